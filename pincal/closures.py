@@ -84,16 +84,25 @@ class Closure:
         return len(self.components)
 
 
-def relative_residual(oMa: pin.SE3, oMb: pin.SE3) -> np.ndarray:
-    """Full 6-vector ``[R_aᵀ(p_b − p_a); log3(R_aᵀ R_b)]`` [m, rad]."""
+def relative_residual(
+    oMa: pin.SE3, oMb: pin.SE3, components: tuple[int, ...] = (0, 1, 2, 3, 4, 5)
+) -> np.ndarray:
+    """Selected components of ``[R_aᵀ(p_b − p_a); log3(R_aᵀ R_b)]`` [m, rad]."""
     Ra = oMa.rotation
-    t = Ra.T @ (oMb.translation - oMa.translation)
-    phi = pin.log3(Ra.T @ oMb.rotation)
-    return np.concatenate([t, phi])
+    full = np.empty(6)
+    if components[0] < 3:
+        full[:3] = Ra.T @ (oMb.translation - oMa.translation)
+    if components[-1] >= 3:
+        full[3:] = pin.log3(Ra.T @ oMb.rotation)
+    return full[list(components)]
 
 
 def relative_jacobian(
-    oMa: pin.SE3, oMb: pin.SE3, twist_a: np.ndarray, twist_b: np.ndarray
+    oMa: pin.SE3,
+    oMb: pin.SE3,
+    twist_a: np.ndarray,
+    twist_b: np.ndarray,
+    components: tuple[int, ...] = (0, 1, 2, 3, 4, 5),
 ) -> np.ndarray:
     """Derivative of :func:`relative_residual` given the local twists of both frames.
 
@@ -101,16 +110,26 @@ def relative_jacobian(
         oMa, oMb: world placements of frames a and b.
         twist_a, twist_b: (6, N) local twists ``[v; ω]`` of a and b per unit of each of
             N variables (LOCAL frame Jacobians, or parameter sensitivities).
+        components: which residual components to return (indices into ``COMPONENTS``).
 
     Returns:
-        (6, N) derivative of the 6-vector residual.
+        (len(components), N) derivative of the selected residual components.
     """
-    Ra, Rb = oMa.rotation, oMb.rotation
-    R_ab = Ra.T @ Rb
-    t = Ra.T @ (oMb.translation - oMa.translation)
-    dt = _skew(t) @ twist_a[3:] + R_ab @ twist_b[:3] - twist_a[:3]
-    dphi = pin.Jlog3(R_ab) @ (twist_b[3:] - R_ab.T @ twist_a[3:])
-    return np.vstack([dt, dphi])
+    Ra = oMa.rotation
+    R_ab = Ra.T @ oMb.rotation
+    blocks = []
+    if components[0] < 3:
+        t = Ra.T @ (oMb.translation - oMa.translation)
+        dt = _skew(t) @ twist_a[3:] + R_ab @ twist_b[:3] - twist_a[:3]
+        blocks.append(dt)
+    if components[-1] >= 3:
+        dphi = pin.Jlog3(R_ab) @ (twist_b[3:] - R_ab.T @ twist_a[3:])
+        blocks.append(dphi)
+    full = blocks[0] if len(blocks) == 1 else np.vstack(blocks)
+    first = 0 if components[0] < 3 else 3
+    if len(components) == full.shape[0]:
+        return full
+    return full[[c - first for c in components]]
 
 
 def measured_quantity(oMf: pin.SE3) -> tuple[np.ndarray, np.ndarray]:

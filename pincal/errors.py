@@ -71,7 +71,9 @@ class ConvergenceError(PincalError):
 class SingularConfigurationError(ConvergenceError):
     """The closure Jacobian is singular at the solution (condition number reported)."""
 
-    def __init__(self, message: str, pose_index: int | None = None, condition: float = float("inf")):
+    def __init__(
+        self, message: str, pose_index: int | None = None, condition: float = float("inf")
+    ):
         self.condition = condition
         super().__init__(message, pose_index=pose_index, residual=0.0)
 

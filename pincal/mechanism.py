@@ -80,7 +80,7 @@ class _Solution:
     q: np.ndarray
     iterations: int
     residual: float
-    condition: float
+    singular_values: np.ndarray  # of the Jacobian over the free dofs at q
 
 
 def _lstsq_step(J: np.ndarray, r: np.ndarray, rcond: float) -> tuple[np.ndarray, np.ndarray]:
@@ -213,8 +213,9 @@ class Mechanism:
         act = set(self._act_v)
         self._free_v = np.array([i for i in range(model.nv) if i not in act], dtype=int)
         self._act_v_arr = np.array(self._act_v, dtype=int)
-        self._closure_fids = [(self.frame_id(c.frame_a), self.frame_id(c.frame_b)) for c in self.closures]
-        self._closure_rows = [np.array(c.components) for c in self.closures]
+        self._closure_fids = [
+            (self.frame_id(c.frame_a), self.frame_id(c.frame_b)) for c in self.closures
+        ]
         self.n_closure_rows = sum(c.size for c in self.closures)
         lower, upper = [], []
         for qi, nq in zip(self._act_q, self._act_nq, strict=True):
@@ -286,8 +287,8 @@ class Mechanism:
         oMf = self.data.oMf
         return np.concatenate(
             [
-                relative_residual(oMf[a], oMf[b])[rows]
-                for (a, b), rows in zip(self._closure_fids, self._closure_rows, strict=True)
+                relative_residual(oMf[a], oMf[b], c.components)
+                for (a, b), c in zip(self._closure_fids, self.closures, strict=True)
             ]
         )
 
@@ -297,9 +298,9 @@ class Mechanism:
             return np.zeros((0, self.model.nv))
         oMf = self.data.oMf
         blocks = []
-        for (a, b), rows in zip(self._closure_fids, self._closure_rows, strict=True):
+        for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
             Ja, Jb = self.frame_jacobian(a), self.frame_jacobian(b)
-            blocks.append(relative_jacobian(oMf[a], oMf[b], Ja, Jb)[rows])
+            blocks.append(relative_jacobian(oMf[a], oMf[b], Ja, Jb, c.components))
         return np.vstack(blocks)
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:
@@ -332,8 +333,7 @@ class Mechanism:
                 J = np.vstack([J, extra()[1]])
             step, s = _lstsq_step(J[:, free], r, opt.rcond)
             if np.max(np.abs(r), initial=0.0) <= opt.tol:
-                cond = s[0] / s[-1] if s.size and s[-1] > 0 else (np.inf if s.size else 1.0)
-                return _Solution(q, it, float(np.max(np.abs(r), initial=0.0)), float(cond))
+                return _Solution(q, it, float(np.max(np.abs(r), initial=0.0)), s)
             if it == opt.max_iterations:
                 break
             step_norm = np.linalg.norm(step)
@@ -476,8 +476,7 @@ class Mechanism:
         return sol.q
 
     def _check_singular(self, sol: _Solution, where: str, pose_index: int | None) -> None:
-        Jc = self.closure_jacobian()[:, self._free_v]
-        s = np.linalg.svd(Jc, compute_uv=False)
+        s = sol.singular_values
         r = self._rank_u
         cond = s[0] / s[r - 1] if r and s[r - 1] > 0 else np.inf
         if r and cond > self.options.max_condition:

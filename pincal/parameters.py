@@ -68,7 +68,9 @@ class ParameterSet:
             joints.setdefault(p.joint, []).append(k)
         self.joints = tuple(joints)
         self._cols = {j: np.array(c) for j, c in joints.items()}
-        self._twists = {j: np.stack([parameters[k].twist for k in c], axis=1) for j, c in joints.items()}
+        self._twists = {
+            j: np.stack([parameters[k].twist for k in c], axis=1) for j, c in joints.items()
+        }
 
     def __len__(self) -> int:
         return len(self.parameters)
@@ -98,7 +100,9 @@ class ParameterSet:
             raise ParameterError("parameter values contain NaN or inf")
         return values
 
-    def joint_twists(self, values: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    def joint_twists(
+        self, values: np.ndarray
+    ) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """Per joint: (columns, twist v_j (6,), effective twists Jexp6(v_j)·Ξ_j (6, n_j)).
 
         The effective twists are the exact derivatives, in the displaced origin frame, of

@@ -91,8 +91,8 @@ def pose_sensitivity(
         Jc_p = np.vstack(
             [
                 relative_jacobian(
-                    oMf[a], oMf[b], param_twist(c.frame_a), param_twist(c.frame_b)
-                )[list(c.components)]
+                    oMf[a], oMf[b], param_twist(c.frame_a), param_twist(c.frame_b), c.components
+                )
                 for c, (a, b) in zip(mech.closures, mech._closure_fids, strict=True)
             ]
         )

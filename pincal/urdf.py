@@ -124,7 +124,12 @@ class UrdfTree:
                 raise ModelFileError(f"{where} has a zero axis")
             axis = axis / norm
         return UrdfJoint(
-            name, jtype, parent.get("link", ""), child.get("link", ""), se3_from_xyz_rpy(xyz, rpy), axis
+            name,
+            jtype,
+            parent.get("link", ""),
+            child.get("link", ""),
+            se3_from_xyz_rpy(xyz, rpy),
+            axis,
         )
 
     def ancestors(self, link: str) -> tuple[str, ...]:

@@ -50,7 +50,10 @@ def sphere_visual(radius: float, colour: str) -> str:
     )
 
 
-INERTIAL = '<inertial><mass value="0.1"/><inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>'
+INERTIAL = (
+    '<inertial><mass value="0.1"/>'
+    '<inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>'
+)
 
 
 def build() -> tuple[str, dict]:
@@ -65,7 +68,7 @@ def build() -> tuple[str, dict]:
         '<material name="orange"><color rgba="0.95 0.55 0.1 1"/></material>',
         '<material name="red"><color rgba="0.85 0.15 0.15 1"/></material>',
         '<link name="world"><visual><origin xyz="0 0 -0.01"/><geometry>'
-        f'<cylinder radius="{R_BASE + 0.04}" length="0.02"/></geometry>'
+        f'<cylinder radius="{R_BASE + 0.04:.6g}" length="0.02"/></geometry>'
         '<material name="grey"/></visual></link>',
     ]
     home = {}
@@ -104,7 +107,7 @@ def build() -> tuple[str, dict]:
     parts += [
         '<link name="platform"><inertial><mass value="2"/><inertia ixx="0.01" iyy="0.01" '
         'izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial><visual><geometry>'
-        f'<cylinder radius="{R_PLATFORM + 0.03}" length="0.015"/></geometry>'
+        f'<cylinder radius="{R_PLATFORM + 0.03:.6g}" length="0.015"/></geometry>'
         '<material name="grey"/></visual></link>',
         '<joint name="platform_joint" type="floating"><parent link="world"/>'
         '<child link="platform"/><origin xyz="0 0 0" rpy="0 0 0"/></joint>',

@@ -1,0 +1,37 @@
+from __future__ import annotations
+
+import json
+
+from click.testing import CliRunner
+
+from pincal.cli import main
+
+
+def test_demo_runs_and_writes_calibrated_model(tmp_path):
+    out = tmp_path / "out"
+    res = CliRunner().invoke(
+        main, ["demo", "--poses", "30", "--validation", "20", "--out", str(out)]
+    )
+    assert res.exit_code == 0, res.output
+    assert "calibrated model" in res.output
+    report = json.loads((out / "identification.json").read_text())
+    after = report["validation_after"]["rms_position_mm"]
+    before = report["validation_before"]["rms_position_mm"]
+    assert after < before / 20
+    assert (out / "stewart_6ups_calibrated.urdf").is_file()
+
+
+def test_info_and_clean_error():
+    runner = CliRunner()
+    res = runner.invoke(main, ["info", "stewart_6ups", "--preset", "stewart42"])
+    assert res.exit_code == 0
+    assert "42 parameters, 42 identifiable" in res.output
+    res = runner.invoke(main, ["info", "no_such_model"])
+    assert res.exit_code == 1
+    assert res.output.count("\n") == 1 and "models are: 'stewart_6ups'" in res.output
+    assert "Traceback" not in res.output
+
+
+def test_help():
+    res = CliRunner().invoke(main, ["--help"])
+    assert res.exit_code == 0 and "pincal demo" in res.output
