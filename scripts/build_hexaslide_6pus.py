@@ -202,7 +202,9 @@ def main() -> None:
     urdf, sidecar = build()
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / f"{NAME}.urdf").write_text(urdf)
-    (OUT / f"{NAME}.yaml").write_text(HEADER + yaml.safe_dump(sidecar, sort_keys=False, width=100))
+    (OUT / f"{NAME}.yaml").write_text(
+        HEADER + yaml.safe_dump(sidecar, sort_keys=False, width=100, default_flow_style=None)
+    )
 
 
 if __name__ == "__main__":

@@ -278,3 +278,10 @@ def test_workspace_is_reachable():
         q = ik(NOMINAL, T)
         assert np.all(np.isfinite(q))
         assert np.all((q >= lim[0]) & (q <= lim[1]))
+
+
+def test_urdf_parses_with_yourdfpy_including_visuals():
+    yourdfpy = pytest.importorskip("yourdfpy")
+    robot = yourdfpy.URDF.load(str(URDF), load_meshes=False)
+    assert len(robot.actuated_joints) == 6 * 3 + 1  # slides, U-joints, platform_float
+    assert sum(len(link.visuals) for link in robot.link_map.values()) >= 6 * 5 + 2
