@@ -242,3 +242,18 @@ def test_hinge_x_of_struts_3_and_4_are_the_only_unidentifiable_coordinates(model
     assert np.min(norms[[n not in dead for n in names]]) > 1e-2
     sv = np.linalg.svd(jac, compute_uv=False)
     assert np.sum(sv > 1e-6 * sv[0]) == 20
+
+
+def test_workspace_pose_box_is_reachable_within_the_slider_ranges(sidecar):
+    box = sidecar["workspace"]["pose"]
+    lo, hi = zip(*(sidecar["workspace"]["joints"][s] for s in SLIDERS), strict=True)
+    grid = [np.linspace(*box[k], 3) for k in ("y", "z", "rx", "ry")]
+    for y_tip, z_tip, rx, ry in np.array(np.meshgrid(*grid)).reshape(4, -1).T:
+        rot = pin.exp3(np.array([rx, ry, 0.0]))
+        # nearest platform orientation R_X(A)·R_Y(B) (the platform has no rotation about Z)
+        b = np.arcsin(rot[0, 2])
+        a = np.arctan2(-rot[1, 2], rot[2, 2])
+        centre = np.array([0.0, y_tip, z_tip]) - rot_x(a) @ rot_y(b) @ np.array([0, 0, Z_TOOL])
+        h = closed_form_ik(centre[1], centre[2], a, b)
+        assert np.all(np.isfinite(h))
+        assert np.all(h >= lo) and np.all(h <= hi)
