@@ -1,0 +1,463 @@
+"""Quantum-behaved particle swarm optimisation (QPSO) for bounded minimisation.
+
+QPSO (Sun, Feng & Xu 2004) moves every particle by sampling around a local
+attractor instead of integrating a velocity. With N particles in d dimensions,
+personal bests ``P`` (N, d), global best ``P_g`` (d,) and the mean best
+``C = mean_i P_i``, one iteration draws per particle and dimension
+``φ, u ~ U(0, 1)`` and a random sign, and sets::
+
+    p_i = φ·P_i + (1 − φ)·P_g                  (local attractor)
+    X_i = p_i ± α(t)·|C − X_i|·ln(1/u)          (new position)
+
+The contraction–expansion coefficient α(t) decreases linearly from ``alpha[0]``
+(iteration 0) to ``alpha[1]`` (last iteration); seed 003 uses 1.0 → 0.5 with
+N = 80 and t_max = 300. New positions are clipped to the box.
+
+:func:`qpso_stepwise` is the two-stage identification of seed 003 (section
+2.2): a coarse stage that fixes one parameter at a time in the order in which
+the parameters converge, then a fine stage over all parameters started from the
+coarse result. See its docstring for how the paper's (unspecified) convergence
+test is read here.
+
+The functions are generic: the objective is any callable of a parameter vector.
+Units are whatever the caller's parameters use.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from pincal.errors import ParameterError
+
+__all__ = [
+    "QPSOResult",
+    "QPSOStage",
+    "QPSOStepwiseResult",
+    "qpso",
+    "qpso_stepwise",
+]
+
+_log = logging.getLogger(__name__)
+
+Objective = Callable[[np.ndarray], "float | np.ndarray"]
+Callback = Callable[[int, np.ndarray, float], "bool | None"]
+
+
+@dataclass(frozen=True)
+class QPSOResult:
+    """Outcome of one QPSO run.
+
+    Attributes:
+        x: best position found, shape (d,).
+        fun: objective value at ``x``.
+        history: best objective value after initialisation (entry 0) and after
+            each iteration, shape (iterations + 1,); non-increasing.
+        nfev: number of objective evaluations (one per particle and iteration).
+        iterations: number of swarm updates performed (≤ t_max).
+        stopped_by_callback: True if the callback ended the run early.
+    """
+
+    x: np.ndarray
+    fun: float
+    history: np.ndarray
+    nfev: int
+    iterations: int
+    stopped_by_callback: bool = False
+
+
+@dataclass(frozen=True)
+class QPSOStage:
+    """One coarse stage of :func:`qpso_stepwise`.
+
+    Attributes:
+        index: the parameter (index into the full vector) fixed by this stage.
+        value: the value it was fixed at.
+        iterations: swarm iterations the stage ran.
+        converged: True if the convergence test fired; False if the stage hit
+            t_max and the least-spread parameter was fixed instead.
+        fun: best objective value of the stage.
+    """
+
+    index: int
+    value: float
+    iterations: int
+    converged: bool
+    fun: float
+
+
+@dataclass(frozen=True)
+class QPSOStepwiseResult:
+    """Outcome of :func:`qpso_stepwise`.
+
+    Attributes:
+        x: final position (fine stage), shape (d,).
+        fun: objective value at ``x``.
+        order: parameter indices in the order the coarse stage fixed them.
+        coarse_x: coarse-stage result, shape (d,).
+        coarse_fun: objective value at ``coarse_x``.
+        stages: the coarse stages, in order.
+        fine: the fine-stage run over all parameters.
+        nfev: objective evaluations over both stages.
+    """
+
+    x: np.ndarray
+    fun: float
+    order: tuple[int, ...]
+    coarse_x: np.ndarray
+    coarse_fun: float
+    stages: tuple[QPSOStage, ...]
+    fine: QPSOResult
+    nfev: int
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _bounds(lower, upper) -> tuple[np.ndarray, np.ndarray]:
+    lo = np.atleast_1d(np.asarray(lower, dtype=float))
+    hi = np.atleast_1d(np.asarray(upper, dtype=float))
+    if lo.ndim != 1 or lo.shape != hi.shape:
+        raise ParameterError(
+            f"lower and upper must be vectors of equal length, got shapes {lo.shape} and {hi.shape}"
+        )
+    if lo.size == 0:
+        raise ParameterError("lower and upper must have at least one element")
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        raise ParameterError("bounds must be finite")
+    if np.any(hi <= lo):
+        bad = np.flatnonzero(hi <= lo).tolist()
+        raise ParameterError(f"upper must exceed lower in every dimension; violated at {bad}")
+    return lo, hi
+
+
+def _alpha_pair(alpha) -> tuple[float, float]:
+    a = np.asarray(alpha, dtype=float).ravel()
+    if a.size == 1:
+        a = np.array([a[0], a[0]])
+    if a.size != 2 or np.any(a <= 0) or not np.all(np.isfinite(a)):
+        raise ParameterError(f"alpha must be a positive scalar or (start, end) pair, got {alpha!r}")
+    return float(a[0]), float(a[1])
+
+
+def _evaluator(fun: Objective, vectorized: bool, d: int) -> Callable[[np.ndarray], np.ndarray]:
+    """Wrap ``fun`` to map (N, d) positions to (N,) values; non-finite → +inf."""
+
+    def evaluate(X: np.ndarray) -> np.ndarray:
+        if vectorized:
+            f = np.asarray(fun(X), dtype=float)
+            if f.shape != (X.shape[0],):
+                raise ParameterError(
+                    f"vectorized objective must return shape ({X.shape[0]},) for input "
+                    f"shape {X.shape}, got {f.shape}"
+                )
+        else:
+            f = np.empty(X.shape[0])
+            for i, x in enumerate(X):
+                v = np.asarray(fun(x.copy()), dtype=float)
+                if v.size != 1:
+                    raise ParameterError(
+                        f"objective must return a scalar for input shape ({d},), got {v.shape}"
+                    )
+                f[i] = v.item()
+        return np.where(np.isfinite(f), f, np.inf)
+
+    return evaluate
+
+
+def _initial_positions(
+    rng: np.random.Generator,
+    n: int,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    x0: np.ndarray | None,
+    spread: float,
+) -> np.ndarray:
+    """Uniform positions in the box, or around x0 (x0 itself is particle 0)."""
+    if x0 is None:
+        return lo + rng.random((n, lo.size)) * (hi - lo)
+    half = 0.5 * spread * (hi - lo)
+    X = np.clip(x0 + (2.0 * rng.random((n, lo.size)) - 1.0) * half, lo, hi)
+    X[0] = x0
+    return X
+
+
+class _Swarm:
+    """Mutable swarm state; one :meth:`step` is one QPSO iteration."""
+
+    def __init__(self, evaluate, X: np.ndarray, lo: np.ndarray, hi: np.ndarray, rng):
+        self.evaluate = evaluate
+        self.lo, self.hi, self.rng = lo, hi, rng
+        self.X = X
+        self.P = X.copy()
+        self.fP = evaluate(X)
+        self.nfev = X.shape[0]
+        self.g = int(np.argmin(self.fP))
+
+    @property
+    def best_x(self) -> np.ndarray:
+        return self.P[self.g].copy()
+
+    @property
+    def best_f(self) -> float:
+        return float(self.fP[self.g])
+
+    def step(self, alpha: float) -> None:
+        n, d = self.X.shape
+        rng = self.rng
+        C = self.P.mean(axis=0)
+        phi = rng.random((n, d))
+        attractor = phi * self.P + (1.0 - phi) * self.P[self.g]
+        u = 1.0 - rng.random((n, d))  # in (0, 1], so ln(1/u) is finite
+        sign = np.where(rng.random((n, d)) < 0.5, -1.0, 1.0)
+        X = attractor + sign * alpha * np.abs(C - self.X) * np.log(1.0 / u)
+        self.X = np.clip(X, self.lo, self.hi)
+        f = self.evaluate(self.X)
+        self.nfev += n
+        better = f < self.fP
+        self.P[better] = self.X[better]
+        self.fP[better] = f[better]
+        self.g = int(np.argmin(self.fP))
+
+
+def _alpha_at(t: int, t_max: int, a0: float, a1: float) -> float:
+    return a0 + (a1 - a0) * t / max(t_max - 1, 1)
+
+
+def _check_counts(n_particles: int, t_max: int) -> None:
+    if int(n_particles) < 2:
+        raise ParameterError(f"n_particles must be at least 2, got {n_particles}")
+    if int(t_max) < 0:
+        raise ParameterError(f"t_max must be non-negative, got {t_max}")
+
+
+# --------------------------------------------------------------------------- public API
+
+
+def qpso(
+    fun: Objective,
+    lower,
+    upper,
+    n_particles: int = 80,
+    t_max: int = 300,
+    rng: np.random.Generator | int | None = None,
+    alpha: tuple[float, float] = (1.0, 0.5),
+    x0=None,
+    callback: Callback | None = None,
+    *,
+    vectorized: bool = False,
+    init_spread: float = 1.0,
+) -> QPSOResult:
+    """Minimise ``fun`` over the box ``lower ≤ x ≤ upper`` with QPSO.
+
+    Args:
+        fun: objective. With ``vectorized=False`` it maps a position (d,) to a
+            scalar; with ``vectorized=True`` it maps positions (N, d) to values
+            (N,). Non-finite values count as +inf.
+        lower, upper: box bounds, shape (d,), ``upper > lower``.
+        n_particles: swarm size N (seed 003: 80).
+        t_max: number of iterations (seed 003: 300).
+        rng: a numpy Generator or a seed; the same seed gives the same result.
+        alpha: contraction–expansion coefficient at the first and last
+            iteration, varied linearly (seed 003: 1.0 → 0.5); a scalar is constant.
+        x0: optional start, shape (d,), inside the box. It becomes particle 0 and
+            the others are drawn uniformly within ``init_spread·(upper − lower)/2``
+            of it (clipped to the box).
+        callback: called after each iteration as ``callback(t, x_best, f_best)``
+            with t = 1..t_max; returning True stops the run.
+        vectorized: see ``fun``.
+        init_spread: see ``x0``; ignored without x0.
+
+    Returns:
+        QPSOResult with the best position, its value and the best-value history.
+
+    Raises:
+        ParameterError: malformed bounds, x0, swarm size or objective output.
+    """
+    lo, hi = _bounds(lower, upper)
+    _check_counts(n_particles, t_max)
+    a0, a1 = _alpha_pair(alpha)
+    gen = np.random.default_rng(rng)
+    start = _start_vector(x0, lo, hi)
+    if not init_spread > 0:
+        raise ParameterError(f"init_spread must be positive, got {init_spread}")
+    evaluate = _evaluator(fun, vectorized, lo.size)
+    swarm = _Swarm(
+        evaluate,
+        _initial_positions(gen, int(n_particles), lo, hi, start, init_spread),
+        lo,
+        hi,
+        gen,
+    )
+    history = [swarm.best_f]
+    stopped = False
+    t = 0
+    while t < t_max:
+        swarm.step(_alpha_at(t, t_max, a0, a1))
+        t += 1
+        history.append(swarm.best_f)
+        if callback is not None and callback(t, swarm.best_x, swarm.best_f):
+            stopped = True
+            break
+    _log.debug("qpso: %d iterations, %d evaluations, best %.6g", t, swarm.nfev, swarm.best_f)
+    return QPSOResult(
+        x=swarm.best_x,
+        fun=swarm.best_f,
+        history=np.asarray(history),
+        nfev=swarm.nfev,
+        iterations=t,
+        stopped_by_callback=stopped,
+    )
+
+
+def _start_vector(x0, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
+    if x0 is None:
+        return None
+    x = np.atleast_1d(np.asarray(x0, dtype=float))
+    if x.shape != lo.shape:
+        raise ParameterError(f"x0 must have shape {lo.shape}, got {x.shape}")
+    if np.any(x < lo) or np.any(x > hi):
+        raise ParameterError("x0 must lie inside the bounds")
+    return x
+
+
+def qpso_stepwise(
+    fun: Objective,
+    lower,
+    upper,
+    n_particles: int = 80,
+    t_max: int = 300,
+    rng: np.random.Generator | int | None = None,
+    alpha: tuple[float, float] = (1.0, 0.5),
+    *,
+    vectorized: bool = False,
+    spread_tol: float = 1e-3,
+    patience: int = 10,
+    fine_t_max: int | None = None,
+    fine_spread: float = 0.1,
+) -> QPSOStepwiseResult:
+    """Seed 003's step-wise QPSO: fix parameters one at a time, then refine all.
+
+    Reading of the paper (section 2.2.1, steps 3–8, and 2.2.2):
+
+    * Coarse stage. A swarm of N particles is initialised uniformly over the
+      m still-free parameters (the fixed ones are held at their values inside
+      the objective). After every iteration each free parameter j of the global
+      best ``P_g`` is tested for convergence; the first to converge is fixed at
+      ``P_g[j]``, m ← m − 1 and a fresh random swarm is started over the rest,
+      until m = 0. The paper does not state the test; here parameter j has
+      converged when the spread of the personal bests in that dimension,
+      ``max_i P_ij − min_i P_ij``, is at most ``spread_tol·(upper_j − lower_j)``
+      and ``P_g[j]`` moved by no more than that amount over the last
+      ``patience`` iterations. If several converge in the same iteration the
+      one with the smallest relative spread is fixed. If none converges within
+      ``t_max`` iterations the least-spread parameter is fixed (logged).
+    * Fine stage. The coarse result is the initial global best of a swarm over
+      all d parameters (particle 0 at the coarse result, the others uniform
+      within ``fine_spread·(upper − lower)/2`` of it), run for ``fine_t_max``
+      iterations (default ``t_max``).
+
+    Args:
+        fun, lower, upper, n_particles, t_max, rng, alpha, vectorized: as for
+            :func:`qpso`; ``t_max`` caps each coarse stage.
+        spread_tol: relative spread of the convergence test (see above).
+        patience: iterations over which ``P_g[j]`` must be stable.
+        fine_t_max: iterations of the fine stage (default ``t_max``).
+        fine_spread: relative initial spread of the fine-stage swarm.
+
+    Returns:
+        QPSOStepwiseResult with the fixing order, coarse and fine results.
+
+    Raises:
+        ParameterError: malformed bounds, tolerances or objective output.
+    """
+    lo, hi = _bounds(lower, upper)
+    _check_counts(n_particles, t_max)
+    a0, a1 = _alpha_pair(alpha)
+    if not spread_tol > 0 or int(patience) < 1 or not fine_spread > 0:
+        raise ParameterError("spread_tol and fine_spread must be positive and patience ≥ 1")
+    gen = np.random.default_rng(rng)
+    d = lo.size
+    evaluate_full = _evaluator(fun, vectorized, d)
+    x_fixed = 0.5 * (lo + hi)  # values of free entries are overwritten before every call
+    free = list(range(d))
+    stages: list[QPSOStage] = []
+    nfev = 0
+    width = hi - lo
+
+    while free:
+        idx = np.asarray(free)
+
+        def evaluate(Z: np.ndarray, idx=idx) -> np.ndarray:
+            X = np.tile(x_fixed, (Z.shape[0], 1))
+            X[:, idx] = Z
+            return evaluate_full(X)
+
+        swarm = _Swarm(
+            evaluate,
+            _initial_positions(gen, int(n_particles), lo[idx], hi[idx], None, 1.0),
+            lo[idx],
+            hi[idx],
+            gen,
+        )
+        recent = [swarm.best_x]
+        tol = spread_tol * width[idx]
+        chosen, converged, t = -1, False, 0
+        while t < t_max:
+            swarm.step(_alpha_at(t, t_max, a0, a1))
+            t += 1
+            recent.append(swarm.best_x)
+            if len(recent) > patience + 1:
+                recent.pop(0)
+            rel_spread = np.ptp(swarm.P, axis=0) / width[idx]
+            if len(recent) == patience + 1:
+                drift = np.ptp(np.asarray(recent), axis=0)
+                ok = (rel_spread * width[idx] <= tol) & (drift <= tol)
+                if np.any(ok):
+                    chosen = int(np.flatnonzero(ok)[np.argmin(rel_spread[ok])])
+                    converged = True
+                    break
+        if chosen < 0:
+            chosen = int(np.argmin(np.ptp(swarm.P, axis=0) / width[idx]))
+            _log.info(
+                "qpso_stepwise: no parameter converged in %d iterations; fixing %d",
+                t_max,
+                int(idx[chosen]),
+            )
+        nfev += swarm.nfev
+        j = int(idx[chosen])
+        best = swarm.best_x
+        x_fixed[idx] = best  # the other free entries keep the stage's best as a warm value
+        stages.append(QPSOStage(j, float(best[chosen]), t, converged, swarm.best_f))
+        free.remove(j)
+
+    coarse_x = x_fixed.copy()
+    coarse_fun = float(evaluate_full(coarse_x[None, :])[0])
+    nfev += 1
+    fine = qpso(
+        fun,
+        lo,
+        hi,
+        n_particles,
+        t_max if fine_t_max is None else fine_t_max,
+        gen,
+        (a0, a1),
+        x0=coarse_x,
+        vectorized=vectorized,
+        init_spread=fine_spread,
+    )
+    nfev += fine.nfev
+    x, f = (fine.x, fine.fun) if fine.fun <= coarse_fun else (coarse_x, coarse_fun)
+    return QPSOStepwiseResult(
+        x=x.copy(),
+        fun=f,
+        order=tuple(s.index for s in stages),
+        coarse_x=coarse_x,
+        coarse_fun=coarse_fun,
+        stages=tuple(stages),
+        fine=fine,
+        nfev=nfev,
+    )
