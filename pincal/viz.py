@@ -181,7 +181,7 @@ def _rgb(colour: Any) -> tuple[float, float, float]:
         return ((c >> 16 & 255) / 255.0, (c >> 8 & 255) / 255.0, (c & 255) / 255.0)
     try:
         rgb = tuple(float(x) for x in colour)
-    except TypeError:
+    except (TypeError, ValueError):
         rgb = ()
     if len(rgb) in (3, 4) and all(0.0 <= x <= 1.0 for x in rgb):
         return rgb[:3]  # type: ignore[return-value]
