@@ -1,0 +1,447 @@
+"""Plots and a Markdown + HTML report of a calibration.
+
+All plots use matplotlib's Agg canvas directly (no pyplot, no window, no global
+state) and are written atomically (temporary file + rename). Values are passed
+in SI units (m, rad); a ``unit`` argument chooses the displayed unit:
+``m, mm, um (µm), rad, mrad, urad (µrad), deg``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import html
+import io
+import math
+import os
+import tempfile
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from pincal.errors import PincalError
+
+__all__ = [
+    "ErrorStats",
+    "ReportError",
+    "ReportFiles",
+    "Section",
+    "Table",
+    "error_statistics",
+    "plot_convergence",
+    "plot_error_histogram",
+    "plot_errors_before_after",
+    "plot_index_history",
+    "plot_parameters",
+    "write_report",
+]
+
+#: display unit → (factor from SI, label)
+_UNITS: dict[str, tuple[float, str]] = {
+    "m": (1.0, "m"),
+    "mm": (1e3, "mm"),
+    "um": (1e6, "µm"),
+    "µm": (1e6, "µm"),
+    "rad": (1.0, "rad"),
+    "mrad": (1e3, "mrad"),
+    "urad": (1e6, "µrad"),
+    "µrad": (1e6, "µrad"),
+    "deg": (180.0 / math.pi, "deg"),
+}
+_BEFORE, _AFTER, _TRUE = "#d62728", "#1f77b4", "#2ca02c"
+
+
+class ReportError(PincalError):
+    """Inputs to a plot or report are malformed (lengths, units, NaN)."""
+
+
+@dataclass(frozen=True)
+class ErrorStats:
+    """Summary of error magnitudes (same unit as the input).
+
+    Attributes:
+        rms: root mean square.
+        max: largest absolute value.
+        mean: mean absolute value.
+        count: number of values.
+    """
+
+    rms: float
+    max: float
+    mean: float
+    count: int
+
+
+@dataclass(frozen=True)
+class Table:
+    """A table for a report: ``rows`` are sequences of cells (str or numbers)."""
+
+    headers: Sequence[str]
+    rows: Sequence[Sequence[object]]
+    caption: str = ""
+
+
+@dataclass(frozen=True)
+class Section:
+    """One report section: a heading, paragraphs of text, images and tables."""
+
+    title: str
+    text: str = ""
+    images: Sequence[str | os.PathLike] = field(default_factory=tuple)
+    tables: Sequence[Table] = field(default_factory=tuple)
+
+
+@dataclass(frozen=True)
+class ReportFiles:
+    """Paths of a written report."""
+
+    markdown: Path
+    html: Path
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _unit(unit: str) -> tuple[float, str]:
+    try:
+        return _UNITS[unit]
+    except KeyError:
+        raise ReportError(f"unit {unit!r} not known; units are: {', '.join(_UNITS)}") from None
+
+
+def _vector(values: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
+    arr = np.asarray(values, dtype=float)
+    if arr.ndim != 1 or arr.size == 0:
+        raise ReportError(f"{what} must be a non-empty 1-D array (m,), got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ReportError(f"{what} contains NaN or inf")
+    return arr
+
+
+def _atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+    return target
+
+
+def _save(fig: Figure, path: str | os.PathLike) -> Path:
+    buffer = io.BytesIO()
+    FigureCanvasAgg(fig)
+    fig.savefig(buffer, format="png", dpi=110)
+    return _atomic_write_bytes(path, buffer.getvalue())
+
+
+def _figure(width: float = 7.0, height: float = 4.0) -> Figure:
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def error_statistics(values: Sequence[float] | np.ndarray) -> ErrorStats:
+    """RMS, max and mean of ``|values|`` (shape (m,))."""
+    arr = np.abs(_vector(values, "values"))
+    return ErrorStats(
+        rms=float(np.sqrt(np.mean(arr**2))),
+        max=float(arr.max()),
+        mean=float(arr.mean()),
+        count=int(arr.size),
+    )
+
+
+# --------------------------------------------------------------------------- plots
+
+
+def plot_errors_before_after(
+    before: Sequence[float] | np.ndarray,
+    after: Sequence[float] | np.ndarray,
+    unit: str,
+    path: str | os.PathLike,
+    *,
+    title: str = "Error per pose",
+) -> Path:
+    """Bar chart of the error at each pose before and after calibration.
+
+    Args:
+        before: error magnitudes, shape (m,) [m or rad].
+        after: error magnitudes, shape (m,) [m or rad] (the same poses).
+        unit: display unit (see module docstring).
+        path: PNG file to write.
+    """
+    b = _vector(before, "before")
+    a = _vector(after, "after")
+    if a.shape != b.shape:
+        raise ReportError(f"before has {b.size} poses but after has {a.size}")
+    factor, label = _unit(unit)
+    sb, sa = error_statistics(b * factor), error_statistics(a * factor)
+    fig = _figure()
+    ax = fig.add_subplot()
+    x = np.arange(b.size)
+    ax.bar(x - 0.2, np.abs(b) * factor, 0.4, color=_BEFORE,
+           label=f"before: RMS {sb.rms:.4g}, max {sb.max:.4g} {label}")  # fmt: skip
+    ax.bar(x + 0.2, np.abs(a) * factor, 0.4, color=_AFTER,
+           label=f"after: RMS {sa.rms:.4g}, max {sa.max:.4g} {label}")  # fmt: skip
+    ax.set_xlabel("pose")
+    ax.set_ylabel(f"error [{label}]")
+    ax.set_title(title)
+    if b.size <= 30:
+        ax.set_xticks(x)
+    ax.legend()
+    ax.grid(axis="y", alpha=0.3)
+    return _save(fig, path)
+
+
+def plot_error_histogram(
+    before: Sequence[float] | np.ndarray,
+    after: Sequence[float] | np.ndarray,
+    unit: str,
+    path: str | os.PathLike,
+    *,
+    title: str = "Error distribution",
+    bins: int = 20,
+) -> Path:
+    """Overlaid histograms of error magnitudes before and after, shape (m,) each [m or rad]."""
+    b = np.abs(_vector(before, "before"))
+    a = np.abs(_vector(after, "after"))
+    factor, label = _unit(unit)
+    edges = np.linspace(0.0, max(b.max(), a.max()) * factor * 1.0001 or 1.0, bins + 1)
+    fig = _figure()
+    ax = fig.add_subplot()
+    ax.hist(b * factor, edges, color=_BEFORE, alpha=0.6, label=f"before (n = {b.size})")
+    ax.hist(a * factor, edges, color=_AFTER, alpha=0.6, label=f"after (n = {a.size})")
+    ax.set_xlabel(f"error [{label}]")
+    ax.set_ylabel("count")
+    ax.set_title(title)
+    ax.legend()
+    return _save(fig, path)
+
+
+def plot_index_history(
+    history: Mapping[str, Sequence[float]] | Sequence[float] | np.ndarray,
+    path: str | os.PathLike,
+    *,
+    title: str = "Observability index during pose selection",
+) -> Path:
+    """Observability indices per exchange iteration, one panel per index.
+
+    Args:
+        history: ``{"O1": [...], "O2": [...], ...}`` (each shape (iterations,)) or
+            one sequence.
+        path: PNG file to write.
+    """
+    series = dict(history) if isinstance(history, Mapping) else {"index": history}
+    if not series:
+        raise ReportError("history is empty; expected {name: values per iteration}")
+    arrays = {name: _vector(v, f"history[{name!r}]") for name, v in series.items()}
+    fig = _figure(7.0, 1.2 + 1.6 * len(arrays))
+    axes = fig.subplots(len(arrays), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, (name, values) in zip(axes, arrays.items(), strict=True):
+        ax.plot(np.arange(values.size), values, "o-", ms=3)
+        ax.set_ylabel(name)
+        ax.grid(alpha=0.3)
+        positive = values > 0
+        if positive.all() and values.max() / values.min() > 100:
+            ax.set_yscale("log")
+    axes[-1].set_xlabel("iteration")
+    axes[0].set_title(title)
+    return _save(fig, path)
+
+
+def plot_convergence(
+    cost_per_iter: Sequence[float] | np.ndarray,
+    path: str | os.PathLike,
+    *,
+    title: str = "Convergence",
+    ylabel: str = "cost",
+) -> Path:
+    """Cost (e.g. ½‖r‖² or residual RMS) per iteration, shape (iterations,), log scale."""
+    cost = _vector(cost_per_iter, "cost_per_iter")
+    fig = _figure()
+    ax = fig.add_subplot()
+    ax.plot(np.arange(cost.size), cost, "o-", ms=4)
+    if np.all(cost > 0):
+        ax.set_yscale("log")
+    ax.set_xlabel("iteration")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(alpha=0.3, which="both")
+    return _save(fig, path)
+
+
+def _parameter_kind(name: str) -> str:
+    dof = name.rsplit(".", 1)[-1]
+    if dof in ("rx", "ry", "rz") or dof.startswith(("alpha", "theta")):
+        return "angle"
+    return "length"
+
+
+def plot_parameters(
+    names: Sequence[str],
+    values: Sequence[float] | np.ndarray,
+    std: Sequence[float] | np.ndarray,
+    true: Sequence[float] | np.ndarray | None = None,
+    path: str | os.PathLike | None = None,
+    *,
+    kinds: Sequence[str] | None = None,
+    length_unit: str = "mm",
+    angle_unit: str = "mrad",
+    title: str = "Identified parameters (±2σ)",
+) -> Path:
+    """Identified parameter values with ±2σ bars, lengths and angles in separate panels.
+
+    Args:
+        names: parameter names, shape (L,) (``<joint>.<dof>``).
+        values: identified values, shape (L,) [m or rad].
+        std: standard deviations, shape (L,) [m or rad].
+        true: true values (simulation), shape (L,), drawn as markers, or None.
+        path: PNG file to write (required).
+        kinds: ``"length"`` or ``"angle"`` per parameter; by default inferred from
+            the dof (``rx, ry, rz`` → angle, otherwise length).
+        length_unit, angle_unit: display units of the two panels.
+    """
+    if path is None:
+        raise ReportError("path is required")
+    names = [str(n) for n in names]
+    v = _vector(values, "values")
+    s = _vector(std, "std")
+    t = None if true is None else _vector(true, "true")
+    for what, arr in (("values", v), ("std", s), ("true", t)):
+        if arr is not None and arr.size != len(names):
+            raise ReportError(f"{what} has {arr.size} entries but there are {len(names)} names")
+    if np.any(s < 0):
+        raise ReportError("std must be non-negative")
+    kinds = list(kinds) if kinds is not None else [_parameter_kind(n) for n in names]
+    if len(kinds) != len(names) or not set(kinds) <= {"length", "angle"}:
+        raise ReportError("kinds must hold 'length' or 'angle' for each name")
+    groups = [
+        (kind, unit, [i for i, k in enumerate(kinds) if k == kind])
+        for kind, unit in (("length", length_unit), ("angle", angle_unit))
+    ]
+    groups = [g for g in groups if g[2]]
+    height = 1.5 + 0.22 * len(names) + 0.6 * len(groups)
+    fig = _figure(7.5, max(3.0, height))
+    axes = fig.subplots(
+        len(groups), 1, squeeze=False, height_ratios=[len(g[2]) + 2 for g in groups]
+    )[:, 0]
+    for ax, (kind, unit, idx) in zip(axes, groups, strict=True):
+        factor, label = _unit(unit)
+        y = np.arange(len(idx))[::-1]
+        ax.errorbar(v[idx] * factor, y, xerr=2 * s[idx] * factor, fmt="o", color=_AFTER,
+                    ecolor=_AFTER, capsize=3, ms=4, label="identified ±2σ")  # fmt: skip
+        if t is not None:
+            ax.plot(t[idx] * factor, y, "x", color=_TRUE, ms=7, mew=2, label="true")
+        ax.axvline(0.0, color="0.6", lw=0.8)
+        ax.set_yticks(y)
+        ax.set_yticklabels([names[i] for i in idx], fontsize=8)
+        ax.set_xlabel(f"{kind} [{label}]")
+        ax.grid(axis="x", alpha=0.3)
+        ax.legend(fontsize=8, loc="best")
+    axes[0].set_title(title)
+    return _save(fig, path)
+
+
+# --------------------------------------------------------------------------- report
+
+
+def _cell(value: object) -> str:
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
+def _markdown_table(table: Table) -> str:
+    lines = []
+    if table.caption:
+        lines.append(f"*{table.caption}*\n")
+    lines.append("| " + " | ".join(str(h) for h in table.headers) + " |")
+    lines.append("|" + "|".join(" --- " for _ in table.headers) + "|")
+    for row in table.rows:
+        cells = [_cell(c).replace("|", "\\|") for c in row]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _html_table(table: Table) -> str:
+    parts = ["<table>"]
+    if table.caption:
+        parts.append(f"<caption>{html.escape(table.caption)}</caption>")
+    parts.append("<tr>" + "".join(f"<th>{html.escape(str(h))}</th>" for h in table.headers))
+    for row in table.rows:
+        parts.append("<tr>" + "".join(f"<td>{html.escape(_cell(c))}</td>" for c in row))
+    parts.append("</table>")
+    return "\n".join(parts)
+
+
+_HTML_PAGE = """<!DOCTYPE html>
+<html>
+<head>
+<meta charset="utf-8">
+<title>{title}</title>
+<style>
+body {{ font: 15px/1.5 sans-serif; max-width: 60em; margin: 2em auto; padding: 0 1em;
+  color: #222; }}
+img {{ max-width: 100%; border: 1px solid #ddd; margin: 0.5em 0; }}
+table {{ border-collapse: collapse; margin: 0.8em 0; }}
+th, td {{ border: 1px solid #bbb; padding: 2px 8px; text-align: right; }}
+th {{ background: #eee; }}
+caption {{ caption-side: top; font-style: italic; text-align: left; }}
+</style>
+</head>
+<body>
+<h1>{title}</h1>
+{body}
+</body>
+</html>
+"""
+
+
+def write_report(
+    directory: str | os.PathLike,
+    sections: Sequence[Section],
+    *,
+    title: str = "pincal calibration report",
+    name: str = "report",
+) -> ReportFiles:
+    """Write ``<name>.md`` and ``<name>.html`` into ``directory``.
+
+    Images are referenced by their path relative to ``directory`` (put the PNGs
+    there or below so the report can be moved as one folder); missing images are
+    an error. Both files are written atomically.
+    """
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    md = [f"# {title}", ""]
+    body = []
+    for section in sections:
+        md += [f"## {section.title}", ""]
+        body.append(f"<h2>{html.escape(section.title)}</h2>")
+        if section.text:
+            md += [section.text, ""]
+            for paragraph in section.text.split("\n\n"):
+                body.append(f"<p>{html.escape(paragraph)}</p>")
+        for image in section.images:
+            image_path = Path(image)
+            if not image_path.is_absolute():
+                image_path = out / image_path
+            if not image_path.is_file():
+                raise ReportError(f"image {str(image)!r} of section {section.title!r} not found")
+            rel = Path(os.path.relpath(image_path.resolve(), out.resolve())).as_posix()
+            md += [f"![{image_path.stem}]({rel})", ""]
+            body.append(f'<img src="{html.escape(rel)}" alt="{html.escape(image_path.stem)}">')
+        for table in section.tables:
+            md += [_markdown_table(table), ""]
+            body.append(_html_table(table))
+    md_path = _atomic_write_bytes(out / f"{name}.md", "\n".join(md).encode("utf-8"))
+    html_text = _HTML_PAGE.format(title=html.escape(title), body="\n".join(body))
+    html_path = _atomic_write_bytes(out / f"{name}.html", html_text.encode("utf-8"))
+    return ReportFiles(markdown=md_path, html=html_path)
