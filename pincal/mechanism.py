@@ -163,6 +163,8 @@ class Mechanism:
             isinstance(types, list) and types and all(t in COMPONENTS for t in types)
         ):
             types = [types] * len(pairs)
+        elif isinstance(types, list) and len(types) == 1:
+            types = types * len(pairs)
         if not isinstance(types, list) or len(types) != len(pairs):
             raise ModelFileError(
                 f"sidecar 'type' must give one closure type per pair ({len(pairs)} pairs), "
