@@ -131,11 +131,15 @@ class CalibrationProblem:
         self.mech, self.params, self.meas = mech, params, measurements
         self.rows = measurements.component_indices
         noise = measurements.noise
-        if noise is not None and np.all(noise.std(measurements.components) > 0):
-            self.sigma = noise.std(measurements.components)
+        m, k = len(measurements), len(self.rows)
+        if measurements.std is not None:
+            self.sigma = np.array(measurements.std, dtype=float)
+            self.known_noise = True
+        elif noise is not None and np.all(noise.std(measurements.components) > 0):
+            self.sigma = np.tile(noise.std(measurements.components), (m, 1))
             self.known_noise = True
         else:
-            self.sigma = np.ones(len(self.rows))
+            self.sigma = np.ones((m, k))
             self.known_noise = False
         self._qs: np.ndarray | None = None
         self._cache: tuple[bytes, Mechanism] | None = None
@@ -184,7 +188,7 @@ class CalibrationProblem:
         self._qs = qs
         w = 1.0 / self.sigma
         r_w = (r_raw * w).ravel()
-        J_w = None if J is None else (J * w[None, :, None]).reshape(-1, len(self.params))
+        J_w = None if J is None else (J * w[:, :, None]).reshape(-1, len(self.params))
         return r_w, J_w, r_raw
 
 

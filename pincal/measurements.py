@@ -71,6 +71,9 @@ class Measurements:
         frame: name of the measured frame.
         actuated: actuated joint names (columns of ``q_act``).
         noise: the instrument noise model, or None if unknown.
+        std: optional (m, k) per-pose standard deviations of the measured components
+            [m, rad] (e.g. from a laser tracker's per-pose fit covariance); overrides
+            ``noise`` for weighting.
     """
 
     q_act: np.ndarray
@@ -80,6 +83,7 @@ class Measurements:
     frame: str
     actuated: tuple[str, ...]
     noise: NoiseModel | None = None
+    std: np.ndarray | None = None
 
     def __post_init__(self):
         m = self.q_act.shape[0]
@@ -95,6 +99,13 @@ class Measurements:
             raise MeasurementError(
                 f"components {self.components} include rotations but no orientation was measured"
             )
+        if self.std is not None:
+            if self.std.shape != (m, len(self.components)):
+                raise MeasurementError(
+                    f"std must be ({m}, {len(self.components)}), got {self.std.shape}"
+                )
+            if not np.all(np.isfinite(self.std) & (self.std > 0)):
+                raise MeasurementError("std must be finite and > 0")
         for name, arr in (("q_act", self.q_act), ("positions", self.positions)):
             bad = np.nonzero(~np.all(np.isfinite(arr.reshape(m, -1)), axis=1))[0]
             if bad.size:
@@ -118,6 +129,7 @@ class Measurements:
             self.frame,
             self.actuated,
             self.noise,
+            None if self.std is None else self.std[idx],
         )
 
 
