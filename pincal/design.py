@@ -234,6 +234,7 @@ class _Problem:
             raise PincalError("all candidate Jacobian blocks are zero")
         self.delta = ridge * mean_diag
         self.stacked = J.reshape(self.N * self.k, self.n)
+        self.JT = np.ascontiguousarray(J.transpose(0, 2, 1))
 
     def check_m(self, m: int, min_m: int = 1) -> int:
         if not isinstance(m, (int, np.integer)) or not min_m <= m <= self.N:
@@ -297,11 +298,15 @@ class _Problem:
     # --- rank-k scoring -------------------------------------------------------------
 
     def add_logdets(self, state: _State) -> NDArray[np.float64]:
-        """log det(A + UᵀU) for every candidate U by the determinant lemma, (N,)."""
-        W = (self.stacked @ state.Ainv).reshape(self.N, self.k, self.n)
-        C = np.matmul(W, self.J.transpose(0, 2, 1))
-        C += np.eye(self.k)
-        sign, ld = np.linalg.slogdet(C)
+        """log det(A + UᵀU) for every candidate U by the determinant lemma, (N,).
+
+        Uses M_c = U_c A⁻¹ U_cᵀ (N, k, k), which the state keeps up to date with
+        rank-k updates (O(N·k²·n) per pose change instead of O(N·k·n²)).
+        """
+        if state.M is None:
+            W = (self.stacked @ state.Ainv).reshape(self.N, self.k, self.n)
+            state.M = np.matmul(W, self.JT)
+        sign, ld = np.linalg.slogdet(state.M + np.eye(self.k))
         return np.where(sign > 0, state.logdet + ld, -np.inf)
 
     def remove_logdets(self, state: _State, members: NDArray[np.int_]) -> NDArray[np.float64]:
@@ -354,7 +359,12 @@ class _Problem:
 
 
 class _State:
-    """A design: member list, A = δI + Σ UᵀU, A⁻¹ (Woodbury-updated), log det A."""
+    """A design: members, A = δI + Σ UᵀU, A⁻¹ (Woodbury-updated), log det A.
+
+    ``M`` (N, k, k), when not None, holds U_c A⁻¹ U_cᵀ for every candidate c and is
+    updated together with A⁻¹: if A⁻¹ ← A⁻¹ ∓ Wᵀ C⁻¹ W then
+    M_c ← M_c ∓ (U_c Wᵀ) C⁻¹ (U_c Wᵀ)ᵀ.
+    """
 
     def __init__(self, problem: _Problem, members: Sequence[int]) -> None:
         self.p = problem
@@ -370,6 +380,7 @@ class _State:
         new.mask = self.mask.copy()
         new.A, new.Ainv, new.logdet = self.A.copy(), self.Ainv.copy(), self.logdet
         new._updates = self._updates
+        new.M = None if self.M is None else self.M.copy()
         return new
 
     def refresh(self) -> None:
@@ -385,6 +396,7 @@ class _State:
         self.Ainv = Linv.T @ Linv
         self.logdet = 2.0 * float(np.sum(np.log(np.diag(L))))
         self._updates = 0
+        self.M: NDArray[np.float64] | None = None
 
     def _update(self, c: int, sign: float) -> None:
         U = self.p.J[c]
@@ -397,7 +409,12 @@ class _State:
             self.refresh()
             return
         # Woodbury: (A ± UᵀU)⁻¹ = A⁻¹ ∓ Wᵀ (I ± W Uᵀ)⁻¹ W
-        self.Ainv -= sign * (W.T @ np.linalg.solve(C, W))
+        Cinv = np.linalg.inv(C)
+        self.Ainv -= sign * (W.T @ Cinv @ W)
+        if self.M is not None:
+            p = self.p
+            P = (p.stacked @ W.T).reshape(p.N, p.k, p.k)  # U_c Wᵀ
+            self.M -= sign * np.matmul(P @ Cinv, P.transpose(0, 2, 1))
         self.Ainv = 0.5 * (self.Ainv + self.Ainv.T)
         self.logdet += ld
 
