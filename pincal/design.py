@@ -57,6 +57,7 @@ _log = logging.getLogger(__name__)
 
 _REL_TOL = 1e-12  # strict-improvement threshold (relative) for accepting a move
 _REFRESH_EVERY = 16  # Woodbury updates between exact refactorisations of A
+_M_REFRESH_EVERY = 64  # rank-k updates between exact recomputations of U_c A⁻¹ U_cᵀ
 
 
 # ----------------------------------------------------------------------------- arrays
@@ -379,12 +380,16 @@ class _State:
         new.members = list(self.members)
         new.mask = self.mask.copy()
         new.A, new.Ainv, new.logdet = self.A.copy(), self.Ainv.copy(), self.logdet
-        new._updates = self._updates
+        new._updates, new._m_updates = self._updates, self._m_updates
         new.M = None if self.M is None else self.M.copy()
         return new
 
-    def refresh(self) -> None:
-        """Recompute A, A⁻¹ and log det A from the members (removes drift)."""
+    def refresh(self, reset_m: bool = True) -> None:
+        """Recompute A, A⁻¹ and log det A from the members (removes drift).
+
+        With ``reset_m`` the candidate products M are dropped too (recomputed in
+        full by the next scoring); otherwise they keep being rank-k updated.
+        """
         p = self.p
         A = p.delta * np.eye(p.n)
         if self.members:
@@ -396,7 +401,9 @@ class _State:
         self.Ainv = Linv.T @ Linv
         self.logdet = 2.0 * float(np.sum(np.log(np.diag(L))))
         self._updates = 0
-        self.M: NDArray[np.float64] | None = None
+        if reset_m:
+            self.M: NDArray[np.float64] | None = None
+            self._m_updates = 0
 
     def _update(self, c: int, sign: float) -> None:
         U = self.p.J[c]
@@ -404,19 +411,22 @@ class _State:
         C = np.eye(self.p.k) + sign * (W @ U.T)
         s, ld = np.linalg.slogdet(C)
         self.A += sign * (U.T @ U)
-        self._updates += 1
-        if s <= 0 or np.linalg.cond(C) > 1e8 or self._updates >= _REFRESH_EVERY:
+        if s <= 0 or np.linalg.cond(C) > 1e8:  # ill-conditioned update: start afresh
             self.refresh()
             return
         # Woodbury: (A ± UᵀU)⁻¹ = A⁻¹ ∓ Wᵀ (I ± W Uᵀ)⁻¹ W
         Cinv = np.linalg.inv(C)
         self.Ainv -= sign * (W.T @ Cinv @ W)
+        self.Ainv = 0.5 * (self.Ainv + self.Ainv.T)
+        self.logdet += ld
         if self.M is not None:
             p = self.p
             P = (p.stacked @ W.T).reshape(p.N, p.k, p.k)  # U_c Wᵀ
             self.M -= sign * np.matmul(P @ Cinv, P.transpose(0, 2, 1))
-        self.Ainv = 0.5 * (self.Ainv + self.Ainv.T)
-        self.logdet += ld
+            self._m_updates += 1
+        self._updates += 1
+        if self._updates >= _REFRESH_EVERY:
+            self.refresh(reset_m=self._m_updates >= _M_REFRESH_EVERY)
 
     def add(self, c: int) -> None:
         self.members.append(int(c))

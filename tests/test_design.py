@@ -211,18 +211,20 @@ def test_map_to_ranges():
 # ----------------------------------------------------------------------------- rank-k
 
 
-def test_rank_k_update_equals_recomputation():
+@pytest.mark.parametrize("steps", [12, 45])
+def test_rank_k_update_equals_recomputation(steps):
+    """12 steps: pure Woodbury/rank-k updates; 45: across periodic refreshes of A⁻¹."""
     J = _random_candidates(8, N=50, k=6, n=9)
     prob = _Problem(J, "O1", fast=True, prune=None, ridge=1e-9)
     rng = np.random.default_rng(8)
     state = _State(prob, list(rng.choice(50, 3, replace=False)))
     prob.add_logdets(state)  # materialise M so that later updates are rank-k
-    for step in range(12):  # fewer than the refresh period: pure Woodbury/rank-k updates
-        if step % 3 == 2:
+    for step in range(steps):
+        if step % 2 == 1 and len(state.members) > 3:
             state.remove(state.members[0])
         else:
             state.add(int(rng.choice(np.flatnonzero(~state.mask))))
-    assert state._updates == 12 and state.M is not None
+    assert state._updates == steps % 16 and state._m_updates == steps and state.M is not None
 
     members = np.asarray(state.members)
     Js = J[members].reshape(-1, 9)
@@ -261,6 +263,27 @@ def test_exchange_terminates_and_never_decreases(index):
     assert sel.history[-1] == pytest.approx(sel.value)
     assert sel.indices.shape == (6,) and len(set(sel.indices)) == 6
     assert sel.value == pytest.approx(observability(J[sel.indices]).get(index), rel=1e-12)
+
+
+@pytest.mark.parametrize("index", ["O1", "O5"])
+def test_exchange_stops_at_its_fixed_point(index):
+    """Brute force: adding the best pose and removing any pose cannot improve the result."""
+    J = _random_candidates(17, N=60)
+    sel = exchange(J, 6, index, rng=4)
+    S = list(sel.indices)
+    others = [c for c in range(len(J)) if c not in S]
+    c_plus = max(others, key=lambda c: observability(J[[*S, c]]).get(index))
+    for s in S:
+        swapped = [x for x in S if x != s] + [c_plus]
+        assert observability(J[swapped]).get(index) <= sel.value * (1 + 1e-12)
+    # and one exchange step from the random start is the brute-force step
+    start = list(np.random.default_rng(4).choice(len(J), 6, replace=False))
+    first = exchange(J, 6, index, start=start, max_iter=1)
+    rest = [c for c in range(len(J)) if c not in start]
+    c_plus = max(rest, key=lambda c: observability(J[[*start, c]]).get(index))
+    grown = [*start, c_plus]
+    best_after = max(observability(J[[x for x in grown if x != r]]).get(index) for r in grown)
+    assert first.history[-1] == pytest.approx(best_after, rel=1e-12)
 
 
 @pytest.mark.parametrize("index", INDEX_NAMES)
