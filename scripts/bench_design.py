@@ -46,6 +46,7 @@ def main() -> None:
         f"exchange O1: {args.candidates} candidates × ({args.rows}, {args.params}) blocks, "
         f"m = {args.poses}, seed {args.seed}"
     )
+    exchange(J, args.poses, "O1", rng=args.seed + 1)  # warm-up (BLAS threads, caches)
     t_fast, fast = _time_runs(J, args.poses, True, args.repeats, args.seed + 1)
     t_slow, slow = _time_runs(J, args.poses, False, args.slow_repeats, args.seed + 1)
     same = np.array_equal(fast.indices, slow.indices)
