@@ -22,8 +22,6 @@ from pincal.closures import (
     Closure,
     measured_jacobian,
     parse_components,
-    relative_jacobian,
-    relative_residual,
 )
 from pincal.errors import (
     ClosureError,
@@ -289,7 +287,7 @@ class Mechanism:
         oMf = self.data.oMf
         return np.concatenate(
             [
-                relative_residual(oMf[a], oMf[b], c.components)
+                c.residual(oMf[a], oMf[b])
                 for (a, b), c in zip(self._closure_fids, self.closures, strict=True)
             ]
         )
@@ -299,10 +297,16 @@ class Mechanism:
         if not self.closures:
             return np.zeros((0, self.model.nv))
         oMf = self.data.oMf
+        model, data, lwa = self.model, self.data, pin.LOCAL_WORLD_ALIGNED
         blocks = []
         for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
-            Ja, Jb = self.frame_jacobian(a), self.frame_jacobian(b)
-            blocks.append(relative_jacobian(oMf[a], oMf[b], Ja, Jb, c.components))
+            if c.is_point:  # world-aligned point velocities directly
+                Jb = pin.getFrameJacobian(model, data, b, lwa)
+                Ja = pin.getFrameJacobian(model, data, a, lwa)
+                blocks.append(Jb[:3] - Ja[:3])
+            else:
+                Ja, Jb = self.frame_jacobian(a), self.frame_jacobian(b)
+                blocks.append(c.jacobian(oMf[a], oMf[b], Ja, Jb))
         return np.vstack(blocks)
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from pincal.closures import COMPONENTS, measured_jacobian, relative_jacobian
+from pincal.closures import COMPONENTS, measured_jacobian
 from pincal.mechanism import Mechanism
 from pincal.parameters import ParameterSet
 
@@ -90,9 +90,7 @@ def pose_sensitivity(
         free = mech._free_v
         Jc_p = np.vstack(
             [
-                relative_jacobian(
-                    oMf[a], oMf[b], param_twist(c.frame_a), param_twist(c.frame_b), c.components
-                )
+                c.jacobian(oMf[a], oMf[b], param_twist(c.frame_a), param_twist(c.frame_b))
                 for c, (a, b) in zip(mech.closures, mech._closure_fids, strict=True)
             ]
         )
