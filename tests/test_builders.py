@@ -300,3 +300,15 @@ def test_example_robot_names_and_unknown_name():
         example_robot_urdf("not_a_robot")
     assert info.value.kind == "robot" and info.value.valid == names
     assert isinstance(info.value, KeyError)
+
+
+def test_probe_as_transform_with_rotation():
+    rng = np.random.default_rng(7)
+    rows = random_table(rng, n=3, types=("revolute",))
+    T_probe = pin.SE3.Random().homogeneous
+    layout = dh_layout(rows, probe=True)
+    q, q_by_joint = joint_values(rows, layout, rng)
+    (got,) = pin_frames(dh_urdf(rows, "p", probe=T_probe), ["probe"], q_by_joint)
+    expected = reference_frames(rows, q, "standard")[-1] @ T_probe
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(dh_fk(rows, q, probe=T_probe), expected, rtol=0, atol=1e-12)
