@@ -594,7 +594,8 @@ def bundled_models() -> list[str]:
 
 
 def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
-    """Find the URDF (and sidecar, if any) for a model directory, URDF path or model name."""
+    """Find the URDF (and sidecar, if any) for a model directory, URDF path, bundled
+    model name or example-robot-data robot name (e.g. ``ur10``)."""
     path = Path(spec)
     if path.is_dir():
         urdf = path / f"{path.name}.urdf"
@@ -610,7 +611,12 @@ def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
     elif (MODELS_DIR / str(spec)).is_dir():
         return resolve_model_path(MODELS_DIR / str(spec))
     else:
-        raise UnknownNameError("model", str(spec), bundled_models())
+        from pincal.builders import example_robot_names, example_robot_urdf
+
+        if str(spec) not in example_robot_names():
+            valid = bundled_models() + [f"{n} (example-robot-data)" for n in example_robot_names()]
+            raise UnknownNameError("model", str(spec), valid)
+        urdf = example_robot_urdf(str(spec))
     sidecar = urdf.with_suffix(".yaml")
     return urdf, sidecar if sidecar.is_file() else None
 
