@@ -81,14 +81,27 @@ class _Solution:
     singular_values: np.ndarray  # of the Jacobian over the free dofs at q
 
 
-def _lstsq_step(J: np.ndarray, r: np.ndarray, rcond: float) -> tuple[np.ndarray, np.ndarray]:
-    """Minimum-norm least-squares solution of ``J dx = −r`` and singular values of J."""
+def _newton_step(J: np.ndarray, r: np.ndarray, rcond: float) -> np.ndarray:
+    """Minimum-norm least-squares solution of ``J dx = −r`` (rank-revealing).
+
+    A square, well-conditioned J is solved by LU; anything else (redundant closure rows,
+    rank loss) by a truncated SVD with relative cut-off ``rcond``.
+    """
+    if J.shape[0] == J.shape[1] and J.size:
+        try:
+            step = -np.linalg.solve(J, r)
+            if np.all(np.isfinite(step)) and np.linalg.norm(J @ step + r) <= 1e-8 * (
+                np.linalg.norm(r) + 1e-300
+            ):
+                return step
+        except np.linalg.LinAlgError:
+            pass
     U, s, Vt = np.linalg.svd(J, full_matrices=False)
     if s.size == 0 or s[0] == 0.0:
-        return np.zeros(J.shape[1]), s
+        return np.zeros(J.shape[1])
     keep = s > rcond * s[0]
     coeff = (U.T @ r)[keep] / s[keep]
-    return -(Vt[keep].T @ coeff), s
+    return -(Vt[keep].T @ coeff)
 
 
 class Mechanism:
@@ -332,16 +345,17 @@ class Mechanism:
 
         r = evaluate(q)
         norm = np.linalg.norm(r)
-        s = np.zeros(0)
         for it in range(opt.max_iterations + 1):
             J = self.closure_jacobian()
             if extra is not None:
                 J = np.vstack([J, extra()[1]])
-            step, s = _lstsq_step(J[:, free], r, opt.rcond)
+            Jf = J[:, free]
             if np.max(np.abs(r), initial=0.0) <= opt.tol:
+                s = np.linalg.svd(Jf, compute_uv=False) if Jf.size else np.zeros(0)
                 return _Solution(q, it, float(np.max(np.abs(r), initial=0.0)), s)
             if it == opt.max_iterations:
                 break
+            step = _newton_step(Jf, r, opt.rcond)
             step_norm = np.linalg.norm(step)
             if step_norm > opt.max_step:
                 step *= opt.max_step / step_norm
