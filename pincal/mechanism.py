@@ -336,11 +336,14 @@ class Mechanism:
         q = q0.copy()
         nv = self.model.nv
 
+        extra_jacobian = [np.zeros((0, nv))]
+
         def evaluate(qq):
             self._update(qq)
             r = self._closure_residual()
             if extra is not None:
-                r = np.concatenate([r, extra()[0]])
+                r_extra, extra_jacobian[0] = extra()
+                r = np.concatenate([r, r_extra])
             return r
 
         r = evaluate(q)
@@ -348,7 +351,7 @@ class Mechanism:
         for it in range(opt.max_iterations + 1):
             J = self.closure_jacobian()
             if extra is not None:
-                J = np.vstack([J, extra()[1]])
+                J = np.vstack([J, extra_jacobian[0]])
             Jf = J[:, free]
             if np.max(np.abs(r), initial=0.0) <= opt.tol:
                 s = np.linalg.svd(Jf, compute_uv=False) if Jf.size else np.zeros(0)
