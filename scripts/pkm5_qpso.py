@@ -128,7 +128,8 @@ def main() -> None:
     print()
     for lab, (res, _) in runs.items():
         print(f"{lab}: {res.message}")
-    summary(mech, params, q_meas, opts, args)
+    if args.repeats > 0:
+        summary(mech, params, q_meas, opts, args)
 
 
 def summary(mech, params, q_meas, opts: QPSOOptions, args) -> None:
