@@ -27,13 +27,14 @@ from pincal.errors import (
     UnidentifiableError,
 )
 from pincal.identifiability import Identifiability, analyse_jacobian
+from pincal.identify_qpso import QPSOOptions, qpso_identify
 from pincal.measurements import Measurements
 from pincal.mechanism import Mechanism
 from pincal.parameters import ParameterSet
 from pincal.sensitivity import pose_sensitivity
 
 log = logging.getLogger(__name__)
-METHODS = ("gauss-newton", "lm")
+METHODS = ("gauss-newton", "lm", "qpso", "qpso-stepwise")
 
 
 @dataclass(frozen=True)
@@ -304,6 +305,7 @@ def identify(
     max_iterations: int = 50,
     xtol: float = 1e-10,
     progress: Callable[[int, float], None] | None = None,
+    qpso: QPSOOptions | None = None,
 ) -> IdentificationResult:
     """Identify parameter values from measurements.
 
@@ -311,7 +313,8 @@ def identify(
         mech: nominal mechanism (the one ``params`` was built for).
         params: the n parameters to identify.
         measurements: m measured poses.
-        method: ``"gauss-newton"`` or ``"lm"`` (scipy least_squares).
+        method: ``"gauss-newton"``, ``"lm"`` (scipy least_squares), ``"qpso"`` or
+            ``"qpso-stepwise"`` (seed 003, see :mod:`pincal.identify_qpso`).
         initial: (n,) starting values [SI] (default zeros = nominal).
         reduce: hold unidentifiable parameters at their initial value and identify the
             base set (True), or raise :class:`UnidentifiableError` (False).
@@ -320,6 +323,7 @@ def identify(
         max_iterations: iteration limit.
         xtol: relative step tolerance.
         progress: optional callback ``(iteration, cost)``.
+        qpso: settings of the QPSO methods (default: the seed's N = 80, t_max = 300, ±0.05 mm).
 
     Raises:
         TooFewPosesError, UnidentifiableError, MeasurementError, ParameterError.
@@ -358,6 +362,10 @@ def identify(
         x, iters, history, success, message = _gauss_newton(
             problem, x0, free, max_iterations, xtol, regularization, progress
         )
+    elif method.startswith("qpso"):
+        found = qpso_identify(problem, x0, free, stepwise=method == "qpso-stepwise", options=qpso)
+        x, iters, history = found.values, found.iterations, list(found.history)
+        success, message = found.cost <= found.initial_cost, found.message
     else:
         x, iters, history, success, message = _levenberg_marquardt(
             problem, x0, free, max_iterations, xtol, loss, progress

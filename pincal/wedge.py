@@ -38,9 +38,11 @@ from pincal.errors import ClosureError, ParameterError
 
 __all__ = [
     "PATENT_ERROR_NAMES",
+    "PATENT_PRESET_NAMES",
     "WedgeConstraintJacobians",
     "WedgeGeometry",
     "WedgeSensitivity",
+    "wedge_compensation",
     "wedge_constraint_jacobians",
     "wedge_constraints",
     "wedge_error_matrix",
@@ -582,3 +584,56 @@ def wedge_urdf(geom: WedgeGeometry, name: str = "wedge3") -> str:
         )
     out.append("</robot>\n")
     return "".join(out)
+
+
+#: Names of the seven parameters of the ``patent`` preset of models/wedge3.
+PATENT_PRESET_NAMES: tuple[str, ...] = (
+    "q0.offset",
+    "q1.offset",
+    "q2.offset",
+    "bar_end1_frame.tx",
+    "bar_end2_frame.tx",
+    "wedge1_slide.ry",
+    "wedge2_slide.ry",
+)
+
+
+def wedge_compensation(
+    names: tuple[str, ...] | list[str],
+    values: np.ndarray,
+    nominal: WedgeGeometry | None = None,
+) -> WedgeGeometry:
+    """Compensated geometry (the patent's capital-letter parameters) from preset values.
+
+    Exact map of models/wedge3/README.md ("Preset patent"): ``δl1 = −bar_end1_frame.tx``,
+    ``δl2 = bar_end2_frame.tx``, ``dq0 = q0.offset``, ``dq1 = q1.offset + δl1``,
+    ``dq2 = q2.offset − δl2``, ``k1 = tan(atan k1⁰ + wedge1_slide.ry)``,
+    ``k2 = tan(atan k2⁰ − wedge2_slide.ry)``. The result has the nominal structure, so
+    :func:`wedge_forward` / :func:`wedge_inverse` remain the calibrated machine's exact
+    kinematics.
+
+    Args:
+        names: parameter names (any subset of ``PATENT_PRESET_NAMES``; others rejected).
+        values: values [m, rad], same length as ``names``.
+        nominal: the geometry the preset perturbs (default ``WedgeGeometry.nominal()``).
+    """
+    nominal = nominal or WedgeGeometry.nominal()
+    values = np.asarray(values, dtype=float)
+    if values.shape != (len(names),):
+        raise ParameterError(f"expected {len(names)} values, got shape {values.shape}")
+    unknown = [n for n in names if n not in PATENT_PRESET_NAMES]
+    if unknown:
+        raise ParameterError(
+            f"parameters {unknown} have no patent meaning; valid: {list(PATENT_PRESET_NAMES)}"
+        )
+    v = dict.fromkeys(PATENT_PRESET_NAMES, 0.0) | dict(zip(names, values.tolist(), strict=True))
+    dl1, dl2 = -v["bar_end1_frame.tx"], v["bar_end2_frame.tx"]
+    return WedgeGeometry(
+        l1=nominal.l1 + dl1,
+        l2=nominal.l2 + dl2,
+        k1=float(np.tan(np.arctan(nominal.k1) + v["wedge1_slide.ry"])),
+        k2=float(np.tan(np.arctan(nominal.k2) - v["wedge2_slide.ry"])),
+        dq0=nominal.dq0 + v["q0.offset"],
+        dq1=nominal.dq1 + v["q1.offset"] + dl1,
+        dq2=nominal.dq2 + v["q2.offset"] - dl2,
+    )
