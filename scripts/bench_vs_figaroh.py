@@ -156,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
     try:
-        import figaroh  # noqa: F401
+        import figaroh
         import figaroh.calibration.calibration_tools  # noqa: F401
 
         figaroh_error = None
