@@ -24,7 +24,7 @@ from pincal.errors import ParameterError
 from pincal.mechanism import Mechanism
 from pincal.parameters import ParameterSet
 
-__all__ = ["LegGeometry", "legs_from_table", "leg_geometry", "pus54_values"]
+__all__ = ["LegGeometry", "leg_geometry", "legs_from_table", "pus54_values"]
 
 N_LEGS = 6
 
