@@ -440,7 +440,10 @@ def experiment_replica(
         say(f"trial {t + 1}/{n_trials}: register, measure {len(rows)} poses, identify")
         fit = tracker.register_base(BASE_TARGETS, rng)
         X = fit.T.inverse() * tracker.T_tracker_base  # true base in the registered frame
-        reg_err = (float(np.linalg.norm(X.translation)), float(np.linalg.norm(pin.log3(X.rotation))))
+        reg_err = (
+            float(np.linalg.norm(X.translation)),
+            float(np.linalg.norm(pin.log3(X.rotation))),
+        )
         meas = tracker_measurements(actual, rows, tracker, rng)
         result = identify(mech, params, meas)
         # before: the controller's nominal IK; after: compensated commands
@@ -454,9 +457,7 @@ def experiment_replica(
         full[[params.index(n) for n in result.params.names]] = result.values
         J = identification_jacobian(mech, result.params, comp.q_act[ok], values=result.values)
         if len(result.params) != len(params):  # linearise at the full identified geometry
-            J = identification_jacobian(
-                result.calibrated, result.params, comp.q_act[ok]
-            )
+            J = identification_jacobian(result.calibrated, result.params, comp.q_act[ok])
         J = J.reshape(len(ok), 6, -1)
         Jp, Jr = J[:, :3].reshape(-1, J.shape[2]), J[:, 3:].reshape(-1, J.shape[2])
         cov = result.covariance
