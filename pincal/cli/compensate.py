@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 
 import click
 
@@ -37,9 +38,7 @@ def compensate(model, targets, out, skip_unreachable, as_json) -> None:
 
     mech = load_mechanism(model)
     poses = read_poses(targets)
-    with click.progressbar(
-        length=len(poses), label="compensating", file=click.get_text_stream("stderr")
-    ) as bar:
+    with click.progressbar(length=len(poses), label="compensating", file=sys.stderr) as bar:
         result = run(mech, poses, progress=lambda done, total: bar.update(1))
     if result.unreachable and not skip_unreachable:
         first = result.unreachable[0]
