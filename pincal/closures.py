@@ -9,7 +9,8 @@ code serves forward/inverse kinematics and the identification Jacobian.
 Component conventions (see models/README.md):
 
 * closure ``a → b``: ``[x, y, z]`` = ``R_aᵀ (p_b − p_a)`` and ``[rx, ry, rz]`` =
-  ``log3(R_aᵀ R_b)``, both in frame a [m, rad];
+  ``log3(R_aᵀ R_b)``, both in frame a [m, rad]; a pure point closure (``3d``) uses
+  ``p_b − p_a`` in world axes instead (same zero set, cheaper);
 * measured quantity of frame f: ``[x, y, z]`` = world position ``p_f`` [m] and
   ``[rx, ry, rz]`` = rotation in the local frame of f [rad].
 """
@@ -82,6 +83,25 @@ class Closure:
     @property
     def size(self) -> int:
         return len(self.components)
+
+    @property
+    def is_point(self) -> bool:
+        """A point coincidence (``3d``): residual ``p_b − p_a`` in world axes."""
+        return self.components == (0, 1, 2)
+
+    def residual(self, oMa: pin.SE3, oMb: pin.SE3) -> np.ndarray:
+        """Residual (size,) [m, rad]; a point closure uses world axes (same zero set)."""
+        if self.is_point:
+            return oMb.translation - oMa.translation
+        return relative_residual(oMa, oMb, self.components)
+
+    def jacobian(
+        self, oMa: pin.SE3, oMb: pin.SE3, twist_a: np.ndarray, twist_b: np.ndarray
+    ) -> np.ndarray:
+        """(size, N) derivative of :meth:`residual` given local twists (6, N) of a and b."""
+        if self.is_point:
+            return oMb.rotation @ twist_b[:3] - oMa.rotation @ twist_a[:3]
+        return relative_jacobian(oMa, oMb, twist_a, twist_b, self.components)
 
 
 def relative_residual(

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize
 
+from pincal.closures import measurement_residual
 from pincal.errors import (
     ConvergenceError,
     MeasurementError,
@@ -164,8 +165,6 @@ class CalibrationProblem:
         r_raw = np.empty((len(meas), len(self.rows)))
         J = np.empty((len(meas), len(self.rows), len(self.params))) if jacobian else None
         fid = mech.frame_id(mech.measured_frame)
-        from pincal.closures import measurement_residual
-
         for i, q_act in enumerate(meas.q_act):
             guess = q_prev[i] if q_prev is not None else None
             try:

@@ -22,8 +22,6 @@ from pincal.closures import (
     Closure,
     measured_jacobian,
     parse_components,
-    relative_jacobian,
-    relative_residual,
 )
 from pincal.errors import (
     ClosureError,
@@ -83,14 +81,27 @@ class _Solution:
     singular_values: np.ndarray  # of the Jacobian over the free dofs at q
 
 
-def _lstsq_step(J: np.ndarray, r: np.ndarray, rcond: float) -> tuple[np.ndarray, np.ndarray]:
-    """Minimum-norm least-squares solution of ``J dx = −r`` and singular values of J."""
+def _newton_step(J: np.ndarray, r: np.ndarray, rcond: float) -> np.ndarray:
+    """Minimum-norm least-squares solution of ``J dx = −r`` (rank-revealing).
+
+    A square, well-conditioned J is solved by LU; anything else (redundant closure rows,
+    rank loss) by a truncated SVD with relative cut-off ``rcond``.
+    """
+    if J.shape[0] == J.shape[1] and J.size:
+        try:
+            step = -np.linalg.solve(J, r)
+            if np.all(np.isfinite(step)) and np.linalg.norm(J @ step + r) <= 1e-8 * (
+                np.linalg.norm(r) + 1e-300
+            ):
+                return step
+        except np.linalg.LinAlgError:
+            pass
     U, s, Vt = np.linalg.svd(J, full_matrices=False)
     if s.size == 0 or s[0] == 0.0:
-        return np.zeros(J.shape[1]), s
+        return np.zeros(J.shape[1])
     keep = s > rcond * s[0]
     coeff = (U.T @ r)[keep] / s[keep]
-    return -(Vt[keep].T @ coeff), s
+    return -(Vt[keep].T @ coeff)
 
 
 class Mechanism:
@@ -289,7 +300,7 @@ class Mechanism:
         oMf = self.data.oMf
         return np.concatenate(
             [
-                relative_residual(oMf[a], oMf[b], c.components)
+                c.residual(oMf[a], oMf[b])
                 for (a, b), c in zip(self._closure_fids, self.closures, strict=True)
             ]
         )
@@ -299,10 +310,16 @@ class Mechanism:
         if not self.closures:
             return np.zeros((0, self.model.nv))
         oMf = self.data.oMf
+        model, data, lwa = self.model, self.data, pin.LOCAL_WORLD_ALIGNED
         blocks = []
         for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
-            Ja, Jb = self.frame_jacobian(a), self.frame_jacobian(b)
-            blocks.append(relative_jacobian(oMf[a], oMf[b], Ja, Jb, c.components))
+            if c.is_point:  # world-aligned point velocities directly
+                Jb = pin.getFrameJacobian(model, data, b, lwa)
+                Ja = pin.getFrameJacobian(model, data, a, lwa)
+                blocks.append(Jb[:3] - Ja[:3])
+            else:
+                Ja, Jb = self.frame_jacobian(a), self.frame_jacobian(b)
+                blocks.append(c.jacobian(oMf[a], oMf[b], Ja, Jb))
         return np.vstack(blocks)
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:
@@ -319,25 +336,29 @@ class Mechanism:
         q = q0.copy()
         nv = self.model.nv
 
+        extra_jacobian = [np.zeros((0, nv))]
+
         def evaluate(qq):
             self._update(qq)
             r = self._closure_residual()
             if extra is not None:
-                r = np.concatenate([r, extra()[0]])
+                r_extra, extra_jacobian[0] = extra()
+                r = np.concatenate([r, r_extra])
             return r
 
         r = evaluate(q)
         norm = np.linalg.norm(r)
-        s = np.zeros(0)
         for it in range(opt.max_iterations + 1):
             J = self.closure_jacobian()
             if extra is not None:
-                J = np.vstack([J, extra()[1]])
-            step, s = _lstsq_step(J[:, free], r, opt.rcond)
+                J = np.vstack([J, extra_jacobian[0]])
+            Jf = J[:, free]
             if np.max(np.abs(r), initial=0.0) <= opt.tol:
+                s = np.linalg.svd(Jf, compute_uv=False) if Jf.size else np.zeros(0)
                 return _Solution(q, it, float(np.max(np.abs(r), initial=0.0)), s)
             if it == opt.max_iterations:
                 break
+            step = _newton_step(Jf, r, opt.rcond)
             step_norm = np.linalg.norm(step)
             if step_norm > opt.max_step:
                 step *= opt.max_step / step_norm
@@ -590,7 +611,8 @@ def bundled_models() -> list[str]:
 
 
 def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
-    """Find the URDF (and sidecar, if any) for a model directory, URDF path or model name."""
+    """Find the URDF (and sidecar, if any) for a model directory, URDF path, bundled
+    model name or example-robot-data robot name (e.g. ``ur10``)."""
     path = Path(spec)
     if path.is_dir():
         urdf = path / f"{path.name}.urdf"
@@ -606,7 +628,12 @@ def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
     elif (MODELS_DIR / str(spec)).is_dir():
         return resolve_model_path(MODELS_DIR / str(spec))
     else:
-        raise UnknownNameError("model", str(spec), bundled_models())
+        from pincal.builders import example_robot_names, example_robot_urdf
+
+        if str(spec) not in example_robot_names():
+            valid = bundled_models() + [f"{n} (example-robot-data)" for n in example_robot_names()]
+            raise UnknownNameError("model", str(spec), valid)
+        urdf = example_robot_urdf(str(spec))
     sidecar = urdf.with_suffix(".yaml")
     return urdf, sidecar if sidecar.is_file() else None
 

@@ -71,6 +71,7 @@ class ParameterSet:
         self._twists = {
             j: np.stack([parameters[k].twist for k in c], axis=1) for j, c in joints.items()
         }
+        self._twist_cache: tuple[bytes, dict] | None = None
 
     def __len__(self) -> int:
         return len(self.parameters)
@@ -108,12 +109,16 @@ class ParameterSet:
         The effective twists are the exact derivatives, in the displaced origin frame, of
         the origin with respect to the joint's parameters at ``values``.
         """
+        key = values.tobytes()
+        if self._twist_cache is not None and self._twist_cache[0] == key:
+            return self._twist_cache[1]
         out = {}
         for j in self.joints:
             cols, Xi = self._cols[j], self._twists[j]
             v = Xi @ values[cols]
             eff = Xi if not np.any(v) else pin.Jexp6(v) @ Xi
             out[j] = (cols, v, eff)
+        self._twist_cache = (key, out)
         return out
 
     def apply(self, mech: Mechanism, values: np.ndarray | None) -> Mechanism:

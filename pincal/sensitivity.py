@@ -11,12 +11,13 @@ is ``∂m/∂p + ∂m/∂q_u · dq_u/dp``. No finite differences.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from pincal.closures import COMPONENTS, measured_jacobian, relative_jacobian
+from pincal.closures import COMPONENTS, measured_jacobian
 from pincal.mechanism import Mechanism
 from pincal.parameters import ParameterSet
 
@@ -39,18 +40,57 @@ class PoseSensitivity:
     jacobian: np.ndarray
 
 
-def _origin_placement(mech: Mechanism, joint: str) -> pin.SE3:
-    """World placement of URDF joint ``joint``'s origin frame (before joint motion)."""
-    uj = mech.tree.joints[joint]
-    model, data = mech.model, mech.data
-    if uj.type == "fixed":
-        return data.oMf[mech.frame_id(joint)]
-    jid = model.getJointId(joint)
-    return data.oMi[model.parents[jid]] * model.jointPlacements[jid]
+def _solve(A: np.ndarray, B: np.ndarray, rcond: float) -> np.ndarray:
+    """Least-squares ``A X = B``: LU when A is square and regular, else truncated SVD."""
+    if A.shape[0] == A.shape[1]:
+        try:
+            X = np.linalg.solve(A, B)
+            if np.all(np.isfinite(X)) and np.linalg.norm(A @ X - B) <= 1e-8 * (
+                np.linalg.norm(B) + 1e-300
+            ):
+                return X
+        except np.linalg.LinAlgError:
+            pass
+    return np.linalg.lstsq(A, B, rcond=rcond)[0]
 
 
-def _ancestor_sets(mech: Mechanism, frames: list[str]) -> dict[str, set[str]]:
-    return {f: set(mech.tree.ancestors(f)) for f in frames}
+@dataclass(frozen=True)
+class _Plan:
+    """What the sensitivity of one (mechanism, parameter set) pair needs, computed once.
+
+    Attributes:
+        fids: frame index of every frame involved (measured + closure frames).
+        moves: per frame, the parameterised joints among its URDF ancestors.
+        origins: per parameterised joint, how to get its origin's world placement:
+            ``(fixed-joint frame id, -1, -1)`` or ``(-1, joint id, parent joint id)``.
+    """
+
+    fids: dict[str, int]
+    moves: dict[str, tuple[str, ...]]
+    origins: dict[str, tuple[int, int, int]]
+
+
+_PLANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _plan(mech: Mechanism, params: ParameterSet) -> _Plan:
+    per_mech = _PLANS.setdefault(mech, {})
+    plan = per_mech.get(params)
+    if plan is None:
+        frames = [mech.measured_frame] + [f for c in mech.closures for f in (c.frame_a, c.frame_b)]
+        frames = list(dict.fromkeys(frames))
+        joints = set(params.joints)
+        moves = {f: tuple(j for j in mech.tree.ancestors(f) if j in joints) for f in frames}
+        origins = {}
+        for j in params.joints:
+            if mech.tree.joints[j].type == "fixed":
+                origins[j] = (mech.frame_id(j), -1, -1)
+            else:
+                jid = mech.model.getJointId(j)
+                origins[j] = (-1, jid, mech.model.parents[jid])
+        plan = _Plan({f: mech.frame_id(f) for f in frames}, moves, origins)
+        per_mech[params] = plan
+    return plan
 
 
 def pose_sensitivity(
@@ -64,42 +104,45 @@ def pose_sensitivity(
     """
     values = params.check_values(values)
     twists = params.joint_twists(values)
+    plan = _plan(mech, params)
     mech._update(q)
+    model, data = mech.model, mech.data
+    oMf = data.oMf
     n = len(params)
-    fm = mech.measured_frame
-    frames = [fm] + [f for c in mech.closures for f in (c.frame_a, c.frame_b)]
-    ancestors = _ancestor_sets(mech, list(dict.fromkeys(frames)))
-    origins = {j: _origin_placement(mech, j) for j in params.joints}
+    origins: dict[str, pin.SE3] = {}
+    for j, (fid, jid, parent) in plan.origins.items():
+        origins[j] = oMf[fid] if fid >= 0 else data.oMi[parent] * model.jointPlacements[jid]
     cache: dict[str, np.ndarray] = {}
 
     def param_twist(frame: str) -> np.ndarray:
+        """(6, n) local twist of ``frame`` per unit of each parameter."""
         if frame not in cache:
             P = np.zeros((6, n))
-            oMf_inv = mech.data.oMf[mech.frame_id(frame)].inverse()
-            for j in ancestors[frame].intersection(twists):
-                cols, _, eff = twists[j]
-                P[:, cols] = (oMf_inv * origins[j]).action @ eff
+            moves = plan.moves[frame]
+            if moves:
+                oMf_inv = oMf[plan.fids[frame]].inverse()
+                for j in moves:
+                    cols, _, eff = twists[j]
+                    P[:, cols] = (oMf_inv * origins[j]).action @ eff
             cache[frame] = P
         return cache[frame]
 
-    oMf = mech.data.oMf
-    fid_m = mech.frame_id(fm)
-    J = measured_jacobian(oMf[fid_m], param_twist(fm))
+    fid_m = plan.fids[mech.measured_frame]
+    oMm = oMf[fid_m]
+    J = measured_jacobian(oMm, param_twist(mech.measured_frame))
     if mech.closures:
         Jc = mech.closure_jacobian()
         free = mech._free_v
         Jc_p = np.vstack(
             [
-                relative_jacobian(
-                    oMf[a], oMf[b], param_twist(c.frame_a), param_twist(c.frame_b), c.components
-                )
+                c.jacobian(oMf[a], oMf[b], param_twist(c.frame_a), param_twist(c.frame_b))
                 for c, (a, b) in zip(mech.closures, mech._closure_fids, strict=True)
             ]
         )
-        dqu_dp = -np.linalg.lstsq(Jc[:, free], Jc_p, rcond=mech.options.rcond)[0]
-        Jm_u = measured_jacobian(oMf[fid_m], mech.frame_jacobian(fid_m))[:, free]
+        dqu_dp = _solve(Jc[:, free], -Jc_p, mech.options.rcond)
+        Jm_u = measured_jacobian(oMm, mech.frame_jacobian(fid_m))[:, free]
         J = J + Jm_u @ dqu_dp
-    return PoseSensitivity(q.copy(), oMf[fid_m].translation.copy(), oMf[fid_m].rotation.copy(), J)
+    return PoseSensitivity(q.copy(), oMm.translation.copy(), oMm.rotation.copy(), J)
 
 
 def identification_jacobian(
