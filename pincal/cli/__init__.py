@@ -21,17 +21,26 @@ def main(ctx: click.Context, debug: bool) -> None:
     Examples:
       pincal demo                      full simulated Stewart calibration
       pincal info stewart_6ups         joints, closures, presets, identifiability
+      pincal simulate hexaslide_6pus --random 30 --out m.csv
+      pincal calibrate hexaslide_6pus --data m.csv --out cal/
+      pincal compensate cal/ --targets poses.csv --out commands.csv
     """
     ctx.ensure_object(dict)
     ctx.obj["debug"] = debug
     logging.basicConfig(level=logging.DEBUG if debug else logging.WARNING)
 
 
+from pincal.cli import calibrate as _calibrate  # noqa: E402
+from pincal.cli import compensate as _compensate  # noqa: E402
 from pincal.cli import demo as _demo  # noqa: E402
 from pincal.cli import info as _info  # noqa: E402
+from pincal.cli import simulate as _simulate  # noqa: E402
 
 main.add_command(_demo.demo)
 main.add_command(_info.info)
+main.add_command(_calibrate.calibrate)
+main.add_command(_compensate.compensate)
+main.add_command(_simulate.simulate)
 
 if __name__ == "__main__":  # pragma: no cover
     main()

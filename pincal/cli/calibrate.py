@@ -1,0 +1,157 @@
+"""`pincal calibrate`: identify a model's parameters from a measurement file."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from pincal.cli.common import fail_cleanly
+
+
+def _stats(s) -> dict[str, float | None]:
+    import math
+
+    def mm(v):
+        return None if math.isnan(v) else v * 1e3
+
+    return {
+        "rms_position_mm": mm(s.rms_position),
+        "max_position_mm": mm(s.max_position),
+        "rms_orientation_mrad": mm(s.rms_orientation),
+        "max_orientation_mrad": mm(s.max_orientation),
+    }
+
+
+def result_json(result, mech, preset: str, data_path: str, n_poses: int) -> dict:
+    """The identification result as plain JSON (SI values and std)."""
+    ident = result.identifiability
+    return {
+        "model": mech.name,
+        "preset": preset,
+        "data": data_path,
+        "method": result.method,
+        "poses": n_poses,
+        "success": result.success,
+        "message": result.message,
+        "iterations": result.iterations,
+        "reduced_chi2": result.reduced_chi2,
+        "parameters": [
+            {"name": n, "unit": u, "value": float(v), "std": float(s)}
+            for n, v, s, u in result.table()
+        ],
+        "fixed": list(result.fixed),
+        "identifiability": {
+            "parameters": len(ident.names),
+            "rank": ident.rank,
+            "unidentifiable": list(ident.unidentifiable_names),
+            "explanation": ident.describe(),
+        },
+        "residuals": {
+            "before": _stats(result.before),
+            "after": _stats(result.after),
+            "per_pose_SI": result.residuals.tolist(),
+        },
+    }
+
+
+def format_report(doc: dict) -> str:
+    """Human-readable identification report (mm / mrad)."""
+    lines = [
+        f"pincal calibration of {doc['model']} (preset {doc['preset']}, {doc['method']})",
+        f"data: {doc['data']} ({doc['poses']} poses)",
+        f"solver: {doc['message']} after {doc['iterations']} iterations; "
+        f"reduced chi2 {doc['reduced_chi2']:.4g}",
+        f"identifiable: {doc['identifiability']['rank']} of "
+        f"{doc['identifiability']['parameters']} parameters",
+        *[f"  {t}" for t in doc["identifiability"]["explanation"]],
+        "",
+        f"{'parameter':32s} {'value':>14s} {'± std':>12s}",
+    ]
+    for p in doc["parameters"]:
+        scale, unit = (1e3, "mm") if p["unit"] == "m" else (1e3, "mrad")
+        lines.append(f"{p['name']:32s} {p['value'] * scale:+14.6f} {p['std'] * scale:12.6f} {unit}")
+    lines.append("")
+    for when in ("before", "after"):
+        s = doc["residuals"][when]
+        parts = []
+        if s["rms_position_mm"] is not None:
+            parts.append(
+                f"position RMS {s['rms_position_mm']:.6f} max {s['max_position_mm']:.6f} mm"
+            )
+        if s["rms_orientation_mrad"] is not None:
+            parts.append(
+                f"orientation RMS {s['rms_orientation_mrad']:.6f} max "
+                f"{s['max_orientation_mrad']:.6f} mrad"
+            )
+        lines.append(f"residuals {when:6s}: " + "; ".join(parts))
+    return "\n".join(lines) + "\n"
+
+
+@click.command()
+@click.argument("model")
+@click.option(
+    "--data",
+    required=True,
+    type=click.Path(dir_okay=False),
+    help="Measurement CSV (pincal measurements format).",
+)
+@click.option("--params", "preset", default=None, help="Parameter preset (default: first preset).")
+@click.option(
+    "--method", type=click.Choice(["gauss-newton", "lm"]), default="gauss-newton", show_default=True
+)
+@click.option(
+    "--out",
+    required=True,
+    type=click.Path(file_okay=False),
+    help="Output directory: report.txt, result.json, calibrated URDF + sidecar.",
+)
+@click.option(
+    "--json", "as_json", is_flag=True, help="Print result.json on stdout instead of the report."
+)
+@fail_cleanly
+def calibrate(model, data, preset, method, out, as_json) -> None:
+    """Identify MODEL's geometric parameters from measured poses (--data)."""
+    import numpy as np
+
+    from pincal.datafiles import check_enough_poses, read_measurement_file
+    from pincal.export import save_urdf
+    from pincal.files import atomic_write_text
+    from pincal.identifiability import identifiability
+    from pincal.identify import identify
+    from pincal.mechanism import load_mechanism
+    from pincal.parameters import parameters
+
+    mech = load_mechanism(model)
+    mf = read_measurement_file(data, mech)
+    for w in mf.warnings:
+        click.echo(f"pincal: warning: {w}", err=True)
+    meas = mf.measurements
+    preset = preset or (next(iter(mech.presets), "full"))
+    params = parameters(mech, preset)
+    structural = identifiability(mech, params, rng=np.random.default_rng(0))
+    check_enough_poses(meas, structural.rank)
+    click.echo(
+        f"… identifying {structural.rank} of {len(params)} parameters from {len(meas)} poses",
+        err=True,
+    )
+    result = identify(
+        mech,
+        params,
+        meas,
+        method=method,
+        progress=lambda it, cost: click.echo(f"… iteration {it}: cost {cost:.6g}", err=True),
+    )
+    doc = result_json(result, mech, preset, str(data), len(meas))
+    out_dir = Path(out)
+    urdf = save_urdf(result.calibrated, out_dir / f"{mech.name}.urdf")
+    doc["calibrated_urdf"] = str(urdf)
+    report = format_report(doc)
+    atomic_write_text(out_dir / "result.json", json.dumps(doc, indent=1) + "\n")
+    atomic_write_text(out_dir / "report.txt", report)
+    if as_json:
+        click.echo(json.dumps(doc))
+    else:
+        click.echo(report, nl=False)
+        click.echo(f"wrote {out_dir / 'report.txt'}, {out_dir / 'result.json'}, {urdf}")

@@ -1,0 +1,145 @@
+"""`pincal simulate`: measurement files from a simulated "actual" machine."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from pincal.cli.common import fail_cleanly
+
+
+def _parse_errors(spec: str) -> int | None:
+    if spec == "none":
+        return None
+    kind, _, seed = spec.partition(":")
+    if kind != "seed" or not seed.strip().lstrip("-").isdigit():
+        raise click.BadParameter(
+            f"{spec!r}: use seed:N (random errors) or none", param_hint="--errors"
+        )
+    return int(seed)
+
+
+def _parse_pair(spec: str, option: str) -> tuple[float, float]:
+    try:
+        a, b = (float(v) for v in spec.split(","))
+    except ValueError:
+        raise click.BadParameter(
+            f"{spec!r}: expected two numbers 'a,b'", param_hint=option
+        ) from None
+    return a, b
+
+
+@click.command()
+@click.argument("model")
+@click.option(
+    "--poses",
+    "poses_file",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Target poses file (pincal poses CSV); commands from the nominal IK.",
+)
+@click.option(
+    "--random",
+    "n_random",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Number of random workspace poses instead of --poses.",
+)
+@click.option("--params", "preset", default=None, help="Parameter preset (default: first preset).")
+@click.option(
+    "--errors",
+    default="seed:0",
+    show_default=True,
+    help="Geometric errors of the actual machine: seed:N (uniform draw) or none.",
+)
+@click.option(
+    "--error-size",
+    default="1,10",
+    show_default=True,
+    help="Error bounds 'length_mm,angle_mrad' (uniform ±).",
+)
+@click.option(
+    "--noise",
+    default="0.01,0.05",
+    show_default=True,
+    help="Measurement noise 1σ 'position_mm,orientation_mrad'.",
+)
+@click.option("--seed", default=1, show_default=True, help="Seed of poses and noise.")
+@click.option(
+    "--length-unit",
+    type=click.Choice(["m", "mm"]),
+    default="m",
+    show_default=True,
+    help="Length unit of the written file (m round-trips exactly).",
+)
+@click.option(
+    "--out",
+    required=True,
+    type=click.Path(dir_okay=False),
+    help="Measurement CSV to write; the true errors go to <out>.truth.json.",
+)
+@fail_cleanly
+def simulate(
+    model, poses_file, n_random, preset, errors, error_size, noise, seed, length_unit, out
+) -> None:
+    """Simulate a measurement campaign of MODEL with random geometric errors.
+
+    The "actual" machine is MODEL with random errors on the preset's parameters; it is
+    measured at the commands the nominal model computes for the target poses.
+    """
+    import numpy as np
+
+    from pincal.datafiles import read_poses, write_measurements
+    from pincal.errors import UnreachablePoseError
+    from pincal.files import atomic_write_text
+    from pincal.measurements import NoiseModel, simulate_measurements
+    from pincal.mechanism import load_mechanism
+    from pincal.parameters import parameters
+    from pincal.workspace import sample_actuators
+
+    if (poses_file is None) == (n_random is None):
+        raise click.UsageError("give exactly one of --poses FILE or --random N")
+    err_seed = _parse_errors(errors)
+    size_mm, size_mrad = _parse_pair(error_size, "--error-size")
+    pos_mm, ori_mrad = _parse_pair(noise, "--noise")
+    nominal = load_mechanism(model)
+    preset = preset or (next(iter(nominal.presets), "full"))
+    params = parameters(nominal, preset)
+    values = np.zeros(len(params))
+    if err_seed is not None:
+        er = np.random.default_rng(err_seed)
+        bound = np.array([size_mm * 1e-3 if u == "m" else size_mrad * 1e-3 for u in params.units])
+        values = er.uniform(-bound, bound)
+    actual = params.apply(nominal, values)
+    rng = np.random.default_rng(seed)
+    if poses_file is not None:
+        targets = read_poses(poses_file)
+        rows, bad = [], []
+        for i, T in enumerate(targets):
+            try:
+                rows.append(nominal.inverse(T))
+            except UnreachablePoseError:
+                bad.append(i)
+        if bad:
+            raise UnreachablePoseError(f"target poses {bad} of {poses_file} are unreachable")
+        q_act = np.array(rows)
+    else:
+        click.echo(f"… sampling {n_random} random poses", err=True)
+        q_act = sample_actuators(nominal, n_random, rng)
+    click.echo(f"… measuring {len(q_act)} poses of the actual machine", err=True)
+    meas = simulate_measurements(actual, q_act, NoiseModel(pos_mm, ori_mrad), rng)
+    path = write_measurements(out, meas, length_unit=length_unit)
+    truth = {
+        "model": nominal.name,
+        "preset": preset,
+        "errors": errors,
+        "parameters": [
+            {"name": n, "unit": u, "value": float(v)}
+            for n, u, v in zip(params.names, params.units, values, strict=True)
+        ],
+    }
+    truth_path = Path(out).with_suffix(".truth.json")
+    atomic_write_text(truth_path, json.dumps(truth, indent=1) + "\n")
+    click.echo(f"wrote {path} ({len(meas)} poses) and {truth_path}")
