@@ -1,11 +1,71 @@
 """pincal: kinematic calibration of parallel machines and serial chains on Pinocchio.
 
-Data flow: :func:`load_mechanism` → :func:`parameters` → pose design →
-:func:`simulate_measurements` (or measured data) → :func:`identify` →
-:func:`save_urdf`.
+Data flow: :func:`load_mechanism` → :func:`parameters` → pose design
+(:func:`observability`, :func:`exchange`) → :func:`simulate_measurements` or
+:func:`read_measurements` → :func:`identify` → :func:`save_urdf` / :func:`compensate`.
+The plotting and meshcat modules (``pincal.report``, ``pincal.viz``) load on first use.
 """
 
-from pincal.closures import COMPONENTS, Closure
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+from pincal.builders import (
+    DHError,
+    DHLayout,
+    DHNames,
+    DHRow,
+    dh_apply_errors,
+    dh_errors_to_parameters,
+    dh_fk,
+    dh_layout,
+    dh_preset,
+    dh_urdf,
+    example_robot_names,
+    example_robot_urdf,
+    parameters_to_dh_errors,
+)
+from pincal.closures import (
+    COMPONENTS,
+    Closure,
+    parse_components,
+)
+from pincal.compensate import (
+    Compensation,
+    compensate,
+    poses_from_array,
+)
+from pincal.datafiles import (
+    ANGLE_UNITS,
+    LENGTH_UNITS,
+    BadValueError,
+    ColumnError,
+    FrameMismatchError,
+    MeasurementFile,
+    MeasurementFormatError,
+    NonFiniteValueError,
+    PoseFitError,
+    TargetMeasurements,
+    check_enough_poses,
+    read_commands,
+    read_measurement_file,
+    read_measurements,
+    read_poses,
+    write_commands,
+    write_measurements,
+    write_poses,
+    write_target_measurements,
+)
+from pincal.design import (
+    PoseSelection,
+    bose_array,
+    detmax,
+    exchange,
+    greedy,
+    map_to_ranges,
+    orthogonal_array,
+)
 from pincal.errors import (
     ClosureError,
     ConvergenceError,
@@ -20,64 +80,341 @@ from pincal.errors import (
     UnknownNameError,
     UnreachablePoseError,
 )
-from pincal.export import save_urdf
-from pincal.identifiability import Identifiability, analyse_jacobian, identifiability
-from pincal.identify import CalibrationProblem, IdentificationResult, ResidualStats, identify
-from pincal.measurements import Measurements, NoiseModel, simulate_measurements
+from pincal.export import (
+    save_urdf,
+)
+from pincal.files import (
+    atomic_write_bytes,
+    atomic_write_text,
+)
+from pincal.global_sensitivity import (
+    GlobalSensitivity,
+    global_sensitivity,
+    global_sensitivity_from_jacobians,
+)
+from pincal.hexaslide import (
+    LegGeometry,
+    leg_geometry,
+    legs_from_table,
+    pus54_values,
+)
+from pincal.identifiability import (
+    Identifiability,
+    analyse_jacobian,
+    identifiability,
+)
+from pincal.identify import (
+    METHODS,
+    CalibrationProblem,
+    IdentificationResult,
+    ResidualStats,
+    identify,
+)
+from pincal.identify_qpso import (
+    QPSOIdentification,
+    QPSOOptions,
+    qpso_identify,
+)
+from pincal.measurements import (
+    Measurements,
+    NoiseModel,
+    simulate_measurements,
+)
 from pincal.mechanism import (
     Mechanism,
     SolverOptions,
     Workspace,
     bundled_models,
     load_mechanism,
+    read_sidecar,
+    resolve_model_path,
 )
-from pincal.parameters import Parameter, ParameterSet, full_parameters, parameters
-from pincal.sensitivity import PoseSensitivity, identification_jacobian, pose_sensitivity
-from pincal.validation import PoseErrors, pose_errors
-from pincal.workspace import sample_actuators, sample_pose
+from pincal.observability import (
+    INDEX_NAMES,
+    JacobianScaling,
+    ObservabilityIndices,
+    crb_covariance,
+    dimensionless_rows,
+    indices_from_singular_values,
+    numerical_rank,
+    observability,
+    predicted_std,
+    predicted_validation_rms,
+    scale_columns,
+    weight_rows,
+)
+from pincal.parameters import (
+    DOFS,
+    Parameter,
+    ParameterSet,
+    full_parameters,
+    parameters,
+)
+from pincal.qpso import (
+    QPSOResult,
+    QPSOStage,
+    QPSOStepwiseResult,
+    qpso,
+    qpso_stepwise,
+)
+from pincal.sensitivity import (
+    PoseSensitivity,
+    identification_jacobian,
+    pose_sensitivity,
+)
+from pincal.serial import (
+    BASE_JOINT,
+    INSTRUMENT_LINK,
+    TOOL_JOINT,
+    TOOL_LINK,
+    Registration,
+    chain_preset,
+    lock_joints,
+    register_instrument,
+    serial_mechanism,
+    with_joint_origin,
+    wrap_base_tool,
+)
+from pincal.step_planning import (
+    StepPlanningResult,
+    step_planned_identify,
+)
+from pincal.tracker import (
+    LaserTracker,
+    MovedTargetError,
+    PoseMeasurement,
+    RigidFit,
+    TrackerNoise,
+    fit_rigid_transform,
+    pose_from_target_points,
+    rigid_fit_covariance,
+)
+from pincal.validation import (
+    PoseErrors,
+    pose_errors,
+)
+from pincal.wedge import (
+    PATENT_ERROR_NAMES,
+    PATENT_PRESET_NAMES,
+    WedgeConstraintJacobians,
+    WedgeGeometry,
+    WedgeSensitivity,
+    wedge_compensation,
+    wedge_constraint_jacobians,
+    wedge_constraints,
+    wedge_error_matrix,
+    wedge_forward,
+    wedge_global_sensitivity,
+    wedge_inverse,
+    wedge_patent_error_matrix,
+    wedge_urdf,
+    wedge_workspace_grid,
+)
+from pincal.workspace import (
+    sample_actuators,
+    sample_pose,
+)
+
+_LAZY = {
+    "Arrow": "pincal.viz",
+    "ErrorStats": "pincal.report",
+    "LiveSession": "pincal.viz",
+    "ReportError": "pincal.report",
+    "ReportFiles": "pincal.report",
+    "Section": "pincal.report",
+    "Table": "pincal.report",
+    "VisualizationError": "pincal.viz",
+    "error_statistics": "pincal.report",
+    "live": "pincal.viz",
+    "plot_convergence": "pincal.report",
+    "plot_error_histogram": "pincal.report",
+    "plot_errors_before_after": "pincal.report",
+    "plot_index_history": "pincal.report",
+    "plot_parameters": "pincal.report",
+    "static_html": "pincal.viz",
+    "write_html": "pincal.viz",
+    "write_report": "pincal.report",
+}
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "ANGLE_UNITS",
+    "BASE_JOINT",
     "COMPONENTS",
+    "DOFS",
+    "INDEX_NAMES",
+    "INSTRUMENT_LINK",
+    "LENGTH_UNITS",
+    "METHODS",
+    "PATENT_ERROR_NAMES",
+    "PATENT_PRESET_NAMES",
+    "TOOL_JOINT",
+    "TOOL_LINK",
+    "Arrow",
+    "BadValueError",
     "CalibrationProblem",
     "Closure",
     "ClosureError",
+    "ColumnError",
+    "Compensation",
     "ConvergenceError",
+    "DHError",
+    "DHLayout",
+    "DHNames",
+    "DHRow",
+    "ErrorStats",
+    "FrameMismatchError",
+    "GlobalSensitivity",
     "Identifiability",
     "IdentificationResult",
+    "JacobianScaling",
+    "LaserTracker",
+    "LegGeometry",
+    "LiveSession",
     "MeasurementError",
+    "MeasurementFile",
+    "MeasurementFormatError",
     "Measurements",
     "Mechanism",
     "MobilityError",
     "ModelFileError",
+    "MovedTargetError",
     "NoiseModel",
+    "NonFiniteValueError",
+    "ObservabilityIndices",
     "Parameter",
     "ParameterError",
     "ParameterSet",
     "PincalError",
     "PoseErrors",
+    "PoseFitError",
+    "PoseMeasurement",
+    "PoseSelection",
     "PoseSensitivity",
+    "QPSOIdentification",
+    "QPSOOptions",
+    "QPSOResult",
+    "QPSOStage",
+    "QPSOStepwiseResult",
+    "Registration",
+    "ReportError",
+    "ReportFiles",
     "ResidualStats",
+    "RigidFit",
+    "Section",
     "SingularConfigurationError",
     "SolverOptions",
+    "StepPlanningResult",
+    "Table",
+    "TargetMeasurements",
     "TooFewPosesError",
+    "TrackerNoise",
     "UnidentifiableError",
     "UnknownNameError",
     "UnreachablePoseError",
+    "VisualizationError",
+    "WedgeConstraintJacobians",
+    "WedgeGeometry",
+    "WedgeSensitivity",
     "Workspace",
     "analyse_jacobian",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "bose_array",
     "bundled_models",
+    "chain_preset",
+    "check_enough_poses",
+    "compensate",
+    "crb_covariance",
+    "detmax",
+    "dh_apply_errors",
+    "dh_errors_to_parameters",
+    "dh_fk",
+    "dh_layout",
+    "dh_preset",
+    "dh_urdf",
+    "dimensionless_rows",
+    "error_statistics",
+    "example_robot_names",
+    "example_robot_urdf",
+    "exchange",
+    "fit_rigid_transform",
     "full_parameters",
+    "global_sensitivity",
+    "global_sensitivity_from_jacobians",
+    "greedy",
     "identifiability",
     "identification_jacobian",
     "identify",
+    "indices_from_singular_values",
+    "leg_geometry",
+    "legs_from_table",
+    "live",
     "load_mechanism",
+    "lock_joints",
+    "map_to_ranges",
+    "numerical_rank",
+    "observability",
+    "orthogonal_array",
     "parameters",
+    "parameters_to_dh_errors",
+    "parse_components",
+    "plot_convergence",
+    "plot_error_histogram",
+    "plot_errors_before_after",
+    "plot_index_history",
+    "plot_parameters",
     "pose_errors",
+    "pose_from_target_points",
     "pose_sensitivity",
+    "poses_from_array",
+    "predicted_std",
+    "predicted_validation_rms",
+    "pus54_values",
+    "qpso",
+    "qpso_identify",
+    "qpso_stepwise",
+    "read_commands",
+    "read_measurement_file",
+    "read_measurements",
+    "read_poses",
+    "read_sidecar",
+    "register_instrument",
+    "resolve_model_path",
+    "rigid_fit_covariance",
     "sample_actuators",
     "sample_pose",
     "save_urdf",
+    "scale_columns",
+    "serial_mechanism",
     "simulate_measurements",
+    "static_html",
+    "step_planned_identify",
+    "wedge_compensation",
+    "wedge_constraint_jacobians",
+    "wedge_constraints",
+    "wedge_error_matrix",
+    "wedge_forward",
+    "wedge_global_sensitivity",
+    "wedge_inverse",
+    "wedge_patent_error_matrix",
+    "wedge_urdf",
+    "wedge_workspace_grid",
+    "weight_rows",
+    "with_joint_origin",
+    "wrap_base_tool",
+    "write_commands",
+    "write_html",
+    "write_measurements",
+    "write_poses",
+    "write_report",
+    "write_target_measurements",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Load the plotting / meshcat API on first use (keeps ``import pincal`` light)."""
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'pincal' has no attribute {name!r}")

@@ -25,6 +25,8 @@ import pinocchio as pin
 
 from pincal.errors import ModelFileError
 
+__all__ = ["COMPONENTS", "Closure", "parse_components"]
+
 COMPONENTS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
 _KIND_COMPONENTS = {
     "3d": ("x", "y", "z"),

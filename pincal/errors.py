@@ -10,6 +10,21 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+__all__ = [
+    "ClosureError",
+    "ConvergenceError",
+    "MeasurementError",
+    "MobilityError",
+    "ModelFileError",
+    "ParameterError",
+    "PincalError",
+    "SingularConfigurationError",
+    "TooFewPosesError",
+    "UnidentifiableError",
+    "UnknownNameError",
+    "UnreachablePoseError",
+]
+
 
 class PincalError(Exception):
     """Root of all pincal errors."""

@@ -9,6 +9,8 @@ import yaml
 from pincal.files import atomic_write_text
 from pincal.mechanism import Mechanism
 
+__all__ = ["save_urdf"]
+
 
 def save_urdf(mech: Mechanism, path: str | Path) -> Path:
     """Write ``mech`` as ``path`` (a ``.urdf`` file) plus its sidecar ``<stem>.yaml``.

@@ -18,6 +18,8 @@ import numpy as np
 from pincal.mechanism import Mechanism
 from pincal.parameters import ParameterSet
 
+__all__ = ["Identifiability", "analyse_jacobian", "identifiability"]
+
 
 @dataclass(frozen=True)
 class Identifiability:

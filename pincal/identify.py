@@ -33,6 +33,8 @@ from pincal.mechanism import Mechanism
 from pincal.parameters import ParameterSet
 from pincal.sensitivity import pose_sensitivity
 
+__all__ = ["METHODS", "CalibrationProblem", "IdentificationResult", "ResidualStats", "identify"]
+
 log = logging.getLogger(__name__)
 METHODS = ("gauss-newton", "lm", "qpso", "qpso-stepwise")
 

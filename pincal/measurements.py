@@ -18,6 +18,8 @@ from pincal.closures import COMPONENTS
 from pincal.errors import MeasurementError
 from pincal.mechanism import Mechanism
 
+__all__ = ["Measurements", "NoiseModel", "simulate_measurements"]
+
 
 @dataclass(frozen=True)
 class NoiseModel:

@@ -34,6 +34,16 @@ from pincal.errors import (
 )
 from pincal.urdf import UrdfTree
 
+__all__ = [
+    "Mechanism",
+    "SolverOptions",
+    "Workspace",
+    "bundled_models",
+    "load_mechanism",
+    "read_sidecar",
+    "resolve_model_path",
+]
+
 log = logging.getLogger(__name__)
 
 MODELS_DIR = Path(__file__).resolve().parent.parent / "models"

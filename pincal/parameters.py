@@ -18,6 +18,8 @@ import pinocchio as pin
 from pincal.errors import ParameterError, UnknownNameError
 from pincal.mechanism import Mechanism
 
+__all__ = ["DOFS", "Parameter", "ParameterSet", "full_parameters", "parameters"]
+
 DOFS: tuple[str, ...] = ("tx", "ty", "tz", "rx", "ry", "rz", "offset")
 _UNIT_TWISTS = {d: np.eye(6)[i] for i, d in enumerate(DOFS[:6])}
 _EXCLUDED_TYPES = ("floating", "planar")

@@ -21,6 +21,8 @@ from pincal.closures import COMPONENTS, measured_jacobian
 from pincal.mechanism import Mechanism
 from pincal.parameters import ParameterSet
 
+__all__ = ["PoseSensitivity", "identification_jacobian", "pose_sensitivity"]
+
 
 @dataclass(frozen=True)
 class PoseSensitivity:

@@ -9,6 +9,8 @@ import pinocchio as pin
 
 from pincal.mechanism import Mechanism
 
+__all__ = ["PoseErrors", "pose_errors"]
+
 
 @dataclass(frozen=True)
 class PoseErrors:

@@ -8,6 +8,8 @@ import pinocchio as pin
 from pincal.errors import ConvergenceError, PincalError
 from pincal.mechanism import Mechanism
 
+__all__ = ["sample_actuators", "sample_pose"]
+
 
 def _joint_ranges(mech: Mechanism) -> np.ndarray:
     ranges = np.array(mech.actuator_limits, dtype=float)
