@@ -22,7 +22,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from pincal.errors import PincalError
+from pincal.errors import ReportError
 
 __all__ = [
     "ErrorStats",
@@ -52,10 +52,6 @@ _UNITS: dict[str, tuple[float, str]] = {
     "deg": (180.0 / math.pi, "deg"),
 }
 _BEFORE, _AFTER, _TRUE = "#d62728", "#1f77b4", "#2ca02c"
-
-
-class ReportError(PincalError):
-    """Inputs to a plot or report are malformed (lengths, units, NaN)."""
 
 
 @dataclass(frozen=True)

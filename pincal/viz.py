@@ -46,7 +46,7 @@ import pinocchio as pin
 import umsgpack
 from meshcat.animation import Animation
 
-from pincal.errors import ModelFileError, PincalError, UnknownNameError
+from pincal.errors import ModelFileError, UnknownNameError, VisualizationError
 
 __all__ = [
     "Arrow",
@@ -66,10 +66,6 @@ _ROOT = "pincal"
 MESH_BUDGET_BYTES = 12_000_000
 _STICK_RGBA = (0.55, 0.55, 0.6, 1.0)
 _AXIS_RGBA = ((0.85, 0.1, 0.1, 1.0), (0.1, 0.7, 0.1, 1.0), (0.1, 0.25, 0.9, 1.0))
-
-
-class VisualizationError(PincalError):
-    """Inputs to a view are malformed (configuration shape, arrow, colour, ...)."""
 
 
 @dataclass(frozen=True)
@@ -170,6 +166,28 @@ def _as_configurations(model: pin.Model, configurations: Any) -> list[np.ndarray
         if not np.all(np.isfinite(q)):
             raise VisualizationError(f"configuration {k} contains NaN or inf")
     return qs
+
+
+#: world direction shown pointing up → rotation R_view_world mapping it to +z
+_UP_ROTATIONS = {
+    "+z": np.eye(3),
+    "-z": np.diag([1.0, -1.0, -1.0]),  # 180° about x
+    "+y": np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]]),  # +90° about x: y → z
+    "-y": np.array([[1.0, 0, 0], [0, 0, 1], [0, -1, 0]]),
+    "+x": np.array([[0.0, 0, -1], [0, 1, 0], [1, 0, 0]]),  # x → z about y
+    "-x": np.array([[0.0, 0, 1], [0, 1, 0], [-1, 0, 0]]),
+}
+UP_DIRECTIONS: tuple[str, ...] = tuple(_UP_ROTATIONS)
+
+
+def _up_rotation(up: str) -> np.ndarray:
+    """Rotation (3, 3) from world to view coordinates that makes world ``up`` point up."""
+    key = str(up).strip().lower()
+    if key in ("x", "y", "z"):
+        key = "+" + key
+    if key not in _UP_ROTATIONS:
+        raise VisualizationError(f"up {up!r} not understood; use one of {', '.join(UP_DIRECTIONS)}")
+    return _UP_ROTATIONS[key]
 
 
 def _rgb(colour: Any) -> tuple[float, float, float]:
@@ -568,8 +586,10 @@ def _build_scene(
     arrow_scale: float | None,
     ghost_opacity: float,
     fps: int,
+    up: str = "+z",
 ) -> dict:
     """Send the scene to ``vis``; returns legend facts (colours, arrow scale)."""
+    R_view_world = _up_rotation(up)
     frame_id = None
     if frame is not None:
         names = [f.name for f in model.frames]
@@ -602,7 +622,7 @@ def _build_scene(
             points.append(part.hull @ T[:3, :3].T + T[:3, 3] if part.hull.size else T[None, :3, 3])
     if frame_id is not None:
         points.extend(_frame_pose(model, frame_id, q)[None, :3, 3] for q in qs)
-    p_arr = np.vstack(points)
+    p_arr = np.vstack(points) @ R_view_world.T  # view coordinates (up = +z)
     lo, hi = p_arr.min(axis=0), p_arr.max(axis=0)
     size = float(np.max(hi - lo))
 
@@ -612,13 +632,27 @@ def _build_scene(
         arrow_scale = _nice_scale(0.15 * size / longest) if longest > 0 else 1.0
     drawn_ends = [a.start + arrow_scale * (a.end - a.start) for a in arrows]
     for a, e in zip(arrows, drawn_ends, strict=True):
-        lo = np.minimum(lo, np.minimum(a.start, e))
-        hi = np.maximum(hi, np.maximum(a.start, e))
+        a_view, e_view = R_view_world @ a.start, R_view_world @ e
+        lo = np.minimum(lo, np.minimum(a_view, e_view))
+        hi = np.maximum(hi, np.maximum(a_view, e_view))
     centre = 0.5 * (lo + hi)
     radius = max(0.5 * float(np.linalg.norm(hi - lo)), 0.05)
 
     root = vis[_ROOT]
-    legend: dict = {"poses": [], "arrows": [], "arrow_scale": arrow_scale, "frame": frame}
+    T_view_world = np.eye(4)
+    T_view_world[:3, :3] = R_view_world
+    root.set_transform(T_view_world)  # everything below is drawn in world coordinates
+    # meshcat's world axes (0.5 m long) would dwarf a small mechanism: scale them to it
+    T_axes = T_view_world.copy()
+    T_axes[:3, :3] *= max(0.2 * size, 1e-3) / 0.5
+    vis["/Axes"].set_transform(T_axes)
+    legend: dict = {
+        "poses": [],
+        "arrows": [],
+        "arrow_scale": arrow_scale,
+        "frame": frame,
+        "up": up,
+    }
     opacity = ghost_opacity if (animate or len(qs) > 1) else 1.0
     for k, poses in enumerate(pose_sets):
         rgb = _ghost_colour(k, len(qs))
@@ -669,7 +703,7 @@ def _build_scene(
         legend["arrows"].append((rgb, a.label, float(np.linalg.norm(a.end - a.start))))
 
     log.debug("scene centre %s radius %.3f m", centre, radius)
-    legend["grid_cell"] = _draw_floor_grid(root["floor_grid"], lo, hi)
+    legend["grid_cell"] = _draw_floor_grid(vis[f"{_ROOT}_floor"], lo, hi)
     _set_camera(vis, centre, radius)
     return legend
 
@@ -697,6 +731,8 @@ def _legend_html(title: str | None, legend: dict, ghosts: bool, animate: bool) -
             "<span style='color:#1ab31a'>y</span> "
             "<span style='color:#1a40e6'>z</span></div>"
         )
+    if legend.get("up", "+z").lstrip("+") != "z":
+        rows.append(f"<div>drawn with world <b>{html.escape(legend['up'])}</b> pointing up</div>")
     if legend.get("grid_cell"):
         rows.append(f"<div>floor grid: {_length_text(legend['grid_cell'])} cells</div>")
     if legend["arrows"]:
@@ -775,6 +811,7 @@ def static_html(
     title: str | None = None,
     ghost_opacity: float = 0.35,
     fps: int = 30,
+    up: str = "+z",
 ) -> str:
     """A self-contained HTML page showing ``model`` at ``configurations``.
 
@@ -796,6 +833,8 @@ def static_html(
         title: page title and legend heading.
         ghost_opacity: opacity of ghost copies in [0, 1].
         fps: animation frame rate.
+        up: the world direction drawn pointing up: ``+z`` (default), ``-z`` (a
+            machine whose world z points down, towards the table), ``±x``, ``±y``.
 
     Returns:
         The HTML text (a few MB: meshcat's viewer is inlined). Opening it needs no
@@ -826,6 +865,7 @@ def static_html(
         arrow_scale=arrow_scale,
         ghost_opacity=ghost_opacity,
         fps=fps,
+        up=up,
     )
     commands = ",\n".join('"' + base64.b64encode(c).decode("ascii") + '"' for c in window.commands)
     return _PAGE.format(
@@ -864,6 +904,7 @@ def live(
     arrows: Sequence[Arrow | tuple] | None = None,
     arrow_scale: float | None = None,
     ghost_opacity: float = 0.35,
+    up: str = "+z",
 ) -> LiveSession:
     """Start a meshcat server on 127.0.0.1 and draw the same view as :func:`static_html`.
 
@@ -893,6 +934,7 @@ def live(
             arrow_scale=arrow_scale,
             ghost_opacity=ghost_opacity,
             fps=30,
+            up=up,
         )
     except BaseException:
         session.close()
