@@ -493,27 +493,35 @@ def _draw_triad(vis: meshcat.Visualizer, T: np.ndarray, length: float, opacity: 
         vis[name].set_transform(_segment_transform(np.zeros(3), tip))
 
 
+def _arrow_material(rgb: Sequence[float]) -> mg.MeshPhongMaterial:
+    """Opaque colour drawn over everything (no depth test): arrows start inside parts."""
+    return mg.MeshPhongMaterial(color=_hex(rgb), opacity=1.0, transparent=True, depthTest=False)
+
+
 def _draw_arrow(
     vis: meshcat.Visualizer, start: np.ndarray, end: np.ndarray, rgb: Sequence[float], width: float
 ) -> None:
     length = float(np.linalg.norm(end - start))
     if length < 1e-12:
-        vis["dot"].set_object(mg.Sphere(1.5 * width), _material(rgb, 1.0))
+        vis["dot"].set_object(mg.Sphere(1.5 * width), _arrow_material(rgb))
         vis["dot"].set_transform(pin.SE3(np.eye(3), start).homogeneous)
+        vis["dot"].set_property("renderOrder", 10)
         return
     head = min(0.35 * length, 6.0 * width)
     direction = (end - start) / length
     neck = end - head * direction
     if np.linalg.norm(neck - start) > 1e-9:
-        vis["shaft"].set_object(mg.Cylinder(1.0, width), _material(rgb, 1.0))
+        vis["shaft"].set_object(mg.Cylinder(1.0, width), _arrow_material(rgb))
         vis["shaft"].set_transform(
             _segment_transform(start, neck)
             @ np.diag([1.0, float(np.linalg.norm(neck - start)), 1, 1])
         )
     vis["head"].set_object(
-        mg.Cylinder(head, radiusTop=0.0, radiusBottom=2.5 * width), _material(rgb, 1.0)
+        mg.Cylinder(head, radiusTop=0.0, radiusBottom=2.5 * width), _arrow_material(rgb)
     )
     vis["head"].set_transform(_segment_transform(neck, end))
+    for part in ("shaft", "head"):  # drawn after the transparent ghosts, which would veil it
+        vis[part].set_property("renderOrder", 10)
 
 
 def _nice_scale(target: float) -> float:
@@ -561,13 +569,20 @@ def _nice_scale_down(target: float) -> float:
     return 10.0**exponent
 
 
-def _set_camera(vis: meshcat.Visualizer, centre: np.ndarray, radius: float) -> None:
-    """Aim the default camera (orbit target) at ``centre`` from a distance fitting ``radius``."""
-    T = np.eye(4)
-    T[:3, 3] = centre
-    vis["/Cameras/default"].set_transform(T)
+def _set_camera(vis: meshcat.Visualizer, radius: float, extent: np.ndarray) -> None:
+    """Place the default camera to see a sphere of ``radius`` around the origin.
+
+    ``extent`` (3,) is the size of the scene's bounding box in view coordinates [m].
+
+    meshcat's orbit controls always look at the world origin, so the scene is
+    shifted to put its centre there (see :func:`_build_scene`).
+    """
     distance = 1.45 * radius / math.tan(math.radians(75.0 / 2))  # meshcat's 75° vertical fov
-    view = np.array([1.0, 0.55, 0.45])  # world direction from target to camera
+    # direction from target to camera: look across the longer horizontal extent
+    if extent[0] > 1.5 * extent[1]:
+        view = np.array([0.55, -1.0, 0.5])  # an x-elongated scene seen from its side
+    else:
+        view = np.array([1.0, 0.55, 0.45])
     x, y, z = distance * view / np.linalg.norm(view)
     # the camera node lives in a frame rotated +90° about x: local (x, y, z) = world (x, -z, y)
     vis["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])
@@ -626,10 +641,10 @@ def _build_scene(
     lo, hi = p_arr.min(axis=0), p_arr.max(axis=0)
     size = float(np.max(hi - lo))
 
-    # arrows: magnified so the longest is about 15 % of the scene
+    # arrows: magnified so the longest is about 30 % of the scene (twice the triads)
     longest = max((float(np.linalg.norm(a.end - a.start)) for a in arrows), default=0.0)
     if arrow_scale is None:
-        arrow_scale = _nice_scale(0.15 * size / longest) if longest > 0 else 1.0
+        arrow_scale = _nice_scale(0.3 * size / longest) if longest > 0 else 1.0
     drawn_ends = [a.start + arrow_scale * (a.end - a.start) for a in arrows]
     for a, e in zip(arrows, drawn_ends, strict=True):
         a_view, e_view = R_view_world @ a.start, R_view_world @ e
@@ -639,9 +654,12 @@ def _build_scene(
     radius = max(0.5 * float(np.linalg.norm(hi - lo)), 0.05)
 
     root = vis[_ROOT]
+    # display = R_view_world · world − centre: up is up and the scene centre sits at
+    # the origin, where meshcat's orbit controls look; nodes below are in world coordinates
     T_view_world = np.eye(4)
     T_view_world[:3, :3] = R_view_world
-    root.set_transform(T_view_world)  # everything below is drawn in world coordinates
+    T_view_world[:3, 3] = -centre
+    root.set_transform(T_view_world)
     # meshcat's world axes (0.5 m long) would dwarf a small mechanism: scale them to it
     T_axes = T_view_world.copy()
     T_axes[:3, :3] *= max(0.2 * size, 1e-3) / 0.5
@@ -654,6 +672,7 @@ def _build_scene(
         "up": up,
     }
     opacity = ghost_opacity if (animate or len(qs) > 1) else 1.0
+    triad = (0.08 if arrows else 0.12) * size  # axis length [m]
     for k, poses in enumerate(pose_sets):
         rgb = _ghost_colour(k, len(qs))
         legend["poses"].append(rgb)
@@ -663,7 +682,7 @@ def _build_scene(
             _draw_triad(
                 root["frame_axes"][f"pose{k}"],
                 _frame_pose(model, frame_id, qs[k]),
-                0.12 * size,
+                triad,
                 1.0,
             )
 
@@ -672,7 +691,7 @@ def _build_scene(
         _draw_parts(robot, parts, pose_sets[0], None, 1.0)
         if frame_id is not None:
             _draw_triad(
-                robot["measured_frame"], _frame_pose(model, frame_id, qs[0]), 0.15 * size, 1.0
+                robot["measured_frame"], _frame_pose(model, frame_id, qs[0]), 1.25 * triad, 1.0
             )
         animation = Animation(default_framerate=fps)
         hold, move, steps = max(1, fps // 2), fps, 12  # [frames]: 0.5 s hold, 1 s move
@@ -696,15 +715,17 @@ def _build_scene(
             start += hold + move
         vis.window.send(_SetAnimationLooped(animation))
 
-    width = 0.004 * size
+    width = 0.006 * size
     for k, (a, e) in enumerate(zip(arrows, drawn_ends, strict=True)):
         rgb = _rgb(a.colour)
         _draw_arrow(root["arrows"][f"arrow{k}"], a.start, e, rgb, width)
         legend["arrows"].append((rgb, a.label, float(np.linalg.norm(a.end - a.start))))
 
     log.debug("scene centre %s radius %.3f m", centre, radius)
-    legend["grid_cell"] = _draw_floor_grid(vis[f"{_ROOT}_floor"], lo, hi)
-    _set_camera(vis, centre, radius)
+    floor = vis[f"{_ROOT}_floor"]
+    floor.set_transform(pin.SE3(np.eye(3), -centre).homogeneous)
+    legend["grid_cell"] = _draw_floor_grid(floor, lo, hi)
+    _set_camera(vis, radius, hi - lo)
     return legend
 
 
@@ -740,12 +761,15 @@ def _legend_html(title: str | None, legend: dict, ghosts: bool, animate: bool) -
         rows.append(
             f"<div><b>error arrows magnified ×{scale:g}</b> (1 mm drawn as {scale:g} mm)</div>"
         )
-        for rgb, label, length in legend["arrows"]:
-            text = html.escape(label) if label else ""
-            rows.append(
-                f"<div><span class='sw' style='background:#{_hex(rgb):06x}'></span>"
-                f"{text} {1e3 * length:.3f} mm</div>"
-            )
+        items = [
+            f"<span class='sw' style='background:#{_hex(rgb):06x}'></span>"
+            f"{html.escape(label) + ': ' if label else ''}{1e3 * length:.3f} mm"
+            for rgb, label, length in legend["arrows"]
+        ]
+        if len(items) <= 3:
+            rows.extend(f"<div>{item}</div>" for item in items)
+        else:  # many arrows: wrap them in one paragraph
+            rows.append("<div>" + " ".join(items) + "</div>")
     if not rows:
         return ""
     return "<div id='pincal-legend'>" + "".join(rows) + "</div>"
@@ -829,7 +853,7 @@ def static_html(
         arrows: error arrows, each an :class:`Arrow` or ``(start (3,), end (3,),
             colour, label)`` in the world frame [m].
         arrow_scale: magnification of the arrows; None picks a 1-2-5 value making
-            the longest about 15 % of the scene. The legend states it.
+            the longest about 30 % of the scene. The legend states it.
         title: page title and legend heading.
         ghost_opacity: opacity of ghost copies in [0, 1].
         fps: animation frame rate.

@@ -204,7 +204,7 @@ def view(
         for k, row in enumerate(rows):
             p_nominal = np.array(mech.forward(row, qs[k]).translation)
             p_calibrated = np.array(cal.forward(row, qs[k]).translation)
-            arrows.append(viz.Arrow(p_nominal, p_calibrated, "#d62728", f"pose {k}"))
+            arrows.append(viz.Arrow(p_nominal, p_calibrated, "#b0008c", f"pose {k}"))
 
     up_dir = str(mech.sidecar.get("view_up", "+z")) if up == "auto" else up
     options = dict(
