@@ -580,9 +580,9 @@ def _set_camera(vis: meshcat.Visualizer, radius: float, extent: np.ndarray) -> N
     distance = 1.45 * radius / math.tan(math.radians(75.0 / 2))  # meshcat's 75° vertical fov
     # direction from target to camera: look across the longer horizontal extent
     if extent[0] > 1.5 * extent[1]:
-        view = np.array([0.55, -1.0, 0.5])  # an x-elongated scene seen from its side
+        view = np.array([0.55, -1.0, 0.75])  # an x-elongated scene seen from its side
     else:
-        view = np.array([1.0, 0.55, 0.45])
+        view = np.array([1.0, 0.55, 0.75])
     x, y, z = distance * view / np.linalg.norm(view)
     # the camera node lives in a frame rotated +90° about x: local (x, y, z) = world (x, -z, y)
     vis["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])
