@@ -119,3 +119,11 @@ class TooFewPosesError(PincalError):
 
 class MeasurementError(PincalError):
     """Measurement data are malformed (missing columns, NaN, wrong units, ...)."""
+
+
+class VisualizationError(PincalError):
+    """Inputs to a view are malformed (configuration shape, arrow, colour, ...)."""
+
+
+class ReportError(PincalError):
+    """Inputs to a plot or report are malformed (lengths, units, NaN, report JSON)."""

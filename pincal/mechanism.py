@@ -139,7 +139,7 @@ class Mechanism:
     ):
         self.urdf_xml = urdf_xml
         self.tree = UrdfTree(urdf_xml)
-        self.sidecar: dict[str, Any] = dict(sidecar or {})
+        self.sidecar: dict[str, Any] = validate_sidecar(sidecar)
         self.name = name or self.tree.name
         self.source = source
         self.options = options or SolverOptions()
@@ -591,6 +591,91 @@ class Mechanism:
                 residual=exc.residual,
             ) from exc
         return sol.q
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(float(v))
+
+
+def _is_names(v: Any) -> bool:
+    return isinstance(v, str) or (isinstance(v, list) and all(isinstance(x, str) for x in v))
+
+
+def _check_range(v: Any, where: str) -> None:
+    if not (isinstance(v, list | tuple) and len(v) == 2 and all(_is_number(x) for x in v)):
+        raise ModelFileError(f"sidecar {where} must be [lower, upper] finite numbers, got {v!r}")
+    if float(v[0]) > float(v[1]):
+        raise ModelFileError(f"sidecar {where}: lower {v[0]} is above upper {v[1]}")
+
+
+def validate_sidecar(sidecar: Any) -> dict[str, Any]:
+    """Check the types of the sidecar keys pincal reads (a copy is returned).
+
+    Names are checked later against the URDF; this catches wrong types, non-finite
+    numbers and inverted ranges with a message naming the key.
+
+    Raises:
+        ModelFileError: a key has the wrong type or value.
+    """
+    if sidecar is None:
+        return {}
+    if not isinstance(sidecar, dict):
+        raise ModelFileError(f"sidecar must be a mapping, got {type(sidecar).__name__}")
+    sc = dict(sidecar)
+    pairs = sc.get("closed_loop")
+    if pairs is not None:
+        if not isinstance(pairs, list):
+            raise ModelFileError("sidecar 'closed_loop' must be a list of [frame_a, frame_b] pairs")
+        for k, pair in enumerate(pairs):
+            if not (isinstance(pair, list | tuple) and len(pair) == 2 and _is_names(list(pair))):
+                raise ModelFileError(
+                    f"sidecar closed_loop[{k}] must be a pair of frame names, got {pair!r}"
+                )
+    kinds = sc.get("type")
+    if kinds is not None and not (
+        isinstance(kinds, str) or (isinstance(kinds, list) and all(_is_names(t) for t in kinds))
+    ):
+        raise ModelFileError(f"sidecar 'type' must be a closure type or a list of them: {kinds!r}")
+    for key in ("name_mot", "measured"):
+        if key in sc and not _is_names(sc[key]):
+            raise ModelFileError(f"sidecar {key!r} must be a name or a list of names: {sc[key]!r}")
+    if "measured_frame" in sc and not isinstance(sc["measured_frame"], str):
+        raise ModelFileError(
+            f"sidecar 'measured_frame' must be a frame name: {sc['measured_frame']!r}"
+        )
+    home = sc.get("home")
+    if home is not None:
+        if not isinstance(home, dict):
+            raise ModelFileError("sidecar 'home' must map joint names to values [m, rad]")
+        for name, value in home.items():
+            vals = value if isinstance(value, list) else [value]
+            if not vals or not all(_is_number(v) for v in vals):
+                raise ModelFileError(
+                    f"sidecar home[{name!r}] must be a finite number or a list of them, "
+                    f"got {value!r}"
+                )
+    ws = sc.get("workspace")
+    if ws is not None:
+        if not isinstance(ws, dict):
+            raise ModelFileError(
+                "sidecar 'workspace' must be a mapping with 'pose' and/or 'joints'"
+            )
+        for part in ("pose", "joints"):
+            ranges = ws.get(part)
+            if ranges is None:
+                continue
+            if not isinstance(ranges, dict):
+                raise ModelFileError(f"sidecar workspace.{part} must map names to [lower, upper]")
+            for name, v in ranges.items():
+                _check_range(v, f"workspace.{part}[{name!r}]")
+    presets = sc.get("presets")
+    if presets is not None:
+        if not isinstance(presets, dict):
+            raise ModelFileError("sidecar 'presets' must map preset names to lists of entries")
+        for name, entries in presets.items():
+            if not isinstance(entries, list):
+                raise ModelFileError(f"sidecar preset {name!r} must be a list of entries")
+    return sc
 
 
 def _read_text(path: Path, what: str) -> str:

@@ -200,12 +200,18 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
     Raises:
         UnknownNameError: unknown preset, joint or dof (valid names listed).
     """
+    if not isinstance(preset, str | list | tuple):
+        raise ParameterError(
+            f"preset must be a name or a list of entries, got {type(preset).__name__}"
+        )
     if isinstance(preset, str):
         if preset == "full":
             return full_parameters(mech)
         if preset not in mech.presets:
             raise UnknownNameError("preset", preset, ["full", *mech.presets])
         label, entries = preset, mech.presets[preset]
+        if not isinstance(entries, list):
+            raise ParameterError(f"preset {preset!r} must be a list of entries")
     else:
         label, entries = "custom", preset
     joint_names = list(mech.tree.joints)
@@ -215,11 +221,17 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
             joint, _, dof = entry.rpartition(".")
             pairs = [(joint, [dof])]
         elif isinstance(entry, dict) and "joints" in entry and "dofs" in entry:
-            pattern = str(entry["joints"])
+            if not isinstance(entry["joints"], str) or not isinstance(entry["dofs"], list | str):
+                raise ParameterError(
+                    f"preset entry {entry!r}: 'joints' must be a name pattern and 'dofs' a list "
+                    f"of {', '.join(DOFS)}"
+                )
+            pattern = entry["joints"]
             matched = [j for j in joint_names if fnmatch.fnmatchcase(j, pattern)]
             if not matched:
                 raise UnknownNameError("joint", pattern, joint_names)
-            pairs = [(j, list(entry["dofs"])) for j in matched]
+            dofs_ = entry["dofs"]
+            pairs = [(j, [dofs_] if isinstance(dofs_, str) else list(dofs_)) for j in matched]
         else:
             raise ParameterError(
                 f"preset entry {entry!r} must be '<joint>.<dof>' or {{joints: ..., dofs: [...]}}"
@@ -228,7 +240,7 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
             if joint not in mech.tree.joints:
                 raise UnknownNameError("joint", joint, joint_names)
             for dof in dofs:
-                if dof not in DOFS:
+                if not isinstance(dof, str) or dof not in DOFS:
                     raise UnknownNameError("dof", str(dof), DOFS)
                 params.append(_make(mech, joint, dof))
     return ParameterSet(params, label)

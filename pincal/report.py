@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import html
 import io
+import json
 import math
 import os
 import tempfile
@@ -22,7 +23,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from pincal.errors import PincalError
+from pincal.errors import ReportError
 
 __all__ = [
     "ErrorStats",
@@ -30,12 +31,15 @@ __all__ = [
     "ReportFiles",
     "Section",
     "Table",
+    "calibration_report",
     "error_statistics",
     "plot_convergence",
     "plot_error_histogram",
     "plot_errors_before_after",
     "plot_index_history",
     "plot_parameters",
+    "plot_validation_summary",
+    "read_identification",
     "write_report",
 ]
 
@@ -52,10 +56,6 @@ _UNITS: dict[str, tuple[float, str]] = {
     "deg": (180.0 / math.pi, "deg"),
 }
 _BEFORE, _AFTER, _TRUE = "#d62728", "#1f77b4", "#2ca02c"
-
-
-class ReportError(PincalError):
-    """Inputs to a plot or report are malformed (lengths, units, NaN)."""
 
 
 @dataclass(frozen=True)
@@ -187,10 +187,20 @@ def plot_errors_before_after(
     fig = _figure()
     ax = fig.add_subplot()
     x = np.arange(b.size)
-    ax.bar(x - 0.2, np.abs(b) * factor, 0.4, color=_BEFORE,
-           label=f"before: RMS {sb.rms:.4g}, max {sb.max:.4g} {label}")  # fmt: skip
-    ax.bar(x + 0.2, np.abs(a) * factor, 0.4, color=_AFTER,
-           label=f"after: RMS {sa.rms:.4g}, max {sa.max:.4g} {label}")  # fmt: skip
+    ax.bar(
+        x - 0.2,
+        np.abs(b) * factor,
+        0.4,
+        color=_BEFORE,
+        label=f"before: RMS {sb.rms:.4g}, max {sb.max:.4g} {label}",
+    )
+    ax.bar(
+        x + 0.2,
+        np.abs(a) * factor,
+        0.4,
+        color=_AFTER,
+        label=f"after: RMS {sa.rms:.4g}, max {sa.max:.4g} {label}",
+    )
     ax.set_xlabel("pose")
     ax.set_ylabel(f"error [{label}]")
     ax.set_title(title)
@@ -336,8 +346,17 @@ def plot_parameters(
     for ax, (kind, unit, idx) in zip(axes, groups, strict=True):
         factor, label = _unit(unit)
         y = np.arange(len(idx))[::-1]
-        ax.errorbar(v[idx] * factor, y, xerr=2 * s[idx] * factor, fmt="o", color=_AFTER,
-                    ecolor=_AFTER, capsize=3, ms=4, label="identified ±2σ")  # fmt: skip
+        ax.errorbar(
+            v[idx] * factor,
+            y,
+            xerr=2 * s[idx] * factor,
+            fmt="o",
+            color=_AFTER,
+            ecolor=_AFTER,
+            capsize=3,
+            ms=4,
+            label="identified ±2σ",
+        )
         if t is not None:
             ax.plot(t[idx] * factor, y, "x", color=_TRUE, ms=7, mew=2, label="true")
         ax.axvline(0.0, color="0.6", lw=0.8)
@@ -445,3 +464,273 @@ def write_report(
     html_text = _HTML_PAGE.format(title=html.escape(title), body="\n".join(body))
     html_path = _atomic_write_bytes(out / f"{name}.html", html_text.encode("utf-8"))
     return ReportFiles(markdown=md_path, html=html_path)
+
+
+# --------------------------------------------------------------------------- calibration report
+
+#: name of the calibration summary written by a calibration run
+IDENTIFICATION_JSON = "identification.json"
+#: largest identification.json read [bytes]
+MAX_JSON_BYTES = 20_000_000
+_SUMMARY_KEYS = (
+    ("rms_position_mm", "RMS position [mm]"),
+    ("max_position_mm", "max position [mm]"),
+    ("rms_orientation_mrad", "RMS orientation [mrad]"),
+    ("max_orientation_mrad", "max orientation [mrad]"),
+)
+
+
+def _number(value: object, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ReportError(f"{what} must be a number, got {value!r}")
+    if not math.isfinite(float(value)):
+        raise ReportError(f"{what} is NaN or infinite")
+    return float(value)
+
+
+def _numbers(value: object, what: str) -> np.ndarray:
+    if not isinstance(value, list) or not value:
+        raise ReportError(f"{what} must be a non-empty list of numbers")
+    return np.array([_number(v, f"{what}[{k}]") for k, v in enumerate(value)])
+
+
+def read_identification(path: str | os.PathLike) -> dict:
+    """Read and check a calibration summary (``identification.json``).
+
+    Required: ``model`` (str) and ``parameters`` (list of ``{name, value, std, unit}``,
+    SI units). Optional, each drawn when present: ``preset``, ``validation_before`` /
+    ``validation_after`` (``rms_position_mm, max_position_mm, rms_orientation_mrad,
+    max_orientation_mrad``), ``reduced_chi2``, ``iterations``, ``message``,
+    ``cost_history`` (list per iteration), ``parameters[i].true`` (simulation truth
+    [SI]), ``validation_errors`` (``{before|after: {position: [m], orientation:
+    [rad]}}`` per validation pose) and ``index_history`` (``{O1: [...], ...}``).
+
+    Raises:
+        ReportError: missing file, invalid JSON or a malformed entry (the message
+            names the entry).
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()[: MAX_JSON_BYTES + 1]
+    except OSError as exc:
+        raise ReportError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
+    if len(raw) > MAX_JSON_BYTES:
+        raise ReportError(f"{str(path)!r} is larger than {MAX_JSON_BYTES} bytes")
+    try:
+        data = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ReportError(f"{str(path)!r} is not valid JSON: {exc}") from exc
+    if not isinstance(data, dict):
+        raise ReportError(f"{str(path)!r} must hold a JSON object, got {type(data).__name__}")
+    if not isinstance(data.get("model"), str):
+        raise ReportError(f"{str(path)!r}: 'model' (the model name) is missing")
+    params = data.get("parameters")
+    if not isinstance(params, list) or not params:
+        raise ReportError(f"{str(path)!r}: 'parameters' must be a non-empty list")
+    for k, p in enumerate(params):
+        if not isinstance(p, dict) or not isinstance(p.get("name"), str):
+            raise ReportError(f"parameters[{k}] must be an object with a 'name'")
+        for key in ("value", "std"):
+            _number(p.get(key), f"parameters[{k}].{key}")
+        if "true" in p:
+            _number(p["true"], f"parameters[{k}].true")
+        if p.get("unit", "m") not in ("m", "rad"):
+            raise ReportError(f"parameters[{k}].unit must be 'm' or 'rad', got {p.get('unit')!r}")
+    for side in ("validation_before", "validation_after"):
+        if side in data:
+            if not isinstance(data[side], dict):
+                raise ReportError(f"'{side}' must be an object")
+            for key, _ in _SUMMARY_KEYS:
+                if key in data[side]:
+                    _number(data[side][key], f"{side}.{key}")
+    if "cost_history" in data:
+        _numbers(data["cost_history"], "cost_history")
+    if "validation_errors" in data:
+        ve = data["validation_errors"]
+        if not isinstance(ve, dict) or not {"before", "after"} <= set(ve):
+            raise ReportError("'validation_errors' must hold 'before' and 'after'")
+        for side in ("before", "after"):
+            if not isinstance(ve[side], dict):
+                raise ReportError(f"validation_errors.{side} must be an object")
+            for key in ("position", "orientation"):
+                if key in ve[side]:
+                    _numbers(ve[side][key], f"validation_errors.{side}.{key}")
+    if "index_history" in data:
+        ih = data["index_history"]
+        if not isinstance(ih, dict) or not ih:
+            raise ReportError("'index_history' must be an object {index name: [values]}")
+        for key, values in ih.items():
+            _numbers(values, f"index_history.{key}")
+    return data
+
+
+def plot_validation_summary(
+    before: Mapping[str, float], after: Mapping[str, float], path: str | os.PathLike
+) -> Path:
+    """Grouped bars of RMS and max position [mm] / orientation [mrad] errors, before vs after."""
+    fig = _figure(7.5, 3.6)
+    axes = fig.subplots(1, 2)
+    for ax, (quantity, unit) in zip(
+        axes, (("position", "mm"), ("orientation", "mrad")), strict=True
+    ):
+        keys = [f"rms_{quantity}_{unit}", f"max_{quantity}_{unit}"]
+        b = [float(before.get(k, np.nan)) for k in keys]
+        a = [float(after.get(k, np.nan)) for k in keys]
+        x = np.arange(2)
+        bars_b = ax.bar(x - 0.2, b, 0.4, color=_BEFORE, label="nominal model")
+        bars_a = ax.bar(x + 0.2, a, 0.4, color=_AFTER, label="calibrated model")
+        ax.bar_label(bars_b, fmt="%.3g", fontsize=8)
+        ax.bar_label(bars_a, fmt="%.3g", fontsize=8)
+        ax.set_xticks(x)
+        ax.set_xticklabels(["RMS", "max"])
+        ax.set_ylabel(f"{quantity} error [{unit}]")
+        positive = [v for v in b + a if v > 0]
+        if positive and max(positive) / min(positive) > 30:
+            ax.set_yscale("log")
+        ax.grid(axis="y", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle("Validation: predicted vs actual measured-frame pose")
+    return _save(fig, path)
+
+
+def _display(value: float, unit: str) -> tuple[float, str]:
+    return (value * 1e6, "µm") if unit == "m" else (value * 1e6, "µrad")
+
+
+def calibration_report(
+    directory: str | os.PathLike,
+    out: str | os.PathLike | None = None,
+    *,
+    name: str = "report",
+) -> ReportFiles:
+    """Assemble plots and numbers of a calibration output directory into one report.
+
+    Reads ``<directory>/identification.json`` (see :func:`read_identification`)
+    and writes ``<out>/<name>.md``, ``<out>/<name>.html`` and their PNG plots in
+    ``<out>/<name>_plots/`` (``out`` defaults to ``directory``). Nothing else is
+    read or changed.
+
+    Raises:
+        ReportError: the directory or its identification.json is missing or malformed.
+    """
+    src = Path(directory)
+    if not src.is_dir():
+        raise ReportError(f"calibration directory {str(src)!r} does not exist")
+    data = read_identification(src / IDENTIFICATION_JSON)
+    out_dir = Path(out) if out is not None else src
+    plots = out_dir / f"{name}_plots"
+    sections: list[Section] = []
+
+    facts = [f"Model **{data['model']}**"]
+    if "preset" in data:
+        facts.append(f"parameter preset {data['preset']!r}")
+    facts.append(f"{len(data['parameters'])} identified parameters")
+    text = ", ".join(facts) + "."
+    if "iterations" in data or "message" in data:
+        text += f"\n\nIdentification: {data.get('iterations', '?')} iterations"
+        text += f", {data['message']}" if data.get("message") else ""
+        if isinstance(data.get("reduced_chi2"), (int, float)):
+            text += (
+                f"; reduced χ² = {float(data['reduced_chi2']):.4g} (≈ 1 when the noise model fits)"
+            )
+        text += "."
+    sections.append(Section("Summary", text))
+
+    before, after = data.get("validation_before"), data.get("validation_after")
+    if before is not None and after is not None:
+        rows = [
+            [label, float(before.get(key, np.nan)), float(after.get(key, np.nan))]
+            for key, label in _SUMMARY_KEYS
+        ]
+        images = [plot_validation_summary(before, after, plots / "validation_summary.png")]
+        ve = data.get("validation_errors")
+        if ve:
+            for key, unit in (("position", "mm"), ("orientation", "mrad")):
+                if key in ve["before"] and key in ve["after"]:
+                    b, a = np.array(ve["before"][key]), np.array(ve["after"][key])
+                    if b.size == a.size:
+                        images.append(
+                            plot_errors_before_after(
+                                b,
+                                a,
+                                unit,
+                                plots / f"validation_{key}.png",
+                                title=f"{key.capitalize()} error per validation pose",
+                            )
+                        )
+                    images.append(
+                        plot_error_histogram(
+                            b,
+                            a,
+                            unit,
+                            plots / f"validation_{key}_histogram.png",
+                            title=f"{key.capitalize()} error distribution",
+                        )
+                    )
+        sections.append(
+            Section(
+                "Validation",
+                "Errors of the predicted measured-frame pose on validation poses, "
+                "nominal vs calibrated model.",
+                images,
+                [Table(["quantity", "nominal", "calibrated"], rows)],
+            )
+        )
+
+    params = data["parameters"]
+    names = [p["name"] for p in params]
+    values = np.array([float(p["value"]) for p in params])
+    std = np.array([float(p["std"]) for p in params])
+    kinds = ["angle" if p.get("unit", "m") == "rad" else "length" for p in params]
+    true = (
+        np.array([float(p["true"]) for p in params]) if all("true" in p for p in params) else None
+    )
+    image = plot_parameters(
+        names,
+        values,
+        std,
+        true,
+        plots / "parameters.png",
+        kinds=kinds,
+        length_unit="um",
+        angle_unit="urad",
+    )
+    headers = ["parameter", "value", "2σ", "unit"] + (
+        ["true", "error / σ"] if true is not None else []
+    )
+    rows = []
+    for k, p in enumerate(params):
+        unit = p.get("unit", "m")
+        v, label = _display(values[k], unit)
+        row: list[object] = [p["name"], round(v, 3), round(2 * std[k] * 1e6, 3), label]
+        if true is not None:
+            row += [
+                round(true[k] * 1e6, 3),
+                round((values[k] - true[k]) / std[k], 2) if std[k] > 0 else "",
+            ]
+        rows.append(row)
+    sections.append(
+        Section(
+            "Identified parameters",
+            "Displacements of the URDF joint origins (lengths in µm, angles in µrad) with "
+            "their ±2σ uncertainty"
+            + (" and the simulated true values." if true is not None else "."),
+            [image],
+            [Table(headers, rows)],
+        )
+    )
+
+    extra_images = []
+    if "cost_history" in data:
+        extra_images.append(
+            plot_convergence(data["cost_history"], plots / "convergence.png", ylabel="½‖r‖²")
+        )
+    if "index_history" in data:
+        extra_images.append(plot_index_history(data["index_history"], plots / "index_history.png"))
+    if extra_images:
+        sections.append(Section("Convergence and pose selection", "", extra_images))
+
+    files = sorted(p.name for p in src.iterdir() if p.suffix in (".urdf", ".yaml", ".json"))
+    if files:
+        sections.append(Section("Files", "Calibration output: " + ", ".join(files) + "."))
+    return write_report(out_dir, sections, title=f"Calibration report: {data['model']}", name=name)

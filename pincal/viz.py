@@ -46,7 +46,7 @@ import pinocchio as pin
 import umsgpack
 from meshcat.animation import Animation
 
-from pincal.errors import ModelFileError, PincalError, UnknownNameError
+from pincal.errors import ModelFileError, UnknownNameError, VisualizationError
 
 __all__ = [
     "Arrow",
@@ -66,10 +66,6 @@ _ROOT = "pincal"
 MESH_BUDGET_BYTES = 12_000_000
 _STICK_RGBA = (0.55, 0.55, 0.6, 1.0)
 _AXIS_RGBA = ((0.85, 0.1, 0.1, 1.0), (0.1, 0.7, 0.1, 1.0), (0.1, 0.25, 0.9, 1.0))
-
-
-class VisualizationError(PincalError):
-    """Inputs to a view are malformed (configuration shape, arrow, colour, ...)."""
 
 
 @dataclass(frozen=True)
@@ -170,6 +166,28 @@ def _as_configurations(model: pin.Model, configurations: Any) -> list[np.ndarray
         if not np.all(np.isfinite(q)):
             raise VisualizationError(f"configuration {k} contains NaN or inf")
     return qs
+
+
+#: world direction shown pointing up → rotation R_view_world mapping it to +z
+_UP_ROTATIONS = {
+    "+z": np.eye(3),
+    "-z": np.diag([1.0, -1.0, -1.0]),  # 180° about x
+    "+y": np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]]),  # +90° about x: y → z
+    "-y": np.array([[1.0, 0, 0], [0, 0, 1], [0, -1, 0]]),
+    "+x": np.array([[0.0, 0, -1], [0, 1, 0], [1, 0, 0]]),  # x → z about y
+    "-x": np.array([[0.0, 0, 1], [0, 1, 0], [-1, 0, 0]]),
+}
+UP_DIRECTIONS: tuple[str, ...] = tuple(_UP_ROTATIONS)
+
+
+def _up_rotation(up: str) -> np.ndarray:
+    """Rotation (3, 3) from world to view coordinates that makes world ``up`` point up."""
+    key = str(up).strip().lower()
+    if key in ("x", "y", "z"):
+        key = "+" + key
+    if key not in _UP_ROTATIONS:
+        raise VisualizationError(f"up {up!r} not understood; use one of {', '.join(UP_DIRECTIONS)}")
+    return _UP_ROTATIONS[key]
 
 
 def _rgb(colour: Any) -> tuple[float, float, float]:
@@ -475,27 +493,35 @@ def _draw_triad(vis: meshcat.Visualizer, T: np.ndarray, length: float, opacity: 
         vis[name].set_transform(_segment_transform(np.zeros(3), tip))
 
 
+def _arrow_material(rgb: Sequence[float]) -> mg.MeshPhongMaterial:
+    """Opaque colour drawn over everything (no depth test): arrows start inside parts."""
+    return mg.MeshPhongMaterial(color=_hex(rgb), opacity=1.0, transparent=True, depthTest=False)
+
+
 def _draw_arrow(
     vis: meshcat.Visualizer, start: np.ndarray, end: np.ndarray, rgb: Sequence[float], width: float
 ) -> None:
     length = float(np.linalg.norm(end - start))
     if length < 1e-12:
-        vis["dot"].set_object(mg.Sphere(1.5 * width), _material(rgb, 1.0))
+        vis["dot"].set_object(mg.Sphere(1.5 * width), _arrow_material(rgb))
         vis["dot"].set_transform(pin.SE3(np.eye(3), start).homogeneous)
+        vis["dot"].set_property("renderOrder", 10)
         return
     head = min(0.35 * length, 6.0 * width)
     direction = (end - start) / length
     neck = end - head * direction
     if np.linalg.norm(neck - start) > 1e-9:
-        vis["shaft"].set_object(mg.Cylinder(1.0, width), _material(rgb, 1.0))
+        vis["shaft"].set_object(mg.Cylinder(1.0, width), _arrow_material(rgb))
         vis["shaft"].set_transform(
             _segment_transform(start, neck)
             @ np.diag([1.0, float(np.linalg.norm(neck - start)), 1, 1])
         )
     vis["head"].set_object(
-        mg.Cylinder(head, radiusTop=0.0, radiusBottom=2.5 * width), _material(rgb, 1.0)
+        mg.Cylinder(head, radiusTop=0.0, radiusBottom=2.5 * width), _arrow_material(rgb)
     )
     vis["head"].set_transform(_segment_transform(neck, end))
+    for part in ("shaft", "head"):  # drawn after the transparent ghosts, which would veil it
+        vis[part].set_property("renderOrder", 10)
 
 
 def _nice_scale(target: float) -> float:
@@ -543,13 +569,20 @@ def _nice_scale_down(target: float) -> float:
     return 10.0**exponent
 
 
-def _set_camera(vis: meshcat.Visualizer, centre: np.ndarray, radius: float) -> None:
-    """Aim the default camera (orbit target) at ``centre`` from a distance fitting ``radius``."""
-    T = np.eye(4)
-    T[:3, 3] = centre
-    vis["/Cameras/default"].set_transform(T)
+def _set_camera(vis: meshcat.Visualizer, radius: float, extent: np.ndarray) -> None:
+    """Place the default camera to see a sphere of ``radius`` around the origin.
+
+    ``extent`` (3,) is the size of the scene's bounding box in view coordinates [m].
+
+    meshcat's orbit controls always look at the world origin, so the scene is
+    shifted to put its centre there (see :func:`_build_scene`).
+    """
     distance = 1.45 * radius / math.tan(math.radians(75.0 / 2))  # meshcat's 75° vertical fov
-    view = np.array([1.0, 0.55, 0.45])  # world direction from target to camera
+    # direction from target to camera: look across the longer horizontal extent
+    if extent[0] > 1.5 * extent[1]:
+        view = np.array([0.55, -1.0, 0.75])  # an x-elongated scene seen from its side
+    else:
+        view = np.array([1.0, 0.55, 0.75])
     x, y, z = distance * view / np.linalg.norm(view)
     # the camera node lives in a frame rotated +90° about x: local (x, y, z) = world (x, -z, y)
     vis["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])
@@ -568,8 +601,10 @@ def _build_scene(
     arrow_scale: float | None,
     ghost_opacity: float,
     fps: int,
+    up: str = "+z",
 ) -> dict:
     """Send the scene to ``vis``; returns legend facts (colours, arrow scale)."""
+    R_view_world = _up_rotation(up)
     frame_id = None
     if frame is not None:
         names = [f.name for f in model.frames]
@@ -602,24 +637,42 @@ def _build_scene(
             points.append(part.hull @ T[:3, :3].T + T[:3, 3] if part.hull.size else T[None, :3, 3])
     if frame_id is not None:
         points.extend(_frame_pose(model, frame_id, q)[None, :3, 3] for q in qs)
-    p_arr = np.vstack(points)
+    p_arr = np.vstack(points) @ R_view_world.T  # view coordinates (up = +z)
     lo, hi = p_arr.min(axis=0), p_arr.max(axis=0)
     size = float(np.max(hi - lo))
 
-    # arrows: magnified so the longest is about 15 % of the scene
+    # arrows: magnified so the longest is about 30 % of the scene (twice the triads)
     longest = max((float(np.linalg.norm(a.end - a.start)) for a in arrows), default=0.0)
     if arrow_scale is None:
-        arrow_scale = _nice_scale(0.15 * size / longest) if longest > 0 else 1.0
+        arrow_scale = _nice_scale(0.3 * size / longest) if longest > 0 else 1.0
     drawn_ends = [a.start + arrow_scale * (a.end - a.start) for a in arrows]
     for a, e in zip(arrows, drawn_ends, strict=True):
-        lo = np.minimum(lo, np.minimum(a.start, e))
-        hi = np.maximum(hi, np.maximum(a.start, e))
+        a_view, e_view = R_view_world @ a.start, R_view_world @ e
+        lo = np.minimum(lo, np.minimum(a_view, e_view))
+        hi = np.maximum(hi, np.maximum(a_view, e_view))
     centre = 0.5 * (lo + hi)
     radius = max(0.5 * float(np.linalg.norm(hi - lo)), 0.05)
 
     root = vis[_ROOT]
-    legend: dict = {"poses": [], "arrows": [], "arrow_scale": arrow_scale, "frame": frame}
+    # display = R_view_world · world − centre: up is up and the scene centre sits at
+    # the origin, where meshcat's orbit controls look; nodes below are in world coordinates
+    T_view_world = np.eye(4)
+    T_view_world[:3, :3] = R_view_world
+    T_view_world[:3, 3] = -centre
+    root.set_transform(T_view_world)
+    # meshcat's world axes (0.5 m long) would dwarf a small mechanism: scale them to it
+    T_axes = T_view_world.copy()
+    T_axes[:3, :3] *= max(0.2 * size, 1e-3) / 0.5
+    vis["/Axes"].set_transform(T_axes)
+    legend: dict = {
+        "poses": [],
+        "arrows": [],
+        "arrow_scale": arrow_scale,
+        "frame": frame,
+        "up": up,
+    }
     opacity = ghost_opacity if (animate or len(qs) > 1) else 1.0
+    triad = (0.08 if arrows else 0.12) * size  # axis length [m]
     for k, poses in enumerate(pose_sets):
         rgb = _ghost_colour(k, len(qs))
         legend["poses"].append(rgb)
@@ -629,7 +682,7 @@ def _build_scene(
             _draw_triad(
                 root["frame_axes"][f"pose{k}"],
                 _frame_pose(model, frame_id, qs[k]),
-                0.12 * size,
+                triad,
                 1.0,
             )
 
@@ -638,7 +691,7 @@ def _build_scene(
         _draw_parts(robot, parts, pose_sets[0], None, 1.0)
         if frame_id is not None:
             _draw_triad(
-                robot["measured_frame"], _frame_pose(model, frame_id, qs[0]), 0.15 * size, 1.0
+                robot["measured_frame"], _frame_pose(model, frame_id, qs[0]), 1.25 * triad, 1.0
             )
         animation = Animation(default_framerate=fps)
         hold, move, steps = max(1, fps // 2), fps, 12  # [frames]: 0.5 s hold, 1 s move
@@ -662,15 +715,17 @@ def _build_scene(
             start += hold + move
         vis.window.send(_SetAnimationLooped(animation))
 
-    width = 0.004 * size
+    width = 0.006 * size
     for k, (a, e) in enumerate(zip(arrows, drawn_ends, strict=True)):
         rgb = _rgb(a.colour)
         _draw_arrow(root["arrows"][f"arrow{k}"], a.start, e, rgb, width)
         legend["arrows"].append((rgb, a.label, float(np.linalg.norm(a.end - a.start))))
 
     log.debug("scene centre %s radius %.3f m", centre, radius)
-    legend["grid_cell"] = _draw_floor_grid(root["floor_grid"], lo, hi)
-    _set_camera(vis, centre, radius)
+    floor = vis[f"{_ROOT}_floor"]
+    floor.set_transform(pin.SE3(np.eye(3), -centre).homogeneous)
+    legend["grid_cell"] = _draw_floor_grid(floor, lo, hi)
+    _set_camera(vis, radius, hi - lo)
     return legend
 
 
@@ -697,6 +752,8 @@ def _legend_html(title: str | None, legend: dict, ghosts: bool, animate: bool) -
             "<span style='color:#1ab31a'>y</span> "
             "<span style='color:#1a40e6'>z</span></div>"
         )
+    if legend.get("up", "+z").lstrip("+") != "z":
+        rows.append(f"<div>drawn with world <b>{html.escape(legend['up'])}</b> pointing up</div>")
     if legend.get("grid_cell"):
         rows.append(f"<div>floor grid: {_length_text(legend['grid_cell'])} cells</div>")
     if legend["arrows"]:
@@ -704,12 +761,15 @@ def _legend_html(title: str | None, legend: dict, ghosts: bool, animate: bool) -
         rows.append(
             f"<div><b>error arrows magnified ×{scale:g}</b> (1 mm drawn as {scale:g} mm)</div>"
         )
-        for rgb, label, length in legend["arrows"]:
-            text = html.escape(label) if label else ""
-            rows.append(
-                f"<div><span class='sw' style='background:#{_hex(rgb):06x}'></span>"
-                f"{text} {1e3 * length:.3f} mm</div>"
-            )
+        items = [
+            f"<span class='sw' style='background:#{_hex(rgb):06x}'></span>"
+            f"{html.escape(label) + ': ' if label else ''}{1e3 * length:.3f} mm"
+            for rgb, label, length in legend["arrows"]
+        ]
+        if len(items) <= 3:
+            rows.extend(f"<div>{item}</div>" for item in items)
+        else:  # many arrows: wrap them in one paragraph
+            rows.append("<div>" + " ".join(items) + "</div>")
     if not rows:
         return ""
     return "<div id='pincal-legend'>" + "".join(rows) + "</div>"
@@ -775,6 +835,7 @@ def static_html(
     title: str | None = None,
     ghost_opacity: float = 0.35,
     fps: int = 30,
+    up: str = "+z",
 ) -> str:
     """A self-contained HTML page showing ``model`` at ``configurations``.
 
@@ -792,10 +853,12 @@ def static_html(
         arrows: error arrows, each an :class:`Arrow` or ``(start (3,), end (3,),
             colour, label)`` in the world frame [m].
         arrow_scale: magnification of the arrows; None picks a 1-2-5 value making
-            the longest about 15 % of the scene. The legend states it.
+            the longest about 30 % of the scene. The legend states it.
         title: page title and legend heading.
         ghost_opacity: opacity of ghost copies in [0, 1].
         fps: animation frame rate.
+        up: the world direction drawn pointing up: ``+z`` (default), ``-z`` (a
+            machine whose world z points down, towards the table), ``±x``, ``±y``.
 
     Returns:
         The HTML text (a few MB: meshcat's viewer is inlined). Opening it needs no
@@ -826,6 +889,7 @@ def static_html(
         arrow_scale=arrow_scale,
         ghost_opacity=ghost_opacity,
         fps=fps,
+        up=up,
     )
     commands = ",\n".join('"' + base64.b64encode(c).decode("ascii") + '"' for c in window.commands)
     return _PAGE.format(
@@ -864,6 +928,7 @@ def live(
     arrows: Sequence[Arrow | tuple] | None = None,
     arrow_scale: float | None = None,
     ghost_opacity: float = 0.35,
+    up: str = "+z",
 ) -> LiveSession:
     """Start a meshcat server on 127.0.0.1 and draw the same view as :func:`static_html`.
 
@@ -893,6 +958,7 @@ def live(
             arrow_scale=arrow_scale,
             ghost_opacity=ghost_opacity,
             fps=30,
+            up=up,
         )
     except BaseException:
         session.close()

@@ -1,0 +1,46 @@
+"""`pincal report`: one HTML + Markdown report of a calibration output directory."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from pincal.cli.common import fail_cleanly
+
+
+@click.command()
+@click.argument("directory", type=click.Path(path_type=Path))
+@click.option(
+    "--out",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Where to write the report (default: DIRECTORY).",
+)
+@click.option("--name", default="report", show_default=True, help="Report file stem.")
+@click.option("--json", "as_json", is_flag=True, help="Print the written paths as JSON.")
+@fail_cleanly
+def report(directory: Path, out: Path | None, name: str, as_json: bool) -> None:
+    """Assemble the plots and numbers of a calibration in DIRECTORY into one report.
+
+    Reads DIRECTORY/identification.json (written by `pincal demo` and the
+    calibration commands) and writes NAME.html, NAME.md and the plots in
+    NAME_plots/: validation errors before vs after, identified parameters with
+    ±2σ bars (and the true values of a simulation), convergence and
+    observability-index history when the JSON holds them.
+
+    \b
+    Examples:
+      pincal demo --out pincal-out && pincal report pincal-out
+      pincal report pincal-out --out /tmp/report --json
+    """
+    from pincal.report import calibration_report
+
+    if not name or "/" in name or "\\" in name or name.startswith("."):
+        raise click.BadParameter("must be a plain file stem", param_hint="--name")
+    files = calibration_report(directory, out, name=name)
+    if as_json:
+        click.echo(json.dumps({"html": str(files.html), "markdown": str(files.markdown)}))
+    else:
+        click.echo(f"wrote {files.html} and {files.markdown}")

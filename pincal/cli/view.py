@@ -1,0 +1,244 @@
+"""`pincal view`: an offline HTML view (or a live meshcat session) of a mechanism's poses.
+
+Poses file (temporary format, until pincal.datafiles defines the measurement files):
+a CSV file whose header names the actuated joints of the model (any order; other
+columns are ignored), one pose per row, values in SI units (m for prismatic, rad for
+revolute joints). Lines starting with ``#`` are comments::
+
+    # three poses of stewart_6ups
+    leg1_slide,leg2_slide,leg3_slide,leg4_slide,leg5_slide,leg6_slide
+    0.4869,0.4869,0.4869,0.4869,0.4869,0.4869
+    0.50,0.47,0.50,0.47,0.50,0.47
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+from pincal.cli.common import fail_cleanly
+from pincal.errors import MeasurementError, ModelFileError
+
+#: largest poses file read [bytes] (a view of more poses is unreadable anyway)
+MAX_POSES_BYTES = 5_000_000
+#: most poses drawn (ghost copies multiply the page size)
+MAX_POSES = 200
+
+
+def read_actuator_csv(path: str | Path, actuated: tuple[str, ...]) -> np.ndarray:
+    """Actuator rows (m, n_act) [m, rad] from a CSV file with a header of joint names.
+
+    Raises:
+        MeasurementError: unreadable file, missing columns, non-numeric or
+            non-finite values, no rows.
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()[: MAX_POSES_BYTES + 1]
+    except OSError as exc:
+        raise MeasurementError(f"cannot read poses file {str(path)!r}: {exc.strerror}") from exc
+    if len(raw) > MAX_POSES_BYTES:
+        raise MeasurementError(f"poses file {str(path)!r} is larger than {MAX_POSES_BYTES} bytes")
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise MeasurementError(f"poses file {str(path)!r} is not UTF-8 text") from exc
+    lines = [
+        (n, line)
+        for n, line in enumerate(text.splitlines(), 1)
+        if not line.lstrip().startswith("#")
+    ]
+    lines = [(n, line) for n, line in lines if line.strip()]
+    if not lines:
+        raise MeasurementError(f"poses file {str(path)!r} is empty; expected a header line")
+    header = [h.strip() for h in next(csv.reader([lines[0][1]]))]
+    missing = [name for name in actuated if name not in header]
+    if missing:
+        raise MeasurementError(
+            f"poses file {str(path)!r}: header lacks actuated joint(s) {missing}; the header "
+            f"must name the actuated joints {list(actuated)}"
+        )
+    columns = [header.index(name) for name in actuated]
+    rows = []
+    for n, line in lines[1:]:
+        cells = next(csv.reader(io.StringIO(line)), [])
+        if len(cells) != len(header):
+            raise MeasurementError(
+                f"{path.name} line {n}: {len(cells)} values for {len(header)} header columns"
+            )
+        try:
+            row = [float(cells[c]) for c in columns]
+        except ValueError:
+            raise MeasurementError(
+                f"{path.name} line {n}: non-numeric value in {[cells[c] for c in columns]}"
+            ) from None
+        if not all(math.isfinite(v) for v in row):
+            raise MeasurementError(f"{path.name} line {n}: NaN or infinite value")
+        rows.append(row)
+    if not rows:
+        raise MeasurementError(f"poses file {str(path)!r} has a header but no poses")
+    if len(rows) > MAX_POSES:
+        raise MeasurementError(
+            f"poses file {str(path)!r} has {len(rows)} poses; at most {MAX_POSES}"
+        )
+    return np.array(rows, dtype=float)
+
+
+def _calibrated_urdf(directory: Path, name: str) -> Path:
+    """The calibrated URDF in a calibration output directory (or the URDF itself)."""
+    if directory.is_file() and directory.suffix.lower() == ".urdf":
+        return directory
+    if not directory.is_dir():
+        raise ModelFileError(f"calibration directory {str(directory)!r} does not exist")
+    preferred = directory / f"{name}_calibrated.urdf"
+    if preferred.is_file():
+        return preferred
+    found = sorted(directory.glob("*_calibrated.urdf"))
+    if len(found) != 1:
+        raise ModelFileError(
+            f"calibration directory {str(directory)!r} must hold {name}_calibrated.urdf "
+            f"(found {[p.name for p in found]})"
+        )
+    return found[0]
+
+
+@click.command()
+@click.argument("model")
+@click.option(
+    "--poses",
+    "poses_file",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="CSV of actuator values (header: actuated joint names; SI units).",
+)
+@click.option(
+    "--random",
+    "n_random",
+    type=click.IntRange(1, MAX_POSES),
+    default=None,
+    help="Draw N random workspace poses (default 5 when --poses is not given).",
+)
+@click.option("--seed", default=0, show_default=True, help="Seed of the random poses.")
+@click.option(
+    "--calibrated",
+    type=click.Path(path_type=Path),
+    help="Calibration output directory (holding <model>_calibrated.urdf): adds error arrows.",
+)
+@click.option(
+    "--html",
+    "html_path",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Write the self-contained HTML view here.",
+)
+@click.option("--live", is_flag=True, help="Also open a live meshcat session on 127.0.0.1.")
+@click.option(
+    "--up",
+    type=click.Choice(["auto", "+z", "-z", "+y", "-y", "+x", "-x"]),
+    default="auto",
+    show_default=True,
+    help="World direction drawn upwards; auto reads the sidecar key view_up (default +z).",
+)
+@click.option("--ghosts/--no-ghosts", default=True, show_default=True, help="Ghost copies.")
+@click.option("--animate/--no-animate", default=True, show_default=True, help="Animation.")
+@click.option("--arrow-scale", type=float, default=None, help="Arrow magnification (auto).")
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON summary instead of text.")
+@fail_cleanly
+def view(
+    model: str,
+    poses_file: Path | None,
+    n_random: int | None,
+    seed: int,
+    calibrated: Path | None,
+    html_path: Path | None,
+    live: bool,
+    up: str,
+    ghosts: bool,
+    animate: bool,
+    arrow_scale: float | None,
+    as_json: bool,
+) -> None:
+    """Show MODEL at measurement poses: an offline HTML page (no server, no network).
+
+    Each pose is a semi-transparent ghost in its own colour, an opaque copy animates
+    through them, and the measured frame's axes are drawn at every pose. With
+    --calibrated, arrows go from the nominal to the calibrated model's predicted
+    measured-frame position at each pose, magnified by the factor in the legend.
+
+    \b
+    Poses CSV (SI units; other columns ignored; '#' starts a comment line):
+      leg1_slide,leg2_slide,leg3_slide,leg4_slide,leg5_slide,leg6_slide
+      0.4869,0.4869,0.4869,0.4869,0.4869,0.4869
+
+    \b
+    Examples:
+      pincal view stewart_6ups --random 6 --html poses.html
+      pincal view stewart_6ups --poses poses.csv --calibrated pincal-out --html errors.html
+      pincal view pkm5 --random 4 --live
+    """
+    from pincal import viz
+    from pincal.mechanism import load_mechanism
+    from pincal.workspace import sample_actuators
+
+    if html_path is None and not live:
+        raise click.UsageError("give --html FILE and/or --live")
+    if arrow_scale is not None and not (math.isfinite(arrow_scale) and arrow_scale > 0):
+        raise click.BadParameter("must be a positive number", param_hint="--arrow-scale")
+    mech = load_mechanism(model)
+    if poses_file is not None:
+        rows = read_actuator_csv(poses_file, mech.actuated)
+        if n_random:
+            rows = np.vstack([rows, sample_actuators(mech, n_random, np.random.default_rng(seed))])
+    else:
+        rows = sample_actuators(mech, n_random or 5, np.random.default_rng(seed))
+    qs = mech.configurations(rows)
+
+    arrows = []
+    if calibrated is not None:
+        cal = load_mechanism(_calibrated_urdf(calibrated, mech.name))
+        for k, row in enumerate(rows):
+            p_nominal = np.array(mech.forward(row, qs[k]).translation)
+            p_calibrated = np.array(cal.forward(row, qs[k]).translation)
+            arrows.append(viz.Arrow(p_nominal, p_calibrated, "#b0008c", f"pose {k}"))
+
+    up_dir = str(mech.sidecar.get("view_up", "+z")) if up == "auto" else up
+    options = dict(
+        frame=mech.measured_frame,
+        ghosts=ghosts,
+        animate=animate,
+        arrows=arrows,
+        arrow_scale=arrow_scale,
+        up=up_dir,
+    )
+    summary: dict = {"model": mech.name, "poses": len(rows), "up": up_dir}
+    if arrows:
+        lengths = [float(np.linalg.norm(a.end - a.start)) * 1e3 for a in arrows]
+        summary["max_prediction_change_mm"] = max(lengths)
+    if html_path is not None:
+        title = f"{mech.name}: {len(rows)} poses" + (" — calibration changes" if arrows else "")
+        page = viz.static_html(mech.model, mech.source, list(qs), title=title, **options)
+        summary["html"] = str(viz.write_html(html_path, page))
+    session = viz.live(mech.model, mech.source, list(qs), **options) if live else None
+    if session is not None:
+        summary["live_url"] = session.web_url
+    if as_json:
+        click.echo(json.dumps(summary))
+    else:
+        if "html" in summary:
+            click.echo(f"wrote {summary['html']} ({len(rows)} poses of {mech.name})")
+        if arrows:
+            click.echo(
+                f"largest nominal → calibrated prediction change: "
+                f"{summary['max_prediction_change_mm']:.4f} mm"
+            )
+    if session is not None:
+        click.echo(f"meshcat viewer at {session.web_url} — press Enter to stop", err=True)
+        try:
+            sys.stdin.readline()
+        finally:
+            session.close()
