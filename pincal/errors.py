@@ -18,11 +18,13 @@ __all__ = [
     "ModelFileError",
     "ParameterError",
     "PincalError",
+    "ReportError",
     "SingularConfigurationError",
     "TooFewPosesError",
     "UnidentifiableError",
     "UnknownNameError",
     "UnreachablePoseError",
+    "VisualizationError",
 ]
 
 

@@ -42,6 +42,7 @@ __all__ = [
     "load_mechanism",
     "read_sidecar",
     "resolve_model_path",
+    "validate_sidecar",
 ]
 
 log = logging.getLogger(__name__)
