@@ -8,13 +8,11 @@ in SI units (m, rad); a ``unit`` argument chooses the displayed unit:
 
 from __future__ import annotations
 
-import contextlib
 import html
 import io
 import json
 import math
 import os
-import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +22,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from pincal.errors import ReportError
+from pincal.files import atomic_write_bytes
 
 __all__ = [
     "ErrorStats",
@@ -121,27 +120,11 @@ def _vector(values: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
     return arr
 
 
-def _atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
-    return target
-
-
 def _save(fig: Figure, path: str | os.PathLike) -> Path:
     buffer = io.BytesIO()
     FigureCanvasAgg(fig)
     fig.savefig(buffer, format="png", dpi=110)
-    return _atomic_write_bytes(path, buffer.getvalue())
+    return atomic_write_bytes(path, buffer.getvalue())
 
 
 def _figure(width: float = 7.0, height: float = 4.0) -> Figure:
@@ -460,9 +443,9 @@ def write_report(
         for table in section.tables:
             md += [_markdown_table(table), ""]
             body.append(_html_table(table))
-    md_path = _atomic_write_bytes(out / f"{name}.md", "\n".join(md).encode("utf-8"))
+    md_path = atomic_write_bytes(out / f"{name}.md", "\n".join(md).encode("utf-8"))
     html_text = _HTML_PAGE.format(title=html.escape(title), body="\n".join(body))
-    html_path = _atomic_write_bytes(out / f"{name}.html", html_text.encode("utf-8"))
+    html_path = atomic_write_bytes(out / f"{name}.html", html_text.encode("utf-8"))
     return ReportFiles(markdown=md_path, html=html_path)
 
 

@@ -33,7 +33,6 @@ import logging
 import math
 import os
 import re
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -47,6 +46,7 @@ import umsgpack
 from meshcat.animation import Animation
 
 from pincal.errors import ModelFileError, UnknownNameError, VisualizationError
+from pincal.files import atomic_write_text
 
 __all__ = [
     "Arrow",
@@ -902,19 +902,7 @@ def static_html(
 
 def write_html(path: str | os.PathLike, html_text: str) -> Path:
     """Write ``html_text`` to ``path`` atomically (temporary file + rename); returns the path."""
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(html_text)
-        os.chmod(tmp, 0o644)  # mkstemp creates 0600; a report page is meant to be shared
-        os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
-    return target
+    return atomic_write_text(path, html_text)
 
 
 def live(
