@@ -21,6 +21,7 @@ def main(ctx: click.Context, debug: bool) -> None:
     Examples:
       pincal demo                      full simulated Stewart calibration
       pincal info stewart_6ups         joints, closures, presets, identifiability
+      pincal poses stewart_6ups --count 18 --index O1 --candidates grid:4 --out poses.csv
     """
     ctx.ensure_object(dict)
     ctx.obj["debug"] = debug
@@ -29,9 +30,11 @@ def main(ctx: click.Context, debug: bool) -> None:
 
 from pincal.cli import demo as _demo  # noqa: E402
 from pincal.cli import info as _info  # noqa: E402
+from pincal.cli import poses as _poses  # noqa: E402
 
 main.add_command(_demo.demo)
 main.add_command(_info.info)
+main.add_command(_poses.poses)
 
 if __name__ == "__main__":  # pragma: no cover
     main()
