@@ -67,6 +67,7 @@ def poses(
     indices, the scaling and the Cramér–Rao prediction.
     """
     import json
+    import sys
     from pathlib import Path
 
     import numpy as np
@@ -84,9 +85,7 @@ def poses(
     preset = preset or (next(iter(mech.presets)) if mech.presets else "full")
     params = parameters(mech, preset)
     click.echo(f"{mech.name}: {len(params)} parameters (preset {preset!r})", err=True)
-    with click.progressbar(
-        length=1, label=f"candidates {spec}", file=click.get_text_stream("stderr")
-    ) as bar:
+    with click.progressbar(length=1, label=f"candidates {spec}", file=sys.stderr) as bar:
         state = {"total": 1}
 
         def progress(done: int, total: int) -> None:
