@@ -1,8 +1,11 @@
 """The main job: a full simulated calibration of the bundled Stewart platform.
 
-A seeded "actual" machine is drawn around the nominal model, a laser-tracker
-campaign is simulated, the parameters are identified, the result is validated on
-fresh poses and the calibrated model is written out.
+A seeded "actual" machine is drawn around the nominal model, measurement poses
+are chosen from a candidate set by maximising O1 on the noise-whitened Jacobian
+(D-optimal design), the Cramér–Rao bound predicts the achievable accuracy before
+measuring, a laser-tracker campaign is simulated, the parameters are identified,
+the result is validated on fresh poses (predicted vs achieved) and the calibrated
+model is written out.
 """
 
 from __future__ import annotations
@@ -14,12 +17,18 @@ from pathlib import Path
 
 import numpy as np
 
+from pincal.candidates import candidate_set
+from pincal.closures import COMPONENTS
+from pincal.crb import CramerRaoReport, cramer_rao_from_jacobian
 from pincal.export import save_urdf
 from pincal.files import atomic_write_text
 from pincal.identify import IdentificationResult, identify
 from pincal.measurements import NoiseModel, simulate_measurements
 from pincal.mechanism import Mechanism, load_mechanism
+from pincal.observability import DesignScaling
 from pincal.parameters import ParameterSet, parameters
+from pincal.selection import PoseDesign, select_poses
+from pincal.sensitivity import identification_jacobian
 from pincal.validation import PoseErrors, pose_errors
 from pincal.workspace import sample_actuators
 
@@ -35,6 +44,9 @@ class DemoSettings:
         error_std: std of the drawn geometric errors [mm].
         noise: instrument noise (mm, mrad).
         method: identification method.
+        candidates: candidate spec for pose selection (``grid:4``, ``random:300``,
+            ``oa:5``) or ``"none"`` for random measurement poses.
+        index: observability index maximised on the noise-whitened Jacobian.
     """
 
     model: str = "stewart_6ups"
@@ -45,6 +57,8 @@ class DemoSettings:
     error_std: float = 0.5
     noise: NoiseModel = field(default_factory=lambda: NoiseModel(0.01, 0.02))
     method: str = "gauss-newton"
+    candidates: str = "grid:4"
+    index: str = "O1"
 
 
 @dataclass(frozen=True)
@@ -59,6 +73,8 @@ class DemoResult:
     before: PoseErrors
     after: PoseErrors
     files: tuple[Path, ...]
+    design: PoseDesign | None = None
+    crb: CramerRaoReport | None = None
 
 
 def draw_errors(params: ParameterSet, std_mm: float, rng: np.random.Generator) -> np.ndarray:
@@ -79,13 +95,31 @@ def run_demo(
     params = parameters(nominal, settings.preset)
     true = draw_errors(params, settings.error_std, rng)
     actual = params.apply(nominal, true)
-    say(f"sampling {settings.n_poses} measurement poses")
-    q_meas = sample_actuators(nominal, settings.n_poses, rng)
+    q_val = sample_actuators(nominal, settings.n_validation, rng)
+    design = None
+    if settings.candidates == "none":
+        say(f"sampling {settings.n_poses} random measurement poses")
+        q_meas = sample_actuators(nominal, settings.n_poses, rng)
+    else:
+        say(f"candidate poses {settings.candidates}")
+        cands = candidate_set(nominal, params, settings.candidates, rng)
+        sig = settings.noise.std(("x", "rx"))
+        scaling = DesignScaling("noise", position_std=sig[0], orientation_std=sig[1])
+        say(f"selecting {settings.n_poses} of {len(cands)} poses by {settings.index}")
+        design = select_poses(cands, settings.n_poses, settings.index, scaling, rng=rng)
+        q_meas = design.q_act
+    comps = nominal.measured_components
+    J_meas = identification_jacobian(nominal, params, q_meas).reshape(
+        len(q_meas), len(comps), len(params)
+    )
+    J_val = identification_jacobian(nominal, params, q_val, components=COMPONENTS).reshape(
+        len(q_val), 6, len(params)
+    )
+    crb = cramer_rao_from_jacobian(J_meas, comps, settings.noise, J_val, params.names, params.units)
     meas = simulate_measurements(actual, q_meas, settings.noise, rng)
     say(f"identifying {len(params)} parameters ({settings.method})")
     result = identify(nominal, params, meas, settings.method)
     say(f"validating on {settings.n_validation} fresh poses")
-    q_val = sample_actuators(nominal, settings.n_validation, rng)
     before = pose_errors(nominal, actual, q_val)
     after = pose_errors(result.calibrated, actual, q_val)
     files: list[Path] = []
@@ -108,7 +142,9 @@ def run_demo(
             "message": result.message,
         }
         files.append(atomic_write_text(out / "identification.json", json.dumps(report, indent=2)))
-    return DemoResult(settings, nominal, params, true, result, before, after, tuple(files))
+    return DemoResult(
+        settings, nominal, params, true, result, before, after, tuple(files), design, crb
+    )
 
 
 def _row(label: str, s: dict[str, float]) -> str:
@@ -118,6 +154,25 @@ def _row(label: str, s: dict[str, float]) -> str:
     )
 
 
+def _prediction_lines(d: DemoResult, err: np.ndarray, after: dict[str, float]) -> list[str]:
+    """Predicted (Cramér–Rao, before measuring) vs achieved accuracy."""
+    if d.crb is None:
+        return []
+    c = d.crb
+    idx = [c.names.index(n) for n in d.result.params.names]
+    pred_std = float(np.sqrt(np.mean(c.std[idx] ** 2)))
+    return [
+        "  predicted before measuring (Cramér–Rao) vs achieved:",
+        "                                      predicted   achieved",
+        f"    RMS parameter error [µm]          {pred_std * 1e6:9.3f}  "
+        f"{np.sqrt(np.mean(err**2)) * 1e6:9.3f}",
+        f"    validation position RMS [mm]      {c.validation_position_rms * 1e3:9.5f}  "
+        f"{after['rms_position_mm']:9.5f}",
+        f"    validation orientation RMS [mrad] {c.validation_orientation_rms * 1e3:9.5f}  "
+        f"{after['rms_orientation_mrad']:9.5f}",
+    ]
+
+
 def format_demo(d: DemoResult) -> str:
     """The printed report of a demo run."""
     r, s = d.result, d.settings
@@ -125,11 +180,19 @@ def format_demo(d: DemoResult) -> str:
     idx = [d.params.index(n) for n in r.params.names]
     err = r.values - d.true_values[idx]
     z = err / r.std
+    if d.design is not None:
+        sel = d.design.selection
+        poses_text = (
+            f"poses chosen by {sel.index_name} ({sel.method}) from {d.design.n_candidates} "
+            f"{s.candidates} candidates; {sel.index_name} {sel.history[0]:.4g} → {sel.value:.4g}"
+        )
+    else:
+        poses_text = "random workspace poses"
     lines = [
         f"pincal demo — simulated calibration of {d.nominal.name} ({len(d.params)} parameters, "
         f"preset {d.params.label!r})",
         f"  actual machine: errors N(0, {s.error_std} mm) drawn with seed {s.seed}",
-        f"  measurements: {s.n_poses} random workspace poses, noise {s.noise.position} mm / "
+        f"  measurements: {s.n_poses} {poses_text}, noise {s.noise.position} mm / "
         f"{s.noise.orientation} mrad (1σ)",
         f"  identification: {r.method}, {r.iterations} iterations, {r.message}; reduced χ² "
         f"{r.reduced_chi2:.3f}",
@@ -139,6 +202,8 @@ def format_demo(d: DemoResult) -> str:
         _row("nominal model", b),
         _row("calibrated model", a),
         "",
+        *_prediction_lines(d, err, a),
+        *([""] if d.crb is not None else []),
         "  parameter errors after identification vs predicted std (Cramér–Rao):",
         f"    RMS |error|/σ = {np.sqrt(np.mean(z**2)):.3f} (expected ≈ 1); "
         f"{np.mean(np.abs(z) < 2) * 100:.0f} % within 2σ (expected ≈ 95 %)",

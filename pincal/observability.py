@@ -35,9 +35,13 @@ from numpy.typing import ArrayLike, NDArray
 from pincal.errors import PincalError, UnidentifiableError, UnknownNameError
 
 __all__ = [
+    "COLUMN_SCALINGS",
     "INDEX_NAMES",
+    "ROW_SCALINGS",
+    "DesignScaling",
     "JacobianScaling",
     "ObservabilityIndices",
+    "characteristic_length",
     "crb_covariance",
     "dimensionless_rows",
     "indices_from_singular_values",
@@ -214,6 +218,7 @@ class JacobianScaling:
     J: NDArray[np.float64]
     row_scale: NDArray[np.float64]
     col_scale: NDArray[np.float64]
+    description: str = ""
 
     def params_to_physical(self, x_scaled: ArrayLike) -> NDArray[np.float64]:
         """Scaled parameter vector (n,) → physical units (SI)."""
@@ -340,6 +345,161 @@ def weight_rows(J: ArrayLike, noise_std: ArrayLike) -> JacobianScaling:
     return JacobianScaling(
         J=arr * row_scale[..., None], row_scale=row_scale.copy(), col_scale=np.ones(arr.shape[-1])
     )
+
+
+ROW_SCALINGS: tuple[str, ...] = ("none", "noise", "K")
+"""Row scalings of :class:`DesignScaling`."""
+COLUMN_SCALINGS: tuple[str, ...] = ("none", "norm", "std")
+"""Column scalings of :class:`DesignScaling`."""
+
+
+@dataclass(frozen=True)
+class DesignScaling:
+    """The stated scaling on which observability indices are computed.
+
+    Rows (one per measured component of each pose):
+
+    - ``"none"``: SI units as they are (position rows [m], rotation rows [rad]);
+    - ``"noise"``: each row divided by its measurement noise σ (whitening; the
+      indices then describe the Cramér–Rao bound of the actual instrument);
+    - ``"K"``: seed 000's Jzg — position rows divided by the characteristic
+      length ``K`` [m], rotation rows unchanged. ``K = 0.001`` (1 mm) gives the
+      seed's *unscaled* Jz, whose entries are in mm/mm and rad/mm.
+
+    Columns (one per parameter):
+
+    - ``"none"``; ``"norm"``: each column divided by its Euclidean norm over the
+      whole candidate set (so every design is scaled alike); ``"std"``: each
+      column multiplied by the parameter's a-priori standard deviation.
+
+    Column scaling changes neither the selection by O1 (it multiplies det JᵀJ by
+    a constant) nor the CRB in physical units; it does change O2–O5 and A.
+
+    Attributes:
+        rows: one of :data:`ROW_SCALINGS`.
+        K: characteristic length [m] for ``rows="K"``.
+        position_std: position noise σ [m] for ``rows="noise"``.
+        orientation_std: orientation noise σ [rad] for ``rows="noise"``.
+        columns: one of :data:`COLUMN_SCALINGS`.
+        column_std: a-priori parameter std (n,) [m or rad] for ``columns="std"``.
+    """
+
+    rows: str = "noise"
+    K: float | None = None
+    position_std: float | None = None
+    orientation_std: float | None = None
+    columns: str = "none"
+    column_std: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        if self.rows not in ROW_SCALINGS:
+            raise UnknownNameError("row scaling", self.rows, ROW_SCALINGS)
+        if self.columns not in COLUMN_SCALINGS:
+            raise UnknownNameError("column scaling", self.columns, COLUMN_SCALINGS)
+        if self.rows == "K" and (self.K is None or not np.isfinite(self.K) or self.K <= 0):
+            raise PincalError(f"row scaling 'K' needs a positive length K [m]; got {self.K}")
+        if self.rows == "noise":
+            for name in ("position_std", "orientation_std"):
+                v = getattr(self, name)
+                if v is not None and (not np.isfinite(v) or v <= 0):
+                    raise PincalError(f"{name} must be a positive noise std; got {v}")
+        if self.columns == "std" and self.column_std is None:
+            raise PincalError("column scaling 'std' needs column_std (a-priori parameter std)")
+
+    def describe(self) -> str:
+        """The scaling in words, e.g. ``"rows: Jzg, position rows / K (K = 600 mm)"``."""
+        if self.rows == "none":
+            rows = "rows: unscaled SI (m, rad)"
+        elif self.rows == "K":
+            rows = f"rows: Jzg, position rows / K (K = {self.K * 1e3:g} mm), rotation rows as is"
+        else:
+            parts = []
+            if self.position_std is not None:
+                parts.append(f"position / {self.position_std * 1e3:g} mm")
+            if self.orientation_std is not None:
+                parts.append(f"rotation / {self.orientation_std * 1e3:g} mrad")
+            rows = "rows: whitened by the noise (" + ", ".join(parts) + ")"
+        cols = {
+            "none": "columns: unscaled",
+            "norm": "columns: unit norm over the candidate set",
+            "std": "columns: × a-priori parameter std",
+        }[self.columns]
+        return f"{rows}; {cols}"
+
+    def apply(self, J_blocks: ArrayLike, components: Sequence[str]) -> JacobianScaling:
+        """Scale Jacobian blocks (N, k, n) whose k rows are ``components``.
+
+        Args:
+            J_blocks: unscaled blocks (N, k, n) (or one block (k, n)).
+            components: the k row names, from x y z rx ry rz.
+
+        Returns:
+            The scaled blocks with row factors (N, k) and column factors (n,);
+            ``description`` is :meth:`describe`.
+        """
+        arr = np.asarray(J_blocks, dtype=float)
+        single = arr.ndim == 2
+        blocks = arr[None] if single else arr
+        if blocks.ndim != 3 or blocks.shape[1] != len(components):
+            raise PincalError(
+                f"J_blocks must have shape (N, {len(components)}, n) for components "
+                f"{tuple(components)}; got {arr.shape}"
+            )
+        is_pos = np.array([c in ("x", "y", "z") for c in components])
+        if self.rows == "none":
+            factors = np.ones(len(components))
+        elif self.rows == "K":
+            factors = np.where(is_pos, 1.0 / float(self.K), 1.0)
+        else:
+            need = []
+            if np.any(is_pos) and self.position_std is None:
+                need.append("position_std")
+            if np.any(~is_pos) and self.orientation_std is None:
+                need.append("orientation_std")
+            if need:
+                raise PincalError(f"row scaling 'noise' needs {' and '.join(need)}")
+            sp = self.position_std if self.position_std is not None else 1.0
+            so = self.orientation_std if self.orientation_std is not None else 1.0
+            factors = np.where(is_pos, 1.0 / sp, 1.0 / so)
+        row_scale = np.broadcast_to(factors, blocks.shape[:-1]).copy()
+        scaled = blocks * row_scale[..., None]
+        n = blocks.shape[-1]
+        if self.columns == "none":
+            col = np.ones(n)
+        elif self.columns == "norm":
+            norms = np.linalg.norm(scaled.reshape(-1, n), axis=0)
+            col = np.where(norms > 0.0, 1.0 / np.where(norms > 0.0, norms, 1.0), 1.0)
+        else:
+            col = np.asarray(self.column_std, dtype=float).reshape(-1)
+            if col.shape != (n,) or not np.all(np.isfinite(col)) or np.any(col <= 0):
+                raise PincalError(f"column_std must be {n} positive values; got {col.shape}")
+        scaled = scaled * col
+        if single:
+            scaled, row_scale = scaled[0], row_scale[0]
+        return JacobianScaling(scaled, row_scale, col, self.describe())
+
+
+def characteristic_length(J_blocks: ArrayLike, components: Sequence[str]) -> float:
+    """K [m] that balances position and rotation rows: RMS(position rows)/RMS(rotation rows).
+
+    With this K the two row blocks of Jzg have equal RMS entries (the seed's aim:
+    "make the elements of Jpm and Jθm of the same order of magnitude").
+
+    Args:
+        J_blocks: unscaled blocks (N, k, n) over a candidate set.
+        components: the k row names; must include position and rotation rows.
+    """
+    arr = np.asarray(J_blocks, dtype=float)
+    is_pos = np.array([c in ("x", "y", "z") for c in components])
+    if arr.ndim != 3 or arr.shape[1] != is_pos.size or is_pos.all() or not is_pos.any():
+        raise PincalError(
+            "characteristic_length needs blocks (N, k, n) with both position and rotation rows"
+        )
+    rms_p = float(np.sqrt(np.mean(arr[:, is_pos] ** 2)))
+    rms_r = float(np.sqrt(np.mean(arr[:, ~is_pos] ** 2)))
+    if rms_r == 0.0:
+        raise PincalError("rotation rows are all zero; K is undefined")
+    return rms_p / rms_r
 
 
 # ----------------------------------------------------------------------------- CRB

@@ -27,7 +27,7 @@ def main(ctx: click.Context, debug: bool) -> None:
     Examples:
       pincal demo                              full simulated Stewart calibration
       pincal info stewart_6ups                 joints, closures, presets, identifiability
-      pincal poses stewart_6ups --count 18 --index O1 --out poses.csv
+      pincal poses stewart_6ups --count 18 --index O1 --candidates grid:4 --out poses.csv
       pincal simulate hexaslide_6pus --random 30 --out m.csv
       pincal calibrate hexaslide_6pus --data m.csv --out cal/
       pincal compensate cal/ --targets targets.csv --out commands.csv
@@ -51,6 +51,7 @@ from pincal.cli import calibrate as _calibrate  # noqa: E402
 from pincal.cli import compensate as _compensate  # noqa: E402
 from pincal.cli import demo as _demo  # noqa: E402
 from pincal.cli import info as _info  # noqa: E402
+from pincal.cli import poses as _poses  # noqa: E402
 from pincal.cli import report as _report  # noqa: E402
 from pincal.cli import simulate as _simulate  # noqa: E402
 from pincal.cli import view as _view  # noqa: E402
@@ -58,6 +59,7 @@ from pincal.cli import view as _view  # noqa: E402
 for _command in (
     _demo.demo,
     _info.info,
+    _poses.poses,
     _simulate.simulate,
     _calibrate.calibrate,
     _compensate.compensate,
