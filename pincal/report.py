@@ -601,7 +601,7 @@ def calibration_report(
         raise ReportError(f"calibration directory {str(src)!r} does not exist")
     data = read_identification(src / IDENTIFICATION_JSON)
     out_dir = Path(out) if out is not None else src
-    plots = out_dir / f"{name}_plots"
+    plots = (out_dir / f"{name}_plots").resolve()
     sections: list[Section] = []
 
     facts = [f"Model **{data['model']}**"]

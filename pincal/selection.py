@@ -8,8 +8,6 @@ a CSV of actuator values and nominal poses and a JSON with the index history.
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import logging
 from dataclasses import dataclass
@@ -19,17 +17,18 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from pincal import datafiles
 from pincal.candidates import CandidateSet
 from pincal.design import PoseSelection, detmax, exchange, greedy
 from pincal.errors import PincalError, UnknownNameError
 from pincal.files import atomic_write_text
 from pincal.observability import DesignScaling, ObservabilityIndices, observability
 
-__all__ = ["METHODS", "PoseDesign", "select_poses", "write_poses"]
+__all__ = ["SELECTION_METHODS", "PoseDesign", "select_poses", "write_pose_design"]
 
 _log = logging.getLogger(__name__)
 
-METHODS: tuple[str, ...] = ("exchange", "detmax", "greedy")
+SELECTION_METHODS: tuple[str, ...] = ("exchange", "detmax", "greedy")
 """Selection algorithms accepted by :func:`select_poses`."""
 
 
@@ -84,8 +83,8 @@ def select_poses(
         restarts: random starts of exchange/DETMAX; the best design is kept.
         tabu: tabu tenure for exchange (0: plain exchange).
     """
-    if method not in METHODS:
-        raise UnknownNameError("selection method", method, METHODS)
+    if method not in SELECTION_METHODS:
+        raise UnknownNameError("selection method", method, SELECTION_METHODS)
     if restarts < 1:
         raise PincalError(f"restarts must be >= 1; got {restarts}")
     scaling = scaling or DesignScaling(rows="none")
@@ -115,31 +114,29 @@ def select_poses(
     )
 
 
-_POSE_COLUMNS = ("x", "y", "z", "rx", "ry", "rz")
+def write_pose_design(
+    design: PoseDesign, path: str | Path, extra: dict | None = None
+) -> tuple[Path, Path, Path]:
+    """Write the selected poses, their actuator commands and the design record.
 
+    Files (each written atomically):
 
-def write_poses(design: PoseDesign, path: str | Path) -> tuple[Path, Path]:
-    """Write the selected poses as CSV and the design record as JSON beside it.
-
-    The CSV has one row per pose: the actuated joint values (columns named after
-    the actuated joints, SI: m or rad), then the nominal measured-frame pose
-    ``nominal_x, nominal_y, nominal_z`` (world position [m]) and
-    ``nominal_rx, nominal_ry, nominal_rz`` (rotation vector of the world
-    orientation [rad]). The JSON (same name, ``.json``) records the index, its
-    history, all indices, the scaling and the candidate source.
+    * ``path``: the nominal measured-frame poses as a pincal pose file
+      (:func:`pincal.datafiles.write_poses`; accepted by ``pincal simulate --poses``
+      and ``pincal compensate --targets``);
+    * ``<stem>.commands.csv``: the selected actuator values (a pincal command file,
+      SI; accepted by ``pincal view --poses``);
+    * ``<stem>.json``: index, its history, all indices, the scaling, the candidate
+      source, plus ``extra`` entries.
 
     Returns:
-        (csv path, json path).
+        (poses path, commands path, json path).
     """
     out = Path(path)
     c = design.candidates
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow([*c.actuated, *(f"nominal_{k}" for k in _POSE_COLUMNS)])
-    for q, p, R in zip(c.q_act, c.positions, c.rotations, strict=True):
-        r = pin.log3(R)
-        writer.writerow([f"{v:.12g}" for v in (*q, *p, *r)])
-    csv_path = atomic_write_text(out, buf.getvalue())
+    poses = [pin.SE3(R, p) for p, R in zip(c.positions, c.rotations, strict=True)]
+    csv_path = datafiles.write_poses(out, poses)
+    cmd_path = datafiles.write_commands(out.with_suffix(".commands.csv"), c.actuated, c.q_act)
     sel = design.selection
     record = {
         "units": "SI (m, rad)",
@@ -166,5 +163,6 @@ def write_poses(design: PoseDesign, path: str | Path) -> tuple[Path, Path]:
         "candidate_indices": [int(i) for i in design.indices],
         "parameters": list(c.param_names),
     }
+    record.update(extra or {})
     json_path = atomic_write_text(out.with_suffix(".json"), json.dumps(record, indent=2))
-    return csv_path, json_path
+    return csv_path, cmd_path, json_path

@@ -48,7 +48,7 @@ def test_simulate_calibrate_compensate_loop(tmp_path):
     )
     assert res.exit_code == 0, res.output
     doc = json.loads(res.stdout)
-    assert doc == json.loads((tmp_path / "cal" / "result.json").read_text())
+    assert doc == json.loads((tmp_path / "cal" / "identification.json").read_text())
     assert doc["identifiability"]["rank"] == 54
     assert 0.3 < doc["reduced_chi2"] < 2.0  # noise-limited fit (GN may stop "no decrease")
     assert (tmp_path / "cal" / "report.txt").read_text().startswith("pincal calibration")

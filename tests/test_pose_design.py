@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import json
 
 import numpy as np
@@ -21,6 +20,7 @@ from pincal.candidates import (
 )
 from pincal.closures import COMPONENTS
 from pincal.crb import cramer_rao, cramer_rao_from_jacobian, efficiency
+from pincal.datafiles import read_commands, read_poses
 from pincal.errors import PincalError, UnidentifiableError, UnknownNameError
 from pincal.observability import (
     DesignScaling,
@@ -29,7 +29,7 @@ from pincal.observability import (
     observability,
     weight_rows,
 )
-from pincal.selection import select_poses, write_poses
+from pincal.selection import select_poses, write_pose_design
 
 
 @pytest.fixture(scope="module")
@@ -243,16 +243,13 @@ def test_write_poses_and_cli(tmp_path, stewart, random_cands):
     mech, _ = stewart
     sc = DesignScaling(rows="K", K=0.25)
     d = select_poses(random_cands, 18, "O1", sc, rng=1)
-    csv_path, json_path = write_poses(d, tmp_path / "p.csv")
-    rows = list(csv.reader(csv_path.open()))
-    assert rows[0][:6] == list(mech.actuated) and rows[0][6] == "nominal_x"
-    assert len(rows) == 19
-    q = np.array(rows[1][:6], dtype=float)
-    T = mech.forward(q)
-    np.testing.assert_allclose(np.array(rows[1][6:9], dtype=float), T.translation, atol=1e-9)
-    np.testing.assert_allclose(
-        pin.exp3(np.array(rows[1][9:12], dtype=float)), T.rotation, atol=1e-9
-    )
+    csv_path, cmd_path, json_path = write_pose_design(d, tmp_path / "p.csv")
+    poses = read_poses(csv_path)
+    _, q_rows = read_commands(cmd_path, mech)
+    assert len(poses) == len(q_rows) == 18
+    T = mech.forward(q_rows[0])
+    np.testing.assert_allclose(poses[0].translation, T.translation, atol=1e-9)
+    np.testing.assert_allclose(poses[0].rotation, T.rotation, atol=1e-9)
     rec = json.loads(json_path.read_text())
     assert rec["index"] == "O1" and rec["history"][-1] == pytest.approx(d.selection.value)
     assert "K = 250 mm" in rec["scaling"]

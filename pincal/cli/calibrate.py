@@ -105,10 +105,13 @@ def format_report(doc: dict) -> str:
     "--out",
     required=True,
     type=click.Path(file_okay=False),
-    help="Output directory: report.txt, result.json, calibrated URDF + sidecar.",
+    help="Output directory: report.txt, identification.json, calibrated URDF + sidecar.",
 )
 @click.option(
-    "--json", "as_json", is_flag=True, help="Print result.json on stdout instead of the report."
+    "--json",
+    "as_json",
+    is_flag=True,
+    help="Print identification.json on stdout instead of the report.",
 )
 @fail_cleanly
 def calibrate(model, data, preset, method, out, as_json) -> None:
@@ -148,10 +151,10 @@ def calibrate(model, data, preset, method, out, as_json) -> None:
     urdf = save_urdf(result.calibrated, out_dir / f"{mech.name}.urdf")
     doc["calibrated_urdf"] = str(urdf)
     report = format_report(doc)
-    atomic_write_text(out_dir / "result.json", json.dumps(doc, indent=1) + "\n")
+    atomic_write_text(out_dir / "identification.json", json.dumps(doc, indent=1) + "\n")
     atomic_write_text(out_dir / "report.txt", report)
     if as_json:
         click.echo(json.dumps(doc))
     else:
         click.echo(report, nl=False)
-        click.echo(f"wrote {out_dir / 'report.txt'}, {out_dir / 'result.json'}, {urdf}")
+        click.echo(f"wrote {out_dir / 'report.txt'}, {out_dir / 'identification.json'}, {urdf}")

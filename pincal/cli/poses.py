@@ -66,9 +66,7 @@ def poses(
     and the nominal poses; OUT with suffix .json gets the index history, all
     indices, the scaling and the Cramér–Rao prediction.
     """
-    import json
     import sys
-    from pathlib import Path
 
     import numpy as np
 
@@ -79,7 +77,7 @@ def poses(
     from pincal.mechanism import load_mechanism
     from pincal.observability import DesignScaling, characteristic_length
     from pincal.parameters import parameters
-    from pincal.selection import select_poses, write_poses
+    from pincal.selection import select_poses, write_pose_design
 
     mech = load_mechanism(model)
     preset = preset or (next(iter(mech.presets)) if mech.presets else "full")
@@ -118,16 +116,16 @@ def poses(
         cands, count, index_name, design_scaling, method, rng=np.random.default_rng(seed),
         restarts=restarts,
     )  # fmt: skip
-    csv_path, json_path = write_poses(design, out)
-    sel = design.selection
     crb = cramer_rao_from_jacobian(
         design.candidates.jacobians, cands.components, noise_model, None,
         params.names, params.units,
     )  # fmt: skip
-    record = json.loads(Path(json_path).read_text())
-    record["noise"] = {"position_mm": noise[0], "orientation_mrad": noise[1]}
-    record["predicted_std"] = dict(zip(params.names, map(float, crb.std), strict=True))
-    json_path.write_text(json.dumps(record, indent=2))
+    extra = {
+        "noise": {"position_mm": noise[0], "orientation_mrad": noise[1]},
+        "predicted_std": dict(zip(params.names, map(float, crb.std), strict=True)),
+    }
+    csv_path, cmd_path, json_path = write_pose_design(design, out, extra)
+    sel = design.selection
     hist = " → ".join(f"{v:.5g}" for v in (sel.history[0], sel.history[-1]))
     click.echo(
         f"{method}: {index_name} {hist} in {sel.iterations} iterations "
@@ -135,4 +133,7 @@ def poses(
         f"condition number {design.indices_all.condition_number:.4g}"
     )
     click.echo(crb.summary())
-    click.echo(f"wrote {csv_path} ({len(design.candidates)} poses) and {json_path}")
+    click.echo(
+        f"wrote {csv_path} ({len(design.candidates)} nominal poses), {cmd_path} "
+        f"(actuator values) and {json_path}"
+    )
