@@ -57,6 +57,7 @@ class DemoSettings:
     error_std: float = 0.5
     noise: NoiseModel = field(default_factory=lambda: NoiseModel(0.01, 0.02))
     method: str = "gauss-newton"
+    report: bool = True
     candidates: str = "grid:4"
     index: str = "O1"
 
@@ -132,16 +133,39 @@ def run_demo(
             "preset": params.label,
             "units": "SI (m, rad)",
             "parameters": [
-                {"name": n, "value": float(v), "std": float(s), "unit": u}
-                for n, v, s, u in result.table()
+                {"name": n, "value": float(v), "std": float(s), "unit": u, "true": float(t)}
+                for (n, v, s, u), t in zip(
+                    result.table(),
+                    true[[params.index(n) for n in result.params.names]],
+                    strict=True,
+                )
             ],
             "validation_before": before.summary(),
             "validation_after": after.summary(),
+            "validation_errors": {
+                "before": {
+                    "position": before.position.tolist(),
+                    "orientation": before.orientation.tolist(),
+                },
+                "after": {
+                    "position": after.position.tolist(),
+                    "orientation": after.orientation.tolist(),
+                },
+            },
             "reduced_chi2": result.reduced_chi2,
             "iterations": result.iterations,
+            "cost_history": list(result.cost_history),
             "message": result.message,
         }
+        if design is not None:
+            report["index_history"] = {settings.index: list(design.selection.history)}
         files.append(atomic_write_text(out / "identification.json", json.dumps(report, indent=2)))
+        if settings.report:
+            from pincal.report import calibration_report
+
+            say("writing the report (plots)")
+            written = calibration_report(out)
+            files += [written.html, written.markdown]
     return DemoResult(
         settings, nominal, params, true, result, before, after, tuple(files), design, crb
     )

@@ -187,6 +187,10 @@ def plot_errors_before_after(
     ax.set_xlabel("pose")
     ax.set_ylabel(f"error [{label}]")
     ax.set_title(title)
+    positive = np.abs(np.concatenate([a, b]))
+    positive = positive[positive > 0]
+    if positive.size and positive.max() > 20 * positive.min():
+        ax.set_yscale("log")  # calibration typically shrinks errors by decades
     if b.size <= 30:
         ax.set_xticks(x)
     ax.legend()
@@ -604,7 +608,7 @@ def calibration_report(
     plots = (out_dir / f"{name}_plots").resolve()
     sections: list[Section] = []
 
-    facts = [f"Model **{data['model']}**"]
+    facts = [f"Model {data['model']}"]
     if "preset" in data:
         facts.append(f"parameter preset {data['preset']!r}")
     facts.append(f"{len(data['parameters'])} identified parameters")
