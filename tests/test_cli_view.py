@@ -17,7 +17,7 @@ from pincal.cli.view import read_actuator_csv
 from pincal.errors import MeasurementError
 from pincal.mechanism import bundled_models, load_mechanism
 
-BUNDLED = ["hexaslide_6pus", "pkm5", "stewart_6ups", "wedge3"]
+BUNDLED = ["aacmm", "hexaslide_6pus", "pkm5", "stewart_6ups", "wedge3"]
 
 
 def _invoke(*args: str, **kwargs):
@@ -138,7 +138,7 @@ def test_view_uses_sidecar_up_direction(tmp_path):
 @pytest.fixture(scope="module")
 def demo_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("demo")
-    res = _invoke("demo", "--poses", "30", "--validation", "10", "--out", str(out))
+    res = _invoke("demo", "--poses", "30", "--validation", "10", "--no-report", "--out", str(out))
     assert res.exit_code == 0, res.output
     return out
 

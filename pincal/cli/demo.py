@@ -17,17 +17,38 @@ from pincal.cli.common import fail_cleanly
     default="gauss-newton",
     show_default=True,
 )
+@click.option(
+    "--candidates",
+    default="grid:4",
+    show_default=True,
+    help="Candidate poses for O1 selection (grid:LEVELS, random:N, oa:P) or 'none' for random.",
+)
 @click.option("--out", default="pincal-out", show_default=True, help="Output directory.")
+@click.option("--report/--no-report", default=True, show_default=True, help="Write report.html.")
 @fail_cleanly
-def demo(seed: int, poses: int, validation: int, method: str, out: str) -> None:
+def demo(
+    seed: int, poses: int, validation: int, method: str, candidates: str, out: str, report: bool
+) -> None:
     """Simulated calibration of the bundled 6-UPS Stewart platform (42 parameters).
 
     Draws an "actual" machine (0.5 mm errors), simulates a laser-tracker campaign
     (noise 0.01 mm / 0.02 mrad), identifies the parameters, validates on fresh poses
-    and writes the calibrated URDF to OUT.
+    and writes the calibrated URDF, identification.json and report.html to OUT.
+
+    \b
+    Examples:
+      pincal demo
+      pincal demo --seed 3 --poses 18 --method lm --out run3
     """
     from pincal.demo import DemoSettings, format_demo, run_demo
 
-    settings = DemoSettings(seed=seed, n_poses=poses, n_validation=validation, method=method)
+    settings = DemoSettings(
+        seed=seed,
+        n_poses=poses,
+        n_validation=validation,
+        method=method,
+        candidates=candidates,
+        report=report,
+    )
     result = run_demo(settings, out, progress=lambda msg: click.echo(f"… {msg}", err=True))
     click.echo(format_demo(result))
