@@ -110,9 +110,12 @@ def run_demo(
         design = select_poses(cands, settings.n_poses, settings.index, scaling, rng=rng)
         q_meas = design.q_act
     comps = nominal.measured_components
-    J_meas = identification_jacobian(nominal, params, q_meas).reshape(
-        len(q_meas), len(comps), len(params)
-    )
+    if design is not None:  # the selected candidates' Jacobian blocks, already computed
+        J_meas = design.candidates.jacobians
+    else:
+        J_meas = identification_jacobian(nominal, params, q_meas).reshape(
+            len(q_meas), len(comps), len(params)
+        )
     J_val = identification_jacobian(nominal, params, q_val, components=COMPONENTS).reshape(
         len(q_val), 6, len(params)
     )

@@ -37,7 +37,6 @@ import pinocchio as pin
 from pincal.compensate import compensate
 from pincal.errors import ConvergenceError
 from pincal.hexaslide import LegGeometry, leg_geometry, legs_from_table, pus54_values
-from pincal.identifiability import analyse_jacobian
 from pincal.identify import IdentificationResult, identify
 from pincal.measurements import Measurements, simulate_measurements
 from pincal.mechanism import Mechanism
@@ -453,11 +452,7 @@ def experiment_replica(
         ok = [i for i in range(n_validation) if comp.reachable[i]]
         before = _errors(targets, _reached(actual, X, q_before))
         after = _errors([targets[i] for i in ok], _reached(actual, X, comp.q_act[ok]))
-        full = np.zeros(len(params))
-        full[[params.index(n) for n in result.params.names]] = result.values
         J = identification_jacobian(mech, result.params, comp.q_act[ok], values=result.values)
-        if len(result.params) != len(params):  # linearise at the full identified geometry
-            J = identification_jacobian(result.calibrated, result.params, comp.q_act[ok])
         J = J.reshape(len(ok), 6, -1)
         Jp, Jr = J[:, :3].reshape(-1, J.shape[2]), J[:, 3:].reshape(-1, J.shape[2])
         cov = result.covariance
@@ -479,9 +474,3 @@ def experiment_replica(
         efficiency=(float(eff[0]), float(eff[1])),
         unreachable=tuple(sorted(unreachable)),
     )
-
-
-def identifiable_count(mech: Mechanism, params: ParameterSet, q_act_rows: np.ndarray) -> int:
-    """Rank of the identification Jacobian at the given poses."""
-    J = identification_jacobian(mech, params, q_act_rows)
-    return analyse_jacobian(J, params.names).rank
