@@ -73,9 +73,7 @@ def test_pincal_commands(tmp_path):
     assert (tmp_path / "commands.csv").is_file() and (tmp_path / "poses.html").is_file()
 
 
-SCRIPTS = [
-    c for c in _commands() if c.startswith("python scripts/") and c.split()[1] not in LONG
-]
+SCRIPTS = [c for c in _commands() if c.startswith("python scripts/") and c.split()[1] not in LONG]
 
 
 @pytest.mark.parametrize("cmd", SCRIPTS)
