@@ -53,3 +53,36 @@ def test_measured_frame_parameter_has_direct_effect(stewart, stewart_poses):
     R = stewart.placement("effector").rotation
     assert np.allclose(J[:3, 0], R[:, 2], atol=1e-12)
     assert np.allclose(J[3:, 1], [1, 0, 0], atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("model", "preset"),
+    [("pkm5", "hinges24"), ("wedge3", "patent"), ("hexaslide_6pus", "pus54"), ("aacmm", "dh")],
+)
+def test_partial_closures_and_components_match_central_differences(model, preset):
+    """Partial closures ([y, z], [x, z]), component subsets and serial chains."""
+    from pincal.mechanism import load_mechanism
+    from pincal.workspace import sample_actuators
+
+    mech = load_mechanism(model)
+    params = parameters(mech, preset)
+    rows = sample_actuators(mech, 2, np.random.default_rng(4))
+    values = np.random.default_rng(6).normal(0, 2e-4, len(params))
+    J = identification_jacobian(
+        mech, params, rows, values, components=("x", "y", "z", "rx", "ry", "rz")
+    )
+    J_fd = fd_jacobian(mech, params, rows, values)
+    assert np.max(np.abs(J - J_fd)) <= 1e-6 * np.max(np.abs(J))
+
+
+@pytest.mark.parametrize("model", ["pkm5", "wedge3", "hexaslide_6pus", "aacmm"])
+def test_inverse_then_forward_round_trip(model):
+    from pincal.mechanism import load_mechanism
+    from pincal.workspace import sample_actuators
+
+    mech = load_mechanism(model)
+    for row in sample_actuators(mech, 3, np.random.default_rng(2)):
+        T = mech.forward(row)
+        q_act = mech.inverse(T, q_guess=mech.q_home)
+        T2 = mech.forward(q_act)
+        assert np.max(np.abs(T2.translation - T.translation)) <= 1e-10
