@@ -74,6 +74,7 @@ __all__ = [
     "PoseFitError",
     "TargetMeasurements",
     "check_enough_poses",
+    "read_actuator_rows",
     "read_commands",
     "read_measurement_file",
     "read_measurements",
@@ -756,3 +757,71 @@ def read_commands(path: str | Path, mech: Mechanism) -> tuple[np.ndarray, np.nda
     act = [names.index(j) for j in mech.actuated]
     fac = _actuator_factors(mech, [parsed[k][1] for k in act], name)
     return data[:, names.index("pose")].astype(int), data[:, act] / fac
+
+
+#: largest file :func:`read_actuator_rows` reads [bytes]
+MAX_POSES_BYTES = 5_000_000
+
+
+def read_actuator_rows(
+    path: str | Path, actuated: tuple[str, ...], max_rows: int | None = None
+) -> np.ndarray:
+    """Actuator rows (m, n_act) [m, rad] from any CSV whose header names the joints.
+
+    Lenient on purpose (for viewing): ``#`` lines are comments, other columns are
+    ignored, values are SI. A command file (:func:`write_commands`) qualifies.
+
+    Raises:
+        MeasurementError: unreadable file, missing columns, non-numeric or
+            non-finite values, no rows.
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()[: MAX_POSES_BYTES + 1]
+    except OSError as exc:
+        raise MeasurementError(f"cannot read poses file {str(path)!r}: {exc.strerror}") from exc
+    if len(raw) > MAX_POSES_BYTES:
+        raise MeasurementError(f"poses file {str(path)!r} is larger than {MAX_POSES_BYTES} bytes")
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise MeasurementError(f"poses file {str(path)!r} is not UTF-8 text") from exc
+    lines = [
+        (n, line)
+        for n, line in enumerate(text.splitlines(), 1)
+        if not line.lstrip().startswith("#")
+    ]
+    lines = [(n, line) for n, line in lines if line.strip()]
+    if not lines:
+        raise MeasurementError(f"poses file {str(path)!r} is empty; expected a header line")
+    header = [h.strip() for h in next(csv.reader([lines[0][1]]))]
+    missing = [name for name in actuated if name not in header]
+    if missing:
+        raise MeasurementError(
+            f"poses file {str(path)!r}: header lacks actuated joint(s) {missing}; the header "
+            f"must name the actuated joints {list(actuated)}"
+        )
+    columns = [header.index(name) for name in actuated]
+    rows = []
+    for n, line in lines[1:]:
+        cells = next(csv.reader(io.StringIO(line)), [])
+        if len(cells) != len(header):
+            raise MeasurementError(
+                f"{path.name} line {n}: {len(cells)} values for {len(header)} header columns"
+            )
+        try:
+            row = [float(cells[c]) for c in columns]
+        except ValueError:
+            raise MeasurementError(
+                f"{path.name} line {n}: non-numeric value in {[cells[c] for c in columns]}"
+            ) from None
+        if not all(math.isfinite(v) for v in row):
+            raise MeasurementError(f"{path.name} line {n}: NaN or infinite value")
+        rows.append(row)
+    if not rows:
+        raise MeasurementError(f"poses file {str(path)!r} has a header but no poses")
+    if max_rows is not None and len(rows) > max_rows:
+        raise MeasurementError(
+            f"poses file {str(path)!r} has {len(rows)} poses; at most {max_rows}"
+        )
+    return np.array(rows, dtype=float)

@@ -13,7 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
-from pincal.cli.view import read_actuator_csv
+from pincal.datafiles import read_actuator_rows
 from pincal.errors import MeasurementError
 from pincal.mechanism import bundled_models, load_mechanism
 
@@ -82,7 +82,7 @@ def test_usage_errors_exit_2():
 def test_poses_csv_reader_orders_columns_by_actuated_names(tmp_path):
     path = tmp_path / "poses.csv"
     path.write_text("# comment\nb, a ,extra\n2.0,1.0,x\n\n4,3,y\n")
-    rows = read_actuator_csv(path, ("a", "b"))
+    rows = read_actuator_rows(path, ("a", "b"))
     np.testing.assert_array_equal(rows, [[1.0, 2.0], [3.0, 4.0]])
 
 
@@ -101,7 +101,7 @@ def test_poses_csv_errors(tmp_path, text, match):
     path = tmp_path / "poses.csv"
     path.write_text(text)
     with pytest.raises(MeasurementError, match=match):
-        read_actuator_csv(path, ("a", "b"))
+        read_actuator_rows(path, ("a", "b"))
 
 
 # ----------------------------------------------------------------------------- view

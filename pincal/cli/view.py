@@ -13,8 +13,6 @@ revolute joints). Lines starting with ``#`` are comments::
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import math
 import sys
@@ -24,71 +22,11 @@ import click
 import numpy as np
 
 from pincal.cli.common import fail_cleanly
-from pincal.errors import MeasurementError, ModelFileError
+from pincal.datafiles import read_actuator_rows
+from pincal.errors import ModelFileError
 
-#: largest poses file read [bytes] (a view of more poses is unreadable anyway)
-MAX_POSES_BYTES = 5_000_000
 #: most poses drawn (ghost copies multiply the page size)
 MAX_POSES = 200
-
-
-def read_actuator_csv(path: str | Path, actuated: tuple[str, ...]) -> np.ndarray:
-    """Actuator rows (m, n_act) [m, rad] from a CSV file with a header of joint names.
-
-    Raises:
-        MeasurementError: unreadable file, missing columns, non-numeric or
-            non-finite values, no rows.
-    """
-    path = Path(path)
-    try:
-        raw = path.read_bytes()[: MAX_POSES_BYTES + 1]
-    except OSError as exc:
-        raise MeasurementError(f"cannot read poses file {str(path)!r}: {exc.strerror}") from exc
-    if len(raw) > MAX_POSES_BYTES:
-        raise MeasurementError(f"poses file {str(path)!r} is larger than {MAX_POSES_BYTES} bytes")
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise MeasurementError(f"poses file {str(path)!r} is not UTF-8 text") from exc
-    lines = [
-        (n, line)
-        for n, line in enumerate(text.splitlines(), 1)
-        if not line.lstrip().startswith("#")
-    ]
-    lines = [(n, line) for n, line in lines if line.strip()]
-    if not lines:
-        raise MeasurementError(f"poses file {str(path)!r} is empty; expected a header line")
-    header = [h.strip() for h in next(csv.reader([lines[0][1]]))]
-    missing = [name for name in actuated if name not in header]
-    if missing:
-        raise MeasurementError(
-            f"poses file {str(path)!r}: header lacks actuated joint(s) {missing}; the header "
-            f"must name the actuated joints {list(actuated)}"
-        )
-    columns = [header.index(name) for name in actuated]
-    rows = []
-    for n, line in lines[1:]:
-        cells = next(csv.reader(io.StringIO(line)), [])
-        if len(cells) != len(header):
-            raise MeasurementError(
-                f"{path.name} line {n}: {len(cells)} values for {len(header)} header columns"
-            )
-        try:
-            row = [float(cells[c]) for c in columns]
-        except ValueError:
-            raise MeasurementError(
-                f"{path.name} line {n}: non-numeric value in {[cells[c] for c in columns]}"
-            ) from None
-        if not all(math.isfinite(v) for v in row):
-            raise MeasurementError(f"{path.name} line {n}: NaN or infinite value")
-        rows.append(row)
-    if not rows:
-        raise MeasurementError(f"poses file {str(path)!r} has a header but no poses")
-    if len(rows) > MAX_POSES:
-        raise MeasurementError(
-            f"poses file {str(path)!r} has {len(rows)} poses; at most {MAX_POSES}"
-        )
-    return np.array(rows, dtype=float)
 
 
 def _calibrated_urdf(directory: Path, name: str) -> Path:
@@ -191,7 +129,7 @@ def view(
         raise click.BadParameter("must be a positive number", param_hint="--arrow-scale")
     mech = load_mechanism(model)
     if poses_file is not None:
-        rows = read_actuator_csv(poses_file, mech.actuated)
+        rows = read_actuator_rows(poses_file, mech.actuated, MAX_POSES)
         if n_random:
             rows = np.vstack([rows, sample_actuators(mech, n_random, np.random.default_rng(seed))])
     else:
