@@ -119,10 +119,11 @@ class UrdfTree:
         if jtype in MOVABLE_TYPES:
             ax = e.find("axis")
             axis = _floats(ax.get("xyz") if ax is not None else "1 0 0", 3, 0.0, where)
-            norm = np.linalg.norm(axis)
-            if norm < 1e-12:
+            scale = np.max(np.abs(axis))
+            if scale < 1e-12:
                 raise ModelFileError(f"{where} has a zero axis")
-            axis = axis / norm
+            axis = axis / scale  # first to the unit box, so huge entries cannot overflow
+            axis = axis / np.linalg.norm(axis)
         return UrdfJoint(
             name,
             jtype,

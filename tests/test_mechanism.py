@@ -125,3 +125,16 @@ def test_input_files_untouched(stewart, stewart42, tmp_path):
     before = (STEWART / "stewart_6ups.urdf").read_bytes()
     stewart42.apply(stewart, np.full(42, 1e-4))
     assert (STEWART / "stewart_6ups.urdf").read_bytes() == before
+
+
+def test_huge_axis_is_normalised_not_overflowed():
+    from pincal.urdf import UrdfTree
+
+    xml = (
+        "<robot name='r'><link name='a'/><link name='b'/>"
+        "<joint name='j' type='revolute'><parent link='a'/><child link='b'/>"
+        "<axis xyz='1e300 1e300 0'/><limit lower='-1' upper='1' effort='1' velocity='1'/>"
+        "</joint></robot>"
+    )
+    axis = UrdfTree(xml).joints["j"].axis
+    assert np.allclose(axis, [2**-0.5, 2**-0.5, 0.0])
