@@ -588,6 +588,21 @@ def _set_camera(vis: meshcat.Visualizer, radius: float, extent: np.ndarray) -> N
     vis["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])
 
 
+def _check_inputs(
+    model: pin.Model,
+    configurations: Sequence[np.ndarray] | np.ndarray,
+    arrows: Sequence[Arrow | tuple] | None,
+    arrow_scale: float | None,
+    ghost_opacity: float,
+) -> tuple[list[np.ndarray], list[Arrow]]:
+    """Validate the arguments shared by :func:`static_html` and :func:`live`."""
+    if not 0.0 <= ghost_opacity <= 1.0:
+        raise VisualizationError(f"ghost_opacity must be in [0, 1], got {ghost_opacity}")
+    if arrow_scale is not None and not (math.isfinite(arrow_scale) and arrow_scale > 0):
+        raise VisualizationError(f"arrow_scale must be a positive number, got {arrow_scale}")
+    return _as_configurations(model, configurations), _as_arrows(arrows)
+
+
 def _build_scene(
     vis: meshcat.Visualizer,
     model: pin.Model,
@@ -869,12 +884,7 @@ def static_html(
         UnknownNameError: ``frame`` is not a frame of ``model``.
         ModelFileError: the URDF file does not exist.
     """
-    qs = _as_configurations(model, configurations)
-    arrow_list = _as_arrows(arrows)
-    if not 0.0 <= ghost_opacity <= 1.0:
-        raise VisualizationError(f"ghost_opacity must be in [0, 1], got {ghost_opacity}")
-    if arrow_scale is not None and not (math.isfinite(arrow_scale) and arrow_scale > 0):
-        raise VisualizationError(f"arrow_scale must be a positive number, got {arrow_scale}")
+    qs, arrow_list = _check_inputs(model, configurations, arrows, arrow_scale, ghost_opacity)
     window = _RecordingWindow()
     vis = meshcat.Visualizer(window=window)
     legend = _build_scene(
@@ -925,8 +935,7 @@ def live(
     (it is also stopped when Python exits). Arguments are those of
     :func:`static_html`.
     """
-    qs = _as_configurations(model, configurations)
-    arrow_list = _as_arrows(arrows)
+    qs, arrow_list = _check_inputs(model, configurations, arrows, arrow_scale, ghost_opacity)
     zmq_url = None
     banner = io.StringIO()
     with contextlib.redirect_stdout(banner):  # meshcat prints the URL; we log it
