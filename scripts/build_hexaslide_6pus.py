@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import yaml
+from urdf_snippets import INERTIAL, sphere_visual
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "scripts" / "data" / "seed001.yaml"
@@ -77,19 +78,6 @@ def box(size, colour: str, xyz=(0, 0, 0)) -> str:
     )
 
 
-def sphere(radius: float, colour: str) -> str:
-    return (
-        f'<visual><geometry><sphere radius="{radius}"/></geometry>'
-        f'<material name="{colour}"/></visual>'
-    )
-
-
-INERTIAL = (
-    '<inertial><mass value="0.1"/>'
-    '<inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>'
-)
-
-
 def build() -> tuple[str, dict]:
     data = yaml.safe_load(DATA.read_text())
     g = leg_geometry(data["nominal"])
@@ -130,7 +118,7 @@ def build() -> tuple[str, dict]:
             f'<child link="leg{n}_cross"/><origin xyz="0 0 0" rpy="{vec(rpy_u)}"/>'
             f'<axis xyz="1 0 0"/><limit lower="{-U_LIMIT}" upper="{U_LIMIT}" effort="0" '
             f'velocity="10"/></joint>',
-            f'<link name="leg{n}_cross">{INERTIAL}{sphere(0.012, "steel")}</link>',
+            f'<link name="leg{n}_cross">{INERTIAL}{sphere_visual(0.012, "steel")}</link>',
             f'<joint name="leg{n}_u2" type="revolute"><parent link="leg{n}_cross"/>'
             f'<child link="leg{n}_link"/><origin xyz="0 0 0" rpy="0 0 0"/>'
             f'<axis xyz="0 1 0"/><limit lower="{-U_LIMIT}" upper="{U_LIMIT}" effort="0" '
@@ -139,7 +127,7 @@ def build() -> tuple[str, dict]:
             f"{cylinder(L, 0.007, (0, 0, 0), (0, 0, L / 2), 'steel')}</link>",
             f'<joint name="leg{n}_tip_joint" type="fixed"><parent link="leg{n}_link"/>'
             f'<child link="leg{n}_tip"/><origin xyz="0 0 {L:.15g}" rpy="0 0 0"/></joint>',
-            f'<link name="leg{n}_tip">{sphere(0.01, "orange")}</link>',
+            f'<link name="leg{n}_tip">{sphere_visual(0.01, "orange")}</link>',
         ]
     parts += [
         '<joint name="platform_float" type="floating"><parent link="base"/>'
@@ -154,7 +142,7 @@ def build() -> tuple[str, dict]:
         parts += [
             f'<joint name="platform_p{n}_joint" type="fixed"><parent link="platform"/>'
             f'<child link="platform_p{n}"/><origin xyz="{vec(g["a"][i])}" rpy="0 0 0"/></joint>',
-            f'<link name="platform_p{n}">{sphere(0.01, "orange")}</link>',
+            f'<link name="platform_p{n}">{sphere_visual(0.01, "orange")}</link>',
         ]
     parts.append("</robot>\n")
     urdf = "\n".join(parts)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import yaml
+from urdf_snippets import INERTIAL, sphere_visual
 
 OUT = Path(__file__).resolve().parent.parent / "models" / "stewart_6ups"
 R_BASE, R_PLATFORM, HOME_Z = 0.300, 0.150, 0.450
@@ -41,19 +42,6 @@ def cylinder_visual(length: float, radius: float, direction: np.ndarray, colour:
         f'<geometry><cylinder radius="{radius}" length="{length:.6g}"/></geometry>'
         f'<material name="{colour}"/></visual>'
     )
-
-
-def sphere_visual(radius: float, colour: str) -> str:
-    return (
-        f'<visual><geometry><sphere radius="{radius}"/></geometry>'
-        f'<material name="{colour}"/></visual>'
-    )
-
-
-INERTIAL = (
-    '<inertial><mass value="0.1"/>'
-    '<inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>'
-)
 
 
 def build() -> tuple[str, dict]:
