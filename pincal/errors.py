@@ -8,16 +8,23 @@ attributes for programmatic use.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 __all__ = [
+    "BadValueError",
     "ClosureError",
+    "ColumnError",
     "ConvergenceError",
+    "FrameMismatchError",
     "MeasurementError",
+    "MeasurementFormatError",
     "MobilityError",
     "ModelFileError",
+    "MovedTargetError",
+    "NonFiniteValueError",
     "ParameterError",
     "PincalError",
+    "PoseFitError",
     "ReportError",
     "SingularConfigurationError",
     "TooFewPosesError",
@@ -129,3 +136,65 @@ class VisualizationError(PincalError):
 
 class ReportError(PincalError):
     """Inputs to a plot or report are malformed (lengths, units, NaN, report JSON)."""
+
+
+class MeasurementFormatError(MeasurementError):
+    """The file's header or layout is malformed (line named in the message)."""
+
+
+class FrameMismatchError(MeasurementError):
+    """The file measures another frame than the model's measured frame."""
+
+
+class ColumnError(MeasurementError):
+    """Columns are missing or not understood.
+
+    Attributes:
+        missing: column names the model needs but the file lacks.
+        unknown: column names the file has but nobody asked for.
+    """
+
+    def __init__(self, message: str, missing: Sequence[str] = (), unknown: Sequence[str] = ()):
+        self.missing = list(missing)
+        self.unknown = list(unknown)
+        super().__init__(message)
+
+
+class BadValueError(MeasurementError):
+    """A cell is not a number. Attributes: row (1-based data row), column."""
+
+    def __init__(self, message: str, row: int, column: str):
+        self.row, self.column = row, column
+        super().__init__(message)
+
+
+class NonFiniteValueError(BadValueError):
+    """A cell is NaN or infinite."""
+
+
+class PoseFitError(MeasurementError):
+    """The targets of one pose cannot be fitted (moved target, collinear). Attribute: row."""
+
+    def __init__(self, message: str, row: int):
+        self.row = row
+        super().__init__(message)
+
+
+class MovedTargetError(MeasurementError):
+    """A target's fit residual exceeds the allowed maximum (the SMR or its nest moved).
+
+    Attributes:
+        target_index: index of the worst target (row of the point arrays).
+        residual: its residual distance [m].
+        max_residual: the allowed maximum [m].
+    """
+
+    def __init__(self, target_index: int, residual: float, max_residual: float):
+        self.target_index = target_index
+        self.residual = residual
+        self.max_residual = max_residual
+        super().__init__(
+            f"target {target_index} does not fit the rigid body: residual "
+            f"{residual * 1e3:.4f} mm > allowed {max_residual * 1e3:.4f} mm "
+            f"(has the target or its nest moved?)"
+        )

@@ -24,7 +24,7 @@ d6' = d6 − D sin ε.
 
 Second part: the instrument frame. The arm is placed at a known transform in the
 instrument frame; registration solves it first by a best-fit rigid transform
-(``pincal.serial.register_instrument``), then identification refines the six
+(``pincal.model._serial.register_instrument``), then identification refines the six
 ``base_frame`` parameters with the DH errors.
 """
 
@@ -41,7 +41,12 @@ import pinocchio as pin
 import yaml
 
 import pincal
-from pincal.serial import BASE_JOINT, register_instrument, serial_mechanism, with_joint_origin
+from pincal.measure import register_instrument
+from pincal.model import (
+    BASE_JOINT,
+    serial_mechanism,
+    with_joint_origin,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 ERRORS = ROOT / "models" / "aacmm" / "table1_errors.yaml"

@@ -81,11 +81,11 @@ def main() -> None:
 
     def jac42():
         for q in qs:
-            pincal.pose_sensitivity(mech, p42, q)
+            pincal.sensitivity.pose_sensitivity(mech, p42, q)
 
     def jacfull():
         for q in qs:
-            pincal.pose_sensitivity(mech, full, q)
+            pincal.sensitivity.pose_sensitivity(mech, full, q)
 
     def np_fk():
         for r in rows:

@@ -50,8 +50,7 @@ def main() -> None:
 
     if args.stewart:
         import pincal
-        from pincal.candidates import grid_candidates
-        from pincal.observability import DesignScaling
+        from pincal.design import DesignScaling, grid_candidates
 
         mech = pincal.load_mechanism("stewart_6ups")
         params = pincal.parameters(mech, "stewart42")

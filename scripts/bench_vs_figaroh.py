@@ -10,7 +10,7 @@ joint-origin errors 0.1–1 mm / 0.5–2 mrad and joint offsets 0.5–2 mrad; N 
 200 random configurations, position noise σ per coordinate; validation on 200 fresh
 configurations. Both tools get the same configurations and the same noisy points.
 
-pincal: ``pincal.identify`` (Gauss–Newton, analytic Jacobian) on the ``chain``
+pincal: ``pincal.identification._identify`` (Gauss–Newton, analytic Jacobian) on the ``chain``
 preset, reduced to its identifiable base set. figaroh: its structural base-parameter
 selection (``calculate_base_kinematics_regressor``, ``full_params``, unknown base and
 tip frames) and its forward model ``calc_updated_fkm``, solved with
@@ -114,7 +114,7 @@ def run_figaroh(problem, meas) -> dict:
     from figaroh.calibration import calibration_tools as ct
     from figaroh.calibration.parameter import add_base_name, add_pee_name
 
-    from pincal.builders import example_robot_urdf
+    from pincal.model import example_robot_urdf
 
     model = pin.buildModelFromUrdf(str(example_robot_urdf("ur10")))
     data = model.createData()

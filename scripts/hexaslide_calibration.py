@@ -28,9 +28,8 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pincal.mechanism import load_mechanism  # noqa: E402
-from pincal.parameters import parameters  # noqa: E402
-from pincal.seed001 import experiment_replica, simulation_check  # noqa: E402
+from pincal.model import load_mechanism, parameters  # noqa: E402
+from scripts.studies.seed001 import experiment_replica, simulation_check  # noqa: E402
 
 
 def part1(mech, params, paper) -> bool:

@@ -14,7 +14,7 @@ deviation) and Table 2 layout (max/min end-position deviation after compensation
 measurement poses and random validation poses), plus wall time.
 
 By default QPSO runs on the linearised cost with one re-linearisation (``--passes 2``,
-two full swarm runs; see pincal.identify_qpso), with the paper's N = 80, t_max = 300.
+two full swarm runs; see pincal.identification), with the paper's N = 80, t_max = 300.
 ``--exact`` evaluates the true closed-loop cost per particle instead; that costs ~35 ms
 per particle, so it is only practical with small settings
 (e.g. ``--exact --particles 20 --iterations 30 --repeats 0``).
@@ -31,7 +31,7 @@ import numpy as np
 import pinocchio as pin
 
 import pincal
-from pincal.identify_qpso import QPSOOptions
+from pincal.identification import QPSOOptions
 
 
 def region_commands(mech: pincal.Mechanism, per_region: int) -> np.ndarray:

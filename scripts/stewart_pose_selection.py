@@ -41,11 +41,15 @@ import numpy as np
 import pinocchio as pin
 
 import pincal
-from pincal.candidates import grid_candidates
-from pincal.closures import COMPONENTS
-from pincal.crb import cramer_rao_from_jacobian, efficiency
-from pincal.observability import DesignScaling, characteristic_length
-from pincal.selection import select_poses
+from pincal.design import (
+    DesignScaling,
+    characteristic_length,
+    cramer_rao_from_jacobian,
+    efficiency,
+    grid_candidates,
+    select_poses,
+)
+from pincal.model import COMPONENTS
 
 NOISE_LEVELS = (  # (position [mm], orientation [mrad])
     (0.1, 0.1),

@@ -5,7 +5,7 @@
    patent's 12 error-vector columns.
 2. Errors drawn on the 7 parameters, the bar-centre pose (x, z, ry) "measured" on a
    3×3×3 grid (noise-free, then with 1 µm / 10 µrad noise), identified by Gauss–Newton
-   and by sensitivity-planned steps (pincal.step_planning); the identified errors are
+   and by sensitivity-planned steps (pincal.identification); the identified errors are
    shown as the patent's parameters (δl1, δl2, δk1, δk2, dq0, dq1, dq2).
 3. Compensation: the calibrated geometry in the closed form (``wedge_forward``) against
    the calibrated closed-loop model's forward kinematics.
@@ -21,9 +21,8 @@ import numpy as np
 import pinocchio as pin
 
 import pincal
-from pincal.global_sensitivity import global_sensitivity, global_sensitivity_from_jacobians
-from pincal.step_planning import step_planned_identify
-from pincal.wedge import (
+from pincal.identification import step_planned_identify
+from pincal.machines import (
     PATENT_ERROR_NAMES,
     WedgeGeometry,
     wedge_compensation,
@@ -31,6 +30,10 @@ from pincal.wedge import (
     wedge_inverse,
     wedge_patent_error_matrix,
     wedge_workspace_grid,
+)
+from pincal.sensitivity import (
+    global_sensitivity,
+    global_sensitivity_from_jacobians,
 )
 
 BOX = ((-0.05, 0.05), (-0.002, 0.002), (-0.01, 0.01))

@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.mechanism import load_mechanism
-from pincal.parameters import parameters
+from pincal.model import load_mechanism, parameters
 
 
 @pytest.fixture(scope="session")
@@ -20,6 +19,6 @@ def stewart42(stewart) -> pincal.ParameterSet:
 
 @pytest.fixture(scope="session")
 def stewart_poses(stewart) -> np.ndarray:
-    from pincal.workspace import sample_actuators
+    from pincal.model import sample_actuators
 
     return sample_actuators(stewart, 30, np.random.default_rng(11))

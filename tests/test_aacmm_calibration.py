@@ -11,7 +11,7 @@ import pinocchio as pin
 import pytest
 
 import pincal
-from pincal.builders import dh_fk
+from pincal.model import dh_fk
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -39,7 +39,10 @@ def test_equivalent_truth_gives_the_same_probe_positions():
     """Independent check of the absorption formulas with numpy DH FK."""
     rows, errors = build.table1()
     names = {"joint_names": build.JOINT_NAMES, "link_names": build.LINK_NAMES}
-    from pincal.builders import dh_errors_to_parameters, parameters_to_dh_errors
+    from pincal.model import (
+        dh_errors_to_parameters,
+        parameters_to_dh_errors,
+    )
 
     values = dh_errors_to_parameters(errors, rows, **names)
     values["joint6_ax.tx"] = 2e-4  # make every absorbed error nonzero

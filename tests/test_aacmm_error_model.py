@@ -9,7 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pincal.builders import DHError, dh_fk
+from pincal.model import (
+    DHError,
+    dh_fk,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -12,7 +12,11 @@ import pinocchio as pin
 import pytest
 import yaml
 
-from pincal.builders import dh_apply_errors, dh_fk, dh_urdf
+from pincal.model import (
+    dh_apply_errors,
+    dh_fk,
+    dh_urdf,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 MODEL = ROOT / "models" / "aacmm"

@@ -19,7 +19,11 @@ import numpy as np
 import pytest
 import yaml
 
-from pincal.builders import DHError, DHRow, dh_fk
+from pincal.model import (
+    DHError,
+    DHRow,
+    dh_fk,
+)
 
 DATA = Path(__file__).resolve().parents[1] / "scripts" / "data" / "seed004.yaml"
 MM = 1e-3

@@ -1,4 +1,4 @@
-"""Tests of pincal.builders: DH tables → URDF, DH error parameters, example-robot-data."""
+"""Tests of pincal.model._dh: DH tables → URDF, DH error parameters, example-robot-data."""
 
 from __future__ import annotations
 
@@ -9,7 +9,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from pincal.builders import (
+from pincal.errors import (
+    ModelFileError,
+    UnknownNameError,
+)
+from pincal.model import (
     DHError,
     DHRow,
     dh_apply_errors,
@@ -22,7 +26,6 @@ from pincal.builders import (
     example_robot_urdf,
     parameters_to_dh_errors,
 )
-from pincal.errors import ModelFileError, UnknownNameError
 
 # ---------------------------------------------------------------- independent reference
 

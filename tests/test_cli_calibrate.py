@@ -9,9 +9,11 @@ import pinocchio as pin
 from click.testing import CliRunner
 
 from pincal.cli import main
-from pincal.datafiles import read_commands, write_poses
-from pincal.mechanism import load_mechanism
-from pincal.parameters import parameters
+from pincal.io import (
+    read_commands,
+    write_poses,
+)
+from pincal.model import load_mechanism, parameters
 
 
 def test_simulate_calibrate_compensate_loop(tmp_path):

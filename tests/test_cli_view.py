@@ -13,9 +13,12 @@ import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
-from pincal.datafiles import read_actuator_rows
 from pincal.errors import MeasurementError
-from pincal.mechanism import bundled_models, load_mechanism
+from pincal.io import read_actuator_rows
+from pincal.model import (
+    bundled_models,
+    load_mechanism,
+)
 
 BUNDLED = ["aacmm", "hexaslide_6pus", "pkm5", "stewart_6ups", "wedge3"]
 

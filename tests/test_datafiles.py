@@ -8,13 +8,16 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from pincal.datafiles import (
+from pincal.errors import (
     BadValueError,
     ColumnError,
     FrameMismatchError,
     MeasurementFormatError,
     NonFiniteValueError,
     PoseFitError,
+    TooFewPosesError,
+)
+from pincal.io import (
     TargetMeasurements,
     check_enough_poses,
     read_commands,
@@ -26,10 +29,11 @@ from pincal.datafiles import (
     write_poses,
     write_target_measurements,
 )
-from pincal.errors import TooFewPosesError
-from pincal.measurements import Measurements, simulate_measurements
-from pincal.mechanism import load_mechanism
-from pincal.workspace import sample_actuators
+from pincal.measure import (
+    Measurements,
+    simulate_measurements,
+)
+from pincal.model import load_mechanism, sample_actuators
 
 
 @pytest.fixture(scope="module")

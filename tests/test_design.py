@@ -8,25 +8,30 @@ import numpy as np
 import pytest
 
 from pincal.design import (
-    _Problem,
-    _State,
+    INDEX_NAMES,
     bose_array,
+    crb_covariance,
     detmax,
+    dimensionless_rows,
     exchange,
     greedy,
     map_to_ranges,
-    orthogonal_array,
-)
-from pincal.errors import PincalError, TooFewPosesError, UnidentifiableError, UnknownNameError
-from pincal.observability import (
-    INDEX_NAMES,
-    crb_covariance,
-    dimensionless_rows,
     observability,
+    orthogonal_array,
     predicted_std,
     predicted_validation_rms,
     scale_columns,
     weight_rows,
+)
+from pincal.design._exchange import (
+    _Problem,
+    _State,
+)
+from pincal.errors import (
+    PincalError,
+    TooFewPosesError,
+    UnidentifiableError,
+    UnknownNameError,
 )
 
 

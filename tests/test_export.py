@@ -3,8 +3,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pincal.export import save_urdf
-from pincal.mechanism import load_mechanism
+from pincal.io import save_urdf
+from pincal.model import load_mechanism
 
 
 def test_saved_urdf_reproduces_forward_kinematics(stewart, stewart42, stewart_poses, tmp_path):

@@ -14,8 +14,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from pincal.errors import PincalError
-from pincal.mechanism import MODELS_DIR, Mechanism, load_mechanism
-from pincal.parameters import parameters
+from pincal.model import (
+    Mechanism,
+    load_mechanism,
+    parameters,
+)
+from pincal.model._mechanism import MODELS_DIR
 
 FAST = settings(
     max_examples=100,

@@ -7,8 +7,7 @@ import pytest
 
 import pincal
 from pincal.errors import ParameterError
-from pincal.global_sensitivity import global_sensitivity, global_sensitivity_from_jacobians
-from pincal.wedge import (
+from pincal.machines import (
     PATENT_ERROR_NAMES,
     WedgeGeometry,
     wedge_error_matrix,
@@ -16,6 +15,10 @@ from pincal.wedge import (
     wedge_inverse,
     wedge_patent_error_matrix,
     wedge_workspace_grid,
+)
+from pincal.sensitivity import (
+    global_sensitivity,
+    global_sensitivity_from_jacobians,
 )
 
 BOX = ((-0.05, 0.05), (-0.002, 0.002), (-0.01, 0.01))

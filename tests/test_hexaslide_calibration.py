@@ -9,11 +9,14 @@ import pinocchio as pin
 import pytest
 import yaml
 
-from pincal.compensate import compensate
-from pincal.hexaslide import leg_geometry, legs_from_table, pus54_values
-from pincal.mechanism import load_mechanism
-from pincal.parameters import parameters
-from pincal.seed001 import experiment_replica, paper_pose, simulation_check
+from pincal.compensation import compensate
+from pincal.machines import (
+    leg_geometry,
+    legs_from_table,
+    pus54_values,
+)
+from pincal.model import load_mechanism, parameters
+from scripts.studies.seed001 import experiment_replica, paper_pose, simulation_check
 
 PAPER = yaml.safe_load(
     (Path(__file__).resolve().parent.parent / "scripts" / "data" / "seed001.yaml").read_text()

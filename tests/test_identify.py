@@ -6,9 +6,13 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.identify import identify
-from pincal.measurements import Measurements, NoiseModel, simulate_measurements
-from pincal.parameters import parameters
+from pincal.identification import identify
+from pincal.measure import (
+    Measurements,
+    NoiseModel,
+    simulate_measurements,
+)
+from pincal.model import parameters
 from pincal.sensitivity import identification_jacobian
 
 
@@ -64,7 +68,7 @@ def test_monte_carlo_matches_cramer_rao(stewart, stewart42, stewart_poses):
 
 def test_too_few_poses(stewart, stewart42, stewart_poses):
     meas = simulate_measurements(stewart, stewart_poses[:6])
-    with pytest.raises(pincal.TooFewPosesError, match="36 equations for 42 parameters"):
+    with pytest.raises(pincal.errors.TooFewPosesError, match="36 equations for 42 parameters"):
         identify(stewart, stewart42, meas)
 
 

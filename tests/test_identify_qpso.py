@@ -6,8 +6,11 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.identify import CalibrationProblem
-from pincal.identify_qpso import QPSOOptions, qpso_identify
+from pincal.identification import (
+    CalibrationProblem,
+    QPSOOptions,
+    qpso_identify,
+)
 
 
 @pytest.fixture(scope="module")

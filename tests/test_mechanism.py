@@ -10,7 +10,8 @@ import pytest
 import yaml
 
 import pincal
-from pincal.mechanism import MODELS_DIR, load_mechanism
+from pincal.model import load_mechanism
+from pincal.model._mechanism import MODELS_DIR
 
 STEWART = MODELS_DIR / "stewart_6ups"
 B_DEG = (-15, 15, 105, 135, 225, 255)
@@ -128,7 +129,7 @@ def test_input_files_untouched(stewart, stewart42, tmp_path):
 
 
 def test_huge_axis_is_normalised_not_overflowed():
-    from pincal.urdf import UrdfTree
+    from pincal.model import UrdfTree
 
     xml = (
         "<robot name='r'><link name='a'/><link name='b'/>"

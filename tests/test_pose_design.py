@@ -10,26 +10,34 @@ import pytest
 from click.testing import CliRunner
 
 import pincal
-from pincal.candidates import (
+from pincal.design import (
+    DesignScaling,
     candidate_set,
+    characteristic_length,
+    cramer_rao,
+    cramer_rao_from_jacobian,
     default_grid_ranges,
+    dimensionless_rows,
+    efficiency,
     grid_candidates,
+    observability,
     orthogonal_candidates,
     parse_candidate_spec,
     random_candidates,
-)
-from pincal.closures import COMPONENTS
-from pincal.crb import cramer_rao, cramer_rao_from_jacobian, efficiency
-from pincal.datafiles import read_commands, read_poses
-from pincal.errors import PincalError, UnidentifiableError, UnknownNameError
-from pincal.observability import (
-    DesignScaling,
-    characteristic_length,
-    dimensionless_rows,
-    observability,
+    select_poses,
     weight_rows,
+    write_pose_design,
 )
-from pincal.selection import select_poses, write_pose_design
+from pincal.errors import (
+    PincalError,
+    UnidentifiableError,
+    UnknownNameError,
+)
+from pincal.io import (
+    read_commands,
+    read_poses,
+)
+from pincal.model import COMPONENTS
 
 
 @pytest.fixture(scope="module")
@@ -279,7 +287,7 @@ def test_full_set_identifiability_lists_the_unidentifiable_directions(stewart):
     full = pincal.parameters(mech, "full")
     q = pincal.sample_actuators(mech, 40, np.random.default_rng(0))
     J = pincal.identification_jacobian(mech, full, q)
-    ident = pincal.analyse_jacobian(J, full.names)
+    ident = pincal.sensitivity.analyse_jacobian(J, full.names)
     s = np.linalg.svd(J, compute_uv=False)
     # the stacked Jacobian has a clear gap (≥ 1e6) right after its numerical rank
     assert ident.rank == np.linalg.matrix_rank(J, tol=1e-8 * s[0])
@@ -296,7 +304,7 @@ def test_full_set_identifiability_lists_the_unidentifiable_directions(stewart):
     # the preset is exactly identifiable
     stewart42 = pincal.parameters(mech, "stewart42")
     J42 = J[:, [full.index(n) for n in stewart42.names]]
-    assert pincal.analyse_jacobian(J42, stewart42.names).full_rank
+    assert pincal.sensitivity.analyse_jacobian(J42, stewart42.names).full_rank
 
 
 def test_identify_reduces_or_refuses_a_rank_deficient_set(stewart):

@@ -1,4 +1,4 @@
-"""Tests of pincal.qpso: known minima, the update rule, reproducibility, step-wise stage."""
+"""QPSO: known minima, the update rule, reproducibility, step-wise stage."""
 
 from __future__ import annotations
 
@@ -6,7 +6,11 @@ import numpy as np
 import pytest
 
 from pincal.errors import ParameterError
-from pincal.qpso import QPSOResult, qpso, qpso_stepwise
+from pincal.identification import (
+    QPSOResult,
+    qpso,
+    qpso_stepwise,
+)
 
 
 def sphere(X: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Tests of pincal.report: plot files, statistics and the assembled report."""
+"""Tests of pincal.report._report: plot files, statistics and the assembled report."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import struct
 import numpy as np
 import pytest
 
+import pincal.errors
 from pincal import report
 
 
@@ -69,13 +70,13 @@ def test_parameter_plot_splits_lengths_and_angles(tmp_path):
 
 
 def test_bad_inputs(tmp_path):
-    with pytest.raises(report.ReportError, match="after has 2"):
+    with pytest.raises(pincal.errors.ReportError, match="after has 2"):
         report.plot_errors_before_after([1, 2, 3], [1, 2], "mm", tmp_path / "x.png")
-    with pytest.raises(report.ReportError, match="units are"):
+    with pytest.raises(pincal.errors.ReportError, match="units are"):
         report.plot_errors_before_after([1, 2], [1, 2], "inch", tmp_path / "x.png")
-    with pytest.raises(report.ReportError, match="NaN"):
+    with pytest.raises(pincal.errors.ReportError, match="NaN"):
         report.plot_convergence([1.0, float("nan")], tmp_path / "x.png")
-    with pytest.raises(report.ReportError, match="3 names"):
+    with pytest.raises(pincal.errors.ReportError, match="3 names"):
         report.plot_parameters(["a.tx", "b.tx", "c.tx"], [1, 2], [1, 1], path=tmp_path / "x.png")
     assert not (tmp_path / "x.png").exists()
 
@@ -104,5 +105,5 @@ def test_report_references_plots_and_tables(tmp_path, errors):
     assert f"{stats_before.rms:.6g}" in md and f"{stats_before.rms:.6g}" in page
     assert "after\\|x" in md  # a pipe in a cell does not break the Markdown table
     assert "Stewart &lt;test&gt;" in page and "<caption>Validation poses</caption>" in page
-    with pytest.raises(report.ReportError, match="not found"):
+    with pytest.raises(pincal.errors.ReportError, match="not found"):
         report.write_report(tmp_path, [report.Section("x", images=["missing.png"])])

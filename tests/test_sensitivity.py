@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from pincal.parameters import parameters
+from pincal.model import parameters
 from pincal.sensitivity import identification_jacobian
 
 
@@ -61,8 +61,7 @@ def test_measured_frame_parameter_has_direct_effect(stewart, stewart_poses):
 )
 def test_partial_closures_and_components_match_central_differences(model, preset):
     """Partial closures ([y, z], [x, z]), component subsets and serial chains."""
-    from pincal.mechanism import load_mechanism
-    from pincal.workspace import sample_actuators
+    from pincal.model import load_mechanism, sample_actuators
 
     mech = load_mechanism(model)
     params = parameters(mech, preset)
@@ -77,8 +76,7 @@ def test_partial_closures_and_components_match_central_differences(model, preset
 
 @pytest.mark.parametrize("model", ["pkm5", "wedge3", "hexaslide_6pus", "aacmm"])
 def test_inverse_then_forward_round_trip(model):
-    from pincal.mechanism import load_mechanism
-    from pincal.workspace import sample_actuators
+    from pincal.model import load_mechanism, sample_actuators
 
     mech = load_mechanism(model)
     for row in sample_actuators(mech, 3, np.random.default_rng(2)):

@@ -1,4 +1,4 @@
-"""pincal.serial: base/tool frames, locked joints, registration; UR10 and Panda calibration."""
+"""Serial chains: base/tool frames, locked joints, registration; UR10 and Panda calibration."""
 
 from __future__ import annotations
 
@@ -11,13 +11,16 @@ import pinocchio as pin
 import pytest
 
 import pincal
-from pincal.builders import example_robot_urdf
-from pincal.errors import ModelFileError, UnknownNameError
-from pincal.serial import (
+from pincal.errors import (
+    ModelFileError,
+    UnknownNameError,
+)
+from pincal.measure import register_instrument
+from pincal.model import (
     BASE_JOINT,
     TOOL_JOINT,
+    example_robot_urdf,
     lock_joints,
-    register_instrument,
     serial_mechanism,
     with_joint_origin,
     wrap_base_tool,

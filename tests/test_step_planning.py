@@ -10,9 +10,8 @@ import pinocchio as pin
 import pytest
 
 import pincal
-from pincal.global_sensitivity import global_sensitivity
-from pincal.step_planning import step_planned_identify
-from pincal.wedge import (
+from pincal.identification import step_planned_identify
+from pincal.machines import (
     PATENT_PRESET_NAMES,
     WedgeGeometry,
     wedge_compensation,
@@ -21,6 +20,7 @@ from pincal.wedge import (
     wedge_urdf,
     wedge_workspace_grid,
 )
+from pincal.sensitivity import global_sensitivity
 
 MODEL_DIR = Path(__file__).resolve().parents[1] / "models" / "wedge3"
 BOX = ((-0.05, 0.05), (-0.002, 0.002), (-0.01, 0.01))

@@ -1,4 +1,4 @@
-"""Tests of the laser-tracker measurement model (pincal.tracker)."""
+"""Tests of the laser-tracker measurement model (pincal.measure._tracker)."""
 
 from __future__ import annotations
 
@@ -6,10 +6,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from pincal.errors import MeasurementError
-from pincal.tracker import (
+from pincal.errors import MeasurementError, MovedTargetError
+from pincal.measure import (
     LaserTracker,
-    MovedTargetError,
     TrackerNoise,
     fit_rigid_transform,
     rigid_fit_covariance,

@@ -1,4 +1,4 @@
-"""Tests of pincal.viz: scene contents against independent kinematics, and real renders."""
+"""Tests of pincal.viz._viz: scene contents against independent kinematics, and real renders."""
 
 from __future__ import annotations
 
@@ -14,7 +14,11 @@ import pytest
 import umsgpack
 
 from pincal import viz
-from pincal.errors import ModelFileError, UnknownNameError
+from pincal.errors import (
+    ModelFileError,
+    UnknownNameError,
+    VisualizationError,
+)
 
 # A planar two-leg platform drawn with primitives only (the loop leg2_tip ↔ platform
 # would be closed by a sidecar; here it only has to look like a parallel machine).
@@ -273,15 +277,15 @@ def test_animation_keyframes_pass_through_every_configuration(prim):
 
 def test_bad_inputs_raise_pincal_errors(prim, tmp_path):
     model, path, qs = prim
-    with pytest.raises(viz.VisualizationError, match=r"shape \(3,\); expected \(4,\)"):
+    with pytest.raises(VisualizationError, match=r"shape \(3,\); expected \(4,\)"):
         viz.static_html(model, path, [np.zeros(3)])
     with pytest.raises(UnknownNameError, match="effector"):
         viz.static_html(model, path, qs, frame="efector")
     with pytest.raises(ModelFileError):
         viz.static_html(model, tmp_path / "missing.urdf", qs)
-    with pytest.raises(viz.VisualizationError, match="colour"):
+    with pytest.raises(VisualizationError, match="colour"):
         viz.static_html(model, path, qs, arrows=[(np.zeros(3), np.ones(3), "reddish", "")])
-    with pytest.raises(viz.VisualizationError, match=r"shape \(3,\)"):
+    with pytest.raises(VisualizationError, match=r"shape \(3,\)"):
         viz.static_html(model, path, qs, arrows=[(np.zeros(2), np.ones(3), "#ff0000", "")])
 
 
@@ -305,7 +309,7 @@ def test_stl_normals_are_recomputed():
     header = b"\0" * 80 + np.array([1], "<u4").tobytes()
     tri = np.zeros(1, [("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
     tri["v"] = [[[0, 0, 0], [2, 0, 0], [0, 3, 0]]]
-    fixed = viz._stl_with_normals(header + tri.tobytes())
+    fixed = viz._viz._stl_with_normals(header + tri.tobytes())
     n = np.frombuffer(fixed, "<f4", 3, 84)
     np.testing.assert_allclose(n, [0, 0, 1])
 

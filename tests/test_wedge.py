@@ -1,12 +1,15 @@
-"""Tests of the closed-form wedge mechanism kinematics (pincal.wedge)."""
+"""Tests of the closed-form wedge mechanism kinematics (pincal.machines._wedge)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from pincal.errors import ClosureError, ParameterError
-from pincal.wedge import (
+from pincal.errors import (
+    ClosureError,
+    ParameterError,
+)
+from pincal.machines import (
     PATENT_ERROR_NAMES,
     WedgeGeometry,
     wedge_constraint_jacobians,

@@ -2,7 +2,7 @@
 
 Uses Pinocchio directly (no pincal engine): the loops are closed by a small Newton
 iteration on the passive joints, then the measured frame is compared with the
-closed form of pincal.wedge.
+closed form of pincal.machines._wedge.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import pinocchio as pin
 import pytest
 import yaml
 
-from pincal.wedge import (
+from pincal.machines import (
     WedgeGeometry,
     wedge_constraints,
     wedge_forward,

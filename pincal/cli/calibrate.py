@@ -118,13 +118,15 @@ def calibrate(model, data, preset, method, out, as_json) -> None:
     """Identify MODEL's geometric parameters from measured poses (--data)."""
     import numpy as np
 
-    from pincal.datafiles import check_enough_poses, read_measurement_file
-    from pincal.export import save_urdf
-    from pincal.files import atomic_write_text
-    from pincal.identifiability import identifiability
-    from pincal.identify import identify
-    from pincal.mechanism import load_mechanism
-    from pincal.parameters import parameters
+    from pincal.identification import identify
+    from pincal.io import (
+        atomic_write_text,
+        check_enough_poses,
+        read_measurement_file,
+        save_urdf,
+    )
+    from pincal.model import load_mechanism, parameters
+    from pincal.sensitivity import identifiability
 
     mech = load_mechanism(model)
     mf = read_measurement_file(data, mech)

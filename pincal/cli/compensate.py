@@ -31,10 +31,13 @@ def compensate(model, targets, out, skip_unreachable, as_json) -> None:
 
     MODEL is typically the calibrated URDF written by `pincal calibrate`.
     """
-    from pincal.compensate import compensate as run
-    from pincal.datafiles import read_poses, write_commands
+    from pincal.compensation import compensate as run
     from pincal.errors import UnreachablePoseError
-    from pincal.mechanism import load_mechanism
+    from pincal.io import (
+        read_poses,
+        write_commands,
+    )
+    from pincal.model import load_mechanism
 
     mech = load_mechanism(model)
     poses = read_poses(targets)

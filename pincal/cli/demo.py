@@ -40,7 +40,7 @@ def demo(
       pincal demo
       pincal demo --seed 3 --poses 18 --method lm --out run3
     """
-    from pincal.demo import DemoSettings, format_demo, run_demo
+    from pincal.cli._demo_job import DemoSettings, format_demo, run_demo
 
     settings = DemoSettings(
         seed=seed,

@@ -15,9 +15,8 @@ def info(model: str, preset: str | None) -> None:
     """Describe MODEL (bundled name, model directory or .urdf path)."""
     import numpy as np
 
-    from pincal.identifiability import identifiability
-    from pincal.mechanism import load_mechanism
-    from pincal.parameters import parameters
+    from pincal.model import load_mechanism, parameters
+    from pincal.sensitivity import identifiability
 
     mech = load_mechanism(model)
     m = mech.model

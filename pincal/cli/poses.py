@@ -70,14 +70,17 @@ def poses(
 
     import numpy as np
 
-    from pincal.candidates import candidate_set
-    from pincal.crb import cramer_rao_from_jacobian
+    from pincal.design import (
+        DesignScaling,
+        candidate_set,
+        characteristic_length,
+        cramer_rao_from_jacobian,
+        select_poses,
+        write_pose_design,
+    )
     from pincal.errors import PincalError
-    from pincal.measurements import NoiseModel
-    from pincal.mechanism import load_mechanism
-    from pincal.observability import DesignScaling, characteristic_length
-    from pincal.parameters import parameters
-    from pincal.selection import select_poses, write_pose_design
+    from pincal.measure import NoiseModel
+    from pincal.model import load_mechanism, parameters
 
     mech = load_mechanism(model)
     preset = preset or (next(iter(mech.presets)) if mech.presets else "full")

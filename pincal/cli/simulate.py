@@ -91,13 +91,17 @@ def simulate(
     """
     import numpy as np
 
-    from pincal.datafiles import read_poses, write_measurements
     from pincal.errors import UnreachablePoseError
-    from pincal.files import atomic_write_text
-    from pincal.measurements import NoiseModel, simulate_measurements
-    from pincal.mechanism import load_mechanism
-    from pincal.parameters import parameters
-    from pincal.workspace import sample_actuators
+    from pincal.io import (
+        atomic_write_text,
+        read_poses,
+        write_measurements,
+    )
+    from pincal.measure import (
+        NoiseModel,
+        simulate_measurements,
+    )
+    from pincal.model import load_mechanism, parameters, sample_actuators
 
     if (poses_file is None) == (n_random is None):
         raise click.UsageError("give exactly one of --poses FILE or --random N")

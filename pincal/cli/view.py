@@ -1,6 +1,6 @@
 """`pincal view`: an offline HTML view (or a live meshcat session) of a mechanism's poses.
 
-Poses file (temporary format, until pincal.datafiles defines the measurement files):
+Poses file (temporary format, until pincal.io._datafiles defines the measurement files):
 a CSV file whose header names the actuated joints of the model (any order; other
 columns are ignored), one pose per row, values in SI units (m for prismatic, rad for
 revolute joints). Lines starting with ``#`` are comments::
@@ -22,8 +22,8 @@ import click
 import numpy as np
 
 from pincal.cli.common import fail_cleanly
-from pincal.datafiles import read_actuator_rows
 from pincal.errors import ModelFileError
+from pincal.io import read_actuator_rows
 
 #: most poses drawn (ghost copies multiply the page size)
 MAX_POSES = 200
@@ -120,8 +120,7 @@ def view(
       pincal view pkm5 --random 4 --live
     """
     from pincal import viz
-    from pincal.mechanism import load_mechanism
-    from pincal.workspace import sample_actuators
+    from pincal.model import load_mechanism, sample_actuators
 
     if html_path is None and not live:
         raise click.UsageError("give --html FILE and/or --live")

@@ -1,0 +1,427 @@
+"""Candidate measurement poses and their identification-Jacobian blocks.
+
+Pose design (:mod:`pincal.design._exchange`) chooses m poses out of N candidates. This
+module produces the candidates from a mechanism, three ways:
+
+- :func:`grid_candidates` — seed 000: n levels per actuator over a joint range,
+  every combination (n^n_act rows) pushed through the forward kinematics; kept
+  are the rows whose loops close, that are not singular, whose actuators are in
+  their limits and whose measured-frame pose lies inside the sidecar's pose
+  workspace (when one is given);
+- :func:`random_candidates` — random feasible workspace poses
+  (:func:`pincal.sample_actuators`);
+- :func:`orthogonal_candidates` — seed 001: a strength-2 orthogonal array over
+  the six workspace pose factors (x, y, z, rx, ry, rz) mapped onto the
+  workspace ranges and solved by inverse kinematics.
+
+Each returns a :class:`CandidateSet`: actuator rows (N, n_act), the nominal
+measured-frame poses and the unscaled Jacobian blocks (N, k, n) of the measured
+components (:func:`pincal.pose_sensitivity`), ready to be scaled
+(:func:`pincal.design._indices.scale_design_jacobian`) and selected from.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import ArrayLike, NDArray
+
+from pincal.design._exchange import map_to_ranges, orthogonal_array
+from pincal.errors import ConvergenceError, PincalError, SingularConfigurationError
+from pincal.model._closures import COMPONENTS
+from pincal.model._mechanism import WORKSPACE_POSE_KEYS, Mechanism
+from pincal.model._parameters import ParameterSet
+from pincal.model._workspace import _joint_ranges, sample_actuators
+from pincal.sensitivity._jacobian import pose_sensitivity
+
+__all__ = [
+    "CandidateSet",
+    "candidate_set",
+    "default_grid_ranges",
+    "evaluate_candidates",
+    "grid_candidates",
+    "orthogonal_candidates",
+    "parse_candidate_spec",
+    "random_candidates",
+]
+
+_log = logging.getLogger(__name__)
+
+Progress = Callable[[int, int], None]
+"""Progress callback ``(done, total)``."""
+
+
+@dataclass(frozen=True, eq=False)
+class CandidateSet:
+    """Feasible candidate poses with their identification-Jacobian blocks.
+
+    Attributes:
+        q_act: actuator values (N, n_act) [m, rad], columns in ``actuated`` order.
+        positions: nominal measured-frame positions (N, 3), world [m].
+        rotations: nominal measured-frame orientations (N, 3, 3).
+        jacobians: unscaled Jacobian blocks (N, k, n): rows are the measured
+            ``components`` (position [m], rotation [rad], measured frame) per unit
+            of each parameter, at the nominal parameter values.
+        components: the k measured components (from x y z rx ry rz).
+        actuated: actuated joint names (n_act,).
+        param_names: parameter names (n,).
+        source: how the candidates were made, e.g. ``"grid:4"``.
+        tried: number of rows tried before filtering.
+        rejected: number of rejected rows per reason.
+    """
+
+    q_act: NDArray[np.float64]
+    positions: NDArray[np.float64]
+    rotations: NDArray[np.float64]
+    jacobians: NDArray[np.float64]
+    components: tuple[str, ...]
+    actuated: tuple[str, ...]
+    param_names: tuple[str, ...]
+    source: str
+    tried: int
+    rejected: dict[str, int] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return int(self.q_act.shape[0])
+
+    def subset(self, indices: ArrayLike) -> CandidateSet:
+        """The candidates at ``indices`` (any integer array), same source."""
+        idx = np.asarray(indices, dtype=int).reshape(-1)
+        return CandidateSet(
+            self.q_act[idx],
+            self.positions[idx],
+            self.rotations[idx],
+            self.jacobians[idx],
+            self.components,
+            self.actuated,
+            self.param_names,
+            self.source,
+            self.tried,
+            dict(self.rejected),
+        )
+
+    def summary(self) -> str:
+        """One line: how many candidates were kept and why others were rejected."""
+        why = ", ".join(f"{n} {reason}" for reason, n in self.rejected.items() if n)
+        return f"{len(self)} of {self.tried} candidates kept ({self.source})" + (
+            f"; rejected: {why}" if why else ""
+        )
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+def _home_pose(mech: Mechanism) -> pin.SE3:
+    mech._update(mech.q_home)
+    return pin.SE3(mech.data.oMf[mech.frame_id(mech.measured_frame)])
+
+
+def _in_workspace(mech: Mechanism, home: pin.SE3, p: np.ndarray, R: np.ndarray) -> bool:
+    """Whether a measured-frame pose lies in the sidecar pose workspace (missing keys: free)."""
+    lim = mech.workspace.pose
+    if not lim:
+        return True
+    r = pin.log3(home.rotation.T @ R)
+    values = dict(zip(WORKSPACE_POSE_KEYS, (*p, *r), strict=True))
+    tol = 1e-9
+    return all(lo - tol <= values[k] <= hi + tol for k, (lo, hi) in lim.items())
+
+
+def evaluate_candidates(
+    mech: Mechanism,
+    params: ParameterSet,
+    q_act_rows: ArrayLike,
+    *,
+    source: str = "custom",
+    in_workspace: bool = True,
+    tried: int | None = None,
+    rejected: dict[str, int] | None = None,
+    progress: Progress | None = None,
+) -> CandidateSet:
+    """Forward kinematics and Jacobian blocks of actuator rows; infeasible rows dropped.
+
+    A row is rejected when its loops do not close (``"no FK"``), the closed
+    configuration is singular (``"singular"``), an actuator is outside its limits
+    (``"outside limits"``), or, with ``in_workspace`` and a sidecar pose
+    workspace, the measured-frame pose is outside it (``"outside workspace"``).
+    Rows are warm-started from the previous feasible row (the order of a grid
+    keeps neighbours close), falling back to the home configuration.
+
+    Args:
+        mech: nominal mechanism.
+        params: parameter set (n parameters) whose Jacobian blocks are computed.
+        q_act_rows: actuator rows (N, n_act) [m, rad].
+        source: label stored in the result.
+        in_workspace: filter by the sidecar pose workspace.
+        tried, rejected: counts from an earlier stage (e.g. failed IK) to add to.
+        progress: callback ``(done, N)`` after each row.
+
+    Returns:
+        The feasible candidates, in input order.
+    """
+    rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
+    n_act = len(mech.actuated)
+    if rows.ndim != 2 or rows.shape[1] != n_act:
+        raise PincalError(
+            f"q_act_rows must have shape (N, {n_act}) for actuated joints "
+            f"{list(mech.actuated)}; got {np.shape(q_act_rows)}"
+        )
+    comps = tuple(mech.measured_components)
+    comp_rows = [COMPONENTS.index(c) for c in comps]
+    lo, hi = np.asarray(mech.actuator_limits, dtype=float).T
+    home = _home_pose(mech)
+    fid = mech.frame_id(mech.measured_frame)
+    counts = {"no FK": 0, "singular": 0, "outside limits": 0, "outside workspace": 0}
+    for k, v in (rejected or {}).items():
+        counts[k] = counts.get(k, 0) + v
+    keep_q, keep_p, keep_R, keep_J = [], [], [], []
+    guess = mech.q_home
+    total = rows.shape[0]
+    for i, row in enumerate(rows):
+        if progress is not None:
+            progress(i + 1, total)
+        if np.any(row < lo - 1e-12) or np.any(row > hi + 1e-12):
+            counts["outside limits"] += 1
+            continue
+        try:
+            try:
+                q = mech.configuration(row, guess, pose_index=i)
+            except SingularConfigurationError:
+                raise
+            except ConvergenceError:
+                q = mech.configuration(row, mech.q_home, pose_index=i)
+        except SingularConfigurationError:
+            counts["singular"] += 1
+            continue
+        except ConvergenceError:
+            counts["no FK"] += 1
+            continue
+        mech._update(q)
+        oMf = mech.data.oMf[fid]
+        p, R = oMf.translation.copy(), oMf.rotation.copy()
+        if in_workspace and not _in_workspace(mech, home, p, R):
+            counts["outside workspace"] += 1
+            continue
+        guess = q
+        sens = pose_sensitivity(mech, params, q)
+        keep_q.append(row)
+        keep_p.append(p)
+        keep_R.append(R)
+        keep_J.append(sens.jacobian[comp_rows])
+    n = len(params)
+    result = CandidateSet(
+        q_act=np.array(keep_q).reshape(-1, n_act),
+        positions=np.array(keep_p).reshape(-1, 3),
+        rotations=np.array(keep_R).reshape(-1, 3, 3),
+        jacobians=np.array(keep_J).reshape(-1, len(comps), n),
+        components=comps,
+        actuated=tuple(mech.actuated),
+        param_names=tuple(params.names),
+        source=source,
+        tried=int(tried if tried is not None else total),
+        rejected=counts,
+    )
+    _log.info("%s", result.summary())
+    return result
+
+
+# ----------------------------------------------------------------------------- grids
+
+
+def default_grid_ranges(mech: Mechanism) -> NDArray[np.float64]:
+    """Actuator ranges (n_act, 2) for a joint-space grid [m, rad].
+
+    The sidecar's ``workspace.joints`` where given; otherwise, when a pose
+    workspace is given, the range of each actuator over the inverse kinematics
+    of the home pose and the 2·d "star" poses that move one pose factor at a
+    time to either end of its range (so the grid spans the joint motion of the
+    workspace axes rather than the far larger URDF limits; grid corners that
+    combine several extremes are then filtered by the pose workspace);
+    otherwise the URDF limits. Always clipped to the actuator limits.
+    """
+    ranges = _joint_ranges(mech)
+    limits = np.asarray(mech.actuator_limits, dtype=float)
+    pose = mech.workspace.pose
+    if pose:
+        home = _home_pose(mech)
+        seen = [mech.actuators_of(mech.q_home)]
+        for key, ends in pose.items():
+            for value in ends:
+                p = home.translation.copy()
+                r = np.zeros(3)
+                i = WORKSPACE_POSE_KEYS.index(key)
+                if i < 3:
+                    p[i] = value
+                else:
+                    r[i - 3] = value
+                T = pin.SE3(home.rotation @ pin.exp3(r), p)
+                try:
+                    seen.append(mech.inverse(T, check_limits=False))
+                except ConvergenceError:
+                    continue
+        seen_arr = np.array(seen)
+        for k, name in enumerate(mech.actuated):
+            if name not in mech.workspace.joints:
+                ranges[k] = seen_arr[:, k].min(), seen_arr[:, k].max()
+    lo = np.maximum(ranges[:, 0], np.where(np.isfinite(limits[:, 0]), limits[:, 0], -np.inf))
+    hi = np.minimum(ranges[:, 1], np.where(np.isfinite(limits[:, 1]), limits[:, 1], np.inf))
+    return np.stack([lo, hi], axis=1)
+
+
+def grid_candidates(
+    mech: Mechanism,
+    params: ParameterSet,
+    levels: int = 4,
+    ranges: ArrayLike | None = None,
+    *,
+    in_workspace: bool = True,
+    progress: Progress | None = None,
+) -> CandidateSet:
+    """Seed 000: a full joint-space grid pushed through the forward kinematics.
+
+    Each actuator takes ``levels`` evenly spaced values over its range (both
+    ends included), giving levels^n_act rows (4 levels, 6 legs: 4096), in
+    lexicographic order (the last actuator varies fastest).
+
+    Args:
+        mech: nominal mechanism.
+        params: parameter set for the Jacobian blocks.
+        levels: values per actuator, ≥ 2.
+        ranges: actuator ranges (n_act, 2) [m, rad]; default
+            :func:`default_grid_ranges`.
+        in_workspace: keep only poses inside the sidecar pose workspace.
+        progress: callback ``(done, total)``.
+    """
+    if not isinstance(levels, (int, np.integer)) or levels < 2:
+        raise PincalError(f"a grid needs levels >= 2 per actuator; got {levels!r}")
+    n_act = len(mech.actuated)
+    rng_arr = default_grid_ranges(mech) if ranges is None else np.asarray(ranges, dtype=float)
+    if rng_arr.shape != (n_act, 2) or not np.all(np.isfinite(rng_arr)):
+        raise PincalError(f"ranges must be finite (lower, upper) pairs, shape ({n_act}, 2)")
+    axes = [np.linspace(lo, hi, int(levels)) for lo, hi in rng_arr]
+    rows = np.array(list(itertools.product(*axes)))
+    return evaluate_candidates(
+        mech, params, rows, source=f"grid:{levels}", in_workspace=in_workspace, progress=progress
+    )
+
+
+def random_candidates(
+    mech: Mechanism,
+    params: ParameterSet,
+    count: int,
+    rng: np.random.Generator | int | None = None,
+    *,
+    progress: Progress | None = None,
+) -> CandidateSet:
+    """``count`` random feasible workspace poses (:func:`pincal.sample_actuators`)."""
+    if count < 1:
+        raise PincalError(f"count must be >= 1; got {count}")
+    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    rows = sample_actuators(mech, int(count), gen)
+    return evaluate_candidates(
+        mech, params, rows, source=f"random:{count}", in_workspace=False, progress=progress
+    )
+
+
+def orthogonal_candidates(
+    mech: Mechanism,
+    params: ParameterSet,
+    levels: int = 5,
+    *,
+    progress: Progress | None = None,
+) -> CandidateSet:
+    """Seed 001: a strength-2 orthogonal array over the six workspace pose factors.
+
+    The array (:func:`pincal.design._exchange.orthogonal_array`, e.g. L25(5⁶) for 5 levels,
+    L49(7⁶) for 7) has one column per pose factor x, y, z, rx, ry, rz; levels are
+    mapped evenly onto the sidecar's pose ranges (a factor without a range stays
+    at its home value) and each run is solved by inverse kinematics. Unreachable
+    runs are counted as ``"no IK"``.
+    """
+    pose = mech.workspace.pose
+    if not pose:
+        raise PincalError(
+            f"{mech.name!r} has no pose workspace in its sidecar (workspace.pose); "
+            "orthogonal-array candidates need pose ranges"
+        )
+    table = orthogonal_array(int(levels), len(WORKSPACE_POSE_KEYS))
+    home = _home_pose(mech)
+    rvec_home = np.zeros(3)
+    centre = np.concatenate([home.translation, rvec_home])
+    lo = np.array(
+        [pose.get(k, (centre[i], centre[i]))[0] for i, k in enumerate(WORKSPACE_POSE_KEYS)]
+    )
+    hi = np.array(
+        [pose.get(k, (centre[i], centre[i]))[1] for i, k in enumerate(WORKSPACE_POSE_KEYS)]
+    )
+    factors = map_to_ranges(table, lo, hi)
+    rows, failed = [], 0
+    total = factors.shape[0]
+    for i, f in enumerate(factors):
+        if progress is not None:
+            progress(i + 1, 2 * total)
+        T = pin.SE3(home.rotation @ pin.exp3(f[3:]), f[:3])
+        try:
+            rows.append(mech.inverse(T, check_limits=False))
+        except ConvergenceError:
+            failed += 1
+    p = table.max() + 1
+
+    def second_half(done: int, n: int) -> None:
+        if progress is not None:
+            progress(total + round(done * total / max(n, 1)), 2 * total)
+
+    return evaluate_candidates(
+        mech,
+        params,
+        np.array(rows).reshape(-1, len(mech.actuated)),
+        source=f"oa:L{p * p}({p}^6)",
+        in_workspace=False,
+        tried=total,
+        rejected={"no IK": failed},
+        progress=second_half,
+    )
+
+
+# ----------------------------------------------------------------------------- specs
+
+
+def parse_candidate_spec(spec: str) -> tuple[str, int]:
+    """``"grid:4"`` → ("grid", 4); kinds: grid (levels), random (count), oa (levels)."""
+    kind, _, arg = spec.partition(":")
+    defaults = {"grid": 4, "random": 500, "oa": 5}
+    if kind not in defaults:
+        raise PincalError(
+            f"candidate spec {spec!r} not understood; use grid:LEVELS, random:COUNT or oa:LEVELS"
+        )
+    try:
+        value = int(arg) if arg else defaults[kind]
+    except ValueError:
+        raise PincalError(f"candidate spec {spec!r}: {arg!r} is not an integer") from None
+    return kind, value
+
+
+def candidate_set(
+    mech: Mechanism,
+    params: ParameterSet,
+    spec: str = "grid:4",
+    rng: np.random.Generator | int | None = None,
+    *,
+    progress: Progress | None = None,
+) -> CandidateSet:
+    """Candidates from a spec string: ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``."""
+    kind, value = parse_candidate_spec(spec)
+    if kind == "grid":
+        result = grid_candidates(mech, params, value, progress=progress)
+    elif kind == "random":
+        result = random_candidates(mech, params, value, rng, progress=progress)
+    else:
+        result = orthogonal_candidates(mech, params, value, progress=progress)
+    if len(result) == 0:
+        raise PincalError(f"no feasible candidate poses from {spec!r}: {result.summary()}")
+    return result

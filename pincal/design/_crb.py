@@ -1,0 +1,232 @@
+"""Cramér–Rao reports: accuracy predicted before measuring, efficiency after.
+
+For measurements with independent Gaussian noise (position σp, orientation σθ)
+every unbiased estimator of the parameters has covariance
+``Cov ⪰ F⁻¹``, ``F = JᵀΣ⁻¹J`` (Fisher information of the stacked
+identification Jacobian J of the measurement poses). Before any measurement
+this gives
+
+- the predicted standard deviation of every parameter, sqrt(diag F⁻¹);
+- the predicted validation error: a parameter error δx with covariance F⁻¹
+  moves the measured frame at a validation pose by J_v δx, so the expected
+  mean square position error over validation poses is
+  tr(J_{v,p} F⁻¹ J_{v,p}ᵀ)/m_v (and likewise for orientation).
+
+After identification (e.g. Monte-Carlo repetitions of a simulation), the
+*efficiency* compares the achieved mean square parameter error with the bound:
+η = tr(F⁻¹) / E‖x̂ − x‖², which is ≈ 1 for an efficient estimator (Gauss–Newton
+at small noise) and < 1 when the estimator wastes information or is biased.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from pincal.design._indices import crb_covariance, weight_rows
+from pincal.errors import PincalError
+from pincal.measure._measurements import NoiseModel
+from pincal.model._closures import COMPONENTS
+from pincal.model._mechanism import Mechanism
+from pincal.model._parameters import ParameterSet
+from pincal.sensitivity._jacobian import identification_jacobian
+
+__all__ = [
+    "CramerRaoReport",
+    "Efficiency",
+    "cramer_rao",
+    "cramer_rao_from_jacobian",
+    "efficiency",
+]
+
+
+def _split(components: Sequence[str]) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    is_pos = np.array([c in ("x", "y", "z") for c in components])
+    return is_pos, ~is_pos
+
+
+@dataclass(frozen=True, eq=False)
+class CramerRaoReport:
+    """What a pose set can achieve at best, before measuring.
+
+    Attributes:
+        names: parameter names (n,); units: their units ("m" or "rad").
+        covariance: Cramér–Rao bound F⁻¹ (n, n) [SI].
+        std: predicted standard deviations sqrt(diag F⁻¹) (n,) [m or rad].
+        validation_position_rms: predicted RMS over validation poses of the
+            position-error norm [m] (NaN if position is not measured or no
+            validation poses were given).
+        validation_orientation_rms: same for the orientation-error angle [rad].
+        m: number of measurement poses; rank: rank of the whitened Jacobian.
+    """
+
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+    covariance: NDArray[np.float64]
+    std: NDArray[np.float64]
+    validation_position_rms: float
+    validation_orientation_rms: float
+    m: int
+    rank: int
+
+    @property
+    def rms_std(self) -> float:
+        """sqrt(tr(F⁻¹)/n): the predicted RMS parameter error (mixed units if any rad)."""
+        return float(np.sqrt(np.mean(self.std**2)))
+
+    def summary(self) -> str:
+        """Two lines: predicted parameter and validation accuracy (mm, mrad)."""
+        lines = [
+            f"Cramér–Rao bound for {self.m} poses: RMS parameter std "
+            f"{self.rms_std * 1e3:.4g} mm (max {self.std.max() * 1e3:.4g})"
+        ]
+        if np.isfinite(self.validation_position_rms) or np.isfinite(
+            self.validation_orientation_rms
+        ):
+            lines.append(
+                f"predicted validation error: position RMS {self.validation_position_rms * 1e3:.4g}"
+                f" mm, orientation RMS {self.validation_orientation_rms * 1e3:.4g} mrad"
+            )
+        return "\n".join(lines)
+
+
+def cramer_rao_from_jacobian(
+    J_blocks: ArrayLike,
+    components: Sequence[str],
+    noise: NoiseModel,
+    J_validation: ArrayLike | None = None,
+    names: Sequence[str] | None = None,
+    units: Sequence[str] | None = None,
+) -> CramerRaoReport:
+    """Cramér–Rao report from Jacobian blocks.
+
+    Args:
+        J_blocks: unscaled identification Jacobian of the measurement poses
+            (m, k, n) [SI], rows = ``components``.
+        components: the k measured components.
+        noise: measurement noise (position [mm], orientation [mrad]), all > 0
+            for the measured components.
+        J_validation: unscaled Jacobian blocks (m_v, 6, n) of validation poses
+            with all six components (x y z rx ry rz), or None.
+        names, units: parameter names and units (n,) (default "p0".., "m").
+
+    Raises:
+        UnidentifiableError: the poses do not determine every parameter.
+    """
+    J = np.asarray(J_blocks, dtype=float)
+    if J.ndim != 3 or J.shape[1] != len(components):
+        raise PincalError(
+            f"J_blocks must have shape (m, {len(components)}, n); got {np.shape(J_blocks)}"
+        )
+    n = J.shape[2]
+    names = tuple(names) if names is not None else tuple(f"p{i}" for i in range(n))
+    units = tuple(units) if units is not None else ("m",) * n
+    sigma = noise.std(tuple(components))
+    if np.any(sigma <= 0):
+        raise PincalError(
+            f"the noise model must give a positive std for every measured component; "
+            f"got {noise} for components {tuple(components)}"
+        )
+    Jw = weight_rows(J, sigma).J
+    cov = crb_covariance(Jw, names=names)
+    rank = int(np.linalg.matrix_rank(Jw.reshape(-1, n)))
+    pos_rms = rot_rms = float("nan")
+    if J_validation is not None:
+        Jv = np.asarray(J_validation, dtype=float)
+        if Jv.ndim != 3 or Jv.shape[1:] != (6, n):
+            raise PincalError(f"J_validation must have shape (m_v, 6, {n}); got {Jv.shape}")
+        is_pos, is_rot = _split(COMPONENTS)
+        # E‖J_i δx‖² = tr(J_i C J_iᵀ), averaged over the validation poses
+        per_row = np.einsum("vij,jk,vik->vi", Jv, cov, Jv)
+        pos_rms = float(np.sqrt(np.mean(per_row[:, is_pos].sum(axis=1))))
+        rot_rms = float(np.sqrt(np.mean(per_row[:, is_rot].sum(axis=1))))
+    return CramerRaoReport(
+        names,
+        units,
+        cov,
+        np.sqrt(np.clip(np.diag(cov), 0, None)),
+        pos_rms,
+        rot_rms,
+        J.shape[0],
+        rank,
+    )
+
+
+def cramer_rao(
+    mech: Mechanism,
+    params: ParameterSet,
+    q_act_rows: ArrayLike,
+    noise: NoiseModel,
+    validation_q_act: ArrayLike | None = None,
+) -> CramerRaoReport:
+    """Predicted accuracy of measuring ``mech`` at actuator rows (m, n_act).
+
+    Args:
+        mech: nominal mechanism; params: the n parameters to identify.
+        q_act_rows: measurement poses (m, n_act) [m, rad].
+        noise: measurement noise model (mm, mrad).
+        validation_q_act: validation poses (m_v, n_act) for the predicted
+            validation error, or None.
+    """
+    comps = tuple(mech.measured_components)
+    rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
+    J = identification_jacobian(mech, params, rows).reshape(rows.shape[0], len(comps), len(params))
+    Jv = None
+    if validation_q_act is not None:
+        qv = np.atleast_2d(np.asarray(validation_q_act, dtype=float))
+        Jv = identification_jacobian(mech, params, qv, components=COMPONENTS).reshape(
+            qv.shape[0], 6, len(params)
+        )
+    return cramer_rao_from_jacobian(J, comps, noise, Jv, params.names, params.units)
+
+
+@dataclass(frozen=True, eq=False)
+class Efficiency:
+    """Achieved accuracy of repeated identifications against the Cramér–Rao bound.
+
+    Attributes:
+        mse: mean squared error per parameter over the repetitions (n,) [SI²].
+        bound: Cramér–Rao variance per parameter diag(F⁻¹) (n,) [SI²].
+        efficiency: η = tr(F⁻¹) / mean ‖x̂ − x‖² (≈ 1: efficient).
+        efficiency_se: Monte-Carlo standard error of η (delta method).
+        repetitions: number of repetitions R.
+    """
+
+    mse: NDArray[np.float64]
+    bound: NDArray[np.float64]
+    efficiency: float
+    efficiency_se: float
+    repetitions: int
+
+    @property
+    def rms_error(self) -> float:
+        """sqrt(mean over parameters of the MSE)."""
+        return float(np.sqrt(np.mean(self.mse)))
+
+    @property
+    def rms_bound(self) -> float:
+        """sqrt(tr(F⁻¹)/n)."""
+        return float(np.sqrt(np.mean(self.bound)))
+
+
+def efficiency(errors: ArrayLike, covariance_bound: ArrayLike) -> Efficiency:
+    """Estimator efficiency from Monte-Carlo parameter errors.
+
+    Args:
+        errors: identified minus true values (R, n) [SI], one row per repetition.
+        covariance_bound: Cramér–Rao bound (n, n) [SI].
+    """
+    e = np.atleast_2d(np.asarray(errors, dtype=float))
+    C = np.asarray(covariance_bound, dtype=float)
+    if C.shape != (e.shape[1], e.shape[1]):
+        raise PincalError(f"covariance_bound must be ({e.shape[1]}, {e.shape[1]}); got {C.shape}")
+    R = e.shape[0]
+    sq = np.sum(e**2, axis=1)
+    mean_sq = float(np.mean(sq))
+    tr = float(np.trace(C))
+    eta = tr / mean_sq if mean_sq > 0 else float("inf")
+    se = eta * float(np.std(sq, ddof=1)) / (mean_sq * np.sqrt(R)) if R > 1 else float("nan")
+    return Efficiency(np.mean(e**2, axis=0), np.diag(C).copy(), eta, se, R)

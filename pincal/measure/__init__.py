@@ -1,0 +1,45 @@
+"""Stage 4 — what an instrument sees: measurements and noise models (SI inside),
+simulation, the laser tracker, instrument registration, pose errors against a reference.
+"""
+
+from __future__ import annotations
+
+from pincal.measure._measurements import (
+    Measurements,
+    NoiseModel,
+    simulate_measurements,
+)
+from pincal.measure._registration import (
+    Registration,
+    register_instrument,
+)
+from pincal.measure._tracker import (
+    LaserTracker,
+    PoseMeasurement,
+    RigidFit,
+    TrackerNoise,
+    fit_rigid_transform,
+    pose_from_target_points,
+    rigid_fit_covariance,
+)
+from pincal.measure._validation import (
+    PoseErrors,
+    pose_errors,
+)
+
+__all__ = [
+    "LaserTracker",
+    "Measurements",
+    "NoiseModel",
+    "PoseErrors",
+    "PoseMeasurement",
+    "Registration",
+    "RigidFit",
+    "TrackerNoise",
+    "fit_rigid_transform",
+    "pose_errors",
+    "pose_from_target_points",
+    "register_instrument",
+    "rigid_fit_covariance",
+    "simulate_measurements",
+]

@@ -1,0 +1,112 @@
+"""Stage 1 — the machine: URDF tree, typed sidecar, loop closures, :class:`Mechanism`,
+parameters (displacements of joint placements), serial chains and DH tables, the
+catalogue of bundled models.
+"""
+
+from __future__ import annotations
+
+from pincal.model._closures import (
+    COMPONENTS,
+    Closure,
+    parse_components,
+)
+from pincal.model._dh import (
+    DHError,
+    DHLayout,
+    DHNames,
+    DHRow,
+    dh_apply_errors,
+    dh_errors_to_parameters,
+    dh_fk,
+    dh_layout,
+    dh_preset,
+    dh_urdf,
+    example_robot_names,
+    example_robot_urdf,
+    parameters_to_dh_errors,
+)
+from pincal.model._mechanism import (
+    Mechanism,
+    SolverOptions,
+    Workspace,
+    bundled_models,
+    load_mechanism,
+    read_sidecar,
+    resolve_model_path,
+    validate_sidecar,
+)
+from pincal.model._parameters import (
+    DOFS,
+    Parameter,
+    ParameterSet,
+    full_parameters,
+    parameters,
+)
+from pincal.model._serial import (
+    BASE_JOINT,
+    INSTRUMENT_LINK,
+    TOOL_JOINT,
+    TOOL_LINK,
+    chain_preset,
+    lock_joints,
+    serial_mechanism,
+    with_joint_origin,
+    wrap_base_tool,
+)
+from pincal.model._urdf import (
+    MOVABLE_TYPES,
+    UrdfJoint,
+    UrdfTree,
+    se3_from_xyz_rpy,
+)
+from pincal.model._workspace import (
+    sample_actuators,
+    sample_pose,
+)
+
+__all__ = [
+    "BASE_JOINT",
+    "COMPONENTS",
+    "DOFS",
+    "INSTRUMENT_LINK",
+    "MOVABLE_TYPES",
+    "TOOL_JOINT",
+    "TOOL_LINK",
+    "Closure",
+    "DHError",
+    "DHLayout",
+    "DHNames",
+    "DHRow",
+    "Mechanism",
+    "Parameter",
+    "ParameterSet",
+    "SolverOptions",
+    "UrdfJoint",
+    "UrdfTree",
+    "Workspace",
+    "bundled_models",
+    "chain_preset",
+    "dh_apply_errors",
+    "dh_errors_to_parameters",
+    "dh_fk",
+    "dh_layout",
+    "dh_preset",
+    "dh_urdf",
+    "example_robot_names",
+    "example_robot_urdf",
+    "full_parameters",
+    "load_mechanism",
+    "lock_joints",
+    "parameters",
+    "parameters_to_dh_errors",
+    "parse_components",
+    "read_sidecar",
+    "resolve_model_path",
+    "sample_actuators",
+    "sample_pose",
+    "se3_from_xyz_rpy",
+    "serial_mechanism",
+    "validate_sidecar",
+    "with_joint_origin",
+    "wrap_base_tool",
+]

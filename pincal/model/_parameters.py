@@ -1,0 +1,246 @@
+"""Geometric parameters: named displacements of URDF joint origins.
+
+Parameter k displaces the origin of URDF joint j along a unit twist ξ_k expressed in
+the joint-origin frame. All parameters of one joint act together as
+``origin ← origin · exp6(Σ_k δ_k ξ_k)``. The dof ``offset`` is the twist along a
+movable joint's axis, i.e. exactly an encoder/prismatic zero offset.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.errors import ParameterError, UnknownNameError
+from pincal.model._mechanism import Mechanism
+
+__all__ = ["DOFS", "Parameter", "ParameterSet", "full_parameters", "parameters"]
+
+DOFS: tuple[str, ...] = ("tx", "ty", "tz", "rx", "ry", "rz", "offset")
+_UNIT_TWISTS = {d: np.eye(6)[i] for i, d in enumerate(DOFS[:6])}
+_EXCLUDED_TYPES = ("floating", "planar")
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One geometric parameter.
+
+    Attributes:
+        name: ``<joint>.<dof>``.
+        joint: URDF joint name.
+        dof: one of ``tx ty tz rx ry rz offset``.
+        twist: (6,) unit twist ``[v; ω]`` in the joint-origin frame.
+        unit: ``"m"`` or ``"rad"``.
+    """
+
+    name: str
+    joint: str
+    dof: str
+    twist: np.ndarray
+    unit: str
+
+
+class ParameterSet:
+    """An ordered set of parameters of one mechanism.
+
+    Attributes:
+        parameters: tuple of :class:`Parameter`.
+        names: parameter names, in order.
+        units: ``"m"``/``"rad"`` per parameter.
+        joints: URDF joints touched, in first-use order.
+    """
+
+    def __init__(self, parameters: Sequence[Parameter], label: str = "custom"):
+        names = [p.name for p in parameters]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ParameterError(f"parameter set lists {dup} more than once")
+        if not parameters:
+            raise ParameterError("a parameter set needs at least one parameter")
+        self.parameters = tuple(parameters)
+        self.label = label
+        self.names = tuple(names)
+        self.units = tuple(p.unit for p in parameters)
+        joints: dict[str, list[int]] = {}
+        for k, p in enumerate(parameters):
+            joints.setdefault(p.joint, []).append(k)
+        self.joints = tuple(joints)
+        self._cols = {j: np.array(c) for j, c in joints.items()}
+        self._twists = {
+            j: np.stack([parameters[k].twist for k in c], axis=1) for j, c in joints.items()
+        }
+        self._twist_cache: tuple[bytes, dict] | None = None
+
+    def __len__(self) -> int:
+        return len(self.parameters)
+
+    def __repr__(self) -> str:
+        return f"ParameterSet({self.label!r}, {len(self)} parameters)"
+
+    def index(self, name: str) -> int:
+        if name not in self.names:
+            raise UnknownNameError("parameter", name, self.names)
+        return self.names.index(name)
+
+    def subset(self, indices: Sequence[int] | np.ndarray, label: str | None = None) -> ParameterSet:
+        """A new set with the parameters at ``indices`` (in that order)."""
+        return ParameterSet([self.parameters[int(i)] for i in indices], label or self.label)
+
+    def check_values(self, values: np.ndarray | None) -> np.ndarray:
+        if values is None:
+            return np.zeros(len(self))
+        values = np.asarray(values, dtype=float)
+        if values.shape != (len(self),):
+            raise ParameterError(
+                f"expected {len(self)} parameter values for set {self.label!r}, got shape "
+                f"{values.shape}"
+            )
+        if not np.all(np.isfinite(values)):
+            raise ParameterError("parameter values contain NaN or inf")
+        return values
+
+    def joint_twists(
+        self, values: np.ndarray
+    ) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """Per joint: (columns, twist v_j (6,), effective twists Jexp6(v_j)·Ξ_j (6, n_j)).
+
+        The effective twists are the exact derivatives, in the displaced origin frame, of
+        the origin with respect to the joint's parameters at ``values``.
+        """
+        key = values.tobytes()
+        if self._twist_cache is not None and self._twist_cache[0] == key:
+            return self._twist_cache[1]
+        out = {}
+        for j in self.joints:
+            cols, Xi = self._cols[j], self._twists[j]
+            v = Xi @ values[cols]
+            eff = Xi if not np.any(v) else pin.Jexp6(v) @ Xi
+            out[j] = (cols, v, eff)
+        self._twist_cache = (key, out)
+        return out
+
+    def apply(self, mech: Mechanism, values: np.ndarray | None) -> Mechanism:
+        """A new mechanism with the joint origins displaced by ``values`` (SI units).
+
+        The input mechanism is not modified.
+        """
+        values = self.check_values(values)
+        origins = {}
+        for j, (_, v, _) in self.joint_twists(values).items():
+            if j not in mech.tree.joints:
+                raise UnknownNameError("joint", j, list(mech.tree.joints))
+            origins[j] = mech.tree.joints[j].origin * pin.exp6(v)
+        return Mechanism(
+            mech.tree.with_origins(origins),
+            mech.sidecar,
+            name=mech.name,
+            source=mech.source,
+            measured_frame=mech.measured_frame,
+            q_guess=mech.q_home,
+            options=mech.options,
+        )
+
+    def format_value(self, k: int, value: float) -> str:
+        """Human-readable value: µm for lengths, µrad for angles."""
+        if self.units[k] == "m":
+            return f"{value * 1e6:+.3f} µm"
+        return f"{value * 1e6:+.3f} µrad"
+
+
+def _make(mech: Mechanism, joint: str, dof: str) -> Parameter:
+    uj = mech.tree.joints[joint]
+    if dof == "offset":
+        if not uj.movable:
+            raise ParameterError(f"joint {joint!r} is {uj.type}: it has no 'offset' parameter")
+        twist = uj.offset_twist()
+        unit = "m" if uj.type == "prismatic" else "rad"
+    else:
+        twist = _UNIT_TWISTS[dof]
+        unit = "m" if dof.startswith("t") else "rad"
+    return Parameter(f"{joint}.{dof}", joint, dof, twist, unit)
+
+
+def _full_dofs(mech: Mechanism, joint: str) -> list[str]:
+    uj = mech.tree.joints[joint]
+    dofs = list(DOFS[:6])
+    if uj.movable:
+        offset = uj.offset_twist()
+        same = [d for d in dofs if np.allclose(np.abs(_UNIT_TWISTS[d]), np.abs(offset))]
+        if same:  # the twist along a unit axis IS the offset: keep one name for it
+            dofs.remove(same[0])
+        dofs.append("offset")
+    return dofs
+
+
+def full_parameters(mech: Mechanism) -> ParameterSet:
+    """Six origin twists for every URDF joint (offset replaces the twist along a
+    movable joint's axis), floating joints excluded."""
+    params = [
+        _make(mech, j, d)
+        for j, uj in mech.tree.joints.items()
+        if uj.type not in _EXCLUDED_TYPES
+        for d in _full_dofs(mech, j)
+    ]
+    return ParameterSet(params, "full")
+
+
+def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet:
+    """Build a parameter set from a preset name, or an explicit list of entries.
+
+    Args:
+        mech: the mechanism.
+        preset: ``"full"``, a preset name from the sidecar, or a list whose entries are
+            ``"<joint>.<dof>"`` strings or ``{"joints": pattern, "dofs": [...]}`` mappings
+            (fnmatch patterns over URDF joint names).
+
+    Raises:
+        UnknownNameError: unknown preset, joint or dof (valid names listed).
+    """
+    if not isinstance(preset, str | list | tuple):
+        raise ParameterError(
+            f"preset must be a name or a list of entries, got {type(preset).__name__}"
+        )
+    if isinstance(preset, str):
+        if preset == "full":
+            return full_parameters(mech)
+        if preset not in mech.presets:
+            raise UnknownNameError("preset", preset, ["full", *mech.presets])
+        label, entries = preset, mech.presets[preset]
+        if not isinstance(entries, list):
+            raise ParameterError(f"preset {preset!r} must be a list of entries")
+    else:
+        label, entries = "custom", preset
+    joint_names = list(mech.tree.joints)
+    params: list[Parameter] = []
+    for entry in entries:
+        if isinstance(entry, str):
+            joint, _, dof = entry.rpartition(".")
+            pairs = [(joint, [dof])]
+        elif isinstance(entry, dict) and "joints" in entry and "dofs" in entry:
+            if not isinstance(entry["joints"], str) or not isinstance(entry["dofs"], list | str):
+                raise ParameterError(
+                    f"preset entry {entry!r}: 'joints' must be a name pattern and 'dofs' a list "
+                    f"of {', '.join(DOFS)}"
+                )
+            pattern = entry["joints"]
+            matched = [j for j in joint_names if fnmatch.fnmatchcase(j, pattern)]
+            if not matched:
+                raise UnknownNameError("joint", pattern, joint_names)
+            dofs_ = entry["dofs"]
+            pairs = [(j, [dofs_] if isinstance(dofs_, str) else list(dofs_)) for j in matched]
+        else:
+            raise ParameterError(
+                f"preset entry {entry!r} must be '<joint>.<dof>' or {{joints: ..., dofs: [...]}}"
+            )
+        for joint, dofs in pairs:
+            if joint not in mech.tree.joints:
+                raise UnknownNameError("joint", joint, joint_names)
+            for dof in dofs:
+                if not isinstance(dof, str) or dof not in DOFS:
+                    raise UnknownNameError("dof", str(dof), DOFS)
+                params.append(_make(mech, joint, dof))
+    return ParameterSet(params, label)

@@ -1,0 +1,177 @@
+"""Analytic identification Jacobian of closed-loop and serial mechanisms.
+
+For a frame f downstream of the origin of URDF joint j, a displacement δ_k of the
+origin along twist ξ_k moves f by the local twist ``Ad(oMf⁻¹ · A_j) ξ_k`` where
+``A_j`` is the world placement of the (displaced) origin frame. Closures add the
+passive-joint motion from the implicit-function theorem,
+``dq_u/dp = −(∂c/∂q_u)⁺ ∂c/∂p`` (rank-revealing, so redundant closure rows of
+over-constrained machines are harmless), and the measured quantity's sensitivity
+is ``∂m/∂p + ∂m/∂q_u · dq_u/dp``. No finite differences.
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.model._closures import COMPONENTS, measured_jacobian
+from pincal.model._mechanism import Mechanism
+from pincal.model._parameters import ParameterSet
+
+__all__ = ["PoseSensitivity", "identification_jacobian", "pose_sensitivity"]
+
+
+@dataclass(frozen=True)
+class PoseSensitivity:
+    """Sensitivities at one closed configuration.
+
+    Attributes:
+        q: (nq,) closed configuration.
+        position: (3,) world position of the measured frame [m].
+        rotation: (3, 3) its orientation.
+        jacobian: (6, n) derivative of ``[p_world; rotation (local)]`` w.r.t. parameters
+            [m/m, m/rad, rad/m, rad/rad].
+    """
+
+    q: np.ndarray
+    position: np.ndarray
+    rotation: np.ndarray
+    jacobian: np.ndarray
+
+
+def _solve(A: np.ndarray, B: np.ndarray, rcond: float) -> np.ndarray:
+    """Least-squares ``A X = B``: LU when A is square and regular, else truncated SVD."""
+    if A.shape[0] == A.shape[1]:
+        try:
+            X = np.linalg.solve(A, B)
+            if np.all(np.isfinite(X)) and np.linalg.norm(A @ X - B) <= 1e-8 * (
+                np.linalg.norm(B) + 1e-300
+            ):
+                return X
+        except np.linalg.LinAlgError:
+            pass
+    return np.linalg.lstsq(A, B, rcond=rcond)[0]
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """What the sensitivity of one (mechanism, parameter set) pair needs, computed once.
+
+    Attributes:
+        fids: frame index of every frame involved (measured + closure frames).
+        moves: per frame, the parameterised joints among its URDF ancestors.
+        origins: per parameterised joint, how to get its origin's world placement:
+            ``(fixed-joint frame id, -1, -1)`` or ``(-1, joint id, parent joint id)``.
+    """
+
+    fids: dict[str, int]
+    moves: dict[str, tuple[str, ...]]
+    origins: dict[str, tuple[int, int, int]]
+
+
+_PLANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _plan(mech: Mechanism, params: ParameterSet) -> _Plan:
+    per_mech = _PLANS.setdefault(mech, {})
+    plan = per_mech.get(params)
+    if plan is None:
+        frames = [mech.measured_frame] + [f for c in mech.closures for f in (c.frame_a, c.frame_b)]
+        frames = list(dict.fromkeys(frames))
+        joints = set(params.joints)
+        moves = {f: tuple(j for j in mech.tree.ancestors(f) if j in joints) for f in frames}
+        origins = {}
+        for j in params.joints:
+            if mech.tree.joints[j].type == "fixed":
+                origins[j] = (mech.frame_id(j), -1, -1)
+            else:
+                jid = mech.model.getJointId(j)
+                origins[j] = (-1, jid, mech.model.parents[jid])
+        plan = _Plan({f: mech.frame_id(f) for f in frames}, moves, origins)
+        per_mech[params] = plan
+    return plan
+
+
+def pose_sensitivity(
+    mech: Mechanism, params: ParameterSet, q: np.ndarray, values: np.ndarray | None = None
+) -> PoseSensitivity:
+    """Sensitivity of the measured frame at a closed configuration ``q`` (nq,).
+
+    ``mech`` must be the mechanism at parameter ``values`` (``params.apply(nominal,
+    values)``); derivatives are with respect to those values (exact chain rule through
+    ``exp6``).
+    """
+    values = params.check_values(values)
+    twists = params.joint_twists(values)
+    plan = _plan(mech, params)
+    mech._update(q)
+    model, data = mech.model, mech.data
+    oMf = data.oMf
+    n = len(params)
+    origins: dict[str, pin.SE3] = {}
+    for j, (fid, jid, parent) in plan.origins.items():
+        origins[j] = oMf[fid] if fid >= 0 else data.oMi[parent] * model.jointPlacements[jid]
+    cache: dict[str, np.ndarray] = {}
+
+    def param_twist(frame: str) -> np.ndarray:
+        """(6, n) local twist of ``frame`` per unit of each parameter."""
+        if frame not in cache:
+            P = np.zeros((6, n))
+            moves = plan.moves[frame]
+            if moves:
+                oMf_inv = oMf[plan.fids[frame]].inverse()
+                for j in moves:
+                    cols, _, eff = twists[j]
+                    P[:, cols] = (oMf_inv * origins[j]).action @ eff
+            cache[frame] = P
+        return cache[frame]
+
+    fid_m = plan.fids[mech.measured_frame]
+    oMm = oMf[fid_m]
+    J = measured_jacobian(oMm, param_twist(mech.measured_frame))
+    if mech.closures:
+        Jc = mech.closure_jacobian()
+        free = mech._free_v
+        Jc_p = np.vstack(
+            [
+                c.jacobian(oMf[a], oMf[b], param_twist(c.frame_a), param_twist(c.frame_b))
+                for c, (a, b) in zip(mech.closures, mech._closure_fids, strict=True)
+            ]
+        )
+        dqu_dp = _solve(Jc[:, free], -Jc_p, mech.options.rcond)
+        Jm_u = measured_jacobian(oMm, mech.frame_jacobian(fid_m))[:, free]
+        J = J + Jm_u @ dqu_dp
+    return PoseSensitivity(q.copy(), oMm.translation.copy(), oMm.rotation.copy(), J)
+
+
+def identification_jacobian(
+    mech: Mechanism,
+    params: ParameterSet,
+    q_act_rows: np.ndarray,
+    values: np.ndarray | None = None,
+    components: tuple[str, ...] | None = None,
+) -> np.ndarray:
+    """Stacked identification Jacobian (m·k, n) of the measured quantity.
+
+    Args:
+        mech: nominal mechanism (the one ``params`` was built for).
+        params: parameter set (n parameters).
+        q_act_rows: (m, n_act) actuator values [m, rad].
+        values: (n,) parameter values at which to linearise (default zeros).
+        components: measured components (default: the mechanism's), k of them; rows per
+            pose are in the order ``x y z rx ry rz`` restricted to these.
+
+    Returns:
+        (m·k, n) array: position rows in metres (world frame) and rotation rows in
+        radians (measured frame) per unit of each parameter.
+    """
+    values = params.check_values(values)
+    at = mech if not np.any(values) else params.apply(mech, values)
+    comps = components or mech.measured_components
+    rows = [COMPONENTS.index(c) for c in comps]
+    qs = at.configurations(q_act_rows)
+    blocks = [pose_sensitivity(at, params, q, values).jacobian[rows] for q in qs]
+    return np.vstack(blocks)
