@@ -123,8 +123,8 @@ class RegistrationRun:
 
 def _joint1_frame(mech: pincal.Mechanism) -> pin.SE3:
     """World placement of joint 1's origin frame (its axis, before joint motion)."""
-    mech._update(pin.neutral(mech.model))
-    return pin.SE3(mech.data.oMi[mech.model.getJointId("joint1")])
+    kin = mech.kinematics(pin.neutral(mech.model))
+    return kin.joint_placements[mech.model.getJointId("joint1")]
 
 
 def registration(

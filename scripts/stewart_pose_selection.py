@@ -72,11 +72,9 @@ class Outcome:
 
 def _poses(mech: pincal.Mechanism, q_rows: np.ndarray) -> list:
     qs = mech.configurations(q_rows)
-    fid = mech.frame_id(mech.measured_frame)
     out = []
     for q in qs:
-        mech._update(q)
-        out.append(pin.SE3(mech.data.oMf[fid]))
+        out.append(mech.frame_placement(q))
     return out
 
 

@@ -49,8 +49,7 @@ def test_measured_frame_parameter_has_direct_effect(stewart, stewart_poses):
     """A twist of the measured frame's own origin moves it by exactly that twist."""
     params = parameters(stewart, ["effector_joint.tz", "effector_joint.rx"])
     J = identification_jacobian(stewart, params, stewart_poses[:1])
-    stewart.configuration(stewart_poses[0])
-    R = stewart.placement("effector").rotation
+    R = stewart.frame_placement(stewart.configuration(stewart_poses[0]), "effector").rotation
     assert np.allclose(J[:3, 0], R[:, 2], atol=1e-12)
     assert np.allclose(J[3:, 1], [1, 0, 0], atol=1e-12)
 

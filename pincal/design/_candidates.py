@@ -117,8 +117,7 @@ class CandidateSet:
 
 
 def _home_pose(mech: Mechanism) -> pin.SE3:
-    mech._update(mech.q_home)
-    return pin.SE3(mech.data.oMf[mech.frame_id(mech.measured_frame)])
+    return mech.frame_placement(mech.q_home)
 
 
 def _in_workspace(mech: Mechanism, home: pin.SE3, p: np.ndarray, R: np.ndarray) -> bool:
@@ -175,7 +174,6 @@ def evaluate_candidates(
     comp_rows = [COMPONENTS.index(c) for c in comps]
     lo, hi = np.asarray(mech.actuator_limits, dtype=float).T
     home = _home_pose(mech)
-    fid = mech.frame_id(mech.measured_frame)
     counts = {"no FK": 0, "singular": 0, "outside limits": 0, "outside workspace": 0}
     for k, v in (rejected or {}).items():
         counts[k] = counts.get(k, 0) + v
@@ -201,8 +199,7 @@ def evaluate_candidates(
         except ConvergenceError:
             counts["no FK"] += 1
             continue
-        mech._update(q)
-        oMf = mech.data.oMf[fid]
+        oMf = mech.frame_placement(q)
         p, R = oMf.translation.copy(), oMf.rotation.copy()
         if in_workspace and not _in_workspace(mech, home, p, R):
             counts["outside workspace"] += 1

@@ -172,7 +172,6 @@ class CalibrationProblem:
         qs = np.empty((len(meas), mech.model.nq))
         r_raw = np.empty((len(meas), len(self.rows)))
         J = np.empty((len(meas), len(self.rows), len(self.params))) if jacobian else None
-        fid = mech.frame_id(mech.measured_frame)
         for i, q_act in enumerate(meas.q_act):
             guess = q_prev[i] if q_prev is not None else None
             try:
@@ -186,7 +185,7 @@ class CalibrationProblem:
                 sens = pose_sensitivity(mech, self.params, qs[i], values)
                 p, R = sens.position, sens.rotation
             else:
-                oMf = mech.data.oMf[fid]
+                oMf = mech.frame_placement(qs[i])
                 p, R = oMf.translation, oMf.rotation
             r, D = measurement_residual(p, R, meas.positions[i], R_meas)
             r_raw[i] = r[self.rows]

@@ -295,7 +295,7 @@ def _actuator_factors(mech: Mechanism, units: list[str | None], name: str) -> np
 
 def _check_magnitudes(mech: Mechanism, positions: np.ndarray, unit: str) -> str | None:
     """A warning when measured positions are ~1000× off the model's home pose scale."""
-    home = mech.placement(mech.measured_frame).translation
+    home = mech.frame_placement(mech.q_home).translation
     scale_model = max(float(np.linalg.norm(home)), 1e-3)
     scale_data = float(np.median(np.linalg.norm(positions, axis=1)))
     ratio = scale_data / scale_model

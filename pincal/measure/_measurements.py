@@ -153,14 +153,12 @@ def simulate_measurements(
     rng = rng if rng is not None else np.random.default_rng()
     rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
     qs = actual.configurations(rows)
-    fid = actual.frame_id(actual.measured_frame)
     with_rot = any(c.startswith("r") for c in comps)
     m = rows.shape[0]
     positions = np.empty((m, 3))
     rotations = np.empty((m, 3, 3)) if with_rot else None
     for i, q in enumerate(qs):
-        actual._update(q)
-        oMf = actual.data.oMf[fid]
+        oMf = actual.frame_placement(q)
         positions[i] = oMf.translation
         if rotations is not None:
             rotations[i] = oMf.rotation

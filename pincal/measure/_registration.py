@@ -65,11 +65,9 @@ def register_instrument(
         raise MeasurementError(f"registration needs at least 3 poses, got {len(measurements)}")
     T_current = mech.tree.joints[base_joint].origin
     qs = mech.configurations(measurements.q_act)
-    fid = mech.frame_id(mech.measured_frame)
     predicted_world = np.empty((len(qs), 3))
     for i, q in enumerate(qs):
-        mech._update(q)
-        predicted_world[i] = mech.data.oMf[fid].translation
+        predicted_world[i] = mech.frame_placement(q).translation
     predicted_base = (predicted_world - T_current.translation) @ T_current.rotation
     fit = fit_rigid_transform(predicted_base, measurements.positions)
     return Registration(fit.T, fit, with_joint_origin(mech, base_joint, fit.T))

@@ -45,13 +45,10 @@ def pose_errors(model: Mechanism, reference: Mechanism, q_act_rows: np.ndarray) 
     """
     qs_model = model.configurations(q_act_rows)
     qs_ref = reference.configurations(q_act_rows)
-    fm, fr = model.frame_id(model.measured_frame), reference.frame_id(reference.measured_frame)
     pos, rot = [], []
     for qm, qr in zip(qs_model, qs_ref, strict=True):
-        model._update(qm)
-        Tm = pin.SE3(model.data.oMf[fm])
-        reference._update(qr)
-        Tr = reference.data.oMf[fr]
+        Tm = model.frame_placement(qm)
+        Tr = reference.frame_placement(qr)
         pos.append(np.linalg.norm(Tm.translation - Tr.translation))
         rot.append(np.linalg.norm(pin.log3(Tm.rotation.T @ Tr.rotation)))
     return PoseErrors(np.array(pos), np.array(rot))

@@ -9,6 +9,8 @@ joint in the order of :attr:`Mechanism.actuated` [m or rad].
 from __future__ import annotations
 
 import logging
+import threading
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -35,6 +37,7 @@ from pincal.model._closures import (
 from pincal.model._urdf import UrdfTree
 
 __all__ = [
+    "Kinematics",
     "Mechanism",
     "SolverOptions",
     "Workspace",
@@ -82,6 +85,27 @@ class Workspace:
 
     pose: dict[str, tuple[float, float]] = field(default_factory=dict)
     joints: dict[str, tuple[float, float]] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Kinematics:
+    """Kinematics of one configuration: fresh arrays, nothing shared with the mechanism.
+
+    Attributes:
+        q: (nq,) the configuration.
+        placements: world placement of each kept frame (by name).
+        jacobians: (6, nv) LOCAL Jacobian of each kept frame (by name).
+        joint_placements: world placement of every joint (index = Pinocchio joint id).
+        closure_residual: (n_closure_rows,) [m, rad].
+        closure_jacobian: (n_closure_rows, nv).
+    """
+
+    q: np.ndarray
+    placements: Mapping[str, pin.SE3]
+    jacobians: Mapping[str, np.ndarray]
+    joint_placements: tuple[pin.SE3, ...]
+    closure_residual: np.ndarray
+    closure_jacobian: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -148,12 +172,18 @@ class Mechanism:
             self.model = pin.buildModelFromXML(urdf_xml)
         except (RuntimeError, ValueError) as exc:
             raise ModelFileError(f"Pinocchio cannot build the URDF model: {exc}") from exc
-        self.data = self.model.createData()
+        self._scratch = threading.local()  # per-thread pin.Data, never read across calls
         self._frame_ids = {f.name: i for i, f in enumerate(self.model.frames)}
         self.closures = self._parse_closures()
         self.actuated = self._parse_actuated()
         self._setup_indices()
         self.measured_frame = self._resolve_measured_frame(measured_frame)
+        #: the frames a sensitivity needs: the measured frame and every closure frame
+        self.key_frames = tuple(
+            dict.fromkeys(
+                [self.measured_frame] + [f for c in self.closures for f in (c.frame_a, c.frame_b)]
+            )
+        )
         self.measured_components = tuple(
             COMPONENTS[i]
             for i in parse_components(self.sidecar.get("measured", "pose"), "sidecar 'measured'")
@@ -292,23 +322,24 @@ class Mechanism:
         return q
 
     # ---------------------------------------------------------------- kinematics core
-    def _update(self, q: np.ndarray) -> None:
-        pin.computeJointJacobians(self.model, self.data, q)
-        pin.updateFramePlacements(self.model, self.data)
+    def _data(self) -> pin.Data:
+        """This thread's scratch ``pin.Data``: filled and read within one call only."""
+        data = getattr(self._scratch, "data", None)
+        if data is None:
+            data = self._scratch.data = self.model.createData()
+        return data
 
-    def placement(self, frame: str | int) -> pin.SE3:
-        """World placement of a frame after the last kinematics update."""
-        fid = frame if isinstance(frame, int) else self.frame_id(frame)
-        return self.data.oMf[fid]
+    def _compute(self, q: np.ndarray) -> pin.Data:
+        """Placements and joint Jacobians at ``q`` in the scratch data."""
+        data = self._data()
+        pin.computeJointJacobians(self.model, data, q)
+        pin.updateFramePlacements(self.model, data)
+        return data
 
-    def frame_jacobian(self, fid: int) -> np.ndarray:
-        """(6, nv) LOCAL Jacobian of frame ``fid`` after the last update."""
-        return pin.getFrameJacobian(self.model, self.data, fid, pin.LOCAL)
-
-    def _closure_residual(self) -> np.ndarray:
+    def _closure_residual(self, data: pin.Data) -> np.ndarray:
         if not self.closures:
             return np.zeros(0)
-        oMf = self.data.oMf
+        oMf = data.oMf
         return np.concatenate(
             [
                 c.residual(oMf[a], oMf[b])
@@ -316,12 +347,11 @@ class Mechanism:
             ]
         )
 
-    def closure_jacobian(self) -> np.ndarray:
-        """(n_closure_rows, nv) closure Jacobian after the last update."""
+    def _closure_jacobian(self, data: pin.Data) -> np.ndarray:
         if not self.closures:
             return np.zeros((0, self.model.nv))
-        oMf = self.data.oMf
-        model, data, lwa = self.model, self.data, pin.LOCAL_WORLD_ALIGNED
+        oMf = data.oMf
+        model, lwa, local = self.model, pin.LOCAL_WORLD_ALIGNED, pin.LOCAL
         blocks = []
         for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
             if c.is_point:  # world-aligned point velocities directly
@@ -329,19 +359,82 @@ class Mechanism:
                 Ja = pin.getFrameJacobian(model, data, a, lwa)
                 blocks.append(Jb[:3] - Ja[:3])
             else:
-                Ja, Jb = self.frame_jacobian(a), self.frame_jacobian(b)
+                Ja = pin.getFrameJacobian(model, data, a, local)
+                Jb = pin.getFrameJacobian(model, data, b, local)
                 blocks.append(c.jacobian(oMf[a], oMf[b], Ja, Jb))
         return np.vstack(blocks)
 
+    def _snapshot(
+        self, q: np.ndarray, data: pin.Data, frames: Sequence[str], jacobian_frames: Sequence[str]
+    ) -> Kinematics:
+        model = self.model
+        return Kinematics(
+            q=np.array(q, dtype=float),
+            placements={f: pin.SE3(data.oMf[self.frame_id(f)]) for f in frames},
+            jacobians={
+                f: pin.getFrameJacobian(model, data, self.frame_id(f), pin.LOCAL)
+                for f in jacobian_frames
+            },
+            joint_placements=tuple(pin.SE3(M) for M in data.oMi),
+            closure_residual=self._closure_residual(data),
+            closure_jacobian=self._closure_jacobian(data),
+        )
+
+    def kinematics(
+        self,
+        q: np.ndarray,
+        frames: Sequence[str] | None = None,
+        jacobian_frames: Sequence[str] | None = None,
+    ) -> Kinematics:
+        """Kinematics of configuration ``q`` (nq,): a fresh, frozen :class:`Kinematics`.
+
+        Args:
+            q: Pinocchio configuration (nq,) (need not close the loops).
+            frames: frames whose world placement to keep (default: :attr:`key_frames`,
+                the measured frame and every closure frame).
+            jacobian_frames: frames whose LOCAL Jacobian to keep (default: the measured
+                frame).
+        """
+        q = self._check_q(q)
+        jac = (self.measured_frame,) if jacobian_frames is None else jacobian_frames
+        return self._snapshot(q, self._compute(q), frames or self.key_frames, jac)
+
+    def frame_link(self, frame: str) -> str:
+        """URDF link a frame is attached to (a frame named by a joint sits on its child)."""
+        self.frame_id(frame)
+        if frame in self.tree.joints and frame not in self.tree.links:
+            return self.tree.joints[frame].child
+        return frame
+
+    @property
+    def free_dofs(self) -> np.ndarray:
+        """Tangent indices (k,) of the passive (not actuated) degrees of freedom."""
+        return self._free_v.copy()
+
+    def frame_placement(self, q: np.ndarray, frame: str | None = None) -> pin.SE3:
+        """World placement (a new SE3) of ``frame`` (default: the measured frame) at ``q``."""
+        q = self._check_q(q)
+        fid = self.frame_id(frame or self.measured_frame)
+        return pin.SE3(self._compute(q).oMf[fid])
+
     def closure_residual(self, q: np.ndarray) -> np.ndarray:
         """Closure residual at configuration q (n_closure_rows,) [m, rad]."""
-        self._update(q)
-        return self._closure_residual()
+        return self._closure_residual(self._compute(self._check_q(q)))
+
+    def closure_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """(n_closure_rows, nv) closure Jacobian at configuration q."""
+        return self._closure_jacobian(self._compute(self._check_q(q)))
+
+    def _check_q(self, q: np.ndarray) -> np.ndarray:
+        q = np.asarray(q, dtype=float)
+        if q.shape != (self.model.nq,):
+            raise ValueError(f"q must have shape ({self.model.nq},), got {q.shape}")
+        return q
 
     def _newton(self, q0: np.ndarray, free: np.ndarray, extra=None) -> _Solution:
         """Damped Newton on the closure (+ optional extra) residual over tangent dofs ``free``.
 
-        ``extra`` is a callable returning ``(r (k,), J (k, nv))`` after ``_update``.
+        ``extra`` is a callable of the computed data returning ``(r (k,), J (k, nv))``.
         """
         opt = self.options
         q = q0.copy()
@@ -349,18 +442,20 @@ class Mechanism:
 
         extra_jacobian = [np.zeros((0, nv))]
 
+        data = self._data()
+
         def evaluate(qq):
-            self._update(qq)
-            r = self._closure_residual()
+            self._compute(qq)
+            r = self._closure_residual(data)
             if extra is not None:
-                r_extra, extra_jacobian[0] = extra()
+                r_extra, extra_jacobian[0] = extra(data)
                 r = np.concatenate([r, r_extra])
             return r
 
         r = evaluate(q)
         norm = np.linalg.norm(r)
         for it in range(opt.max_iterations + 1):
-            J = self.closure_jacobian()
+            J = self._closure_jacobian(data)
             if extra is not None:
                 J = np.vstack([J, extra_jacobian[0]])
             Jf = J[:, free]
@@ -384,7 +479,6 @@ class Mechanism:
                     break
                 alpha *= 0.5
             else:  # no decrease along the Newton direction: stalled
-                self._update(q)
                 break
             q, r, norm = q_try, r_try, n_try
         raise ConvergenceError(
@@ -419,8 +513,8 @@ class Mechanism:
         return where
 
     def _check_mobility(self) -> None:
-        self._update(self.q_home)
-        Jc = self.closure_jacobian()
+        data = self._compute(self.q_home)
+        Jc = self._closure_jacobian(data)
         n_act = len(self.actuated)
         if Jc.shape[0] == 0:
             rank, rank_u, nullspace = 0, 0, np.eye(self._free_v.size)
@@ -433,7 +527,8 @@ class Mechanism:
         idle = self._free_v.size - rank_u
         mobility = self.model.nv - rank - idle
         if idle:  # passive motions the actuators do not fix must not move the measured frame
-            Jm = self.frame_jacobian(self.frame_id(self.measured_frame))[:, self._free_v]
+            fid = self.frame_id(self.measured_frame)
+            Jm = pin.getFrameJacobian(self.model, data, fid, pin.LOCAL)[:, self._free_v]
             moved = np.linalg.norm(Jm @ nullspace, axis=0)
             if np.any(moved > 1e-9):
                 raise MobilityError(
@@ -494,7 +589,6 @@ class Mechanism:
         guess = self.q_home if q_guess is None else q_guess
         q0 = self.with_actuators(guess, q_act)
         if not self.closures:
-            self._update(q0)
             return q0
         where = f"pose {pose_index}" if pose_index is not None else "pose"
         try:
@@ -523,8 +617,7 @@ class Mechanism:
 
     def forward(self, q_act: np.ndarray, q_guess: np.ndarray | None = None) -> pin.SE3:
         """Pose of the measured frame in the world for actuator values ``q_act``."""
-        self.configuration(q_act, q_guess)
-        return pin.SE3(self.data.oMf[self.frame_id(self.measured_frame)])
+        return self.frame_placement(self.configuration(q_act, q_guess))
 
     def configurations(self, q_act_rows: np.ndarray) -> np.ndarray:
         """Closed configurations (m, nq) for actuator rows (m, n_act), warm-started."""
@@ -572,13 +665,13 @@ class Mechanism:
         comps = np.array([COMPONENTS.index(c) for c in self.measured_components])
         target_p, target_R = T_world_target.translation, T_world_target.rotation
 
-        def extra():
-            oMf = self.data.oMf[fid]
+        def extra(data: pin.Data) -> tuple[np.ndarray, np.ndarray]:
+            oMf = data.oMf[fid]
             r = np.zeros(6)
             r[:3] = oMf.translation - target_p
             E = target_R.T @ oMf.rotation
             r[3:] = pin.log3(E)
-            J = measured_jacobian(oMf, self.frame_jacobian(fid))
+            J = measured_jacobian(oMf, pin.getFrameJacobian(self.model, data, fid, pin.LOCAL))
             J[3:] = pin.Jlog3(E) @ J[3:]
             return r[comps], J[comps]
 

@@ -23,8 +23,7 @@ def _joint_ranges(mech: Mechanism) -> np.ndarray:
 
 def sample_pose(mech: Mechanism, rng: np.random.Generator) -> pin.SE3:
     """A random measured-frame pose within ``mech.workspace.pose`` (home for missing keys)."""
-    mech._update(mech.q_home)
-    home = mech.data.oMf[mech.frame_id(mech.measured_frame)]
+    home = mech.frame_placement(mech.q_home)
     lim = mech.workspace.pose
     p = home.translation.copy()
     for i, key in enumerate("xyz"):

@@ -11,14 +11,13 @@ is ``∂m/∂p + ∂m/∂q_u · dq_u/dp``. No finite differences.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from pincal.model._closures import COMPONENTS, measured_jacobian
-from pincal.model._mechanism import Mechanism
+from pincal.model._mechanism import Kinematics, Mechanism
 from pincal.model._parameters import ParameterSet
 
 __all__ = ["PoseSensitivity", "identification_jacobian", "pose_sensitivity"]
@@ -61,59 +60,63 @@ class _Plan:
     """What the sensitivity of one (mechanism, parameter set) pair needs, computed once.
 
     Attributes:
-        fids: frame index of every frame involved (measured + closure frames).
+        frames: frames whose placement is needed: the key frames (measured + closure
+            frames) and the parameterised fixed joints.
         moves: per frame, the parameterised joints among its URDF ancestors.
         origins: per parameterised joint, how to get its origin's world placement:
             ``(fixed-joint frame id, -1, -1)`` or ``(-1, joint id, parent joint id)``.
     """
 
-    fids: dict[str, int]
+    frames: tuple[str, ...]
     moves: dict[str, tuple[str, ...]]
     origins: dict[str, tuple[int, int, int]]
 
 
-_PLANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
 def _plan(mech: Mechanism, params: ParameterSet) -> _Plan:
-    per_mech = _PLANS.setdefault(mech, {})
-    plan = per_mech.get(params)
-    if plan is None:
-        frames = [mech.measured_frame] + [f for c in mech.closures for f in (c.frame_a, c.frame_b)]
-        frames = list(dict.fromkeys(frames))
-        joints = set(params.joints)
-        moves = {f: tuple(j for j in mech.tree.ancestors(f) if j in joints) for f in frames}
-        origins = {}
-        for j in params.joints:
-            if mech.tree.joints[j].type == "fixed":
-                origins[j] = (mech.frame_id(j), -1, -1)
-            else:
-                jid = mech.model.getJointId(j)
-                origins[j] = (-1, jid, mech.model.parents[jid])
-        plan = _Plan({f: mech.frame_id(f) for f in frames}, moves, origins)
-        per_mech[params] = plan
-    return plan
+    """Which parameterised joints move each key frame, and where their origins hang."""
+    joints = set(params.joints)
+    moves = {
+        f: tuple(j for j in mech.tree.ancestors(mech.frame_link(f)) if j in joints)
+        for f in mech.key_frames
+    }
+    origins = {}
+    for j in params.joints:
+        if mech.tree.joints[j].type == "fixed":
+            origins[j] = (mech.frame_id(j), -1, -1)
+        else:
+            jid = mech.model.getJointId(j)
+            origins[j] = (-1, jid, mech.model.parents[jid])
+    fixed = [j for j, (fid, _, _) in origins.items() if fid >= 0]
+    return _Plan(tuple(dict.fromkeys([*mech.key_frames, *fixed])), moves, origins)
 
 
 def pose_sensitivity(
-    mech: Mechanism, params: ParameterSet, q: np.ndarray, values: np.ndarray | None = None
+    mech: Mechanism,
+    params: ParameterSet,
+    q: np.ndarray | Kinematics,
+    values: np.ndarray | None = None,
+    plan: _Plan | None = None,
 ) -> PoseSensitivity:
-    """Sensitivity of the measured frame at a closed configuration ``q`` (nq,).
+    """Sensitivity of the measured frame at a closed configuration.
 
-    ``mech`` must be the mechanism at parameter ``values`` (``params.apply(nominal,
-    values)``); derivatives are with respect to those values (exact chain rule through
-    ``exp6``).
+    Args:
+        mech: the mechanism at parameter ``values`` (``params.apply(nominal, values)``);
+            derivatives are with respect to those values (exact chain rule through exp6).
+        params: the parameter set (n parameters).
+        q: the closed configuration (nq,), or its :class:`Kinematics` when already computed.
+        values: (n,) parameter values (default zeros).
+        plan: the ``(mech, params)`` plan when evaluating many poses (computed if None).
     """
     values = params.check_values(values)
     twists = params.joint_twists(values)
-    plan = _plan(mech, params)
-    mech._update(q)
-    model, data = mech.model, mech.data
-    oMf = data.oMf
+    plan = plan or _plan(mech, params)
+    kin = q if isinstance(q, Kinematics) else mech.kinematics(q, plan.frames)
+    placements, joints = kin.placements, kin.joint_placements
+    model = mech.model
     n = len(params)
     origins: dict[str, pin.SE3] = {}
     for j, (fid, jid, parent) in plan.origins.items():
-        origins[j] = oMf[fid] if fid >= 0 else data.oMi[parent] * model.jointPlacements[jid]
+        origins[j] = placements[j] if fid >= 0 else joints[parent] * model.jointPlacements[jid]
     cache: dict[str, np.ndarray] = {}
 
     def param_twist(frame: str) -> np.ndarray:
@@ -122,29 +125,32 @@ def pose_sensitivity(
             P = np.zeros((6, n))
             moves = plan.moves[frame]
             if moves:
-                oMf_inv = oMf[plan.fids[frame]].inverse()
+                oMf_inv = placements[frame].inverse()
                 for j in moves:
                     cols, _, eff = twists[j]
                     P[:, cols] = (oMf_inv * origins[j]).action @ eff
             cache[frame] = P
         return cache[frame]
 
-    fid_m = plan.fids[mech.measured_frame]
-    oMm = oMf[fid_m]
+    oMm = placements[mech.measured_frame]
     J = measured_jacobian(oMm, param_twist(mech.measured_frame))
     if mech.closures:
-        Jc = mech.closure_jacobian()
-        free = mech._free_v
+        free = mech.free_dofs
         Jc_p = np.vstack(
             [
-                c.jacobian(oMf[a], oMf[b], param_twist(c.frame_a), param_twist(c.frame_b))
-                for c, (a, b) in zip(mech.closures, mech._closure_fids, strict=True)
+                c.jacobian(
+                    placements[c.frame_a],
+                    placements[c.frame_b],
+                    param_twist(c.frame_a),
+                    param_twist(c.frame_b),
+                )
+                for c in mech.closures
             ]
         )
-        dqu_dp = _solve(Jc[:, free], -Jc_p, mech.options.rcond)
-        Jm_u = measured_jacobian(oMm, mech.frame_jacobian(fid_m))[:, free]
+        dqu_dp = _solve(kin.closure_jacobian[:, free], -Jc_p, mech.options.rcond)
+        Jm_u = measured_jacobian(oMm, kin.jacobians[mech.measured_frame])[:, free]
         J = J + Jm_u @ dqu_dp
-    return PoseSensitivity(q.copy(), oMm.translation.copy(), oMm.rotation.copy(), J)
+    return PoseSensitivity(kin.q.copy(), oMm.translation.copy(), oMm.rotation.copy(), J)
 
 
 def identification_jacobian(
@@ -173,5 +179,6 @@ def identification_jacobian(
     comps = components or mech.measured_components
     rows = [COMPONENTS.index(c) for c in comps]
     qs = at.configurations(q_act_rows)
-    blocks = [pose_sensitivity(at, params, q, values).jacobian[rows] for q in qs]
+    plan = _plan(at, params)
+    blocks = [pose_sensitivity(at, params, q, values, plan).jacobian[rows] for q in qs]
     return np.vstack(blocks)

@@ -369,12 +369,10 @@ def tracker_measurements(
     rotation std of the local rotation vector.
     """
     qs = actual.configurations(q_act_rows)
-    fid = actual.frame_id(actual.measured_frame)
     m = len(q_act_rows)
     pos, rot, std = np.empty((m, 3)), np.empty((m, 3, 3)), np.empty((m, 6))
     for i, q in enumerate(qs):
-        actual._update(q)
-        T_true = pin.SE3(actual.data.oMf[fid])
+        T_true = actual.frame_placement(q)
         pm = tracker.measure_pose(T_true, targets_platform, rng)
         T = pm.T_base_body
         pos[i], rot[i] = T.translation, T.rotation
@@ -395,11 +393,9 @@ def tracker_measurements(
 
 def _reached(actual: Mechanism, X: pin.SE3, q_rows: np.ndarray) -> list[pin.SE3]:
     qs = actual.configurations(q_rows)
-    fid = actual.frame_id(actual.measured_frame)
     out = []
     for q in qs:
-        actual._update(q)
-        out.append(X * pin.SE3(actual.data.oMf[fid]))
+        out.append(X * actual.frame_placement(q))
     return out
 
 
