@@ -1,4 +1,4 @@
-"""Tests of the closed-form wedge mechanism kinematics (pincal.machines._wedge)."""
+"""Tests of the closed-form wedge mechanism kinematics (pincal.machines._wedge, _wedge_errors, _wedge_urdf)."""
 
 from __future__ import annotations
 
