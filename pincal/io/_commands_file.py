@@ -30,7 +30,7 @@ from pincal.io._csv import (
     write_csv,
 )
 from pincal.io._units import actuator_read_factors, actuator_write_factors
-from pincal.model._mechanism import Mechanism
+from pincal.model import Mechanism
 
 __all__ = ["MAX_POSES_BYTES", "read_actuator_rows", "read_commands", "write_commands"]
 

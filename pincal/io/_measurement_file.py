@@ -68,9 +68,8 @@ from pincal.io._units import (
     actuator_write_factors,
     unit_factor,
 )
-from pincal.measure._measurements import Measurements, NoiseModel
-from pincal.model._closures import COMPONENTS
-from pincal.model._mechanism import Mechanism
+from pincal.measure import Measurements, NoiseModel
+from pincal.model import COMPONENTS, Mechanism
 
 __all__ = [
     "MeasurementFile",

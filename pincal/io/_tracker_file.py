@@ -20,9 +20,8 @@ import numpy as np
 from pincal.errors import MeasurementError, MeasurementFormatError, PoseFitError
 from pincal.io._csv import Header, actuator_columns, fmt, positive_value, write_csv
 from pincal.io._units import LENGTH_UNITS, actuator_write_factors, unit_factor
-from pincal.measure._measurements import Measurements
-from pincal.measure._tracker import fit_rigid_transform, rigid_fit_covariance
-from pincal.model._closures import COMPONENTS
+from pincal.measure import Measurements, fit_rigid_transform, rigid_fit_covariance
+from pincal.model import COMPONENTS
 
 __all__ = [
     "TargetMeasurements",

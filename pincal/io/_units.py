@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from pincal.errors import MeasurementError, MeasurementFormatError
-from pincal.model._mechanism import Mechanism
+from pincal.model import Mechanism
 
 __all__ = [
     "ANGLE_UNITS",

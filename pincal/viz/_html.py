@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 import umsgpack
 
-from pincal.io._atomic import atomic_write_text
+from pincal.io import atomic_write_text
 from pincal.viz._inputs import Arrow, check_inputs, hex_colour
 from pincal.viz._scene import build_scene
 
