@@ -1,4 +1,4 @@
-"""Tests of pincal.viz._viz: scene contents against independent kinematics, and real renders."""
+"""Tests of pincal.viz: scene contents against independent kinematics, and real renders."""
 
 from __future__ import annotations
 
@@ -19,6 +19,7 @@ from pincal.errors import (
     UnknownNameError,
     VisualizationError,
 )
+from pincal.viz._geometry import stl_with_normals
 
 # A planar two-leg platform drawn with primitives only (the loop leg2_tip ↔ platform
 # would be closed by a sidecar; here it only has to look like a parallel machine).
@@ -309,7 +310,7 @@ def test_stl_normals_are_recomputed():
     header = b"\0" * 80 + np.array([1], "<u4").tobytes()
     tri = np.zeros(1, [("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
     tri["v"] = [[[0, 0, 0], [2, 0, 0], [0, 3, 0]]]
-    fixed = viz._viz._stl_with_normals(header + tri.tobytes())
+    fixed = stl_with_normals(header + tri.tobytes())
     n = np.frombuffer(fixed, "<f4", 3, 84)
     np.testing.assert_allclose(n, [0, 0, 1])
 

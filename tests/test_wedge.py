@@ -1,4 +1,4 @@
-"""Tests of the closed-form wedge mechanism kinematics (pincal.machines._wedge)."""
+"""Tests of the closed-form wedge kinematics, error matrices and URDF (pincal.machines)."""
 
 from __future__ import annotations
 

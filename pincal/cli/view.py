@@ -1,6 +1,6 @@
 """`pincal view`: an offline HTML view (or a live meshcat session) of a mechanism's poses.
 
-Poses file (temporary format, until pincal.io._datafiles defines the measurement files):
+Poses file (read by :func:`pincal.io.read_actuator_rows`; a command file qualifies):
 a CSV file whose header names the actuated joints of the model (any order; other
 columns are ignored), one pose per row, values in SI units (m for prismatic, rad for
 revolute joints). Lines starting with ``#`` are comments::

@@ -15,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ConvergenceError, MeasurementError
-from pincal.model._mechanism import Mechanism
+from pincal.model import Mechanism
 
 __all__ = ["Compensation", "compensate", "poses_from_array"]
 
@@ -47,14 +47,43 @@ class Compensation:
 
 
 def poses_from_array(poses: np.ndarray) -> list[pin.SE3]:
-    """Poses from an (m, 6) array ``[x, y, z [m], rx, ry, rz [rad, rotation vector]]``."""
-    arr = np.atleast_2d(np.asarray(poses, dtype=float))
+    """Poses from an (m, 6) array ``[x, y, z [m], rx, ry, rz [rad, rotation vector]]``.
+
+    Args:
+        poses: shape (m, 6) or (6,) [m, rad].
+
+    Returns:
+        m world-frame poses.
+
+    Raises:
+        MeasurementError: wrong shape, non-numeric, NaN or infinite values.
+    """
+    try:
+        arr = np.atleast_2d(np.asarray(poses, dtype=float))
+    except (TypeError, ValueError):
+        raise MeasurementError(
+            "target poses must be numbers, an (m, 6) array [x y z rx ry rz] (m, rad)"
+        ) from None
     if arr.ndim != 2 or arr.shape[1] != 6:
         raise MeasurementError(f"target poses must be (m, 6) [x y z rx ry rz], got {arr.shape}")
     bad = np.nonzero(~np.all(np.isfinite(arr), axis=1))[0]
     if bad.size:
         raise MeasurementError(f"target pose {int(bad[0])} contains NaN or inf")
     return [pin.SE3(pin.exp3(r[3:]), r[:3].copy()) for r in arr]
+
+
+def _as_poses(targets: Sequence[pin.SE3] | np.ndarray) -> list[pin.SE3]:
+    if isinstance(targets, np.ndarray):
+        return poses_from_array(targets)
+    poses = list(targets)
+    if all(isinstance(T, pin.SE3) for T in poses):
+        return poses
+    if any(isinstance(T, pin.SE3) for T in poses):
+        raise MeasurementError(
+            "targets mix pin.SE3 poses and other values; give all as pin.SE3 or an (m, 6) "
+            "array [x y z rx ry rz] (m, rad)"
+        )
+    return poses_from_array(poses)
 
 
 def compensate(
@@ -74,8 +103,12 @@ def compensate(
 
     Returns:
         A :class:`Compensation`; unreachable targets are reported by index, not raised.
+
+    Raises:
+        MeasurementError: targets that are neither ``pin.SE3`` poses nor an (m, 6)
+            array of finite numbers.
     """
-    poses = poses_from_array(targets) if isinstance(targets, np.ndarray) else list(targets)
+    poses = _as_poses(targets)
     m, n = len(poses), calibrated.n_actuated
     q_act = np.full((m, n), np.nan)
     reasons: dict[int, str] = {}

@@ -1,5 +1,4 @@
-"""Files: measurement, pose and command CSVs, URDF + sidecar export, atomic writes.
-"""
+"""Files: measurement, pose and command CSVs, URDF + sidecar export, atomic writes."""
 
 from __future__ import annotations
 
@@ -7,21 +6,29 @@ from pincal.io._atomic import (
     atomic_write_bytes,
     atomic_write_text,
 )
-from pincal.io._datafiles import (
-    ANGLE_UNITS,
-    LENGTH_UNITS,
-    MeasurementFile,
-    TargetMeasurements,
-    check_enough_poses,
+from pincal.io._commands_file import (
     read_actuator_rows,
     read_commands,
+    write_commands,
+)
+from pincal.io._measurement_file import (
+    MeasurementFile,
+    check_enough_poses,
     read_measurement_file,
     read_measurements,
-    read_poses,
-    write_commands,
     write_measurements,
+)
+from pincal.io._poses_file import (
+    read_poses,
     write_poses,
+)
+from pincal.io._tracker_file import (
+    TargetMeasurements,
     write_target_measurements,
+)
+from pincal.io._units import (
+    ANGLE_UNITS,
+    LENGTH_UNITS,
 )
 from pincal.io._urdf_export import (
     save_urdf,

@@ -7,7 +7,7 @@ from pathlib import Path
 import yaml
 
 from pincal.io._atomic import atomic_write_text
-from pincal.model._mechanism import Mechanism
+from pincal.model import Mechanism
 
 __all__ = ["save_urdf"]
 

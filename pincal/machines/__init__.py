@@ -1,5 +1,4 @@
-"""Machine-specific closed forms kept outside the generic core (wedge, hexaslide).
-"""
+"""Machine-specific closed forms kept outside the generic core (wedge, hexaslide)."""
 
 from __future__ import annotations
 
@@ -10,21 +9,25 @@ from pincal.machines._hexaslide import (
     pus54_values,
 )
 from pincal.machines._wedge import (
-    PATENT_ERROR_NAMES,
-    PATENT_PRESET_NAMES,
     WedgeConstraintJacobians,
     WedgeGeometry,
-    WedgeSensitivity,
-    wedge_compensation,
     wedge_constraint_jacobians,
     wedge_constraints,
-    wedge_error_matrix,
     wedge_forward,
-    wedge_global_sensitivity,
     wedge_inverse,
+)
+from pincal.machines._wedge_errors import (
+    PATENT_ERROR_NAMES,
+    PATENT_PRESET_NAMES,
+    WedgeSensitivity,
+    wedge_compensation,
+    wedge_error_matrix,
+    wedge_global_sensitivity,
     wedge_patent_error_matrix,
-    wedge_urdf,
     wedge_workspace_grid,
+)
+from pincal.machines._wedge_urdf import (
+    wedge_urdf,
 )
 
 __all__ = [

@@ -21,8 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ParameterError
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
+from pincal.model import Mechanism, ParameterSet
 
 __all__ = ["LegGeometry", "leg_geometry", "legs_from_table", "pus54_values"]
 

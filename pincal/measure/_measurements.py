@@ -15,8 +15,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import MeasurementError
-from pincal.model._closures import COMPONENTS
-from pincal.model._mechanism import Mechanism
+from pincal.model import COMPONENTS, Mechanism
 
 __all__ = ["Measurements", "NoiseModel", "simulate_measurements"]
 
@@ -33,15 +32,23 @@ class NoiseModel:
     position: float = 0.0
     orientation: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("position", "orientation"):
             v = getattr(self, name)
-            if not np.isfinite(v) or v < 0:
+            try:
+                ok = bool(np.isfinite(v) and v >= 0)
+            except TypeError:
+                ok = False
+            if not ok:
                 raise MeasurementError(f"noise {name} must be a finite std ≥ 0, got {v!r}")
 
     @classmethod
     def from_spec(cls, spec: NoiseModel | Mapping[str, float] | None) -> NoiseModel | None:
-        """Accept None, a NoiseModel, or ``{"position": mm, "orientation": mrad}``."""
+        """Accept None, a NoiseModel, or ``{"position": mm, "orientation": mrad}``.
+
+        Raises:
+            MeasurementError: unknown keys, non-numeric or negative values, other types.
+        """
         if spec is None or isinstance(spec, NoiseModel):
             return spec
         if isinstance(spec, Mapping):
@@ -51,11 +58,24 @@ class NoiseModel:
                     f"noise keys {sorted(unknown)} not understood; use 'position' [mm] and "
                     "'orientation' [mrad]"
                 )
-            return cls(float(spec.get("position", 0.0)), float(spec.get("orientation", 0.0)))
+            try:
+                position = float(spec.get("position", 0.0))
+                orientation = float(spec.get("orientation", 0.0))
+            except (TypeError, ValueError):
+                raise MeasurementError(
+                    f"noise values must be numbers (position [mm], orientation [mrad]), got "
+                    f"{dict(spec)!r}"
+                ) from None
+            return cls(position, orientation)
         raise MeasurementError(f"noise must be None, a NoiseModel or a mapping, got {spec!r}")
 
     def std(self, components: tuple[str, ...]) -> np.ndarray:
-        """Per-component standard deviations (k,) in SI [m, rad]."""
+        """Per-component standard deviations (k,) in SI [m, rad].
+
+        Args:
+            components: component names (k,) from ``x y z rx ry rz``; ``x y z`` take
+                the position std, the others the orientation std.
+        """
         return np.array(
             [self.position * 1e-3 if c in "xyz" else self.orientation * 1e-3 for c in components]
         )
@@ -87,8 +107,22 @@ class Measurements:
     noise: NoiseModel | None = None
     std: np.ndarray | None = None
 
-    def __post_init__(self):
-        m = self.q_act.shape[0]
+    def __post_init__(self) -> None:
+        for name in ("q_act", "positions", "rotations", "std"):
+            value = getattr(self, name)
+            if value is None or isinstance(value, np.ndarray):
+                continue
+            try:  # sequences are accepted and stored as float arrays
+                object.__setattr__(self, name, np.asarray(value, dtype=float))
+            except (TypeError, ValueError):
+                raise MeasurementError(f"{name} must be an array of numbers") from None
+        bad_comps = [c for c in self.components if c not in COMPONENTS]
+        if bad_comps or not self.components or len(set(self.components)) != len(self.components):
+            raise MeasurementError(
+                f"components {tuple(self.components)} invalid; choose distinct names from "
+                f"{COMPONENTS}"
+            )
+        m = self.q_act.shape[0] if self.q_act.ndim else 0
         if self.q_act.ndim != 2 or self.q_act.shape[1] != len(self.actuated):
             raise MeasurementError(
                 f"q_act must be (m, {len(self.actuated)}), got {self.q_act.shape}"
@@ -114,15 +148,35 @@ class Measurements:
                 raise MeasurementError(f"{name} has NaN or inf in pose {int(bad[0])}")
 
     def __len__(self) -> int:
+        """Number of poses m."""
         return self.q_act.shape[0]
 
     @property
     def component_indices(self) -> np.ndarray:
+        """Indices (k,) of ``components`` in ``x y z rx ry rz``."""
         return np.array([COMPONENTS.index(c) for c in self.components])
 
-    def subset(self, indices) -> Measurements:
-        """Measurements of the poses at ``indices``."""
-        idx = np.asarray(indices)
+    def subset(self, indices: np.ndarray | list[int] | slice) -> Measurements:
+        """Measurements of the poses at ``indices``.
+
+        Args:
+            indices: pose indices (integers in [-m, m)), a boolean mask (m,) or a slice.
+
+        Raises:
+            MeasurementError: an index out of range or not an integer / boolean.
+        """
+        m = len(self)
+        idx = indices if isinstance(indices, slice) else np.asarray(indices)
+        if not isinstance(idx, slice):
+            if idx.dtype == bool:
+                if idx.shape != (m,):
+                    raise MeasurementError(
+                        f"a boolean mask must have shape ({m},), got {idx.shape}"
+                    )
+            elif idx.size and not np.issubdtype(idx.dtype, np.integer):
+                raise MeasurementError(f"pose indices must be integers, got {idx.dtype}")
+            elif idx.size and (idx.min() < -m or idx.max() >= m):
+                raise MeasurementError(f"pose indices must lie in [0, {m}), got {idx.tolist()}")
         return Measurements(
             self.q_act[idx],
             self.positions[idx],
@@ -147,6 +201,20 @@ def simulate_measurements(
     Position noise is added in the world frame, orientation noise as a rotation
     ``R · exp3(n)`` in the measured frame. Orientation is recorded only when a rotation
     component is measured.
+
+    Args:
+        actual: the machine measured (simulation truth).
+        q_act_rows: actuator values (m, n_act) [m, rad]; a single row (n_act,) is accepted.
+        noise: a :class:`NoiseModel`, ``{"position": mm, "orientation": mrad}`` or None.
+        rng: random generator for the noise (default: a fresh one).
+        components: measured components (default ``actual.measured_components``).
+
+    Returns:
+        The measurements (m poses) [SI].
+
+    Raises:
+        MeasurementError: bad noise specification or components.
+        ConvergenceError: the closure cannot be solved for a row (from ``actual``).
     """
     noise = NoiseModel.from_spec(noise)
     comps = tuple(components or actual.measured_components)

@@ -45,8 +45,7 @@ __all__ = [
     "rigid_fit_covariance",
 ]
 
-_log = logging.getLogger(__name__,
-)
+_log = logging.getLogger(__name__)
 
 #: Relative threshold on the second singular value of the centred target cloud
 #: below which the targets count as collinear (rotation about the line undefined).

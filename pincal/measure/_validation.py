@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from pincal.model._mechanism import Mechanism
+from pincal.model import Mechanism
 
 __all__ = ["PoseErrors", "pose_errors"]
 
@@ -42,6 +42,12 @@ def pose_errors(model: Mechanism, reference: Mechanism, q_act_rows: np.ndarray) 
         model: the mechanism whose predictions are judged (nominal or calibrated).
         reference: the "actual" machine (simulation truth).
         q_act_rows: (m, n_act) actuator commands [m, rad].
+
+    Returns:
+        Position (m,) [m] and orientation (m,) [rad] errors per command row.
+
+    Raises:
+        ConvergenceError: a row whose closure cannot be solved by either mechanism.
     """
     qs_model = model.configurations(q_act_rows)
     qs_ref = reference.configurations(q_act_rows)
