@@ -45,8 +45,17 @@ __all__ = ["load_mjcf", "mjcf_to_urdf"]
 
 log = logging.getLogger(__name__)
 
-ACTUATOR_TAGS = ("motor", "position", "velocity", "general", "intvelocity", "damper",
-                 "cylinder", "muscle", "adhesion")
+ACTUATOR_TAGS = (
+    "motor",
+    "position",
+    "velocity",
+    "general",
+    "intvelocity",
+    "damper",
+    "cylinder",
+    "muscle",
+    "adhesion",
+)
 
 
 class _Converter(MjcfTree):
@@ -75,7 +84,8 @@ class _Converter(MjcfTree):
             if e.tag not in ("connect", "weld"):
                 raise ModelFileError(
                     f"MJCF <equality><{e.tag}> is not supported (it couples joint or tendon "
-                    "values, not frames); only connect (3d) and weld (6d) closures are")
+                    "values, not frames); only connect (3d) and weld (6d) closures are"
+                )
             name = a.get("name") or f"{e.tag}{k}"
             if a.get("active", "true") == "false":
                 log.warning("MJCF import: inactive equality %r skipped", name)
@@ -92,10 +102,15 @@ class _Converter(MjcfTree):
                 else:
                     Tb = pin.SE3(np.eye(3), vec(a.get("anchor"), 3, f"weld {name!r} anchor"))
                     rel = vec(a.get("relpose", "0 1 0 0 0 0 0"), 7, f"weld {name!r} relpose")
-                    Ta = (X1.actInv(X2) * Tb if not rel[3:].any()
-                          else pin.SE3(quat_matrix(rel[3:], f"weld {name!r}"), rel[:3]))
-                pair = [self.fresh(f"{name}_1", self.used_links),
-                        self.fresh(f"{name}_2", self.used_links)]
+                    Ta = (
+                        X1.actInv(X2) * Tb
+                        if not rel[3:].any()
+                        else pin.SE3(quat_matrix(rel[3:], f"weld {name!r}"), rel[:3])
+                    )
+                pair = [
+                    self.fresh(f"{name}_1", self.used_links),
+                    self.fresh(f"{name}_2", self.used_links),
+                ]
                 self.fixed(self.body_link[b1], pair[0], Ta)
                 self.fixed(self.body_link[b2], pair[1], Tb)
             pairs.append(pair)
@@ -110,16 +125,21 @@ class _Converter(MjcfTree):
             name = a.get("name") or f"{e.tag}{k}"
             target = a.get("joint") or a.get("jointinparent")
             if e.tag not in ACTUATOR_TAGS or target is None:
-                log.warning("MJCF import: actuator %r (<%s>) has no joint transmission and is "
-                            "skipped; declare the actuated joints with load_mjcf(actuated=...)",
-                            name, e.tag)
+                log.warning(
+                    "MJCF import: actuator %r (<%s>) has no joint transmission and is "
+                    "skipped; declare the actuated joints with load_mjcf(actuated=...)",
+                    name,
+                    e.tag,
+                )
                 continue
             if target not in self.mj_joints:
                 raise UnknownNameError("MJCF joint", target, list(self.mj_joints))
             if self.mj_joints[target][0] not in ("hinge", "slide"):
-                raise ModelFileError(f"MJCF actuator {name!r} drives the "
-                                     f"{self.mj_joints[target][0]} joint {target!r}; pincal "
-                                     "actuates 1-dof (hinge/slide) joints only")
+                raise ModelFileError(
+                    f"MJCF actuator {name!r} drives the "
+                    f"{self.mj_joints[target][0]} joint {target!r}; pincal "
+                    "actuates 1-dof (hinge/slide) joints only"
+                )
             out[name] = target
         return out
 
@@ -148,9 +168,9 @@ class _Converter(MjcfTree):
         return home
 
 
-
-def mjcf_to_urdf(source: str | Path, *, name: str | None = None,
-                 keyframe: str | None = None) -> tuple[str, dict[str, Any]]:
+def mjcf_to_urdf(
+    source: str | Path, *, name: str | None = None, keyframe: str | None = None
+) -> tuple[str, dict[str, Any]]:
     """Translate MJCF into URDF text and a pincal sidecar (mapping in the module docstring).
 
     Args:
@@ -195,9 +215,14 @@ def mjcf_to_urdf(source: str | Path, *, name: str | None = None,
     return conv.urdf(), sidecar
 
 
-def load_mjcf(path: str | Path, measured_frame: str | None = None, *,
-              actuated: list[str] | None = None, keyframe: str | None = None,
-              options: SolverOptions | None = None) -> Mechanism:
+def load_mjcf(
+    path: str | Path,
+    measured_frame: str | None = None,
+    *,
+    actuated: list[str] | None = None,
+    keyframe: str | None = None,
+    options: SolverOptions | None = None,
+) -> Mechanism:
     """Load an MJCF file as a :class:`~pincal.model.Mechanism` (via :func:`mjcf_to_urdf`).
 
     A sidecar ``<stem>.yaml`` beside the file, if present, is merged over the derived
@@ -225,5 +250,6 @@ def load_mjcf(path: str | Path, measured_frame: str | None = None, *,
         sidecar |= read_sidecar(extra)
     if actuated is not None:
         sidecar["name_mot"] = list(actuated)
-    return Mechanism(urdf, sidecar, name=path.stem, source=path, measured_frame=measured_frame,
-                     options=options)
+    return Mechanism(
+        urdf, sidecar, name=path.stem, source=path, measured_frame=measured_frame, options=options
+    )

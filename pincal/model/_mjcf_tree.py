@@ -25,6 +25,7 @@ REFUSED = ("include", "replicate", "attach")
 
 
 def vec(text: str | None, n: int, where: str, default: float = 0.0) -> np.ndarray:
+    """(n,) finite numbers from an MJCF attribute (``default`` everywhere when absent)."""
     if text is None:
         return np.full(n, default)
     try:
@@ -37,6 +38,7 @@ def vec(text: str | None, n: int, where: str, default: float = 0.0) -> np.ndarra
 
 
 def unit(v: np.ndarray, where: str) -> np.ndarray:
+    """``v`` normalised; a zero vector is a :class:`ModelFileError` naming ``where``."""
     norm = float(np.linalg.norm(v))
     if norm < 1e-12:
         raise ModelFileError(f"MJCF {where}: zero-length vector {v.tolist()}")
@@ -44,6 +46,7 @@ def unit(v: np.ndarray, where: str) -> np.ndarray:
 
 
 def quat_matrix(wxyz: np.ndarray, where: str) -> np.ndarray:
+    """Rotation matrix (3, 3) of an MJCF quaternion ``w x y z`` (normalised first)."""
     w, x, y, z = unit(wxyz, where)
     return pin.Quaternion(w, x, y, z).toRotationMatrix()
 
@@ -54,17 +57,23 @@ def euler_xyz(R: np.ndarray) -> list[float]:
     return [float(np.arctan2(-R[1, 2], R[2, 2])), b, float(np.arctan2(-R[0, 1], R[0, 0]))]
 
 
-
 class MjcfTree:
-    """One pass over an MJCF tree; fills URDF links/joints and the sidecar."""
+    """The compiler settings, default classes and body tree of one MJCF document.
+
+    After :meth:`convert_tree`: ``links``/``joints`` (URDF to write with :meth:`urdf`),
+    ``body_world`` (body placements at ``qpos0``), ``site_body``, ``mj_joints`` (MuJoCo
+    joint → type and URDF joints, in ``qpos`` order), ``qpos0`` and ``leaves``.
+    """
 
     def __init__(self, root: ET.Element, name: str):
         if root.tag != "mujoco":
             raise ModelFileError(f"MJCF root element is <{root.tag}>, expected <mujoco>")
         for tag in REFUSED:
             if root.find(f".//{tag}") is not None:
-                raise ModelFileError(f"MJCF <{tag}> is not supported: expand it into one file "
-                                     "first (e.g. save the model from MuJoCo with mj_saveLastXML)")
+                raise ModelFileError(
+                    f"MJCF <{tag}> is not supported: expand it into one file "
+                    "first (e.g. save the model from MuJoCo with mj_saveLastXML)"
+                )
         self.root, self.name = root, root.get("model") or name
         self.degree, self.seq, self.autolimits = True, "xyz", True
         for c in root.findall("compiler"):
@@ -83,11 +92,14 @@ class MjcfTree:
         named = [n for n in bodies + sites if n]
         dup = sorted({n for n in named if named.count(n) > 1} | ({"world"} & set(named)))
         if dup:
-            raise ModelFileError(f"MJCF body/site names {dup} are used twice (or are 'world'); "
-                                 "URDF link names must be unique: rename them")
+            raise ModelFileError(
+                f"MJCF body/site names {dup} are used twice (or are 'world'); "
+                "URDF link names must be unique: rename them"
+            )
         self.used_links = {"world", *named}
-        self.used_joints = {j.get("name") for j in root.iter("joint") if j.get("name")}
-        self.used_joints |= {j.get("name") for j in root.iter("freejoint") if j.get("name")}
+        self.used_joints: set[str] = {
+            n for tag in ("joint", "freejoint") for j in root.iter(tag) if (n := j.get("name"))
+        }
         self.links: list[str] = ["world"]
         self.joints: list[dict[str, Any]] = []
         self.body_link: dict[str, str] = {"world": "world"}
@@ -133,9 +145,9 @@ class MjcfTree:
             v = vec(a["axisangle"], 4, f"{where} axisangle")
             R = pin.exp3(unit(v[:3], f"{where} axisangle") * self._angle(v[3]))
         elif kind == "euler":
-            for axis, value in zip(self.seq, vec(a["euler"], 3, f"{where} euler"), strict=True):
-                Ri = pin.exp3(np.eye(3)["xyz".index(axis.lower())] * self._angle(value))
-                R = R @ Ri if axis.islower() else Ri @ R
+            for letter, value in zip(self.seq, vec(a["euler"], 3, f"{where} euler"), strict=True):
+                Ri = pin.exp3(np.eye(3)["xyz".index(letter.lower())] * self._angle(value))
+                R = R @ Ri if letter.islower() else Ri @ R  # lower: moving axes; upper: fixed
         elif kind == "xyaxes":
             v = vec(a["xyaxes"], 6, f"{where} xyaxes")
             x = unit(v[:3], f"{where} xyaxes")
@@ -162,12 +174,29 @@ class MjcfTree:
         used.add(out)
         return out
 
-    def _add(self, name: str, jtype: str, parent: str, child: str, origin: pin.SE3,
-             axis: np.ndarray | None = None, limits: tuple[float, float] | None = None) -> None:
+    def _add(
+        self,
+        name: str,
+        jtype: str,
+        parent: str,
+        child: str,
+        origin: pin.SE3,
+        axis: np.ndarray | None = None,
+        limits: tuple[float, float] | None = None,
+    ) -> None:
         if child not in self.links:
             self.links.append(child)
-        self.joints.append(dict(name=name, type=jtype, parent=parent, child=child,
-                                origin=origin, axis=axis, limits=limits))
+        self.joints.append(
+            dict(
+                name=name,
+                type=jtype,
+                parent=parent,
+                child=child,
+                origin=origin,
+                axis=axis,
+                limits=limits,
+            )
+        )
 
     def fixed(self, parent: str, child: str, origin: pin.SE3) -> None:
         self._add(self.fresh(f"{child}_frame", self.used_joints), "fixed", parent, child, origin)
@@ -209,8 +238,9 @@ class MjcfTree:
             jname = a.get("name") or self.fresh(f"{name}_joint{k}", self.used_joints)
             if kind == "free":
                 if parent != "world" or len(joints) > 1:
-                    raise ModelFileError(f"MJCF free joint {jname!r}: only alone in a top-level "
-                                         "body")
+                    raise ModelFileError(
+                        f"MJCF free joint {jname!r}: only alone in a top-level body"
+                    )
                 self._add(jname, "floating", "world", name, pin.SE3.Identity())
                 q = pin.SE3ToXYZQUAT(self.body_world[name])
                 self.qpos0 += [*q[:3], q[6], *q[3:6]]  # MuJoCo order: x y z w qx qy qz
@@ -220,14 +250,20 @@ class MjcfTree:
             pos = vec(a.get("pos"), 3, f"joint {jname!r} pos")
             start = origin * pin.SE3(np.eye(3), pos - offset)
             last = k == len(joints) - 1
-            child = name if last and not pos.any() else self.fresh(f"{jname}_link",
-                                                                   self.used_links)
+            child = name if last and not pos.any() else self.fresh(f"{jname}_link", self.used_links)
             if kind == "ball":
                 names = [self.fresh(f"{jname}_{c}", self.used_joints) for c in "xyz"]
                 mids = [self.fresh(f"{jname}_link{i}", self.used_links) for i in (1, 2)]
                 for i, (jn, ch) in enumerate(zip(names, [*mids, child], strict=True)):
-                    self._add(jn, "revolute", link, ch, start if i == 0 else pin.SE3.Identity(),
-                              np.eye(3)[i], (-np.pi, np.pi))
+                    self._add(
+                        jn,
+                        "revolute",
+                        link,
+                        ch,
+                        start if i == 0 else pin.SE3.Identity(),
+                        np.eye(3)[i],
+                        (-np.pi, np.pi),
+                    )
                     link = ch
                 self.qpos0 += [1.0, 0.0, 0.0, 0.0]
                 self.mj_joints[jname] = ("ball", names)
@@ -240,25 +276,41 @@ class MjcfTree:
                     lo, hi = (scale(v) for v in vec(a.get("range"), 2, f"joint {jname!r} range"))
                 else:
                     lo, hi = (-np.pi, np.pi) if kind == "hinge" else (-1.0, 1.0)
-                    log.info("MJCF import: joint %r has no range; URDF limits [%g, %g]",
-                             jname, lo, hi)
-                shift = pin.exp6(pin.Motion(*((-ref * axis, np.zeros(3)) if kind == "slide"
-                                              else (np.zeros(3), -ref * axis))))
-                self._add(jname, "revolute" if kind == "hinge" else "prismatic", link, child,
-                          start * shift, axis, (lo, hi))
+                    log.info(
+                        "MJCF import: joint %r has no range; URDF limits [%g, %g]", jname, lo, hi
+                    )
+                shift = pin.exp6(
+                    pin.Motion(
+                        *(
+                            (-ref * axis, np.zeros(3))
+                            if kind == "slide"
+                            else (np.zeros(3), -ref * axis)
+                        )
+                    )
+                )
+                self._add(
+                    jname,
+                    "revolute" if kind == "hinge" else "prismatic",
+                    link,
+                    child,
+                    start * shift,
+                    axis,
+                    (lo, hi),
+                )
                 self.qpos0.append(ref)
                 self.mj_joints[jname] = (kind, [jname])
                 link = child
             else:
-                raise ModelFileError(f"MJCF joint {jname!r} has unknown type {kind!r}; valid: "
-                                     "hinge, slide, ball, free")
+                raise ModelFileError(
+                    f"MJCF joint {jname!r} has unknown type {kind!r}; valid: "
+                    "hinge, slide, ball, free"
+                )
             origin, offset = pin.SE3.Identity(), pos
         if origin is not None and (not joints or offset.any()):
             self.fixed(link, name, origin * pin.SE3(np.eye(3), -offset))
         if elem.find("body") is None and elem.find("frame/body") is None:
             self.leaves.append(name)
         self._children(elem, name, pin.SE3.Identity(), cls)
-
 
     def urdf(self) -> str:
         robot = ET.Element("robot", name=self.name)
@@ -269,13 +321,22 @@ class MjcfTree:
             ET.SubElement(e, "parent", link=j["parent"])
             ET.SubElement(e, "child", link=j["child"])
             M = j["origin"]
-            ET.SubElement(e, "origin", xyz=" ".join(repr(float(v)) for v in M.translation),
-                          rpy=" ".join(repr(float(v)) for v in pin.rpy.matrixToRpy(M.rotation)))
+            ET.SubElement(
+                e,
+                "origin",
+                xyz=" ".join(repr(float(v)) for v in M.translation),
+                rpy=" ".join(repr(float(v)) for v in pin.rpy.matrixToRpy(M.rotation)),
+            )
             if j["axis"] is not None:
                 ET.SubElement(e, "axis", xyz=" ".join(repr(float(v)) for v in j["axis"]))
                 lo, hi = j["limits"]
-                ET.SubElement(e, "limit", lower=repr(float(lo)), upper=repr(float(hi)),
-                              effort="0", velocity="0")
+                ET.SubElement(
+                    e,
+                    "limit",
+                    lower=repr(float(lo)),
+                    upper=repr(float(hi)),
+                    effort="0",
+                    velocity="0",
+                )
         ET.indent(robot)
         return ET.tostring(robot, encoding="unicode") + "\n"
-

@@ -52,13 +52,19 @@ MACHINES = ("fourbar", "delta", "fivebar")
 # parameters whose effect stays in the plane of a planar machine (out-of-plane errors
 # would open its loops), or any for the spatial Delta
 CANDIDATES = {
-    "fourbar": [{"joints": "*", "dofs": ["tx", "ty", "rz"]},
-                {"joints": "crank_joint", "dofs": ["offset"]}],
-    "delta": [{"joints": "arm?_hinge", "dofs": ["tx", "ty", "tz", "rx", "ry", "rz", "offset"]},
-              {"joints": "arm?_rod?_tip_?_frame", "dofs": ["tx", "ty", "tz"]},
-              {"joints": "tcp_frame", "dofs": ["tx", "ty", "tz"]}],
-    "fivebar": [{"joints": "*", "dofs": ["tx", "ty", "rz"]},
-                {"joints": "*_motor", "dofs": ["offset"]}],
+    "fourbar": [
+        {"joints": "*", "dofs": ["tx", "ty", "rz"]},
+        {"joints": "crank_joint", "dofs": ["offset"]},
+    ],
+    "delta": [
+        {"joints": "arm?_hinge", "dofs": ["tx", "ty", "tz", "rx", "ry", "rz", "offset"]},
+        {"joints": "arm?_rod?_tip_?_frame", "dofs": ["tx", "ty", "tz"]},
+        {"joints": "tcp_frame", "dofs": ["tx", "ty", "tz"]},
+    ],
+    "fivebar": [
+        {"joints": "*", "dofs": ["tx", "ty", "rz"]},
+        {"joints": "*_motor", "dofs": ["offset"]},
+    ],
 }
 
 
@@ -66,7 +72,8 @@ def test_structure_and_names(fourbar, delta, fivebar):
     """MJCF names survive: bodies and sites as links, joints, equalities, actuators."""
     assert fourbar.actuated == ("crank_joint",)
     assert [(c.frame_a, c.frame_b, c.label) for c in fourbar.closures] == [
-        ("pin_C_1", "pin_C_2", "3d")]
+        ("pin_C_1", "pin_C_2", "3d")
+    ]
     assert fourbar.sidecar["mjcf_equality"] == ["pin_C"]
     assert fourbar.sidecar["mjcf_actuators"] == {"crank_motor": "crank_joint"}
     assert {"ground", "crank", "coupler", "rocker", "tool"} <= set(fourbar.tree.links)
@@ -83,7 +90,10 @@ def test_structure_and_names(fourbar, delta, fivebar):
     # two actuators on one joint declare it once; actuator names are kept
     assert fivebar.actuated == ("left_motor", "right_motor")
     assert fivebar.sidecar["mjcf_actuators"] == {
-        "motor0": "left_motor", "position1": "right_motor", "velocity2": "right_motor"}
+        "motor0": "left_motor",
+        "position1": "right_motor",
+        "velocity2": "right_motor",
+    }
 
 
 @pytest.mark.parametrize("name", MACHINES)
@@ -96,8 +106,9 @@ def test_file_pose_is_qpos0(fourbar, delta):
     """Joint values equal MuJoCo qpos: ref is folded into the origins, loops close at qpos0."""
     q0 = fourbar.with_actuators(fourbar.q_home, [np.pi / 2])  # crank ref = 90 deg
     assert fourbar.sidecar["home"]["crank_joint"] == pytest.approx(np.pi / 2)
-    assert np.allclose(fourbar.frame_placement(q0, "tool").translation, [0.15, 0.15, 0.1],
-                       atol=1e-15)
+    assert np.allclose(
+        fourbar.frame_placement(q0, "tool").translation, [0.15, 0.15, 0.1], atol=1e-15
+    )
     assert np.allclose(fourbar.configuration([np.pi / 2]), fourbar.q_home, atol=1e-12)
     assert delta.sidecar["home"]["arm1_hinge"] == pytest.approx(np.radians(30))
 
@@ -193,21 +204,25 @@ def test_zoo_matches_pinocchio_mjcf_parser():
     ``pin.buildModelAndConstraintsFromMJCF`` on a tree with one top-level body."""
     from pincal.model._mjcf_tree import euler_xyz
 
-    urdf, sidecar = mjcf_to_urdf(HERE / "zoo.xml")
+    urdf, _ = mjcf_to_urdf(HERE / "zoo.xml")
     mine = pin.buildModelFromXML(urdf)
     ref, points, frames = pin.buildModelAndConstraintsFromMJCF(str(HERE / "zoo.xml"))
+    assert len(points) == len(frames) == 0
     assert mine.nv == ref.nv and mine.nq == ref.nq - 1  # the ball: 3 revolutes vs a quaternion
     checked = [f.name for f in ref.frames if f.type in (pin.BODY, pin.OP_FRAME)]
     assert {"base", "wrist", "s_tip", "s_side"} <= set(checked)
     rng = np.random.default_rng(0)
     dm, dr = mine.createData(), ref.createData()
     for _ in range(5):
-        values = {n: rng.uniform(-0.6, 0.6) for n in ("j_base", "j_upper", "j_slide", "j_tilt",
-                                                      "j_side")}
+        values = {
+            n: rng.uniform(-0.6, 0.6) for n in ("j_base", "j_upper", "j_slide", "j_tilt", "j_side")
+        }
         R = pin.exp3(rng.normal(0, 0.5, 3))
         qm = pin.neutral(mine)
-        for n, v in {**values, **dict(zip(("j_ball_x", "j_ball_y", "j_ball_z"), euler_xyz(R),
-                                          strict=True))}.items():
+        for n, v in {
+            **values,
+            **dict(zip(("j_ball_x", "j_ball_y", "j_ball_z"), euler_xyz(R), strict=True)),
+        }.items():
             qm[mine.idx_qs[mine.getJointId(n)]] = v
         pin.framesForwardKinematics(mine, dm, qm)
         pin.framesForwardKinematics(ref, dr, _pin_q(ref, values, {"j_ball": R}))
@@ -236,14 +251,18 @@ def test_fourbar_matches_pinocchio_relative_to_its_top_body(fourbar):
             assert np.max(np.abs(a.homogeneous - b.homogeneous)) <= 1e-12, name
 
 
-ROT = {"x": lambda t: pin.exp3(np.array([t, 0, 0])), "y": lambda t: pin.exp3(np.array([0, t, 0])),
-       "z": lambda t: pin.exp3(np.array([0, 0, t]))}
+ROT = {
+    "x": lambda t: pin.exp3(np.array([t, 0, 0])),
+    "y": lambda t: pin.exp3(np.array([0, t, 0])),
+    "z": lambda t: pin.exp3(np.array([0, 0, t])),
+}
 
 
 def _one_body(attrs: str, compiler: str = "", extra: str = "") -> tuple[str, dict]:
     return mjcf_to_urdf(
         f'<mujoco><compiler {compiler}/><worldbody><body name="b" {attrs}>'
-        f'<joint name="j"/>{extra}</body></worldbody></mujoco>')
+        f'<joint name="j"/>{extra}</body></worldbody></mujoco>'
+    )
 
 
 def _origin(urdf: str, joint: str) -> pin.SE3:
@@ -266,7 +285,8 @@ def test_orientation_conventions_where_pinocchio_differs():
     assert np.allclose(_origin(urdf, "j").rotation, ROT["x"](np.pi), atol=1e-15)
     urdf, _ = mjcf_to_urdf(
         '<mujoco><default><site pos="0 0 0.01"/></default><worldbody><body name="b">'
-        '<site name="s"/><site name="t" pos="1 0 0"/></body></worldbody></mujoco>')
+        '<site name="s"/><site name="t" pos="1 0 0"/></body></worldbody></mujoco>'
+    )
     assert np.allclose(_origin(urdf, "s_frame").translation, [0, 0, 0.01])
     assert np.allclose(_origin(urdf, "t_frame").translation, [1, 0, 0])
 
@@ -274,11 +294,13 @@ def test_orientation_conventions_where_pinocchio_differs():
 def test_multi_joint_ref_at_qpos0():
     """ref inside a multi-joint body (Pinocchio's parser ignores it): bodies sit at their
     file pose at qpos0."""
-    text = ('<mujoco><worldbody><body name="a"><joint name="ja"/><body name="c" pos="0.3 0 0">'
-            '<joint name="j1" type="slide" axis="0 0 1" ref="0.05"/><joint name="j2" '
-            'pos="0.01 0.02 0" ref="20"/><site name="s" pos="0.1 0 0"/></body></body>'
-            '</worldbody><actuator><motor joint="j1"/><motor joint="j2"/><motor joint="ja"/>'
-            '</actuator></mujoco>')
+    text = (
+        '<mujoco><worldbody><body name="a"><joint name="ja"/><body name="c" pos="0.3 0 0">'
+        '<joint name="j1" type="slide" axis="0 0 1" ref="0.05"/><joint name="j2" '
+        'pos="0.01 0.02 0" ref="20"/><site name="s" pos="0.1 0 0"/></body></body>'
+        '</worldbody><actuator><motor joint="j1"/><motor joint="j2"/><motor joint="ja"/>'
+        "</actuator></mujoco>"
+    )
     urdf, sidecar = mjcf_to_urdf(text)
     mech = Mechanism(urdf, sidecar, measured_frame="s")
     assert sidecar["home"] == pytest.approx({"ja": 0.0, "j1": 0.05, "j2": np.radians(20)})
@@ -289,13 +311,16 @@ def test_multi_joint_ref_at_qpos0():
 
 def test_weld_relpose_and_sites():
     """weld with an explicit relpose, and connect/weld between sites."""
-    body = ('<body name="a"><joint name="ja" axis="0 0 1"/><site name="sa" pos="1 0 0"/>'
-            '<body name="b" pos="1 0 0"><joint name="jb" axis="0 0 1"/>'
-            '<site name="sb" pos="0 0 0"/></body></body>')
+    body = (
+        '<body name="a"><joint name="ja" axis="0 0 1"/><site name="sa" pos="1 0 0"/>'
+        '<body name="b" pos="1 0 0"><joint name="jb" axis="0 0 1"/>'
+        '<site name="sb" pos="0 0 0"/></body></body>'
+    )
     urdf, sc = mjcf_to_urdf(
-        f'<mujoco><worldbody>{body}</worldbody><equality>'
+        f"<mujoco><worldbody>{body}</worldbody><equality>"
         '<weld name="w" body1="a" body2="b" relpose="0.5 0 0 0 0 0 1" anchor="0.1 0 0"/>'
-        '<connect site1="sa" site2="sb"/></equality></mujoco>')
+        '<connect site1="sa" site2="sb"/></equality></mujoco>'
+    )
     assert sc["closed_loop"] == [["w_1", "w_2"], ["sa", "sb"]] and sc["type"] == ["6d", "3d"]
     assert sc["mjcf_equality"] == ["w", "connect1"]
     T = _origin(urdf, "w_1_frame")
@@ -304,11 +329,13 @@ def test_weld_relpose_and_sites():
 
 
 def test_free_joint_and_keyframe_home():
-    text = ('<mujoco><worldbody><body name="p" pos="1 2 3" quat="0 1 0 0"><freejoint name="f"/>'
-            '<body name="r"><joint name="jb" type="ball"/></body></body></worldbody><keyframe>'
-            '<key name="other" qpos="0 0 0 1 0 0 0 1 0 0 0"/>'
-            '<key name="home" qpos="4 5 6 1 0 0 0 0.9 0.1 0.2 0.3"/></keyframe></mujoco>')
-    urdf, sc = mjcf_to_urdf(text)
+    text = (
+        '<mujoco><worldbody><body name="p" pos="1 2 3" quat="0 1 0 0"><freejoint name="f"/>'
+        '<body name="r"><joint name="jb" type="ball"/></body></body></worldbody><keyframe>'
+        '<key name="other" qpos="0 0 0 1 0 0 0 1 0 0 0"/>'
+        '<key name="home" qpos="4 5 6 1 0 0 0 0.9 0.1 0.2 0.3"/></keyframe></mujoco>'
+    )
+    _, sc = mjcf_to_urdf(text)
     assert sc["home"]["f"] == [4.0, 5.0, 6.0, 0.0, 0.0, 0.0, 1.0]
     R = pin.Quaternion(*(np.array([0.9, 0.1, 0.2, 0.3]) / np.linalg.norm([0.9, 0.1, 0.2, 0.3])))
     a, b, c = (sc["home"][f"jb_{k}"] for k in "xyz")
@@ -324,24 +351,40 @@ def test_free_joint_and_keyframe_home():
 @pytest.mark.parametrize(
     ("snippet", "error", "match"),
     [
-        ('<equality><joint joint1="ja" joint2="jb"/></equality>', ModelFileError,
-         r"<equality><joint> is not supported"),
-        ('<equality><tendon tendon1="t"/></equality>', ModelFileError,
-         r"<equality><tendon> is not supported"),
-        ('<equality><connect body1="a" body2="nope" anchor="0 0 0"/></equality>',
-         UnknownNameError, "MJCF body 'nope' not found"),
-        ('<equality><connect site1="nope" site2="sa"/></equality>', UnknownNameError,
-         "MJCF site 'nope' not found"),
+        (
+            '<equality><joint joint1="ja" joint2="jb"/></equality>',
+            ModelFileError,
+            r"<equality><joint> is not supported",
+        ),
+        (
+            '<equality><tendon tendon1="t"/></equality>',
+            ModelFileError,
+            r"<equality><tendon> is not supported",
+        ),
+        (
+            '<equality><connect body1="a" body2="nope" anchor="0 0 0"/></equality>',
+            UnknownNameError,
+            "MJCF body 'nope' not found",
+        ),
+        (
+            '<equality><connect site1="nope" site2="sa"/></equality>',
+            UnknownNameError,
+            "MJCF site 'nope' not found",
+        ),
         ('<include file="other.xml"/>', ModelFileError, "<include> is not supported"),
-        ('<actuator><motor joint="nope"/></actuator>', UnknownNameError,
-         "MJCF joint 'nope' not found"),
-        ('<actuator><motor joint="jf"/></actuator>', ModelFileError,
-         "drives the ball joint 'jf'"),
+        (
+            '<actuator><motor joint="nope"/></actuator>',
+            UnknownNameError,
+            "MJCF joint 'nope' not found",
+        ),
+        ('<actuator><motor joint="jf"/></actuator>', ModelFileError, "drives the ball joint 'jf'"),
     ],
 )
 def test_unsupported_or_wrong_input_is_refused(snippet, error, match):
-    body = ('<worldbody><body name="a"><joint name="ja"/><site name="sa"/><body name="b">'
-            '<joint name="jb"/><joint name="jf" type="ball"/></body></body></worldbody>')
+    body = (
+        '<worldbody><body name="a"><joint name="ja"/><site name="sa"/><body name="b">'
+        '<joint name="jb"/><joint name="jf" type="ball"/></body></body></worldbody>'
+    )
     with pytest.raises(error, match=match):
         mjcf_to_urdf(f"<mujoco>{body}{snippet}</mujoco>")
 
@@ -351,16 +394,27 @@ def test_unsupported_or_wrong_input_is_refused(snippet, error, match):
     [
         ("<robot/>", "root element is <robot>"),
         ("<mujoco><worldbody/></mujoco>", "no <worldbody> with a <body>"),
-        ('<mujoco><worldbody><body name="a" pos="1 2"/></worldbody></mujoco>',
-         "body 'a' pos: expected 3 finite numbers"),
-        ('<mujoco><worldbody><body name="a" euler="1 2 3" quat="1 0 0 0"/></worldbody>'
-         "</mujoco>", "give one orientation"),
-        ('<mujoco><worldbody><body name="a"><joint type="screw"/></body></worldbody></mujoco>',
-         "unknown type 'screw'"),
-        ('<mujoco><worldbody><body name="a"><site name="a"/></body></worldbody></mujoco>',
-         r"names \['a'\] are used twice"),
-        ('<mujoco><worldbody><body name="a"><body name="b"><freejoint/></body></body>'
-         "</worldbody></mujoco>", "only alone in a top-level body"),
+        (
+            '<mujoco><worldbody><body name="a" pos="1 2"/></worldbody></mujoco>',
+            "body 'a' pos: expected 3 finite numbers",
+        ),
+        (
+            '<mujoco><worldbody><body name="a" euler="1 2 3" quat="1 0 0 0"/></worldbody></mujoco>',
+            "give one orientation",
+        ),
+        (
+            '<mujoco><worldbody><body name="a"><joint type="screw"/></body></worldbody></mujoco>',
+            "unknown type 'screw'",
+        ),
+        (
+            '<mujoco><worldbody><body name="a"><site name="a"/></body></worldbody></mujoco>',
+            r"names \['a'\] are used twice",
+        ),
+        (
+            '<mujoco><worldbody><body name="a"><body name="b"><freejoint/></body></body>'
+            "</worldbody></mujoco>",
+            "only alone in a top-level body",
+        ),
         ("<mujoco><worldbody><body", "not well-formed XML"),
     ],
 )
@@ -370,9 +424,11 @@ def test_malformed_mjcf(text, match):
 
 
 def test_non_joint_actuator_is_skipped_with_warning(caplog):
-    text = ('<mujoco><worldbody><body name="a"><joint name="ja"/><site name="s"/></body>'
-            '</worldbody><actuator><motor name="m" site="s"/><motor joint="ja"/></actuator>'
-            "</mujoco>")
+    text = (
+        '<mujoco><worldbody><body name="a"><joint name="ja"/><site name="s"/></body>'
+        '</worldbody><actuator><motor name="m" site="s"/><motor joint="ja"/></actuator>'
+        "</mujoco>"
+    )
     with caplog.at_level(logging.WARNING, logger="pincal.model._mjcf"):
         _, sc = mjcf_to_urdf(text)
     assert sc["name_mot"] == ["ja"] and "actuator 'm'" in caplog.text
@@ -381,11 +437,13 @@ def test_non_joint_actuator_is_skipped_with_warning(caplog):
 def test_load_mjcf_errors_and_overrides(tmp_path):
     with pytest.raises(ModelFileError, match="cannot read MJCF file"):
         load_mjcf(tmp_path / "missing.xml")
-    mech = load_mjcf(HERE / "fivebar.xml", actuated=["left_motor", "right_motor"],
-                     keyframe="home")
+    mech = load_mjcf(HERE / "fivebar.xml", actuated=["left_motor", "right_motor"], keyframe="home")
     assert mech.actuated == ("left_motor", "right_motor") and mech.measured_frame == "pen"
     assert mjcf_to_urdf(HERE / "fivebar.xml")[1]["measured_frame"] == "right_distal"  # last leaf
     out = pincal.save_urdf(mech, tmp_path / "fivebar.urdf")
     again = load_mechanism(out)
-    assert np.allclose(again.forward(np.array([2.0, 1.1])).homogeneous,
-                       mech.forward(np.array([2.0, 1.1])).homogeneous, atol=1e-12)
+    assert np.allclose(
+        again.forward(np.array([2.0, 1.1])).homogeneous,
+        mech.forward(np.array([2.0, 1.1])).homogeneous,
+        atol=1e-12,
+    )

@@ -48,19 +48,24 @@ def main() -> None:
                 f'        <geom type="capsule" fromto="0 0 0 0 0 {LB}" size="0.004"/>\n'
                 f"      </body>\n"
             )
-            eqs.append(f'    <connect name="{rod}_tip" body1="{rod}" body2="platform" '
-                       f'anchor="0 0 {LB}"/>\n')
+            eqs.append(
+                f'    <connect name="{rod}_tip" body1="{rod}" body2="platform" '
+                f'anchor="0 0 {LB}"/>\n'
+            )
         arms.append(
             f'    <body name="arm{i + 1}" pos="{fmt(base)}" euler="{120 * i} {THETA} 0">\n'
             f'      <joint name="arm{i + 1}_hinge" axis="0 1 0" ref="{THETA}" range="-10 70"/>\n'
-            + "".join(rods) + "    </body>\n"
+            + "".join(rods)
+            + "    </body>\n"
         )
         acts.append(f'    <motor name="motor{i + 1}" joint="arm{i + 1}_hinge" gear="50"/>\n')
     xml = (
         "<!-- Delta robot for pincal's MJCF import tests; written by make_delta.py. -->\n"
         '<mujoco model="delta">\n  <compiler angle="degree" eulerseq="zyx"/>\n'
-        "  <worldbody>\n" + "".join(arms)
-        + f'    <body name="platform" pos="0 0 {-h:.15g}">\n      <freejoint name="platform_free"/>\n'
+        "  <worldbody>\n"
+        + "".join(arms)
+        + f'    <body name="platform" pos="0 0 {-h:.15g}">\n'
+        + '      <freejoint name="platform_free"/>\n'
         '      <site name="tcp" pos="0 0 -0.02"/>\n    </body>\n  </worldbody>\n'
         "  <equality>\n" + "".join(eqs) + "  </equality>\n"
         "  <actuator>\n" + "".join(acts) + "  </actuator>\n</mujoco>\n"
