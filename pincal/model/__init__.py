@@ -35,6 +35,7 @@ from pincal.model._mechanism import (
     resolve_model_path,
     validate_sidecar,
 )
+from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
 from pincal.model._parameters import (
     DOFS,
     Parameter,
@@ -96,7 +97,9 @@ __all__ = [
     "example_robot_urdf",
     "full_parameters",
     "load_mechanism",
+    "load_mjcf",
     "lock_joints",
+    "mjcf_to_urdf",
     "parameters",
     "parameters_to_dh_errors",
     "parse_components",

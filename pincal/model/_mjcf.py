@@ -1,0 +1,255 @@
+"""MJCF (MuJoCo XML) import: converted to URDF text + sidecar, then a :class:`Mechanism`.
+
+pincal's parameters displace URDF joint origins and export writes URDF, so an MJCF file
+is translated once into the URDF route (models/README.md, section "MJCF"):
+
+* every ``<body>`` (any number under ``<worldbody>``, nested ``<frame>`` s honoured)
+  becomes a URDF link of the same name placed at the MuJoCo body frame; a body without
+  joints hangs on a ``fixed`` joint ``<body>_frame``;
+* ``hinge``/``slide`` joints become ``revolute``/``prismatic`` joints of the same name
+  with URDF value = MuJoCo ``qpos`` (``ref`` and off-body ``pos`` are folded into the
+  origins; an off-origin joint gets an extra link ``<joint>_link``); ``ball`` becomes
+  three revolutes ``<joint>_x``, ``_y``, ``_z`` about the body axes at the joint centre
+  (URDF has no spherical joint; a 3d closure would lose the body's rotation); ``free``
+  becomes a ``floating`` joint;
+* named ``<site>`` s become fixed child links; ``<equality><connect>`` becomes a ``3d``
+  closure between the links ``<eq>_1`` (anchor on body1) and ``<eq>_2`` (the same point
+  in body2 at ``qpos0``), or between the two sites; ``<weld>`` becomes a ``6d`` closure
+  (``relpose``, else the ``qpos0`` relative pose); equality names are kept in the
+  sidecar key ``mjcf_equality``;
+* actuators with ``joint=`` give ``name_mot`` (names in ``mjcf_actuators``); the
+  ``home`` guess is the keyframe ``home`` (else the first keyframe, else ``qpos0``).
+
+Joint/tendon/flex equalities and ``<include>`` are refused (:class:`ModelFileError`);
+actuators on tendons, sites or bodies are skipped with a logged warning. Geometry,
+inertia, tendons, sensors and contacts do not affect kinematics and are ignored.
+"""
+
+from __future__ import annotations
+
+import logging
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.errors import ModelFileError, UnknownNameError
+from pincal.model._mjcf_tree import MjcfTree, euler_xyz, quat_matrix, unit, vec
+
+if TYPE_CHECKING:
+    from pincal.model import Mechanism, SolverOptions
+
+__all__ = ["load_mjcf", "mjcf_to_urdf"]
+
+log = logging.getLogger(__name__)
+
+ACTUATOR_TAGS = (
+    "motor",
+    "position",
+    "velocity",
+    "general",
+    "intvelocity",
+    "damper",
+    "cylinder",
+    "muscle",
+    "adhesion",
+)
+
+
+class _Converter(MjcfTree):
+    """The tree plus MJCF's equality, actuator and keyframe sections."""
+
+    def _section(self, tag: str) -> list[ET.Element]:
+        return [e for section in self.root.findall(tag) for e in section]
+
+    def _body_of(self, name: str | None) -> str:
+        name = name or "world"
+        if name not in self.body_link:
+            raise UnknownNameError("MJCF body", name, list(self.body_link))
+        return name
+
+    def _site(self, name: str) -> str:
+        if name not in self.site_body:
+            raise UnknownNameError("MJCF site", name, list(self.site_body))
+        return name
+
+    def closures(self) -> tuple[list[list[str]], list[str], list[str]]:
+        pairs: list[list[str]] = []
+        kinds: list[str] = []
+        names: list[str] = []
+        for k, e in enumerate(self._section("equality")):
+            a = self.attrs(e, "main", "equality")
+            if e.tag not in ("connect", "weld"):
+                raise ModelFileError(
+                    f"MJCF <equality><{e.tag}> is not supported (it couples joint or tendon "
+                    "values, not frames); only connect (3d) and weld (6d) closures are"
+                )
+            name = a.get("name") or f"{e.tag}{k}"
+            if a.get("active", "true") == "false":
+                log.warning("MJCF import: inactive equality %r skipped", name)
+                continue
+            if "site1" in a or "site2" in a:
+                pair = [self._site(a.get("site1", "")), self._site(a.get("site2", ""))]
+            else:
+                b1, b2 = self._body_of(a.get("body1")), self._body_of(a.get("body2"))
+                X1, X2 = self.body_world[b1], self.body_world[b2]
+                if e.tag == "connect":
+                    anchor = vec(a.get("anchor"), 3, f"connect {name!r} anchor")
+                    Ta = pin.SE3(np.eye(3), anchor)
+                    Tb = pin.SE3(np.eye(3), X2.actInv(X1.act(anchor)))
+                else:
+                    Tb = pin.SE3(np.eye(3), vec(a.get("anchor"), 3, f"weld {name!r} anchor"))
+                    rel = vec(a.get("relpose", "0 1 0 0 0 0 0"), 7, f"weld {name!r} relpose")
+                    Ta = (
+                        X1.actInv(X2) * Tb
+                        if not rel[3:].any()
+                        else pin.SE3(quat_matrix(rel[3:], f"weld {name!r}"), rel[:3])
+                    )
+                pair = [
+                    self.fresh(f"{name}_1", self.used_links),
+                    self.fresh(f"{name}_2", self.used_links),
+                ]
+                self.fixed(self.body_link[b1], pair[0], Ta)
+                self.fixed(self.body_link[b2], pair[1], Tb)
+            pairs.append(pair)
+            kinds.append("3d" if e.tag == "connect" else "6d")
+            names.append(name)
+        return pairs, kinds, names
+
+    def actuators(self) -> dict[str, str]:
+        out: dict[str, str] = {}
+        for k, e in enumerate(self._section("actuator")):
+            a = self.attrs(e, "main")
+            name = a.get("name") or f"{e.tag}{k}"
+            target = a.get("joint") or a.get("jointinparent")
+            if e.tag not in ACTUATOR_TAGS or target is None:
+                log.warning(
+                    "MJCF import: actuator %r (<%s>) has no joint transmission and is "
+                    "skipped; declare the actuated joints with load_mjcf(actuated=...)",
+                    name,
+                    e.tag,
+                )
+                continue
+            if target not in self.mj_joints:
+                raise UnknownNameError("MJCF joint", target, list(self.mj_joints))
+            if self.mj_joints[target][0] not in ("hinge", "slide"):
+                raise ModelFileError(
+                    f"MJCF actuator {name!r} drives the "
+                    f"{self.mj_joints[target][0]} joint {target!r}; pincal "
+                    "actuates 1-dof (hinge/slide) joints only"
+                )
+            out[name] = target
+        return out
+
+    def home(self, keyframe: str | None) -> dict[str, Any]:
+        keys = self.root.findall("keyframe/key")
+        named = [k for k in keys if k.get("name") == (keyframe or "home")]
+        if keyframe is not None and not named:
+            raise UnknownNameError("MJCF keyframe", keyframe, [k.get("name", "") for k in keys])
+        key = named[0] if named else (keys[0] if keys else None)
+        qpos = np.array(self.qpos0)
+        if key is not None and key.get("qpos") is not None:
+            qpos = vec(key.get("qpos"), qpos.size, f"keyframe {key.get('name', '')!r} qpos")
+        home: dict[str, Any] = {}
+        i = 0
+        for jname, (kind, urdf) in self.mj_joints.items():
+            if kind in ("hinge", "slide"):
+                home[jname], i = float(qpos[i]), i + 1
+            elif kind == "ball":
+                angles = euler_xyz(quat_matrix(qpos[i : i + 4], f"ball {jname!r} qpos"))
+                home.update(zip(urdf, angles, strict=True))
+                i += 4
+            else:
+                w = qpos[i + 3 : i + 7]
+                q = pin.Quaternion(*unit(w, f"free {jname!r} qpos")).coeffs()  # x y z w
+                home[jname], i = [*map(float, qpos[i : i + 3]), *map(float, q)], i + 7
+        return home
+
+
+def mjcf_to_urdf(
+    source: str | Path, *, name: str | None = None, keyframe: str | None = None
+) -> tuple[str, dict[str, Any]]:
+    """Translate MJCF into URDF text and a pincal sidecar (mapping in the module docstring).
+
+    Args:
+        source: an MJCF file path, or MJCF text (a string starting with ``<``).
+        name: robot name when ``<mujoco model=...>`` is absent (default: file stem).
+        keyframe: keyframe whose ``qpos`` is the home guess (default: ``home``, else the
+            first keyframe, else ``qpos0``).
+
+    Returns:
+        ``(urdf_xml, sidecar)``; the sidecar has ``closed_loop``, ``type``, ``name_mot``
+        (when actuators drive joints), ``home`` [m, rad], ``measured_frame`` (the last
+        leaf body), ``mjcf_equality`` and ``mjcf_actuators``.
+
+    Raises:
+        ModelFileError: unreadable or unsupported MJCF. UnknownNameError: a reference to a
+        body, site, joint, class or keyframe that does not exist.
+    """
+    text = str(source)
+    if not (isinstance(source, str) and text.lstrip().startswith("<")):
+        path = Path(source)
+        name = name or path.stem
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise ModelFileError(f"cannot read MJCF file {str(path)!r}: {exc.strerror}") from exc
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise ModelFileError(f"MJCF is not well-formed XML: {exc}") from exc
+    conv = _Converter(root, name or "mjcf")
+    conv.convert_tree()
+    pairs, kinds, eq_names = conv.closures()
+    actuators = conv.actuators()
+    sidecar: dict[str, Any] = {}
+    if pairs:
+        sidecar |= {"closed_loop": pairs, "type": kinds}
+    if actuators:
+        sidecar["name_mot"] = list(dict.fromkeys(actuators.values()))
+    sidecar["home"] = conv.home(keyframe)
+    sidecar["measured_frame"] = conv.leaves[-1]
+    sidecar |= {"mjcf_equality": eq_names, "mjcf_actuators": actuators}
+    return conv.urdf(), sidecar
+
+
+def load_mjcf(
+    path: str | Path,
+    measured_frame: str | None = None,
+    *,
+    actuated: list[str] | None = None,
+    keyframe: str | None = None,
+    options: SolverOptions | None = None,
+) -> Mechanism:
+    """Load an MJCF file as a :class:`~pincal.model.Mechanism` (via :func:`mjcf_to_urdf`).
+
+    A sidecar ``<stem>.yaml`` beside the file, if present, is merged over the derived
+    keys (to add presets, a workspace, ``measured``, or to override them).
+
+    Args:
+        path: the ``.xml`` file.
+        measured_frame: link to measure (default: sidecar, else the last leaf body).
+        actuated: actuated joint names, overriding the MJCF actuators.
+        keyframe: keyframe giving the home guess (see :func:`mjcf_to_urdf`).
+        options: :class:`~pincal.model.SolverOptions`.
+
+    Returns:
+        The Mechanism; ``urdf_xml`` is the converted URDF, so export writes URDF.
+
+    Raises:
+        ModelFileError, UnknownNameError, ClosureError, MobilityError.
+    """
+    from pincal.model import Mechanism, read_sidecar
+
+    path = Path(path)
+    urdf, sidecar = mjcf_to_urdf(path, keyframe=keyframe)
+    extra = path.with_suffix(".yaml")
+    if extra.is_file():
+        sidecar |= read_sidecar(extra)
+    if actuated is not None:
+        sidecar["name_mot"] = list(actuated)
+    return Mechanism(
+        urdf, sidecar, name=path.stem, source=path, measured_frame=measured_frame, options=options
+    )
