@@ -28,12 +28,10 @@ from pincal.model._dh import (
 from pincal.model._mechanism import (
     Mechanism,
     SolverOptions,
-    Workspace,
     bundled_models,
     load_mechanism,
     read_sidecar,
     resolve_model_path,
-    validate_sidecar,
 )
 from pincal.model._parameters import (
     DOFS,
@@ -53,6 +51,12 @@ from pincal.model._serial import (
     with_joint_origin,
     wrap_base_tool,
 )
+from pincal.model._sidecar import (
+    JOINT_KINDS,
+    Sidecar,
+    Workspace,
+    validate_sidecar,
+)
 from pincal.model._urdf import (
     MOVABLE_TYPES,
     UrdfJoint,
@@ -69,6 +73,7 @@ __all__ = [
     "COMPONENTS",
     "DOFS",
     "INSTRUMENT_LINK",
+    "JOINT_KINDS",
     "MOVABLE_TYPES",
     "TOOL_JOINT",
     "TOOL_LINK",
@@ -80,6 +85,7 @@ __all__ = [
     "Mechanism",
     "Parameter",
     "ParameterSet",
+    "Sidecar",
     "SolverOptions",
     "UrdfJoint",
     "UrdfTree",

@@ -11,7 +11,7 @@ from __future__ import annotations
 import logging
 import threading
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -34,11 +34,14 @@ from pincal.model._closures import (
     measured_jacobian,
     parse_components,
 )
+from pincal.model._sidecar import WORKSPACE_POSE_KEYS, Sidecar, Workspace, validate_sidecar
 from pincal.model._urdf import UrdfTree
 
 __all__ = [
+    "WORKSPACE_POSE_KEYS",
     "Kinematics",
     "Mechanism",
+    "Sidecar",
     "SolverOptions",
     "Workspace",
     "bundled_models",
@@ -51,7 +54,6 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
-WORKSPACE_POSE_KEYS = ("x", "y", "z", "rx", "ry", "rz")
 
 
 @dataclass(frozen=True)
@@ -71,20 +73,6 @@ class SolverOptions:
     max_step: float = 0.5
     rcond: float = 1e-10
     max_condition: float = 1e8
-
-
-@dataclass(frozen=True)
-class Workspace:
-    """Limits for random measurement poses.
-
-    Attributes:
-        pose: measured-frame pose ranges; keys among x, y, z (world position [m]) and
-            rx, ry, rz (rotation vector relative to the home orientation [rad]).
-        joints: actuated-joint ranges [m or rad] (URDF limits where not given).
-    """
-
-    pose: dict[str, tuple[float, float]] = field(default_factory=dict)
-    joints: dict[str, tuple[float, float]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -154,7 +142,7 @@ class Mechanism:
     def __init__(
         self,
         urdf_xml: str,
-        sidecar: dict[str, Any] | None = None,
+        sidecar: Sidecar | Mapping[str, Any] | None = None,
         *,
         name: str | None = None,
         source: Path | None = None,
@@ -164,7 +152,7 @@ class Mechanism:
     ):
         self.urdf_xml = urdf_xml
         self.tree = UrdfTree(urdf_xml)
-        self.sidecar: dict[str, Any] = validate_sidecar(sidecar)
+        self.sidecar: Sidecar = Sidecar.from_dict(sidecar)
         self.name = name or self.tree.name
         self.source = source
         self.options = options or SolverOptions()
@@ -185,10 +173,9 @@ class Mechanism:
             )
         )
         self.measured_components = tuple(
-            COMPONENTS[i]
-            for i in parse_components(self.sidecar.get("measured", "pose"), "sidecar 'measured'")
+            COMPONENTS[i] for i in parse_components(self.sidecar.measured, "sidecar 'measured'")
         )
-        self.presets: dict[str, Any] = dict(self.sidecar.get("presets") or {})
+        self.presets: dict[str, Any] = dict(self.sidecar.presets)
         self.workspace = self._parse_workspace()
         guess = self._home_guess() if q_guess is None else np.asarray(q_guess, dtype=float)
         self.q_home = self._assemble(guess)
@@ -207,26 +194,10 @@ class Mechanism:
         return self.model.getJointId(name)
 
     def _parse_closures(self) -> tuple[Closure, ...]:
-        pairs = self.sidecar.get("closed_loop") or []
-        types = self.sidecar.get("type", "3d")
-        if not isinstance(pairs, list):
-            raise ModelFileError("sidecar 'closed_loop' must be a list of [frame_a, frame_b] pairs")
-        if isinstance(types, str) or (
-            isinstance(types, list) and types and all(t in COMPONENTS for t in types)
-        ):
-            types = [types] * len(pairs)
-        elif isinstance(types, list) and len(types) == 1:
-            types = types * len(pairs)
-        if not isinstance(types, list) or len(types) != len(pairs):
-            raise ModelFileError(
-                f"sidecar 'type' must give one closure type per pair ({len(pairs)} pairs), "
-                f"got {types!r}"
-            )
         closures = []
-        for k, (pair, kind) in enumerate(zip(pairs, types, strict=True)):
-            if not (isinstance(pair, list | tuple) and len(pair) == 2):
-                raise ModelFileError(f"sidecar closed_loop[{k}] must be a pair of frame names")
-            a, b = (str(p) for p in pair)
+        for k, ((a, b), kind) in enumerate(
+            zip(self.sidecar.closed_loop, self.sidecar.type, strict=True)
+        ):
             self.frame_id(a)
             self.frame_id(b)
             comps = parse_components(kind, f"sidecar type[{k}]")
@@ -240,15 +211,13 @@ class Mechanism:
             for j in range(1, self.model.njoints)
             if self.model.joints[j].nv == 1
         ]
-        names = self.sidecar.get("name_mot")
+        names = self.sidecar.name_mot
         if names is None:
             if self.closures:
                 raise ModelFileError(
                     "a closed-loop mechanism needs 'name_mot' (actuated joints) in its sidecar"
                 )
             return tuple(movable)
-        if isinstance(names, str):
-            names = [names]
         for n in names:
             if n not in movable:
                 raise UnknownNameError("actuated joint", str(n), movable)
@@ -282,7 +251,7 @@ class Mechanism:
         self.actuator_limits = np.array([lower, upper]).T  # (n_act, 2)
 
     def _resolve_measured_frame(self, requested: str | None) -> str:
-        name = requested or self.sidecar.get("measured_frame")
+        name = requested or self.sidecar.measured_frame
         if name is None:
             # the last link of the URDF in declaration order that is a leaf
             parents = {j.parent for j in self.tree.joints.values()}
@@ -292,23 +261,16 @@ class Mechanism:
         return str(name)
 
     def _parse_workspace(self) -> Workspace:
-        raw = self.sidecar.get("workspace") or {}
-        pose = {}
-        for k, v in (raw.get("pose") or {}).items():
-            if k not in WORKSPACE_POSE_KEYS:
-                raise UnknownNameError("workspace pose key", k, WORKSPACE_POSE_KEYS)
-            pose[k] = (float(v[0]), float(v[1]))
-        joints = {}
-        for k, v in (raw.get("joints") or {}).items():
+        ws = self.sidecar.workspace
+        for k in ws.joints:
             if k not in self.actuated:
                 raise UnknownNameError("actuated joint", k, self.actuated)
-            joints[k] = (float(v[0]), float(v[1]))
-        return Workspace(pose, joints)
+        return Workspace(dict(ws.pose), dict(ws.joints))
 
     def _home_guess(self) -> np.ndarray:
         q = pin.neutral(self.model)
-        for name, value in (self.sidecar.get("home") or {}).items():
-            j = self.joint_id(str(name))
+        for name, value in self.sidecar.home.items():
+            j = self.joint_id(name)
             qi, nq = self.model.idx_qs[j], self.model.nqs[j]
             vals = np.atleast_1d(np.asarray(value, dtype=float))
             if nq == 7 and vals.size == 6:  # floating: x y z roll pitch yaw
@@ -685,91 +647,6 @@ class Mechanism:
                 residual=exc.residual,
             ) from exc
         return sol.q
-
-
-def _is_number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(float(v))
-
-
-def _is_names(v: Any) -> bool:
-    return isinstance(v, str) or (isinstance(v, list) and all(isinstance(x, str) for x in v))
-
-
-def _check_range(v: Any, where: str) -> None:
-    if not (isinstance(v, list | tuple) and len(v) == 2 and all(_is_number(x) for x in v)):
-        raise ModelFileError(f"sidecar {where} must be [lower, upper] finite numbers, got {v!r}")
-    if float(v[0]) > float(v[1]):
-        raise ModelFileError(f"sidecar {where}: lower {v[0]} is above upper {v[1]}")
-
-
-def validate_sidecar(sidecar: Any) -> dict[str, Any]:
-    """Check the types of the sidecar keys pincal reads (a copy is returned).
-
-    Names are checked later against the URDF; this catches wrong types, non-finite
-    numbers and inverted ranges with a message naming the key.
-
-    Raises:
-        ModelFileError: a key has the wrong type or value.
-    """
-    if sidecar is None:
-        return {}
-    if not isinstance(sidecar, dict):
-        raise ModelFileError(f"sidecar must be a mapping, got {type(sidecar).__name__}")
-    sc = dict(sidecar)
-    pairs = sc.get("closed_loop")
-    if pairs is not None:
-        if not isinstance(pairs, list):
-            raise ModelFileError("sidecar 'closed_loop' must be a list of [frame_a, frame_b] pairs")
-        for k, pair in enumerate(pairs):
-            if not (isinstance(pair, list | tuple) and len(pair) == 2 and _is_names(list(pair))):
-                raise ModelFileError(
-                    f"sidecar closed_loop[{k}] must be a pair of frame names, got {pair!r}"
-                )
-    kinds = sc.get("type")
-    if kinds is not None and not (
-        isinstance(kinds, str) or (isinstance(kinds, list) and all(_is_names(t) for t in kinds))
-    ):
-        raise ModelFileError(f"sidecar 'type' must be a closure type or a list of them: {kinds!r}")
-    for key in ("name_mot", "measured"):
-        if key in sc and not _is_names(sc[key]):
-            raise ModelFileError(f"sidecar {key!r} must be a name or a list of names: {sc[key]!r}")
-    if "measured_frame" in sc and not isinstance(sc["measured_frame"], str):
-        raise ModelFileError(
-            f"sidecar 'measured_frame' must be a frame name: {sc['measured_frame']!r}"
-        )
-    home = sc.get("home")
-    if home is not None:
-        if not isinstance(home, dict):
-            raise ModelFileError("sidecar 'home' must map joint names to values [m, rad]")
-        for name, value in home.items():
-            vals = value if isinstance(value, list) else [value]
-            if not vals or not all(_is_number(v) for v in vals):
-                raise ModelFileError(
-                    f"sidecar home[{name!r}] must be a finite number or a list of them, "
-                    f"got {value!r}"
-                )
-    ws = sc.get("workspace")
-    if ws is not None:
-        if not isinstance(ws, dict):
-            raise ModelFileError(
-                "sidecar 'workspace' must be a mapping with 'pose' and/or 'joints'"
-            )
-        for part in ("pose", "joints"):
-            ranges = ws.get(part)
-            if ranges is None:
-                continue
-            if not isinstance(ranges, dict):
-                raise ModelFileError(f"sidecar workspace.{part} must map names to [lower, upper]")
-            for name, v in ranges.items():
-                _check_range(v, f"workspace.{part}[{name!r}]")
-    presets = sc.get("presets")
-    if presets is not None:
-        if not isinstance(presets, dict):
-            raise ModelFileError("sidecar 'presets' must map preset names to lists of entries")
-        for name, entries in presets.items():
-            if not isinstance(entries, list):
-                raise ModelFileError(f"sidecar preset {name!r} must be a list of entries")
-    return sc
 
 
 def _read_text(path: Path, what: str) -> str:
