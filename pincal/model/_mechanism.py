@@ -10,14 +10,12 @@ from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
-import yaml
 
 from pincal.errors import (
     ClosureError,
@@ -34,7 +32,9 @@ from pincal.model._closures import (
     measured_jacobian,
     parse_components,
 )
-from pincal.model._sidecar import WORKSPACE_POSE_KEYS, Sidecar, Workspace, validate_sidecar
+from pincal.model._kinematics import KinematicQueries, Kinematics
+from pincal.model._newton import Solution, SolverOptions, damped_newton
+from pincal.model._sidecar import WORKSPACE_POSE_KEYS, Sidecar, Workspace
 from pincal.model._urdf import UrdfTree
 
 __all__ = [
@@ -44,90 +44,12 @@ __all__ = [
     "Sidecar",
     "SolverOptions",
     "Workspace",
-    "bundled_models",
-    "load_mechanism",
-    "read_sidecar",
-    "resolve_model_path",
-    "validate_sidecar",
 ]
 
 log = logging.getLogger(__name__)
 
-MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
 
-
-@dataclass(frozen=True)
-class SolverOptions:
-    """Newton solver settings.
-
-    Attributes:
-        tol: convergence threshold on the largest residual component [m or rad].
-        max_iterations: Newton iterations before giving up.
-        max_step: largest tangent step norm per iteration [m, rad].
-        rcond: relative singular-value cut-off of the rank-revealing solve.
-        max_condition: condition number above which a solution is called singular.
-    """
-
-    tol: float = 1e-12
-    max_iterations: int = 60
-    max_step: float = 0.5
-    rcond: float = 1e-10
-    max_condition: float = 1e8
-
-
-@dataclass(frozen=True)
-class Kinematics:
-    """Kinematics of one configuration: fresh arrays, nothing shared with the mechanism.
-
-    Attributes:
-        q: (nq,) the configuration.
-        placements: world placement of each kept frame (by name).
-        jacobians: (6, nv) LOCAL Jacobian of each kept frame (by name).
-        joint_placements: world placement of every joint (index = Pinocchio joint id).
-        closure_residual: (n_closure_rows,) [m, rad].
-        closure_jacobian: (n_closure_rows, nv).
-    """
-
-    q: np.ndarray
-    placements: Mapping[str, pin.SE3]
-    jacobians: Mapping[str, np.ndarray]
-    joint_placements: tuple[pin.SE3, ...]
-    closure_residual: np.ndarray
-    closure_jacobian: np.ndarray
-
-
-@dataclass(frozen=True)
-class _Solution:
-    q: np.ndarray
-    iterations: int
-    residual: float
-    singular_values: np.ndarray  # of the Jacobian over the free dofs at q
-
-
-def _newton_step(J: np.ndarray, r: np.ndarray, rcond: float) -> np.ndarray:
-    """Minimum-norm least-squares solution of ``J dx = −r`` (rank-revealing).
-
-    A square, well-conditioned J is solved by LU; anything else (redundant closure rows,
-    rank loss) by a truncated SVD with relative cut-off ``rcond``.
-    """
-    if J.shape[0] == J.shape[1] and J.size:
-        try:
-            step = -np.linalg.solve(J, r)
-            if np.all(np.isfinite(step)) and np.linalg.norm(J @ step + r) <= 1e-8 * (
-                np.linalg.norm(r) + 1e-300
-            ):
-                return step
-        except np.linalg.LinAlgError:
-            pass
-    U, s, Vt = np.linalg.svd(J, full_matrices=False)
-    if s.size == 0 or s[0] == 0.0:
-        return np.zeros(J.shape[1])
-    keep = s > rcond * s[0]
-    coeff = (U.T @ r)[keep] / s[keep]
-    return -(Vt[keep].T @ coeff)
-
-
-class Mechanism:
+class Mechanism(KinematicQueries):
     """A mechanism loaded from URDF (+ sidecar).
 
     Use :func:`load_mechanism` to create one. Attributes of interest:
@@ -182,17 +104,6 @@ class Mechanism:
         self._check_mobility()
 
     # ------------------------------------------------------------------ set-up
-    def frame_id(self, name: str) -> int:
-        """Pinocchio frame index of a frame (URDF link or joint) by name."""
-        if name not in self._frame_ids:
-            raise UnknownNameError("frame", name, self.tree.links)
-        return self._frame_ids[name]
-
-    def joint_id(self, name: str) -> int:
-        if not self.model.existJointName(name):
-            raise UnknownNameError("joint", name, list(self.model.names)[1:])
-        return self.model.getJointId(name)
-
     def _parse_closures(self) -> tuple[Closure, ...]:
         closures = []
         for k, ((a, b), kind) in enumerate(
@@ -284,129 +195,15 @@ class Mechanism:
         return q
 
     # ---------------------------------------------------------------- kinematics core
-    def _data(self) -> pin.Data:
-        """This thread's scratch ``pin.Data``: filled and read within one call only."""
-        data = getattr(self._scratch, "data", None)
-        if data is None:
-            data = self._scratch.data = self.model.createData()
-        return data
-
-    def _compute(self, q: np.ndarray) -> pin.Data:
-        """Placements and joint Jacobians at ``q`` in the scratch data."""
-        data = self._data()
-        pin.computeJointJacobians(self.model, data, q)
-        pin.updateFramePlacements(self.model, data)
-        return data
-
-    def _closure_residual(self, data: pin.Data) -> np.ndarray:
-        if not self.closures:
-            return np.zeros(0)
-        oMf = data.oMf
-        return np.concatenate(
-            [
-                c.residual(oMf[a], oMf[b])
-                for (a, b), c in zip(self._closure_fids, self.closures, strict=True)
-            ]
-        )
-
-    def _closure_jacobian(self, data: pin.Data) -> np.ndarray:
-        if not self.closures:
-            return np.zeros((0, self.model.nv))
-        oMf = data.oMf
-        model, lwa, local = self.model, pin.LOCAL_WORLD_ALIGNED, pin.LOCAL
-        blocks = []
-        for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
-            if c.is_point:  # world-aligned point velocities directly
-                Jb = pin.getFrameJacobian(model, data, b, lwa)
-                Ja = pin.getFrameJacobian(model, data, a, lwa)
-                blocks.append(Jb[:3] - Ja[:3])
-            else:
-                Ja = pin.getFrameJacobian(model, data, a, local)
-                Jb = pin.getFrameJacobian(model, data, b, local)
-                blocks.append(c.jacobian(oMf[a], oMf[b], Ja, Jb))
-        return np.vstack(blocks)
-
-    def _snapshot(
-        self, q: np.ndarray, data: pin.Data, frames: Sequence[str], jacobian_frames: Sequence[str]
-    ) -> Kinematics:
-        model = self.model
-        return Kinematics(
-            q=np.array(q, dtype=float),
-            placements={f: pin.SE3(data.oMf[self.frame_id(f)]) for f in frames},
-            jacobians={
-                f: pin.getFrameJacobian(model, data, self.frame_id(f), pin.LOCAL)
-                for f in jacobian_frames
-            },
-            joint_placements=tuple(pin.SE3(M) for M in data.oMi),
-            closure_residual=self._closure_residual(data),
-            closure_jacobian=self._closure_jacobian(data),
-        )
-
-    def kinematics(
-        self,
-        q: np.ndarray,
-        frames: Sequence[str] | None = None,
-        jacobian_frames: Sequence[str] | None = None,
-    ) -> Kinematics:
-        """Kinematics of configuration ``q`` (nq,): a fresh, frozen :class:`Kinematics`.
-
-        Args:
-            q: Pinocchio configuration (nq,) (need not close the loops).
-            frames: frames whose world placement to keep (default: :attr:`key_frames`,
-                the measured frame and every closure frame).
-            jacobian_frames: frames whose LOCAL Jacobian to keep (default: the measured
-                frame).
-        """
-        q = self._check_q(q)
-        jac = (self.measured_frame,) if jacobian_frames is None else jacobian_frames
-        return self._snapshot(q, self._compute(q), frames or self.key_frames, jac)
-
-    def frame_link(self, frame: str) -> str:
-        """URDF link a frame is attached to (a frame named by a joint sits on its child)."""
-        self.frame_id(frame)
-        if frame in self.tree.joints and frame not in self.tree.links:
-            return self.tree.joints[frame].child
-        return frame
-
-    @property
-    def free_dofs(self) -> np.ndarray:
-        """Tangent indices (k,) of the passive (not actuated) degrees of freedom."""
-        return self._free_v.copy()
-
-    def frame_placement(self, q: np.ndarray, frame: str | None = None) -> pin.SE3:
-        """World placement (a new SE3) of ``frame`` (default: the measured frame) at ``q``."""
-        q = self._check_q(q)
-        fid = self.frame_id(frame or self.measured_frame)
-        return pin.SE3(self._compute(q).oMf[fid])
-
-    def closure_residual(self, q: np.ndarray) -> np.ndarray:
-        """Closure residual at configuration q (n_closure_rows,) [m, rad]."""
-        return self._closure_residual(self._compute(self._check_q(q)))
-
-    def closure_jacobian(self, q: np.ndarray) -> np.ndarray:
-        """(n_closure_rows, nv) closure Jacobian at configuration q."""
-        return self._closure_jacobian(self._compute(self._check_q(q)))
-
-    def _check_q(self, q: np.ndarray) -> np.ndarray:
-        q = np.asarray(q, dtype=float)
-        if q.shape != (self.model.nq,):
-            raise ValueError(f"q must have shape ({self.model.nq},), got {q.shape}")
-        return q
-
-    def _newton(self, q0: np.ndarray, free: np.ndarray, extra=None) -> _Solution:
+    def _newton(self, q0: np.ndarray, free: np.ndarray, extra=None) -> Solution:
         """Damped Newton on the closure (+ optional extra) residual over tangent dofs ``free``.
 
         ``extra`` is a callable of the computed data returning ``(r (k,), J (k, nv))``.
         """
-        opt = self.options
-        q = q0.copy()
-        nv = self.model.nv
-
-        extra_jacobian = [np.zeros((0, nv))]
-
         data = self._data()
+        extra_jacobian = [np.zeros((0, self.model.nv))]
 
-        def evaluate(qq):
+        def evaluate(qq: np.ndarray) -> np.ndarray:
             self._compute(qq)
             r = self._closure_residual(data)
             if extra is not None:
@@ -414,39 +211,11 @@ class Mechanism:
                 r = np.concatenate([r, r_extra])
             return r
 
-        r = evaluate(q)
-        norm = np.linalg.norm(r)
-        for it in range(opt.max_iterations + 1):
+        def jacobian() -> np.ndarray:
             J = self._closure_jacobian(data)
-            if extra is not None:
-                J = np.vstack([J, extra_jacobian[0]])
-            Jf = J[:, free]
-            if np.max(np.abs(r), initial=0.0) <= opt.tol:
-                s = np.linalg.svd(Jf, compute_uv=False) if Jf.size else np.zeros(0)
-                return _Solution(q, it, float(np.max(np.abs(r), initial=0.0)), s)
-            if it == opt.max_iterations:
-                break
-            step = _newton_step(Jf, r, opt.rcond)
-            step_norm = np.linalg.norm(step)
-            if step_norm > opt.max_step:
-                step *= opt.max_step / step_norm
-            dv = np.zeros(nv)
-            dv[free] = step
-            alpha = 1.0
-            for _ in range(30):
-                q_try = pin.integrate(self.model, q, alpha * dv)
-                r_try = evaluate(q_try)
-                n_try = np.linalg.norm(r_try)
-                if n_try < norm or n_try <= opt.tol:
-                    break
-                alpha *= 0.5
-            else:  # no decrease along the Newton direction: stalled
-                break
-            q, r, norm = q_try, r_try, n_try
-        raise ConvergenceError(
-            f"Newton did not converge: residual {np.max(np.abs(r)):.3e} after {it} iterations",
-            residual=float(np.max(np.abs(r))),
-        )
+            return J if extra is None else np.vstack([J, extra_jacobian[0]])
+
+        return damped_newton(self.model, q0, free, evaluate, jacobian, self.options)
 
     def _assemble(self, guess: np.ndarray) -> np.ndarray:
         if not self.closures:
@@ -508,36 +277,6 @@ class Mechanism:
         self.mobility = mobility
 
     # ------------------------------------------------------------------ public API
-    @property
-    def n_actuated(self) -> int:
-        return len(self.actuated)
-
-    def actuators_of(self, q: np.ndarray) -> np.ndarray:
-        """Actuated joint values (n_act,) of a configuration q (nq,)."""
-        out = np.empty(len(self.actuated))
-        for k, (qi, nq) in enumerate(zip(self._act_q, self._act_nq, strict=True)):
-            out[k] = q[qi] if nq == 1 else np.arctan2(q[qi + 1], q[qi])
-        return out
-
-    def with_actuators(self, q: np.ndarray, q_act: np.ndarray) -> np.ndarray:
-        """Copy of configuration q with the actuated joints set to ``q_act``."""
-        q = np.array(q, dtype=float)
-        for v, qi, nq in zip(q_act, self._act_q, self._act_nq, strict=True):
-            if nq == 1:
-                q[qi] = v
-            else:
-                q[qi : qi + 2] = (np.cos(v), np.sin(v))
-        return q
-
-    def _check_q_act(self, q_act: np.ndarray) -> np.ndarray:
-        q_act = np.asarray(q_act, dtype=float)
-        if q_act.shape != (len(self.actuated),):
-            raise ValueError(
-                f"q_act must have shape ({len(self.actuated)},) for actuated joints "
-                f"{list(self.actuated)}, got {q_act.shape}"
-            )
-        return q_act
-
     def configuration(
         self, q_act: np.ndarray, q_guess: np.ndarray | None = None, pose_index: int | None = None
     ) -> np.ndarray:
@@ -565,7 +304,7 @@ class Mechanism:
         self._check_singular(sol, where, pose_index)
         return sol.q
 
-    def _check_singular(self, sol: _Solution, where: str, pose_index: int | None) -> None:
+    def _check_singular(self, sol: Solution, where: str, pose_index: int | None) -> None:
         s = sol.singular_values
         r = self._rank_u
         cond = s[0] / s[r - 1] if r and s[r - 1] > 0 else np.inf
@@ -647,82 +386,3 @@ class Mechanism:
                 residual=exc.residual,
             ) from exc
         return sol.q
-
-
-def _read_text(path: Path, what: str) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelFileError(f"cannot read {what} {str(path)!r}: {exc.strerror}") from exc
-
-
-def read_sidecar(path: Path) -> dict[str, Any]:
-    """Parse a sidecar YAML file safely (no code execution)."""
-    try:
-        data = yaml.safe_load(_read_text(path, "sidecar"))
-    except yaml.YAMLError as exc:
-        raise ModelFileError(f"sidecar {str(path)!r} is not valid YAML: {exc}") from exc
-    if data is None:
-        return {}
-    if not isinstance(data, dict):
-        raise ModelFileError(f"sidecar {str(path)!r} must be a mapping, got {type(data).__name__}")
-    return data
-
-
-def bundled_models() -> list[str]:
-    """Names of the models shipped in ``models/``."""
-    if not MODELS_DIR.is_dir():
-        return []
-    return sorted(p.name for p in MODELS_DIR.iterdir() if (p / f"{p.name}.urdf").is_file())
-
-
-def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
-    """Find the URDF (and sidecar, if any) for a model directory, URDF path, bundled
-    model name or example-robot-data robot name (e.g. ``ur10``)."""
-    path = Path(spec)
-    if path.is_dir():
-        urdf = path / f"{path.name}.urdf"
-        if not urdf.is_file():
-            candidates = sorted(path.glob("*.urdf"))
-            if len(candidates) != 1:
-                raise ModelFileError(f"model directory {str(path)!r} must hold {path.name}.urdf")
-            urdf = candidates[0]
-    elif path.suffix.lower() == ".urdf":
-        urdf = path
-        if not urdf.is_file():
-            raise ModelFileError(f"URDF file {str(path)!r} does not exist")
-    elif (MODELS_DIR / str(spec)).is_dir():
-        return resolve_model_path(MODELS_DIR / str(spec))
-    else:
-        from pincal.model._dh import example_robot_names, example_robot_urdf
-
-        if str(spec) not in example_robot_names():
-            valid = bundled_models() + [f"{n} (example-robot-data)" for n in example_robot_names()]
-            raise UnknownNameError("model", str(spec), valid)
-        urdf = example_robot_urdf(str(spec))
-    sidecar = urdf.with_suffix(".yaml")
-    return urdf, sidecar if sidecar.is_file() else None
-
-
-def load_mechanism(
-    spec: str | Path, measured_frame: str | None = None, options: SolverOptions | None = None
-) -> Mechanism:
-    """Load a mechanism from a model directory, a ``.urdf`` path or a bundled model name.
-
-    A sidecar ``<name>.yaml`` beside the URDF declares closures, actuation, measured
-    frame and presets (see models/README.md). A bare serial URDF needs none: all its
-    1-dof joints are actuated and its last leaf link is the measured frame.
-
-    Raises:
-        ModelFileError, UnknownNameError, ClosureError, MobilityError.
-    """
-    urdf, sidecar_path = resolve_model_path(spec)
-    sidecar = read_sidecar(sidecar_path) if sidecar_path else {}
-    return Mechanism(
-        _read_text(urdf, "URDF"),
-        sidecar,
-        name=urdf.stem,
-        source=urdf,
-        measured_frame=measured_frame,
-        options=options,
-    )

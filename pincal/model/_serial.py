@@ -39,7 +39,8 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ModelFileError, UnknownNameError
-from pincal.model._mechanism import Mechanism, read_sidecar, resolve_model_path
+from pincal.model._catalogue import read_sidecar, resolve_model_path
+from pincal.model._mechanism import Mechanism
 from pincal.model._urdf import MOVABLE_TYPES, UrdfTree
 
 __all__ = [
