@@ -235,7 +235,10 @@ def dh_layout(
 
 
 def _probe_transform(probe: Sequence[float] | np.ndarray) -> np.ndarray:
-    arr = np.asarray(probe, dtype=float)
+    try:
+        arr = np.asarray(probe, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ModelFileError(f"probe must be numbers: {exc}") from exc
     if arr.shape == (3,):
         T = np.eye(4)
         T[:3, 3] = arr
@@ -292,7 +295,10 @@ def dh_fk(
     rows = _check_rows(rows)
     if convention not in _CONVENTIONS:
         raise UnknownNameError("DH convention", str(convention), _CONVENTIONS)
-    q = np.asarray(q, dtype=float).reshape(-1)
+    try:
+        q = np.asarray(q, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"q must be numbers: {exc}") from exc
     n_movable = sum(r.joint_type != "fixed" for r in rows)
     if q.shape != (n_movable,):
         raise ParameterError(f"q must have shape ({n_movable},), got {q.shape}")

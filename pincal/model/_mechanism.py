@@ -22,6 +22,7 @@ from pincal.errors import (
     ConvergenceError,
     MobilityError,
     ModelFileError,
+    ShapeError,
     SingularConfigurationError,
     UnknownNameError,
     UnreachablePoseError,
@@ -362,6 +363,7 @@ class Mechanism(KinematicQueries):
         self, T_world_target: pin.SE3, q_guess: np.ndarray | None = None
     ) -> np.ndarray:
         """Full closed configuration (nq,) reaching the target (see :meth:`inverse`)."""
+        T_world_target = _as_se3(T_world_target)
         fid = self.frame_id(self.measured_frame)
         comps = np.array([COMPONENTS.index(c) for c in self.measured_components])
         target_p, target_R = T_world_target.translation, T_world_target.rotation
@@ -376,7 +378,7 @@ class Mechanism(KinematicQueries):
             J[3:] = pin.Jlog3(E) @ J[3:]
             return r[comps], J[comps]
 
-        guess = self.q_home if q_guess is None else q_guess
+        guess = self.q_home if q_guess is None else self._check_q(q_guess)
         try:
             sol = self._newton(guess, np.arange(self.model.nv), extra)
         except ConvergenceError as exc:
@@ -386,3 +388,22 @@ class Mechanism(KinematicQueries):
                 residual=exc.residual,
             ) from exc
         return sol.q
+
+
+def _as_se3(T: object) -> pin.SE3:
+    """A pin.SE3, or a (4, 4) homogeneous matrix turned into one."""
+    if isinstance(T, pin.SE3):
+        return T
+    try:
+        M = np.asarray(T, dtype=float)
+    except (TypeError, ValueError):
+        M = np.zeros(0)
+    if M.shape != (4, 4) or not np.all(np.isfinite(M)):
+        raise ShapeError(
+            f"target pose must be a pinocchio.SE3 or a finite (4, 4) matrix, got {type(T).__name__}"
+            f"{' of shape ' + str(M.shape) if M.size else ''}"
+        )
+    R = M[:3, :3]
+    if not np.allclose(R.T @ R, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
+        raise ShapeError("target pose matrix: the upper-left (3, 3) block must be a rotation")
+    return pin.SE3(R, M[:3, 3])

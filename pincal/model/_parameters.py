@@ -113,12 +113,23 @@ class ParameterSet:
 
     def subset(self, indices: Sequence[int] | np.ndarray, label: str | None = None) -> ParameterSet:
         """A new set with the parameters at ``indices`` (in that order)."""
-        return ParameterSet([self.parameters[int(i)] for i in indices], label or self.label)
+        n = len(self)
+        try:
+            picked = [int(i) for i in indices]
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"subset indices must be integers: {exc}") from exc
+        bad = [i for i in picked if not -n <= i < n]
+        if bad:
+            raise ParameterError(f"subset indices {bad} out of range for {n} parameters")
+        return ParameterSet([self.parameters[i] for i in picked], label or self.label)
 
     def check_values(self, values: np.ndarray | None) -> np.ndarray:
         if values is None:
             return np.zeros(len(self))
-        values = np.asarray(values, dtype=float)
+        try:
+            values = np.asarray(values, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"parameter values must be numbers: {exc}") from exc
         if values.shape != (len(self),):
             raise ParameterError(
                 f"expected {len(self)} parameter values for set {self.label!r}, got shape "
