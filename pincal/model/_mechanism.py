@@ -27,6 +27,7 @@ from pincal.errors import (
     UnknownNameError,
     UnreachablePoseError,
 )
+from pincal.model._build import build_model
 from pincal.model._closures import (
     COMPONENTS,
     Closure,
@@ -79,10 +80,10 @@ class Mechanism(KinematicQueries):
         self.name = name or self.tree.name
         self.source = source
         self.options = options or SolverOptions()
-        try:
-            self.model = pin.buildModelFromXML(urdf_xml)
-        except (RuntimeError, ValueError) as exc:
-            raise ModelFileError(f"Pinocchio cannot build the URDF model: {exc}") from exc
+        model, notes = build_model(urdf_xml, self.tree, self.sidecar)
+        self.model = model
+        #: remarks about the model (joint kinds from the sidecar, ranges), for `pincal info`
+        self.notes: tuple[str, ...] = tuple(notes)
         self._scratch = threading.local()  # per-thread pin.Data, never read across calls
         self._frame_ids = {f.name: i for i, f in enumerate(self.model.frames)}
         self.closures = self._parse_closures()
