@@ -65,3 +65,57 @@ def test_zero_width_range_takes_the_sidecar_workspace_range():
     assert np.allclose(mech.actuator_limits[0], [1.5, 2.5])
     assert np.all(np.isinf(mech.actuator_limits[1]))
     assert any("'mot_l'" in n and "[1.5, 2.5]" in n for n in mech.notes)
+
+
+# ------------------------------------------------------------ 7. joint_name / joint_type
+@pytest.fixture(scope="module")
+def rssr():
+    return load_mechanism(MACHINES / "rssr")
+
+
+def test_joint_type_spherical_turns_the_placeholder_into_a_ball_joint(rssr):
+    j = rssr.model.getJointId("ball_a")
+    assert rssr.model.joints[j].shortname() == "JointModelSpherical"
+    assert (rssr.model.nqs[j], rssr.model.nvs[j]) == (4, 3)
+    assert rssr.mobility == 1
+    assert any("'ball_a' is a spherical joint" in n for n in rssr.notes)
+    for crank in (0.0, 0.3, 0.6, -0.4):
+        q = rssr.configuration([crank])
+        a = rssr.frame_placement(q, "coupler").translation
+        b = rssr.frame_placement(q, "rocker_tip").translation
+        assert np.isclose(np.linalg.norm(b - a), 0.17, atol=1e-12)  # coupler length kept
+    params = parameters(rssr, "full")
+    rows = np.array([[0.1], [0.5]])
+    J = pincal.identification_jacobian(rssr, params, rows)
+    cols = []
+    for k in range(len(params)):
+        e = np.zeros(len(params))
+        e[k] = 1e-6
+        plus = [params.apply(rssr, e).forward(r).translation for r in rows]
+        minus = [params.apply(rssr, -e).forward(r).translation for r in rows]
+        cols.append((np.concatenate(plus) - np.concatenate(minus)) / 2e-6)
+    J_fd = np.stack(cols, axis=1)
+    assert np.max(np.abs(J - J_fd)) <= 1e-6 * np.max(np.abs(J))
+
+
+def _rssr_with(**changes):
+    xml = (MACHINES / "rssr" / "rssr.urdf").read_text()
+    sc = pincal.model.read_sidecar(MACHINES / "rssr" / "rssr.yaml")
+    sc.update(changes)
+    return xml, sc
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"joint_type": ["UNIVERSAL"]}, "universal joint needs two axes"),
+        ({"joint_type": ["cylindrical"]}, "'cylindrical' of joint 'ball_a' is not supported"),
+        ({"joint_name": ["ball_b"]}, "joint 'ball_b' not found"),
+        ({"joint_name": ["coupler_end"]}, "is a fixed URDF joint"),
+        ({"joint_type": ["spherical", "spherical"]}, "must have the same length"),
+    ],
+)
+def test_unsupported_joint_kinds_are_clear_errors(changes, message):
+    xml, sc = _rssr_with(**changes)
+    with pytest.raises(pincal.PincalError, match=message):
+        pincal.Mechanism(xml, sc)
