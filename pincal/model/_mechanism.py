@@ -21,11 +21,10 @@ from pincal.errors import (
     ConvergenceError,
     ModelFileError,
     ShapeError,
-    SingularConfigurationError,
     UnknownNameError,
     UnreachablePoseError,
 )
-from pincal.model._assembly import Assembly
+from pincal.model._branch import BranchTracking
 from pincal.model._build import build_model
 from pincal.model._closures import (
     COMPONENTS,
@@ -51,7 +50,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-class Mechanism(Assembly):
+class Mechanism(BranchTracking):
     """A mechanism loaded from URDF (+ sidecar).
 
     Use :func:`load_mechanism` to create one. Attributes of interest:
@@ -101,9 +100,15 @@ class Mechanism(Assembly):
         )
         self.presets: dict[str, Any] = dict(self.sidecar.presets)
         self.workspace = self._parse_workspace()
-        guess = self._home_guess() if q_guess is None else np.asarray(q_guess, dtype=float)
-        self.q_home = self._assemble(guess)
+        self._assembly_notes: list[str] = []
+        if q_guess is None:
+            keep = any(n in self.sidecar.home for n in self.actuated)
+            self.q_home = self._assemble(self._home_guess(), keep_actuators=keep)
+        else:
+            self.q_home = self._assemble(np.asarray(q_guess, dtype=float))
+        self.notes += tuple(self._assembly_notes)
         self._check_mobility()
+        self._init_branch()
 
     # ------------------------------------------------------------------ set-up
     def _parse_closures(self) -> tuple[Closure, ...]:
@@ -190,22 +195,26 @@ class Mechanism(Assembly):
     ) -> np.ndarray:
         """Full configuration (nq,) with loops closed for actuator values ``q_act``.
 
+        The solution stays on the assembly mode of :attr:`q_home` (see ``_branch``):
+        a solve from ``q_guess`` (default home) that lands on another branch is redone
+        by continuation from the guess, then from home.
+
         Raises:
-            ConvergenceError: the loops cannot be closed from the guess.
+            ConvergenceError: no solution on the home branch (the message names the pose).
             SingularConfigurationError: the passive joints are not locally unique.
         """
         q_act = self._check_q_act(q_act)
-        guess = self.q_home if q_guess is None else q_guess
-        q0 = self.with_actuators(guess, q_act)
+        guess = self.q_home if q_guess is None else self._check_q(q_guess)
         if not self.closures:
-            return q0
+            return self.with_actuators(guess, q_act)
         where = f"pose {pose_index}" if pose_index is not None else "pose"
         try:
-            sol = self._newton(q0, self._free_v)
+            sol = self._solve_on_branch(q_act, guess)
         except ConvergenceError as exc:
             raise ConvergenceError(
                 f"forward kinematics failed at {where} (q_act = {np.round(q_act, 6).tolist()}): "
-                f"loops do not close, residual {exc.residual * 1e3:.3g} mm",
+                f"the loops do not close on the assembly branch of home (residual "
+                f"{exc.residual * 1e3:.3g} mm); {exc}",
                 pose_index=pose_index,
                 residual=exc.residual,
             ) from exc
@@ -217,17 +226,19 @@ class Mechanism(Assembly):
         return self.frame_placement(self.configuration(q_act, q_guess))
 
     def configurations(self, q_act_rows: np.ndarray) -> np.ndarray:
-        """Closed configurations (m, nq) for actuator rows (m, n_act), warm-started."""
-        rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
+        """Closed configurations (m, nq) for actuator rows (m, n_act) on home's branch.
+
+        Each row starts from the previous solution (continuation when a direct solve
+        leaves the branch, then from home).
+        """
+        try:
+            rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
+        except (TypeError, ValueError) as exc:
+            raise ShapeError(f"actuator rows must be numbers: {exc}") from exc
         out = np.empty((rows.shape[0], self.model.nq))
         guess = self.q_home
         for i, row in enumerate(rows):
-            try:
-                out[i] = self.configuration(row, guess, pose_index=i)
-            except SingularConfigurationError:
-                raise
-            except ConvergenceError:
-                out[i] = self.configuration(row, self.q_home, pose_index=i)
+            out[i] = self.configuration(row, guess, pose_index=i)
             guess = out[i]
         return out
 

@@ -142,3 +142,82 @@ def test_undecidable_measured_frame_lists_candidates():
     assert "'rod_l'" in str(info.value) and "'rod_r'" in str(info.value)
     ok = pincal.Mechanism(xml, sc, measured_frame="rod_r")
     assert ok.measured_frame == "rod_r"
+
+
+# ------------------------------------------------------------------ 9. assembly branch
+@pytest.fixture(scope="module")
+def prs3():
+    return load_mechanism(MACHINES / "prs3")
+
+
+def _passive_det_sign(mech, q):
+    return np.sign(np.linalg.det(mech.closure_jacobian(q)[:, mech.free_dofs]))
+
+
+def test_user_home_is_kept_as_the_assembly_start(prs3):
+    assert np.allclose(prs3.actuators_of(prs3.q_home), [0.2, 0.2, 0.2], atol=0)  # was 0.2009
+    assert prs3.measured_frame == "platform"
+    z = prs3.frame_placement(prs3.q_home).translation[2]
+    assert np.isclose(z, 0.2 + np.sqrt(0.12**2 - 0.1**2), atol=1e-12)  # knees-up mode
+
+
+def test_forward_kinematics_stays_on_the_home_branch(prs3):
+    rows = np.array([[0.211, 0.237, 0.257], [0.208, 0.228, 0.265]])
+    home_sign = _passive_det_sign(prs3, prs3.q_home)
+    Q = prs3.configurations(rows)
+    # a plain warm-started Newton from Q[0] lands on the other mode (det sign flips)
+    plain = prs3._newton(prs3.with_actuators(Q[0], rows[1]), prs3.free_dofs).q
+    assert _passive_det_sign(prs3, plain) == -home_sign
+    assert [_passive_det_sign(prs3, q) for q in Q] == [home_sign, home_sign]
+    # reference: fine continuation from Q[0] (each step a tiny move)
+    q = Q[0]
+    for t in np.linspace(0, 1, 201)[1:]:
+        q = prs3.configuration(rows[0] + t * (rows[1] - rows[0]), q_guess=q)
+    assert np.allclose(Q[1], q, atol=1e-9)
+    assert not np.allclose(Q[1], plain, atol=1e-3)
+    # the same answer whatever the starting guess (here: a guess on the other mode)
+    assert np.allclose(prs3.configuration(rows[1], q_guess=plain), Q[1], atol=1e-9)
+
+
+def test_no_solution_on_the_home_branch_names_the_pose(prs3):
+    rows = np.array([[0.2, 0.2, 0.2], [0.133, 0.283, 0.131], [0.251, 0.163, 0.172]])
+    with pytest.raises(pincal.errors.ConvergenceError, match="pose 2") as info:
+        prs3.configurations(rows)
+    assert info.value.pose_index == 2
+    assert "assembly branch of home" in str(info.value)
+
+
+# ---------------------------------------------------------------- 10. honest diagnoses
+def _machine(name, urdf_edit=None, **sidecar_changes):
+    xml = (MACHINES / name / f"{name}.urdf").read_text()
+    if urdf_edit:
+        xml = xml.replace(*urdf_edit)
+    sc = pincal.model.read_sidecar(MACHINES / name / f"{name}.yaml")
+    sc.update(sidecar_changes)
+    return xml, sc
+
+
+def test_singular_home_is_called_singular():
+    legs = {"leg1": 0.2, "leg2": 0.2, "leg3": 0.2}
+    xml, sc = _machine("rpr3", home={"ee_float": [0, 0, 0, 0, 0, 0], **legs})  # legs radial
+    with pytest.raises(pincal.errors.SingularConfigurationError, match="home configuration is"):
+        pincal.Mechanism(xml, sc)  # was: MobilityError "actuate more joints"
+    ok = pincal.Mechanism(*_machine("rpr3"))  # the sidecar's rotated home is fine
+    assert ok.mobility == 3
+
+
+def test_under_actuation_names_the_free_passive_joints():
+    xml, sc = _machine("rpr3", name_mot=["leg1", "leg2"])
+    with pytest.raises(pincal.errors.MobilityError, match="free passive joints") as info:
+        pincal.Mechanism(xml, sc)
+    assert "'rev3'" in str(info.value) and "'ee_float'" in str(info.value)
+
+
+def test_open_closure_blames_frame_names_or_geometry():
+    pairs = [["leg1", "pin1"], ["leg2", "pin2"], ["pin3", "pin1"]]
+    xml, sc = _machine("rpr3", closed_loop=pairs)
+    with pytest.raises(pincal.errors.ClosureError, match="frame names are probably wrong"):
+        pincal.Mechanism(xml, sc)
+    xml, sc = _machine("rssr", urdf_edit=('<origin xyz="0.17 0 0"/>', '<origin xyz="0.5 0 0"/>'))
+    with pytest.raises(pincal.errors.ClosureError, match="the geometry"):
+        pincal.Mechanism(xml, sc)
