@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import importlib.metadata
 from pathlib import Path
 
@@ -14,6 +15,7 @@ _ERD_ALIASES = {"ur10": "ur10_robot", "ur5": "ur5_robot"}
 _ERD_MARKER = "share/example-robot-data/robots/"
 
 
+@functools.cache
 def _erd_index() -> tuple[dict[str, Path], list[str]]:
     """(all accepted names → path, the short names to show)."""
     try:
@@ -24,8 +26,12 @@ def _erd_index() -> tuple[dict[str, Path], list[str]]:
         ) from exc
     files = [f for f in (dist.files or ()) if _ERD_MARKER in str(f) and str(f).endswith(".urdf")]
     by_stem: dict[str, list[Path]] = {}
+    stubs: list[str] = []
     for f in files:
         path = Path(str(dist.locate_file(f)))
+        if _is_stub(path):  # e.g. ur3.urdf: a xacro leftover without links
+            stubs.append(path.stem)
+            continue
         by_stem.setdefault(path.stem, []).append(path)
     index: dict[str, Path] = {}
     shown: list[str] = []
@@ -39,11 +45,22 @@ def _erd_index() -> tuple[dict[str, Path], list[str]]:
         if len(paths) == 1:
             index[stem] = paths[0]
             shown.append(stem)
-    for alias, stem in _ERD_ALIASES.items():
+    aliases = dict(_ERD_ALIASES) | {stub: f"{stub}_robot" for stub in stubs}
+    for alias, stem in aliases.items():
         if alias not in index and stem in index:
             index[alias] = index[stem]
             shown.append(alias)
     return index, sorted(shown)
+
+
+def _is_stub(path: Path) -> bool:
+    """A URDF file without any <link> (a macro file left over by xacro)."""
+    try:
+        with path.open("rb") as fh:
+            head = fh.read(1 << 16)
+    except OSError:
+        return False
+    return b"<link" not in head
 
 
 def _erd_robots_dir(path: Path) -> Path:

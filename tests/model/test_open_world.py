@@ -221,3 +221,12 @@ def test_open_closure_blames_frame_names_or_geometry():
     xml, sc = _machine("rssr", urdf_edit=('<origin xyz="0.17 0 0"/>', '<origin xyz="0.5 0 0"/>'))
     with pytest.raises(pincal.errors.ClosureError, match="the geometry"):
         pincal.Mechanism(xml, sc)
+
+
+# ------------------------------------------------------ 11. example-robot-data stub files
+def test_ur3_resolves_to_the_real_robot_not_the_empty_stub():
+    mech = load_mechanism("ur3")  # was: ur3.urdf, a xacro leftover with 0 links
+    assert pincal.model.example_robot_urdf("ur3").name == "ur3_robot.urdf"
+    assert mech.n_actuated == 6 and len(mech.tree.links) > 6
+    for name in pincal.model.example_robot_names():
+        assert b"<link" in pincal.model.example_robot_urdf(name).read_bytes()
