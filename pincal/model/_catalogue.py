@@ -78,7 +78,8 @@ def load_mechanism(
 
     A sidecar ``<name>.yaml`` beside the URDF declares closures, actuation, measured
     frame and presets (see models/README.md). A bare serial URDF needs none: all its
-    1-dof joints are actuated and its last leaf link is the measured frame.
+    1-dof joints are actuated and the measured frame is chosen by name (effector, ee,
+    tcp, tool, flange, platform...) or as the deepest leaf link without a closure.
 
     Raises:
         ModelFileError, UnknownNameError, ClosureError, MobilityError.

@@ -58,8 +58,13 @@ class Mechanism(BranchTracking):
     * ``model``: the Pinocchio model (do not modify);
     * ``actuated``: actuated joint names; ``closures``: the loop closures;
     * ``measured_frame`` and ``measured_components`` (names from x y z rx ry rz);
-    * ``q_home``: assembled home configuration (nq,);
-    * ``workspace``: :class:`Workspace`; ``presets``: raw parameter presets.
+    * ``q_home``: assembled home configuration (nq,); forward kinematics stays on its
+      assembly mode (``home_branch``: sign of det of the passive closure Jacobian, 0
+      where that Jacobian is not square);
+    * ``workspace``: :class:`Workspace`; ``presets``: raw parameter presets;
+    * ``sidecar``: the typed :class:`Sidecar`; ``notes``: remarks for ``pincal info``;
+    * ``mobility``, ``closure_rank`` and ``idle_joints`` (passive joints the actuators
+      do not hold and that do not move the measured frame).
     """
 
     def __init__(
