@@ -43,8 +43,12 @@ class BranchTracking(Assembly):
         )
         self.home_branch = self._branch_sign(self.q_home)
 
-    def _on_branch(self, q: np.ndarray) -> bool:
-        return self.home_branch == 0.0 or self._branch_sign(q) == self.home_branch
+    def _on_branch(self, sol: Solution) -> bool:
+        """Whether a passive solve (Jacobian over the passive dofs kept) is on home's branch."""
+        if self.home_branch == 0.0:
+            return True
+        J = sol.jacobian[: self.n_closure_rows]
+        return float(np.sign(np.linalg.det(J))) == self.home_branch
 
     def _solve_on_branch(self, q_act: np.ndarray, start: np.ndarray) -> Solution:
         """Closed configuration for ``q_act`` on the home branch, starting from ``start``.
@@ -55,7 +59,7 @@ class BranchTracking(Assembly):
         """
         try:
             sol = self._newton(self.with_actuators(start, q_act), self._free_v)
-            if self._on_branch(sol.q):
+            if self._on_branch(sol):
                 return sol
         except ConvergenceError:
             pass
@@ -84,7 +88,7 @@ class BranchTracking(Assembly):
                 cand = self._newton(self.with_actuators(pred, a), self._free_v)
                 correction = pin.difference(self.model, pred, cand.q)[self._free_v]
                 moved = pin.difference(self.model, q, pred)[self._free_v]
-                ok = self._on_branch(cand.q) and (
+                ok = self._on_branch(cand) and (
                     np.linalg.norm(correction) <= 0.25 * np.linalg.norm(moved) + 1e-7
                 )
             except ConvergenceError as exc:

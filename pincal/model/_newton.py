@@ -43,6 +43,7 @@ class Solution:
     iterations: int
     residual: float
     singular_values: np.ndarray  # of the Jacobian over the free dofs at q
+    jacobian: np.ndarray  # (m, k) the Jacobian over the free dofs at q
 
 
 def newton_step(J: np.ndarray, r: np.ndarray, rcond: float) -> np.ndarray:
@@ -102,7 +103,7 @@ def damped_newton(
         Jf = jacobian()[:, free]
         if np.max(np.abs(r), initial=0.0) <= opt.tol:
             s = np.linalg.svd(Jf, compute_uv=False) if Jf.size else np.zeros(0)
-            return Solution(q, it, float(np.max(np.abs(r), initial=0.0)), s)
+            return Solution(q, it, float(np.max(np.abs(r), initial=0.0)), s, Jf)
         if it == opt.max_iterations:
             break
         step = newton_step(Jf, r, opt.rcond)
