@@ -230,3 +230,12 @@ def test_ur3_resolves_to_the_real_robot_not_the_empty_stub():
     assert mech.n_actuated == 6 and len(mech.tree.links) > 6
     for name in pincal.model.example_robot_names():
         assert b"<link" in pincal.model.example_robot_urdf(name).read_bytes()
+
+
+def test_open_closure_blames_the_home_guess_when_other_starts_close():
+    # all joints at 0: both chains stretched along x, the gap is along x, and no joint
+    # can move a tip along x there: Newton stalls, yet the loop closes from elsewhere
+    flat = {"mot_l": 0.0, "elbow_l": 0.0, "mot_r": 0.0, "elbow_r": 0.0}
+    xml, sc = _machine("fivebar", home=flat)
+    with pytest.raises(pincal.errors.ClosureError, match="'home' guess in the sidecar is at fault"):
+        pincal.Mechanism(xml, sc)
