@@ -298,6 +298,13 @@ class Mechanism(BranchTracking):
                 f"residual {exc.residual * 1e3:.3g} mm/mrad after Newton",
                 residual=exc.residual,
             ) from exc
+        if self.home_branch and self._branch_sign(sol.q) != self.home_branch:
+            raise UnreachablePoseError(
+                f"target pose (p = {np.round(target_p * 1e3, 3).tolist()} mm) is reached only in "
+                f"another assembly mode than home's: forward kinematics would not return it; "
+                f"give q_guess on home's mode or choose another target",
+                residual=0.0,
+            )
         return sol.q
 
 

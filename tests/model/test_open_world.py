@@ -239,3 +239,21 @@ def test_open_closure_blames_the_home_guess_when_other_starts_close():
     xml, sc = _machine("fivebar", home=flat)
     with pytest.raises(pincal.errors.ClosureError, match="'home' guess in the sidecar is at fault"):
         pincal.Mechanism(xml, sc)
+
+
+def test_inverse_answers_only_on_the_home_branch(prs3):
+    rows = np.array([[0.211, 0.237, 0.257], [0.208, 0.228, 0.265]])
+    q0 = prs3.configurations(rows[:1])[0]
+    other = prs3._newton(prs3.with_actuators(q0, rows[1]), prs3.free_dofs).q  # other mode
+    targets = [prs3.frame_placement(q) for q in (q0, other)]
+    answered = 0
+    for T in targets:
+        try:
+            q_act = prs3.inverse(T)
+        except pincal.errors.UnreachablePoseError as exc:
+            assert "another assembly mode" in str(exc)
+            continue
+        answered += 1
+        back = prs3.forward(q_act)  # on home's branch: must give the target back
+        assert np.allclose(back.homogeneous, T.homogeneous, atol=1e-9)
+    assert answered >= 1
