@@ -26,6 +26,7 @@ __all__ = [
     "PincalError",
     "PoseFitError",
     "ReportError",
+    "ShapeError",
     "SingularConfigurationError",
     "TooFewPosesError",
     "UnidentifiableError",
@@ -49,6 +50,13 @@ def _listing(names: Iterable[str], limit: int = 40) -> str:
 
 class ModelFileError(PincalError):
     """A URDF or sidecar file is missing, malformed or inconsistent."""
+
+
+class ShapeError(PincalError, ValueError):
+    """An array argument has the wrong shape (or is not numeric).
+
+    Also a ValueError, so callers that caught the plain ValueError keep working.
+    """
 
 
 class UnknownNameError(PincalError, KeyError):

@@ -38,7 +38,7 @@ def region_commands(mech: pincal.Mechanism, per_region: int) -> np.ndarray:
     """Actuator rows (m, 4) for ``per_region`` poses per measurement region (IK)."""
     z_tool = mech.forward(np.zeros(4)).translation[2] - 1.05  # tool length [m]
     rows = []
-    for reg in mech.sidecar["measurement_regions"]:
+    for reg in mech.sidecar.measurement_regions:
         centre = np.array(reg["centre"], dtype=float)
         for ang in np.linspace(*reg["range"], per_region):
             a, b = (ang, 0.0) if reg["axis"] == "x" else (0.0, ang)

@@ -143,7 +143,7 @@ def view(
             p_calibrated = np.array(cal.forward(row, qs[k]).translation)
             arrows.append(viz.Arrow(p_nominal, p_calibrated, "#b0008c", f"pose {k}"))
 
-    up_dir = str(mech.sidecar.get("view_up", "+z")) if up == "auto" else up
+    up_dir = str(mech.sidecar.view_up or "+z") if up == "auto" else up
     options = dict(
         frame=mech.measured_frame,
         ghosts=ghosts,

@@ -27,7 +27,7 @@ def save_urdf(mech: Mechanism, path: str | Path) -> Path:
         path = path / f"{mech.name}.urdf"
     if mech.source is not None and path.resolve() == Path(mech.source).resolve():
         raise FileExistsError(f"refusing to overwrite the source model {str(path)!r}")
-    sidecar = dict(mech.sidecar)
+    sidecar = mech.sidecar.to_dict()
     if mech.measured_frame != sidecar.get("measured_frame"):
         sidecar["measured_frame"] = mech.measured_frame
     atomic_write_text(path, mech.urdf_xml if mech.urdf_xml.endswith("\n") else mech.urdf_xml + "\n")

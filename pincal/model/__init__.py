@@ -5,6 +5,12 @@ catalogue of bundled models.
 
 from __future__ import annotations
 
+from pincal.model._catalogue import (
+    bundled_models,
+    load_mechanism,
+    read_sidecar,
+    resolve_model_path,
+)
 from pincal.model._closures import (
     COMPONENTS,
     Closure,
@@ -16,26 +22,19 @@ from pincal.model._dh import (
     DHNames,
     DHRow,
     dh_apply_errors,
-    dh_errors_to_parameters,
     dh_fk,
     dh_layout,
+)
+from pincal.model._dh_model import (
+    dh_errors_to_parameters,
     dh_preset,
     dh_urdf,
-    example_robot_names,
-    example_robot_urdf,
     parameters_to_dh_errors,
 )
-from pincal.model._mechanism import (
-    Mechanism,
-    SolverOptions,
-    Workspace,
-    bundled_models,
-    load_mechanism,
-    read_sidecar,
-    resolve_model_path,
-    validate_sidecar,
-)
+from pincal.model._kinematics import Kinematics
+from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
+from pincal.model._newton import SolverOptions
 from pincal.model._parameters import (
     DOFS,
     Parameter,
@@ -43,6 +42,7 @@ from pincal.model._parameters import (
     full_parameters,
     parameters,
 )
+from pincal.model._robots import example_robot_names, example_robot_urdf
 from pincal.model._serial import (
     BASE_JOINT,
     INSTRUMENT_LINK,
@@ -53,6 +53,12 @@ from pincal.model._serial import (
     serial_mechanism,
     with_joint_origin,
     wrap_base_tool,
+)
+from pincal.model._sidecar import (
+    JOINT_KINDS,
+    Sidecar,
+    Workspace,
+    validate_sidecar,
 )
 from pincal.model._urdf import (
     MOVABLE_TYPES,
@@ -70,6 +76,7 @@ __all__ = [
     "COMPONENTS",
     "DOFS",
     "INSTRUMENT_LINK",
+    "JOINT_KINDS",
     "MOVABLE_TYPES",
     "TOOL_JOINT",
     "TOOL_LINK",
@@ -78,9 +85,11 @@ __all__ = [
     "DHLayout",
     "DHNames",
     "DHRow",
+    "Kinematics",
     "Mechanism",
     "Parameter",
     "ParameterSet",
+    "Sidecar",
     "SolverOptions",
     "UrdfJoint",
     "UrdfTree",

@@ -16,8 +16,8 @@ is translated once into the URDF route (models/README.md, section "MJCF"):
   closure between the links ``<eq>_1`` (anchor on body1) and ``<eq>_2`` (the same point
   in body2 at ``qpos0``), or between the two sites; ``<weld>`` becomes a ``6d`` closure
   (``relpose``, else the ``qpos0`` relative pose); equality names are kept in the
-  sidecar key ``mjcf_equality``;
-* actuators with ``joint=`` give ``name_mot`` (names in ``mjcf_actuators``); the
+  sidecar key ``closure_names``;
+* actuators with ``joint=`` give ``name_mot`` (names in ``actuator_names``); the
   ``home`` guess is the keyframe ``home`` (else the first keyframe, else ``qpos0``).
 
 Joint/tendon/flex equalities and ``<include>`` are refused (:class:`ModelFileError`);
@@ -182,7 +182,7 @@ def mjcf_to_urdf(
     Returns:
         ``(urdf_xml, sidecar)``; the sidecar has ``closed_loop``, ``type``, ``name_mot``
         (when actuators drive joints), ``home`` [m, rad], ``measured_frame`` (the last
-        leaf body), ``mjcf_equality`` and ``mjcf_actuators``.
+        leaf body), ``closure_names`` and ``actuator_names``.
 
     Raises:
         ModelFileError: unreadable or unsupported MJCF. UnknownNameError: a reference to a
@@ -211,7 +211,7 @@ def mjcf_to_urdf(
         sidecar["name_mot"] = list(dict.fromkeys(actuators.values()))
     sidecar["home"] = conv.home(keyframe)
     sidecar["measured_frame"] = conv.leaves[-1]
-    sidecar |= {"mjcf_equality": eq_names, "mjcf_actuators": actuators}
+    sidecar |= {"closure_names": eq_names, "actuator_names": actuators}
     return conv.urdf(), sidecar
 
 

@@ -25,7 +25,7 @@ _UNIT_TWISTS = {d: np.eye(6)[i] for i, d in enumerate(DOFS[:6])}
 _EXCLUDED_TYPES = ("floating", "planar")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Parameter:
     """One geometric parameter.
 
@@ -42,6 +42,22 @@ class Parameter:
     dof: str
     twist: np.ndarray
     unit: str
+
+    def __post_init__(self) -> None:
+        twist = np.array(self.twist, dtype=float)  # own read-only copy: hashing stays valid
+        twist.setflags(write=False)
+        object.__setattr__(self, "twist", twist)
+
+    def _key(self) -> tuple:
+        return (self.name, self.joint, self.dof, self.unit, tuple(self.twist.tolist()))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Parameter):
+            return NotImplemented
+        return self._key() == other._key()
+
+    def __hash__(self) -> int:
+        return hash(self._key())
 
 
 class ParameterSet:
@@ -81,6 +97,15 @@ class ParameterSet:
     def __repr__(self) -> str:
         return f"ParameterSet({self.label!r}, {len(self)} parameters)"
 
+    def __eq__(self, other: object) -> bool:
+        """Same parameters in the same order (the label is not compared)."""
+        if not isinstance(other, ParameterSet):
+            return NotImplemented
+        return self.parameters == other.parameters
+
+    def __hash__(self) -> int:
+        return hash(self.parameters)
+
     def index(self, name: str) -> int:
         if name not in self.names:
             raise UnknownNameError("parameter", name, self.names)
@@ -88,12 +113,23 @@ class ParameterSet:
 
     def subset(self, indices: Sequence[int] | np.ndarray, label: str | None = None) -> ParameterSet:
         """A new set with the parameters at ``indices`` (in that order)."""
-        return ParameterSet([self.parameters[int(i)] for i in indices], label or self.label)
+        n = len(self)
+        try:
+            picked = [int(i) for i in indices]
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"subset indices must be integers: {exc}") from exc
+        bad = [i for i in picked if not -n <= i < n]
+        if bad:
+            raise ParameterError(f"subset indices {bad} out of range for {n} parameters")
+        return ParameterSet([self.parameters[i] for i in picked], label or self.label)
 
     def check_values(self, values: np.ndarray | None) -> np.ndarray:
         if values is None:
             return np.zeros(len(self))
-        values = np.asarray(values, dtype=float)
+        try:
+            values = np.asarray(values, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"parameter values must be numbers: {exc}") from exc
         if values.shape != (len(self),):
             raise ParameterError(
                 f"expected {len(self)} parameter values for set {self.label!r}, got shape "

@@ -39,7 +39,8 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ModelFileError, UnknownNameError
-from pincal.model._mechanism import Mechanism, read_sidecar, resolve_model_path
+from pincal.model._catalogue import read_sidecar, resolve_model_path
+from pincal.model._mechanism import Mechanism
 from pincal.model._urdf import MOVABLE_TYPES, UrdfTree
 
 __all__ = [
@@ -237,7 +238,7 @@ def serial_mechanism(
         spec: anything :func:`pincal.load_mechanism` accepts (bundled model, URDF path,
             example-robot-data name such as ``"ur10"`` or ``"panda"``).
         flange: link carrying the tool frame; the measured frame becomes ``tool``.
-            None: no tool frame, the sidecar's (or the last leaf's) measured frame.
+            None: no tool frame, the sidecar's (or the automatically chosen) measured frame.
         lock: movable joints to make fixed, ``{name: value}`` (e.g. Panda fingers).
         base: add the ``base_frame`` joint (instrument → robot root).
         T_instrument_base, T_flange_tool: initial placements (default identity).

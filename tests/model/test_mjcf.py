@@ -74,8 +74,8 @@ def test_structure_and_names(fourbar, delta, fivebar):
     assert [(c.frame_a, c.frame_b, c.label) for c in fourbar.closures] == [
         ("pin_C_1", "pin_C_2", "3d")
     ]
-    assert fourbar.sidecar["mjcf_equality"] == ["pin_C"]
-    assert fourbar.sidecar["mjcf_actuators"] == {"crank_motor": "crank_joint"}
+    assert fourbar.sidecar.closure_names == ("pin_C",)
+    assert fourbar.sidecar.actuator_names == {"crank_motor": "crank_joint"}
     assert {"ground", "crank", "coupler", "rocker", "tool"} <= set(fourbar.tree.links)
     assert delta.model.nq == 3 + 6 * 3 + 7 and delta.model.nv == 27
     assert delta.mobility == 3 and delta.actuated == ("arm1_hinge", "arm2_hinge", "arm3_hinge")
@@ -89,7 +89,7 @@ def test_structure_and_names(fourbar, delta, fivebar):
     assert [c.label for c in fivebar.closures] == ["6d"] and fivebar.mobility == 2
     # two actuators on one joint declare it once; actuator names are kept
     assert fivebar.actuated == ("left_motor", "right_motor")
-    assert fivebar.sidecar["mjcf_actuators"] == {
+    assert fivebar.sidecar.actuator_names == {
         "motor0": "left_motor",
         "position1": "right_motor",
         "velocity2": "right_motor",
@@ -105,12 +105,12 @@ def test_loops_close_at_home(name, request):
 def test_file_pose_is_qpos0(fourbar, delta):
     """Joint values equal MuJoCo qpos: ref is folded into the origins, loops close at qpos0."""
     q0 = fourbar.with_actuators(fourbar.q_home, [np.pi / 2])  # crank ref = 90 deg
-    assert fourbar.sidecar["home"]["crank_joint"] == pytest.approx(np.pi / 2)
+    assert fourbar.sidecar.home["crank_joint"][0] == pytest.approx(np.pi / 2)
     assert np.allclose(
         fourbar.frame_placement(q0, "tool").translation, [0.15, 0.15, 0.1], atol=1e-15
     )
     assert np.allclose(fourbar.configuration([np.pi / 2]), fourbar.q_home, atol=1e-12)
-    assert delta.sidecar["home"]["arm1_hinge"] == pytest.approx(np.radians(30))
+    assert delta.sidecar.home["arm1_hinge"][0] == pytest.approx(np.radians(30))
 
 
 def test_fourbar_same_as_urdf_route(fourbar):
@@ -322,7 +322,7 @@ def test_weld_relpose_and_sites():
         '<connect site1="sa" site2="sb"/></equality></mujoco>'
     )
     assert sc["closed_loop"] == [["w_1", "w_2"], ["sa", "sb"]] and sc["type"] == ["6d", "3d"]
-    assert sc["mjcf_equality"] == ["w", "connect1"]
+    assert sc["closure_names"] == ["w", "connect1"]
     T = _origin(urdf, "w_1_frame")
     assert np.allclose(T.translation, [0.5, 0, 0]) and np.allclose(T.rotation, ROT["z"](np.pi))
     assert np.allclose(_origin(urdf, "w_2_frame").translation, [0.1, 0, 0])

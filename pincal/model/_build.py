@@ -1,0 +1,118 @@
+"""The Pinocchio model of a URDF + sidecar: joint kinds the URDF cannot express, ranges.
+
+* ``joint_name`` / ``joint_type`` (the robot.yaml convention): each listed URDF joint
+  (a placeholder such as a revolute or fixed joint) becomes a spherical joint
+  (Pinocchio ``JointModelSpherical``, a ball joint about the joint origin). Universal
+  joints need two axes that a single URDF joint cannot give: they are refused with
+  advice (model them as two revolute joints).
+* A revolute or prismatic joint whose ``<limit>`` has no ``lower``/``upper`` gets the
+  URDF default 0/0: a zero-width range means "no range given" and is made unlimited.
+  Each such joint yields a note (``Mechanism.notes``, printed by ``pincal info``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.errors import ModelFileError, UnknownNameError
+from pincal.model._sidecar import Sidecar
+from pincal.model._urdf import UrdfTree
+
+__all__ = ["build_model"]
+
+
+def build_model(urdf_xml: str, tree: UrdfTree, sidecar: Sidecar) -> tuple[pin.Model, list[str]]:
+    """Build the Pinocchio model and the notes about it.
+
+    Args:
+        urdf_xml: URDF text.
+        tree: the parsed URDF (for joint types and names).
+        sidecar: the typed sidecar (joint kinds and workspace ranges).
+
+    Returns:
+        (model, notes): the model (limits widened where the URDF gave none) and
+        human-readable notes, one per adjusted joint.
+
+    Raises:
+        ModelFileError: Pinocchio cannot build the URDF, or a joint kind is unsupported.
+        UnknownNameError: ``joint_name`` lists a joint the URDF does not have.
+    """
+    try:
+        model = pin.buildModelFromXML(urdf_xml)
+    except (RuntimeError, ValueError) as exc:
+        raise ModelFileError(f"Pinocchio cannot build the URDF model: {exc}") from exc
+    notes: list[str] = []
+    if sidecar.joint_name:
+        model = _replace_joints(model, tree, sidecar)
+        notes += [
+            f"joint {n!r} is a {k} joint (sidecar joint_type)"
+            for n, k in zip(sidecar.joint_name, sidecar.joint_type, strict=True)
+        ]
+    notes += _open_zero_ranges(model, sidecar)
+    return model, notes
+
+
+def _replace_joints(model: pin.Model, tree: UrdfTree, sidecar: Sidecar) -> pin.Model:
+    kinds = dict(zip(sidecar.joint_name, sidecar.joint_type, strict=True))
+    movable = list(model.names)[1:]
+    for name, kind in kinds.items():
+        if name not in tree.joints:
+            raise UnknownNameError("joint", name, list(tree.joints))
+        if name not in movable:
+            raise ModelFileError(
+                f"sidecar joint_name {name!r} is a {tree.joints[name].type} URDF joint, which "
+                f"Pinocchio merges away; declare it as a revolute (any axis) placeholder to make "
+                f"it {kind}"
+            )
+        if kind == "universal":
+            raise ModelFileError(
+                f"sidecar joint_type 'universal' for {name!r}: a universal joint needs two axes "
+                f"that one URDF joint cannot give; write it as two revolute joints in the URDF "
+                f"(joint_type supports: spherical)"
+            )
+    new = pin.Model()
+    new.name = model.name
+    for j in range(1, model.njoints):
+        name = model.names[j]
+        placement = model.jointPlacements[j]
+        if name in kinds:
+            jid = new.addJoint(model.parents[j], pin.JointModelSpherical(), placement, name)
+        else:
+            qi, nq, vi, nv = model.idx_qs[j], model.nqs[j], model.idx_vs[j], model.nvs[j]
+            jid = new.addJoint(
+                model.parents[j],
+                model.joints[j],
+                placement,
+                name,
+                model.effortLimit[vi : vi + nv],
+                model.velocityLimit[vi : vi + nv],
+                model.lowerPositionLimit[qi : qi + nq],
+                model.upperPositionLimit[qi : qi + nq],
+            )
+        new.appendBodyToJoint(jid, model.inertias[j], pin.SE3.Identity())
+    for f in list(model.frames)[1:]:
+        frame = pin.Frame(f.name, f.parentJoint, f.parentFrame, f.placement, f.type, f.inertia)
+        new.addFrame(frame, False)
+    return new
+
+
+def _open_zero_ranges(model: pin.Model, sidecar: Sidecar) -> list[str]:
+    notes = []
+    lower, upper = model.lowerPositionLimit.copy(), model.upperPositionLimit.copy()
+    for j in range(1, model.njoints):
+        if model.nqs[j] != 1:
+            continue
+        qi, name = model.idx_qs[j], model.names[j]
+        if lower[qi] != upper[qi]:
+            continue
+        given = sidecar.workspace.joints.get(name)
+        lower[qi], upper[qi] = given if given else (-np.inf, np.inf)
+        where = (
+            f"the sidecar workspace range [{given[0]:.6g}, {given[1]:.6g}] is its range"
+            if given
+            else "treated as unlimited"
+        )
+        notes.append(f"joint {name!r} has a zero-width URDF <limit> (no lower/upper); {where}")
+    model.lowerPositionLimit, model.upperPositionLimit = lower, upper
+    return notes

@@ -1,0 +1,105 @@
+"""The model catalogue: bundled models, model paths, sidecar files, loading."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from pincal.errors import ModelFileError, UnknownNameError
+from pincal.model._mechanism import Mechanism
+from pincal.model._newton import SolverOptions
+
+__all__ = ["MODELS_DIR", "bundled_models", "load_mechanism", "read_sidecar", "resolve_model_path"]
+
+#: the bundled models (pincal/models links to the checkout's top-level models/; the wheel
+#: ships them as package data)
+MODELS_DIR = Path(__file__).resolve().parents[1] / "models"
+
+
+def _read_text(path: Path, what: str) -> str:
+    try:
+        return path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelFileError(f"cannot read {what} {str(path)!r}: {exc.strerror}") from exc
+
+
+def read_sidecar(path: Path) -> dict[str, Any]:
+    """Parse a sidecar YAML file safely (no code execution)."""
+    try:
+        data = yaml.safe_load(_read_text(path, "sidecar"))
+    except yaml.YAMLError as exc:
+        raise ModelFileError(f"sidecar {str(path)!r} is not valid YAML: {exc}") from exc
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        raise ModelFileError(f"sidecar {str(path)!r} must be a mapping, got {type(data).__name__}")
+    return data
+
+
+def bundled_models() -> list[str]:
+    """Names of the models shipped in ``models/``."""
+    if not MODELS_DIR.is_dir():
+        return []
+    return sorted(p.name for p in MODELS_DIR.iterdir() if (p / f"{p.name}.urdf").is_file())
+
+
+def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
+    """Find the URDF (and sidecar, if any) for a model directory, URDF path, bundled
+    model name or example-robot-data robot name (e.g. ``ur10``)."""
+    path = Path(spec)
+    if path.is_dir():
+        urdf = path / f"{path.name}.urdf"
+        if not urdf.is_file():
+            candidates = sorted(path.glob("*.urdf"))
+            if len(candidates) != 1:
+                raise ModelFileError(f"model directory {str(path)!r} must hold {path.name}.urdf")
+            urdf = candidates[0]
+    elif path.suffix.lower() == ".urdf":
+        urdf = path
+        if not urdf.is_file():
+            raise ModelFileError(f"URDF file {str(path)!r} does not exist")
+    elif (MODELS_DIR / str(spec)).is_dir():
+        return resolve_model_path(MODELS_DIR / str(spec))
+    else:
+        from pincal.model._robots import example_robot_names, example_robot_urdf
+
+        if str(spec) not in example_robot_names():
+            valid = bundled_models() + [f"{n} (example-robot-data)" for n in example_robot_names()]
+            raise UnknownNameError("model", str(spec), valid)
+        urdf = example_robot_urdf(str(spec))
+    sidecar = urdf.with_suffix(".yaml")
+    return urdf, sidecar if sidecar.is_file() else None
+
+
+def load_mechanism(
+    spec: str | Path, measured_frame: str | None = None, options: SolverOptions | None = None
+) -> Mechanism:
+    """Load a mechanism from a model directory, a ``.urdf`` or MJCF ``.xml`` path or a name.
+
+    Names are bundled models (:func:`bundled_models`) or example-robot-data robots.
+    An MJCF file is converted to URDF + sidecar first (:func:`pincal.model.load_mjcf`).
+
+    A sidecar ``<name>.yaml`` beside the URDF declares closures, actuation, measured
+    frame and presets (see models/README.md). A bare serial URDF needs none: all its
+    1-dof joints are actuated and the measured frame is chosen by name (effector, ee,
+    tcp, tool, flange, platform...) or as the deepest leaf link without a closure.
+
+    Raises:
+        ModelFileError, UnknownNameError, ClosureError, MobilityError.
+    """
+    if Path(spec).suffix.lower() == ".xml":
+        from pincal.model._mjcf import load_mjcf
+
+        return load_mjcf(spec, measured_frame, options=options)
+    urdf, sidecar_path = resolve_model_path(spec)
+    sidecar = read_sidecar(sidecar_path) if sidecar_path else {}
+    return Mechanism(
+        _read_text(urdf, "URDF"),
+        sidecar,
+        name=urdf.stem,
+        source=urdf,
+        measured_frame=measured_frame,
+        options=options,
+    )

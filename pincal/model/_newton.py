@@ -1,0 +1,129 @@
+"""Damped, rank-revealing Newton solve on a Pinocchio configuration manifold.
+
+Used to close kinematic loops (forward kinematics, assembly) and to reach target poses
+(inverse kinematics). Redundant closure rows and rank loss are handled by a truncated
+SVD; every step is limited in norm and backtracked until the residual decreases.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.errors import ConvergenceError
+
+__all__ = ["Solution", "SolverOptions", "damped_newton", "newton_step"]
+
+
+@dataclass(frozen=True)
+class SolverOptions:
+    """Newton solver settings.
+
+    Attributes:
+        tol: convergence threshold on the largest residual component [m or rad].
+        max_iterations: Newton iterations before giving up.
+        max_step: largest tangent step norm per iteration [m, rad].
+        rcond: relative singular-value cut-off of the rank-revealing solve.
+        max_condition: condition number above which a solution is called singular.
+    """
+
+    tol: float = 1e-12
+    max_iterations: int = 60
+    max_step: float = 0.5
+    rcond: float = 1e-10
+    max_condition: float = 1e8
+
+
+@dataclass(frozen=True)
+class Solution:
+    q: np.ndarray
+    iterations: int
+    residual: float
+    singular_values: np.ndarray  # of the Jacobian over the free dofs at q
+    jacobian: np.ndarray  # (m, k) the Jacobian over the free dofs at q
+
+
+def newton_step(J: np.ndarray, r: np.ndarray, rcond: float) -> np.ndarray:
+    """Minimum-norm least-squares solution of ``J dx = −r`` (rank-revealing).
+
+    A square, well-conditioned J is solved by LU; anything else (redundant closure rows,
+    rank loss) by a truncated SVD with relative cut-off ``rcond``.
+    """
+    if J.shape[0] == J.shape[1] and J.size:
+        try:
+            step = -np.linalg.solve(J, r)
+            if np.all(np.isfinite(step)) and np.linalg.norm(J @ step + r) <= 1e-8 * (
+                np.linalg.norm(r) + 1e-300
+            ):
+                return step
+        except np.linalg.LinAlgError:
+            pass
+    U, s, Vt = np.linalg.svd(J, full_matrices=False)
+    if s.size == 0 or s[0] == 0.0:
+        return np.zeros(J.shape[1])
+    keep = s > rcond * s[0]
+    coeff = (U.T @ r)[keep] / s[keep]
+    return -(Vt[keep].T @ coeff)
+
+
+def damped_newton(
+    model: pin.Model,
+    q0: np.ndarray,
+    free: np.ndarray,
+    evaluate: Callable[[np.ndarray], np.ndarray],
+    jacobian: Callable[[], np.ndarray],
+    options: SolverOptions,
+) -> Solution:
+    """Drive ``evaluate(q)`` to zero moving only the tangent dofs ``free``.
+
+    Args:
+        model: the Pinocchio model (for ``integrate``).
+        q0: (nq,) start configuration.
+        free: tangent indices (k,) allowed to move.
+        evaluate: residual (m,) at q; the call also prepares :func:`jacobian`.
+        jacobian: (m, nv) Jacobian at the configuration last passed to ``evaluate``.
+        options: tolerances and limits.
+
+    Returns:
+        The converged :class:`Solution` (singular values of the Jacobian over ``free``).
+
+    Raises:
+        ConvergenceError: no convergence within ``options.max_iterations``, or stalled.
+    """
+    opt = options
+    q = np.array(q0, dtype=float)
+    nv = model.nv
+    r = evaluate(q)
+    norm = np.linalg.norm(r)
+    it = 0
+    for it in range(opt.max_iterations + 1):
+        Jf = jacobian()[:, free]
+        if np.max(np.abs(r), initial=0.0) <= opt.tol:
+            s = np.linalg.svd(Jf, compute_uv=False) if Jf.size else np.zeros(0)
+            return Solution(q, it, float(np.max(np.abs(r), initial=0.0)), s, Jf)
+        if it == opt.max_iterations:
+            break
+        step = newton_step(Jf, r, opt.rcond)
+        step_norm = np.linalg.norm(step)
+        if step_norm > opt.max_step:
+            step *= opt.max_step / step_norm
+        dv = np.zeros(nv)
+        dv[free] = step
+        alpha = 1.0
+        for _ in range(30):
+            q_try = pin.integrate(model, q, alpha * dv)
+            r_try = evaluate(q_try)
+            n_try = np.linalg.norm(r_try)
+            if n_try < norm or n_try <= opt.tol:
+                break
+            alpha *= 0.5
+        else:  # no decrease along the Newton direction: stalled
+            break
+        q, r, norm = q_try, r_try, n_try
+    raise ConvergenceError(
+        f"Newton did not converge: residual {np.max(np.abs(r)):.3e} after {it} iterations",
+        residual=float(np.max(np.abs(r))),
+    )
