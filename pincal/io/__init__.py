@@ -1,4 +1,5 @@
-"""Files: measurement, pose and command CSVs, URDF + sidecar export, atomic writes.
+"""Files: measurement, pose and command CSVs, pose-design files, URDF + sidecar export,
+atomic writes.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from pincal.io._datafiles import (
     write_poses,
     write_target_measurements,
 )
+from pincal.io._pose_design_file import write_pose_design
 from pincal.io._urdf_export import (
     save_urdf,
 )
@@ -43,6 +45,7 @@ __all__ = [
     "save_urdf",
     "write_commands",
     "write_measurements",
+    "write_pose_design",
     "write_poses",
     "write_target_measurements",
 ]

@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from pincal.errors import PincalError
 
-__all__ = ["RANK_RTOL", "RangeSolver", "numerical_rank"]
+__all__ = ["RANK_RTOL", "RangeSolver", "numerical_rank", "numerical_ranks"]
 
 RANK_RTOL: float = 1e-8
 """Default relative singular-value threshold of :func:`numerical_rank`."""
@@ -33,6 +33,29 @@ def _check_rtol(rtol: float) -> float:
             f"The default is {RANK_RTOL:g}."
         )
     return float(rtol)
+
+
+def numerical_ranks(sigma: ArrayLike, rtol: float = RANK_RTOL) -> NDArray[np.int_]:
+    """Numerical rank of each row of a batch of singular values: count of σi > rtol·σ1.
+
+    Args:
+        sigma: singular values (B, k), one matrix per row, any order within a row.
+        rtol: relative threshold in [0, 1) (default :data:`RANK_RTOL` = 1e-8).
+
+    Returns:
+        Ranks (B,) (0 for an all-zero row).
+
+    Raises:
+        PincalError: ``rtol`` is not in [0, 1) or ``sigma`` is not 2-D.
+    """
+    s = np.asarray(sigma, dtype=float)
+    rtol = _check_rtol(rtol)
+    if s.ndim != 2:
+        raise PincalError(f"sigma must be a batch (B, k) of singular values; got {s.shape}")
+    if s.shape[1] == 0:
+        return np.zeros(s.shape[0], dtype=int)
+    s1 = np.max(s, axis=1, keepdims=True)
+    return np.where(s1[:, 0] > 0.0, np.count_nonzero(s > rtol * s1, axis=1), 0)
 
 
 def numerical_rank(sigma: ArrayLike, rtol: float = RANK_RTOL) -> int:
@@ -48,14 +71,7 @@ def numerical_rank(sigma: ArrayLike, rtol: float = RANK_RTOL) -> int:
     Raises:
         PincalError: ``rtol`` is not in [0, 1).
     """
-    s = np.asarray(sigma, dtype=float).reshape(-1)
-    rtol = _check_rtol(rtol)
-    if s.size == 0:
-        return 0
-    s1 = float(np.max(s))
-    if not s1 > 0.0:
-        return 0
-    return int(np.count_nonzero(s > rtol * s1))
+    return int(numerical_ranks(np.asarray(sigma, dtype=float).reshape(1, -1), rtol)[0])
 
 
 @dataclass(frozen=True, eq=False)
