@@ -108,9 +108,7 @@ def _measured(mech, q_act_rows, reference_rotations):
 
 
 @pytest.mark.parametrize("at_zero", [True, False])
-def test_jacobian_matches_central_differences_on_closable_parameters(
-    five_bar, full, rows, at_zero
-):
+def test_jacobian_matches_central_differences_on_closable_parameters(five_bar, full, rows, at_zero):
     closable = full.subset(np.flatnonzero(~closure_breaking(five_bar, full, rows)))
     rng = np.random.default_rng(8)
     values = np.zeros(len(closable)) if at_zero else rng.normal(0, 2e-4, len(closable))

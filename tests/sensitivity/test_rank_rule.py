@@ -69,9 +69,7 @@ def test_random_rank_deficient_matrices(seed, rank, n, zero_columns, breaking):
         keep = np.setdiff1d(np.arange(n), [] if mask is None else mask)
         true_rank = np.linalg.matrix_rank(J[:, keep]) if keep.size else 0
         assert ident.rank == true_rank
-        assert sorted([*ident.base, *ident.unidentifiable, *ident.breaks_closure]) == list(
-            range(n)
-        )
+        assert sorted([*ident.base, *ident.unidentifiable, *ident.breaks_closure]) == list(range(n))
         if ident.rank:
             assert np.linalg.matrix_rank(J[:, ident.base]) == ident.rank
         _reproduces(J, ident, 1e-5)
