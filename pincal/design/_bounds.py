@@ -53,7 +53,9 @@ def crb_covariance(
     if rank < n:
         null = vt[rank:]
         involved = np.flatnonzero(np.max(np.abs(null), axis=0) > 1e-8)
-        labels = [names[i] for i in involved] if names is not None else [str(i) for i in involved]
+        labels = (
+            [names[int(i)] for i in involved] if names is not None else [str(i) for i in involved]
+        )
         if not allow_rank_deficient:
             raise UnidentifiableError(
                 f"Jacobian has rank {rank} < {n} parameters; the unobservable directions involve "

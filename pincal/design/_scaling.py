@@ -263,7 +263,8 @@ class DesignScaling:
         if self.rows == "none":
             rows = "rows: unscaled SI (m, rad)"
         elif self.rows == "K":
-            rows = f"rows: Jzg, position rows / K (K = {self.K * 1e3:g} mm), rotation rows as is"
+            K_mm = float(self.K or 0.0) * 1e3
+            rows = f"rows: Jzg, position rows / K (K = {K_mm:g} mm), rotation rows as is"
         else:
             parts = []
             if self.position_std is not None:

@@ -153,7 +153,8 @@ class _Problem:
             cand, ld_all = cand[keep], ld_all[keep]
         size = len(state.members) + 1
         if state.members:
-            R = np.linalg.qr(self.J[np.asarray(state.members)].reshape(-1, self.n), mode="r")
+            members = self.J[np.asarray(state.members)].reshape(-1, self.n)
+            R: NDArray[np.float64] = np.asarray(np.linalg.qr(members, mode="r"))
         else:
             R = np.zeros((0, self.n))
         stacked = np.concatenate([np.broadcast_to(R, (cand.size, *R.shape)), self.J[cand]], 1)
