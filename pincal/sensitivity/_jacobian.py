@@ -61,6 +61,8 @@ def _breaking(solver: RangeSolver, Jc_p: np.ndarray) -> np.ndarray:
     A column breaks closure when that part exceeds :data:`RANK_RTOL` of the column's
     own norm (and is not round-off of a negligible column: 1e-12 of the largest).
     """
+    if solver.rank == Jc_p.shape[0]:  # full row rank: every column is in the range
+        return np.zeros(Jc_p.shape[1], dtype=bool)
     norms = np.linalg.norm(Jc_p, axis=0)
     out = solver.out_of_range(Jc_p)
     floor = 1e-12 * float(norms.max(initial=0.0))

@@ -117,4 +117,6 @@ class RangeSolver:
     def out_of_range(self, B: ArrayLike) -> NDArray[np.float64]:
         """Norm of each column of B outside range(A), ‖(I − U Uᵀ) b_k‖, shape (k,)."""
         b = np.asarray(B, dtype=float).reshape(self.u.shape[0], -1)
+        if self.rank == self.u.shape[0]:  # full row rank: the range is everything
+            return np.zeros(b.shape[1])
         return np.linalg.norm(b - self.u @ (self.u.T @ b), axis=0)
