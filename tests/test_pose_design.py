@@ -26,7 +26,6 @@ from pincal.design import (
     random_candidates,
     select_poses,
     weight_rows,
-    write_pose_design,
 )
 from pincal.errors import (
     PincalError,
@@ -36,6 +35,7 @@ from pincal.errors import (
 from pincal.io import (
     read_commands,
     read_poses,
+    write_pose_design,
 )
 from pincal.model import COMPONENTS
 

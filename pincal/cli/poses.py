@@ -76,9 +76,9 @@ def poses(
         characteristic_length,
         cramer_rao_from_jacobian,
         select_poses,
-        write_pose_design,
     )
     from pincal.errors import PincalError
+    from pincal.io import write_pose_design
     from pincal.measure import NoiseModel
     from pincal.model import load_mechanism, parameters
 

@@ -1,19 +1,22 @@
 """Stage 3 — where to measure: observability indices and Jacobian scalings, candidate
 poses, exchange / DETMAX / greedy selection, Cramér–Rao predictions.
+
+The files of a selection are written by :func:`pincal.io.write_pose_design`.
 """
 
 from __future__ import annotations
 
-from pincal.design._candidates import (
-    CandidateSet,
+from pincal.design._arrays import bose_array, map_to_ranges, orthogonal_array
+from pincal.design._bounds import crb_covariance, predicted_std, predicted_validation_rms
+from pincal.design._candidate_sources import (
     candidate_set,
     default_grid_ranges,
-    evaluate_candidates,
     grid_candidates,
     orthogonal_candidates,
     parse_candidate_spec,
     random_candidates,
 )
+from pincal.design._candidates import CandidateSet, evaluate_candidates
 from pincal.design._crb import (
     CramerRaoReport,
     Efficiency,
@@ -21,39 +24,26 @@ from pincal.design._crb import (
     cramer_rao_from_jacobian,
     efficiency,
 )
-from pincal.design._exchange import (
-    PoseSelection,
-    bose_array,
-    detmax,
-    exchange,
-    greedy,
-    map_to_ranges,
-    orthogonal_array,
-)
+from pincal.design._exchange import PoseSelection, detmax, exchange, greedy
 from pincal.design._indices import (
-    COLUMN_SCALINGS,
     INDEX_NAMES,
-    ROW_SCALINGS,
-    DesignScaling,
-    JacobianScaling,
     ObservabilityIndices,
-    characteristic_length,
-    crb_covariance,
-    dimensionless_rows,
+    batch_indices,
     indices_from_singular_values,
     numerical_rank,
     observability,
-    predicted_std,
-    predicted_validation_rms,
+)
+from pincal.design._scaling import (
+    COLUMN_SCALINGS,
+    ROW_SCALINGS,
+    DesignScaling,
+    JacobianScaling,
+    characteristic_length,
+    dimensionless_rows,
     scale_columns,
     weight_rows,
 )
-from pincal.design._selection import (
-    SELECTION_METHODS,
-    PoseDesign,
-    select_poses,
-    write_pose_design,
-)
+from pincal.design._selection import SELECTION_METHODS, PoseDesign, select_poses
 
 __all__ = [
     "COLUMN_SCALINGS",
@@ -68,6 +58,7 @@ __all__ = [
     "ObservabilityIndices",
     "PoseDesign",
     "PoseSelection",
+    "batch_indices",
     "bose_array",
     "candidate_set",
     "characteristic_length",
@@ -95,5 +86,4 @@ __all__ = [
     "scale_columns",
     "select_poses",
     "weight_rows",
-    "write_pose_design",
 ]

@@ -14,15 +14,16 @@ module produces the candidates from a mechanism, three ways:
   the six workspace pose factors (x, y, z, rx, ry, rz) mapped onto the
   workspace ranges and solved by inverse kinematics.
 
-Each returns a :class:`CandidateSet`: actuator rows (N, n_act), the nominal
+The three generators live in :mod:`pincal.design._candidate_sources`; all of them
+push actuator rows through :func:`evaluate_candidates` here. Each returns a
+:class:`CandidateSet`: actuator rows (N, n_act), the nominal
 measured-frame poses and the unscaled Jacobian blocks (N, k, n) of the measured
 components (:func:`pincal.pose_sensitivity`), ready to be scaled
-(:func:`pincal.design._indices.scale_design_jacobian`) and selected from.
+(:class:`pincal.design._scaling.DesignScaling`) and selected from.
 """
 
 from __future__ import annotations
 
-import itertools
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -31,24 +32,13 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
-from pincal.design._exchange import map_to_ranges, orthogonal_array
 from pincal.errors import ConvergenceError, PincalError, SingularConfigurationError
 from pincal.model._closures import COMPONENTS
 from pincal.model._mechanism import WORKSPACE_POSE_KEYS, Mechanism
 from pincal.model._parameters import ParameterSet
-from pincal.model._workspace import _joint_ranges, sample_actuators
 from pincal.sensitivity._jacobian import pose_sensitivity
 
-__all__ = [
-    "CandidateSet",
-    "candidate_set",
-    "default_grid_ranges",
-    "evaluate_candidates",
-    "grid_candidates",
-    "orthogonal_candidates",
-    "parse_candidate_spec",
-    "random_candidates",
-]
+__all__ = ["CandidateSet", "evaluate_candidates"]
 
 _log = logging.getLogger(__name__)
 
@@ -224,201 +214,4 @@ def evaluate_candidates(
         rejected=counts,
     )
     _log.info("%s", result.summary())
-    return result
-
-
-# ----------------------------------------------------------------------------- grids
-
-
-def default_grid_ranges(mech: Mechanism) -> NDArray[np.float64]:
-    """Actuator ranges (n_act, 2) for a joint-space grid [m, rad].
-
-    The sidecar's ``workspace.joints`` where given; otherwise, when a pose
-    workspace is given, the range of each actuator over the inverse kinematics
-    of the home pose and the 2·d "star" poses that move one pose factor at a
-    time to either end of its range (so the grid spans the joint motion of the
-    workspace axes rather than the far larger URDF limits; grid corners that
-    combine several extremes are then filtered by the pose workspace);
-    otherwise the URDF limits. Always clipped to the actuator limits.
-    """
-    ranges = _joint_ranges(mech)
-    limits = np.asarray(mech.actuator_limits, dtype=float)
-    pose = mech.workspace.pose
-    if pose:
-        home = _home_pose(mech)
-        seen = [mech.actuators_of(mech.q_home)]
-        for key, ends in pose.items():
-            for value in ends:
-                p = home.translation.copy()
-                r = np.zeros(3)
-                i = WORKSPACE_POSE_KEYS.index(key)
-                if i < 3:
-                    p[i] = value
-                else:
-                    r[i - 3] = value
-                T = pin.SE3(home.rotation @ pin.exp3(r), p)
-                try:
-                    seen.append(mech.inverse(T, check_limits=False))
-                except ConvergenceError:
-                    continue
-        seen_arr = np.array(seen)
-        for k, name in enumerate(mech.actuated):
-            if name not in mech.workspace.joints:
-                ranges[k] = seen_arr[:, k].min(), seen_arr[:, k].max()
-    lo = np.maximum(ranges[:, 0], np.where(np.isfinite(limits[:, 0]), limits[:, 0], -np.inf))
-    hi = np.minimum(ranges[:, 1], np.where(np.isfinite(limits[:, 1]), limits[:, 1], np.inf))
-    return np.stack([lo, hi], axis=1)
-
-
-def grid_candidates(
-    mech: Mechanism,
-    params: ParameterSet,
-    levels: int = 4,
-    ranges: ArrayLike | None = None,
-    *,
-    in_workspace: bool = True,
-    progress: Progress | None = None,
-) -> CandidateSet:
-    """Seed 000: a full joint-space grid pushed through the forward kinematics.
-
-    Each actuator takes ``levels`` evenly spaced values over its range (both
-    ends included), giving levels^n_act rows (4 levels, 6 legs: 4096), in
-    lexicographic order (the last actuator varies fastest).
-
-    Args:
-        mech: nominal mechanism.
-        params: parameter set for the Jacobian blocks.
-        levels: values per actuator, ≥ 2.
-        ranges: actuator ranges (n_act, 2) [m, rad]; default
-            :func:`default_grid_ranges`.
-        in_workspace: keep only poses inside the sidecar pose workspace.
-        progress: callback ``(done, total)``.
-    """
-    if not isinstance(levels, (int, np.integer)) or levels < 2:
-        raise PincalError(f"a grid needs levels >= 2 per actuator; got {levels!r}")
-    n_act = len(mech.actuated)
-    rng_arr = default_grid_ranges(mech) if ranges is None else np.asarray(ranges, dtype=float)
-    if rng_arr.shape != (n_act, 2) or not np.all(np.isfinite(rng_arr)):
-        raise PincalError(f"ranges must be finite (lower, upper) pairs, shape ({n_act}, 2)")
-    axes = [np.linspace(lo, hi, int(levels)) for lo, hi in rng_arr]
-    rows = np.array(list(itertools.product(*axes)))
-    return evaluate_candidates(
-        mech, params, rows, source=f"grid:{levels}", in_workspace=in_workspace, progress=progress
-    )
-
-
-def random_candidates(
-    mech: Mechanism,
-    params: ParameterSet,
-    count: int,
-    rng: np.random.Generator | int | None = None,
-    *,
-    progress: Progress | None = None,
-) -> CandidateSet:
-    """``count`` random feasible workspace poses (:func:`pincal.sample_actuators`)."""
-    if count < 1:
-        raise PincalError(f"count must be >= 1; got {count}")
-    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    rows = sample_actuators(mech, int(count), gen)
-    return evaluate_candidates(
-        mech, params, rows, source=f"random:{count}", in_workspace=False, progress=progress
-    )
-
-
-def orthogonal_candidates(
-    mech: Mechanism,
-    params: ParameterSet,
-    levels: int = 5,
-    *,
-    progress: Progress | None = None,
-) -> CandidateSet:
-    """Seed 001: a strength-2 orthogonal array over the six workspace pose factors.
-
-    The array (:func:`pincal.design._exchange.orthogonal_array`, e.g. L25(5⁶) for 5 levels,
-    L49(7⁶) for 7) has one column per pose factor x, y, z, rx, ry, rz; levels are
-    mapped evenly onto the sidecar's pose ranges (a factor without a range stays
-    at its home value) and each run is solved by inverse kinematics. Unreachable
-    runs are counted as ``"no IK"``.
-    """
-    pose = mech.workspace.pose
-    if not pose:
-        raise PincalError(
-            f"{mech.name!r} has no pose workspace in its sidecar (workspace.pose); "
-            "orthogonal-array candidates need pose ranges"
-        )
-    table = orthogonal_array(int(levels), len(WORKSPACE_POSE_KEYS))
-    home = _home_pose(mech)
-    rvec_home = np.zeros(3)
-    centre = np.concatenate([home.translation, rvec_home])
-    lo = np.array(
-        [pose.get(k, (centre[i], centre[i]))[0] for i, k in enumerate(WORKSPACE_POSE_KEYS)]
-    )
-    hi = np.array(
-        [pose.get(k, (centre[i], centre[i]))[1] for i, k in enumerate(WORKSPACE_POSE_KEYS)]
-    )
-    factors = map_to_ranges(table, lo, hi)
-    rows, failed = [], 0
-    total = factors.shape[0]
-    for i, f in enumerate(factors):
-        if progress is not None:
-            progress(i + 1, 2 * total)
-        T = pin.SE3(home.rotation @ pin.exp3(f[3:]), f[:3])
-        try:
-            rows.append(mech.inverse(T, check_limits=False))
-        except ConvergenceError:
-            failed += 1
-    p = table.max() + 1
-
-    def second_half(done: int, n: int) -> None:
-        if progress is not None:
-            progress(total + round(done * total / max(n, 1)), 2 * total)
-
-    return evaluate_candidates(
-        mech,
-        params,
-        np.array(rows).reshape(-1, len(mech.actuated)),
-        source=f"oa:L{p * p}({p}^6)",
-        in_workspace=False,
-        tried=total,
-        rejected={"no IK": failed},
-        progress=second_half,
-    )
-
-
-# ----------------------------------------------------------------------------- specs
-
-
-def parse_candidate_spec(spec: str) -> tuple[str, int]:
-    """``"grid:4"`` → ("grid", 4); kinds: grid (levels), random (count), oa (levels)."""
-    kind, _, arg = spec.partition(":")
-    defaults = {"grid": 4, "random": 500, "oa": 5}
-    if kind not in defaults:
-        raise PincalError(
-            f"candidate spec {spec!r} not understood; use grid:LEVELS, random:COUNT or oa:LEVELS"
-        )
-    try:
-        value = int(arg) if arg else defaults[kind]
-    except ValueError:
-        raise PincalError(f"candidate spec {spec!r}: {arg!r} is not an integer") from None
-    return kind, value
-
-
-def candidate_set(
-    mech: Mechanism,
-    params: ParameterSet,
-    spec: str = "grid:4",
-    rng: np.random.Generator | int | None = None,
-    *,
-    progress: Progress | None = None,
-) -> CandidateSet:
-    """Candidates from a spec string: ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``."""
-    kind, value = parse_candidate_spec(spec)
-    if kind == "grid":
-        result = grid_candidates(mech, params, value, progress=progress)
-    elif kind == "random":
-        result = random_candidates(mech, params, value, rng, progress=progress)
-    else:
-        result = orthogonal_candidates(mech, params, value, progress=progress)
-    if len(result) == 0:
-        raise PincalError(f"no feasible candidate poses from {spec!r}: {result.summary()}")
     return result

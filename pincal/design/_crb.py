@@ -26,7 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from pincal.design._indices import crb_covariance, weight_rows
+from pincal.design._bounds import crb_covariance
+from pincal.design._scaling import weight_rows
 from pincal.errors import PincalError
 from pincal.measure._measurements import NoiseModel
 from pincal.model._closures import COMPONENTS

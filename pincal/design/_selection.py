@@ -1,30 +1,26 @@
 """Choosing measurement poses of a mechanism: candidates → scaling → index → selection.
 
 Glue between :mod:`pincal.design._candidates` (feasible poses with Jacobian blocks),
-:class:`pincal.design._indices.DesignScaling` (the stated scaling) and
-:mod:`pincal.design._exchange` (exchange / DETMAX / greedy), plus writing the result:
-a CSV of actuator values and nominal poses and a JSON with the index history.
+:class:`pincal.design._scaling.DesignScaling` (the stated scaling) and
+:mod:`pincal.design._exchange` (exchange / DETMAX / greedy). Writing the result to
+files is :func:`pincal.io.write_pose_design` (design does not depend on io).
 """
 
 from __future__ import annotations
 
-import json
 import logging
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 from numpy.typing import NDArray
 
 from pincal.design._candidates import CandidateSet
 from pincal.design._exchange import PoseSelection, detmax, exchange, greedy
-from pincal.design._indices import DesignScaling, ObservabilityIndices, observability
+from pincal.design._indices import ObservabilityIndices, observability
+from pincal.design._scaling import DesignScaling
 from pincal.errors import PincalError, UnknownNameError
-from pincal.io import _datafiles as datafiles
-from pincal.io._atomic import atomic_write_text
 
-__all__ = ["SELECTION_METHODS", "PoseDesign", "select_poses", "write_pose_design"]
+__all__ = ["SELECTION_METHODS", "PoseDesign", "select_poses"]
 
 _log = logging.getLogger(__name__)
 
@@ -112,57 +108,3 @@ def select_poses(
         n_candidates=len(candidates),
         restarts=restarts,
     )
-
-
-def write_pose_design(
-    design: PoseDesign, path: str | Path, extra: dict | None = None
-) -> tuple[Path, Path, Path]:
-    """Write the selected poses, their actuator commands and the design record.
-
-    Files (each written atomically):
-
-    * ``path``: the nominal measured-frame poses as a pincal pose file
-      (:func:`pincal.io._datafiles.write_poses`; accepted by ``pincal simulate --poses``
-      and ``pincal compensate --targets``);
-    * ``<stem>.commands.csv``: the selected actuator values (a pincal command file,
-      SI; accepted by ``pincal view --poses``);
-    * ``<stem>.json``: index, its history, all indices, the scaling, the candidate
-      source, plus ``extra`` entries.
-
-    Returns:
-        (poses path, commands path, json path).
-    """
-    out = Path(path)
-    c = design.candidates
-    poses = [pin.SE3(R, p) for p, R in zip(c.positions, c.rotations, strict=True)]
-    csv_path = datafiles.write_poses(out, poses)
-    cmd_path = datafiles.write_commands(out.with_suffix(".commands.csv"), c.actuated, c.q_act)
-    sel = design.selection
-    record = {
-        "units": "SI (m, rad)",
-        "actuated": list(c.actuated),
-        "count": len(c),
-        "index": sel.index_name,
-        "value": sel.value,
-        "method": sel.method,
-        "iterations": sel.iterations,
-        "converged": sel.converged,
-        "restarts": design.restarts,
-        "history": list(sel.history),
-        "indices": design.indices_all.as_dict(),
-        "condition_number": (
-            None if not np.isfinite(cond := design.indices_all.condition_number) else cond
-        ),
-        "scaling": design.scaling.describe(),
-        "candidates": {
-            "source": c.source,
-            "searched": design.n_candidates,
-            "tried": c.tried,
-            "rejected": c.rejected,
-        },
-        "candidate_indices": [int(i) for i in design.indices],
-        "parameters": list(c.param_names),
-    }
-    record.update(extra or {})
-    json_path = atomic_write_text(out.with_suffix(".json"), json.dumps(record, indent=2))
-    return csv_path, cmd_path, json_path

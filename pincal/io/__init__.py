@@ -1,4 +1,6 @@
-"""Files: measurement, pose and command CSVs, URDF + sidecar export, atomic writes."""
+"""Files: measurement, pose and command CSVs, pose-design files, URDF + sidecar export,
+atomic writes.
+"""
 
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from pincal.io._measurement_file import (
     read_measurements,
     write_measurements,
 )
+from pincal.io._pose_design_file import write_pose_design
 from pincal.io._poses_file import (
     read_poses,
     write_poses,
@@ -50,6 +53,7 @@ __all__ = [
     "save_urdf",
     "write_commands",
     "write_measurements",
+    "write_pose_design",
     "write_poses",
     "write_target_measurements",
 ]

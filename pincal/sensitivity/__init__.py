@@ -1,5 +1,6 @@
 """Stage 2 — how errors show: the analytic identification Jacobian, identifiability
-(rank, base set, absorbed combinations) and global sensitivity over a workspace.
+(rank, base set, absorbed combinations, parameters that break loop closure), the one
+numerical-rank rule, and global sensitivity over a workspace.
 """
 
 from __future__ import annotations
@@ -16,18 +17,24 @@ from pincal.sensitivity._identifiability import (
 )
 from pincal.sensitivity._jacobian import (
     PoseSensitivity,
+    closure_breaking,
     identification_jacobian,
     pose_sensitivity,
 )
+from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
 __all__ = [
+    "RANK_RTOL",
     "GlobalSensitivity",
     "Identifiability",
     "PoseSensitivity",
+    "RangeSolver",
     "analyse_jacobian",
+    "closure_breaking",
     "global_sensitivity",
     "global_sensitivity_from_jacobians",
     "identifiability",
     "identification_jacobian",
+    "numerical_rank",
     "pose_sensitivity",
 ]

@@ -1,24 +1,43 @@
 """Identifiability: rank, base parameters and the combinations the others fall into.
 
-The numerical rank r of the column-scaled identification Jacobian over many poses
-(from its singular values) is the number of identifiable parameters. The *base*
-parameters are chosen greedily in the set's order (an orthogonalisation that keeps
-a column when it is not in the span of the columns kept so far), so a preset's
-physically meaningful parameters, listed first, are preferred. Every other
-parameter's column is a combination of base columns, ``J_k = Σ_i β_ki J_i``: its
-effect is absorbed into those base parameters and it cannot be identified.
+The numerical rank r of the column-scaled identification Jacobian over many poses is
+the number of identifiable parameters; it follows the one rank rule of
+:func:`pincal.sensitivity._rank.numerical_rank` (σi > rtol·σ1). The *base* parameters
+are chosen greedily in the set's order (an orthogonalisation that keeps a column when
+its part outside the span of the columns kept so far exceeds the same threshold
+rtol·σ1), so a preset's physically meaningful parameters, listed first, are preferred.
+The base always has exactly r members: the greedy pass stops at r, and if it found
+fewer, the remaining members are the columns with the largest part outside the span
+(column pivoting). Every other parameter's column is a combination of base columns,
+``J_k = Σ_i β_ki J_i``: its effect is absorbed into those base parameters and it
+cannot be identified.
+
+Over-constrained loops (e.g. a ``6d`` closure of a planar loop) add a third class:
+parameters whose change would open a loop that no passive-joint motion can close
+(their closure-Jacobian column ∂c/∂p_k lies outside the range of ∂c/∂q_u at some
+pose). They cannot change while the mechanism stays assembled, so they are reported
+as *breaking loop closure* and are neither base nor absorbed parameters.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from pincal.errors import PincalError
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
+from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
 __all__ = ["Identifiability", "analyse_jacobian", "identifiability"]
+
+_COMBINATION_CUTOFF = 1e-6
+"""Coefficients (in column-scaled units) below this are left out of a combination."""
+
+
+def _empty() -> np.ndarray:
+    return np.zeros(0, dtype=int)
 
 
 @dataclass(frozen=True)
@@ -27,13 +46,17 @@ class Identifiability:
 
     Attributes:
         names: all parameter names (n,).
-        rank: numerical rank of the scaled Jacobian.
+        rank: numerical rank of the scaled Jacobian of the closable parameters; always
+            equal to ``len(base)``.
         base: indices of the identifiable base parameters (rank,), in name order.
-        unidentifiable: indices of the parameters that are not identifiable.
+        unidentifiable: indices of the closable parameters that are not identifiable.
         combinations: for each unidentifiable index k, ``{base index: β}`` such that the
-            (scaled) column of k equals Σ β · base columns.
-        singular_values: of the column-scaled Jacobian (descending).
+            column of k equals Σ β · base columns (parameter units).
+        singular_values: of the column-scaled Jacobian of the closable parameters
+            (descending).
         column_scale: norms used to scale each column (n,).
+        breaks_closure: indices of the parameters that cannot change without breaking a
+            loop closure (over-constrained loops); not counted as identifiable.
     """
 
     names: tuple[str, ...]
@@ -43,6 +66,7 @@ class Identifiability:
     combinations: dict[int, dict[int, float]]
     singular_values: np.ndarray
     column_scale: np.ndarray
+    breaks_closure: np.ndarray = field(default_factory=_empty)
 
     @property
     def full_rank(self) -> bool:
@@ -56,8 +80,12 @@ class Identifiability:
     def unidentifiable_names(self) -> tuple[str, ...]:
         return tuple(self.names[i] for i in self.unidentifiable)
 
+    @property
+    def breaks_closure_names(self) -> tuple[str, ...]:
+        return tuple(self.names[i] for i in self.breaks_closure)
+
     def describe(self, max_terms: int = 4) -> list[str]:
-        """One sentence per unidentifiable parameter, e.g.
+        """One sentence per parameter that is not identifiable, e.g.
         ``"leg3_u1.rx is not identifiable (absorbed by +1.000·leg3_u2.rx)"``."""
         lines = []
         for k in self.unidentifiable:
@@ -69,57 +97,113 @@ class Identifiability:
             absorbed = " ".join(shown) if shown else "no effect on the measurements"
             verb = "absorbed by" if shown else "it has"
             lines.append(f"{self.names[k]} is not identifiable ({verb} {absorbed})")
+        for k in self.breaks_closure:
+            lines.append(
+                f"{self.names[k]} breaks loop closure (no passive-joint motion can close the "
+                "loops after changing it; it is not identifiable)"
+            )
         return lines
 
     def summary(self) -> str:
         head = f"{self.rank} of {len(self.names)} parameters identifiable"
+        if self.breaks_closure.size:
+            head += f"; {self.breaks_closure.size} break loop closure"
         return "\n".join([head, *self.describe()])
 
 
-def analyse_jacobian(J: np.ndarray, names: tuple[str, ...], rtol: float = 1e-8) -> Identifiability:
+def _greedy_base(Js: np.ndarray, rank: int, threshold: float) -> list[int]:
+    """Exactly ``rank`` column indices of Js: in order while independent, then pivoted."""
+    n = Js.shape[1]
+    basis = np.zeros((Js.shape[0], 0))
+    chosen: list[int] = []
+
+    def outside(k: int) -> np.ndarray:
+        v = Js[:, k] - basis @ (basis.T @ Js[:, k])
+        return v - basis @ (basis.T @ v)  # second pass: Gram–Schmidt twice is enough
+
+    for k in range(n):
+        if len(chosen) == rank:
+            break
+        v = outside(k)
+        norm = float(np.linalg.norm(v))
+        if norm > threshold:
+            basis = np.column_stack([basis, v / norm])
+            chosen.append(k)
+    while len(chosen) < rank:  # borderline spectrum: fill by column pivoting
+        rest = [k for k in range(n) if k not in set(chosen)]
+        parts = [outside(k) for k in rest]
+        norms = [float(np.linalg.norm(v)) for v in parts]
+        i = int(np.argmax(norms))
+        if norms[i] == 0.0:
+            break
+        basis = np.column_stack([basis, parts[i] / norms[i]])
+        chosen.append(rest[i])
+    return sorted(chosen)
+
+
+def analyse_jacobian(
+    J: np.ndarray,
+    names: tuple[str, ...],
+    rtol: float = RANK_RTOL,
+    breaks_closure: np.ndarray | None = None,
+) -> Identifiability:
     """Identifiability of the parameters whose identification Jacobian is ``J`` (N, n).
 
     Columns are scaled to unit norm first, so mixed units (m, rad) do not bias the
     rank; a column below 1e-12 of the largest column norm counts as zero (the
-    parameter has no effect). ``rtol`` is the relative threshold
-    on the pivoted R diagonal.
+    parameter has no effect). The rank is the count of singular values above
+    ``rtol``·σ1 and the base has exactly that many parameters.
+
+    Args:
+        J: identification Jacobian (N, n).
+        names: the n parameter names.
+        rtol: relative rank threshold (default :data:`pincal.sensitivity._rank.RANK_RTOL`).
+        breaks_closure: indices (or an (n,) boolean mask) of parameters that break loop
+            closure; they are reported apart and left out of the rank.
+
+    Raises:
+        PincalError: J is not 2-D with one column per name, or contains NaN/inf.
     """
     J = np.asarray(J, dtype=float)
+    if J.ndim != 2 or J.shape[1] != len(names):
+        raise PincalError(
+            f"J must have shape (rows, {len(names)}) for {len(names)} parameter names; "
+            f"got {J.shape}"
+        )
+    if not np.all(np.isfinite(J)):
+        raise PincalError("J contains NaN or infinite entries; check the poses and parameters")
     n = J.shape[1]
+    breaking = np.zeros(n, dtype=bool)
+    if breaks_closure is not None:
+        b = np.asarray(breaks_closure)
+        if b.dtype == bool and b.shape == (n,):
+            breaking = b.copy()
+        else:
+            breaking[b.astype(int).reshape(-1)] = True
     scale = np.linalg.norm(J, axis=0)
     scale[scale <= 1e-12 * max(float(scale.max(initial=0.0)), 1e-300)] = 0.0  # no effect
     safe = np.where(scale > 0, scale, 1.0)
     Js = J / safe
     Js[:, scale == 0] = 0.0
-    sv = np.linalg.svd(Js, compute_uv=False)
-    rank = int(np.sum(sv > rtol * sv[0])) if sv.size and sv[0] > 0 else 0
-    # Greedy selection in the given order: a column joins the base when it is not
-    # (numerically) in the span of the earlier base columns. Presets list the physically
-    # meaningful parameters first, so they are preferred as base parameters.
-    basis = np.zeros((Js.shape[0], 0))
-    chosen: list[int] = []
-    for k in range(n):
-        if len(chosen) == rank:
-            break
-        v = Js[:, k] - basis @ (basis.T @ Js[:, k])
-        v -= basis @ (basis.T @ v)
-        norm = np.linalg.norm(v)
-        if norm > np.sqrt(rtol):
-            basis = np.column_stack([basis, v / norm])
-            chosen.append(k)
-    base = np.array(chosen, dtype=int)
-    others = np.array([k for k in range(n) if k not in set(chosen)], dtype=int)
+    closable = np.flatnonzero(~breaking)
+    Jc = Js[:, closable]
+    sv = np.linalg.svd(Jc, compute_uv=False) if Jc.size else np.zeros(0)
+    rank = numerical_rank(sv, rtol)
+    threshold = rtol * float(sv[0]) if sv.size else 0.0
+    base = closable[_greedy_base(Jc, rank, threshold)] if rank else _empty()
+    others = np.array([k for k in closable if k not in set(base.tolist())], dtype=int)
     combos: dict[int, dict[int, float]] = {}
     if base.size and others.size:
-        beta = np.linalg.lstsq(J[:, base], J[:, others], rcond=None)[0]  # parameter units
-        bscale = safe[base][:, None] / safe[others][None, :]  # relative size in scaled terms
+        beta_s = RangeSolver.factor(Js[:, base], rtol=0.0).solve(Js[:, others])  # scaled
         for col, k in enumerate(others):
             combos[int(k)] = {
-                int(base[i]): float(beta[i, col])
+                int(base[i]): float(beta_s[i, col] * safe[k] / safe[base[i]])  # parameter units
                 for i in range(base.size)
-                if abs(beta[i, col] * bscale[i, col]) > 1e-6
+                if abs(beta_s[i, col]) > _COMBINATION_CUTOFF
             }
-    return Identifiability(tuple(names), rank, base, others, combos, sv, scale[:n])
+    return Identifiability(
+        tuple(names), rank, base, others, combos, sv, scale[:n], np.flatnonzero(breaking)
+    )
 
 
 def identifiability(
@@ -128,9 +212,13 @@ def identifiability(
     q_act_rows: np.ndarray | None = None,
     n_poses: int = 60,
     rng: np.random.Generator | None = None,
-    rtol: float = 1e-8,
+    rtol: float = RANK_RTOL,
 ) -> Identifiability:
     """Analyse which parameters the measured components can identify.
+
+    Parameters that break loop closure (over-constrained loops, see
+    :func:`pincal.sensitivity.closure_breaking`) at any of the poses are reported in
+    ``breaks_closure`` and not counted as identifiable.
 
     Args:
         mech: nominal mechanism.
@@ -140,9 +228,9 @@ def identifiability(
         rtol: relative rank threshold.
     """
     from pincal.model._workspace import sample_actuators
-    from pincal.sensitivity._jacobian import identification_jacobian
+    from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
 
     if q_act_rows is None:
         q_act_rows = sample_actuators(mech, n_poses, rng or np.random.default_rng(0))
-    J = identification_jacobian(mech, params, q_act_rows)
-    return analyse_jacobian(J, params.names, rtol)
+    J, breaking = jacobian_and_closure_breaking(mech, params, q_act_rows)
+    return analyse_jacobian(J, params.names, rtol, breaks_closure=breaking)

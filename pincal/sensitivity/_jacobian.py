@@ -4,14 +4,23 @@ For a frame f downstream of the origin of URDF joint j, a displacement δ_k of t
 origin along twist ξ_k moves f by the local twist ``Ad(oMf⁻¹ · A_j) ξ_k`` where
 ``A_j`` is the world placement of the (displaced) origin frame. Closures add the
 passive-joint motion from the implicit-function theorem,
-``dq_u/dp = −(∂c/∂q_u)⁺ ∂c/∂p`` (rank-revealing, so redundant closure rows of
-over-constrained machines are harmless), and the measured quantity's sensitivity
-is ``∂m/∂p + ∂m/∂q_u · dq_u/dp``. No finite differences.
+``dq_u/dp = −(∂c/∂q_u)⁺ ∂c/∂p`` (one truncated SVD of ∂c/∂q_u per pose, applied to
+all parameter columns at once, rank-revealing with the mechanism's ``options.rcond``,
+so redundant closure rows of over-constrained machines are harmless), and the
+measured quantity's sensitivity is ``∂m/∂p + ∂m/∂q_u · dq_u/dp``. No finite
+differences.
+
+Over-constrained loops (a ``6d`` closure of a planar loop) have closure rows that no
+passive motion can change. A parameter whose closure column ∂c/∂p_k has a part
+outside the range of ∂c/∂q_u cannot change without opening a loop: it *breaks loop
+closure* (:attr:`PoseSensitivity.breaks_closure`, :func:`closure_breaking`). For such
+a parameter the least-squares column is not a derivative of anything measurable; for
+every other parameter the Jacobian is exact.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -19,8 +28,9 @@ import pinocchio as pin
 from pincal.model._closures import COMPONENTS, measured_jacobian
 from pincal.model._mechanism import Kinematics, Mechanism
 from pincal.model._parameters import ParameterSet
+from pincal.sensitivity._rank import RANK_RTOL, RangeSolver
 
-__all__ = ["PoseSensitivity", "identification_jacobian", "pose_sensitivity"]
+__all__ = ["PoseSensitivity", "closure_breaking", "identification_jacobian", "pose_sensitivity"]
 
 
 @dataclass(frozen=True)
@@ -33,26 +43,30 @@ class PoseSensitivity:
         rotation: (3, 3) its orientation.
         jacobian: (6, n) derivative of ``[p_world; rotation (local)]`` w.r.t. parameters
             [m/m, m/rad, rad/m, rad/rad].
+        breaks_closure: (n,) True for the parameters whose change would open a loop
+            that the passive joints cannot close at this pose (all False for serial
+            chains and loops that are not over-constrained).
     """
 
     q: np.ndarray
     position: np.ndarray
     rotation: np.ndarray
     jacobian: np.ndarray
+    breaks_closure: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
 
-def _solve(A: np.ndarray, B: np.ndarray, rcond: float) -> np.ndarray:
-    """Least-squares ``A X = B``: LU when A is square and regular, else truncated SVD."""
-    if A.shape[0] == A.shape[1]:
-        try:
-            X = np.linalg.solve(A, B)
-            if np.all(np.isfinite(X)) and np.linalg.norm(A @ X - B) <= 1e-8 * (
-                np.linalg.norm(B) + 1e-300
-            ):
-                return X
-        except np.linalg.LinAlgError:
-            pass
-    return np.linalg.lstsq(A, B, rcond=rcond)[0]
+def _breaking(solver: RangeSolver, Jc_p: np.ndarray) -> np.ndarray:
+    """(n,) True where a closure column has a part outside range(∂c/∂q_u).
+
+    A column breaks closure when that part exceeds :data:`RANK_RTOL` of the column's
+    own norm (and is not round-off of a negligible column: 1e-12 of the largest).
+    """
+    if solver.rank == Jc_p.shape[0]:  # full row rank: every column is in the range
+        return np.zeros(Jc_p.shape[1], dtype=bool)
+    norms = np.linalg.norm(Jc_p, axis=0)
+    out = solver.out_of_range(Jc_p)
+    floor = 1e-12 * float(norms.max(initial=0.0))
+    return (out > RANK_RTOL * norms) & (out > floor)
 
 
 @dataclass(frozen=True)
@@ -147,10 +161,31 @@ def pose_sensitivity(
                 for c in mech.closures
             ]
         )
-        dqu_dp = _solve(kin.closure_jacobian[:, free], -Jc_p, mech.options.rcond)
+        solver = RangeSolver.factor(kin.closure_jacobian[:, free], mech.options.rcond)
+        dqu_dp = solver.solve(-Jc_p)
+        breaks = _breaking(solver, Jc_p)
         Jm_u = measured_jacobian(oMm, kin.jacobians[mech.measured_frame])[:, free]
         J = J + Jm_u @ dqu_dp
-    return PoseSensitivity(kin.q.copy(), oMm.translation.copy(), oMm.rotation.copy(), J)
+    else:
+        breaks = np.zeros(n, dtype=bool)
+    return PoseSensitivity(kin.q.copy(), oMm.translation.copy(), oMm.rotation.copy(), J, breaks)
+
+
+def _sensitivities(
+    mech: Mechanism,
+    params: ParameterSet,
+    q_act_rows: np.ndarray,
+    values: np.ndarray | None,
+) -> list[PoseSensitivity]:
+    values = params.check_values(values)
+    at = mech if not np.any(values) else params.apply(mech, values)
+    qs = at.configurations(q_act_rows)
+    plan = _plan(at, params)
+    return [pose_sensitivity(at, params, q, values, plan) for q in qs]
+
+
+def _rows(mech: Mechanism, components: tuple[str, ...] | None) -> list[int]:
+    return [COMPONENTS.index(c) for c in (components or mech.measured_components)]
 
 
 def identification_jacobian(
@@ -172,13 +207,49 @@ def identification_jacobian(
 
     Returns:
         (m·k, n) array: position rows in metres (world frame) and rotation rows in
-        radians (measured frame) per unit of each parameter.
+        radians (measured frame) per unit of each parameter. Columns of parameters
+        that break loop closure (:func:`closure_breaking`) are least-squares values
+        without a physical meaning.
     """
-    values = params.check_values(values)
-    at = mech if not np.any(values) else params.apply(mech, values)
-    comps = components or mech.measured_components
-    rows = [COMPONENTS.index(c) for c in comps]
-    qs = at.configurations(q_act_rows)
-    plan = _plan(at, params)
-    blocks = [pose_sensitivity(at, params, q, values, plan).jacobian[rows] for q in qs]
-    return np.vstack(blocks)
+    rows = _rows(mech, components)
+    return np.vstack([s.jacobian[rows] for s in _sensitivities(mech, params, q_act_rows, values)])
+
+
+def closure_breaking(
+    mech: Mechanism,
+    params: ParameterSet,
+    q_act_rows: np.ndarray,
+    values: np.ndarray | None = None,
+) -> np.ndarray:
+    """Which parameters cannot change without breaking a loop closure.
+
+    Parameter k keeps every loop closable when its closure-Jacobian column ∂c/∂p_k
+    lies in the range of ∂c/∂q_u (passive joints) at every pose; otherwise (a ``6d``
+    closure of a planar loop and an out-of-plane parameter, say) it breaks closure.
+
+    Args:
+        mech: nominal mechanism; params: the n parameters.
+        q_act_rows: (m, n_act) actuator values [m, rad].
+        values: (n,) parameter values (default zeros).
+
+    Returns:
+        (n,) boolean mask, True where the parameter breaks closure at any pose.
+    """
+    return jacobian_and_closure_breaking(mech, params, q_act_rows, values)[1]
+
+
+def jacobian_and_closure_breaking(
+    mech: Mechanism,
+    params: ParameterSet,
+    q_act_rows: np.ndarray,
+    values: np.ndarray | None = None,
+    components: tuple[str, ...] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`identification_jacobian` and :func:`closure_breaking` from one pass."""
+    rows = _rows(mech, components)
+    sens = _sensitivities(mech, params, q_act_rows, values)
+    J = np.vstack([s.jacobian[rows] for s in sens])
+    breaks = np.zeros(len(params), dtype=bool)
+    for s in sens:
+        breaks |= s.breaks_closure
+    return J, breaks
