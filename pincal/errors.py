@@ -27,6 +27,7 @@ __all__ = [
     "PoseFitError",
     "ReportError",
     "SingularConfigurationError",
+    "SolverOptionError",
     "TooFewPosesError",
     "UnidentifiableError",
     "UnknownNameError",
@@ -108,6 +109,10 @@ class UnreachablePoseError(ConvergenceError):
 
 class ParameterError(PincalError):
     """Parameter values or a parameter set are inconsistent (length, names, preset)."""
+
+
+class SolverOptionError(ParameterError):
+    """An identification solver's option is out of range or the solver name is unknown."""
 
 
 class UnidentifiableError(PincalError):
