@@ -58,18 +58,19 @@ def check_real(
 class GaussNewtonOptions:
     """Options of ``"gauss-newton"``.
 
-    Each iteration tries the Gauss–Newton step and halves it up to ``max_halvings``
-    times; a trial whose model cannot be assembled or solved counts as no decrease.
-    When no halving decreases the cost, the step is damped Levenberg–Marquardt style
-    (``(JᵀJ + μ·diag(JᵀJ)) δ = −Jᵀr``, μ from ``damping_start`` up by ×10 until the cost
-    decreases, then down by ÷10 per accepted step until pure Gauss–Newton again).
+    Each iteration tries the full Gauss–Newton step; a trial whose model cannot be
+    assembled or solved counts as no decrease. When it does not decrease the cost, the
+    step is damped Levenberg–Marquardt style (``(JᵀJ + μ·diag(JᵀJ)) δ = −Jᵀr``, μ from
+    ``damping_start`` up ×10 per rejected trial, down ÷10 per accepted step until pure
+    Gauss–Newton again). With ``damping=False`` the step is halved instead (pincal 0.1).
 
     Attributes:
         max_iterations: iteration limit (≥ 1).
         xtol: relative step tolerance (> 0).
         regularization: Tikhonov weight λ ≥ 0 on ``‖x − initial‖²`` (whitened units).
-        max_halvings: step halvings of the line search (0–60).
-        damping: enable the Levenberg damping fallback.
+        max_halvings: trial lengths 1, ½, ¼, … of the line search used when
+            ``damping`` is False (1–60).
+        damping: damp rejected steps (True) or halve them (False).
         damping_start: first μ of the fallback (> 0, ≤ 1).
     """
 
@@ -78,14 +79,14 @@ class GaussNewtonOptions:
     regularization: float = 0.0
     max_halvings: int = 20
     damping: bool = True
-    damping_start: float = 1e-3
+    damping_start: float = 1.0
 
     def __post_init__(self) -> None:
         o = type(self).__name__
         check_int(o, "max_iterations", self.max_iterations, 1)
         check_real(o, "xtol", self.xtol, 0.0, open_low=True)
         check_real(o, "regularization", self.regularization, 0.0)
-        check_int(o, "max_halvings", self.max_halvings, 0, 60)
+        check_int(o, "max_halvings", self.max_halvings, 1, 60)
         check_real(o, "damping_start", self.damping_start, 0.0, 1.0, open_low=True)
         if not isinstance(self.damping, bool):
             raise SolverOptionError(f"{o}.damping must be True or False, got {self.damping!r}")
