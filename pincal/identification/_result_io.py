@@ -318,7 +318,9 @@ def result_from_dict(data: Mapping[str, Any], source: str = "identification.json
     res = res if isinstance(res, dict) else {}
     per_pose = res.get("per_pose_SI", [])
     try:
-        residuals = np.array(per_pose, dtype=float).reshape(len(per_pose), -1)
+        residuals = np.array(per_pose, dtype=float).reshape(len(per_pose), -1 if per_pose else 0)
+        if residuals.ndim != 2:
+            raise ValueError("not a table")
     except (TypeError, ValueError):
         raise ReportError(f"{src}: residuals.per_pose_SI must be a list of number rows") from None
     chi2 = data.get("reduced_chi2")
