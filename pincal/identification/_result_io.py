@@ -4,7 +4,7 @@ Format version 2 (pincal ≥ 0.2), SI values::
 
     {"format": "pincal identification", "version": 2, "units": "SI (m, rad)",
      "model", "preset", "method", "success", "message", "iterations", "reduced_chi2",
-     "equations", "poses",
+     "equations", "poses", "names" (all n, in order),
      "parameters": [{"name", "unit", "value", "std", "initial"[, "true"]}],  # identified
      "held": [{"name", "unit", "value"[, "true"]}],                         # not identified
      "covariance": [[...]],                  # (k, k) of the identified parameters
@@ -53,6 +53,7 @@ _OWNED = {
     "reduced_chi2",
     "equations",
     "poses",
+    "names",
     "parameters",
     "held",
     "fixed",
@@ -125,7 +126,8 @@ def result_to_dict(
     """
     notes = dict(result.annotations)
     notes.update(annotations or {})
-    clash = sorted(set(notes) & _OWNED)
+    passthrough = {"identifiability"} if result.identifiability is None else set()
+    clash = sorted(set(notes) & (_OWNED - passthrough))
     if clash:
         raise ReportError(f"annotations {clash} would overwrite result entries; rename them")
     truth = notes.pop("truth", None) or {}
@@ -156,6 +158,7 @@ def result_to_dict(
         "reduced_chi2": _json_float(result.reduced_chi2),
         "equations": int(result.n_equations),
         "poses": int(result.residuals.shape[0]),
+        "names": list(result.names),
         "parameters": entries,
         "held": held,
         "covariance": np.asarray(result.covariance).tolist(),
@@ -300,11 +303,25 @@ def result_from_dict(data: Mapping[str, Any], source: str = "identification.json
         raise ReportError(f"{src}: 'model' (the model name) is missing")
     params, held = _entries(data, src)
     every = params + held
+    flags = [True] * len(params) + [False] * len(held)
+    order = data.get("names")
+    if order is not None:  # the parameter order of the set (identified and held mixed)
+        if not isinstance(order, list) or sorted(order) != sorted(p["name"] for p in every):
+            raise ReportError(f"{src}: 'names' must list the parameters and held ones")
+        where = {p["name"]: k for k, p in enumerate(every)}
+        perm = [where[n] for n in order]
+        every, flags = [every[k] for k in perm], [flags[k] for k in perm]
+        params = [p for p, f in zip(every, flags, strict=True) if f]
     names = tuple(p["name"] for p in every)
-    identified = np.array([True] * len(params) + [False] * len(held))
+    identified = np.array(flags)
     full = np.array([float(p["value"]) for p in every])
     std = np.array([float(p["std"]) for p in params])
-    initial = np.array([float(p.get("initial", 0.0)) for p in params] + list(full[len(params) :]))
+    initial = np.array(
+        [
+            float(p.get("initial", 0.0)) if f else float(p["value"])
+            for p, f in zip(every, flags, strict=True)
+        ]
+    )
     cov = np.diag(std**2)
     if "covariance" in data:
         cov = np.array(
@@ -328,8 +345,8 @@ def result_from_dict(data: Mapping[str, Any], source: str = "identification.json
     truth = {p["name"]: float(p["true"]) for p in every if "true" in p}
     if truth:
         notes["truth"] = truth
-    if "identifiability" in data:
-        notes["identifiability_summary"] = data["identifiability"]
+    if "identifiability" in data:  # written again by to_dict (no analysis object here)
+        notes["identifiability"] = data["identifiability"]
     return IdentificationResult(
         method=str(data.get("method", "unknown")),
         names=names,
