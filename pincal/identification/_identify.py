@@ -38,10 +38,14 @@ _LEGACY = {
 
 
 def _legacy_options(method: str, options: Any, legacy: dict[str, Any], qpso: Any) -> Any:
-    given = {k: v for k, v in legacy.items() if v is not None}
-    if qpso is not None:
-        if not method.startswith("qpso"):
-            raise SolverOptionError(f"qpso= applies to the QPSO methods, not {method!r}")
+    """Options from pincal 0.1's keywords; as in 0.1, keywords of other methods are ignored."""
+    given = {k: v for k, v in legacy.items() if v is not None and method in _LEGACY[k]}
+    ignored = sorted(k for k, v in legacy.items() if v is not None and k not in given)
+    if qpso is not None and not method.startswith("qpso"):
+        ignored.append("qpso")
+    if ignored:
+        log.info("identify: %s do not apply to method %r (ignored)", ignored, method)
+    if qpso is not None and method.startswith("qpso"):
         if options is not None:
             raise SolverOptionError("give the QPSO options once: options= or qpso=")
         return qpso
@@ -50,12 +54,6 @@ def _legacy_options(method: str, options: Any, legacy: dict[str, Any], qpso: Any
     if options is not None:
         raise SolverOptionError(
             f"give {sorted(given)} inside options= ({type(options).__name__}), not beside it"
-        )
-    wrong = sorted(k for k in given if method not in _LEGACY[k])
-    if wrong:
-        raise SolverOptionError(
-            f"{wrong} do not apply to method {method!r}; use options= with "
-            f"{solver(method).options_type.__name__}"
         )
     return solver(method).options_type(**given)
 
@@ -168,7 +166,7 @@ def identify(
         initial, fit, reduce: see :class:`IdentificationProblem` (mechanism form only).
         progress: optional callback ``(iteration, cost)``.
         loss, regularization, max_iterations, xtol, qpso: pincal 0.1 keywords, turned
-            into the method's options (refused for methods they do not apply to).
+            into the method's options (ignored, as in 0.1, by methods they do not apply to).
 
     Returns:
         IdentificationResult.

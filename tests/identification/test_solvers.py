@@ -141,8 +141,12 @@ def test_registry_and_problem_form(stewart, stewart42, stewart_poses):
         identify(problem, "newton")
     with pytest.raises(SolverOptionError, match="takes GaussNewtonOptions"):
         identify(problem, options=LMOptions())
-    with pytest.raises(SolverOptionError, match="do not apply to method 'gauss-newton'"):
-        identify(stewart, stewart42, meas, loss="huber")
+    with pytest.raises(SolverOptionError, match="inside options="):
+        identify(stewart, stewart42, meas, options=GaussNewtonOptions(), xtol=1e-9)
+    # pincal 0.1 keywords of other methods are ignored, as they were
+    plain = identify(problem)
+    mixed = identify(stewart, stewart42, meas, loss="huber", qpso=QPSOOptions())
+    np.testing.assert_array_equal(plain.full_values, mixed.full_values)
     with pytest.raises(pincal.ParameterError, match="unknown"):
         IdentificationProblem(stewart, stewart42, meas, fit=["nope.tx"])
 
