@@ -127,7 +127,7 @@ def _finish(
         preset=params.label,
         extras=out.extras,
         parameter_set=params,
-        calibrated=model.mechanism(out.x),
+        calibrated_mechanism=model.mechanism(out.x),
         identifiability=ident,
     )
 
@@ -187,6 +187,12 @@ def identify(
         if initial is not None or fit is not None or reduce is not True:
             raise SolverOptionError("initial / fit / reduce belong in the IdentificationProblem")
     else:
+        if not isinstance(params, ParameterSet) or not isinstance(measurements, Measurements):
+            raise SolverOptionError(
+                "identify(mech, params, measurements, method): params must be a ParameterSet "
+                f"and measurements a Measurements, got {type(params).__name__} and "
+                f"{type(measurements).__name__}"
+            )
         problem = IdentificationProblem(problem, params, measurements, initial, fit, reduce)
     legacy = dict(loss=loss, regularization=regularization, max_iterations=max_iterations)
     legacy["xtol"] = xtol

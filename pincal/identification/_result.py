@@ -144,7 +144,8 @@ class IdentificationResult:
         model: mechanism name; preset: parameter-set label.
         extras: solver-specific extras (see :data:`SolverExtras`), or None.
         parameter_set: the full parameter set (None when read from a file).
-        calibrated: the mechanism with ``full_values`` applied (None when read from a file).
+        calibrated_mechanism: the mechanism with ``full_values`` applied (None when read
+            from a file); use :attr:`calibrated`.
         identifiability: analysis at the start values (None when read from a file).
         annotations: JSON-ready context written with the result (data file, validation
             errors, simulated truth, index history, ...).
@@ -171,7 +172,7 @@ class IdentificationResult:
     preset: str = ""
     extras: SolverExtras | None = None
     parameter_set: ParameterSet | None = field(default=None, repr=False)
-    calibrated: Mechanism | None = field(default=None, repr=False)
+    calibrated_mechanism: Mechanism | None = field(default=None, repr=False)
     identifiability: Identifiability | None = field(default=None, repr=False)
     annotations: Mapping[str, Any] = field(default_factory=dict, repr=False)
 
@@ -203,6 +204,21 @@ class IdentificationResult:
                 "result.identified_names / result.values, or identify again"
             )
         return self.parameter_set.subset(np.flatnonzero(self.identified))
+
+    @property
+    def calibrated(self) -> Mechanism:
+        """The mechanism with ``full_values`` applied.
+
+        Raises:
+            ParameterError: the result was read from a file (apply the values with
+                ``ParameterSet.apply`` to the nominal mechanism instead).
+        """
+        if self.calibrated_mechanism is None:
+            raise ParameterError(
+                "this result was read from a file and holds no mechanism; load the "
+                "calibrated URDF, or apply result.full_values to the nominal mechanism"
+            )
+        return self.calibrated_mechanism
 
     @property
     def converged(self) -> bool:

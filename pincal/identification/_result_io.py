@@ -131,7 +131,8 @@ def result_to_dict(
     if clash:
         raise ReportError(f"annotations {clash} would overwrite result entries; rename them")
     truth = notes.pop("truth", None) or {}
-    entries, held = [], []
+    entries: list[dict[str, Any]] = []
+    held: list[dict[str, Any]] = []
     std = iter(result.std)
     for k, name in enumerate(result.names):
         e: dict[str, Any] = {

@@ -77,7 +77,8 @@ def step_planning(
     w = w_all[free]
     r, J, _ = problem.evaluate(x)
     cost = 0.5 * float(r @ r)
-    history, steps = [cost], []
+    history: list[float] = [cost]
+    steps: list[np.ndarray] = []
     lam_rel = float(opts.damping)
     converged, message = False, "maximum iterations reached"
     while len(steps) < int(opts.max_iterations) and free.size:

@@ -142,8 +142,8 @@ def _validation(notes: dict, plots: Path) -> Section | None:
         for key, label in _SUMMARY_KEYS
     ]
     images = [plot_validation_summary(before, after, plots / "validation_summary.png")]
-    ve = notes.get("validation_errors")
-    for key, unit in (("position", "mm"), ("orientation", "mrad")) if ve else ():
+    ve: dict = notes.get("validation_errors") or {"before": {}, "after": {}}
+    for key, unit in (("position", "mm"), ("orientation", "mrad")):
         if key in ve["before"] and key in ve["after"]:
             b, a = np.array(ve["before"][key]), np.array(ve["after"][key])
             title = key.capitalize()
