@@ -28,6 +28,7 @@ __all__ = [
     "ReportError",
     "ShapeError",
     "SingularConfigurationError",
+    "SolverOptionError",
     "TooFewPosesError",
     "UnidentifiableError",
     "UnknownNameError",
@@ -116,6 +117,10 @@ class UnreachablePoseError(ConvergenceError):
 
 class ParameterError(PincalError):
     """Parameter values or a parameter set are inconsistent (length, names, preset)."""
+
+
+class SolverOptionError(ParameterError):
+    """An identification solver's option is out of range or the solver name is unknown."""
 
 
 class UnidentifiableError(PincalError):

@@ -7,8 +7,10 @@ import pytest
 
 import pincal
 from pincal.identification import (
-    CalibrationProblem,
+    IdentificationProblem,
+    QPSOExtras,
     QPSOOptions,
+    identify,
     qpso_identify,
 )
 
@@ -47,20 +49,36 @@ def test_exact_and_linear_cost_models_agree(wedge_offsets) -> None:
     """Tiny swarm on the exact closed-loop cost (FK per particle) vs the linearised cost:
     the same seed gives the same best particle (nonlinearity ~1e-12 over ±50 µm)."""
     mech, params, meas, _ = wedge_offsets
-    problem = CalibrationProblem(mech, params, meas)
+    problem = IdentificationProblem(mech, params, meas)
     kw = dict(n_particles=6, t_max=8, seed=4)
-    exact = qpso_identify(problem, options=QPSOOptions(cost_model="exact", **kw))
+    exact = identify(problem, "qpso", options=QPSOOptions(cost_model="exact", **kw))
     linear = qpso_identify(problem, options=QPSOOptions(cost_model="linear", **kw))
-    np.testing.assert_allclose(exact.values, linear.values, atol=1e-12)
-    assert exact.nfev == 6 * 9
-    assert exact.cost < exact.initial_cost
-    r, _, _ = problem.evaluate(exact.values, jacobian=False)
-    assert exact.cost == pytest.approx(0.5 * r @ r, rel=1e-12)
+    np.testing.assert_allclose(exact.full_values, linear.full_values, atol=1e-12)
+    assert isinstance(exact.extras, QPSOExtras)
+    assert exact.extras.nfev == 6 * 9
+    assert exact.extras.cost < exact.extras.initial_cost
+    r, _, _ = problem.model.evaluate(exact.full_values, jacobian=False)
+    assert exact.extras.cost == pytest.approx(0.5 * r @ r, rel=1e-12)
 
 
 def test_bad_cost_model() -> None:
     with pytest.raises(pincal.ParameterError, match="cost model"):
         QPSOOptions(cost_model="quadratic")
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"n_particles": 1}, r"n_particles must be an integer ≥ 2, got 1"),
+        ({"t_max": -3}, r"t_max must be an integer ≥ 0"),
+        ({"half_width_m": 0.0}, r"half_width_m must be a finite number in \(0, ∞\)"),
+        ({"alpha": (1.0, -0.5)}, "alpha must be a positive number"),
+        ({"passes": 0}, "passes must be an integer ≥ 1"),
+    ],
+)
+def test_bad_qpso_options_name_the_valid_range(kw, match) -> None:
+    with pytest.raises(pincal.errors.SolverOptionError, match=match):
+        QPSOOptions(**kw)
 
 
 def test_pkm5_hinges24_identifiability() -> None:
@@ -82,14 +100,14 @@ def test_pkm5_stepwise_beats_direct_but_not_gauss_newton() -> None:
     q = pincal.sample_actuators(mech, 30, rng)
     given = rng.uniform(-3e-5, 3e-5, len(params))
     meas = pincal.simulate_measurements(params.apply(mech, given), q, None, rng)
-    problem = CalibrationProblem(mech, params, meas)
-    direct = qpso_identify(problem, options=QPSOOptions(seed=3))
-    stepwise = qpso_identify(problem, stepwise=True, options=QPSOOptions(seed=3))
-    assert stepwise.cost < direct.cost < 1e-2 * direct.initial_cost
-    assert sorted(stepwise.order) == list(range(20))
+    problem = IdentificationProblem(mech, params, meas)
+    direct = identify(problem, "qpso", options=QPSOOptions(seed=3)).extras
+    stepwise = identify(problem, "qpso-stepwise", options=QPSOOptions(seed=3))
+    assert stepwise.extras.cost < direct.cost < 1e-2 * direct.initial_cost
+    assert sorted(stepwise.extras.order) == list(range(20))
     gn = np.zeros(len(params))
     for _ in range(2):  # two Gauss–Newton steps
-        r, J, _ = problem.evaluate(gn)
+        r, J, _ = problem.model.evaluate(gn)
         gn = gn - np.linalg.lstsq(J, r, rcond=None)[0]
     assert np.abs(gn - given).max() < 1e-9
-    assert np.abs(stepwise.values - given).max() > 1e-6  # QPSO: micrometres off
+    assert np.abs(stepwise.full_values - given).max() > 1e-6  # QPSO: micrometres off

@@ -1,4 +1,4 @@
-"""Tests of pincal.report._report: plot files, statistics and the assembled report."""
+"""Tests of pincal.report: plot files, statistics and the assembled report."""
 
 from __future__ import annotations
 

@@ -49,10 +49,11 @@ def _patent_pose(mech: pincal.Mechanism, q_act: np.ndarray) -> np.ndarray:
 def test_converges_to_gauss_newton_on_noise_free_data(setup) -> None:
     mech, params, meas, planned = setup
     gn = pincal.identify(mech, params, meas, "gauss-newton")
-    assert planned.converged, planned.message
+    assert planned.success, planned.message
+    assert planned.method == "step-planned"
     np.testing.assert_allclose(planned.values, gn.values, atol=1e-11)
     np.testing.assert_allclose(planned.values, ERRORS, atol=1e-11)
-    assert planned.held == ()
+    assert planned.fixed == ()
     assert np.all(np.diff(planned.cost_history) <= 0)
 
 
@@ -60,7 +61,7 @@ def test_steps_are_planned_by_sensitivity(setup) -> None:
     """The first planned step differs from the Gauss–Newton step (damped in sensitivity
     units) and the steps add up to the identified values."""
     _, _, _, planned = setup
-    np.testing.assert_allclose(planned.steps.sum(axis=0), planned.values, atol=1e-15)
+    np.testing.assert_allclose(planned.extras.steps.sum(axis=0), planned.values, atol=1e-15)
     assert planned.iterations >= 2
 
 

@@ -145,18 +145,8 @@ def run_demo(
         out = Path(out_dir)
         files.append(save_urdf(result.calibrated, out / f"{nominal.name}_calibrated.urdf"))
         files.append(out / f"{nominal.name}_calibrated.yaml")
-        report = {
-            "model": nominal.name,
-            "preset": params.label,
-            "units": "SI (m, rad)",
-            "parameters": [
-                {"name": n, "value": float(v), "std": float(s), "unit": u, "true": float(t)}
-                for (n, v, s, u), t in zip(
-                    result.table(),
-                    true[[params.index(n) for n in result.params.names]],
-                    strict=True,
-                )
-            ],
+        notes: dict[str, object] = {
+            "truth": dict(zip(params.names, (float(t) for t in true), strict=True)),
             "validation_before": before.summary(),
             "validation_after": after.summary(),
             "validation_errors": {
@@ -169,13 +159,10 @@ def run_demo(
                     "orientation": after.orientation.tolist(),
                 },
             },
-            "reduced_chi2": result.reduced_chi2,
-            "iterations": result.iterations,
-            "cost_history": list(result.cost_history),
-            "message": result.message,
         }
         if design is not None:
-            report["index_history"] = {settings.index: list(design.selection.history)}
+            notes["index_history"] = {settings.index: list(design.selection.history)}
+        report = result.to_dict(notes)
         files.append(atomic_write_text(out / "identification.json", json.dumps(report, indent=2)))
         if settings.report:
             from pincal.report import calibration_report

@@ -8,52 +8,17 @@ from pathlib import Path
 import click
 
 from pincal.cli.common import fail_cleanly
+from pincal.identification import METHODS
 
 
-def _stats(s) -> dict[str, float | None]:
-    import math
-
-    def mm(v):
-        return None if math.isnan(v) else v * 1e3
-
-    return {
-        "rms_position_mm": mm(s.rms_position),
-        "max_position_mm": mm(s.max_position),
-        "rms_orientation_mrad": mm(s.rms_orientation),
-        "max_orientation_mrad": mm(s.max_orientation),
-    }
-
-
-def result_json(result, mech, preset: str, data_path: str, n_poses: int) -> dict:
-    """The identification result as plain JSON (SI values and std)."""
-    ident = result.identifiability
-    return {
-        "model": mech.name,
-        "preset": preset,
-        "data": data_path,
-        "method": result.method,
-        "poses": n_poses,
-        "success": result.success,
-        "message": result.message,
-        "iterations": result.iterations,
-        "reduced_chi2": result.reduced_chi2,
-        "parameters": [
-            {"name": n, "unit": u, "value": float(v), "std": float(s)}
-            for n, v, s, u in result.table()
-        ],
-        "fixed": list(result.fixed),
-        "identifiability": {
-            "parameters": len(ident.names),
-            "rank": ident.rank,
-            "unidentifiable": list(ident.unidentifiable_names),
-            "explanation": ident.describe(),
-        },
-        "residuals": {
-            "before": _stats(result.before),
-            "after": _stats(result.after),
-            "per_pose_SI": result.residuals.tolist(),
-        },
-    }
+def result_json(result, data_path: str, urdf: str | None = None) -> dict:
+    """The identification result as ``identification.json`` (SI values and std), via
+    :meth:`pincal.identification.IdentificationResult.to_dict` with the data file (and
+    the calibrated URDF) as annotations."""
+    notes = {"data": data_path}
+    if urdf is not None:
+        notes["calibrated_urdf"] = urdf
+    return result.to_dict(notes)
 
 
 def format_report(doc: dict) -> str:
@@ -99,7 +64,11 @@ def format_report(doc: dict) -> str:
 )
 @click.option("--params", "preset", default=None, help="Parameter preset (default: first preset).")
 @click.option(
-    "--method", type=click.Choice(["gauss-newton", "lm"]), default="gauss-newton", show_default=True
+    "--method",
+    type=click.Choice(list(METHODS)),
+    default="gauss-newton",
+    show_default=True,
+    help="Identification solver.",
 )
 @click.option(
     "--out",
@@ -148,10 +117,9 @@ def calibrate(model, data, preset, method, out, as_json) -> None:
         method=method,
         progress=lambda it, cost: click.echo(f"… iteration {it}: cost {cost:.6g}", err=True),
     )
-    doc = result_json(result, mech, preset, str(data), len(meas))
     out_dir = Path(out)
     urdf = save_urdf(result.calibrated, out_dir / f"{mech.name}.urdf")
-    doc["calibrated_urdf"] = str(urdf)
+    doc = result_json(result, str(data), str(urdf))
     report = format_report(doc)
     atomic_write_text(out_dir / "identification.json", json.dumps(doc, indent=1) + "\n")
     atomic_write_text(out_dir / "report.txt", report)

@@ -1,47 +1,66 @@
-"""Stage 5 — from measurements to parameters: Gauss–Newton, LM, QPSO, step-wise QPSO and
-sensitivity-planned steps, with covariances at the Cramér–Rao bound.
+"""Stage 5 — from measurements to parameters: one :class:`IdentificationProblem`, solved by
+a registered solver (``"gauss-newton"``, ``"lm"``, ``"qpso"``, ``"qpso-stepwise"``,
+``"step-planned"``), gives one :class:`IdentificationResult` with covariances at the
+Cramér–Rao bound; ``IdentificationResult.to_dict`` / ``from_dict`` write and read
+``identification.json``.
 """
 
 from __future__ import annotations
 
-from pincal.identification._identify import (
-    METHODS,
-    CalibrationProblem,
+from pincal.identification._identify import identify, qpso_identify, step_planned_identify
+from pincal.identification._options import (
+    LOSSES,
+    GaussNewtonOptions,
+    LMOptions,
+    StepPlanningOptions,
+)
+from pincal.identification._problem import CalibrationProblem, IdentificationProblem
+from pincal.identification._qpso import QPSOResult, qpso
+from pincal.identification._qpso_identify import COST_MODELS, QPSOOptions
+from pincal.identification._qpso_stepwise import QPSOStage, QPSOStepwiseResult, qpso_stepwise
+from pincal.identification._result import (
     IdentificationResult,
+    LocalSolverExtras,
+    QPSOExtras,
     ResidualStats,
-    identify,
+    SolverExtras,
+    StepPlanningExtras,
 )
-from pincal.identification._qpso import (
-    QPSOResult,
-    QPSOStage,
-    QPSOStepwiseResult,
-    qpso,
-    qpso_stepwise,
-)
-from pincal.identification._qpso_identify import (
-    QPSOIdentification,
-    QPSOOptions,
-    qpso_identify,
-)
-from pincal.identification._step_planning import (
-    StepPlanningResult,
-    step_planned_identify,
-)
+from pincal.identification._result_io import FORMAT_VERSION
+from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
+
+#: pincal 0.1 result names: every solver now returns an IdentificationResult
+QPSOIdentification = IdentificationResult
+StepPlanningResult = IdentificationResult
 
 __all__ = [
+    "COST_MODELS",
+    "FORMAT_VERSION",
+    "LOSSES",
     "METHODS",
+    "SOLVERS",
     "CalibrationProblem",
+    "GaussNewtonOptions",
+    "IdentificationProblem",
     "IdentificationResult",
+    "LMOptions",
+    "LocalSolverExtras",
+    "QPSOExtras",
     "QPSOIdentification",
     "QPSOOptions",
     "QPSOResult",
     "QPSOStage",
     "QPSOStepwiseResult",
     "ResidualStats",
+    "Solver",
+    "SolverExtras",
+    "StepPlanningExtras",
+    "StepPlanningOptions",
     "StepPlanningResult",
     "identify",
     "qpso",
     "qpso_identify",
     "qpso_stepwise",
+    "solver",
     "step_planned_identify",
 ]

@@ -1,7 +1,7 @@
 """QPSO identification (seed 003): swarm search of the whitened residual cost.
 
 The cost of parameter values ``x`` (n,) is ``0.5·‖r_w(x)‖²`` with ``r_w`` the whitened
-residual of :class:`pincal.identification._identify.CalibrationProblem` (the same cost Gauss–Newton
+residual of :class:`pincal.identification.CalibrationProblem` (the same cost Gauss–Newton
 minimises). The swarm searches the box ``x0 ± half_width`` (seed 003: ±0.05 mm for the
 hinge coordinates) over the free (identifiable) parameters; the others stay at ``x0``.
 
@@ -31,10 +31,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pincal.errors import ConvergenceError, ParameterError
-from pincal.identification._qpso import qpso, qpso_stepwise
+from pincal.errors import SolverOptionError
+from pincal.identification._options import check_int, check_real
+from pincal.identification._outcome import Progress, SolverOutcome
+from pincal.identification._problem import CalibrationProblem
+from pincal.identification._qpso import qpso
+from pincal.identification._qpso_stepwise import qpso_stepwise
+from pincal.identification._result import QPSOExtras
 
-__all__ = ["QPSOIdentification", "QPSOOptions", "qpso_identify"]
+__all__ = ["COST_MODELS", "QPSOOptions", "qpso_search"]
 
 log = logging.getLogger(__name__)
 COST_MODELS = ("linear", "exact")
@@ -45,16 +50,20 @@ class QPSOOptions:
     """Settings of QPSO identification (defaults: seed 003).
 
     Attributes:
-        n_particles: swarm size N (80).
-        t_max: iterations per run, and per coarse stage of the step-wise variant (300).
-        alpha: contraction–expansion coefficient, first → last iteration (1.0 → 0.5).
-        half_width_m: half-width of the search box for length parameters [m] (0.05 mm).
-        half_width_rad: half-width for angle parameters [rad] (1 mrad; not in the seed).
-        seed: random seed (same seed → same result).
+        n_particles: swarm size N (80; ≥ 2).
+        t_max: iterations per run, and per coarse stage of the step-wise variant (300; ≥ 0).
+        alpha: contraction–expansion coefficient, first → last iteration (1.0 → 0.5; > 0).
+        half_width_m: half-width of the search box for length parameters [m] (0.05 mm; > 0).
+        half_width_rad: half-width for angle parameters [rad] (1 mrad; not in the seed; > 0).
+        seed: random seed (same seed → same result; None = fresh entropy).
         cost_model: ``"linear"`` or ``"exact"`` (see the module docstring).
         passes: linearisation passes of the ``"linear"`` model (≥ 1; default 1).
         spread_tol, patience, fine_t_max, fine_spread: step-wise convergence test and
-            fine stage, see :func:`pincal.identification._qpso.qpso_stepwise`.
+            fine stage, see :func:`pincal.identification.qpso_stepwise` (spread_tol and
+            fine_spread > 0, patience ≥ 1, fine_t_max ≥ 0 or None).
+
+    Raises:
+        SolverOptionError: an option outside its range (the message gives the range).
     """
 
     n_particles: int = 80
@@ -71,86 +80,61 @@ class QPSOOptions:
     fine_spread: float = 0.1
 
     def __post_init__(self) -> None:
+        o = type(self).__name__
         if self.cost_model not in COST_MODELS:
-            raise ParameterError(
+            raise SolverOptionError(
                 f"unknown QPSO cost model {self.cost_model!r}; choose from {COST_MODELS}"
             )
-        if int(self.passes) < 1:
-            raise ParameterError(f"passes must be at least 1, got {self.passes}")
-        if not (self.half_width_m > 0 and self.half_width_rad > 0):
-            raise ParameterError("search half-widths must be positive")
+        check_int(o, "n_particles", self.n_particles, 2)
+        check_int(o, "t_max", self.t_max, 0)
+        check_int(o, "passes", self.passes, 1)
+        check_int(o, "patience", self.patience, 1)
+        if self.fine_t_max is not None:
+            check_int(o, "fine_t_max", self.fine_t_max, 0)
+        check_real(o, "half_width_m", self.half_width_m, 0.0, open_low=True)
+        check_real(o, "half_width_rad", self.half_width_rad, 0.0, open_low=True)
+        check_real(o, "spread_tol", self.spread_tol, 0.0, open_low=True)
+        check_real(o, "fine_spread", self.fine_spread, 0.0, open_low=True)
+        a = np.atleast_1d(np.asarray(self.alpha, dtype=float))
+        if a.size not in (1, 2) or not np.all(np.isfinite(a)) or np.any(a <= 0):
+            raise SolverOptionError(
+                f"{o}.alpha must be a positive number or a (start, end) pair of positive "
+                f"numbers, got {self.alpha!r}"
+            )
+        if self.seed is not None:
+            check_int(o, "seed", self.seed, 0)
 
 
-@dataclass(frozen=True)
-class QPSOIdentification:
-    """Outcome of :func:`qpso_identify`.
-
-    Attributes:
-        values: (n,) identified values [SI] (free entries searched, others = x0).
-        cost: exact cost 0.5·‖r_w‖² at ``values``.
-        initial_cost: exact cost at ``x0``.
-        history: best cost per swarm iteration (of the cost model; last pass, or the fine
-            stage of the step-wise variant).
-        iterations: swarm iterations over all passes and stages.
-        nfev: cost evaluations (particles) over all passes and stages.
-        order: step-wise only: free-parameter indices (into the full vector) in the order
-            the coarse stage fixed them; empty for the direct variant.
-        seconds: wall time of the search.
-        message: summary.
-    """
-
-    values: np.ndarray
-    cost: float
-    initial_cost: float
-    history: np.ndarray
-    iterations: int
-    nfev: int
-    order: tuple[int, ...]
-    seconds: float
-    message: str
-
-
-def _exact_cost(problem, x: np.ndarray) -> float:
-    try:
-        r, _, _ = problem.evaluate(x, jacobian=False)
-    except ConvergenceError:
-        return float("inf")
-    return 0.5 * float(r @ r)
-
-
-def qpso_identify(
-    problem,
-    x0: np.ndarray | None = None,
-    free: np.ndarray | None = None,
+def qpso_search(
+    problem: CalibrationProblem,
+    x0: np.ndarray,
+    free: np.ndarray,
+    opts: QPSOOptions,
+    progress: Progress = None,
     *,
     stepwise: bool = False,
-    options: QPSOOptions | None = None,
-) -> QPSOIdentification:
+) -> SolverOutcome:
     """Minimise the whitened residual cost of ``problem`` with (step-wise) QPSO.
 
     Args:
-        problem: a :class:`pincal.identification._identify.CalibrationProblem` (n parameters).
-        x0: (n,) centre of the search box and values of the non-free parameters [SI]
-            (default zeros = nominal).
-        free: indices of the parameters to search (default all).
+        problem: the residual model (n parameters).
+        x0: (n,) centre of the search box and values of the non-free parameters [SI].
+        free: indices of the parameters to search.
+        opts: :class:`QPSOOptions`.
+        progress: unused (the swarm reports no per-iteration cost); accepted for symmetry.
         stepwise: seed 003's step-wise variant (coarse one-at-a-time + fine stage).
-        options: :class:`QPSOOptions` (default: the seed's settings).
 
     Returns:
-        QPSOIdentification.
+        SolverOutcome with :class:`QPSOExtras`; success when the exact cost did not rise.
     """
-    opts = options or QPSOOptions()
-    n = len(problem.params)
-    x0 = np.zeros(n) if x0 is None else np.asarray(x0, dtype=float).copy()
-    if x0.shape != (n,):
-        raise ParameterError(f"x0 must have shape ({n},), got {x0.shape}")
-    free = np.arange(n) if free is None else np.asarray(free, dtype=int)
+    x0 = np.asarray(x0, dtype=float).copy()
+    free = np.asarray(free, dtype=int)
     units = np.array(problem.params.units)[free]
     half = np.where(units == "m", opts.half_width_m, opts.half_width_rad)
     lo, hi = x0[free] - half, x0[free] + half
     rng = np.random.default_rng(opts.seed)
     start = time.perf_counter()
-    initial_cost = _exact_cost(problem, x0)
+    initial_cost = problem.cost(x0)
 
     def run(cost, vectorized: bool):
         if stepwise:
@@ -182,7 +166,7 @@ def qpso_identify(
         def exact(z: np.ndarray) -> float:
             x = x0.copy()
             x[free] = z
-            return _exact_cost(problem, x)
+            return problem.cost(x)
 
         z, history, iterations, nfev, order = run(exact, False)
         passes = 1
@@ -205,7 +189,7 @@ def qpso_identify(
         passes = int(opts.passes)
     values = x0.copy()
     values[free] = z
-    cost = _exact_cost(problem, values)
+    cost = problem.cost(values)
     seconds = time.perf_counter() - start
     variant = "step-wise QPSO" if stepwise else "QPSO"
     message = (
@@ -214,14 +198,6 @@ def qpso_identify(
         f"iterations, {nfev} evaluations, {seconds:.2f} s"
     )
     log.info(message)
-    return QPSOIdentification(
-        values=values,
-        cost=cost,
-        initial_cost=initial_cost,
-        history=np.asarray(history, dtype=float),
-        iterations=iterations,
-        nfev=nfev,
-        order=order,
-        seconds=seconds,
-        message=message,
-    )
+    swarm = tuple(float(v) for v in np.asarray(history, dtype=float))
+    extras = QPSOExtras(cost, initial_cost, nfev, order, seconds, swarm)
+    return SolverOutcome(values, iterations, swarm, bool(cost <= initial_cost), message, extras)

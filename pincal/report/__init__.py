@@ -1,14 +1,17 @@
-"""Reports of a calibration: plots, Markdown and HTML.
+"""Reports of a calibration: plots, Markdown and HTML, and the report of a calibration
+output directory (read from its ``identification.json``).
 """
 
 from __future__ import annotations
 
-from pincal.report._report import (
-    ErrorStats,
-    ReportFiles,
-    Section,
-    Table,
+from pincal.report._calibration import (
+    IDENTIFICATION_JSON,
     calibration_report,
+    read_identification,
+)
+from pincal.report._document import ReportFiles, Section, Table, write_report
+from pincal.report._plots import (
+    ErrorStats,
     error_statistics,
     plot_convergence,
     plot_error_histogram,
@@ -16,11 +19,10 @@ from pincal.report._report import (
     plot_index_history,
     plot_parameters,
     plot_validation_summary,
-    read_identification,
-    write_report,
 )
 
 __all__ = [
+    "IDENTIFICATION_JSON",
     "ErrorStats",
     "ReportFiles",
     "Section",

@@ -1,0 +1,243 @@
+"""Local solvers: damped Gauss–Newton and scipy's Levenberg–Marquardt.
+
+Both minimise ``0.5·‖r_w(x)‖²`` of :class:`pincal.identification.CalibrationProblem`
+over the free parameters. A trial vector whose model cannot be assembled
+(:class:`pincal.ClosureError`) or whose poses cannot be solved
+(:class:`pincal.ConvergenceError`) is a rejected step, never an error.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import scipy.optimize
+
+from pincal.identification._options import GaussNewtonOptions, LMOptions
+from pincal.identification._outcome import Progress, SolverOutcome
+from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
+from pincal.identification._result import LocalSolverExtras
+
+__all__ = ["gauss_newton", "levenberg_marquardt"]
+
+log = logging.getLogger(__name__)
+_MU_MAX = 1e10  # largest relative damping before the step is given up
+_MU_OFF = 1e-7  # below it the damping is switched off (pure Gauss–Newton again)
+_FAILED_RESIDUAL = 1e100  # whitened residual entries of a trial that cannot be evaluated
+
+
+def _at_floor(problem: CalibrationProblem, cost: float, initial: float) -> bool:
+    """True when the cost is at the kinematic solver's precision (exact data fitted)."""
+    return cost <= problem.solver_floor_cost or cost <= 1e-20 * initial
+
+
+def _damped_step(A: np.ndarray, b: np.ndarray, mu: float) -> np.ndarray:
+    """argmin ‖A δ + b‖² + μ·Σ d_i δ_i², d = diag(AᵀA) + 1e-12·max (Marquardt scaling)."""
+    d = np.einsum("ij,ij->j", A, A)
+    d = d + 1e-12 * max(float(d.max(initial=0.0)), 1e-300)
+    A_aug = np.vstack([A, np.diag(np.sqrt(mu * d))])
+    b_aug = np.concatenate([b, np.zeros(A.shape[1])])
+    return -np.linalg.lstsq(A_aug, b_aug, rcond=None)[0]
+
+
+def gauss_newton(
+    problem: CalibrationProblem,
+    x0: np.ndarray,
+    free: np.ndarray,
+    opts: GaussNewtonOptions,
+    progress: Progress = None,
+) -> SolverOutcome:
+    """Gauss–Newton with Levenberg damping when the full step fails.
+
+    The undamped Gauss–Newton step is taken whenever it decreases the cost (so a
+    well-behaved problem converges quadratically as before). When it does not (or the
+    trial model cannot be assembled), the step is damped,
+    ``(JᵀJ + μ·diag(JᵀJ)) δ = −Jᵀr``, with μ raised ×10 per rejected and lowered ÷10 per
+    accepted step until it falls below 1e-7 and pure Gauss–Newton resumes. With
+    ``opts.damping`` False the full step is instead halved up to ``max_halvings`` times.
+
+    Args:
+        problem: residual model (n parameters).
+        x0: (n,) start values [SI]; free: indices of the parameters to fit.
+        opts: options; progress: optional ``(iteration, cost)`` callback.
+
+    Returns:
+        SolverOutcome with :class:`LocalSolverExtras`.
+    """
+    x = x0.copy()
+    r, J, _ = problem.evaluate(x)
+    evals, rejected = 1, 0
+    cost = 0.5 * float(r @ r)
+    history = [cost]
+    message, success = "maximum iterations reached", False
+    lam = opts.regularization
+    mu = 0.0
+    it = 0
+    for it in range(1, opts.max_iterations + 1):
+        Jf = J[:, free]
+        if lam > 0:
+            A = np.vstack([Jf, np.sqrt(lam) * np.eye(free.size)])
+            b = np.concatenate([r, np.sqrt(lam) * (x[free] - x0[free])])
+        else:
+            A, b = Jf, r
+        step = -np.linalg.lstsq(A, b, rcond=None)[0]
+        predicted = cost - 0.5 * float(np.sum((b + A @ step) ** 2))
+        if predicted <= 1e-12 * cost + 1e-24 * history[0]:
+            message, success = "converged (predicted decrease below 1e-12 of the cost)", True
+            break
+        accepted, alpha, x_try = False, 1.0, x
+        if mu == 0.0:
+            # the full Gauss–Newton step; with damping off, a halving line search
+            for _ in range(1 if opts.damping else opts.max_halvings):
+                x_try = x.copy()
+                x_try[free] += alpha * step
+                cost_try = problem.cost(x_try)
+                evals += 1
+                # with damping on, a full step must deliver a quarter of its predicted
+                # decrease (else the linear model is not trusted and the step is damped)
+                enough = not opts.damping or cost - cost_try >= 0.25 * predicted
+                if cost_try < cost and enough:
+                    accepted = True
+                    break
+                rejected += 1
+                alpha *= 0.5
+            if not accepted and _at_floor(problem, cost, history[0]):
+                message, success = "converged (solver precision)", True
+                break
+            if not accepted and not opts.damping:
+                message = "no decrease along the step"
+                break
+            if not accepted:
+                mu = opts.damping_start
+                log.debug("gauss-newton: full step rejected; damping μ = %g", mu)
+        damped = not accepted
+        if damped:
+            while mu <= _MU_MAX:
+                step = _damped_step(A, b, mu)
+                x_try = x.copy()
+                x_try[free] += step
+                cost_try = problem.cost(x_try)
+                evals += 1
+                if cost_try < cost:
+                    accepted = True
+                    break
+                rejected += 1
+                mu *= 10.0
+            if not accepted:
+                success = _at_floor(problem, cost, history[0])
+                message = (
+                    "converged (solver precision)"
+                    if success
+                    else f"no decrease along the step, even damped (μ up to {_MU_MAX:g})"
+                )
+                break
+            alpha = 1.0
+            # gain ratio ρ = actual / predicted decrease (Nielsen's update of μ)
+            predicted_d = cost - 0.5 * float(np.sum((b + A @ step) ** 2))
+            rho = (cost - cost_try) / predicted_d if predicted_d > 0 else 0.0
+            mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+            mu = mu if mu >= _MU_OFF else 0.0
+        x = x_try
+        small = np.linalg.norm(alpha * step) <= opts.xtol * (np.linalg.norm(x[free]) + opts.xtol)
+        r, J, _ = problem.evaluate(x)
+        evals += 1
+        cost = 0.5 * float(r @ r)
+        history.append(cost)
+        if progress:
+            progress(it, cost)
+        if small and not damped:
+            message, success = "converged (step below tolerance)", True
+            break
+    extras = LocalSolverExtras(evaluations=evals, rejected_steps=rejected, damping=mu)
+    return SolverOutcome(x, it, tuple(history), success, message, extras)
+
+
+def levenberg_marquardt(
+    problem: CalibrationProblem,
+    x0: np.ndarray,
+    free: np.ndarray,
+    opts: LMOptions,
+    progress: Progress = None,
+) -> SolverOutcome:
+    """``scipy.optimize.least_squares`` on the free parameters.
+
+    Success is scipy's convergence, or — when scipy stopped at its evaluation limit —
+    a cost at the kinematic solver's precision (exact data fitted) or at the noise floor
+    (a Gauss–Newton step from the end point promises less than 1e-9 of the cost).
+
+    Args:
+        problem: residual model; x0: (n,) start [SI]; free: fitted indices.
+        opts: options; progress: optional ``(evaluation, cost)`` callback.
+    """
+    history: list[float] = []
+    cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+    def full(z):
+        x = x0.copy()
+        x[free] = z
+        return x
+
+    last: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def both(z):
+        key = z.tobytes()
+        if key not in cache:
+            cache.clear()
+            try:
+                r, J, _ = problem.evaluate(full(z))
+                J = J[:, free]
+                last[:] = [(r, J)]
+            except TRIAL_FAILURES:
+                if not last:
+                    raise  # the start itself cannot be evaluated
+                # a trial model that cannot be assembled / solved: a huge residual makes
+                # the solver reject the step and shrink its trust region
+                r, J = np.full_like(last[0][0], _FAILED_RESIDUAL), last[0][1]
+            cache[key] = (r, J)
+            history.append(0.5 * float(r @ r))
+            if progress:
+                progress(len(history), history[-1])
+        return cache[key]
+
+    max_nfev = opts.max_iterations * 10
+    sol = scipy.optimize.least_squares(
+        lambda z: both(z)[0],
+        x0[free],
+        jac=lambda z: both(z)[1],
+        method="lm" if opts.loss == "linear" else "trf",
+        loss=opts.loss,
+        x_scale="jac",
+        xtol=max(opts.xtol, 1e-15),
+        ftol=1e-15,
+        gtol=1e-15,
+        max_nfev=max_nfev,
+    )
+    x = full(sol.x)
+    r_end, J_end = both(sol.x)
+    cost = 0.5 * float(r_end @ r_end)
+    # decrease the Gauss–Newton model still promises at the end point
+    gn = np.linalg.lstsq(J_end, -r_end, rcond=None)[0]
+    promised = cost - 0.5 * float(np.sum((r_end + J_end @ gn) ** 2))
+    if sol.success:
+        success, message = True, f"converged ({sol.message})"
+    elif _at_floor(problem, cost, history[0]):
+        success = True
+        message = (
+            f"converged: cost {cost:.3g} is at the kinematic solver's precision (exact data "
+            f"fitted); scipy stopped at its evaluation limit ({max_nfev}) before its own "
+            "1e-15 tolerances"
+        )
+    elif promised <= 1e-9 * cost:
+        success = True
+        message = (
+            f"converged: cost {cost:.6g} is at the noise floor (a further Gauss–Newton step "
+            f"promises {promised:.2g}); scipy stopped at its evaluation limit ({max_nfev})"
+        )
+    else:
+        success = False
+        message = (
+            f"stopped at the evaluation limit ({max_nfev}) with the cost still decreasing "
+            f"({cost:.6g}); raise max_iterations ({sol.message})"
+        )
+    extras = LocalSolverExtras(evaluations=int(sol.nfev), rejected_steps=0)
+    return SolverOutcome(x, int(sol.nfev), tuple(history), success, message, extras)

@@ -1,0 +1,143 @@
+"""Frozen, validated options of the local solvers and of step planning.
+
+Each registered solver has its own options dataclass; a bad value raises
+:class:`pincal.errors.SolverOptionError` (a :class:`pincal.ParameterError`) naming the
+option and its valid range when the options are built, before any solving starts.
+The QPSO options live with the QPSO solver (:class:`QPSOOptions`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pincal.errors import SolverOptionError
+
+__all__ = [
+    "LOSSES",
+    "GaussNewtonOptions",
+    "LMOptions",
+    "StepPlanningOptions",
+    "check_int",
+    "check_real",
+]
+
+#: robust losses of ``lm`` (scipy.optimize.least_squares)
+LOSSES = ("linear", "huber", "soft_l1", "cauchy", "arctan")
+
+
+def check_int(owner: str, name: str, value: Any, low: int, high: int | None = None) -> None:
+    """Raise SolverOptionError unless ``value`` is an integer in [low, high]."""
+    ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    ok = ok and value >= low and (high is None or value <= high)
+    if not ok:
+        valid = f"an integer ≥ {low}" if high is None else f"an integer in [{low}, {high}]"
+        raise SolverOptionError(f"{owner}.{name} must be {valid}, got {value!r}")
+
+
+def check_real(
+    owner: str, name: str, value: Any, low: float, high: float = math.inf, *, open_low=False
+) -> None:
+    """Raise SolverOptionError unless ``value`` is a finite real in [low, high]
+    ((low, high] with ``open_low``)."""
+    ok = isinstance(value, (int, float, np.floating)) and not isinstance(value, bool)
+    ok = ok and math.isfinite(float(value)) and value <= high
+    ok = ok and (value > low if open_low else value >= low)
+    if not ok:
+        bracket = "(" if open_low else "["
+        top = "∞)" if math.isinf(high) else f"{high:g}]"
+        raise SolverOptionError(
+            f"{owner}.{name} must be a finite number in {bracket}{low:g}, {top}, got {value!r}"
+        )
+
+
+@dataclass(frozen=True)
+class GaussNewtonOptions:
+    """Options of ``"gauss-newton"``.
+
+    Each iteration tries the full Gauss–Newton step; a trial whose model cannot be
+    assembled or solved counts as no decrease. When it does not decrease the cost, the
+    step is damped Levenberg–Marquardt style (``(JᵀJ + μ·diag(JᵀJ)) δ = −Jᵀr``, μ from
+    ``damping_start`` up ×10 per rejected trial, down ÷10 per accepted step until pure
+    Gauss–Newton again). With ``damping=False`` the step is halved instead (pincal 0.1).
+
+    Attributes:
+        max_iterations: iteration limit (≥ 1).
+        xtol: relative step tolerance (> 0).
+        regularization: Tikhonov weight λ ≥ 0 on ``‖x − initial‖²`` (whitened units).
+        max_halvings: trial lengths 1, ½, ¼, … of the line search used when
+            ``damping`` is False (1–60).
+        damping: damp rejected steps (True) or halve them (False).
+        damping_start: first μ of the fallback (> 0, ≤ 1).
+    """
+
+    max_iterations: int = 50
+    xtol: float = 1e-10
+    regularization: float = 0.0
+    max_halvings: int = 20
+    damping: bool = True
+    damping_start: float = 1.0
+
+    def __post_init__(self) -> None:
+        o = type(self).__name__
+        check_int(o, "max_iterations", self.max_iterations, 1)
+        check_real(o, "xtol", self.xtol, 0.0, open_low=True)
+        check_real(o, "regularization", self.regularization, 0.0)
+        check_int(o, "max_halvings", self.max_halvings, 1, 60)
+        check_real(o, "damping_start", self.damping_start, 0.0, 1.0, open_low=True)
+        if not isinstance(self.damping, bool):
+            raise SolverOptionError(f"{o}.damping must be True or False, got {self.damping!r}")
+
+
+@dataclass(frozen=True)
+class LMOptions:
+    """Options of ``"lm"`` (``scipy.optimize.least_squares``).
+
+    Attributes:
+        max_iterations: the evaluation limit is 10 × this (≥ 1).
+        xtol: relative step tolerance (> 0).
+        loss: robust loss, one of :data:`LOSSES` (``"linear"`` = plain least squares
+            with scipy's ``lm``; the others use ``trf``).
+    """
+
+    max_iterations: int = 50
+    xtol: float = 1e-10
+    loss: str = "linear"
+
+    def __post_init__(self) -> None:
+        o = type(self).__name__
+        check_int(o, "max_iterations", self.max_iterations, 1)
+        check_real(o, "xtol", self.xtol, 0.0, open_low=True)
+        if self.loss not in LOSSES:
+            raise SolverOptionError(f"{o}.loss must be one of {LOSSES}, got {self.loss!r}")
+
+
+@dataclass(frozen=True)
+class StepPlanningOptions:
+    """Options of ``"step-planned"`` (seed 002's sensitivity-planned steps).
+
+    Attributes:
+        sensitivity: global sensitivity of the problem's parameters (None: computed over
+            ``workspace``).
+        workspace: actuator rows (m, n_act) or a sample count for the default sensitivity.
+        damping: initial λ relative to max diag(JᵀJ) (≥ 0).
+        max_iterations: accepted-step limit (≥ 1).
+        xtol: stop when ``max_i |w_i Δ_i| ≤ xtol·(1 + max_i |w_i x_i|)`` (> 0).
+    """
+
+    sensitivity: Any = None
+    workspace: Any = 200
+    damping: float = 1.0
+    max_iterations: int = 100
+    xtol: float = 1e-12
+
+    def __post_init__(self) -> None:
+        o = type(self).__name__
+        check_real(o, "damping", self.damping, 0.0)
+        check_int(o, "max_iterations", self.max_iterations, 1)
+        check_real(o, "xtol", self.xtol, 0.0, open_low=True)
+        if isinstance(self.workspace, (int, np.integer)) and not isinstance(self.workspace, bool):
+            check_int(o, "workspace", self.workspace, 1)

@@ -1,0 +1,254 @@
+"""One result shape for every identification solver.
+
+:class:`IdentificationResult` holds the full parameter vector with a mask of what was
+identified, the covariance of the identified ones, residual statistics, the solver's
+iterations / success / message and its typed extras (:class:`QPSOExtras`,
+:class:`StepPlanningExtras`, :class:`LocalSolverExtras`). Its ``to_dict`` / ``from_dict``
+(:mod:`pincal.identification._result_io`) are the one writer and reader of
+``identification.json``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from pincal.errors import ParameterError
+from pincal.model._mechanism import Mechanism
+from pincal.model._parameters import ParameterSet
+from pincal.sensitivity._identifiability import Identifiability
+
+__all__ = [
+    "IdentificationResult",
+    "LocalSolverExtras",
+    "QPSOExtras",
+    "ResidualStats",
+    "SolverExtras",
+    "StepPlanningExtras",
+]
+
+
+@dataclass(frozen=True)
+class ResidualStats:
+    """Residual statistics over the measured poses.
+
+    Attributes:
+        rms_position, max_position: of the position-error norm per pose [m] (NaN if
+            position is not measured).
+        rms_orientation, max_orientation: of the rotation-error norm per pose [rad]
+            (NaN if orientation is not measured).
+    """
+
+    rms_position: float
+    max_position: float
+    rms_orientation: float
+    max_orientation: float
+
+    @classmethod
+    def from_residuals(cls, r: np.ndarray, components: tuple[str, ...]) -> ResidualStats:
+        """From unweighted residuals (m, k) in the given components."""
+        pos = [i for i, c in enumerate(components) if c in ("x", "y", "z")]
+        rot = [i for i, c in enumerate(components) if c.startswith("r")]
+        out = []
+        for cols in (pos, rot):
+            if cols:
+                norms = np.linalg.norm(r[:, cols], axis=1)
+                out += [float(np.sqrt(np.mean(norms**2))), float(norms.max())]
+            else:
+                out += [float("nan"), float("nan")]
+        return cls(*out)
+
+
+@dataclass(frozen=True)
+class LocalSolverExtras:
+    """Extras of ``gauss-newton`` and ``lm``.
+
+    Attributes:
+        evaluations: residual evaluations (with or without Jacobian).
+        rejected_steps: trial steps rejected (no decrease, or model not assembled).
+        damping: final Levenberg damping μ relative to max diag(JᵀJ) (0 = pure
+            Gauss–Newton; NaN for ``lm``, whose damping is internal to scipy).
+    """
+
+    evaluations: int
+    rejected_steps: int = 0
+    damping: float = float("nan")
+
+
+@dataclass(frozen=True)
+class QPSOExtras:
+    """Extras of ``qpso`` and ``qpso-stepwise``.
+
+    Attributes:
+        cost: exact cost 0.5·‖r_w‖² at the result.
+        initial_cost: exact cost at the start values.
+        nfev: cost evaluations (particles) over all passes and stages.
+        order: step-wise only: parameter indices (into the full vector) in the order the
+            coarse stage fixed them; empty for the direct variant.
+        seconds: wall time of the search [s].
+        swarm_history: best cost of the cost model per swarm iteration (last pass, or the
+            fine stage of the step-wise variant).
+    """
+
+    cost: float
+    initial_cost: float
+    nfev: int
+    order: tuple[int, ...]
+    seconds: float
+    swarm_history: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class StepPlanningExtras:
+    """Extras of ``step-planned``.
+
+    Attributes:
+        steps: (accepted steps, n) planned steps [SI] (full parameter vector).
+        weights: (n,) normalised global sensitivities that planned the steps.
+        sensitivity: the global sensitivity object (None when read from a file).
+    """
+
+    steps: np.ndarray
+    weights: np.ndarray
+    sensitivity: Any = None
+
+
+SolverExtras = LocalSolverExtras | QPSOExtras | StepPlanningExtras
+
+
+@dataclass(frozen=True)
+class IdentificationResult:
+    """Outcome of :func:`pincal.identify` for every solver.
+
+    Attributes:
+        method: solver name (``"gauss-newton"``, ``"lm"``, ``"qpso"``, ...).
+        names: all n parameter names; units: ``"m"``/``"rad"`` per parameter.
+        full_values: (n,) values of all parameters [SI]; the ones not identified keep
+            their start values.
+        identified: (n,) bool mask of the identified parameters (k of them).
+        std: (k,) standard deviations of the identified parameters [SI].
+        covariance: (k, k) their covariance (``(Jᵀ W J)⁻¹``, scaled by the residual
+            variance when no noise model is given).
+        before, after: residual statistics at the start and identified values.
+        reduced_chi2: weighted residual sum of squares / (N − k).
+        iterations: solver iterations (function evaluations for ``lm``).
+        success: whether the solver reached its tolerance or the noise/solver floor.
+        message: solver message, including any parameter reduction.
+        cost_history: 0.5·‖weighted residual‖² per iteration.
+        residuals: (m, c) unweighted residuals at the solution [m, rad].
+        initial_values: (n,) start values [SI].
+        n_equations: scalar measurement equations N.
+        model: mechanism name; preset: parameter-set label.
+        extras: solver-specific extras (see :data:`SolverExtras`), or None.
+        parameter_set: the full parameter set (None when read from a file).
+        calibrated_mechanism: the mechanism with ``full_values`` applied (None when read
+            from a file); use :attr:`calibrated`.
+        identifiability: analysis at the start values (None when read from a file).
+        annotations: JSON-ready context written with the result (data file, validation
+            errors, simulated truth, index history, ...).
+    """
+
+    method: str
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+    full_values: np.ndarray
+    identified: np.ndarray
+    std: np.ndarray
+    covariance: np.ndarray
+    before: ResidualStats
+    after: ResidualStats
+    reduced_chi2: float
+    iterations: int
+    success: bool
+    message: str
+    cost_history: tuple[float, ...]
+    residuals: np.ndarray
+    initial_values: np.ndarray
+    n_equations: int = 0
+    model: str = ""
+    preset: str = ""
+    extras: SolverExtras | None = None
+    parameter_set: ParameterSet | None = field(default=None, repr=False)
+    calibrated_mechanism: Mechanism | None = field(default=None, repr=False)
+    identifiability: Identifiability | None = field(default=None, repr=False)
+    annotations: Mapping[str, Any] = field(default_factory=dict, repr=False)
+
+    @property
+    def values(self) -> np.ndarray:
+        """(k,) identified values [SI], in name order."""
+        return self.full_values[self.identified]
+
+    @property
+    def identified_names(self) -> tuple[str, ...]:
+        return tuple(n for n, ok in zip(self.names, self.identified, strict=True) if ok)
+
+    @property
+    def fixed(self) -> tuple[str, ...]:
+        """Names of the parameters held at their start values (not identified)."""
+        return tuple(n for n, ok in zip(self.names, self.identified, strict=True) if not ok)
+
+    @property
+    def params(self) -> ParameterSet:
+        """The identified parameters as a set (the base set when reduced).
+
+        Raises:
+            ParameterError: the result was read from a file (no parameter set; use
+                ``identified_names``).
+        """
+        if self.parameter_set is None:
+            raise ParameterError(
+                "this result was read from a file and has no parameter set; use "
+                "result.identified_names / result.values, or identify again"
+            )
+        return self.parameter_set.subset(np.flatnonzero(self.identified))
+
+    @property
+    def calibrated(self) -> Mechanism:
+        """The mechanism with ``full_values`` applied.
+
+        Raises:
+            ParameterError: the result was read from a file (apply the values with
+                ``ParameterSet.apply`` to the nominal mechanism instead).
+        """
+        if self.calibrated_mechanism is None:
+            raise ParameterError(
+                "this result was read from a file and holds no mechanism; load the "
+                "calibrated URDF, or apply result.full_values to the nominal mechanism"
+            )
+        return self.calibrated_mechanism
+
+    @property
+    def converged(self) -> bool:
+        """Alias of ``success`` (the step-planning result of pincal 0.1 called it so)."""
+        return self.success
+
+    @property
+    def held(self) -> tuple[str, ...]:
+        """Alias of ``fixed`` (the step-planning result of pincal 0.1 called it so)."""
+        return self.fixed
+
+    def table(self) -> list[tuple[str, float, float, str]]:
+        """(name, value, std, unit) per identified parameter [SI]."""
+        units = [u for u, ok in zip(self.units, self.identified, strict=True) if ok]
+        return list(zip(self.identified_names, self.values, self.std, units, strict=True))
+
+    def to_dict(self, annotations: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """The JSON document of ``identification.json`` (see
+        :func:`pincal.identification._result_io.result_to_dict`)."""
+        from pincal.identification._result_io import result_to_dict
+
+        return result_to_dict(self, annotations)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], source: str = "identification.json"):
+        """Read an ``identification.json`` document (this format or pincal 0.1's).
+
+        Raises:
+            ReportError: a malformed document (the message names the entry and ``source``).
+        """
+        from pincal.identification._result_io import result_from_dict
+
+        return result_from_dict(data, source)

@@ -1,0 +1,245 @@
+"""The report of a calibration output directory, read from its ``identification.json``.
+
+The file is read with :meth:`pincal.identification.IdentificationResult.from_dict` (the
+one reader of the format; pincal 0.1 files included); this module checks the report's
+own annotations (validation errors, index history) and draws them.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from pincal.errors import ReportError
+from pincal.identification import IdentificationResult
+from pincal.report._document import ReportFiles, Section, Table, write_report
+from pincal.report._plots import (
+    plot_convergence,
+    plot_error_histogram,
+    plot_errors_before_after,
+    plot_index_history,
+    plot_parameters,
+    plot_validation_summary,
+)
+
+__all__ = ["IDENTIFICATION_JSON", "MAX_JSON_BYTES", "calibration_report", "read_identification"]
+
+#: name of the calibration summary written by a calibration run
+IDENTIFICATION_JSON = "identification.json"
+#: largest identification.json read [bytes]
+MAX_JSON_BYTES = 20_000_000
+_SUMMARY_KEYS = (
+    ("rms_position_mm", "RMS position [mm]"),
+    ("max_position_mm", "max position [mm]"),
+    ("rms_orientation_mrad", "RMS orientation [mrad]"),
+    ("max_orientation_mrad", "max orientation [mrad]"),
+)
+
+
+def _number(value: object, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ReportError(f"{what} must be a number, got {value!r}")
+    if not math.isfinite(float(value)):
+        raise ReportError(f"{what} is NaN or infinite")
+    return float(value)
+
+
+def _numbers(value: object, what: str) -> np.ndarray:
+    if not isinstance(value, list) or not value:
+        raise ReportError(f"{what} must be a non-empty list of numbers")
+    return np.array([_number(v, f"{what}[{k}]") for k, v in enumerate(value)])
+
+
+def _check_annotations(notes: dict) -> None:
+    """Validation summaries, per-pose validation errors and index history, if present."""
+    for side in ("validation_before", "validation_after"):
+        if side in notes:
+            if not isinstance(notes[side], dict):
+                raise ReportError(f"'{side}' must be an object")
+            for key, _ in _SUMMARY_KEYS:
+                if notes[side].get(key) is not None:
+                    _number(notes[side][key], f"{side}.{key}")
+    if "validation_errors" in notes:
+        ve = notes["validation_errors"]
+        if not isinstance(ve, dict) or not {"before", "after"} <= set(ve):
+            raise ReportError("'validation_errors' must hold 'before' and 'after'")
+        for side in ("before", "after"):
+            if not isinstance(ve[side], dict):
+                raise ReportError(f"validation_errors.{side} must be an object")
+            for key in ("position", "orientation"):
+                if key in ve[side]:
+                    _numbers(ve[side][key], f"validation_errors.{side}.{key}")
+    if "index_history" in notes:
+        ih = notes["index_history"]
+        if not isinstance(ih, dict) or not ih:
+            raise ReportError("'index_history' must be an object {index name: [values]}")
+        for key, values in ih.items():
+            _numbers(values, f"index_history.{key}")
+
+
+def read_identification(path: str | os.PathLike) -> IdentificationResult:
+    """Read and check a calibration summary (``identification.json``).
+
+    The result part is read by :meth:`IdentificationResult.from_dict` (format version 2,
+    or pincal 0.1's files); the report's annotations — ``validation_before`` /
+    ``validation_after`` (``rms_position_mm, max_position_mm, rms_orientation_mrad,
+    max_orientation_mrad``), ``validation_errors`` (``{before|after: {position: [m],
+    orientation: [rad]}}`` per validation pose), ``index_history`` (``{O1: [...], ...}``)
+    and the parameters' ``true`` values (as ``annotations["truth"]``) — are checked here.
+
+    Returns:
+        IdentificationResult (no parameter set or mechanism; context in ``annotations``).
+
+    Raises:
+        ReportError: missing file, invalid JSON, a newer format version or a malformed
+            entry (the message names the entry).
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()[: MAX_JSON_BYTES + 1]
+    except OSError as exc:
+        raise ReportError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
+    if len(raw) > MAX_JSON_BYTES:
+        raise ReportError(f"{str(path)!r} is larger than {MAX_JSON_BYTES} bytes")
+    try:
+        data = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ReportError(f"{str(path)!r} is not valid JSON: {exc}") from exc
+    if not isinstance(data, dict):
+        raise ReportError(f"{str(path)!r} must hold a JSON object, got {type(data).__name__}")
+    result = IdentificationResult.from_dict(data, source=repr(str(path)))
+    _check_annotations(dict(result.annotations))
+    return result
+
+
+def _display(value: float, unit: str) -> tuple[float, str]:
+    return (value * 1e6, "µm") if unit == "m" else (value * 1e6, "µrad")
+
+
+def _summary(result: IdentificationResult) -> Section:
+    facts = [f"Model {result.model}"]
+    if result.preset:
+        facts.append(f"parameter preset {result.preset!r}")
+    facts.append(f"{int(result.identified.sum())} identified parameters")
+    text = ", ".join(facts) + "."
+    text += f"\n\nIdentification: {result.iterations} iterations"
+    text += f", {result.message}" if result.message else ""
+    if math.isfinite(result.reduced_chi2):
+        text += f"; reduced χ² = {result.reduced_chi2:.4g} (≈ 1 when the noise model fits)"
+    return Section("Summary", text + ".")
+
+
+def _validation(notes: dict, plots: Path) -> Section | None:
+    before, after = notes.get("validation_before"), notes.get("validation_after")
+    if before is None or after is None:
+        return None
+    rows = [
+        [label, float(before.get(key) or np.nan), float(after.get(key) or np.nan)]
+        for key, label in _SUMMARY_KEYS
+    ]
+    images = [plot_validation_summary(before, after, plots / "validation_summary.png")]
+    ve: dict = notes.get("validation_errors") or {"before": {}, "after": {}}
+    for key, unit in (("position", "mm"), ("orientation", "mrad")):
+        if key in ve["before"] and key in ve["after"]:
+            b, a = np.array(ve["before"][key]), np.array(ve["after"][key])
+            title = key.capitalize()
+            if b.size == a.size:
+                images.append(
+                    plot_errors_before_after(
+                        b, a, unit, plots / f"validation_{key}.png",
+                        title=f"{title} error per validation pose",
+                    )
+                )  # fmt: skip
+            images.append(
+                plot_error_histogram(
+                    b, a, unit, plots / f"validation_{key}_histogram.png",
+                    title=f"{title} error distribution",
+                )
+            )  # fmt: skip
+    return Section(
+        "Validation",
+        "Errors of the predicted measured-frame pose on validation poses, "
+        "nominal vs calibrated model.",
+        images,
+        [Table(["quantity", "nominal", "calibrated"], rows)],
+    )
+
+
+def _parameters(result: IdentificationResult, plots: Path) -> Section:
+    names = list(result.identified_names)
+    values, std = result.values, result.std
+    units = [u for u, ok in zip(result.units, result.identified, strict=True) if ok]
+    kinds = ["angle" if u == "rad" else "length" for u in units]
+    truth = result.annotations.get("truth") or {}
+    true = np.array([float(truth[n]) for n in names]) if all(n in truth for n in names) else None
+    image = plot_parameters(
+        names, values, std, true, plots / "parameters.png",
+        kinds=kinds, length_unit="um", angle_unit="urad",
+    )  # fmt: skip
+    headers = ["parameter", "value", "2σ", "unit"] + (
+        ["true", "error / σ"] if true is not None else []
+    )
+    rows = []
+    for k, name in enumerate(names):
+        v, label = _display(values[k], units[k])
+        row: list[object] = [name, round(v, 3), round(2 * std[k] * 1e6, 3), label]
+        if true is not None:
+            row += [
+                round(true[k] * 1e6, 3),
+                round((values[k] - true[k]) / std[k], 2) if std[k] > 0 else "",
+            ]
+        rows.append(row)
+    return Section(
+        "Identified parameters",
+        "Displacements of the URDF joint origins (lengths in µm, angles in µrad) with "
+        "their ±2σ uncertainty" + (" and the simulated true values." if true is not None else "."),
+        [image],
+        [Table(headers, rows)],
+    )
+
+
+def calibration_report(
+    directory: str | os.PathLike,
+    out: str | os.PathLike | None = None,
+    *,
+    name: str = "report",
+) -> ReportFiles:
+    """Assemble plots and numbers of a calibration output directory into one report.
+
+    Reads ``<directory>/identification.json`` (see :func:`read_identification`)
+    and writes ``<out>/<name>.md``, ``<out>/<name>.html`` and their PNG plots in
+    ``<out>/<name>_plots/`` (``out`` defaults to ``directory``). Nothing else is
+    read or changed.
+
+    Raises:
+        ReportError: the directory or its identification.json is missing or malformed.
+    """
+    src = Path(directory)
+    if not src.is_dir():
+        raise ReportError(f"calibration directory {str(src)!r} does not exist")
+    result = read_identification(src / IDENTIFICATION_JSON)
+    notes = dict(result.annotations)
+    out_dir = Path(out) if out is not None else src
+    plots = (out_dir / f"{name}_plots").resolve()
+    sections = [_summary(result)]
+    validation = _validation(notes, plots)
+    if validation is not None:
+        sections.append(validation)
+    sections.append(_parameters(result, plots))
+    extra_images = []
+    if result.cost_history:
+        extra_images.append(
+            plot_convergence(list(result.cost_history), plots / "convergence.png", ylabel="½‖r‖²")
+        )
+    if "index_history" in notes:
+        extra_images.append(plot_index_history(notes["index_history"], plots / "index_history.png"))
+    if extra_images:
+        sections.append(Section("Convergence and pose selection", "", extra_images))
+    files = sorted(p.name for p in src.iterdir() if p.suffix in (".urdf", ".yaml", ".json"))
+    if files:
+        sections.append(Section("Files", "Calibration output: " + ", ".join(files) + "."))
+    return write_report(out_dir, sections, title=f"Calibration report: {result.model}", name=name)

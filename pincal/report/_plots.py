@@ -1,0 +1,349 @@
+"""Plots of a calibration (PNG files).
+
+All plots use matplotlib's Agg canvas directly (no pyplot, no window, no global
+state) and are written atomically (temporary file + rename). Values are passed
+in SI units (m, rad); a ``unit`` argument chooses the displayed unit:
+``m, mm, um (µm), rad, mrad, urad (µrad), deg``.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from pincal.errors import ReportError
+from pincal.io._atomic import atomic_write_bytes
+
+__all__ = [
+    "ErrorStats",
+    "error_statistics",
+    "plot_convergence",
+    "plot_error_histogram",
+    "plot_errors_before_after",
+    "plot_index_history",
+    "plot_parameters",
+    "plot_validation_summary",
+]
+
+#: display unit → (factor from SI, label)
+_UNITS: dict[str, tuple[float, str]] = {
+    "m": (1.0, "m"),
+    "mm": (1e3, "mm"),
+    "um": (1e6, "µm"),
+    "µm": (1e6, "µm"),
+    "rad": (1.0, "rad"),
+    "mrad": (1e3, "mrad"),
+    "urad": (1e6, "µrad"),
+    "µrad": (1e6, "µrad"),
+    "deg": (180.0 / math.pi, "deg"),
+}
+_BEFORE, _AFTER, _TRUE = "#d62728", "#1f77b4", "#2ca02c"
+
+
+@dataclass(frozen=True)
+class ErrorStats:
+    """Summary of error magnitudes (same unit as the input).
+
+    Attributes:
+        rms: root mean square.
+        max: largest absolute value.
+        mean: mean absolute value.
+        count: number of values.
+    """
+
+    rms: float
+    max: float
+    mean: float
+    count: int
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _unit(unit: str) -> tuple[float, str]:
+    try:
+        return _UNITS[unit]
+    except KeyError:
+        raise ReportError(f"unit {unit!r} not known; units are: {', '.join(_UNITS)}") from None
+
+
+def _vector(values: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
+    arr = np.asarray(values, dtype=float)
+    if arr.ndim != 1 or arr.size == 0:
+        raise ReportError(f"{what} must be a non-empty 1-D array (m,), got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ReportError(f"{what} contains NaN or inf")
+    return arr
+
+
+def _save(fig: Figure, path: str | os.PathLike) -> Path:
+    buffer = io.BytesIO()
+    FigureCanvasAgg(fig)
+    fig.savefig(buffer, format="png", dpi=110)
+    return atomic_write_bytes(path, buffer.getvalue())
+
+
+def _figure(width: float = 7.0, height: float = 4.0) -> Figure:
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def error_statistics(values: Sequence[float] | np.ndarray) -> ErrorStats:
+    """RMS, max and mean of ``|values|`` (shape (m,))."""
+    arr = np.abs(_vector(values, "values"))
+    return ErrorStats(
+        rms=float(np.sqrt(np.mean(arr**2))),
+        max=float(arr.max()),
+        mean=float(arr.mean()),
+        count=int(arr.size),
+    )
+
+
+# --------------------------------------------------------------------------- plots
+
+
+def plot_errors_before_after(
+    before: Sequence[float] | np.ndarray,
+    after: Sequence[float] | np.ndarray,
+    unit: str,
+    path: str | os.PathLike,
+    *,
+    title: str = "Error per pose",
+) -> Path:
+    """Bar chart of the error at each pose before and after calibration.
+
+    Args:
+        before: error magnitudes, shape (m,) [m or rad].
+        after: error magnitudes, shape (m,) [m or rad] (the same poses).
+        unit: display unit (see module docstring).
+        path: PNG file to write.
+    """
+    b = _vector(before, "before")
+    a = _vector(after, "after")
+    if a.shape != b.shape:
+        raise ReportError(f"before has {b.size} poses but after has {a.size}")
+    factor, label = _unit(unit)
+    sb, sa = error_statistics(b * factor), error_statistics(a * factor)
+    fig = _figure()
+    ax = fig.add_subplot()
+    x = np.arange(b.size)
+    ax.bar(
+        x - 0.2,
+        np.abs(b) * factor,
+        0.4,
+        color=_BEFORE,
+        label=f"before: RMS {sb.rms:.4g}, max {sb.max:.4g} {label}",
+    )
+    ax.bar(
+        x + 0.2,
+        np.abs(a) * factor,
+        0.4,
+        color=_AFTER,
+        label=f"after: RMS {sa.rms:.4g}, max {sa.max:.4g} {label}",
+    )
+    ax.set_xlabel("pose")
+    ax.set_ylabel(f"error [{label}]")
+    ax.set_title(title)
+    positive = np.abs(np.concatenate([a, b]))
+    positive = positive[positive > 0]
+    if positive.size and positive.max() > 20 * positive.min():
+        ax.set_yscale("log")  # calibration typically shrinks errors by decades
+    if b.size <= 30:
+        ax.set_xticks(x)
+    ax.legend()
+    ax.grid(axis="y", alpha=0.3)
+    return _save(fig, path)
+
+
+def plot_error_histogram(
+    before: Sequence[float] | np.ndarray,
+    after: Sequence[float] | np.ndarray,
+    unit: str,
+    path: str | os.PathLike,
+    *,
+    title: str = "Error distribution",
+    bins: int = 20,
+) -> Path:
+    """Overlaid histograms of error magnitudes before and after, shape (m,) each [m or rad]."""
+    b = np.abs(_vector(before, "before"))
+    a = np.abs(_vector(after, "after"))
+    factor, label = _unit(unit)
+    edges = np.linspace(0.0, max(b.max(), a.max()) * factor * 1.0001 or 1.0, bins + 1)
+    fig = _figure()
+    ax = fig.add_subplot()
+    ax.hist(b * factor, edges, color=_BEFORE, alpha=0.6, label=f"before (n = {b.size})")
+    ax.hist(a * factor, edges, color=_AFTER, alpha=0.6, label=f"after (n = {a.size})")
+    ax.set_xlabel(f"error [{label}]")
+    ax.set_ylabel("count")
+    ax.set_title(title)
+    ax.legend()
+    return _save(fig, path)
+
+
+def plot_index_history(
+    history: Mapping[str, Sequence[float]] | Sequence[float] | np.ndarray,
+    path: str | os.PathLike,
+    *,
+    title: str = "Observability index during pose selection",
+) -> Path:
+    """Observability indices per exchange iteration, one panel per index.
+
+    Args:
+        history: ``{"O1": [...], "O2": [...], ...}`` (each shape (iterations,)) or
+            one sequence.
+        path: PNG file to write.
+    """
+    series = dict(history) if isinstance(history, Mapping) else {"index": history}
+    if not series:
+        raise ReportError("history is empty; expected {name: values per iteration}")
+    arrays = {name: _vector(v, f"history[{name!r}]") for name, v in series.items()}
+    fig = _figure(7.0, 1.2 + 1.6 * len(arrays))
+    axes = fig.subplots(len(arrays), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, (name, values) in zip(axes, arrays.items(), strict=True):
+        ax.plot(np.arange(values.size), values, "o-", ms=3)
+        ax.set_ylabel(name)
+        ax.grid(alpha=0.3)
+        positive = values > 0
+        if positive.all() and values.max() / values.min() > 100:
+            ax.set_yscale("log")
+    axes[-1].set_xlabel("iteration")
+    axes[0].set_title(title)
+    return _save(fig, path)
+
+
+def plot_convergence(
+    cost_per_iter: Sequence[float] | np.ndarray,
+    path: str | os.PathLike,
+    *,
+    title: str = "Convergence",
+    ylabel: str = "cost",
+) -> Path:
+    """Cost (e.g. ½‖r‖² or residual RMS) per iteration, shape (iterations,), log scale."""
+    cost = _vector(cost_per_iter, "cost_per_iter")
+    fig = _figure()
+    ax = fig.add_subplot()
+    ax.plot(np.arange(cost.size), cost, "o-", ms=4)
+    if np.all(cost > 0):
+        ax.set_yscale("log")
+    ax.set_xlabel("iteration")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(alpha=0.3, which="both")
+    return _save(fig, path)
+
+
+def _parameter_kind(name: str) -> str:
+    dof = name.rsplit(".", 1)[-1]
+    if dof in ("rx", "ry", "rz") or dof.startswith(("alpha", "theta")):
+        return "angle"
+    return "length"
+
+
+def plot_parameters(
+    names: Sequence[str],
+    values: Sequence[float] | np.ndarray,
+    std: Sequence[float] | np.ndarray,
+    true: Sequence[float] | np.ndarray | None = None,
+    path: str | os.PathLike | None = None,
+    *,
+    kinds: Sequence[str] | None = None,
+    length_unit: str = "mm",
+    angle_unit: str = "mrad",
+    title: str = "Identified parameters (±2σ)",
+) -> Path:
+    """Identified parameter values with ±2σ bars, lengths and angles in separate panels.
+
+    Args:
+        names: parameter names, shape (L,) (``<joint>.<dof>``).
+        values: identified values, shape (L,) [m or rad].
+        std: standard deviations, shape (L,) [m or rad].
+        true: true values (simulation), shape (L,), drawn as markers, or None.
+        path: PNG file to write (required).
+        kinds: ``"length"`` or ``"angle"`` per parameter; by default inferred from
+            the dof (``rx, ry, rz`` → angle, otherwise length).
+        length_unit, angle_unit: display units of the two panels.
+    """
+    if path is None:
+        raise ReportError("path is required")
+    names = [str(n) for n in names]
+    v = _vector(values, "values")
+    s = _vector(std, "std")
+    t = None if true is None else _vector(true, "true")
+    for what, arr in (("values", v), ("std", s), ("true", t)):
+        if arr is not None and arr.size != len(names):
+            raise ReportError(f"{what} has {arr.size} entries but there are {len(names)} names")
+    if np.any(s < 0):
+        raise ReportError("std must be non-negative")
+    kinds = list(kinds) if kinds is not None else [_parameter_kind(n) for n in names]
+    if len(kinds) != len(names) or not set(kinds) <= {"length", "angle"}:
+        raise ReportError("kinds must hold 'length' or 'angle' for each name")
+    groups = [
+        (kind, unit, [i for i, k in enumerate(kinds) if k == kind])
+        for kind, unit in (("length", length_unit), ("angle", angle_unit))
+    ]
+    groups = [g for g in groups if g[2]]
+    height = 1.5 + 0.22 * len(names) + 0.6 * len(groups)
+    fig = _figure(7.5, max(3.0, height))
+    axes = fig.subplots(
+        len(groups), 1, squeeze=False, height_ratios=[len(g[2]) + 2 for g in groups]
+    )[:, 0]
+    for ax, (kind, unit, idx) in zip(axes, groups, strict=True):
+        factor, label = _unit(unit)
+        y = np.arange(len(idx))[::-1]
+        ax.errorbar(
+            v[idx] * factor,
+            y,
+            xerr=2 * s[idx] * factor,
+            fmt="o",
+            color=_AFTER,
+            ecolor=_AFTER,
+            capsize=3,
+            ms=4,
+            label="identified ±2σ",
+        )
+        if t is not None:
+            ax.plot(t[idx] * factor, y, "x", color=_TRUE, ms=7, mew=2, label="true")
+        ax.axvline(0.0, color="0.6", lw=0.8)
+        ax.set_yticks(y)
+        ax.set_yticklabels([names[i] for i in idx], fontsize=8)
+        ax.set_xlabel(f"{kind} [{label}]")
+        ax.grid(axis="x", alpha=0.3)
+        ax.legend(fontsize=8, loc="best")
+    axes[0].set_title(title)
+    return _save(fig, path)
+
+
+def plot_validation_summary(
+    before: Mapping[str, float], after: Mapping[str, float], path: str | os.PathLike
+) -> Path:
+    """Grouped bars of RMS and max position [mm] / orientation [mrad] errors, before vs after."""
+    fig = _figure(7.5, 3.6)
+    axes = fig.subplots(1, 2)
+    for ax, (quantity, unit) in zip(
+        axes, (("position", "mm"), ("orientation", "mrad")), strict=True
+    ):
+        keys = [f"rms_{quantity}_{unit}", f"max_{quantity}_{unit}"]
+        b = [float(before.get(k, np.nan)) for k in keys]
+        a = [float(after.get(k, np.nan)) for k in keys]
+        x = np.arange(2)
+        bars_b = ax.bar(x - 0.2, b, 0.4, color=_BEFORE, label="nominal model")
+        bars_a = ax.bar(x + 0.2, a, 0.4, color=_AFTER, label="calibrated model")
+        ax.bar_label(bars_b, fmt="%.3g", fontsize=8)
+        ax.bar_label(bars_a, fmt="%.3g", fontsize=8)
+        ax.set_xticks(x)
+        ax.set_xticklabels(["RMS", "max"])
+        ax.set_ylabel(f"{quantity} error [{unit}]")
+        positive = [v for v in b + a if v > 0]
+        if positive and max(positive) / min(positive) > 30:
+            ax.set_yscale("log")
+        ax.grid(axis="y", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle("Validation: predicted vs actual measured-frame pose")
+    return _save(fig, path)

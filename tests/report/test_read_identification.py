@@ -1,0 +1,64 @@
+"""The report reads identification.json through IdentificationResult.from_dict."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import pincal
+from pincal.errors import ReportError
+from pincal.identification import IdentificationResult, identify
+from pincal.report import calibration_report, read_identification
+
+DEMO_01 = {  # written by `pincal demo` of pincal 0.1
+    "model": "stewart_6ups",
+    "preset": "stewart42",
+    "units": "SI (m, rad)",
+    "parameters": [
+        {"name": "leg1.tx", "value": 1e-4, "std": 1e-5, "unit": "m", "true": 1.1e-4},
+        {"name": "leg1.rx", "value": -2e-4, "std": 3e-5, "unit": "rad", "true": -2e-4},
+    ],
+    "validation_before": {"rms_position_mm": 1.0, "max_position_mm": 2.0},
+    "validation_after": {"rms_position_mm": 0.01, "max_position_mm": 0.02},
+    "reduced_chi2": 0.9,
+    "iterations": 5,
+    "cost_history": [1.0, 1e-3, 1e-6],
+    "message": "converged",
+}
+
+
+def test_pincal_01_demo_file_gives_the_same_report(tmp_path):
+    (tmp_path / "identification.json").write_text(json.dumps(DEMO_01))
+    res = read_identification(tmp_path / "identification.json")
+    assert isinstance(res, IdentificationResult) and res.identified_names == ("leg1.tx", "leg1.rx")
+    assert res.annotations["truth"] == {"leg1.tx": 1.1e-4, "leg1.rx": -2e-4}
+    md = calibration_report(tmp_path).markdown.read_text()
+    assert "| leg1.tx | 100 | 20 | µm | 110 | -1 |" in md
+    assert "reduced χ² = 0.9" in md and "report_plots/convergence.png" in md
+
+
+def test_result_written_by_to_dict_is_reported(tmp_path, stewart, stewart42, stewart_poses):
+    truth = np.random.default_rng(3).normal(0.0, 3e-4, len(stewart42))
+    noise = pincal.NoiseModel(0.01, 0.02)
+    actual = stewart42.apply(stewart, truth)
+    meas = pincal.simulate_measurements(actual, stewart_poses, noise, np.random.default_rng(4))
+    res = identify(stewart, stewart42, meas, "lm")
+    notes = {"truth": dict(zip(stewart42.names, truth, strict=True))}
+    (tmp_path / "identification.json").write_text(json.dumps(res.to_dict(notes)))
+    back = read_identification(tmp_path / "identification.json")
+    np.testing.assert_array_equal(back.values, res.values)
+    md = calibration_report(tmp_path).markdown.read_text()
+    assert all(f"| {n} |" in md for n in stewart42.names) and "Model stewart_6ups" in md
+    assert f"{res.iterations} iterations" in md
+
+
+def test_bad_annotations_are_refused(tmp_path):
+    path = tmp_path / "identification.json"
+    path.write_text(json.dumps({**DEMO_01, "validation_errors": {"before": {}}}))
+    with pytest.raises(ReportError, match="'before' and 'after'"):
+        read_identification(path)
+    path.write_text(json.dumps({**DEMO_01, "version": 99}))
+    with pytest.raises(ReportError, match="version 99"):
+        read_identification(path)
