@@ -280,9 +280,13 @@ def efficiency(
         eta, se = next(iter(by_unit.values()))
     else:
         eta = se = float("nan")
-    # whitening on the range of C: z = Λ^(-1/2) Vᵀ e, E‖z‖² = rank for an efficient estimator
-    lam, V = np.linalg.eigh(0.5 * (C + C.T))
+    # whitening on the range of C, after scaling to the correlation matrix so that a
+    # change of units (a diagonal scaling) cannot change the result:
+    # C = D R D, R = V Λ Vᵀ, z = Λ^(-1/2) Vᵀ D⁻¹ e, E‖z‖² = rank for an efficient estimator
+    d = np.sqrt(np.clip(np.diag(C), 0.0, None))
+    d[d == 0] = 1.0
+    lam, V = np.linalg.eigh(0.5 * (C + C.T) / np.outer(d, d))
     keep = lam > max(lam.max(), 0.0) * n * np.finfo(float).eps
-    z = (e @ V[:, keep]) / np.sqrt(lam[keep])
+    z = ((e / d) @ V[:, keep]) / np.sqrt(lam[keep])
     w, w_se = _ratio_of_mean(float(keep.sum()), np.sum(z**2, axis=1))
     return Efficiency(np.mean(e**2, axis=0), np.diag(C).copy(), eta, se, R, w, w_se, by_unit, units)
