@@ -21,7 +21,8 @@ Two cost models:
   draws) and 1e-5 µm after one re-linearisation there, measured by
   ``python scripts/pkm5_qpso.py`` — still below the 30–50 µm QPSO reaches, and on wedge3
   both models give identical swarms (tested). With ``passes > 1`` the model is
-  re-linearised at the best particle and the search repeated (each pass a full QPSO run); the reported cost is always the exact one.
+  re-linearised at the best particle and the search repeated (each pass a full QPSO
+  run); the reported cost is always the exact one.
 
 Both are seeded and reproducible: the same ``QPSOOptions.seed`` gives the same result.
 """
