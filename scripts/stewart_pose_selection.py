@@ -334,9 +334,9 @@ def main() -> None:
     for index, (r, c) in summary.items():
         print(
             f"| {index} | "
-            + " | ".join(f"{v:.2f} ± {se:.2f}" for v, se in r.values())
+            + " | ".join(f"{v:.3f} ± {se:.3f}" for v, se in r.values())
             + " | "
-            + " | ".join(f"{v:.2f}" for v in c.values())
+            + " | ".join(f"{v:.3f}" for v in c.values())
             + " |"
         )
 
