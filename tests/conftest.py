@@ -22,3 +22,7 @@ def stewart_poses(stewart) -> np.ndarray:
     from pincal.model import sample_actuators
 
     return sample_actuators(stewart, 30, np.random.default_rng(11))
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "slow: takes more than ~20 s (deselect with -m 'not slow')")

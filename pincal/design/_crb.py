@@ -13,15 +13,23 @@ this gives
   tr(J_{v,p} F⁻¹ J_{v,p}ᵀ)/m_v (and likewise for orientation).
 
 After identification (e.g. Monte-Carlo repetitions of a simulation), the
-*efficiency* compares the achieved mean square parameter error with the bound:
-η = tr(F⁻¹) / E‖x̂ − x‖², which is ≈ 1 for an efficient estimator (Gauss–Newton
-at small noise) and < 1 when the estimator wastes information or is biased.
+*efficiency* compares the achieved parameter error with the bound. Three forms:
+
+- whitened (Mahalanobis, unit-free): η_w = n / E[(x̂ − x)ᵀ F (x̂ − x)], n the rank
+  of F⁻¹; every parameter counts in units of its own bound, so lengths and angles
+  never add;
+- per unit class u ("m", "rad"): η_u = tr(F⁻¹_uu) / E‖x̂_u − x_u‖²;
+- trace form η = tr(F⁻¹) / E‖x̂ − x‖², defined only when all parameters share one
+  unit (it would add m² and rad² otherwise).
+
+Each is ≈ 1 for an efficient estimator (Gauss–Newton at small noise) and < 1 when
+the estimator wastes information or is biased.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -191,9 +199,14 @@ class Efficiency:
     Attributes:
         mse: mean squared error per parameter over the repetitions (n,) [SI²].
         bound: Cramér–Rao variance per parameter diag(F⁻¹) (n,) [SI²].
-        efficiency: η = tr(F⁻¹) / mean ‖x̂ − x‖² (≈ 1: efficient).
-        efficiency_se: Monte-Carlo standard error of η (delta method).
+        efficiency: trace form η = tr(F⁻¹) / mean ‖x̂ − x‖² (≈ 1: efficient); NaN
+            when ``units`` mix lengths and angles (use ``whitened`` or ``by_unit``).
+        efficiency_se: Monte-Carlo standard error of η (delta method), NaN likewise.
         repetitions: number of repetitions R.
+        whitened: unit-free η_w = rank / mean (x̂ − x)ᵀ F (x̂ − x), F = (F⁻¹)⁺.
+        whitened_se: its Monte-Carlo standard error (delta method).
+        by_unit: unit → (η_u, standard error), the trace form within one unit class.
+        units: the parameters' units (n,) ("m" for all when not given).
     """
 
     mse: NDArray[np.float64]
@@ -201,33 +214,80 @@ class Efficiency:
     efficiency: float
     efficiency_se: float
     repetitions: int
+    whitened: float = float("nan")
+    whitened_se: float = float("nan")
+    by_unit: dict[str, tuple[float, float]] = field(default_factory=dict)
+    units: tuple[str, ...] = ()
 
     @property
     def rms_error(self) -> float:
-        """sqrt(mean over parameters of the MSE)."""
+        """sqrt(mean over parameters of the MSE) (mixed units if any rad)."""
         return float(np.sqrt(np.mean(self.mse)))
 
     @property
     def rms_bound(self) -> float:
-        """sqrt(tr(F⁻¹)/n)."""
+        """sqrt(tr(F⁻¹)/n) (mixed units if any rad)."""
         return float(np.sqrt(np.mean(self.bound)))
 
 
-def efficiency(errors: ArrayLike, covariance_bound: ArrayLike) -> Efficiency:
+def _ratio_of_mean(numerator: float, samples: NDArray[np.float64]) -> tuple[float, float]:
+    """numerator / mean(samples) and its delta-method standard error."""
+    R = samples.size
+    mean = float(np.mean(samples))
+    if mean <= 0:
+        return float("inf"), float("nan")
+    eta = numerator / mean
+    se = eta * float(np.std(samples, ddof=1)) / (mean * np.sqrt(R)) if R > 1 else float("nan")
+    return eta, se
+
+
+def efficiency(
+    errors: ArrayLike, covariance_bound: ArrayLike, units: Sequence[str] | None = None
+) -> Efficiency:
     """Estimator efficiency from Monte-Carlo parameter errors.
 
     Args:
         errors: identified minus true values (R, n) [SI], one row per repetition.
-        covariance_bound: Cramér–Rao bound (n, n) [SI].
+        covariance_bound: Cramér–Rao bound (n, n) [SI], symmetric positive
+            semi-definite.
+        units: the parameters' units (n,), e.g. ``ParameterSet.units``; default all "m".
+
+    Returns:
+        Efficiency with the whitened, per-unit and (single-unit only) trace forms.
+
+    Raises:
+        PincalError: shapes do not match.
     """
     e = np.atleast_2d(np.asarray(errors, dtype=float))
     C = np.asarray(covariance_bound, dtype=float)
-    if C.shape != (e.shape[1], e.shape[1]):
-        raise PincalError(f"covariance_bound must be ({e.shape[1]}, {e.shape[1]}); got {C.shape}")
+    n = e.shape[1]
+    if C.shape != (n, n):
+        raise PincalError(f"covariance_bound must be ({n}, {n}); got {C.shape}")
+    units = tuple(units) if units is not None else ("m",) * n
+    if len(units) != n:
+        raise PincalError(
+            f"units must name the unit of each of the {n} parameters; got {len(units)} "
+            f"(pass ParameterSet.units)"
+        )
     R = e.shape[0]
-    sq = np.sum(e**2, axis=1)
-    mean_sq = float(np.mean(sq))
-    tr = float(np.trace(C))
-    eta = tr / mean_sq if mean_sq > 0 else float("inf")
-    se = eta * float(np.std(sq, ddof=1)) / (mean_sq * np.sqrt(R)) if R > 1 else float("nan")
-    return Efficiency(np.mean(e**2, axis=0), np.diag(C).copy(), eta, se, R)
+    u = np.array(units)
+    by_unit = {
+        str(k): _ratio_of_mean(
+            float(np.trace(C[np.ix_(u == k, u == k)])), np.sum(e[:, u == k] ** 2, 1)
+        )
+        for k in dict.fromkeys(units)
+    }
+    if len(by_unit) == 1:
+        eta, se = next(iter(by_unit.values()))
+    else:
+        eta = se = float("nan")
+    # whitening on the range of C, after scaling to the correlation matrix so that a
+    # change of units (a diagonal scaling) cannot change the result:
+    # C = D R D, R = V Λ Vᵀ, z = Λ^(-1/2) Vᵀ D⁻¹ e, E‖z‖² = rank for an efficient estimator
+    d = np.sqrt(np.clip(np.diag(C), 0.0, None))
+    d[d == 0] = 1.0
+    lam, V = np.linalg.eigh(0.5 * (C + C.T) / np.outer(d, d))
+    keep = lam > max(lam.max(), 0.0) * n * np.finfo(float).eps
+    z = ((e / d) @ V[:, keep]) / np.sqrt(lam[keep])
+    w, w_se = _ratio_of_mean(float(keep.sum()), np.sum(z**2, axis=1))
+    return Efficiency(np.mean(e**2, axis=0), np.diag(C).copy(), eta, se, R, w, w_se, by_unit, units)
