@@ -25,7 +25,7 @@ from pincal.model import (
     dh_fk,
 )
 
-DATA = Path(__file__).resolve().parents[1] / "scripts" / "data" / "seed004.yaml"
+DATA = Path(__file__).resolve().parents[2] / "scripts" / "data" / "seed004.yaml"
 MM = 1e-3
 
 

@@ -17,7 +17,7 @@ import pinocchio as pin
 import pytest
 import yaml
 
-MODEL_DIR = Path(__file__).resolve().parents[1] / "models" / "pkm5"
+MODEL_DIR = Path(__file__).resolve().parents[2] / "models" / "pkm5"
 URDF = MODEL_DIR / "pkm5.urdf"
 SIDECAR = MODEL_DIR / "pkm5.yaml"
 

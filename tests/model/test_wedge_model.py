@@ -22,7 +22,7 @@ from pincal.machines import (
     wedge_urdf,
 )
 
-MODEL_DIR = Path(__file__).resolve().parents[1] / "models" / "wedge3"
+MODEL_DIR = Path(__file__).resolve().parents[2] / "models" / "wedge3"
 PASSIVE = ("z_guide", "bar_rev", "wedge1_slide", "wedge2_slide")
 ACTUATED = ("q0", "q1", "q2")
 PAIRS = (("wedge1_shoe", "bar_end1"), ("wedge2_shoe", "bar_end2"))

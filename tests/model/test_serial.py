@@ -26,7 +26,7 @@ from pincal.model import (
     wrap_base_tool,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _load(name):

@@ -14,7 +14,7 @@ import pinocchio as pin
 import pytest
 import yaml
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "models" / "hexaslide_6pus"
 URDF = MODEL / "hexaslide_6pus.urdf"
 SIDECAR = yaml.safe_load((MODEL / "hexaslide_6pus.yaml").read_text())

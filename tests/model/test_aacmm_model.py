@@ -18,7 +18,7 @@ from pincal.model import (
     dh_urdf,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "models" / "aacmm"
 
 

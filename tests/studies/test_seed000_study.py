@@ -27,7 +27,7 @@ from pincal.design import (
 )
 from pincal.model import COMPONENTS
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 _spec = importlib.util.spec_from_file_location(
     "stewart_pose_selection", ROOT / "scripts" / "stewart_pose_selection.py"
 )

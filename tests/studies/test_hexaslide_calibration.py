@@ -19,7 +19,7 @@ from pincal.model import load_mechanism, parameters
 from scripts.studies.seed001 import experiment_replica, paper_pose, simulation_check
 
 PAPER = yaml.safe_load(
-    (Path(__file__).resolve().parent.parent / "scripts" / "data" / "seed001.yaml").read_text()
+    (Path(__file__).resolve().parents[2] / "scripts" / "data" / "seed001.yaml").read_text()
 )
 
 

@@ -13,7 +13,7 @@ import pytest
 import pincal
 from pincal.model import dh_fk
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _load(name):

@@ -22,7 +22,7 @@ from pincal.machines import (
 )
 from pincal.sensitivity import global_sensitivity
 
-MODEL_DIR = Path(__file__).resolve().parents[1] / "models" / "wedge3"
+MODEL_DIR = Path(__file__).resolve().parents[2] / "models" / "wedge3"
 BOX = ((-0.05, 0.05), (-0.002, 0.002), (-0.01, 0.01))
 # drawn errors [m, rad] in preset order: offsets, bar ends, wedge-slide rotations
 ERRORS = np.array([2e-5, -3e-5, 1.5e-5, -2.5e-5, 1e-5, 4e-4, -3e-4])

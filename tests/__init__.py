@@ -1,0 +1,1 @@
+"""pincal tests: one folder per subpackage, plus the studies and the README."""
