@@ -27,7 +27,7 @@ LONG = {
     "scripts/bench_core.py": "benchmark (timings, no assertion)",
     "scripts/bench_design.py": "benchmark (timings, no assertion)",
     "scripts/bench_vs_figaroh.py": "needs the optional [bench] extra",
-    "scripts/stewart_pose_selection.py": "Monte-Carlo study (30 min); core claim in test_seed000_study.py",
+    "scripts/stewart_pose_selection.py": "Monte-Carlo study; core claim in test_seed000_study.py",
     "scripts/pkm5_qpso.py": "QPSO study; core claim in test_identify_qpso.py",
 }
 

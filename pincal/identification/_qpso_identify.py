@@ -159,10 +159,10 @@ def qpso_search(
             its = sum(s.iterations for s in res.stages) + res.fine.iterations
             order = tuple(int(free[i]) for i in res.order)
             return res.x, res.fine.history, its, res.nfev, order
-        res = qpso(
+        single = qpso(
             cost, lo, hi, opts.n_particles, opts.t_max, rng, opts.alpha, vectorized=vectorized
         )
-        return res.x, res.history, res.iterations, res.nfev, ()
+        return single.x, single.history, single.iterations, single.nfev, ()
 
     iterations = nfev = 0
     if opts.cost_model == "exact":

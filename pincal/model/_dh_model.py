@@ -165,7 +165,13 @@ def dh_urdf(
         T = _probe_transform(probe)
         parts.append(_link("probe"))
         parts.append(
-            _joint("probe_joint", "fixed", parent, "probe", _origin(T[:3, 3], _rpy_from_matrix(T)))
+            _joint(
+                "probe_joint",
+                "fixed",
+                parent,
+                "probe",
+                _origin(T[:3, 3].tolist(), _rpy_from_matrix(T)),
+            )
         )
     parts.append("</robot>\n")
     return "".join(parts)

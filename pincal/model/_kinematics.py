@@ -7,6 +7,7 @@ call fills a per-thread scratch ``pin.Data`` and returns fresh arrays.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -14,6 +15,10 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ShapeError, UnknownNameError
+from pincal.model._closures import Closure
+from pincal.model._newton import SolverOptions
+from pincal.model._sidecar import Sidecar
+from pincal.model._urdf import UrdfTree
 
 __all__ = ["KinematicQueries", "Kinematics"]
 
@@ -49,10 +54,29 @@ def _as_floats(x: object, what: str) -> np.ndarray:
 class KinematicQueries:
     """Configuration-in, fresh-arrays-out queries (mixed into Mechanism).
 
-    Expects the attributes set by ``Mechanism.__init__``: ``model``, ``tree``,
-    ``closures``, ``actuated``, ``measured_frame``, ``key_frames`` and the index
-    arrays.
+    Expects the attributes set by ``Mechanism.__init__`` (declared here for the mixins).
     """
+
+    model: pin.Model
+    tree: UrdfTree
+    sidecar: Sidecar
+    name: str
+    options: SolverOptions
+    closures: tuple[Closure, ...]
+    actuated: tuple[str, ...]
+    measured_frame: str
+    key_frames: tuple[str, ...]
+    q_home: np.ndarray
+    n_closure_rows: int
+    _scratch: threading.local
+    _frame_ids: dict[str, int]
+    _closure_fids: list[tuple[int, int]]
+    _act_q: list[int]
+    _act_v: list[int]
+    _act_nq: list[int]
+    _act_v_arr: np.ndarray
+    _free_v: np.ndarray
+    _assembly_notes: list[str]
 
     def frame_id(self, name: str) -> int:
         """Pinocchio frame index of a frame (URDF link or joint) by name."""

@@ -92,17 +92,18 @@ def lock_joints(urdf_xml: str, values: Mapping[str, float]) -> str:
         if name not in movable:
             raise UnknownNameError("movable joint", name, movable)
     root = ET.fromstring(urdf_xml)
-    elements = {e.get("name"): e for e in root.findall("joint")}
+    elements = {str(e.get("name")): e for e in root.findall("joint")}
     changed = True
     while changed:  # follow mimic chains
         changed = False
         for name, e in elements.items():
             mimic = e.find("mimic")
-            if name in locked or mimic is None or mimic.get("joint") not in locked:
+            leader = None if mimic is None else mimic.get("joint")
+            if name in locked or mimic is None or leader is None or leader not in locked:
                 continue
             mult = float(mimic.get("multiplier", "1"))
             off = float(mimic.get("offset", "0"))
-            locked[str(name)] = mult * locked[mimic.get("joint")] + off
+            locked[str(name)] = mult * locked[leader] + off
             changed = True
     for name, value in locked.items():
         uj = tree.joints[name]

@@ -152,7 +152,7 @@ class UrdfTree:
     def with_origins(self, origins: dict[str, pin.SE3]) -> str:
         """Return the URDF text with the given joint origins replaced (full precision)."""
         root = ET.fromstring(ET.tostring(self.root))
-        by_name = {e.get("name"): e for e in root.findall("joint")}
+        by_name = {str(e.get("name")): e for e in root.findall("joint")}
         for name, M in origins.items():
             if name not in by_name:
                 raise UnknownNameError("joint", name, list(by_name))

@@ -43,7 +43,7 @@ def sample_actuators(
     forward kinematics converges away from singularities. Infeasible draws are
     rejected.
     """
-    rows = []
+    rows: list[np.ndarray] = []
     tries = 0
     ranges = _joint_ranges(mech)
     use_pose = bool(mech.workspace.pose)

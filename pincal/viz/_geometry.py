@@ -251,7 +251,7 @@ def skeleton_parts(model: pin.Model, frames_with_visual: set[int], size: float) 
 def joint_sticks_extent(model: pin.Model, qs: list[np.ndarray]) -> float:
     """Size [m] of the cloud of joint and frame origins over all configurations."""
     data = model.createData()
-    pts = []
+    pts: list[np.ndarray] = []
     for q in qs:
         pin.forwardKinematics(model, data, q)
         pin.updateFramePlacements(model, data)

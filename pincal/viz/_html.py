@@ -204,4 +204,4 @@ def static_html(
 
 def write_html(path: str | os.PathLike, html_text: str) -> Path:
     """Write ``html_text`` to ``path`` atomically (temporary file + rename); returns the path."""
-    return atomic_write_text(path, html_text)
+    return atomic_write_text(Path(path), html_text)
