@@ -50,6 +50,7 @@ def main(ctx: click.Context, debug: bool) -> None:
 from pincal.cli import calibrate as _calibrate  # noqa: E402
 from pincal.cli import compensate as _compensate  # noqa: E402
 from pincal.cli import demo as _demo  # noqa: E402
+from pincal.cli import import_cmd as _import_cmd  # noqa: E402
 from pincal.cli import info as _info  # noqa: E402
 from pincal.cli import poses as _poses  # noqa: E402
 from pincal.cli import report as _report  # noqa: E402
@@ -65,6 +66,7 @@ for _command in (
     _compensate.compensate,
     _view.view,
     _report.report,
+    _import_cmd.import_tracker,
 ):
     main.add_command(_command)
 
