@@ -74,7 +74,10 @@ def _write_pair(tmp, data, *, delim=";", comma=True, unit=1e3, time=False, seed=
         log.append(delim.join([k, *(_num(v * 1e3, comma) for v in data.q_act[i])]))
     (tmp / "log.csv").write_text("\n".join(log) + "\n")
     tl = [delim.join(["point", "x", "y", "z"])]
-    tl += [delim.join([n, *(_num(v * unit, comma) for v in p)]) for n, p in zip(NAMES, LOCAL)]
+    tl += [
+        delim.join([n, *(_num(v * unit, comma) for v in p)])
+        for n, p in zip(NAMES, LOCAL, strict=True)
+    ]
     (tmp / "targets.csv").write_text("\n".join(tl) + "\n")
     return order
 
