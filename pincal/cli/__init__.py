@@ -54,6 +54,7 @@ from pincal.cli import import_cmd as _import_cmd  # noqa: E402
 from pincal.cli import info as _info  # noqa: E402
 from pincal.cli import poses as _poses  # noqa: E402
 from pincal.cli import report as _report  # noqa: E402
+from pincal.cli import run as _run  # noqa: E402
 from pincal.cli import simulate as _simulate  # noqa: E402
 from pincal.cli import view as _view  # noqa: E402
 
@@ -67,6 +68,7 @@ for _command in (
     _view.view,
     _report.report,
     _import_cmd.import_tracker,
+    _run.run,
 ):
     main.add_command(_command)
 
