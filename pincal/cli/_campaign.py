@@ -59,7 +59,8 @@ Campaign file keys (YAML; relative paths are relative to the file):
 
 def _choice(value: str, valid: tuple[str, ...], key: str) -> None:
     if value not in valid:
-        near = difflib.get_close_matches(value, valid, n=1)
+        same = [v for v in valid if v.lower() == str(value).lower()]
+        near = same or difflib.get_close_matches(str(value), valid, n=1)
         hint = f" (did you mean {near[0]!r}?)" if near else ""
         raise CampaignError(f"{key}: {value!r} is not valid{hint}; use one of {', '.join(valid)}")
 
