@@ -86,8 +86,10 @@ def _campaign(tmp_path, text: str) -> Path:
         ("preset: p\n", "key 'model' is required"),
         ("model: x\nmeasurements: {poses: 5}\nvalidation: {source: file}\n", "validation.file"),
         ("model: x\n", "exactly one of a 'design' section or 'measurements.poses'"),
-        ("model: x\nmeasurements: {source: file, file: nope.csv}\nvalidation: {source: none}\n",
-         "measurements.file: .*nope.csv' does not exist"),  # fmt: skip
+        (
+            "model: x\nmeasurements: {source: file, file: nope.csv}\nvalidation: {source: none}\n",
+            "measurements.file: .*nope.csv' does not exist",
+        ),
         ("- a\n", "expected a mapping"),
         ("model: [\n", "not valid YAML"),
     ],
