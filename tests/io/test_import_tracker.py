@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 from datetime import datetime, timedelta, timezone
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -209,3 +210,23 @@ def test_wrong_field_count_names_line(tmp_path):
     p.write_text("a;b\n1;2\n3\n")
     with pytest.raises(MeasurementError, match="t.csv line 3: 1 fields"):
         read_table(p)
+
+
+def test_documented_example_files_import(tmp_path):
+    ex = Path(__file__).resolve().parents[2] / "docs" / "examples" / "tracker"
+    nominal = load_mechanism("hexaslide_6pus")
+    files = (ex / "points.csv", ex / "controller_log.csv", ex / "targets_local.csv")
+    before = {p: p.read_bytes() for p in files}
+    by_pose = import_tracker(*files, nominal, TrackerImportOptions(point_std=0.005))
+    by_time = import_tracker(
+        *files, nominal, TrackerImportOptions(match="time", tolerance=5.0, point_std=0.005)
+    )
+    assert by_pose.match == "pose" and by_time.max_time_offset == pytest.approx(3.0)
+    np.testing.assert_array_equal(by_pose.targets.points, by_time.targets.points)
+    assert by_pose.targets.point_std == pytest.approx(5e-6)
+    out = write_target_measurements(tmp_path / "t.csv", by_pose.targets)
+    meas = read_measurements(out, nominal)
+    assert len(meas) == 8 and meas.std is not None
+    with pytest.raises(ImportMatchError, match="points have no controller-log row"):
+        import_tracker(*files, nominal, TrackerImportOptions(match="time", tolerance=2.5))
+    assert {p: p.read_bytes() for p in files} == before
