@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -146,3 +147,25 @@ def test_a_failing_step_stops_the_run(tmp_path):
     assert res.exit_code == 1
     assert "step 'calibrate' failed" in res.output
     assert "report" not in res.output.split("failed")[-1]
+
+
+def test_every_key_is_documented_and_the_example_is_valid():
+    import dataclasses
+
+    from pincal.cli import _campaign
+
+    def keys(cls):
+        for f in dataclasses.fields(cls):
+            yield f.name
+            sub = getattr(_campaign, f.name.capitalize(), None)
+            if f.name == "measurements":
+                sub = _campaign.MeasurementSource
+            if sub is not None and dataclasses.is_dataclass(sub):
+                yield from keys(sub)
+
+    for key in keys(_campaign.Campaign):
+        assert re.search(rf"\n +{key}:", _campaign.KEYS_HELP), key
+    camp = load_campaign(EXAMPLE)
+    assert camp.model == "hexaslide_6pus" and camp.design is not None
+    res = CliRunner().invoke(main, ["run", "--help"])
+    assert res.exit_code == 0 and "errors_seed: 0" in res.output and "Examples:" in res.output
