@@ -148,8 +148,8 @@ class Campaign:
 
     def check(self, key: str = "") -> None:
         for f in dataclasses.fields(self):
-            sub = getattr(self, f.name)
-            if dataclasses.is_dataclass(sub):
+            sub: Any = getattr(self, f.name)
+            if hasattr(sub, "check"):
                 sub.check(f.name)
         m = self.measurements
         if m.source == "simulated" and (self.design is None) == (m.poses is None):
@@ -185,11 +185,11 @@ def _type_name(tp: Any) -> str:
 def _coerce(value: Any, tp: Any, key: str) -> Any:
     origin = typing.get_origin(tp)
     if origin in (typing.Union, types.UnionType):
-        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        inner = [a for a in typing.get_args(tp) if a is not type(None)]
         if value is None:
             return None
-        return _coerce(value, args[0], key)
-    if dataclasses.is_dataclass(tp):
+        return _coerce(value, inner[0], key)
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         return _build(tp, value, key)
     if origin is tuple:
         args = typing.get_args(tp)
@@ -248,7 +248,7 @@ def load_campaign(path: str | Path) -> Campaign:
         CampaignError: unreadable file, not YAML, unknown key (nearest valid key
             suggested), wrong type or value, or a missing data file.
     """
-    import yaml
+    import yaml  # type: ignore[import-untyped]
 
     path = Path(path)
     try:

@@ -18,6 +18,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -166,7 +167,7 @@ def run(ctx: click.Context, campaign_file: Path, out: Path | None, dry_run: bool
       pincal run campaign.yaml --dry-run       check the file, list the commands
       pincal run campaign.yaml --json          summary as JSON on stdout
     """
-    import yaml
+    import yaml  # type: ignore[import-untyped]
 
     from pincal.io import atomic_write_text
 
@@ -177,7 +178,7 @@ def run(ctx: click.Context, campaign_file: Path, out: Path | None, dry_run: bool
     for k, step in enumerate(STEPS, start=1):
         args = step.arguments(camp, paths)
         tag = f"pincal run: [{k}/{len(STEPS)}] {step.name}"
-        record = {"step": step.name, "command": step.command, "args": args}
+        record: dict[str, Any] = {"step": step.name, "command": step.command, "args": args}
         summary["steps"].append(record)
         if args is None:
             record["status"] = "not applicable"

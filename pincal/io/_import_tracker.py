@@ -142,7 +142,7 @@ def _time(table: Table, i: int, k: int) -> float:
 
 
 def _length_factor(table: Table, cols: list[int], unit: str | None) -> float:
-    units = {table.unit(k) for k in cols} - {None}
+    units = {u for k in cols if (u := table.unit(k)) is not None}
     if len(units) > 1 or (units and unit is not None and units != {unit}):
         raise MeasurementError(
             f"{table.name}: coordinate units disagree ({sorted(units)} in the titles, "
@@ -159,14 +159,15 @@ def _length_factor(table: Table, cols: list[int], unit: str | None) -> float:
 
 
 def _xyz(table: Table, mapping: Mapping[str, str], unit: str | None, what: str):
-    cols = {f: table.find(f, _ALIASES[f], mapping) for f in ("point", "x", "y", "z")}
-    missing = [f for f, k in cols.items() if k is None]
+    found = {f: table.find(f, _ALIASES[f], mapping) for f in ("point", "x", "y", "z")}
+    missing = [f for f, k in found.items() if k is None]
     if missing:
         raise ColumnError(
             f"{table.name}: no {missing} column in the {what} (columns {list(table.columns)}); "
             f"map them, e.g. --columns point=Name,x=X",
             missing=missing,
         )
+    cols = {f: k for f, k in found.items() if k is not None}
     xyz = [cols["x"], cols["y"], cols["z"]]
     lf = _length_factor(table, xyz, unit)
     names = [table.text(i, cols["point"]) for i in range(len(table.rows))]
@@ -214,7 +215,8 @@ def _assign(points: Table, log: Table, opts: TrackerImportOptions):
         raise MeasurementError(f"match {mode!r} unknown; use one of {MATCHES}")
     if mode == "auto":
         mode = "pose" if pk["pose"] is not None and lk["pose"] is not None else "time"
-    if pk[mode] is None or lk[mode] is None:
+    pcol, lcol = pk[mode], lk[mode]
+    if pcol is None or lcol is None:
         where = [t.name for t, k in ((points, pk), (log, lk)) if k[mode] is None]
         raise ColumnError(
             f"matching by {mode} needs a {mode} column in {where}; map it (--columns "
@@ -224,7 +226,7 @@ def _assign(points: Table, log: Table, opts: TrackerImportOptions):
         )
     n_log = len(log.rows)
     if mode == "pose":
-        ids = [_norm_id(log.text(i, lk["pose"])) for i in range(n_log)]
+        ids = [_norm_id(log.text(i, lcol)) for i in range(n_log)]
         first: dict[str, int] = {}
         for i, pid in enumerate(ids):
             if pid in first:
@@ -234,18 +236,16 @@ def _assign(points: Table, log: Table, opts: TrackerImportOptions):
                     log_lines=[log.lines[first[pid]], log.lines[i]],
                 )
             first[pid] = i
-        owner = [
-            first.get(_norm_id(points.text(i, pk["pose"])), -1) for i in range(len(points.rows))
-        ]
-        return mode, np.array(owner, dtype=int), ids, None
+        pairs = [first.get(_norm_id(points.text(i, pcol)), -1) for i in range(len(points.rows))]
+        return mode, np.array(pairs, dtype=int), ids, None
     if not opts.tolerance > 0:
         raise MeasurementError(f"time tolerance {opts.tolerance!r} s must be > 0")
-    lt = np.array([_time(log, i, lk["time"]) for i in range(n_log)])
-    pt = np.array([_time(points, i, pk["time"]) for i in range(len(points.rows))])
+    lt = np.array([_time(log, i, lcol) for i in range(n_log)])
+    pt = np.array([_time(points, i, pcol) for i in range(len(points.rows))])
     nearest = np.abs(pt[:, None] - lt[None, :]).argmin(axis=1) if n_log else np.zeros(0, int)
     offset = np.abs(pt - lt[nearest]) if n_log else np.full(len(pt), np.inf)
     owner = np.where(offset <= opts.tolerance, nearest, -1)
-    ids = [log.rows[i][lk["time"]].strip() for i in range(n_log)]
+    ids = [log.rows[i][lcol].strip() for i in range(n_log)]
     ok = offset[owner >= 0]
     return mode, owner, ids, float(ok.max()) if ok.size else None
 
