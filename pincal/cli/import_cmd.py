@@ -41,12 +41,14 @@ _FILE = click.Path(exists=True, dir_okay=False, path_type=Path)
 @click.option("--max-residual", type=float, default=None, help="Moved-target threshold [--unit].")
 @click.option("--out-unit", type=click.Choice(["m", "mm", "um"]), default="m", show_default=True,
               help="Length unit of the written file (m round-trips exactly).")  # fmt: skip
+@click.option("--ignore-unknown-points", is_flag=True,
+              help="Skip points that are not in --targets (e.g. base nests).")  # fmt: skip
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary.")
 @fail_cleanly
 def import_tracker(
     points, log_path, targets_path, model, out, match, tolerance, unit, log_length_unit,
     log_angle_unit, columns, target_columns, log_columns, delimiter, decimal, point_std,
-    max_residual, out_unit, as_json,
+    max_residual, out_unit, ignore_unknown_points, as_json,
 ) -> None:  # fmt: skip
     """Pair a laser tracker's POINTS export with a controller log into a targets file.
 
@@ -89,6 +91,7 @@ def import_tracker(
         decimal=decimal,
         point_std=point_std,
         max_residual=max_residual,
+        ignore_unknown_points=ignore_unknown_points,
     )
     result = import_tracker(points, log_path, targets_path, mech, opts)
     path = write_target_measurements(out, result.targets, length_unit=out_unit)

@@ -25,8 +25,10 @@ Matching (``match``): ``pose`` pairs points and log rows with equal pose ids
 nearest time stamp (seconds, or ISO 8601 date-times) within ``tolerance`` seconds;
 ``auto`` uses ``pose`` when both files have a pose column, else ``time``. Every log
 row must receive each target exactly once and every point must find its log row;
-otherwise :class:`~pincal.errors.ImportMatchError` lists the offending lines. The
-result keeps the controller log's row order. Inputs are only read.
+otherwise :class:`~pincal.errors.ImportMatchError` lists the offending lines (a
+point within ``tolerance`` of two log rows is refused as ambiguous; points whose
+name is not a target are refused unless ``ignore_unknown_points``). The result
+keeps the controller log's row order. Inputs are only read.
 """
 
 from __future__ import annotations
@@ -78,6 +80,8 @@ class TrackerImportOptions:
         decimal: ``auto``, ``.`` or ``,`` (all three files).
         point_std: 1σ per point coordinate [the points file's unit], or None.
         max_residual: moved-target threshold [the points file's unit], or None.
+        ignore_unknown_points: skip points whose name is not a target (e.g. base
+            reference nests) instead of refusing them.
     """
 
     match: str = "auto"
@@ -92,6 +96,7 @@ class TrackerImportOptions:
     decimal: str = "auto"
     point_std: float | None = None
     max_residual: float | None = None
+    ignore_unknown_points: bool = False
 
 
 @dataclass(frozen=True)
@@ -242,9 +247,20 @@ def _assign(points: Table, log: Table, opts: TrackerImportOptions):
         raise MeasurementError(f"time tolerance {opts.tolerance!r} s must be > 0")
     lt = np.array([_time(log, i, lcol) for i in range(n_log)])
     pt = np.array([_time(points, i, pcol) for i in range(len(points.rows))])
-    nearest = np.abs(pt[:, None] - lt[None, :]).argmin(axis=1) if n_log else np.zeros(0, int)
-    offset = np.abs(pt - lt[nearest]) if n_log else np.full(len(pt), np.inf)
+    dist = np.abs(pt[:, None] - lt[None, :])
+    nearest = dist.argmin(axis=1) if n_log else np.zeros(0, int)
+    offset = dist[np.arange(len(pt)), nearest] if n_log else np.full(len(pt), np.inf)
     owner = np.where(offset <= opts.tolerance, nearest, -1)
+    if n_log > 1:
+        twice = np.flatnonzero(np.partition(dist, 1, axis=1)[:, 1] <= opts.tolerance)
+        if twice.size:
+            lines = [points.lines[i] for i in twice]
+            raise ImportMatchError(
+                f"{points.name}: {len(lines)} points lie within {opts.tolerance} s of two "
+                f"controller-log rows: lines {_listing(lines)}; use a tolerance below half "
+                f"the time between poses",
+                points_lines=lines,
+            )
     ids = [log.rows[i][lcol].strip() for i in range(n_log)]
     ok = offset[owner >= 0]
     return mode, owner, ids, float(ok.max()) if ok.size else None
@@ -289,8 +305,17 @@ def import_tracker(
         )
     names, pts, lf = _xyz(points, o.point_columns, o.length_unit, "points file")
     q_act = _log_actuators(log, mech, o)
+    stray = sorted({n for n in names if n not in tnames})
+    if stray and not o.ignore_unknown_points:
+        bad = [points.lines[i] for i, n in enumerate(names) if n not in tnames]
+        raise ImportMatchError(
+            f"{points.name}: points {stray} are not in {tgt.name} (targets {tnames}): lines "
+            f"{_listing(bad)}; remove them or ignore them (--ignore-unknown-points)",
+            points_lines=bad,
+        )
     mode, owner, ids, max_dt = _assign(points, log, o)
-    lost = [points.lines[i] for i in np.flatnonzero(owner < 0)]
+    owner[[i for i, n in enumerate(names) if n not in tnames]] = -2  # ignored points
+    lost = [points.lines[i] for i in np.flatnonzero(owner == -1)]
     if lost:
         raise ImportMatchError(
             f"{points.name}: {len(lost)} points have no controller-log row (matching by "
@@ -306,18 +331,12 @@ def import_tracker(
             f"lines {_listing(lines)} ({mode} {_listing([ids[i] for i in empty])})",
             log_lines=lines,
         )
-    stray = sorted({n for n in names if n not in tnames})
-    if stray:
-        bad = [points.lines[i] for i, n in enumerate(names) if n not in tnames]
-        raise ImportMatchError(
-            f"{points.name}: points {stray} are not in {tgt.name} (targets {tnames}): lines "
-            f"{_listing(bad)}",
-            points_lines=bad,
-        )
     index = {n: j for j, n in enumerate(tnames)}
     out = np.full((len(log.rows), len(tnames), 3), np.nan)
     seen: dict[tuple[int, int], int] = {}
     for i, (r, n) in enumerate(zip(owner.tolist(), names, strict=True)):
+        if r == -2:
+            continue
         key = (r, index[n])
         if key in seen:
             raise ImportMatchError(

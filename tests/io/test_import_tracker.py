@@ -230,3 +230,22 @@ def test_documented_example_files_import(tmp_path):
     with pytest.raises(ImportMatchError, match="points have no controller-log row"):
         import_tracker(*files, nominal, TrackerImportOptions(match="time", tolerance=2.5))
     assert {p: p.read_bytes() for p in files} == before
+
+
+def test_ambiguous_time_and_unknown_points(tmp_path):
+    ex = Path(__file__).resolve().parents[2] / "docs" / "examples" / "tracker"
+    nominal = load_mechanism("hexaslide_6pus")
+    log, targets = ex / "controller_log.csv", ex / "targets_local.csv"
+    with pytest.raises(ImportMatchError, match="within 30.0 s of two controller-log rows") as e:
+        import_tracker(ex / "points.csv", log, targets, nominal, TrackerImportOptions("time", 30.0))
+    assert e.value.points_lines[0] == 5  # P1 SMR3, 29 s before the P2 log row
+    lines = (ex / "points.csv").read_text().splitlines()
+    extra = "P3;BASE1;1000,0;0,0;0,0;2026-11-23T09:31:05.000"
+    (tmp_path / "p.csv").write_text("\n".join([*lines[:9], extra, *lines[9:]]) + "\n")
+    with pytest.raises(ImportMatchError, match=r"points \['BASE1'\] .* lines 10;"):
+        import_tracker(tmp_path / "p.csv", log, targets, nominal)
+    for match in ("pose", "time"):
+        opts = TrackerImportOptions(match, 5.0, ignore_unknown_points=True)
+        got = import_tracker(tmp_path / "p.csv", log, targets, nominal, opts)
+        ref = import_tracker(ex / "points.csv", log, targets, nominal, opts)
+        np.testing.assert_array_equal(got.targets.points, ref.targets.points)
