@@ -133,6 +133,10 @@ def _invoke(ctx: click.Context, step: Step, args: list[str], quiet: bool) -> str
     try:
         with sub, out:
             cmd.invoke(sub)
+    except click.ClickException as exc:
+        raise CampaignError(
+            f"step {step.name!r} (`pincal {step.command}`): {exc.format_message()}"
+        ) from exc
     except SystemExit as exc:
         if exc.code:
             click.echo(f"pincal run: step {step.name!r} failed; the run stops here", err=True)

@@ -169,3 +169,18 @@ def test_every_key_is_documented_and_the_example_is_valid():
     assert camp.model == "hexaslide_6pus" and camp.design is not None
     res = CliRunner().invoke(main, ["run", "--help"])
     assert res.exit_code == 0 and "errors_seed: 0" in res.output and "Examples:" in res.output
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--bogus"], r"step 'x': `pincal simulate` rejected the arguments .*--bogus"),
+        (["stewart_6ups", "--out", "m.csv"], r"step 'x' \(`pincal simulate`\): give exactly one"),
+    ],
+)
+def test_a_step_usage_error_is_a_campaign_error(tmp_path, monkeypatch, args, message):
+    monkeypatch.setattr(run_module, "STEPS", (run_module.Step("x", "simulate", lambda c, p: args),))
+    path = _campaign(tmp_path, "model: stewart_6ups\nmeasurements: {poses: 30}\n")
+    res = _run(str(path), "--out", str(tmp_path / "out"))
+    assert res.exit_code == 1, res.output
+    assert re.search(f"CampaignError: {message}", res.output), res.output
