@@ -184,3 +184,24 @@ def test_a_step_usage_error_is_a_campaign_error(tmp_path, monkeypatch, args, mes
     res = _run(str(path), "--out", str(tmp_path / "out"))
     assert res.exit_code == 1, res.output
     assert re.search(f"CampaignError: {message}", res.output), res.output
+
+
+def test_tracker_example_imports_and_calibrates(tmp_path):
+    import shutil
+
+    shutil.copytree(EXAMPLE.parent / "tracker", tmp_path / "tracker")
+    d = tmp_path / "tracker"
+    res = CliRunner().invoke(main, [
+        "import-tracker", str(d / "points.csv"), "--log", str(d / "controller_log.csv"),
+        "--targets", str(d / "targets_local.csv"), "--model", "hexaslide_6pus",
+        "--point-std", "0.005", "--out", str(d / "targets.csv")])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    res = _run(str(d / "campaign.yaml"), "--json")
+    assert res.exit_code == 0, res.output
+    out = d / "hexaslide-tracker-cal"
+    assert json.loads(res.stdout)["urdf"] == [str(out / "hexaslide_6pus.urdf")]
+    assert (out / "report.html").is_file()
+    doc = json.loads((out / "identification.json").read_text())
+    assert doc["poses"] == 16 and 0.3 < doc["reduced_chi2"] < 3.0
+    r = doc["residuals"]
+    assert r["after"]["rms_position_mm"] < r["before"]["rms_position_mm"] / 50

@@ -226,7 +226,7 @@ def test_documented_example_files_import(tmp_path):
     assert by_pose.targets.point_std == pytest.approx(5e-6)
     out = write_target_measurements(tmp_path / "t.csv", by_pose.targets)
     meas = read_measurements(out, nominal)
-    assert len(meas) == 8 and meas.std is not None
+    assert len(meas) == 16 and meas.std is not None
     with pytest.raises(ImportMatchError, match="points have no controller-log row"):
         import_tracker(*files, nominal, TrackerImportOptions(match="time", tolerance=2.5))
     assert {p: p.read_bytes() for p in files} == before
