@@ -12,10 +12,12 @@ from collections.abc import Iterable, Sequence
 
 __all__ = [
     "BadValueError",
+    "CampaignError",
     "ClosureError",
     "ColumnError",
     "ConvergenceError",
     "FrameMismatchError",
+    "ImportMatchError",
     "MeasurementError",
     "MeasurementFormatError",
     "MobilityError",
@@ -211,3 +213,23 @@ class MovedTargetError(MeasurementError):
             f"{residual * 1e3:.4f} mm > allowed {max_residual * 1e3:.4f} mm "
             f"(has the target or its nest moved?)"
         )
+
+
+class ImportMatchError(MeasurementError):
+    """Imported tracker points and controller-log rows do not pair up.
+
+    Attributes:
+        points_lines: 1-based lines of the points file left without a log row.
+        log_lines: 1-based lines of the controller log left without points.
+    """
+
+    def __init__(
+        self, message: str, points_lines: Sequence[int] = (), log_lines: Sequence[int] = ()
+    ):
+        self.points_lines = list(points_lines)
+        self.log_lines = list(log_lines)
+        super().__init__(message)
+
+
+class CampaignError(PincalError):
+    """A campaign file (``pincal run``) is malformed: unknown key, bad value, missing file."""

@@ -50,9 +50,11 @@ def main(ctx: click.Context, debug: bool) -> None:
 from pincal.cli import calibrate as _calibrate  # noqa: E402
 from pincal.cli import compensate as _compensate  # noqa: E402
 from pincal.cli import demo as _demo  # noqa: E402
+from pincal.cli import import_cmd as _import_cmd  # noqa: E402
 from pincal.cli import info as _info  # noqa: E402
 from pincal.cli import poses as _poses  # noqa: E402
 from pincal.cli import report as _report  # noqa: E402
+from pincal.cli import run as _run  # noqa: E402
 from pincal.cli import simulate as _simulate  # noqa: E402
 from pincal.cli import view as _view  # noqa: E402
 
@@ -65,6 +67,8 @@ for _command in (
     _compensate.compensate,
     _view.view,
     _report.report,
+    _import_cmd.import_tracker,
+    _run.run,
 ):
     main.add_command(_command)
 

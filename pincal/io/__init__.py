@@ -13,6 +13,11 @@ from pincal.io._commands_file import (
     read_commands,
     write_commands,
 )
+from pincal.io._import_tracker import (
+    TrackerImport,
+    TrackerImportOptions,
+    import_tracker,
+)
 from pincal.io._measurement_file import (
     MeasurementFile,
     check_enough_poses,
@@ -42,9 +47,12 @@ __all__ = [
     "LENGTH_UNITS",
     "MeasurementFile",
     "TargetMeasurements",
+    "TrackerImport",
+    "TrackerImportOptions",
     "atomic_write_bytes",
     "atomic_write_text",
     "check_enough_poses",
+    "import_tracker",
     "read_actuator_rows",
     "read_commands",
     "read_measurement_file",

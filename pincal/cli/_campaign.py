@@ -1,0 +1,272 @@
+"""The campaign file of ``pincal run``: a typed, frozen, validated description.
+
+Read with :func:`load_campaign`; every key is checked before any work starts. An
+unknown key is an error that suggests the nearest valid one; a wrong type or value
+names the key path (``measurements.noise``). Relative paths in the file are
+relative to the file's directory. See :data:`KEYS_HELP` (shown by ``pincal run
+--help``) and ``docs/examples/campaign.yaml``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import types
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from pincal.errors import CampaignError
+
+__all__ = ["KEYS_HELP", "Campaign", "load_campaign"]
+
+INDICES = ("O1", "O2", "O3", "O4", "O5", "A")
+DESIGN_METHODS = ("exchange", "detmax", "greedy")
+SOURCES = ("simulated", "file")
+VALIDATION_SOURCES = ("simulated", "file", "none")
+
+KEYS_HELP = """\
+\b
+Campaign file keys (YAML; relative paths are relative to the file):
+  model: NAME|DIR|URDF       required; the nominal model
+  preset: NAME               parameter preset (default: the model's first)
+  out: DIR                   output directory (default: campaign-out; --out overrides)
+  design:                    optional pose design (pincal poses)
+    count: 18                poses to select
+    index: O1                O1 O2 O3 O4 O5 A
+    candidates: grid:4       grid:LEVELS | random:COUNT | oa:LEVELS
+    method: exchange         exchange | detmax | greedy
+    seed: 0
+  measurements:
+    source: simulated        simulated | file
+    file: PATH               source file: a pincal measurement file (pose or targets)
+    poses: 30                simulated without a design: random workspace poses
+    errors_seed: 0           simulated "actual" machine: seed of its geometric errors
+    error_size: [1, 10]      uniform error bounds [mm, mrad]
+    noise: [0.01, 0.05]      measurement noise 1 sigma [mm, mrad]
+    seed: 1                  seed of the poses and the noise
+  identification:
+    method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
+  validation:                held-out poses, measured on the same actual machine
+    source: simulated        simulated | file | none
+    file: PATH               source file: a pincal measurement file
+    poses: 20                simulated: random workspace poses
+    seed: 2
+  report: true               write report.html / report.md into the output directory
+"""
+
+
+def _choice(value: str, valid: tuple[str, ...], key: str) -> None:
+    if value not in valid:
+        same = [v for v in valid if v.lower() == str(value).lower()]
+        near = same or difflib.get_close_matches(str(value), valid, n=1)
+        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        raise CampaignError(f"{key}: {value!r} is not valid{hint}; use one of {', '.join(valid)}")
+
+
+@dataclass(frozen=True)
+class Design:
+    """Pose design (``pincal poses``)."""
+
+    count: int = 18
+    index: str = "O1"
+    candidates: str = "grid:4"
+    method: str = "exchange"
+    seed: int = 0
+
+    def check(self, key: str) -> None:
+        _choice(self.index, INDICES, f"{key}.index")
+        _choice(self.method, DESIGN_METHODS, f"{key}.method")
+        if self.count < 1:
+            raise CampaignError(f"{key}.count must be ≥ 1, got {self.count}")
+
+
+@dataclass(frozen=True)
+class MeasurementSource:
+    """Calibration measurements: simulated on a seeded actual machine, or a file."""
+
+    source: str = "simulated"
+    file: str | None = None
+    poses: int | None = None
+    errors_seed: int = 0
+    error_size: tuple[float, float] = (1.0, 10.0)
+    noise: tuple[float, float] = (0.01, 0.05)
+    seed: int = 1
+
+    def check(self, key: str) -> None:
+        _choice(self.source, SOURCES, f"{key}.source")
+        if (self.source == "file") != (self.file is not None):
+            raise CampaignError(f"{key}.file is required with source: file, and only then")
+        if self.poses is not None and self.poses < 1:
+            raise CampaignError(f"{key}.poses must be ≥ 1, got {self.poses}")
+        if min(*self.error_size, *self.noise) < 0:
+            raise CampaignError(f"{key}.error_size and {key}.noise must be ≥ 0")
+
+
+@dataclass(frozen=True)
+class Identification:
+    """Identification options (``pincal calibrate``)."""
+
+    method: str = "gauss-newton"
+
+    def check(self, key: str) -> None:
+        from pincal.identification import METHODS
+
+        _choice(self.method, tuple(METHODS), f"{key}.method")
+
+
+@dataclass(frozen=True)
+class Validation:
+    """Held-out validation poses."""
+
+    source: str = "simulated"
+    file: str | None = None
+    poses: int = 20
+    seed: int = 2
+
+    def check(self, key: str) -> None:
+        _choice(self.source, VALIDATION_SOURCES, f"{key}.source")
+        if (self.source == "file") != (self.file is not None):
+            raise CampaignError(f"{key}.file is required with source: file, and only then")
+        if self.poses < 1:
+            raise CampaignError(f"{key}.poses must be ≥ 1, got {self.poses}")
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """A whole calibration campaign (see :data:`KEYS_HELP`)."""
+
+    model: str
+    preset: str | None = None
+    out: str = "campaign-out"
+    design: Design | None = None
+    measurements: MeasurementSource = field(default_factory=MeasurementSource)
+    identification: Identification = field(default_factory=Identification)
+    validation: Validation = field(default_factory=Validation)
+    report: bool = True
+
+    def check(self, key: str = "") -> None:
+        for f in dataclasses.fields(self):
+            sub: Any = getattr(self, f.name)
+            if hasattr(sub, "check"):
+                sub.check(f.name)
+        m = self.measurements
+        if m.source == "simulated" and (self.design is None) == (m.poses is None):
+            raise CampaignError(
+                "simulated measurements need exactly one of a 'design' section or "
+                "'measurements.poses' (random workspace poses)"
+            )
+        if m.source == "file" and m.poses is not None:
+            raise CampaignError("measurements.poses applies to source: simulated only")
+        if self.validation.source == "simulated" and m.source != "simulated":
+            raise CampaignError(
+                "validation.source: simulated needs simulated measurements (the same actual "
+                "machine); use validation source: file or none"
+            )
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data (lists for pairs) for YAML/JSON."""
+
+        def plain(v: Any) -> Any:
+            if isinstance(v, tuple):
+                return list(v)
+            if isinstance(v, dict):
+                return {k: plain(x) for k, x in v.items()}
+            return v
+
+        return plain(dataclasses.asdict(self))
+
+
+def _type_name(tp: Any) -> str:
+    return getattr(tp, "__name__", str(tp))
+
+
+def _coerce(value: Any, tp: Any, key: str) -> Any:
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        inner = [a for a in typing.get_args(tp) if a is not type(None)]
+        if value is None:
+            return None
+        return _coerce(value, inner[0], key)
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
+        return _build(tp, value, key)
+    if origin is tuple:
+        args = typing.get_args(tp)
+        if not isinstance(value, (list, tuple)) or len(value) != len(args):
+            raise CampaignError(f"{key}: expected a list of {len(args)} numbers, got {value!r}")
+        return tuple(
+            _coerce(v, a, f"{key}[{k}]") for k, (v, a) in enumerate(zip(value, args, strict=True))
+        )
+    ok = {
+        bool: isinstance(value, bool),
+        int: isinstance(value, int) and not isinstance(value, bool),
+        float: isinstance(value, (int, float)) and not isinstance(value, bool),
+        str: isinstance(value, str),
+    }.get(tp, False)
+    if not ok:
+        raise CampaignError(f"{key}: expected {_type_name(tp)}, got {value!r}")
+    return float(value) if tp is float else value
+
+
+def _build(cls: type, data: Any, key: str) -> Any:
+    where = key or "campaign file"
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise CampaignError(f"{where}: expected a mapping of keys, got {data!r}")
+    hints = typing.get_type_hints(cls)
+    valid = [f.name for f in dataclasses.fields(cls)]
+    for name in data:
+        if name not in valid:
+            near = difflib.get_close_matches(str(name), valid, n=1, cutoff=0.5)
+            hint = f"did you mean {near[0]!r}? " if near else ""
+            raise CampaignError(
+                f"{where}: unknown key {name!r}; {hint}valid keys are {', '.join(valid)}"
+            )
+    kwargs = {}
+    for f in dataclasses.fields(cls):
+        sub = f"{key}.{f.name}" if key else f.name
+        if f.name in data:
+            kwargs[f.name] = _coerce(data[f.name], hints[f.name], sub)
+        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            raise CampaignError(f"{where}: key {f.name!r} is required")
+    return cls(**kwargs)
+
+
+def _resolve(path: str | None, base: Path) -> str | None:
+    if path is None:
+        return None
+    p = Path(path).expanduser()
+    return str(p if p.is_absolute() else base / p)
+
+
+def load_campaign(path: str | Path) -> Campaign:
+    """Read and validate a campaign file; relative paths become relative to its directory.
+
+    Raises:
+        CampaignError: unreadable file, not YAML, unknown key (nearest valid key
+            suggested), wrong type or value, or a missing data file.
+    """
+    import yaml  # type: ignore[import-untyped]
+
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise CampaignError(f"cannot read campaign file {str(path)!r}: {exc.strerror}") from exc
+    except yaml.YAMLError as exc:
+        raise CampaignError(f"{path.name} is not valid YAML: {exc}") from exc
+    camp = _build(Campaign, data, "")
+    camp.check()
+    base = path.resolve().parent
+    m = dataclasses.replace(camp.measurements, file=_resolve(camp.measurements.file, base))
+    v = dataclasses.replace(camp.validation, file=_resolve(camp.validation.file, base))
+    model = camp.model
+    if "/" in model or model.endswith((".urdf", ".xml")):
+        model = _resolve(model, base) or model
+    for key, f in (("measurements.file", m.file), ("validation.file", v.file)):
+        if f is not None and not Path(f).is_file():
+            raise CampaignError(f"{key}: {f!r} does not exist")
+    out = _resolve(camp.out, base) or camp.out
+    return dataclasses.replace(camp, model=model, out=out, measurements=m, validation=v)

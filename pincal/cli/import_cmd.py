@@ -1,0 +1,117 @@
+"""`pincal import-tracker`: a tracker point export + controller log → a targets file."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from pincal.cli.common import fail_cleanly
+
+_FILE = click.Path(exists=True, dir_okay=False, path_type=Path)
+
+
+@click.command("import-tracker")
+@click.argument("points", type=_FILE)
+@click.option(
+    "--log", "log_path", required=True, type=_FILE, help="Controller log (one row per pose)."
+)
+@click.option("--targets", "targets_path", required=True, type=_FILE,
+              help="Target coordinates in the measured frame (point, x, y, z).")  # fmt: skip
+@click.option("--model", required=True, help="Model (bundled name, directory or .urdf).")
+@click.option("--out", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="Targets measurement file to write (kind: targets).")  # fmt: skip
+@click.option("--match", type=click.Choice(["auto", "pose", "time"]), default="auto",
+              show_default=True, help="Pair points and log rows by pose id or time.")  # fmt: skip
+@click.option("--tolerance", type=float, default=0.5, show_default=True,
+              help="Largest point-to-log time difference [s] (--match time).")  # fmt: skip
+@click.option("--unit", default=None, help="Length unit of points and targets (m, mm, um).")
+@click.option("--log-length-unit", default="m", show_default=True, help="Prismatic joints' unit.")
+@click.option("--log-angle-unit", default="rad", show_default=True, help="Revolute joints' unit.")
+@click.option(
+    "--columns", default=None, help="Points columns: field=Title,… (pose,time,point,x,y,z)."
+)
+@click.option("--target-columns", default=None, help="Targets columns: field=Title,….")
+@click.option("--log-columns", default=None, help="Log columns: field=Title,… (pose,time,joints).")
+@click.option("--delimiter", type=click.Choice(["auto", ",", ";", "tab"]), default="auto",
+              show_default=True)  # fmt: skip
+@click.option("--decimal", type=click.Choice(["auto", ".", ","]), default="auto", show_default=True)
+@click.option("--point-std", type=float, default=None, help="1σ per point coordinate [--unit].")
+@click.option("--max-residual", type=float, default=None, help="Moved-target threshold [--unit].")
+@click.option("--out-unit", type=click.Choice(["m", "mm", "um"]), default="m", show_default=True,
+              help="Length unit of the written file (m round-trips exactly).")  # fmt: skip
+@click.option("--ignore-unknown-points", is_flag=True,
+              help="Skip points that are not in --targets (e.g. base nests).")  # fmt: skip
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON summary.")
+@fail_cleanly
+def import_tracker(
+    points, log_path, targets_path, model, out, match, tolerance, unit, log_length_unit,
+    log_angle_unit, columns, target_columns, log_columns, delimiter, decimal, point_std,
+    max_residual, out_unit, ignore_unknown_points, as_json,
+) -> None:  # fmt: skip
+    """Pair a laser tracker's POINTS export with a controller log into a targets file.
+
+    POINTS has one measured point per row (long format): a pose/group id and/or a
+    time stamp, the target name and x, y, z in the machine base frame. --targets
+    gives each target's x, y, z in the model's measured frame; --log has one row
+    per pose with the pose id and/or time and one column per actuated joint.
+    Delimiters , ; and tab and a decimal comma are detected; titles such as
+    'X [mm]' carry their unit. The inputs are only read; OUT is written whole or
+    not at all. See docs/examples/README.md for the formats.
+
+    \b
+    Examples:
+      pincal import-tracker points.csv --log log.csv --targets targets_local.csv \\
+          --model hexaslide_6pus --unit mm --log-length-unit mm --out targets.csv
+      pincal import-tracker export.txt --log ctrl.csv --targets t.csv --model stewart_6ups \\
+          --unit mm --match time --tolerance 0.2 --columns point=Name,time=Timestamp \\
+          --out targets.csv --json
+      pincal calibrate stewart_6ups --data targets.csv --out cal/
+    """
+    from pincal.errors import MeasurementError
+    from pincal.io import TrackerImportOptions, import_tracker, write_target_measurements
+    from pincal.io._delimited import parse_mapping
+    from pincal.model import load_mechanism
+
+    resolved = Path(out).resolve()
+    if resolved in {Path(p).resolve() for p in (points, log_path, targets_path)}:
+        raise MeasurementError(f"--out {out} is one of the inputs; inputs are never modified")
+    mech = load_mechanism(model)
+    opts = TrackerImportOptions(
+        match=match,
+        tolerance=tolerance,
+        length_unit=unit,
+        log_length_unit=log_length_unit,
+        log_angle_unit=log_angle_unit,
+        point_columns=parse_mapping(columns, "--columns"),
+        target_columns=parse_mapping(target_columns, "--target-columns"),
+        log_columns=parse_mapping(log_columns, "--log-columns"),
+        delimiter=delimiter,
+        decimal=decimal,
+        point_std=point_std,
+        max_residual=max_residual,
+        ignore_unknown_points=ignore_unknown_points,
+    )
+    result = import_tracker(points, log_path, targets_path, mech, opts)
+    path = write_target_measurements(out, result.targets, length_unit=out_unit)
+    summary = {
+        "out": str(path),
+        "model": mech.name,
+        "frame": mech.measured_frame,
+        "poses": len(result.pose_ids),
+        "targets": list(result.targets.names),
+        "match": result.match,
+        "max_time_offset_s": result.max_time_offset,
+    }
+    if as_json:
+        click.echo(json.dumps(summary))
+        return
+    extra = ""
+    if result.max_time_offset is not None:
+        extra = f", largest time offset {result.max_time_offset:.3g} s"
+    click.echo(
+        f"matched {len(result.pose_ids)} poses × {len(result.targets.names)} targets by "
+        f"{result.match}{extra}"
+    )
+    click.echo(f"wrote {path}")

@@ -1,0 +1,218 @@
+"""`pincal run`: drive a whole calibration campaign from one YAML file.
+
+The campaign is a fixed list of steps (:data:`STEPS`), each the name of an existing
+``pincal`` subcommand and a function building its command-line arguments from the
+campaign and the paths of the earlier steps' outputs. The steps are invoked in this
+process, in order, exactly as a user would type them, so the run writes whatever
+the subcommands write. A step whose subcommand this pincal does not have is skipped
+with a note; a step that does not apply (no design section, file measurements…)
+is skipped silently in the summary.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import click
+
+from pincal.cli._campaign import KEYS_HELP, Campaign, load_campaign
+from pincal.cli.common import fail_cleanly
+
+
+@dataclass(frozen=True)
+class Paths:
+    """Where the steps read and write (``inputs/`` inside the output directory)."""
+
+    out: Path
+    design: Path
+    data: Path
+    validation: Path | None
+
+
+@dataclass(frozen=True)
+class Step:
+    """One campaign step: a subcommand and its argument builder (None = not applicable)."""
+
+    name: str
+    command: str
+    arguments: Callable[[Campaign, Paths], list[str] | None]
+
+
+def _pair(v: tuple[float, float]) -> str:
+    return f"{v[0]!r},{v[1]!r}"
+
+
+def _actual(c: Campaign) -> list[str]:
+    m = c.measurements
+    opts = ["--errors", f"seed:{m.errors_seed}", "--error-size", _pair(m.error_size)]
+    opts += ["--noise", _pair(m.noise)]
+    return opts + (["--params", c.preset] if c.preset else [])
+
+
+def _design(c: Campaign, p: Paths) -> list[str] | None:
+    d = c.design
+    if d is None:
+        return None
+    args = [c.model, "--count", str(d.count), "--index", d.index, "--candidates", d.candidates]
+    args += ["--method", d.method, "--seed", str(d.seed), "--out", str(p.design)]
+    return args + (["--preset", c.preset] if c.preset else [])
+
+
+def _measure(c: Campaign, p: Paths) -> list[str] | None:
+    m = c.measurements
+    if m.source != "simulated":
+        return None
+    where = ["--poses", str(p.design)] if c.design else ["--random", str(m.poses)]
+    return [c.model, *where, *_actual(c), "--seed", str(m.seed), "--out", str(p.data)]
+
+
+def _measure_validation(c: Campaign, p: Paths) -> list[str] | None:
+    v = c.validation
+    if v.source != "simulated" or p.validation is None:
+        return None
+    return [c.model, "--random", str(v.poses), *_actual(c), "--seed", str(v.seed),
+            "--out", str(p.validation)]  # fmt: skip
+
+
+def _calibrate(c: Campaign, p: Paths) -> list[str] | None:
+    args = [c.model, "--data", str(p.data), "--method", c.identification.method]
+    return args + (["--params", c.preset] if c.preset else []) + ["--out", str(p.out)]
+
+
+def _validate(c: Campaign, p: Paths) -> list[str] | None:
+    return None if p.validation is None else [str(p.out), "--data", str(p.validation)]
+
+
+def _report(c: Campaign, p: Paths) -> list[str] | None:
+    return [str(p.out)] if c.report else None
+
+
+#: the campaign, in order: (step name, pincal subcommand, argument builder)
+STEPS: tuple[Step, ...] = (
+    Step("design", "poses", _design),
+    Step("measure", "simulate", _measure),
+    Step("measure-validation", "simulate", _measure_validation),
+    Step("calibrate", "calibrate", _calibrate),
+    Step("validate", "validate", _validate),
+    Step("report", "report", _report),
+)
+
+
+def campaign_paths(c: Campaign, out: Path) -> Paths:
+    """The step paths of campaign ``c`` writing into ``out``."""
+    inputs = out / "inputs"
+    data = Path(c.measurements.file) if c.measurements.file else inputs / "measurements.csv"
+    v = c.validation
+    val = None if v.source == "none" else Path(v.file) if v.file else inputs / "validation.csv"
+    return Paths(out, inputs / "design.csv", data, val)
+
+
+def _invoke(ctx: click.Context, step: Step, args: list[str], quiet: bool) -> str:
+    """Run one step; returns its status (``done`` or ``skipped``)."""
+    from pincal.cli import main as group
+    from pincal.errors import CampaignError
+
+    cmd = group.get_command(ctx, step.command)
+    if cmd is None:
+        return "skipped"
+    try:
+        sub = cmd.make_context(step.command, list(args), parent=ctx)
+    except click.ClickException as exc:
+        raise CampaignError(
+            f"step {step.name!r}: `pincal {step.command}` rejected the arguments "
+            f"{args}: {exc.format_message()}"
+        ) from exc
+    out = contextlib.redirect_stdout(sys.stderr) if quiet else contextlib.nullcontext()
+    try:
+        with sub, out:
+            cmd.invoke(sub)
+    except click.ClickException as exc:
+        raise CampaignError(
+            f"step {step.name!r} (`pincal {step.command}`): {exc.format_message()}"
+        ) from exc
+    except SystemExit as exc:
+        if exc.code:
+            click.echo(f"pincal run: step {step.name!r} failed; the run stops here", err=True)
+        raise
+    return "done"
+
+
+@click.command("run", epilog=KEYS_HELP)
+@click.argument("campaign_file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output directory (default: the file's 'out' key).")  # fmt: skip
+@click.option("--dry-run", is_flag=True, help="Check the file and print the steps only.")
+@click.option("--json", "as_json", is_flag=True,
+              help="Print a JSON summary on stdout (step output goes to stderr).")  # fmt: skip
+@fail_cleanly
+@click.pass_context
+def run(ctx: click.Context, campaign_file: Path, out: Path | None, dry_run: bool,
+        as_json: bool) -> None:  # fmt: skip
+    """Run the calibration campaign described in CAMPAIGN_FILE (YAML).
+
+    The steps are the pincal subcommands a user would type, in order: poses
+    (design) → simulate (calibration and validation data of a seeded "actual"
+    machine, or your measurement files) → calibrate → validate → report. Every
+    output lands in one calibration directory: the calibrated URDF, identification
+    and report files, the generated inputs in inputs/ and the resolved campaign in
+    campaign.yaml. The whole file is checked before the first step; each step
+    prints a progress line on stderr.
+
+    \b
+    Examples:
+      pincal run docs/examples/campaign.yaml --out cal/
+      pincal run campaign.yaml --dry-run       check the file, list the commands
+      pincal run campaign.yaml --json          summary as JSON on stdout
+    """
+    import yaml  # type: ignore[import-untyped]
+
+    from pincal.io import atomic_write_text
+
+    camp = load_campaign(campaign_file)
+    out_dir = Path(out) if out is not None else Path(camp.out)
+    paths = campaign_paths(camp, out_dir)
+    summary: dict = {"campaign": str(campaign_file), "out": str(out_dir), "steps": []}
+    for k, step in enumerate(STEPS, start=1):
+        args = step.arguments(camp, paths)
+        tag = f"pincal run: [{k}/{len(STEPS)}] {step.name}"
+        record: dict[str, Any] = {"step": step.name, "command": step.command, "args": args}
+        summary["steps"].append(record)
+        if args is None:
+            record["status"] = "not applicable"
+            click.echo(f"{tag}: not applicable", err=True)
+            continue
+        from pincal.cli import main as group
+
+        if group.get_command(ctx, step.command) is None:
+            record["status"] = "skipped"
+            record["note"] = (
+                f"this pincal has no `{step.command}` command; run it later: "
+                f"pincal {step.command} {' '.join(args)}"
+            )
+            click.echo(f"{tag}: skipped — {record['note']}", err=True)
+            continue
+        click.echo(f"{tag}: pincal {step.command} {' '.join(args)}", err=True)
+        if dry_run:
+            record["status"] = "planned"
+            continue
+        t0 = time.perf_counter()
+        record["status"] = _invoke(ctx, step, args, as_json)
+        record["seconds"] = round(time.perf_counter() - t0, 3)
+    if not dry_run:
+        # out: "." — the copy lives in the output directory and reruns into it
+        dump = yaml.safe_dump({**camp.to_dict(), "out": "."}, sort_keys=False)
+        atomic_write_text(out_dir / "campaign.yaml", dump)
+        summary["urdf"] = sorted(str(p) for p in out_dir.glob("*.urdf"))
+        summary["report"] = sorted(str(p) for p in out_dir.glob("report.*"))
+    if as_json:
+        click.echo(json.dumps(summary))
+    else:
+        done = sum(s["status"] == "done" for s in summary["steps"])
+        click.echo(f"campaign {'checked' if dry_run else 'done'}: {done} steps run; {out_dir}")

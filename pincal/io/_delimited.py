@@ -1,0 +1,202 @@
+"""Foreign delimited text tables (instrument and controller exports), read-only.
+
+Not a pincal file: no magic line. Leading blank lines and lines starting with ``#``
+are skipped; the first other line holds the column titles, every following
+non-blank line is a data row. The delimiter is a comma, semicolon or tab (``auto``
+picks, in that order of preference, tab, then semicolon, then comma as found in the
+title line); the decimal mark is ``.`` or ``,`` (``auto``: ``,`` when the delimiter
+is not a comma and some cell holds a number written with a decimal comma). Every
+message names the file and its 1-based line number.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from pincal.errors import BadValueError, ColumnError, MeasurementError, MeasurementFormatError
+from pincal.io._csv import parse_column
+
+__all__ = ["DELIMITERS", "Table", "parse_mapping", "read_table"]
+
+#: option value → delimiter character
+DELIMITERS = {"auto": None, ",": ",", ";": ";", "tab": "\t", "\t": "\t"}
+_DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d*,\d+(?:[eE][+-]?\d+)?\s*$")
+
+
+@dataclass(frozen=True)
+class Table:
+    """A delimited table as text.
+
+    Attributes:
+        name: file name (for messages).
+        columns: column titles as written (stripped).
+        rows: data rows as text cells.
+        lines: 1-based file line number of each data row.
+        delimiter: the delimiter used.
+        decimal: the decimal mark used (``.`` or ``,``).
+    """
+
+    name: str
+    columns: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+    lines: tuple[int, ...]
+    delimiter: str
+    decimal: str
+
+    def find(self, field: str, aliases: Sequence[str], mapping: Mapping[str, str]) -> int | None:
+        """Index of the column holding ``field``: the mapped title, else an alias.
+
+        Titles compare case-insensitively and without a bracketed unit.
+
+        Raises:
+            ColumnError: a mapped title that is not in the table.
+        """
+        bare = [parse_column(c)[0].lower() if _parsable(c) else c.lower() for c in self.columns]
+        if field in mapping:
+            want = mapping[field].strip().lower()
+            for k, (c, b) in enumerate(zip(self.columns, bare, strict=True)):
+                if c.lower() == want or b == want:
+                    return k
+            raise ColumnError(
+                f"{self.name}: column {mapping[field]!r} (mapped to {field!r}) not found; "
+                f"columns are {list(self.columns)}",
+                missing=[mapping[field]],
+            )
+        for alias in aliases:
+            if alias.lower() in bare:
+                return bare.index(alias.lower())
+        return None
+
+    def unit(self, k: int) -> str | None:
+        """The bracketed unit of column ``k`` (``X [mm]`` → ``mm``), or None."""
+        return parse_column(self.columns[k])[1] if _parsable(self.columns[k]) else None
+
+    def number(self, i: int, k: int) -> float:
+        """Cell (row ``i``, column ``k``) as a finite float.
+
+        Raises:
+            BadValueError: not a number or not finite (names the file line and column).
+        """
+        cell = self.rows[i][k].strip()
+        text = cell.replace(",", ".") if self.decimal == "," else cell
+        try:
+            v = float(text) if "," not in text else math.nan
+        except ValueError:
+            v = math.nan
+        if not math.isfinite(v):
+            raise BadValueError(
+                f"{self.name} line {self.lines[i]}, column {self.columns[k]!r}: {cell!r} is not "
+                f"a finite number (decimal mark {self.decimal!r}; set it with --decimal)",
+                i + 1,
+                self.columns[k],
+            )
+        return v
+
+    def text(self, i: int, k: int) -> str:
+        """Cell (row ``i``, column ``k``) stripped.
+
+        Raises:
+            BadValueError: the cell is empty.
+        """
+        cell = self.rows[i][k].strip()
+        if not cell:
+            raise BadValueError(
+                f"{self.name} line {self.lines[i]}, column {self.columns[k]!r}: empty cell",
+                i + 1,
+                self.columns[k],
+            )
+        return cell
+
+
+def _parsable(title: str) -> bool:
+    try:
+        parse_column(title)
+    except MeasurementFormatError:
+        return False
+    return True
+
+
+def _pick_delimiter(title_line: str) -> str:
+    for d in ("\t", ";", ","):
+        if d in title_line:
+            return d
+    return ","
+
+
+def read_table(path: str | Path, delimiter: str = "auto", decimal: str = "auto") -> Table:
+    """Read a delimited export (see the module doc).
+
+    Args:
+        path: the file (never modified).
+        delimiter: ``auto``, ``,``, ``;`` or ``tab``.
+        decimal: ``auto``, ``.`` or ``,``.
+
+    Returns:
+        The table as text cells with their file line numbers.
+
+    Raises:
+        MeasurementError: the file cannot be read or an option is unknown.
+        MeasurementFormatError: not UTF-8, no title line, a row with the wrong number
+            of fields, a decimal comma with a comma delimiter.
+    """
+    name = Path(path).name
+    if delimiter not in DELIMITERS:
+        raise MeasurementError(f"delimiter {delimiter!r} unknown; use one of {list(DELIMITERS)}")
+    if decimal not in ("auto", ".", ","):
+        raise MeasurementError(f"decimal mark {decimal!r} unknown; use auto, '.' or ','")
+    try:
+        text = Path(path).read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise MeasurementError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
+    except UnicodeDecodeError as exc:
+        raise MeasurementFormatError(f"{name} is not a UTF-8 text file") from exc
+    numbered = [(n, ln) for n, ln in enumerate(text.splitlines(), start=1) if ln.strip()]
+    while numbered and numbered[0][1].lstrip().startswith("#"):
+        numbered.pop(0)
+    if not numbered:
+        raise MeasurementFormatError(f"{name}: no column title line")
+    delim = DELIMITERS[delimiter] or _pick_delimiter(numbered[0][1])
+    parsed = list(csv.reader([ln for _, ln in numbered], delimiter=delim))
+    columns = tuple(c.strip() for c in parsed[0])
+    rows, lines = [], []
+    for (n, _), cells in zip(numbered[1:], parsed[1:], strict=True):
+        if len(cells) != len(columns):
+            raise MeasurementFormatError(
+                f"{name} line {n}: {len(cells)} fields, the title line has {len(columns)} "
+                f"(delimiter {delim!r}; set it with --delimiter)"
+            )
+        rows.append(tuple(cells))
+        lines.append(n)
+    if decimal == "auto":
+        decimal = "."
+        if delim != "," and any(_DECIMAL_COMMA.match(c) for r in rows for c in r):
+            decimal = ","
+    elif decimal == "," and delim == ",":
+        raise MeasurementFormatError(f"{name}: a decimal comma needs a ';' or tab delimiter")
+    return Table(name, columns, tuple(rows), tuple(lines), delim, decimal)
+
+
+def parse_mapping(spec: str | Mapping[str, str] | None, what: str) -> dict[str, str]:
+    """``field=Title,field=Title`` (or a mapping) → {field: title}.
+
+    Raises:
+        MeasurementError: an item without ``=`` or a field given twice.
+    """
+    if spec is None:
+        return {}
+    if isinstance(spec, Mapping):
+        return {str(k): str(v) for k, v in spec.items()}
+    out: dict[str, str] = {}
+    for item in (s for s in spec.split(",") if s.strip()):
+        key, eq, title = item.partition("=")
+        if not eq or not key.strip() or not title.strip():
+            raise MeasurementError(f"{what}: {item!r} is not field=Column")
+        if key.strip() in out:
+            raise MeasurementError(f"{what}: field {key.strip()!r} mapped twice")
+        out[key.strip()] = title.strip()
+    return out
