@@ -33,7 +33,8 @@ def demo(
 
     Draws an "actual" machine (0.5 mm errors), simulates a laser-tracker campaign
     (noise 0.01 mm / 0.02 mrad), identifies the parameters, validates on fresh poses
-    and writes the calibrated URDF, identification.json and report.html to OUT.
+    and writes the calibration directory OUT (calibration.json, calibrated.urdf +
+    calibrated.yaml, identification.json) with report.html.
 
     \b
     Examples:
