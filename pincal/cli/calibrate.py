@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import calibration_summary, fail_cleanly, model_source
+from pincal.cli.common import fail_cleanly, model_source
 from pincal.identification import METHODS
 
 
@@ -81,7 +81,7 @@ def format_report(doc: dict) -> str:
     "--json",
     "as_json",
     is_flag=True,
-    help="Print identification.json (and the written files) on stdout instead of the report.",
+    help="Print identification.json on stdout instead of the report.",
 )
 @fail_cleanly
 def calibrate(model, data, preset, method, out, as_json) -> None:
@@ -138,13 +138,14 @@ def calibrate(model, data, preset, method, out, as_json) -> None:
         model_source=model_source(model),
         data_files=[data],
         noise=meas.noise,
+        annotations={"data": str(data)},
         texts={"report.txt": report},
     )
     if as_json:
-        click.echo(json.dumps({**doc, "calibration": calibration_summary(cal)}))
+        click.echo(json.dumps(doc))
     else:
         click.echo(report, nl=False)
         click.echo(
-            f"wrote calibration directory {out_dir}/ ({MANIFEST}, {CALIBRATED_URDF} + "
+            f"wrote calibration directory {cal.path}/ ({MANIFEST}, {CALIBRATED_URDF} + "
             f"{CALIBRATED_SIDECAR}, identification.json, report.txt)"
         )

@@ -1,5 +1,5 @@
-"""Files: the calibration directory, measurement, pose and command CSVs, pose-design files, URDF + sidecar export,
-atomic writes.
+"""Files: the calibration directory, measurement, pose and command CSVs, pose-design
+files, URDF + sidecar export, atomic writes.
 """
 
 from __future__ import annotations

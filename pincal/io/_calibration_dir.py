@@ -378,4 +378,3 @@ def read_calibration(path: str | Path, *, verify: bool = True) -> CalibrationDir
         )
     noise = _noise(manifest.get("noise"), where)
     return CalibrationDirectory(d, manifest, result, d / CALIBRATED_URDF, noise)
-

@@ -81,5 +81,7 @@ def read_pose_rows(path: str | Path, mech: Mechanism, max_rows: int | None = Non
     else:
         return read_actuator_rows(path, mech.actuated, max_rows)
     if max_rows is not None and len(rows) > max_rows:
-        raise MeasurementError(f"poses file {str(path)!r} has {len(rows)} poses; at most {max_rows}")
+        raise MeasurementError(
+            f"poses file {str(path)!r} has {len(rows)} poses; at most {max_rows}"
+        )
     return np.asarray(rows, dtype=float)
