@@ -249,7 +249,7 @@ def write_calibration(
         CalibrationDirectoryError: ``path`` exists and is not a calibration directory.
         ParameterError: ``result`` has no calibrated mechanism.
     """
-    out = Path(path)
+    out = Path(path).resolve()  # "." or "cal/" name a directory we can replace by rename
     out.parent.mkdir(parents=True, exist_ok=True)
     mech = result.calibrated
     notes = {"data": [str(p) for p in data_files], "calibrated_urdf": CALIBRATED_URDF}
@@ -269,7 +269,7 @@ def write_calibration(
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return read_calibration(out)
+    return read_calibration(path)
 
 
 def _load_json(path: Path) -> dict:
