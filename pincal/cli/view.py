@@ -23,6 +23,7 @@ import click
 import numpy as np
 
 from pincal.cli.common import fail_cleanly
+from pincal.errors import ModelFileError
 from pincal.io import read_pose_rows
 
 #: most poses drawn (ghost copies multiply the page size)
@@ -143,6 +144,14 @@ def view(
     arrows = []
     if calibrated is not None:
         cal = _calibrated_mechanism(calibrated)
+        if tuple(cal.actuated) != tuple(mech.actuated) or (
+            calibrated.is_dir() and cal.name != mech.name
+        ):
+            raise ModelFileError(
+                f"calibration {str(calibrated)!r} is of model {cal.name!r} (actuators "
+                f"{list(cal.actuated)}), not of {mech.name!r}; give the calibrated model's "
+                f"nominal MODEL"
+            )
         for k, row in enumerate(rows):
             p_nominal = np.array(mech.forward(row, qs[k]).translation)
             p_calibrated = np.array(cal.forward(row, qs[k]).translation)
