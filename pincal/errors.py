@@ -12,6 +12,7 @@ from collections.abc import Iterable, Sequence
 
 __all__ = [
     "BadValueError",
+    "CalibrationDirectoryError",
     "CampaignError",
     "ClosureError",
     "ColumnError",
@@ -151,6 +152,10 @@ class VisualizationError(PincalError):
 
 class ReportError(PincalError):
     """Inputs to a plot or report are malformed (lengths, units, NaN, report JSON)."""
+
+
+class CalibrationDirectoryError(PincalError):
+    """A calibration directory is missing, incomplete, of a newer format or damaged."""
 
 
 class MeasurementFormatError(MeasurementError):

@@ -19,21 +19,26 @@ import click
 def main(ctx: click.Context, debug: bool) -> None:
     """Kinematic calibration of parallel machines and serial chains.
 
-    MODEL arguments are a bundled model name (stewart_6ups, hexaslide_6pus, pkm5,
-    wedge3), a model directory or a .urdf file (with its sidecar .yaml beside it).
-    Units inside are SI (m, rad); printed errors are in mm / mrad.
+    MODEL arguments are a bundled model name ({models}), a model directory, a .urdf
+    file (with its sidecar .yaml beside it) or an MJCF .xml file. Units inside are SI
+    (m, rad); printed errors are in mm / mrad; every CSV states its units in its header.
+
+    A campaign: poses → simulate (or measure) → calibrate → view → compensate →
+    validate → report. `calibrate` writes one calibration directory (calibration.json,
+    calibrated.urdf + calibrated.yaml, identification.json) that view --calibrated,
+    compensate, validate and report read as it is.
 
     \b
     Examples:
       pincal demo                              full simulated Stewart calibration
       pincal info stewart_6ups                 joints, closures, presets, identifiability
-      pincal poses stewart_6ups --count 18 --index O1 --candidates grid:4 --out poses.csv
-      pincal simulate hexaslide_6pus --random 30 --out m.csv
+      pincal poses hexaslide_6pus --count 40 --candidates random:300 --out poses.csv
+      pincal simulate hexaslide_6pus --poses poses.csv --out m.csv
       pincal calibrate hexaslide_6pus --data m.csv --out cal/
-      pincal compensate cal/ --targets targets.csv --out commands.csv
-      pincal view stewart_6ups --html v.html   offline 3-D view of random poses
-      pincal view stewart_6ups --calibrated pincal-out --html errors.html
-      pincal report pincal-out                 HTML + Markdown report of a calibration
+      pincal view hexaslide_6pus --poses poses.csv --calibrated cal/ --html errors.html
+      pincal compensate cal/ --targets poses.csv --out commands.csv
+      pincal validate cal/ --data held_out.csv  errors on data not used for fitting
+      pincal report cal/                       HTML + Markdown report of a calibration
       pincal --debug info my_robot.urdf        full traceback on errors
 
     \b
@@ -56,7 +61,11 @@ from pincal.cli import poses as _poses  # noqa: E402
 from pincal.cli import report as _report  # noqa: E402
 from pincal.cli import run as _run  # noqa: E402
 from pincal.cli import simulate as _simulate  # noqa: E402
+from pincal.cli import validate as _validate  # noqa: E402
 from pincal.cli import view as _view  # noqa: E402
+from pincal.model import bundled_models as _bundled_models  # noqa: E402
+
+main.help = (main.help or "").replace("{models}", ", ".join(_bundled_models()))
 
 for _command in (
     _demo.demo,
@@ -65,6 +74,7 @@ for _command in (
     _simulate.simulate,
     _calibrate.calibrate,
     _compensate.compensate,
+    _validate.validate,
     _view.view,
     _report.report,
     _import_cmd.import_tracker,

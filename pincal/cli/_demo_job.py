@@ -4,13 +4,12 @@ A seeded "actual" machine is drawn around the nominal model, measurement poses
 are chosen from a candidate set by maximising O1 on the noise-whitened Jacobian
 (D-optimal design), the Cramér–Rao bound predicts the achievable accuracy before
 measuring, a laser-tracker campaign is simulated, the parameters are identified,
-the result is validated on fresh poses (predicted vs achieved) and the calibrated
-model is written out.
+the result is validated on fresh poses (predicted vs achieved) and the calibration
+directory (:func:`pincal.io.write_calibration`) is written out.
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +28,7 @@ from pincal.identification import (
     IdentificationResult,
     identify,
 )
-from pincal.io import atomic_write_text, save_urdf
+from pincal.io import MANIFEST, write_calibration
 from pincal.measure import (
     NoiseModel,
     PoseErrors,
@@ -143,8 +142,6 @@ def run_demo(
     files: list[Path] = []
     if out_dir is not None:
         out = Path(out_dir)
-        files.append(save_urdf(result.calibrated, out / f"{nominal.name}_calibrated.urdf"))
-        files.append(out / f"{nominal.name}_calibrated.yaml")
         notes: dict[str, object] = {
             "truth": dict(zip(params.names, (float(t) for t in true), strict=True)),
             "validation_before": before.summary(),
@@ -162,8 +159,11 @@ def run_demo(
         }
         if design is not None:
             notes["index_history"] = {settings.index: list(design.selection.history)}
-        report = result.to_dict(notes)
-        files.append(atomic_write_text(out / "identification.json", json.dumps(report, indent=2)))
+        cal = write_calibration(
+            out, result, model_source=settings.model, noise=settings.noise, annotations=notes
+        )
+        files += [out / MANIFEST, cal.calibrated_urdf, cal.calibrated_urdf.with_suffix(".yaml")]
+        files.append(out / "identification.json")
         if settings.report:
             from pincal.report import calibration_report
 

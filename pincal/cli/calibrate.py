@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli.common import fail_cleanly, model_source
 from pincal.identification import METHODS
 
 
@@ -74,7 +74,8 @@ def format_report(doc: dict) -> str:
     "--out",
     required=True,
     type=click.Path(file_okay=False),
-    help="Output directory: report.txt, identification.json, calibrated URDF + sidecar.",
+    help="Calibration directory to write: calibration.json, calibrated.urdf + "
+    "calibrated.yaml, identification.json, report.txt.",
 )
 @click.option(
     "--json",
@@ -84,15 +85,26 @@ def format_report(doc: dict) -> str:
 )
 @fail_cleanly
 def calibrate(model, data, preset, method, out, as_json) -> None:
-    """Identify MODEL's geometric parameters from measured poses (--data)."""
+    """Identify MODEL's geometric parameters from measured poses (--data).
+
+    Writes one calibration directory OUT (whole or not at all) that `pincal view
+    --calibrated`, `compensate`, `validate` and `report` read as it is.
+
+    \b
+    Examples:
+      pincal calibrate hexaslide_6pus --data m.csv --out cal/
+      pincal calibrate wedge3 --data m.csv --params patent --method lm --out cal/ --json
+    """
     import numpy as np
 
     from pincal.identification import identify
     from pincal.io import (
-        atomic_write_text,
+        CALIBRATED_SIDECAR,
+        CALIBRATED_URDF,
+        MANIFEST,
         check_enough_poses,
         read_measurement_file,
-        save_urdf,
+        write_calibration,
     )
     from pincal.model import load_mechanism, parameters
     from pincal.sensitivity import identifiability
@@ -118,13 +130,22 @@ def calibrate(model, data, preset, method, out, as_json) -> None:
         progress=lambda it, cost: click.echo(f"… iteration {it}: cost {cost:.6g}", err=True),
     )
     out_dir = Path(out)
-    urdf = save_urdf(result.calibrated, out_dir / f"{mech.name}.urdf")
-    doc = result_json(result, str(data), str(urdf))
+    doc = result_json(result, str(data), CALIBRATED_URDF)
     report = format_report(doc)
-    atomic_write_text(out_dir / "identification.json", json.dumps(doc, indent=1) + "\n")
-    atomic_write_text(out_dir / "report.txt", report)
+    cal = write_calibration(
+        out_dir,
+        result,
+        model_source=model_source(model),
+        data_files=[data],
+        noise=meas.noise,
+        annotations={"data": str(data)},
+        texts={"report.txt": report},
+    )
     if as_json:
         click.echo(json.dumps(doc))
     else:
         click.echo(report, nl=False)
-        click.echo(f"wrote {out_dir / 'report.txt'}, {out_dir / 'identification.json'}, {urdf}")
+        click.echo(
+            f"wrote calibration directory {cal.path}/ ({MANIFEST}, {CALIBRATED_URDF} + "
+            f"{CALIBRATED_SIDECAR}, identification.json, report.txt)"
+        )

@@ -25,20 +25,30 @@ from pincal.cli.common import fail_cleanly
 )
 @click.option("--out", default="pincal-out", show_default=True, help="Output directory.")
 @click.option("--report/--no-report", default=True, show_default=True, help="Write report.html.")
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
 def demo(
-    seed: int, poses: int, validation: int, method: str, candidates: str, out: str, report: bool
+    seed: int,
+    poses: int,
+    validation: int,
+    method: str,
+    candidates: str,
+    out: str,
+    report: bool,
+    as_json: bool,
 ) -> None:
     """Simulated calibration of the bundled 6-UPS Stewart platform (42 parameters).
 
     Draws an "actual" machine (0.5 mm errors), simulates a laser-tracker campaign
     (noise 0.01 mm / 0.02 mrad), identifies the parameters, validates on fresh poses
-    and writes the calibrated URDF, identification.json and report.html to OUT.
+    and writes the calibration directory OUT (calibration.json, calibrated.urdf +
+    calibrated.yaml, identification.json) with report.html.
 
     \b
     Examples:
       pincal demo
       pincal demo --seed 3 --poses 18 --method lm --out run3
+      pincal demo --no-report --json
     """
     from pincal.cli._demo_job import DemoSettings, format_demo, run_demo
 
@@ -51,4 +61,23 @@ def demo(
         report=report,
     )
     result = run_demo(settings, out, progress=lambda msg: click.echo(f"… {msg}", err=True))
-    click.echo(format_demo(result))
+    if as_json:
+        import json
+
+        r = result.result
+        click.echo(
+            json.dumps(
+                {
+                    "model": result.nominal.name,
+                    "parameters": len(result.params),
+                    "iterations": int(r.iterations),
+                    "reduced_chi2": float(r.reduced_chi2),
+                    "validation_before": result.before.summary(),
+                    "validation_after": result.after.summary(),
+                    "calibration": str(out),
+                    "files": [str(f) for f in result.files],
+                }
+            )
+        )
+    else:
+        click.echo(format_demo(result))

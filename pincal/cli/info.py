@@ -61,22 +61,57 @@ def structure_lines(mech: Mechanism) -> list[str]:
 @click.command()
 @click.argument("model")
 @click.option("--preset", default=None, help="Parameter preset to analyse (default: all).")
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON description on stdout.")
 @fail_cleanly
-def info(model: str, preset: str | None) -> None:
-    """Describe MODEL (bundled name, model directory or .urdf path)."""
+def info(model: str, preset: str | None, as_json: bool) -> None:
+    """Describe MODEL (bundled name, model directory, .urdf or MJCF .xml path).
+
+    \b
+    Examples:
+      pincal info stewart_6ups
+      pincal info wedge3 --preset patent
+      pincal info models/pkm5 --json
+    """
+    import json
+
     import numpy as np
 
     from pincal.model import load_mechanism, parameters
     from pincal.sensitivity import identifiability
 
     mech = load_mechanism(model)
-    for line in structure_lines(mech):
-        click.echo(line)
+    if not as_json:
+        for line in structure_lines(mech):
+            click.echo(line)
     names = [preset] if preset else ["full", *mech.presets]
+    presets = []
     for name in names:
         params = parameters(mech, name)
         ident = identifiability(mech, params, rng=np.random.default_rng(0))
+        presets.append(
+            {
+                "preset": name,
+                "parameters": len(params),
+                "identifiable": int(ident.rank),
+                "explanation": list(ident.describe()) if preset else [],
+            }
+        )
+        if as_json:
+            continue
         click.echo(f"  preset {name!r}: {len(params)} parameters, {ident.rank} identifiable")
         if preset:
             for line in ident.describe():
                 click.echo(f"    {line}")
+    if as_json:
+        doc = {
+            "model": mech.name,
+            "source": None if mech.source is None else str(mech.source),
+            "actuated": list(mech.actuated),
+            "mobility": int(mech.mobility),
+            "closures": len(mech.closures),
+            "measured_frame": mech.measured_frame,
+            "measured_components": list(mech.measured_components),
+            "presets": presets,
+            "notes": list(mech.notes),
+        }
+        click.echo(json.dumps(doc))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import click
 
 from pincal.cli.common import fail_cleanly
@@ -44,7 +46,13 @@ from pincal.cli.common import fail_cleanly
 )
 @click.option("--restarts", default=3, show_default=True, help="Random starts (best kept).")
 @click.option("--seed", default=0, show_default=True, help="Random seed.")
-@click.option("--out", default="poses.csv", show_default=True, help="Output CSV (+ .json).")
+@click.option(
+    "--out",
+    default="poses.csv",
+    show_default=True,
+    help="Pose file to write (+ <stem>.commands.csv and <stem>.json beside it).",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
 def poses(
     model: str,
@@ -59,12 +67,21 @@ def poses(
     restarts: int,
     seed: int,
     out: str,
+    as_json: bool,
 ) -> None:
     """Select measurement poses of MODEL from a candidate set and write them to OUT.
 
-    OUT gets the actuator values (columns named after the actuated joints, SI)
-    and the nominal poses; OUT with suffix .json gets the index history, all
-    indices, the scaling and the Cramér–Rao prediction.
+    OUT is a pincal pose file: the nominal measured-frame poses (x y z [mm], rotation
+    vector rx ry rz [mrad]) and the actuator values of each pose (columns named after
+    the actuated joints, unit in brackets). `pincal view --poses`, `simulate --poses`
+    and `compensate --targets` read it as it is. <stem>.commands.csv repeats the
+    actuator values alone; <stem>.json gets the index history, all indices, the
+    scaling and the Cramér–Rao prediction.
+
+    \b
+    Examples:
+      pincal poses hexaslide_6pus --count 40 --candidates random:300 --out poses.csv
+      pincal poses stewart_6ups --count 18 --index O3 --scaling K --out p.csv --json
     """
     import sys
 
@@ -78,7 +95,7 @@ def poses(
         select_poses,
     )
     from pincal.errors import PincalError
-    from pincal.io import write_pose_design
+    from pincal.io import si_actuator_units, write_pose_design
     from pincal.measure import NoiseModel
     from pincal.model import load_mechanism, parameters
 
@@ -127,8 +144,28 @@ def poses(
         "noise": {"position_mm": noise[0], "orientation_mrad": noise[1]},
         "predicted_std": dict(zip(params.names, map(float, crb.std), strict=True)),
     }
-    csv_path, cmd_path, json_path = write_pose_design(design, out, extra)
+    csv_path, cmd_path, json_path = write_pose_design(
+        design, out, extra, actuator_units=si_actuator_units(mech)
+    )
     sel = design.selection
+    if as_json:
+        click.echo(
+            json.dumps(
+                {
+                    "model": mech.name,
+                    "preset": preset,
+                    "poses": str(csv_path),
+                    "commands": str(cmd_path),
+                    "design": str(json_path),
+                    "count": len(design.candidates),
+                    "index": index_name,
+                    "value": float(sel.value),
+                    "converged": bool(sel.converged),
+                    "predicted_rms_std": float(crb.rms_std),
+                }
+            )
+        )
+        return
     hist = " → ".join(f"{v:.5g}" for v in (sel.history[0], sel.history[-1]))
     click.echo(
         f"{method}: {index_name} {hist} in {sel.iterations} iterations "
@@ -137,6 +174,6 @@ def poses(
     )
     click.echo(crb.summary())
     click.echo(
-        f"wrote {csv_path} ({len(design.candidates)} nominal poses), {cmd_path} "
-        f"(actuator values) and {json_path}"
+        f"wrote {csv_path} ({len(design.candidates)} nominal poses with their actuator "
+        f"values), {cmd_path} and {json_path}"
     )

@@ -80,14 +80,24 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
     type=click.Path(dir_okay=False),
     help="Measurement CSV to write; the true errors go to <out>.truth.json.",
 )
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
 def simulate(
-    model, poses_file, n_random, preset, errors, error_size, noise, seed, length_unit, out
-) -> None:
+    model, poses_file, n_random, preset, errors, error_size, noise, seed, length_unit, out,
+    as_json,
+) -> None:  # fmt: skip
     """Simulate a measurement campaign of MODEL with random geometric errors.
 
     The "actual" machine is MODEL with random errors on the preset's parameters; it is
-    measured at the commands the nominal model computes for the target poses.
+    measured at the commands the nominal model computes for the target poses. The
+    measurement file states its units and noise in its header; `pincal calibrate
+    --data` and `pincal validate --data` read it.
+
+    \b
+    Examples:
+      pincal simulate hexaslide_6pus --poses poses.csv --out m.csv
+      pincal simulate wedge3 --random 20 --seed 5 --out held_out.csv
+      pincal simulate pkm5 --random 30 --noise 0.005,0.02 --length-unit mm --out m.csv
     """
     import numpy as np
 
@@ -146,4 +156,18 @@ def simulate(
     }
     truth_path = Path(out).with_suffix(".truth.json")
     atomic_write_text(truth_path, json.dumps(truth, indent=1) + "\n")
-    click.echo(f"wrote {path} ({len(meas)} poses) and {truth_path}")
+    if as_json:
+        click.echo(
+            json.dumps(
+                {
+                    "measurements": str(path),
+                    "truth": str(truth_path),
+                    "model": nominal.name,
+                    "preset": preset,
+                    "poses": len(meas),
+                    "components": list(meas.components),
+                }
+            )
+        )
+    else:
+        click.echo(f"wrote {path} ({len(meas)} poses) and {truth_path}")

@@ -1,9 +1,10 @@
 """`pincal view`: an offline HTML view (or a live meshcat session) of a mechanism's poses.
 
-Poses file (read by :func:`pincal.io.read_actuator_rows`; a command file qualifies):
-a CSV file whose header names the actuated joints of the model (any order; other
-columns are ignored), one pose per row, values in SI units (m for prismatic, rad for
-revolute joints). Lines starting with ``#`` are comments::
+Poses file (read by :func:`pincal.io.read_pose_rows`): the pose file ``pincal poses``
+writes, a command or measurement file, or a CSV file whose header names the actuated
+joints of the model (any order; other columns are ignored), one pose per row, values
+in SI units (m for prismatic, rad for revolute joints). Lines starting with ``#`` are
+comments::
 
     # three poses of stewart_6ups
     leg1_slide,leg2_slide,leg3_slide,leg4_slide,leg5_slide,leg6_slide
@@ -23,28 +24,28 @@ import numpy as np
 
 from pincal.cli.common import fail_cleanly
 from pincal.errors import ModelFileError
-from pincal.io import read_actuator_rows
+from pincal.io import read_pose_rows
 
 #: most poses drawn (ghost copies multiply the page size)
 MAX_POSES = 200
 
 
-def _calibrated_urdf(directory: Path, name: str) -> Path:
-    """The calibrated URDF in a calibration output directory (or the URDF itself)."""
-    if directory.is_file() and directory.suffix.lower() == ".urdf":
-        return directory
-    if not directory.is_dir():
-        raise ModelFileError(f"calibration directory {str(directory)!r} does not exist")
-    preferred = directory / f"{name}_calibrated.urdf"
-    if preferred.is_file():
-        return preferred
-    found = sorted(directory.glob("*_calibrated.urdf"))
-    if len(found) != 1:
-        raise ModelFileError(
-            f"calibration directory {str(directory)!r} must hold {name}_calibrated.urdf "
-            f"(found {[p.name for p in found]})"
-        )
-    return found[0]
+def _calibrated_mechanism(spec: Path):
+    """The calibrated mechanism of a calibration directory (a bare .urdf as in 0.1)."""
+    from pincal.io import read_calibration
+    from pincal.model import load_mechanism
+
+    if spec.is_file() and spec.suffix.lower() == ".urdf":
+        return load_mechanism(spec)
+    return read_calibration(spec).calibrated()
+
+
+def _urdf_for_viz(mech) -> str | Path:
+    """What viz draws from: the URDF file, or the URDF text of a model from MJCF."""
+    src = mech.source
+    if src is not None and Path(src).suffix.lower() == ".urdf" and Path(src).is_file():
+        return Path(src)
+    return mech.urdf_xml
 
 
 @click.command()
@@ -53,7 +54,8 @@ def _calibrated_urdf(directory: Path, name: str) -> Path:
     "--poses",
     "poses_file",
     type=click.Path(dir_okay=False, path_type=Path),
-    help="CSV of actuator values (header: actuated joint names; SI units).",
+    help="Pose file (`pincal poses`), commands or measurement file, or a CSV naming the "
+    "actuated joints (SI).",
 )
 @click.option(
     "--random",
@@ -66,7 +68,7 @@ def _calibrated_urdf(directory: Path, name: str) -> Path:
 @click.option(
     "--calibrated",
     type=click.Path(path_type=Path),
-    help="Calibration output directory (holding <model>_calibrated.urdf): adds error arrows.",
+    help="Calibration directory (`pincal calibrate --out`): adds nominal → calibrated arrows.",
 )
 @click.option(
     "--html",
@@ -108,15 +110,19 @@ def view(
     --calibrated, arrows go from the nominal to the calibrated model's predicted
     measured-frame position at each pose, magnified by the factor in the legend.
 
+    --poses reads the pose file `pincal poses` writes (its actuator columns, or the
+    nominal inverse kinematics of its poses), a commands or measurement file, or a
+    plain CSV whose header names the actuated joints (SI units; other columns
+    ignored; '#' starts a comment line):
+
     \b
-    Poses CSV (SI units; other columns ignored; '#' starts a comment line):
       leg1_slide,leg2_slide,leg3_slide,leg4_slide,leg5_slide,leg6_slide
       0.4869,0.4869,0.4869,0.4869,0.4869,0.4869
 
     \b
     Examples:
       pincal view stewart_6ups --random 6 --html poses.html
-      pincal view stewart_6ups --poses poses.csv --calibrated pincal-out --html errors.html
+      pincal view hexaslide_6pus --poses poses.csv --calibrated cal/ --html errors.html
       pincal view pkm5 --random 4 --live
     """
     from pincal import viz
@@ -128,7 +134,7 @@ def view(
         raise click.BadParameter("must be a positive number", param_hint="--arrow-scale")
     mech = load_mechanism(model)
     if poses_file is not None:
-        rows = read_actuator_rows(poses_file, mech.actuated, MAX_POSES)
+        rows = read_pose_rows(poses_file, mech, MAX_POSES)
         if n_random:
             rows = np.vstack([rows, sample_actuators(mech, n_random, np.random.default_rng(seed))])
     else:
@@ -137,7 +143,15 @@ def view(
 
     arrows = []
     if calibrated is not None:
-        cal = load_mechanism(_calibrated_urdf(calibrated, mech.name))
+        cal = _calibrated_mechanism(calibrated)
+        if tuple(cal.actuated) != tuple(mech.actuated) or (
+            calibrated.is_dir() and cal.name != mech.name
+        ):
+            raise ModelFileError(
+                f"calibration {str(calibrated)!r} is of model {cal.name!r} (actuators "
+                f"{list(cal.actuated)}), not of {mech.name!r}; give the calibrated model's "
+                f"nominal MODEL"
+            )
         for k, row in enumerate(rows):
             p_nominal = np.array(mech.forward(row, qs[k]).translation)
             p_calibrated = np.array(cal.forward(row, qs[k]).translation)
@@ -158,9 +172,9 @@ def view(
         summary["max_prediction_change_mm"] = max(lengths)
     if html_path is not None:
         title = f"{mech.name}: {len(rows)} poses" + (" — calibration changes" if arrows else "")
-        page = viz.static_html(mech.model, mech.source, list(qs), title=title, **options)
+        page = viz.static_html(mech.model, _urdf_for_viz(mech), list(qs), title=title, **options)
         summary["html"] = str(viz.write_html(html_path, page))
-    session = viz.live(mech.model, mech.source, list(qs), **options) if live else None
+    session = viz.live(mech.model, _urdf_for_viz(mech), list(qs), **options) if live else None
     if session is not None:
         summary["live_url"] = session.web_url
     if as_json:

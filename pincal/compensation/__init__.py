@@ -7,11 +7,13 @@ from __future__ import annotations
 from pincal.compensation._compensate import (
     Compensation,
     compensate,
+    compensation_components,
     poses_from_array,
 )
 
 __all__ = [
     "Compensation",
     "compensate",
+    "compensation_components",
     "poses_from_array",
 ]

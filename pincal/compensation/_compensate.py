@@ -3,6 +3,11 @@
 Compensation is inverse kinematics with the calibrated model: the commands for
 which the identified machine (not the nominal one) reaches each target. Targets
 are solved in order, each warm-started from the previous solution.
+
+Only the components the machine controls are imposed: by default the model's
+measured components (``mech.measured_components``, e.g. ``x z ry`` for the 3-DOF
+wedge), or the ``components`` given. A machine of mobility n cannot meet more than
+n independent components, so asking for more is refused with the reason.
 """
 
 from __future__ import annotations
@@ -14,10 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import ConvergenceError, MeasurementError
-from pincal.model import Mechanism
+from pincal.errors import ConvergenceError, MeasurementError, MobilityError, ModelFileError
+from pincal.model import COMPONENTS, Mechanism
 
-__all__ = ["Compensation", "compensate", "poses_from_array"]
+__all__ = ["Compensation", "compensate", "compensation_components", "poses_from_array"]
 
 log = logging.getLogger(__name__)
 
@@ -32,6 +37,7 @@ class Compensation:
         unreachable: indices of unreachable targets.
         reasons: message per unreachable index.
         actuated: actuated joint names (columns of ``q_act``).
+        components: the pose components imposed (subset of x y z rx ry rz).
     """
 
     q_act: np.ndarray
@@ -39,6 +45,7 @@ class Compensation:
     unreachable: tuple[int, ...]
     reasons: dict[int, str]
     actuated: tuple[str, ...]
+    components: tuple[str, ...] = COMPONENTS
 
     @property
     def commands(self) -> np.ndarray:
@@ -86,11 +93,71 @@ def _as_poses(targets: Sequence[pin.SE3] | np.ndarray) -> list[pin.SE3]:
     return poses_from_array(poses)
 
 
+def compensation_components(
+    mech: Mechanism, components: Sequence[str] | str | None = None
+) -> tuple[str, ...]:
+    """The components a compensation of ``mech`` imposes, checked against its mobility.
+
+    Args:
+        mech: the (calibrated) mechanism.
+        components: names from x y z rx ry rz (a sequence or ``"x,y,z"``); None: the
+            model's measured components.
+
+    Returns:
+        The components in x y z rx ry rz order.
+
+    Raises:
+        MeasurementError: unknown or repeated component names.
+        MobilityError: more components than the machine's mobility.
+    """
+    if components is None:
+        comps = tuple(mech.measured_components)
+        origin = "the model's measured components"
+    else:
+        names = components.replace(",", " ").split() if isinstance(components, str) else components
+        names = [str(c).strip().lower() for c in names]
+        bad = [c for c in names if c not in COMPONENTS]
+        if bad or not names or len(set(names)) != len(names):
+            raise MeasurementError(
+                f"compensation components {list(names)} invalid; choose distinct names from "
+                f"{' '.join(COMPONENTS)} (e.g. x,y,z)"
+            )
+        comps = tuple(c for c in COMPONENTS if c in names)
+        origin = "the components asked for"
+    if len(comps) > mech.mobility:
+        raise MobilityError(
+            f"{mech.name} has {mech.mobility} degrees of freedom but {origin} are "
+            f"{len(comps)} ({' '.join(comps)}): a target cannot fix more components than the "
+            f"machine moves; choose at most {mech.mobility} (CLI: --components, e.g. "
+            f"{','.join(comps[: mech.mobility])})"
+        )
+    return comps
+
+
+def _solver(mech: Mechanism, comps: tuple[str, ...]) -> Mechanism:
+    """``mech`` itself, or a copy whose inverse kinematics imposes ``comps``."""
+    if comps == tuple(mech.measured_components):
+        return mech
+    try:
+        return Mechanism(
+            mech.urdf_xml,
+            mech.sidecar.replace(measured=list(comps)),
+            name=mech.name,
+            source=mech.source,
+            measured_frame=mech.measured_frame,
+            q_guess=mech.q_home,
+            options=mech.options,
+        )
+    except ModelFileError as exc:  # pragma: no cover - comps are checked above
+        raise MeasurementError(f"components {comps}: {exc}") from exc
+
+
 def compensate(
     calibrated: Mechanism,
     targets: Sequence[pin.SE3] | np.ndarray,
     check_limits: bool = True,
     progress: Callable[[int, int], None] | None = None,
+    components: Sequence[str] | str | None = None,
 ) -> Compensation:
     """Actuator commands reaching ``targets`` with the calibrated model's inverse kinematics.
 
@@ -100,23 +167,29 @@ def compensate(
             array ``[x y z [m], rx ry rz [rad]]``.
         check_limits: treat commands outside the actuator limits as unreachable.
         progress: optional callback ``(done, total)``.
+        components: the pose components to impose (see :func:`compensation_components`;
+            default: the model's measured components).
 
     Returns:
-        A :class:`Compensation`; unreachable targets are reported by index, not raised.
+        A :class:`Compensation`; unreachable targets are reported by index with the
+        reason, not raised.
 
     Raises:
         MeasurementError: targets that are neither ``pin.SE3`` poses nor an (m, 6)
-            array of finite numbers.
+            array of finite numbers, or bad ``components``.
+        MobilityError: more components than the machine's mobility.
     """
     poses = _as_poses(targets)
+    comps = compensation_components(calibrated, components)
+    solver = _solver(calibrated, comps)
     m, n = len(poses), calibrated.n_actuated
     q_act = np.full((m, n), np.nan)
     reasons: dict[int, str] = {}
     guess = None
     for i, T in enumerate(poses):
         try:
-            q = calibrated.inverse_configuration(T, guess)
-            row = calibrated.actuators_of(q)
+            q = solver.inverse_configuration(T, guess)
+            row = solver.actuators_of(q)
             if check_limits:
                 lo, hi = np.asarray(calibrated.actuator_limits, dtype=float).T
                 out = np.nonzero((row < lo - 1e-12) | (row > hi + 1e-12))[0]
@@ -129,11 +202,11 @@ def compensate(
             q_act[i] = row
             guess = q
         except ConvergenceError as exc:
-            reasons[i] = str(exc)
+            reasons[i] = f"{exc} (imposing {' '.join(comps)})"
             log.info("target %d unreachable: %s", i, exc)
         if progress:
             progress(i + 1, m)
     reachable = np.all(np.isfinite(q_act), axis=1)
     return Compensation(
-        q_act, reachable, tuple(sorted(reasons)), reasons, tuple(calibrated.actuated)
+        q_act, reachable, tuple(sorted(reasons)), reasons, tuple(calibrated.actuated), comps
     )

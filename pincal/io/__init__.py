@@ -1,5 +1,5 @@
-"""Files: measurement, pose and command CSVs, pose-design files, URDF + sidecar export,
-atomic writes.
+"""Files: the calibration directory, measurement, pose and command CSVs, pose-design
+files, URDF + sidecar export, atomic writes.
 """
 
 from __future__ import annotations
@@ -7,6 +7,17 @@ from __future__ import annotations
 from pincal.io._atomic import (
     atomic_write_bytes,
     atomic_write_text,
+)
+from pincal.io._calibration_dir import (
+    CALIBRATED_SIDECAR,
+    CALIBRATED_URDF,
+    CALIBRATION_FORMAT,
+    CALIBRATION_VERSION,
+    MANIFEST,
+    CalibrationDirectory,
+    read_calibration,
+    sha256_file,
+    write_calibration,
 )
 from pincal.io._commands_file import (
     read_actuator_rows,
@@ -26,7 +37,10 @@ from pincal.io._measurement_file import (
     write_measurements,
 )
 from pincal.io._pose_design_file import write_pose_design
+from pincal.io._pose_rows import read_pose_rows
 from pincal.io._poses_file import (
+    PoseFile,
+    read_pose_file,
     read_poses,
     write_poses,
 )
@@ -37,6 +51,7 @@ from pincal.io._tracker_file import (
 from pincal.io._units import (
     ANGLE_UNITS,
     LENGTH_UNITS,
+    si_actuator_units,
 )
 from pincal.io._urdf_export import (
     save_urdf,
@@ -44,8 +59,15 @@ from pincal.io._urdf_export import (
 
 __all__ = [
     "ANGLE_UNITS",
+    "CALIBRATED_SIDECAR",
+    "CALIBRATED_URDF",
+    "CALIBRATION_FORMAT",
+    "CALIBRATION_VERSION",
     "LENGTH_UNITS",
+    "MANIFEST",
+    "CalibrationDirectory",
     "MeasurementFile",
+    "PoseFile",
     "TargetMeasurements",
     "TrackerImport",
     "TrackerImportOptions",
@@ -54,11 +76,17 @@ __all__ = [
     "check_enough_poses",
     "import_tracker",
     "read_actuator_rows",
+    "read_calibration",
     "read_commands",
     "read_measurement_file",
     "read_measurements",
+    "read_pose_file",
+    "read_pose_rows",
     "read_poses",
     "save_urdf",
+    "sha256_file",
+    "si_actuator_units",
+    "write_calibration",
     "write_commands",
     "write_measurements",
     "write_pose_design",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -20,17 +21,20 @@ __all__ = ["write_pose_design"]
 
 
 def write_pose_design(
-    design: PoseDesign, path: str | Path, extra: dict | None = None
+    design: PoseDesign,
+    path: str | Path,
+    extra: dict | None = None,
+    actuator_units: Sequence[str] | None = None,
 ) -> tuple[Path, Path, Path]:
     """Write the selected poses, their actuator commands and the design record.
 
     Files (each written atomically):
 
-    * ``path``: the nominal measured-frame poses as a pincal pose file
-      (:func:`pincal.io.write_poses`; accepted by ``pincal simulate --poses``
-      and ``pincal compensate --targets``);
-    * ``<stem>.commands.csv``: the selected actuator values (a pincal command file,
-      SI; accepted by ``pincal view --poses``);
+    * ``path``: the nominal measured-frame poses with their actuator values as a pincal
+      pose file (:func:`pincal.io.write_poses`; read by ``pincal view --poses``,
+      ``pincal simulate --poses`` and ``pincal compensate --targets``);
+    * ``<stem>.commands.csv``: the selected actuator values alone (a pincal command
+      file);
     * ``<stem>.json``: index, its history, all indices, the scaling, the candidate
       source, plus ``extra`` entries.
 
@@ -38,6 +42,8 @@ def write_pose_design(
         design: the selection (:func:`pincal.design.select_poses`).
         path: the pose file to write (CSV); the other two files sit beside it.
         extra: further JSON entries (e.g. the command line).
+        actuator_units: unit per actuator column (see :func:`pincal.io.si_actuator_units`);
+            None writes SI values without a unit.
 
     Returns:
         (poses path, commands path, json path).
@@ -45,8 +51,12 @@ def write_pose_design(
     out = Path(path)
     c = design.candidates
     poses = [pin.SE3(R, p) for p, R in zip(c.positions, c.rotations, strict=True)]
-    csv_path = write_poses(out, poses)
-    cmd_path = write_commands(out.with_suffix(".commands.csv"), c.actuated, c.q_act)
+    csv_path = write_poses(
+        out, poses, actuated=c.actuated, q_act=c.q_act, actuator_units=actuator_units
+    )
+    cmd_path = write_commands(
+        out.with_suffix(".commands.csv"), c.actuated, c.q_act, actuator_units=actuator_units
+    )
     sel = design.selection
     record = {
         "units": "SI (m, rad)",

@@ -19,6 +19,7 @@ __all__ = [
     "LENGTH_UNITS",
     "actuator_read_factors",
     "actuator_write_factors",
+    "si_actuator_units",
     "unit_factor",
 ]
 
@@ -86,3 +87,12 @@ def actuator_write_factors(units: Sequence[str] | None, n: int) -> np.ndarray:
             f"or angle units {', '.join(ANGLE_UNITS)}"
         )
     return np.array([table[u] for u in units])
+
+
+def si_actuator_units(mech: Mechanism) -> list[str]:
+    """SI unit per actuated joint (n_act,): ``"rad"`` for revolute and continuous joints,
+    ``"m"`` otherwise (for writing files whose actuator columns state their unit)."""
+    return [
+        "rad" if mech.tree.joints[j].type in ("revolute", "continuous") else "m"
+        for j in mech.actuated
+    ]

@@ -18,7 +18,7 @@ def test_demo_runs_and_writes_calibrated_model(tmp_path):
     after = report["validation_after"]["rms_position_mm"]
     before = report["validation_before"]["rms_position_mm"]
     assert after < before / 20
-    assert (out / "stewart_6ups_calibrated.urdf").is_file()
+    assert (out / "calibrated.urdf").is_file() and (out / "calibration.json").is_file()
 
 
 def test_info_and_clean_error():

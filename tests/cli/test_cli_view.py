@@ -148,7 +148,7 @@ def demo_dir(tmp_path_factory):
 
 def test_view_calibrated_arrows_match_independent_forward_kinematics(demo_dir, tmp_path):
     mech = load_mechanism("stewart_6ups")
-    cal = load_mechanism(demo_dir / "stewart_6ups_calibrated.urdf")
+    cal = load_mechanism(demo_dir / "calibrated.urdf")
     q_act = mech.actuators_of(mech.q_home)
     poses = tmp_path / "poses.csv"
     poses.write_text(",".join(mech.actuated) + "\n" + ",".join(str(float(v)) for v in q_act) + "\n")

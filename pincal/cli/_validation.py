@@ -1,0 +1,214 @@
+"""Validation of a calibration on held-out measurements: before/after errors, an ISO 9283
+style pose-accuracy table and the Cramér–Rao prediction.
+
+Errors are measured minus predicted on the components the file measures: position
+error = norm of the measured position components [m]; orientation error = norm of the
+measured components of log3(R_predictedᵀ R_measured) [rad] (measured frame).
+
+ISO 9283 (pose accuracy and repeatability) per commanded pose j (rows with the same
+actuator values are repeats of one command):
+
+- AP_p = ‖P̄ − P_c‖: distance between the mean attained position and the commanded one
+  (the pose the model predicts for the command);
+- AP_a, AP_b, AP_c: mean attained orientation minus the commanded one, about x, y, z
+  (components of log3(R_cᵀ R), small angles) [rad];
+- RP_l = l̄ + 3 S_l with l_i = ‖P_i − P̄‖ and S_l their sample std (n ≥ 2 repeats).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.measure import Measurements, NoiseModel
+from pincal.model import COMPONENTS, Mechanism, ParameterSet
+
+__all__ = ["Validation", "validate_calibration"]
+
+
+@dataclass(frozen=True)
+class ModelErrors:
+    """Per-pose errors (m,) of one model's predictions [m, rad] and ISO 9283 rows."""
+
+    position: np.ndarray
+    orientation: np.ndarray
+    ap: list[dict[str, Any]]
+
+    def summary(self, has_pos: bool, has_rot: bool) -> dict[str, float | None]:
+        p, o = self.position * 1e3, self.orientation * 1e3
+        return {
+            "rms_position_mm": float(np.sqrt(np.mean(p**2))) if has_pos else None,
+            "max_position_mm": float(p.max()) if has_pos else None,
+            "rms_orientation_mrad": float(np.sqrt(np.mean(o**2))) if has_rot else None,
+            "max_orientation_mrad": float(o.max()) if has_rot else None,
+        }
+
+
+@dataclass(frozen=True)
+class Validation:
+    """Validation of a calibration on held-out data (SI inside; ``to_dict`` in mm/mrad)."""
+
+    components: tuple[str, ...]
+    groups: list[np.ndarray]
+    before: ModelErrors
+    after: ModelErrors
+    repeatability_mm: list[float | None]
+    predicted: dict[str, float | None]
+
+    @property
+    def has_position(self) -> bool:
+        return any(c in ("x", "y", "z") for c in self.components)
+
+    @property
+    def has_orientation(self) -> bool:
+        return any(c in ("rx", "ry", "rz") for c in self.components)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: summaries, per-pose errors and the ISO 9283 table (mm, mrad)."""
+        hp, hr = self.has_position, self.has_orientation
+        iso = []
+        for j, rows in enumerate(self.groups):
+            iso.append(
+                {
+                    "pose": j,
+                    "rows": [int(r) for r in rows],
+                    "repeats": len(rows),
+                    "before": self.before.ap[j],
+                    "after": self.after.ap[j],
+                    "RP_l_mm": self.repeatability_mm[j],
+                }
+            )
+        return {
+            "components": list(self.components),
+            "poses": int(sum(len(g) for g in self.groups)),
+            "commanded_poses": len(self.groups),
+            "before": self.before.summary(hp, hr),
+            "after": self.after.summary(hp, hr),
+            "per_pose": {
+                "before_position_mm": (self.before.position * 1e3).tolist(),
+                "after_position_mm": (self.after.position * 1e3).tolist(),
+                "before_orientation_mrad": (self.before.orientation * 1e3).tolist(),
+                "after_orientation_mrad": (self.after.orientation * 1e3).tolist(),
+            },
+            "iso9283": iso,
+            "predicted": self.predicted,
+        }
+
+
+def _groups(q_act: np.ndarray) -> list[np.ndarray]:
+    """Row indices of each distinct command, in order of first appearance."""
+    keys = np.round(q_act, 12)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    inverse = np.asarray(inverse).ravel()
+    order = np.argsort(first)
+    return [np.nonzero(inverse == g)[0] for g in order]
+
+
+def _model_errors(
+    model: Mechanism, meas: Measurements, groups: list[np.ndarray], pos: list[int], rot: list[int]
+) -> ModelErrors:
+    m = len(meas)
+    ep = np.zeros((m, 3))
+    er = np.zeros((m, 3))
+    ap: list[dict[str, Any]] = []
+    for rows in groups:
+        T = model.forward(meas.q_act[rows[0]])
+        for i in rows:
+            ep[i] = meas.positions[i] - T.translation
+            if meas.rotations is not None:
+                er[i] = pin.log3(T.rotation.T @ meas.rotations[i])
+        entry: dict[str, Any] = {
+            "AP_p_mm": float(np.linalg.norm(ep[rows][:, pos].mean(axis=0)) * 1e3) if pos else None
+        }
+        mean_r = er[rows].mean(axis=0)
+        for k, label in enumerate(("AP_a_mrad", "AP_b_mrad", "AP_c_mrad")):
+            entry[label] = float(mean_r[k] * 1e3) if k in rot else None
+        ap.append(entry)
+    position = np.linalg.norm(ep[:, pos], axis=1) if pos else np.zeros(m)
+    orientation = np.linalg.norm(er[:, rot], axis=1) if rot else np.zeros(m)
+    return ModelErrors(position, orientation, ap)
+
+
+def _repeatability(meas: Measurements, rows: np.ndarray, pos: list[int]) -> float | None:
+    if len(rows) < 2 or not pos:
+        return None
+    P = meas.positions[rows][:, pos]
+    d = np.linalg.norm(P - P.mean(axis=0), axis=1)
+    return float((d.mean() + 3.0 * d.std(ddof=1)) * 1e3)
+
+
+def _prediction(
+    nominal: Mechanism,
+    params: ParameterSet,
+    names: tuple[str, ...],
+    covariance: np.ndarray,
+    q_rows: np.ndarray,
+    pos: list[int],
+    rot: list[int],
+    noise: NoiseModel | None,
+) -> dict[str, float | None]:
+    """Cramér–Rao prediction of the calibrated model's validation RMS (mm, mrad)."""
+    from pincal.design import predicted_validation_rms
+    from pincal.sensitivity import identification_jacobian
+
+    cols = [params.index(n) for n in names]
+    J = identification_jacobian(nominal, params, q_rows, components=COMPONENTS)
+    J = J.reshape(len(q_rows), 6, len(params))[:, :, cols]
+    out: dict[str, float | None] = {}
+    for key, idx, sigma in (
+        ("position_mm", pos, None if noise is None else noise.position * 1e-3),
+        ("orientation_mrad", rot, None if noise is None else noise.orientation * 1e-3),
+    ):
+        if not idx:
+            out[f"model_rms_{key}"] = out[f"observed_rms_{key}"] = None
+            continue
+        model = predicted_validation_rms(J[:, idx, :], covariance) * np.sqrt(len(idx))
+        out[f"model_rms_{key}"] = float(model * 1e3)
+        out[f"observed_rms_{key}"] = (
+            None if sigma is None else float(np.sqrt(model**2 + len(idx) * sigma**2) * 1e3)
+        )
+    return out
+
+
+def validate_calibration(
+    nominal: Mechanism,
+    calibrated: Mechanism,
+    meas: Measurements,
+    params: ParameterSet,
+    names: tuple[str, ...],
+    covariance: np.ndarray,
+    noise: NoiseModel | None = None,
+) -> Validation:
+    """Before (nominal) / after (calibrated) errors on held-out measurements.
+
+    Args:
+        nominal: the nominal mechanism (the one ``params`` was built for).
+        calibrated: the calibrated mechanism.
+        meas: held-out measurements (not used for fitting).
+        params: the calibration's parameter set (preset) on ``nominal``.
+        names: identified parameter names (k,) in the order of ``covariance``.
+        covariance: (k, k) covariance of the identified parameters [SI].
+        noise: instrument noise of ``meas`` for the observed-RMS prediction, if known.
+
+    Returns:
+        The :class:`Validation`.
+
+    Raises:
+        ConvergenceError: a command whose closure a model cannot solve.
+    """
+    comps = tuple(meas.components)
+    pos = [k for k in range(3) if COMPONENTS[k] in comps]
+    rot = [k for k in range(3) if COMPONENTS[3 + k] in comps]
+    if meas.rotations is None:
+        rot = []
+    groups = _groups(meas.q_act)
+    before = _model_errors(nominal, meas, groups, pos, rot)
+    after = _model_errors(calibrated, meas, groups, pos, rot)
+    rp = [_repeatability(meas, rows, pos) for rows in groups]
+    q_rows = np.array([meas.q_act[g[0]] for g in groups])
+    cov = np.asarray(covariance, dtype=float)
+    predicted = _prediction(nominal, params, names, cov, q_rows, pos, [3 + k for k in rot], noise)
+    return Validation(comps, groups, before, after, rp, predicted)

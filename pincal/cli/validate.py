@@ -1,0 +1,119 @@
+"""`pincal validate`: errors of a calibration on held-out measurements."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from pincal.cli.common import calibration_summary, fail_cleanly
+
+
+def _fmt(v: float | None, width: int = 9, digits: int = 4) -> str:
+    return f"{'-':>{width}s}" if v is None else f"{v:{width}.{digits}f}"
+
+
+def format_validation(doc: dict, max_rows: int = 40) -> str:
+    """The printed validation report (mm / mrad)."""
+    b, a, p = doc["before"], doc["after"], doc["predicted"]
+    lines = [
+        f"pincal validate {doc['calibration']['directory']} ({doc['calibration']['model']}, "
+        f"preset {doc['calibration']['preset']}) on {doc['data']}: {doc['poses']} poses, "
+        f"{doc['commanded_poses']} commanded, components {' '.join(doc['components'])}",
+    ]
+    if not doc["independent"]:
+        lines.append("  WARNING: this file was used for fitting; the validation is not independent")
+    lines += [
+        "                        position [mm]          orientation [mrad]",
+        "                        RMS        max         RMS        max",
+        f"  nominal model      {_fmt(b['rms_position_mm'])}  {_fmt(b['max_position_mm'])}"
+        f"   {_fmt(b['rms_orientation_mrad'])}  {_fmt(b['max_orientation_mrad'])}",
+        f"  calibrated model   {_fmt(a['rms_position_mm'])}  {_fmt(a['max_position_mm'])}"
+        f"   {_fmt(a['rms_orientation_mrad'])}  {_fmt(a['max_orientation_mrad'])}",
+        f"  Cramér–Rao (model) {_fmt(p['model_rms_position_mm'])}  {'':9s}"
+        f"   {_fmt(p['model_rms_orientation_mrad'])}",
+        f"  Cramér–Rao + noise {_fmt(p['observed_rms_position_mm'])}  {'':9s}"
+        f"   {_fmt(p['observed_rms_orientation_mrad'])}",
+        "",
+        "  ISO 9283 pose accuracy per commanded pose (AP: mean attained − commanded;"
+        " RP_l = l̄ + 3 S_l over repeats)",
+        "  pose  n   AP_p nominal  AP_p calibrated   AP_a      AP_b      AP_c    RP_l",
+        "                 [mm]        [mm]         calibrated [mrad]            [mm]",
+    ]
+    for row in doc["iso9283"][:max_rows]:
+        c = row["after"]
+        lines.append(
+            f"  {row['pose']:4d} {row['repeats']:2d} {_fmt(row['before']['AP_p_mm'], 12)}"
+            f"  {_fmt(c['AP_p_mm'], 12)}   {_fmt(c['AP_a_mrad'], 8, 3)}  "
+            f"{_fmt(c['AP_b_mrad'], 8, 3)}  {_fmt(c['AP_c_mrad'], 8, 3)} "
+            f"{_fmt(row['RP_l_mm'], 7)}"
+        )
+    if len(doc["iso9283"]) > max_rows:
+        lines.append(f"  … {len(doc['iso9283']) - max_rows} more (--json gives all)")
+    return "\n".join(lines) + "\n"
+
+
+@click.command()
+@click.argument("calibration", type=click.Path(path_type=Path))
+@click.option(
+    "--data",
+    required=True,
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Held-out measurement file (not used for fitting).",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print the full validation as JSON.")
+@fail_cleanly
+def validate(calibration: Path, data: Path, as_json: bool) -> None:
+    """Check the calibration in CALIBRATION on measurements not used for fitting.
+
+    Prints the nominal (before) and calibrated (after) errors on --data (RMS and max
+    position [mm] and orientation [mrad] over the measured components), an ISO
+    9283-style pose accuracy table (AP_p, AP_a/b/c per commanded pose; RP_l when
+    poses are repeated, i.e. rows with the same actuator values) and the Cramér–Rao
+    prediction from the calibration's covariance (without and with the instrument
+    noise). Warns when --data is a file the calibration was fitted on.
+
+    \b
+    Examples:
+      pincal simulate hexaslide_6pus --random 20 --seed 9 --out held_out.csv
+      pincal validate cal/ --data held_out.csv
+      pincal validate cal/ --data held_out.csv --json
+    """
+    from pincal.cli._validation import validate_calibration
+    from pincal.io import read_calibration, read_measurement_file, sha256_file
+    from pincal.model import parameters
+
+    cal = read_calibration(calibration)
+    nominal = cal.nominal()
+    mf = read_measurement_file(data, nominal)
+    for w in mf.warnings:
+        click.echo(f"pincal: warning: {w}", err=True)
+    meas = mf.measurements
+    digest = sha256_file(data)
+    fitted = {d.get("sha256") for d in cal.manifest.get("data_files", []) or []}
+    independent = digest not in fitted
+    if not independent:
+        click.echo(f"pincal: warning: {data} was used to fit this calibration", err=True)
+    params = parameters(nominal, cal.preset)
+    result = cal.result
+    validation = validate_calibration(
+        nominal,
+        cal.calibrated(),
+        meas,
+        params,
+        tuple(result.identified_names),
+        result.covariance,
+        meas.noise or cal.noise,
+    )
+    doc = {
+        "calibration": calibration_summary(cal),
+        "data": str(data),
+        "data_sha256": digest,
+        "independent": independent,
+        **validation.to_dict(),
+    }
+    if as_json:
+        click.echo(json.dumps(doc))
+    else:
+        click.echo(format_validation(doc), nl=False)

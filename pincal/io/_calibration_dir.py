@@ -1,0 +1,380 @@
+"""The calibration directory: what ``pincal calibrate`` and ``pincal demo`` write and every
+command that uses a calibration reads (``view``, ``compensate``, ``validate``, ``report``).
+
+::
+
+    cal/
+      calibration.json      manifest (format "pincal calibration", version 1)
+      calibrated.urdf       calibrated model (identified geometry at full precision)
+      calibrated.yaml       its sidecar (closures, actuation, measured frame, presets)
+      identification.json   IdentificationResult.to_dict (values, std, covariance, ...)
+      report.txt            optional human-readable report
+
+The manifest holds the format version, the pincal version, the model name and source,
+the parameter preset and names, the identified values and std (SI; the covariance is in
+``identification.json``), units, instrument noise, the input data files with their
+SHA-256 and the SHA-256 of every file of the directory, and the creation time (UTC).
+
+:func:`write_calibration` writes the whole directory into a temporary sibling and
+renames it into place, so the directory is complete or absent; :func:`read_calibration`
+is the one reader. Directories of pincal 0.1 (``identification.json`` beside
+``<model>_calibrated.urdf`` or ``<model>.urdf``, no manifest) are read too.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+from pincal.errors import CalibrationDirectoryError, PincalError
+from pincal.identification import IdentificationResult
+from pincal.io._atomic import atomic_write_text
+from pincal.io._urdf_export import save_urdf
+from pincal.measure import NoiseModel
+from pincal.model import Mechanism, load_mechanism, read_sidecar
+
+__all__ = [
+    "CALIBRATED_SIDECAR",
+    "CALIBRATED_URDF",
+    "CALIBRATION_FORMAT",
+    "CALIBRATION_VERSION",
+    "IDENTIFICATION_FILE",
+    "MANIFEST",
+    "CalibrationDirectory",
+    "read_calibration",
+    "sha256_file",
+    "write_calibration",
+]
+
+CALIBRATION_FORMAT = "pincal calibration"
+CALIBRATION_VERSION = 1
+MANIFEST = "calibration.json"
+CALIBRATED_URDF = "calibrated.urdf"
+CALIBRATED_SIDECAR = "calibrated.yaml"
+IDENTIFICATION_FILE = "identification.json"
+_MAX_JSON_BYTES = 50_000_000
+
+
+def sha256_file(path: str | Path) -> str:
+    """Hex SHA-256 of a file's bytes.
+
+    Raises:
+        CalibrationDirectoryError: the file cannot be read.
+    """
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                h.update(block)
+    except OSError as exc:
+        raise CalibrationDirectoryError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
+    return h.hexdigest()
+
+
+@dataclass(frozen=True, eq=False)
+class CalibrationDirectory:
+    """A calibration directory as read by :func:`read_calibration`.
+
+    Attributes:
+        path: the directory.
+        manifest: the ``calibration.json`` content (a synthesised one for 0.1 directories).
+        result: the identification result (values, std, covariance (k, k) [SI]).
+        calibrated_urdf: path of the calibrated URDF (its sidecar ``.yaml`` beside it).
+        noise: instrument noise of the fitted data (mm, mrad), if known.
+        legacy: True for a pincal 0.1 directory without a manifest.
+    """
+
+    path: Path
+    manifest: Mapping[str, Any]
+    result: IdentificationResult
+    calibrated_urdf: Path
+    noise: NoiseModel | None = None
+    legacy: bool = False
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def model(self) -> str:
+        """Name of the calibrated model."""
+        return str(self.manifest.get("model") or self.result.model)
+
+    @property
+    def model_source(self) -> str | None:
+        """The nominal model's spec (bundled name or path) as given to ``calibrate``."""
+        src = self.manifest.get("model_source")
+        return str(src) if src else None
+
+    @property
+    def preset(self) -> str:
+        """Parameter preset of the identification."""
+        return str(self.manifest.get("preset") or self.result.preset)
+
+    def calibrated(self) -> Mechanism:
+        """The calibrated mechanism (loaded once).
+
+        Raises:
+            ModelFileError: the URDF or sidecar does not load.
+        """
+        if "calibrated" not in self._cache:
+            urdf = self.calibrated_urdf
+            side = urdf.with_suffix(".yaml")
+            try:
+                text = urdf.read_text(encoding="utf-8")
+            except OSError as exc:
+                raise CalibrationDirectoryError(
+                    f"cannot read {str(urdf)!r}: {exc.strerror}"
+                ) from exc
+            sidecar = read_sidecar(side) if side.is_file() else {}
+            self._cache["calibrated"] = Mechanism(text, sidecar, name=self.model, source=urdf)
+        return self._cache["calibrated"]
+
+    def nominal(self) -> Mechanism:
+        """The nominal mechanism (from ``model_source``, else the bundled model's name).
+
+        Raises:
+            CalibrationDirectoryError: the nominal model cannot be found.
+        """
+        if "nominal" not in self._cache:
+            spec = self.model_source or self.model
+            try:
+                self._cache["nominal"] = load_mechanism(spec)
+            except PincalError as exc:
+                raise CalibrationDirectoryError(
+                    f"{str(self.path)!r}: cannot load the nominal model {spec!r} ({exc}); "
+                    f"run from the directory calibrate was run in, or pass the model"
+                ) from exc
+        return self._cache["nominal"]
+
+
+def _manifest(
+    result: IdentificationResult,
+    model_source: str | None,
+    data_files: Sequence[str | Path],
+    noise: NoiseModel | None,
+    files: dict[str, str],
+) -> dict[str, Any]:
+    from pincal import __version__
+
+    ident = result.identified
+    return {
+        "format": CALIBRATION_FORMAT,
+        "version": CALIBRATION_VERSION,
+        "pincal_version": __version__,
+        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "model": result.model,
+        "model_source": model_source,
+        "preset": result.preset,
+        "method": result.method,
+        "units": {"length": "m", "angle": "rad"},
+        "parameters": [
+            {"name": n, "unit": u, "value": float(v), "std": float(s)}
+            for n, u, v, s in zip(
+                result.identified_names,
+                [u for u, ok in zip(result.units, ident, strict=True) if ok],
+                result.values,
+                result.std,
+                strict=True,
+            )
+        ],
+        "covariance": IDENTIFICATION_FILE,
+        "noise": None
+        if noise is None
+        else {"position_mm": float(noise.position), "orientation_mrad": float(noise.orientation)},
+        "data_files": [
+            {"path": str(p), "name": Path(p).name, "sha256": sha256_file(p)} for p in data_files
+        ],
+        "calibrated_urdf": CALIBRATED_URDF,
+        "calibrated_sidecar": CALIBRATED_SIDECAR,
+        "identification": IDENTIFICATION_FILE,
+        "files": files,
+    }
+
+
+def _replace_dir(tmp: Path, out: Path) -> None:
+    """Move the finished ``tmp`` directory to ``out`` (replacing an old calibration)."""
+    if not out.exists():
+        os.replace(tmp, out)
+        return
+    if not out.is_dir():
+        raise CalibrationDirectoryError(f"{str(out)!r} exists and is not a directory")
+    entries = list(out.iterdir())
+    if entries and not ((out / MANIFEST).is_file() or (out / IDENTIFICATION_FILE).is_file()):
+        raise CalibrationDirectoryError(
+            f"{str(out)!r} is a non-empty directory that is not a calibration directory "
+            f"({len(entries)} entries); choose a new --out directory"
+        )
+    old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
+    os.replace(out, old / out.name)
+    try:
+        os.replace(tmp, out)
+    except BaseException:
+        os.replace(old / out.name, out)
+        raise
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def write_calibration(
+    path: str | Path,
+    result: IdentificationResult,
+    *,
+    model_source: str | None = None,
+    data_files: Sequence[str | Path] = (),
+    noise: NoiseModel | None = None,
+    annotations: Mapping[str, Any] | None = None,
+    texts: Mapping[str, str] | None = None,
+) -> CalibrationDirectory:
+    """Write a calibration directory atomically (whole or absent).
+
+    Args:
+        path: the directory; an existing calibration directory (or an empty one) is
+            replaced, any other existing path is refused.
+        result: identification result with its calibrated mechanism.
+        model_source: the nominal model spec (bundled name or path) for later commands.
+        data_files: measurement files the calibration was fitted on (hashed).
+        noise: instrument noise of those data (mm, mrad), if known.
+        annotations: extra entries of ``identification.json`` (validation, truth, ...).
+        texts: further text files to write ``{file name: content}`` (e.g. report.txt).
+
+    Returns:
+        The directory as :func:`read_calibration` reads it.
+
+    Raises:
+        CalibrationDirectoryError: ``path`` exists and is not a calibration directory.
+        ParameterError: ``result`` has no calibrated mechanism.
+    """
+    out = Path(path).resolve()  # "." or "cal/" name a directory we can replace by rename
+    out.parent.mkdir(parents=True, exist_ok=True)
+    mech = result.calibrated
+    notes = {"data": [str(p) for p in data_files], "calibrated_urdf": CALIBRATED_URDF}
+    notes.update(annotations or {})
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
+    try:
+        save_urdf(mech, tmp / CALIBRATED_URDF)
+        doc = result.to_dict(notes)
+        atomic_write_text(tmp / IDENTIFICATION_FILE, json.dumps(doc, indent=1) + "\n")
+        for name, text in (texts or {}).items():
+            atomic_write_text(tmp / name, text)
+        files = {p.name: sha256_file(p) for p in sorted(tmp.iterdir()) if p.is_file()}
+        manifest = _manifest(result, model_source, data_files, noise, files)
+        atomic_write_text(tmp / MANIFEST, json.dumps(manifest, indent=1) + "\n")
+        os.chmod(tmp, 0o755)
+        _replace_dir(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return read_calibration(path)
+
+
+def _load_json(path: Path) -> dict:
+    try:
+        raw = path.read_bytes()[: _MAX_JSON_BYTES + 1]
+        data = json.loads(raw.decode("utf-8"))
+    except OSError as exc:
+        raise CalibrationDirectoryError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise CalibrationDirectoryError(f"{str(path)!r} is not valid JSON: {exc}") from exc
+    if not isinstance(data, dict):
+        raise CalibrationDirectoryError(f"{str(path)!r} must hold a JSON object")
+    return data
+
+
+def _legacy_urdf(d: Path, model: str) -> Path:
+    for name in (f"{model}_calibrated.urdf", f"{model}.urdf"):
+        if (d / name).is_file():
+            return d / name
+    found = sorted(d.glob("*.urdf"))
+    if len(found) == 1:
+        return found[0]
+    raise CalibrationDirectoryError(
+        f"calibration directory {str(d)!r} has no {MANIFEST} and no single calibrated URDF "
+        f"({model}_calibrated.urdf or {model}.urdf; found {[p.name for p in found]})"
+    )
+
+
+def _noise(entry: object, where: str) -> NoiseModel | None:
+    if entry is None:
+        return None
+    try:
+        return NoiseModel(float(entry["position_mm"]), float(entry["orientation_mrad"]))  # type: ignore[index]
+    except (TypeError, KeyError, ValueError) as exc:
+        raise CalibrationDirectoryError(
+            f"{where}: 'noise' must be {{position_mm, orientation_mrad}}; got {entry!r}"
+        ) from exc
+
+
+def read_calibration(path: str | Path, *, verify: bool = True) -> CalibrationDirectory:
+    """Read a calibration directory (see the module doc).
+
+    Args:
+        path: the directory.
+        verify: check the SHA-256 of the directory's files against the manifest.
+
+    Returns:
+        The :class:`CalibrationDirectory`.
+
+    Raises:
+        CalibrationDirectoryError: the directory or a file is missing (named), the manifest
+            is of another format or a newer version, or a file was changed after writing.
+        ReportError: a malformed ``identification.json``.
+    """
+    d = Path(path)
+    if not d.is_dir():
+        hint = (
+            "; give the directory written by `pincal calibrate --out`"
+            if d.suffix.lower() in (".urdf", ".yaml", ".json")
+            else ""
+        )
+        raise CalibrationDirectoryError(f"calibration directory {str(d)!r} does not exist{hint}")
+    ident_path = d / IDENTIFICATION_FILE
+    if not (d / MANIFEST).is_file():
+        if not ident_path.is_file():
+            raise CalibrationDirectoryError(
+                f"{str(d)!r} is not a calibration directory: it has neither {MANIFEST} nor "
+                f"{IDENTIFICATION_FILE} (write one with `pincal calibrate MODEL --data FILE "
+                f"--out {d}`)"
+            )
+        result = IdentificationResult.from_dict(_load_json(ident_path), source=str(ident_path))
+        manifest = {"model": result.model, "preset": result.preset, "legacy": True}
+        return CalibrationDirectory(d, manifest, result, _legacy_urdf(d, result.model), None, True)
+    manifest = _load_json(d / MANIFEST)
+    where = str(d / MANIFEST)
+    if manifest.get("format") != CALIBRATION_FORMAT:
+        raise CalibrationDirectoryError(
+            f"{where}: format {manifest.get('format')!r}, expected {CALIBRATION_FORMAT!r}"
+        )
+    version = manifest.get("version")
+    if not isinstance(version, int) or version > CALIBRATION_VERSION:
+        raise CalibrationDirectoryError(
+            f"{where}: format version {version!r}; this pincal reads versions ≤ "
+            f"{CALIBRATION_VERSION} (upgrade pincal)"
+        )
+    files = manifest.get("files") or {}
+    needed = {CALIBRATED_URDF, IDENTIFICATION_FILE} | set(files)
+    missing = sorted(n for n in needed if not (d / n).is_file())
+    if missing:
+        raise CalibrationDirectoryError(
+            f"calibration directory {str(d)!r} is incomplete: missing {missing} "
+            f"(copy the whole directory, not single files)"
+        )
+    if verify:
+        changed = sorted(n for n, h in files.items() if sha256_file(d / n) != h)
+        if changed:
+            raise CalibrationDirectoryError(
+                f"calibration directory {str(d)!r}: {changed} changed after it was written "
+                f"(SHA-256 mismatch); re-run `pincal calibrate` or restore the files"
+            )
+    result = IdentificationResult.from_dict(_load_json(ident_path), source=str(ident_path))
+    names = [p.get("name") for p in manifest.get("parameters", [])]
+    if names and tuple(names) != tuple(result.identified_names):
+        raise CalibrationDirectoryError(
+            f"{where}: parameters {names[:3]}… differ from {IDENTIFICATION_FILE}'s"
+        )
+    noise = _noise(manifest.get("noise"), where)
+    return CalibrationDirectory(d, manifest, result, d / CALIBRATED_URDF, noise)
