@@ -28,7 +28,7 @@ from pincal.cli.common import fail_cleanly
 
 @dataclass(frozen=True)
 class Paths:
-    """Where the steps read and write (``inputs/`` inside the output directory)."""
+    """Where the steps read and write (generated inputs in ``<out>-inputs/`` beside ``<out>``)."""
 
     out: Path
     design: Path
@@ -107,7 +107,7 @@ STEPS: tuple[Step, ...] = (
 
 def campaign_paths(c: Campaign, out: Path) -> Paths:
     """The step paths of campaign ``c`` writing into ``out``."""
-    inputs = out / "inputs"
+    inputs = out.parent / f"{out.name}-inputs"  # the calibration directory holds only its own files
     data = Path(c.measurements.file) if c.measurements.file else inputs / "measurements.csv"
     v = c.validation
     val = None if v.source == "none" else Path(v.file) if v.file else inputs / "validation.csv"
@@ -161,8 +161,8 @@ def run(ctx: click.Context, campaign_file: Path, out: Path | None, dry_run: bool
     (design) → simulate (calibration and validation data of a seeded "actual"
     machine, or your measurement files) → calibrate → validate → report. Every
     output lands in one calibration directory: the calibrated URDF, identification
-    and report files, the generated inputs in inputs/ and the resolved campaign in
-    campaign.yaml. The whole file is checked before the first step; each step
+    and report files and the resolved campaign in campaign.yaml; the generated inputs
+    go to OUT-inputs/ beside it. The whole file is checked before the first step; each step
     prints a progress line on stderr.
 
     \b

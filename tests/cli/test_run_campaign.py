@@ -38,7 +38,7 @@ def test_example_campaign_runs_end_to_end(tmp_path):
     assert "pincal run: [4/6] calibrate: pincal calibrate" in res.stderr
     # the calibration recovered the seeded actual machine's errors
     doc = json.loads((out / "identification.json").read_text())
-    truth = json.loads((out / "inputs" / "measurements.truth.json").read_text())
+    truth = json.loads((out.parent / f"{out.name}-inputs" / "measurements.truth.json").read_text())
     true = np.array([p["value"] for p in truth["parameters"]])
     found = {p["name"]: (p["value"], p["std"]) for p in doc["parameters"]}
     names = [p["name"] for p in truth["parameters"]]
@@ -53,7 +53,10 @@ def test_example_campaign_runs_end_to_end(tmp_path):
     copy.update(
         design=None,
         out=str(tmp_path / "again"),
-        measurements={"source": "file", "file": str(out / "inputs" / "measurements.csv")},
+        measurements={
+            "source": "file",
+            "file": str(out.parent / f"{out.name}-inputs" / "measurements.csv"),
+        },
         validation={"source": "none"},
         identification={"method": "lm"},
         report=False,
@@ -62,7 +65,7 @@ def test_example_campaign_runs_end_to_end(tmp_path):
     res = _run(str(again))
     assert res.exit_code == 0, res.output
     assert (tmp_path / "again" / "hexaslide_6pus.urdf").is_file()
-    assert not (tmp_path / "again" / "inputs").exists()
+    assert not (tmp_path / "again-inputs").exists()
     doc2 = json.loads((tmp_path / "again" / "identification.json").read_text())
     assert doc2["method"] != doc["method"]
     v1 = np.array([p["value"] for p in doc["parameters"]])
