@@ -32,8 +32,8 @@ def test_example_campaign_runs_end_to_end(tmp_path):
     status = {s["step"]: s["status"] for s in summary["steps"]}
     assert all(status[k] == "done" for k in ("design", "measure", "calibrate", "report"))
     assert status["validate"] in ("done", "skipped")
-    assert summary["urdf"] == [str(out / "hexaslide_6pus.urdf")]
-    assert (out / "hexaslide_6pus.urdf").is_file() and (out / "report.html").is_file()
+    assert summary["urdf"] == [str(out / "calibrated.urdf")]
+    assert (out / "calibrated.urdf").is_file() and (out / "report.html").is_file()
     assert str(out / "report.md") in summary["report"]
     assert "pincal run: [4/6] calibrate: pincal calibrate" in res.stderr
     # the calibration recovered the seeded actual machine's errors
@@ -64,7 +64,7 @@ def test_example_campaign_runs_end_to_end(tmp_path):
     again.write_text(yaml.safe_dump(copy))
     res = _run(str(again))
     assert res.exit_code == 0, res.output
-    assert (tmp_path / "again" / "hexaslide_6pus.urdf").is_file()
+    assert (tmp_path / "again" / "calibrated.urdf").is_file()
     assert not (tmp_path / "again-inputs").exists()
     doc2 = json.loads((tmp_path / "again" / "identification.json").read_text())
     assert doc2["method"] != doc["method"]
@@ -202,7 +202,7 @@ def test_tracker_example_imports_and_calibrates(tmp_path):
     res = _run(str(d / "campaign.yaml"), "--json")
     assert res.exit_code == 0, res.output
     out = d / "hexaslide-tracker-cal"
-    assert json.loads(res.stdout)["urdf"] == [str(out / "hexaslide_6pus.urdf")]
+    assert json.loads(res.stdout)["urdf"] == [str(out / "calibrated.urdf")]
     assert (out / "report.html").is_file()
     doc = json.loads((out / "identification.json").read_text())
     assert doc["poses"] == 16 and 0.3 < doc["reduced_chi2"] < 3.0
