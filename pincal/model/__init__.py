@@ -39,6 +39,7 @@ from pincal.model._parameters import (
     DOFS,
     Parameter,
     ParameterSet,
+    degenerate_translations,
     full_parameters,
     parameters,
 )
@@ -104,6 +105,7 @@ __all__ = [
     "dh_urdf",
     "example_robot_names",
     "example_robot_urdf",
+    "degenerate_translations",
     "full_parameters",
     "load_mechanism",
     "load_mjcf",
