@@ -66,8 +66,8 @@ def info(model: str, preset: str | None) -> None:
     """Describe MODEL (bundled name, model directory or .urdf path)."""
     import numpy as np
 
-    from pincal.model import load_mechanism, parameters
-    from pincal.sensitivity import identifiability
+    from pincal.model import degenerate_translations, load_mechanism, parameters
+    from pincal.sensitivity import BASE_POSES, identifiability
 
     mech = load_mechanism(model)
     for line in structure_lines(mech):
@@ -76,7 +76,41 @@ def info(model: str, preset: str | None) -> None:
     for name in names:
         params = parameters(mech, name)
         ident = identifiability(mech, params, rng=np.random.default_rng(0))
-        click.echo(f"  preset {name!r}: {len(params)} parameters, {ident.rank} identifiable")
+        breaking = (
+            f", {ident.breaks_closure.size} break loop closure" if ident.breaks_closure.size else ""
+        )
+        click.echo(
+            f"  preset {name!r}: {len(params)} parameters, {ident.rank} identifiable{breaking}"
+        )
         if preset:
             for line in ident.describe():
                 click.echo(f"    {line}")
+    if preset is None and "base" not in mech.presets:
+        click.echo(
+            base_line(
+                mech, len(parameters(mech, "base")), len(degenerate_translations(mech)), BASE_POSES
+            )
+        )
+
+
+def reduction_line(preset: str, rank: int, n: int) -> str:
+    """The one line `pincal poses` and `pincal calibrate` print when they reduce a
+    rank-deficient preset to its identifiable base set."""
+    return (
+        f"pincal: preset {preset!r}: {rank} of {n} parameters identifiable; using its "
+        f"identifiable base set (`pincal info MODEL` offers it as the 'base' preset)"
+    )
+
+
+def base_line(mech: Mechanism, n_base: int, n_degenerate: int, n_poses: int) -> str:
+    """The line of `pincal info` that offers the identifiable base set as a preset."""
+    left = (
+        f"; {n_degenerate} translations between coincident passive axes left out"
+        if n_degenerate
+        else ""
+    )
+    return (
+        f"  preset 'base': {n_base} parameters, all identifiable (the identifiable base set "
+        f"of 'full' over {n_poses} random poses{left}); use it with --params base "
+        f"(simulate, calibrate) or --preset base (poses, info)"
+    )

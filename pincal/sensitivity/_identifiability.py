@@ -31,7 +31,13 @@ from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet, degenerate_translations, full_parameters
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
-__all__ = ["BASE_POSES", "Identifiability", "analyse_jacobian", "base_parameters", "identifiability"]
+__all__ = [
+    "BASE_POSES",
+    "Identifiability",
+    "analyse_jacobian",
+    "base_parameters",
+    "identifiability",
+]
 
 BASE_POSES = 60
 """Random workspace poses (seed 0) over which the ``base`` preset is computed."""
