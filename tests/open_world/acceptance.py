@@ -98,13 +98,34 @@ def check_cli(model: str | Path, tmp_path: Path, poses: int = 30) -> dict:
     """
     data = tmp_path / "meas.csv"
     invoke(
-        "simulate", model, "--random", poses, "--params", "base", "--errors", "seed:3",
-        "--error-size", "0.2,1", "--noise", "0,0", "--out", data,
-    )  # fmt: skip
+        "simulate",
+        model,
+        "--random",
+        poses,
+        "--params",
+        "base",
+        "--errors",
+        "seed:3",
+        "--error-size",
+        "0.2,1",
+        "--noise",
+        "0,0",
+        "--out",
+        data,
+    )
     truth = json.loads(data.with_suffix(".truth.json").read_text())
     doc = json.loads(
-        invoke("calibrate", model, "--data", data, "--params", "base", "--out",
-               tmp_path / "cal", "--json")  # fmt: skip
+        invoke(
+            "calibrate",
+            model,
+            "--data",
+            data,
+            "--params",
+            "base",
+            "--out",
+            tmp_path / "cal",
+            "--json",
+        )
     )
     true = {p["name"]: p["value"] for p in truth["parameters"]}
     found = {p["name"]: p["value"] for p in doc["parameters"]}

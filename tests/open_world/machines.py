@@ -69,8 +69,7 @@ def rssr_emulated_ball() -> tuple[str, dict]:
     urdf = (
         '<?xml version="1.0"?>\n<robot name="rssr3r">\n'
         + "".join(
-            _link(n)
-            for n in ("base_link", "crank", "gimbal1", "gimbal2", "coupler", "coupler_tip")
+            _link(n) for n in ("base_link", "crank", "gimbal1", "gimbal2", "coupler", "coupler_tip")
         )
         + _link("rocker")
         + _link("rocker_tip")
@@ -134,18 +133,33 @@ def delta_4r() -> tuple[str, dict]:
         joints += [
             _joint(f"hinge{i}", "revolute", "base_link", f"arm{i}", arm_w, "0 1 0", (-0.3, 0.3)),
             _joint(
-                f"elbow{i}", "revolute", f"arm{i}", f"ebar{i}",
-                _se3(_ry(beta), (L_ARM, 0, 0)), "0 1 0",
-            ),  # fmt: skip
-            _joint(f"rod_a{i}", "revolute", f"ebar{i}", f"rod_a{i}", _se3(p=(0, HALF_W, 0)), "1 0 0"),
-            _joint(f"rod_b{i}", "revolute", f"ebar{i}", f"rod_b{i}", _se3(p=(0, -HALF_W, 0)), "1 0 0"),
+                f"elbow{i}",
+                "revolute",
+                f"arm{i}",
+                f"ebar{i}",
+                _se3(_ry(beta), (L_ARM, 0, 0)),
+                "0 1 0",
+            ),
+            _joint(
+                f"rod_a{i}", "revolute", f"ebar{i}", f"rod_a{i}", _se3(p=(0, HALF_W, 0)), "1 0 0"
+            ),
+            _joint(
+                f"rod_b{i}", "revolute", f"ebar{i}", f"rod_b{i}", _se3(p=(0, -HALF_W, 0)), "1 0 0"
+            ),
             _joint(f"wbar{i}", "revolute", f"rod_a{i}", f"wbar{i}", _se3(p=(0, 0, L_ROD)), "1 0 0"),
             _joint(
-                f"rod_b_end{i}", "revolute", f"rod_b{i}", f"rod_b_end{i}",
-                _se3(p=(0, 0, L_ROD)), "1 0 0", None,
-            ),  # fmt: skip
+                f"rod_b_end{i}",
+                "revolute",
+                f"rod_b{i}",
+                f"rod_b_end{i}",
+                _se3(p=(0, 0, L_ROD)),
+                "1 0 0",
+                None,
+            ),
             _joint(f"wbar_b{i}", "fixed", f"wbar{i}", f"wbar_b{i}", _se3(p=(0, -2 * HALF_W, 0))),
-            _joint(f"wrist{i}", "revolute", f"wbar{i}", f"wrist{i}", _se3(p=(0, -HALF_W, 0)), "0 1 0"),
+            _joint(
+                f"wrist{i}", "revolute", f"wbar{i}", f"wrist{i}", _se3(p=(0, -HALF_W, 0)), "0 1 0"
+            ),
         ]
         closures.append([f"rod_b_end{i}", f"wbar_b{i}"])
         to_platform = wrist_w.inverse() * platform
@@ -155,9 +169,13 @@ def delta_4r() -> tuple[str, dict]:
             joints.append(_joint("tcp_joint", "fixed", "platform", "tcp", _se3(p=(0, 0, -0.02))))
         else:
             links.append(_link(f"wrist_end{i}"))
-            joints.append(_joint(f"wrist_end{i}", "fixed", f"wrist{i}", f"wrist_end{i}", to_platform))
+            joints.append(
+                _joint(f"wrist_end{i}", "fixed", f"wrist{i}", f"wrist_end{i}", to_platform)
+            )
             closures.append([f"wrist_end{i}", "platform"])
-    urdf = '<?xml version="1.0"?>\n<robot name="delta4r">\n' + "".join(links + joints) + "</robot>\n"
+    urdf = (
+        '<?xml version="1.0"?>\n<robot name="delta4r">\n' + "".join(links + joints) + "</robot>\n"
+    )
     sidecar = {
         "closed_loop": closures,
         "type": ["6d"] * len(closures),
@@ -193,3 +211,5 @@ def copy_machine(folder: Path, name: str, **sidecar_changes) -> Path:
 
 
 FIVEBAR_WORKSPACE = {"joints": {"mot_l": [1.8, 2.2], "mot_r": [0.9, 1.3]}}
+
+MJCF = Path(__file__).parents[1] / "model" / "mjcf"
