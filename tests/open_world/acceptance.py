@@ -70,8 +70,12 @@ def check_jacobian(mech: Mechanism, n_poses: int = 2, seed: int = 4) -> None:
         assert np.max(np.abs(J - J_fd)) <= 1e-6 * np.max(np.abs(J))
 
 
-def check_recovery(mech: Mechanism, n_poses: int = 30, size: float = 2e-4) -> np.ndarray:
-    """Noise-free recovery of the base parameters ≤ 1e-9; returns the recovered values."""
+def check_recovery(
+    mech: Mechanism, n_poses: int = 30, size: float = 2e-4, tol: float | None = 1e-9
+) -> np.ndarray:
+    """Noise-free recovery of the base parameters ≤ ``tol`` (None: not checked); the
+    calibrated model predicts the measured components at fresh poses ≤ 1e-9 either
+    way. Returns the recovered values."""
     params = parameters(mech, "base")
     rows = sample_actuators(mech, n_poses, np.random.default_rng(11))
     truth = np.random.default_rng(1).normal(0, size, len(params))
@@ -79,7 +83,11 @@ def check_recovery(mech: Mechanism, n_poses: int = 30, size: float = 2e-4) -> np
     res = identify(mech, params, meas)
     assert res.success, res.message
     assert res.identified.all(), res.message
-    assert np.max(np.abs(res.values - truth)) <= 1e-9
+    actual = params.apply(mech, truth)
+    for row in sample_actuators(mech, 5, np.random.default_rng(12)):
+        assert _measured_error(mech, actual.forward(row), res.calibrated.forward(row)) <= 1e-9
+    if tol is not None:
+        assert np.max(np.abs(res.values - truth)) <= tol
     return res.values
 
 
@@ -90,8 +98,14 @@ def invoke(*args: str) -> str:
     return res.stdout
 
 
-def check_cli(model: str | Path, tmp_path: Path, poses: int = 30) -> dict:
+def check_cli(
+    model: str | Path, tmp_path: Path, poses: int = 30, param_tol: float | None = 1e-8
+) -> dict:
     """simulate → calibrate → compensate through the CLI with the base preset.
+
+    The calibrated parameters match the simulated errors to ``param_tol`` (None: not
+    checked; the CSV holds values to 1e-12 relative) and the compensation commands
+    bring the simulated actual machine to the targets.
 
     Returns:
         ``{"calibrate": identification.json, "commands": (m, n_act), "targets": rows}``.
@@ -130,7 +144,8 @@ def check_cli(model: str | Path, tmp_path: Path, poses: int = 30) -> dict:
     true = {p["name"]: p["value"] for p in truth["parameters"]}
     found = {p["name"]: p["value"] for p in doc["parameters"]}
     assert set(found) == set(true)
-    assert max(abs(found[n] - true[n]) for n in true) <= 1e-8
+    if param_tol is not None:
+        assert max(abs(found[n] - true[n]) for n in true) <= param_tol
     # targets: poses the actual (simulated) machine reaches at fresh actuator values
     nominal = load_mechanism(model)
     base = parameters(nominal, "base")
@@ -144,5 +159,6 @@ def check_cli(model: str | Path, tmp_path: Path, poses: int = 30) -> dict:
     assert list(idx) == list(range(len(rows)))
     for q_act, T in zip(commands, targets, strict=True):
         assert _measured_error(nominal, T, actual.forward(q_act)) <= 1e-7
-    assert np.max(np.abs(commands - rows)) <= 1e-6
+    if param_tol is not None:  # the calibrated model is the actual one: same commands
+        assert np.max(np.abs(commands - rows)) <= 1e-6
     return {"calibrate": doc, "commands": commands, "targets": rows}

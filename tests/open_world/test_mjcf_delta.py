@@ -42,6 +42,5 @@ def test_noise_free_recovery(mech):
     acceptance.check_recovery(mech)
 
 
-@pytest.mark.slow
 def test_simulate_calibrate_compensate(model, tmp_path):
     acceptance.check_cli(model, tmp_path)
