@@ -27,6 +27,7 @@ def mech(model):
     return load_mechanism(model)
 
 
+@pytest.mark.slow
 def test_sampled_poses_stay_on_the_home_branch():
     from pincal.model import sample_actuators
 
@@ -44,6 +45,7 @@ def test_round_trip(mech):
     acceptance.check_round_trip(mech)
 
 
+@pytest.mark.slow
 def test_jacobian_matches_central_differences(mech):
     acceptance.check_jacobian(mech)
 

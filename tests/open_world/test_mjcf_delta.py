@@ -34,6 +34,7 @@ def test_round_trip(mech):
     acceptance.check_round_trip(mech)
 
 
+@pytest.mark.slow
 def test_jacobian_matches_central_differences(mech):
     acceptance.check_jacobian(mech)
 

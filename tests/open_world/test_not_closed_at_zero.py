@@ -38,10 +38,12 @@ def test_round_trip(mech):
     acceptance.check_round_trip(mech)
 
 
+@pytest.mark.slow
 def test_jacobian_matches_central_differences(mech):
     acceptance.check_jacobian(mech)
 
 
+@pytest.mark.slow
 def test_noise_free_recovery(mech):
     acceptance.check_recovery(mech)
 
