@@ -97,6 +97,7 @@ def calibrate(model, data, preset, method, out, as_json) -> None:
     """
     import numpy as np
 
+    from pincal.cli.info import reduction_line
     from pincal.identification import identify
     from pincal.io import (
         CALIBRATED_SIDECAR,
@@ -118,6 +119,8 @@ def calibrate(model, data, preset, method, out, as_json) -> None:
     params = parameters(mech, preset)
     structural = identifiability(mech, params, rng=np.random.default_rng(0))
     check_enough_poses(meas, structural.rank)
+    if structural.rank < len(params):
+        click.echo(reduction_line(preset, structural.rank, len(params)), err=True)
     click.echo(
         f"… identifying {structural.rank} of {len(params)} parameters from {len(meas)} poses",
         err=True,

@@ -76,8 +76,8 @@ def info(model: str, preset: str | None, as_json: bool) -> None:
 
     import numpy as np
 
-    from pincal.model import load_mechanism, parameters
-    from pincal.sensitivity import identifiability
+    from pincal.model import degenerate_translations, load_mechanism, parameters
+    from pincal.sensitivity import BASE_POSES, identifiability
 
     mech = load_mechanism(model)
     if not as_json:
@@ -88,20 +88,31 @@ def info(model: str, preset: str | None, as_json: bool) -> None:
     for name in names:
         params = parameters(mech, name)
         ident = identifiability(mech, params, rng=np.random.default_rng(0))
+        n_breaking = int(ident.breaks_closure.size)
         presets.append(
             {
                 "preset": name,
                 "parameters": len(params),
                 "identifiable": int(ident.rank),
+                "breaks_closure": n_breaking,
                 "explanation": list(ident.describe()) if preset else [],
             }
         )
         if as_json:
             continue
-        click.echo(f"  preset {name!r}: {len(params)} parameters, {ident.rank} identifiable")
+        breaking = f", {n_breaking} break loop closure" if n_breaking else ""
+        click.echo(
+            f"  preset {name!r}: {len(params)} parameters, {ident.rank} identifiable{breaking}"
+        )
         if preset:
             for line in ident.describe():
                 click.echo(f"    {line}")
+    base = None
+    if preset is None and "base" not in mech.presets:
+        n_base, n_degenerate = len(parameters(mech, "base")), len(degenerate_translations(mech))
+        base = {"parameters": n_base, "degenerate_translations_left_out": n_degenerate}
+        if not as_json:
+            click.echo(base_line(mech, n_base, n_degenerate, BASE_POSES))
     if as_json:
         doc = {
             "model": mech.name,
@@ -112,6 +123,30 @@ def info(model: str, preset: str | None, as_json: bool) -> None:
             "measured_frame": mech.measured_frame,
             "measured_components": list(mech.measured_components),
             "presets": presets,
+            "base_preset": base,
             "notes": list(mech.notes),
         }
         click.echo(json.dumps(doc))
+
+
+def reduction_line(preset: str, rank: int, n: int) -> str:
+    """The one line `pincal poses` and `pincal calibrate` print when they reduce a
+    rank-deficient preset to its identifiable base set."""
+    return (
+        f"pincal: preset {preset!r}: {rank} of {n} parameters identifiable; using its "
+        f"identifiable base set (`pincal info MODEL` offers it as the 'base' preset)"
+    )
+
+
+def base_line(mech: Mechanism, n_base: int, n_degenerate: int, n_poses: int) -> str:
+    """The line of `pincal info` that offers the identifiable base set as a preset."""
+    left = (
+        f"; {n_degenerate} translations between coincident passive axes left out"
+        if n_degenerate
+        else ""
+    )
+    return (
+        f"  preset 'base': {n_base} parameters, all identifiable (the identifiable base set "
+        f"of 'full' over {n_poses} random poses{left}); use it with --params base "
+        f"(simulate, calibrate) or --preset base (poses, info)"
+    )

@@ -87,6 +87,7 @@ def poses(
 
     import numpy as np
 
+    from pincal.cli.info import reduction_line
     from pincal.design import (
         DesignScaling,
         candidate_set,
@@ -98,10 +99,15 @@ def poses(
     from pincal.io import si_actuator_units, write_pose_design
     from pincal.measure import NoiseModel
     from pincal.model import load_mechanism, parameters
+    from pincal.sensitivity import base_parameters
 
     mech = load_mechanism(model)
     preset = preset or (next(iter(mech.presets)) if mech.presets else "full")
     params = parameters(mech, preset)
+    reduced = base_parameters(mech, params)
+    if len(reduced) < len(params):
+        click.echo(reduction_line(preset, len(reduced), len(params)), err=True)
+        params = reduced
     click.echo(f"{mech.name}: {len(params)} parameters (preset {preset!r})", err=True)
     with click.progressbar(length=1, label=f"candidates {spec}", file=sys.stderr) as bar:
         state = {"total": 1}

@@ -24,6 +24,7 @@ from pincal.measure._measurements import Measurements
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._identifiability import Identifiability, analyse_jacobian
+from pincal.sensitivity._jacobian import closure_breaking
 
 __all__ = ["identify", "qpso_identify", "step_planned_identify"]
 
@@ -59,11 +60,19 @@ def _legacy_options(method: str, options: Any, legacy: dict[str, Any], qpso: Any
 
 
 def _fit_set(problem: IdentificationProblem, J0: np.ndarray) -> tuple[np.ndarray, Identifiability]:
-    """Indices fitted (the base set of ``problem.fit``) and the analysis at the start."""
+    """Indices fitted (the base set of ``problem.fit``, without parameters that break
+    loop closure) and the analysis at the start."""
     params, model = problem.params, problem.model
     candidates = problem.fit_indices
-    ident = analyse_jacobian(J0, params.names)
-    sub = analyse_jacobian(J0[:, candidates], tuple(params.names[i] for i in candidates))
+    breaking = np.zeros(len(params), dtype=bool)
+    if problem.mech.closures:
+        breaking = closure_breaking(problem.mech, params, problem.measurements.q_act, problem.x0)
+    ident = analyse_jacobian(J0, params.names, breaks_closure=breaking)
+    sub = analyse_jacobian(
+        J0[:, candidates],
+        tuple(params.names[i] for i in candidates),
+        breaks_closure=breaking[candidates],
+    )
     n, n_eq = candidates.size, model.n_equations
     if sub.rank < n and sub.rank >= n_eq:
         rows = len(model.rows)
@@ -205,9 +214,13 @@ def identify(
     n_fit = problem.fit_indices.size
     prefix = ""
     if free.size < n_fit:
+        held = np.setdiff1d(problem.fit_indices, free)
+        n_break = int(np.isin(held, ident.breaks_closure).sum())
         prefix = (
             f"identified the {free.size} base parameters; held {n_fit - free.size} "
-            f"unidentifiable ones at their initial values. "
+            f"unidentifiable ones at their initial values"
+            + (f" ({n_break} break loop closure)" if n_break else "")
+            + ". "
         )
         log.info(prefix)
     out = entry.solve(model, x0, free, opts, progress)

@@ -39,6 +39,7 @@ from pincal.model._parameters import (
     DOFS,
     Parameter,
     ParameterSet,
+    degenerate_translations,
     full_parameters,
     parameters,
 )
@@ -96,6 +97,7 @@ __all__ = [
     "Workspace",
     "bundled_models",
     "chain_preset",
+    "degenerate_translations",
     "dh_apply_errors",
     "dh_errors_to_parameters",
     "dh_fk",

@@ -4,6 +4,10 @@ Parameter k displaces the origin of URDF joint j along a unit twist ξ_k express
 the joint-origin frame. All parameters of one joint act together as
 ``origin ← origin · exp6(Σ_k δ_k ξ_k)``. The dof ``offset`` is the twist along a
 movable joint's axis, i.e. exactly an encoder/prismatic zero offset.
+
+Presets: ``"full"`` (every origin twist) and ``"base"`` (the identifiable base set of
+``full`` without its degenerate translations, see :func:`degenerate_translations` and
+:func:`pincal.sensitivity.base_parameters`).
 """
 
 from __future__ import annotations
@@ -18,11 +22,21 @@ import pinocchio as pin
 from pincal.errors import ParameterError, UnknownNameError
 from pincal.model._mechanism import Mechanism
 
-__all__ = ["DOFS", "Parameter", "ParameterSet", "full_parameters", "parameters"]
+__all__ = [
+    "DOFS",
+    "Parameter",
+    "ParameterSet",
+    "degenerate_translations",
+    "full_parameters",
+    "parameters",
+]
 
 DOFS: tuple[str, ...] = ("tx", "ty", "tz", "rx", "ry", "rz", "offset")
 _UNIT_TWISTS = {d: np.eye(6)[i] for i, d in enumerate(DOFS[:6])}
 _EXCLUDED_TYPES = ("floating", "planar")
+_REVOLUTE = ("revolute", "continuous")
+_ZERO_LENGTH = 1e-12
+"""Origin translations up to this norm [m] count as a zero-length link."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -224,12 +238,51 @@ def full_parameters(mech: Mechanism) -> ParameterSet:
     return ParameterSet(params, "full")
 
 
+def degenerate_translations(mech: Mechanism) -> tuple[str, ...]:
+    """Translation parameters between coincident joint axes (emulated U and ball joints).
+
+    ``J.tx``, ``J.ty`` and ``J.tz`` are *degenerate* when J is a passive revolute joint
+    whose origin translation is zero (‖t‖ ≤ 1e-12 m: a zero-length link) and whose
+    parent link hangs from a passive revolute joint P: the axes of P and J then pass
+    through one point, the pair (or a chain of three) emulates one physical universal
+    or spherical joint, and translating J's origin would split that joint into two
+    joints an offset apart — an error the physical joint cannot have. Such
+    translations also create distinct assemblies and break forward kinematics, so the
+    ``base`` preset leaves them out. Actuated joints are never degenerate: the offset
+    between two motor axes is a real geometric error.
+
+    Args:
+        mech: the mechanism.
+
+    Returns:
+        Parameter names ``<joint>.t?`` in URDF joint order (empty when there are none).
+    """
+    tree, actuated = mech.tree, set(mech.actuated)
+
+    def passive_revolute(name: str) -> bool:
+        return tree.joints[name].type in _REVOLUTE and name not in actuated
+
+    out = []
+    for name, uj in tree.joints.items():
+        parent = tree.parent_joint.get(uj.parent)
+        if (
+            passive_revolute(name)
+            and parent is not None
+            and passive_revolute(parent)
+            and float(np.linalg.norm(uj.origin.translation)) <= _ZERO_LENGTH
+        ):
+            out += [f"{name}.{d}" for d in _full_dofs(mech, name) if d.startswith("t")]
+    return tuple(out)
+
+
 def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet:
     """Build a parameter set from a preset name, or an explicit list of entries.
 
     Args:
         mech: the mechanism.
-        preset: ``"full"``, a preset name from the sidecar, or a list whose entries are
+        preset: ``"full"``, ``"base"`` (the identifiable base set, computed from 60
+            seeded random workspace poses; a sidecar preset named ``base`` takes
+            precedence), a preset name from the sidecar, or a list whose entries are
             ``"<joint>.<dof>"`` strings or ``{"joints": pattern, "dofs": [...]}`` mappings
             (fnmatch patterns over URDF joint names).
 
@@ -243,8 +296,12 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
     if isinstance(preset, str):
         if preset == "full":
             return full_parameters(mech)
+        if preset == "base" and preset not in mech.presets:
+            from pincal.sensitivity._identifiability import base_parameters
+
+            return base_parameters(mech)
         if preset not in mech.presets:
-            raise UnknownNameError("preset", preset, ["full", *mech.presets])
+            raise UnknownNameError("preset", preset, ["full", "base", *mech.presets])
         label, entries = preset, mech.presets[preset]
         if not isinstance(entries, list):
             raise ParameterError(f"preset {preset!r} must be a list of entries")

@@ -11,8 +11,10 @@ from pincal.sensitivity._global import (
     global_sensitivity_from_jacobians,
 )
 from pincal.sensitivity._identifiability import (
+    BASE_POSES,
     Identifiability,
     analyse_jacobian,
+    base_parameters,
     identifiability,
 )
 from pincal.sensitivity._jacobian import (
@@ -24,12 +26,14 @@ from pincal.sensitivity._jacobian import (
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
 __all__ = [
+    "BASE_POSES",
     "RANK_RTOL",
     "GlobalSensitivity",
     "Identifiability",
     "PoseSensitivity",
     "RangeSolver",
     "analyse_jacobian",
+    "base_parameters",
     "closure_breaking",
     "global_sensitivity",
     "global_sensitivity_from_jacobians",

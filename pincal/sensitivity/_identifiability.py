@@ -21,16 +21,27 @@ as *breaking loop closure* and are neither base nor absorbed parameters.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from pincal.errors import PincalError
+from pincal.errors import PincalError, UnidentifiableError
 from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
+from pincal.model._parameters import ParameterSet, degenerate_translations, full_parameters
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
-__all__ = ["Identifiability", "analyse_jacobian", "identifiability"]
+__all__ = [
+    "BASE_POSES",
+    "Identifiability",
+    "analyse_jacobian",
+    "base_parameters",
+    "identifiability",
+]
+
+BASE_POSES = 60
+"""Random workspace poses (seed 0) over which the ``base`` preset is computed."""
+_BASE_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 _COMBINATION_CUTOFF = 1e-6
 """Coefficients (in column-scaled units) below this are left out of a combination."""
@@ -234,3 +245,44 @@ def identifiability(
         q_act_rows = sample_actuators(mech, n_poses, rng or np.random.default_rng(0))
     J, breaking = jacobian_and_closure_breaking(mech, params, q_act_rows)
     return analyse_jacobian(J, params.names, rtol, breaks_closure=breaking)
+
+
+def base_parameters(mech: Mechanism, params: ParameterSet | None = None) -> ParameterSet:
+    """The identifiable base set: the ``base`` preset (``parameters(mech, "base")``).
+
+    The candidates are ``params`` (default: the ``full`` preset without its
+    :func:`pincal.model.degenerate_translations`); the result keeps, in the candidates'
+    order, the base parameters of :func:`identifiability` over :data:`BASE_POSES`
+    random workspace poses drawn with seed 0, so it is deterministic. Parameters that
+    break loop closure or are absorbed by others are left out. The default set is
+    computed once per mechanism.
+
+    Args:
+        mech: the mechanism.
+        params: candidate parameters (default: ``full`` minus degenerate translations).
+
+    Returns:
+        ParameterSet labelled ``"base"`` (default candidates) or ``"<label> base"``.
+
+    Raises:
+        UnidentifiableError: no candidate parameter changes the measured quantity.
+    """
+    if params is None and mech in _BASE_CACHE:
+        return _BASE_CACHE[mech]
+    candidates = params
+    if candidates is None:
+        full = full_parameters(mech)
+        skip = set(degenerate_translations(mech))
+        candidates = full.subset([k for k, n in enumerate(full.names) if n not in skip])
+    ident = identifiability(mech, candidates, n_poses=BASE_POSES, rng=np.random.default_rng(0))
+    if ident.rank == 0:
+        raise UnidentifiableError(
+            f"none of the {len(candidates)} parameters of {mech.name!r} changes the measured "
+            f"components {list(mech.measured_components)}; measure more components",
+            candidates.names,
+        )
+    label = "base" if params is None else f"{params.label} base"
+    out = candidates.subset(ident.base, label)
+    if params is None:
+        _BASE_CACHE[mech] = out
+    return out

@@ -1,0 +1,215 @@
+"""Machines written for the open-world acceptance tests (URDF text + sidecar dict).
+
+* :func:`rssr_emulated_ball`: the RSSR four-bar of tests/model/machines/rssr with its
+  ball joint emulated by three revolutes whose axes intersect (z, y, x; zero-length
+  links between them), as many public URDFs write a spherical joint.
+* :func:`delta_4r`: a Delta robot whose parallelograms are four-revolute planar loops,
+  each closed by a ``6d`` weld (three over-constrained closures: 18 rows of rank 9),
+  with the platform hanging from leg 1 and welded (``6d``) to the wrists of legs 2 and
+  3. The file pose (q = 0) is the assembled home. Lengths in m, angles in rad.
+
+:func:`write_machine` writes ``<dir>/<name>/<name>.urdf`` + ``.yaml`` for the CLI.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import yaml
+
+_INERTIAL = (
+    '<inertial><mass value="0.1"/><origin xyz="0 0 0"/>'
+    '<inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial>'
+)
+
+
+def _fmt(v) -> str:
+    return " ".join(f"{0.0 if abs(x) < 1e-15 else x:.17g}" for x in np.atleast_1d(v))
+
+
+def _link(name: str) -> str:
+    return f'  <link name="{name}">{_INERTIAL}</link>\n'
+
+
+def _joint(
+    name: str,
+    kind: str,
+    parent: str,
+    child: str,
+    placement: pin.SE3 | None = None,
+    axis: str = "0 0 1",
+    limit: tuple[float, float] | None = (-3.1, 3.1),
+) -> str:
+    M = placement if placement is not None else pin.SE3.Identity()
+    body = (
+        f'  <joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
+        f'<origin xyz="{_fmt(M.translation)}" rpy="{_fmt(pin.rpy.matrixToRpy(M.rotation))}"/>'
+    )
+    if kind == "revolute":
+        body += f'<axis xyz="{axis}"/>'
+        if limit is not None:
+            body += f'<limit lower="{limit[0]}" upper="{limit[1]}" effort="1" velocity="1"/>'
+        else:
+            body += '<limit effort="0" velocity="1"/>'
+    return body + "</joint>\n"
+
+
+def _se3(R: np.ndarray | None = None, p=(0.0, 0.0, 0.0)) -> pin.SE3:
+    return pin.SE3(np.eye(3) if R is None else R, np.asarray(p, dtype=float))
+
+
+# ------------------------------------------------------------------ RSSR, ball = 3 revolutes
+def rssr_emulated_ball() -> tuple[str, dict]:
+    """RSSR four-bar (crank 0.05, coupler 0.17, rocker 0.08, pivots 0.2 apart) whose crank
+    ball joint is three revolutes ``ball_x`` (z), ``ball_y`` (y), ``ball_z`` (x) meeting at
+    one point; the rocker-end ball is the cut (3D closure). Measured: rocker tip position.
+    """
+    urdf = (
+        '<?xml version="1.0"?>\n<robot name="rssr3r">\n'
+        + "".join(
+            _link(n) for n in ("base_link", "crank", "gimbal1", "gimbal2", "coupler", "coupler_tip")
+        )
+        + _link("rocker")
+        + _link("rocker_tip")
+        + _joint("crank_mot", "revolute", "base_link", "crank")
+        + _joint("ball_x", "revolute", "crank", "gimbal1", _se3(p=(0.05, 0, 0)), limit=None)
+        + _joint("ball_y", "revolute", "gimbal1", "gimbal2", axis="0 1 0", limit=None)
+        + _joint("ball_z", "revolute", "gimbal2", "coupler", axis="1 0 0", limit=None)
+        + _joint("coupler_end", "fixed", "coupler", "coupler_tip", _se3(p=(0.17, 0, 0)))
+        + _joint("rocker_pivot", "revolute", "base_link", "rocker", _se3(p=(0.2, 0, 0)), "0 1 0")
+        + _joint("rocker_end", "fixed", "rocker", "rocker_tip", _se3(p=(0, 0, 0.08)))
+        + "</robot>\n"
+    )
+    sidecar = {
+        "closed_loop": [["coupler_end", "rocker_end"]],
+        "type": ["3D"],
+        "name_mot": ["crank_mot"],
+        "measured_frame": "rocker_tip",
+        "measured": "position",
+        "home": {"crank_mot": 0.0, "ball_y": -float(np.arctan2(0.08, 0.15))},
+        "workspace": {"joints": {"crank_mot": [-0.6, 0.6]}},
+    }
+    return urdf, sidecar
+
+
+# ------------------------------------------------------------------ Delta with 4R parallelograms
+R_BASE, L_ARM, L_ROD, R_PLAT, HALF_W, THETA = 0.2, 0.25, 0.5, 0.05, 0.03, np.radians(30.0)
+
+
+def _ry(a: float) -> np.ndarray:
+    return pin.utils.rotate("y", a)
+
+
+def _rz(a: float) -> np.ndarray:
+    return pin.utils.rotate("z", a)
+
+
+def delta_4r() -> tuple[str, dict]:
+    """Delta robot with revolute-only parallelograms (see the module doc).
+
+    Leg i (φ = 120°·(i−1)): ``hinge_i`` (actuated, axis y of the leg), ``elbow_i`` (∥ y),
+    the parallelogram ``rod_a_i``/``rod_b_i``/``wbar_i``/``rod_b_end_i`` (four revolutes
+    normal to its plane; the weld of link ``rod_b_end_i`` to frame ``wbar_b_i`` closes
+    it), ``wrist_i`` (∥ y). Measured: the
+    position of ``tcp`` 0.02 m below the platform centre.
+    """
+    h = L_ARM * np.sin(THETA) + np.sqrt(L_ROD**2 - (R_BASE + L_ARM * np.cos(THETA) - R_PLAT) ** 2)
+    platform = _se3(p=(0, 0, -h))
+    links, joints, closures = [_link("base_link")], [], []
+    for i in (1, 2, 3):
+        phi = np.radians(120.0 * (i - 1))
+        leg = _rz(phi)
+        arm_w = _se3(leg @ _ry(THETA), leg @ np.array([R_BASE, 0.0, 0.0]))
+        elbow_p = arm_w.act(np.array([L_ARM, 0.0, 0.0]))
+        attach = platform.translation + leg @ np.array([R_PLAT, 0.0, 0.0])
+        d_arm = arm_w.rotation.T @ (attach - elbow_p) / L_ROD
+        beta = float(np.arctan2(d_arm[0], d_arm[2]))
+        wrist_w = _se3(arm_w.rotation @ _ry(beta), attach)
+        names = [f"{n}{i}" for n in ("arm", "ebar", "rod_a", "rod_b", "wbar", "wrist")]
+        names += [f"rod_b_end{i}", f"wbar_b{i}"]
+        links += [_link(n) for n in names]
+        joints += [
+            _joint(f"hinge{i}", "revolute", "base_link", f"arm{i}", arm_w, "0 1 0", (-0.3, 0.3)),
+            _joint(
+                f"elbow{i}",
+                "revolute",
+                f"arm{i}",
+                f"ebar{i}",
+                _se3(_ry(beta), (L_ARM, 0, 0)),
+                "0 1 0",
+            ),
+            _joint(
+                f"rod_a{i}", "revolute", f"ebar{i}", f"rod_a{i}", _se3(p=(0, HALF_W, 0)), "1 0 0"
+            ),
+            _joint(
+                f"rod_b{i}", "revolute", f"ebar{i}", f"rod_b{i}", _se3(p=(0, -HALF_W, 0)), "1 0 0"
+            ),
+            _joint(f"wbar{i}", "revolute", f"rod_a{i}", f"wbar{i}", _se3(p=(0, 0, L_ROD)), "1 0 0"),
+            _joint(
+                f"rod_b_end{i}",
+                "revolute",
+                f"rod_b{i}",
+                f"rod_b_end{i}",
+                _se3(p=(0, 0, L_ROD)),
+                "1 0 0",
+                None,
+            ),
+            _joint(f"wbar_b{i}", "fixed", f"wbar{i}", f"wbar_b{i}", _se3(p=(0, -2 * HALF_W, 0))),
+            _joint(
+                f"wrist{i}", "revolute", f"wbar{i}", f"wrist{i}", _se3(p=(0, -HALF_W, 0)), "0 1 0"
+            ),
+        ]
+        closures.append([f"rod_b_end{i}", f"wbar_b{i}"])
+        to_platform = wrist_w.inverse() * platform
+        if i == 1:
+            links += [_link("platform"), _link("tcp")]
+            joints.append(_joint("platform_mount", "fixed", "wrist1", "platform", to_platform))
+            joints.append(_joint("tcp_joint", "fixed", "platform", "tcp", _se3(p=(0, 0, -0.02))))
+        else:
+            links.append(_link(f"wrist_end{i}"))
+            joints.append(
+                _joint(f"wrist_end{i}", "fixed", f"wrist{i}", f"wrist_end{i}", to_platform)
+            )
+            closures.append([f"wrist_end{i}", "platform"])
+    urdf = (
+        '<?xml version="1.0"?>\n<robot name="delta4r">\n' + "".join(links + joints) + "</robot>\n"
+    )
+    sidecar = {
+        "closed_loop": closures,
+        "type": ["6d"] * len(closures),
+        "name_mot": ["hinge1", "hinge2", "hinge3"],
+        "measured_frame": "tcp",
+        "measured": "position",
+        "workspace": {"joints": {f"hinge{i}": [-0.25, 0.25] for i in (1, 2, 3)}},
+    }
+    return urdf, sidecar
+
+
+def write_machine(folder: Path, name: str, urdf: str, sidecar: dict) -> Path:
+    """Write ``folder/name/name.urdf`` and ``.yaml``; returns the model directory."""
+    d = Path(folder) / name
+    d.mkdir(parents=True, exist_ok=True)
+    (d / f"{name}.urdf").write_text(urdf, encoding="utf-8")
+    (d / f"{name}.yaml").write_text(yaml.safe_dump(sidecar), encoding="utf-8")
+    return d
+
+
+MODEL_MACHINES = Path(__file__).parents[1] / "model" / "machines"
+
+
+def copy_machine(folder: Path, name: str, **sidecar_changes) -> Path:
+    """Copy tests/model/machines/<name> to ``folder`` with sidecar keys replaced; returns
+    the model directory. Used to give a workspace to machines whose actuators have no
+    range (a URDF ``<limit>`` without lower/upper is unlimited: random poses over ±π cross
+    working modes, where inverse kinematics from home answers another mode)."""
+    src = MODEL_MACHINES / name
+    sidecar = yaml.safe_load((src / f"{name}.yaml").read_text(encoding="utf-8"))
+    sidecar.update(sidecar_changes)
+    return write_machine(folder, name, (src / f"{name}.urdf").read_text(encoding="utf-8"), sidecar)
+
+
+FIVEBAR_WORKSPACE = {"joints": {"mot_l": [1.8, 2.2], "mot_r": [0.9, 1.3]}}
+
+MJCF = Path(__file__).parents[1] / "model" / "mjcf"
