@@ -62,15 +62,15 @@ def test_new_commands_document_examples(command):
         ["report", "no_such_dir"],
     ],
 )
-def test_errors_are_one_line_exit_1_and_debug_shows_traceback(args, tmp_path):
-    with CliRunner().isolated_filesystem(temp_dir=tmp_path):
-        res = CliRunner().invoke(main, args)
-        assert res.exit_code == 1
-        assert res.output.count("\n") == 1 and res.output.startswith("pincal: error: ")
-        assert "Traceback" not in res.output
-        res = CliRunner().invoke(main, ["--debug", *args])
-        assert res.exit_code != 0 and res.exception is not None
-        assert not isinstance(res.exception, SystemExit)  # propagated with its traceback
+def test_errors_are_one_line_exit_1_and_debug_shows_traceback(args, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 1
+    assert res.output.count("\n") == 1 and res.output.startswith("pincal: error: ")
+    assert "Traceback" not in res.output
+    res = CliRunner().invoke(main, ["--debug", *args])
+    assert res.exit_code != 0 and res.exception is not None
+    assert not isinstance(res.exception, SystemExit)  # propagated with its traceback
 
 
 def test_usage_errors_exit_2():
