@@ -1,5 +1,7 @@
-"""Validation of a calibration on held-out measurements: before/after errors, an ISO 9283
-style pose-accuracy table and the Cramér–Rao prediction.
+"""Validation of a calibration on held-out measurements.
+
+It reports the before/after errors, an ISO 9283 style pose-accuracy table and the
+Cramér–Rao prediction.
 
 Errors are measured minus predicted on the components the file measures: position
 error = norm of the measured position components [m]; orientation error = norm of the

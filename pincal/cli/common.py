@@ -40,8 +40,11 @@ def fail_cleanly(func):
 
 
 def model_source(spec: str) -> str:
-    """The model spec to record in a calibration: an existing path made absolute, else the
-    name (bundled model)."""
+    """The model spec to record in a calibration.
+
+    Returns:
+        An existing path made absolute, else the name unchanged (a bundled model).
+    """
     p = Path(spec)
     return str(p.resolve()) if p.exists() else spec
 

@@ -120,7 +120,8 @@ def cramer_rao_from_jacobian(
             for the measured components.
         J_validation: unscaled Jacobian blocks (m_v, 6, n) of validation poses
             with all six components (x y z rx ry rz), or None.
-        names, units: parameter names and units (n,) (default "p0".., "m").
+        names: parameter names (n,) (default "p0", "p1", ...).
+        units: parameter units (n,) (default "m" for every parameter).
 
     Raises:
         UnidentifiableError: the poses do not determine every parameter.
@@ -174,7 +175,8 @@ def cramer_rao(
     """Predicted accuracy of measuring ``mech`` at actuator rows (m, n_act).
 
     Args:
-        mech: nominal mechanism; params: the n parameters to identify.
+        mech: nominal mechanism.
+        params: the n parameters to identify.
         q_act_rows: measurement poses (m, n_act) [m, rad].
         noise: measurement noise model (mm, mrad).
         validation_q_act: validation poses (m_v, n_act) for the predicted
@@ -231,7 +233,7 @@ class Efficiency:
 
 
 def _ratio_of_mean(numerator: float, samples: NDArray[np.float64]) -> tuple[float, float]:
-    """numerator / mean(samples) and its delta-method standard error."""
+    """Ratio numerator / mean(samples) and its delta-method standard error."""
     R = samples.size
     mean = float(np.mean(samples))
     if mean <= 0:

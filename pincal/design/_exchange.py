@@ -120,10 +120,10 @@ def exchange(
     prune: int | None = 64,
     ridge: float = 1e-9,
 ) -> PoseSelection:
-    """Add/remove exchange selection of m poses (seed 000, after Daney et al.).
+    r"""Add/remove exchange selection of m poses (seed 000, after Daney et al.).
 
     Seed 000 (its Fig. 4): (1) candidates Ω0; (2) m random poses of Ω0 form Ω1;
-    (3) add the pose T+ of Ω0 \\ Ω1 that maximises the index of Ω1 ∪ {T+};
+    (3) add the pose T+ of Ω0 \ Ω1 that maximises the index of Ω1 ∪ {T+};
     (4) remove the pose T− of Ω1 ∪ {T+} whose removal leaves the largest index;
     (5) repeat (3)–(4) until the added pose T+ is the removed pose T−. Here the
     loop also stops if an exchange does not strictly increase the exact index,
@@ -232,7 +232,11 @@ def greedy(
         m: number of poses, m·k ≥ n.
         index: "O1".."O5" or "A".
         start: poses that are always included (at most m distinct indices).
-        fast, prune, ridge: as in :func:`exchange`.
+        fast: rank-k updates (True) or exact recomputation of every candidate
+            design from scratch (False, slow reference).
+        prune: for indices other than O1, number of best candidates by the
+            D-criterion evaluated exactly (None: all).
+        ridge: relative ridge δ for the D-criterion (see module docstring).
     """
     problem = _Problem(J_cand, index, fast, prune, ridge)
     m = problem.check_m(m)
@@ -280,7 +284,11 @@ def detmax(
         start: initial design, m distinct indices (default random).
         max_depth: deepest excursion tried.
         max_iter: maximum number of accepted excursions.
-        fast, prune, ridge: as in :func:`exchange`.
+        fast: rank-k updates (True) or exact recomputation of every candidate
+            design from scratch (False, slow reference).
+        prune: for indices other than O1, number of best candidates by the
+            D-criterion evaluated exactly (None: all).
+        ridge: relative ridge δ for the D-criterion (see module docstring).
     """
     problem = _Problem(J_cand, index, fast, prune, ridge)
     m = problem.check_m(m)

@@ -1,5 +1,7 @@
-"""Jacobian scalings: the rows (noise whitening, seed 000's Jzg with a characteristic
-length K) and the columns (unit norm, a-priori parameter std), each written once.
+"""Jacobian scalings of the rows and the columns, each written once.
+
+Rows: noise whitening, or seed 000's Jzg with a characteristic length K. Columns: unit
+norm, or the a-priori parameter std.
 
 ``J_scaled = row_scale[..., None] * J * col_scale``: the row factors come from
 :func:`weight_rows` (1/σ) or :func:`dimensionless_rows` (1/K on position rows), the

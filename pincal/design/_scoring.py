@@ -116,7 +116,7 @@ class _Problem:
     # --- rank-k scoring -------------------------------------------------------------
 
     def add_logdets(self, state: _State) -> NDArray[np.float64]:
-        """log det(A + UᵀU) for every candidate U by the determinant lemma, (N,).
+        """Log det(A + UᵀU) for every candidate U by the determinant lemma, (N,).
 
         Uses M_c = U_c A⁻¹ U_cᵀ (N, k, k), which the state keeps up to date with
         rank-k updates (O(N·k²·n) per pose change instead of O(N·k·n²)).
@@ -128,7 +128,7 @@ class _Problem:
         return np.where(sign > 0, state.logdet + ld, -np.inf)
 
     def remove_logdets(self, state: _State, members: NDArray[np.int_]) -> NDArray[np.float64]:
-        """log det(A − UᵀU) for removing each of ``members``, (len(members),)."""
+        """Log det(A − UᵀU) for removing each of ``members``, (len(members),)."""
         U = self.J[members]
         W = np.matmul(U, state.Ainv)
         C = np.eye(self.k) - np.matmul(W, U.transpose(0, 2, 1))

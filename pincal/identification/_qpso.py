@@ -203,7 +203,8 @@ def qpso(
         fun: objective. With ``vectorized=False`` it maps a position (d,) to a
             scalar; with ``vectorized=True`` it maps positions (N, d) to values
             (N,). Non-finite values count as +inf.
-        lower, upper: box bounds, shape (d,), ``upper > lower``.
+        lower: lower box bounds, shape (d,), in the units of ``x``.
+        upper: upper box bounds, shape (d,), in the units of ``x``; ``upper > lower``.
         n_particles: swarm size N (seed 003: 80).
         t_max: number of iterations (seed 003: 300).
         rng: a numpy Generator or a seed; the same seed gives the same result.

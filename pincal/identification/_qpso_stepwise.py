@@ -114,8 +114,18 @@ def qpso_stepwise(
       iterations (default ``t_max``).
 
     Args:
-        fun, lower, upper, n_particles, t_max, rng, alpha, vectorized: as for
-            :func:`qpso`; ``t_max`` caps each coarse stage.
+        fun: objective of a full position, as for :func:`qpso`: with
+            ``vectorized=False`` it maps a position (d,) to a scalar; with
+            ``vectorized=True`` it maps positions (N, d) to values (N,). Non-finite
+            values count as +inf.
+        lower: lower box bounds, shape (d,), in the units of ``x``.
+        upper: upper box bounds, shape (d,), in the units of ``x``; ``upper > lower``.
+        n_particles: swarm size N of every stage (seed 003: 80).
+        t_max: maximum number of iterations of each coarse stage (seed 003: 300).
+        rng: a numpy Generator or a seed; the same seed gives the same result.
+        alpha: contraction–expansion coefficient at the first and last iteration
+            of a stage, varied linearly (seed 003: 1.0 → 0.5); a scalar is constant.
+        vectorized: whether ``fun`` evaluates a whole swarm (N, d) in one call.
         spread_tol: relative spread of the convergence test (see above).
         patience: iterations over which ``P_g[j]`` must be stable.
         fine_t_max: iterations of the fine stage (default ``t_max``).

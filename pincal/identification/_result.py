@@ -236,8 +236,10 @@ class IdentificationResult:
         return list(zip(self.identified_names, self.values, self.std, units, strict=True))
 
     def to_dict(self, annotations: Mapping[str, Any] | None = None) -> dict[str, Any]:
-        """The JSON document of ``identification.json`` (see
-        :func:`pincal.identification._result_io.result_to_dict`)."""
+        """The JSON document of ``identification.json``.
+
+        See :func:`pincal.identification._result_io.result_to_dict`.
+        """
         from pincal.identification._result_io import result_to_dict
 
         return result_to_dict(self, annotations)

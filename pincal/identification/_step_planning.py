@@ -52,9 +52,12 @@ def step_planning(
 
     Args:
         problem: residual model (n parameters).
-        x0: (n,) start values [SI]; free: indices of the parameters to fit (the
-            insensitive ones among them are held too).
-        opts: :class:`StepPlanningOptions`; progress: optional ``(step, cost)`` callback.
+        x0: (n,) start values [SI].
+        free: indices of the parameters to fit (k,) (the insensitive ones among
+            them are held too).
+        opts: :class:`StepPlanningOptions`.
+        progress: optional ``progress(step, cost)`` callback, called with the step
+            number and the cost ½‖r‖² after each step, or None.
 
     Returns:
         SolverOutcome with :class:`StepPlanningExtras`; ``fitted`` lists the parameters

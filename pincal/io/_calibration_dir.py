@@ -1,5 +1,7 @@
-"""The calibration directory: what ``pincal calibrate`` and ``pincal demo`` write and every
-command that uses a calibration reads (``view``, ``compensate``, ``validate``, ``report``).
+"""The calibration directory: what ``pincal calibrate`` and ``pincal demo`` write.
+
+Every command that uses a calibration reads it (``view``, ``compensate``, ``validate``,
+``report``).
 
 ::
 

@@ -312,7 +312,10 @@ def write_measurements(
     Args:
         path: output file.
         measurements: the data (SI).
-        length_unit, angle_unit: units of the file's measured columns.
+        length_unit: unit of the file's measured position columns, one of ``"m"``,
+            ``"mm"``, ``"um"``.
+        angle_unit: unit of the file's measured angle columns, one of ``"rad"``,
+            ``"mrad"``, ``"urad"``, ``"deg"``.
         orientation: ``"matrix"`` (exact) or ``"rotvec"``.
         actuator_units: optional unit per actuator column (``"mm"``, ``"deg"``…); SI if None.
 

@@ -31,10 +31,11 @@ def _kind(path: Path) -> str | None:
 
 
 def read_pose_rows(path: str | Path, mech: Mechanism, max_rows: int | None = None) -> np.ndarray:
-    """Actuator rows (m, n_act) [m, rad] of ``mech`` from a pose, command or measurement
-    file, or any CSV whose header names the actuated joints.
+    """Actuator rows (m, n_act) [m, rad] of ``mech`` read from a file.
 
-    A pose file without actuator columns is solved with ``mech``'s inverse kinematics.
+    The file is a pose, command or measurement file, or any CSV whose header names the
+    actuated joints. A pose file without actuator columns is solved with ``mech``'s
+    inverse kinematics.
 
     Args:
         path: the file.

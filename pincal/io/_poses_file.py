@@ -177,7 +177,10 @@ def write_poses(
     Args:
         path: output file.
         poses: the poses [m].
-        length_unit, angle_unit: units of the file's columns.
+        length_unit: unit of the file's position columns, one of ``"m"``, ``"mm"``,
+            ``"um"``.
+        angle_unit: unit of the file's orientation columns, one of ``"rad"``,
+            ``"mrad"``, ``"urad"``, ``"deg"``.
         orientation: ``"rotvec"`` or ``"rpy"``.
         actuated: actuator column names (n_act,) when ``q_act`` is given.
         q_act: (m, n_act) actuator values [m, rad] or None.

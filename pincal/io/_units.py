@@ -90,8 +90,11 @@ def actuator_write_factors(units: Sequence[str] | None, n: int) -> np.ndarray:
 
 
 def si_actuator_units(mech: Mechanism) -> list[str]:
-    """SI unit per actuated joint (n_act,): ``"rad"`` for revolute and continuous joints,
-    ``"m"`` otherwise (for writing files whose actuator columns state their unit)."""
+    """SI unit per actuated joint (n_act,), for files whose actuator columns state their unit.
+
+    Returns:
+        ``"rad"`` for revolute and continuous joints, ``"m"`` otherwise.
+    """
     return [
         "rad" if mech.tree.joints[j].type in ("revolute", "continuous") else "m"
         for j in mech.actuated

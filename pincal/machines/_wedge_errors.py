@@ -140,7 +140,8 @@ def wedge_workspace_grid(
     """Regular n×n×n grid of poses over a box of the output space (x, z, α).
 
     Args:
-        x_range, z_range: (min, max) [m].
+        x_range: (min, max) of the x coordinate [m].
+        z_range: (min, max) of the z coordinate [m].
         alpha_range: (min, max) [rad].
         n: points per axis (≥ 1).
 

@@ -52,6 +52,8 @@ def register_instrument(
         mech: mechanism with a base-frame fixed joint ``base_joint`` directly below the
             root (see :func:`wrap_base_tool`).
         measurements: at least 3 poses with non-collinear measured positions.
+        base_joint: name of the fixed joint between the root link and the mechanism
+            whose origin is re-fitted (default ``"base_frame"``).
 
     Raises:
         UnknownNameError: no ``base_joint``.

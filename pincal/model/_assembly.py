@@ -67,8 +67,11 @@ class Assembly(KinematicQueries):
         return damped_newton(self.model, q0, free, evaluate, jacobian, self.options)
 
     def _assemble(self, guess: np.ndarray, keep_actuators: bool = False) -> np.ndarray:
-        """Close the loops from ``guess``; with ``keep_actuators`` only passive joints move
-        (the actuator values of a user-given home are kept), else every joint may move."""
+        """Close the loops from ``guess``.
+
+        With ``keep_actuators`` only passive joints move (the actuator values of a
+        user-given home are kept), else every joint may move.
+        """
         if not self.closures:
             return guess
         if keep_actuators:
@@ -139,8 +142,10 @@ class Assembly(KinematicQueries):
         return int(np.sum(s > self.options.rcond * s[0])) if s[0] > 0 else 0
 
     def _check_not_singular_home(self, rank_u: int) -> None:
-        """A rank drop at home that disappears nearby is a singular home, not a mobility
-        problem: say so (instead of "actuate more joints")."""
+        """Report a rank drop at home that disappears nearby as a singular home.
+
+        Such a drop is not a mobility problem: say so (instead of "actuate more joints").
+        """
         rng = np.random.default_rng(0)
         nearby = max(
             self._passive_rank(

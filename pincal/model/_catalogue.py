@@ -46,8 +46,11 @@ def bundled_models() -> list[str]:
 
 
 def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
-    """Find the URDF (and sidecar, if any) for a model directory, URDF path, bundled
-    model name or example-robot-data robot name (e.g. ``ur10``)."""
+    """Find the URDF (and sidecar, if any) for a model spec.
+
+    The spec is a model directory, a URDF path, a bundled model name or an
+    example-robot-data robot name (e.g. ``ur10``).
+    """
     path = Path(spec)
     if path.is_dir():
         urdf = path / f"{path.name}.urdf"

@@ -129,9 +129,12 @@ def relative_jacobian(
     """Derivative of :func:`relative_residual` given the local twists of both frames.
 
     Args:
-        oMa, oMb: world placements of frames a and b.
-        twist_a, twist_b: (6, N) local twists ``[v; ω]`` of a and b per unit of each of
-            N variables (LOCAL frame Jacobians, or parameter sensitivities).
+        oMa: world placement of frame a (the frame the residual is expressed in).
+        oMb: world placement of frame b.
+        twist_a: (6, N) local twists ``[v; ω]`` of frame a per unit of each of N
+            variables (LOCAL frame Jacobian, or parameter sensitivities) [m, rad].
+        twist_b: (6, N) local twists ``[v; ω]`` of frame b per unit of the same N
+            variables, in the same form as ``twist_a``.
         components: which residual components to return (indices into ``COMPONENTS``).
 
     Returns:

@@ -125,7 +125,7 @@ class DHNames:
     joint_type: JointType
 
     def parameter(self, quantity: DHQuantity) -> str:
-        """pincal parameter name (``<urdf joint>.<dof>``) of this row's DH ``quantity``."""
+        """Name of the pincal parameter (``<urdf joint>.<dof>``) of this row's DH ``quantity``."""
         if quantity == "a":
             return f"{self.link_joint}.tx"
         if quantity == "alpha":

@@ -121,7 +121,11 @@ def dh_urdf(
         convention: ``"standard"`` or ``"modified"``.
         probe: optional tool point, a position (3,) [m] or a 4x4 transform in the
             last DH frame; adds ``probe_joint`` (fixed) and link ``probe``.
-        joint_names, link_names, base_link: URDF names (see :func:`dh_layout`).
+        joint_names: URDF names of the motion joints, one per row (default
+            ``joint1 … jointN``; see :func:`dh_layout`).
+        link_names: URDF names of the DH frame links, one per row (default
+            ``link1 … linkN``).
+        base_link: URDF name of the DH frame 0 (the root link).
         visual_radius: radius [m] of the cylinder visuals along d and a; None
             for no visuals.
 
@@ -222,7 +226,7 @@ def dh_errors_to_parameters(
     joint_names: Sequence[str] | None = None,
     link_names: Sequence[str] | None = None,
 ) -> dict[str, float]:
-    """pincal parameter values [m, rad] equal to the given DH errors.
+    """Values [m, rad] of the pincal parameters equal to the given DH errors.
 
     The mapping is exact and unscaled (Δa ↦ ``<link joint>.tx``, Δα ↦ ``.rx``,
     Δd ↦ ``<joint>.tz`` / ``.offset``, Δθ ↦ ``<joint>.offset`` / ``.rz``).

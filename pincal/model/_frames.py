@@ -55,8 +55,11 @@ def _groups(tree: UrdfTree, closure_links: Iterable[str]) -> tuple[list, list, l
 
 
 def measured_frame_candidates(tree: UrdfTree, closure_links: Iterable[str]) -> list[str]:
-    """Candidate measured frames, best first: effector-named links, then leaves and then
-    the other links, deepest first (closure links and the root excluded)."""
+    """Candidate measured frames, best first.
+
+    Effector-named links come first, then leaves and then the other links, deepest first
+    (closure links and the root excluded).
+    """
     named, leaves, others = _groups(tree, closure_links)
     ordered = [link for _, link in named]
     return ordered + [link for link in leaves + others if link not in ordered]

@@ -227,8 +227,10 @@ def _full_dofs(mech: Mechanism, joint: str) -> list[str]:
 
 
 def full_parameters(mech: Mechanism) -> ParameterSet:
-    """Six origin twists for every URDF joint (offset replaces the twist along a
-    movable joint's axis), floating joints excluded."""
+    """Six origin twists for every URDF joint, floating joints excluded.
+
+    For a movable joint the offset replaces the twist along its axis.
+    """
     params = [
         _make(mech, j, d)
         for j, uj in mech.tree.joints.items()

@@ -242,7 +242,10 @@ def serial_mechanism(
             None: no tool frame, the sidecar's (or the automatically chosen) measured frame.
         lock: movable joints to make fixed, ``{name: value}`` (e.g. Panda fingers).
         base: add the ``base_frame`` joint (instrument → robot root).
-        T_instrument_base, T_flange_tool: initial placements (default identity).
+        T_instrument_base: initial placement of the robot base in the instrument frame,
+            the ``base_frame`` joint origin [m] (default identity).
+        T_flange_tool: initial placement of the tool in the flange frame, the
+            ``tool_frame`` joint origin [m] (default identity).
         measured: measured components (``"pose"``, ``"position"`` or a list);
             default the sidecar's, else pose.
 

@@ -103,7 +103,8 @@ def global_sensitivity_from_jacobians(
     Args:
         jacobians: (m, k, n) identification Jacobians at m workspace samples.
         names: n column names.
-        position_rows, orientation_rows: indices into the k rows of each class.
+        position_rows: indices into the k rows of the position components [m].
+        orientation_rows: indices into the k rows of the orientation components [rad].
         rtol: relative tolerance for equal sensitivities (groups).
     """
     J = np.asarray(jacobians, dtype=float)

@@ -96,8 +96,10 @@ class Identifiability:
         return tuple(self.names[i] for i in self.breaks_closure)
 
     def describe(self, max_terms: int = 4) -> list[str]:
-        """One sentence per parameter that is not identifiable, e.g.
-        ``"leg3_u1.rx is not identifiable (absorbed by +1.000·leg3_u2.rx)"``."""
+        """One sentence per parameter that is not identifiable.
+
+        For example ``"leg3_u1.rx is not identifiable (absorbed by +1.000·leg3_u2.rx)"``.
+        """
         lines = []
         for k in self.unidentifiable:
             combo = self.combinations.get(int(k), {})
@@ -234,7 +236,8 @@ def identifiability(
     Args:
         mech: nominal mechanism.
         params: parameter set to analyse.
-        q_act_rows: (m, n_act) poses; by default ``n_poses`` random workspace poses.
+        q_act_rows: (m, n_act) poses [m, rad]; by default ``n_poses`` random workspace poses.
+        n_poses: number of random workspace poses sampled when ``q_act_rows`` is None.
         rng: random generator for the default poses.
         rtol: relative rank threshold.
     """
