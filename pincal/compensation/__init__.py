@@ -1,5 +1,7 @@
-"""Stage 6 — using the calibration: actuator commands that bring the calibrated model to
-target poses.
+"""Stage 6 — using the calibration: commands that reach targets with the calibrated model.
+
+Actuator commands that bring the calibrated model to target poses, in the components the
+machine controls.
 """
 
 from __future__ import annotations

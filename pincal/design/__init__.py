@@ -1,4 +1,6 @@
-"""Stage 3 — where to measure: observability indices and Jacobian scalings, candidate
+"""Stage 3 — where to measure.
+
+Observability indices and Jacobian scalings, candidate
 poses, exchange / DETMAX / greedy selection, Cramér–Rao predictions.
 
 The files of a selection are written by :func:`pincal.io.write_pose_design`.

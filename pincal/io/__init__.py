@@ -1,4 +1,6 @@
-"""Files: the calibration directory, measurement, pose and command CSVs, pose-design
+"""Files: every format pincal reads and writes.
+
+The calibration directory, measurement, pose and command CSVs, pose-design
 files, URDF + sidecar export, atomic writes.
 """
 

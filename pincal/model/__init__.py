@@ -1,4 +1,6 @@
-"""Stage 1 — the machine: URDF tree, typed sidecar, loop closures, :class:`Mechanism`,
+"""Stage 1 — the machine.
+
+URDF tree, typed sidecar, loop closures, :class:`Mechanism`,
 parameters (displacements of joint placements), serial chains and DH tables, the
 catalogue of bundled models.
 """

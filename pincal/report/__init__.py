@@ -1,4 +1,6 @@
-"""Reports of a calibration: plots, Markdown and HTML, and the report of a calibration
+"""Reports of a calibration.
+
+Plots, Markdown and HTML, and the report of a calibration
 output directory (read from its ``identification.json``).
 """
 

@@ -1,4 +1,6 @@
-"""Stage 2 — how errors show: the analytic identification Jacobian, identifiability
+"""Stage 2 — how errors show.
+
+The analytic identification Jacobian, identifiability
 (rank, base set, absorbed combinations, parameters that break loop closure), the one
 numerical-rank rule, and global sensitivity over a workspace.
 """
