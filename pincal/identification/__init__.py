@@ -1,7 +1,7 @@
 """Stage 5 — from measurements to parameters.
 
-One :class:`IdentificationProblem`, solved by a registered solver (``"gauss-newton"``, ``"lm"``, ``"qpso"``, ``"qpso-stepwise"``,
-``"step-planned"``), gives one :class:`IdentificationResult` with covariances at the
+One :class:`IdentificationProblem`, solved by a registered solver (``"gauss-newton"``,
+``"lm"``, ``"qpso"``, ``"qpso-stepwise"``, ``"step-planned"``), gives one :class:`IdentificationResult` with covariances at the
 Cramér–Rao bound; ``IdentificationResult.to_dict`` / ``from_dict`` write and read
 ``identification.json``.
 """

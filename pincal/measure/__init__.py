@@ -1,6 +1,7 @@
 """Stage 4 — what an instrument sees.
 
-Measurements and noise models (SI inside), simulation, the laser tracker, instrument registration, pose errors against a reference.
+Measurements and noise models (SI inside), simulation, the laser tracker, instrument
+registration, pose errors against a reference.
 """
 
 from __future__ import annotations
