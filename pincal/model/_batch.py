@@ -148,8 +148,14 @@ class BatchModel:
             M = model.jointPlacements[j]
             joints.append(
                 _Joint(
-                    kind[0], int(model.parents[j]), jm.idx_q, jm.idx_v, kind[1],
-                    _skew(kind[1]), M.rotation.copy(), M.translation.copy(),
+                    kind[0],
+                    int(model.parents[j]),
+                    jm.idx_q,
+                    jm.idx_v,
+                    kind[1],
+                    _skew(kind[1]),
+                    M.rotation.copy(),
+                    M.translation.copy(),
                 )
             )
         #: False when the model has a joint type this module does not implement
@@ -198,9 +204,9 @@ class BatchModel:
             else:
                 quat = Q[:, jt.iq + (3 if jt.kind == "F" else 0) :][:, :4]
                 Ri = R_place @ quat_to_matrix(quat)
-                pi = p_place + (R_place @ Q[:, jt.iq : jt.iq + 3, None])[..., 0] * (
-                    jt.kind == "F"
-                )
+                pi = p_place
+                if jt.kind == "F":
+                    pi = p_place + (R_place @ Q[:, jt.iq : jt.iq + 3, None])[..., 0]
                 oR[:, j], op[:, j] = Ri, pi
                 v0 = jt.iv
                 if jt.kind == "F":  # local linear velocity columns
