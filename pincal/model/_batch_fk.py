@@ -20,10 +20,52 @@ import pinocchio as pin
 from pincal.errors import ShapeError
 from pincal.model._batch import BatchKinematics, BatchModel
 from pincal.model._branch import BranchTracking
+from pincal.model._closures import Closure
 
-__all__ = ["BatchTracking"]
+__all__ = ["BatchTracking", "closure_jacobian_batch", "closure_residual_batch"]
 
 _MAX_BATCH_ITERATIONS = 30
+
+
+def closure_residual_batch(
+    c: Closure, Ra: np.ndarray, pa: np.ndarray, Rb: np.ndarray, pb: np.ndarray
+) -> np.ndarray:
+    """Residuals (N, c.size) of closure ``c`` from frame placements (N, 3, 3), (N, 3)."""
+    if c.is_point:
+        return pb - pa
+    Rat = np.swapaxes(Ra, 1, 2)
+    full = [(Rat @ (pb - pa)[:, :, None])[..., 0]]
+    if c.components[-1] >= 3:
+        full.append(np.array([pin.log3(M) for M in Rat @ Rb]))
+    return np.concatenate(full, axis=1)[:, list(c.components)]
+
+
+def closure_jacobian_batch(
+    c: Closure,
+    Ra: np.ndarray,
+    pa: np.ndarray,
+    Rb: np.ndarray,
+    pb: np.ndarray,
+    Ta: np.ndarray,
+    Tb: np.ndarray,
+) -> np.ndarray:
+    """(N, c.size, n) derivative of :func:`closure_residual_batch` given local twists.
+
+    Args:
+        c: the closure; Ra, pa, Rb, pb: placements (N, 3, 3), (N, 3) of its frames.
+        Ta, Tb: (N, 6, n) local twists ``[v; ω]`` of frames a and b per unit of each of
+            n variables (LOCAL frame Jacobians or parameter sensitivities).
+    """
+    if c.is_point:
+        return Rb @ Tb[:, :3] - Ra @ Ta[:, :3]
+    Rat = np.swapaxes(Ra, 1, 2)
+    t = (Rat @ (pb - pa)[:, :, None])[..., 0]
+    Rab = Rat @ Rb
+    blocks = [np.cross(t[:, :, None], Ta[:, 3:], axis=1) + Rab @ Tb[:, :3] - Ta[:, :3]]
+    if c.components[-1] >= 3:
+        dw = Tb[:, 3:] - np.swapaxes(Rab, 1, 2) @ Ta[:, 3:]
+        blocks.append(np.array([pin.Jlog3(M) for M in Rab]) @ dw)
+    return np.concatenate(blocks, axis=1)[:, list(c.components)]
 
 
 class BatchTracking(BranchTracking):
@@ -75,31 +117,10 @@ class BatchTracking(BranchTracking):
         for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
             Ra, pa = bm.frame_placement(bk, a)
             Rb, pb = bm.frame_placement(bk, b)
-            if c.is_point:
-                res.append(pb - pa)
-                if jacobian:
-                    Ja = bm.frame_jacobian(bk, a, local_world_aligned=True)
-                    Jb = bm.frame_jacobian(bk, b, local_world_aligned=True)
-                    jacs.append(Jb[:, :3] - Ja[:, :3])
-                continue
-            Rat = np.swapaxes(Ra, 1, 2)
-            t = (Rat @ (pb - pa)[:, :, None])[..., 0]
-            Rab = Rat @ Rb
-            full = [t]
-            if c.components[-1] >= 3:
-                full.append(np.array([pin.log3(M) for M in Rab]))
-            r = np.concatenate(full, axis=1)
-            sel = list(c.components)
-            res.append(r[:, sel])
+            res.append(closure_residual_batch(c, Ra, pa, Rb, pb))
             if jacobian:
                 Ja, Jb = bm.frame_jacobian(bk, a), bm.frame_jacobian(bk, b)
-                tx = np.cross(t[:, :, None], Ja[:, 3:], axis=1)  # skew(t) ω_a
-                blocks = [tx + Rab @ Jb[:, :3] - Ja[:, :3]]
-                if c.components[-1] >= 3:
-                    dw = Jb[:, 3:] - np.swapaxes(Rab, 1, 2) @ Ja[:, 3:]
-                    Jl = np.array([pin.Jlog3(M) for M in Rab])
-                    blocks.append(Jl @ dw)
-                jacs.append(np.concatenate(blocks, axis=1)[:, sel])
+                jacs.append(closure_jacobian_batch(c, Ra, pa, Rb, pb, Ja, Jb))
         r = np.concatenate(res, axis=1)
         return r, (np.concatenate(jacs, axis=1) if jacobian else None)
 
