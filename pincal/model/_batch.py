@@ -54,17 +54,32 @@ def exp3_batch(w: np.ndarray) -> np.ndarray:
 def quat_to_matrix(quat: np.ndarray) -> np.ndarray:
     """Rotation matrices (N, 3, 3) of unit quaternions (N, 4) stored x, y, z, w."""
     x, y, z, w = quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3]
+    tx, ty, tz = 2 * x, 2 * y, 2 * z
+    twx, twy, twz = tx * w, ty * w, tz * w
+    txx, txy, txz = tx * x, ty * x, tz * x
+    tyy, tyz, tzz = ty * y, tz * y, tz * z
     R = np.empty((quat.shape[0], 3, 3))
-    R[:, 0, 0] = 1 - 2 * (y * y + z * z)
-    R[:, 0, 1] = 2 * (x * y - z * w)
-    R[:, 0, 2] = 2 * (x * z + y * w)
-    R[:, 1, 0] = 2 * (x * y + z * w)
-    R[:, 1, 1] = 1 - 2 * (x * x + z * z)
-    R[:, 1, 2] = 2 * (y * z - x * w)
-    R[:, 2, 0] = 2 * (x * z - y * w)
-    R[:, 2, 1] = 2 * (y * z + x * w)
-    R[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    R[:, 0, 0], R[:, 0, 1], R[:, 0, 2] = 1 - (tyy + tzz), txy - twz, txz + twy
+    R[:, 1, 0], R[:, 1, 1], R[:, 1, 2] = txy + twz, 1 - (txx + tzz), tyz - twx
+    R[:, 2, 0], R[:, 2, 1], R[:, 2, 2] = txz - twy, tyz + twx, 1 - (txx + tyy)
     return R
+
+
+def _axis_rotation(axis: np.ndarray, c: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Rotations (N, 3, 3) about a unit axis (3,) of angles given by cos, sin (N,)."""
+    N = c.shape[0]
+    nz = np.nonzero(axis)[0]
+    if nz.size == 1 and axis[nz[0]] == 1.0:  # aligned axis: exact cos/sin entries
+        k = int(nz[0])
+        a, b = (k + 1) % 3, (k + 2) % 3
+        R = np.zeros((N, 3, 3))
+        R[:, k, k] = 1.0
+        R[:, a, a], R[:, b, b] = c, c
+        R[:, a, b], R[:, b, a] = -s, s
+        return R
+    t = 1.0 - c
+    R = (t[:, None, None] * np.outer(axis, axis)) + c[:, None, None] * np.eye(3)
+    return R + s[:, None, None] * _skew(axis)
 
 
 def _quat_mul_exp(quat: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -181,39 +196,41 @@ class BatchModel:
         oR[:, 0], op[:, 0] = np.eye(3), 0.0
         Jw = np.zeros((N, 6, self.nv))
         for j, jt in enumerate(self._joints, start=1):
+            # Pinocchio's order: liMi = placement · M_joint(q), oMi = oM_parent · liMi
             Rp, pp = oR[:, jt.parent], op[:, jt.parent]
-            R_place = Rp @ jt.R0  # (N, 3, 3)
-            p_place = pp + Rp @ jt.p0
             if jt.kind in ("R", "RU"):
                 if jt.kind == "R":
                     th = Q[:, jt.iq]
                     s, c = np.sin(th), np.cos(th)
                 else:
                     c, s = Q[:, jt.iq], Q[:, jt.iq + 1]
-                Rj = np.eye(3) + s[:, None, None] * jt.K + (1.0 - c)[:, None, None] * (jt.K @ jt.K)
-                oR[:, j] = R_place @ Rj
-                op[:, j] = p_place
-                w = R_place @ jt.axis  # Rj leaves its own axis unchanged
-                Jw[:, 3:, jt.iv] = w
-                Jw[:, :3, jt.iv] = np.cross(p_place, w)
+                liR = jt.R0 @ _axis_rotation(jt.axis, c, s)
+                lip = np.broadcast_to(jt.p0, (N, 3))
             elif jt.kind == "P":
-                oR[:, j] = R_place
-                a = R_place @ jt.axis
-                op[:, j] = p_place + Q[:, jt.iq, None] * a
-                Jw[:, :3, jt.iv] = a
+                liR = np.broadcast_to(jt.R0, (N, 3, 3))
+                lip = jt.p0 + (jt.R0 @ (Q[:, jt.iq, None] * jt.axis)[:, :, None])[..., 0]
             else:
-                quat = Q[:, jt.iq + (3 if jt.kind == "F" else 0) :][:, :4]
-                Ri = R_place @ quat_to_matrix(quat)
-                pi = p_place
+                i4 = jt.iq + (3 if jt.kind == "F" else 0)
+                liR = jt.R0 @ quat_to_matrix(Q[:, i4 : i4 + 4])
+                lip = np.broadcast_to(jt.p0, (N, 3))
                 if jt.kind == "F":
-                    pi = p_place + (R_place @ Q[:, jt.iq : jt.iq + 3, None])[..., 0]
-                oR[:, j], op[:, j] = Ri, pi
+                    lip = jt.p0 + (jt.R0 @ Q[:, jt.iq : jt.iq + 3, None])[..., 0]
+            Ri = Rp @ liR
+            pi = pp + (Rp @ lip[:, :, None])[..., 0]
+            oR[:, j], op[:, j] = Ri, pi
+            if jt.kind in ("R", "RU"):
+                w = Ri @ jt.axis
+                Jw[:, 3:, jt.iv] = w
+                Jw[:, :3, jt.iv] = np.cross(pi, w)
+            elif jt.kind == "P":
+                Jw[:, :3, jt.iv] = Ri @ jt.axis
+            else:
                 v0 = jt.iv
                 if jt.kind == "F":  # local linear velocity columns
                     Jw[:, :3, v0 : v0 + 3] = Ri
                     v0 += 3
                 Jw[:, 3:, v0 : v0 + 3] = Ri
-                Jw[:, :3, v0 : v0 + 3] = _skew(pi) @ Ri
+                Jw[:, :3, v0 : v0 + 3] = np.cross(pi[:, :, None], Ri, axis=1)
         return BatchKinematics(Q, oR, op, Jw)
 
     def frame_placement(self, bk: BatchKinematics, fid: int) -> tuple[np.ndarray, np.ndarray]:

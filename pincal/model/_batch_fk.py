@@ -200,6 +200,26 @@ class BatchTracking(BranchTracking):
             ok[io[(signs != self.home_branch) | risky]] = False
         return Q, ok, BatchKinematics(Q, out_R, out_p, out_J)
 
+    def try_configurations_batch(
+        self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, BatchKinematics | None]:
+        """Batched Newton only: configurations (N, nq), accepted mask (N,), kinematics.
+
+        Rows not accepted (no convergence, other branch, possibly singular) hold no
+        usable configuration: redo them with :meth:`configuration`. For a mechanism the
+        batched solve does not apply to, nothing is accepted (kinematics None).
+        """
+        rows = self._check_rows(q_act_rows, len(self.actuated), "actuator rows")
+        N = rows.shape[0]
+        G = np.tile(self.q_home, (N, 1)) if guesses is None else guesses
+        G = self._check_rows(G, self.model.nq, "guesses")
+        if not self.closures and self.batch_model.supported:
+            Q = self._actuators_batch(G, rows)
+            return Q, np.ones(N, dtype=bool), self.batch_model.kinematics(Q)
+        if not self._batchable:
+            return np.array(G), np.zeros(N, dtype=bool), None
+        return self._solve_batch(rows, G)
+
     def configurations_batch(
         self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
     ) -> tuple[np.ndarray, BatchKinematics | None]:
