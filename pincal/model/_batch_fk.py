@@ -18,7 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ShapeError
-from pincal.model._batch import BatchKinematics, BatchModel
+from pincal.model._batch import BatchKinematics, BatchModel, cross_cols, mm, mv
 from pincal.model._branch import BranchTracking
 from pincal.model._closures import Closure
 
@@ -34,9 +34,9 @@ def closure_residual_batch(
     if c.is_point:
         return pb - pa
     Rat = np.swapaxes(Ra, 1, 2)
-    full = [(Rat @ (pb - pa)[:, :, None])[..., 0]]
+    full = [mv(Rat, pb - pa)]
     if c.components[-1] >= 3:
-        full.append(np.array([pin.log3(M) for M in Rat @ Rb]))
+        full.append(np.array([pin.log3(M) for M in mm(Rat, Rb)]))
     return np.concatenate(full, axis=1)[:, list(c.components)]
 
 
@@ -57,13 +57,13 @@ def closure_jacobian_batch(
             n variables (LOCAL frame Jacobians or parameter sensitivities).
     """
     if c.is_point:
-        return Rb @ Tb[:, :3] - Ra @ Ta[:, :3]
+        return mm(Rb, Tb[:, :3]) - mm(Ra, Ta[:, :3])
     Rat = np.swapaxes(Ra, 1, 2)
-    t = (Rat @ (pb - pa)[:, :, None])[..., 0]
-    Rab = Rat @ Rb
-    blocks = [np.cross(t[:, :, None], Ta[:, 3:], axis=1) + Rab @ Tb[:, :3] - Ta[:, :3]]
+    t = mv(Rat, pb - pa)
+    Rab = mm(Rat, Rb)
+    blocks = [cross_cols(t[:, :, None], Ta[:, 3:]) + mm(Rab, Tb[:, :3]) - Ta[:, :3]]
     if c.components[-1] >= 3:
-        dw = Tb[:, 3:] - np.swapaxes(Rab, 1, 2) @ Ta[:, 3:]
+        dw = Tb[:, 3:] - mm(np.swapaxes(Rab, 1, 2), Ta[:, 3:])
         blocks.append(np.array([pin.Jlog3(M) for M in Rab]) @ dw)
     return np.concatenate(blocks, axis=1)[:, list(c.components)]
 
@@ -118,11 +118,22 @@ class BatchTracking(BranchTracking):
             Ra, pa = bm.frame_placement(bk, a)
             Rb, pb = bm.frame_placement(bk, b)
             res.append(closure_residual_batch(c, Ra, pa, Rb, pb))
-            if jacobian:
+            if jacobian and c.is_point:  # world point velocities: v_o + ω × p
+                jacs.append(self._point_closure_jacobian(bk, a, b, pa, pb))
+            elif jacobian:
                 Ja, Jb = bm.frame_jacobian(bk, a), bm.frame_jacobian(bk, b)
                 jacs.append(closure_jacobian_batch(c, Ra, pa, Rb, pb, Ja, Jb))
         r = np.concatenate(res, axis=1)
         return r, (np.concatenate(jacs, axis=1) if jacobian else None)
+
+    def _point_closure_jacobian(
+        self, bk: BatchKinematics, a: int, b: int, pa: np.ndarray, pb: np.ndarray
+    ) -> np.ndarray:
+        """(N, 3, nv) derivative of ``p_b − p_a`` (world axes) from the WORLD Jacobian."""
+        ma, mb = self.batch_model.support_of_frame(a), self.batch_model.support_of_frame(b)
+        Jv, Jw = bk.jacobian[:, :3], bk.jacobian[:, 3:]
+        P = pb[:, :, None] * mb - pa[:, :, None] * ma
+        return Jv * (mb.astype(float) - ma) + cross_cols(Jw, P)
 
     def _actuators_batch(self, Q: np.ndarray, A: np.ndarray) -> np.ndarray:
         out = np.array(Q, dtype=float)

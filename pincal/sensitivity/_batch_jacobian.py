@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pincal.model._batch import BatchKinematics
+from pincal.model._batch import BatchKinematics, cross_cols, mm, mv
 from pincal.model._batch_fk import closure_jacobian_batch
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
@@ -71,7 +71,7 @@ def _param_twists(
         else:
             M = model.jointPlacements[jid]
             Rp, pp = bk.rotations[:, parent], bk.translations[:, parent]
-            origins[j] = (Rp @ M.rotation, pp + Rp @ M.translation)
+            origins[j] = (mm(Rp, M.rotation), pp + mv(Rp, M.translation))
     out = {}
     for frame in mech.key_frames:
         P = np.zeros((N, 6, n))
@@ -80,11 +80,11 @@ def _param_twists(
         for j in plan.moves[frame]:
             cols, _, eff = twists[j]
             Ro, po = origins[j]
-            Rx = Rft @ Ro  # oMf⁻¹ · A_j
-            px = (Rft @ (po - pf)[:, :, None])[..., 0]
-            ang = Rx @ eff[3:]
+            Rx = mm(Rft, Ro)  # oMf⁻¹ · A_j
+            px = mv(Rft, po - pf)
+            ang = mm(Rx, eff[3:])
             P[:, 3:, cols] = ang
-            P[:, :3, cols] = Rx @ eff[:3] + np.cross(px[:, :, None], ang, axis=1)
+            P[:, :3, cols] = mm(Rx, eff[:3]) + cross_cols(px[:, :, None], ang)
         out[frame] = P
     return placements, out
 
@@ -129,7 +129,7 @@ def sensitivities_batch(
     placements, P = _param_twists(mech, params, bk, values, plan)
     Rm, pm = placements[mech.measured_frame]
     Pm = P[mech.measured_frame]
-    J = np.concatenate([Rm @ Pm[:, :3], Pm[:, 3:]], axis=1)
+    J = np.concatenate([mm(Rm, Pm[:, :3]), Pm[:, 3:]], axis=1)
     if mech.closures:
         free = mech.free_dofs
         Jc_p = np.concatenate(
@@ -144,6 +144,6 @@ def sensitivities_batch(
         _, Jc = mech.closure_terms_batch(bk)
         dqu_dp = np.linalg.solve(Jc[:, :, free], -Jc_p)
         Jl = mech.batch_model.frame_jacobian(bk, mech.frame_id(mech.measured_frame))
-        Jm_u = np.concatenate([Rm @ Jl[:, :3, free], Jl[:, 3:, free]], axis=1)
+        Jm_u = np.concatenate([mm(Rm, Jl[:, :3, free]), Jl[:, 3:, free]], axis=1)
         J = J + Jm_u @ dqu_dp
     return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
