@@ -196,7 +196,7 @@ def worker(repeats: int, n: int, sizes: list[int]) -> dict:
         res["identify"][m] = {
             "time": t,
             "iterations": r.iterations,
-            "values": np.asarray(r.full_values).tolist(),
+            "values": np.asarray(r.values).tolist(),
         }
     return res
 
@@ -248,8 +248,10 @@ def _run(path: Path, args: list[str]) -> dict:
         cwd=str(path),
         capture_output=True,
         text=True,
-        check=True,
+        check=False,
     )
+    if out.returncode:
+        raise RuntimeError(f"benchmark subprocess failed in {path}:\n{out.stderr[-3000:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
