@@ -111,7 +111,7 @@ def floors(repeats: int, n: int) -> dict[str, float]:
     out["stewart FK cold"] = median_time(lambda: numpy_stewart_fk(L, p0, R0), repeats) / n
 
     def warm_eval():
-        p, R, nn, a_w = numpy_stewart_fk(L, pw, Rw)
+        _, R, nn, a_w = numpy_stewart_fk(L, pw, Rw)
         numpy_stewart_jacobian(R, nn, a_w)
 
     out["stewart FK warm"] = median_time(lambda: numpy_stewart_fk(L, pw, Rw), repeats) / n
@@ -289,8 +289,9 @@ def main() -> None:
     if args.v01.is_dir() and not args.quick:
         old = _run(args.v01, ["--worker", f"--repeats={args.repeats}", f"--poses={args.poses}",
                               f"--sizes={args.sizes}"])  # fmt: skip
+    libs = ", ".join(blas)
     print(f"pin {pin.__version__}, numpy {np.__version__}; BLAS threads in every process: 1 "
-          f"(threadpool_limits(1), OPENBLAS_NUM_THREADS=1; libraries: {', '.join(blas)})")  # fmt: skip
+          f"(threadpool_limits(1), OPENBLAS_NUM_THREADS=1; libraries: {libs})")  # fmt: skip
     print(f"median of {args.repeats} repeats over {args.poses} random workspace poses; "
           f"shared machine: compare the ratios (same run)\n")  # fmt: skip
     head = f"{'operation (per pose)':28s} {'pincal now':>13s} {'pincal 0.1':>13s} {'floor':>13s}"
@@ -310,8 +311,9 @@ def main() -> None:
             rel = np.max(np.abs(np.subtract(r["values"], o["values"]))) / np.max(
                 np.abs(o["values"])
             )
+            up = o["time"] / r["time"]
             line += (f"   0.1 {o['time']:7.3f} s ({o['iterations']} it.)   "
-                     f"speed-up {o['time'] / r['time']:5.1f}×   max rel. diff {rel:.1e}")  # fmt: skip
+                     f"speed-up {up:5.1f}×   max rel. diff {rel:.1e}")  # fmt: skip
         print(line)
     print("\nidentify scaling (fresh process each; peak resident memory of the process):")
     big = [1000, 3000] + ([] if args.quick else [10000])
