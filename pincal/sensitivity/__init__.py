@@ -5,6 +5,7 @@ numerical-rank rule, and global sensitivity over a workspace.
 
 from __future__ import annotations
 
+from pincal.sensitivity._batch_jacobian import BatchSensitivity, sensitivities_batch
 from pincal.sensitivity._global import (
     GlobalSensitivity,
     global_sensitivity,
@@ -25,6 +26,7 @@ from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
 __all__ = [
     "RANK_RTOL",
+    "BatchSensitivity",
     "GlobalSensitivity",
     "Identifiability",
     "PoseSensitivity",
@@ -37,4 +39,5 @@ __all__ = [
     "identification_jacobian",
     "numerical_rank",
     "pose_sensitivity",
+    "sensitivities_batch",
 ]
