@@ -95,3 +95,18 @@ def test_over_constrained_weld_closure_terms_and_fallback():
     for i, q in enumerate(Qp):
         np.testing.assert_allclose(r[i], mech.closure_residual(q), atol=1e-12)
         np.testing.assert_allclose(J[i], mech.closure_jacobian(q), atol=1e-12)
+
+
+def test_batched_solve_from_the_other_mode_returns_home_branch():
+    from tests.model.test_open_world import MACHINES
+
+    prs3 = pincal.load_mechanism(MACHINES / "prs3")
+    rows = np.array([[0.211, 0.237, 0.257], [0.208, 0.228, 0.265]])
+    Q = prs3.configurations(rows)
+    other = prs3._newton(prs3.with_actuators(Q[0], rows[1]), prs3.free_dofs).q
+    sign = np.sign(np.linalg.det(prs3.closure_jacobian(other)[:, prs3.free_dofs]))
+    assert sign == -prs3.home_branch  # the guess is on the other assembly mode
+    Qb, _ = prs3.configurations_batch(rows[1:], guesses=other[None])
+    np.testing.assert_allclose(Qb[0], Q[1], atol=1e-9)
+    _, ok, _ = prs3.try_configurations_batch(rows[1:], guesses=other[None])
+    assert not ok[0]  # the batched Newton alone stays on the guess's mode: rejected
