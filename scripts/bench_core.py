@@ -183,6 +183,7 @@ def worker(repeats: int, n: int, sizes: list[int]) -> dict:
     ur_rows = pincal.sample_actuators(ur, n, rng)
     ur_qs = ur.configurations(ur_rows)
     res["ur10 evaluate+J"] = median_time(lambda: evaluate(ur, full, ur_rows, ur_qs), repeats) / n
+    res["floor"] = floors(repeats, n)  # same process, right after: load-comparable
     noise = pincal.NoiseModel(0.01, 0.02)
     true = np.random.default_rng(1).normal(0, 0.5e-3, len(p42))
     actual = p42.apply(mech, true)
@@ -256,7 +257,7 @@ def _run(path: Path, args: list[str]) -> dict:
 
 
 def _fmt(t: float | None) -> str:
-    return "—" if t is None else f"{t * 1e6:10.1f} µs"
+    return "—" if t is None else f"{t * 1e6:.1f} µs"
 
 
 def main() -> None:
@@ -282,7 +283,6 @@ def main() -> None:
             print(json.dumps(design_and_demo()))
             return
         blas = sorted({f"{i['internal_api']} {i['num_threads']}" for i in threadpool_info()})
-        floor = floors(args.repeats, args.poses)
     now = _run(ROOT, ["--worker", f"--repeats={args.repeats}", f"--poses={args.poses}",
                       f"--sizes={args.sizes}"])  # fmt: skip
     old = None
@@ -294,15 +294,21 @@ def main() -> None:
           f"(threadpool_limits(1), OPENBLAS_NUM_THREADS=1; libraries: {libs})")  # fmt: skip
     print(f"median of {args.repeats} repeats over {args.poses} random workspace poses; "
           f"shared machine: compare the ratios (same run)\n")  # fmt: skip
-    head = f"{'operation (per pose)':28s} {'pincal now':>13s} {'pincal 0.1':>13s} {'floor':>13s}"
-    print(head + f" {'0.1/now':>8s} {'now/floor':>9s}")
+    print("per pose; 'floor' = the floor measured in the same process right after; the")
+    print("normalised 0.1/now ratio divides each version's time by its own floor (load drift)\n")
+    head = f"{'operation':22s} {'now':>11s} {'floor':>10s} {'now/floor':>9s}"
+    print(head + f" {'0.1':>11s} {'floor':>10s} {'0.1/now':>8s} {'normalised':>10s}")
     for key in ("stewart FK cold", "stewart FK warm", "stewart evaluate+J", "ur10 evaluate+J"):
-        t_old = old[key] if old else None
-        r_old = f"{t_old / now[key]:7.1f}×" if t_old else "       —"
-        print(f"{key:28s} {_fmt(now[key]):>13s} {_fmt(t_old):>13s} {_fmt(floor[key]):>13s} "
-              f"{r_old} {now[key] / floor[key]:8.1f}×")  # fmt: skip
-    print(f"{'ur10 FK + kinematic regressor':28s} {'':>13s} {'':>13s} "
-          f"{_fmt(floor['ur10 FK+regressor']):>13s}")  # fmt: skip
+        f_now = now["floor"][key]
+        line = f"{key:22s} {_fmt(now[key]):>11s} {_fmt(f_now):>10s} {now[key] / f_now:8.1f}×"
+        if old:
+            f_old = old["floor"][key]
+            norm = (old[key] / f_old) / (now[key] / f_now)
+            line += (f" {_fmt(old[key]):>11s} {_fmt(f_old):>10s} {old[key] / now[key]:7.1f}×"
+                     f" {norm:9.1f}×")  # fmt: skip
+        print(line)
+    print(f"{'ur10 FK + regressor':22s} {'':>11s} {_fmt(now['floor']['ur10 FK+regressor']):>10s}"
+          f"  (pin.computeFrameKinematicRegressor, for reference)")  # fmt: skip
     print("\nidentify, Stewart 42 parameters (Gauss–Newton):")
     for m, r in now["identify"].items():
         line = f"  N = {int(m):5d}: now {r['time']:7.3f} s ({r['iterations']} it.)"
