@@ -1,46 +1,46 @@
-"""Benchmark of the core engine on the 6-UPS Stewart platform.
+"""Benchmark of the core engine: pincal now, pincal 0.1 and the floors, in one run.
 
-Run: python scripts/bench_core.py [--repeats 7]
+Run: python scripts/bench_core.py [--repeats 5] [--v01 /work/wt/v01] [--quick]
 
-Prints a table of median times over repeats (each repeat loops over a batch of
-poses): generic FK (cold / warm start), IK, the analytic identification Jacobian per
-pose, finite-difference Jacobians for comparison, a plain-numpy Stewart Newton FK
-measured in the same run, and full 42-parameter identifications.
+Every operation is timed per pose (median of repeats) for
+
+* pincal now (this checkout, batched paths),
+* pincal 0.1 (the ``1d5694d`` commit checked out at ``--v01``; create it with
+  ``git worktree add /work/wt/v01 1d5694d``), run in a subprocess with PYTHONPATH
+  pointing there (skipped when the directory is missing),
+* the floors: a plain-numpy batched Newton/closed-form Stewart (same sizes: 6 legs,
+  42 parameters) and, for the UR10, the Pinocchio calls alone
+  (``framesForwardKinematics`` + ``computeFrameJacobian`` per pose).
+
+All processes run with one BLAS thread (``threadpool_limits(1)``; stated in the
+output). The machine may be shared: compare the ratios, which are measured in the
+same run, rather than absolute times. Also printed: identify time and peak memory for
+N = 1 000 … 10 000 poses (fresh subprocess each), ``pincal demo`` and the
+4 096-candidate Stewart pose selection.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import resource
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from threadpoolctl import threadpool_info, threadpool_limits
 
-import pincal
-
+ROOT = Path(__file__).resolve().parents[1]
 B_DEG = (-15, 15, 105, 135, 225, 255)
 P_DEG = (-45, 45, 75, 165, 195, 285)
 BASE = np.array([[0.3 * np.cos(t), 0.3 * np.sin(t), 0.0] for t in np.radians(B_DEG)])
 PLAT = np.array([[0.15 * np.cos(t), 0.15 * np.sin(t), 0.0] for t in np.radians(P_DEG)])
-
-
-def numpy_stewart_fk(lengths: np.ndarray, p0: np.ndarray, R0: np.ndarray, tol=1e-12):
-    """Plain-numpy Newton FK of the nominal Stewart platform (pose as p, R)."""
-    p, R = p0.copy(), R0.copy()
-    for _ in range(50):
-        a_w = PLAT @ R.T
-        legs = a_w + p - BASE
-        norms = np.linalg.norm(legs, axis=1)
-        r = norms - lengths
-        if np.max(np.abs(r)) <= tol:
-            return p, R
-        n = legs / norms[:, None]
-        J = np.hstack([n, np.cross(a_w, n)])  # d length / d(p, world rotation)
-        dx = np.linalg.solve(J, -r)
-        p = p + dx[:3]
-        R = pin.exp3(dx[3:]) @ R
-    raise RuntimeError("numpy FK did not converge")
 
 
 def median_time(fn, repeats: int) -> float:
@@ -52,91 +52,286 @@ def median_time(fn, repeats: int) -> float:
     return statistics.median(times)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeats", type=int, default=7)
-    args = ap.parse_args()
+# ---------------------------------------------------------------------- floors
+def _exp3(w: np.ndarray) -> np.ndarray:
+    th = np.linalg.norm(w, axis=1)[:, None, None]
+    K = np.zeros((w.shape[0], 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -w[:, 2], w[:, 1], -w[:, 0]
+    K = K - np.swapaxes(K, 1, 2)
+    t = np.maximum(th, 1e-12)
+    return np.eye(3) + np.sin(t) / t * K + (1 - np.cos(t)) / t**2 * (K @ K)
+
+
+def numpy_stewart_fk(L: np.ndarray, p: np.ndarray, R: np.ndarray, tol: float = 1e-12):
+    """Batched closed-form Newton FK of the nominal Stewart (leg lengths L (N, 6))."""
+    p, R = p.copy(), R.copy()
+    for _ in range(50):
+        a_w = PLAT @ np.swapaxes(R, 1, 2)  # (N, 6, 3)
+        legs = a_w + p[:, None] - BASE
+        norms = np.linalg.norm(legs, axis=2)
+        r = norms - L
+        if np.max(np.abs(r)) <= tol:
+            return p, R, legs / norms[..., None], a_w
+        n = legs / norms[..., None]
+        J = np.concatenate([n, np.cross(a_w, n)], axis=2)
+        dx = np.linalg.solve(J, -r[..., None])[..., 0]
+        p = p + dx[:, :3]
+        R = _exp3(dx[:, 3:]) @ R
+    raise RuntimeError("numpy FK did not converge")
+
+
+def numpy_stewart_jacobian(R, n, a_w):
+    """(N, 6, 42) pose sensitivity to base/platform anchors and leg offsets (closed form)."""
+    N = R.shape[0]
+    Jx = np.concatenate([n, np.cross(a_w, n)], axis=2)  # d length / d(p, ω_world)
+    dl = np.zeros((N, 6, 42))
+    for i in range(6):
+        dl[:, i, 3 * i : 3 * i + 3] = -n[:, i]
+        dl[:, i, 18 + 3 * i : 21 + 3 * i] = (np.swapaxes(R, 1, 2) @ n[:, i, :, None])[..., 0]
+        dl[:, i, 36 + i] = -1.0
+    dX = -np.linalg.solve(Jx, dl)
+    dX[:, 3:] = np.swapaxes(R, 1, 2) @ dX[:, 3:]  # rotation in the platform frame
+    return dX
+
+
+def floors(repeats: int, n: int) -> dict[str, float]:
+    import pincal
+
+    rng = np.random.default_rng(0)
+    mech = pincal.load_mechanism("stewart_6ups")
+    rows = pincal.sample_actuators(mech, n, rng)
+    T = [mech.forward(r) for r in rows]
+    p_true = np.array([t.translation for t in T])
+    R_true = np.array([t.rotation for t in T])
+    L = np.linalg.norm(PLAT @ np.swapaxes(R_true, 1, 2) + p_true[:, None] - BASE, axis=2)
+    T0 = mech.forward(mech.actuators_of(mech.q_home))
+    p0, R0 = np.tile(T0.translation, (n, 1)), np.tile(T0.rotation, (n, 1, 1))
+    pw, Rw = p_true + 1e-4, _exp3(np.full((n, 3), 1e-4)) @ R_true
+    out = {}
+    out["stewart FK cold"] = median_time(lambda: numpy_stewart_fk(L, p0, R0), repeats) / n
+
+    def warm_eval():
+        _, R, nn, a_w = numpy_stewart_fk(L, pw, Rw)
+        numpy_stewart_jacobian(R, nn, a_w)
+
+    out["stewart FK warm"] = median_time(lambda: numpy_stewart_fk(L, pw, Rw), repeats) / n
+    out["stewart evaluate+J"] = median_time(warm_eval, repeats) / n
+    ur = pincal.load_mechanism("ur10")
+    model, data = ur.model, ur.model.createData()
+    fid = ur.frame_id(ur.measured_frame)
+    qs = [ur.with_actuators(ur.q_home, r) for r in pincal.sample_actuators(ur, n, rng)]
+
+    def ur_calls():
+        for q in qs:
+            pin.framesForwardKinematics(model, data, q)
+            pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
+
+    def ur_regressor():
+        for q in qs:
+            pin.framesForwardKinematics(model, data, q)
+            pin.computeFrameKinematicRegressor(model, data, fid, pin.LOCAL)
+
+    out["ur10 evaluate+J"] = median_time(ur_calls, repeats) / n
+    out["ur10 FK+regressor"] = median_time(ur_regressor, repeats) / n
+    return out
+
+
+# ---------------------------------------------------------------------- worker
+def worker(repeats: int, n: int, sizes: list[int]) -> dict:
+    """Time the operations with whichever pincal is importable (now or 0.1)."""
+    import pincal
+    from pincal import sensitivity as sens_mod
+
+    batched = hasattr(pincal.load_mechanism("wedge3"), "configurations_batch")
+    if batched:
+        from pincal.sensitivity._batch_jacobian import sensitivities_batch
     rng = np.random.default_rng(0)
     mech = pincal.load_mechanism("stewart_6ups")
     p42 = pincal.parameters(mech, "stewart42")
-    full = pincal.parameters(mech, "full")
-    rows = pincal.sample_actuators(mech, 50, rng)
-    targets = [mech.forward(r) for r in rows]
+    rows = pincal.sample_actuators(mech, n, rng)
     qs = mech.configurations(rows)
-    n = len(rows)
     home = mech.q_home
-    T_home = mech.forward(mech.actuators_of(home))
+    res: dict = {"version": pincal.__version__, "batched": batched}
 
     def fk_cold():
-        for r in rows:
-            mech.configuration(r, home)
+        if batched:
+            mech.configurations_batch(rows)
+        else:
+            for r in rows:
+                mech.configuration(r, home)
 
-    def fk_warm():  # guess = solution of a pose 0.1 mm / 0.1 mrad away along the path
-        for r, q in zip(rows, qs, strict=True):
-            mech.configuration(r + 1e-4, q)
+    def fk_warm():
+        if batched:
+            mech.configurations_batch(rows + 1e-4, qs)
+        else:
+            for r, q in zip(rows, qs, strict=True):
+                mech.configuration(r + 1e-4, q)
 
-    def ik():
-        for T in targets:
-            mech.inverse(T)
+    def evaluate(m, params, rr, qq):
+        if batched:
+            Q, bk = m.configurations_batch(rr + 1e-4, qq)
+            sensitivities_batch(m, params, Q, bk)
+        else:
+            for r, q in zip(rr, qq, strict=True):
+                sens_mod.pose_sensitivity(m, params, m.configuration(r + 1e-4, q))
 
-    def jac42():
-        for q in qs:
-            pincal.sensitivity.pose_sensitivity(mech, p42, q)
-
-    def jacfull():
-        for q in qs:
-            pincal.sensitivity.pose_sensitivity(mech, full, q)
-
-    def np_fk():
-        for r in rows:
-            numpy_stewart_fk(r, T_home.translation, T_home.rotation)
-
-    sub = rows[:2]
-
-    def fd42_rebuild():  # central FD by re-solving the loops of rebuilt models
-        for k in range(len(p42)):
-            e = np.zeros(len(p42))
-            e[k] = 1e-6
-            for sign in (1, -1):
-                m = p42.apply(mech, sign * e)
-                for r in sub:
-                    m.forward(r)
-
-    res = {}
-    res["FK cold (from home)"] = median_time(fk_cold, args.repeats) / n
-    res["FK warm (nearby solution)"] = median_time(fk_warm, args.repeats) / n
-    res["numpy Stewart Newton FK (cold)"] = median_time(np_fk, args.repeats) / n
-    res["IK (from home)"] = median_time(ik, args.repeats) / n
-    res["Jacobian, 42 parameters"] = median_time(jac42, args.repeats) / n
-    res["Jacobian, full (204)"] = median_time(jacfull, args.repeats) / n
-    res["central FD, 42 params (rebuild + FK)"] = median_time(fd42_rebuild, 1) / len(sub)
-    fd_lower = 2 * len(p42) * res["FK warm (nearby solution)"]
-
-    print(f"pincal {pincal.__version__}, pin {pin.__version__}, numpy {np.__version__}")
-    print(f"median of {args.repeats} repeats over {n} random workspace poses\n")
-    print(f"{'operation':44s} {'time per pose':>14s}")
-    for name, t in res.items():
-        print(f"{name:44s} {t * 1e6:11.1f} µs")
-    print(f"{'FD lower bound: 2·42 warm FK solves':44s} {fd_lower * 1e6:11.1f} µs")
-    print()
-    jac = res["Jacobian, 42 parameters"]
-    fk_ratio = res["FK cold (from home)"] / res["numpy Stewart Newton FK (cold)"]
-    print(f"{'generic FK cold / numpy FK':44s} {fk_ratio:9.2f} ×")
-    ratio_fd = res["central FD, 42 params (rebuild + FK)"] / jac
-    print(f"{'analytic Jacobian speed-up vs FD (rebuild)':44s} {ratio_fd:9.0f} ×")
-    print(f"{'analytic Jacobian speed-up vs FD lower bound':44s} {fd_lower / jac:9.0f} ×")
-
+    res["stewart FK cold"] = median_time(fk_cold, repeats) / n
+    res["stewart FK warm"] = median_time(fk_warm, repeats) / n
+    res["stewart evaluate+J"] = median_time(lambda: evaluate(mech, p42, rows, qs), repeats) / n
+    ur = pincal.load_mechanism("ur10")
+    full = pincal.parameters(ur, "full")
+    ur_rows = pincal.sample_actuators(ur, n, rng)
+    ur_qs = ur.configurations(ur_rows)
+    res["ur10 evaluate+J"] = median_time(lambda: evaluate(ur, full, ur_rows, ur_qs), repeats) / n
+    res["floor"] = floors(repeats, n)  # same process, right after: load-comparable
     noise = pincal.NoiseModel(0.01, 0.02)
-    true = rng.normal(0, 0.5e-3, len(p42))
+    true = np.random.default_rng(1).normal(0, 0.5e-3, len(p42))
     actual = p42.apply(mech, true)
-    print()
-    for m in (30, 300):
-        q_m = pincal.sample_actuators(mech, m, rng)
-        meas = pincal.simulate_measurements(actual, q_m, noise, rng)
-        reps = max(1, args.repeats // 3)
+    res["identify"] = {}
+    for m in sizes:
+        q_m = pincal.sample_actuators(mech, m, np.random.default_rng(m))
+        meas = pincal.simulate_measurements(actual, q_m, noise, np.random.default_rng(m + 1))
+        reps = 1 if m > 1000 else max(1, repeats // 2)
         t = median_time(lambda meas=meas: pincal.identify(mech, p42, meas), reps)
         r = pincal.identify(mech, p42, meas)
-        print(f"identify 42 parameters, {m:3d} poses (GN, {r.iterations} it.)  {t:8.3f} s")
+        res["identify"][m] = {
+            "time": t,
+            "iterations": r.iterations,
+            "values": np.asarray(r.values).tolist(),
+        }
+    return res
+
+
+def identify_memory(m: int) -> dict:
+    """Identify with m poses in this (fresh) process: time and peak resident memory."""
+    import pincal
+
+    mech = pincal.load_mechanism("stewart_6ups")
+    p42 = pincal.parameters(mech, "stewart42")
+    actual = p42.apply(mech, np.random.default_rng(1).normal(0, 0.5e-3, len(p42)))
+    q_m = pincal.sample_actuators(mech, m, np.random.default_rng(m))
+    meas = pincal.simulate_measurements(
+        actual, q_m, pincal.NoiseModel(0.01, 0.02), np.random.default_rng(m + 1)
+    )
+    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    t0 = time.perf_counter()
+    r = pincal.identify(mech, p42, meas)
+    t = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return {"time": t, "iterations": r.iterations, "peak_mb": peak / 1024, "base_mb": base / 1024}
+
+
+def design_and_demo() -> dict:
+    import pincal
+    from pincal.cli._demo_job import DemoSettings, run_demo
+    from pincal.design import DesignScaling, exchange, grid_candidates
+
+    mech = pincal.load_mechanism("stewart_6ups")
+    params = pincal.parameters(mech, "stewart42")
+    t0 = time.perf_counter()
+    cands = grid_candidates(mech, params, 4, in_workspace=False)
+    sc = DesignScaling(rows="noise", position_std=1e-5, orientation_std=1e-5)
+    exchange(sc.apply(cands.jacobians, cands.components).J, 18, "O1", rng=1)
+    t_sel = time.perf_counter() - t0
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        run_demo(DemoSettings(), Path(tmp) / "demo")
+        t_demo = time.perf_counter() - t0
+    return {"selection": t_sel, "candidates": int(cands.tried), "demo": t_demo}
+
+
+# ---------------------------------------------------------------------- driver
+def _run(path: Path, args: list[str]) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(path), OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    out = subprocess.run(
+        [sys.executable, str(Path(__file__).resolve()), *args],
+        env=env,
+        cwd=str(path),
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    if out.returncode:
+        raise RuntimeError(f"benchmark subprocess failed in {path}:\n{out.stderr[-3000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _fmt(t: float | None) -> str:
+    return "—" if t is None else f"{t * 1e6:.1f} µs"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--poses", type=int, default=1000, help="poses per timed batch")
+    ap.add_argument("--v01", type=Path, default=Path("/work/wt/v01"))
+    ap.add_argument("--quick", action="store_true", help="skip N = 10 000 and the 0.1 run")
+    ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--memory", type=int, default=0, help=argparse.SUPPRESS)
+    ap.add_argument("--design", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--sizes", default="300,1000,3000", help="identify sizes")
+    args = ap.parse_args()
+    sizes = [int(s) for s in args.sizes.split(",")]
+    with threadpool_limits(1):
+        if args.worker:
+            print(json.dumps(worker(args.repeats, args.poses, sizes)))
+            return
+        if args.memory:
+            print(json.dumps(identify_memory(args.memory)))
+            return
+        if args.design:
+            print(json.dumps(design_and_demo()))
+            return
+        blas = sorted({f"{i['internal_api']} {i['num_threads']}" for i in threadpool_info()})
+    now = _run(ROOT, ["--worker", f"--repeats={args.repeats}", f"--poses={args.poses}",
+                      f"--sizes={args.sizes}"])  # fmt: skip
+    old = None
+    if args.v01.is_dir() and not args.quick:
+        old = _run(args.v01, ["--worker", f"--repeats={args.repeats}", f"--poses={args.poses}",
+                              f"--sizes={args.sizes}"])  # fmt: skip
+    libs = ", ".join(blas)
+    print(f"pin {pin.__version__}, numpy {np.__version__}; BLAS threads in every process: 1 "
+          f"(threadpool_limits(1), OPENBLAS_NUM_THREADS=1; libraries: {libs})")  # fmt: skip
+    print(f"median of {args.repeats} repeats over {args.poses} random workspace poses; "
+          f"shared machine: compare the ratios (same run)\n")  # fmt: skip
+    print("per pose; 'floor' = the floor measured in the same process right after; the")
+    print("normalised 0.1/now ratio divides each version's time by its own floor (load drift)\n")
+    head = f"{'operation':22s} {'now':>11s} {'floor':>10s} {'now/floor':>9s}"
+    print(head + f" {'0.1':>11s} {'floor':>10s} {'0.1/now':>8s} {'normalised':>10s}")
+    for key in ("stewart FK cold", "stewart FK warm", "stewart evaluate+J", "ur10 evaluate+J"):
+        f_now = now["floor"][key]
+        line = f"{key:22s} {_fmt(now[key]):>11s} {_fmt(f_now):>10s} {now[key] / f_now:8.1f}×"
+        if old:
+            f_old = old["floor"][key]
+            norm = (old[key] / f_old) / (now[key] / f_now)
+            line += (f" {_fmt(old[key]):>11s} {_fmt(f_old):>10s} {old[key] / now[key]:7.1f}×"
+                     f" {norm:9.1f}×")  # fmt: skip
+        print(line)
+    print(f"{'ur10 FK + regressor':22s} {'':>11s} {_fmt(now['floor']['ur10 FK+regressor']):>10s}"
+          f"  (pin.computeFrameKinematicRegressor, for reference)")  # fmt: skip
+    print("\nidentify, Stewart 42 parameters (Gauss–Newton):")
+    for m, r in now["identify"].items():
+        line = f"  N = {int(m):5d}: now {r['time']:7.3f} s ({r['iterations']} it.)"
+        if old:
+            o = old["identify"][m]
+            rel = np.max(np.abs(np.subtract(r["values"], o["values"]))) / np.max(
+                np.abs(o["values"])
+            )
+            up = o["time"] / r["time"]
+            line += (f"   0.1 {o['time']:7.3f} s ({o['iterations']} it.)   "
+                     f"speed-up {up:5.1f}×   max rel. diff {rel:.1e}")  # fmt: skip
+        print(line)
+    print("\nidentify scaling (fresh process each; peak resident memory of the process):")
+    big = [1000, 3000] + ([] if args.quick else [10000])
+    for m in big:
+        r = _run(ROOT, [f"--memory={m}"])
+        print(f"  N = {m:5d}: {r['time']:7.3f} s = {1e3 * r['time'] / m:.3f} ms/pose "
+              f"({r['iterations']} it.), peak RSS {r['peak_mb']:.0f} MB "
+              f"(before identify {r['base_mb']:.0f} MB)")  # fmt: skip
+    d = _run(ROOT, ["--design"])
+    print(f"\nStewart pose selection, {d['candidates']} grid candidates (FK + Jacobians + "
+          f"exchange O1, 18 poses): {d['selection']:.2f} s")  # fmt: skip
+    print(f"pincal demo (run_demo, default settings): {d['demo']:.2f} s")
 
 
 if __name__ == "__main__":

@@ -36,7 +36,7 @@ from pincal.errors import ConvergenceError, PincalError, SingularConfigurationEr
 from pincal.model._closures import COMPONENTS
 from pincal.model._mechanism import WORKSPACE_POSE_KEYS, Mechanism
 from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._jacobian import pose_sensitivity
+from pincal.sensitivity._batch_jacobian import sensitivities_batch
 
 __all__ = ["CandidateSet", "evaluate_candidates"]
 
@@ -167,39 +167,47 @@ def evaluate_candidates(
     counts = {"no FK": 0, "singular": 0, "outside limits": 0, "outside workspace": 0}
     for k, v in (rejected or {}).items():
         counts[k] = counts.get(k, 0) + v
-    keep_q, keep_p, keep_R, keep_J = [], [], [], []
-    guess = mech.q_home
     total = rows.shape[0]
+    inside = np.all((rows >= lo - 1e-12) & (rows <= hi + 1e-12), axis=1)
+    Q, solved, bk = mech.try_configurations_batch(rows)
+    fid = mech.frame_id(mech.measured_frame)
+    if bk is not None:
+        R_all, p_all = mech.batch_model.frame_placement(bk, fid)
+    keep: list[int] = []
+    guess = mech.q_home
     for i, row in enumerate(rows):
         if progress is not None:
             progress(i + 1, total)
-        if np.any(row < lo - 1e-12) or np.any(row > hi + 1e-12):
+        if not inside[i]:
             counts["outside limits"] += 1
             continue
-        try:
+        if solved[i]:
+            q, p, R = Q[i], p_all[i], R_all[i]
+        else:
             try:
-                q = mech.configuration(row, guess, pose_index=i)
+                try:
+                    q = mech.configuration(row, guess, pose_index=i)
+                except SingularConfigurationError:
+                    raise
+                except ConvergenceError:
+                    q = mech.configuration(row, mech.q_home, pose_index=i)
             except SingularConfigurationError:
-                raise
+                counts["singular"] += 1
+                continue
             except ConvergenceError:
-                q = mech.configuration(row, mech.q_home, pose_index=i)
-        except SingularConfigurationError:
-            counts["singular"] += 1
-            continue
-        except ConvergenceError:
-            counts["no FK"] += 1
-            continue
-        oMf = mech.frame_placement(q)
-        p, R = oMf.translation.copy(), oMf.rotation.copy()
+                counts["no FK"] += 1
+                continue
+            Q[i] = q
+            oMf = mech.frame_placement(q)
+            p, R = oMf.translation, oMf.rotation
         if in_workspace and not _in_workspace(mech, home, p, R):
             counts["outside workspace"] += 1
             continue
         guess = q
-        sens = pose_sensitivity(mech, params, q)
-        keep_q.append(row)
-        keep_p.append(p)
-        keep_R.append(R)
-        keep_J.append(sens.jacobian[comp_rows])
+        keep.append(i)
+    sens = sensitivities_batch(mech, params, Q[keep].reshape(-1, mech.model.nq))
+    keep_q, keep_p, keep_R = rows[keep], sens.positions, sens.rotations
+    keep_J = sens.jacobian[:, comp_rows]
     n = len(params)
     result = CandidateSet(
         q_act=np.array(keep_q).reshape(-1, n_act),

@@ -9,6 +9,7 @@ Cramér–Rao bound; ``IdentificationResult.to_dict`` / ``from_dict`` write and 
 from __future__ import annotations
 
 from pincal.identification._identify import identify, qpso_identify, step_planned_identify
+from pincal.identification._monte_carlo import MonteCarloStudy, monte_carlo
 from pincal.identification._options import (
     LOSSES,
     GaussNewtonOptions,
@@ -46,6 +47,7 @@ __all__ = [
     "IdentificationResult",
     "LMOptions",
     "LocalSolverExtras",
+    "MonteCarloStudy",
     "QPSOExtras",
     "QPSOIdentification",
     "QPSOOptions",
@@ -59,6 +61,7 @@ __all__ = [
     "StepPlanningOptions",
     "StepPlanningResult",
     "identify",
+    "monte_carlo",
     "qpso",
     "qpso_identify",
     "qpso_stepwise",

@@ -13,6 +13,7 @@ import logging
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from pincal.errors import SolverOptionError, TooFewPosesError, UnidentifiableError
 from pincal.identification._outcome import Progress, SolverOutcome
@@ -207,6 +208,12 @@ def identify(
     legacy["xtol"] = xtol
     entry = solver(method)
     opts = entry.check_options(_legacy_options(method, options, legacy, qpso))
+    with threadpool_limits(1):  # small dense solves: threaded BLAS only adds contention
+        return _run(problem, method, entry, opts, progress)
+
+
+def _run(problem: IdentificationProblem, method: str, entry: Any, opts: Any, progress: Progress):
+    """The body of :func:`identify` (checked arguments), one BLAS thread."""
     model = problem.model
     x0 = problem.x0
     _, J0, raw0 = model.evaluate(x0)

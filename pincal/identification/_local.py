@@ -124,7 +124,9 @@ def gauss_newton(
                 rejected += 1
                 mu *= 10.0
             if not accepted:
-                success = _at_floor(problem, cost, history[0])
+                # no step decreases the cost although the model promised only round-off
+                # (below 1e-9 of the cost): converged as well as the evaluation allows
+                success = _at_floor(problem, cost, history[0]) or predicted <= 1e-9 * cost
                 message = (
                     "converged (solver precision)"
                     if success

@@ -17,13 +17,13 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+import pinocchio as pin
 
 from pincal.errors import ClosureError, ConvergenceError, MeasurementError, ParameterError
 from pincal.measure._measurements import Measurements
-from pincal.model._closures import measurement_residual
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._jacobian import pose_sensitivity
+from pincal.sensitivity._batch_jacobian import sensitivities_batch
 
 __all__ = ["TRIAL_FAILURES", "CalibrationProblem", "IdentificationProblem"]
 
@@ -67,6 +67,7 @@ class CalibrationProblem:
             self.known_noise = False
         self._qs: np.ndarray | None = None
         self._cache: tuple[bytes, Mechanism] | None = None
+        self._memo: dict[bytes, tuple] = {}  # last evaluations: r_w, J_w, r_raw, qs, kinematics
 
     @property
     def solver_floor_cost(self) -> float:
@@ -96,36 +97,72 @@ class CalibrationProblem:
         return 0.5 * float(r @ r)
 
     def evaluate(self, values: np.ndarray, jacobian: bool = True):
-        """Whitened residual (N,), its Jacobian (N, n) or None, and raw residuals (m, k)."""
+        """Whitened residual (N,), its Jacobian (N, n) or None, and raw residuals (m, k).
+
+        Evaluations are memoised per parameter vector (the returned arrays are
+        read-only); a Jacobian asked for after a residual-only evaluation reuses that
+        evaluation's closed configurations and kinematics.
+        """
+        values = np.asarray(values, dtype=float)
+        key = values.tobytes()
+        hit = self._memo.get(key)
+        if hit is not None and (hit[1] is not None or not jacobian):
+            return hit[0], (hit[1] if jacobian else None), hit[2]
         mech = self.mechanism(values)
+        qs, bk = (hit[3], hit[4]) if hit is not None else self._configurations(mech)
+        out = self._residuals(mech, values, qs, bk, jacobian)
+        for a in out:
+            if a is not None:
+                a.setflags(write=False)
+        if len(self._memo) >= 2:
+            self._memo.pop(next(iter(self._memo)))
+        self._memo[key] = (*out, qs, bk)
+        return out
+
+    def _configurations(self, mech: Mechanism):
+        """Closed configurations (m, nq) of the measured poses (warm-started), kinematics."""
         meas = self.meas
-        q_prev = self._qs
-        qs = np.empty((len(meas), mech.model.nq))
-        r_raw = np.empty((len(meas), len(self.rows)))
-        J = np.empty((len(meas), len(self.rows), len(self.params))) if jacobian else None
-        for i, q_act in enumerate(meas.q_act):
-            guess = q_prev[i] if q_prev is not None else None
-            try:
-                qs[i] = mech.configuration(q_act, guess, pose_index=i)
-            except ConvergenceError:
-                if guess is None:
-                    raise
-                qs[i] = mech.configuration(q_act, None, pose_index=i)
-            R_meas = None if meas.rotations is None else meas.rotations[i]
-            if jacobian:
-                sens = pose_sensitivity(mech, self.params, qs[i], values)
-                p, R = sens.position, sens.rotation
-            else:
-                oMf = mech.frame_placement(qs[i])
-                p, R = oMf.translation, oMf.rotation
-            r, D = measurement_residual(p, R, meas.positions[i], R_meas)
-            r_raw[i] = r[self.rows]
-            if jacobian:
-                J[i] = -(D @ sens.jacobian)[self.rows]
+        try:
+            qs, bk = mech.configurations_batch(meas.q_act, self._qs)
+        except ConvergenceError:
+            if self._qs is None:
+                raise
+            qs = np.empty((len(meas), mech.model.nq))
+            for i, q_act in enumerate(meas.q_act):
+                try:
+                    qs[i] = mech.configuration(q_act, self._qs[i], pose_index=i)
+                except ConvergenceError:
+                    qs[i] = mech.configuration(q_act, None, pose_index=i)
+            bk = None
         self._qs = qs
+        return qs, bk
+
+    def _residuals(self, mech: Mechanism, values: np.ndarray, qs, bk, jacobian: bool):
+        meas = self.meas
+        if jacobian:
+            sens = sensitivities_batch(mech, self.params, qs, bk, values)
+            p, R = sens.positions, sens.rotations
+        elif bk is not None:
+            R, p = mech.batch_model.frame_placement(bk, mech.frame_id(mech.measured_frame))
+        else:
+            T = [mech.frame_placement(q) for q in qs]
+            p, R = np.array([t.translation for t in T]), np.array([t.rotation for t in T])
+        r = np.zeros((len(meas), 6))
+        r[:, :3] = meas.positions - p
+        D_rot = None
+        if meas.rotations is not None:
+            E = np.swapaxes(R, 1, 2) @ np.asarray(meas.rotations, dtype=float)
+            r[:, 3:] = [pin.log3(e) for e in E]
+            if jacobian:
+                D_rot = np.array([pin.Jlog3(e) for e in E]) @ np.swapaxes(E, 1, 2)
+        r_raw = r[:, self.rows]
         w = 1.0 / self.sigma
         r_w = (r_raw * w).ravel()
-        J_w = None if J is None else (J * w[:, :, None]).reshape(-1, len(self.params))
+        if not jacobian:
+            return r_w, None, r_raw
+        Js = sens.jacobian
+        J = -np.concatenate([Js[:, :3], Js[:, 3:] if D_rot is None else D_rot @ Js[:, 3:]], 1)
+        J_w = (J[:, self.rows] * w[:, :, None]).reshape(-1, len(self.params))
         return r_w, J_w, r_raw
 
 

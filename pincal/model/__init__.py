@@ -7,6 +7,7 @@ catalogue of bundled models.
 
 from __future__ import annotations
 
+from pincal.model._batch import BatchKinematics, BatchModel
 from pincal.model._catalogue import (
     bundled_models,
     load_mechanism,
@@ -83,6 +84,8 @@ __all__ = [
     "MOVABLE_TYPES",
     "TOOL_JOINT",
     "TOOL_LINK",
+    "BatchKinematics",
+    "BatchModel",
     "Closure",
     "DHError",
     "DHLayout",

@@ -24,7 +24,7 @@ from pincal.errors import (
     UnknownNameError,
     UnreachablePoseError,
 )
-from pincal.model._branch import BranchTracking
+from pincal.model._batch_fk import BatchTracking
 from pincal.model._build import build_model
 from pincal.model._closures import (
     COMPONENTS,
@@ -50,7 +50,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-class Mechanism(BranchTracking):
+class Mechanism(BatchTracking):
     """A mechanism loaded from URDF (+ sidecar).
 
     Use :func:`load_mechanism` to create one. Attributes of interest:
@@ -233,19 +233,11 @@ class Mechanism(BranchTracking):
     def configurations(self, q_act_rows: np.ndarray) -> np.ndarray:
         """Closed configurations (m, nq) for actuator rows (m, n_act) on home's branch.
 
-        Each row starts from the previous solution (continuation when a direct solve
-        leaves the branch, then from home).
+        All rows are solved together from home (:meth:`configurations_batch`); a row the
+        batched Newton does not settle is redone from the previous row's solution
+        (continuation when a direct solve leaves the branch, then from home).
         """
-        try:
-            rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
-        except (TypeError, ValueError) as exc:
-            raise ShapeError(f"actuator rows must be numbers: {exc}") from exc
-        out = np.empty((rows.shape[0], self.model.nq))
-        guess = self.q_home
-        for i, row in enumerate(rows):
-            out[i] = self.configuration(row, guess, pose_index=i)
-            guess = out[i]
-        return out
+        return self.configurations_batch(q_act_rows)[0]
 
     def inverse(
         self, T_world_target: pin.SE3, q_guess: np.ndarray | None = None, check_limits: bool = True

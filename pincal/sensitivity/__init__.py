@@ -7,6 +7,7 @@ numerical-rank rule, and global sensitivity over a workspace.
 
 from __future__ import annotations
 
+from pincal.sensitivity._batch_jacobian import BatchSensitivity, sensitivities_batch
 from pincal.sensitivity._global import (
     GlobalSensitivity,
     global_sensitivity,
@@ -30,6 +31,7 @@ from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 __all__ = [
     "BASE_POSES",
     "RANK_RTOL",
+    "BatchSensitivity",
     "GlobalSensitivity",
     "Identifiability",
     "PoseSensitivity",
@@ -43,4 +45,5 @@ __all__ = [
     "identification_jacobian",
     "numerical_rank",
     "pose_sensitivity",
+    "sensitivities_batch",
 ]

@@ -176,12 +176,14 @@ def _sensitivities(
     params: ParameterSet,
     q_act_rows: np.ndarray,
     values: np.ndarray | None,
-) -> list[PoseSensitivity]:
+):
+    """Batched sensitivities of the measured frame at the rows' closed configurations."""
+    from pincal.sensitivity._batch_jacobian import sensitivities_batch
+
     values = params.check_values(values)
     at = mech if not np.any(values) else params.apply(mech, values)
-    qs = at.configurations(q_act_rows)
-    plan = _plan(at, params)
-    return [pose_sensitivity(at, params, q, values, plan) for q in qs]
+    qs, bk = at.configurations_batch(q_act_rows)
+    return sensitivities_batch(at, params, qs, bk, values)
 
 
 def _rows(mech: Mechanism, components: tuple[str, ...] | None) -> list[int]:
@@ -212,7 +214,8 @@ def identification_jacobian(
         without a physical meaning.
     """
     rows = _rows(mech, components)
-    return np.vstack([s.jacobian[rows] for s in _sensitivities(mech, params, q_act_rows, values)])
+    J = _sensitivities(mech, params, q_act_rows, values).jacobian[:, rows]
+    return J.reshape(-1, len(params))
 
 
 def closure_breaking(
@@ -248,8 +251,4 @@ def jacobian_and_closure_breaking(
     """:func:`identification_jacobian` and :func:`closure_breaking` from one pass."""
     rows = _rows(mech, components)
     sens = _sensitivities(mech, params, q_act_rows, values)
-    J = np.vstack([s.jacobian[rows] for s in sens])
-    breaks = np.zeros(len(params), dtype=bool)
-    for s in sens:
-        breaks |= s.breaks_closure
-    return J, breaks
+    return sens.jacobian[:, rows].reshape(-1, len(params)), sens.breaks_closure.copy()

@@ -1,0 +1,277 @@
+"""Forward kinematics of many poses at once (batched Newton on the passive joints).
+
+:class:`BatchTracking` is the part of :class:`~pincal.model.Mechanism` that closes the
+loops for N actuator rows together: each Newton iteration evaluates the closure
+residuals and Jacobians of all unfinished poses with :class:`~pincal.model._batch.BatchModel`
+(numpy over the kinematic tree) and solves the N square passive systems with one
+``np.linalg.solve`` over (N, k, k). A pose is accepted when its residual is below
+``options.tol`` and it is on home's assembly branch (sign of det of the passive closure
+Jacobian). Poses whose residual does not decrease, that leave the branch, or whose
+condition estimate comes near ``options.max_condition`` are handed to the pose-by-pose
+solver (:meth:`configuration`: damped Newton, continuation, exact singularity check),
+so results and errors are those of the pose-by-pose path.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.errors import ShapeError
+from pincal.model._batch import BatchKinematics, BatchModel, cross_cols, mm, mv
+from pincal.model._branch import BranchTracking
+from pincal.model._closures import Closure
+
+__all__ = ["BatchTracking", "closure_jacobian_batch", "closure_residual_batch"]
+
+_MAX_BATCH_ITERATIONS = 30
+
+
+def closure_residual_batch(
+    c: Closure, Ra: np.ndarray, pa: np.ndarray, Rb: np.ndarray, pb: np.ndarray
+) -> np.ndarray:
+    """Residuals (N, c.size) of closure ``c`` from frame placements (N, 3, 3), (N, 3)."""
+    if c.is_point:
+        return pb - pa
+    Rat = np.swapaxes(Ra, 1, 2)
+    full = [mv(Rat, pb - pa)]
+    if c.components[-1] >= 3:
+        full.append(np.array([pin.log3(M) for M in mm(Rat, Rb)]))
+    return np.concatenate(full, axis=1)[:, list(c.components)]
+
+
+def closure_jacobian_batch(
+    c: Closure,
+    Ra: np.ndarray,
+    pa: np.ndarray,
+    Rb: np.ndarray,
+    pb: np.ndarray,
+    Ta: np.ndarray,
+    Tb: np.ndarray,
+) -> np.ndarray:
+    """(N, c.size, n) derivative of :func:`closure_residual_batch` given local twists.
+
+    Args:
+        c: the closure; Ra, pa, Rb, pb: placements (N, 3, 3), (N, 3) of its frames.
+        Ta, Tb: (N, 6, n) local twists ``[v; ω]`` of frames a and b per unit of each of
+            n variables (LOCAL frame Jacobians or parameter sensitivities).
+    """
+    if c.is_point:
+        return mm(Rb, Tb[:, :3]) - mm(Ra, Ta[:, :3])
+    Rat = np.swapaxes(Ra, 1, 2)
+    t = mv(Rat, pb - pa)
+    Rab = mm(Rat, Rb)
+    blocks = [cross_cols(t[:, :, None], Ta[:, 3:]) + mm(Rab, Tb[:, :3]) - Ta[:, :3]]
+    if c.components[-1] >= 3:
+        dw = Tb[:, 3:] - mm(np.swapaxes(Rab, 1, 2), Ta[:, 3:])
+        blocks.append(np.array([pin.Jlog3(M) for M in Rab]) @ dw)
+    return np.concatenate(blocks, axis=1)[:, list(c.components)]
+
+
+class BatchTracking(BranchTracking):
+    """Batched loop closing and kinematics (mixed into Mechanism)."""
+
+    @property
+    def batch_model(self) -> BatchModel:
+        """The batched numpy kinematics of :attr:`model` (built once)."""
+        bm = self.__dict__.get("_batch_model_cache")
+        if bm is None:
+            bm = self.__dict__["_batch_model_cache"] = BatchModel(self.model)
+        return bm
+
+    def kinematics_batch(self, qs: np.ndarray) -> BatchKinematics:
+        """Joint placements and WORLD joint Jacobian of configurations ``qs`` (N, nq).
+
+        Raises:
+            ShapeError: ``qs`` is not (N, nq).
+        """
+        qs = self._check_rows(qs, self.model.nq, "configurations")
+        if not self.batch_model.supported:
+            raise ShapeError(  # pragma: no cover - every loader joint type is implemented
+                f"mechanism {self.name!r} has a joint type the batched kinematics lacks"
+            )
+        return self.batch_model.kinematics(qs)
+
+    def _check_rows(self, rows: np.ndarray, width: int, what: str) -> np.ndarray:
+        try:
+            out = np.atleast_2d(np.asarray(rows, dtype=float))
+        except (TypeError, ValueError) as exc:
+            raise ShapeError(f"{what} must be numbers: {exc}") from exc
+        if out.ndim != 2 or out.shape[1] != width:
+            raise ShapeError(f"{what} must have shape (N, {width}), got {np.shape(rows)}")
+        return out
+
+    @property
+    def _batchable(self) -> bool:
+        return bool(self.closures) and self.home_branch != 0.0 and self.batch_model.supported
+
+    def closure_terms_batch(
+        self, bk: BatchKinematics, jacobian: bool = True
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """Closure residuals (N, n_closure_rows) and Jacobians (N, n_closure_rows, nv)."""
+        bm = self.batch_model
+        N = bk.q.shape[0]
+        if not self.closures:
+            return np.zeros((N, 0)), (np.zeros((N, 0, self.model.nv)) if jacobian else None)
+        res, jacs = [], []
+        for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
+            Ra, pa = bm.frame_placement(bk, a)
+            Rb, pb = bm.frame_placement(bk, b)
+            res.append(closure_residual_batch(c, Ra, pa, Rb, pb))
+            if jacobian and c.is_point:  # world point velocities: v_o + ω × p
+                jacs.append(self._point_closure_jacobian(bk, a, b, pa, pb))
+            elif jacobian:
+                Ja, Jb = bm.frame_jacobian(bk, a), bm.frame_jacobian(bk, b)
+                jacs.append(closure_jacobian_batch(c, Ra, pa, Rb, pb, Ja, Jb))
+        r = np.concatenate(res, axis=1)
+        return r, (np.concatenate(jacs, axis=1) if jacobian else None)
+
+    def _point_closure_jacobian(
+        self, bk: BatchKinematics, a: int, b: int, pa: np.ndarray, pb: np.ndarray
+    ) -> np.ndarray:
+        """(N, 3, nv) derivative of ``p_b − p_a`` (world axes) from the WORLD Jacobian."""
+        ma, mb = self.batch_model.support_of_frame(a), self.batch_model.support_of_frame(b)
+        Jv, Jw = bk.jacobian[:, :3], bk.jacobian[:, 3:]
+        P = pb[:, :, None] * mb - pa[:, :, None] * ma
+        return Jv * (mb.astype(float) - ma) + cross_cols(Jw, P)
+
+    def _actuators_batch(self, Q: np.ndarray, A: np.ndarray) -> np.ndarray:
+        out = np.array(Q, dtype=float)
+        for k, (qi, nq) in enumerate(zip(self._act_q, self._act_nq, strict=True)):
+            if nq == 1:
+                out[:, qi] = A[:, k]
+            else:
+                out[:, qi], out[:, qi + 1] = np.cos(A[:, k]), np.sin(A[:, k])
+        return out
+
+    def _solve_batch(
+        self, A: np.ndarray, Q0: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, BatchKinematics]:
+        """Batched Newton: configurations (N, nq), accepted mask (N,), their kinematics.
+
+        Rows not accepted (no decrease, no convergence, other branch, possibly
+        singular) hold garbage and must be redone pose by pose.
+        """
+        bm, opt, free = self.batch_model, self.options, self._free_v
+        N, k = A.shape[0], free.size
+        Q = self._actuators_batch(Q0, A)
+        done = np.zeros(N, dtype=bool)
+        failed = np.zeros(N, dtype=bool)
+        prev = np.full(N, np.inf)
+        out_R = np.empty((N, self.model.njoints, 3, 3))
+        out_p = np.empty((N, self.model.njoints, 3))
+        out_J = np.empty((N, 6, self.model.nv))
+        Jf_done = np.empty((N, k, k))
+        for _ in range(_MAX_BATCH_ITERATIONS + 1):
+            ia = np.nonzero(~done & ~failed)[0]
+            if ia.size == 0:
+                break
+            bk = bm.kinematics(Q[ia])
+            r, J = self.closure_terms_batch(bk)
+            Jf = J[:, :, free]
+            rmax = np.max(np.abs(r), axis=1)
+            norm = np.linalg.norm(r, axis=1)
+            conv = rmax <= opt.tol
+            ic = ia[conv]
+            done[ic] = True
+            out_R[ic], out_p[ic], out_J[ic] = (
+                bk.rotations[conv],
+                bk.translations[conv],
+                bk.jacobian[conv],
+            )
+            Jf_done[ic] = Jf[conv]
+            go = ~conv & (norm < prev[ia])
+            failed[ia[~conv & ~go]] = True
+            ig = ia[go]
+            if ig.size == 0:
+                continue
+            prev[ig] = norm[go]
+            try:
+                step = -np.linalg.solve(Jf[go], r[go][:, :, None])[..., 0]
+            except np.linalg.LinAlgError:
+                failed[ig] = True
+                continue
+            sn = np.linalg.norm(step, axis=1)
+            step *= np.minimum(1.0, opt.max_step / np.maximum(sn, 1e-300))[:, None]
+            bad = ~np.all(np.isfinite(step), axis=1)
+            failed[ig[bad]] = True
+            DV = np.zeros((ig.size, self.model.nv))
+            DV[:, free] = step
+            Q[ig[~bad]] = bm.integrate(Q[ig[~bad]], DV[~bad])
+        ok = done.copy()
+        if ok.any():
+            io = np.nonzero(ok)[0]
+            Jd = Jf_done[io]
+            signs = np.sign(np.linalg.det(Jd))
+            with np.errstate(all="ignore"):
+                inv_norm = np.abs(np.linalg.inv(Jd)).sum(axis=1).max(axis=1)
+            cond1 = np.abs(Jd).sum(axis=1).max(axis=1) * inv_norm
+            # cond₂ ≤ k·cond₁: rows that might exceed the limit get the exact check
+            risky = ~np.isfinite(cond1) | (k * cond1 > opt.max_condition)
+            ok[io[(signs != self.home_branch) | risky]] = False
+        return Q, ok, BatchKinematics(Q, out_R, out_p, out_J)
+
+    def try_configurations_batch(
+        self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, BatchKinematics | None]:
+        """Batched Newton only: configurations (N, nq), accepted mask (N,), kinematics.
+
+        Rows not accepted (no convergence, other branch, possibly singular) hold no
+        usable configuration: redo them with :meth:`configuration`. For a mechanism the
+        batched solve does not apply to, nothing is accepted (kinematics None).
+        """
+        rows = self._check_rows(q_act_rows, len(self.actuated), "actuator rows")
+        N = rows.shape[0]
+        G = np.tile(self.q_home, (N, 1)) if guesses is None else guesses
+        G = self._check_rows(G, self.model.nq, "guesses")
+        if not self.closures and self.batch_model.supported:
+            Q = self._actuators_batch(G, rows)
+            return Q, np.ones(N, dtype=bool), self.batch_model.kinematics(Q)
+        if not self._batchable:
+            return np.array(G), np.zeros(N, dtype=bool), None
+        return self._solve_batch(rows, G)
+
+    def configurations_batch(
+        self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
+    ) -> tuple[np.ndarray, BatchKinematics | None]:
+        """Closed configurations (N, nq) on home's branch and their kinematics.
+
+        Args:
+            q_act_rows: (N, n_act) actuator values [m, rad].
+            guesses: (N, nq) start configurations (default: home for the batched solve;
+                rows redone pose by pose start from the previous row's solution).
+
+        Returns:
+            The configurations, and their :class:`BatchKinematics` (None when the
+            batched kinematics does not apply to this mechanism).
+
+        Raises:
+            ConvergenceError, SingularConfigurationError: as :meth:`configuration`,
+                naming the pose index.
+        """
+        rows = self._check_rows(q_act_rows, len(self.actuated), "actuator rows")
+        N = rows.shape[0]
+        G = None if guesses is None else self._check_rows(guesses, self.model.nq, "guesses")
+        if G is not None and G.shape[0] != N:
+            raise ShapeError(f"guesses must have {N} rows (one per actuator row), got {len(G)}")
+        if not self.closures:
+            out = self._actuators_batch(np.tile(self.q_home, (N, 1)) if G is None else G, rows)
+            return out, (self.batch_model.kinematics(out) if self.batch_model.supported else None)
+        if not self._batchable:
+            out = np.empty((N, self.model.nq))
+            for i, row in enumerate(rows):
+                guess = G[i] if G is not None else (out[i - 1] if i else self.q_home)
+                out[i] = self.configuration(row, guess, pose_index=i)
+            bk = self.batch_model.kinematics(out) if self.batch_model.supported else None
+            return out, bk
+        start = np.tile(self.q_home, (N, 1)) if G is None else G
+        Q, ok, bk = self._solve_batch(rows, start)
+        for i in np.nonzero(~ok)[0]:
+            guess = G[i] if G is not None else (Q[i - 1] if i else self.q_home)
+            Q[i] = self.configuration(rows[i], guess, pose_index=int(i))
+        redo = np.nonzero(~ok)[0]
+        if redo.size:
+            fix = self.batch_model.kinematics(Q[redo])
+            bk.rotations[redo], bk.translations[redo] = fix.rotations, fix.translations
+            bk.jacobian[redo] = fix.jacobian
+        return Q, bk
