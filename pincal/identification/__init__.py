@@ -8,6 +8,19 @@ Cramér–Rao bound; ``IdentificationResult.to_dict`` / ``from_dict`` write and 
 from __future__ import annotations
 
 from pincal.identification._identify import identify, qpso_identify, step_planned_identify
+from pincal.identification._instrument_design import (
+    InstrumentIdentifiability,
+    default_instrument,
+    instrument_blocks,
+    instrument_candidates,
+    instrument_cramer_rao,
+    instrument_identifiability,
+)
+from pincal.identification._instrument_problem import (
+    InstrumentIdentification,
+    InstrumentProblem,
+    identify_instruments,
+)
 from pincal.identification._options import (
     LOSSES,
     GaussNewtonOptions,
@@ -43,6 +56,9 @@ __all__ = [
     "GaussNewtonOptions",
     "IdentificationProblem",
     "IdentificationResult",
+    "InstrumentIdentifiability",
+    "InstrumentIdentification",
+    "InstrumentProblem",
     "LMOptions",
     "LocalSolverExtras",
     "QPSOExtras",
@@ -57,7 +73,13 @@ __all__ = [
     "StepPlanningExtras",
     "StepPlanningOptions",
     "StepPlanningResult",
+    "default_instrument",
     "identify",
+    "identify_instruments",
+    "instrument_blocks",
+    "instrument_candidates",
+    "instrument_cramer_rao",
+    "instrument_identifiability",
     "qpso",
     "qpso_identify",
     "qpso_stepwise",

@@ -26,7 +26,7 @@ import pinocchio as pin
 from pincal.design._bounds import crb_covariance
 from pincal.design._candidates import CandidateSet
 from pincal.errors import ConvergenceError, MeasurementError
-from pincal.measure._instruments import INSTRUMENT_KINDS, Instrument, InstrumentData
+from pincal.measure._instruments import INSTRUMENT_KINDS, Instrument
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.model._workspace import sample_actuators
@@ -242,7 +242,9 @@ def instrument_identifiability(
         ids = np.arange(n_poses) % max(inst.n_planes, 1) if inst.kind == "plane" else None
     else:
         if kind not in INSTRUMENT_KINDS:
-            raise MeasurementError(f"unknown instrument kind {kind!r}; choose from {INSTRUMENT_KINDS}")
+            raise MeasurementError(
+                f"unknown instrument kind {kind!r}; choose from {INSTRUMENT_KINDS}"
+            )
         inst, th, ids = default_instrument(mech, kind, q)
     J, P, Jp = instrument_blocks(mech, params, inst, th, q, ids)
     J = J[:, 0, :]
@@ -252,7 +254,7 @@ def instrument_identifiability(
     ident = analyse_jacobian(J[:, order], tuple(names[i] for i in order))
     # null directions of the column-scaled Jacobian, back in parameter units
     scale = np.where(ident.column_scale > 0, ident.column_scale, 1.0)
-    _, s, vt = np.linalg.svd(J[:, order] / scale, full_matrices=True)
+    _, _, vt = np.linalg.svd(J[:, order] / scale, full_matrices=True)
     null = (vt[ident.rank :] / scale).T  # (n + k, d) in the `order` columns
     null_x = np.empty_like(null)
     null_x[order] = null
@@ -271,7 +273,9 @@ def instrument_identifiability(
     invisible = _words(ax0, tr0, c0 if ax0.shape[1] else None)
     absorbed = _words(_complement(axu, ax0), _complement(tru, tr0), None)
     if absorbed:
-        used = [inst.parameter_names[i] for i in range(len(th)) if np.any(np.abs(inst_part[i]) > 1e-9)]
+        used = [
+            inst.parameter_names[i] for i in range(len(th)) if np.any(np.abs(inst_part[i]) > 1e-9)
+        ]
         absorbed = [f"{w} ({', '.join(used)})" for w in absorbed]
     return InstrumentIdentifiability(
         inst.kind, names, n, ident, tuple(invisible), tuple(absorbed), int(still)
@@ -308,7 +312,9 @@ def instrument_candidates(
     home = mech.frame_placement(mech.q_home)
     c = np.asarray(theta[:3], dtype=float)
     radius = (
-        float(np.linalg.norm(home.translation - c)) if instrument.kind == "distance" else instrument.radius
+        float(np.linalg.norm(home.translation - c))
+        if instrument.kind == "distance"
+        else instrument.radius
     )
     rows, tried = [], 0
     while len(rows) < count and tried < 20 * count:
@@ -332,20 +338,8 @@ def instrument_candidates(
     )  # fmt: skip
 
 
-def instrument_cramer_rao(
-    J_blocks: np.ndarray, std: float, base: np.ndarray
-) -> np.ndarray:
+def instrument_cramer_rao(J_blocks: np.ndarray, std: float, base: np.ndarray) -> np.ndarray:
     """Cramér–Rao covariance (b, b) of the base parameters ``base`` (indices into the
     n + k columns) from joint reading blocks (m, 1, n + k) and the reading noise [m]."""
     J = np.asarray(J_blocks, dtype=float).reshape(len(J_blocks), -1)[:, base] / std
     return crb_covariance(J)
-
-
-def data_at(
-    data: InstrumentData, rows: np.ndarray
-) -> InstrumentData:  # pragma: no cover - small convenience
-    """The readings at row indices ``rows``."""
-    return InstrumentData(
-        data.instrument, data.q_act[rows], data.values[rows], data.actuated, data.frame,
-        None if data.plane is None else data.plane[rows], data.initial,
-    )  # fmt: skip

@@ -63,10 +63,14 @@ class InstrumentProblem:
         if not datasets:
             raise MeasurementError("give at least one measurement dataset")
         self.mech, self.params, self.datasets = mech, params, datasets
-        self.labels = list(labels) if labels is not None else [
-            f"{d.kind if isinstance(d, InstrumentData) else 'pose'}{i}"
-            for i, d in enumerate(datasets)
-        ]
+        self.labels = (
+            list(labels)
+            if labels is not None
+            else [
+                f"{d.kind if isinstance(d, InstrumentData) else 'pose'}{i}"
+                for i, d in enumerate(datasets)
+            ]
+        )
         qs = mech.configurations(np.vstack([d.q_act for d in datasets]))
         self.instruments: list[Any] = []
         theta0: list[np.ndarray] = []
@@ -321,6 +325,4 @@ def identify_instruments(
         calibrated_mechanism=model.mechanism(x),
         annotations={"instruments": inst, "datasets": list(model.labels)},
     )
-    return InstrumentIdentification(
-        result, model.names, x, x0, free, cov, raws, ident
-    )
+    return InstrumentIdentification(result, model.names, x, x0, free, cov, raws, ident)

@@ -13,6 +13,10 @@ from pincal.io._commands_file import (
     read_commands,
     write_commands,
 )
+from pincal.io._instrument_file import (
+    read_instrument_data,
+    write_instrument_data,
+)
 from pincal.io._measurement_file import (
     MeasurementFile,
     check_enough_poses,
@@ -47,11 +51,13 @@ __all__ = [
     "check_enough_poses",
     "read_actuator_rows",
     "read_commands",
+    "read_instrument_data",
     "read_measurement_file",
     "read_measurements",
     "read_poses",
     "save_urdf",
     "write_commands",
+    "write_instrument_data",
     "write_measurements",
     "write_pose_design",
     "write_poses",

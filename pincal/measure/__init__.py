@@ -4,6 +4,13 @@ simulation, the laser tracker, instrument registration, pose errors against a re
 
 from __future__ import annotations
 
+from pincal.measure._instruments import (
+    INSTRUMENT_KINDS,
+    Instrument,
+    InstrumentData,
+    initial_instrument_values,
+    simulate_instrument,
+)
 from pincal.measure._measurements import (
     Measurements,
     NoiseModel,
@@ -28,6 +35,9 @@ from pincal.measure._validation import (
 )
 
 __all__ = [
+    "INSTRUMENT_KINDS",
+    "Instrument",
+    "InstrumentData",
     "LaserTracker",
     "Measurements",
     "NoiseModel",
@@ -37,9 +47,11 @@ __all__ = [
     "RigidFit",
     "TrackerNoise",
     "fit_rigid_transform",
+    "initial_instrument_values",
     "pose_errors",
     "pose_from_target_points",
     "register_instrument",
     "rigid_fit_covariance",
+    "simulate_instrument",
     "simulate_measurements",
 ]

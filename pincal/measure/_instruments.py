@@ -91,7 +91,9 @@ class Instrument:
             raise MeasurementError(f"a sphere needs a calibrated radius > 0 [m], got {self.radius}")
         object.__setattr__(self, "direction", _unit(self.direction, "direction"))
         object.__setattr__(
-            self, "normals", tuple(_unit(n, f"plane normal {j}") for j, n in enumerate(self.normals))
+            self,
+            "normals",
+            tuple(_unit(n, f"plane normal {j}") for j, n in enumerate(self.normals)),
         )
 
     @property
@@ -127,7 +129,9 @@ class Instrument:
         ids = None
         if self.kind == "plane":
             ids = np.zeros(len(P), dtype=int) if plane is None else np.asarray(plane, dtype=int)
-            if ids.shape != (len(P),) or (ids.size and (ids.min() < 0 or ids.max() >= self.n_planes)):
+            if ids.shape != (len(P),) or (
+                ids.size and (ids.min() < 0 or ids.max() >= self.n_planes)
+            ):
                 raise MeasurementError(
                     f"plane ids must be (m,) integers in [0, {self.n_planes}), one per row"
                 )
@@ -235,7 +239,9 @@ class InstrumentData:
                 raise MeasurementError("plane ids must be one integer ≥ 0 per reading")
             object.__setattr__(self, "plane", ids.astype(int))
         elif self.plane is not None:
-            raise MeasurementError(f"plane ids belong to the plane kind, not {self.instrument.kind!r}")
+            raise MeasurementError(
+                f"plane ids belong to the plane kind, not {self.instrument.kind!r}"
+            )
         if self.initial is not None:
             x0 = np.asarray(self.initial, dtype=float).reshape(-1)
             object.__setattr__(self, "initial", x0)
