@@ -61,8 +61,15 @@ def structure_lines(mech: Mechanism) -> list[str]:
 @click.command()
 @click.argument("model")
 @click.option("--preset", default=None, help="Parameter preset to analyse (default: all).")
+@click.option(
+    "--instrument",
+    type=click.Choice(["distance", "sphere", "plane", "point"]),
+    default=None,
+    help="What this instrument identifies of the preset (default: first preset): rank, "
+    "base set, absorbed combinations and the unseen motions in words.",
+)
 @fail_cleanly
-def info(model: str, preset: str | None) -> None:
+def info(model: str, preset: str | None, instrument: str | None = None) -> None:
     """Describe MODEL (bundled name, model directory or .urdf path)."""
     import numpy as np
 
@@ -72,6 +79,13 @@ def info(model: str, preset: str | None) -> None:
     mech = load_mechanism(model)
     for line in structure_lines(mech):
         click.echo(line)
+    if instrument is not None:
+        from pincal.identification import instrument_identifiability
+
+        params = parameters(mech, preset or next(iter(mech.presets), "full"))
+        for line in instrument_identifiability(mech, params, instrument).lines():
+            click.echo(f"  {line}")
+        return
     names = [preset] if preset else ["full", *mech.presets]
     for name in names:
         params = parameters(mech, name)
