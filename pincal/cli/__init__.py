@@ -47,6 +47,7 @@ def main(ctx: click.Context, debug: bool) -> None:
     logging.basicConfig(level=logging.DEBUG if debug else logging.WARNING)
 
 
+from pincal.cli import acceptance as _acceptance  # noqa: E402
 from pincal.cli import calibrate as _calibrate  # noqa: E402
 from pincal.cli import compensate as _compensate  # noqa: E402
 from pincal.cli import demo as _demo  # noqa: E402
@@ -65,6 +66,7 @@ for _command in (
     _compensate.compensate,
     _view.view,
     _report.report,
+    _acceptance.acceptance,
 ):
     main.add_command(_command)
 
