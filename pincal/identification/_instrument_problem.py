@@ -71,6 +71,12 @@ class InstrumentProblem:
                 for i, d in enumerate(datasets)
             ]
         )
+        for d, label in zip(datasets, self.labels, strict=True):
+            if tuple(d.actuated) != tuple(mech.actuated) or d.frame != mech.measured_frame:
+                raise MeasurementError(
+                    f"dataset {label!r} is of joints {list(d.actuated)} / frame {d.frame!r}; "
+                    f"the model has {list(mech.actuated)} / {mech.measured_frame!r}"
+                )
         qs = mech.configurations(np.vstack([d.q_act for d in datasets]))
         self.instruments: list[Any] = []
         theta0: list[np.ndarray] = []
@@ -79,11 +85,6 @@ class InstrumentProblem:
         units: list[str] = list(params.units)
         start = 0
         for d, label in zip(datasets, self.labels, strict=True):
-            if tuple(d.actuated) != tuple(mech.actuated) or d.frame != mech.measured_frame:
-                raise MeasurementError(
-                    f"dataset {label!r} is of joints {list(d.actuated)} / frame {d.frame!r}; "
-                    f"the model has {list(mech.actuated)} / {mech.measured_frame!r}"
-                )
             m = len(d)
             if isinstance(d, Measurements):
                 self.instruments.append(None)
