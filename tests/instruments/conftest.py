@@ -23,8 +23,12 @@ def setups(P: np.ndarray) -> dict:
     c = P.mean(axis=0)
     ids = np.arange(len(P)) % 2
     return {
-        "distance": (Instrument("distance", 1e-6), np.r_[c + [0.01, 0.02, -0.15], 1e-3], None),
-        "sphere": (Instrument("sphere", 1e-6, radius=0.02), c + [0.0, 0.01, -0.1], None),
+        "distance": (
+            Instrument("distance", 1e-6),
+            np.r_[c + np.array([0.01, 0.02, -0.15]), 1e-3],
+            None,
+        ),
+        "sphere": (Instrument("sphere", 1e-6, radius=0.02), c + np.array([0.0, 0.01, -0.1]), None),
         "plane": (
             Instrument("plane", 1e-6, normals=((0, 0, 1), (1, 0, 0.1))),
             np.array([1e-3, -2e-3, 0.3, 2e-3, 1e-3, 0.05]),

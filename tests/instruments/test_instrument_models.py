@@ -34,10 +34,10 @@ def _fd(f, x, h):
 @pytest.mark.parametrize("kind", INSTRUMENT_KINDS)
 def test_reading_derivatives_match_central_differences(kind):
     rng = np.random.default_rng(3)
-    P = rng.uniform(-0.2, 0.2, (12, 3)) + [0, 0, 0.5]
+    P = rng.uniform(-0.2, 0.2, (12, 3)) + np.array([0, 0, 0.5])
     inst, theta, ids = setups(P)[kind]
     ids = None if ids is None else np.arange(12) % 2
-    v, dp, dth = inst.predict(P, theta, ids)
+    _, dp, dth = inst.predict(P, theta, ids)
     for i in range(len(P)):
         num = _fd(
             lambda p, i=i: inst.predict(P[[i]] * 0 + p, theta, None if ids is None else ids[[i]])[
