@@ -112,7 +112,11 @@ def iso_test_cube(
             f"the centre {centre} of the sampled workspace is not reachable at the home "
             "orientation; check the workspace limits of the sidecar"
         )
-    lo, hi = 0.0, 2 * float(np.max(P.max(axis=0) - P.min(axis=0)))
+    lo, hi = 0.0, max(float(np.max(P.max(axis=0) - P.min(axis=0))), 8 * tol)
+    for _ in range(20):  # grow until out of reach, then bisect
+        if not reachable(hi):
+            break
+        lo, hi = hi, 2 * hi
     while hi - lo > tol:
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if reachable(mid) else (lo, mid)

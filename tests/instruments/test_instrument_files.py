@@ -22,10 +22,17 @@ def test_files_round_trip_exactly_in_metres(
     kind, tmp_path, stewart, stewart_rows80, stewart_tool80
 ):
     inst, theta, ids = setups(stewart_tool80)[kind]
-    data = simulate_instrument(stewart, inst, theta, stewart_rows80[:10], np.random.default_rng(0),
-                               None if ids is None else ids[:10])  # fmt: skip
-    data = InstrumentData(inst, data.q_act, data.values, data.actuated, data.frame, data.plane,
-                          theta + 1e-4)  # fmt: skip
+    data = simulate_instrument(
+        stewart,
+        inst,
+        theta,
+        stewart_rows80[:10],
+        np.random.default_rng(0),
+        None if ids is None else ids[:10],
+    )
+    data = InstrumentData(
+        inst, data.q_act, data.values, data.actuated, data.frame, data.plane, theta + 1e-4
+    )
     back = read_instrument_data(write_instrument_data(tmp_path / "a.csv", data), stewart)
     assert back.instrument == inst
     np.testing.assert_array_equal(back.q_act, data.q_act)
@@ -63,8 +70,21 @@ def test_bad_files_name_what_is_wrong(tmp_path, stewart):
 @pytest.mark.parametrize("kind", INSTRUMENT_KINDS)
 def test_cli_simulate_instrument_then_identify(kind, tmp_path, stewart):
     out = tmp_path / f"{kind}.csv"
-    res = CliRunner().invoke(main, ["simulate", "stewart_6ups", "--random", "70", "--instrument",
-                                    kind, "--noise", "0.001,0", "--out", str(out)])  # fmt: skip
+    res = CliRunner().invoke(
+        main,
+        [
+            "simulate",
+            "stewart_6ups",
+            "--random",
+            "70",
+            "--instrument",
+            kind,
+            "--noise",
+            "0.001,0",
+            "--out",
+            str(out),
+        ],
+    )
     assert res.exit_code == 0, res.output
     truth = json.loads(out.with_suffix(".truth.json").read_text())
     assert set(truth["instrument"]) and truth["preset"] == "stewart42"

@@ -39,9 +39,10 @@ def test_ballbar_on_the_stewart_rank_and_absorbed_combinations(stewart, stewart4
     # positions are absorbed together with the pivot (rigid translation)
     assert set(ident.combinations) == set(ident.unidentifiable.tolist())
     pivot_terms = [
-        k for k, combo in ident.combinations.items()
+        k
+        for k, combo in ident.combinations.items()
         if any(ident.names[i].startswith("pivot_") for i in combo)
-    ]  # fmt: skip
+    ]
     assert pivot_terms and all(
         ident.names[k].endswith(("u1.tx", "u1.ty", "u1.tz")) for k in pivot_terms
     )
@@ -54,8 +55,9 @@ def test_ballbar_on_the_stewart_rank_and_absorbed_combinations(stewart, stewart4
         [float(t) for t in rep.invisible[0].split("point (")[1].split(")")[0].split(",")]
     )
     np.testing.assert_allclose(centre, theta[:3], atol=1e-3)  # about the pivot
-    assert rep.absorbed == ("3 translations of every tool point (in every direction) "
-                            "(pivot_x, pivot_y, pivot_z)",)  # fmt: skip
+    assert rep.absorbed == (
+        "3 translations of every tool point (in every direction) (pivot_x, pivot_y, pivot_z)",
+    )
     assert rep.n_still == 3
 
 
@@ -93,8 +95,12 @@ def test_every_kind_states_what_it_cannot_see(stewart, stewart42):
     assert ranks == {"sphere": 36, "plane": 39, "point": 36}
     gauge = instrument_identifiability(stewart, stewart42, "point", n_poses=50, rng=1)
     assert any("2 translation(s)" in w for w in gauge.invisible)  # across the gauge axis
-    assert any("along (+0.000, -0.000, +1.000)" in w or "along (-0.000, +0.000, +1.000)" in w
-               or "+1.000)" in w for w in gauge.absorbed)  # fmt: skip
+    assert any(
+        "along (+0.000, -0.000, +1.000)" in w
+        or "along (-0.000, +0.000, +1.000)" in w
+        or "+1.000)" in w
+        for w in gauge.absorbed
+    )
 
 
 def test_cli_info_instrument_prints_the_statement():
