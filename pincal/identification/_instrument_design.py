@@ -295,7 +295,8 @@ def instrument_candidates(
 
     Tool points on the sphere around the pivot / centre (bar length ``|θ_c − home|`` for
     the ballbar, ``radius`` for the sphere) in directions drawn uniformly, at the home
-    orientation tilted by up to ``max_tilt`` [rad]; unreachable ones are dropped.
+    orientation tilted by up to ``max_tilt`` [rad]; unreachable ones and those outside
+    the sidecar's workspace joint ranges are dropped.
 
     Returns:
         CandidateSet with joint Jacobian blocks (N, 1, n + k), component ``"v"``.
@@ -316,6 +317,12 @@ def instrument_candidates(
         if instrument.kind == "distance"
         else instrument.radius
     )
+    # the sidecar's workspace joint ranges, where given, bound the candidates too
+    limits = [
+        (k, mech.workspace.joints[a])
+        for k, a in enumerate(mech.actuated)
+        if a in mech.workspace.joints
+    ]
     rows, tried = [], 0
     while len(rows) < count and tried < 20 * count:
         tried += 1
@@ -323,9 +330,11 @@ def instrument_candidates(
         u /= np.linalg.norm(u)
         R = home.rotation @ pin.exp3(gen.uniform(-max_tilt, max_tilt, 3))
         try:
-            rows.append(mech.inverse(pin.SE3(R, c + radius * u)))
+            q = mech.inverse(pin.SE3(R, c + radius * u))
         except ConvergenceError:
             continue
+        if all(lo <= q[k] <= hi for k, (lo, hi) in limits):
+            rows.append(q)
     if not rows:
         raise MeasurementError("no candidate pose is reachable; move the pivot / sphere")
     q = np.array(rows)
