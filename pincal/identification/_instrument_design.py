@@ -323,7 +323,8 @@ def instrument_candidates(
         for k, a in enumerate(mech.actuated)
         if a in mech.workspace.joints
     ]
-    rows, tried = [], 0
+    rows: list[np.ndarray] = []
+    tried = 0
     while len(rows) < count and tried < 20 * count:
         tried += 1
         u = gen.normal(size=3)

@@ -169,7 +169,7 @@ class InstrumentProblem:
                 placements = [mech.frame_placement(q) for q in q_block]
                 P = np.array([T.translation for T in placements])
                 Rs = [T.rotation for T in placements]
-            if inst is None:
+            if isinstance(d, Measurements):
                 rows = d.component_indices
                 raw = np.empty((m, rows.size))
                 J = np.zeros((m, rows.size, len(x)))

@@ -76,7 +76,8 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
             f"{name} measures frame {frame!r} but the model's tool frame is {mech.measured_frame!r}"
         )
     std = positive_value(header_value(header, "std", None, name), "std", name) / lf
-    radius, direction, normals = 0.0, (0.0, 0.0, 1.0), ()
+    radius, direction = 0.0, (0.0, 0.0, 1.0)
+    normals: tuple[tuple[float, ...], ...] = ()
     if kind == "sphere":
         radius = positive_value(header_value(header, "radius", None, name), "radius", name) / lf
     if kind == "point":
