@@ -52,6 +52,7 @@ def main(ctx: click.Context, debug: bool) -> None:
     logging.basicConfig(level=logging.DEBUG if debug else logging.WARNING)
 
 
+from pincal.cli import acceptance as _acceptance  # noqa: E402
 from pincal.cli import calibrate as _calibrate  # noqa: E402
 from pincal.cli import compensate as _compensate  # noqa: E402
 from pincal.cli import demo as _demo  # noqa: E402
@@ -79,6 +80,7 @@ for _command in (
     _report.report,
     _import_cmd.import_tracker,
     _run.run,
+    _acceptance.acceptance,
 ):
     main.add_command(_command)
 

@@ -61,15 +61,23 @@ def structure_lines(mech: Mechanism) -> list[str]:
 @click.command()
 @click.argument("model")
 @click.option("--preset", default=None, help="Parameter preset to analyse (default: all).")
+@click.option(
+    "--instrument",
+    type=click.Choice(["distance", "sphere", "plane", "point"]),
+    default=None,
+    help="What this instrument identifies of the preset (default: first preset): rank, "
+    "base set, absorbed combinations and the unseen motions in words.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON description on stdout.")
 @fail_cleanly
-def info(model: str, preset: str | None, as_json: bool) -> None:
+def info(model: str, preset: str | None, instrument: str | None, as_json: bool) -> None:
     """Describe MODEL (bundled name, model directory, .urdf or MJCF .xml path).
 
-    \b
+    
     Examples:
       pincal info stewart_6ups
       pincal info wedge3 --preset patent
+      pincal info stewart_6ups --instrument distance    what a ballbar cannot see
       pincal info models/pkm5 --json
     """
     import json
@@ -83,6 +91,17 @@ def info(model: str, preset: str | None, as_json: bool) -> None:
     if not as_json:
         for line in structure_lines(mech):
             click.echo(line)
+    if instrument is not None:
+        from pincal.identification import instrument_identifiability
+
+        params = parameters(mech, preset or next(iter(mech.presets), "full"))
+        lines = instrument_identifiability(mech, params, instrument).lines()
+        if as_json:
+            click.echo(json.dumps({"model": mech.name, "instrument": instrument, "lines": lines}))
+        else:
+            for line in lines:
+                click.echo(f"  {line}")
+        return
     names = [preset] if preset else ["full", *mech.presets]
     presets = []
     for name in names:

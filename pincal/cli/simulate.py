@@ -80,11 +80,18 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
     type=click.Path(dir_okay=False),
     help="Measurement CSV to write; the true errors go to <out>.truth.json.",
 )
+@click.option(
+    "--instrument",
+    type=click.Choice(["distance", "sphere", "plane", "point"]),
+    default=None,
+    help="Write one scalar reading per pose (ballbar, sphere probe, planes, gauge) instead "
+    "of poses; its noise is the position noise.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
 def simulate(
     model, poses_file, n_random, preset, errors, error_size, noise, seed, length_unit, out,
-    as_json,
+    instrument, as_json,
 ) -> None:  # fmt: skip
     """Simulate a measurement campaign of MODEL with random geometric errors.
 
@@ -143,8 +150,19 @@ def simulate(
         click.echo(f"… sampling {n_random} random poses", err=True)
         q_act = sample_actuators(nominal, n_random, rng)
     click.echo(f"… measuring {len(q_act)} poses of the actual machine", err=True)
-    meas = simulate_measurements(actual, q_act, NoiseModel(pos_mm, ori_mrad), rng)
-    path = write_measurements(out, meas, length_unit=length_unit)
+    extra = {}
+    if instrument is not None:
+        from pincal.identification import default_instrument
+        from pincal.io import write_instrument_data
+        from pincal.measure import simulate_instrument
+
+        inst, theta, ids = default_instrument(nominal, instrument, q_act, std=pos_mm * 1e-3)
+        meas = simulate_instrument(actual, inst, theta, q_act, rng, plane=ids)
+        path = write_instrument_data(out, meas, length_unit=length_unit)
+        extra = {"instrument": dict(zip(inst.parameter_names, map(float, theta), strict=True))}
+    else:
+        meas = simulate_measurements(actual, q_act, NoiseModel(pos_mm, ori_mrad), rng)
+        path = write_measurements(out, meas, length_unit=length_unit)
     truth = {
         "model": nominal.name,
         "preset": preset,
@@ -153,6 +171,7 @@ def simulate(
             {"name": n, "unit": u, "value": float(v)}
             for n, u, v in zip(params.names, params.units, values, strict=True)
         ],
+        **extra,
     }
     truth_path = Path(out).with_suffix(".truth.json")
     atomic_write_text(truth_path, json.dumps(truth, indent=1) + "\n")

@@ -1,14 +1,27 @@
 """Stage 5 — from measurements to parameters.
 
 One :class:`IdentificationProblem`, solved by a registered solver (``"gauss-newton"``,
-``"lm"``, ``"qpso"``, ``"qpso-stepwise"``, ``"step-planned"``), gives one :class:`IdentificationResult` with covariances at the
-Cramér–Rao bound; ``IdentificationResult.to_dict`` / ``from_dict`` write and read
-``identification.json``.
+``"lm"``, ``"qpso"``, ``"qpso-stepwise"``, ``"step-planned"``), gives one
+:class:`IdentificationResult` with covariances at the Cramér–Rao bound;
+``IdentificationResult.to_dict`` / ``from_dict`` write and read ``identification.json``.
 """
 
 from __future__ import annotations
 
 from pincal.identification._identify import identify, qpso_identify, step_planned_identify
+from pincal.identification._instrument_design import (
+    InstrumentIdentifiability,
+    default_instrument,
+    instrument_blocks,
+    instrument_candidates,
+    instrument_cramer_rao,
+    instrument_identifiability,
+)
+from pincal.identification._instrument_problem import (
+    InstrumentIdentification,
+    InstrumentProblem,
+    identify_instruments,
+)
 from pincal.identification._monte_carlo import MonteCarloStudy, monte_carlo
 from pincal.identification._options import (
     LOSSES,
@@ -45,6 +58,9 @@ __all__ = [
     "GaussNewtonOptions",
     "IdentificationProblem",
     "IdentificationResult",
+    "InstrumentIdentifiability",
+    "InstrumentIdentification",
+    "InstrumentProblem",
     "LMOptions",
     "LocalSolverExtras",
     "MonteCarloStudy",
@@ -60,7 +76,13 @@ __all__ = [
     "StepPlanningExtras",
     "StepPlanningOptions",
     "StepPlanningResult",
+    "default_instrument",
     "identify",
+    "identify_instruments",
+    "instrument_blocks",
+    "instrument_candidates",
+    "instrument_cramer_rao",
+    "instrument_identifiability",
     "monte_carlo",
     "qpso",
     "qpso_identify",

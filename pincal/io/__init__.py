@@ -31,6 +31,10 @@ from pincal.io._import_tracker import (
     TrackerImportOptions,
     import_tracker,
 )
+from pincal.io._instrument_file import (
+    read_instrument_data,
+    write_instrument_data,
+)
 from pincal.io._measurement_file import (
     MeasurementFile,
     check_enough_poses,
@@ -80,6 +84,7 @@ __all__ = [
     "read_actuator_rows",
     "read_calibration",
     "read_commands",
+    "read_instrument_data",
     "read_measurement_file",
     "read_measurements",
     "read_pose_file",
@@ -90,6 +95,7 @@ __all__ = [
     "si_actuator_units",
     "write_calibration",
     "write_commands",
+    "write_instrument_data",
     "write_measurements",
     "write_pose_design",
     "write_poses",

@@ -1,11 +1,26 @@
 """Stage 4 — what an instrument sees.
 
-Measurements and noise models (SI inside), simulation, the laser tracker, instrument
+Measurements and noise models (SI inside), scalar instruments (ballbar, sphere probe,
+planes, gauge), ISO 9283 pose characteristics, simulation, the laser tracker, instrument
 registration, pose errors against a reference.
 """
 
 from __future__ import annotations
 
+from pincal.measure._instruments import (
+    INSTRUMENT_KINDS,
+    Instrument,
+    InstrumentData,
+    initial_instrument_values,
+    simulate_instrument,
+)
+from pincal.measure._iso9283 import (
+    PoseCharacteristics,
+    TestCube,
+    iso_test_cube,
+    pose_characteristics,
+    simulate_cycles,
+)
 from pincal.measure._measurements import (
     Measurements,
     NoiseModel,
@@ -30,18 +45,28 @@ from pincal.measure._validation import (
 )
 
 __all__ = [
+    "INSTRUMENT_KINDS",
+    "Instrument",
+    "InstrumentData",
     "LaserTracker",
     "Measurements",
     "NoiseModel",
+    "PoseCharacteristics",
     "PoseErrors",
     "PoseMeasurement",
     "Registration",
     "RigidFit",
+    "TestCube",
     "TrackerNoise",
     "fit_rigid_transform",
+    "initial_instrument_values",
+    "iso_test_cube",
+    "pose_characteristics",
     "pose_errors",
     "pose_from_target_points",
     "register_instrument",
     "rigid_fit_covariance",
+    "simulate_cycles",
+    "simulate_instrument",
     "simulate_measurements",
 ]

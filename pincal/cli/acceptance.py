@@ -1,0 +1,166 @@
+"""`pincal acceptance`: ISO 9283 pose accuracy and repeatability on the test cube."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from pincal.cli.common import fail_cleanly
+
+if TYPE_CHECKING:
+    from pincal.model import Mechanism
+
+
+def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
+    """The calibrated machine from a calibration directory or an identification.json.
+
+    A directory is read as its ``calibrated.urdf`` (+ ``calibrated.yaml``) when present,
+    else as its single ``.urdf`` + ``.yaml`` pair, else through its
+    ``identification.json`` applied to ``nominal``.
+
+    Raises:
+        ModelFileError / ReportError: nothing usable at ``spec``.
+    """
+    from pincal.errors import ModelFileError, ParameterError, ReportError
+    from pincal.identification import IdentificationResult
+    from pincal.model import load_mechanism, parameters
+
+    path = Path(spec)
+    if path.is_dir():
+        urdfs = sorted(path.glob("*.urdf"))
+        pick = [u for u in urdfs if u.stem == "calibrated"] or urdfs
+        if len(pick) == 1 and pick[0].with_suffix(".yaml").is_file():
+            return load_mechanism(pick[0])
+        path = path / "identification.json"
+        if not path.is_file():
+            raise ModelFileError(
+                f"{spec!r} holds no calibrated.urdf + calibrated.yaml pair (or a single "
+                ".urdf + .yaml pair) and no identification.json; give a calibration "
+                "directory written by 'pincal calibrate' or an identification.json"
+            )
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ReportError(f"cannot read {str(path)!r} as identification.json: {exc}") from None
+    result = IdentificationResult.from_dict(data, str(path))
+    params = parameters(nominal, result.preset or "full")
+    if tuple(params.names) != tuple(result.names):
+        raise ParameterError(
+            f"{str(path)!r} holds parameters of preset {result.preset!r} that do not match "
+            f"model {nominal.name!r}; give the model it was identified for"
+        )
+    return params.apply(nominal, result.full_values)
+
+
+def _grouped(meas, controller):
+    """Commands (forward kinematics of the distinct actuator rows) and the poses per row."""
+    import numpy as np
+
+    from pincal.errors import MeasurementError
+
+    keys, first, inverse = np.unique(meas.q_act, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    counts = np.bincount(inverse.reshape(-1))
+    if len(set(counts.tolist())) != 1 or counts[0] < 2:
+        raise MeasurementError(
+            f"every commanded pose must be measured the same number (≥ 2) of times; got "
+            f"counts {counts[order].tolist()}"
+        )
+    if meas.rotations is None:
+        raise MeasurementError("ISO 9283 needs the attained orientation: measure full poses")
+    poses, pos, rot = [], [], []
+    for g in order:
+        rows = np.flatnonzero(inverse.reshape(-1) == g)
+        poses.append(controller.forward(keys[g]))
+        pos.append(meas.positions[rows])
+        rot.append(meas.rotations[rows])
+    return poses, np.array(pos), np.array(rot)
+
+
+@click.command()
+@click.argument("model")
+@click.option(
+    "--calibrated",
+    "cal",
+    default=None,
+    help="Calibration directory (calibrated.urdf + .yaml, or identification.json) or an "
+    "identification.json: the controller model after calibration.",
+)
+@click.option(
+    "--data",
+    "data_file",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Measured repeated poses (pincal measurements CSV, full poses; rows with equal "
+    "actuator values are one commanded pose) instead of a simulation.",
+)
+@click.option("--params", "preset", default=None, help="Preset of the simulated errors.")
+@click.option("--errors", default="seed:0", show_default=True, help="seed:N or none.")
+@click.option("--error-size", default="1,10", show_default=True, help="'length_mm,angle_mrad'.")
+@click.option("--cycles", default=30, show_default=True, type=click.IntRange(min=2))
+@click.option(
+    "--repeatability", default=2.0, show_default=True, help="Actuator repeatability 1σ [µm]."
+)
+@click.option("--seed", default=1, show_default=True, help="Seed of the cube search and cycles.")
+@click.option("--json", "json_out", type=click.Path(dir_okay=False), default=None)
+@fail_cleanly
+def acceptance(
+    model, cal, data_file, preset, errors, error_size, cycles, repeatability, seed, json_out
+) -> None:
+    """ISO 9283 acceptance of MODEL: AP and RP at P1–P5 of the test cube.
+
+    Simulates the actual machine (MODEL with the errors of `pincal simulate`, same
+    defaults) commanded by the nominal model (before) and by the calibrated one
+    (after, with --calibrated), or evaluates measured cycles (--data).
+    """
+    import numpy as np
+
+    from pincal.cli.simulate import _parse_errors, _parse_pair
+    from pincal.io import atomic_write_text, read_measurements
+    from pincal.measure._iso9283 import iso_test_cube, pose_characteristics, simulate_cycles
+    from pincal.model import load_mechanism, parameters
+
+    nominal = load_mechanism(model)
+    calibrated = load_calibrated(cal, nominal) if cal else None
+    report: dict = {"model": nominal.name}
+    if data_file is not None:
+        controller = calibrated or nominal
+        poses, pos, rot = _grouped(read_measurements(data_file, nominal), controller)
+        pc = pose_characteristics(poses, pos, rot)
+        for line in pc.lines(f"measured ({data_file}), commands from the "
+                             f"{'calibrated' if calibrated else 'nominal'} model"):  # fmt: skip
+            click.echo(line)
+        report["measured"] = pc.to_dict()
+    else:
+        cube = iso_test_cube(nominal, rng=seed)
+        click.echo(
+            f"test cube: centre {np.round(cube.centre * 1e3, 3).tolist()} mm, edge "
+            f"{cube.edge * 1e3:.2f} mm, P2–P5 at {cube.inset:.0%} of the diagonal"
+        )
+        report["cube"] = {"centre": cube.centre.tolist(), "edge": cube.edge}
+        err_seed = _parse_errors(errors)
+        size_mm, size_mrad = _parse_pair(error_size, "--error-size")
+        params = parameters(nominal, preset or next(iter(nominal.presets), "full"))
+        values = np.zeros(len(params))
+        if err_seed is not None:
+            er = np.random.default_rng(err_seed)
+            bound = np.array(
+                [size_mm * 1e-3 if u == "m" else size_mrad * 1e-3 for u in params.units]
+            )
+            values = er.uniform(-bound, bound)
+        actual = params.apply(nominal, values)
+        runs = [("before", nominal)] + ([("after", calibrated)] if calibrated else [])
+        for label, controller in runs:
+            _, pos, rot = simulate_cycles(
+                actual, controller, cube.poses, cycles, repeatability * 1e-6, seed
+            )
+            pc = pose_characteristics(cube.poses, pos, rot)
+            for line in pc.lines(f"{label} calibration (simulated, {cycles} cycles)"):
+                click.echo(line)
+            report[label] = pc.to_dict()
+    if json_out:
+        atomic_write_text(json_out, json.dumps(report, indent=1) + "\n")
+        click.echo(f"wrote {json_out}")

@@ -1,0 +1,355 @@
+"""What a scalar instrument can identify, in words, and where to measure with it.
+
+:func:`instrument_identifiability` analyses the joint machine + instrument Jacobian
+over random poses (:func:`pincal.sensitivity.analyse_jacobian`: rank, base set,
+absorbed combinations) and describes its null directions physically: each null
+direction moves the tool points by a field ``δp_i = J_p,i δx``; fields that are
+rigid motions ``v + ω × p_i`` are named (translations along directions, rotations
+about axes through a point), split into motions the instrument cannot see at all and
+motions its own parameters absorb (e.g. a ballbar cannot see a rotation of the whole
+machine about its pivot, and its pivot absorbs a translation).
+
+:func:`instrument_candidates` gives candidate poses for an instrument (ballbar on a
+sphere of bar length around the pivot, a probe grid on a reference sphere) as a
+:class:`pincal.design.CandidateSet` whose Jacobian blocks are the joint scalar rows,
+so :func:`pincal.design.select_poses` works unchanged;
+:func:`instrument_cramer_rao` gives the Cramér–Rao covariance of the base set.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.design._bounds import crb_covariance
+from pincal.design._candidates import CandidateSet
+from pincal.errors import ConvergenceError, MeasurementError
+from pincal.measure._instruments import INSTRUMENT_KINDS, Instrument
+from pincal.model._mechanism import Mechanism
+from pincal.model._parameters import ParameterSet
+from pincal.model._workspace import sample_actuators
+from pincal.sensitivity._identifiability import Identifiability, analyse_jacobian
+from pincal.sensitivity._jacobian import _plan, pose_sensitivity
+
+__all__ = [
+    "InstrumentIdentifiability",
+    "default_instrument",
+    "instrument_blocks",
+    "instrument_candidates",
+    "instrument_cramer_rao",
+    "instrument_identifiability",
+]
+
+
+def instrument_blocks(
+    mech: Mechanism,
+    params: ParameterSet,
+    instrument: Instrument,
+    theta: np.ndarray,
+    q_act_rows: np.ndarray,
+    plane: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Joint Jacobian blocks of the readings at the nominal machine.
+
+    Args:
+        mech, params: nominal mechanism and its n parameters.
+        instrument, theta: the instrument and its k parameter values.
+        q_act_rows: (m, n_act) actuator rows [m, rad]; plane: (m,) plane ids.
+
+    Returns:
+        J (m, 1, n + k) of dv/d[x; θ], tool positions P (m, 3) [m], position
+        sensitivities Jp (m, 3, n).
+    """
+    rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
+    plan = _plan(mech, params)
+    sens = [pose_sensitivity(mech, params, q, None, plan) for q in mech.configurations(rows)]
+    P = np.array([s.position for s in sens])
+    Jp = np.array([s.jacobian[:3] for s in sens])
+    _, dv_dp, dv_dth = instrument.predict(P, theta, plane)
+    J = np.concatenate([np.einsum("mi,min->mn", dv_dp, Jp), dv_dth], axis=1)[:, None, :]
+    return J, P, Jp
+
+
+def default_instrument(
+    mech: Mechanism, kind: str, q_act_rows: np.ndarray, std: float = 1e-6
+) -> tuple[Instrument, np.ndarray, np.ndarray | None]:
+    """A typical set-up of ``kind`` beside the workspace of ``q_act_rows``.
+
+    Ballbar pivot and probe sphere 0.1 m below the centre of the tool positions (sphere
+    radius 0.02 m), one horizontal plane and a vertical one, a vertical gauge.
+
+    Returns:
+        (instrument, θ (k,), plane ids (m,) or None).
+    """
+    rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
+    P = np.array([mech.frame_placement(q).translation for q in mech.configurations(rows)])
+    c = P.mean(axis=0) - np.array([0.0, 0.0, 0.1])
+    if kind == "distance":
+        return Instrument(kind, std), np.r_[c, 0.0], None
+    if kind == "sphere":
+        return Instrument(kind, std, radius=0.02), c, None
+    if kind == "point":
+        return Instrument(kind, std), np.zeros(1), None
+    ids = np.arange(len(rows)) % 2
+    inst = Instrument("plane", std, normals=((0.0, 0.0, 1.0), (1.0, 0.0, 0.0)))
+    return inst, np.array([0.0, 0.0, P[:, 2].min(), 0.0, 0.0, P[:, 0].min()]), ids
+
+
+def _span(M: np.ndarray, tol: float = 1e-6, absolute: bool = False) -> np.ndarray:
+    """Orthonormal basis (columns) of the column span of M (singular values above
+    ``tol``, relative to the largest unless ``absolute``)."""
+    if M.size == 0:
+        return np.zeros((M.shape[0], 0))
+    u, s, _ = np.linalg.svd(M, full_matrices=False)
+    return u[:, s > tol * (1.0 if absolute else max(float(s.max(initial=0.0)), 1e-300))]
+
+
+def _vec(v: np.ndarray) -> str:
+    return "(" + ", ".join(f"{x:+.3f}" for x in v) + ")"
+
+
+def _rigid(F: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rigid-motion content of tool-point fields F (3m, k).
+
+    Fits ``δp_i = v + ω × (p_i − p̄)`` per column (ω scaled by the RMS radius L of the
+    points so both parts are in metres).
+
+    Returns:
+        rotation axes (3, r) (orthonormal), translation directions (3, t) of the
+        rotation-free combinations, rotation centre (3,) [m] (NaN when r = 0).
+    """
+    mean = P.mean(axis=0)
+    Pc = P - mean
+    L = max(float(np.sqrt(np.mean(np.sum(Pc**2, axis=1)))), 1e-9)
+    A = np.vstack([np.hstack([np.eye(3), -pin.skew(p) / L]) for p in Pc])
+    C, *_ = np.linalg.lstsq(A, F, rcond=None)
+    tol = 1e-6 * max(float(np.abs(C).max(initial=0.0)), 1e-300)
+    u, sw, vw = np.linalg.svd(C[3:], full_matrices=True)
+    r = int(np.count_nonzero(sw > tol))
+    axes = u[:, :r]
+    trans = _span(C[:3] @ vw[r:].T, 1e-6) if vw[r:].size else np.zeros((3, 0))
+    centre = np.full(3, np.nan)
+    if r:
+        W = C[:, :] @ vw[:r].T  # combinations with rotation: v = −ω × (c − p̄)
+        M = np.vstack([-pin.skew(W[3:, j] / L) for j in range(r)])
+        centre = mean + np.linalg.lstsq(M, W[:3].T.reshape(-1), rcond=None)[0]
+    return axes, trans, centre
+
+
+def _complement(B: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """Orthonormal basis of the part of span(B) orthogonal to span(A) (both (3, ·))."""
+    if B.shape[1] == 0:
+        return B
+    Q = _span(A) if A.shape[1] else np.zeros((3, 0))
+    return _span(B - Q @ (Q.T @ B), 1e-6, absolute=True)
+
+
+def _words(axes: np.ndarray, trans: np.ndarray, centre: np.ndarray | None) -> list[str]:
+    out = []
+    if axes.shape[1]:
+        where = "" if centre is None else f" through the point {_vec(centre)} m"
+        out.append(
+            f"{axes.shape[1]} rotation(s) of every tool point about the "
+            f"{'axes' if axes.shape[1] > 1 else 'axis'} "
+            + ", ".join(_vec(axes[:, j]) for j in range(axes.shape[1]))
+            + where
+        )
+    if trans.shape[1] == 3:
+        out.append("3 translations of every tool point (in every direction)")
+    elif trans.shape[1]:
+        out.append(
+            f"{trans.shape[1]} translation(s) of every tool point along "
+            + ", ".join(_vec(trans[:, j]) for j in range(trans.shape[1]))
+        )
+    return out
+
+
+@dataclass(frozen=True)
+class InstrumentIdentifiability:
+    """What one instrument identifies of a machine.
+
+    Attributes:
+        kind: instrument kind; names: machine then instrument parameter names.
+        n_machine: number of machine parameters.
+        identifiability: joint analysis (instrument parameters listed first).
+        invisible: words for the null directions the instrument does not see at all.
+        absorbed: words for the null directions its own parameters absorb.
+        n_still: null directions that do not move the tool point at all.
+    """
+
+    kind: str
+    names: tuple[str, ...]
+    n_machine: int
+    identifiability: Identifiability
+    invisible: tuple[str, ...]
+    absorbed: tuple[str, ...]
+    n_still: int
+
+    @property
+    def rank(self) -> int:
+        return self.identifiability.rank
+
+    def lines(self) -> list[str]:
+        """The statement in words."""
+        ident, n = self.identifiability, len(self.names)
+        k = n - self.n_machine
+        out = [
+            f"instrument {self.kind!r}: {self.n_machine} machine + {k} instrument parameters, "
+            f"rank {ident.rank} ({n - ident.rank} not identifiable)",
+        ]
+        for w in self.invisible:
+            out.append(f"  cannot see: {w}")
+        for w in self.absorbed:
+            out.append(f"  absorbed by the instrument parameters: {w}")
+        if self.n_still:
+            out.append(
+                f"  cannot see: {self.n_still} direction(s) that do not move the tool point "
+                "(tool orientation about the tool point)"
+            )
+        out.append("  base set and absorbed combinations:")
+        out += [f"    {line}" for line in ident.describe()]
+        return out
+
+
+def instrument_identifiability(
+    mech: Mechanism,
+    params: ParameterSet,
+    kind: str | Instrument,
+    n_poses: int = 60,
+    rng: np.random.Generator | int = 0,
+    theta: np.ndarray | None = None,
+) -> InstrumentIdentifiability:
+    """Identifiability of ``params`` by one instrument over random poses, in words.
+
+    Args:
+        mech, params: nominal mechanism and its n parameters.
+        kind: an instrument kind (a typical set-up, :func:`default_instrument`) or an
+            :class:`Instrument` with ``theta``.
+        n_poses: random workspace poses; rng: generator or seed.
+        theta: the instrument's parameter values (with an Instrument).
+
+    Raises:
+        MeasurementError: unknown kind, or an Instrument without theta.
+    """
+    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    q = sample_actuators(mech, n_poses, gen)
+    if isinstance(kind, Instrument):
+        if theta is None:
+            raise MeasurementError("give theta with an Instrument")
+        inst, th = kind, np.asarray(theta, dtype=float)
+        ids = np.arange(n_poses) % max(inst.n_planes, 1) if inst.kind == "plane" else None
+    else:
+        if kind not in INSTRUMENT_KINDS:
+            raise MeasurementError(
+                f"unknown instrument kind {kind!r}; choose from {INSTRUMENT_KINDS}"
+            )
+        inst, th, ids = default_instrument(mech, kind, q)
+    J, P, Jp = instrument_blocks(mech, params, inst, th, q, ids)
+    J = J[:, 0, :]
+    n = len(params)
+    names = (*params.names, *inst.parameter_names)
+    order = np.r_[np.arange(n, len(names)), np.arange(n)]
+    ident = analyse_jacobian(J[:, order], tuple(names[i] for i in order))
+    # null directions of the column-scaled Jacobian, back in parameter units
+    scale = np.where(ident.column_scale > 0, ident.column_scale, 1.0)
+    _, _, vt = np.linalg.svd(J[:, order] / scale, full_matrices=True)
+    null = (vt[ident.rank :] / scale).T  # (n + k, d) in the `order` columns
+    null_x = np.empty_like(null)
+    null_x[order] = null
+    machine, inst_part = null_x[:n], null_x[n:]
+    # machine-only motions: combinations with no instrument part
+    _, si, vi = np.linalg.svd(inst_part, full_matrices=True)
+    r_i = int(np.count_nonzero(si > 1e-9 * max(float(si.max(initial=0.0)), 1e-300)))
+    pure, mixed = vi[r_i:].T, vi[:r_i].T
+    fields = lambda V: np.einsum("mij,jk->mik", Jp, machine @ V).reshape(-1, V.shape[1])  # noqa: E731
+    F0, F1 = fields(pure), fields(mixed)
+    Q0 = _span(F0)
+    still = F0.shape[1] - Q0.shape[1]
+    ax0, tr0, c0 = _rigid(Q0, P)
+    Qu = _span(np.hstack([F0, F1]))
+    axu, tru, _ = _rigid(Qu, P)
+    invisible = _words(ax0, tr0, c0 if ax0.shape[1] else None)
+    absorbed = _words(_complement(axu, ax0), _complement(tru, tr0), None)
+    if absorbed:
+        used = [
+            inst.parameter_names[i] for i in range(len(th)) if np.any(np.abs(inst_part[i]) > 1e-9)
+        ]
+        absorbed = [f"{w} ({', '.join(used)})" for w in absorbed]
+    return InstrumentIdentifiability(
+        inst.kind, names, n, ident, tuple(invisible), tuple(absorbed), int(still)
+    )
+
+
+def instrument_candidates(
+    mech: Mechanism,
+    params: ParameterSet,
+    instrument: Instrument,
+    theta: np.ndarray,
+    count: int = 200,
+    rng: np.random.Generator | int = 0,
+    max_tilt: float = 0.0,
+) -> CandidateSet:
+    """Candidate poses for a ballbar (``distance``) or a probe on a sphere (``sphere``).
+
+    Tool points on the sphere around the pivot / centre (bar length ``|θ_c − home|`` for
+    the ballbar, ``radius`` for the sphere) in directions drawn uniformly, at the home
+    orientation tilted by up to ``max_tilt`` [rad]; unreachable ones and those outside
+    the sidecar's workspace joint ranges are dropped.
+
+    Returns:
+        CandidateSet with joint Jacobian blocks (N, 1, n + k), component ``"v"``.
+
+    Raises:
+        MeasurementError: another kind, or no reachable candidate.
+    """
+    if instrument.kind not in ("distance", "sphere"):
+        raise MeasurementError(
+            f"instrument_candidates makes ballbar/sphere candidates, not {instrument.kind!r}; "
+            "use random workspace poses (pincal.model.sample_actuators) for planes and gauges"
+        )
+    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    home = mech.frame_placement(mech.q_home)
+    c = np.asarray(theta[:3], dtype=float)
+    radius = (
+        float(np.linalg.norm(home.translation - c))
+        if instrument.kind == "distance"
+        else instrument.radius
+    )
+    # the sidecar's workspace joint ranges, where given, bound the candidates too
+    limits = [
+        (k, mech.workspace.joints[a])
+        for k, a in enumerate(mech.actuated)
+        if a in mech.workspace.joints
+    ]
+    rows: list[np.ndarray] = []
+    tried = 0
+    while len(rows) < count and tried < 20 * count:
+        tried += 1
+        u = gen.normal(size=3)
+        u /= np.linalg.norm(u)
+        R = home.rotation @ pin.exp3(gen.uniform(-max_tilt, max_tilt, 3))
+        try:
+            q = mech.inverse(pin.SE3(R, c + radius * u))
+        except ConvergenceError:
+            continue
+        if all(lo <= q[k] <= hi for k, (lo, hi) in limits):
+            rows.append(q)
+    if not rows:
+        raise MeasurementError("no candidate pose is reachable; move the pivot / sphere")
+    q = np.array(rows)
+    J, P, _ = instrument_blocks(mech, params, instrument, theta, q)
+    Rs = np.array([mech.frame_placement(x).rotation for x in mech.configurations(q)])
+    names = (*params.names, *instrument.parameter_names)
+    return CandidateSet(
+        q, P, Rs, J, ("v",), mech.actuated, names, f"{instrument.kind}:{count}", tried,
+        {"unreachable": tried - len(rows)},
+    )  # fmt: skip
+
+
+def instrument_cramer_rao(J_blocks: np.ndarray, std: float, base: np.ndarray) -> np.ndarray:
+    """Cramér–Rao covariance (b, b) of the base parameters ``base`` (indices into the
+    n + k columns) from joint reading blocks (m, 1, n + k) and the reading noise [m]."""
+    J = np.asarray(J_blocks, dtype=float).reshape(len(J_blocks), -1)[:, base] / std
+    return crb_covariance(J)

@@ -1,0 +1,343 @@
+"""Joint machine + instrument identification from files of several measurement kinds.
+
+:class:`InstrumentProblem` is a residual model beside
+:class:`pincal.identification.CalibrationProblem`: the unknowns are
+``x = [machine parameters (n); θ of instrument 1; θ of instrument 2; …]``. Each dataset
+is either :class:`pincal.measure.Measurements` (pose, position, component subset, tracker
+poses — residuals exactly as in ``CalibrationProblem``) or
+:class:`pincal.measure.InstrumentData` (one scalar per pose); every block is whitened
+by its own noise, so several files of different kinds combine in one fit. The
+Jacobian is analytic: ``∂v/∂p · ∂p/∂x`` with ``∂p/∂x`` from
+:func:`pincal.sensitivity.pose_sensitivity`, and ``∂v/∂θ`` from the instrument.
+
+:func:`identify_instruments` solves it with a registered local solver
+(``"gauss-newton"`` or ``"lm"``), fitting the identifiable base set (instrument
+parameters first, so what an instrument absorbs is held on the machine side).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pincal.errors import ConvergenceError, MeasurementError, SolverOptionError
+from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
+from pincal.identification._result import IdentificationResult, ResidualStats
+from pincal.identification._solvers import solver
+from pincal.measure._instruments import InstrumentData, initial_instrument_values
+from pincal.measure._measurements import Measurements
+from pincal.model._closures import measurement_residual
+from pincal.model._mechanism import Mechanism
+from pincal.model._parameters import ParameterSet
+from pincal.sensitivity._identifiability import Identifiability, analyse_jacobian
+from pincal.sensitivity._jacobian import _plan, pose_sensitivity
+
+__all__ = ["InstrumentIdentification", "InstrumentProblem", "identify_instruments"]
+
+Dataset = InstrumentData | Measurements
+
+
+class InstrumentProblem:
+    """Whitened residuals and Jacobian of machine + instrument parameters.
+
+    Args:
+        mech: nominal mechanism; params: its n parameters.
+        datasets: one or more :class:`Measurements` / :class:`InstrumentData`.
+        labels: a label per dataset (default ``"<kind><i>"``), prefixing θ names.
+
+    Raises:
+        MeasurementError: no datasets, or a dataset of other joints / another frame.
+    """
+
+    def __init__(
+        self,
+        mech: Mechanism,
+        params: ParameterSet,
+        datasets: Sequence[Dataset],
+        labels: Sequence[str] | None = None,
+    ):
+        datasets = list(datasets)
+        if not datasets:
+            raise MeasurementError("give at least one measurement dataset")
+        self.mech, self.params, self.datasets = mech, params, datasets
+        self.labels = (
+            list(labels)
+            if labels is not None
+            else [
+                f"{d.kind if isinstance(d, InstrumentData) else 'pose'}{i}"
+                for i, d in enumerate(datasets)
+            ]
+        )
+        for d, label in zip(datasets, self.labels, strict=True):
+            if tuple(d.actuated) != tuple(mech.actuated) or d.frame != mech.measured_frame:
+                raise MeasurementError(
+                    f"dataset {label!r} is of joints {list(d.actuated)} / frame {d.frame!r}; "
+                    f"the model has {list(mech.actuated)} / {mech.measured_frame!r}"
+                )
+        qs = mech.configurations(np.vstack([d.q_act for d in datasets]))
+        self.instruments: list[Any] = []
+        theta0: list[np.ndarray] = []
+        self.sigma: list[np.ndarray] = []
+        names: list[str] = list(params.names)
+        units: list[str] = list(params.units)
+        start = 0
+        for d, label in zip(datasets, self.labels, strict=True):
+            m = len(d)
+            if isinstance(d, Measurements):
+                self.instruments.append(None)
+                self.sigma.append(CalibrationProblem(mech, params, d).sigma)
+            else:
+                P = np.array([mech.frame_placement(q).translation for q in qs[start : start + m]])
+                inst, th = initial_instrument_values(d, P)
+                self.instruments.append(inst)
+                theta0.append(th)
+                self.sigma.append(np.full((m, 1), inst.std))
+                names += [f"{label}.{n}" for n in inst.parameter_names]
+                units += list(inst.parameter_units)
+            start += m
+        self.names, self.units = tuple(names), tuple(units)
+        self.n_machine = len(params)
+        self.x0 = np.concatenate([np.zeros(self.n_machine), *theta0])
+        self._qs: np.ndarray | None = None
+        self._cache: tuple[bytes, Mechanism] | None = None
+
+    @property
+    def n_equations(self) -> int:
+        return int(sum(s.size for s in self.sigma))
+
+    @property
+    def solver_floor_cost(self) -> float:
+        """Cost of residuals at 100× the FK tolerance: below it, data are fitted exactly."""
+        return 0.5 * float(sum(np.sum((100 * self.mech.options.tol / s) ** 2) for s in self.sigma))
+
+    def mechanism(self, x: np.ndarray) -> Mechanism:
+        """The mechanism with the machine part of ``x`` applied (cached for the last one)."""
+        values = np.asarray(x, dtype=float)[: self.n_machine]
+        key = values.tobytes()
+        if self._cache is None or self._cache[0] != key:
+            mech = self.mech if not np.any(values) else self.params.apply(self.mech, values)
+            self._cache = (key, mech)
+        return self._cache[1]
+
+    def cost(self, x: np.ndarray) -> float:
+        """0.5·‖whitened residual‖²; +inf when the model cannot be assembled."""
+        try:
+            r, _, _ = self.evaluate(x, jacobian=False)
+        except TRIAL_FAILURES:
+            return float("inf")
+        return 0.5 * float(r @ r)
+
+    def _configurations(self, mech: Mechanism) -> np.ndarray:
+        rows = np.vstack([d.q_act for d in self.datasets])
+        qs = np.empty((len(rows), mech.model.nq))
+        for i, q_act in enumerate(rows):
+            guess = None if self._qs is None else self._qs[i]
+            try:
+                qs[i] = mech.configuration(q_act, guess, pose_index=i)
+            except ConvergenceError:
+                if guess is None:
+                    raise
+                qs[i] = mech.configuration(q_act, None, pose_index=i)
+        self._qs = qs
+        return qs
+
+    def evaluate(self, x: np.ndarray, jacobian: bool = True):
+        """Whitened residual (N,), its Jacobian (N, n + Σk) or None, raw residuals per dataset.
+
+        Residuals are ``measured − model`` [m, rad]; the third item is a list of
+        (m_i, k_i) arrays, one per dataset.
+        """
+        x = np.asarray(x, dtype=float)
+        n, values = self.n_machine, x[: self.n_machine]
+        mech = self.mechanism(x)
+        qs = self._configurations(mech)
+        plan = _plan(mech, self.params) if jacobian else None
+        r_all, J_all, raws = [], [], []
+        start, col = 0, n
+        for d, inst, sig in zip(self.datasets, self.instruments, self.sigma, strict=True):
+            m = len(d)
+            q_block = qs[start : start + m]
+            start += m
+            if jacobian:
+                sens = [pose_sensitivity(mech, self.params, q, values, plan) for q in q_block]
+                P = np.array([s.position for s in sens])
+                Rs = [s.rotation for s in sens]
+            else:
+                placements = [mech.frame_placement(q) for q in q_block]
+                P = np.array([T.translation for T in placements])
+                Rs = [T.rotation for T in placements]
+            if isinstance(d, Measurements):
+                rows = d.component_indices
+                raw = np.empty((m, rows.size))
+                J = np.zeros((m, rows.size, len(x)))
+                for i in range(m):
+                    R_meas = None if d.rotations is None else d.rotations[i]
+                    r, D = measurement_residual(P[i], Rs[i], d.positions[i], R_meas)
+                    raw[i] = r[rows]
+                    if jacobian:
+                        J[i, :, :n] = -(D @ sens[i].jacobian)[rows]
+            else:
+                k = len(inst.parameter_names)
+                v, dv_dp, dv_dth = inst.predict(P, x[col : col + k], d.plane)
+                raw = (d.values - v)[:, None]
+                J = np.zeros((m, 1, len(x)))
+                if jacobian:
+                    Jp = np.array([s.jacobian[:3] for s in sens])  # (m, 3, n)
+                    J[:, 0, :n] = -np.einsum("mi,min->mn", dv_dp, Jp)
+                    J[:, 0, col : col + k] = -dv_dth
+                col += k
+            raws.append(raw)
+            r_all.append((raw / sig).ravel())
+            J_all.append((J / sig[:, :, None]).reshape(-1, len(x)))
+        r_w = np.concatenate(r_all)
+        return r_w, (np.vstack(J_all) if jacobian else None), raws
+
+    def analyse(self, x: np.ndarray | None = None) -> Identifiability:
+        """Identifiability of the joint parameters at ``x`` (default the start values),
+        with the instrument parameters listed first so they enter the base first."""
+        _, J, _ = self.evaluate(self.x0 if x is None else x)
+        order = np.r_[np.arange(self.n_machine, len(self.names)), np.arange(self.n_machine)]
+        return analyse_jacobian(J[:, order], tuple(self.names[i] for i in order))
+
+
+@dataclass(frozen=True)
+class InstrumentIdentification:
+    """Outcome of :func:`identify_instruments`.
+
+    Attributes:
+        result: the machine part as an :class:`IdentificationResult` (marginal
+            covariance of the machine base parameters; residual statistics over every
+            dataset, scalar readings counted as position residuals [m]; annotations
+            hold the instrument values).
+        names: all joint parameter names (machine, then ``label.θ`` names).
+        values: (n + Σk,) joint values at the solution [SI]; x0: start values.
+        fitted: indices (into ``names``) of the fitted base set.
+        covariance: covariance of the fitted values (order of ``fitted``).
+        residuals: per dataset, (m_i, k_i) raw residuals at the solution [m, rad].
+        identifiability: joint analysis at the start (instrument parameters first).
+    """
+
+    result: IdentificationResult
+    names: tuple[str, ...]
+    values: np.ndarray
+    x0: np.ndarray
+    fitted: np.ndarray
+    covariance: np.ndarray
+    residuals: list[np.ndarray]
+    identifiability: Identifiability
+
+    def instrument_values(self) -> dict[str, float]:
+        """Instrument parameter name → identified (or start) value [SI]."""
+        n = len(self.result.names)
+        return {k: float(v) for k, v in zip(self.names[n:], self.values[n:], strict=True)}
+
+
+def _stats(raws: list[np.ndarray], datasets: Sequence[Dataset]) -> ResidualStats:
+    pos, rot = [], []
+    for raw, d in zip(raws, datasets, strict=True):
+        if isinstance(d, Measurements):
+            comps = d.components
+            ip = [i for i, c in enumerate(comps) if not c.startswith("r")]
+            ir = [i for i, c in enumerate(comps) if c.startswith("r")]
+            pos += list(np.linalg.norm(raw[:, ip], axis=1)) if ip else []
+            rot += list(np.linalg.norm(raw[:, ir], axis=1)) if ir else []
+        else:
+            pos += list(np.abs(raw[:, 0]))
+    out = []
+    for e in (np.array(pos), np.array(rot)):
+        out += [float(np.sqrt(np.mean(e**2))), float(e.max())] if e.size else [np.nan, np.nan]
+    return ResidualStats(*out)
+
+
+def identify_instruments(
+    mech: Mechanism,
+    params: ParameterSet,
+    datasets: Sequence[Dataset],
+    method: str = "gauss-newton",
+    *,
+    options: Any = None,
+    labels: Sequence[str] | None = None,
+) -> InstrumentIdentification:
+    """Identify machine and instrument parameters jointly from several datasets.
+
+    Args:
+        mech: nominal mechanism; params: the n machine parameters.
+        datasets: :class:`Measurements` and/or :class:`InstrumentData` (any mix).
+        method: ``"gauss-newton"`` or ``"lm"``; options: that solver's options.
+        labels: names of the datasets (prefix of the instrument parameter names).
+
+    Returns:
+        InstrumentIdentification (the machine part is an IdentificationResult).
+
+    Raises:
+        SolverOptionError: a method other than the local solvers.
+        MeasurementError: inconsistent datasets.
+    """
+    if method not in ("gauss-newton", "lm"):
+        raise SolverOptionError(
+            f"joint instrument identification runs 'gauss-newton' or 'lm', not {method!r}"
+        )
+    entry = solver(method)
+    opts = entry.check_options(options)
+    model = InstrumentProblem(mech, params, datasets, labels)
+    x0 = model.x0
+    _, _, raw0 = model.evaluate(x0, jacobian=False)
+    ident = model.analyse(x0)
+    order = np.r_[np.arange(model.n_machine, len(model.names)), np.arange(model.n_machine)]
+    free = np.sort(order[ident.base])
+    out = entry.solve(model, x0, free, opts, None)
+    r, J, raws = model.evaluate(out.x)
+    Jf = J[:, free]
+    success, message = out.success, out.message
+    if not success:
+        # at the noise floor a Gauss–Newton step may promise less than the cost changes
+        # with the kinematic solver's precision (100× its tolerance per reading)
+        step = np.linalg.lstsq(Jf, -r, rcond=None)[0]
+        predicted = 0.5 * float(r @ r - np.sum((r + Jf @ step) ** 2))
+        sig = np.concatenate([s.ravel() for s in model.sigma])
+        jitter = float(np.sum(np.abs(r) * 100 * mech.options.tol / sig))
+        if predicted <= max(jitter, 1e-9 * float(r @ r)):
+            success = True
+            message = (
+                f"converged (noise floor: a further step promises {predicted:.3g}, below the "
+                f"kinematic precision {jitter:.3g} of the cost; solver: {out.message})"
+            )
+    dof = max(model.n_equations - free.size, 1)
+    chi2 = float(r @ r) / dof
+    cov = np.linalg.pinv(Jf.T @ Jf)
+    n = model.n_machine
+    mach = free < n
+    cov_m = cov[np.ix_(mach, mach)]
+    mask = np.zeros(n, dtype=bool)
+    mask[free[mach]] = True
+    x = np.asarray(out.x, dtype=float)
+    inst = {k: float(v) for k, v in zip(model.names[n:], x[n:], strict=True)}
+    result = IdentificationResult(
+        method=method,
+        names=params.names,
+        units=params.units,
+        full_values=x[:n].copy(),
+        identified=mask,
+        std=np.sqrt(np.diag(cov_m)),
+        covariance=cov_m,
+        before=_stats(raw0, datasets),
+        after=_stats(raws, datasets),
+        reduced_chi2=chi2,
+        iterations=out.iterations,
+        success=success,
+        message=f"joint fit of {free.size} of {len(model.names)} parameters; " + message,
+        cost_history=tuple(out.history),
+        residuals=np.concatenate([np.linalg.norm(a, axis=1) for a in raws])[:, None],
+        initial_values=np.zeros(n),
+        n_equations=model.n_equations,
+        model=mech.name,
+        preset=params.label,
+        extras=out.extras,
+        parameter_set=params,
+        calibrated_mechanism=model.mechanism(x),
+        annotations={"instruments": inst, "datasets": list(model.labels)},
+    )
+    return InstrumentIdentification(result, model.names, x, x0, free, cov, raws, ident)

@@ -1,0 +1,149 @@
+"""Instrument files: one scalar reading per pose (ballbar, sphere probe, planes, gauge).
+
+::
+
+    # pincal instrument 1
+    # kind: distance                  distance | sphere | plane | point
+    # frame: effector                 the tool frame (must match the model's)
+    # length_unit: mm                 m | mm | um  (value, std, radius, initial)
+    # std: 0.001                      1σ noise of one reading, in length_unit
+    # radius: 12.7                    sphere only: calibrated radius (probe tip included)
+    # direction: 0, 0, 1              point only: the gauge axis (default +z)
+    # normal: 0, 0, 0, 1              plane only, optional, repeatable: id, nx, ny, nz
+    # initial: 0.1, 0.2, 0.3, 0       optional start values of the instrument parameters
+    leg1_slide [mm],…,leg6_slide [mm],value[,plane]
+
+The actuator columns come first (optional bracketed units), then ``value`` (the
+reading) and, for planes, ``plane`` (integer plane id). Plane tilts in ``initial``
+are in rad. In metres the file round-trips exactly.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from pincal.errors import ColumnError, MeasurementFormatError
+from pincal.io._csv import (
+    fmt,
+    header_value,
+    parse_column,
+    parse_numbers,
+    positive_value,
+    split_file,
+    write_csv,
+)
+from pincal.io._units import LENGTH_UNITS, actuator_read_factors, unit_factor
+from pincal.measure._instruments import INSTRUMENT_KINDS, Instrument, InstrumentData
+from pincal.model import Mechanism
+
+__all__ = ["read_instrument_data", "write_instrument_data"]
+
+
+def _vector(text: str, n: int, key: str, name: str) -> np.ndarray:
+    try:
+        v = np.array([float(x) for x in text.replace(",", " ").split()])
+    except ValueError:
+        raise MeasurementFormatError(f"{name}: header {key!r} must be numbers") from None
+    if v.size != n or not np.all(np.isfinite(v)):
+        raise MeasurementFormatError(f"{name}: header {key!r} needs {n} finite numbers")
+    return v
+
+
+def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
+    """Read an instrument file (see the module doc) against ``mech``.
+
+    Returns:
+        InstrumentData [SI].
+
+    Raises:
+        MeasurementFormatError: bad header or kind; ColumnError: missing columns;
+        BadValueError / NonFiniteValueError: bad cells; FrameMismatchError is reported
+        as MeasurementFormatError naming both frames.
+    """
+    name = Path(path).name
+    header, columns, rows = split_file(path, "instrument")
+    kind = header_value(header, "kind", None, name)
+    if kind not in INSTRUMENT_KINDS:
+        raise MeasurementFormatError(
+            f"{name}: kind {kind!r} unknown; use one of {INSTRUMENT_KINDS}"
+        )
+    lf = unit_factor(LENGTH_UNITS, header_value(header, "length_unit", "m", name), "length", name)
+    frame = header_value(header, "frame", mech.measured_frame, name)
+    if frame != mech.measured_frame:
+        raise MeasurementFormatError(
+            f"{name} measures frame {frame!r} but the model's tool frame is {mech.measured_frame!r}"
+        )
+    std = positive_value(header_value(header, "std", None, name), "std", name) / lf
+    radius, direction = 0.0, (0.0, 0.0, 1.0)
+    normals: tuple[tuple[float, ...], ...] = ()
+    if kind == "sphere":
+        radius = positive_value(header_value(header, "radius", None, name), "radius", name) / lf
+    if kind == "point":
+        direction = tuple(
+            _vector(header_value(header, "direction", "0 0 1", name), 3, "direction", name)
+        )
+    if kind == "plane" and "normal" in header:
+        rows_n = sorted(
+            (_vector(t, 4, "normal", name) for t in header["normal"]), key=lambda r: r[0]
+        )
+        if [int(r[0]) for r in rows_n] != list(range(len(rows_n))):
+            raise MeasurementFormatError(f"{name}: normal ids must be 0, 1, … without gaps")
+        normals = tuple(tuple(r[1:]) for r in rows_n)
+    inst = Instrument(kind, std, radius, direction, normals)  # type: ignore[arg-type]
+    parsed = [parse_column(c) for c in columns]
+    names = [p[0] for p in parsed]
+    need = [*mech.actuated, "value", *(["plane"] if kind == "plane" else [])]
+    missing = [c for c in need if c not in names]
+    if missing:
+        raise ColumnError(f"{name}: missing columns {missing}", missing=missing)
+    data = parse_numbers(rows, columns, name)
+    if data.shape[0] == 0:
+        raise MeasurementFormatError(f"{name}: no data rows")
+    col = {c: k for k, c in enumerate(names)}
+    act = [col[j] for j in mech.actuated]
+    q_act = data[:, act] / actuator_read_factors(mech, [parsed[k][1] for k in act], name)
+    values = data[:, col["value"]] / lf
+    plane = data[:, col["plane"]] if kind == "plane" else None
+    initial = None
+    if "initial" in header:
+        if kind == "plane" and not normals:
+            raise MeasurementFormatError(f"{name}: give the 'normal' lines with 'initial'")
+        k = len(inst.parameter_names)
+        raw = _vector(header_value(header, "initial", None, name), k, "initial", name)
+        units = np.array([1.0 if u == "rad" else lf for u in inst.parameter_units])
+        initial = raw / units
+    return InstrumentData(inst, q_act, values, mech.actuated, frame, plane, initial)
+
+
+def write_instrument_data(path: str | Path, data: InstrumentData, length_unit: str = "m") -> Path:
+    """Write ``data`` as an instrument file (actuators in SI, lengths in ``length_unit``).
+
+    Returns:
+        The written path.
+
+    Raises:
+        MeasurementFormatError: unknown length unit.
+    """
+    lf = unit_factor(LENGTH_UNITS, length_unit, "length", "write_instrument_data")
+    inst = data.instrument
+    lines = [f"kind: {inst.kind}", f"frame: {data.frame}", f"length_unit: {length_unit}"]
+    lines.append(f"std: {fmt(inst.std * lf)}")
+    if inst.kind == "sphere":
+        lines.append(f"radius: {fmt(inst.radius * lf)}")
+    if inst.kind == "point":
+        lines.append("direction: " + ", ".join(fmt(x) for x in inst.direction))
+    for j, n in enumerate(inst.normals):
+        lines.append(f"normal: {j}, " + ", ".join(fmt(x) for x in n))
+    if data.initial is not None:
+        units = np.array([1.0 if u == "rad" else lf for u in inst.parameter_units])
+        lines.append("initial: " + ", ".join(fmt(x) for x in data.initial * units))
+    columns = [*data.actuated, "value", *(["plane"] if inst.kind == "plane" else [])]
+    rows = []
+    for i in range(len(data)):
+        row = [fmt(v) for v in data.q_act[i]] + [fmt(data.values[i] * lf)]
+        if data.plane is not None:
+            row.append(str(int(data.plane[i])))
+        rows.append(row)
+    return write_csv(path, "instrument", lines, columns, rows)

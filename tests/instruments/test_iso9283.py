@@ -1,0 +1,199 @@
+"""ISO 9283 pose accuracy / repeatability and the test cube."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from click.testing import CliRunner
+
+from pincal.cli import main
+from pincal.errors import MeasurementError, PincalError
+from pincal.measure._iso9283 import (
+    iso_test_cube,
+    pose_characteristics,
+    simulate_cycles,
+)
+
+
+def _by_definition(cmd, pos, rot):
+    """AP/RP written out from ISO 9283's definitions, loop by loop."""
+    out = []
+    for j, T in enumerate(cmd):
+        n = len(pos[j])
+        xb = [sum(p[k] for p in pos[j]) / n for k in range(3)]
+        ap_p = math.sqrt(sum((xb[k] - T.translation[k]) ** 2 for k in range(3)))
+        l = [math.sqrt(sum((p[k] - xb[k]) ** 2 for k in range(3))) for p in pos[j]]  # noqa: E741
+        lb = sum(l) / n
+        s_l = math.sqrt(sum((li - lb) ** 2 for li in l) / (n - 1))
+
+        # roll-pitch-yaw of R = Rz(c) Ry(b) Rx(a)
+        def abc(R):
+            return (math.atan2(R[2, 1], R[2, 2]), math.asin(-R[2, 0]), math.atan2(R[1, 0], R[0, 0]))
+
+        ac = abc(T.rotation)
+        angs = [abc(R) for R in rot[j]]
+        ap_abc, rp_abc = [], []
+        for k in range(3):
+            mean = sum(a[k] for a in angs) / n
+            ap_abc.append(mean - ac[k])
+            rp_abc.append(3 * math.sqrt(sum((a[k] - mean) ** 2 for a in angs) / (n - 1)))
+        out.append((ap_p, ap_abc, lb + 3 * s_l, rp_abc))
+    return out
+
+
+def test_ap_rp_match_the_definition():
+    rng = np.random.default_rng(4)
+    cmd = [pin.SE3(pin.exp3(rng.normal(0, 0.3, 3)), rng.normal(0, 0.2, 3)) for _ in range(5)]
+    pos = np.array(
+        [
+            [
+                T.translation + np.array([1e-3, -2e-3, 5e-4]) + rng.normal(0, 2e-5, 3)
+                for _ in range(30)
+            ]
+            for T in cmd
+        ]
+    )
+    rot = np.array(
+        [
+            [
+                T.rotation @ pin.exp3(np.array([1e-3, 0, -2e-3]) + rng.normal(0, 5e-5, 3))
+                for _ in range(30)
+            ]
+            for T in cmd
+        ]
+    )
+    pc = pose_characteristics(cmd, pos, rot)
+    ref = _by_definition(cmd, pos, rot)
+    for j, (ap_p, ap_abc, rp_l, rp_abc) in enumerate(ref):
+        assert pc.ap_p[j] == pytest.approx(ap_p, rel=1e-12)
+        np.testing.assert_allclose(pc.ap_abc[j], ap_abc, rtol=1e-9, atol=1e-13)
+        assert pc.rp_l[j] == pytest.approx(rp_l, rel=1e-12)
+        np.testing.assert_allclose(pc.rp_abc[j], rp_abc, rtol=1e-9)
+    assert pc.cycles == 30 and len(pc.lines("x")) == 8
+    assert 2.2e-3 < pc.ap_p.max() < 2.4e-3  # the offset of 2.29 mm
+    with pytest.raises(MeasurementError, match="2 cycles"):
+        pose_characteristics(cmd, pos[:, :1], rot[:, :1])
+    with pytest.raises(MeasurementError, match="positions"):
+        pose_characteristics(cmd[:2], pos, rot)
+
+
+def test_test_cube_is_the_largest_reachable_cube_with_the_standard_points(stewart):
+    cube = iso_test_cube(stewart, n_samples=100, rng=0)
+    h = cube.edge / 2
+    assert 0.05 < cube.edge < 1.0
+    for T in cube.poses:
+        stewart.inverse(T)  # reachable
+    # slightly larger: some lattice point is out of reach
+    lattice = [np.array([i, j, k]) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)]
+    failed = 0
+    for d in lattice:
+        try:
+            stewart.inverse(pin.SE3(cube.rotation, cube.centre + 1.02 * h * d))
+        except PincalError:
+            failed += 1
+    assert failed > 0
+    P = cube.points
+    np.testing.assert_allclose(P[0], cube.centre)
+    diag = 2 * h * math.sqrt(3)  # the diagonal plane's diagonal is the cube's diagonal
+    corners = [
+        cube.centre + h * np.array(s) for s in ((1, 1, 1), (-1, -1, 1), (-1, -1, -1), (1, 1, -1))
+    ]
+    for p, c in zip(P[1:], corners, strict=True):
+        assert np.linalg.norm(p - c) == pytest.approx(0.1 * diag, rel=1e-12)
+        # in the diagonal plane x = y (through C1, C2, C7, C8)
+        assert (p - cube.centre)[0] == pytest.approx((p - cube.centre)[1], abs=1e-12)
+    with pytest.raises(PincalError, match="0.08..0.12"):
+        iso_test_cube(stewart, n_samples=10, inset=0.2)
+
+
+def test_calibration_improves_accuracy_not_repeatability(stewart, stewart42):
+    cube = iso_test_cube(stewart, n_samples=60, rng=1)
+    actual = stewart42.apply(stewart, np.random.default_rng(0).uniform(-1e-3, 1e-3, len(stewart42)))
+    _, pos, rot = simulate_cycles(actual, stewart, cube.poses, 10, 2e-6, 0)
+    before = pose_characteristics(cube.poses, pos, rot)
+    _, pos, rot = simulate_cycles(actual, actual, cube.poses, 10, 2e-6, 0)
+    after = pose_characteristics(cube.poses, pos, rot)
+    assert after.ap_p.max() < 0.05 * before.ap_p.max()
+    np.testing.assert_allclose(after.rp_l, before.rp_l, rtol=0.2)
+
+
+@pytest.mark.slow
+def test_cli_acceptance_before_and_after_and_from_data(tmp_path):
+    runner = CliRunner()
+    meas = tmp_path / "m.csv"
+    assert (
+        runner.invoke(
+            main, ["simulate", "stewart_6ups", "--random", "30", "--out", str(meas)]
+        ).exit_code
+        == 0
+    )
+    cal = tmp_path / "cal"
+    res = runner.invoke(main, ["calibrate", "stewart_6ups", "--data", str(meas), "--out", str(cal)])
+    assert res.exit_code == 0, res.output
+    out = tmp_path / "acc.json"
+    res = runner.invoke(
+        main,
+        [
+            "acceptance",
+            "stewart_6ups",
+            "--calibrated",
+            str(cal),
+            "--cycles",
+            "8",
+            "--json",
+            str(out),
+        ],
+    )
+    assert res.exit_code == 0, res.output
+    rep = json.loads(out.read_text())
+    assert max(rep["after"]["AP_p"]) < 0.1 * max(rep["before"]["AP_p"])
+    assert "before calibration" in res.output and "after calibration" in res.output
+    res2 = runner.invoke(
+        main,
+        [
+            "acceptance",
+            "stewart_6ups",
+            "--calibrated",
+            str(cal / "identification.json"),
+            "--cycles",
+            "8",
+            "--json",
+            str(out),
+        ],
+    )
+    assert res2.exit_code == 0, res2.output
+    again = json.loads(out.read_text())["after"]  # the URDF and the values agree
+    np.testing.assert_allclose(again["AP_p"], rep["after"]["AP_p"], rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(again["RP_l"], rep["after"]["RP_l"], rtol=1e-6)
+    # measured cycles: rows with equal actuator values are one commanded pose
+    from pincal.io import write_measurements
+    from pincal.measure import Measurements
+    from pincal.model import load_mechanism, parameters
+
+    nominal = load_mechanism("stewart_6ups")
+    cube = iso_test_cube(nominal, n_samples=60, rng=1)
+    params = parameters(nominal, "stewart42")
+    actual = params.apply(nominal, np.full(len(params), 2e-4))
+    q, pos, rot = simulate_cycles(actual, nominal, cube.poses, 5, 1e-6, 3)
+    rows = np.repeat(q, 5, axis=0)
+    m = Measurements(
+        rows,
+        pos.reshape(-1, 3),
+        rot.reshape(-1, 3, 3),
+        ("x", "y", "z", "rx", "ry", "rz"),
+        nominal.measured_frame,
+        nominal.actuated,
+    )
+    data = write_measurements(tmp_path / "cycles.csv", m)
+    res = runner.invoke(
+        main, ["acceptance", "stewart_6ups", "--data", str(data), "--json", str(out)]
+    )
+    assert res.exit_code == 0, res.output
+    got = json.loads(out.read_text())["measured"]
+    ref = pose_characteristics(cube.poses, pos, rot)
+    np.testing.assert_allclose(got["AP_p"], ref.ap_p, atol=1e-9)
+    np.testing.assert_allclose(got["RP_l"], ref.rp_l, rtol=1e-9)
