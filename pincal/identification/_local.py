@@ -152,6 +152,13 @@ def gauss_newton(
     return SolverOutcome(x, it, tuple(history), success, message, extras)
 
 
+def _f_scale(opts: LMOptions) -> float:
+    """The robust loss' soft margin [σ]: the option, or the loss' 3σ-at-weight-½ default."""
+    from pincal.identification._weighting import ROBUST_F_SCALE
+
+    return float(ROBUST_F_SCALE[opts.loss] if opts.f_scale is None else opts.f_scale)
+
+
 def levenberg_marquardt(
     problem: CalibrationProblem,
     x0: np.ndarray,
@@ -161,7 +168,8 @@ def levenberg_marquardt(
 ) -> SolverOutcome:
     """``scipy.optimize.least_squares`` on the free parameters.
 
-    Success is scipy's convergence, or — when scipy stopped at its evaluation limit —
+    The residuals are whitened by the noise σ, so a robust loss' ``f_scale`` is in σ
+    (:attr:`LMOptions.f_scale`). Success is scipy's convergence, or — when scipy stopped at its evaluation limit —
     a cost at the kinematic solver's precision (exact data fitted) or at the noise floor
     (a Gauss–Newton step from the end point promises less than 1e-9 of the cost).
 
@@ -206,6 +214,7 @@ def levenberg_marquardt(
         jac=lambda z: both(z)[1],
         method="lm" if opts.loss == "linear" else "trf",
         loss=opts.loss,
+        f_scale=1.0 if opts.loss == "linear" else _f_scale(opts),
         x_scale="jac",
         xtol=max(opts.xtol, 1e-15),
         ftol=1e-15,

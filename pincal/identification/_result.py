@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import ParameterError
+from pincal.identification._weighting import Weighting
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._identifiability import Identifiability
@@ -149,6 +150,8 @@ class IdentificationResult:
         identifiability: analysis at the start values (None when read from a file).
         annotations: JSON-ready context written with the result (data file, validation
             errors, simulated truth, index history, ...).
+        weighting: the noise σ used (declared or estimated), the robust loss and the
+            poses it down-weighted (:class:`Weighting`); None for pincal 0.1 files.
     """
 
     method: str
@@ -175,6 +178,7 @@ class IdentificationResult:
     calibrated_mechanism: Mechanism | None = field(default=None, repr=False)
     identifiability: Identifiability | None = field(default=None, repr=False)
     annotations: Mapping[str, Any] = field(default_factory=dict, repr=False)
+    weighting: Weighting | None = field(default=None, repr=False)
 
     @property
     def values(self) -> np.ndarray:
