@@ -17,13 +17,13 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import SolverOptionError, TooFewPosesError, UnidentifiableError
-from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._noise import initial_weights, weighted_fit
+from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import CalibrationProblem, IdentificationProblem
 from pincal.identification._qpso_identify import QPSOOptions
 from pincal.identification._result import IdentificationResult, ResidualStats
-from pincal.identification._weighting import Weighting
 from pincal.identification._solvers import solver
+from pincal.identification._weighting import Weighting
 from pincal.measure._measurements import Measurements
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet

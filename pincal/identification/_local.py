@@ -169,9 +169,10 @@ def levenberg_marquardt(
     """``scipy.optimize.least_squares`` on the free parameters.
 
     The residuals are whitened by the noise σ, so a robust loss' ``f_scale`` is in σ
-    (:attr:`LMOptions.f_scale`). Success is scipy's convergence, or — when scipy stopped at its evaluation limit —
-    a cost at the kinematic solver's precision (exact data fitted) or at the noise floor
-    (a Gauss–Newton step from the end point promises less than 1e-9 of the cost).
+    (:attr:`LMOptions.f_scale`). Success is scipy's convergence, or — when scipy stopped
+    at its evaluation limit — a cost at the kinematic solver's precision (exact data
+    fitted) or at the noise floor (a Gauss–Newton step from the end point promises less
+    than 1e-9 of the cost).
 
     Args:
         problem: residual model; x0: (n,) start [SI]; free: fitted indices.

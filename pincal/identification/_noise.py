@@ -22,8 +22,6 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import NoiseEstimationError
-from pincal.identification._local import gauss_newton
-from pincal.identification._options import GaussNewtonOptions
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import CalibrationProblem
 from pincal.identification._weighting import (
@@ -132,9 +130,11 @@ def weighted_fit(
 ) -> tuple[SolverOutcome, CalibrationProblem, Weighting]:
     """Run the solver; when the noise is estimated, re-weight and re-fit until it settles.
 
-    Later rounds start from the previous solution with the same solver when it is a
-    local one (``gauss-newton``, ``lm``), else with Gauss–Newton (the global search has
-    found the basin; only the weights changed).
+    Later rounds run the same local solver (``gauss-newton``, ``lm``) from the previous
+    solution. A global or planned search (``qpso``, ``qpso-stepwise``, ``step-planned``)
+    runs once, weighted by the start weights of :func:`initial_weights`; the σ and the
+    covariance are then estimated from its residuals (one round: re-fit with a local
+    solver for the converged estimate).
 
     Args:
         model: residual model (re-weighted by :func:`initial_weights` when estimating).
@@ -150,11 +150,12 @@ def weighted_fit(
     estimating = model.noise_source == "estimated"
     loss, f_scale = _loss(opts)
     local = entry.name in ("gauss-newton", "lm")
-    solve, options = entry.solve, opts
     x, rounds, iterations, history = x0, 0, 0, []
     converged, red = not estimating, {}
+    first = None
     while True:
-        out = solve(model, x, free, options, progress)
+        out = entry.solve(model, x, free, opts, progress)
+        first = first or out
         rounds += 1
         iterations += out.iterations
         history += list(out.history)
@@ -173,10 +174,8 @@ def weighted_fit(
         if change <= RTOL or (len(std) == 1 and loss == "linear"):
             converged = True  # one block and least squares: σ does not move the fit
             break
-        if rounds >= MAX_ROUNDS:
-            break
-        if not local:
-            solve, options = gauss_newton, GaussNewtonOptions()
+        if rounds >= MAX_ROUNDS or not local:
+            break  # a global / planned search is run once (start weights, then estimated)
     r_w = raw / model.sigma
     if not red:
         h = hat_diagonal(J[:, fitted]).reshape(raw.shape)
@@ -198,11 +197,12 @@ def weighted_fit(
     if estimating:
         note = (
             f"noise estimated from the residuals in {rounds} re-weighted fits"
-            + ("" if converged else f" (not settled to {RTOL:g} after {MAX_ROUNDS})")
+            + ("" if converged else f" (not settled to {RTOL:g} after {rounds})")
             + "; "
         )
+        extras = out.extras if local else first.extras  # the global solver's own extras
         out = SolverOutcome(
-            x, iterations, tuple(history), out.success, note + out.message, out.extras, out.fitted
+            x, iterations, tuple(history), out.success, note + out.message, extras, out.fitted
         )
     return out, model, weighting
 
