@@ -82,12 +82,25 @@ def format_report(doc: dict) -> str:
     is_flag=True,
     help="Print identification.json on stdout instead of the report.",
 )
+@click.option(
+    "--noise",
+    default=None,
+    help="Instrument noise 1σ 'pos_mm,ori_mrad' (overrides the file's '# noise:'); "
+    "default: the file's, else estimated from the residuals.",
+)
+@click.option(
+    "--loss",
+    type=click.Choice(["linear", "huber", "soft_l1", "cauchy"]),
+    default="linear",
+    show_default=True,
+    help="Robust loss (needs --method lm); poses it down-weights are reported.",
+)
 @fail_cleanly
-def calibrate(model, data, preset, method, out, as_json) -> None:
+def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
     """Identify MODEL's geometric parameters from measured poses (--data)."""
     import numpy as np
 
-    from pincal.identification import identify
+    from pincal.identification import LMOptions, identify
     from pincal.io import (
         atomic_write_text,
         check_enough_poses,
@@ -97,6 +110,19 @@ def calibrate(model, data, preset, method, out, as_json) -> None:
     from pincal.model import load_mechanism, parameters
     from pincal.sensitivity import identifiability
 
+    if loss != "linear" and method != "lm":
+        raise click.BadParameter(
+            f"a robust loss needs --method lm, not {method}", param_hint="--loss"
+        )
+    declared = None
+    if noise is not None:
+        try:
+            pos_mm, ori_mrad = (float(v) for v in noise.split(","))
+        except ValueError:
+            raise click.BadParameter(
+                "give 'pos_mm,ori_mrad', e.g. 0.01,0.02", param_hint="--noise"
+            ) from None
+        declared = {"position": pos_mm, "orientation": ori_mrad}
     mech = load_mechanism(model)
     mf = read_measurement_file(data, mech)
     for w in mf.warnings:
@@ -116,6 +142,8 @@ def calibrate(model, data, preset, method, out, as_json) -> None:
         meas,
         method=method,
         progress=lambda it, cost: click.echo(f"… iteration {it}: cost {cost:.6g}", err=True),
+        noise=declared,
+        options=LMOptions(loss=loss) if method == "lm" else None,
     )
     out_dir = Path(out)
     urdf = save_urdf(result.calibrated, out_dir / f"{mech.name}.urdf")

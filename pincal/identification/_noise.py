@@ -24,6 +24,7 @@ import numpy as np
 from pincal.errors import NoiseEstimationError
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import CalibrationProblem
+from pincal.identification._result import LocalSolverExtras
 from pincal.identification._weighting import (
     INLIER_LIMIT,
     ROBUST_F_SCALE,
@@ -152,10 +153,13 @@ def weighted_fit(
     local = entry.name in ("gauss-newton", "lm")
     x, rounds, iterations, history = x0, 0, 0, []
     converged, red = not estimating, {}
-    first = None
+    first, evaluations, rejected = None, 0, 0
     while True:
         out = entry.solve(model, x, free, opts, progress)
         first = first or out
+        if isinstance(out.extras, LocalSolverExtras):
+            evaluations += out.extras.evaluations
+            rejected += out.extras.rejected_steps
         rounds += 1
         iterations += out.iterations
         history += list(out.history)
@@ -200,7 +204,9 @@ def weighted_fit(
             + ("" if converged else f" (not settled to {RTOL:g} after {rounds})")
             + "; "
         )
-        extras = out.extras if local else first.extras  # the global solver's own extras
+        extras = first.extras  # a global solver's own extras; local ones summed
+        if isinstance(out.extras, LocalSolverExtras):
+            extras = LocalSolverExtras(evaluations, rejected, out.extras.damping)
         out = SolverOutcome(
             x, iterations, tuple(history), out.success, note + out.message, extras, out.fitted
         )
