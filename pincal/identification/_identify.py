@@ -138,6 +138,7 @@ def _finish(
         calibrated_mechanism=model.mechanism(out.x),
         identifiability=ident,
         weighting=weighting,
+        initial_residuals=raw0,
     )
 
 

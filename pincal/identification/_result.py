@@ -152,6 +152,8 @@ class IdentificationResult:
             errors, simulated truth, index history, ...).
         weighting: the noise σ used (declared or estimated), the robust loss and the
             poses it down-weighted (:class:`Weighting`); None for pincal 0.1 files.
+        initial_residuals: (m, c) unweighted residuals at the start values [m, rad]
+            (None when read from a file that lacks them).
     """
 
     method: str
@@ -179,6 +181,7 @@ class IdentificationResult:
     identifiability: Identifiability | None = field(default=None, repr=False)
     annotations: Mapping[str, Any] = field(default_factory=dict, repr=False)
     weighting: Weighting | None = field(default=None, repr=False)
+    initial_residuals: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def values(self) -> np.ndarray:

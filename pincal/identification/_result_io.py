@@ -9,7 +9,8 @@ Format version 2 (pincal ≥ 0.2), SI values::
      "held": [{"name", "unit", "value"[, "true"]}],                         # not identified
      "covariance": [[...]],                  # (k, k) of the identified parameters
      "cost_history": [...],
-     "residuals": {"before": {...mm/mrad}, "after": {...}, "per_pose_SI": [[...]]},
+     "residuals": {"before": {...mm/mrad}, "after": {...}, "per_pose_SI": [[...]],
+                   "per_pose_before_SI": [[...]]},
      "identifiability": {"parameters", "rank", "unidentifiable", "explanation"},
      "extras": {"type": "local" | "qpso" | "step-planned", ...},
      "weighting": {"source": "declared" | "per-pose" | "estimated", "position_std" [m],
@@ -175,6 +176,8 @@ def result_to_dict(
             "per_pose_SI": np.asarray(result.residuals).tolist(),
         },
     }
+    if result.initial_residuals is not None:
+        doc["residuals"]["per_pose_before_SI"] = np.asarray(result.initial_residuals).tolist()
     ident = result.identifiability
     if ident is not None:
         doc["identifiability"] = {
@@ -349,6 +352,14 @@ def result_from_dict(data: Mapping[str, Any], source: str = "identification.json
     except (TypeError, ValueError):
         raise ReportError(f"{src}: residuals.per_pose_SI must be a list of number rows") from None
     chi2 = data.get("reduced_chi2")
+    initial_residuals = None
+    if "per_pose_before_SI" in res:
+        try:
+            initial_residuals = np.array(res["per_pose_before_SI"], dtype=float)
+        except (TypeError, ValueError):
+            initial_residuals = None
+        if initial_residuals is None or initial_residuals.shape != residuals.shape:
+            raise ReportError(f"{src}: residuals.per_pose_before_SI must match per_pose_SI")
     weighting = None
     if isinstance(data.get("weighting"), dict):
         try:
@@ -384,4 +395,5 @@ def result_from_dict(data: Mapping[str, Any], source: str = "identification.json
         extras=_read_extras(data.get("extras"), src),
         annotations=notes,
         weighting=weighting,
+        initial_residuals=initial_residuals,
     )
