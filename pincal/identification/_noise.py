@@ -175,7 +175,9 @@ def weighted_fit(
         new = model.with_block_std(std)
         J = J * (model.sigma / new.sigma).reshape(-1)[:, None]
         model = new
-        if change <= RTOL or (len(std) == 1 and loss == "linear"):
+        exact = all(v <= model.sigma_floor for v in std.values())
+        if change <= RTOL or exact or (len(std) == 1 and loss == "linear"):
+            # settled; or data fitted to the solver's precision (weights change nothing);
             converged = True  # one block and least squares: σ does not move the fit
             break
         if rounds >= MAX_ROUNDS or not local:

@@ -131,8 +131,8 @@ class IdentificationResult:
             their start values.
         identified: (n,) bool mask of the identified parameters (k of them).
         std: (k,) standard deviations of the identified parameters [SI].
-        covariance: (k, k) their covariance (``(Jᵀ W J)⁻¹``, scaled by the residual
-            variance when no noise model is given).
+        covariance: (k, k) their covariance ``(Jᵀ W J)⁻¹`` with W from the declared or
+            estimated noise (see ``weighting``).
         before, after: residual statistics at the start and identified values.
         reduced_chi2: weighted residual sum of squares / (N − k).
         iterations: solver iterations (function evaluations for ``lm``).
