@@ -158,7 +158,7 @@ def plot_errors_before_after(
         ax.set_yscale("log")  # calibration typically shrinks errors by decades
     if b.size <= 30:
         ax.set_xticks(x)
-    ax.legend()
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, fontsize=8)  # not on bars
     ax.grid(axis="y", alpha=0.3)
     return _save(fig, path)
 
