@@ -24,6 +24,7 @@ __all__ = [
     "MobilityError",
     "ModelFileError",
     "MovedTargetError",
+    "NoiseEstimationError",
     "NonFiniteValueError",
     "ParameterError",
     "PincalError",
@@ -144,6 +145,10 @@ class TooFewPosesError(PincalError):
 
 class MeasurementError(PincalError):
     """Measurement data are malformed (missing columns, NaN, wrong units, ...)."""
+
+
+class NoiseEstimationError(MeasurementError):
+    """The measurement noise is not declared and cannot be estimated from the residuals."""
 
 
 class VisualizationError(PincalError):

@@ -83,22 +83,38 @@ def format_report(doc: dict) -> str:
     is_flag=True,
     help="Print identification.json on stdout instead of the report.",
 )
+@click.option(
+    "--noise",
+    default=None,
+    help="Instrument noise 1σ 'pos_mm,ori_mrad' (overrides the file's '# noise:'); "
+    "default: the file's, else estimated from the residuals.",
+)
+@click.option(
+    "--loss",
+    type=click.Choice(["linear", "huber", "soft_l1", "cauchy"]),
+    default="linear",
+    show_default=True,
+    help="Robust loss (needs --method lm); poses it down-weights are reported.",
+)
 @fail_cleanly
-def calibrate(model, data, preset, method, out, as_json) -> None:
+def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
     """Identify MODEL's geometric parameters from measured poses (--data).
 
     Writes one calibration directory OUT (whole or not at all) that `pincal view
-    --calibrated`, `compensate`, `validate` and `report` read as it is.
+    --calibrated`, `compensate`, `validate` and `report` read as it is. Without a noise
+    declaration (file header or --noise) the noise of each block is estimated from the
+    residuals and reported.
 
     \b
     Examples:
       pincal calibrate hexaslide_6pus --data m.csv --out cal/
-      pincal calibrate wedge3 --data m.csv --params patent --method lm --out cal/ --json
+      pincal calibrate hexaslide_6pus --data m.csv --noise 0.01,0.02 --out cal/
+      pincal calibrate wedge3 --data m.csv --params patent --method lm --loss huber --out cal/
     """
     import numpy as np
 
     from pincal.cli.info import reduction_line
-    from pincal.identification import identify
+    from pincal.identification import LMOptions, identify
     from pincal.io import (
         CALIBRATED_SIDECAR,
         CALIBRATED_URDF,
@@ -110,6 +126,19 @@ def calibrate(model, data, preset, method, out, as_json) -> None:
     from pincal.model import load_mechanism, parameters
     from pincal.sensitivity import identifiability
 
+    if loss != "linear" and method != "lm":
+        raise click.BadParameter(
+            f"a robust loss needs --method lm, not {method}", param_hint="--loss"
+        )
+    declared = None
+    if noise is not None:
+        try:
+            pos_mm, ori_mrad = (float(v) for v in noise.split(","))
+        except ValueError:
+            raise click.BadParameter(
+                "give 'pos_mm,ori_mrad', e.g. 0.01,0.02", param_hint="--noise"
+            ) from None
+        declared = {"position": pos_mm, "orientation": ori_mrad}
     mech = load_mechanism(model)
     mf = read_measurement_file(data, mech)
     for w in mf.warnings:
@@ -131,6 +160,8 @@ def calibrate(model, data, preset, method, out, as_json) -> None:
         meas,
         method=method,
         progress=lambda it, cost: click.echo(f"… iteration {it}: cost {cost:.6g}", err=True),
+        noise=declared,
+        options=LMOptions(loss=loss) if method == "lm" else None,
     )
     out_dir = Path(out)
     doc = result_json(result, str(data), CALIBRATED_URDF)

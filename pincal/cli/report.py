@@ -1,4 +1,4 @@
-"""`pincal report`: one HTML + Markdown report of a calibration output directory."""
+"""`pincal report`: the HTML + Markdown + JSON report of a calibration output directory."""
 
 from __future__ import annotations
 
@@ -24,11 +24,13 @@ from pincal.cli.common import fail_cleanly
 def report(directory: Path, out: Path | None, name: str, as_json: bool) -> None:
     """Assemble the plots and numbers of a calibration in DIRECTORY into one report.
 
-    Reads DIRECTORY/identification.json (written by `pincal demo` and the
-    calibration commands) and writes NAME.html, NAME.md and the plots in
-    NAME_plots/: validation errors before vs after, identified parameters with
-    ±2σ bars (and the true values of a simulation), convergence and
-    observability-index history when the JSON holds them.
+    Reads DIRECTORY/identification.json (written by `pincal demo` and
+    `pincal calibrate`) and writes NAME.html (self-contained, plots embedded),
+    NAME.md and NAME.json with the same numbers (lengths in µm, angles in µrad,
+    uncertainties 2σ): data and noise (declared or estimated), residuals before
+    and after, outliers and down-weighted poses, parameters with 2σ (poorly
+    determined ones flagged) and their correlations, Cramér–Rao prediction vs
+    achievement, validation and convergence when the JSON holds them.
 
     \b
     Examples:
@@ -41,6 +43,7 @@ def report(directory: Path, out: Path | None, name: str, as_json: bool) -> None:
         raise click.BadParameter("must be a plain file stem", param_hint="--name")
     files = calibration_report(directory, out, name=name)
     if as_json:
-        click.echo(json.dumps({"html": str(files.html), "markdown": str(files.markdown)}))
+        paths = {"html": str(files.html), "markdown": str(files.markdown)}
+        click.echo(json.dumps({**paths, "json": str(files.json)}))
     else:
-        click.echo(f"wrote {files.html} and {files.markdown}")
+        click.echo(f"wrote {files.html}, {files.markdown} and {files.json}")

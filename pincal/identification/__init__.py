@@ -43,6 +43,7 @@ from pincal.identification._result import (
 )
 from pincal.identification._result_io import FORMAT_VERSION
 from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
+from pincal.identification._weighting import Weighting
 
 #: pincal 0.1 result names: every solver now returns an IdentificationResult
 QPSOIdentification = IdentificationResult
@@ -77,6 +78,7 @@ __all__ = [
     "StepPlanningOptions",
     "StepPlanningResult",
     "default_instrument",
+    "Weighting",
     "identify",
     "identify_instruments",
     "instrument_blocks",

@@ -2,9 +2,11 @@
 
 :func:`identify` counts the equations against what is fitted (the identifiable base set
 of the parameters to fit), runs the solver chosen by name and computes the common
-result: covariance ``(Jᵀ W J)⁻¹`` at the solution (scaled by the residual variance when
-no noise model is given, i.e. the Cramér–Rao bound for Gaussian noise), residual
-statistics and the calibrated mechanism.
+result: covariance ``(Jᵀ W J)⁻¹`` at the solution (the Cramér–Rao bound for Gaussian
+noise), residual statistics and the calibrated mechanism. When the data declare no
+noise, the σ of each block (position, orientation) is estimated from the residuals by
+variance-component estimation (:mod:`pincal.identification._noise`); the weights used
+are reported in ``result.weighting``.
 """
 
 from __future__ import annotations
@@ -16,11 +18,13 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from pincal.errors import SolverOptionError, TooFewPosesError, UnidentifiableError
+from pincal.identification._noise import initial_weights, weighted_fit
 from pincal.identification._outcome import Progress, SolverOutcome
-from pincal.identification._problem import IdentificationProblem
+from pincal.identification._problem import CalibrationProblem, IdentificationProblem
 from pincal.identification._qpso_identify import QPSOOptions
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import solver
+from pincal.identification._weighting import Weighting
 from pincal.measure._measurements import Measurements
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
@@ -60,10 +64,15 @@ def _legacy_options(method: str, options: Any, legacy: dict[str, Any], qpso: Any
     return solver(method).options_type(**given)
 
 
-def _fit_set(problem: IdentificationProblem, J0: np.ndarray) -> tuple[np.ndarray, Identifiability]:
-    """Indices fitted (the base set of ``problem.fit``, without parameters that break
-    loop closure) and the analysis at the start."""
-    params, model = problem.params, problem.model
+def _fit_set(
+    problem: IdentificationProblem, J0: np.ndarray, model: CalibrationProblem
+) -> tuple[np.ndarray, Identifiability]:
+    """Indices fitted and the analysis at the start.
+
+    The fitted set is the identifiable base set of ``problem.fit`` without the parameters
+    that break loop closure.
+    """
+    params = problem.params
     candidates = problem.fit_indices
     breaking = np.zeros(len(params), dtype=bool)
     if problem.mech.closures:
@@ -101,8 +110,10 @@ def _finish(
     ident: Identifiability,
     raw0: np.ndarray,
     prefix: str,
+    model: CalibrationProblem,
+    weighting: Weighting,
 ) -> IdentificationResult:
-    params, model = problem.params, problem.model
+    params = problem.params
     fitted = free if out.fitted is None else np.asarray(out.fitted, dtype=int)
     r, J, raw = model.evaluate(out.x)
     Jf = J[:, fitted]
@@ -139,6 +150,8 @@ def _finish(
         parameter_set=params,
         calibrated_mechanism=model.mechanism(out.x),
         identifiability=ident,
+        weighting=weighting,
+        initial_residuals=raw0,
     )
 
 
@@ -158,6 +171,7 @@ def identify(
     max_iterations: int | None = None,
     xtol: float | None = None,
     qpso: QPSOOptions | None = None,
+    noise: Any = None,
 ) -> IdentificationResult:
     """Identify parameter values from measurements.
 
@@ -173,7 +187,8 @@ def identify(
             ``"qpso-stepwise"`` or ``"step-planned"`` (see ``METHODS``).
         options: the method's options dataclass (``GaussNewtonOptions``, ``LMOptions``,
             ``QPSOOptions``, ``StepPlanningOptions``; default: its defaults).
-        initial, fit, reduce: see :class:`IdentificationProblem` (mechanism form only).
+        initial, fit, reduce, noise: see :class:`IdentificationProblem` (mechanism form
+            only); without a declared noise, it is estimated from the residuals.
         progress: optional callback ``(iteration, cost)``.
         loss, regularization, max_iterations, xtol, qpso: pincal 0.1 keywords, turned
             into the method's options (ignored, as in 0.1, by methods they do not apply to).
@@ -186,6 +201,8 @@ def identify(
         UnidentifiableError: rank-deficient and ``reduce`` is False.
         SolverOptionError: unknown method or options of the wrong type / range.
         MeasurementError, ParameterError: inconsistent inputs.
+        NoiseEstimationError: no noise declared and too few redundant equations to
+            estimate it.
     """
     if isinstance(problem, IdentificationProblem):
         if isinstance(params, str):
@@ -194,8 +211,10 @@ def identify(
             raise SolverOptionError(
                 "with an IdentificationProblem, give only the method (and options)"
             )
-        if initial is not None or fit is not None or reduce is not True:
-            raise SolverOptionError("initial / fit / reduce belong in the IdentificationProblem")
+        if initial is not None or fit is not None or reduce is not True or noise is not None:
+            raise SolverOptionError(
+                "initial / fit / reduce / noise belong in the IdentificationProblem"
+            )
     else:
         if not isinstance(params, ParameterSet) or not isinstance(measurements, Measurements):
             raise SolverOptionError(
@@ -203,7 +222,9 @@ def identify(
                 f"and measurements a Measurements, got {type(params).__name__} and "
                 f"{type(measurements).__name__}"
             )
-        problem = IdentificationProblem(problem, params, measurements, initial, fit, reduce)
+        problem = IdentificationProblem(
+            problem, params, measurements, initial, fit, reduce, noise
+        )
     legacy = dict(loss=loss, regularization=regularization, max_iterations=max_iterations)
     legacy["xtol"] = xtol
     entry = solver(method)
@@ -217,7 +238,8 @@ def _run(problem: IdentificationProblem, method: str, entry: Any, opts: Any, pro
     model = problem.model
     x0 = problem.x0
     _, J0, raw0 = model.evaluate(x0)
-    free, ident = _fit_set(problem, J0)
+    model, J0 = initial_weights(model, J0, raw0)
+    free, ident = _fit_set(problem, J0, model)
     n_fit = problem.fit_indices.size
     prefix = ""
     if free.size < n_fit:
@@ -230,8 +252,8 @@ def _run(problem: IdentificationProblem, method: str, entry: Any, opts: Any, pro
             + ". "
         )
         log.info(prefix)
-    out = entry.solve(model, x0, free, opts, progress)
-    return _finish(problem, method, out, free, ident, raw0, prefix)
+    out, model, weighting = weighted_fit(model, entry, x0, free, opts, progress)
+    return _finish(problem, method, out, free, ident, raw0, prefix, model, weighting)
 
 
 def qpso_identify(

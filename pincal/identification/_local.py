@@ -154,6 +154,13 @@ def gauss_newton(
     return SolverOutcome(x, it, tuple(history), success, message, extras)
 
 
+def _f_scale(opts: LMOptions) -> float:
+    """The robust loss' soft margin [σ]: the option, or the loss' 3σ-at-weight-½ default."""
+    from pincal.identification._weighting import ROBUST_F_SCALE
+
+    return float(ROBUST_F_SCALE[opts.loss] if opts.f_scale is None else opts.f_scale)
+
+
 def levenberg_marquardt(
     problem: CalibrationProblem,
     x0: np.ndarray,
@@ -163,9 +170,11 @@ def levenberg_marquardt(
 ) -> SolverOutcome:
     """``scipy.optimize.least_squares`` on the free parameters.
 
-    Success is scipy's convergence, or — when scipy stopped at its evaluation limit —
-    a cost at the kinematic solver's precision (exact data fitted) or at the noise floor
-    (a Gauss–Newton step from the end point promises less than 1e-9 of the cost).
+    The residuals are whitened by the noise σ, so a robust loss' ``f_scale`` is in σ
+    (:attr:`LMOptions.f_scale`). Success is scipy's convergence, or — when scipy stopped
+    at its evaluation limit — a cost at the kinematic solver's precision (exact data
+    fitted) or at the noise floor (a Gauss–Newton step from the end point promises less
+    than 1e-9 of the cost).
 
     Args:
         problem: residual model; x0: (n,) start [SI]; free: fitted indices.
@@ -208,6 +217,7 @@ def levenberg_marquardt(
         jac=lambda z: both(z)[1],
         method="lm" if opts.loss == "linear" else "trf",
         loss=opts.loss,
+        f_scale=1.0 if opts.loss == "linear" else _f_scale(opts),
         x_scale="jac",
         xtol=max(opts.xtol, 1e-15),
         ftol=1e-15,

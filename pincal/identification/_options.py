@@ -101,11 +101,15 @@ class LMOptions:
         xtol: relative step tolerance (> 0).
         loss: robust loss, one of :data:`LOSSES` (``"linear"`` = plain least squares
             with scipy's ``lm``; the others use ``trf``).
+        f_scale: the robust loss' soft margin in σ of the (whitened) residuals, i.e.
+            tied to the noise (> 0); None: the loss' default, at which a residual of
+            3σ gets the weight 0.5 (huber 1.5, soft_l1 √3, cauchy 3, arctan 3).
     """
 
     max_iterations: int = 50
     xtol: float = 1e-10
     loss: str = "linear"
+    f_scale: float | None = None
 
     def __post_init__(self) -> None:
         o = type(self).__name__
@@ -113,6 +117,8 @@ class LMOptions:
         check_real(o, "xtol", self.xtol, 0.0, open_low=True)
         if self.loss not in LOSSES:
             raise SolverOptionError(f"{o}.loss must be one of {LOSSES}, got {self.loss!r}")
+        if self.f_scale is not None:
+            check_real(o, "f_scale", self.f_scale, 0.0, open_low=True)
 
 
 @dataclass(frozen=True)

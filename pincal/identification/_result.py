@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import ParameterError
+from pincal.identification._weighting import Weighting
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._identifiability import Identifiability
@@ -130,8 +131,8 @@ class IdentificationResult:
             their start values.
         identified: (n,) bool mask of the identified parameters (k of them).
         std: (k,) standard deviations of the identified parameters [SI].
-        covariance: (k, k) their covariance (``(Jᵀ W J)⁻¹``, scaled by the residual
-            variance when no noise model is given).
+        covariance: (k, k) their covariance ``(Jᵀ W J)⁻¹`` with W from the declared or
+            estimated noise (see ``weighting``).
         before, after: residual statistics at the start and identified values.
         reduced_chi2: weighted residual sum of squares / (N − k).
         iterations: solver iterations (function evaluations for ``lm``).
@@ -149,6 +150,10 @@ class IdentificationResult:
         identifiability: analysis at the start values (None when read from a file).
         annotations: JSON-ready context written with the result (data file, validation
             errors, simulated truth, index history, ...).
+        weighting: the noise σ used (declared or estimated), the robust loss and the
+            poses it down-weighted (:class:`Weighting`); None for pincal 0.1 files.
+        initial_residuals: (m, c) unweighted residuals at the start values [m, rad]
+            (None when read from a file that lacks them).
     """
 
     method: str
@@ -175,6 +180,8 @@ class IdentificationResult:
     calibrated_mechanism: Mechanism | None = field(default=None, repr=False)
     identifiability: Identifiability | None = field(default=None, repr=False)
     annotations: Mapping[str, Any] = field(default_factory=dict, repr=False)
+    weighting: Weighting | None = field(default=None, repr=False)
+    initial_residuals: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def values(self) -> np.ndarray:

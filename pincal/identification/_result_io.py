@@ -9,9 +9,13 @@ Format version 2 (pincal ≥ 0.2), SI values::
      "held": [{"name", "unit", "value"[, "true"]}],                         # not identified
      "covariance": [[...]],                  # (k, k) of the identified parameters
      "cost_history": [...],
-     "residuals": {"before": {...mm/mrad}, "after": {...}, "per_pose_SI": [[...]]},
+     "residuals": {"before": {...mm/mrad}, "after": {...}, "per_pose_SI": [[...]],
+                   "per_pose_before_SI": [[...]]},
      "identifiability": {"parameters", "rank", "unidentifiable", "explanation"},
      "extras": {"type": "local" | "qpso" | "step-planned", ...},
+     "weighting": {"source": "declared" | "per-pose" | "estimated", "position_std" [m],
+                   "orientation_std" [rad], "rounds", "converged", "redundancy", "loss",
+                   "f_scale", "pose_weights", "downweighted", "outliers", "whitened"},
      ...annotations (validation_before/after, validation_errors, index_history, data, ...)}
 
 Files of pincal 0.1 (no ``version``; written by ``pincal calibrate`` or ``pincal demo``)
@@ -35,6 +39,7 @@ from pincal.identification._result import (
     ResidualStats,
     StepPlanningExtras,
 )
+from pincal.identification._weighting import Weighting
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "result_from_dict", "result_to_dict"]
 
@@ -62,6 +67,7 @@ _OWNED = {
     "residuals",
     "identifiability",
     "extras",
+    "weighting",
 }
 _STATS = (
     ("rms_position_mm", "rms_position", 1e3),
@@ -170,6 +176,8 @@ def result_to_dict(
             "per_pose_SI": np.asarray(result.residuals).tolist(),
         },
     }
+    if result.initial_residuals is not None:
+        doc["residuals"]["per_pose_before_SI"] = np.asarray(result.initial_residuals).tolist()
     ident = result.identifiability
     if ident is not None:
         doc["identifiability"] = {
@@ -181,6 +189,8 @@ def result_to_dict(
     extras = _extras_dict(result.extras)
     if extras is not None:
         doc["extras"] = extras
+    if result.weighting is not None:
+        doc["weighting"] = result.weighting.to_dict()
     doc.update(notes)
     return doc
 
@@ -342,6 +352,20 @@ def result_from_dict(data: Mapping[str, Any], source: str = "identification.json
     except (TypeError, ValueError):
         raise ReportError(f"{src}: residuals.per_pose_SI must be a list of number rows") from None
     chi2 = data.get("reduced_chi2")
+    initial_residuals = None
+    if "per_pose_before_SI" in res:
+        try:
+            initial_residuals = np.array(res["per_pose_before_SI"], dtype=float)
+        except (TypeError, ValueError):
+            initial_residuals = None
+        if initial_residuals is None or initial_residuals.shape != residuals.shape:
+            raise ReportError(f"{src}: residuals.per_pose_before_SI must match per_pose_SI")
+    weighting = None
+    if isinstance(data.get("weighting"), dict):
+        try:
+            weighting = Weighting.from_dict(data["weighting"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ReportError(f"{src}: malformed 'weighting' ({exc})") from None
     notes = {k: v for k, v in data.items() if k not in _OWNED}
     truth = {p["name"]: float(p["true"]) for p in every if "true" in p}
     if truth:
@@ -370,4 +394,6 @@ def result_from_dict(data: Mapping[str, Any], source: str = "identification.json
         preset=str(data.get("preset", "")),
         extras=_read_extras(data.get("extras"), src),
         annotations=notes,
+        weighting=weighting,
+        initial_residuals=initial_residuals,
     )

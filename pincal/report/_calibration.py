@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -22,8 +23,15 @@ from pincal.report._plots import (
     plot_error_histogram,
     plot_errors_before_after,
     plot_index_history,
-    plot_parameters,
     plot_validation_summary,
+)
+from pincal.report._sections import (
+    UNITS_NOTE,
+    data_section,
+    outlier_section,
+    parameter_section,
+    prediction_section,
+    residual_section,
 )
 
 __all__ = ["IDENTIFICATION_JSON", "MAX_JSON_BYTES", "calibration_report", "read_identification"]
@@ -116,8 +124,13 @@ def read_identification(path: str | os.PathLike) -> IdentificationResult:
     return result
 
 
-def _display(value: float, unit: str) -> tuple[float, str]:
-    return (value * 1e6, "µm") if unit == "m" else (value * 1e6, "µrad")
+_SUMMARY_LABELS = ("RMS position", "max position", "RMS orientation", "max orientation")
+_SUMMARY_UNITS = ("µm", "µm", "µrad", "µrad")
+
+
+def _r(value_mm: object) -> float:
+    """A summary value [mm or mrad] in µm or µrad (NaN when absent)."""
+    return float("nan") if value_mm is None else round(float(value_mm) * 1e3, 3)
 
 
 def _summary(result: IdentificationResult) -> Section:
@@ -138,12 +151,14 @@ def _validation(notes: dict, plots: Path) -> Section | None:
     if before is None or after is None:
         return None
     rows = [
-        [label, float(before.get(key) or np.nan), float(after.get(key) or np.nan)]
-        for key, label in _SUMMARY_KEYS
+        [label, unit, _r(before.get(key)), _r(after.get(key))]
+        for (key, _), label, unit in zip(
+            _SUMMARY_KEYS, _SUMMARY_LABELS, _SUMMARY_UNITS, strict=True
+        )
     ]
     images = [plot_validation_summary(before, after, plots / "validation_summary.png")]
     ve: dict = notes.get("validation_errors") or {"before": {}, "after": {}}
-    for key, unit in (("position", "mm"), ("orientation", "mrad")):
+    for key, unit in (("position", "um"), ("orientation", "urad")):
         if key in ve["before"] and key in ve["after"]:
             b, a = np.array(ve["before"][key]), np.array(ve["after"][key])
             title = key.capitalize()
@@ -165,40 +180,7 @@ def _validation(notes: dict, plots: Path) -> Section | None:
         "Errors of the predicted measured-frame pose on validation poses, "
         "nominal vs calibrated model.",
         images,
-        [Table(["quantity", "nominal", "calibrated"], rows)],
-    )
-
-
-def _parameters(result: IdentificationResult, plots: Path) -> Section:
-    names = list(result.identified_names)
-    values, std = result.values, result.std
-    units = [u for u, ok in zip(result.units, result.identified, strict=True) if ok]
-    kinds = ["angle" if u == "rad" else "length" for u in units]
-    truth = result.annotations.get("truth") or {}
-    true = np.array([float(truth[n]) for n in names]) if all(n in truth for n in names) else None
-    image = plot_parameters(
-        names, values, std, true, plots / "parameters.png",
-        kinds=kinds, length_unit="um", angle_unit="urad",
-    )  # fmt: skip
-    headers = ["parameter", "value", "2σ", "unit"] + (
-        ["true", "error / σ"] if true is not None else []
-    )
-    rows = []
-    for k, name in enumerate(names):
-        v, label = _display(values[k], units[k])
-        row: list[object] = [name, round(v, 3), round(2 * std[k] * 1e6, 3), label]
-        if true is not None:
-            row += [
-                round(true[k] * 1e6, 3),
-                round((values[k] - true[k]) / std[k], 2) if std[k] > 0 else "",
-            ]
-        rows.append(row)
-    return Section(
-        "Identified parameters",
-        "Displacements of the URDF joint origins (lengths in µm, angles in µrad) with "
-        "their ±2σ uncertainty" + (" and the simulated true values." if true is not None else "."),
-        [image],
-        [Table(headers, rows)],
+        [Table(["quantity", "unit", "nominal model", "calibrated model"], rows)],
     )
 
 
@@ -208,11 +190,15 @@ def calibration_report(
     *,
     name: str = "report",
 ) -> ReportFiles:
-    """Assemble plots and numbers of a calibration output directory into one report.
+    """Write the report of a calibration output directory: HTML, Markdown and JSON.
 
-    Reads ``<directory>/identification.json`` (see :func:`read_identification`)
-    and writes ``<out>/<name>.md``, ``<out>/<name>.html`` and their PNG plots in
-    ``<out>/<name>_plots/`` (``out`` defaults to ``directory``). Nothing else is
+    Reads ``<directory>/identification.json`` (see :func:`read_identification`) and
+    writes ``<out>/<name>.html`` (self-contained: plots embedded), ``<name>.md`` and
+    ``<name>.json`` with the same tables (lengths in µm, angles in µrad, 2σ
+    uncertainties): data and noise (declared or estimated), residuals before/after,
+    outliers (|r/σ| > 3) and robustly down-weighted poses, parameters with 2σ, poorly
+    determined ones flagged, their correlations, Cramér–Rao prediction vs achievement,
+    validation and convergence. ``out`` defaults to ``directory``; nothing else is
     read or changed.
 
     Raises:
@@ -224,22 +210,58 @@ def calibration_report(
     result = read_identification(src / IDENTIFICATION_JSON)
     notes = dict(result.annotations)
     out_dir = Path(out) if out is not None else src
-    plots = (out_dir / f"{name}_plots").resolve()
-    sections = [_summary(result)]
-    validation = _validation(notes, plots)
-    if validation is not None:
-        sections.append(validation)
-    sections.append(_parameters(result, plots))
-    extra_images = []
-    if result.cost_history:
-        extra_images.append(
-            plot_convergence(list(result.cost_history), plots / "convergence.png", ylabel="½‖r‖²")
-        )
-    if "index_history" in notes:
-        extra_images.append(plot_index_history(notes["index_history"], plots / "index_history.png"))
-    if extra_images:
-        sections.append(Section("Convergence and pose selection", "", extra_images))
     files = sorted(p.name for p in src.iterdir() if p.suffix in (".urdf", ".yaml", ".json"))
-    if files:
-        sections.append(Section("Files", "Calibration output: " + ", ".join(files) + "."))
-    return write_report(out_dir, sections, title=f"Calibration report: {result.model}", name=name)
+    with tempfile.TemporaryDirectory(prefix="pincal-report-") as tmp:
+        plots = Path(tmp)
+        data, noise = data_section(result, notes)
+        sections = [_summary(result), data, residual_section(result, plots)]
+        outliers, out_idx, down_idx = outlier_section(result)
+        sections.append(outliers)
+        params, poor = parameter_section(result, plots)
+        sections += [params, prediction_section(result)]
+        validation = _validation(notes, plots)
+        if validation is not None:
+            sections.append(validation)
+        extra_images = []
+        if result.cost_history:
+            extra_images.append(
+                plot_convergence(list(result.cost_history), plots / "convergence.png",
+                                 ylabel="½‖r/σ‖²")
+            )  # fmt: skip
+        if "index_history" in notes:
+            extra_images.append(
+                plot_index_history(notes["index_history"], plots / "index_history.png")
+            )
+        if extra_images:
+            w = result.weighting
+            text = (
+                f"Cost ½‖r/σ‖² per iteration; the noise was re-estimated between {w.rounds} "
+                "fits, so the cost jumps where σ changed."
+                if w is not None and w.source == "estimated" and w.rounds > 1
+                else ""
+            )
+            sections.append(Section("Convergence and pose selection", text, extra_images))
+        if files:
+            sections.append(Section("Files", "Calibration output: " + ", ".join(files) + "."))
+        summary = {
+            "format": "pincal report",
+            "version": 1,
+            "units": UNITS_NOTE,
+            "model": result.model,
+            "preset": result.preset,
+            "method": result.method,
+            "noise": noise,
+            "flags": {
+                "poorly_determined": poor,
+                "outlier_poses": out_idx,
+                "downweighted_poses": down_idx,
+            },
+        }
+        return write_report(
+            out_dir,
+            sections,
+            title=f"Calibration report: {result.model}",
+            name=name,
+            markdown_images=False,
+            json_data=summary,
+        )

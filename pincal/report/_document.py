@@ -1,8 +1,16 @@
-"""A report document: sections of text, images and tables as Markdown + HTML."""
+"""A report document: sections of text, images and tables as Markdown, HTML and JSON.
+
+The HTML page is self-contained: images are embedded as base64 ``data:`` URIs, so the
+file can be copied, mailed or archived alone. The Markdown and JSON hold the same
+tables (same numbers, same units in the headers).
+"""
 
 from __future__ import annotations
 
+import base64
 import html
+import json
+import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -35,16 +43,37 @@ class Section:
 
 @dataclass(frozen=True)
 class ReportFiles:
-    """Paths of a written report."""
+    """Paths of a written report (``json`` None when not written)."""
 
     markdown: Path
     html: Path
+    json: Path | None = None
 
 
 def _cell(value: object) -> str:
     if isinstance(value, float):
         return f"{value:.6g}"
     return str(value)
+
+
+def _json_cell(value: object) -> object:
+    """A table cell as JSON: numbers as numbers (NaN as null), the rest as text."""
+    if isinstance(value, bool) or value is None:
+        return value
+    if isinstance(value, (int, float)):
+        return float(value) if math.isfinite(float(value)) else None
+    try:
+        f = float(value)  # numpy scalars
+    except (TypeError, ValueError):
+        return str(value)
+    return f if math.isfinite(f) else None
+
+
+def _data_uri(path: Path) -> str:
+    kind = {".png": "image/png", ".svg": "image/svg+xml", ".jpg": "image/jpeg"}.get(
+        path.suffix.lower(), "application/octet-stream"
+    )
+    return f"data:{kind};base64," + base64.b64encode(path.read_bytes()).decode("ascii")
 
 
 def _markdown_table(table: Table) -> str:
@@ -82,6 +111,8 @@ img {{ max-width: 100%; border: 1px solid #ddd; margin: 0.5em 0; }}
 table {{ border-collapse: collapse; margin: 0.8em 0; }}
 th, td {{ border: 1px solid #bbb; padding: 2px 8px; text-align: right; }}
 th {{ background: #eee; }}
+td:first-child {{ text-align: left; }}
+p.note {{ color: #555; font-size: 90%; }}
 caption {{ caption-side: top; font-style: italic; text-align: left; }}
 </style>
 </head>
@@ -99,17 +130,35 @@ def write_report(
     *,
     title: str = "pincal calibration report",
     name: str = "report",
+    markdown_images: bool = True,
+    json_data: dict | None = None,
 ) -> ReportFiles:
-    """Write ``<name>.md`` and ``<name>.html`` into ``directory``.
+    """Write ``<name>.md``, ``<name>.html`` (and ``<name>.json``) into ``directory``.
 
-    Images are referenced by their path relative to ``directory`` (put the PNGs
-    there or below so the report can be moved as one folder); missing images are
-    an error. Both files are written atomically.
+    The HTML embeds every image as a base64 ``data:`` URI (one self-contained file);
+    the Markdown references images by their path relative to ``directory`` (or, with
+    ``markdown_images`` False, leaves them out and points to the HTML). Missing images
+    are an error. All files are written atomically.
+
+    Args:
+        directory: output folder (created).
+        sections: the report's sections.
+        title: page title; name: file stem.
+        markdown_images: link the images from the Markdown (they must then stay).
+        json_data: when given, ``<name>.json`` is written with it plus ``title`` and the
+            sections' text and tables (the same numbers as the HTML and Markdown).
+
+    Returns:
+        ReportFiles.
+
+    Raises:
+        ReportError: an image does not exist.
     """
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
     md = [f"# {title}", ""]
     body = []
+    doc_sections = []
     for section in sections:
         md += [f"## {section.title}", ""]
         body.append(f"<h2>{html.escape(section.title)}</h2>")
@@ -123,13 +172,36 @@ def write_report(
                 image_path = out / image_path
             if not image_path.is_file():
                 raise ReportError(f"image {str(image)!r} of section {section.title!r} not found")
-            rel = Path(os.path.relpath(image_path.resolve(), out.resolve())).as_posix()
-            md += [f"![{image_path.stem}]({rel})", ""]
-            body.append(f'<img src="{html.escape(rel)}" alt="{html.escape(image_path.stem)}">')
+            if markdown_images:
+                rel = Path(os.path.relpath(image_path.resolve(), out.resolve())).as_posix()
+                md += [f"![{image_path.stem}]({rel})", ""]
+            alt = html.escape(image_path.stem)
+            body.append(f'<img src="{_data_uri(image_path)}" alt="{alt}">')
+        if section.images and not markdown_images:
+            md += [f"*Plots ({len(section.images)}): see {name}.html.*", ""]
         for table in section.tables:
             md += [_markdown_table(table), ""]
             body.append(_html_table(table))
+        doc_sections.append(
+            {
+                "title": section.title,
+                "text": section.text,
+                "tables": [
+                    {
+                        "caption": t.caption,
+                        "headers": [str(h) for h in t.headers],
+                        "rows": [[_json_cell(c) for c in row] for row in t.rows],
+                    }
+                    for t in section.tables
+                ],
+            }
+        )
     md_path = atomic_write_bytes(out / f"{name}.md", "\n".join(md).encode("utf-8"))
     html_text = _HTML_PAGE.format(title=html.escape(title), body="\n".join(body))
     html_path = atomic_write_bytes(out / f"{name}.html", html_text.encode("utf-8"))
-    return ReportFiles(markdown=md_path, html=html_path)
+    json_path = None
+    if json_data is not None:
+        doc = {"title": title, **json_data, "sections": doc_sections}
+        text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False)
+        json_path = atomic_write_bytes(out / f"{name}.json", (text + "\n").encode("utf-8"))
+    return ReportFiles(markdown=md_path, html=html_path, json=json_path)

@@ -26,6 +26,7 @@ __all__ = [
     "ErrorStats",
     "error_statistics",
     "plot_convergence",
+    "plot_correlation",
     "plot_error_histogram",
     "plot_errors_before_after",
     "plot_index_history",
@@ -157,7 +158,7 @@ def plot_errors_before_after(
         ax.set_yscale("log")  # calibration typically shrinks errors by decades
     if b.size <= 30:
         ax.set_xticks(x)
-    ax.legend()
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, fontsize=8)  # not on bars
     ax.grid(axis="y", alpha=0.3)
     return _save(fig, path)
 
@@ -175,9 +176,14 @@ def plot_error_histogram(
     b = np.abs(_vector(before, "before"))
     a = np.abs(_vector(after, "after"))
     factor, label = _unit(unit)
-    edges = np.linspace(0.0, max(b.max(), a.max()) * factor * 1.0001 or 1.0, bins + 1)
+    top = max(b.max(), a.max()) * factor * 1.0001 or 1.0
+    low = min(b[b > 0].min(initial=top), a[a > 0].min(initial=top)) * factor
+    log_x = top > 50 * low > 0  # before and after decades apart: log bins show both
+    edges = np.geomspace(low / 1.0001, top, bins + 1) if log_x else np.linspace(0, top, bins + 1)
     fig = _figure()
     ax = fig.add_subplot()
+    if log_x:
+        ax.set_xscale("log")
     ax.hist(b * factor, edges, color=_BEFORE, alpha=0.6, label=f"before (n = {b.size})")
     ax.hist(a * factor, edges, color=_AFTER, alpha=0.6, label=f"after (n = {a.size})")
     ax.set_xlabel(f"error [{label}]")
@@ -346,4 +352,27 @@ def plot_validation_summary(
         ax.grid(axis="y", alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.suptitle("Validation: predicted vs actual measured-frame pose")
+    return _save(fig, path)
+
+
+def plot_correlation(
+    names: Sequence[str], covariance: np.ndarray, path: str | os.PathLike
+) -> Path:
+    """Heat map of the parameter correlations ``C_ij / (σ_i σ_j)`` of a (L, L) covariance."""
+    C = np.asarray(covariance, dtype=float)
+    if C.ndim != 2 or C.shape != (len(names), len(names)) or not len(names):
+        raise ReportError(f"covariance must be ({len(names)}, {len(names)}), got {C.shape}")
+    s = np.sqrt(np.clip(np.diag(C), 0.0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        R = np.nan_to_num(C / np.outer(s, s), nan=0.0)
+    size = min(12.0, 3.0 + 0.18 * len(names))
+    fig = _figure(size + 1.2, size)
+    ax = fig.add_subplot()
+    im = ax.imshow(R, vmin=-1.0, vmax=1.0, cmap="RdBu_r")
+    ticks = np.arange(len(names))
+    font = 8 if len(names) <= 40 else 5
+    ax.set_xticks(ticks, [str(n) for n in names], rotation=90, fontsize=font)
+    ax.set_yticks(ticks, [str(n) for n in names], fontsize=font)
+    fig.colorbar(im, ax=ax, shrink=0.8, label="correlation")
+    ax.set_title("Parameter correlations")
     return _save(fig, path)

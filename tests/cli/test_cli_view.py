@@ -175,10 +175,10 @@ def test_report_assembles_demo_output(demo_dir, tmp_path):
     md = Path(files["markdown"]).read_text()
     data = json.loads((demo_dir / "identification.json").read_text())
     rms_after = data["validation_after"]["rms_position_mm"]
-    assert f"{rms_after:.6g}" in md  # the number from the JSON, in the table
-    assert md.count("| leg") >= 12 and "report_plots/parameters.png" in md
-    assert (tmp_path / "rep" / "report_plots" / "validation_summary.png").stat().st_size > 8000
-    assert "<img" in Path(files["html"]).read_text()
+    assert f"{round(rms_after * 1e3, 3):.6g}" in md  # the number from the JSON, in µm
+    assert md.count("| leg") >= 12 and "see report.html" in md
+    assert not (tmp_path / "rep" / "report_plots").exists()  # plots embedded in the page
+    assert '<img src="data:image/png;base64,' in Path(files["html"]).read_text()
     assert not (demo_dir / "report.md").exists()  # --out respected
 
 
@@ -202,8 +202,9 @@ def test_report_uses_optional_histories(tmp_path):
     res = _invoke("report", str(tmp_path))
     assert res.exit_code == 0, res.output
     md = (tmp_path / "report.md").read_text()
-    for name in ("validation_position.png", "convergence.png", "index_history.png"):
-        assert f"report_plots/{name}" in md
+    page = (tmp_path / "report.html").read_text()
+    for name in ("validation_position", "convergence", "index_history"):
+        assert '<img src="data:image/png;base64,' in page and f'alt="{name}"' in page
     assert "| j.tx | 100 | 20 | µm | 110 | -1 |" in md  # (value − true)/σ = −1
 
 

@@ -49,7 +49,9 @@ def test_exact_and_linear_cost_models_agree(wedge_offsets) -> None:
     """Tiny swarm on the exact closed-loop cost (FK per particle) vs the linearised cost:
     the same seed gives the same best particle (nonlinearity ~1e-12 over ±50 µm)."""
     mech, params, meas, _ = wedge_offsets
-    problem = IdentificationProblem(mech, params, meas)
+    # declared noise: the problem's own residual model is the one the swarm minimised
+    noise = {"position": 0.001, "orientation": 0.001}
+    problem = IdentificationProblem(mech, params, meas, noise=noise)
     kw = dict(n_particles=6, t_max=8, seed=4)
     exact = identify(problem, "qpso", options=QPSOOptions(cost_model="exact", **kw))
     linear = qpso_identify(problem, options=QPSOOptions(cost_model="linear", **kw))

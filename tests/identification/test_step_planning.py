@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import shutil
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from pincal.machines import (
     wedge_urdf,
     wedge_workspace_grid,
 )
+from pincal.measure import NoiseModel
 from pincal.sensitivity import global_sensitivity
 
 MODEL_DIR = Path(__file__).resolve().parents[2] / "models" / "wedge3"
@@ -35,6 +37,8 @@ def setup():
     actual = params.apply(mech, ERRORS)
     q = wedge_inverse(wedge_workspace_grid(*BOX, n=3), WedgeGeometry.nominal())
     meas = pincal.simulate_measurements(actual, q, None, np.random.default_rng(0))
+    # exact data with a declared σ (1 µm, 1 µrad), so no noise is estimated from ~0 residuals
+    meas = dataclasses.replace(meas, noise=NoiseModel(1e-3, 1e-3))
     sens = global_sensitivity(mech, params, q)
     planned = step_planned_identify(mech, params, meas, sensitivity=sens)
     return mech, params, meas, planned

@@ -36,7 +36,8 @@ def test_pincal_01_demo_file_gives_the_same_report(tmp_path):
     assert res.annotations["truth"] == {"leg1.tx": 1.1e-4, "leg1.rx": -2e-4}
     md = calibration_report(tmp_path).markdown.read_text()
     assert "| leg1.tx | 100 | 20 | µm | 110 | -1 |" in md
-    assert "reduced χ² = 0.9" in md and "report_plots/convergence.png" in md
+    assert "reduced χ² = 0.9" in md and "see report.html" in md
+    assert '<img src="data:image/png;base64,' in calibration_report(tmp_path).html.read_text()
 
 
 def test_result_written_by_to_dict_is_reported(tmp_path, stewart, stewart42, stewart_poses):

@@ -101,7 +101,7 @@ def test_report_references_plots_and_tables(tmp_path, errors):
     md = files.markdown.read_text()
     page = files.html.read_text()
     assert "![errors](img/errors.png)" in md
-    assert '<img src="img/errors.png"' in page
+    assert '<img src="data:image/png;base64,' in page  # self-contained page
     assert f"{stats_before.rms:.6g}" in md and f"{stats_before.rms:.6g}" in page
     assert "after\\|x" in md  # a pipe in a cell does not break the Markdown table
     assert "Stewart &lt;test&gt;" in page and "<caption>Validation poses</caption>" in page

@@ -1,0 +1,216 @@
+"""Fitting with declared or estimated noise: variance-component estimation.
+
+Real measurement files rarely declare their noise. Fitting them with unit weights
+would weigh 1 m like 1 rad and make the covariance meaningless, so when no noise is
+declared the σ of each block b (position, orientation) is estimated from the
+residuals and the fit repeated until the estimate settles (Helmert / Förstner
+variance-component estimation):
+
+    σ_b² = r_bᵀ r_b / (n_b − tr(H_bb)),   H = J_w (J_wᵀ J_w)⁺ J_wᵀ,
+
+r_b the raw residuals of the block's n_b equations at the fit with the current σ and
+n_b − tr(H_bb) the block's redundancy (its equations not used up by the fit). With a
+robust loss, equations whose whitened residual exceeds 3 are left out of the estimate
+(and the sum is corrected for the truncated Gaussian tail).
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import numpy as np
+
+from pincal.errors import NoiseEstimationError
+from pincal.identification._outcome import Progress, SolverOutcome
+from pincal.identification._problem import CalibrationProblem
+from pincal.identification._result import LocalSolverExtras
+from pincal.identification._weighting import (
+    INLIER_LIMIT,
+    ROBUST_F_SCALE,
+    TRUNCATED_VARIANCE,
+    Weighting,
+    hat_diagonal,
+    robust_weights,
+)
+
+__all__ = ["MAX_ROUNDS", "RTOL", "initial_weights", "variance_components", "weighted_fit"]
+
+log = logging.getLogger(__name__)
+#: largest number of re-weighted fits of the noise estimation
+MAX_ROUNDS = 30
+#: the estimate has converged when no block's σ changes by more than this (relative)
+RTOL = 1e-3
+
+
+def initial_weights(
+    model: CalibrationProblem, J0: np.ndarray, raw0: np.ndarray
+) -> tuple[CalibrationProblem, np.ndarray]:
+    """Start weights of a model whose noise is to be estimated, and J0 re-weighted.
+
+    σ_b starts at the RMS of the block's residuals at the start values (floored), so the
+    first fit weighs the blocks as their model errors; the estimation then refines it.
+
+    Args:
+        model: residual model; J0: (N, n) its whitened Jacobian at the start;
+            raw0: (m, k) raw residuals at the start [m, rad].
+
+    Returns:
+        The (re-weighted) model and J0 in its weights; unchanged when noise is known.
+    """
+    if model.known_noise:
+        return model, J0
+    std = {
+        b: max(float(np.sqrt(np.mean(raw0[:, cols] ** 2))), model.sigma_floor)
+        for b, cols in model.blocks.items()
+    }
+    new = model.with_block_std(std)
+    scale = (model.sigma / new.sigma).ravel()
+    return new, J0 * scale[:, None]
+
+
+def variance_components(
+    model: CalibrationProblem,
+    raw: np.ndarray,
+    J_w: np.ndarray,
+    loss: str = "linear",
+) -> tuple[dict[str, float], dict[str, float]]:
+    """One variance-component update: σ_b² = r_bᵀr_b / (n_b − tr(H_bb)) per block.
+
+    Args:
+        model: the residual model at its current weights.
+        raw: (m, k) raw residuals [m, rad]; J_w: (N, p) whitened Jacobian of the fitted
+            parameters, N = m·k.
+        loss: with a robust loss, equations beyond 3σ are left out.
+
+    Returns:
+        ({block: σ [m or rad]}, {block: redundancy n_b − tr(H_bb)}).
+
+    Raises:
+        NoiseEstimationError: a block has less than one redundant equation.
+    """
+    z = (raw / model.sigma).ravel()
+    keep = np.ones(z.size, dtype=bool) if loss == "linear" else np.abs(z) <= INLIER_LIMIT
+    h = np.zeros(z.size)
+    h[keep] = hat_diagonal(J_w[keep])
+    col = np.tile(np.arange(raw.shape[1]), raw.shape[0])
+    flat = raw.ravel()
+    std, red = {}, {}
+    for b, cols in model.blocks.items():
+        sel = keep & np.isin(col, cols)
+        red[b] = float(np.sum(1.0 - h[sel]))
+        if red[b] < 1.0:
+            raise NoiseEstimationError(
+                f"cannot estimate the {b} noise: its {int(sel.sum())} equations leave "
+                f"{red[b]:.2f} redundant after the fit (need ≥ 1); declare the instrument "
+                "noise (noise= argument, `--noise pos_mm,ori_mrad` or a '# noise:' header) "
+                "or measure more poses"
+            )
+        var = float(np.sum(flat[sel] ** 2)) / red[b]
+        if loss != "linear":
+            var /= TRUNCATED_VARIANCE
+        std[b] = max(float(np.sqrt(var)), model.sigma_floor)
+    return std, red
+
+
+def _loss(opts: Any) -> tuple[str, float]:
+    loss = str(getattr(opts, "loss", "linear"))
+    if loss == "linear":
+        return loss, float("nan")
+    f = getattr(opts, "f_scale", None)
+    return loss, float(ROBUST_F_SCALE[loss] if f is None else f)
+
+
+def weighted_fit(
+    model: CalibrationProblem,
+    entry: Any,
+    x0: np.ndarray,
+    free: np.ndarray,
+    opts: Any,
+    progress: Progress = None,
+) -> tuple[SolverOutcome, CalibrationProblem, Weighting]:
+    """Run the solver; when the noise is estimated, re-weight and re-fit until it settles.
+
+    Later rounds run the same local solver (``gauss-newton``, ``lm``) from the previous
+    solution. A global or planned search (``qpso``, ``qpso-stepwise``, ``step-planned``)
+    runs once, weighted by the start weights of :func:`initial_weights`; the σ and the
+    covariance are then estimated from its residuals (one round: re-fit with a local
+    solver for the converged estimate).
+
+    Args:
+        model: residual model (re-weighted by :func:`initial_weights` when estimating).
+        entry: the registered solver; x0: (n,) start [SI]; free: fitted indices;
+            opts: its options; progress: optional callback.
+
+    Returns:
+        (outcome over all rounds, the final residual model, its :class:`Weighting`).
+
+    Raises:
+        NoiseEstimationError: a block cannot be estimated (too few redundant equations).
+    """
+    estimating = model.noise_source == "estimated"
+    loss, f_scale = _loss(opts)
+    local = entry.name in ("gauss-newton", "lm")
+    x, rounds, iterations, history = x0, 0, 0, []
+    converged, red = not estimating, {}
+    first, evaluations, rejected = None, 0, 0
+    while True:
+        out = entry.solve(model, x, free, opts, progress)
+        first = first or out
+        if isinstance(out.extras, LocalSolverExtras):
+            evaluations += out.extras.evaluations
+            rejected += out.extras.rejected_steps
+        rounds += 1
+        iterations += out.iterations
+        history += list(out.history)
+        x = out.x
+        fitted = free if out.fitted is None else np.asarray(out.fitted, dtype=int)
+        _, J, raw = model.evaluate(x)
+        if not estimating:
+            break
+        std, red = variance_components(model, raw, J[:, fitted], loss)
+        old = model.block_std()
+        change = max(abs(std[b] / old[b] - 1.0) for b in std)
+        log.info("noise estimate round %d: %s (change %.2g)", rounds, std, change)
+        new = model.with_block_std(std)
+        J = J * (model.sigma / new.sigma).reshape(-1)[:, None]
+        model = new
+        exact = all(v <= model.sigma_floor for v in std.values())
+        if change <= RTOL or exact or (len(std) == 1 and loss == "linear"):
+            # settled; or data fitted to the solver's precision (weights change nothing);
+            converged = True  # one block and least squares: σ does not move the fit
+            break
+        if rounds >= MAX_ROUNDS or not local:
+            break  # a global / planned search is run once (start weights, then estimated)
+    r_w = raw / model.sigma
+    if not red:
+        h = hat_diagonal(J[:, fitted]).reshape(raw.shape)
+        red = {b: float(np.sum(1.0 - h[:, cols])) for b, cols in model.blocks.items()}
+    std_now = model.block_std()
+    pose_w = robust_weights(loss, r_w, f_scale).min(axis=1) if loss != "linear" else None
+    weighting = Weighting(
+        source=model.noise_source,
+        position_std=std_now.get("position", float("nan")),
+        orientation_std=std_now.get("orientation", float("nan")),
+        rounds=rounds if estimating else 0,
+        converged=converged,
+        redundancy=red,
+        loss=loss,
+        f_scale=f_scale,
+        pose_weights=np.ones(raw.shape[0]) if pose_w is None else pose_w,
+        whitened=r_w,
+    )
+    if estimating:
+        note = (
+            f"noise estimated from the residuals in {rounds} re-weighted fits"
+            + ("" if converged else f" (not settled to {RTOL:g} after {rounds})")
+            + "; "
+        )
+        extras = first.extras  # a global solver's own extras; local ones summed
+        if isinstance(out.extras, LocalSolverExtras):
+            extras = LocalSolverExtras(evaluations, rejected, out.extras.damping)
+        out = SolverOutcome(
+            x, iterations, tuple(history), out.success, note + out.message, extras, out.fitted
+        )
+    return out, model, weighting
+

@@ -1,0 +1,254 @@
+"""Sections of a calibration report, built from an :class:`IdentificationResult`.
+
+One convention everywhere: lengths in µm, angles in µrad, uncertainties as 2σ (≈ 95 %
+for Gaussian errors); every table header names its unit.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from pincal.identification import IdentificationResult
+from pincal.report._document import Section, Table
+from pincal.report._plots import (
+    plot_correlation,
+    plot_error_histogram,
+    plot_errors_before_after,
+    plot_parameters,
+)
+
+__all__ = [
+    "POOR_ANGLE_2SIGMA",
+    "POOR_LENGTH_2SIGMA",
+    "UNITS_NOTE",
+    "data_section",
+    "outlier_section",
+    "parameter_section",
+    "poorly_determined",
+    "prediction_section",
+    "residual_section",
+]
+
+#: a length parameter with 2σ above this is flagged as poorly determined [m]
+POOR_LENGTH_2SIGMA = 0.5e-3
+#: an angle parameter with 2σ above this is flagged as poorly determined [rad]
+POOR_ANGLE_2SIGMA = 1e-3
+#: |whitened residual| above this flags an outlier
+OUTLIER_LIMIT = 3.0
+UNITS_NOTE = "lengths in µm, angles in µrad; uncertainties are 2σ"
+_U = 1e6  # m → µm, rad → µrad
+_POS, _ORI = ("x", "y", "z"), ("rx", "ry", "rz")
+
+
+def _r(v: float, digits: int = 3) -> float:
+    return round(float(v), digits) if math.isfinite(float(v)) else float("nan")
+
+
+def _components(result: IdentificationResult) -> tuple[str, ...]:
+    """Measured components (from the residual width: 3 = position, 6 = full pose)."""
+    k = result.residuals.shape[1] if result.residuals.ndim == 2 else 0
+    return {3: _POS, 6: _POS + _ORI}.get(k, tuple(f"c{j}" for j in range(k)))
+
+
+def poorly_determined(result: IdentificationResult) -> list[str]:
+    """Identified parameters whose 2σ exceeds 0.5 mm (lengths) or 1 mrad (angles)."""
+    units = [u for u, ok in zip(result.units, result.identified, strict=True) if ok]
+    limit = np.array([POOR_ANGLE_2SIGMA if u == "rad" else POOR_LENGTH_2SIGMA for u in units])
+    bad = 2 * np.asarray(result.std) > limit
+    return [n for n, b in zip(result.identified_names, bad, strict=True) if b]
+
+
+def data_section(result: IdentificationResult, notes: dict) -> tuple[Section, dict]:
+    """Poses, components, instrument and noise (declared or estimated)."""
+    comps = _components(result)
+    m = int(result.residuals.shape[0])
+    w = result.weighting
+    rows: list[list[object]] = [
+        ["poses", m, ""],
+        ["measured components", " ".join(comps), ""],
+        ["scalar equations", int(result.n_equations), ""],
+        ["identified parameters", int(result.identified.sum()), ""],
+    ]
+    if "data" in notes:
+        rows.append(["measurement file", str(notes["data"]), ""])
+    noise: dict[str, object] = {"source": "unknown (pincal 0.1 file)"}
+    if w is not None:
+        how = {
+            "declared": "declared (instrument / --noise)",
+            "estimated": f"estimated from the residuals ({w.rounds} re-weighted fits)",
+            "per-pose": "per-pose σ of the measurement file",
+        }.get(w.source, w.source)
+        rows.append(["noise", how, ""])
+        rows.append(["noise σ position", _r(w.position_std * _U), "µm"])
+        rows.append(["noise σ orientation", _r(w.orientation_std * _U), "µrad"])
+        rows.append(["loss", w.loss, ""])
+        noise = {
+            "source": w.source,
+            "position_um": _r(w.position_std * _U),
+            "orientation_urad": _r(w.orientation_std * _U),
+            "loss": w.loss,
+        }
+    text = (
+        "What was measured and how it was weighted. The noise σ is per component "
+        "(1σ); when it is estimated, each block's σ² = rᵀr / (n − tr H) at the fit."
+    )
+    return Section("Data and noise", text, (), [Table(["item", "value", "unit"], rows)]), noise
+
+
+def _norms(r: np.ndarray, comps: tuple[str, ...], block: tuple[str, ...]) -> np.ndarray | None:
+    cols = [j for j, c in enumerate(comps) if c in block]
+    return np.linalg.norm(r[:, cols], axis=1) if cols and r.size else None
+
+
+def residual_section(result: IdentificationResult, plots: Path) -> Section:
+    """Residuals before and after per pose (plots), as histograms, and their statistics."""
+    comps = _components(result)
+    rows, images = [], []
+    for block, label, unit in ((_POS, "position", "um"), (_ORI, "orientation", "urad")):
+        after = _norms(result.residuals, comps, block)
+        if after is None:
+            continue
+        before = None
+        if result.initial_residuals is not None:
+            before = _norms(np.asarray(result.initial_residuals), comps, block)
+        shown = "µm" if unit == "um" else "µrad"
+        b_stats = getattr(result.before, f"rms_{label}"), getattr(result.before, f"max_{label}")
+        rows.append(
+            [label, shown, _r(b_stats[0] * _U), _r(b_stats[1] * _U),
+             _r(np.sqrt(np.mean(after**2)) * _U), _r(after.max() * _U)]
+        )  # fmt: skip
+        if before is not None:
+            title = f"{label.capitalize()} residual per pose"
+            images.append(
+                plot_errors_before_after(
+                    before, after, unit, plots / f"residual_{label}.png", title=title
+                )
+            )
+            images.append(
+                plot_error_histogram(
+                    before, after, unit, plots / f"residual_{label}_histogram.png",
+                    title=f"{label.capitalize()} residual distribution",
+                )
+            )  # fmt: skip
+    headers = ["residual (norm per pose)", "unit", "RMS before", "max before", "RMS after",
+               "max after"]  # fmt: skip
+    text = (
+        "Residual = measured − model at the measured poses, with the nominal model "
+        "(before) and the identified one (after); norms per pose, in µm and µrad."
+    )
+    return Section("Residuals", text, images, [Table(headers, rows)])
+
+
+def outlier_section(result: IdentificationResult) -> tuple[Section, list[int], list[int]]:
+    """Poses with |whitened residual| > 3 and poses a robust loss down-weighted."""
+    w = result.weighting
+    if w is None or w.whitened.size == 0:
+        text = "No weights in this file (pincal 0.1): outliers cannot be flagged."
+        return Section("Outliers", text), [], []
+    comps = _components(result)
+    z = np.asarray(w.whitened)
+    rows = []
+    for i in w.outliers:
+        j = int(np.argmax(np.abs(z[i])))
+        rows.append([i, comps[j], _r(z[i, j], 2), _r(w.pose_weights[i], 3)])
+    text = (
+        f"{len(w.outliers)} of {z.shape[0]} poses have a whitened residual |r/σ| > "
+        f"{OUTLIER_LIMIT:g} (expected for Gaussian noise: ~{0.0027 * z.size:.1f} "
+        "components in all)."
+    )
+    if w.loss != "linear":
+        text += (
+            f" Robust loss {w.loss} (f_scale {w.f_scale:.3g}σ) down-weighted "
+            f"{len(w.downweighted)} poses below 0.5: {list(w.downweighted)}."
+        )
+    headers = ["pose", "worst component", "whitened residual [σ]", "robust weight"]
+    table = Table(headers, rows) if rows else Table(headers, [["none", "", "", ""]])
+    return Section("Outliers", text, (), [table]), list(w.outliers), list(w.downweighted)
+
+
+def parameter_section(result: IdentificationResult, plots: Path) -> tuple[Section, list[str]]:
+    """Identified values with 2σ, poorly determined flags, plot and correlation map."""
+    names = list(result.identified_names)
+    values, std = result.values, result.std
+    units = [u for u, ok in zip(result.units, result.identified, strict=True) if ok]
+    kinds = ["angle" if u == "rad" else "length" for u in units]
+    truth = result.annotations.get("truth") or {}
+    true = np.array([float(truth[n]) for n in names]) if all(n in truth for n in names) else None
+    images = [
+        plot_parameters(
+            names, values, std, true, plots / "parameters.png",
+            kinds=kinds, length_unit="um", angle_unit="urad",
+        )
+    ]  # fmt: skip
+    if len(names) > 1:
+        images.append(plot_correlation(names, result.covariance, plots / "correlation.png"))
+    poor = set(poorly_determined(result))
+    headers = ["parameter", "value [µm | µrad]", "2σ [µm | µrad]", "unit"]
+    headers += ["true [µm | µrad]", "error / σ"] if true is not None else []
+    headers += ["poorly determined"]
+    rows = []
+    for k, name in enumerate(names):
+        label = "µrad" if units[k] == "rad" else "µm"
+        row: list[object] = [name, _r(values[k] * _U), _r(2 * std[k] * _U), label]
+        if true is not None:
+            row += [
+                _r(true[k] * _U),
+                _r((values[k] - true[k]) / std[k], 2) if std[k] > 0 else "",
+            ]
+        row.append("YES" if name in poor else "")
+        rows.append(row)
+    text = (
+        "Displacements of the URDF joint origins (" + UNITS_NOTE + ")"
+        + (", with the simulated true values" if true is not None else "")
+        + f". Poorly determined: 2σ > {POOR_LENGTH_2SIGMA * 1e3:g} mm (lengths) or > "
+        f"{POOR_ANGLE_2SIGMA * 1e3:g} mrad (angles) — {len(poor)} parameters"
+        + (f": {', '.join(sorted(poor))}." if poor else ".")
+    )
+    if result.fixed:
+        text += f"\n\nHeld at their start values (not identifiable): {', '.join(result.fixed)}."
+    return Section("Identified parameters", text, images, [Table(headers, rows)]), sorted(poor)
+
+
+def prediction_section(result: IdentificationResult) -> Section:
+    """Cramér–Rao prediction vs what the calibration achieved."""
+    w = result.weighting
+    rows: list[list[object]] = []
+    if w is not None and w.whitened.size:
+        comps = _components(result)
+        for block, label, sig in (
+            (_POS, "position", w.position_std), (_ORI, "orientation", w.orientation_std)
+        ):  # fmt: skip
+            cols = [j for j, c in enumerate(comps) if c in block]
+            if not cols or not math.isfinite(sig) or label not in w.redundancy:
+                continue
+            n_b = len(cols) * result.residuals.shape[0]
+            predicted = sig * math.sqrt(w.redundancy[label] / n_b)
+            achieved = float(np.sqrt(np.mean(result.residuals[:, cols] ** 2)))
+            unit = "µm" if label == "position" else "µrad"
+            rows.append(
+                [f"{label} residual RMS per component", unit, _r(predicted * _U),
+                 _r(achieved * _U)]
+            )  # fmt: skip
+    rows.append(["reduced χ²", "", 1.0, _r(result.reduced_chi2, 4)])
+    truth = result.annotations.get("truth") or {}
+    names = result.identified_names
+    if names and all(n in truth for n in names) and np.all(result.std > 0):
+        e = result.values - np.array([truth[n] for n in names])
+        rows.append(["RMS(error / σ) of the parameters", "", 1.0,
+                     _r(float(np.sqrt(np.mean((e / result.std) ** 2))), 3)])  # fmt: skip
+        maha = float(e @ np.linalg.pinv(result.covariance) @ e) / e.size
+        rows.append(["Mahalanobis error / n", "", 1.0, _r(maha, 3)])
+    text = (
+        "The parameter covariance is the Cramér–Rao bound (Jᵀ Σ⁻¹ J)⁻¹ at the solution for "
+        "the stated noise. Predicted: residual RMS σ·√(redundancy / n) and χ² = 1 when the "
+        "model and noise are right; achieved: what this calibration gave."
+    )
+    return Section(
+        "Prediction (Cramér–Rao) vs achievement",
+        text,
+        (),
+        [Table(["quantity", "unit", "predicted", "achieved"], rows)],
+    )
