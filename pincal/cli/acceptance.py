@@ -105,16 +105,30 @@ def _grouped(meas, controller):
     "--repeatability", default=2.0, show_default=True, help="Actuator repeatability 1σ [µm]."
 )
 @click.option("--seed", default=1, show_default=True, help="Seed of the cube search and cycles.")
-@click.option("--json", "json_out", type=click.Path(dir_okay=False), default=None)
+@click.option(
+    "--out",
+    "json_out",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Also write the AP/RP report as JSON to this file.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON on stdout.")
 @fail_cleanly
 def acceptance(
-    model, cal, data_file, preset, errors, error_size, cycles, repeatability, seed, json_out
+    model, cal, data_file, preset, errors, error_size, cycles, repeatability, seed, json_out,
+    as_json,
 ) -> None:
     """ISO 9283 acceptance of MODEL: AP and RP at P1–P5 of the test cube.
 
     Simulates the actual machine (MODEL with the errors of `pincal simulate`, same
     defaults) commanded by the nominal model (before) and by the calibrated one
     (after, with --calibrated), or evaluates measured cycles (--data).
+
+    \b
+    Examples:
+      pincal acceptance stewart_6ups                      before calibration only
+      pincal acceptance stewart_6ups --calibrated cal/    before and after
+      pincal acceptance stewart_6ups --data cycles.csv --out iso.json
     """
     import numpy as np
 
@@ -123,6 +137,7 @@ def acceptance(
     from pincal.measure._iso9283 import iso_test_cube, pose_characteristics, simulate_cycles
     from pincal.model import load_mechanism, parameters
 
+    say = (lambda _line: None) if as_json else click.echo
     nominal = load_mechanism(model)
     calibrated = load_calibrated(cal, nominal) if cal else None
     report: dict = {"model": nominal.name}
@@ -132,11 +147,11 @@ def acceptance(
         pc = pose_characteristics(poses, pos, rot)
         for line in pc.lines(f"measured ({data_file}), commands from the "
                              f"{'calibrated' if calibrated else 'nominal'} model"):  # fmt: skip
-            click.echo(line)
+            say(line)
         report["measured"] = pc.to_dict()
     else:
         cube = iso_test_cube(nominal, rng=seed)
-        click.echo(
+        say(
             f"test cube: centre {np.round(cube.centre * 1e3, 3).tolist()} mm, edge "
             f"{cube.edge * 1e3:.2f} mm, P2–P5 at {cube.inset:.0%} of the diagonal"
         )
@@ -159,8 +174,10 @@ def acceptance(
             )
             pc = pose_characteristics(cube.poses, pos, rot)
             for line in pc.lines(f"{label} calibration (simulated, {cycles} cycles)"):
-                click.echo(line)
+                say(line)
             report[label] = pc.to_dict()
     if json_out:
         atomic_write_text(json_out, json.dumps(report, indent=1) + "\n")
-        click.echo(f"wrote {json_out}")
+        say(f"wrote {json_out}")
+    if as_json:
+        click.echo(json.dumps(report))

@@ -99,14 +99,26 @@ def default_instrument(
 
 def _span(M: np.ndarray, tol: float = 1e-6, absolute: bool = False) -> np.ndarray:
     """Orthonormal basis (columns) of the column span of M (singular values above
-    ``tol``, relative to the largest unless ``absolute``)."""
+    ``tol``, relative to the largest unless ``absolute``).
+    """
     if M.size == 0:
         return np.zeros((M.shape[0], 0))
     u, s, _ = np.linalg.svd(M, full_matrices=False)
     return u[:, s > tol * (1.0 if absolute else max(float(s.max(initial=0.0)), 1e-300))]
 
 
+def _point(p: np.ndarray) -> str:
+    """A point as text (no "-0.000")."""
+    p = np.where(np.abs(np.asarray(p, dtype=float)) < 5e-4, 0.0, p)
+    return "(" + ", ".join(f"{x:+.3f}" for x in p) + ")"
+
+
 def _vec(v: np.ndarray) -> str:
+    """A direction as text, its sign fixed so the largest component is positive."""
+    v = np.asarray(v, dtype=float)
+    if v.size and v[np.argmax(np.abs(v))] < 0:
+        v = -v
+    v = np.where(np.abs(v) < 5e-4, 0.0, v)  # no "-0.000"
     return "(" + ", ".join(f"{x:+.3f}" for x in v) + ")"
 
 
@@ -149,7 +161,7 @@ def _complement(B: np.ndarray, A: np.ndarray) -> np.ndarray:
 def _words(axes: np.ndarray, trans: np.ndarray, centre: np.ndarray | None) -> list[str]:
     out = []
     if axes.shape[1]:
-        where = "" if centre is None else f" through the point {_vec(centre)} m"
+        where = "" if centre is None else f" through the point {_point(centre)} m"
         out.append(
             f"{axes.shape[1]} rotation(s) of every tool point about the "
             f"{'axes' if axes.shape[1] > 1 else 'axis'} "
@@ -350,6 +362,7 @@ def instrument_candidates(
 
 def instrument_cramer_rao(J_blocks: np.ndarray, std: float, base: np.ndarray) -> np.ndarray:
     """Cramér–Rao covariance (b, b) of the base parameters ``base`` (indices into the
-    n + k columns) from joint reading blocks (m, 1, n + k) and the reading noise [m]."""
+    n + k columns) from joint reading blocks (m, 1, n + k) and the reading noise [m].
+    """
     J = np.asarray(J_blocks, dtype=float).reshape(len(J_blocks), -1)[:, base] / std
     return crb_covariance(J)

@@ -197,7 +197,8 @@ class InstrumentProblem:
 
     def analyse(self, x: np.ndarray | None = None) -> Identifiability:
         """Identifiability of the joint parameters at ``x`` (default the start values),
-        with the instrument parameters listed first so they enter the base first."""
+        with the instrument parameters listed first so they enter the base first.
+        """
         _, J, _ = self.evaluate(self.x0 if x is None else x)
         order = np.r_[np.arange(self.n_machine, len(self.names)), np.arange(self.n_machine)]
         return analyse_jacobian(J[:, order], tuple(self.names[i] for i in order))

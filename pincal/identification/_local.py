@@ -32,7 +32,7 @@ def _at_floor(problem: CalibrationProblem, cost: float, initial: float) -> bool:
 
 
 def _damped_step(A: np.ndarray, b: np.ndarray, mu: float) -> np.ndarray:
-    """argmin ‖A δ + b‖² + μ·Σ d_i δ_i², d = diag(AᵀA) + 1e-12·max (Marquardt scaling)."""
+    """Argmin ‖A δ + b‖² + μ·Σ d_i δ_i², d = diag(AᵀA) + 1e-12·max (Marquardt scaling)."""
     d = np.einsum("ij,ij->j", A, A)
     d = d + 1e-12 * max(float(d.max(initial=0.0)), 1e-300)
     A_aug = np.vstack([A, np.diag(np.sqrt(mu * d))])

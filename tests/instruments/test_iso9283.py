@@ -144,7 +144,7 @@ def test_cli_acceptance_before_and_after_and_from_data(tmp_path):
             str(cal),
             "--cycles",
             "8",
-            "--json",
+            "--out",
             str(out),
         ],
     )
@@ -161,7 +161,7 @@ def test_cli_acceptance_before_and_after_and_from_data(tmp_path):
             str(cal / "identification.json"),
             "--cycles",
             "8",
-            "--json",
+            "--out",
             str(out),
         ],
     )
@@ -190,7 +190,7 @@ def test_cli_acceptance_before_and_after_and_from_data(tmp_path):
     )
     data = write_measurements(tmp_path / "cycles.csv", m)
     res = runner.invoke(
-        main, ["acceptance", "stewart_6ups", "--data", str(data), "--json", str(out)]
+        main, ["acceptance", "stewart_6ups", "--data", str(data), "--out", str(out)]
     )
     assert res.exit_code == 0, res.output
     got = json.loads(out.read_text())["measured"]

@@ -16,13 +16,14 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+import scipy.linalg
 from click.testing import CliRunner
 
 from pincal.cli import main
 from pincal.identification import identify
 from pincal.io import read_commands, write_poses
 from pincal.measure import simulate_measurements
-from pincal.model import Mechanism, load_mechanism, parameters, sample_actuators
+from pincal.model import COMPONENTS, Mechanism, load_mechanism, parameters, sample_actuators
 from pincal.sensitivity import identification_jacobian
 
 ALL = ("x", "y", "z", "rx", "ry", "rz")
@@ -98,6 +99,27 @@ def invoke(*args: str) -> str:
     return res.stdout
 
 
+def controlled_components(mech: Mechanism) -> tuple[str, ...]:
+    """As many measured components as the machine has degrees of freedom: those best
+    moved by the actuators at home (column-pivoted QR of the actuator Jacobian)."""
+    comps = tuple(mech.measured_components)
+    if len(comps) <= mech.mobility:
+        return comps
+    rows = [COMPONENTS.index(c) for c in comps]
+    q0 = mech.actuators_of(mech.q_home)
+    T0, h, cols = mech.forward(q0), 1e-7, []
+    for k in range(len(q0)):
+        dq = np.zeros(len(q0))
+        dq[k] = h
+        T = mech.forward(q0 + dq)
+        twist = np.r_[T.translation - T0.translation, pin.log3(T0.rotation.T @ T.rotation)]
+        cols.append(twist[rows] / h)
+    J = np.stack(cols, axis=1)  # (components, actuators)
+    _, _, piv = scipy.linalg.qr(J.T, pivoting=True)
+    keep = sorted(piv[: mech.mobility])
+    return tuple(comps[i] for i in keep)
+
+
 def check_cli(
     model: str | Path, tmp_path: Path, poses: int = 30, param_tol: float | None = 1e-8
 ) -> dict:
@@ -154,7 +176,16 @@ def check_cli(
     targets = [actual.forward(r) for r in rows]
     write_poses(tmp_path / "targets.csv", targets, length_unit="m", angle_unit="rad")
     urdf = next((tmp_path / "cal").glob("*.urdf"))
-    invoke("compensate", urdf, "--targets", tmp_path / "targets.csv", "--out", tmp_path / "cmd.csv")
+    invoke(
+        "compensate",
+        urdf,
+        "--targets",
+        tmp_path / "targets.csv",
+        "--components",
+        ",".join(controlled_components(nominal)),
+        "--out",
+        tmp_path / "cmd.csv",
+    )
     idx, commands = read_commands(tmp_path / "cmd.csv", nominal)
     assert list(idx) == list(range(len(rows)))
     for q_act, T in zip(commands, targets, strict=True):
