@@ -15,6 +15,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from pincal.errors import ReportError
 from pincal.io._atomic import atomic_write_bytes
@@ -201,7 +202,18 @@ def write_report(
     html_path = atomic_write_bytes(out / f"{name}.html", html_text.encode("utf-8"))
     json_path = None
     if json_data is not None:
-        doc = {"title": title, **json_data, "sections": doc_sections}
+        doc = _finite({"title": title, **json_data, "sections": doc_sections})
         text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False)
         json_path = atomic_write_bytes(out / f"{name}.json", (text + "\n").encode("utf-8"))
     return ReportFiles(markdown=md_path, html=html_path, json=json_path)
+
+
+def _finite(value: Any) -> Any:
+    """``value`` with every NaN or infinite float replaced by None (JSON has neither)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    return value
