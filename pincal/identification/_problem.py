@@ -30,7 +30,6 @@ import pinocchio as pin
 
 from pincal.errors import ClosureError, ConvergenceError, MeasurementError, ParameterError
 from pincal.measure._measurements import Measurements, NoiseModel
-from pincal.model._closures import measurement_residual
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._batch_jacobian import sensitivities_batch
@@ -162,8 +161,10 @@ class CalibrationProblem:
         return self._cache[1]
 
     def cost(self, values: np.ndarray) -> float:
-        """0.5·‖whitened residual‖² at ``values``; +inf when the model cannot be assembled
-        or a pose cannot be solved."""
+        """0.5·‖whitened residual‖² at ``values``.
+
+        Returns +inf when the model cannot be assembled or a pose cannot be solved.
+        """
         try:
             r, _, _ = self.evaluate(values, jacobian=False)
         except TRIAL_FAILURES:

@@ -66,7 +66,7 @@ def _skew(v: np.ndarray) -> np.ndarray:
 
 
 def _sinc_terms(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³ with Taylor series near 0 (arrays (N,))."""
+    """Sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³ with Taylor series near 0 (arrays (N,))."""
     small = theta < 1e-4
     t = np.where(small, 1.0, theta)
     t2 = theta * theta

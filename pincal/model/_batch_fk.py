@@ -52,9 +52,14 @@ def closure_jacobian_batch(
     """(N, c.size, n) derivative of :func:`closure_residual_batch` given local twists.
 
     Args:
-        c: the closure; Ra, pa, Rb, pb: placements (N, 3, 3), (N, 3) of its frames.
-        Ta, Tb: (N, 6, n) local twists ``[v; ω]`` of frames a and b per unit of each of
-            n variables (LOCAL frame Jacobians or parameter sensitivities).
+        c: the closure.
+        Ra: (N, 3, 3) world rotations of the closure's frame a.
+        pa: (N, 3) world positions of frame a [m].
+        Rb: (N, 3, 3) world rotations of the closure's frame b.
+        pb: (N, 3) world positions of frame b [m].
+        Ta: (N, 6, n) local twists ``[v; ω]`` of frame a per unit of each of n
+            variables (LOCAL frame Jacobians or parameter sensitivities) [m, rad].
+        Tb: (N, 6, n) local twists ``[v; ω]`` of frame b, as ``Ta``.
     """
     if c.is_point:
         return mm(Rb, Tb[:, :3]) - mm(Ra, Ta[:, :3])

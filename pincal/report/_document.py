@@ -143,7 +143,8 @@ def write_report(
     Args:
         directory: output folder (created).
         sections: the report's sections.
-        title: page title; name: file stem.
+        title: page title.
+        name: file stem of the written files (``<name>.md``, ``<name>.html``, ...).
         markdown_images: link the images from the Markdown (they must then stay).
         json_data: when given, ``<name>.json`` is written with it plus ``title`` and the
             sections' text and tables (the same numbers as the HTML and Markdown).

@@ -125,6 +125,7 @@ def plot_errors_before_after(
         after: error magnitudes, shape (m,) [m or rad] (the same poses).
         unit: display unit (see module docstring).
         path: PNG file to write.
+        title: chart title.
     """
     b = _vector(before, "before")
     a = _vector(after, "after")
@@ -205,6 +206,7 @@ def plot_index_history(
         history: ``{"O1": [...], "O2": [...], ...}`` (each shape (iterations,)) or
             one sequence.
         path: PNG file to write.
+        title: figure title.
     """
     series = dict(history) if isinstance(history, Mapping) else {"index": history}
     if not series:
@@ -274,7 +276,9 @@ def plot_parameters(
         path: PNG file to write (required).
         kinds: ``"length"`` or ``"angle"`` per parameter; by default inferred from
             the dof (``rx, ry, rz`` → angle, otherwise length).
-        length_unit, angle_unit: display units of the two panels.
+        length_unit: display unit of the length panel (e.g. ``"mm"``).
+        angle_unit: display unit of the angle panel (e.g. ``"mrad"``).
+        title: figure title.
     """
     if path is None:
         raise ReportError("path is required")
