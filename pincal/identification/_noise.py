@@ -156,7 +156,8 @@ def weighted_fit(
     loss, f_scale = _loss(opts)
     local = entry.name in ("gauss-newton", "lm")
     x, rounds, iterations, history = x0, 0, 0, []
-    converged, red = not estimating, {}
+    converged = not estimating
+    red: dict[str, float] = {}
     first, evaluations, rejected = None, 0, 0
     while True:
         out = entry.solve(model, x, free, opts, progress)

@@ -15,6 +15,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import SupportsFloat, cast
 
 from pincal.errors import ReportError
 from pincal.io._atomic import atomic_write_bytes
@@ -63,7 +64,7 @@ def _json_cell(value: object) -> object:
     if isinstance(value, (int, float)):
         return float(value) if math.isfinite(float(value)) else None
     try:
-        f = float(value)  # numpy scalars
+        f = float(cast(SupportsFloat, value))  # numpy scalars
     except (TypeError, ValueError):
         return str(value)
     return f if math.isfinite(f) else None

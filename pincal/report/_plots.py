@@ -89,7 +89,7 @@ def _save(fig: Figure, path: str | os.PathLike) -> Path:
     buffer = io.BytesIO()
     FigureCanvasAgg(fig)
     fig.savefig(buffer, format="png", dpi=110)
-    return atomic_write_bytes(path, buffer.getvalue())
+    return atomic_write_bytes(Path(path), buffer.getvalue())
 
 
 def _figure(width: float = 7.0, height: float = 4.0) -> Figure:
@@ -185,8 +185,8 @@ def plot_error_histogram(
     ax = fig.add_subplot()
     if log_x:
         ax.set_xscale("log")
-    ax.hist(b * factor, edges, color=_BEFORE, alpha=0.6, label=f"before (n = {b.size})")
-    ax.hist(a * factor, edges, color=_AFTER, alpha=0.6, label=f"after (n = {a.size})")
+    ax.hist(b * factor, edges.tolist(), color=_BEFORE, alpha=0.6, label=f"before (n = {b.size})")
+    ax.hist(a * factor, edges.tolist(), color=_AFTER, alpha=0.6, label=f"after (n = {a.size})")
     ax.set_xlabel(f"error [{label}]")
     ax.set_ylabel("count")
     ax.set_title(title)
