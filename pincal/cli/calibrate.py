@@ -12,9 +12,10 @@ from pincal.identification import METHODS
 
 
 def result_json(result, data_path: str, urdf: str | None = None) -> dict:
-    """The identification result as ``identification.json`` (SI values and std), via
-    :meth:`pincal.identification.IdentificationResult.to_dict` with the data file (and
-    the calibrated URDF) as annotations.
+    """The identification result as ``identification.json`` (SI values and std).
+
+    Built via :meth:`pincal.identification.IdentificationResult.to_dict` with the data
+    file (and the calibrated URDF) as annotations.
     """
     notes = {"data": data_path}
     if urdf is not None:

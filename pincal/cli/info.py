@@ -13,9 +13,11 @@ if TYPE_CHECKING:
 
 
 def structure_lines(mech: Mechanism) -> list[str]:
-    """The model's structure as text lines: joints, closures (rank at home), actuated,
-    passive and idle joints, mobility, measured frame (and the automatic candidates),
-    and the notes about joint ranges and kinds.
+    """The model's structure as text lines.
+
+    Lists joints, closures (rank at home), actuated, passive and idle joints, mobility,
+    measured frame (and the automatic candidates), and the notes about joint ranges
+    and kinds.
     """
     import numpy as np
 
@@ -150,8 +152,9 @@ def info(model: str, preset: str | None, instrument: str | None, as_json: bool) 
 
 
 def reduction_line(preset: str, rank: int, n: int) -> str:
-    """The one line `pincal poses` and `pincal calibrate` print when they reduce a
-    rank-deficient preset to its identifiable base set.
+    """The one line `pincal poses` and `pincal calibrate` print when reducing a preset.
+
+    Printed when a rank-deficient preset is reduced to its identifiable base set.
     """
     return (
         f"pincal: preset {preset!r}: {rank} of {n} parameters identifiable; using its "

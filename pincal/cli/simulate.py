@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from pincal.cli.common import fail_cleanly
+
+if TYPE_CHECKING:
+    from pincal.measure import InstrumentData, Measurements
 
 
 def _parse_errors(spec: str) -> int | None:
@@ -151,18 +155,22 @@ def simulate(
         q_act = sample_actuators(nominal, n_random, rng)
     click.echo(f"… measuring {len(q_act)} poses of the actual machine", err=True)
     extra = {}
+    meas: Measurements | InstrumentData
+    components: list[str]
     if instrument is not None:
         from pincal.identification import default_instrument
         from pincal.io import write_instrument_data
         from pincal.measure import simulate_instrument
 
         inst, theta, ids = default_instrument(nominal, instrument, q_act, std=pos_mm * 1e-3)
-        meas = simulate_instrument(actual, inst, theta, q_act, rng, plane=ids)
-        path = write_instrument_data(out, meas, length_unit=length_unit)
+        readings = simulate_instrument(actual, inst, theta, q_act, rng, plane=ids)
+        path = write_instrument_data(out, readings, length_unit=length_unit)
+        meas, components = readings, [readings.kind]
         extra = {"instrument": dict(zip(inst.parameter_names, map(float, theta), strict=True))}
     else:
-        meas = simulate_measurements(actual, q_act, NoiseModel(pos_mm, ori_mrad), rng)
-        path = write_measurements(out, meas, length_unit=length_unit)
+        poses = simulate_measurements(actual, q_act, NoiseModel(pos_mm, ori_mrad), rng)
+        path = write_measurements(out, poses, length_unit=length_unit)
+        meas, components = poses, list(poses.components)
     truth = {
         "model": nominal.name,
         "preset": preset,
@@ -184,7 +192,7 @@ def simulate(
                     "model": nominal.name,
                     "preset": preset,
                     "poses": len(meas),
-                    "components": list(meas.components),
+                    "components": components,
                 }
             )
         )

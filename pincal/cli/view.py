@@ -18,6 +18,7 @@ import json
 import math
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, TypedDict
 
 import click
 import numpy as np
@@ -26,8 +27,22 @@ from pincal.cli.common import fail_cleanly
 from pincal.errors import ModelFileError
 from pincal.io import read_pose_rows
 
+if TYPE_CHECKING:
+    from pincal.viz import Arrow
+
 #: most poses drawn (ghost copies multiply the page size)
 MAX_POSES = 200
+
+
+class _ViewOptions(TypedDict):
+    """Keywords shared by :func:`pincal.viz.static_html` and :func:`pincal.viz.live`."""
+
+    frame: str | None
+    ghosts: bool
+    animate: bool
+    arrows: list[Arrow]
+    arrow_scale: float | None
+    up: str
 
 
 def _calibrated_mechanism(spec: Path):
@@ -141,7 +156,7 @@ def view(
         rows = sample_actuators(mech, n_random or 5, np.random.default_rng(seed))
     qs = mech.configurations(rows)
 
-    arrows = []
+    arrows: list[Arrow] = []
     if calibrated is not None:
         cal = _calibrated_mechanism(calibrated)
         if tuple(cal.actuated) != tuple(mech.actuated) or (
@@ -158,14 +173,14 @@ def view(
             arrows.append(viz.Arrow(p_nominal, p_calibrated, "#b0008c", f"pose {k}"))
 
     up_dir = str(mech.sidecar.view_up or "+z") if up == "auto" else up
-    options = dict(
-        frame=mech.measured_frame,
-        ghosts=ghosts,
-        animate=animate,
-        arrows=arrows,
-        arrow_scale=arrow_scale,
-        up=up_dir,
-    )
+    options: _ViewOptions = {
+        "frame": mech.measured_frame,
+        "ghosts": ghosts,
+        "animate": animate,
+        "arrows": arrows,
+        "arrow_scale": arrow_scale,
+        "up": up_dir,
+    }
     summary: dict = {"model": mech.name, "poses": len(rows), "up": up_dir}
     if arrows:
         lengths = [float(np.linalg.norm(a.end - a.start)) * 1e3 for a in arrows]

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from pincal.errors import ConvergenceError, MeasurementError, MobilityError, ModelFileError
 from pincal.model import COMPONENTS, Mechanism
@@ -53,7 +54,7 @@ class Compensation:
         return self.q_act[self.reachable]
 
 
-def poses_from_array(poses: np.ndarray) -> list[pin.SE3]:
+def poses_from_array(poses: ArrayLike) -> list[pin.SE3]:
     """Poses from an (m, 6) array ``[x, y, z [m], rx, ry, rz [rad, rotation vector]]``.
 
     Args:

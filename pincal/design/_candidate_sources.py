@@ -1,5 +1,7 @@
-"""Candidate generators: joint-space grids (seed 000), random workspace poses and
-orthogonal arrays over the workspace pose factors (seed 001), plus spec strings.
+"""Candidate generators: joint-space grids, random workspace poses, orthogonal arrays.
+
+Joint-space grids (seed 000), random workspace poses and orthogonal arrays over the
+workspace pose factors (seed 001), plus spec strings.
 
 Each pushes actuator rows through :func:`pincal.design._candidates.evaluate_candidates`.
 """

@@ -147,7 +147,10 @@ def evaluate_candidates(
         q_act_rows: actuator rows (N, n_act) [m, rad].
         source: label stored in the result.
         in_workspace: filter by the sidecar pose workspace.
-        tried, rejected: counts from an earlier stage (e.g. failed IK) to add to.
+        tried: total number of rows tried, counting an earlier stage (e.g. IK) that
+            produced these rows (None = the number of rows given).
+        rejected: rejection counts by reason (``"no FK"``, ``"singular"``, ...) from an
+            earlier stage (e.g. failed IK), added to this stage's counts.
         progress: callback ``(done, N)`` after each row.
 
     Returns:

@@ -187,11 +187,25 @@ def identify(
             ``"qpso-stepwise"`` or ``"step-planned"`` (see ``METHODS``).
         options: the method's options dataclass (``GaussNewtonOptions``, ``LMOptions``,
             ``QPSOOptions``, ``StepPlanningOptions``; default: its defaults).
-        initial, fit, reduce, noise: see :class:`IdentificationProblem` (mechanism form
-            only); without a declared noise, it is estimated from the residuals.
+        initial: (n,) start values [m, rad] (mechanism form only; None = nominal); see
+            :class:`IdentificationProblem`.
+        fit: names of the parameters to fit (mechanism form only; None = all).
+        reduce: fit only the identifiable base set of ``fit`` (mechanism form only);
+            False raises when it is rank-deficient.
+        noise: declared instrument noise (mechanism form only; a ``NoiseModel`` or
+            ``{"position": mm, "orientation": mrad}``); without a declared noise, it is
+            estimated from the residuals.
         progress: optional callback ``(iteration, cost)``.
-        loss, regularization, max_iterations, xtol, qpso: pincal 0.1 keywords, turned
-            into the method's options (ignored, as in 0.1, by methods they do not apply to).
+        loss: pincal 0.1 keyword: robust loss of ``"lm"`` (see ``LMOptions.loss``);
+            ignored, as in 0.1, by methods it does not apply to.
+        regularization: pincal 0.1 keyword: Tikhonov weight λ ≥ 0 of ``"gauss-newton"``
+            (whitened units); ignored by other methods.
+        max_iterations: pincal 0.1 keyword: iteration limit of ``"gauss-newton"`` and
+            ``"lm"``; ignored by other methods.
+        xtol: pincal 0.1 keyword: relative step tolerance of ``"gauss-newton"`` and
+            ``"lm"``; ignored by other methods.
+        qpso: pincal 0.1 keyword: the ``QPSOOptions`` of ``"qpso"`` /
+            ``"qpso-stepwise"`` (give it or ``options``, not both).
 
     Returns:
         IdentificationResult.

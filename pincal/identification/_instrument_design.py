@@ -54,9 +54,13 @@ def instrument_blocks(
     """Joint Jacobian blocks of the readings at the nominal machine.
 
     Args:
-        mech, params: nominal mechanism and its n parameters.
-        instrument, theta: the instrument and its k parameter values.
-        q_act_rows: (m, n_act) actuator rows [m, rad]; plane: (m,) plane ids.
+        mech: nominal mechanism.
+        params: its n parameters.
+        instrument: the instrument whose readings are modelled.
+        theta: (k,) instrument parameter values [m, rad] (see
+            :attr:`Instrument.parameter_names`).
+        q_act_rows: (m, n_act) actuator rows [m, rad].
+        plane: (m,) plane ids of a plane instrument (None for other kinds).
 
     Returns:
         J (m, 1, n + k) of dv/d[x; θ], tool positions P (m, 3) [m], position
@@ -98,8 +102,10 @@ def default_instrument(
 
 
 def _span(M: np.ndarray, tol: float = 1e-6, absolute: bool = False) -> np.ndarray:
-    """Orthonormal basis (columns) of the column span of M (singular values above
-    ``tol``, relative to the largest unless ``absolute``).
+    """Orthonormal basis (columns) of the column span of M.
+
+    Keeps the singular directions with singular values above ``tol``, relative to the
+    largest unless ``absolute``.
     """
     if M.size == 0:
         return np.zeros((M.shape[0], 0))
@@ -236,10 +242,12 @@ def instrument_identifiability(
     """Identifiability of ``params`` by one instrument over random poses, in words.
 
     Args:
-        mech, params: nominal mechanism and its n parameters.
+        mech: nominal mechanism.
+        params: its n parameters.
         kind: an instrument kind (a typical set-up, :func:`default_instrument`) or an
             :class:`Instrument` with ``theta``.
-        n_poses: random workspace poses; rng: generator or seed.
+        n_poses: number of random workspace poses.
+        rng: random generator or seed for the poses.
         theta: the instrument's parameter values (with an Instrument).
 
     Raises:
@@ -361,8 +369,10 @@ def instrument_candidates(
 
 
 def instrument_cramer_rao(J_blocks: np.ndarray, std: float, base: np.ndarray) -> np.ndarray:
-    """Cramér–Rao covariance (b, b) of the base parameters ``base`` (indices into the
-    n + k columns) from joint reading blocks (m, 1, n + k) and the reading noise [m].
+    """Cramér–Rao covariance (b, b) of the base parameters ``base``.
+
+    ``base`` indexes the n + k columns of the joint reading blocks (m, 1, n + k);
+    ``std`` is the reading noise [m].
     """
     J = np.asarray(J_blocks, dtype=float).reshape(len(J_blocks), -1)[:, base] / std
     return crb_covariance(J)

@@ -196,8 +196,9 @@ class InstrumentProblem:
         return r_w, (np.vstack(J_all) if jacobian else None), raws
 
     def analyse(self, x: np.ndarray | None = None) -> Identifiability:
-        """Identifiability of the joint parameters at ``x`` (default the start values),
-        with the instrument parameters listed first so they enter the base first.
+        """Identifiability of the joint parameters at ``x`` (default the start values).
+
+        The instrument parameters are listed first so they enter the base first.
         """
         _, J, _ = self.evaluate(self.x0 if x is None else x)
         order = np.r_[np.arange(self.n_machine, len(self.names)), np.arange(self.n_machine)]
@@ -265,9 +266,12 @@ def identify_instruments(
     """Identify machine and instrument parameters jointly from several datasets.
 
     Args:
-        mech: nominal mechanism; params: the n machine parameters.
+        mech: nominal mechanism.
+        params: the n machine parameters.
         datasets: :class:`Measurements` and/or :class:`InstrumentData` (any mix).
-        method: ``"gauss-newton"`` or ``"lm"``; options: that solver's options.
+        method: ``"gauss-newton"`` or ``"lm"``.
+        options: that solver's options dataclass (``GaussNewtonOptions`` or
+            ``LMOptions``; None = its defaults).
         labels: names of the datasets (prefix of the instrument parameter names).
 
     Returns:

@@ -58,8 +58,10 @@ def gauss_newton(
 
     Args:
         problem: residual model (n parameters).
-        x0: (n,) start values [SI]; free: indices of the parameters to fit.
-        opts: options; progress: optional ``(iteration, cost)`` callback.
+        x0: (n,) start values [SI].
+        free: (p,) integer indices into the n parameters of those to fit.
+        opts: options.
+        progress: optional ``(iteration, cost)`` callback.
 
     Returns:
         SolverOutcome with :class:`LocalSolverExtras`.
@@ -177,8 +179,11 @@ def levenberg_marquardt(
     than 1e-9 of the cost).
 
     Args:
-        problem: residual model; x0: (n,) start [SI]; free: fitted indices.
-        opts: options; progress: optional ``(evaluation, cost)`` callback.
+        problem: residual model (n parameters).
+        x0: (n,) start values [SI].
+        free: (p,) integer indices into the n parameters of those to fit.
+        opts: options.
+        progress: optional ``(evaluation, cost)`` callback.
     """
     history: list[float] = []
     cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}

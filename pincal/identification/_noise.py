@@ -52,8 +52,9 @@ def initial_weights(
     first fit weighs the blocks as their model errors; the estimation then refines it.
 
     Args:
-        model: residual model; J0: (N, n) its whitened Jacobian at the start;
-            raw0: (m, k) raw residuals at the start [m, rad].
+        model: residual model.
+        J0: (N, n) its whitened Jacobian at the start values, N = m·k.
+        raw0: (m, k) raw residuals at the start values [m, rad].
 
     Returns:
         The (re-weighted) model and J0 in its weights; unchanged when noise is known.
@@ -79,8 +80,8 @@ def variance_components(
 
     Args:
         model: the residual model at its current weights.
-        raw: (m, k) raw residuals [m, rad]; J_w: (N, p) whitened Jacobian of the fitted
-            parameters, N = m·k.
+        raw: (m, k) raw residuals [m, rad].
+        J_w: (N, p) whitened Jacobian of the fitted parameters, N = m·k.
         loss: with a robust loss, equations beyond 3σ are left out.
 
     Returns:
@@ -139,8 +140,11 @@ def weighted_fit(
 
     Args:
         model: residual model (re-weighted by :func:`initial_weights` when estimating).
-        entry: the registered solver; x0: (n,) start [SI]; free: fitted indices;
-            opts: its options; progress: optional callback.
+        entry: the registered solver.
+        x0: (n,) start values [SI].
+        free: (p,) integer indices into the n parameters of those to fit.
+        opts: the solver's options dataclass.
+        progress: optional ``(iteration, cost)`` callback passed to the solver.
 
     Returns:
         (outcome over all rounds, the final residual model, its :class:`Weighting`).
@@ -152,7 +156,8 @@ def weighted_fit(
     loss, f_scale = _loss(opts)
     local = entry.name in ("gauss-newton", "lm")
     x, rounds, iterations, history = x0, 0, 0, []
-    converged, red = not estimating, {}
+    converged = not estimating
+    red: dict[str, float] = {}
     first, evaluations, rejected = None, 0, 0
     while True:
         out = entry.solve(model, x, free, opts, progress)

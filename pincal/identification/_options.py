@@ -41,8 +41,9 @@ def check_int(owner: str, name: str, value: Any, low: int, high: int | None = No
 def check_real(
     owner: str, name: str, value: Any, low: float, high: float = math.inf, *, open_low=False
 ) -> None:
-    """Raise SolverOptionError unless ``value`` is a finite real in [low, high]
-    ((low, high] with ``open_low``).
+    """Raise SolverOptionError unless ``value`` is a finite real in [low, high].
+
+    With ``open_low`` the interval is (low, high].
     """
     ok = isinstance(value, (int, float, np.floating)) and not isinstance(value, bool)
     ok = ok and math.isfinite(float(value)) and value <= high

@@ -161,8 +161,9 @@ class CalibrationProblem:
         return self._cache[1]
 
     def cost(self, values: np.ndarray) -> float:
-        """0.5·‖whitened residual‖² at ``values``; +inf when the model cannot be assembled
-        or a pose cannot be solved.
+        """0.5·‖whitened residual‖² at ``values``.
+
+        Returns +inf when the model cannot be assembled or a pose cannot be solved.
         """
         try:
             r, _, _ = self.evaluate(values, jacobian=False)

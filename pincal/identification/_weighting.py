@@ -138,7 +138,8 @@ def robust_weights(loss: str, r_w: np.ndarray, f_scale: float) -> np.ndarray:
 
     Args:
         loss: ``linear``, ``huber``, ``soft_l1``, ``cauchy`` or ``arctan``.
-        r_w: whitened residuals [σ]; f_scale: the loss' soft margin [σ].
+        r_w: whitened residuals [σ] (any shape).
+        f_scale: the loss' soft margin [σ].
     """
     z = (np.asarray(r_w, dtype=float) / f_scale) ** 2 if loss != "linear" else None
     if z is None:

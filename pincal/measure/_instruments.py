@@ -264,7 +264,8 @@ def initial_instrument_values(
     ``data.initial`` gives θ0.
 
     Args:
-        data: the readings; positions: (m, 3) nominal tool positions [m].
+        data: the readings.
+        positions: (m, 3) nominal tool positions [m].
 
     Returns:
         (instrument with plane normals filled in, θ0 (k,)).
@@ -320,7 +321,9 @@ def simulate_instrument(
 
     Args:
         actual: the machine measured (simulation truth).
-        instrument: the instrument; theta: (k,) its true parameters.
+        instrument: the instrument.
+        theta: (k,) its true parameter values [m, rad] (see
+            :attr:`Instrument.parameter_names`).
         q_act_rows: (m, n_act) actuator values [m, rad].
         rng: generator for the noise (default: a fresh one).
         plane: (m,) plane ids (``plane`` kind).

@@ -84,7 +84,9 @@ def iso_test_cube(
     Args:
         mech: the (nominal) machine; its home orientation is commanded.
         n_samples: random reachable poses sampled for the centre and the initial size.
-        rng: generator or seed; inset: (0.08..0.12) fraction of the plane diagonal.
+        rng: random generator or seed.
+        inset: (0.08..0.12) fraction of the plane diagonal by which the test points
+            P2..P5 are set in from the cube corners.
         tol: edge-length resolution of the bisection [m].
 
     Raises:
@@ -217,7 +219,8 @@ def pose_characteristics(
 
     Args:
         commanded: P commanded poses.
-        positions: (P, n, 3) attained positions [m]; rotations: (P, n, 3, 3).
+        positions: (P, n, 3) attained positions [m].
+        rotations: (P, n, 3, 3) attained orientations (rotation matrices).
 
     Raises:
         MeasurementError: shapes that do not match, or fewer than 2 cycles.

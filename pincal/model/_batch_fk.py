@@ -14,6 +14,8 @@ so results and errors are those of the pose-by-pose path.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Literal, overload
+
 import numpy as np
 import pinocchio as pin
 
@@ -52,9 +54,14 @@ def closure_jacobian_batch(
     """(N, c.size, n) derivative of :func:`closure_residual_batch` given local twists.
 
     Args:
-        c: the closure; Ra, pa, Rb, pb: placements (N, 3, 3), (N, 3) of its frames.
-        Ta, Tb: (N, 6, n) local twists ``[v; ω]`` of frames a and b per unit of each of
-            n variables (LOCAL frame Jacobians or parameter sensitivities).
+        c: the closure.
+        Ra: (N, 3, 3) world rotations of the closure's frame a.
+        pa: (N, 3) world positions of frame a [m].
+        Rb: (N, 3, 3) world rotations of the closure's frame b.
+        pb: (N, 3) world positions of frame b [m].
+        Ta: (N, 6, n) local twists ``[v; ω]`` of frame a per unit of each of n
+            variables (LOCAL frame Jacobians or parameter sensitivities) [m, rad].
+        Tb: (N, 6, n) local twists ``[v; ω]`` of frame b, as ``Ta``.
     """
     if c.is_point:
         return mm(Rb, Tb[:, :3]) - mm(Ra, Ta[:, :3])
@@ -70,6 +77,15 @@ def closure_jacobian_batch(
 
 class BatchTracking(BranchTracking):
     """Batched loop closing and kinematics (mixed into Mechanism)."""
+
+    if TYPE_CHECKING:  # provided by Mechanism, which mixes this class in
+
+        def configuration(
+            self,
+            q_act: np.ndarray,
+            q_guess: np.ndarray | None = None,
+            pose_index: int | None = None,
+        ) -> np.ndarray: ...
 
     @property
     def batch_model(self) -> BatchModel:
@@ -104,6 +120,16 @@ class BatchTracking(BranchTracking):
     @property
     def _batchable(self) -> bool:
         return bool(self.closures) and self.home_branch != 0.0 and self.batch_model.supported
+
+    @overload
+    def closure_terms_batch(
+        self, bk: BatchKinematics, jacobian: Literal[True] = ...
+    ) -> tuple[np.ndarray, np.ndarray]: ...
+
+    @overload
+    def closure_terms_batch(
+        self, bk: BatchKinematics, jacobian: bool
+    ) -> tuple[np.ndarray, np.ndarray | None]: ...
 
     def closure_terms_batch(
         self, bk: BatchKinematics, jacobian: bool = True
@@ -266,9 +292,9 @@ class BatchTracking(BranchTracking):
             return out, bk
         start = np.tile(self.q_home, (N, 1)) if G is None else G
         Q, ok, bk = self._solve_batch(rows, start)
-        for i in np.nonzero(~ok)[0]:
-            guess = G[i] if G is not None else (Q[i - 1] if i else self.q_home)
-            Q[i] = self.configuration(rows[i], guess, pose_index=int(i))
+        for j in np.nonzero(~ok)[0]:
+            guess = G[j] if G is not None else (Q[j - 1] if j else self.q_home)
+            Q[j] = self.configuration(rows[j], guess, pose_index=int(j))
         redo = np.nonzero(~ok)[0]
         if redo.size:
             fix = self.batch_model.kinematics(Q[redo])

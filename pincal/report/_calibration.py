@@ -12,6 +12,7 @@ import math
 import os
 import tempfile
 from pathlib import Path
+from typing import SupportsFloat, cast
 
 import numpy as np
 
@@ -130,7 +131,9 @@ _SUMMARY_UNITS = ("µm", "µm", "µrad", "µrad")
 
 def _r(value_mm: object) -> float:
     """A summary value [mm or mrad] in µm or µrad (NaN when absent)."""
-    return float("nan") if value_mm is None else round(float(value_mm) * 1e3, 3)
+    if value_mm is None:
+        return float("nan")
+    return round(float(cast(SupportsFloat, value_mm)) * 1e3, 3)
 
 
 def _summary(result: IdentificationResult) -> Section:

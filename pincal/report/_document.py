@@ -15,7 +15,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, SupportsFloat, cast
 
 from pincal.errors import ReportError
 from pincal.io._atomic import atomic_write_bytes
@@ -64,7 +64,7 @@ def _json_cell(value: object) -> object:
     if isinstance(value, (int, float)):
         return float(value) if math.isfinite(float(value)) else None
     try:
-        f = float(value)  # numpy scalars
+        f = float(cast(SupportsFloat, value))  # numpy scalars
     except (TypeError, ValueError):
         return str(value)
     return f if math.isfinite(f) else None
@@ -144,7 +144,8 @@ def write_report(
     Args:
         directory: output folder (created).
         sections: the report's sections.
-        title: page title; name: file stem.
+        title: page title.
+        name: file stem of the written files (``<name>.md``, ``<name>.html``, ...).
         markdown_images: link the images from the Markdown (they must then stay).
         json_data: when given, ``<name>.json`` is written with it plus ``title`` and the
             sections' text and tables (the same numbers as the HTML and Markdown).

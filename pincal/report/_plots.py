@@ -89,7 +89,7 @@ def _save(fig: Figure, path: str | os.PathLike) -> Path:
     buffer = io.BytesIO()
     FigureCanvasAgg(fig)
     fig.savefig(buffer, format="png", dpi=110)
-    return atomic_write_bytes(path, buffer.getvalue())
+    return atomic_write_bytes(Path(path), buffer.getvalue())
 
 
 def _figure(width: float = 7.0, height: float = 4.0) -> Figure:
@@ -125,6 +125,7 @@ def plot_errors_before_after(
         after: error magnitudes, shape (m,) [m or rad] (the same poses).
         unit: display unit (see module docstring).
         path: PNG file to write.
+        title: chart title.
     """
     b = _vector(before, "before")
     a = _vector(after, "after")
@@ -184,8 +185,8 @@ def plot_error_histogram(
     ax = fig.add_subplot()
     if log_x:
         ax.set_xscale("log")
-    ax.hist(b * factor, edges, color=_BEFORE, alpha=0.6, label=f"before (n = {b.size})")
-    ax.hist(a * factor, edges, color=_AFTER, alpha=0.6, label=f"after (n = {a.size})")
+    ax.hist(b * factor, edges.tolist(), color=_BEFORE, alpha=0.6, label=f"before (n = {b.size})")
+    ax.hist(a * factor, edges.tolist(), color=_AFTER, alpha=0.6, label=f"after (n = {a.size})")
     ax.set_xlabel(f"error [{label}]")
     ax.set_ylabel("count")
     ax.set_title(title)
@@ -205,6 +206,7 @@ def plot_index_history(
         history: ``{"O1": [...], "O2": [...], ...}`` (each shape (iterations,)) or
             one sequence.
         path: PNG file to write.
+        title: figure title.
     """
     series = dict(history) if isinstance(history, Mapping) else {"index": history}
     if not series:
@@ -274,7 +276,9 @@ def plot_parameters(
         path: PNG file to write (required).
         kinds: ``"length"`` or ``"angle"`` per parameter; by default inferred from
             the dof (``rx, ry, rz`` → angle, otherwise length).
-        length_unit, angle_unit: display units of the two panels.
+        length_unit: display unit of the length panel (e.g. ``"mm"``).
+        angle_unit: display unit of the angle panel (e.g. ``"mrad"``).
+        title: figure title.
     """
     if path is None:
         raise ReportError("path is required")

@@ -231,7 +231,8 @@ def closure_breaking(
     closure of a planar loop and an out-of-plane parameter, say) it breaks closure.
 
     Args:
-        mech: nominal mechanism; params: the n parameters.
+        mech: nominal mechanism.
+        params: the n parameters.
         q_act_rows: (m, n_act) actuator values [m, rad].
         values: (n,) parameter values (default zeros).
 
