@@ -24,7 +24,7 @@ def result_json(result, data_path: str, urdf: str | None = None) -> dict:
 
 
 def format_report(doc: dict) -> str:
-    """Human-readable identification report (mm / mrad)."""
+    """Human-readable identification report: values and 2σ in µm / µrad (as report.md)."""
     lines = [
         f"pincal calibration of {doc['model']} (preset {doc['preset']}, {doc['method']})",
         f"data: {doc['data']} ({doc['poses']} poses)",
@@ -34,11 +34,19 @@ def format_report(doc: dict) -> str:
         f"{doc['identifiability']['parameters']} parameters",
         *[f"  {t}" for t in doc["identifiability"]["explanation"]],
         "",
-        f"{'parameter':32s} {'value':>14s} {'± std':>12s}",
     ]
+    w = doc.get("weighting") or {}
+    if w.get("position_std") is not None or w.get("orientation_std") is not None:
+        pos, ori = w.get("position_std"), w.get("orientation_std")
+        parts = [f"position {pos * 1e6:.3f} µm" if pos is not None else "",
+                 f"orientation {ori * 1e6:.3f} µrad" if ori is not None else ""]  # fmt: skip
+        lines.append(f"noise (1σ, {w.get('source', '?')}): " + ", ".join(x for x in parts if x))
+    header = f"{'parameter':32s} {'value':>14s} {'2σ':>12s}  (µm for lengths, µrad for angles)"
+    lines += ["", header]
     for p in doc["parameters"]:
-        scale, unit = (1e3, "mm") if p["unit"] == "m" else (1e3, "mrad")
-        lines.append(f"{p['name']:32s} {p['value'] * scale:+14.6f} {p['std'] * scale:12.6f} {unit}")
+        unit = "µm" if p["unit"] == "m" else "µrad"
+        two_sigma = 2 * p["std"] * 1e6 if p["std"] is not None else float("nan")
+        lines.append(f"{p['name']:32s} {p['value'] * 1e6:+14.3f} {two_sigma:12.3f}  {unit}")
     lines.append("")
     for when in ("before", "after"):
         s = doc["residuals"][when]

@@ -54,7 +54,7 @@ def test_campaign_end_to_end(model, tmp_path):
         os.chdir(cwd)
     assert sorted(p.name for p in (tmp_path / "cal").iterdir() if p.is_file()) == sorted(
         ["calibrated.urdf", "calibrated.yaml", "calibration.json", "identification.json",
-         "report.txt", "report.html", "report.md"]
+         "report.txt", "report.html", "report.md", "report.json"]
     )  # fmt: skip
     expected_components = {"hexaslide_6pus": 6, "wedge3": 3}[model]
     assert len(k["components"]) == expected_components
