@@ -30,11 +30,12 @@ def format_report(doc: dict) -> str:
         f"data: {doc['data']} ({doc['poses']} poses)",
         f"solver: {doc['message']} after {doc['iterations']} iterations; "
         f"reduced chi2 {doc['reduced_chi2']:.4g}",
-        f"identifiable: {doc['identifiability']['rank']} of "
-        f"{doc['identifiability']['parameters']} parameters",
-        *[f"  {t}" for t in doc["identifiability"]["explanation"]],
-        "",
     ]
+    ident = doc.get("identifiability")
+    if ident:
+        lines.append(f"identifiable: {ident['rank']} of {ident['parameters']} parameters")
+        lines += [f"  {t}" for t in ident["explanation"]]
+    lines.append("")
     w = doc.get("weighting") or {}
     if w.get("position_std") is not None or w.get("orientation_std") is not None:
         pos, ori = w.get("position_std"), w.get("orientation_std")
@@ -121,20 +122,14 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
       pincal calibrate hexaslide_6pus --data m.csv --noise 0.01,0.02 --out cal/
       pincal calibrate wedge3 --data m.csv --params patent --method lm --loss huber --out cal/
     """
-    import numpy as np
-
-    from pincal.cli.info import reduction_line
-    from pincal.identification import LMOptions, identify
     from pincal.io import (
         CALIBRATED_SIDECAR,
         CALIBRATED_URDF,
         MANIFEST,
-        check_enough_poses,
         read_measurement_file,
         write_calibration,
     )
     from pincal.model import load_mechanism, parameters
-    from pincal.sensitivity import identifiability
 
     if loss != "linear" and method != "lm":
         raise click.BadParameter(
@@ -150,12 +145,73 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
             ) from None
         declared = {"position": pos_mm, "orientation": ori_mrad}
     mech = load_mechanism(model)
-    mf = read_measurement_file(data, mech)
-    for w in mf.warnings:
-        click.echo(f"pincal: warning: {w}", err=True)
-    meas = mf.measurements
     preset = preset or (next(iter(mech.presets), "full"))
     params = parameters(mech, preset)
+    if _is_instrument_file(data):
+        if declared is not None or loss != "linear":
+            raise click.BadParameter(
+                "an instrument file carries its own noise; --noise and --loss apply to "
+                "pose measurement files",
+                param_hint="--data",
+            )
+        result, noise_model = _identify_instrument(mech, params, data, method), None
+    else:
+        mf = read_measurement_file(data, mech)
+        for w in mf.warnings:
+            click.echo(f"pincal: warning: {w}", err=True)
+        meas = mf.measurements
+        noise_model = meas.noise
+        result = _identify_poses(mech, params, preset, meas, method, declared, loss)
+    out_dir = Path(out)
+    doc = result_json(result, str(data), CALIBRATED_URDF)
+    report = format_report(doc)
+    cal = write_calibration(
+        out_dir,
+        result,
+        model_source=model_source(model),
+        data_files=[data],
+        noise=noise_model,
+        annotations={"data": str(data)},
+        texts={"report.txt": report},
+    )
+    if as_json:
+        click.echo(json.dumps(doc))
+    else:
+        click.echo(report, nl=False)
+        click.echo(
+            f"wrote calibration directory {cal.path}/ ({MANIFEST}, {CALIBRATED_URDF} + "
+            f"{CALIBRATED_SIDECAR}, identification.json, report.txt)"
+        )
+
+
+def _is_instrument_file(path: str) -> bool:
+    """True for a scalar-instrument file (``# pincal instrument`` header)."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            return f.readline().startswith("# pincal instrument")
+    except (OSError, UnicodeDecodeError):
+        return False  # the measurement reader reports the problem
+
+
+def _identify_instrument(mech, params, data: str, method: str):
+    """Machine and instrument parameters from a ballbar / probe / plane / gauge file."""
+    from pincal.identification import identify_instruments
+    from pincal.io import read_instrument_data
+
+    readings = read_instrument_data(data, mech)
+    click.echo(f"… identifying from {len(readings.q_act)} {readings.kind} readings", err=True)
+    return identify_instruments(mech, params, [readings], method=method).result
+
+
+def _identify_poses(mech, params, preset: str, meas, method: str, declared, loss: str):
+    """Identification from a pose / position / target measurement file."""
+    import numpy as np
+
+    from pincal.cli.info import reduction_line
+    from pincal.identification import LMOptions, identify
+    from pincal.io import check_enough_poses
+    from pincal.sensitivity import identifiability
+
     structural = identifiability(mech, params, rng=np.random.default_rng(0))
     check_enough_poses(meas, structural.rank)
     if structural.rank < len(params):
@@ -173,23 +229,4 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
         noise=declared,
         options=LMOptions(loss=loss) if method == "lm" else None,
     )
-    out_dir = Path(out)
-    doc = result_json(result, str(data), CALIBRATED_URDF)
-    report = format_report(doc)
-    cal = write_calibration(
-        out_dir,
-        result,
-        model_source=model_source(model),
-        data_files=[data],
-        noise=meas.noise,
-        annotations={"data": str(data)},
-        texts={"report.txt": report},
-    )
-    if as_json:
-        click.echo(json.dumps(doc))
-    else:
-        click.echo(report, nl=False)
-        click.echo(
-            f"wrote calibration directory {cal.path}/ ({MANIFEST}, {CALIBRATED_URDF} + "
-            f"{CALIBRATED_SIDECAR}, identification.json, report.txt)"
-        )
+    return result
