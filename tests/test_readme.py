@@ -53,6 +53,7 @@ def test_readme_has_the_two_sacred_commands():
     assert 'pip install -e ".[test]" && python -m pytest' in README
 
 
+@pytest.mark.slow
 def test_pincal_commands(tmp_path):
     runner = CliRunner()
     cwd = os.getcwd()

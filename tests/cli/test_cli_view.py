@@ -258,6 +258,7 @@ def test_bundled_models_are_the_ones_tested():
     assert sorted(bundled_models()) == BUNDLED
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (apt-get install chromium)")
 @pytest.mark.parametrize("model", BUNDLED)
 def test_every_bundled_model_renders_and_poses_differ(model, tmp_path):

@@ -46,6 +46,7 @@ def test_position_only_recovery(stewart, stewart42, stewart_poses):
     assert errors.position.max() <= 1e-9
 
 
+@pytest.mark.slow
 def test_monte_carlo_matches_cramer_rao(stewart, stewart42, stewart_poses):
     """Mean squared parameter error over 100 noisy runs within 0.8–1.25 of tr(CRB)."""
     noise = NoiseModel(position=0.01, orientation=0.02)

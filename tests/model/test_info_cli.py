@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
@@ -11,6 +12,7 @@ from pincal.cli import main
 MACHINES = Path(__file__).parent / "machines"
 
 
+@pytest.mark.slow
 def test_info_prints_closure_ranks_joints_measured_frame_and_notes():
     res = CliRunner().invoke(main, ["info", str(MACHINES / "prs3"), "--preset", "full"])
     assert res.exit_code == 0, res.output

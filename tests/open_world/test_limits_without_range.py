@@ -45,10 +45,5 @@ def test_jacobian_matches_central_differences(mech):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="30 poses over ±π (near singular ones included): Gauss–Newton stops at its "
-    "iteration limit (measured: 'maximum iterations reached')",
-)
 def test_noise_free_recovery_over_the_whole_circle(mech):
     acceptance.check_recovery(mech)

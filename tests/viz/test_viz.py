@@ -387,6 +387,7 @@ def test_render_shows_the_mechanism_and_poses_differ(prim, tmp_path):
     assert changed.mean() > 0.005
 
 
+@pytest.mark.slow
 @needs_chromium
 def test_render_ur5_ghosts_and_animation(ur5, tmp_path):
     model, path, qs = ur5
