@@ -29,6 +29,7 @@ LONG = {
     "scripts/bench_vs_figaroh.py": "needs the optional [bench] extra",
     "scripts/stewart_pose_selection.py": "Monte-Carlo study; core claim in test_seed000_study.py",
     "scripts/pkm5_qpso.py": "QPSO study; core claim in test_identify_qpso.py",
+    "scripts/studies/instrument_campaigns.py": "Monte-Carlo study; core claim in tests/instruments",
 }
 
 
