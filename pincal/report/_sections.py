@@ -72,8 +72,10 @@ def data_section(result: IdentificationResult, notes: dict) -> tuple[Section, di
         ["scalar equations", int(result.n_equations), ""],
         ["identified parameters", int(result.identified.sum()), ""],
     ]
-    if "data" in notes:
-        rows.append(["measurement file", str(notes["data"]), ""])
+    data = notes.get("data")
+    if isinstance(data, (list, tuple)):
+        data = ", ".join(map(str, data)) or None
+    rows.append(["measurement file", str(data) if data else "simulated (no file)", ""])
     noise: dict[str, object] = {"source": "unknown (pincal 0.1 file)"}
     if w is not None:
         how = {
