@@ -21,7 +21,6 @@ as *breaking loop closure* and are neither base nor absorbed parameters.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -41,7 +40,6 @@ __all__ = [
 
 BASE_POSES = 60
 """Random workspace poses (seed 0) over which the ``base`` preset is computed."""
-_BASE_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 _COMBINATION_CUTOFF = 1e-6
 """Coefficients (in column-scaled units) below this are left out of a combination."""
@@ -270,8 +268,6 @@ def base_parameters(mech: Mechanism, params: ParameterSet | None = None) -> Para
     Raises:
         UnidentifiableError: no candidate parameter changes the measured quantity.
     """
-    if params is None and mech in _BASE_CACHE:
-        return _BASE_CACHE[mech]
     candidates = params
     if candidates is None:
         full = full_parameters(mech)
@@ -285,7 +281,4 @@ def base_parameters(mech: Mechanism, params: ParameterSet | None = None) -> Para
             candidates.names,
         )
     label = "base" if params is None else f"{params.label} base"
-    out = candidates.subset(ident.base, label)
-    if params is None:
-        _BASE_CACHE[mech] = out
-    return out
+    return candidates.subset(ident.base, label)
