@@ -170,6 +170,8 @@ def run_demo(
             say("writing the report (plots)")
             written = calibration_report(out)
             files += [written.html, written.markdown]
+            if written.json is not None:
+                files.append(written.json)
     return DemoResult(
         settings, nominal, params, true, result, before, after, tuple(files), design, crb
     )
