@@ -19,6 +19,8 @@ __all__ = [
     "ConvergenceError",
     "FrameMismatchError",
     "ImportMatchError",
+    "InputFileError",
+    "InputLimitError",
     "MeasurementError",
     "MeasurementFormatError",
     "MobilityError",
@@ -38,11 +40,45 @@ __all__ = [
     "UnknownNameError",
     "UnreachablePoseError",
     "VisualizationError",
+    "clip",
 ]
 
 
 class PincalError(Exception):
     """Root of all pincal errors."""
+
+
+def clip(value: object, limit: int = 80) -> str:
+    """Return ``repr``-like text of a user value, cut to at most ``limit`` characters.
+
+    Every user-supplied value that goes into a message passes through here, so a
+    huge or hostile value (a YAML alias bomb, a 10 MB CSV cell) cannot make the
+    message itself huge or slow. Strings are shown as they are (newlines escaped);
+    other objects by ``repr`` of a bounded prefix for long sequences.
+
+    Args:
+        value: anything.
+        limit: maximum length of the returned text, in characters.
+
+    Returns:
+        The text, ending in "…" (with the full length) when cut.
+    """
+    if isinstance(value, str):
+        text = value.encode("unicode_escape", "backslashreplace").decode("ascii", "replace")
+    elif isinstance(value, int) and value.bit_length() > 128:
+        text = f"<integer of ~{int(value.bit_length() * 0.30103) + 1} digits>"
+    elif isinstance(value, (list, tuple, set, dict)) and len(value) > limit:
+        text = f"<{type(value).__name__} of {len(value)} items>"
+    else:
+        text = repr(value)
+    if len(text) <= limit:
+        return text
+    tail = f"… ({len(text)} chars)"
+    return text[: max(limit - len(tail), 1)] + tail
+
+
+class InputLimitError(PincalError):
+    """An input is larger than a stated limit (file size, model size, option value)."""
 
 
 def _listing(names: Iterable[str], limit: int = 40) -> str:
@@ -53,7 +89,11 @@ def _listing(names: Iterable[str], limit: int = 40) -> str:
     return shown
 
 
-class ModelFileError(PincalError):
+class InputFileError(PincalError):
+    """An input file is missing, not a regular file, unreadable or not UTF-8 text."""
+
+
+class ModelFileError(InputFileError):
     """A URDF or sidecar file is missing, malformed or inconsistent."""
 
 

@@ -1,0 +1,122 @@
+"""Bounded reading of user files: the one way pincal opens an input.
+
+Every input (URDF, sidecar, MJCF, CSV, JSON, YAML) is read through
+:func:`read_text` or :func:`read_bytes`, which refuse non-regular files (FIFOs,
+devices such as ``/dev/zero``, directories) before opening them and stop reading at a
+size cap instead of exhausting memory. Caps default to :data:`DEFAULT_MAX_BYTES` and
+can be raised per call or for the process with the ``PINCAL_MAX_FILE_MB``
+environment variable.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from pathlib import Path
+
+from pincal.errors import InputFileError, InputLimitError, clip
+
+__all__ = ["DEFAULT_MAX_BYTES", "max_bytes", "read_bytes", "read_text"]
+
+#: Default cap on one input file: 200 MB (a 100 000-pose CSV is ~30 MB).
+DEFAULT_MAX_BYTES = 200 * 1024 * 1024
+
+
+def max_bytes() -> int:
+    """Return the size cap in bytes (``PINCAL_MAX_FILE_MB`` overrides the default)."""
+    env = os.environ.get("PINCAL_MAX_FILE_MB")
+    if env:
+        try:
+            return max(1, int(float(env) * 1024 * 1024))
+        except ValueError:
+            raise InputLimitError(
+                f"PINCAL_MAX_FILE_MB={clip(env)} is not a number of megabytes; "
+                "set it to e.g. 500 or unset it"
+            ) from None
+    return DEFAULT_MAX_BYTES
+
+
+def read_bytes(
+    path: str | Path,
+    what: str = "file",
+    limit: int | None = None,
+    error: type[InputFileError] = InputFileError,
+) -> bytes:
+    """Read a regular file whole, refusing devices, FIFOs and files over the cap.
+
+    Args:
+        path: file to read.
+        what: what the file is, for messages ("URDF", "measurement CSV", …).
+        limit: cap in bytes; ``None`` uses :func:`max_bytes`.
+        error: the class raised for a missing or unreadable file (e.g.
+            :class:`~pincal.errors.ModelFileError` for a URDF).
+
+    Returns:
+        The file's bytes.
+
+    Raises:
+        InputFileError: (or ``error``) the file is missing, not a regular file, or unreadable.
+        InputLimitError: the file is larger than the cap.
+    """
+    p = Path(path)
+    cap = max_bytes() if limit is None else limit
+    try:
+        st = p.stat()
+    except FileNotFoundError:
+        raise error(f"{what} {clip(str(p))} does not exist") from None
+    except OSError as exc:
+        raise error(f"cannot read {what} {clip(str(p))}: {exc.strerror}") from None
+    if not stat.S_ISREG(st.st_mode):
+        kind = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file (device, FIFO, …)"
+        raise error(f"{what} {clip(str(p))} is {kind}; give the path of a regular file")
+    if st.st_size > cap:
+        raise InputLimitError(_too_big(p, what, st.st_size, cap))
+    try:
+        # O_NONBLOCK: a file swapped for a FIFO after the check cannot block the open.
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as exc:
+        raise error(f"cannot read {what} {clip(str(p))}: {exc.strerror}") from None
+    with os.fdopen(fd, "rb") as fh:
+        data = fh.read(cap + 1)
+    if len(data) > cap:
+        raise InputLimitError(_too_big(p, what, len(data), cap))
+    return data
+
+
+def read_text(
+    path: str | Path,
+    what: str = "file",
+    limit: int | None = None,
+    error: type[InputFileError] = InputFileError,
+) -> str:
+    """Read a regular UTF-8 text file whole (a leading BOM is dropped).
+
+    Args:
+        path: file to read.
+        what: what the file is, for messages.
+        limit: cap in bytes; ``None`` uses :func:`max_bytes`.
+        error: the class raised for a missing, unreadable or non-UTF-8 file.
+
+    Returns:
+        The decoded text.
+
+    Raises:
+        InputFileError: (or ``error``) missing, not a regular file, unreadable or not UTF-8 (the
+            message gives the byte offset of the first bad byte).
+        InputLimitError: the file is larger than the cap.
+    """
+    data = read_bytes(path, what, limit, error)
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise error(
+            f"{what} {clip(str(path))} is not UTF-8 text (byte 0x{data[exc.start]:02x} at "
+            f"offset {exc.start}); save it as UTF-8"
+        ) from None
+
+
+def _too_big(p: Path, what: str, size: int, cap: int) -> str:
+    return (
+        f"{what} {clip(str(p))} is {size / 1e6:.1f} MB or more, over the {cap / 1e6:.0f} MB "
+        "limit; if the file is right, raise the limit with PINCAL_MAX_FILE_MB"
+    )

@@ -1,0 +1,63 @@
+"""Bounded reading of inputs and clipped values in messages."""
+
+from __future__ import annotations
+
+import os
+import threading
+
+import pytest
+
+from pincal._files import read_bytes, read_text
+from pincal.errors import InputFileError, InputLimitError, ModelFileError, clip
+
+
+def test_clip_bounds_every_kind_of_value():
+    assert len(clip("a" * 10**6)) <= 80
+    assert clip(list(range(10**6))) == "<list of 1000000 items>"
+    assert "digits" in clip(10**400)
+    assert clip("x\ny") == "x\\ny"
+    assert clip(3.5) == "3.5"
+
+
+def test_device_fifo_and_directory_are_refused(tmp_path):
+    with pytest.raises(InputFileError, match="not a regular file"):
+        read_bytes("/dev/zero", "measurement CSV")
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    done = threading.Event()
+
+    def attempt():
+        with pytest.raises(InputFileError, match="pipe.csv is not a regular file"):
+            read_text(fifo, "poses CSV")
+        done.set()
+
+    t = threading.Thread(target=attempt, daemon=True)
+    t.start()
+    t.join(10)
+    assert done.is_set(), "reading a FIFO with no writer blocked"
+    with pytest.raises(InputFileError, match="is a directory"):
+        read_text(tmp_path, "URDF")
+
+
+def test_size_cap_and_environment_override(tmp_path, monkeypatch):
+    big = tmp_path / "big.csv"
+    big.write_bytes(b"x" * 3000)
+    with pytest.raises(InputLimitError, match="PINCAL_MAX_FILE_MB"):
+        read_bytes(big, "CSV", limit=1000)
+    monkeypatch.setenv("PINCAL_MAX_FILE_MB", "0.001")
+    with pytest.raises(InputLimitError, match="big.csv"):
+        read_bytes(big, "CSV")
+    monkeypatch.setenv("PINCAL_MAX_FILE_MB", "5")
+    assert len(read_bytes(big, "CSV")) == 3000
+
+
+def test_text_names_the_file_and_offset_and_drops_bom(tmp_path):
+    bad = tmp_path / "robot.urdf"
+    bad.write_bytes(b"<robot>\xff</robot>")
+    with pytest.raises(ModelFileError, match=r"robot.urdf is not UTF-8 .*offset 7"):
+        read_text(bad, "URDF", error=ModelFileError)
+    bom = tmp_path / "m.csv"
+    bom.write_bytes("\ufeffa,b\n".encode())
+    assert read_text(bom) == "a,b\n"
+    with pytest.raises(ModelFileError, match="does not exist"):
+        read_text(tmp_path / "missing.urdf", "URDF", error=ModelFileError)
