@@ -80,8 +80,8 @@ def validate(calibration: Path, data: Path, as_json: bool) -> None:
       pincal validate cal/ --data held_out.csv
       pincal validate cal/ --data held_out.csv --json
     """
-    from pincal.cli._validation import validate_calibration
     from pincal.io import read_calibration, read_measurement_file, sha256_file
+    from pincal.measure import validate_held_out
     from pincal.model import parameters
 
     cal = read_calibration(calibration)
@@ -97,7 +97,7 @@ def validate(calibration: Path, data: Path, as_json: bool) -> None:
         click.echo(f"pincal: warning: {data} was used to fit this calibration", err=True)
     params = parameters(nominal, cal.preset)
     result = cal.result
-    validation = validate_calibration(
+    validation = validate_held_out(
         nominal,
         cal.calibrated(),
         meas,

@@ -2,11 +2,15 @@
 
 Measurements and noise models (SI inside), scalar instruments (ballbar, sphere probe,
 planes, gauge), ISO 9283 pose characteristics, simulation, the laser tracker, instrument
-registration, pose errors against a reference.
+registration, pose errors against a reference, validation on held-out data.
 """
 
 from __future__ import annotations
 
+from pincal.measure._held_out import (
+    HeldOutValidation,
+    validate_held_out,
+)
 from pincal.measure._instruments import (
     INSTRUMENT_KINDS,
     Instrument,
@@ -46,6 +50,7 @@ from pincal.measure._validation import (
 
 __all__ = [
     "INSTRUMENT_KINDS",
+    "HeldOutValidation",
     "Instrument",
     "InstrumentData",
     "LaserTracker",
@@ -69,4 +74,5 @@ __all__ = [
     "simulate_cycles",
     "simulate_instrument",
     "simulate_measurements",
+    "validate_held_out",
 ]

@@ -9,8 +9,7 @@ import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
-from pincal.cli._validation import validate_calibration
-from pincal.measure import Measurements, NoiseModel, simulate_measurements
+from pincal.measure import Measurements, NoiseModel, simulate_measurements, validate_held_out
 from pincal.model import load_mechanism, parameters, sample_actuators
 
 
@@ -27,7 +26,7 @@ def test_iso9283_accuracy_and_repeatability_by_hand():
     rows = q[[0, 0, 0, 1, 1]]  # two commanded poses, repeated 3 and 2 times
     meas = simulate_measurements(actual, rows, NoiseModel(0.01, 0.02), rng)
     cov = np.eye(len(params)) * 1e-12
-    v = validate_calibration(nominal, actual, meas, params, params.names, cov)
+    v = validate_held_out(nominal, actual, meas, params, params.names, cov)
     doc = v.to_dict()
     assert doc["commanded_poses"] == 2 and [r["repeats"] for r in doc["iso9283"]] == [3, 2]
     # by hand: x and z measured (wedge3 measures x z ry)
@@ -44,7 +43,7 @@ def test_iso9283_accuracy_and_repeatability_by_hand():
     assert doc["predicted"]["observed_rms_position_mm"] is None  # no noise given
     single = Measurements(meas.q_act[:1], meas.positions[:1], meas.rotations[:1],
                           meas.components, meas.frame, meas.actuated)  # fmt: skip
-    one = validate_calibration(nominal, actual, single, params, params.names, cov).to_dict()
+    one = validate_held_out(nominal, actual, single, params, params.names, cov).to_dict()
     assert one["iso9283"][0]["RP_l_mm"] is None
 
 

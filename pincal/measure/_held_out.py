@@ -25,10 +25,10 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pincal.measure import Measurements, NoiseModel
+from pincal.measure._measurements import Measurements, NoiseModel
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
 
-__all__ = ["Validation", "validate_calibration"]
+__all__ = ["HeldOutValidation", "validate_held_out"]
 
 
 @dataclass(frozen=True)
@@ -50,7 +50,7 @@ class ModelErrors:
 
 
 @dataclass(frozen=True)
-class Validation:
+class HeldOutValidation:
     """Validation of a calibration on held-out data (SI inside; ``to_dict`` in mm/mrad)."""
 
     components: tuple[str, ...]
@@ -175,7 +175,7 @@ def _prediction(
     return out
 
 
-def validate_calibration(
+def validate_held_out(
     nominal: Mechanism,
     calibrated: Mechanism,
     meas: Measurements,
@@ -183,7 +183,7 @@ def validate_calibration(
     names: tuple[str, ...],
     covariance: np.ndarray,
     noise: NoiseModel | None = None,
-) -> Validation:
+) -> HeldOutValidation:
     """Before (nominal) / after (calibrated) errors on held-out measurements.
 
     Args:
@@ -196,7 +196,7 @@ def validate_calibration(
         noise: instrument noise of ``meas`` for the observed-RMS prediction, if known.
 
     Returns:
-        The :class:`Validation`.
+        The :class:`HeldOutValidation`.
 
     Raises:
         ConvergenceError: a command whose closure a model cannot solve.
@@ -213,4 +213,4 @@ def validate_calibration(
     q_rows = np.array([meas.q_act[g[0]] for g in groups])
     cov = np.asarray(covariance, dtype=float)
     predicted = _prediction(nominal, params, names, cov, q_rows, pos, [3 + k for k in rot], noise)
-    return Validation(comps, groups, before, after, rp, predicted)
+    return HeldOutValidation(comps, groups, before, after, rp, predicted)
