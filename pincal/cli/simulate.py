@@ -42,7 +42,9 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
     "poses_file",
     type=click.Path(dir_okay=False),
     default=None,
-    help="Target poses file (pincal poses CSV); commands from the nominal IK.",
+    help="Poses file: its actuator columns are the commands (as `pincal poses` writes "
+    "them); a file with target poses only is solved by the nominal IK. A commands or "
+    "measurements file works too.",
 )
 @click.option(
     "--random",
@@ -100,7 +102,8 @@ def simulate(
     """Simulate a measurement campaign of MODEL with random geometric errors.
 
     The "actual" machine is MODEL with random errors on the preset's parameters; it is
-    measured at the commands the nominal model computes for the target poses. The
+    measured at the commands of the poses file (its actuator columns, or the nominal
+    model's IK of its target poses when it has none). The
     measurement file states its units and noise in its header; `pincal calibrate
     --data` and `pincal validate --data` read it.
 
@@ -112,10 +115,9 @@ def simulate(
     """
     import numpy as np
 
-    from pincal.errors import UnreachablePoseError
     from pincal.io import (
         atomic_write_text,
-        read_poses,
+        read_pose_rows,
         write_measurements,
     )
     from pincal.measure import (
@@ -140,16 +142,7 @@ def simulate(
     actual = params.apply(nominal, values)
     rng = np.random.default_rng(seed)
     if poses_file is not None:
-        targets = read_poses(poses_file)
-        rows, bad = [], []
-        for i, T in enumerate(targets):
-            try:
-                rows.append(nominal.inverse(T))
-            except UnreachablePoseError:
-                bad.append(i)
-        if bad:
-            raise UnreachablePoseError(f"target poses {bad} of {poses_file} are unreachable")
-        q_act = np.array(rows)
+        q_act = read_pose_rows(poses_file, nominal)
     else:
         click.echo(f"… sampling {n_random} random poses", err=True)
         q_act = sample_actuators(nominal, n_random, rng)

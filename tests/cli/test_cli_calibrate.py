@@ -11,9 +11,10 @@ from click.testing import CliRunner
 from pincal.cli import main
 from pincal.io import (
     read_commands,
+    read_measurements,
     write_poses,
 )
-from pincal.model import load_mechanism, parameters
+from pincal.model import load_mechanism, parameters, sample_actuators
 
 
 def test_simulate_calibrate_compensate_loop(tmp_path):
@@ -127,3 +128,20 @@ def test_too_few_poses_is_refused(tmp_path):
     )
     assert res.exit_code == 1
     assert "TooFewPosesError" in res.stderr and "at least 9 poses" in res.stderr
+
+
+def test_simulate_uses_the_actuator_columns_of_a_poses_file(tmp_path):
+    """The commands measured are the file's actuator values, not a fresh IK of its poses."""
+    mech = load_mechanism("wedge3")
+    q = sample_actuators(mech, 4, np.random.default_rng(3))
+    poses = [mech.forward(row) for row in q]
+    # Rows whose actuator values are shifted from the poses: only the columns can say so.
+    shifted = q + 1e-4
+    path = tmp_path / "poses.csv"
+    write_poses(path, poses, actuated=mech.actuated, q_act=shifted)
+    out = tmp_path / "m.csv"
+    res = CliRunner().invoke(
+        main, ["simulate", "wedge3", "--poses", str(path), "--noise", "0,0", "--out", str(out)]
+    )
+    assert res.exit_code == 0, res.output
+    np.testing.assert_allclose(read_measurements(out, mech).q_act, shifted, atol=1e-12)
