@@ -7,6 +7,7 @@ from typing import Any
 
 import yaml
 
+from pincal._files import read_text
 from pincal.errors import ModelFileError, UnknownNameError
 from pincal.model._mechanism import Mechanism
 from pincal.model._newton import SolverOptions
@@ -99,7 +100,7 @@ def load_mechanism(
     urdf, sidecar_path = resolve_model_path(spec)
     sidecar = read_sidecar(sidecar_path) if sidecar_path else {}
     return Mechanism(
-        _read_text(urdf, "URDF"),
+        read_text(urdf, "URDF", error=ModelFileError),
         sidecar,
         name=urdf.stem,
         source=urdf,
