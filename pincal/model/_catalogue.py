@@ -11,6 +11,7 @@ from pincal._files import read_text
 from pincal.errors import ModelFileError, UnknownNameError
 from pincal.model._mechanism import Mechanism
 from pincal.model._newton import SolverOptions
+from pincal.model._urdf import UrdfTree
 
 __all__ = ["MODELS_DIR", "bundled_models", "load_mechanism", "read_sidecar", "resolve_model_path"]
 
@@ -99,8 +100,10 @@ def load_mechanism(
         return load_mjcf(spec, measured_frame, options=options)
     urdf, sidecar_path = resolve_model_path(spec)
     sidecar = read_sidecar(sidecar_path) if sidecar_path else {}
+    urdf_xml = read_text(urdf, "URDF", error=ModelFileError)
+    UrdfTree(urdf_xml, source=urdf)  # checked first, so that a bad URDF's messages name the file
     return Mechanism(
-        read_text(urdf, "URDF", error=ModelFileError),
+        urdf_xml,
         sidecar,
         name=urdf.stem,
         source=urdf,

@@ -7,13 +7,15 @@ from the text. This keeps the exported URDF exactly the identified model.
 
 from __future__ import annotations
 
+import os
+import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import ModelFileError, UnknownNameError, clip
+from pincal.errors import InputLimitError, ModelFileError, UnknownNameError, clip
 from pincal.model._urdf_check import (
     JOINT_TYPES,
     ModelLimits,
@@ -24,6 +26,8 @@ from pincal.model._urdf_check import (
 __all__ = ["MOVABLE_TYPES", "UrdfJoint", "UrdfTree", "se3_from_xyz_rpy"]
 
 MOVABLE_TYPES = ("revolute", "continuous", "prismatic")
+
+_LINK_TAG = re.compile(r"<link[\s/>]")
 
 
 @dataclass(frozen=True)
@@ -85,6 +89,7 @@ class UrdfTree:
     Args:
         xml: URDF text.
         limits: size limits (default :meth:`ModelLimits.from_env`).
+        source: the file the text comes from, named in the messages.
 
     Raises:
         ModelFileError: malformed XML, a missing or invalid attribute, not one tree.
@@ -92,8 +97,19 @@ class UrdfTree:
         UnknownNameError: a joint names a link that does not exist.
     """
 
-    def __init__(self, xml: str, limits: ModelLimits | None = None):
-        limits = limits or ModelLimits.from_env()
+    def __init__(
+        self, xml: str, limits: ModelLimits | None = None, source: str | os.PathLike | None = None
+    ):
+        try:
+            self._load(xml, limits or ModelLimits.from_env())
+        except (ModelFileError, InputLimitError) as exc:
+            if source is None:
+                raise
+            raise type(exc)(f"{clip(str(source), 200)}: {exc}") from None
+
+    def _load(self, xml: str, limits: ModelLimits) -> None:
+        # an upper bound of the link count, before spending time and memory on parsing
+        limits.check("links", len(_LINK_TAG.findall(xml)), limits.links, "PINCAL_MAX_LINKS", "URDF")
         try:
             self.root = ET.fromstring(xml)
         except ET.ParseError as exc:
