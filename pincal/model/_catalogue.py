@@ -63,7 +63,7 @@ def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
             urdf = candidates[0]
     elif path.suffix.lower() == ".urdf":
         urdf = path
-        if not urdf.is_file():
+        if not urdf.exists():  # a FIFO or device is refused by the bounded reader
             raise ModelFileError(f"URDF file {str(path)!r} does not exist")
     elif (MODELS_DIR / str(spec)).is_dir():
         return resolve_model_path(MODELS_DIR / str(spec))

@@ -31,7 +31,9 @@ def _joint_ranges(mech: Mechanism) -> np.ndarray:
     ranges[~np.isfinite(ranges[:, 1]), 1] = np.pi
     with np.errstate(over="ignore"):
         width = ranges[:, 1] - ranges[:, 0]
-    for k in np.flatnonzero(~(np.isfinite(width) & (width >= 0))):
+    bad = np.flatnonzero(~(np.isfinite(width) & (width >= 0)))
+    if bad.size:
+        k = int(bad[0])
         raise ModelFileError(
             f"joint {mech.actuated[k]!r} of {mech.name!r} has the range "
             f"[{ranges[k, 0]:.6g}, {ranges[k, 1]:.6g}] to sample in; give finite limits with "
