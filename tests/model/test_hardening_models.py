@@ -174,6 +174,21 @@ def test_deep_chain_is_refused_before_pinocchio_parses_it(tmp_path, monkeypatch)
     assert "deep.urdf" in line and "PINCAL_MAX_TREE_DEPTH=5000" in line
 
 
+def test_deep_mjcf_is_refused_before_the_recursive_conversion(tmp_path, monkeypatch):
+    n = 3000  # deeper than Python's recursion limit: was a RecursionError traceback
+    bodies = "".join(
+        f'<body name="b{i}" pos="0 0 0.1"><joint name="j{i}" type="hinge"/>' for i in range(n)
+    )
+    path = tmp_path / "deep.xml"
+    path.write_text(f"<mujoco><worldbody>{bodies}{'</body>' * n}</worldbody></mujoco>")
+    with pytest.raises(InputLimitError, match=r"3000 bodies and sites.*PINCAL_MAX_LINKS"):
+        load_mechanism(path)
+    monkeypatch.setenv("PINCAL_MAX_LINKS", "5000")
+    with pytest.raises(InputLimitError, match=r"'deep' has 3000 nested bodies.*limit of 256"):
+        load_mechanism(path)
+    assert "PINCAL_MAX_TREE_DEPTH=3000" in cli_error(["info", str(path)], "InputLimitError")
+
+
 def test_depth_limit_can_be_raised(monkeypatch):
     with pytest.raises(InputLimitError, match="PINCAL_MAX_TREE_DEPTH"):
         UrdfTree(chain(300, "fixed", limit=""))
