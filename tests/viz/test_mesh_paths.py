@@ -72,15 +72,18 @@ def test_meshes_inside_the_model_directory_are_drawn(tmp_path):
         assert b"INSIDE-MESH" in embedded(page(urdf))
 
 
-@pytest.mark.parametrize("how", ["absolute", "dotdot", "package", "file"])
+@pytest.mark.parametrize("how", ["absolute", "dotdot", "package", "file", "symlink"])
 def test_meshes_outside_are_refused_naming_link_and_path(tmp_path, how):
     secret = tmp_path / "private" / "secret.stl"
     stl(secret, SECRET)
+    (tmp_path / "arm").mkdir()
+    (tmp_path / "arm" / "link.stl").symlink_to(secret)
     filename = {
         "absolute": str(secret),
         "dotdot": "../private/secret.stl",
         "package": "package://private/secret.stl",
         "file": f"file://{secret}",
+        "symlink": "link.stl",  # inside by name, outside once the link is followed
     }[how]
     urdf = robot(tmp_path / "arm", filename)
     with pytest.raises(VisualizationError, match=r"link 'base' mesh .*secret.stl.*outside") as e:
