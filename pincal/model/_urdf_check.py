@@ -22,15 +22,15 @@ redirected, so what urdfdom prints can go into the error message (clipped) or th
 from __future__ import annotations
 
 import contextlib
+import math
 import os
+import sys
 import tempfile
 import threading
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TypeVar
-
-import numpy as np
 
 from pincal.errors import InputLimitError, ModelFileError, clip
 
@@ -58,7 +58,7 @@ MAX_COORDINATE = 1e6
 #: largest accepted joint limit magnitude [m or rad]; Gazebo models write ±1e16 for "none"
 MAX_LIMIT = 1e16
 
-_FLOAT_MAX = float(np.finfo(float).max)
+_FLOAT_MAX = sys.float_info.max
 
 T = TypeVar("T")
 
@@ -153,23 +153,23 @@ def check_robot_element(root: ET.Element) -> None:
 
 def _numbers(
     e: ET.Element | None, attr: str, n: int, where: str, bound: float
-) -> np.ndarray | None:
+) -> list[float] | None:
     """The ``n`` numbers of attribute ``attr`` of ``e`` (None when absent), checked finite."""
     if e is None or e.get(attr) is None:
         return None
     text = str(e.get(attr))
     try:
-        values = np.array([float(s) for s in text.split()], dtype=float)
+        values = [float(s) for s in text.split()]
     except ValueError:
         raise ModelFileError(
             f"{where} <{e.tag} {attr}>: cannot read {n} number{'s' if n > 1 else ''} "
             f"from '{clip(text)}'"
         ) from None
-    if values.shape != (n,):
+    if len(values) != n:
         raise ModelFileError(
-            f"{where} <{e.tag} {attr}>: expected {n} numbers, got {values.size} in '{clip(text)}'"
+            f"{where} <{e.tag} {attr}>: expected {n} numbers, got {len(values)} in '{clip(text)}'"
         )
-    if not np.all(np.isfinite(values)) or np.any(np.abs(values) > bound):
+    if not all(math.isfinite(v) and abs(v) <= bound for v in values):
         raise ModelFileError(
             f"{where} <{e.tag} {attr}>: '{clip(text)}' must hold finite numbers within "
             f"±{bound:g} (SI units: m, rad)"
@@ -178,7 +178,7 @@ def _numbers(
 
 
 def _scalar(
-    e: ET.Element, attr: str, where: str, bound: float = np.inf, required: bool = False
+    e: ET.Element, attr: str, where: str, bound: float = math.inf, required: bool = False
 ) -> float | None:
     if e.get(attr) is None:
         if required:
@@ -249,7 +249,7 @@ def _check_limit(e: ET.Element, jtype: str, where: str) -> None:
             )
         return
     bounded = jtype in ("revolute", "prismatic")
-    bound = MAX_LIMIT if bounded else np.inf
+    bound = MAX_LIMIT if bounded else math.inf
     lower = _scalar(limit, "lower", where, bound)
     upper = _scalar(limit, "upper", where, bound)
     _scalar(limit, "effort", where, required=True)
