@@ -142,6 +142,16 @@ def test_urdf_errors_name_the_joint_and_attribute(tmp_path, body, jtype, expecte
     assert "bad.urdf" in line and "'arm'" in line
 
 
+def test_joints_forming_a_loop_are_refused_not_followed_forever():
+    xml = (
+        '<robot name="r"><link name="base"/><link name="a"/><link name="b"/>'
+        '<joint name="ab" type="fixed"><parent link="a"/><child link="b"/></joint>'
+        '<joint name="ba" type="fixed"><parent link="b"/><child link="a"/></joint></robot>'
+    )
+    with pytest.raises(ModelFileError, match=r"links \['a', 'b'\] are not connected .*'base'"):
+        UrdfTree(xml)
+
+
 def test_parser_output_goes_to_the_log_not_the_terminal(capfd, caplog):
     xml = one_joint(LIMIT).replace(
         '<link name="base"/>', '<link name="base"><inertial><mass value="x"/></inertial></link>'
