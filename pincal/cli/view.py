@@ -102,6 +102,12 @@ def _urdf_for_viz(mech) -> str | Path:
 @click.option("--ghosts/--no-ghosts", default=True, show_default=True, help="Ghost copies.")
 @click.option("--animate/--no-animate", default=True, show_default=True, help="Animation.")
 @click.option("--arrow-scale", type=float, default=None, help="Arrow magnification (auto).")
+@click.option(
+    "--allow-mesh-outside",
+    is_flag=True,
+    help="Also read meshes outside the model's directory (absolute paths, ../); the page "
+    "embeds their bytes, so only for a URDF you trust.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary instead of text.")
 @fail_cleanly
 def view(
@@ -116,6 +122,7 @@ def view(
     ghosts: bool,
     animate: bool,
     arrow_scale: float | None,
+    allow_mesh_outside: bool,
     as_json: bool,
 ) -> None:
     """Show MODEL at measurement poses: an offline HTML page (no server, no network).
@@ -185,11 +192,13 @@ def view(
     if arrows:
         lengths = [float(np.linalg.norm(a.end - a.start)) * 1e3 for a in arrows]
         summary["max_prediction_change_mm"] = max(lengths)
-    if html_path is not None:
-        title = f"{mech.name}: {len(rows)} poses" + (" — calibration changes" if arrows else "")
-        page = viz.static_html(mech.model, _urdf_for_viz(mech), list(qs), title=title, **options)
-        summary["html"] = str(viz.write_html(html_path, page))
-    session = viz.live(mech.model, _urdf_for_viz(mech), list(qs), **options) if live else None
+    source = _urdf_for_viz(mech)
+    with viz.allow_mesh_outside(allow_mesh_outside):  # meshes are read (and embedded) here
+        if html_path is not None:
+            title = f"{mech.name}: {len(rows)} poses" + (" — calibration changes" if arrows else "")
+            page = viz.static_html(mech.model, source, list(qs), title=title, **options)
+            summary["html"] = str(viz.write_html(html_path, page))
+        session = viz.live(mech.model, source, list(qs), **options) if live else None
     if session is not None:
         summary["live_url"] = session.web_url
     if as_json:

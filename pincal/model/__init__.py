@@ -70,6 +70,7 @@ from pincal.model._urdf import (
     UrdfTree,
     se3_from_xyz_rpy,
 )
+from pincal.model._urdf_check import ModelLimits
 from pincal.model._workspace import (
     sample_actuators,
     sample_pose,
@@ -93,6 +94,7 @@ __all__ = [
     "DHRow",
     "Kinematics",
     "Mechanism",
+    "ModelLimits",
     "Parameter",
     "ParameterSet",
     "Sidecar",

@@ -12,14 +12,19 @@
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import ModelFileError, UnknownNameError
+from pincal.errors import ModelFileError, UnknownNameError, clip
 from pincal.model._sidecar import Sidecar
 from pincal.model._urdf import UrdfTree
+from pincal.model._urdf_check import ModelLimits, captured_stderr
 
 __all__ = ["build_model"]
+
+log = logging.getLogger(__name__)
 
 
 def build_model(urdf_xml: str, tree: UrdfTree, sidecar: Sidecar) -> tuple[pin.Model, list[str]]:
@@ -38,13 +43,26 @@ def build_model(urdf_xml: str, tree: UrdfTree, sidecar: Sidecar) -> tuple[pin.Mo
         ModelFileError: Pinocchio cannot build the URDF, or a joint kind is unsupported.
         UnknownNameError: ``joint_name`` lists a joint the URDF does not have.
     """
-    try:
-        model = pin.buildModelFromXML(urdf_xml)
-    except (RuntimeError, ValueError) as exc:
-        raise ModelFileError(f"Pinocchio cannot build the URDF model: {exc}") from exc
+    built, printed, error = captured_stderr(lambda: pin.buildModelFromXML(urdf_xml))
+    lines = [line.strip() for line in printed.splitlines()]
+    said = " ".join(line for line in lines if line.startswith("Error"))
+    if error is not None or built is None:
+        why = f"; the URDF parser said: {clip(said, 400)}" if said else ""
+        raise ModelFileError(f"Pinocchio cannot build the URDF model: {clip(str(error))}{why}")
+    if said:
+        log.warning("the URDF parser reports for %r: %s", tree.name, clip(said, 2000))
+    model = built
     notes: list[str] = []
     if sidecar.joint_name:
         model = _replace_joints(model, tree, sidecar)
+        limits = ModelLimits.from_env()
+        limits.check(
+            "degrees of freedom (with the sidecar's spherical joints)",
+            model.nv,
+            limits.dof,
+            "PINCAL_MAX_DOF",
+            f"URDF robot '{clip(tree.name)}'",
+        )
         notes += [
             f"joint {n!r} is a {k} joint (sidecar joint_type)"
             for n, k in zip(sidecar.joint_name, sidecar.joint_type, strict=True)

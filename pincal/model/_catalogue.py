@@ -7,9 +7,11 @@ from typing import Any
 
 import yaml
 
+from pincal._files import read_text
 from pincal.errors import ModelFileError, UnknownNameError
 from pincal.model._mechanism import Mechanism
 from pincal.model._newton import SolverOptions
+from pincal.model._urdf import UrdfTree
 
 __all__ = ["MODELS_DIR", "bundled_models", "load_mechanism", "read_sidecar", "resolve_model_path"]
 
@@ -61,7 +63,7 @@ def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
             urdf = candidates[0]
     elif path.suffix.lower() == ".urdf":
         urdf = path
-        if not urdf.is_file():
+        if not urdf.exists():  # a FIFO or device is refused by the bounded reader
             raise ModelFileError(f"URDF file {str(path)!r} does not exist")
     elif (MODELS_DIR / str(spec)).is_dir():
         return resolve_model_path(MODELS_DIR / str(spec))
@@ -98,8 +100,10 @@ def load_mechanism(
         return load_mjcf(spec, measured_frame, options=options)
     urdf, sidecar_path = resolve_model_path(spec)
     sidecar = read_sidecar(sidecar_path) if sidecar_path else {}
+    urdf_xml = read_text(urdf, "URDF", error=ModelFileError)
+    UrdfTree(urdf_xml, source=urdf)  # checked first, so that a bad URDF's messages name the file
     return Mechanism(
-        _read_text(urdf, "URDF"),
+        urdf_xml,
         sidecar,
         name=urdf.stem,
         source=urdf,

@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from pincal._files import read_text
 from pincal.errors import ModelFileError, UnknownNameError
 from pincal.model._mjcf_tree import MjcfTree, euler_xyz, quat_matrix, unit, vec
 
@@ -192,10 +193,7 @@ def mjcf_to_urdf(
     if not (isinstance(source, str) and text.lstrip().startswith("<")):
         path = Path(source)
         name = name or path.stem
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ModelFileError(f"cannot read MJCF file {str(path)!r}: {exc.strerror}") from exc
+        text = read_text(path, "MJCF file", error=ModelFileError)
     try:
         root = ET.fromstring(text)
     except ET.ParseError as exc:

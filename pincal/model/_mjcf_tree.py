@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import logging
 import xml.etree.ElementTree as ET
+from collections import Counter
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ModelFileError, UnknownNameError
+from pincal.model._urdf_check import ModelLimits
 
 __all__ = ["MjcfTree", "euler_xyz", "quat_matrix", "unit", "vec"]
 
@@ -57,6 +59,24 @@ def euler_xyz(R: np.ndarray) -> list[float]:
     return [float(np.arctan2(-R[1, 2], R[2, 2])), b, float(np.arctan2(-R[0, 1], R[0, 0]))]
 
 
+def _check_size(root: ET.Element, where: str) -> None:
+    """Refuse documents past the model limits before the recursive conversion.
+
+    Raises:
+        InputLimitError: more bodies and sites than ``ModelLimits.links``, or bodies,
+            frames or defaults nested deeper than ``ModelLimits.depth``.
+    """
+    limits = ModelLimits.from_env()
+    count = sum(1 for e in root.iter() if e.tag in ("body", "site"))
+    limits.check("bodies and sites", count, limits.links, "PINCAL_MAX_LINKS", where)
+    deepest, stack = 0, [(root, 0)]
+    while stack:  # iterative: the document may be deeper than Python's recursion limit
+        elem, depth = stack.pop()
+        deepest = max(deepest, depth)
+        stack.extend((c, depth + (c.tag in ("body", "frame", "default"))) for c in elem)
+    limits.check("nested bodies", deepest, limits.depth, "PINCAL_MAX_TREE_DEPTH", where)
+
+
 class MjcfTree:
     """The compiler settings, default classes and body tree of one MJCF document.
 
@@ -75,6 +95,7 @@ class MjcfTree:
                     "first (e.g. save the model from MuJoCo with mj_saveLastXML)"
                 )
         self.root, self.name = root, root.get("model") or name
+        _check_size(root, f"MJCF model {self.name!r}")
         self.degree, self.seq, self.autolimits = True, "xyz", True
         for c in root.findall("compiler"):
             if c.get("coordinate", "local") != "local":
@@ -90,7 +111,7 @@ class MjcfTree:
         bodies = [b.get("name") for b in root.iter("body")]
         sites = [s.get("name") for s in root.iter("site") if s.get("name")]
         named = [n for n in bodies + sites if n]
-        dup = sorted({n for n in named if named.count(n) > 1} | ({"world"} & set(named)))
+        dup = sorted({n for n, k in Counter(named).items() if k > 1} | ({"world"} & set(named)))
         if dup:
             raise ModelFileError(
                 f"MJCF body/site names {dup} are used twice (or are 'world'); "

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from pincal._files import read_text
 from pincal.errors import ModelFileError, UnknownNameError
 from pincal.model._catalogue import read_sidecar, resolve_model_path
 from pincal.model._mechanism import Mechanism
@@ -255,7 +256,7 @@ def serial_mechanism(
     """
     urdf_path, sidecar_path = resolve_model_path(spec)
     sidecar = dict(read_sidecar(sidecar_path)) if sidecar_path else {}
-    xml = urdf_path.read_text(encoding="utf-8")
+    xml = read_text(urdf_path, "URDF", error=ModelFileError)
     if lock:
         xml = lock_joints(xml, lock)
     xml = wrap_base_tool(xml, flange, T_instrument_base, T_flange_tool, base=base)

@@ -7,17 +7,27 @@ from the text. This keeps the exported URDF exactly the identified model.
 
 from __future__ import annotations
 
+import os
+import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import ModelFileError, UnknownNameError
+from pincal.errors import InputLimitError, ModelFileError, UnknownNameError, clip
+from pincal.model._urdf_check import (
+    JOINT_TYPES,
+    ModelLimits,
+    check_joint_element,
+    check_robot_element,
+)
 
 __all__ = ["MOVABLE_TYPES", "UrdfJoint", "UrdfTree", "se3_from_xyz_rpy"]
 
 MOVABLE_TYPES = ("revolute", "continuous", "prismatic")
+
+_LINK_TAG = re.compile(r"<link[\s/>]")
 
 
 @dataclass(frozen=True)
@@ -69,40 +79,105 @@ def se3_from_xyz_rpy(xyz: np.ndarray, rpy: np.ndarray) -> pin.SE3:
 
 
 class UrdfTree:
-    """Parsed URDF: joints by name, link topology, and origin rewriting."""
+    """Parsed URDF: joints by name, link topology, and origin rewriting.
 
-    def __init__(self, xml: str):
+    The text is checked before anything is built (:mod:`pincal.model._urdf_check`):
+    names, joint attributes and numbers (the message names the joint and attribute),
+    and the size limits of :class:`~pincal.model.ModelLimits` (links, degrees of
+    freedom, depth). Building the tree is linear in the number of links.
+
+    Args:
+        xml: URDF text.
+        limits: size limits (default :meth:`ModelLimits.from_env`).
+        source: the file the text comes from, named in the messages.
+
+    Raises:
+        ModelFileError: malformed XML, a missing or invalid attribute, not one tree.
+        InputLimitError: more links, degrees of freedom or depth than the limits.
+        UnknownNameError: a joint names a link that does not exist.
+    """
+
+    def __init__(
+        self, xml: str, limits: ModelLimits | None = None, source: str | os.PathLike | None = None
+    ):
+        try:
+            self._load(xml, limits or ModelLimits.from_env())
+        except (ModelFileError, InputLimitError) as exc:
+            if source is None:
+                raise
+            raise type(exc)(f"{clip(str(source), 200)}: {exc}") from None
+
+    def _load(self, xml: str, limits: ModelLimits) -> None:
+        # an upper bound of the link count, before spending time and memory on parsing
+        limits.check("links", len(_LINK_TAG.findall(xml)), limits.links, "PINCAL_MAX_LINKS", "URDF")
         try:
             self.root = ET.fromstring(xml)
         except ET.ParseError as exc:
             raise ModelFileError(f"URDF is not well-formed XML: {exc}") from exc
-        if self.root.tag != "robot":
-            raise ModelFileError(f"URDF root element is <{self.root.tag}>, expected <robot>")
+        check_robot_element(self.root)
         self.name = self.root.get("name", "robot")
-        self.links = [e.get("name", "") for e in self.root.findall("link")]
+        where = f"URDF robot '{clip(self.name)}'"
+        link_elements = self.root.findall("link")
+        limits.check("links", len(link_elements), limits.links, "PINCAL_MAX_LINKS", where)
+        self.links = [e.get("name", "") for e in link_elements]
         if not self.links:
             raise ModelFileError("URDF has no <link>")
+        link_set: set[str] = set()
+        for link in self.links:
+            if not link:
+                raise ModelFileError("URDF <link> without a name attribute; every link needs one")
+            if link in link_set:
+                raise ModelFileError(f"URDF link '{clip(link)}' is defined twice")
+            link_set.add(link)
         self.joints: dict[str, UrdfJoint] = {}
         self._elements: dict[str, ET.Element] = {}
         parent_joint: dict[str, str] = {}
+        dof = 0
         for e in self.root.findall("joint"):
-            joint = self._parse_joint(e)
-            if joint.name in self.joints:
-                raise ModelFileError(f"URDF joint {joint.name!r} is defined twice")
-            for link in (joint.parent, joint.child):
-                if link not in self.links:
+            name, jtype, parent, child = check_joint_element(e)
+            if name in self.joints:
+                raise ModelFileError(f"URDF joint '{clip(name)}' is defined twice")
+            for link in (parent, child):
+                if link not in link_set:
                     raise UnknownNameError("link", link, self.links)
-            if joint.child in parent_joint:
-                raise ModelFileError(f"URDF link {joint.child!r} has two parent joints")
-            self.joints[joint.name] = joint
-            self._elements[joint.name] = e
-            parent_joint[joint.child] = joint.name
+            if child in parent_joint:
+                raise ModelFileError(f"URDF link '{clip(child)}' has two parent joints")
+            dof += JOINT_TYPES[jtype]
+            self.joints[name] = self._parse_joint(e)
+            self._elements[name] = e
+            parent_joint[child] = name
+        limits.check("degrees of freedom", dof, limits.dof, "PINCAL_MAX_DOF", where)
         self.parent_joint = parent_joint
         roots = [link for link in self.links if link not in parent_joint]
         if len(roots) != 1:
-            raise ModelFileError(f"URDF must form one tree; root links are {roots}")
+            raise ModelFileError(f"URDF must form one tree; root links are {clip(roots, 200)}")
         self.root_link = roots[0]
+        self.depth = self._check_depth(limits, where)
         self._ancestors: dict[str, tuple[str, ...]] = {}
+
+    def _check_depth(self, limits: ModelLimits, where: str) -> int:
+        """Depth of the tree (joints from the root to the deepest link), in linear time."""
+        children: dict[str, list[str]] = {}
+        for joint in self.joints.values():
+            children.setdefault(joint.parent, []).append(joint.child)
+        depth = {self.root_link: 0}
+        stack = [self.root_link]
+        while stack:
+            link = stack.pop()
+            for child in children.get(link, ()):
+                depth[child] = depth[link] + 1
+                stack.append(child)
+        if len(depth) != len(self.links):
+            loose = [link for link in self.links if link not in depth]
+            raise ModelFileError(
+                f"URDF links {clip(loose, 200)} are not connected to the root link "
+                f"'{clip(self.root_link)}' (their joints form a loop); a URDF must be one tree"
+            )
+        deepest = max(depth.values())
+        limits.check(
+            "joints in its deepest chain", deepest, limits.depth, "PINCAL_MAX_TREE_DEPTH", where
+        )
+        return deepest
 
     @staticmethod
     def _parse_joint(e: ET.Element) -> UrdfJoint:
@@ -123,7 +198,9 @@ class UrdfTree:
             axis = _floats(ax.get("xyz") if ax is not None else "1 0 0", 3, 0.0, where)
             scale = np.max(np.abs(axis))
             if scale < 1e-12:
-                raise ModelFileError(f"{where} has a zero axis")
+                raise ModelFileError(
+                    f'{where} <axis xyz> is zero; give a direction such as xyz="0 0 1"'
+                )
             axis = axis / scale  # first to the unit box, so huge entries cannot overflow
             axis = axis / np.linalg.norm(axis)
         return UrdfJoint(
@@ -138,7 +215,7 @@ class UrdfTree:
     def ancestors(self, link: str) -> tuple[str, ...]:
         """URDF joints on the path from the root to ``link`` (root first)."""
         if link not in self._ancestors:
-            if link not in self.links:
+            if link not in self.parent_joint and link != self.root_link:
                 raise UnknownNameError("link", link, self.links)
             chain: list[str] = []
             current = link

@@ -1,14 +1,25 @@
-"""Random feasible measurement poses inside a mechanism's workspace."""
+"""Random feasible measurement poses inside a mechanism's workspace.
+
+A pose drawn in a ``pose`` workspace is kept only when the forward kinematics of its
+inverse-kinematics solution (on home's assembly branch, what every later step uses)
+returns it: a pose reached only on another assembly mode (a mirrored platform, the
+other elbow of a five-bar) would otherwise give data for a different pose.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import ConvergenceError, PincalError
+from pincal.errors import ConvergenceError, ModelFileError, UnreachablePoseError
+from pincal.model._closures import COMPONENTS
 from pincal.model._mechanism import Mechanism
 
 __all__ = ["sample_actuators", "sample_pose"]
+
+
+#: a pose whose forward kinematics misses the drawn target by more [m, rad] is refused
+_ROUND_TRIP_TOL = 1e-6
 
 
 def _joint_ranges(mech: Mechanism) -> np.ndarray:
@@ -18,7 +29,27 @@ def _joint_ranges(mech: Mechanism) -> np.ndarray:
             ranges[k] = mech.workspace.joints[name]
     ranges[~np.isfinite(ranges[:, 0]), 0] = -np.pi
     ranges[~np.isfinite(ranges[:, 1]), 1] = np.pi
+    with np.errstate(over="ignore"):
+        width = ranges[:, 1] - ranges[:, 0]
+    bad = np.flatnonzero(~(np.isfinite(width) & (width >= 0)))
+    if bad.size:
+        k = int(bad[0])
+        raise ModelFileError(
+            f"joint {mech.actuated[k]!r} of {mech.name!r} has the range "
+            f"[{ranges[k, 0]:.6g}, {ranges[k, 1]:.6g}] to sample in; give finite limits with "
+            f"lower <= upper (URDF <limit> or the sidecar workspace 'joints')"
+        )
     return ranges
+
+
+def _off_branch(mech: Mechanism, q_act: np.ndarray, target: pin.SE3) -> bool:
+    """Whether forward kinematics on home's branch misses the IK target (another mode)."""
+    reached = mech.forward(q_act)
+    error = np.concatenate(
+        [reached.translation - target.translation, pin.log3(target.rotation.T @ reached.rotation)]
+    )
+    comps = [COMPONENTS.index(c) for c in mech.measured_components]
+    return bool(np.max(np.abs(error[comps])) > _ROUND_TRIP_TOL)
 
 
 def sample_pose(mech: Mechanism, rng: np.random.Generator) -> pin.SE3:
@@ -41,26 +72,51 @@ def sample_actuators(
     With a pose workspace, poses are drawn uniformly in it and solved by inverse
     kinematics; otherwise actuator values are drawn in their ranges and kept when the
     forward kinematics converges away from singularities. Infeasible draws are
-    rejected.
+    rejected, and so are poses reached only in another assembly mode than home's.
+
+    Raises:
+        ModelFileError: fewer than ``n`` feasible poses in ``max_tries_per_pose · n``
+            draws (the message says when the workspace lies on another assembly mode),
+            or an actuator range that is not finite or inverted.
     """
     rows: list[np.ndarray] = []
-    tries = 0
+    tries = mirrored = 0
     ranges = _joint_ranges(mech)
     use_pose = bool(mech.workspace.pose)
     while len(rows) < n:
         tries += 1
         if tries > max_tries_per_pose * n:
-            raise PincalError(
-                f"only {len(rows)} of {n} random poses were feasible for {mech.name!r}; "
-                "check the sidecar workspace limits"
-            )
+            raise ModelFileError(_infeasible(mech, len(rows), n, mirrored, tries - 1))
         try:
             if use_pose:
-                q_act = mech.inverse(sample_pose(mech, rng))
+                target = sample_pose(mech, rng)
+                q_act = mech.inverse(target)
+                if _off_branch(mech, q_act, target):
+                    mirrored += 1
+                    continue
             else:
                 q_act = rng.uniform(ranges[:, 0], ranges[:, 1])
                 mech.configuration(q_act)
+        except UnreachablePoseError as exc:
+            # residual 0: IK converged, but only in another assembly mode than home's
+            mirrored += exc.residual == 0.0
+            continue
         except ConvergenceError:
             continue
         rows.append(q_act)
     return np.array(rows)
+
+
+def _infeasible(mech: Mechanism, got: int, n: int, mirrored: int, tries: int) -> str:
+    text = (
+        f"only {got} of {n} random poses were feasible for {mech.name!r} ({tries} draws); "
+        "check the sidecar workspace limits"
+    )
+    if mirrored:
+        text += (
+            f": {mirrored} drawn poses are reached only in another assembly mode than home's "
+            "(e.g. the platform mirrored through the base), where forward kinematics would "
+            "not return them; give a 'pose' workspace on home's side (home's measured frame "
+            f"is at {np.round(mech.frame_placement(mech.q_home).translation, 4).tolist()} m)"
+        )
+    return text

@@ -238,10 +238,23 @@ def identifiability(
         n_poses: number of random workspace poses sampled when ``q_act_rows`` is None.
         rng: random generator for the default poses.
         rtol: relative rank threshold.
+
+    Raises:
+        InputLimitError: more parameters than ``ModelLimits.parameters`` (raise it with
+            the environment variable ``PINCAL_MAX_PARAMETERS``).
     """
+    from pincal.model import ModelLimits
     from pincal.model._workspace import sample_actuators
     from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
 
+    limits = ModelLimits.from_env()
+    limits.check(
+        f"parameters in set {params.label!r} to analyse",
+        len(params),
+        limits.parameters,
+        "PINCAL_MAX_PARAMETERS",
+        f"model {mech.name!r}",
+    )
     if q_act_rows is None:
         q_act_rows = sample_actuators(mech, n_poses, rng or np.random.default_rng(0))
     J, breaking = jacobian_and_closure_breaking(mech, params, q_act_rows)

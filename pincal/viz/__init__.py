@@ -20,10 +20,14 @@ from pincal.viz._live import (
     LiveSession,
     live,
 )
+from pincal.viz._meshes import (
+    allow_mesh_outside,
+)
 
 __all__ = [
     "Arrow",
     "LiveSession",
+    "allow_mesh_outside",
     "live",
     "static_html",
     "write_html",

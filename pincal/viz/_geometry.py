@@ -20,7 +20,10 @@ import numpy as np
 import pinocchio as pin
 import umsgpack
 
-from pincal.errors import ModelFileError
+from pincal._files import read_bytes, read_text
+from pincal.errors import InputFileError, ModelFileError, VisualizationError, clip
+from pincal.model._urdf_check import captured_stderr
+from pincal.viz._meshes import checked_urdf, mesh_access_allowed, mesh_references
 
 __all__ = [
     "Part",
@@ -96,31 +99,70 @@ def segment_transform(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def load_geometry_model(
-    model: pin.Model, urdf: str | os.PathLike, kind: pin.GeometryType
+    model: pin.Model,
+    urdf: str | os.PathLike,
+    kind: pin.GeometryType,
+    allow_outside: bool | None = None,
 ) -> pin.GeometryModel:
+    """The geometry model of a URDF's visuals or collisions, meshes checked first.
+
+    Args:
+        model: the Pinocchio model built from the URDF.
+        urdf: the URDF file, or URDF text.
+        kind: ``pin.GeometryType.VISUAL`` or ``COLLISION``.
+        allow_outside: read meshes outside the model's directory (default: the
+            :func:`~pincal.viz.allow_mesh_outside` context, else False).
+
+    Raises:
+        ModelFileError: the URDF file is missing or unreadable.
+        VisualizationError: a mesh outside the model's directory, a URL, a missing or
+            unreadable mesh file (the message names the link and the path).
+    """
+    allow = mesh_access_allowed() if allow_outside is None else allow_outside
     text = str(urdf)
     if text.lstrip().startswith("<"):
-        return pin.buildGeomFromUrdfString(model, text, kind, package_dirs=[])
-    path = Path(urdf)
-    if not path.is_file():
-        raise ModelFileError(f"URDF file {str(path)!r} not found")
-    # package://pkg/... resolves against any ancestor holding a folder named pkg
-    package_dirs = [str(p) for p in path.resolve().parents][:8]
-    return pin.buildGeomFromUrdf(model, str(path), kind, package_dirs=package_dirs)
+        path = None
+    else:
+        path = Path(urdf)
+        text = read_text(path, "URDF", error=ModelFileError)
+    xml = checked_urdf(text, path, allow)
+    refs = mesh_references(xml, None, True)
+    built, printed, error = captured_stderr(
+        lambda: pin.buildGeomFromUrdfString(model, xml, kind, package_dirs=[])
+    )
+    if error is not None or built is None:
+        message = f"{error}\n{printed}"
+        culprit = next((r for r in refs if str(r.path) in message), None)
+        where = (
+            f"link '{clip(culprit.link)}' mesh {clip(str(culprit.path), 200)}"
+            if culprit
+            else "a mesh"
+        )
+        said = " ".join(str(error).split())
+        said = said.split("message:", 1)[-1].strip()  # the loader's reason, without its source
+        raise VisualizationError(
+            f"cannot load {where}: {clip(said, 300)}; check that the "
+            "file is a valid .stl, .dae or .obj mesh"
+        )
+    if printed.strip():
+        log.debug("geometry loader output: %s", clip(printed, 2000))
+    return built
 
 
 def _mesh_geometry(path: str) -> tuple[mg.Geometry, int] | None:
     suffix = Path(path).suffix.lower()
     if not Path(path).is_file():
         return None
-    if suffix == ".stl":
-        data = stl_with_normals(Path(path).read_bytes())
-        _, ext_code = mg.threejs_type(np.uint8)
-        return mg.MeshGeometry(umsgpack.Ext(ext_code, data), "stl"), len(data)
-    if suffix == ".dae":
-        return mg.DaeMeshGeometry.from_file(path), Path(path).stat().st_size
-    if suffix == ".obj":
-        return mg.ObjMeshGeometry.from_file(path), Path(path).stat().st_size
+    try:
+        if suffix == ".stl":
+            data = stl_with_normals(read_bytes(path, "mesh"))
+            _, ext_code = mg.threejs_type(np.uint8)
+            return mg.MeshGeometry(umsgpack.Ext(ext_code, data), "stl"), len(data)
+        if suffix in (".dae", ".obj"):
+            text = read_text(path, "mesh")
+            return mg.MeshGeometry(text, suffix[1:]), len(text.encode("utf-8"))
+    except InputFileError as exc:
+        raise VisualizationError(f"cannot embed mesh: {exc}") from None
     return None
 
 

@@ -143,6 +143,7 @@ def static_html(
     ghost_opacity: float = 0.35,
     fps: int = 30,
     up: str = "+z",
+    allow_mesh_outside: bool = False,
 ) -> str:
     """A self-contained HTML page showing ``model`` at ``configurations``.
 
@@ -151,6 +152,8 @@ def static_html(
             placements, e.g. a calibrated model; link names must match).
         urdf_path: the URDF file (its ``<visual>`` elements are drawn; ``package://``
             URIs resolve against the file's ancestor folders) or the URDF XML text.
+            Mesh files are read only from inside the URDF's directory (or the
+            ``package://`` package holding the URDF) and embedded in the page.
         configurations: sequence of configurations, each shape (model.nq,).
         frame: name of a model frame (the measured frame) whose axes are drawn at
             every configuration, or None.
@@ -166,13 +169,16 @@ def static_html(
         fps: animation frame rate.
         up: the world direction drawn pointing up: ``+z`` (default), ``-z`` (a
             machine whose world z points down, towards the table), ``±x``, ``±y``.
+        allow_mesh_outside: also read meshes outside the model's directory (absolute
+            paths, ``../``): their bytes end up in the page, so only for trusted URDFs.
 
     Returns:
         The HTML text (a few MB: meshcat's viewer is inlined). Opening it needs no
         server and no network.
 
     Raises:
-        VisualizationError: malformed configurations, arrows or colours.
+        VisualizationError: malformed configurations, arrows or colours; a mesh outside
+            the model's directory, a mesh URL, a missing or unreadable mesh file.
         UnknownNameError: ``frame`` is not a frame of ``model``.
         ModelFileError: the URDF file does not exist.
     """
@@ -192,6 +198,7 @@ def static_html(
         ghost_opacity=ghost_opacity,
         fps=fps,
         up=up,
+        allow_mesh_outside=allow_mesh_outside or None,
     )
     commands = ",\n".join('"' + base64.b64encode(c).decode("ascii") + '"' for c in window.commands)
     return _PAGE.format(

@@ -81,8 +81,12 @@ def build_scene(
     ghost_opacity: float,
     fps: int,
     up: str = "+z",
+    allow_mesh_outside: bool | None = None,
 ) -> dict:
-    """Send the scene to ``vis``; returns legend facts (colours, arrow scale)."""
+    """Send the scene to ``vis``; returns legend facts (colours, arrow scale).
+
+    ``allow_mesh_outside`` None follows :func:`~pincal.viz.allow_mesh_outside`.
+    """
     R_view_world = up_rotation(up)
     frame_id = None
     if frame is not None:
@@ -93,11 +97,13 @@ def build_scene(
 
     animate = animate and len(qs) > 1
     copies = (len(qs) if ghosts else 0) + (1 if animate else 0)
-    gmodel = load_geometry_model(model, urdf, pin.GeometryType.VISUAL)
+    gmodel = load_geometry_model(model, urdf, pin.GeometryType.VISUAL, allow_mesh_outside)
     parts, with_visual = parts_from_geometry(gmodel)
     mesh_bytes = sum(p.mesh_bytes for p in parts) * max(1, copies)
     if mesh_bytes > MESH_BUDGET_BYTES:
-        collision = load_geometry_model(model, urdf, pin.GeometryType.COLLISION)
+        collision = load_geometry_model(
+            model, urdf, pin.GeometryType.COLLISION, allow_mesh_outside
+        )
         c_parts, c_with = parts_from_geometry(collision)
         if c_parts and sum(p.mesh_bytes for p in c_parts) < sum(p.mesh_bytes for p in parts):
             log.info(

@@ -435,7 +435,7 @@ def test_non_joint_actuator_is_skipped_with_warning(caplog):
 
 
 def test_load_mjcf_errors_and_overrides(tmp_path):
-    with pytest.raises(ModelFileError, match="cannot read MJCF file"):
+    with pytest.raises(ModelFileError, match="MJCF file .*missing.xml does not exist"):
         load_mjcf(tmp_path / "missing.xml")
     mech = load_mjcf(HERE / "fivebar.xml", actuated=["left_motor", "right_motor"], keyframe="home")
     assert mech.actuated == ("left_motor", "right_motor") and mech.measured_frame == "pen"
