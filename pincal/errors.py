@@ -281,5 +281,5 @@ class ImportMatchError(MeasurementError):
         super().__init__(message)
 
 
-class CampaignError(PincalError):
+class CampaignError(InputFileError):
     """A campaign file (``pincal run``) is malformed: unknown key, bad value, missing file."""

@@ -5,9 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from pincal.errors import ModelFileError, UnknownNameError
+from pincal._yaml import load_yaml
+from pincal.errors import ModelFileError, UnknownNameError, clip
 from pincal.model._mechanism import Mechanism
 from pincal.model._newton import SolverOptions
 
@@ -26,15 +25,22 @@ def _read_text(path: Path, what: str) -> str:
 
 
 def read_sidecar(path: Path) -> dict[str, Any]:
-    """Parse a sidecar YAML file safely (no code execution)."""
-    try:
-        data = yaml.safe_load(_read_text(path, "sidecar"))
-    except yaml.YAMLError as exc:
-        raise ModelFileError(f"sidecar {str(path)!r} is not valid YAML: {exc}") from exc
+    """Parse a sidecar YAML file safely (see :func:`pincal._yaml.load_yaml`).
+
+    No code execution, a size cap, bounded alias expansion, duplicate keys refused.
+
+    Raises:
+        ModelFileError: unreadable, not UTF-8, not YAML, a duplicate key, not a mapping.
+        InputLimitError: too large, an alias bomb or nesting too deep.
+    """
+    data = load_yaml(path, "sidecar", ModelFileError)
     if data is None:
         return {}
     if not isinstance(data, dict):
-        raise ModelFileError(f"sidecar {str(path)!r} must be a mapping, got {type(data).__name__}")
+        raise ModelFileError(
+            f"sidecar {clip(str(path))} must be a mapping of keys (closed_loop, name_mot, ...), "
+            f"got a {type(data).__name__}"
+        )
     return data
 
 
