@@ -22,6 +22,7 @@ __all__ = [
     "InputFileError",
     "InputLimitError",
     "MeasurementError",
+    "MeasurementFileError",
     "MeasurementFormatError",
     "MobilityError",
     "ModelFileError",
@@ -205,6 +206,10 @@ class CalibrationDirectoryError(PincalError):
 
 class MeasurementFormatError(MeasurementError):
     """The file's header or layout is malformed (line named in the message)."""
+
+
+class MeasurementFileError(MeasurementFormatError, InputFileError):
+    """A data file (measurements, poses, commands…) is missing, unreadable or not text."""
 
 
 class FrameMismatchError(MeasurementError):

@@ -24,16 +24,20 @@ from pathlib import Path
 
 import numpy as np
 
-from pincal.errors import ColumnError, MeasurementFormatError
+from pincal._yaml import shown
+from pincal.errors import ColumnError, MeasurementFormatError, clip
 from pincal.io._csv import (
+    actuator_columns,
     fmt,
     header_value,
     parse_column,
+    parse_float,
     parse_numbers,
     positive_value,
     split_file,
     write_csv,
 )
+from pincal.io._names import quote_value
 from pincal.io._units import LENGTH_UNITS, actuator_read_factors, unit_factor
 from pincal.measure._instruments import INSTRUMENT_KINDS, Instrument, InstrumentData
 from pincal.model import Mechanism
@@ -42,12 +46,11 @@ __all__ = ["read_instrument_data", "write_instrument_data"]
 
 
 def _vector(text: str, n: int, key: str, name: str) -> np.ndarray:
-    try:
-        v = np.array([float(x) for x in text.replace(",", " ").split()])
-    except ValueError:
-        raise MeasurementFormatError(f"{name}: header {key!r} must be numbers") from None
+    v = np.array([parse_float(x, f"{name} header {key!r}") for x in text.replace(",", " ").split()])
     if v.size != n or not np.all(np.isfinite(v)):
-        raise MeasurementFormatError(f"{name}: header {key!r} needs {n} finite numbers")
+        raise MeasurementFormatError(
+            f"{name}: header {key!r} is {clip(text)}; it needs {n} finite numbers"
+        )
     return v
 
 
@@ -67,13 +70,14 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
     kind = header_value(header, "kind", None, name)
     if kind not in INSTRUMENT_KINDS:
         raise MeasurementFormatError(
-            f"{name}: kind {kind!r} unknown; use one of {INSTRUMENT_KINDS}"
+            f"{name}: kind {shown(kind)} unknown; use one of {INSTRUMENT_KINDS}"
         )
     lf = unit_factor(LENGTH_UNITS, header_value(header, "length_unit", "m", name), "length", name)
     frame = header_value(header, "frame", mech.measured_frame, name)
     if frame != mech.measured_frame:
         raise MeasurementFormatError(
-            f"{name} measures frame {frame!r} but the model's tool frame is {mech.measured_frame!r}"
+            f"{name} measures frame {shown(frame)} but the model's tool frame is "
+            f"{mech.measured_frame!r}"
         )
     std = positive_value(header_value(header, "std", None, name), "std", name) / lf
     radius, direction = 0.0, (0.0, 0.0, 1.0)
@@ -128,7 +132,11 @@ def write_instrument_data(path: str | Path, data: InstrumentData, length_unit: s
     """
     lf = unit_factor(LENGTH_UNITS, length_unit, "length", "write_instrument_data")
     inst = data.instrument
-    lines = [f"kind: {inst.kind}", f"frame: {data.frame}", f"length_unit: {length_unit}"]
+    lines = [
+        f"kind: {inst.kind}",
+        f"frame: {quote_value(data.frame, 'frame')}",
+        f"length_unit: {length_unit}",
+    ]
     lines.append(f"std: {fmt(inst.std * lf)}")
     if inst.kind == "sphere":
         lines.append(f"radius: {fmt(inst.radius * lf)}")
@@ -139,7 +147,11 @@ def write_instrument_data(path: str | Path, data: InstrumentData, length_unit: s
     if data.initial is not None:
         units = np.array([1.0 if u == "rad" else lf for u in inst.parameter_units])
         lines.append("initial: " + ", ".join(fmt(x) for x in data.initial * units))
-    columns = [*data.actuated, "value", *(["plane"] if inst.kind == "plane" else [])]
+    columns = [
+        *actuator_columns(data.actuated, None),
+        "value",
+        *(["plane"] if inst.kind == "plane" else []),
+    ]
     rows = []
     for i in range(len(data)):
         row = [fmt(v) for v in data.q_act[i]] + [fmt(data.values[i] * lf)]

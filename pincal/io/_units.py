@@ -11,6 +11,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from pincal._yaml import shown
 from pincal.errors import MeasurementError, MeasurementFormatError
 from pincal.model import Mechanism
 
@@ -45,7 +46,7 @@ def unit_factor(table: dict[str, float], name: str, what: str, where: str) -> fl
     """
     if name not in table:
         raise MeasurementFormatError(
-            f"{where}: unknown {what} unit {name!r}; use one of {', '.join(table)}"
+            f"{where}: unknown {what} unit {shown(name)}; use one of {', '.join(table)}"
         )
     return table[name]
 
@@ -83,7 +84,7 @@ def actuator_write_factors(units: Sequence[str] | None, n: int) -> np.ndarray:
     unknown = [u for u in units if u not in table]
     if unknown:
         raise MeasurementError(
-            f"actuator units {unknown} unknown; use length units {', '.join(LENGTH_UNITS)} "
+            f"actuator units {shown(unknown)} unknown; use length units {', '.join(LENGTH_UNITS)} "
             f"or angle units {', '.join(ANGLE_UNITS)}"
         )
     return np.array([table[u] for u in units])
