@@ -148,8 +148,9 @@ def parse_yaml(text: str, where: str, error: type[InputFileError] = InputFileErr
             (key and lines named), a value YAML cannot represent (e.g. an integer of
             more than 4300 digits), more than one document.
     """
-    loader = _StrictLoader(text)
+    loader: _StrictLoader | None = None
     try:
+        loader = _StrictLoader(text)
         try:
             node = loader.get_single_node()
         except RecursionError:
@@ -175,7 +176,8 @@ def parse_yaml(text: str, where: str, error: type[InputFileError] = InputFileErr
     except (ValueError, OverflowError) as exc:
         raise error(f"{where} holds a value that cannot be read: {clip(str(exc), 160)}") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 def load_yaml(

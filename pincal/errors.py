@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 
 __all__ = [
+    "ActuatorRangeError",
     "BadValueError",
     "CalibrationDirectoryError",
     "CampaignError",
@@ -240,6 +241,20 @@ class BadValueError(MeasurementError):
 
 class NonFiniteValueError(BadValueError):
     """A cell is NaN or infinite."""
+
+
+class ActuatorRangeError(BadValueError):
+    """An actuator value lies far outside its joint's URDF limits.
+
+    Attributes: row, column (as :class:`BadValueError`), joint, limits (lower, upper)
+    [m or rad].
+    """
+
+    def __init__(
+        self, message: str, row: int, column: str, joint: str, limits: tuple[float, float]
+    ):
+        self.joint, self.limits = joint, limits
+        super().__init__(message, row, column)
 
 
 class PoseFitError(MeasurementError):

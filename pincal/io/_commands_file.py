@@ -37,7 +37,11 @@ from pincal.io._csv import (
     write_csv,
 )
 from pincal.io._names import is_decimal, is_non_finite
-from pincal.io._units import actuator_read_factors, actuator_write_factors
+from pincal.io._units import (
+    actuator_read_factors,
+    actuator_write_factors,
+    check_actuator_ranges,
+)
 from pincal.model import Mechanism
 
 __all__ = ["MAX_POSES_BYTES", "read_actuator_rows", "read_commands", "write_commands"]
@@ -101,7 +105,9 @@ def read_commands(path: str | Path, mech: Mechanism) -> tuple[np.ndarray, np.nda
     data = parse_numbers(rows, columns, name)
     act = [names.index(j) for j in mech.actuated]
     fac = actuator_read_factors(mech, [parsed[k][1] for k in act], name)
-    return data[:, names.index("pose")].astype(int), data[:, act] / fac
+    q_act = data[:, act] / fac
+    check_actuator_ranges(mech, q_act, name, [columns[k] for k in act])
+    return data[:, names.index("pose")].astype(int), q_act
 
 
 def read_actuator_rows(

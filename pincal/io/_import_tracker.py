@@ -50,7 +50,7 @@ from pincal.errors import (
 )
 from pincal.io._delimited import Table, read_table
 from pincal.io._tracker_file import TargetMeasurements
-from pincal.io._units import ANGLE_UNITS, LENGTH_UNITS, unit_factor
+from pincal.io._units import ANGLE_UNITS, LENGTH_UNITS, check_actuator_ranges, unit_factor
 from pincal.model import Mechanism
 
 __all__ = ["TrackerImport", "TrackerImportOptions", "import_tracker"]
@@ -206,7 +206,9 @@ def _log_actuators(log: Table, mech: Mechanism, opts: TrackerImportOptions) -> n
         cols.append(k)
         factors.append(unit_factor(table, unit, "angle" if revolute else "length", log.name))
     q = np.array([[log.number(i, k) for k in cols] for i in range(len(log.rows))])
-    return q.reshape(-1, len(cols)) / np.array(factors)
+    q = q.reshape(-1, len(cols)) / np.array(factors)
+    check_actuator_ranges(mech, q, log.name, [log.columns[k] for k in cols], log.lines)
+    return q
 
 
 def _listing(items: list) -> str:

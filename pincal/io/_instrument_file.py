@@ -38,7 +38,12 @@ from pincal.io._csv import (
     write_csv,
 )
 from pincal.io._names import quote_value
-from pincal.io._units import LENGTH_UNITS, actuator_read_factors, unit_factor
+from pincal.io._units import (
+    LENGTH_UNITS,
+    actuator_read_factors,
+    check_actuator_ranges,
+    unit_factor,
+)
 from pincal.measure._instruments import INSTRUMENT_KINDS, Instrument, InstrumentData
 from pincal.model import Mechanism
 
@@ -108,6 +113,7 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
     col = {c: k for k, c in enumerate(names)}
     act = [col[j] for j in mech.actuated]
     q_act = data[:, act] / actuator_read_factors(mech, [parsed[k][1] for k in act], name)
+    check_actuator_ranges(mech, q_act, name, [columns[k] for k in act])
     values = data[:, col["value"]] / lf
     plane = data[:, col["plane"]] if kind == "plane" else None
     initial = None

@@ -68,6 +68,7 @@ from pincal.io._units import (
     LENGTH_UNITS,
     actuator_read_factors,
     actuator_write_factors,
+    check_actuator_ranges,
     unit_factor,
 )
 from pincal.measure import Measurements, NoiseModel
@@ -202,6 +203,7 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
     col = {c: k for k, c in enumerate(names)}
     act_idx = [col[j] for j in mech.actuated]
     q_act = data[:, act_idx] / actuator_read_factors(mech, [parsed[k][1] for k in act_idx], name)
+    check_actuator_ranges(mech, q_act, name, [columns[k] for k in act_idx])
     used = set(act_idx)
 
     def take(cols: Sequence[str], what: str) -> np.ndarray:

@@ -12,6 +12,7 @@ from pincal.io._commands_file import read_actuator_rows, read_commands
 from pincal.io._csv import file_kind
 from pincal.io._measurement_file import read_measurements
 from pincal.io._poses_file import read_pose_file
+from pincal.io._units import check_actuator_ranges
 from pincal.model import Mechanism
 
 __all__ = ["read_pose_rows"]
@@ -46,6 +47,7 @@ def read_pose_rows(path: str | Path, mech: Mechanism, max_rows: int | None = Non
                     f"model {mech.name!r}"
                 )
             rows = pf.q_act[:, [pf.actuated.index(j) for j in mech.actuated]]
+            check_actuator_ranges(mech, rows, path.name)
         else:
             out, bad = [], []
             for i, T in enumerate(pf.poses):
@@ -68,7 +70,9 @@ def read_pose_rows(path: str | Path, mech: Mechanism, max_rows: int | None = Non
             "measurements file"
         )
     else:
-        return read_actuator_rows(path, mech.actuated, max_rows)
+        rows = read_actuator_rows(path, mech.actuated, max_rows)
+        check_actuator_ranges(mech, rows, path.name)
+        return rows
     if max_rows is not None and len(rows) > max_rows:
         raise MeasurementError(
             f"poses file {str(path)!r} has {len(rows)} poses; at most {max_rows}"
