@@ -20,7 +20,7 @@ import yaml
 from pincal._files import read_text
 from pincal.errors import InputFileError, InputLimitError, clip
 
-__all__ = ["MAX_DEPTH", "MAX_NODES", "load_yaml", "parse_yaml", "shown"]
+__all__ = ["MAX_DEPTH", "MAX_NODES", "load_yaml", "parse_yaml", "path_text", "shown"]
 
 #: largest number of nodes a document may expand to, aliases counted at every use
 MAX_NODES = 200_000
@@ -204,4 +204,10 @@ def load_yaml(
         InputLimitError: too large, or an alias expansion / nesting past the bounds.
     """
     text = read_text(path, what, limit, error)
-    return parse_yaml(text, f"{what} {clip(str(path))}", error)
+    return parse_yaml(text, f"{what} {path_text(path)}", error)
+
+
+def path_text(path: str | Path, limit: int = 80) -> str:
+    """A path for messages, cut at the front so the file name always shows."""
+    text = clip(str(path), 10 * limit)
+    return text if len(text) <= limit else "…" + text[-(limit - 1) :]

@@ -218,4 +218,3 @@ def weighted_fit(
             x, iterations, tuple(history), out.success, note + out.message, extras, out.fitted
         )
     return out, model, weighting
-

@@ -61,7 +61,7 @@ from pincal.io._csv import (
     split_file,
     write_csv,
 )
-from pincal.io._names import quote_value
+from pincal.io._names import is_decimal, is_non_finite, quote_value
 from pincal.io._tracker_file import TargetMeasurements, parse_target_limits, parse_targets
 from pincal.io._units import (
     ANGLE_UNITS,
@@ -143,12 +143,11 @@ def _parse_noise(header: Header, name: str) -> NoiseModel | None:
             raise MeasurementFormatError(
                 f"{name}: noise entry {shown(item)}; use position_mm=<σ> orientation_mrad=<σ>"
             )
-        try:
-            sigma = float(v)
-        except ValueError:
+        if not (is_decimal(v) or is_non_finite(v)):
             raise MeasurementFormatError(
-                f"{name}: noise entry {shown(item)} is not a number"
-            ) from None
+                f"{name}: noise entry {shown(item)} is not a number; write e.g. position_mm=0.01"
+            )
+        sigma = float(v)
         if not (math.isfinite(sigma) and sigma >= 0):
             raise MeasurementFormatError(f"{name}: noise entry {shown(item)} must be finite, ≥ 0")
         vals[key.split("_")[0]] = sigma

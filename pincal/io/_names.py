@@ -40,7 +40,7 @@ _UNWRITABLE = ("Cc", "Cs", "Zl", "Zp")
 _JSON_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
 _PLAIN_WORD = re.compile(r'^[^\s"#]+$')
 _PLAIN_TITLE = re.compile(r'^[^\s,"#\[\]](?:[^,"#\[\]]*[^\s,"#\[\]])?$')
-_DECIMAL = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
+_DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 
