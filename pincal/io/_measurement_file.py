@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from pincal._yaml import shown
+from pincal._yaml import path_text, shown
 from pincal.errors import (
     BadValueError,
     ColumnError,
@@ -87,6 +87,8 @@ log = logging.getLogger(__name__)
 MATRIX_COLUMNS = tuple(f"r{i}{j}" for i in range(1, 4) for j in range(1, 4))
 ORIENTATIONS = ("rotvec", "matrix")
 KINDS = ("pose", "targets")
+#: column names a pose-kind file gives a meaning (an actuated joint may not use them)
+_RESERVED = frozenset([*COMPONENTS, *MATRIX_COLUMNS, *(f"std_{c}" for c in COMPONENTS)])
 
 
 @dataclass(frozen=True)
@@ -329,7 +331,8 @@ def write_measurements(
         The written path.
 
     Raises:
-        MeasurementFormatError: unknown length or angle unit.
+        MeasurementFormatError: unknown length or angle unit; a name the file cannot
+            hold (control characters, an actuated joint named like a data column).
         MeasurementError: unknown orientation or bad ``actuator_units``.
     """
     lf = unit_factor(LENGTH_UNITS, length_unit, "length", "write_measurements")
@@ -337,6 +340,13 @@ def write_measurements(
     if orientation not in ORIENTATIONS:
         raise MeasurementError(f"orientation {orientation!r}; use one of {ORIENTATIONS}")
     meas = measurements
+    clash = [a for a in meas.actuated if a in _RESERVED]
+    if clash:
+        raise MeasurementFormatError(
+            f"cannot write {path_text(path)}: actuated joint {shown(clash[0])} would appear "
+            "twice as a measurement column name (x y z rx ry rz r11…r33 std_*); rename the "
+            "joint"
+        )
     lines = [
         f"frame: {quote_value(meas.frame, 'frame')}",
         "kind: pose",
