@@ -374,3 +374,59 @@ def test_huge_header_and_cell_values_are_clipped(tmp_path, hexa, good_csv):
     with pytest.raises(BadValueError) as exc2:
         read_commands(path, hexa)
     assert len(str(exc2.value)) < 400
+
+
+# --- every data-file option of the CLI against each bad-file class ---------------------
+
+_COMMANDS = {
+    "calibrate": lambda f, out: ["calibrate", "hexaslide_6pus", "--data", f, "--out", out],
+    "simulate": lambda f, out: ["simulate", "hexaslide_6pus", "--poses", f, "--out", out],
+    "compensate": lambda f, out: ["compensate", "hexaslide_6pus", "--targets", f, "--out", out],
+    "view": lambda f, out: ["view", "hexaslide_6pus", "--poses", f, "--html", out],
+    "acceptance": lambda f, out: ["acceptance", "hexaslide_6pus", "--data", f, "--out", out],
+    "import-tracker": lambda f, out: [
+        "import-tracker",
+        f,
+        "--log",
+        f,
+        "--targets",
+        f,
+        "--model",
+        "hexaslide_6pus",
+        "--out",
+        out,
+    ],
+}
+
+
+def _bad_file(kind: str, tmp_path: Path, monkeypatch) -> str:
+    path = tmp_path / "bad.csv"
+    if kind == "device":
+        return "/dev/zero"
+    if kind == "directory":
+        path.mkdir()
+    elif kind == "too_big":
+        path.write_bytes(b"# pincal measurements 1\n" + b"0," * 700_000)
+        monkeypatch.setenv("PINCAL_MAX_FILE_MB", "1")
+    elif kind == "huge_cell":
+        path.write_text("# pincal poses 1\n# length_unit: m\nx,y,z\n" + "1" * 200_000 + ",0,0\n")
+    elif kind == "not_utf8":
+        path.write_bytes(b"# pincal poses 1\nx,y,z\n\xff\xfe,0,0\n")
+    return str(path)
+
+
+@pytest.mark.parametrize("kind", ["device", "directory", "too_big", "huge_cell", "not_utf8"])
+@pytest.mark.parametrize("command", sorted(_COMMANDS))
+def test_every_data_option_fails_cleanly_on_bad_files(tmp_path, monkeypatch, command, kind):
+    if kind == "device" and not Path("/dev/zero").exists():
+        pytest.skip("no /dev/zero")
+    f = _bad_file(kind, tmp_path, monkeypatch)
+    res = _cli(*_COMMANDS[command](f, str(tmp_path / "out.x")))
+    assert res.exit_code in (1, 2), res.output  # 2: click refused the path itself
+    assert "Traceback" not in res.output, res.output
+    assert res.exception is None or isinstance(res.exception, SystemExit), res.exception
+    err = res.stderr.strip()
+    assert err and len(err) < 1000, err
+    if res.exit_code == 1:
+        assert len(err.splitlines()) == 1, err
+        assert Path(f).name in err, err
