@@ -118,16 +118,7 @@ def _grouped(meas, controller):
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON on stdout.")
 @fail_cleanly
 def acceptance(
-    model,
-    cal,
-    data_file,
-    preset,
-    errors,
-    error_size,
-    cycles,
-    repeatability,
-    seed,
-    json_out,
+    model, cal, data_file, preset, errors, error_size, cycles, repeatability, seed, json_out,
     as_json,
 ) -> None:
     """ISO 9283 acceptance of MODEL: AP and RP at P1–P5 of the test cube.

@@ -236,7 +236,9 @@ def identify(
                 f"and measurements a Measurements, got {type(params).__name__} and "
                 f"{type(measurements).__name__}"
             )
-        problem = IdentificationProblem(problem, params, measurements, initial, fit, reduce, noise)
+        problem = IdentificationProblem(
+            problem, params, measurements, initial, fit, reduce, noise
+        )
     legacy = dict(loss=loss, regularization=regularization, max_iterations=max_iterations)
     legacy["xtol"] = xtol
     entry = solver(method)

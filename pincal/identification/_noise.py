@@ -218,3 +218,4 @@ def weighted_fit(
             x, iterations, tuple(history), out.success, note + out.message, extras, out.fitted
         )
     return out, model, weighting
+

@@ -359,7 +359,9 @@ def plot_validation_summary(
     return _save(fig, path)
 
 
-def plot_correlation(names: Sequence[str], covariance: np.ndarray, path: str | os.PathLike) -> Path:
+def plot_correlation(
+    names: Sequence[str], covariance: np.ndarray, path: str | os.PathLike
+) -> Path:
     """Heat map of the parameter correlations ``C_ij / (σ_i σ_j)`` of a (L, L) covariance."""
     C = np.asarray(covariance, dtype=float)
     if C.ndim != 2 or C.shape != (len(names), len(names)) or not len(names):

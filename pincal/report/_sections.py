@@ -203,9 +203,7 @@ def parameter_section(result: IdentificationResult, plots: Path) -> tuple[Sectio
         row.append("YES" if name in poor else "")
         rows.append(row)
     text = (
-        "Displacements of the URDF joint origins ("
-        + UNITS_NOTE
-        + ")"
+        "Displacements of the URDF joint origins (" + UNITS_NOTE + ")"
         + (", with the simulated true values" if true is not None else "")
         + f". Poorly determined: 2σ > {POOR_LENGTH_2SIGMA * 1e3:g} mm (lengths) or > "
         f"{POOR_ANGLE_2SIGMA * 1e3:g} mrad (angles) — {len(poor)} parameters"
