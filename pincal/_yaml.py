@@ -58,36 +58,43 @@ class _DuplicateKey(Exception):
         self.key, self.line, self.first = key, line, first
 
 
-class _StrictLoader(yaml.SafeLoader):
-    """SafeLoader that refuses duplicate mapping keys (merge keys ``<<`` excepted)."""
+def _check_duplicates(nodes: list[Any], loader: yaml.SafeLoader) -> None:
+    """Refuse a mapping that gives a scalar key twice (merge keys ``<<`` excepted).
 
-    def construct_mapping(self, node: Any, deep: bool = False) -> Any:
-        if isinstance(node, yaml.MappingNode):
-            seen: dict[object, int] = {}
-            for key_node, _ in node.value:
-                if key_node.tag == _MERGE_TAG:
-                    continue
-                key = self.construct_object(key_node, deep=True)
-                line = key_node.start_mark.line + 1
-                try:
-                    if key in seen:
-                        raise _DuplicateKey(key, line, seen[key])
-                    seen[key] = line
-                except TypeError:
-                    continue  # unhashable key: SafeConstructor reports it
-        return super().construct_mapping(node, deep=deep)
+    Run on the composed graph, before construction flattens merge keys into the
+    mappings (a key overridden after a merge is not a duplicate).
+    """
+    for node in nodes:
+        if not isinstance(node, yaml.MappingNode):
+            continue
+        seen: dict[object, int] = {}
+        for key_node, _ in node.value:
+            if not isinstance(key_node, yaml.ScalarNode) or key_node.tag == _MERGE_TAG:
+                continue
+            key = loader.construct_object(key_node, deep=True)
+            line = key_node.start_mark.line + 1
+            try:
+                if key in seen:
+                    raise _DuplicateKey(key, line, seen[key])
+                seen[key] = line
+            except TypeError:
+                continue
 
 
-def _expanded_size(root: Any, where: str) -> None:
+def _expanded_size(root: Any, where: str) -> list[Any]:
     """Refuse a node graph that expands to more than MAX_NODES nodes or MAX_DEPTH levels.
 
     Aliases share their node, so the graph is small even when its expansion is
     astronomically large; sizes are memoised per node, which makes the count linear
     in the graph, not in the expansion.
+
+    Returns:
+        Every distinct node of the graph.
     """
     sizes: dict[int, int] = {}
     depths: dict[int, int] = {}
     active: set[int] = set()
+    visited: list[Any] = []
     # iterative post-order walk (no recursion limit on deep documents)
     stack: list[tuple[Any, bool]] = [(root, False)]
     while stack:
@@ -108,6 +115,7 @@ def _expanded_size(root: Any, where: str) -> None:
                     f"{where} nests more than {MAX_DEPTH} levels deep; flatten the document"
                 )
             sizes[nid], depths[nid] = size, depth
+            visited.append(node)
             continue
         if nid in sizes:
             continue
@@ -119,6 +127,7 @@ def _expanded_size(root: Any, where: str) -> None:
         active.add(nid)
         stack.append((node, True))
         stack.extend((k, False) for k in _children(node) if id(k) not in sizes)
+    return visited
 
 
 def _children(node: Any) -> list[Any]:
@@ -148,9 +157,9 @@ def parse_yaml(text: str, where: str, error: type[InputFileError] = InputFileErr
             (key and lines named), a value YAML cannot represent (e.g. an integer of
             more than 4300 digits), more than one document.
     """
-    loader: _StrictLoader | None = None
+    loader: yaml.SafeLoader | None = None
     try:
-        loader = _StrictLoader(text)
+        loader = yaml.SafeLoader(text)
         try:
             node = loader.get_single_node()
         except RecursionError:
@@ -159,7 +168,7 @@ def parse_yaml(text: str, where: str, error: type[InputFileError] = InputFileErr
             ) from None
         if node is None:
             return None
-        _expanded_size(node, where)
+        _check_duplicates(_expanded_size(node, where), loader)
         return loader.construct_document(node)
     except _DuplicateKey as dup:
         raise error(
