@@ -114,7 +114,7 @@ def read_identification(path: str | os.PathLike) -> IdentificationResult:
     except (InputFileError, InputLimitError) as exc:
         raise ReportError(str(exc)) from None
     try:
-        data = json.loads(raw.decode("utf-8"))
+        data = json.loads(raw.decode("utf-8-sig"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ReportError(f"{str(path)!r} is not valid JSON: {exc}") from exc
     if not isinstance(data, dict):
