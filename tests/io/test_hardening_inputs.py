@@ -243,8 +243,20 @@ def test_byte_order_mark_is_accepted_by_every_reader(tmp_path, hexa, meas, good_
     assert len(read_pose_file(files["p"]).poses) == 4
     assert np.array_equal(read_commands(files["c"], hexa)[1], meas.q_act)
     assert read_pose_rows(files["c"], hexa).shape == (4, 6)
-    res = _cli("validate", "--help")
-    assert res.exit_code == 0
+    bom = b"\xef\xbb\xbf"
+    side = tmp_path / "s.yaml"
+    side.write_bytes(bom + b"measured_frame: platform\n")
+    assert read_sidecar(side) == {"measured_frame": "platform"}
+    table = tmp_path / "t.csv"
+    table.write_bytes(bom + b"point,x,y,z\nT1,1,2,3\n")
+    from pincal.io._delimited import read_table
+
+    assert read_table(table).columns == ("point", "x", "y", "z")
+    raw = tmp_path / "raw.csv"
+    raw.write_bytes(
+        bom + b",".join(j.encode() for j in hexa.actuated) + b"\n" + b"0.1," * 5 + b"0.1\n"
+    )
+    assert read_pose_rows(raw, hexa).shape == (1, 6)
 
 
 def pin_pose(meas, i):
