@@ -202,3 +202,27 @@ def test_unwritable_names_are_refused_at_write_time(tmp_path, bad):
     with pytest.raises(MeasurementFormatError, match="cannot be written.*control or line-break"):
         write_commands(tmp_path / "c.csv", (bad, "j2"), np.zeros((1, 2)))
     assert not (tmp_path / "c.csv").exists()
+
+
+def test_cli_campaign_on_a_model_with_awkward_names(tmp_path):
+    """simulate → view → calibrate through the CLI; each step reads the previous file."""
+    from click.testing import CliRunner
+
+    from pincal.cli import main
+
+    j1, j2, frame = "j #1", ' j,"2" [a] ', "tool #x"
+    (tmp_path / "r.urdf").write_text(_urdf(j1, j2, frame))
+    runner = CliRunner()
+    m, cal = str(tmp_path / "m.csv"), str(tmp_path / "cal")
+    for args in (
+        ["simulate", str(tmp_path / "r.urdf"), "--random", "6", "--out", m],
+        ["view", str(tmp_path / "r.urdf"), "--poses", m, "--html", str(tmp_path / "v.html")],
+        ["calibrate", str(tmp_path / "r.urdf"), "--data", m, "--out", cal],
+    ):
+        res = runner.invoke(main, args)
+        assert res.exit_code == 0, (args, res.output)
+    mech = load_mechanism(tmp_path / "r.urdf")
+    back = read_measurement_file(m, mech).measurements
+    assert back.actuated == (j1, j2) and back.frame == frame
+    calibrated = load_mechanism(tmp_path / "cal" / "calibrated.urdf")
+    assert calibrated.actuated == (j1, j2) and calibrated.measured_frame == frame
