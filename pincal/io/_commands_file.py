@@ -94,6 +94,8 @@ def read_commands(path: str | Path, mech: Mechanism) -> tuple[np.ndarray, np.nda
         MeasurementFormatError: not a command file, or unknown unit.
         ColumnError: missing ``pose`` or actuator columns.
         BadValueError, NonFiniteValueError: a cell that is not a finite number.
+        ActuatorRangeError: a command far outside its joint's URDF limits.
+        MeasurementFileError, InputLimitError: unreadable, not a regular file, too large.
     """
     name = Path(path).name
     _, columns, rows = split_file(path, "commands")

@@ -67,8 +67,9 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
 
     Raises:
         MeasurementFormatError: bad header or kind; ColumnError: missing columns;
-        BadValueError / NonFiniteValueError: bad cells; FrameMismatchError is reported
-        as MeasurementFormatError naming both frames.
+        BadValueError / NonFiniteValueError: bad cells; ActuatorRangeError: an actuator
+        far outside its URDF limits; FrameMismatchError is reported as
+        MeasurementFormatError naming both frames.
     """
     name = Path(path).name
     header, columns, rows = split_file(path, "instrument")

@@ -168,8 +168,9 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
 
     Raises:
         MeasurementFormatError, FrameMismatchError, ColumnError, BadValueError,
-        NonFiniteValueError, PoseFitError (all MeasurementError), each naming the
-        line, row or column.
+        NonFiniteValueError, ActuatorRangeError, PoseFitError (all MeasurementError),
+        each naming the line, row or column; MeasurementFileError: missing, a FIFO or
+        device, not UTF-8; InputLimitError: over the size cap.
     """
     name = Path(path).name
     header, columns, rows = split_file(path, "measurements")

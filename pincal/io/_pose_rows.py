@@ -34,6 +34,7 @@ def read_pose_rows(path: str | Path, mech: Mechanism, max_rows: int | None = Non
         MeasurementError: unreadable or malformed file, missing actuator columns, too
             many rows.
         UnreachablePoseError: a pose of a pose file that ``mech`` cannot reach.
+        ActuatorRangeError: an actuator value far outside its joint's URDF limits.
     """
     path = Path(path)
     kind = file_kind(path)
