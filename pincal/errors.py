@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 
 __all__ = [
+    "ActuatorRangeError",
     "BadValueError",
     "CalibrationDirectoryError",
     "CampaignError",
@@ -22,6 +23,7 @@ __all__ = [
     "InputFileError",
     "InputLimitError",
     "MeasurementError",
+    "MeasurementFileError",
     "MeasurementFormatError",
     "MobilityError",
     "ModelFileError",
@@ -207,6 +209,10 @@ class MeasurementFormatError(MeasurementError):
     """The file's header or layout is malformed (line named in the message)."""
 
 
+class MeasurementFileError(MeasurementFormatError, InputFileError):
+    """A data file (measurements, poses, commands…) is missing, unreadable or not text."""
+
+
 class FrameMismatchError(MeasurementError):
     """The file measures another frame than the model's measured frame."""
 
@@ -235,6 +241,20 @@ class BadValueError(MeasurementError):
 
 class NonFiniteValueError(BadValueError):
     """A cell is NaN or infinite."""
+
+
+class ActuatorRangeError(BadValueError):
+    """An actuator value lies far outside its joint's URDF limits.
+
+    Attributes: row, column (as :class:`BadValueError`), joint, limits (lower, upper)
+    [m or rad].
+    """
+
+    def __init__(
+        self, message: str, row: int, column: str, joint: str, limits: tuple[float, float]
+    ):
+        self.joint, self.limits = joint, limits
+        super().__init__(message, row, column)
 
 
 class PoseFitError(MeasurementError):
@@ -281,5 +301,5 @@ class ImportMatchError(MeasurementError):
         super().__init__(message)
 
 
-class CampaignError(PincalError):
+class CampaignError(InputFileError):
     """A campaign file (``pincal run``) is malformed: unknown key, bad value, missing file."""

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from pincal._yaml import shown
 from pincal.errors import CampaignError
 
 __all__ = ["KEYS_HELP", "Campaign", "load_campaign"]
@@ -62,7 +63,9 @@ def _choice(value: str, valid: tuple[str, ...], key: str) -> None:
         same = [v for v in valid if v.lower() == str(value).lower()]
         near = same or difflib.get_close_matches(str(value), valid, n=1)
         hint = f" (did you mean {near[0]!r}?)" if near else ""
-        raise CampaignError(f"{key}: {value!r} is not valid{hint}; use one of {', '.join(valid)}")
+        raise CampaignError(
+            f"{key}: {shown(value)} is not valid{hint}; use one of {', '.join(valid)}"
+        )
 
 
 @dataclass(frozen=True)
@@ -194,7 +197,9 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
     if origin is tuple:
         args = typing.get_args(tp)
         if not isinstance(value, (list, tuple)) or len(value) != len(args):
-            raise CampaignError(f"{key}: expected a list of {len(args)} numbers, got {value!r}")
+            raise CampaignError(
+                f"{key}: expected a list of {len(args)} numbers, got {shown(value)}"
+            )
         return tuple(
             _coerce(v, a, f"{key}[{k}]") for k, (v, a) in enumerate(zip(value, args, strict=True))
         )
@@ -205,7 +210,7 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
         str: isinstance(value, str),
     }.get(tp, False)
     if not ok:
-        raise CampaignError(f"{key}: expected {_type_name(tp)}, got {value!r}")
+        raise CampaignError(f"{key}: expected {_type_name(tp)}, got {shown(value)}")
     return float(value) if tp is float else value
 
 
@@ -214,7 +219,7 @@ def _build(cls: type, data: Any, key: str) -> Any:
     if data is None:
         data = {}
     if not isinstance(data, dict):
-        raise CampaignError(f"{where}: expected a mapping of keys, got {data!r}")
+        raise CampaignError(f"{where}: expected a mapping of keys, got {shown(data)}")
     hints = typing.get_type_hints(cls)
     valid = [f.name for f in dataclasses.fields(cls)]
     for name in data:
@@ -248,15 +253,10 @@ def load_campaign(path: str | Path) -> Campaign:
         CampaignError: unreadable file, not YAML, unknown key (nearest valid key
             suggested), wrong type or value, or a missing data file.
     """
-    import yaml  # type: ignore[import-untyped]
+    from pincal._yaml import load_yaml
 
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise CampaignError(f"cannot read campaign file {str(path)!r}: {exc.strerror}") from exc
-    except yaml.YAMLError as exc:
-        raise CampaignError(f"{path.name} is not valid YAML: {exc}") from exc
+    data = load_yaml(path, "campaign file", CampaignError)
     camp = _build(Campaign, data, "")
     camp.check()
     base = path.resolve().parent
@@ -267,6 +267,6 @@ def load_campaign(path: str | Path) -> Campaign:
         model = _resolve(model, base) or model
     for key, f in (("measurements.file", m.file), ("validation.file", v.file)):
         if f is not None and not Path(f).is_file():
-            raise CampaignError(f"{key}: {f!r} does not exist")
+            raise CampaignError(f"{key}: {shown(f)} does not exist")
     out = _resolve(camp.out, base) or camp.out
     return dataclasses.replace(camp, model=model, out=out, measurements=m, validation=v)

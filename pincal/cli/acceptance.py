@@ -24,7 +24,8 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
     Raises:
         ModelFileError / ReportError: nothing usable at ``spec``.
     """
-    from pincal.errors import ModelFileError, ParameterError, ReportError
+    from pincal._files import read_text
+    from pincal.errors import ModelFileError, ParameterError, ReportError, clip
     from pincal.identification import IdentificationResult
     from pincal.model import load_mechanism, parameters
 
@@ -42,9 +43,11 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
                 "directory written by 'pincal calibrate' or an identification.json"
             )
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ReportError(f"cannot read {str(path)!r} as identification.json: {exc}") from None
+        data = json.loads(read_text(path, "identification.json"))
+    except ValueError as exc:
+        raise ReportError(
+            f"cannot read {clip(str(path))} as identification.json: {clip(str(exc))}"
+        ) from None
     result = IdentificationResult.from_dict(data, str(path))
     params = parameters(nominal, result.preset or "full")
     if tuple(params.names) != tuple(result.names):

@@ -186,10 +186,12 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
 
 def _is_instrument_file(path: str) -> bool:
     """True for a scalar-instrument file (``# pincal instrument`` header)."""
+    from pincal.errors import PincalError
+    from pincal.io import file_kind
+
     try:
-        with open(path, encoding="utf-8") as f:
-            return f.readline().startswith("# pincal instrument")
-    except (OSError, UnicodeDecodeError):
+        return file_kind(path) == "instrument"
+    except PincalError:
         return False  # the measurement reader reports the problem
 
 

@@ -26,6 +26,7 @@ from pincal.io._commands_file import (
     read_commands,
     write_commands,
 )
+from pincal.io._csv import file_kind
 from pincal.io._import_tracker import (
     TrackerImport,
     TrackerImportOptions,
@@ -80,6 +81,7 @@ __all__ = [
     "atomic_write_bytes",
     "atomic_write_text",
     "check_enough_poses",
+    "file_kind",
     "import_tracker",
     "read_actuator_rows",
     "read_calibration",

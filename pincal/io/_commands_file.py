@@ -13,14 +13,21 @@ reader of any CSV naming the actuated joints (for viewing).
 from __future__ import annotations
 
 import csv
-import io
 import math
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from pincal.errors import ColumnError, MeasurementError
+from pincal._files import read_text
+from pincal._yaml import shown
+from pincal.errors import (
+    ColumnError,
+    MeasurementError,
+    MeasurementFileError,
+    MeasurementFormatError,
+    clip,
+)
 from pincal.io._csv import (
     actuator_columns,
     fmt,
@@ -29,7 +36,12 @@ from pincal.io._csv import (
     split_file,
     write_csv,
 )
-from pincal.io._units import actuator_read_factors, actuator_write_factors
+from pincal.io._names import is_decimal, is_non_finite
+from pincal.io._units import (
+    actuator_read_factors,
+    actuator_write_factors,
+    check_actuator_ranges,
+)
 from pincal.model import Mechanism
 
 __all__ = ["MAX_POSES_BYTES", "read_actuator_rows", "read_commands", "write_commands"]
@@ -82,6 +94,8 @@ def read_commands(path: str | Path, mech: Mechanism) -> tuple[np.ndarray, np.nda
         MeasurementFormatError: not a command file, or unknown unit.
         ColumnError: missing ``pose`` or actuator columns.
         BadValueError, NonFiniteValueError: a cell that is not a finite number.
+        ActuatorRangeError: a command far outside its joint's URDF limits.
+        MeasurementFileError, InputLimitError: unreadable, not a regular file, too large.
     """
     name = Path(path).name
     _, columns, rows = split_file(path, "commands")
@@ -93,7 +107,9 @@ def read_commands(path: str | Path, mech: Mechanism) -> tuple[np.ndarray, np.nda
     data = parse_numbers(rows, columns, name)
     act = [names.index(j) for j in mech.actuated]
     fac = actuator_read_factors(mech, [parsed[k][1] for k in act], name)
-    return data[:, names.index("pose")].astype(int), data[:, act] / fac
+    q_act = data[:, act] / fac
+    check_actuator_ranges(mech, q_act, name, [columns[k] for k in act])
+    return data[:, names.index("pose")].astype(int), q_act
 
 
 def read_actuator_rows(
@@ -114,16 +130,7 @@ def read_actuator_rows(
             non-finite values, no rows.
     """
     path = Path(path)
-    try:
-        raw = path.read_bytes()[: MAX_POSES_BYTES + 1]
-    except OSError as exc:
-        raise MeasurementError(f"cannot read poses file {str(path)!r}: {exc.strerror}") from exc
-    if len(raw) > MAX_POSES_BYTES:
-        raise MeasurementError(f"poses file {str(path)!r} is larger than {MAX_POSES_BYTES} bytes")
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise MeasurementError(f"poses file {str(path)!r} is not UTF-8 text") from exc
+    text = read_text(path, "poses file", MAX_POSES_BYTES, MeasurementFileError)
     lines = [
         (n, line)
         for n, line in enumerate(text.splitlines(), 1)
@@ -132,7 +139,12 @@ def read_actuator_rows(
     lines = [(n, line) for n, line in lines if line.strip()]
     if not lines:
         raise MeasurementError(f"poses file {str(path)!r} is empty; expected a header line")
-    header = [h.strip() for h in next(csv.reader([lines[0][1]]))]
+    try:
+        header = [h.strip() for h in next(csv.reader([lines[0][1]]))]
+    except csv.Error as exc:
+        raise MeasurementFormatError(
+            f"{path.name} line {lines[0][0]}: cannot be split into cells ({clip(str(exc))})"
+        ) from None
     missing = [name for name in actuated if name not in header]
     if missing:
         raise MeasurementError(
@@ -142,17 +154,23 @@ def read_actuator_rows(
     columns = [header.index(name) for name in actuated]
     rows = []
     for n, line in lines[1:]:
-        cells = next(csv.reader(io.StringIO(line)), [])
+        try:
+            cells = next(csv.reader([line]), [])
+        except csv.Error as exc:
+            raise MeasurementFormatError(
+                f"{path.name} line {n}: cannot be split into cells ({clip(str(exc))})"
+            ) from None
         if len(cells) != len(header):
             raise MeasurementError(
                 f"{path.name} line {n}: {len(cells)} values for {len(header)} header columns"
             )
-        try:
-            row = [float(cells[c]) for c in columns]
-        except ValueError:
+        bad = [cells[c] for c in columns if not is_decimal(cells[c])]
+        if bad and not is_non_finite(bad[0]):
             raise MeasurementError(
-                f"{path.name} line {n}: non-numeric value in {[cells[c] for c in columns]}"
-            ) from None
+                f"{path.name} line {n}: non-numeric value {shown(bad[0])}; write plain decimal "
+                "numbers (e.g. 12.5 or -1e-3)"
+            )
+        row = [float(cells[c]) for c in columns]
         if not all(math.isfinite(v) for v in row):
             raise MeasurementError(f"{path.name} line {n}: NaN or infinite value")
         rows.append(row)

@@ -18,8 +18,18 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from pincal.errors import BadValueError, ColumnError, MeasurementError, MeasurementFormatError
+from pincal._files import read_text
+from pincal._yaml import shown
+from pincal.errors import (
+    BadValueError,
+    ColumnError,
+    MeasurementError,
+    MeasurementFileError,
+    MeasurementFormatError,
+    clip,
+)
 from pincal.io._csv import parse_column
+from pincal.io._names import is_decimal
 
 __all__ = ["DELIMITERS", "Table", "parse_mapping", "read_table"]
 
@@ -63,8 +73,8 @@ class Table:
                 if c.lower() == want or b == want:
                     return k
             raise ColumnError(
-                f"{self.name}: column {mapping[field]!r} (mapped to {field!r}) not found; "
-                f"columns are {list(self.columns)}",
+                f"{self.name}: column {shown(mapping[field])} (mapped to {field!r}) not found; "
+                f"columns are {shown(list(self.columns))}",
                 missing=[mapping[field]],
             )
         for alias in aliases:
@@ -84,13 +94,11 @@ class Table:
         """
         cell = self.rows[i][k].strip()
         text = cell.replace(",", ".") if self.decimal == "," else cell
-        try:
-            v = float(text) if "," not in text else math.nan
-        except ValueError:
-            v = math.nan
+        v = float(text) if is_decimal(text) else math.nan
         if not math.isfinite(v):
             raise BadValueError(
-                f"{self.name} line {self.lines[i]}, column {self.columns[k]!r}: {cell!r} is not "
+                f"{self.name} line {self.lines[i]}, column {shown(self.columns[k])}: "
+                f"{shown(cell)} is not "
                 f"a finite number (decimal mark {self.decimal!r}; set it with --decimal)",
                 i + 1,
                 self.columns[k],
@@ -106,7 +114,7 @@ class Table:
         cell = self.rows[i][k].strip()
         if not cell:
             raise BadValueError(
-                f"{self.name} line {self.lines[i]}, column {self.columns[k]!r}: empty cell",
+                f"{self.name} line {self.lines[i]}, column {shown(self.columns[k])}: empty cell",
                 i + 1,
                 self.columns[k],
             )
@@ -146,22 +154,19 @@ def read_table(path: str | Path, delimiter: str = "auto", decimal: str = "auto")
     """
     name = Path(path).name
     if delimiter not in DELIMITERS:
-        raise MeasurementError(f"delimiter {delimiter!r} unknown; use one of {list(DELIMITERS)}")
+        raise MeasurementError(
+            f"delimiter {shown(delimiter)} unknown; use one of {list(DELIMITERS)}"
+        )
     if decimal not in ("auto", ".", ","):
-        raise MeasurementError(f"decimal mark {decimal!r} unknown; use auto, '.' or ','")
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise MeasurementError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
-    except UnicodeDecodeError as exc:
-        raise MeasurementFormatError(f"{name} is not a UTF-8 text file") from exc
+        raise MeasurementError(f"decimal mark {shown(decimal)} unknown; use auto, '.' or ','")
+    text = read_text(path, "delimited table", error=MeasurementFileError)
     numbered = [(n, ln) for n, ln in enumerate(text.splitlines(), start=1) if ln.strip()]
     while numbered and numbered[0][1].lstrip().startswith("#"):
         numbered.pop(0)
     if not numbered:
         raise MeasurementFormatError(f"{name}: no column title line")
     delim = DELIMITERS[delimiter] or _pick_delimiter(numbered[0][1])
-    parsed = list(csv.reader([ln for _, ln in numbered], delimiter=delim))
+    parsed = _split(numbered, delim, name)
     columns = tuple(c.strip() for c in parsed[0])
     rows, lines = [], []
     for (n, _), cells in zip(numbered[1:], parsed[1:], strict=True):
@@ -181,6 +186,24 @@ def read_table(path: str | Path, delimiter: str = "auto", decimal: str = "auto")
     return Table(name, columns, tuple(rows), tuple(lines), delim, decimal)
 
 
+def _split(numbered: list[tuple[int, str]], delim: str, name: str) -> list[list[str]]:
+    """Cells of each line; a line csv cannot split (a huge cell) is named."""
+    try:
+        return list(csv.reader([ln for _, ln in numbered], delimiter=delim))
+    except csv.Error:
+        pass
+    out = []
+    for n, line in numbered:
+        try:
+            out.append(next(csv.reader([line], delimiter=delim), []))
+        except csv.Error as exc:
+            raise MeasurementFormatError(
+                f"{name} line {n}: cannot be split into cells ({clip(str(exc))}); is this the "
+                "right file?"
+            ) from None
+    return out
+
+
 def parse_mapping(spec: str | Mapping[str, str] | None, what: str) -> dict[str, str]:
     """``field=Title,field=Title`` (or a mapping) → {field: title}.
 
@@ -195,8 +218,8 @@ def parse_mapping(spec: str | Mapping[str, str] | None, what: str) -> dict[str, 
     for item in (s for s in spec.split(",") if s.strip()):
         key, eq, title = item.partition("=")
         if not eq or not key.strip() or not title.strip():
-            raise MeasurementError(f"{what}: {item!r} is not field=Column")
+            raise MeasurementError(f"{what}: {shown(item)} is not field=Column")
         if key.strip() in out:
-            raise MeasurementError(f"{what}: field {key.strip()!r} mapped twice")
+            raise MeasurementError(f"{what}: field {shown(key.strip())} mapped twice")
         out[key.strip()] = title.strip()
     return out

@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pincal._yaml import shown
 from pincal.errors import (
     BadValueError,
     ColumnError,
@@ -49,7 +50,7 @@ from pincal.errors import (
 )
 from pincal.io._delimited import Table, read_table
 from pincal.io._tracker_file import TargetMeasurements
-from pincal.io._units import ANGLE_UNITS, LENGTH_UNITS, unit_factor
+from pincal.io._units import ANGLE_UNITS, LENGTH_UNITS, check_actuator_ranges, unit_factor
 from pincal.model import Mechanism
 
 __all__ = ["TrackerImport", "TrackerImportOptions", "import_tracker"]
@@ -136,7 +137,8 @@ def _time(table: Table, i: int, k: int) -> float:
         stamp = datetime.fromisoformat(cell)
     except ValueError:
         raise BadValueError(
-            f"{table.name} line {table.lines[i]}, column {table.columns[k]!r}: {cell!r} is "
+            f"{table.name} line {table.lines[i]}, column {shown(table.columns[k])}: "
+            f"{shown(cell)} is "
             f"neither seconds nor an ISO 8601 date-time",
             i + 1,
             table.columns[k],
@@ -151,7 +153,7 @@ def _length_factor(table: Table, cols: list[int], unit: str | None) -> float:
     if len(units) > 1 or (units and unit is not None and units != {unit}):
         raise MeasurementError(
             f"{table.name}: coordinate units disagree ({sorted(units)} in the titles, "
-            f"{unit!r} stated); state one unit"
+            f"{shown(unit)} stated); state one unit"
         )
     chosen = next(iter(units), unit)
     if chosen is None:
@@ -168,7 +170,8 @@ def _xyz(table: Table, mapping: Mapping[str, str], unit: str | None, what: str):
     missing = [f for f, k in found.items() if k is None]
     if missing:
         raise ColumnError(
-            f"{table.name}: no {missing} column in the {what} (columns {list(table.columns)}); "
+            f"{table.name}: no {missing} column in the {what} (columns "
+            f"{shown(list(table.columns))}); "
             f"map them, e.g. --columns point=Name,x=X",
             missing=missing,
         )
@@ -194,7 +197,7 @@ def _log_actuators(log: Table, mech: Mechanism, opts: TrackerImportOptions) -> n
         if k is None:
             raise ColumnError(
                 f"{log.name}: no column for actuated joint {joint!r} (columns "
-                f"{list(log.columns)}); map it, e.g. --log-columns {joint}=Axis1",
+                f"{shown(list(log.columns))}); map it, e.g. --log-columns {joint}=Axis1",
                 missing=[joint],
             )
         revolute = mech.tree.joints[joint].type in ("revolute", "continuous")
@@ -203,7 +206,9 @@ def _log_actuators(log: Table, mech: Mechanism, opts: TrackerImportOptions) -> n
         cols.append(k)
         factors.append(unit_factor(table, unit, "angle" if revolute else "length", log.name))
     q = np.array([[log.number(i, k) for k in cols] for i in range(len(log.rows))])
-    return q.reshape(-1, len(cols)) / np.array(factors)
+    q = q.reshape(-1, len(cols)) / np.array(factors)
+    check_actuator_ranges(mech, q, log.name, [log.columns[k] for k in cols], log.lines)
+    return q
 
 
 def _listing(items: list) -> str:
@@ -217,7 +222,7 @@ def _assign(points: Table, log: Table, opts: TrackerImportOptions):
     lk = {f: log.find(f, _ALIASES[f], opts.log_columns) for f in ("pose", "time")}
     mode = opts.match
     if mode not in MATCHES:
-        raise MeasurementError(f"match {mode!r} unknown; use one of {MATCHES}")
+        raise MeasurementError(f"match {shown(mode)} unknown; use one of {MATCHES}")
     if mode == "auto":
         mode = "pose" if pk["pose"] is not None and lk["pose"] is not None else "time"
     pcol, lcol = pk[mode], lk[mode]
@@ -236,7 +241,7 @@ def _assign(points: Table, log: Table, opts: TrackerImportOptions):
         for i, pid in enumerate(ids):
             if pid in first:
                 raise ImportMatchError(
-                    f"{log.name}: pose {pid!r} on lines {log.lines[first[pid]]} and "
+                    f"{log.name}: pose {shown(pid)} on lines {log.lines[first[pid]]} and "
                     f"{log.lines[i]}; pose ids must be unique",
                     log_lines=[log.lines[first[pid]], log.lines[i]],
                 )
@@ -244,7 +249,7 @@ def _assign(points: Table, log: Table, opts: TrackerImportOptions):
         pairs = [first.get(_norm_id(points.text(i, pcol)), -1) for i in range(len(points.rows))]
         return mode, np.array(pairs, dtype=int), ids, None
     if not opts.tolerance > 0:
-        raise MeasurementError(f"time tolerance {opts.tolerance!r} s must be > 0")
+        raise MeasurementError(f"time tolerance {shown(opts.tolerance)} s must be > 0")
     lt = np.array([_time(log, i, lcol) for i in range(n_log)])
     pt = np.array([_time(points, i, pcol) for i in range(len(points.rows))])
     dist = np.abs(pt[:, None] - lt[None, :])
@@ -340,7 +345,8 @@ def import_tracker(
         key = (r, index[n])
         if key in seen:
             raise ImportMatchError(
-                f"{points.name}: target {n!r} measured twice for {mode} {ids[r]!r} (lines "
+                f"{points.name}: target {shown(n)} measured twice for {mode} "
+                f"{shown(ids[r])} (lines "
                 f"{points.lines[seen[key]]} and {points.lines[i]}); delete one",
                 points_lines=[points.lines[seen[key]], points.lines[i]],
             )
@@ -348,7 +354,7 @@ def import_tracker(
         out[r, index[n]] = pts[i]
     holes = np.argwhere(np.isnan(out[:, :, 0]))
     if holes.size:
-        msg = [f"{mode} {ids[r]!r} (log line {log.lines[r]}): {tnames[j]}" for r, j in holes]
+        msg = [f"{mode} {shown(ids[r])} (log line {log.lines[r]}): {tnames[j]}" for r, j in holes]
         raise ImportMatchError(
             f"{points.name}: targets missing: {_listing(msg)}",
             log_lines=sorted({log.lines[r] for r, _ in holes}),
@@ -367,5 +373,7 @@ def import_tracker(
         data.to_measurements()
     except PoseFitError as exc:
         r = exc.row - 1
-        raise PoseFitError(f"{mode} {ids[r]!r} (log line {log.lines[r]}): {exc}", exc.row) from exc
+        raise PoseFitError(
+            f"{mode} {shown(ids[r])} (log line {log.lines[r]}): {exc}", exc.row
+        ) from exc
     return TrackerImport(data, tuple(ids), log.lines, mode, max_dt)

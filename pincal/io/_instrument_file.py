@@ -24,17 +24,26 @@ from pathlib import Path
 
 import numpy as np
 
-from pincal.errors import ColumnError, MeasurementFormatError
+from pincal._yaml import shown
+from pincal.errors import ColumnError, MeasurementFormatError, clip
 from pincal.io._csv import (
+    actuator_columns,
     fmt,
     header_value,
     parse_column,
+    parse_float,
     parse_numbers,
     positive_value,
     split_file,
     write_csv,
 )
-from pincal.io._units import LENGTH_UNITS, actuator_read_factors, unit_factor
+from pincal.io._names import quote_value
+from pincal.io._units import (
+    LENGTH_UNITS,
+    actuator_read_factors,
+    check_actuator_ranges,
+    unit_factor,
+)
 from pincal.measure._instruments import INSTRUMENT_KINDS, Instrument, InstrumentData
 from pincal.model import Mechanism
 
@@ -42,12 +51,11 @@ __all__ = ["read_instrument_data", "write_instrument_data"]
 
 
 def _vector(text: str, n: int, key: str, name: str) -> np.ndarray:
-    try:
-        v = np.array([float(x) for x in text.replace(",", " ").split()])
-    except ValueError:
-        raise MeasurementFormatError(f"{name}: header {key!r} must be numbers") from None
+    v = np.array([parse_float(x, f"{name} header {key!r}") for x in text.replace(",", " ").split()])
     if v.size != n or not np.all(np.isfinite(v)):
-        raise MeasurementFormatError(f"{name}: header {key!r} needs {n} finite numbers")
+        raise MeasurementFormatError(
+            f"{name}: header {key!r} is {clip(text)}; it needs {n} finite numbers"
+        )
     return v
 
 
@@ -59,21 +67,23 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
 
     Raises:
         MeasurementFormatError: bad header or kind; ColumnError: missing columns;
-        BadValueError / NonFiniteValueError: bad cells; FrameMismatchError is reported
-        as MeasurementFormatError naming both frames.
+        BadValueError / NonFiniteValueError: bad cells; ActuatorRangeError: an actuator
+        far outside its URDF limits; FrameMismatchError is reported as
+        MeasurementFormatError naming both frames.
     """
     name = Path(path).name
     header, columns, rows = split_file(path, "instrument")
     kind = header_value(header, "kind", None, name)
     if kind not in INSTRUMENT_KINDS:
         raise MeasurementFormatError(
-            f"{name}: kind {kind!r} unknown; use one of {INSTRUMENT_KINDS}"
+            f"{name}: kind {shown(kind)} unknown; use one of {INSTRUMENT_KINDS}"
         )
     lf = unit_factor(LENGTH_UNITS, header_value(header, "length_unit", "m", name), "length", name)
     frame = header_value(header, "frame", mech.measured_frame, name)
     if frame != mech.measured_frame:
         raise MeasurementFormatError(
-            f"{name} measures frame {frame!r} but the model's tool frame is {mech.measured_frame!r}"
+            f"{name} measures frame {shown(frame)} but the model's tool frame is "
+            f"{mech.measured_frame!r}"
         )
     std = positive_value(header_value(header, "std", None, name), "std", name) / lf
     radius, direction = 0.0, (0.0, 0.0, 1.0)
@@ -104,6 +114,7 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
     col = {c: k for k, c in enumerate(names)}
     act = [col[j] for j in mech.actuated]
     q_act = data[:, act] / actuator_read_factors(mech, [parsed[k][1] for k in act], name)
+    check_actuator_ranges(mech, q_act, name, [columns[k] for k in act])
     values = data[:, col["value"]] / lf
     plane = data[:, col["plane"]] if kind == "plane" else None
     initial = None
@@ -128,7 +139,11 @@ def write_instrument_data(path: str | Path, data: InstrumentData, length_unit: s
     """
     lf = unit_factor(LENGTH_UNITS, length_unit, "length", "write_instrument_data")
     inst = data.instrument
-    lines = [f"kind: {inst.kind}", f"frame: {data.frame}", f"length_unit: {length_unit}"]
+    lines = [
+        f"kind: {inst.kind}",
+        f"frame: {quote_value(data.frame, 'frame')}",
+        f"length_unit: {length_unit}",
+    ]
     lines.append(f"std: {fmt(inst.std * lf)}")
     if inst.kind == "sphere":
         lines.append(f"radius: {fmt(inst.radius * lf)}")
@@ -139,7 +154,11 @@ def write_instrument_data(path: str | Path, data: InstrumentData, length_unit: s
     if data.initial is not None:
         units = np.array([1.0 if u == "rad" else lf for u in inst.parameter_units])
         lines.append("initial: " + ", ".join(fmt(x) for x in data.initial * units))
-    columns = [*data.actuated, "value", *(["plane"] if inst.kind == "plane" else [])]
+    columns = [
+        *actuator_columns(data.actuated, None),
+        "value",
+        *(["plane"] if inst.kind == "plane" else []),
+    ]
     rows = []
     for i in range(len(data)):
         row = [fmt(v) for v in data.q_act[i]] + [fmt(data.values[i] * lf)]

@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from pincal._yaml import path_text, shown
 from pincal.errors import (
     BadValueError,
     ColumnError,
@@ -60,12 +61,14 @@ from pincal.io._csv import (
     split_file,
     write_csv,
 )
+from pincal.io._names import is_decimal, is_non_finite, quote_value
 from pincal.io._tracker_file import TargetMeasurements, parse_target_limits, parse_targets
 from pincal.io._units import (
     ANGLE_UNITS,
     LENGTH_UNITS,
     actuator_read_factors,
     actuator_write_factors,
+    check_actuator_ranges,
     unit_factor,
 )
 from pincal.measure import Measurements, NoiseModel
@@ -84,6 +87,8 @@ log = logging.getLogger(__name__)
 MATRIX_COLUMNS = tuple(f"r{i}{j}" for i in range(1, 4) for j in range(1, 4))
 ORIENTATIONS = ("rotvec", "matrix")
 KINDS = ("pose", "targets")
+#: column names a pose-kind file gives a meaning (an actuated joint may not use them)
+_RESERVED = frozenset([*COMPONENTS, *MATRIX_COLUMNS, *(f"std_{c}" for c in COMPONENTS)])
 
 
 @dataclass(frozen=True)
@@ -116,7 +121,7 @@ def _check_magnitudes(mech: Mechanism, positions: np.ndarray, unit: str) -> str 
         return None
     return (
         f"measured positions are {ratio:.3g}× the model's size (median distance "
-        f"{scale_data:.4g} m vs home {scale_model:.4g} m): is length_unit {unit!r} right?"
+        f"{scale_data:.4g} m vs home {scale_model:.4g} m): is length_unit {shown(unit)} right?"
     )
 
 
@@ -125,7 +130,7 @@ def _components(header: Header, name: str) -> list[str]:
     bad = [c for c in comps if c not in COMPONENTS]
     if bad or not comps or len(set(comps)) != len(comps):
         raise MeasurementFormatError(
-            f"{name}: components {comps} invalid; choose distinct names from {COMPONENTS}"
+            f"{name}: components {shown(comps)} invalid; choose distinct names from {COMPONENTS}"
         )
     return [c for c in COMPONENTS if c in comps]
 
@@ -138,14 +143,15 @@ def _parse_noise(header: Header, name: str) -> NoiseModel | None:
         key, _, v = item.partition("=")
         if key not in ("position_mm", "orientation_mrad"):
             raise MeasurementFormatError(
-                f"{name}: noise entry {item!r}; use position_mm=<σ> orientation_mrad=<σ>"
+                f"{name}: noise entry {shown(item)}; use position_mm=<σ> orientation_mrad=<σ>"
             )
-        try:
-            sigma = float(v)
-        except ValueError:
-            raise MeasurementFormatError(f"{name}: noise entry {item!r} is not a number") from None
+        if not (is_decimal(v) or is_non_finite(v)):
+            raise MeasurementFormatError(
+                f"{name}: noise entry {shown(item)} is not a number; write e.g. position_mm=0.01"
+            )
+        sigma = float(v)
         if not (math.isfinite(sigma) and sigma >= 0):
-            raise MeasurementFormatError(f"{name}: noise entry {item!r} must be finite, ≥ 0")
+            raise MeasurementFormatError(f"{name}: noise entry {shown(item)} must be finite, ≥ 0")
         vals[key.split("_")[0]] = sigma
     return NoiseModel(vals.get("position", 0.0), vals.get("orientation", 0.0))
 
@@ -162,14 +168,15 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
 
     Raises:
         MeasurementFormatError, FrameMismatchError, ColumnError, BadValueError,
-        NonFiniteValueError, PoseFitError (all MeasurementError), each naming the
-        line, row or column.
+        NonFiniteValueError, ActuatorRangeError, PoseFitError (all MeasurementError),
+        each naming the line, row or column; MeasurementFileError: missing, a FIFO or
+        device, not UTF-8; InputLimitError: over the size cap.
     """
     name = Path(path).name
     header, columns, rows = split_file(path, "measurements")
     kind = header_value(header, "kind", "pose", name)
     if kind not in KINDS:
-        raise MeasurementFormatError(f"{name}: kind {kind!r} unknown; use one of {KINDS}")
+        raise MeasurementFormatError(f"{name}: kind {shown(kind)} unknown; use one of {KINDS}")
     lu = header_value(header, "length_unit", None, name)
     au = header_value(header, "angle_unit", "rad", name)
     lf = unit_factor(LENGTH_UNITS, lu, "length", name)
@@ -177,14 +184,14 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
     frame = header_value(header, "frame", mech.measured_frame, name)
     if frame != mech.measured_frame:
         raise FrameMismatchError(
-            f"{name} measures frame {frame!r} but the model measures {mech.measured_frame!r} "
-            f"(load the model with measured_frame={frame!r})"
+            f"{name} measures frame {shown(frame)} but the model measures {mech.measured_frame!r} "
+            f"(load the model with measured_frame={shown(frame)})"
         )
     parsed = [parse_column(c) for c in columns]
     names = [p[0] for p in parsed]
     dup = sorted({c for c in names if names.count(c) > 1})
     if dup:
-        raise ColumnError(f"{name}: duplicate columns {dup}")
+        raise ColumnError(f"{name}: duplicate columns {shown(dup)}")
     missing_act = [j for j in mech.actuated if j not in names]
     if missing_act:
         raise ColumnError(
@@ -198,6 +205,7 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
     col = {c: k for k, c in enumerate(names)}
     act_idx = [col[j] for j in mech.actuated]
     q_act = data[:, act_idx] / actuator_read_factors(mech, [parsed[k][1] for k in act_idx], name)
+    check_actuator_ranges(mech, q_act, name, [columns[k] for k in act_idx])
     used = set(act_idx)
 
     def take(cols: Sequence[str], what: str) -> np.ndarray:
@@ -232,7 +240,7 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
         orient = header_value(header, "orientation", "rotvec", name)
         if orient not in ORIENTATIONS:
             raise MeasurementFormatError(
-                f"{name}: orientation {orient!r} unknown; use one of {ORIENTATIONS}"
+                f"{name}: orientation {shown(orient)} unknown; use one of {ORIENTATIONS}"
             )
         has_rot = any(c in col for c in ("rx", *MATRIX_COLUMNS))
         if has_rot or any(c.startswith("r") for c in comps):
@@ -256,7 +264,7 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
             if bad.size:
                 i, j = bad[0]
                 raise BadValueError(
-                    f"{name} data row {i + 1}, column {std_cols[j]!r}: std must be > 0",
+                    f"{name} data row {i + 1}, column {shown(std_cols[j])}: std must be > 0",
                     int(i) + 1,
                     std_cols[j],
                 )
@@ -266,7 +274,8 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
     unknown = [columns[k] for k in range(len(columns)) if k not in used]
     if unknown:
         raise ColumnError(
-            f"{name}: columns {unknown} not understood (kind {kind!r}, model {mech.name!r})",
+            f"{name}: columns {shown(unknown)} not understood (kind {shown(kind)}, "
+            f"model {mech.name!r})",
             unknown=unknown,
         )
     warnings = []
@@ -323,7 +332,8 @@ def write_measurements(
         The written path.
 
     Raises:
-        MeasurementFormatError: unknown length or angle unit.
+        MeasurementFormatError: unknown length or angle unit; a name the file cannot
+            hold (control characters, an actuated joint named like a data column).
         MeasurementError: unknown orientation or bad ``actuator_units``.
     """
     lf = unit_factor(LENGTH_UNITS, length_unit, "length", "write_measurements")
@@ -331,8 +341,15 @@ def write_measurements(
     if orientation not in ORIENTATIONS:
         raise MeasurementError(f"orientation {orientation!r}; use one of {ORIENTATIONS}")
     meas = measurements
+    clash = [a for a in meas.actuated if a in _RESERVED]
+    if clash:
+        raise MeasurementFormatError(
+            f"cannot write {path_text(path)}: actuated joint {shown(clash[0])} would appear "
+            "twice as a measurement column name (x y z rx ry rz r11…r33 std_*); rename the "
+            "joint"
+        )
     lines = [
-        f"frame: {meas.frame}",
+        f"frame: {quote_value(meas.frame, 'frame')}",
         "kind: pose",
         f"length_unit: {length_unit}",
         f"angle_unit: {angle_unit}",

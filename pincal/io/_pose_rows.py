@@ -6,28 +6,16 @@ from pathlib import Path
 
 import numpy as np
 
+from pincal._yaml import shown
 from pincal.errors import MeasurementError, UnreachablePoseError
 from pincal.io._commands_file import read_actuator_rows, read_commands
+from pincal.io._csv import file_kind
 from pincal.io._measurement_file import read_measurements
 from pincal.io._poses_file import read_pose_file
+from pincal.io._units import check_actuator_ranges
 from pincal.model import Mechanism
 
 __all__ = ["read_pose_rows"]
-
-
-def _kind(path: Path) -> str | None:
-    try:
-        with open(path, encoding="utf-8", errors="replace") as fh:
-            for line in fh:
-                s = line.strip()
-                if not s:
-                    continue
-                if s.startswith("#") and s[1:].strip().startswith("pincal "):
-                    return s[1:].split()[1]
-                return None
-    except OSError as exc:
-        raise MeasurementError(f"cannot read poses file {str(path)!r}: {exc.strerror}") from exc
-    return None
 
 
 def read_pose_rows(path: str | Path, mech: Mechanism, max_rows: int | None = None) -> np.ndarray:
@@ -46,19 +34,21 @@ def read_pose_rows(path: str | Path, mech: Mechanism, max_rows: int | None = Non
         MeasurementError: unreadable or malformed file, missing actuator columns, too
             many rows.
         UnreachablePoseError: a pose of a pose file that ``mech`` cannot reach.
+        ActuatorRangeError: an actuator value far outside its joint's URDF limits.
     """
     path = Path(path)
-    kind = _kind(path)
+    kind = file_kind(path)
     if kind == "poses":
         pf = read_pose_file(path)
         if pf.q_act is not None:
             missing = [j for j in mech.actuated if j not in pf.actuated]
             if missing:
                 raise MeasurementError(
-                    f"{path.name}: actuator columns {list(pf.actuated)} lack {missing} of "
+                    f"{path.name}: actuator columns {shown(list(pf.actuated))} lack {missing} of "
                     f"model {mech.name!r}"
                 )
             rows = pf.q_act[:, [pf.actuated.index(j) for j in mech.actuated]]
+            check_actuator_ranges(mech, rows, path.name)
         else:
             out, bad = [], []
             for i, T in enumerate(pf.poses):
@@ -77,10 +67,13 @@ def read_pose_rows(path: str | Path, mech: Mechanism, max_rows: int | None = Non
         rows = read_measurements(path, mech).q_act
     elif kind is not None:
         raise MeasurementError(
-            f"{path.name} is a pincal {kind!r} file; give a poses, commands or measurements file"
+            f"{path.name} is a pincal {shown(kind)} file; give a poses, commands or "
+            "measurements file"
         )
     else:
-        return read_actuator_rows(path, mech.actuated, max_rows)
+        rows = read_actuator_rows(path, mech.actuated, max_rows)
+        check_actuator_ranges(mech, rows, path.name)
+        return rows
     if max_rows is not None and len(rows) > max_rows:
         raise MeasurementError(
             f"poses file {str(path)!r} has {len(rows)} poses; at most {max_rows}"

@@ -31,16 +31,19 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from pincal._yaml import shown
 from pincal.errors import ColumnError, MeasurementError, MeasurementFormatError
 from pincal.io._csv import (
     actuator_columns,
     fmt,
     header_value,
+    header_words,
     parse_column,
     parse_numbers,
     split_file,
     write_csv,
 )
+from pincal.io._names import quote_words
 from pincal.io._units import ANGLE_UNITS, LENGTH_UNITS, actuator_write_factors, unit_factor
 
 __all__ = ["PoseFile", "read_pose_file", "read_poses", "write_poses"]
@@ -77,7 +80,7 @@ def _actuator_factors(units: list[str | None], joints: list[str], name: str) -> 
             factors.append(ANGLE_UNITS[unit])
         else:
             raise MeasurementFormatError(
-                f"{name}: unit {unit!r} of actuator column {joint!r} unknown; use "
+                f"{name}: unit {shown(unit)} of actuator column {shown(joint)} unknown; use "
                 f"{', '.join(LENGTH_UNITS)} or {', '.join(ANGLE_UNITS)}"
             )
     return np.array(factors)
@@ -104,8 +107,8 @@ def read_pose_file(path: str | Path) -> PoseFile:
     af = unit_factor(ANGLE_UNITS, header_value(header, "angle_unit", "rad", name), "angle", name)
     orient = header_value(header, "orientation", "rotvec", name)
     if orient not in _ROTATION_COLUMNS:
-        raise MeasurementFormatError(f"{name}: orientation {orient!r}; use rotvec or rpy")
-    actuated = header_value(header, "actuated", "", name).split()
+        raise MeasurementFormatError(f"{name}: orientation {shown(orient)}; use rotvec or rpy")
+    actuated = header_words(header, "actuated", name)
     want = ["x", "y", "z", *_ROTATION_COLUMNS[orient]]
     parsed = [parse_column(c) for c in columns]
     names = [p[0] for p in parsed]
@@ -117,7 +120,7 @@ def read_pose_file(path: str | Path) -> PoseFile:
         raise ColumnError(
             f"{name}: pose columns are {want} (all, or the components the machine controls"
             f"{'; roll pitch yaw together' if orient == 'rpy' else ''}) plus the actuator "
-            f"columns named by '# actuated:'; not understood {extra}, missing actuator "
+            f"columns named by '# actuated:'; not understood {shown(extra)}, missing actuator "
             f"columns {missing_act}",
             missing_act,
             extra,
@@ -209,7 +212,7 @@ def write_poses(
             raise MeasurementError(
                 f"q_act has shape {q_act.shape}; expected ({len(poses)}, {len(actuated)})"
             )
-        header.append(f"actuated: {' '.join(actuated)}")
+        header.append(f"actuated: {quote_words(actuated, 'actuated joint')}")
         act_cols = actuator_columns(actuated, actuator_units)
         afac = actuator_write_factors(actuator_units, len(actuated))
     rows = []

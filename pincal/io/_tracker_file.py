@@ -11,14 +11,23 @@ row's pose (Kabsch, :mod:`pincal.measure._tracker`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from pincal.errors import MeasurementError, MeasurementFormatError, PoseFitError
-from pincal.io._csv import Header, actuator_columns, fmt, positive_value, write_csv
+from pincal.errors import MeasurementError, MeasurementFormatError, PoseFitError, clip
+from pincal.io._csv import (
+    Header,
+    actuator_columns,
+    fmt,
+    parse_float,
+    positive_value,
+    write_csv,
+)
+from pincal.io._names import column_title, quote_value, quote_words, split_words
 from pincal.io._units import LENGTH_UNITS, actuator_write_factors, unit_factor
 from pincal.measure import Measurements, fit_rigid_transform, rigid_fit_covariance
 from pincal.model import COMPONENTS
@@ -110,13 +119,16 @@ def parse_targets(header: Header, lf: float, name: str) -> tuple[list[str], np.n
     """
     names, coords = [], []
     for entry in header.get("target", []):
-        parts = entry.split()
+        parts = split_words(entry, f"{name} header 'target'")
         if len(parts) != 4:
-            raise MeasurementFormatError(f"{name}: target line {entry!r}: expected 'name x y z'")
-        try:
-            coords.append([float(v) / lf for v in parts[1:]])
-        except ValueError:
-            raise MeasurementFormatError(f"{name}: target line {entry!r}: bad number") from None
+            raise MeasurementFormatError(
+                f"{name}: target line {clip(entry)}: expected 'name x y z'"
+            )
+        coords.append([parse_float(v, f"{name} target {clip(parts[0])}") / lf for v in parts[1:]])
+        if not all(math.isfinite(c) for c in coords[-1]):
+            raise MeasurementFormatError(
+                f"{name}: target line {clip(entry)}: coordinates must be finite"
+            )
         names.append(parts[0])
     if len(names) < 3:
         raise MeasurementFormatError(
@@ -165,15 +177,19 @@ def write_target_measurements(
         MeasurementError: bad ``actuator_units``.
     """
     lf = unit_factor(LENGTH_UNITS, length_unit, "length", "write_target_measurements")
-    lines = [f"frame: {data.frame}", "kind: targets", f"length_unit: {length_unit}"]
+    lines = [
+        f"frame: {quote_value(data.frame, 'frame')}",
+        "kind: targets",
+        f"length_unit: {length_unit}",
+    ]
     for n, p in zip(data.names, data.targets_local, strict=True):
-        lines.append(f"target: {n} {' '.join(fmt(v * lf) for v in p)}")
+        lines.append(f"target: {quote_words([n], 'target')} {' '.join(fmt(v * lf) for v in p)}")
     if data.point_std is not None:
         lines.append(f"point_std: {fmt(data.point_std * lf)}")
     if data.max_residual is not None:
         lines.append(f"max_residual: {fmt(data.max_residual * lf)}")
     columns = actuator_columns(data.actuated, actuator_units) + [
-        f"{n}.{a}" for n in data.names for a in "xyz"
+        column_title(f"{n}.{a}", None, "target") for n in data.names for a in "xyz"
     ]
     afac = actuator_write_factors(actuator_units, len(data.actuated))
     rows = [

@@ -11,7 +11,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pincal.errors import MeasurementError, MeasurementFormatError
+from pincal._yaml import shown
+from pincal.errors import ActuatorRangeError, MeasurementError, MeasurementFormatError
 from pincal.model import Mechanism
 
 __all__ = [
@@ -19,9 +20,15 @@ __all__ = [
     "LENGTH_UNITS",
     "actuator_read_factors",
     "actuator_write_factors",
+    "check_actuator_ranges",
     "si_actuator_units",
     "unit_factor",
 ]
+
+#: how far past a URDF limit an actuator value is still read, as a fraction of the range
+RANGE_TOLERANCE = 0.05
+#: ranges wider than this [m or rad] are treated as "no range" (URDF ±1e308 and the like)
+_NO_RANGE = 1e9
 
 #: units per SI unit (value_in_unit = SI value × factor)
 LENGTH_UNITS = {"m": 1.0, "mm": 1e3, "um": 1e6}
@@ -45,7 +52,7 @@ def unit_factor(table: dict[str, float], name: str, what: str, where: str) -> fl
     """
     if name not in table:
         raise MeasurementFormatError(
-            f"{where}: unknown {what} unit {name!r}; use one of {', '.join(table)}"
+            f"{where}: unknown {what} unit {shown(name)}; use one of {', '.join(table)}"
         )
     return table[name]
 
@@ -83,7 +90,7 @@ def actuator_write_factors(units: Sequence[str] | None, n: int) -> np.ndarray:
     unknown = [u for u in units if u not in table]
     if unknown:
         raise MeasurementError(
-            f"actuator units {unknown} unknown; use length units {', '.join(LENGTH_UNITS)} "
+            f"actuator units {shown(unknown)} unknown; use length units {', '.join(LENGTH_UNITS)} "
             f"or angle units {', '.join(ANGLE_UNITS)}"
         )
     return np.array([table[u] for u in units])
@@ -99,3 +106,51 @@ def si_actuator_units(mech: Mechanism) -> list[str]:
         "rad" if mech.tree.joints[j].type in ("revolute", "continuous") else "m"
         for j in mech.actuated
     ]
+
+
+def check_actuator_ranges(
+    mech: Mechanism,
+    q_act: np.ndarray,
+    name: str,
+    columns: Sequence[str] | None = None,
+    lines: Sequence[int] | None = None,
+) -> None:
+    """Refuse actuator values far outside the joints' URDF limits.
+
+    A value may exceed a limit by :data:`RANGE_TOLERANCE` of the joint's range
+    (measured values scatter around the limits); joints without a finite range
+    (continuous joints, prismatic joints without limits) are not checked.
+
+    Args:
+        mech: the model giving the actuated joints and their limits.
+        q_act: (m, n_act) actuator values [m, rad], in ``mech.actuated`` order.
+        name: file name, for the message.
+        columns: the file's column title per actuator (default the joint names).
+        lines: 1-based file line of each row (default: data rows 1 … m are named).
+
+    Raises:
+        ActuatorRangeError: the first value out of range (row, column, joint, range).
+    """
+    q_act = np.asarray(q_act, dtype=float).reshape(-1, len(mech.actuated))
+    for k, joint in enumerate(mech.actuated):
+        lo, hi = (float(v) for v in mech.actuator_limits[k])
+        if not (np.isfinite(lo) and np.isfinite(hi) and 0 < hi - lo < _NO_RANGE):
+            continue
+        tol = RANGE_TOLERANCE * (hi - lo)
+        bad = np.nonzero(~((q_act[:, k] >= lo - tol) & (q_act[:, k] <= hi + tol)))[0]
+        if not bad.size:
+            continue
+        i = int(bad[0])
+        col = joint if columns is None else columns[k]
+        row = f"data row {i + 1}" if lines is None else f"line {lines[i]}"
+        unit = "rad" if mech.tree.joints[joint].type in ("revolute", "continuous") else "m"
+        raise ActuatorRangeError(
+            f"{name} {row}, column {shown(col)}: joint {joint!r} = {q_act[i, k]:.6g} {unit} "
+            f"is outside its range [{lo:.6g}, {hi:.6g}] {unit} (URDF limits, "
+            f"{RANGE_TOLERANCE:.0%} of the range tolerated); check the column's unit and "
+            "the joint order",
+            i + 1,
+            col,
+            joint,
+            (lo, hi),
+        )

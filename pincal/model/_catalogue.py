@@ -5,10 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from pincal._files import read_text
-from pincal.errors import ModelFileError, UnknownNameError
+from pincal._yaml import load_yaml
+from pincal.errors import ModelFileError, UnknownNameError, clip
 from pincal.model._mechanism import Mechanism
 from pincal.model._newton import SolverOptions
 from pincal.model._urdf import UrdfTree
@@ -20,23 +19,23 @@ __all__ = ["MODELS_DIR", "bundled_models", "load_mechanism", "read_sidecar", "re
 MODELS_DIR = Path(__file__).resolve().parents[1] / "models"
 
 
-def _read_text(path: Path, what: str) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelFileError(f"cannot read {what} {str(path)!r}: {exc.strerror}") from exc
-
-
 def read_sidecar(path: Path) -> dict[str, Any]:
-    """Parse a sidecar YAML file safely (no code execution)."""
-    try:
-        data = yaml.safe_load(_read_text(path, "sidecar"))
-    except yaml.YAMLError as exc:
-        raise ModelFileError(f"sidecar {str(path)!r} is not valid YAML: {exc}") from exc
+    """Parse a sidecar YAML file safely (see :func:`pincal._yaml.load_yaml`).
+
+    No code execution, a size cap, bounded alias expansion, duplicate keys refused.
+
+    Raises:
+        ModelFileError: unreadable, not UTF-8, not YAML, a duplicate key, not a mapping.
+        InputLimitError: too large, an alias bomb or nesting too deep.
+    """
+    data = load_yaml(path, "sidecar", ModelFileError)
     if data is None:
         return {}
     if not isinstance(data, dict):
-        raise ModelFileError(f"sidecar {str(path)!r} must be a mapping, got {type(data).__name__}")
+        raise ModelFileError(
+            f"sidecar {clip(str(path))} must be a mapping of keys (closed_loop, name_mot, ...), "
+            f"got a {type(data).__name__}"
+        )
     return data
 
 

@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
 
+from pincal._yaml import shown
 from pincal.errors import ModelFileError
 from pincal.model._closures import COMPONENTS, parse_components
 
@@ -41,7 +42,17 @@ class Workspace:
 
 
 def _is_number(v: Any) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(float(v))
+    """A finite int or float that converts to a finite float (a 400-digit int does not)."""
+    if isinstance(v, bool):
+        return False
+    if isinstance(v, int):
+        return v.bit_length() <= 1023
+    return isinstance(v, float) and math.isfinite(v)
+
+
+def _q(v: Any) -> str:
+    """Bounded text of a user value for messages."""
+    return shown(v)
 
 
 def _names(v: Any, key: str) -> tuple[str, ...]:
@@ -50,15 +61,24 @@ def _names(v: Any, key: str) -> tuple[str, ...]:
         return (v,)
     if isinstance(v, list | tuple) and all(isinstance(x, str) for x in v):
         return tuple(v)
-    raise ModelFileError(f"sidecar {key!r} must be a name or a list of names: {v!r}")
+    raise ModelFileError(f"sidecar {_q(key)} must be a name or a list of names: {_q(v)}")
 
 
 def _range(v: Any, where: str) -> tuple[float, float]:
     if not (isinstance(v, list | tuple) and len(v) == 2 and all(_is_number(x) for x in v)):
-        raise ModelFileError(f"sidecar {where} must be [lower, upper] finite numbers, got {v!r}")
+        raise ModelFileError(f"sidecar {where} must be [lower, upper] finite numbers, got {_q(v)}")
     if float(v[0]) > float(v[1]):
-        raise ModelFileError(f"sidecar {where}: lower {v[0]} is above upper {v[1]}")
+        raise ModelFileError(f"sidecar {where}: lower {_q(v[0])} is above upper {_q(v[1])}")
     return float(v[0]), float(v[1])
+
+
+def _check_components(spec: Any, what: str) -> None:
+    """parse_components with the offending value clipped in the message."""
+    try:
+        parse_components(spec, what)
+    except ModelFileError:
+        valid = ", ".join(["3d", "6d", "pose", "position", "orientation", *COMPONENTS])
+        raise ModelFileError(f"{what}: invalid components {_q(spec)}; use one of {valid}") from None
 
 
 def _closure_pairs(v: Any) -> tuple[tuple[str, str], ...]:
@@ -74,7 +94,7 @@ def _closure_pairs(v: Any) -> tuple[tuple[str, str], ...]:
             and all(isinstance(p, str) for p in pair)
         ):
             raise ModelFileError(
-                f"sidecar closed_loop[{k}] must be a pair of frame names, got {pair!r}"
+                f"sidecar closed_loop[{k}] must be a pair of frame names, got {_q(pair)}"
             )
         pairs.append((pair[0], pair[1]))
     return tuple(pairs)
@@ -96,18 +116,18 @@ def _closure_kinds(v: Any, n_pairs: int) -> tuple[ClosureKind, ...]:
     elif isinstance(v, list | tuple):
         kinds = list(v)
     else:
-        raise ModelFileError(f"sidecar 'type' must be a closure type or a list of them: {v!r}")
+        raise ModelFileError(f"sidecar 'type' must be a closure type or a list of them: {_q(v)}")
     if len(kinds) != n_pairs:
         raise ModelFileError(
-            f"sidecar 'type' must give one closure type per pair ({n_pairs} pairs), got {v!r}"
+            f"sidecar 'type' must give one closure type per pair ({n_pairs} pairs), got {_q(v)}"
         )
     out: list[ClosureKind] = []
     for k, kind in enumerate(kinds):
         if not (isinstance(kind, str) or isinstance(kind, list | tuple)):
-            raise ModelFileError(f"sidecar type[{k}] must be a closure type, got {kind!r}")
+            raise ModelFileError(f"sidecar type[{k}] must be a closure type, got {_q(kind)}")
         if not isinstance(kind, str) and not all(isinstance(c, str) for c in kind):
-            raise ModelFileError(f"sidecar type[{k}] must list component names, got {kind!r}")
-        parse_components(kind, f"sidecar type[{k}]")  # raises ModelFileError
+            raise ModelFileError(f"sidecar type[{k}] must list component names, got {_q(kind)}")
+        _check_components(kind, f"sidecar type[{k}]")
         out.append(kind if isinstance(kind, str) else tuple(kind))
     return tuple(out)
 
@@ -122,7 +142,8 @@ def _home(v: Any) -> dict[str, tuple[float, ...]]:
         vals = value if isinstance(value, list | tuple) else [value]
         if not vals or not all(_is_number(x) for x in vals):
             raise ModelFileError(
-                f"sidecar home[{name!r}] must be a finite number or a list of them, got {value!r}"
+                f"sidecar home[{_q(name)}] must be a finite number or a list of them, "
+                f"got {_q(value)}"
             )
         out[str(name)] = tuple(float(x) for x in vals)
     return out
@@ -145,7 +166,7 @@ def _workspace(v: Any) -> Workspace:
         for name, r in ranges.items():
             if part == "pose" and name not in WORKSPACE_POSE_KEYS:
                 _refuse_unknown({name: r}, WORKSPACE_POSE_KEYS, "workspace pose key")
-            parts[part][str(name)] = _range(r, f"workspace.{part}[{name!r}]")
+            parts[part][str(name)] = _range(r, f"workspace.{part}[{_q(name)}]")
     return Workspace(parts["pose"], parts["joints"])
 
 
@@ -156,7 +177,7 @@ def _presets(v: Any) -> dict[str, list[Any]]:
         raise ModelFileError("sidecar 'presets' must map preset names to lists of entries")
     for name, entries in v.items():
         if not isinstance(entries, list):
-            raise ModelFileError(f"sidecar preset {name!r} must be a list of entries")
+            raise ModelFileError(f"sidecar preset {_q(name)} must be a list of entries")
     return {str(k): list(e) for k, e in v.items()}
 
 
@@ -164,9 +185,9 @@ def _refuse_unknown(d: Mapping[Any, Any], valid: tuple[str, ...], what: str) -> 
     for key in d:
         if key not in valid:
             near = difflib.get_close_matches(str(key), valid, n=1, cutoff=0.6)
-            hint = f"did you mean {near[0]!r}? " if near else ""
+            hint = f"did you mean {_q(near[0])}? " if near else ""
             raise ModelFileError(
-                f"unknown sidecar {what} {key!r}: {hint}valid keys are {', '.join(valid)}"
+                f"unknown sidecar {what} {_q(key)}: {hint}valid keys are {', '.join(valid)}"
             )
 
 
@@ -243,18 +264,18 @@ class Sidecar:
         for name, kind in zip(joint_name, kinds, strict=True):
             if kind not in JOINT_KINDS:
                 raise ModelFileError(
-                    f"sidecar joint_type {kind!r} of joint {name!r} is not supported; "
+                    f"sidecar joint_type {_q(kind)} of joint {_q(name)} is not supported; "
                     f"supported kinds: {', '.join(JOINT_KINDS)}"
                 )
         frame = d.get("measured_frame")
         if frame is not None and not isinstance(frame, str):
-            raise ModelFileError(f"sidecar 'measured_frame' must be a frame name: {frame!r}")
+            raise ModelFileError(f"sidecar 'measured_frame' must be a frame name: {_q(frame)}")
         measured = d.get("measured", "pose")
         measured = measured if isinstance(measured, str) else _names(measured, "measured")
-        parse_components(measured, "sidecar 'measured'")
+        _check_components(measured, "sidecar 'measured'")
         view_up = d.get("view_up")
         if view_up is not None and not isinstance(view_up, str):
-            raise ModelFileError(f"sidecar 'view_up' must be a direction such as -z: {view_up!r}")
+            raise ModelFileError(f"sidecar 'view_up' must be a direction such as -z: {_q(view_up)}")
         regions = d.get("measurement_regions") or []
         if not isinstance(regions, list):
             raise ModelFileError("sidecar 'measurement_regions' must be a list")

@@ -16,7 +16,8 @@ from typing import SupportsFloat, cast
 
 import numpy as np
 
-from pincal.errors import ReportError
+from pincal._files import read_bytes
+from pincal.errors import InputFileError, InputLimitError, ReportError
 from pincal.identification import IdentificationResult
 from pincal.report._document import ReportFiles, Section, Table, write_report
 from pincal.report._plots import (
@@ -108,14 +109,12 @@ def read_identification(path: str | os.PathLike) -> IdentificationResult:
             entry (the message names the entry).
     """
     path = Path(path)
+    try:  # bounded; refuses FIFOs and devices
+        raw = read_bytes(path, "identification.json", MAX_JSON_BYTES)
+    except (InputFileError, InputLimitError) as exc:
+        raise ReportError(str(exc)) from None
     try:
-        raw = path.read_bytes()[: MAX_JSON_BYTES + 1]
-    except OSError as exc:
-        raise ReportError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
-    if len(raw) > MAX_JSON_BYTES:
-        raise ReportError(f"{str(path)!r} is larger than {MAX_JSON_BYTES} bytes")
-    try:
-        data = json.loads(raw.decode("utf-8"))
+        data = json.loads(raw.decode("utf-8-sig"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ReportError(f"{str(path)!r} is not valid JSON: {exc}") from exc
     if not isinstance(data, dict):
