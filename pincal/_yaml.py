@@ -11,7 +11,6 @@ last one), naming the key and both lines.
 
 from __future__ import annotations
 
-import reprlib
 from pathlib import Path
 from typing import Any
 
@@ -30,26 +29,8 @@ _MERGE_TAG = "tag:yaml.org,2002:merge"
 
 
 def shown(value: Any, limit: int = 80) -> str:
-    """Bounded ``repr`` of a parsed value for messages.
-
-    Strings are quoted; nested containers are cut by depth and count before
-    :func:`~pincal.errors.clip` cuts the text.
-
-    Args:
-        value: any parsed YAML value (or anything else).
-        limit: maximum length of the text [characters].
-
-    Returns:
-        The text.
-    """
-    if isinstance(value, int) and not isinstance(value, bool):
-        return clip(value, limit)
-    short = reprlib.Repr()
-    short.maxlevel, short.maxstring, short.maxother = 3, limit, limit
-    try:
-        return clip(short.repr(value), limit)
-    except ValueError:  # an integer too long to print, nested somewhere
-        return f"<{type(value).__name__}>"
+    """Bounded text of a parsed value for messages: :func:`~pincal.errors.clip`, quoted."""
+    return clip(value, limit, quote=True)
 
 
 class _DuplicateKey(Exception):

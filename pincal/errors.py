@@ -8,6 +8,7 @@ attributes for programmatic use.
 
 from __future__ import annotations
 
+import reprlib
 from collections.abc import Iterable, Sequence
 
 __all__ = [
@@ -50,29 +51,38 @@ class PincalError(Exception):
     """Root of all pincal errors."""
 
 
-def clip(value: object, limit: int = 80) -> str:
-    """Return ``repr``-like text of a user value, cut to at most ``limit`` characters.
+def clip(value: object, limit: int = 80, *, quote: bool = False) -> str:
+    """Return bounded text of a user value for a message, at most ``limit`` characters.
 
     Every user-supplied value that goes into a message passes through here, so a
-    huge or hostile value (a YAML alias bomb, a 10 MB CSV cell) cannot make the
-    message itself huge or slow. Strings are shown as they are (newlines escaped);
-    other objects by ``repr`` of a bounded prefix for long sequences.
+    huge or hostile value (a YAML alias bomb, a 10 MB CSV cell, a 5 000-digit integer)
+    cannot make the message itself huge or slow. Strings are shown as they are, with
+    control characters escaped (quoted with ``quote=True``); other values by a ``repr``
+    bounded in depth and item count (:mod:`reprlib`).
 
     Args:
         value: anything.
         limit: maximum length of the returned text, in characters.
+        quote: put strings in single quotes (as ``repr`` would).
 
     Returns:
-        The text, ending in "…" (with the full length) when cut.
+        The text, ending in "… (N chars)" when cut.
     """
     if isinstance(value, str):
         text = value.encode("unicode_escape", "backslashreplace").decode("ascii", "replace")
-    elif isinstance(value, int) and value.bit_length() > 128:
+        if quote:
+            text = "'" + text.replace("'", "\\'") + "'"
+    elif isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 128:
         text = f"<integer of ~{int(value.bit_length() * 0.30103) + 1} digits>"
     elif isinstance(value, (list, tuple, set, dict)) and len(value) > limit:
         text = f"<{type(value).__name__} of {len(value)} items>"
     else:
-        text = repr(value)
+        short = reprlib.Repr()
+        short.maxlevel, short.maxstring, short.maxother = 3, limit, limit
+        try:
+            text = short.repr(value)
+        except ValueError:  # an integer too long to print, nested somewhere
+            text = f"<{type(value).__name__}>"
     if len(text) <= limit:
         return text
     tail = f"… ({len(text)} chars)"
