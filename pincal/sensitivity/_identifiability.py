@@ -27,7 +27,12 @@ import numpy as np
 
 from pincal.errors import PincalError, UnidentifiableError
 from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet, degenerate_translations, full_parameters
+from pincal.model._parameters import (
+    ParameterSet,
+    degenerate_translations,
+    full_parameters,
+    register_preset,
+)
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
 __all__ = [
@@ -282,3 +287,6 @@ def base_parameters(mech: Mechanism, params: ParameterSet | None = None) -> Para
         )
     label = "base" if params is None else f"{params.label} base"
     return candidates.subset(ident.base, label)
+
+
+register_preset("base", base_parameters)  # parameters(mech, "base"), without model importing us
