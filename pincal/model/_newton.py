@@ -90,8 +90,11 @@ def _polish(
     jacobian: Callable[[], np.ndarray],
     opt: SolverOptions,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Up to ``opt.polish_steps`` full Newton steps from a converged q, each kept only
-    when it lowers max|r|. Returns (q, r, Jf) of the last kept iterate."""
+    """Polish a converged solve: full Newton steps while each halves max|r|.
+
+    Returns:
+        (q, r, Jf) of the last kept iterate (at most ``opt.polish_steps`` steps).
+    """
     for _ in range(opt.polish_steps):
         worst = np.max(np.abs(r), initial=0.0)
         if worst == 0.0:
