@@ -6,6 +6,12 @@ them. Here a solution is accepted only when it is on the branch of ``q_home``:
 
 * where the passive closure Jacobian is square, the sign of its determinant must equal
   the sign at home (it changes exactly when a passive singularity is crossed);
+* where it has independent rows but more columns because some passive motion is idle
+  (e.g. the spin of an RSSR coupler about its own axis: it moves nothing the closures
+  or the measured frame see), the idle directions are left out: the columns carrying
+  most of the idle motion at home are dropped (column-pivoted QR of the home
+  nullspace) and the sign of the determinant of the remaining square block is checked
+  instead (``idle_branch``; ``home_branch`` stays 0 for such mechanisms);
 * a direct solve from the start configuration that fails this test is replaced by a
   continuation: a straight path in actuator space from the start (then from home),
   in steps that halve until each step converges, keeps the sign and moves the passive
@@ -16,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+import scipy.linalg
 
 from pincal.errors import ConvergenceError
 from pincal.model._assembly import Assembly
@@ -30,25 +37,49 @@ class BranchTracking(Assembly):
     """Branch-preserving loop closing (mixed into Mechanism)."""
 
     def _branch_sign(self, q: np.ndarray) -> float:
-        """Sign of det of the passive closure Jacobian at q, or 0 where undefined."""
-        if not self._square_passive:
+        """Sign of det of the (idle-reduced) passive closure Jacobian at q, 0 if undefined."""
+        if self._branch_cols is None:
             return 0.0
-        J = self.closure_jacobian(q)[:, self._free_v]
+        J = self.closure_jacobian(q)[:, self._free_v[self._branch_cols]]
         return float(np.sign(np.linalg.det(J)))
 
     def _init_branch(self) -> None:
         n = self._free_v.size
-        self._square_passive = bool(
-            self.closures and self.n_closure_rows == n and self._rank_u == n
-        )
-        self.home_branch = self._branch_sign(self.q_home)
+        rows = self.n_closure_rows
+        self._square_passive = bool(self.closures and rows == n and self._rank_u == n)
+        self._branch_cols: np.ndarray | None = None
+        if self._square_passive:
+            self._branch_cols = np.arange(n)
+        elif self.closures and 0 < rows == self._rank_u < n:
+            self._branch_cols = self._non_idle_columns()
+        sign = self._branch_sign(self.q_home)
+        self.home_branch = sign if self._square_passive else 0.0
+        #: the branch sign with the idle passive directions left out (= home_branch when
+        #: there are none; 0 where no branch is defined)
+        self.idle_branch = sign
+
+    def _non_idle_columns(self) -> np.ndarray | None:
+        """Local passive columns left when the idle directions at home are dropped.
+
+        None when the remaining square block is not well-conditioned at home (then no
+        branch is checked, as before).
+        """
+        J = self.closure_jacobian(self.q_home)[:, self._free_v]
+        _, _, Vt = np.linalg.svd(J)
+        null = Vt[self._rank_u :]  # (idle, n): the idle directions at home
+        _, _, piv = scipy.linalg.qr(null, pivoting=True)
+        keep = np.sort(piv[null.shape[0] :])
+        s = np.linalg.svd(J[:, keep], compute_uv=False)
+        if s[-1] <= 0 or s[0] / s[-1] > self.options.max_condition:
+            return None
+        return keep
 
     def _on_branch(self, sol: Solution) -> bool:
         """Whether a passive solve (Jacobian over the passive dofs kept) is on home's branch."""
-        if self.home_branch == 0.0:
+        if self.idle_branch == 0.0 or self._branch_cols is None:
             return True
-        J = sol.jacobian[: self.n_closure_rows]
-        return float(np.sign(np.linalg.det(J))) == self.home_branch
+        J = sol.jacobian[: self.n_closure_rows][:, self._branch_cols]
+        return float(np.sign(np.linalg.det(J))) == self.idle_branch
 
     def _solve_on_branch(self, q_act: np.ndarray, start: np.ndarray) -> Solution:
         """Closed configuration for ``q_act`` on the home branch, starting from ``start``.

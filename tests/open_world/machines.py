@@ -61,10 +61,18 @@ def _se3(R: np.ndarray | None = None, p=(0.0, 0.0, 0.0)) -> pin.SE3:
 
 
 # ------------------------------------------------------------------ RSSR, ball = 3 revolutes
+RSSR_CRANK_RANGE = (0.1, 1.0)
+"""Crank range [rad] of the RSSR machines: on one side of the output dead point at 0."""
+
 def rssr_emulated_ball() -> tuple[str, dict]:
     """RSSR four-bar (crank 0.05, coupler 0.17, rocker 0.08, pivots 0.2 apart) whose crank
     ball joint is three revolutes ``ball_x`` (z), ``ball_y`` (y), ``ball_z`` (x) meeting at
     one point; the rocker-end ball is the cut (3D closure). Measured: rocker tip position.
+
+    The machine is mirror-symmetric about the plane y = 0: crank angles a and −a put the
+    rocker tip at the same position, and crank = 0 is a dead point of the output (the
+    tip does not move at first order). Inverse kinematics is therefore posed only on one
+    side of it: home is at crank 0.5 rad and the workspace is [0.1, 1.0] rad.
     """
     urdf = (
         '<?xml version="1.0"?>\n<robot name="rssr3r">\n'
@@ -88,8 +96,8 @@ def rssr_emulated_ball() -> tuple[str, dict]:
         "name_mot": ["crank_mot"],
         "measured_frame": "rocker_tip",
         "measured": "position",
-        "home": {"crank_mot": 0.0, "ball_y": -float(np.arctan2(0.08, 0.15))},
-        "workspace": {"joints": {"crank_mot": [-0.6, 0.6]}},
+        "home": {"crank_mot": 0.5, "ball_y": -float(np.arctan2(0.08, 0.15))},
+        "workspace": {"joints": {"crank_mot": list(RSSR_CRANK_RANGE)}},
     }
     return urdf, sidecar
 

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import pytest
 
-from pincal.errors import UnreachablePoseError
 from pincal.model import load_mechanism
 from tests.open_world import acceptance
 from tests.open_world.machines import rssr_emulated_ball, write_machine
@@ -33,12 +32,6 @@ def test_base_preset_leaves_out_translations_between_coincident_axes(mech):
     assert degenerate <= set(parameters(mech, "full").names)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=UnreachablePoseError,
-    reason="inverse kinematics from home does not converge for this 1-dof loop with an idle "
-    "coupler spin (measured: residual 3.45 mm at crank -0.497 rad)",
-)
 def test_round_trip(mech):
     acceptance.check_round_trip(mech)
 
@@ -51,14 +44,9 @@ def test_noise_free_recovery_of_the_measured_quantity(mech):
     acceptance.check_recovery(mech, tol=None)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="ill-conditioned base set of a 1-dof machine: parameters recovered to 1.8e-6 "
-    "only (the measured position to < 1e-9)",
-)
 def test_noise_free_recovery(mech):
     acceptance.check_recovery(mech)
 
 
 def test_simulate_calibrate_compensate(model, tmp_path):
-    acceptance.check_cli(model, tmp_path, param_tol=None)  # ill-conditioned, see above
+    acceptance.check_cli(model, tmp_path)

@@ -37,11 +37,6 @@ def test_noise_free_recovery_of_the_measured_quantity(mech):
     acceptance.check_recovery(mech, tol=None)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="ill-conditioned base set of a 1-dof machine: parameters recovered to 1.3e-8 "
-    "only (the measured pose to < 1e-9)",
-)
 def test_noise_free_recovery(mech):
     acceptance.check_recovery(mech)
 
