@@ -12,6 +12,11 @@ fewer, the remaining members are the columns with the largest part outside the s
 ``J_k = Σ_i β_ki J_i``: its effect is absorbed into those base parameters and it
 cannot be identified.
 
+The ``base`` *preset* (:func:`base_set`) applies the same analysis with the stricter
+threshold :data:`BASE_RTOL` = 100 × RANK_RTOL: directions between the two thresholds
+exist but are too weak to identify in practice (and fall below the rank rule on other
+pose sets); the preset leaves them out and :meth:`BaseSet.note` says so.
+
 Over-constrained loops (e.g. a ``6d`` closure of a planar loop) add a third class:
 parameters whose change would open a loop that no passive-joint motion can close
 (their closure-Jacobian column ∂c/∂p_k lies outside the range of ∂c/∂q_u at some
