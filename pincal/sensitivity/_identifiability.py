@@ -293,9 +293,9 @@ class BaseSet:
             return None
         return (
             f"{self.weak} weakly identifiable direction(s) left out (singular value down to "
-            f"{self.weakest:.2g} of the largest, below {BASE_RTOL:g}: no instrument resolves "
-            f"them and even exact double-precision data fixes them only to ~1e-16/"
-            f"{self.weakest:.2g} of the parameter scale)"
+            f"{self.weakest:.2g} of the largest, below {BASE_RTOL:g}): the measurements "
+            f"hardly change along them, so no instrument resolves them and even noise-free "
+            f"double-precision data fixes them only to ~{1e-16 / self.weakest:.0e} relative"
         )
 
 
