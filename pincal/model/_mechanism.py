@@ -301,29 +301,39 @@ class Mechanism(BatchTracking):
             )
         return sol.q
 
-    def _dead_start_note(self, q: np.ndarray, fid: int, comps: np.ndarray) -> str:
-        """Why inverse kinematics may not leave ``q`` ("" when it is not a dead point).
-
-        A dead point: the measured components do not move at first order with some
-        actuator combination there, the loops staying closed.
-        """
+    def _output_rank(self, q: np.ndarray, fid: int, comps: np.ndarray) -> int:
+        """Rank of the actuator → measured-components map at q, the loops staying closed."""
         data = self._compute(q)
         J_frame = pin.getFrameJacobian(self.model, data, fid, pin.LOCAL)
         Jm = measured_jacobian(data.oMf[fid], J_frame)[comps]
         Jc = self._closure_jacobian(data)
         act, free = self._act_v_arr, self._free_v
-        # output velocity per unit actuator velocity, the loops staying closed
         dq_free = -np.linalg.pinv(Jc[:, free], rcond=self.options.rcond) @ Jc[:, act]
         G = Jm[:, act] + Jm[:, free] @ dq_free
         s = np.linalg.svd(G, compute_uv=False)
         scale = max(float(np.max(np.abs(Jm), initial=0.0)), 1e-300)
-        dead = int(np.sum(s <= 1e-9 * scale)) + max(len(act) - s.size, 0)
-        if not dead:
+        return int(np.sum(s > 1e-9 * scale))
+
+    def _dead_start_note(self, q: np.ndarray, fid: int, comps: np.ndarray) -> str:
+        """Why inverse kinematics may not leave ``q`` ("" when it is not a dead point).
+
+        A dead point: the actuators move the measured components in fewer directions at
+        q than at nearby configurations (first order, the loops staying closed).
+        """
+        rank = self._output_rank(q, fid, comps)
+        rng = np.random.default_rng(0)
+        nearby = max(
+            self._output_rank(
+                pin.integrate(self.model, q, 1e-3 * rng.standard_normal(self.model.nv)), fid, comps
+            )
+            for _ in range(3)
+        )
+        if rank >= nearby:
             return ""
         return (
-            f". At the start configuration the measured components "
-            f"{list(self.measured_components)} do not move at first order with {dead} "
-            f"combination(s) of the actuators {list(self.actuated)} (a dead point of the "
+            f". At the start configuration the actuators {list(self.actuated)} move the "
+            f"measured components {list(self.measured_components)} in only {rank} "
+            f"independent direction(s) at first order, {nearby} nearby (a dead point of the "
             f"output): Newton cannot leave it, and nearby targets are reached by several "
             f"actuator values (e.g. a mirror-symmetric machine). Give q_guess near the "
             f"solution, or put the sidecar 'home' away from the dead point and keep the "

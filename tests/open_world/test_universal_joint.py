@@ -9,7 +9,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from pincal.errors import ModelFileError
+from pincal.errors import ModelFileError, UnreachablePoseError
 from pincal.model import Mechanism, load_mechanism
 from tests.open_world import acceptance
 from tests.open_world.machines import rusr_universal, write_machine
@@ -73,3 +73,10 @@ def test_noise_free_recovery(mech):
 
 def test_simulate_calibrate_compensate(model, tmp_path):
     acceptance.check_cli(model, tmp_path)
+
+
+def test_unreachable_target_from_a_regular_home_names_no_dead_point(mech):
+    far = pin.SE3(np.eye(3), np.array([1.0, 1.0, 1.0]))
+    with pytest.raises(UnreachablePoseError, match="unreachable") as info:
+        mech.inverse(far)
+    assert "dead point" not in str(info.value)
