@@ -88,7 +88,7 @@ def info(model: str, preset: str | None, instrument: str | None, as_json: bool) 
     import numpy as np
 
     from pincal.model import degenerate_translations, load_mechanism, parameters
-    from pincal.sensitivity import BASE_POSES, identifiability
+    from pincal.sensitivity import BASE_POSES, base_set, identifiability
 
     mech = load_mechanism(model)
     if not as_json:
@@ -131,10 +131,14 @@ def info(model: str, preset: str | None, instrument: str | None, as_json: bool) 
                 click.echo(f"    {line}")
     base = None
     if preset is None and "base" not in mech.presets:
-        n_base, n_degenerate = len(parameters(mech, "base")), len(degenerate_translations(mech))
+        found = base_set(mech)  # = parameters(mech, "base"), with what it leaves out
+        n_base, n_degenerate = len(found.params), len(degenerate_translations(mech))
         base = {"parameters": n_base, "degenerate_translations_left_out": n_degenerate}
+        base["weak_directions_left_out"] = found.weak
         if not as_json:
             click.echo(base_line(mech, n_base, n_degenerate, BASE_POSES))
+            if found.note():
+                click.echo(f"    {found.note()}")
     if as_json:
         doc = {
             "model": mech.name,

@@ -45,6 +45,7 @@ from pincal.model._parameters import (
     degenerate_translations,
     full_parameters,
     parameters,
+    register_preset,
 )
 from pincal.model._robots import example_robot_names, example_robot_urdf
 from pincal.model._serial import (
@@ -122,6 +123,7 @@ __all__ = [
     "parameters_to_dh_errors",
     "parse_components",
     "read_sidecar",
+    "register_preset",
     "resolve_model_path",
     "sample_actuators",
     "sample_pose",

@@ -6,6 +6,13 @@ them. Here a solution is accepted only when it is on the branch of ``q_home``:
 
 * where the passive closure Jacobian is square, the sign of its determinant must equal
   the sign at home (it changes exactly when a passive singularity is crossed);
+* where it is not square — redundant closure rows (a ``3d``/``6d`` closure of a planar
+  loop) or idle passive motion (e.g. the spin of an RSSR coupler about its own axis:
+  it moves nothing the closures or the measured frame see) — a square block of its
+  rank is checked instead: the rows of a row-pivoted QR at home, and the columns left
+  when those carrying most of the idle motion at home are dropped (column-pivoted QR
+  of the home nullspace). Its sign is ``idle_branch``; ``home_branch`` stays 0 for
+  such mechanisms;
 * a direct solve from the start configuration that fails this test is replaced by a
   continuation: a straight path in actuator space from the start (then from home),
   in steps that halve until each step converges, keeps the sign and moves the passive
@@ -16,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+import scipy.linalg
 
 from pincal.errors import ConvergenceError
 from pincal.model._assembly import Assembly
@@ -29,26 +37,59 @@ _MIN_STEP = 1.0 / 4096  # smallest continuation step, as a fraction of the path
 class BranchTracking(Assembly):
     """Branch-preserving loop closing (mixed into Mechanism)."""
 
-    def _branch_sign(self, q: np.ndarray) -> float:
-        """Sign of det of the passive closure Jacobian at q, or 0 where undefined."""
-        if not self._square_passive:
+    def _branch_det_sign(self, Jf: np.ndarray) -> float:
+        """Sign of det of the branch block of a passive closure Jacobian (rows, n_free)."""
+        if self._branch_block is None:
             return 0.0
-        J = self.closure_jacobian(q)[:, self._free_v]
-        return float(np.sign(np.linalg.det(J)))
+        rows, cols = self._branch_block
+        return float(np.sign(np.linalg.det(Jf[np.ix_(rows, cols)])))
+
+    def _branch_sign(self, q: np.ndarray) -> float:
+        """Sign of det of the (reduced) passive closure Jacobian at q, 0 if undefined."""
+        if self._branch_block is None:
+            return 0.0
+        return self._branch_det_sign(self.closure_jacobian(q)[:, self._free_v])
 
     def _init_branch(self) -> None:
-        n = self._free_v.size
-        self._square_passive = bool(
-            self.closures and self.n_closure_rows == n and self._rank_u == n
-        )
-        self.home_branch = self._branch_sign(self.q_home)
+        n, rows, r = self._free_v.size, self.n_closure_rows, self._rank_u
+        self._square_passive = bool(self.closures and rows == n and r == n)
+        self._branch_block: tuple[np.ndarray, np.ndarray] | None = None
+        if self._square_passive:
+            self._branch_block = (np.arange(n), np.arange(n))
+        elif self.closures and r > 0:
+            self._branch_block = self._reduced_block()
+        sign = self._branch_sign(self.q_home)
+        self.home_branch = sign if self._square_passive else 0.0
+        #: the branch sign of the square block of rank rows and non-idle columns
+        #: (= home_branch when the passive closure Jacobian is square; 0: no branch)
+        self.idle_branch = sign
+
+    def _reduced_block(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Independent rows and non-idle columns of the passive closure Jacobian at home.
+
+        None when that square block is not well-conditioned at home (then no branch is
+        checked, as before).
+        """
+        J = self.closure_jacobian(self.q_home)[:, self._free_v]
+        r = self._rank_u
+        _, _, row_piv = scipy.linalg.qr(J.T, pivoting=True)
+        rows = np.sort(row_piv[:r])
+        _, _, Vt = np.linalg.svd(J[rows])
+        null = Vt[r:]  # (idle, n): the idle directions at home
+        cols = np.arange(J.shape[1])
+        if null.shape[0]:
+            _, _, piv = scipy.linalg.qr(null, pivoting=True)
+            cols = np.sort(piv[null.shape[0] :])
+        s = np.linalg.svd(J[np.ix_(rows, cols)], compute_uv=False)
+        if s[-1] <= 0 or s[0] / s[-1] > self.options.max_condition:
+            return None
+        return rows, cols
 
     def _on_branch(self, sol: Solution) -> bool:
         """Whether a passive solve (Jacobian over the passive dofs kept) is on home's branch."""
-        if self.home_branch == 0.0:
+        if self.idle_branch == 0.0:
             return True
-        J = sol.jacobian[: self.n_closure_rows]
-        return float(np.sign(np.linalg.det(J))) == self.home_branch
+        return self._branch_det_sign(sol.jacobian[: self.n_closure_rows]) == self.idle_branch
 
     def _solve_on_branch(self, q_act: np.ndarray, start: np.ndarray) -> Solution:
         """Closed configuration for ``q_act`` on the home branch, starting from ``start``.

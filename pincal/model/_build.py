@@ -2,9 +2,13 @@
 
 * ``joint_name`` / ``joint_type`` (the robot.yaml convention): each listed URDF joint
   (a placeholder such as a revolute or fixed joint) becomes a spherical joint
-  (Pinocchio ``JointModelSpherical``, a ball joint about the joint origin). Universal
-  joints need two axes that a single URDF joint cannot give: they are refused with
-  advice (model them as two revolute joints).
+  (Pinocchio ``JointModelSpherical``, a ball joint about the joint origin) or a
+  universal joint (``JointModelUniversal``, two intersecting perpendicular revolute axes
+  at the joint origin, q = the two angles [rad], first axis turned first). A universal
+  joint's placeholder must be a revolute joint: its URDF ``<axis>`` a is the first
+  axis; the second is the joint-frame unit vector e that follows a's largest component
+  in the cycle x → y → z → x, made perpendicular to a (e − (e·a)a, normalised) — for
+  a = z it is x, for x it is y, for y it is z. Rotate the joint ``<origin>`` to orient it.
 * A revolute or prismatic joint whose ``<limit>`` has no ``lower``/``upper`` gets the
   URDF default 0/0: a zero-width range means "no range given" and is made unlimited.
   Each such joint yields a note (``Mechanism.notes``, printed by ``pincal info``).
@@ -83,11 +87,11 @@ def _replace_joints(model: pin.Model, tree: UrdfTree, sidecar: Sidecar) -> pin.M
                 f"Pinocchio merges away; declare it as a revolute (any axis) placeholder to make "
                 f"it {kind}"
             )
-        if kind == "universal":
+        if kind == "universal" and tree.joints[name].type not in ("revolute", "continuous"):
             raise ModelFileError(
-                f"sidecar joint_type 'universal' for {name!r}: a universal joint needs two axes "
-                f"that one URDF joint cannot give; write it as two revolute joints in the URDF "
-                f"(joint_type supports: spherical)"
+                f"sidecar joint_type 'universal' for {name!r}: the placeholder must be a "
+                f"revolute joint whose <axis> is the first axis of the universal joint, got a "
+                f"{tree.joints[name].type} joint"
             )
     new = pin.Model()
     new.name = model.name
@@ -95,7 +99,12 @@ def _replace_joints(model: pin.Model, tree: UrdfTree, sidecar: Sidecar) -> pin.M
         name = model.names[j]
         placement = model.jointPlacements[j]
         if name in kinds:
-            jid = new.addJoint(model.parents[j], pin.JointModelSpherical(), placement, name)
+            joint = (
+                _universal(tree.joints[name].axis)
+                if kinds[name] == "universal"
+                else pin.JointModelSpherical()
+            )
+            jid = new.addJoint(model.parents[j], joint, placement, name)
         else:
             qi, nq, vi, nv = model.idx_qs[j], model.nqs[j], model.idx_vs[j], model.nvs[j]
             jid = new.addJoint(
@@ -113,6 +122,14 @@ def _replace_joints(model: pin.Model, tree: UrdfTree, sidecar: Sidecar) -> pin.M
         frame = pin.Frame(f.name, f.parentJoint, f.parentFrame, f.placement, f.type, f.inertia)
         new.addFrame(frame, False)
     return new
+
+
+def _universal(axis: np.ndarray) -> pin.JointModel:
+    """Universal joint whose first axis is ``axis`` (see the module doc for the second)."""
+    a = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    e = np.eye(3)[(int(np.argmax(np.abs(a))) + 1) % 3]
+    b = e - float(e @ a) * a
+    return pin.JointModelUniversal(a, b / np.linalg.norm(b))
 
 
 def _open_zero_ranges(model: pin.Model, sidecar: Sidecar) -> list[str]:

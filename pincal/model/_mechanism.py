@@ -60,7 +60,8 @@ class Mechanism(BatchTracking):
     * ``measured_frame`` and ``measured_components`` (names from x y z rx ry rz);
     * ``q_home``: assembled home configuration (nq,); forward kinematics stays on its
       assembly mode (``home_branch``: sign of det of the passive closure Jacobian, 0
-      where that Jacobian is not square);
+      where that Jacobian is not square; ``idle_branch``: the same sign with idle passive
+      directions left out, see ``_branch``);
     * ``workspace``: :class:`Workspace`; ``presets``: raw parameter presets;
     * ``sidecar``: the typed :class:`Sidecar`; ``notes``: remarks for ``pincal info``;
     * ``mobility``, ``closure_rank`` and ``idle_joints`` (passive joints the actuators
@@ -287,10 +288,11 @@ class Mechanism(BatchTracking):
         except ConvergenceError as exc:
             raise UnreachablePoseError(
                 f"target pose unreachable (p = {np.round(target_p * 1e3, 3).tolist()} mm): "
-                f"residual {exc.residual * 1e3:.3g} mm/mrad after Newton",
+                f"residual {exc.residual * 1e3:.3g} mm/mrad after Newton"
+                + self._dead_start_note(guess, fid, comps),
                 residual=exc.residual,
             ) from exc
-        if self.home_branch and self._branch_sign(sol.q) != self.home_branch:
+        if self.idle_branch and self._branch_sign(sol.q) != self.idle_branch:
             raise UnreachablePoseError(
                 f"target pose (p = {np.round(target_p * 1e3, 3).tolist()} mm) is reached only in "
                 f"another assembly mode than home's: forward kinematics would not return it; "
@@ -298,6 +300,45 @@ class Mechanism(BatchTracking):
                 residual=0.0,
             )
         return sol.q
+
+    def _output_rank(self, q: np.ndarray, fid: int, comps: np.ndarray) -> int:
+        """Rank of the actuator → measured-components map at q, the loops staying closed."""
+        data = self._compute(q)
+        J_frame = pin.getFrameJacobian(self.model, data, fid, pin.LOCAL)
+        Jm = measured_jacobian(data.oMf[fid], J_frame)[comps]
+        Jc = self._closure_jacobian(data)
+        act, free = self._act_v_arr, self._free_v
+        dq_free = -np.linalg.pinv(Jc[:, free], rcond=self.options.rcond) @ Jc[:, act]
+        G = Jm[:, act] + Jm[:, free] @ dq_free
+        s = np.linalg.svd(G, compute_uv=False)
+        scale = max(float(np.max(np.abs(Jm), initial=0.0)), 1e-300)
+        return int(np.sum(s > 1e-9 * scale))
+
+    def _dead_start_note(self, q: np.ndarray, fid: int, comps: np.ndarray) -> str:
+        """Why inverse kinematics may not leave ``q`` ("" when it is not a dead point).
+
+        A dead point: the actuators move the measured components in fewer directions at
+        q than at nearby configurations (first order, the loops staying closed).
+        """
+        rank = self._output_rank(q, fid, comps)
+        rng = np.random.default_rng(0)
+        nearby = max(
+            self._output_rank(
+                pin.integrate(self.model, q, 1e-3 * rng.standard_normal(self.model.nv)), fid, comps
+            )
+            for _ in range(3)
+        )
+        if rank >= nearby:
+            return ""
+        return (
+            f". At the start configuration the actuators {list(self.actuated)} move the "
+            f"measured components {list(self.measured_components)} in only {rank} "
+            f"independent direction(s) at first order, {nearby} nearby (a dead point of the "
+            f"output): Newton cannot leave it, and nearby targets are reached by several "
+            f"actuator values (e.g. a mirror-symmetric machine). Give q_guess near the "
+            f"solution, or put the sidecar 'home' away from the dead point and keep the "
+            f"workspace on one side of it"
+        )
 
 
 def _as_se3(T: object) -> pin.SE3:

@@ -3,6 +3,14 @@
 Used to close kinematic loops (forward kinematics, assembly) and to reach target poses
 (inverse kinematics). Redundant closure rows and rank loss are handled by a truncated
 SVD; every step is limited in norm and backtracked until the residual decreases.
+
+Once the residual is below ``tol`` the solve is *polished*: up to ``polish_steps`` more
+full Newton steps are taken while each one lowers the largest residual component. With
+quadratic convergence this brings the residual from ``tol`` (1e-12) to round-off
+(~1e-16), so configurations — and the measurements simulated from them — are exact to
+machine precision, not only to the tolerance. That matters on ill-conditioned
+identification problems, where the parameter error is the data error times the
+condition number (the MJCF four-bar: 1.3e-8 from 1e-12-accurate data, ~1e-11 polished).
 """
 
 from __future__ import annotations
@@ -28,6 +36,8 @@ class SolverOptions:
         max_step: largest tangent step norm per iteration [m, rad].
         rcond: relative singular-value cut-off of the rank-revealing solve.
         max_condition: condition number above which a solution is called singular.
+        polish_steps: extra Newton steps after convergence, each kept only when it lowers
+            the largest residual component (0: stop at ``tol``).
     """
 
     tol: float = 1e-12
@@ -35,6 +45,7 @@ class SolverOptions:
     max_step: float = 0.5
     rcond: float = 1e-10
     max_condition: float = 1e8
+    polish_steps: int = 2
 
 
 @dataclass(frozen=True)
@@ -67,6 +78,36 @@ def newton_step(J: np.ndarray, r: np.ndarray, rcond: float) -> np.ndarray:
     keep = s > rcond * s[0]
     coeff = (U.T @ r)[keep] / s[keep]
     return -(Vt[keep].T @ coeff)
+
+
+def _polish(
+    model: pin.Model,
+    q: np.ndarray,
+    r: np.ndarray,
+    Jf: np.ndarray,
+    free: np.ndarray,
+    evaluate: Callable[[np.ndarray], np.ndarray],
+    jacobian: Callable[[], np.ndarray],
+    opt: SolverOptions,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Polish a converged solve: full Newton steps while each halves max|r|.
+
+    Returns:
+        (q, r, Jf) of the last kept iterate (at most ``opt.polish_steps`` steps).
+    """
+    for _ in range(opt.polish_steps):
+        worst = np.max(np.abs(r), initial=0.0)
+        if worst == 0.0:
+            break
+        dv = np.zeros(model.nv)
+        dv[free] = newton_step(Jf, r, opt.rcond)
+        q_try = pin.integrate(model, q, dv)
+        r_try = evaluate(q_try)
+        if not np.max(np.abs(r_try), initial=0.0) < 0.5 * worst:
+            evaluate(q)  # leave the evaluator's state (for jacobian()) at the kept q
+            break
+        q, r, Jf = q_try, r_try, jacobian()[:, free]
+    return q, r, Jf
 
 
 def damped_newton(
@@ -102,6 +143,7 @@ def damped_newton(
     for it in range(opt.max_iterations + 1):
         Jf = jacobian()[:, free]
         if np.max(np.abs(r), initial=0.0) <= opt.tol:
+            q, r, Jf = _polish(model, q, r, Jf, free, evaluate, jacobian, opt)
             s = np.linalg.svd(Jf, compute_uv=False) if Jf.size else np.zeros(0)
             return Solution(q, it, float(np.max(np.abs(r), initial=0.0)), s, Jf)
         if it == opt.max_iterations:

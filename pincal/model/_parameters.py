@@ -5,15 +5,18 @@ the joint-origin frame. All parameters of one joint act together as
 ``origin ← origin · exp6(Σ_k δ_k ξ_k)``. The dof ``offset`` is the twist along a
 movable joint's axis, i.e. exactly an encoder/prismatic zero offset.
 
-Presets: ``"full"`` (every origin twist) and ``"base"`` (the identifiable base set of
-``full`` without its degenerate translations, see :func:`degenerate_translations` and
-:func:`pincal.sensitivity.base_parameters`).
+Presets: ``"full"`` (every origin twist) and computed presets registered by later
+stages with :func:`register_preset` — the sensitivity stage registers ``"base"``
+(the identifiable base set of ``full`` without its degenerate translations, see
+:func:`degenerate_translations` and ``base_parameters``) when it is imported, which
+``import pincal`` (hence any ``import pincal.model``) always does. This module imports
+nothing from the later stages.
 """
 
 from __future__ import annotations
 
 import fnmatch
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +32,7 @@ __all__ = [
     "degenerate_translations",
     "full_parameters",
     "parameters",
+    "register_preset",
 ]
 
 DOFS: tuple[str, ...] = ("tx", "ty", "tz", "rx", "ry", "rz", "offset")
@@ -37,6 +41,31 @@ _EXCLUDED_TYPES = ("floating", "planar")
 _REVOLUTE = ("revolute", "continuous")
 _ZERO_LENGTH = 1e-12
 """Origin translations up to this norm [m] count as a zero-length link."""
+
+_COMPUTED_PRESETS: dict[str, Callable[[Mechanism], ParameterSet]] = {}
+"""Presets computed from the mechanism (name → builder), filled by :func:`register_preset`."""
+
+
+def register_preset(name: str, builder: Callable[[Mechanism], ParameterSet]) -> None:
+    """Make ``parameters(mech, name)`` return ``builder(mech)``.
+
+    Later stages use this to offer presets they compute (``"base"`` is registered by
+    the sensitivity stage) without the model stage importing them. A sidecar
+    preset of the same name takes precedence. Registering a name again replaces it.
+
+    Args:
+        name: preset name (not ``"full"``).
+        builder: ``builder(mech) -> ParameterSet``.
+
+    Raises:
+        ParameterError: ``name`` is ``"full"`` or not a non-empty string.
+    """
+    if not isinstance(name, str) or not name or name == "full":
+        raise ParameterError(
+            f"cannot register a computed preset named {name!r}: give a non-empty name other "
+            f"than 'full'"
+        )
+    _COMPUTED_PRESETS[name] = builder
 
 
 @dataclass(frozen=True, eq=False)
@@ -282,8 +311,9 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
 
     Args:
         mech: the mechanism.
-        preset: ``"full"``, ``"base"`` (the identifiable base set, computed from 60
-            seeded random workspace poses; a sidecar preset named ``base`` takes
+        preset: ``"full"``, a computed preset (``"base"``: the identifiable base set,
+            computed from 60 seeded random workspace poses, registered by
+            the sensitivity stage; a sidecar preset of the same name takes
             precedence), a preset name from the sidecar, or a list whose entries are
             ``"<joint>.<dof>"`` strings or ``{"joints": pattern, "dofs": [...]}`` mappings
             (fnmatch patterns over URDF joint names).
@@ -298,12 +328,10 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
     if isinstance(preset, str):
         if preset == "full":
             return full_parameters(mech)
-        if preset == "base" and preset not in mech.presets:
-            from pincal.sensitivity._identifiability import base_parameters
-
-            return base_parameters(mech)
+        if preset in _COMPUTED_PRESETS and preset not in mech.presets:
+            return _COMPUTED_PRESETS[preset](mech)
         if preset not in mech.presets:
-            raise UnknownNameError("preset", preset, ["full", "base", *mech.presets])
+            raise UnknownNameError("preset", preset, ["full", *_COMPUTED_PRESETS, *mech.presets])
         label, entries = preset, mech.presets[preset]
         if not isinstance(entries, list):
             raise ParameterError(f"preset {preset!r} must be a list of entries")

@@ -15,9 +15,12 @@ from pincal.sensitivity._global import (
 )
 from pincal.sensitivity._identifiability import (
     BASE_POSES,
+    BASE_RTOL,
+    BaseSet,
     Identifiability,
     analyse_jacobian,
     base_parameters,
+    base_set,
     identifiability,
 )
 from pincal.sensitivity._jacobian import (
@@ -30,7 +33,9 @@ from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
 __all__ = [
     "BASE_POSES",
+    "BASE_RTOL",
     "RANK_RTOL",
+    "BaseSet",
     "BatchSensitivity",
     "GlobalSensitivity",
     "Identifiability",
@@ -38,6 +43,7 @@ __all__ = [
     "RangeSolver",
     "analyse_jacobian",
     "base_parameters",
+    "base_set",
     "closure_breaking",
     "global_sensitivity",
     "global_sensitivity_from_jacobians",

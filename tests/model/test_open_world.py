@@ -108,7 +108,6 @@ def _rssr_with(**changes):
 @pytest.mark.parametrize(
     ("changes", "message"),
     [
-        ({"joint_type": ["UNIVERSAL"]}, "universal joint needs two axes"),
         ({"joint_type": ["cylindrical"]}, "'cylindrical' of joint 'ball_a' is not supported"),
         ({"joint_name": ["ball_b"]}, "joint 'ball_b' not found"),
         ({"joint_name": ["coupler_end"]}, "is a fixed URDF joint"),

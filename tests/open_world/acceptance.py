@@ -121,13 +121,18 @@ def controlled_components(mech: Mechanism) -> tuple[str, ...]:
 
 
 def check_cli(
-    model: str | Path, tmp_path: Path, poses: int = 30, param_tol: float | None = 1e-8
+    model: str | Path,
+    tmp_path: Path,
+    poses: int = 30,
+    param_tol: float | None = 1e-8,
+    target_rows: np.ndarray | None = None,
 ) -> dict:
     """simulate → calibrate → compensate through the CLI with the base preset.
 
     The calibrated parameters match the simulated errors to ``param_tol`` (None: not
     checked; the CSV holds values to 1e-12 relative) and the compensation commands
-    bring the simulated actual machine to the targets.
+    bring the simulated actual machine to the targets: the poses it reaches at
+    ``target_rows`` (default: 5 random workspace rows).
 
     Returns:
         ``{"calibrate": identification.json, "commands": (m, n_act), "targets": rows}``.
@@ -172,7 +177,11 @@ def check_cli(
     nominal = load_mechanism(model)
     base = parameters(nominal, "base")
     actual = base.apply(nominal, np.array([true[n] for n in base.names]))
-    rows = sample_actuators(nominal, 5, np.random.default_rng(21))
+    rows = (
+        sample_actuators(nominal, 5, np.random.default_rng(21))
+        if target_rows is None
+        else np.asarray(target_rows, dtype=float)
+    )
     targets = [actual.forward(r) for r in rows]
     write_poses(tmp_path / "targets.csv", targets, length_unit="m", angle_unit="rad")
     urdf = next((tmp_path / "cal").glob("*.urdf"))

@@ -61,10 +61,19 @@ def _se3(R: np.ndarray | None = None, p=(0.0, 0.0, 0.0)) -> pin.SE3:
 
 
 # ------------------------------------------------------------------ RSSR, ball = 3 revolutes
+RSSR_CRANK_RANGE = (0.1, 1.0)
+"""Crank range [rad] of the RSSR machines: on one side of the output dead point at 0."""
+
+
 def rssr_emulated_ball() -> tuple[str, dict]:
     """RSSR four-bar (crank 0.05, coupler 0.17, rocker 0.08, pivots 0.2 apart) whose crank
     ball joint is three revolutes ``ball_x`` (z), ``ball_y`` (y), ``ball_z`` (x) meeting at
     one point; the rocker-end ball is the cut (3D closure). Measured: rocker tip position.
+
+    The machine is mirror-symmetric about the plane y = 0: crank angles a and −a put the
+    rocker tip at the same position, and crank = 0 is a dead point of the output (the
+    tip does not move at first order). Inverse kinematics is therefore posed only on one
+    side of it: home is at crank 0.5 rad and the workspace is [0.1, 1.0] rad.
     """
     urdf = (
         '<?xml version="1.0"?>\n<robot name="rssr3r">\n'
@@ -88,8 +97,59 @@ def rssr_emulated_ball() -> tuple[str, dict]:
         "name_mot": ["crank_mot"],
         "measured_frame": "rocker_tip",
         "measured": "position",
-        "home": {"crank_mot": 0.0, "ball_y": -float(np.arctan2(0.08, 0.15))},
-        "workspace": {"joints": {"crank_mot": [-0.6, 0.6]}},
+        "home": {"crank_mot": 0.5, "ball_y": -float(np.arctan2(0.08, 0.15))},
+        "workspace": {"joints": {"crank_mot": list(RSSR_CRANK_RANGE)}},
+    }
+    return urdf, sidecar
+
+
+# ------------------------------------------------------------------ RUSR with a universal joint
+RUSR_CRANK_RANGE = (0.2, 0.8)
+"""Crank range [rad] of :func:`rusr_universal` (home at 0.5)."""
+
+
+def rusr_universal() -> tuple[str, dict]:
+    """Spatial RUSR four-bar whose crank-end joint is a universal joint given in the
+    sidecar (``joint_type: universal`` on the revolute placeholder ``u_joint``).
+
+    Crank ``crank_mot`` (actuated, axis z, length 0.05); ``u_joint`` at the crank tip:
+    first axis z (the placeholder's ``<axis>``), second axis x (pincal's rule for a z
+    first axis); the coupler runs 0.17 along its own y (perpendicular to both U axes, so
+    the U joint points it anywhere and the coupler has no idle spin); its end meets the
+    rocker tip in a ball joint (3D closure); the rocker ``rocker_pivot`` turns about x
+    (length 0.08). The pivot is placed so that the loop closes at crank 0.5 rad with the
+    coupler along (0.1, 1, 0.15) — not mirror-symmetric. Measured: the position of the
+    point ``coupler_mark`` (0.02, 0.085, 0.01) on the coupler (a coupler curve).
+    """
+    crank_home = 0.5
+    c = np.array([0.05 * np.cos(crank_home), 0.05 * np.sin(crank_home), 0.0])
+    u = np.array([0.1, 1.0, 0.15]) / np.linalg.norm([0.1, 1.0, 0.15])
+    pivot = c + 0.17 * u - np.array([0.0, 0.0, 0.08])
+    urdf = (
+        '<?xml version="1.0"?>\n<robot name="rusr">\n'
+        + "".join(
+            _link(n)
+            for n in ("base_link", "crank", "coupler", "coupler_tip", "coupler_mark", "rocker")
+        )
+        + _link("rocker_tip")
+        + _joint("crank_mot", "revolute", "base_link", "crank")
+        + _joint("u_joint", "revolute", "crank", "coupler", _se3(p=(0.05, 0, 0)), "0 0 1")
+        + _joint("coupler_end", "fixed", "coupler", "coupler_tip", _se3(p=(0, 0.17, 0)))
+        + _joint("mark", "fixed", "coupler", "coupler_mark", _se3(p=(0.02, 0.085, 0.01)))
+        + _joint("rocker_pivot", "revolute", "base_link", "rocker", _se3(p=pivot), "1 0 0")
+        + _joint("rocker_end", "fixed", "rocker", "rocker_tip", _se3(p=(0, 0, 0.08)))
+        + "</robot>\n"
+    )
+    sidecar = {
+        "closed_loop": [["coupler_end", "rocker_end"]],
+        "type": ["3D"],
+        "name_mot": ["crank_mot"],
+        "joint_name": ["u_joint"],
+        "joint_type": ["universal"],
+        "measured_frame": "coupler_mark",
+        "measured": "position",
+        "home": {"crank_mot": crank_home},
+        "workspace": {"joints": {"crank_mot": list(RUSR_CRANK_RANGE)}},
     }
     return urdf, sidecar
 

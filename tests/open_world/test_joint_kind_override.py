@@ -8,18 +8,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pincal.errors import UnreachablePoseError
 from pincal.model import load_mechanism
 from tests.open_world import acceptance
-from tests.open_world.machines import copy_machine
+from tests.open_world.machines import RSSR_CRANK_RANGE, copy_machine
 
 
 @pytest.fixture(scope="module")
 def model(tmp_path_factory) -> Path:
-    # the crank's URDF range is ±3.14; inverse kinematics from home does not reach
-    # crank angles near ±π, so the copy under test gets a sidecar workspace
-    workspace = {"joints": {"crank_mot": [-0.6, 0.6]}}
-    return copy_machine(tmp_path_factory.mktemp("m"), "rssr", workspace=workspace)
+    # the crank's URDF range is ±3.14 and the rocker tip is at the same place for crank
+    # angles a and −a (mirror symmetry; crank 0 is a dead point of the output): the copy
+    # under test gets a home and a workspace on one side of the dead point
+    workspace = {"joints": {"crank_mot": list(RSSR_CRANK_RANGE)}}
+    return copy_machine(
+        tmp_path_factory.mktemp("m"), "rssr", home={"crank_mot": 0.5}, workspace=workspace
+    )
 
 
 @pytest.fixture(scope="module")
@@ -33,12 +35,6 @@ def test_loads_with_a_ball_joint(mech):
     assert mech.mobility == 1 and np.isfinite(mech.actuator_limits).all()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=UnreachablePoseError,
-    reason="inverse kinematics from home does not converge for this 1-dof loop with an idle "
-    "coupler spin (measured: residual 3.45 mm at crank -0.497 rad)",
-)
 def test_round_trip(mech):
     acceptance.check_round_trip(mech)
 
@@ -51,14 +47,9 @@ def test_noise_free_recovery_of_the_measured_quantity(mech):
     acceptance.check_recovery(mech, tol=None)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="ill-conditioned base set of a 1-dof machine: parameters recovered to 6.5e-8 "
-    "only (the measured position to < 1e-9)",
-)
 def test_noise_free_recovery(mech):
     acceptance.check_recovery(mech)
 
 
 def test_simulate_calibrate_compensate(model, tmp_path):
-    acceptance.check_cli(model, tmp_path, param_tol=None)  # ill-conditioned, see above
+    acceptance.check_cli(model, tmp_path)

@@ -4,8 +4,9 @@ machines/fivebar as written, no workspace): they are unlimited, with a note.
 Random poses are then drawn over ±π. What works: loading, forward kinematics and
 identification Jacobians over the whole circle, calibration through the CLI.
 Inverse kinematics from home answers the pose, but for far poses in another working
-mode (other actuator values reaching the same point), so the round trip is checked
-near home, and the compensation commands by the pose they reach.
+mode (other actuator values reaching the same point) or not on home's assembly mode
+(measured: 6 of 40 random poses over ±π), so the round trip and the compensation
+targets are taken near home.
 """
 
 from __future__ import annotations
@@ -47,3 +48,13 @@ def test_jacobian_matches_central_differences(mech):
 @pytest.mark.slow
 def test_noise_free_recovery_over_the_whole_circle(mech):
     acceptance.check_recovery(mech)
+
+
+NEAR_HOME = ([0.0, 0.0], [0.1, -0.1], [-0.15, 0.05], [0.2, 0.2], [-0.2, 0.1])
+
+
+@pytest.mark.slow
+def test_simulate_calibrate_compensate(mech, tmp_path):
+    """Simulated over the whole circle (±π), calibrated to 1e-8, compensated near home."""
+    rows = mech.actuators_of(mech.q_home) + np.array(NEAR_HOME)
+    acceptance.check_cli(MODEL, tmp_path, target_rows=rows)
