@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli.common import fail_cleanly, guard_paths, model_input
 
 if TYPE_CHECKING:
     from pincal.model import Mechanism
@@ -137,6 +137,10 @@ def acceptance(
     from pincal.measure._iso9283 import iso_test_cube, pose_characteristics, simulate_cycles
     from pincal.model import load_mechanism, parameters
 
+    guard_paths(
+        {"MODEL": model_input(model), "--calibrated": cal, "--data": data_file},
+        {"--out": json_out},
+    )
     say = (lambda _line: None) if as_json else click.echo
     nominal = load_mechanism(model)
     calibrated = load_calibrated(cal, nominal) if cal else None

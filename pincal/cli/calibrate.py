@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import fail_cleanly, model_source
+from pincal.cli.common import fail_cleanly, guard_paths, model_input, model_source
 from pincal.identification import METHODS
 
 
@@ -126,6 +126,7 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
         CALIBRATED_SIDECAR,
         CALIBRATED_URDF,
         MANIFEST,
+        calibration_lock,
         read_measurement_file,
         write_calibration,
     )
@@ -135,6 +136,8 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
         raise click.BadParameter(
             f"a robust loss needs --method lm, not {method}", param_hint="--loss"
         )
+    guard_paths({"MODEL": model_input(model), "--data": data}, out_dirs={"--out": out})
+    click.get_current_context().with_resource(calibration_lock(out))  # until the end
     declared = None
     if noise is not None:
         try:

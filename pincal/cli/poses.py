@@ -6,7 +6,7 @@ import json
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli.common import fail_cleanly, guard_paths, model_input
 
 
 @click.command()
@@ -84,6 +84,7 @@ def poses(
       pincal poses stewart_6ups --count 18 --index O3 --scaling K --out p.csv --json
     """
     import sys
+    from pathlib import Path
 
     import numpy as np
 
@@ -101,6 +102,11 @@ def poses(
     from pincal.model import load_mechanism, parameters
     from pincal.sensitivity import base_parameters
 
+    guard_paths(
+        {"MODEL": model_input(model)},
+        {"--out": out, "--out's commands file": Path(out).with_suffix(".commands.csv"),
+         "--out's JSON record": Path(out).with_suffix(".json")},
+    )  # fmt: skip
     mech = load_mechanism(model)
     preset = preset or (next(iter(mech.presets)) if mech.presets else "full")
     params = parameters(mech, preset)

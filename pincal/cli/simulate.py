@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli.common import fail_cleanly, guard_paths, model_input
 
 if TYPE_CHECKING:
     from pincal.measure import InstrumentData, Measurements
@@ -129,6 +129,11 @@ def simulate(
     err_seed = _parse_errors(errors)
     size_mm, size_mrad = _parse_pair(error_size, "--error-size")
     pos_mm, ori_mrad = _parse_pair(noise, "--noise")
+    truth_path = Path(out).with_suffix(".truth.json")
+    guard_paths(
+        {"MODEL": model_input(model), "--poses": poses_file},
+        {"--out": out, "--out's truth file": truth_path},
+    )
     nominal = load_mechanism(model)
     preset = preset or (next(iter(nominal.presets), "full"))
     params = parameters(nominal, preset)
@@ -181,7 +186,6 @@ def simulate(
         ],
         **extra,
     }
-    truth_path = Path(out).with_suffix(".truth.json")
     atomic_write_text(truth_path, json.dumps(truth, indent=1) + "\n")
     if as_json:
         click.echo(

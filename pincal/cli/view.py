@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, TypedDict
 import click
 import numpy as np
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli.common import fail_cleanly, guard_paths, model_input
 from pincal.errors import ModelFileError
 from pincal.io import read_pose_rows
 
@@ -147,6 +147,10 @@ def view(
         raise click.UsageError("give --html FILE and/or --live")
     if arrow_scale is not None and not (math.isfinite(arrow_scale) and arrow_scale > 0):
         raise click.BadParameter("must be a positive number", param_hint="--arrow-scale")
+    guard_paths(
+        {"MODEL": model_input(model), "--poses": poses_file, "--calibrated": calibrated},
+        {"--html": html_path},
+    )
     mech = load_mechanism(model)
     if poses_file is not None:
         rows = read_pose_rows(poses_file, mech, MAX_POSES)
