@@ -113,20 +113,20 @@ def guard_paths(
         for i_label, i_path, i_text in ins:
             if _same(o_path, i_path):
                 raise OutputPathError(
-                    f"{o_label} {clip(o_text)} is the same file as the input {i_label} "
-                    f"{clip(i_text)}; {fix}"
+                    f"{o_label} {clip(o_text, 300)} is the same file as the input {i_label} "
+                    f"{clip(i_text, 300)}; {fix}"
                 )
     for d_label, d_path, d_text in dirs:
         for i_label, i_path, i_text in ins:
             if _inside(i_path, d_path):
                 raise OutputPathError(
-                    f"the input {i_label} {clip(i_text)} is inside the output directory {d_label} "
-                    f"{clip(d_text)}, which is replaced as a whole; {fix}"
+                    f"the input {i_label} {clip(i_text, 300)} is inside the output directory "
+                    f"{d_label} {clip(d_text, 300)}, which is replaced as a whole; {fix}"
                 )
     for k, (a_label, a_path, a_text) in enumerate(outs):
         for b_label, b_path, b_text in outs[k + 1 :]:
             if _same(a_path, b_path):
                 raise OutputPathError(
-                    f"{a_label} {clip(a_text)} and {b_label} {clip(b_text)} are the same "
-                    f"file; give output paths that differ"
+                    f"{a_label} {clip(a_text, 300)} and {b_label} {clip(b_text, 300)} are the same "
+                    f"file (the command writes both); give output paths that differ"
                 )
