@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from pincal.cli._limits import check_number
 from pincal.cli.common import fail_cleanly, guard_paths, model_input
 
 _FILE = click.Path(exists=True, dir_okay=False, path_type=Path)
@@ -78,6 +79,8 @@ def import_tracker(
          "--model": model_input(model)},
         {"--out": out},
     )  # fmt: skip
+    check_number(tolerance, "--tolerance", positive=True)
+    check_number(point_std, "--point-std", positive=True)
     mech = load_mechanism(model)
     opts = TrackerImportOptions(
         match=match,
