@@ -14,8 +14,10 @@ comments::
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import signal
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, TypedDict
@@ -91,7 +93,19 @@ def _urdf_for_viz(mech) -> str | Path:
     type=click.Path(dir_okay=False, path_type=Path),
     help="Write the self-contained HTML view here.",
 )
-@click.option("--live", is_flag=True, help="Also open a live meshcat session on 127.0.0.1.")
+@click.option(
+    "--live",
+    is_flag=True,
+    help="Also open a live meshcat session, listening on the loopback interface only "
+    "(127.0.0.1; see --host); it stops with pincal (Enter, Ctrl-C, SIGTERM, even SIGKILL).",
+)
+@click.option(
+    "--host",
+    default="127.0.0.1",
+    show_default=True,
+    help="IPv4 address the --live server listens on (0.0.0.0: every interface, reachable "
+    "from other machines).",
+)
 @click.option(
     "--up",
     type=click.Choice(["auto", "+z", "-z", "+y", "-y", "+x", "-x"]),
@@ -112,6 +126,7 @@ def view(
     calibrated: Path | None,
     html_path: Path | None,
     live: bool,
+    host: str,
     up: str,
     ghosts: bool,
     animate: bool,
@@ -193,7 +208,9 @@ def view(
         title = f"{mech.name}: {len(rows)} poses" + (" — calibration changes" if arrows else "")
         page = viz.static_html(mech.model, _urdf_for_viz(mech), list(qs), title=title, **options)
         summary["html"] = str(viz.write_html(html_path, page))
-    session = viz.live(mech.model, _urdf_for_viz(mech), list(qs), **options) if live else None
+    session = None
+    if live:
+        session = viz.live(mech.model, _urdf_for_viz(mech), list(qs), host=host, **options)
     if session is not None:
         summary["live_url"] = session.web_url
     if as_json:
@@ -209,6 +226,23 @@ def view(
     if session is not None:
         click.echo(f"meshcat viewer at {session.web_url} — press Enter to stop", err=True)
         try:
-            sys.stdin.readline()
+            with _exit_on_signals():
+                sys.stdin.readline()
         finally:
             session.close()
+
+
+@contextlib.contextmanager
+def _exit_on_signals():
+    """Turn SIGTERM / SIGHUP into SystemExit, so ``finally`` stops the live server."""
+
+    def leave(signum, _frame):
+        raise SystemExit(128 + signum)
+
+    wanted = [signal.SIGTERM] + ([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])
+    old = {s: signal.signal(s, leave) for s in wanted}
+    try:
+        yield
+    finally:
+        for s, handler in old.items():
+            signal.signal(s, handler)
