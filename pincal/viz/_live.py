@@ -180,6 +180,7 @@ def live(
     except BaseException:
         _stop(proc)
         raise
+    vis.window.server_proc = proc  # where meshcat's own launcher keeps it
     session = LiveSession(vis, web_url, zmq_url, proc)
     log.info("meshcat viewer at %s", session.web_url)
     try:
