@@ -29,6 +29,7 @@ __all__ = [
     "calibration_lock",
     "exchange_paths",
     "remove_stale_temporaries",
+    "swap_in_directory",
 ]
 
 _RENAME_EXCHANGE = 2  # linux/fs.h
@@ -86,6 +87,30 @@ def exchange_paths(a: Path, b: Path) -> bool:
     if err in (errno.ENOSYS, errno.EINVAL, errno.ENOTSUP):
         return False
     raise OSError(err, os.strerror(err), str(b))
+
+
+def swap_in_directory(tmp: Path, out: Path) -> None:
+    """Put the finished directory ``tmp`` at ``out``, replacing what is there.
+
+    On Linux the swap is one ``renameat2(RENAME_EXCHANGE)``, so ``out`` is at every
+    instant either the complete old directory or the complete new one; the old one
+    ends up in ``tmp`` and is removed. Elsewhere the old directory is first moved aside
+    (``.NAME.pincal-old-*``).
+    """
+    if not out.exists():
+        os.replace(tmp, out)
+        return
+    if exchange_paths(tmp, out):
+        shutil.rmtree(tmp, ignore_errors=True)
+        return
+    old = Path(tempfile.mkdtemp(prefix=_temp_prefix(out, "old"), dir=out.parent))
+    os.replace(out, old / out.name)
+    try:
+        os.replace(tmp, out)
+    except BaseException:
+        os.replace(old / out.name, out)
+        raise
+    shutil.rmtree(old, ignore_errors=True)
 
 
 def remove_stale_temporaries(out: Path) -> list[Path]:

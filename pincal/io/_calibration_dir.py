@@ -44,8 +44,8 @@ from pincal.io._atomic import (
     _temp_prefix,
     atomic_write_text,
     calibration_lock,
-    exchange_paths,
     remove_stale_temporaries,
+    swap_in_directory,
 )
 from pincal.io._urdf_export import save_urdf
 from pincal.measure import NoiseModel
@@ -221,30 +221,6 @@ def _check_replaceable(out: Path) -> None:
         )
 
 
-def _replace_dir(tmp: Path, out: Path) -> None:
-    """Swap the finished ``tmp`` directory in at ``out`` (replacing an old calibration).
-
-    On Linux the swap is one ``renameat2(RENAME_EXCHANGE)``, so ``out`` is at every
-    instant either the complete old set or the complete new one; the old set ends up
-    in ``tmp`` and is removed. Elsewhere the old directory is first moved aside.
-    """
-    _check_replaceable(out)
-    if not out.exists():
-        os.replace(tmp, out)
-        return
-    if exchange_paths(tmp, out):
-        shutil.rmtree(tmp, ignore_errors=True)
-        return
-    old = Path(tempfile.mkdtemp(prefix=_temp_prefix(out, "old"), dir=out.parent))
-    os.replace(out, old / out.name)
-    try:
-        os.replace(tmp, out)
-    except BaseException:
-        os.replace(old / out.name, out)
-        raise
-    shutil.rmtree(old, ignore_errors=True)
-
-
 def write_calibration(
     path: str | Path,
     result: IdentificationResult,
@@ -307,7 +283,8 @@ def _write_locked(
         manifest = _manifest(result, model_source, data_files, noise, files)
         atomic_write_text(tmp / MANIFEST, json.dumps(manifest, indent=1) + "\n")
         os.chmod(tmp, 0o755)
-        _replace_dir(tmp, out)
+        _check_replaceable(out)
+        swap_in_directory(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise

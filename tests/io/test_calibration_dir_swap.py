@@ -78,6 +78,7 @@ def strays(parent: Path) -> list[str]:
 _KILLER = textwrap.dedent(
     """
     import os, sys, json
+    import pincal.io._atomic as at
     import pincal.io._calibration_dir as cd
     from pincal.identification import identify
     from pincal.io import read_measurements, write_calibration
@@ -91,13 +92,13 @@ _KILLER = textwrap.dedent(
             os._exit(9)
         cd.atomic_write_text = patched
     elif where == "before-swap":
-        cd.exchange_paths = lambda a, b: os._exit(9)
+        at.exchange_paths = lambda a, b: os._exit(9)
     elif where == "after-swap":
-        real_x = cd.exchange_paths
+        real_x = at.exchange_paths
         def after(a, b):
             real_x(a, b)
             os._exit(9)
-        cd.exchange_paths = after
+        at.exchange_paths = after
     nominal = load_mechanism("wedge3")
     params = parameters(nominal, "patent")
     res = identify(nominal, params, read_measurements(data, nominal))
@@ -202,3 +203,27 @@ def test_timed_kill_9_of_cli_calibrate_never_leaves_a_mixed_set(data_file, tmp_p
     assert _calibrate(out, data_file).wait(timeout=300) == 0
     consistent_set(out)
     assert strays(tmp_path) == []
+
+
+def test_exchange_paths_swaps_two_directories(tmp_path):
+    from pincal.io._atomic import exchange_paths
+
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir()
+    b.mkdir()
+    (a / "x").write_text("a")
+    (b / "x").write_text("b")
+    if not exchange_paths(a, b):
+        pytest.skip("no renameat2(RENAME_EXCHANGE) here")
+    assert (a / "x").read_text() == "b" and (b / "x").read_text() == "a"
+
+
+def test_without_atomic_exchange_the_fallback_still_replaces_whole(
+    result, tmp_path, monkeypatch
+):
+    out = tmp_path / "cal"
+    write_calibration(out, result, model_source="wedge3", texts={"report.txt": "old\n"})
+    monkeypatch.setattr("pincal.io._atomic.exchange_paths", lambda a, b: False)
+    write_calibration(out, result, model_source="wedge3", texts={"report.txt": "new\n"})
+    consistent_set(out)
+    assert (out / "report.txt").read_text() == "new\n" and strays(tmp_path) == []
