@@ -227,3 +227,19 @@ def test_without_atomic_exchange_the_fallback_still_replaces_whole(
     write_calibration(out, result, model_source="wedge3", texts={"report.txt": "new\n"})
     consistent_set(out)
     assert (out / "report.txt").read_text() == "new\n" and strays(tmp_path) == []
+
+
+def test_single_file_temporaries_of_a_killed_writer_are_removed(tmp_path):
+    from pincal.io import atomic_write_text
+
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    stale = tmp_path / f".m.csv.{dead.pid}.abc123.tmp"  # what a SIGKILLed writer leaves
+    stale.write_text("half")
+    mine = tmp_path / f".m.csv.{os.getpid()}.zzz.tmp"  # a live writer's: kept
+    mine.write_text("busy")
+    other = tmp_path / ".n.csv.1.x.tmp"  # another file's: not ours to judge
+    other.write_text("x")
+    atomic_write_text(tmp_path / "m.csv", "data\n")
+    assert not stale.exists() and mine.exists() and other.exists()
+    assert (tmp_path / "m.csv").read_text() == "data\n"
