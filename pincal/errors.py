@@ -31,6 +31,8 @@ __all__ = [
     "MovedTargetError",
     "NoiseEstimationError",
     "NonFiniteValueError",
+    "OptionValueError",
+    "OutputPathError",
     "ParameterError",
     "PincalError",
     "PoseFitError",
@@ -209,6 +211,17 @@ class VisualizationError(PincalError):
 
 class ReportError(PincalError):
     """Inputs to a plot or report are malformed (lengths, units, NaN, report JSON)."""
+
+
+class OutputPathError(PincalError):
+    """An output path would overwrite an input (or another output) of the same command."""
+
+
+class OptionValueError(PincalError, ValueError):
+    """An option or argument value is not valid (not finite, not positive, not an integer).
+
+    Also a ValueError, so callers that caught the plain ValueError keep working.
+    """
 
 
 class CalibrationDirectoryError(PincalError):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import math
 import types
 import typing
 from dataclasses import dataclass, field
@@ -18,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from pincal._yaml import shown
-from pincal.errors import CampaignError
+from pincal.errors import CampaignError, PincalError, clip
 
 __all__ = ["KEYS_HELP", "Campaign", "load_campaign"]
 
@@ -82,7 +83,13 @@ class Design:
         _choice(self.index, INDICES, f"{key}.index")
         _choice(self.method, DESIGN_METHODS, f"{key}.method")
         if self.count < 1:
-            raise CampaignError(f"{key}.count must be ≥ 1, got {self.count}")
+            raise CampaignError(f"{key}.count must be ≥ 1, got {clip(self.count)}")
+        from pincal.design import parse_candidate_spec
+
+        try:
+            parse_candidate_spec(self.candidates)
+        except PincalError as exc:
+            raise CampaignError(f"{key}.candidates: {exc}") from exc
 
 
 @dataclass(frozen=True)
@@ -211,7 +218,15 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
     }.get(tp, False)
     if not ok:
         raise CampaignError(f"{key}: expected {_type_name(tp)}, got {shown(value)}")
-    return float(value) if tp is float else value
+    if tp is float:
+        try:
+            number = float(value)
+        except OverflowError:
+            number = math.inf
+        if not math.isfinite(number):
+            raise CampaignError(f"{key}: expected a finite number, got {shown(value)}")
+        return number
+    return value
 
 
 def _build(cls: type, data: Any, key: str) -> Any:

@@ -60,6 +60,8 @@ class DemoSettings:
         candidates: candidate spec for pose selection (``grid:4``, ``random:300``,
             ``oa:5``) or ``"none"`` for random measurement poses.
         index: observability index maximised on the noise-whitened Jacobian.
+        bounded: refuse a candidate set past the default bounds of
+            :func:`pincal.design.candidate_set` (False: ``--yes``).
     """
 
     model: str = "stewart_6ups"
@@ -73,6 +75,7 @@ class DemoSettings:
     report: bool = True
     candidates: str = "grid:4"
     index: str = "O1"
+    bounded: bool = True
 
 
 @dataclass(frozen=True)
@@ -116,7 +119,8 @@ def run_demo(
         q_meas = sample_actuators(nominal, settings.n_poses, rng)
     else:
         say(f"candidate poses {settings.candidates}")
-        cands = candidate_set(nominal, params, settings.candidates, rng)
+        unbounded = {} if settings.bounded else {"max_candidates": None, "max_bytes": None}
+        cands = candidate_set(nominal, params, settings.candidates, rng, **unbounded)
         sig = settings.noise.std(("x", "rx"))
         scaling = DesignScaling("noise", position_std=sig[0], orientation_std=sig[1])
         say(f"selecting {settings.n_poses} of {len(cands)} poses by {settings.index}")

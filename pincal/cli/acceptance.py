@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli._limits import MAX_POSES, check_count, check_number, yes_option
+from pincal.cli.common import fail_cleanly, guard_paths, model_input
 
 if TYPE_CHECKING:
     from pincal.model import Mechanism
@@ -116,10 +117,11 @@ def _grouped(meas, controller):
     help="Also write the AP/RP report as JSON to this file.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON on stdout.")
+@yes_option
 @fail_cleanly
 def acceptance(
     model, cal, data_file, preset, errors, error_size, cycles, repeatability, seed, json_out,
-    as_json,
+    as_json, yes,
 ) -> None:
     """ISO 9283 acceptance of MODEL: AP and RP at P1–P5 of the test cube.
 
@@ -140,6 +142,13 @@ def acceptance(
     from pincal.measure._iso9283 import iso_test_cube, pose_characteristics, simulate_cycles
     from pincal.model import load_mechanism, parameters
 
+    guard_paths(
+        {"MODEL": model_input(model), "--calibrated": cal, "--data": data_file},
+        {"--out": json_out},
+    )
+    check_count(cycles, "--cycles", MAX_POSES // 5, yes, least=2, what="cycles of 5 poses")
+    check_number(repeatability, "--repeatability")
+    _parse_pair(error_size, "--error-size")
     say = (lambda _line: None) if as_json else click.echo
     nominal = load_mechanism(model)
     calibrated = load_calibrated(cal, nominal) if cal else None

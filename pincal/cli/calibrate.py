@@ -7,7 +7,8 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import fail_cleanly, model_source
+from pincal.cli._limits import number_pair
+from pincal.cli.common import fail_cleanly, guard_paths, model_input, model_source
 from pincal.identification import METHODS
 
 
@@ -126,6 +127,7 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
         CALIBRATED_SIDECAR,
         CALIBRATED_URDF,
         MANIFEST,
+        calibration_lock,
         read_measurement_file,
         write_calibration,
     )
@@ -135,14 +137,11 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
         raise click.BadParameter(
             f"a robust loss needs --method lm, not {method}", param_hint="--loss"
         )
+    guard_paths({"MODEL": model_input(model), "--data": data}, out_dirs={"--out": out})
+    click.get_current_context().with_resource(calibration_lock(out))  # until the end
     declared = None
     if noise is not None:
-        try:
-            pos_mm, ori_mrad = (float(v) for v in noise.split(","))
-        except ValueError:
-            raise click.BadParameter(
-                "give 'pos_mm,ori_mrad', e.g. 0.01,0.02", param_hint="--noise"
-            ) from None
+        pos_mm, ori_mrad = number_pair(noise, "--noise", positive=True, form="pos_mm,ori_mrad")
         declared = {"position": pos_mm, "orientation": ori_mrad}
     mech = load_mechanism(model)
     preset = preset or (next(iter(mech.presets), "full"))

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli.common import fail_cleanly, guard_paths
 
 
 def load_calibrated(spec: str):
@@ -68,6 +68,7 @@ def compensate(calibration, targets, out, components, skip_unreachable, as_json)
     from pincal.errors import ColumnError, UnreachablePoseError
     from pincal.io import read_pose_file, si_actuator_units, write_commands
 
+    guard_paths({"CALIBRATION": calibration, "--targets": targets}, {"--out": out})
     mech, origin = load_calibrated(calibration)
     comps = compensation_components(mech, components)
     pf = read_pose_file(targets)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import click
 
+from pincal.cli._limits import MAX_POSES, check_count, naming_option, yes_option
 from pincal.cli.common import fail_cleanly
 
 
@@ -26,6 +27,7 @@ from pincal.cli.common import fail_cleanly
 @click.option("--out", default="pincal-out", show_default=True, help="Output directory.")
 @click.option("--report/--no-report", default=True, show_default=True, help="Write report.html.")
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
+@yes_option
 @fail_cleanly
 def demo(
     seed: int,
@@ -36,6 +38,7 @@ def demo(
     out: str,
     report: bool,
     as_json: bool,
+    yes: bool,
 ) -> None:
     """Simulated calibration of the bundled 6-UPS Stewart platform (42 parameters).
 
@@ -51,7 +54,13 @@ def demo(
       pincal demo --no-report --json
     """
     from pincal.cli._demo_job import DemoSettings, format_demo, run_demo
+    from pincal.design import parse_candidate_spec
 
+    check_count(poses, "--poses", MAX_POSES, yes)
+    check_count(validation, "--validation", MAX_POSES, yes)
+    if candidates != "none":
+        with naming_option("--candidates"):
+            parse_candidate_spec(candidates)
     settings = DemoSettings(
         seed=seed,
         n_poses=poses,
@@ -59,8 +68,10 @@ def demo(
         method=method,
         candidates=candidates,
         report=report,
+        bounded=not yes,
     )
-    result = run_demo(settings, out, progress=lambda msg: click.echo(f"… {msg}", err=True))
+    with naming_option("--candidates" if candidates != "none" else "--poses"):
+        result = run_demo(settings, out, progress=lambda msg: click.echo(f"… {msg}", err=True))
     if as_json:
         import json
 

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli._limits import check_number
+from pincal.cli.common import fail_cleanly, guard_paths, model_input
 
 _FILE = click.Path(exists=True, dir_okay=False, path_type=Path)
 
@@ -69,14 +70,17 @@ def import_tracker(
           --out targets.csv --json
       pincal calibrate stewart_6ups --data targets.csv --out cal/
     """
-    from pincal.errors import MeasurementError
     from pincal.io import TrackerImportOptions, import_tracker, write_target_measurements
     from pincal.io._delimited import parse_mapping
     from pincal.model import load_mechanism
 
-    resolved = Path(out).resolve()
-    if resolved in {Path(p).resolve() for p in (points, log_path, targets_path)}:
-        raise MeasurementError(f"--out {out} is one of the inputs; inputs are never modified")
+    guard_paths(
+        {"POINTS": points, "--log": log_path, "--targets": targets_path,
+         "--model": model_input(model)},
+        {"--out": out},
+    )  # fmt: skip
+    check_number(tolerance, "--tolerance", positive=True)
+    check_number(point_std, "--point-std", positive=True)
     mech = load_mechanism(model)
     opts = TrackerImportOptions(
         match=match,

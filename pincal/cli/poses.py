@@ -6,7 +6,15 @@ import json
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli._limits import (
+    MAX_POSES,
+    MAX_RESTARTS,
+    check_count,
+    check_number,
+    naming_option,
+    yes_option,
+)
+from pincal.cli.common import fail_cleanly, guard_paths, model_input
 
 
 @click.command()
@@ -25,7 +33,8 @@ from pincal.cli.common import fail_cleanly
     "spec",
     default="grid:4",
     show_default=True,
-    help="grid:LEVELS (joint grid), random:COUNT or oa:LEVELS (orthogonal array).",
+    help="grid:LEVELS (joint grid), random:COUNT or oa:LEVELS (orthogonal array); "
+    "more than 200000 candidate poses or ~2 GB need --yes.",
 )
 @click.option("--preset", default=None, help="Parameter preset (default: first, else full).")
 @click.option(
@@ -53,6 +62,7 @@ from pincal.cli.common import fail_cleanly
     help="Pose file to write (+ <stem>.commands.csv and <stem>.json beside it).",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
+@yes_option
 @fail_cleanly
 def poses(
     model: str,
@@ -68,6 +78,7 @@ def poses(
     seed: int,
     out: str,
     as_json: bool,
+    yes: bool,
 ) -> None:
     """Select measurement poses of MODEL from a candidate set and write them to OUT.
 
@@ -84,15 +95,19 @@ def poses(
       pincal poses stewart_6ups --count 18 --index O3 --scaling K --out p.csv --json
     """
     import sys
+    from pathlib import Path
 
     import numpy as np
 
     from pincal.cli.info import reduction_line
     from pincal.design import (
+        MAX_CANDIDATE_BYTES,
+        MAX_CANDIDATES,
         DesignScaling,
         candidate_set,
         characteristic_length,
         cramer_rao_from_jacobian,
+        parse_candidate_spec,
         select_poses,
     )
     from pincal.errors import PincalError
@@ -101,6 +116,18 @@ def poses(
     from pincal.model import load_mechanism, parameters
     from pincal.sensitivity import base_parameters
 
+    guard_paths(
+        {"MODEL": model_input(model)},
+        {"--out": out, "--out's commands file": Path(out).with_suffix(".commands.csv"),
+         "--out's JSON record": Path(out).with_suffix(".json")},
+    )  # fmt: skip
+    check_count(count, "--count", MAX_POSES, yes)
+    check_count(restarts, "--restarts", MAX_RESTARTS, yes, what="restarts")
+    check_number(K_mm, "--K", positive=True)
+    for value, name in zip(noise, ("--noise (position)", "--noise (orientation)"), strict=True):
+        check_number(value, name, positive=True)
+    with naming_option("--candidates"):
+        parse_candidate_spec(spec)  # a malformed spec fails before the model loads
     mech = load_mechanism(model)
     preset = preset or (next(iter(mech.presets)) if mech.presets else "full")
     params = parameters(mech, preset)
@@ -118,7 +145,12 @@ def poses(
                 state["total"] = total
             bar.update(done - bar.pos)
 
-        cands = candidate_set(mech, params, spec, rng=seed, progress=progress)
+        with naming_option("--candidates"):
+            cands = candidate_set(
+                mech, params, spec, rng=seed, progress=progress,
+                max_candidates=None if yes else MAX_CANDIDATES,
+                max_bytes=None if yes else MAX_CANDIDATE_BYTES,
+            )  # fmt: skip
     click.echo(cands.summary(), err=True)
     noise_model = NoiseModel(*noise)
     if scaling == "K":

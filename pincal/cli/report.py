@@ -7,7 +7,8 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli.common import fail_cleanly, guard_paths
+from pincal.errors import PincalError
 
 
 @click.command()
@@ -41,9 +42,28 @@ def report(directory: Path, out: Path | None, name: str, as_json: bool) -> None:
 
     if not name or "/" in name or "\\" in name or name.startswith("."):
         raise click.BadParameter("must be a plain file stem", param_hint="--name")
+    target = out or directory
+    guard_paths(
+        _inputs(directory),
+        {f"--name's {x}": target / f"{name}.{x}" for x in ("html", "md", "json")},
+    )
     files = calibration_report(directory, out, name=name)
     if as_json:
         paths = {"html": str(files.html), "markdown": str(files.markdown)}
         click.echo(json.dumps({**paths, "json": str(files.json)}))
     else:
         click.echo(f"wrote {files.html}, {files.markdown} and {files.json}")
+
+
+def _inputs(directory: Path) -> dict[str, Path]:
+    """The files of calibration DIRECTORY that the report must not overwrite."""
+    from pincal.io import CALIBRATED_SIDECAR, CALIBRATED_URDF, MANIFEST, read_calibration
+
+    names = {MANIFEST, "identification.json", CALIBRATED_URDF, CALIBRATED_SIDECAR}
+    try:
+        cal = read_calibration(directory, verify=False)
+    except PincalError:
+        pass  # the report names the problem
+    else:
+        names |= set(cal.manifest.get("files") or {}) | {cal.calibrated_urdf.name}
+    return {f"DIRECTORY's {n}": directory / n for n in sorted(names) if (directory / n).exists()}

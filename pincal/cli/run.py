@@ -23,6 +23,7 @@ from typing import Any
 import click
 
 from pincal.cli._campaign import KEYS_HELP, Campaign, load_campaign
+from pincal.cli._limits import yes_option
 from pincal.cli.common import fail_cleanly
 
 
@@ -114,14 +115,19 @@ def campaign_paths(c: Campaign, out: Path) -> Paths:
     return Paths(out, inputs / "design.csv", data, val)
 
 
-def _invoke(ctx: click.Context, step: Step, args: list[str], quiet: bool) -> str:
-    """Run one step; returns its status (``done`` or ``skipped``)."""
+def _invoke(ctx: click.Context, step: Step, args: list[str], quiet: bool, yes: bool) -> str:
+    """Run one step; returns its status (``done`` or ``skipped``).
+
+    With ``yes``, steps whose command has ``--yes`` get it (past the size bounds).
+    """
     from pincal.cli import main as group
     from pincal.errors import CampaignError
 
     cmd = group.get_command(ctx, step.command)
     if cmd is None:
         return "skipped"
+    if yes and any(p.name == "yes" for p in cmd.params):
+        args = [*args, "--yes"]
     try:
         sub = cmd.make_context(step.command, list(args), parent=ctx)
     except click.ClickException as exc:
@@ -151,10 +157,11 @@ def _invoke(ctx: click.Context, step: Step, args: list[str], quiet: bool) -> str
 @click.option("--dry-run", is_flag=True, help="Check the file and print the steps only.")
 @click.option("--json", "as_json", is_flag=True,
               help="Print a JSON summary on stdout (step output goes to stderr).")  # fmt: skip
+@yes_option
 @fail_cleanly
 @click.pass_context
 def run(ctx: click.Context, campaign_file: Path, out: Path | None, dry_run: bool,
-        as_json: bool) -> None:  # fmt: skip
+        as_json: bool, yes: bool) -> None:  # fmt: skip
     """Run the calibration campaign described in CAMPAIGN_FILE (YAML).
 
     The steps are the pincal subcommands a user would type, in order: poses
@@ -203,7 +210,7 @@ def run(ctx: click.Context, campaign_file: Path, out: Path | None, dry_run: bool
             record["status"] = "planned"
             continue
         t0 = time.perf_counter()
-        record["status"] = _invoke(ctx, step, args, as_json)
+        record["status"] = _invoke(ctx, step, args, as_json, yes)
         record["seconds"] = round(time.perf_counter() - t0, 3)
     if not dry_run:
         # out: "." — the copy lives in the output directory and reruns into it

@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli._limits import MAX_POSES, check_count, number_pair, yes_option
+from pincal.cli.common import fail_cleanly, guard_paths, model_input
 
 if TYPE_CHECKING:
     from pincal.measure import InstrumentData, Measurements
@@ -26,13 +27,9 @@ def _parse_errors(spec: str) -> int | None:
 
 
 def _parse_pair(spec: str, option: str) -> tuple[float, float]:
-    try:
-        a, b = (float(v) for v in spec.split(","))
-    except ValueError:
-        raise click.BadParameter(
-            f"{spec!r}: expected two numbers 'a,b'", param_hint=option
-        ) from None
-    return a, b
+    """Two finite numbers ≥ 0 (:func:`pincal.cli._limits.number_pair`)."""
+    form = "length_mm,angle_mrad" if option == "--error-size" else "position_mm,orientation_mrad"
+    return number_pair(spec, option, form=form)
 
 
 @click.command()
@@ -94,10 +91,11 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
     "of poses; its noise is the position noise.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
+@yes_option
 @fail_cleanly
 def simulate(
     model, poses_file, n_random, preset, errors, error_size, noise, seed, length_unit, out,
-    instrument, as_json,
+    instrument, as_json, yes,
 ) -> None:  # fmt: skip
     """Simulate a measurement campaign of MODEL with random geometric errors.
 
@@ -128,9 +126,15 @@ def simulate(
 
     if (poses_file is None) == (n_random is None):
         raise click.UsageError("give exactly one of --poses FILE or --random N")
+    check_count(n_random, "--random", MAX_POSES, yes)
     err_seed = _parse_errors(errors)
     size_mm, size_mrad = _parse_pair(error_size, "--error-size")
     pos_mm, ori_mrad = _parse_pair(noise, "--noise")
+    truth_path = Path(out).with_suffix(".truth.json")
+    guard_paths(
+        {"MODEL": model_input(model), "--poses": poses_file},
+        {"--out": out, "--out's truth file": truth_path},
+    )
     nominal = load_mechanism(model)
     preset = preset or (next(iter(nominal.presets), "full"))
     params = parameters(nominal, preset)
@@ -174,7 +178,6 @@ def simulate(
         ],
         **extra,
     }
-    truth_path = Path(out).with_suffix(".truth.json")
     atomic_write_text(truth_path, json.dumps(truth, indent=1) + "\n")
     if as_json:
         click.echo(

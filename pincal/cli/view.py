@@ -14,8 +14,10 @@ comments::
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import signal
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, TypedDict
@@ -23,7 +25,7 @@ from typing import TYPE_CHECKING, TypedDict
 import click
 import numpy as np
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli.common import fail_cleanly, guard_paths, model_input
 from pincal.errors import ModelFileError
 from pincal.io import read_pose_rows
 
@@ -91,7 +93,19 @@ def _urdf_for_viz(mech) -> str | Path:
     type=click.Path(dir_okay=False, path_type=Path),
     help="Write the self-contained HTML view here.",
 )
-@click.option("--live", is_flag=True, help="Also open a live meshcat session on 127.0.0.1.")
+@click.option(
+    "--live",
+    is_flag=True,
+    help="Also open a live meshcat session, listening on the loopback interface only "
+    "(127.0.0.1; see --host); it stops with pincal (Enter, Ctrl-C, SIGTERM, even SIGKILL).",
+)
+@click.option(
+    "--host",
+    default="127.0.0.1",
+    show_default=True,
+    help="IPv4 address the --live server listens on (0.0.0.0: every interface, reachable "
+    "from other machines).",
+)
 @click.option(
     "--up",
     type=click.Choice(["auto", "+z", "-z", "+y", "-y", "+x", "-x"]),
@@ -118,6 +132,7 @@ def view(
     calibrated: Path | None,
     html_path: Path | None,
     live: bool,
+    host: str,
     up: str,
     ghosts: bool,
     animate: bool,
@@ -154,6 +169,10 @@ def view(
         raise click.UsageError("give --html FILE and/or --live")
     if arrow_scale is not None and not (math.isfinite(arrow_scale) and arrow_scale > 0):
         raise click.BadParameter("must be a positive number", param_hint="--arrow-scale")
+    guard_paths(
+        {"MODEL": model_input(model), "--poses": poses_file, "--calibrated": calibrated},
+        {"--html": html_path},
+    )
     mech = load_mechanism(model)
     if poses_file is not None:
         rows = read_pose_rows(poses_file, mech, MAX_POSES)
@@ -198,7 +217,7 @@ def view(
             title = f"{mech.name}: {len(rows)} poses" + (" — calibration changes" if arrows else "")
             page = viz.static_html(mech.model, source, list(qs), title=title, **options)
             summary["html"] = str(viz.write_html(html_path, page))
-        session = viz.live(mech.model, source, list(qs), **options) if live else None
+        session = viz.live(mech.model, source, list(qs), host=host, **options) if live else None
     if session is not None:
         summary["live_url"] = session.web_url
     if as_json:
@@ -214,6 +233,23 @@ def view(
     if session is not None:
         click.echo(f"meshcat viewer at {session.web_url} — press Enter to stop", err=True)
         try:
-            sys.stdin.readline()
+            with _exit_on_signals():
+                sys.stdin.readline()
         finally:
             session.close()
+
+
+@contextlib.contextmanager
+def _exit_on_signals():
+    """Turn SIGTERM / SIGHUP into SystemExit, so ``finally`` stops the live server."""
+
+    def leave(signum, _frame):
+        raise SystemExit(128 + signum)
+
+    wanted = [signal.SIGTERM] + ([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])
+    old = {s: signal.signal(s, leave) for s in wanted}
+    try:
+        yield
+    finally:
+        for s, handler in old.items():
+            signal.signal(s, handler)

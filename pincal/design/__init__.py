@@ -18,7 +18,14 @@ from pincal.design._candidate_sources import (
     parse_candidate_spec,
     random_candidates,
 )
-from pincal.design._candidates import CandidateSet, evaluate_candidates
+from pincal.design._candidates import (
+    MAX_CANDIDATE_BYTES,
+    MAX_CANDIDATES,
+    CandidateCost,
+    CandidateSet,
+    candidate_cost,
+    evaluate_candidates,
+)
 from pincal.design._crb import (
     CramerRaoReport,
     Efficiency,
@@ -50,8 +57,11 @@ from pincal.design._selection import SELECTION_METHODS, PoseDesign, select_poses
 __all__ = [
     "COLUMN_SCALINGS",
     "INDEX_NAMES",
+    "MAX_CANDIDATES",
+    "MAX_CANDIDATE_BYTES",
     "ROW_SCALINGS",
     "SELECTION_METHODS",
+    "CandidateCost",
     "CandidateSet",
     "CramerRaoReport",
     "DesignScaling",
@@ -62,6 +72,7 @@ __all__ = [
     "PoseSelection",
     "batch_indices",
     "bose_array",
+    "candidate_cost",
     "candidate_set",
     "characteristic_length",
     "cramer_rao",

@@ -9,14 +9,23 @@ Each pushes actuator rows through :func:`pincal.design._candidates.evaluate_cand
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
 from pincal.design._arrays import map_to_ranges, orthogonal_array
-from pincal.design._candidates import CandidateSet, Progress, _home_pose, evaluate_candidates
-from pincal.errors import ConvergenceError, PincalError
+from pincal.design._candidates import (
+    MAX_CANDIDATE_BYTES,
+    MAX_CANDIDATES,
+    CandidateSet,
+    Progress,
+    _home_pose,
+    candidate_cost,
+    evaluate_candidates,
+)
+from pincal.errors import ConvergenceError, OptionValueError, PincalError, clip
 from pincal.model._mechanism import WORKSPACE_POSE_KEYS, Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.model._workspace import _joint_ranges, sample_actuators
@@ -79,6 +88,8 @@ def grid_candidates(
     *,
     in_workspace: bool = True,
     progress: Progress | None = None,
+    max_candidates: int | None = MAX_CANDIDATES,
+    max_bytes: int | None = MAX_CANDIDATE_BYTES,
 ) -> CandidateSet:
     """Seed 000: a full joint-space grid pushed through the forward kinematics.
 
@@ -94,10 +105,19 @@ def grid_candidates(
             :func:`default_grid_ranges`.
         in_workspace: keep only poses inside the sidecar pose workspace.
         progress: callback ``(done, total)``.
+        max_candidates: refuse more rows than this (None: no bound).
+        max_bytes: refuse a larger memory estimate [bytes] (None: no bound).
+
+    Raises:
+        OptionValueError: ``levels`` is not an integer ≥ 2.
+        InputLimitError: the estimate passes a bound (:class:`CandidateCost`).
     """
     if not isinstance(levels, (int, np.integer)) or levels < 2:
-        raise PincalError(f"a grid needs levels >= 2 per actuator; got {levels!r}")
+        raise OptionValueError(f"a grid needs levels >= 2 per actuator; got {levels!r}")
     n_act = len(mech.actuated)
+    _cost(mech, params, "grid", int(levels)).check(
+        f"grid:{levels} ({n_act} actuators)", max_candidates, max_bytes
+    )
     rng_arr = default_grid_ranges(mech) if ranges is None else np.asarray(ranges, dtype=float)
     if rng_arr.shape != (n_act, 2) or not np.all(np.isfinite(rng_arr)):
         raise PincalError(f"ranges must be finite (lower, upper) pairs, shape ({n_act}, 2)")
@@ -115,10 +135,18 @@ def random_candidates(
     rng: np.random.Generator | int | None = None,
     *,
     progress: Progress | None = None,
+    max_candidates: int | None = MAX_CANDIDATES,
+    max_bytes: int | None = MAX_CANDIDATE_BYTES,
 ) -> CandidateSet:
-    """``count`` random feasible workspace poses (:func:`pincal.sample_actuators`)."""
-    if count < 1:
-        raise PincalError(f"count must be >= 1; got {count}")
+    """``count`` random feasible workspace poses (:func:`pincal.sample_actuators`).
+
+    Raises:
+        OptionValueError: ``count`` is not an integer ≥ 1.
+        InputLimitError: the estimate passes a bound (see :func:`grid_candidates`).
+    """
+    if not isinstance(count, (int, np.integer)) or count < 1:
+        raise OptionValueError(f"count must be an integer >= 1; got {count!r}")
+    _cost(mech, params, "random", int(count)).check(f"random:{count}", max_candidates, max_bytes)
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     rows = sample_actuators(mech, int(count), gen)
     return evaluate_candidates(
@@ -132,6 +160,8 @@ def orthogonal_candidates(
     levels: int = 5,
     *,
     progress: Progress | None = None,
+    max_candidates: int | None = MAX_CANDIDATES,
+    max_bytes: int | None = MAX_CANDIDATE_BYTES,
 ) -> CandidateSet:
     """Seed 001: a strength-2 orthogonal array over the six workspace pose factors.
 
@@ -139,8 +169,12 @@ def orthogonal_candidates(
     L49(7⁶) for 7) has one column per pose factor x, y, z, rx, ry, rz; levels are
     mapped evenly onto the sidecar's pose ranges (a factor without a range stays
     at its home value) and each run is solved by inverse kinematics. Unreachable
-    runs are counted as ``"no IK"``.
+    runs are counted as ``"no IK"``. ``max_candidates`` and ``max_bytes`` bound the
+    estimated cost as in :func:`grid_candidates`.
     """
+    if not isinstance(levels, (int, np.integer)) or levels < 2:
+        raise OptionValueError(f"an orthogonal array needs levels >= 2; got {levels!r}")
+    _cost(mech, params, "oa", int(levels)).check(f"oa:{levels}", max_candidates, max_bytes)
     pose = mech.workspace.pose
     if not pose:
         raise PincalError(
@@ -194,14 +228,20 @@ def parse_candidate_spec(spec: str) -> tuple[str, int]:
     kind, _, arg = spec.partition(":")
     defaults = {"grid": 4, "random": 500, "oa": 5}
     if kind not in defaults:
-        raise PincalError(
-            f"candidate spec {spec!r} not understood; use grid:LEVELS, random:COUNT or oa:LEVELS"
+        raise OptionValueError(
+            f"{clip(spec)} is not a candidate spec; use grid:LEVELS, random:COUNT or oa:LEVELS"
         )
+    least = {"grid": 2, "random": 1, "oa": 2}[kind]
     try:
-        value = int(arg) if arg else defaults[kind]
+        number = float(arg) if arg else defaults[kind]  # "1e4" is an integer too
     except ValueError:
-        raise PincalError(f"candidate spec {spec!r}: {arg!r} is not an integer") from None
-    return kind, value
+        number = math.nan
+    if not (math.isfinite(number) and number == int(number) and number >= least):
+        raise OptionValueError(
+            f"{clip(spec)}: {clip(arg)} is not an integer >= {least}; candidate specs are "
+            f"grid:LEVELS (>= 2), random:COUNT (>= 1) or oa:LEVELS (>= 2)"
+        )
+    return kind, int(number)
 
 
 def candidate_set(
@@ -211,15 +251,38 @@ def candidate_set(
     rng: np.random.Generator | int | None = None,
     *,
     progress: Progress | None = None,
+    max_candidates: int | None = MAX_CANDIDATES,
+    max_bytes: int | None = MAX_CANDIDATE_BYTES,
 ) -> CandidateSet:
-    """Candidates from a spec string: ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``."""
+    """Candidates from a spec string: ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``.
+
+    The cost (rows, memory) is estimated before any work and refused past
+    ``max_candidates`` rows or ``max_bytes`` (None: no bound).
+
+    Raises:
+        OptionValueError: the spec is malformed (kind, or a number that is not an integer
+            of the kind's minimum).
+        InputLimitError: the estimate passes a bound, naming the estimate and the bound.
+    """
     kind, value = parse_candidate_spec(spec)
+    limit, mem = max_candidates, max_bytes
     if kind == "grid":
-        result = grid_candidates(mech, params, value, progress=progress)
+        result = grid_candidates(
+            mech, params, value, progress=progress, max_candidates=limit, max_bytes=mem
+        )
     elif kind == "random":
-        result = random_candidates(mech, params, value, rng, progress=progress)
+        result = random_candidates(
+            mech, params, value, rng, progress=progress, max_candidates=limit, max_bytes=mem
+        )
     else:
-        result = orthogonal_candidates(mech, params, value, progress=progress)
+        result = orthogonal_candidates(
+            mech, params, value, progress=progress, max_candidates=limit, max_bytes=mem
+        )
     if len(result) == 0:
         raise PincalError(f"no feasible candidate poses from {spec!r}: {result.summary()}")
     return result
+
+
+def _cost(mech: Mechanism, params: ParameterSet, kind: str, value: int):
+    k = len(mech.measured_components)
+    return candidate_cost(kind, value, len(mech.actuated), k, len(params))

@@ -32,13 +32,30 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
-from pincal.errors import ConvergenceError, PincalError, SingularConfigurationError
+from pincal.errors import (
+    ConvergenceError,
+    InputLimitError,
+    PincalError,
+    SingularConfigurationError,
+)
 from pincal.model._closures import COMPONENTS
 from pincal.model._mechanism import WORKSPACE_POSE_KEYS, Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._batch_jacobian import sensitivities_batch
 
-__all__ = ["CandidateSet", "evaluate_candidates"]
+__all__ = [
+    "MAX_CANDIDATES",
+    "MAX_CANDIDATE_BYTES",
+    "CandidateCost",
+    "CandidateSet",
+    "candidate_cost",
+    "evaluate_candidates",
+]
+
+#: default bound on the rows a candidate set tries (forward or inverse kinematics each)
+MAX_CANDIDATES = 200_000
+#: default bound on the estimated memory of a candidate set [bytes]
+MAX_CANDIDATE_BYTES = 2 * 1024**3
 
 _log = logging.getLogger(__name__)
 
@@ -101,6 +118,80 @@ class CandidateSet:
         return f"{len(self)} of {self.tried} candidates kept ({self.source})" + (
             f"; rejected: {why}" if why else ""
         )
+
+
+# ----------------------------------------------------------------------------- cost
+
+
+@dataclass(frozen=True)
+class CandidateCost:
+    """Up-front estimate of a candidate set's size.
+
+    Attributes:
+        rows: actuator rows tried (each a forward or inverse kinematics solve).
+        bytes: estimated peak memory [bytes] (Jacobian blocks, poses, tables).
+    """
+
+    rows: int
+    bytes: int
+
+    def describe(self) -> str:
+        """E.g. ``"1.0e+12 candidate poses, ~1.6e+04 GB"``."""
+        return f"{self.rows:.3g} candidate poses, ~{self.bytes / 1024**3:.3g} GB"
+
+    def check(
+        self,
+        what: str,
+        max_rows: int | None = MAX_CANDIDATES,
+        max_bytes: int | None = MAX_CANDIDATE_BYTES,
+    ) -> None:
+        """Refuse a cost past the bounds (None: no bound).
+
+        Raises:
+            InputLimitError: naming ``what``, the estimate and the bound.
+        """
+        over_rows = max_rows is not None and self.rows > max_rows
+        over_bytes = max_bytes is not None and self.bytes > max_bytes
+        if over_rows or over_bytes:
+            raise InputLimitError(
+                f"{what} gives {self.describe()}; the bound is {max_rows} poses and "
+                f"{(max_bytes or 0) / 1024**3:.3g} GB: use fewer levels or a smaller count "
+                f"(grid:4, random:2000, oa:7 are typical), or pass --yes (library: "
+                f"max_candidates=None) to go ahead"
+            )
+
+
+def candidate_cost(
+    kind: str, value: int, n_act: int, n_components: int, n_params: int
+) -> CandidateCost:
+    """Estimate the rows and memory of candidates ``kind:value`` before making them.
+
+    Args:
+        kind: ``"grid"`` (value = levels per actuator), ``"random"`` (value = count) or
+            ``"oa"`` (value = levels; the array has p² runs, p the next prime).
+        value: the spec's number.
+        n_act: number of actuators.
+        n_components: measured components k (≤ 6).
+        n_params: number of parameters n.
+
+    Returns:
+        The :class:`CandidateCost` (exact integers for the row counts).
+    """
+    per_row = 8 * (6 * n_params + n_components * n_params + 12 + 3 * n_act)
+    table = 0
+    if kind == "grid":
+        rows = int(value) ** n_act
+    elif kind == "oa":
+        from pincal.design._arrays import _is_prime
+
+        p = max(int(value), len(WORKSPACE_POSE_KEYS) - 1, 2)
+        while p < 10**6 and not _is_prime(p):  # past that, p ≥ value is bound enough
+            p += 1
+        rows = p * p
+        table = 8 * rows * (p + 1)  # the full Bose array before its first six columns
+    else:
+        rows = int(value)
+    return CandidateCost(rows, rows * per_row + table)
 
 
 # ----------------------------------------------------------------------------- helpers

@@ -9,6 +9,7 @@ from __future__ import annotations
 from pincal.io._atomic import (
     atomic_write_bytes,
     atomic_write_text,
+    calibration_lock,
 )
 from pincal.io._calibration_dir import (
     CALIBRATED_SIDECAR,
@@ -80,6 +81,7 @@ __all__ = [
     "TrackerImportOptions",
     "atomic_write_bytes",
     "atomic_write_text",
+    "calibration_lock",
     "check_enough_poses",
     "file_kind",
     "import_tracker",

@@ -17,9 +17,11 @@ the parameter preset and names, the identified values and std (SI; the covarianc
 ``identification.json``), units, instrument noise, the input data files with their
 SHA-256 and the SHA-256 of every file of the directory, and the creation time (UTC).
 
-:func:`write_calibration` writes the whole directory into a temporary sibling and
-renames it into place, so the directory is complete or absent; :func:`read_calibration`
-is the one reader. Directories of pincal 0.1 (``identification.json`` beside
+:func:`write_calibration` writes the whole directory into a temporary sibling
+(``.NAME.pincal-tmp-*``) and swaps it in with one rename, so the directory is at every
+instant the complete old set or the complete new one; a lock file beside it
+(``.NAME.pincal-lock``) keeps a second writer out. :func:`read_calibration` is the one
+reader. Directories of pincal 0.1 (``identification.json`` beside
 ``<model>_calibrated.urdf`` or ``<model>.urdf``, no manifest) are read too.
 """
 
@@ -38,7 +40,13 @@ from typing import Any
 
 from pincal.errors import CalibrationDirectoryError, PincalError
 from pincal.identification import IdentificationResult
-from pincal.io._atomic import atomic_write_text
+from pincal.io._atomic import (
+    _temp_prefix,
+    atomic_write_text,
+    calibration_lock,
+    remove_stale_temporaries,
+    swap_in_directory,
+)
 from pincal.io._urdf_export import save_urdf
 from pincal.measure import NoiseModel
 from pincal.model import Mechanism, load_mechanism, read_sidecar
@@ -199,10 +207,9 @@ def _manifest(
     }
 
 
-def _replace_dir(tmp: Path, out: Path) -> None:
-    """Move the finished ``tmp`` directory to ``out`` (replacing an old calibration)."""
+def _check_replaceable(out: Path) -> None:
+    """Refuse to replace anything but a calibration directory or an empty directory."""
     if not out.exists():
-        os.replace(tmp, out)
         return
     if not out.is_dir():
         raise CalibrationDirectoryError(f"{str(out)!r} exists and is not a directory")
@@ -212,14 +219,6 @@ def _replace_dir(tmp: Path, out: Path) -> None:
             f"{str(out)!r} is a non-empty directory that is not a calibration directory "
             f"({len(entries)} entries); choose a new --out directory"
         )
-    old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
-    os.replace(out, old / out.name)
-    try:
-        os.replace(tmp, out)
-    except BaseException:
-        os.replace(old / out.name, out)
-        raise
-    shutil.rmtree(old, ignore_errors=True)
 
 
 def write_calibration(
@@ -248,15 +247,32 @@ def write_calibration(
         The directory as :func:`read_calibration` reads it.
 
     Raises:
-        CalibrationDirectoryError: ``path`` exists and is not a calibration directory.
+        CalibrationDirectoryError: ``path`` exists and is not a calibration directory, or
+            another process is writing it (see :func:`calibration_lock`).
         ParameterError: ``result`` has no calibrated mechanism.
     """
     out = Path(path).resolve()  # "." or "cal/" name a directory we can replace by rename
     out.parent.mkdir(parents=True, exist_ok=True)
+    with calibration_lock(out):
+        _write_locked(out, result, model_source, data_files, noise, annotations, texts)
+    return read_calibration(path)
+
+
+def _write_locked(
+    out: Path,
+    result: IdentificationResult,
+    model_source: str | None,
+    data_files: Sequence[str | Path],
+    noise: NoiseModel | None,
+    annotations: Mapping[str, Any] | None,
+    texts: Mapping[str, str] | None,
+) -> None:
+    _check_replaceable(out)
+    remove_stale_temporaries(out)
     mech = result.calibrated
     notes = {"data": [str(p) for p in data_files], "calibrated_urdf": CALIBRATED_URDF}
     notes.update(annotations or {})
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
+    tmp = Path(tempfile.mkdtemp(prefix=_temp_prefix(out, "tmp"), dir=out.parent))
     try:
         save_urdf(mech, tmp / CALIBRATED_URDF)
         doc = result.to_dict(notes)
@@ -267,11 +283,11 @@ def write_calibration(
         manifest = _manifest(result, model_source, data_files, noise, files)
         atomic_write_text(tmp / MANIFEST, json.dumps(manifest, indent=1) + "\n")
         os.chmod(tmp, 0o755)
-        _replace_dir(tmp, out)
+        _check_replaceable(out)
+        swap_in_directory(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return read_calibration(path)
 
 
 def _load_json(path: Path) -> dict:
