@@ -97,12 +97,15 @@ class BatchKinematics:
         rotations: (N, njoints, 3, 3) joint world rotations (``oMi``).
         translations: (N, njoints, 3) joint world positions [m].
         jacobian: (N, 6, nv) WORLD joint Jacobian ``[v_o; ω]`` (``data.J`` of Pinocchio).
+        closure_jacobian: (N, n_closure_rows, k) closure Jacobian on the mechanism's k
+            free dofs at ``q``, when the loop-closing solve computed it (else None).
     """
 
     q: np.ndarray
     rotations: np.ndarray
     translations: np.ndarray
     jacobian: np.ndarray
+    closure_jacobian: np.ndarray | None = None
 
 
 class BatchModel:
