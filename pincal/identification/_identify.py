@@ -28,8 +28,8 @@ from pincal.identification._weighting import Weighting
 from pincal.measure._measurements import Measurements
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._identifiability import Identifiability, analyse_jacobian
 from pincal.sensitivity._batch_jacobian import batch_applies
+from pincal.sensitivity._identifiability import Identifiability, analyse_jacobian
 from pincal.sensitivity._jacobian import closure_breaking
 
 __all__ = ["identify", "qpso_identify", "step_planned_identify"]

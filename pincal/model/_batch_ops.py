@@ -14,12 +14,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
 __all__ = [
     "JointGroup",
     "cross_cols",
     "exp3_batch",
     "group_joints",
+    "jlog3_batch",
+    "log3_batch",
     "mm",
     "mv",
     "quat_to_matrix",
@@ -213,3 +216,37 @@ def walk(
                 0, 3, 1, 2
             )
     return oR, op, Jw
+
+
+def log3_batch(R: np.ndarray) -> np.ndarray:
+    """Rotation vectors (N, 3) [rad] of rotation matrices (N, 3, 3) (``pin.log3`` batched).
+
+    θ = atan2(‖v‖, tr R − 1) with v = vee(R − Rᵀ) = 2 sin θ·axis keeps full precision
+    for small angles; rotations beyond 2.5 rad (where v loses the axis near π) are
+    handed to ``pin.log3`` one by one.
+    """
+    v = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], 1)
+    s = np.linalg.norm(v, axis=1)
+    theta = np.arctan2(s, R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)
+    small = theta < 1e-4
+    factor = np.where(small, 0.5 + theta * theta / 12.0, theta / np.where(small, 1.0, s))
+    w = factor[:, None] * v
+    for i in np.nonzero(theta > 2.5)[0]:
+        w[i] = pin.log3(R[i])
+    return w
+
+
+def jlog3_batch(w: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) ``pin.Jlog3`` of the rotations exp(w) given their rotation vectors (N, 3).
+
+    ``Jlog3 = I + ½[w]× + (1/θ² − (1 + cos θ)/(2θ sin θ))[w]×²`` (Taylor series below
+    0.01 rad, where the difference cancels).
+    """
+    theta = np.linalg.norm(w, axis=1)
+    small = theta < 1e-2
+    t = np.where(small, 1.0, theta)
+    t2 = theta * theta
+    series = 1.0 / 12.0 + t2 * (1.0 / 720.0 + t2 * (1.0 / 30240.0 + t2 / 1209600.0))
+    coef = np.where(small, series, 1.0 / (t * t) - (1.0 + np.cos(t)) / (2.0 * t * np.sin(t)))
+    K = skew(w)
+    return np.eye(3) + 0.5 * K + coef[:, None, None] * (K @ K)

@@ -175,9 +175,12 @@ def _closure_maps(
         pb = np.stack([place[t[0].frame_b][1] for t in point], axis=1)
         RoP, poP = Ro[:, jP], po[:, jP]
         d = sb[:, None] * (poP - pb) - sa[:, None] * (poP - pa)
-        blk = np.concatenate([(sb - sa)[:, None, None] * RoP, _cross_rows(d, RoP)], axis=-1)
         rows = np.array([t[1] for t in point])[:, None] + np.arange(3)
-        contrib = -(np.swapaxes(Y[:, rows], -1, -2) @ blk)  # (N, P, 6, 6)
+        Yt = np.swapaxes(Y[:, rows], -1, -2)  # (N, P, 6, 3)
+        # −Yᵀ[σ Ro, skew(d) Ro] = −[σ Yᵀ Ro, (Yᵀ skew(d)) Ro], rows of Yᵀ skew(d) = y × d
+        contrib = np.empty((*Yt.shape[:2], 6, 6))
+        contrib[..., :3] = (sa - sb)[:, None, None] * (Yt @ RoP)
+        contrib[..., 3:] = np.cross(d[:, :, None], Yt) @ RoP
         if np.unique(jP).size == jP.size:
             C[:, jP] += contrib
         else:
