@@ -33,11 +33,13 @@ from pincal.model._batch_ops import skew as _skew
 __all__ = [
     "BatchKinematics",
     "BatchModel",
+    "concat_kinematics",
     "cross_cols",
     "exp3_batch",
     "mm",
     "mv",
     "quat_to_matrix",
+    "slice_kinematics",
 ]
 
 _AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
@@ -106,6 +108,30 @@ class BatchKinematics:
     translations: np.ndarray
     jacobian: np.ndarray
     closure_jacobian: np.ndarray | None = None
+
+
+def concat_kinematics(parts: list[BatchKinematics]) -> BatchKinematics:
+    """The kinematics of consecutive chunks of poses as one :class:`BatchKinematics`."""
+    cj = [p.closure_jacobian for p in parts]
+    return BatchKinematics(
+        np.concatenate([p.q for p in parts]),
+        np.concatenate([p.rotations for p in parts]),
+        np.concatenate([p.translations for p in parts]),
+        np.concatenate([p.jacobian for p in parts]),
+        None if any(c is None for c in cj) else np.concatenate(cj),  # type: ignore[misc]
+    )
+
+
+def slice_kinematics(bk: BatchKinematics, rows: slice) -> BatchKinematics:
+    """The kinematics of poses ``rows`` (views, not copies)."""
+    cj = bk.closure_jacobian
+    return BatchKinematics(
+        bk.q[rows],
+        bk.rotations[rows],
+        bk.translations[rows],
+        bk.jacobian[rows],
+        None if cj is None else cj[rows],
+    )
 
 
 class BatchModel:

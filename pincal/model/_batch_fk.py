@@ -20,13 +20,22 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ShapeError
-from pincal.model._batch import BatchKinematics, BatchModel, cross_cols, mm, mv
+from pincal.model._batch import (
+    BatchKinematics,
+    BatchModel,
+    concat_kinematics,
+    cross_cols,
+    mm,
+    mv,
+)
 from pincal.model._branch import BranchTracking
 from pincal.model._closures import Closure
 
 __all__ = ["BatchTracking", "closure_jacobian_batch", "closure_residual_batch"]
 
 _MAX_BATCH_ITERATIONS = 30
+#: poses per chunk of the batched solves (measured: 250–500 fastest per pose)
+CHUNK = 512
 
 
 def closure_residual_batch(
@@ -209,8 +218,22 @@ class BatchTracking(BranchTracking):
         """Batched Newton: configurations (N, nq), accepted mask (N,), their kinematics.
 
         Rows not accepted (no decrease, no convergence, other branch, possibly
-        singular) hold garbage and must be redone pose by pose.
+        singular) hold garbage and must be redone pose by pose. Solved in chunks of
+        :data:`CHUNK` poses (temporaries that stay in cache: cost linear in N).
         """
+        if A.shape[0] <= CHUNK:
+            return self._solve_chunk(A, Q0)
+        parts = [
+            self._solve_chunk(A[s : s + CHUNK], Q0[s : s + CHUNK])
+            for s in range(0, A.shape[0], CHUNK)
+        ]
+        Q = np.concatenate([p[0] for p in parts])
+        return Q, np.concatenate([p[1] for p in parts]), concat_kinematics([p[2] for p in parts])
+
+    def _solve_chunk(
+        self, A: np.ndarray, Q0: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, BatchKinematics]:
+        """:meth:`_solve_batch` of one chunk of poses."""
         bm, opt, free = self.batch_model, self.options, self._free_v
         N, k = A.shape[0], free.size
         Q = self._actuators_batch(Q0, A)

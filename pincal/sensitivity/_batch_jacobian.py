@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pincal.model._batch import BatchKinematics, cross_cols, mm, mv
-from pincal.model._batch_fk import closure_jacobian_batch
+from pincal.model._batch import BatchKinematics, cross_cols, mm, mv, slice_kinematics
+from pincal.model._batch_fk import CHUNK, closure_jacobian_batch
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._jacobian import _Plan, _plan, pose_sensitivity
@@ -281,14 +281,28 @@ def sensitivities_batch(
             breaks,
         )
     bk = bk if bk is not None else mech.kinematics_batch(qs)
-    if all(c.components[-1] < 3 for c in mech.closures):
-        Rm, pm, J = _world_path(mech, params, bk, values, plan)
-        return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
+    path = _world_path if all(c.components[-1] < 3 for c in mech.closures) else _local_path
+    N = bk.q.shape[0]
+    parts = [
+        path(mech, params, slice_kinematics(bk, slice(s, s + CHUNK)), values, plan)
+        for s in range(0, N, CHUNK)
+    ]
+    Rm, pm, J = (np.concatenate([p[i] for p in parts]) for i in range(3))
+    return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
+
+
+def _local_path(
+    mech: Mechanism, params: ParameterSet, bk: BatchKinematics, values: np.ndarray, plan: _Plan
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Measured rotation, position and Jacobian (N, 6, n) from local parameter twists.
+
+    The general path (closures with orientation components): closure Jacobians from
+    the frames' local twists, passive correction by one adjoint solve.
+    """
     placements, P = _param_twists(mech, params, bk, values, plan)
     Rm, pm = placements[mech.measured_frame]
     Pm = P[mech.measured_frame]
     J = np.concatenate([mm(Rm, Pm[:, :3]), Pm[:, 3:]], axis=1)
-    free = mech.free_dofs
     Jc_p = np.concatenate(
         [
             closure_jacobian_batch(
@@ -300,9 +314,8 @@ def sensitivities_batch(
     )
     Jf = bk.closure_jacobian
     if Jf is None:
-        Jf = mech.closure_terms_batch(bk, columns=free)[1]
+        Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
     Jm_u = _measured_free_jacobian(mech, bk, Rm, pm)
     # Jm_u · dq_u/dp = −(Jf⁻ᵀ Jm_uᵀ)ᵀ Jc_p: one solve with 6 right-hand sides
     Y = np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
-    J = J - np.swapaxes(Y, 1, 2) @ Jc_p
-    return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
+    return Rm, pm, J - np.swapaxes(Y, 1, 2) @ Jc_p
