@@ -195,14 +195,20 @@ def _closure_maps(
 
 
 def _world_path(
-    mech: Mechanism, params: ParameterSet, bk: BatchKinematics, values: np.ndarray, plan: _Plan
+    mech: Mechanism,
+    params: ParameterSet,
+    bk: BatchKinematics,
+    values: np.ndarray,
+    plan: _Plan,
+    out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Measured rotation, position and Jacobian (N, 6, n) when every closure is positional.
 
-    Per parameterised joint j, the Jacobian columns are ``C_j · eff_j``: C_j (N, 6, 6)
-    maps a local twist of j's origin to the measured quantity (directly, and through
-    the passive joints that re-close the loops), eff_j (6, c) is the joint's constant
-    twists per parameter (one GEMM). The passive part ``Jm_u · dq_u/dp =
+    The Jacobian is written into ``out`` (N, 6, n) when given. Per parameterised joint
+    j, the Jacobian columns are ``C_j · eff_j``: C_j (N, 6, 6) maps a local twist of j's
+    origin to the measured quantity (directly, and through the passive joints that
+    re-close the loops), eff_j (6, c) is the joint's constant twists per parameter
+    (one GEMM). The passive part ``Jm_u · dq_u/dp =
     −(Jm_u Jf⁻¹) ∂c/∂p`` uses one adjoint solve ``Y = Jf⁻ᵀ Jm_uᵀ`` (6 right-hand sides,
     not n).
     """
@@ -214,33 +220,37 @@ def _world_path(
     Rs, ps = mech.batch_model.frame_placements(bk, np.array([mech.frame_id(f) for f in frames]))
     place = {f: (Rs[:, i], ps[:, i]) for i, f in enumerate(frames)}
     Rm, pm = place[mech.measured_frame]
-    C = np.zeros((N, len(names), 6, 6))
-    touched = np.zeros(len(names), dtype=bool)
+    C: np.ndarray | None = None  # closure part of the joint maps
     moves = set(plan.moves[mech.measured_frame])
     mj = [i for i, j in enumerate(names) if j in moves]
+    touched = {i: k for k, i in enumerate(mj)}  # joint index → its measured map
+    Cm = np.zeros((N, len(mj), 6, 6))
     if mj:
         R = Ro[:, mj]
-        C[:, mj, :3, :3] = R
-        C[:, mj, :3, 3:] = _cross_rows(po[:, mj] - pm[:, None], R)
-        C[:, mj, 3:, 3:] = np.swapaxes(Rm, 1, 2)[:, None] @ R
-        touched[mj] = True
+        Cm[:, :, :3, :3] = R
+        Cm[:, :, :3, 3:] = _cross_rows(po[:, mj] - pm[:, None], R)
+        Cm[:, :, 3:, 3:] = np.swapaxes(Rm, 1, 2)[:, None] @ R
     if mech.closures:
         Jf = bk.closure_jacobian
         if Jf is None:
             Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
         Jm_u = _measured_free_jacobian(mech, bk, Rm, pm)
         Y = np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
+        C = np.zeros((N, len(names), 6, 6))
         _closure_maps(mech, plan, names, Ro, po, place, Y, C)
-        for c in mech.closures:
-            for f in (c.frame_a, c.frame_b):
-                touched[[names.index(j) for j in plan.moves[f]]] = True
-    J = np.zeros((N, 6, n))
     twists = params.joint_twists(values)
+    J = np.zeros((N, 6, n)) if out is None else out
     for i, j in enumerate(names):
-        if touched[i]:
-            cols, _, eff = twists[j]
+        if C is not None and i in touched:
+            Ci = C[:, i] + Cm[:, touched[i]]
+        elif C is not None:
             Ci = np.ascontiguousarray(C[:, i])
-            J[:, :, _columns(cols)] = (Ci.reshape(-1, 6) @ eff).reshape(N, 6, -1)
+        elif i in touched:
+            Ci = np.ascontiguousarray(Cm[:, touched[i]])
+        else:
+            continue
+        cols, _, eff = twists[j]
+        J[:, :, _columns(cols)] = (Ci.reshape(-1, 6) @ eff).reshape(N, 6, -1)
     return Rm, pm, J
 
 
@@ -281,13 +291,20 @@ def sensitivities_batch(
             breaks,
         )
     bk = bk if bk is not None else mech.kinematics_batch(qs)
-    path = _world_path if all(c.components[-1] < 3 for c in mech.closures) else _local_path
     N = bk.q.shape[0]
-    parts = [
-        path(mech, params, slice_kinematics(bk, slice(s, s + CHUNK)), values, plan)
-        for s in range(0, N, CHUNK)
-    ]
-    Rm, pm, J = (np.concatenate([p[i] for p in parts]) for i in range(3))
+    if any(c.components[-1] >= 3 for c in mech.closures):
+        parts = [
+            _local_path(mech, params, slice_kinematics(bk, slice(s, s + CHUNK)), values, plan)
+            for s in range(0, N, CHUNK)
+        ]
+        Rm, pm, J = (np.concatenate([p[i] for p in parts]) for i in range(3))
+        return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
+    Rm, pm, J = np.empty((N, 3, 3)), np.empty((N, 3)), np.zeros((N, 6, n))
+    for s in range(0, N, CHUNK):
+        rows = slice(s, s + CHUNK)
+        Rm[rows], pm[rows], _ = _world_path(
+            mech, params, slice_kinematics(bk, rows), values, plan, J[rows]
+        )
     return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
 
 
