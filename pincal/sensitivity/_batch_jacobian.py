@@ -96,26 +96,31 @@ def _mmc(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 
 def _origins(
-    mech: Mechanism, bk: BatchKinematics, plan: _Plan, names: list[str]
-) -> tuple[np.ndarray, np.ndarray]:
-    """World placements (N, J, 3, 3), (N, J, 3) of the parameterised joints' origins."""
+    mech: Mechanism, bk: BatchKinematics, plan: _Plan
+) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Parameterised joints (fixed ones first) and their origins' world placements.
+
+    Returns:
+        The J joint names, rotations (N, J, 3, 3) and positions (N, J, 3) [m].
+    """
     bm, model = mech.batch_model, mech.model
+    fixed = [j for j, o in plan.origins.items() if o[0] >= 0]
+    moving = [j for j, o in plan.origins.items() if o[0] < 0]
     N = bk.q.shape[0]
-    Ro, po = np.empty((N, len(names), 3, 3)), np.empty((N, len(names), 3))
-    fixed = [i for i, j in enumerate(names) if plan.origins[j][0] >= 0]
+    Rs, ps = [np.empty((N, 0, 3, 3))], [np.empty((N, 0, 3))]
     if fixed:
-        fids = np.array([plan.origins[names[i]][0] for i in fixed])
-        Ro[:, fixed], po[:, fixed] = bm.frame_placements(bk, fids)
-    moving = [i for i, j in enumerate(names) if plan.origins[j][0] < 0]
+        R, p = bm.frame_placements(bk, np.array([plan.origins[j][0] for j in fixed]))
+        Rs.append(R)
+        ps.append(p)
     if moving:
-        jids = [plan.origins[names[i]][1] for i in moving]
-        parents = np.array([plan.origins[names[i]][2] for i in moving])
+        jids = [plan.origins[j][1] for j in moving]
+        parents = np.array([plan.origins[j][2] for j in moving])
         MR = np.array([model.jointPlacements[j].rotation for j in jids])
         Mp = np.array([model.jointPlacements[j].translation for j in jids])
         Rp = bk.rotations[:, parents]
-        Ro[:, moving] = Rp @ MR
-        po[:, moving] = bk.translations[:, parents] + mv(Rp, Mp)
-    return Ro, po
+        Rs.append(Rp @ MR)
+        ps.append(bk.translations[:, parents] + mv(Rp, Mp))
+    return fixed + moving, np.concatenate(Rs, axis=1), np.concatenate(ps, axis=1)
 
 
 def _columns(cols: np.ndarray) -> slice | np.ndarray:
@@ -213,8 +218,7 @@ def _world_path(
     not n).
     """
     N, n = bk.q.shape[0], len(params)
-    names = list(plan.origins)
-    Ro, po = _origins(mech, bk, plan, names)
+    names, Ro, po = _origins(mech, bk, plan)
     key = [mech.measured_frame, *(f for c in mech.closures for f in (c.frame_a, c.frame_b))]
     frames = list(dict.fromkeys(key))
     Rs, ps = mech.batch_model.frame_placements(bk, np.array([mech.frame_id(f) for f in frames]))
