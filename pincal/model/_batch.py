@@ -112,13 +112,13 @@ class BatchKinematics:
 
 def concat_kinematics(parts: list[BatchKinematics]) -> BatchKinematics:
     """The kinematics of consecutive chunks of poses as one :class:`BatchKinematics`."""
-    cj = [p.closure_jacobian for p in parts]
+    cj = [p.closure_jacobian for p in parts if p.closure_jacobian is not None]
     return BatchKinematics(
         np.concatenate([p.q for p in parts]),
         np.concatenate([p.rotations for p in parts]),
         np.concatenate([p.translations for p in parts]),
         np.concatenate([p.jacobian for p in parts]),
-        None if any(c is None for c in cj) else np.concatenate(cj),  # type: ignore[misc]
+        np.concatenate(cj) if len(cj) == len(parts) else None,
     )
 
 
@@ -209,13 +209,17 @@ class BatchModel:
         return mm(Rp, R0), pp + mv(Rp, p0)
 
     def frame_placements(
-        self, bk: BatchKinematics, fids: np.ndarray, rotations: bool = True
-    ) -> tuple[np.ndarray | None, np.ndarray]:
-        """World rotations (N, G, 3, 3) (None unless asked) and positions (N, G, 3) of frames."""
+        self, bk: BatchKinematics, fids: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """World rotations (N, G, 3, 3) and positions (N, G, 3) of frames ``fids`` (G,)."""
         parents = self._frame_parent[fids]
         Rp = bk.rotations[:, parents]
-        p = bk.translations[:, parents] + mv(Rp, self._frame_p[fids])
-        return (Rp @ self._frame_R[fids] if rotations else None), p
+        return Rp @ self._frame_R[fids], bk.translations[:, parents] + mv(Rp, self._frame_p[fids])
+
+    def frame_positions(self, bk: BatchKinematics, fids: np.ndarray) -> np.ndarray:
+        """World positions (N, G, 3) of frames ``fids`` (G,) [m]."""
+        parents = self._frame_parent[fids]
+        return bk.translations[:, parents] + mv(bk.rotations[:, parents], self._frame_p[fids])
 
     def support_of_frame(self, fid: int) -> np.ndarray:
         """(nv,) True for the tangent dofs that move frame ``fid`` (its supporting joints)."""

@@ -166,7 +166,7 @@ class BatchTracking(BranchTracking):
             rows = slice(row, row + c.size)
             row += c.size
             if c.is_point:  # world point velocities: v_o + ω × p
-                pa = bm.frame_placements(bk, np.array([a, b]), rotations=False)[1]
+                pa = bm.frame_positions(bk, np.array([a, b]))
                 pa, pb = pa[:, 0], pa[:, 1]
                 r[:, rows] = pb - pa
                 if J is not None:

@@ -188,8 +188,9 @@ def _closure_maps(
         contrib[..., 3:] = np.cross(d[:, :, None], Yt) @ RoP
         if np.unique(jP).size == jP.size:
             C[:, jP] += contrib
-        else:
-            np.add.at(C, (slice(None), jP), contrib)
+        else:  # a joint moving several closures (a base joint, say)
+            for k, i in enumerate(jP):
+                C[:, i] += contrib[:, k]
     for c, r0, i, sa_, sb_ in pairs:
         if c.is_point or sa_ == sb_:
             continue  # moving both frames of a positional closure expressed in a: no change
@@ -298,14 +299,14 @@ def sensitivities_batch(
     N = bk.q.shape[0]
     if any(c.components[-1] >= 3 for c in mech.closures):
         parts = [
-            _local_path(mech, params, slice_kinematics(bk, slice(s, s + CHUNK)), values, plan)
-            for s in range(0, N, CHUNK)
+            _local_path(mech, params, slice_kinematics(bk, slice(k, k + CHUNK)), values, plan)
+            for k in range(0, N, CHUNK)
         ]
         Rm, pm, J = (np.concatenate([p[i] for p in parts]) for i in range(3))
         return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
     Rm, pm, J = np.empty((N, 3, 3)), np.empty((N, 3)), np.zeros((N, 6, n))
-    for s in range(0, N, CHUNK):
-        rows = slice(s, s + CHUNK)
+    for start in range(0, N, CHUNK):
+        rows = slice(start, start + CHUNK)
         Rm[rows], pm[rows], _ = _world_path(
             mech, params, slice_kinematics(bk, rows), values, plan, J[rows]
         )
