@@ -81,11 +81,14 @@ def _fit_set(
     if problem.mech.closures and not batch_applies(model.mechanism(problem.x0)):
         breaking = closure_breaking(problem.mech, params, problem.measurements.q_act, problem.x0)
     ident = analyse_jacobian(J0, params.names, breaks_closure=breaking)
-    sub = analyse_jacobian(
-        J0[:, candidates],
-        tuple(params.names[i] for i in candidates),
-        breaks_closure=breaking[candidates],
-    )
+    if np.array_equal(candidates, np.arange(len(params))):
+        sub = ident  # fitting every parameter: the same analysis
+    else:
+        sub = analyse_jacobian(
+            J0[:, candidates],
+            tuple(params.names[i] for i in candidates),
+            breaks_closure=breaking[candidates],
+        )
     n, n_eq = candidates.size, model.n_equations
     if sub.rank < n and sub.rank >= n_eq:
         rows = len(model.rows)
