@@ -13,10 +13,11 @@ Every operation is timed per pose (median of repeats) for
   (``framesForwardKinematics`` + ``computeFrameJacobian`` per pose).
 
 All processes run with one BLAS thread (``threadpool_limits(1)``; stated in the
-output). The machine may be shared: compare the ratios, which are measured in the
-same run, rather than absolute times. Also printed: identify time and peak memory for
-N = 1 000 … 10 000 poses (fresh subprocess each), ``pincal demo`` and the
-4 096-candidate Stewart pose selection.
+output) and every time is CPU time of the process (``time.process_time``), which other
+jobs on a shared machine disturb far less than wall-clock time; compare the ratios,
+which are measured in the same run, rather than absolute times. Also printed:
+identify time and peak memory for N = 1 000 … 10 000 poses (fresh subprocess each),
+``pincal demo`` and the 4 096-candidate Stewart pose selection.
 """
 
 from __future__ import annotations
@@ -44,11 +45,12 @@ PLAT = np.array([[0.15 * np.cos(t), 0.15 * np.sin(t), 0.0] for t in np.radians(P
 
 
 def median_time(fn, repeats: int) -> float:
+    """Median CPU time of ``fn()`` [s] (process time: robust on a shared machine)."""
     times = []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         fn()
-        times.append(time.perf_counter() - t0)
+        times.append(time.process_time() - t0)
     return statistics.median(times)
 
 
@@ -214,9 +216,9 @@ def identify_memory(m: int) -> dict:
         actual, q_m, pincal.NoiseModel(0.01, 0.02), np.random.default_rng(m + 1)
     )
     base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     r = pincal.identify(mech, p42, meas)
-    t = time.perf_counter() - t0
+    t = time.process_time() - t0
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return {"time": t, "iterations": r.iterations, "peak_mb": peak / 1024, "base_mb": base / 1024}
 
@@ -228,15 +230,15 @@ def design_and_demo() -> dict:
 
     mech = pincal.load_mechanism("stewart_6ups")
     params = pincal.parameters(mech, "stewart42")
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     cands = grid_candidates(mech, params, 4, in_workspace=False)
     sc = DesignScaling(rows="noise", position_std=1e-5, orientation_std=1e-5)
     exchange(sc.apply(cands.jacobians, cands.components).J, 18, "O1", rng=1)
-    t_sel = time.perf_counter() - t0
+    t_sel = time.process_time() - t0
     with tempfile.TemporaryDirectory() as tmp:
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         run_demo(DemoSettings(), Path(tmp) / "demo")
-        t_demo = time.perf_counter() - t0
+        t_demo = time.process_time() - t0
     return {"selection": t_sel, "candidates": int(cands.tried), "demo": t_demo}
 
 
@@ -292,8 +294,8 @@ def main() -> None:
     libs = ", ".join(blas)
     print(f"pin {pin.__version__}, numpy {np.__version__}; BLAS threads in every process: 1 "
           f"(threadpool_limits(1), OPENBLAS_NUM_THREADS=1; libraries: {libs})")  # fmt: skip
-    print(f"median of {args.repeats} repeats over {args.poses} random workspace poses; "
-          f"shared machine: compare the ratios (same run)\n")  # fmt: skip
+    print(f"CPU time (time.process_time), median of {args.repeats} repeats over {args.poses} "
+          f"random workspace poses; shared machine: compare the ratios (same run)\n")  # fmt: skip
     print("per pose; 'floor' = the floor measured in the same process right after; the")
     print("normalised 0.1/now ratio divides each version's time by its own floor (load drift)\n")
     head = f"{'operation':22s} {'now':>11s} {'floor':>10s} {'now/floor':>9s}"

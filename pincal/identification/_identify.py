@@ -28,6 +28,7 @@ from pincal.identification._weighting import Weighting
 from pincal.measure._measurements import Measurements
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
+from pincal.sensitivity._batch_jacobian import batch_applies
 from pincal.sensitivity._identifiability import Identifiability, analyse_jacobian
 from pincal.sensitivity._jacobian import closure_breaking
 
@@ -75,14 +76,19 @@ def _fit_set(
     params = problem.params
     candidates = problem.fit_indices
     breaking = np.zeros(len(params), dtype=bool)
-    if problem.mech.closures:
+    # square regular passive closures (the batched Jacobian's domain) break nothing: the
+    # start evaluation already solved every pose there, so no second pass is needed
+    if problem.mech.closures and not batch_applies(model.mechanism(problem.x0)):
         breaking = closure_breaking(problem.mech, params, problem.measurements.q_act, problem.x0)
     ident = analyse_jacobian(J0, params.names, breaks_closure=breaking)
-    sub = analyse_jacobian(
-        J0[:, candidates],
-        tuple(params.names[i] for i in candidates),
-        breaks_closure=breaking[candidates],
-    )
+    if np.array_equal(candidates, np.arange(len(params))):
+        sub = ident  # fitting every parameter: the same analysis
+    else:
+        sub = analyse_jacobian(
+            J0[:, candidates],
+            tuple(params.names[i] for i in candidates),
+            breaks_closure=breaking[candidates],
+        )
     n, n_eq = candidates.size, model.n_equations
     if sub.rank < n and sub.rank >= n_eq:
         rows = len(model.rows)

@@ -26,10 +26,10 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-import pinocchio as pin
 
 from pincal.errors import ClosureError, ConvergenceError, MeasurementError, ParameterError
 from pincal.measure._measurements import Measurements, NoiseModel
+from pincal.model._batch_ops import jlog3_batch, log3_batch
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._batch_jacobian import sensitivities_batch
@@ -227,9 +227,9 @@ class CalibrationProblem:
         D_rot = None
         if meas.rotations is not None:
             E = np.swapaxes(R, 1, 2) @ np.asarray(meas.rotations, dtype=float)
-            r[:, 3:] = [pin.log3(e) for e in E]
+            r[:, 3:] = log3_batch(E)
             if jacobian:
-                D_rot = np.array([pin.Jlog3(e) for e in E]) @ np.swapaxes(E, 1, 2)
+                D_rot = jlog3_batch(r[:, 3:]) @ np.swapaxes(E, 1, 2)
         r_raw = r[:, self.rows]
         w = 1.0 / self.sigma
         r_w = (r_raw * w).ravel()

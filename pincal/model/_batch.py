@@ -18,101 +18,31 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from pincal.model._batch_ops import (
+    cross_cols,
+    exp3_batch,
+    group_joints,
+    mm,
+    mv,
+    quat_to_matrix,
+    walk,
+)
+from pincal.model._batch_ops import sinc_terms as _sinc_terms
+from pincal.model._batch_ops import skew as _skew
+
 __all__ = [
     "BatchKinematics",
     "BatchModel",
+    "concat_kinematics",
     "cross_cols",
     "exp3_batch",
     "mm",
     "mv",
     "quat_to_matrix",
+    "slice_kinematics",
 ]
 
 _AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
-
-
-def mm(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Stacked products ``A @ B`` of (…, 3, 3) by (…, 3, k) as three broadcast terms.
-
-    numpy's stacked matmul loops over 3 × 3 matrices one by one; three whole-array
-    multiply-adds are an order of magnitude faster (same summation order).
-    """
-    return (
-        A[..., :, 0:1] * B[..., 0:1, :]
-        + A[..., :, 1:2] * B[..., 1:2, :]
-        + (A[..., :, 2:3] * B[..., 2:3, :])
-    )
-
-
-def mv(A: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Stacked products ``A @ v`` of (…, 3, 3) by vectors (…, 3)."""
-    return A[..., :, 0] * v[..., 0:1] + A[..., :, 1] * v[..., 1:2] + A[..., :, 2] * v[..., 2:3]
-
-
-def cross_cols(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Column-wise cross products ``a × b`` of (N, 3, k) arrays (broadcasting)."""
-    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
-    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    """(…, 3, 3) skew matrices of vectors (…, 3)."""
-    out = np.zeros((*v.shape[:-1], 3, 3))
-    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
-    return out
-
-
-def _sinc_terms(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³ with Taylor series near 0 (arrays (N,))."""
-    small = theta < 1e-4
-    t = np.where(small, 1.0, theta)
-    t2 = theta * theta
-    a = np.where(small, 1.0 - t2 / 6.0, np.sin(t) / t)
-    b = np.where(small, 0.5 - t2 / 24.0, (1.0 - np.cos(t)) / (t * t))
-    c = np.where(small, 1.0 / 6.0 - t2 / 120.0, (t - np.sin(t)) / (t * t * t))
-    return a, b, c
-
-
-def exp3_batch(w: np.ndarray) -> np.ndarray:
-    """Rotation matrices (N, 3, 3) of rotation vectors (N, 3) [rad] (Rodrigues)."""
-    theta = np.linalg.norm(w, axis=-1)
-    a, b, _ = _sinc_terms(theta)
-    K = _skew(w)
-    return np.eye(3) + a[:, None, None] * K + b[:, None, None] * (K @ K)
-
-
-def quat_to_matrix(quat: np.ndarray) -> np.ndarray:
-    """Rotation matrices (N, 3, 3) of unit quaternions (N, 4) stored x, y, z, w."""
-    x, y, z, w = quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3]
-    tx, ty, tz = 2 * x, 2 * y, 2 * z
-    twx, twy, twz = tx * w, ty * w, tz * w
-    txx, txy, txz = tx * x, ty * x, tz * x
-    tyy, tyz, tzz = ty * y, tz * y, tz * z
-    R = np.empty((quat.shape[0], 3, 3))
-    R[:, 0, 0], R[:, 0, 1], R[:, 0, 2] = 1 - (tyy + tzz), txy - twz, txz + twy
-    R[:, 1, 0], R[:, 1, 1], R[:, 1, 2] = txy + twz, 1 - (txx + tzz), tyz - twx
-    R[:, 2, 0], R[:, 2, 1], R[:, 2, 2] = txz - twy, tyz + twx, 1 - (txx + tyy)
-    return R
-
-
-def _axis_rotation(axis: np.ndarray, c: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Rotations (N, 3, 3) about a unit axis (3,) of angles given by cos, sin (N,)."""
-    N = c.shape[0]
-    nz = np.nonzero(axis)[0]
-    if nz.size == 1 and axis[nz[0]] == 1.0:  # aligned axis: exact cos/sin entries
-        k = int(nz[0])
-        a, b = (k + 1) % 3, (k + 2) % 3
-        R = np.zeros((N, 3, 3))
-        R[:, k, k] = 1.0
-        R[:, a, a], R[:, b, b] = c, c
-        R[:, a, b], R[:, b, a] = -s, s
-        return R
-    t = 1.0 - c
-    R = (t[:, None, None] * np.outer(axis, axis)) + c[:, None, None] * np.eye(3)
-    return R + s[:, None, None] * _skew(axis)
 
 
 def _quat_mul_exp(quat: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -169,12 +99,39 @@ class BatchKinematics:
         rotations: (N, njoints, 3, 3) joint world rotations (``oMi``).
         translations: (N, njoints, 3) joint world positions [m].
         jacobian: (N, 6, nv) WORLD joint Jacobian ``[v_o; ω]`` (``data.J`` of Pinocchio).
+        closure_jacobian: (N, n_closure_rows, k) closure Jacobian on the mechanism's k
+            free dofs at ``q``, when the loop-closing solve computed it (else None).
     """
 
     q: np.ndarray
     rotations: np.ndarray
     translations: np.ndarray
     jacobian: np.ndarray
+    closure_jacobian: np.ndarray | None = None
+
+
+def concat_kinematics(parts: list[BatchKinematics]) -> BatchKinematics:
+    """The kinematics of consecutive chunks of poses as one :class:`BatchKinematics`."""
+    cj = [p.closure_jacobian for p in parts if p.closure_jacobian is not None]
+    return BatchKinematics(
+        np.concatenate([p.q for p in parts]),
+        np.concatenate([p.rotations for p in parts]),
+        np.concatenate([p.translations for p in parts]),
+        np.concatenate([p.jacobian for p in parts]),
+        np.concatenate(cj) if len(cj) == len(parts) else None,
+    )
+
+
+def slice_kinematics(bk: BatchKinematics, rows: slice) -> BatchKinematics:
+    """The kinematics of poses ``rows`` (views, not copies)."""
+    cj = bk.closure_jacobian
+    return BatchKinematics(
+        bk.q[rows],
+        bk.rotations[rows],
+        bk.translations[rows],
+        bk.jacobian[rows],
+        None if cj is None else cj[rows],
+    )
 
 
 class BatchModel:
@@ -209,10 +166,29 @@ class BatchModel:
         #: False when the model has a joint type this module does not implement
         self.supported = ok
         self._joints = tuple(joints) if ok else ()
+        self._groups = (
+            group_joints(
+                [jt.kind for jt in joints],
+                [jt.parent for jt in joints],
+                [jt.iq for jt in joints],
+                [jt.iv for jt in joints],
+                np.array([jt.axis for jt in joints]).reshape(-1, 3),
+                np.array([jt.R0 for jt in joints]).reshape(-1, 3, 3),
+                np.array([jt.p0 for jt in joints]).reshape(-1, 3),
+            )
+            if ok
+            else ()
+        )
+        linear = [jt for jt in self._joints if jt.kind in ("R", "P")]
+        self._linear_q = np.array([jt.iq for jt in linear], dtype=int)
+        self._linear_v = np.array([jt.iv for jt in linear], dtype=int)
         self._frames = [
             (int(f.parentJoint), f.placement.rotation.copy(), f.placement.translation.copy())
             for f in model.frames
         ]
+        self._frame_parent = np.array([f[0] for f in self._frames], dtype=int)
+        self._frame_R = np.array([f[1] for f in self._frames]).reshape(-1, 3, 3)
+        self._frame_p = np.array([f[2] for f in self._frames]).reshape(-1, 3)
         support = np.zeros((model.njoints, model.nv), dtype=bool)
         for j in range(1, model.njoints):
             support[j] = support[model.parents[j]]
@@ -223,47 +199,7 @@ class BatchModel:
     def kinematics(self, Q: np.ndarray) -> BatchKinematics:
         """Joint placements and the WORLD joint Jacobian of configurations ``Q`` (N, nq)."""
         Q = np.asarray(Q, dtype=float)
-        N = Q.shape[0]
-        oR = np.empty((N, self.njoints, 3, 3))
-        op = np.empty((N, self.njoints, 3))
-        oR[:, 0], op[:, 0] = np.eye(3), 0.0
-        Jw = np.zeros((N, 6, self.nv))
-        for j, jt in enumerate(self._joints, start=1):
-            # Pinocchio's order: liMi = placement · M_joint(q), oMi = oM_parent · liMi
-            Rp, pp = oR[:, jt.parent], op[:, jt.parent]
-            if jt.kind in ("R", "RU"):
-                if jt.kind == "R":
-                    th = Q[:, jt.iq]
-                    s, c = np.sin(th), np.cos(th)
-                else:
-                    c, s = Q[:, jt.iq], Q[:, jt.iq + 1]
-                liR = mm(jt.R0, _axis_rotation(jt.axis, c, s))
-                lip = np.broadcast_to(jt.p0, (N, 3))
-            elif jt.kind == "P":
-                liR = np.broadcast_to(jt.R0, (N, 3, 3))
-                lip = jt.p0 + mv(jt.R0, Q[:, jt.iq, None] * jt.axis)
-            else:
-                i4 = jt.iq + (3 if jt.kind == "F" else 0)
-                liR = mm(jt.R0, quat_to_matrix(Q[:, i4 : i4 + 4]))
-                lip = np.broadcast_to(jt.p0, (N, 3))
-                if jt.kind == "F":
-                    lip = jt.p0 + mv(jt.R0, Q[:, jt.iq : jt.iq + 3])
-            Ri = mm(Rp, liR)
-            pi = pp + mv(Rp, lip)
-            oR[:, j], op[:, j] = Ri, pi
-            if jt.kind in ("R", "RU"):
-                w = mv(Ri, jt.axis)
-                Jw[:, 3:, jt.iv] = w
-                Jw[:, :3, jt.iv] = cross_cols(pi[:, :, None], w[:, :, None])[..., 0]
-            elif jt.kind == "P":
-                Jw[:, :3, jt.iv] = mv(Ri, jt.axis)
-            else:
-                v0 = jt.iv
-                if jt.kind == "F":  # local linear velocity columns
-                    Jw[:, :3, v0 : v0 + 3] = Ri
-                    v0 += 3
-                Jw[:, 3:, v0 : v0 + 3] = Ri
-                Jw[:, :3, v0 : v0 + 3] = cross_cols(pi[:, :, None], Ri)
+        oR, op, Jw = walk(self._groups, Q, self.njoints, self.nv)
         return BatchKinematics(Q, oR, op, Jw)
 
     def frame_placement(self, bk: BatchKinematics, fid: int) -> tuple[np.ndarray, np.ndarray]:
@@ -271,6 +207,19 @@ class BatchModel:
         parent, R0, p0 = self._frames[fid]
         Rp, pp = bk.rotations[:, parent], bk.translations[:, parent]
         return mm(Rp, R0), pp + mv(Rp, p0)
+
+    def frame_placements(
+        self, bk: BatchKinematics, fids: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """World rotations (N, G, 3, 3) and positions (N, G, 3) of frames ``fids`` (G,)."""
+        parents = self._frame_parent[fids]
+        Rp = bk.rotations[:, parents]
+        return Rp @ self._frame_R[fids], bk.translations[:, parents] + mv(Rp, self._frame_p[fids])
+
+    def frame_positions(self, bk: BatchKinematics, fids: np.ndarray) -> np.ndarray:
+        """World positions (N, G, 3) of frames ``fids`` (G,) [m]."""
+        parents = self._frame_parent[fids]
+        return bk.translations[:, parents] + mv(bk.rotations[:, parents], self._frame_p[fids])
 
     def support_of_frame(self, fid: int) -> np.ndarray:
         """(nv,) True for the tangent dofs that move frame ``fid`` (its supporting joints)."""
@@ -296,11 +245,12 @@ class BatchModel:
     def integrate(self, Q: np.ndarray, DV: np.ndarray) -> np.ndarray:
         """``pin.integrate`` of configurations (N, nq) by tangent steps (N, nv)."""
         out = np.array(Q, dtype=float)
+        out[:, self._linear_q] += DV[:, self._linear_v]
         for jt in self._joints:
             iq, iv = jt.iq, jt.iv
             if jt.kind in ("R", "P"):
-                out[:, iq] += DV[:, iv]
-            elif jt.kind == "RU":
+                continue
+            if jt.kind == "RU":
                 c, s = Q[:, iq], Q[:, iq + 1]
                 cd, sd = np.cos(DV[:, iv]), np.sin(DV[:, iv])
                 cn, sn = c * cd - s * sd, s * cd + c * sd

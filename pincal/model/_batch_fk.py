@@ -20,13 +20,22 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ShapeError
-from pincal.model._batch import BatchKinematics, BatchModel, cross_cols, mm, mv
+from pincal.model._batch import (
+    BatchKinematics,
+    BatchModel,
+    concat_kinematics,
+    cross_cols,
+    mm,
+    mv,
+)
 from pincal.model._branch import BranchTracking
 from pincal.model._closures import Closure
 
 __all__ = ["BatchTracking", "closure_jacobian_batch", "closure_residual_batch"]
 
 _MAX_BATCH_ITERATIONS = 30
+#: poses per chunk of the batched solves (temporaries of a chunk stay in the L2 cache)
+CHUNK = 256
 
 
 def closure_residual_batch(
@@ -123,43 +132,76 @@ class BatchTracking(BranchTracking):
 
     @overload
     def closure_terms_batch(
-        self, bk: BatchKinematics, jacobian: Literal[True] = ...
+        self,
+        bk: BatchKinematics,
+        jacobian: Literal[True] = ...,
+        columns: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]: ...
 
     @overload
     def closure_terms_batch(
-        self, bk: BatchKinematics, jacobian: bool
+        self, bk: BatchKinematics, jacobian: bool, columns: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray | None]: ...
 
     def closure_terms_batch(
-        self, bk: BatchKinematics, jacobian: bool = True
+        self, bk: BatchKinematics, jacobian: bool = True, columns: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray | None]:
-        """Closure residuals (N, n_closure_rows) and Jacobians (N, n_closure_rows, nv)."""
+        """Closure residuals (N, n_closure_rows) and Jacobians (N, n_closure_rows, nv).
+
+        Args:
+            bk: the batched kinematics.
+            jacobian: also compute the Jacobians.
+            columns: tangent dofs whose Jacobian columns to return (default all nv).
+        """
         bm = self.batch_model
         N = bk.q.shape[0]
+        cols = np.arange(self.model.nv) if columns is None else np.asarray(columns)
         if not self.closures:
-            return np.zeros((N, 0)), (np.zeros((N, 0, self.model.nv)) if jacobian else None)
-        res, jacs = [], []
+            return np.zeros((N, 0)), (np.zeros((N, 0, cols.size)) if jacobian else None)
+        sizes = [c.size for c in self.closures]
+        r = np.empty((N, sum(sizes)))
+        J = np.zeros((N, sum(sizes), cols.size)) if jacobian else None
+        row = 0
         for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
+            rows = slice(row, row + c.size)
+            row += c.size
+            if c.is_point:  # world point velocities: v_o + ω × p
+                pa = bm.frame_positions(bk, np.array([a, b]))
+                pa, pb = pa[:, 0], pa[:, 1]
+                r[:, rows] = pb - pa
+                if J is not None:
+                    self._point_closure_jacobian(bk, a, b, pa, pb, cols, J[:, rows])
+                continue
             Ra, pa = bm.frame_placement(bk, a)
             Rb, pb = bm.frame_placement(bk, b)
-            res.append(closure_residual_batch(c, Ra, pa, Rb, pb))
-            if jacobian and c.is_point:  # world point velocities: v_o + ω × p
-                jacs.append(self._point_closure_jacobian(bk, a, b, pa, pb))
-            elif jacobian:
+            r[:, rows] = closure_residual_batch(c, Ra, pa, Rb, pb)
+            if J is not None:
                 Ja, Jb = bm.frame_jacobian(bk, a), bm.frame_jacobian(bk, b)
-                jacs.append(closure_jacobian_batch(c, Ra, pa, Rb, pb, Ja, Jb))
-        r = np.concatenate(res, axis=1)
-        return r, (np.concatenate(jacs, axis=1) if jacobian else None)
+                J[:, rows] = closure_jacobian_batch(c, Ra, pa, Rb, pb, Ja, Jb)[:, :, cols]
+        return r, J
 
     def _point_closure_jacobian(
-        self, bk: BatchKinematics, a: int, b: int, pa: np.ndarray, pb: np.ndarray
-    ) -> np.ndarray:
-        """(N, 3, nv) derivative of ``p_b − p_a`` (world axes) from the WORLD Jacobian."""
-        ma, mb = self.batch_model.support_of_frame(a), self.batch_model.support_of_frame(b)
-        Jv, Jw = bk.jacobian[:, :3], bk.jacobian[:, 3:]
+        self,
+        bk: BatchKinematics,
+        a: int,
+        b: int,
+        pa: np.ndarray,
+        pb: np.ndarray,
+        cols: np.ndarray,
+        out: np.ndarray,
+    ) -> None:
+        """Write the derivative of ``p_b − p_a`` (world axes) into ``out`` (N, 3, len(cols)).
+
+        From the WORLD joint Jacobian, on the columns of the dofs that support frame a or
+        b (the others stay 0): a point p on a moving body has velocity ``v_o + ω × p``.
+        """
+        bm = self.batch_model
+        ma, mb = bm.support_of_frame(a)[cols], bm.support_of_frame(b)[cols]
+        sub = np.nonzero(ma | mb)[0]
+        ma, mb, idx = ma[sub], mb[sub], cols[sub]
+        Jv, Jw = bk.jacobian[:, :3, idx], bk.jacobian[:, 3:, idx]
         P = pb[:, :, None] * mb - pa[:, :, None] * ma
-        return Jv * (mb.astype(float) - ma) + cross_cols(Jw, P)
+        out[:, :, sub] = Jv * (mb.astype(float) - ma) + cross_cols(Jw, P)
 
     def _actuators_batch(self, Q: np.ndarray, A: np.ndarray) -> np.ndarray:
         out = np.array(Q, dtype=float)
@@ -176,8 +218,22 @@ class BatchTracking(BranchTracking):
         """Batched Newton: configurations (N, nq), accepted mask (N,), their kinematics.
 
         Rows not accepted (no decrease, no convergence, other branch, possibly
-        singular) hold garbage and must be redone pose by pose.
+        singular) hold garbage and must be redone pose by pose. Solved in chunks of
+        :data:`CHUNK` poses (temporaries that stay in cache: cost linear in N).
         """
+        if A.shape[0] <= CHUNK:
+            return self._solve_chunk(A, Q0)
+        parts = [
+            self._solve_chunk(A[s : s + CHUNK], Q0[s : s + CHUNK])
+            for s in range(0, A.shape[0], CHUNK)
+        ]
+        Q = np.concatenate([p[0] for p in parts])
+        return Q, np.concatenate([p[1] for p in parts]), concat_kinematics([p[2] for p in parts])
+
+    def _solve_chunk(
+        self, A: np.ndarray, Q0: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, BatchKinematics]:
+        """:meth:`_solve_batch` of one chunk of poses."""
         bm, opt, free = self.batch_model, self.options, self._free_v
         N, k = A.shape[0], free.size
         Q = self._actuators_batch(Q0, A)
@@ -193,8 +249,7 @@ class BatchTracking(BranchTracking):
             if ia.size == 0:
                 break
             bk = bm.kinematics(Q[ia])
-            r, J = self.closure_terms_batch(bk)
-            Jf = J[:, :, free]
+            r, Jf = self.closure_terms_batch(bk, columns=free)
             rmax = np.max(np.abs(r), axis=1)
             norm = np.linalg.norm(r, axis=1)
             conv = rmax <= opt.tol
@@ -235,7 +290,7 @@ class BatchTracking(BranchTracking):
             # cond₂ ≤ k·cond₁: rows that might exceed the limit get the exact check
             risky = ~np.isfinite(cond1) | (k * cond1 > opt.max_condition)
             ok[io[(signs != self.home_branch) | risky]] = False
-        return Q, ok, BatchKinematics(Q, out_R, out_p, out_J)
+        return Q, ok, BatchKinematics(Q, out_R, out_p, out_J, Jf_done)
 
     def try_configurations_batch(
         self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
@@ -300,4 +355,6 @@ class BatchTracking(BranchTracking):
             fix = self.batch_model.kinematics(Q[redo])
             bk.rotations[redo], bk.translations[redo] = fix.rotations, fix.translations
             bk.jacobian[redo] = fix.jacobian
+            if bk.closure_jacobian is not None:
+                bk.closure_jacobian[redo] = self.closure_terms_batch(fix, columns=self._free_v)[1]
         return Q, bk

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pincal.model._batch import BatchKinematics, cross_cols, mm, mv
-from pincal.model._batch_fk import closure_jacobian_batch
+from pincal.model._batch import BatchKinematics, cross_cols, mm, mv, slice_kinematics
+from pincal.model._batch_fk import CHUNK, closure_jacobian_batch
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._jacobian import _Plan, _plan, pose_sensitivity
@@ -89,6 +89,176 @@ def _param_twists(
     return placements, out
 
 
+def _mmc(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``A @ B`` of stacked matrices A (…, r, m) by one constant matrix B (m, k) (one GEMM)."""
+    A = np.ascontiguousarray(A)
+    return (A.reshape(-1, A.shape[-1]) @ B).reshape(*A.shape[:-1], B.shape[1])
+
+
+def _origins(
+    mech: Mechanism, bk: BatchKinematics, plan: _Plan
+) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Parameterised joints (fixed ones first) and their origins' world placements.
+
+    Returns:
+        The J joint names, rotations (N, J, 3, 3) and positions (N, J, 3) [m].
+    """
+    bm, model = mech.batch_model, mech.model
+    fixed = [j for j, o in plan.origins.items() if o[0] >= 0]
+    moving = [j for j, o in plan.origins.items() if o[0] < 0]
+    N = bk.q.shape[0]
+    Rs, ps = [np.empty((N, 0, 3, 3))], [np.empty((N, 0, 3))]
+    if fixed:
+        R, p = bm.frame_placements(bk, np.array([plan.origins[j][0] for j in fixed]))
+        Rs.append(R)
+        ps.append(p)
+    if moving:
+        jids = [plan.origins[j][1] for j in moving]
+        parents = np.array([plan.origins[j][2] for j in moving])
+        MR = np.array([model.jointPlacements[j].rotation for j in jids])
+        Mp = np.array([model.jointPlacements[j].translation for j in jids])
+        Rp = bk.rotations[:, parents]
+        Rs.append(Rp @ MR)
+        ps.append(bk.translations[:, parents] + mv(Rp, Mp))
+    return fixed + moving, np.concatenate(Rs, axis=1), np.concatenate(ps, axis=1)
+
+
+def _columns(cols: np.ndarray) -> slice | np.ndarray:
+    """A slice for contiguous parameter columns (faster to write), else the indices."""
+    if cols.size and np.all(np.diff(cols) == 1):
+        return slice(int(cols[0]), int(cols[-1]) + 1)
+    return cols
+
+
+def _cross_rows(d: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """``skew(d) @ R`` of stacked vectors d (…, 3) and matrices R (…, 3, 3)."""
+    r0, r1, r2 = R[..., 0, :], R[..., 1, :], R[..., 2, :]
+    d0, d1, d2 = d[..., 0:1], d[..., 1:2], d[..., 2:3]
+    return np.stack([d1 * r2 - d2 * r1, d2 * r0 - d0 * r2, d0 * r1 - d1 * r0], axis=-2)
+
+
+def _measured_free_jacobian(
+    mech: Mechanism, bk: BatchKinematics, Rm: np.ndarray, pm: np.ndarray
+) -> np.ndarray:
+    """(N, 6, k) derivative of ``[p_world; rotation (local)]`` w.r.t. the free dofs."""
+    free = mech.free_dofs
+    sup = mech.batch_model.support_of_frame(mech.frame_id(mech.measured_frame))[free]
+    Jv, Jw = bk.jacobian[:, :3, free], bk.jacobian[:, 3:, free]
+    v = Jv + cross_cols(Jw, pm[:, :, None])
+    return np.concatenate([v, np.swapaxes(Rm, 1, 2) @ Jw], axis=1) * sup
+
+
+def _closure_maps(
+    mech: Mechanism,
+    plan: _Plan,
+    names: list[str],
+    Ro: np.ndarray,
+    po: np.ndarray,
+    place: dict[str, tuple[np.ndarray, np.ndarray]],
+    Y: np.ndarray,
+    C: np.ndarray,
+) -> None:
+    """Add ``−Yᵀ ∂c/∂(origin twist)`` of every closure into the joint maps C (N, J, 6, 6).
+
+    A local twist of origin j moves a world point x by ``Ro v + (po − x) × Ro ω``; a point
+    closure's residual ``p_b − p_a`` by ``[σ Ro, skew(d) Ro]`` with σ = [j moves b] −
+    [j moves a] and d = [j moves b](po − p_b) − [j moves a](po − p_a). All (point
+    closure, joint) pairs are stacked into one set of array operations.
+    """
+    pairs, row = [], 0
+    for c in mech.closures:
+        ma, mb = set(plan.moves[c.frame_a]), set(plan.moves[c.frame_b])
+        for i, j in enumerate(names):
+            if j in ma or j in mb:
+                pairs.append((c, row, i, float(j in ma), float(j in mb)))
+        row += c.size
+    point = [t for t in pairs if t[0].is_point]
+    if point:
+        jP = np.array([t[2] for t in point])
+        sa, sb = np.array([t[3] for t in point]), np.array([t[4] for t in point])
+        pa = np.stack([place[t[0].frame_a][1] for t in point], axis=1)
+        pb = np.stack([place[t[0].frame_b][1] for t in point], axis=1)
+        RoP, poP = Ro[:, jP], po[:, jP]
+        d = sb[:, None] * (poP - pb) - sa[:, None] * (poP - pa)
+        rows = np.array([t[1] for t in point])[:, None] + np.arange(3)
+        Yt = np.swapaxes(Y[:, rows], -1, -2)  # (N, P, 6, 3)
+        # −Yᵀ[σ Ro, skew(d) Ro] = −[σ Yᵀ Ro, (Yᵀ skew(d)) Ro], rows of Yᵀ skew(d) = y × d
+        contrib = np.empty((*Yt.shape[:2], 6, 6))
+        contrib[..., :3] = (sa - sb)[:, None, None] * (Yt @ RoP)
+        contrib[..., 3:] = np.cross(d[:, :, None], Yt) @ RoP
+        if np.unique(jP).size == jP.size:
+            C[:, jP] += contrib
+        else:  # a joint moving several closures (a base joint, say)
+            for k, i in enumerate(jP):
+                C[:, i] += contrib[:, k]
+    for c, r0, i, sa_, sb_ in pairs:
+        if c.is_point or sa_ == sb_:
+            continue  # moving both frames of a positional closure expressed in a: no change
+        Ra, pb = place[c.frame_a][0], place[c.frame_b][1]
+        pmap = np.concatenate([Ro[:, i], _cross_rows(po[:, i] - pb, Ro[:, i])], axis=-1)
+        blk = (np.swapaxes(Ra, 1, 2) @ pmap)[:, list(c.components)] * (sb_ - sa_)
+        C[:, i] -= np.swapaxes(Y[:, r0 : r0 + c.size], 1, 2) @ blk
+
+
+def _world_path(
+    mech: Mechanism,
+    params: ParameterSet,
+    bk: BatchKinematics,
+    values: np.ndarray,
+    plan: _Plan,
+    out: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Measured rotation, position and Jacobian (N, 6, n) when every closure is positional.
+
+    The Jacobian is written into ``out`` (N, 6, n) when given. Per parameterised joint
+    j, the Jacobian columns are ``C_j · eff_j``: C_j (N, 6, 6) maps a local twist of j's
+    origin to the measured quantity (directly, and through the passive joints that
+    re-close the loops), eff_j (6, c) is the joint's constant twists per parameter
+    (one GEMM). The passive part ``Jm_u · dq_u/dp =
+    −(Jm_u Jf⁻¹) ∂c/∂p`` uses one adjoint solve ``Y = Jf⁻ᵀ Jm_uᵀ`` (6 right-hand sides,
+    not n).
+    """
+    N, n = bk.q.shape[0], len(params)
+    names, Ro, po = _origins(mech, bk, plan)
+    key = [mech.measured_frame, *(f for c in mech.closures for f in (c.frame_a, c.frame_b))]
+    frames = list(dict.fromkeys(key))
+    Rs, ps = mech.batch_model.frame_placements(bk, np.array([mech.frame_id(f) for f in frames]))
+    place = {f: (Rs[:, i], ps[:, i]) for i, f in enumerate(frames)}
+    Rm, pm = place[mech.measured_frame]
+    C: np.ndarray | None = None  # closure part of the joint maps
+    moves = set(plan.moves[mech.measured_frame])
+    mj = [i for i, j in enumerate(names) if j in moves]
+    touched = {i: k for k, i in enumerate(mj)}  # joint index → its measured map
+    Cm = np.zeros((N, len(mj), 6, 6))
+    if mj:
+        R = Ro[:, mj]
+        Cm[:, :, :3, :3] = R
+        Cm[:, :, :3, 3:] = _cross_rows(po[:, mj] - pm[:, None], R)
+        Cm[:, :, 3:, 3:] = np.swapaxes(Rm, 1, 2)[:, None] @ R
+    if mech.closures:
+        Jf = bk.closure_jacobian
+        if Jf is None:
+            Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
+        Jm_u = _measured_free_jacobian(mech, bk, Rm, pm)
+        Y = np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
+        C = np.zeros((N, len(names), 6, 6))
+        _closure_maps(mech, plan, names, Ro, po, place, Y, C)
+    twists = params.joint_twists(values)
+    J = np.zeros((N, 6, n)) if out is None else out
+    for i, j in enumerate(names):
+        if C is not None and i in touched:
+            Ci = C[:, i] + Cm[:, touched[i]]
+        elif C is not None:
+            Ci = np.ascontiguousarray(C[:, i])
+        elif i in touched:
+            Ci = np.ascontiguousarray(Cm[:, touched[i]])
+        else:
+            continue
+        cols, _, eff = twists[j]
+        J[:, :, _columns(cols)] = (Ci.reshape(-1, 6) @ eff).reshape(N, 6, -1)
+    return Rm, pm, J
+
+
 def sensitivities_batch(
     mech: Mechanism,
     params: ParameterSet,
@@ -126,24 +296,48 @@ def sensitivities_batch(
             breaks,
         )
     bk = bk if bk is not None else mech.kinematics_batch(qs)
+    N = bk.q.shape[0]
+    if any(c.components[-1] >= 3 for c in mech.closures):
+        parts = [
+            _local_path(mech, params, slice_kinematics(bk, slice(k, k + CHUNK)), values, plan)
+            for k in range(0, N, CHUNK)
+        ]
+        Rm, pm, J = (np.concatenate([p[i] for p in parts]) for i in range(3))
+        return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
+    Rm, pm, J = np.empty((N, 3, 3)), np.empty((N, 3)), np.zeros((N, 6, n))
+    for start in range(0, N, CHUNK):
+        rows = slice(start, start + CHUNK)
+        Rm[rows], pm[rows], _ = _world_path(
+            mech, params, slice_kinematics(bk, rows), values, plan, J[rows]
+        )
+    return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
+
+
+def _local_path(
+    mech: Mechanism, params: ParameterSet, bk: BatchKinematics, values: np.ndarray, plan: _Plan
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Measured rotation, position and Jacobian (N, 6, n) from local parameter twists.
+
+    The general path (closures with orientation components): closure Jacobians from
+    the frames' local twists, passive correction by one adjoint solve.
+    """
     placements, P = _param_twists(mech, params, bk, values, plan)
     Rm, pm = placements[mech.measured_frame]
     Pm = P[mech.measured_frame]
     J = np.concatenate([mm(Rm, Pm[:, :3]), Pm[:, 3:]], axis=1)
-    if mech.closures:
-        free = mech.free_dofs
-        Jc_p = np.concatenate(
-            [
-                closure_jacobian_batch(
-                    c, *placements[c.frame_a], *placements[c.frame_b], P[c.frame_a], P[c.frame_b]
-                )
-                for c in mech.closures
-            ],
-            axis=1,
-        )
-        _, Jc = mech.closure_terms_batch(bk)
-        dqu_dp = np.linalg.solve(Jc[:, :, free], -Jc_p)
-        Jl = mech.batch_model.frame_jacobian(bk, mech.frame_id(mech.measured_frame))
-        Jm_u = np.concatenate([mm(Rm, Jl[:, :3, free]), Jl[:, 3:, free]], axis=1)
-        J = J + Jm_u @ dqu_dp
-    return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
+    Jc_p = np.concatenate(
+        [
+            closure_jacobian_batch(
+                c, *placements[c.frame_a], *placements[c.frame_b], P[c.frame_a], P[c.frame_b]
+            )
+            for c in mech.closures
+        ],
+        axis=1,
+    )
+    Jf = bk.closure_jacobian
+    if Jf is None:
+        Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
+    Jm_u = _measured_free_jacobian(mech, bk, Rm, pm)
+    # Jm_u · dq_u/dp = −(Jf⁻ᵀ Jm_uᵀ)ᵀ Jc_p: one solve with 6 right-hand sides
+    Y = np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
+    return Rm, pm, J - np.swapaxes(Y, 1, 2) @ Jc_p

@@ -58,3 +58,20 @@ def test_memoised_values_equal_a_fresh_problem(setup):
     rb, Jb, _ = CalibrationProblem(mech, params, meas).evaluate(x)
     np.testing.assert_allclose(ra, rb, rtol=0, atol=1e-9)
     np.testing.assert_allclose(Ja, Jb, rtol=0, atol=1e-9 * np.abs(Jb).max())
+
+
+def test_identify_solves_each_trial_once_and_reuses_the_start(setup, monkeypatch):
+    """No second pass at the start values for closure breaking (square closures break none)."""
+    mech, params, meas = setup
+    calls = {"fk": 0}
+    fk = Mechanism.configurations_batch
+
+    def count_fk(self, *a, **k):
+        calls["fk"] += 1
+        return fk(self, *a, **k)
+
+    monkeypatch.setattr(Mechanism, "configurations_batch", count_fk)
+    res = pincal.identify(mech, params, meas, noise={"position": 0.01, "orientation": 0.02})
+    # one solve at the start, one per cost evaluation of the Gauss–Newton trials
+    assert calls["fk"] == res.extras.evaluations - res.iterations + 1
+    assert res.success
