@@ -168,7 +168,7 @@ def run_demo(
             from pincal.report import calibration_report
 
             say("writing the report (plots)")
-            written = calibration_report(out)
+            written = calibration_report(out, n_jobs=-1)
             files += [written.html, written.markdown]
             if written.json is not None:
                 files.append(written.json)

@@ -41,7 +41,7 @@ def report(directory: Path, out: Path | None, name: str, as_json: bool) -> None:
 
     if not name or "/" in name or "\\" in name or name.startswith("."):
         raise click.BadParameter("must be a plain file stem", param_hint="--name")
-    files = calibration_report(directory, out, name=name)
+    files = calibration_report(directory, out, name=name, n_jobs=-1)
     if as_json:
         paths = {"html": str(files.html), "markdown": str(files.markdown)}
         click.echo(json.dumps({**paths, "json": str(files.json)}))
