@@ -79,6 +79,7 @@ def grid_candidates(
     *,
     in_workspace: bool = True,
     progress: Progress | None = None,
+    n_jobs: int = 1,
 ) -> CandidateSet:
     """Seed 000: a full joint-space grid pushed through the forward kinematics.
 
@@ -94,6 +95,7 @@ def grid_candidates(
             :func:`default_grid_ranges`.
         in_workspace: keep only poses inside the sidecar pose workspace.
         progress: callback ``(done, total)``.
+        n_jobs: processes evaluating the rows (see :func:`evaluate_candidates`).
     """
     if not isinstance(levels, (int, np.integer)) or levels < 2:
         raise PincalError(f"a grid needs levels >= 2 per actuator; got {levels!r}")
@@ -104,7 +106,13 @@ def grid_candidates(
     axes = [np.linspace(lo, hi, int(levels)) for lo, hi in rng_arr]
     rows = np.array(list(itertools.product(*axes)))
     return evaluate_candidates(
-        mech, params, rows, source=f"grid:{levels}", in_workspace=in_workspace, progress=progress
+        mech,
+        params,
+        rows,
+        source=f"grid:{levels}",
+        in_workspace=in_workspace,
+        progress=progress,
+        n_jobs=n_jobs,
     )
 
 
@@ -115,14 +123,24 @@ def random_candidates(
     rng: np.random.Generator | int | None = None,
     *,
     progress: Progress | None = None,
+    n_jobs: int = 1,
 ) -> CandidateSet:
-    """``count`` random feasible workspace poses (:func:`pincal.sample_actuators`)."""
+    """``count`` random feasible workspace poses (:func:`pincal.sample_actuators`).
+
+    ``n_jobs``: processes evaluating the rows (see :func:`evaluate_candidates`).
+    """
     if count < 1:
         raise PincalError(f"count must be >= 1; got {count}")
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     rows = sample_actuators(mech, int(count), gen)
     return evaluate_candidates(
-        mech, params, rows, source=f"random:{count}", in_workspace=False, progress=progress
+        mech,
+        params,
+        rows,
+        source=f"random:{count}",
+        in_workspace=False,
+        progress=progress,
+        n_jobs=n_jobs,
     )
 
 
@@ -132,6 +150,7 @@ def orthogonal_candidates(
     levels: int = 5,
     *,
     progress: Progress | None = None,
+    n_jobs: int = 1,
 ) -> CandidateSet:
     """Seed 001: a strength-2 orthogonal array over the six workspace pose factors.
 
@@ -139,7 +158,8 @@ def orthogonal_candidates(
     L49(7⁶) for 7) has one column per pose factor x, y, z, rx, ry, rz; levels are
     mapped evenly onto the sidecar's pose ranges (a factor without a range stays
     at its home value) and each run is solved by inverse kinematics. Unreachable
-    runs are counted as ``"no IK"``.
+    runs are counted as ``"no IK"``. ``n_jobs``: processes evaluating the solved rows
+    (see :func:`evaluate_candidates`).
     """
     pose = mech.workspace.pose
     if not pose:
@@ -183,6 +203,7 @@ def orthogonal_candidates(
         tried=total,
         rejected={"no IK": failed},
         progress=second_half,
+        n_jobs=n_jobs,
     )
 
 
@@ -211,15 +232,20 @@ def candidate_set(
     rng: np.random.Generator | int | None = None,
     *,
     progress: Progress | None = None,
+    n_jobs: int = 1,
 ) -> CandidateSet:
-    """Candidates from a spec string: ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``."""
+    """Candidates from a spec string: ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``.
+
+    ``n_jobs``: processes evaluating the rows (see :func:`evaluate_candidates`); the
+    candidates do not depend on it.
+    """
     kind, value = parse_candidate_spec(spec)
     if kind == "grid":
-        result = grid_candidates(mech, params, value, progress=progress)
+        result = grid_candidates(mech, params, value, progress=progress, n_jobs=n_jobs)
     elif kind == "random":
-        result = random_candidates(mech, params, value, rng, progress=progress)
+        result = random_candidates(mech, params, value, rng, progress=progress, n_jobs=n_jobs)
     else:
-        result = orthogonal_candidates(mech, params, value, progress=progress)
+        result = orthogonal_candidates(mech, params, value, progress=progress, n_jobs=n_jobs)
     if len(result) == 0:
         raise PincalError(f"no feasible candidate poses from {spec!r}: {result.summary()}")
     return result
