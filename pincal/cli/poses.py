@@ -52,6 +52,14 @@ from pincal.cli.common import fail_cleanly
     show_default=True,
     help="Pose file to write (+ <stem>.commands.csv and <stem>.json beside it).",
 )
+@click.option(
+    "--jobs",
+    "n_jobs",
+    type=click.IntRange(min=-1),
+    default=1,
+    show_default=True,
+    help="Processes evaluating the candidates (-1: every CPU); same poses for any value.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
 def poses(
@@ -67,6 +75,7 @@ def poses(
     restarts: int,
     seed: int,
     out: str,
+    n_jobs: int,
     as_json: bool,
 ) -> None:
     """Select measurement poses of MODEL from a candidate set and write them to OUT.
@@ -118,7 +127,7 @@ def poses(
                 state["total"] = total
             bar.update(done - bar.pos)
 
-        cands = candidate_set(mech, params, spec, rng=seed, progress=progress)
+        cands = candidate_set(mech, params, spec, rng=seed, progress=progress, n_jobs=n_jobs)
     click.echo(cands.summary(), err=True)
     noise_model = NoiseModel(*noise)
     if scaling == "K":
