@@ -102,7 +102,22 @@ def run_demo(
     out_dir: str | Path | None = "pincal-out",
     progress: Callable[[str], None] | None = None,
 ) -> DemoResult:
-    """Run the simulated calibration and write the calibrated model to ``out_dir``."""
+    """Run the simulated calibration and write the calibrated model to ``out_dir``.
+
+    BLAS runs single-threaded throughout: every dense solve here is small, and a
+    threaded BLAS on a busy machine made them several times slower.
+    """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):
+        return _run_demo(settings, out_dir, progress)
+
+
+def _run_demo(
+    settings: DemoSettings,
+    out_dir: str | Path | None,
+    progress: Callable[[str], None] | None,
+) -> DemoResult:
     say = progress or (lambda _msg: None)
     rng = np.random.default_rng(settings.seed)
     nominal = load_mechanism(settings.model)

@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 
 from pincal.errors import ReportError
 from pincal.io._atomic import atomic_write_bytes
+from pincal.report._axes import bars as _bars
 from pincal.report._axes import log_scale as _log_scale
 
 __all__ = [
@@ -137,20 +138,14 @@ def plot_errors_before_after(
     fig = _figure()
     ax = fig.add_subplot()
     x = np.arange(b.size)
-    ax.bar(
-        x - 0.2,
-        np.abs(b) * factor,
-        0.4,
-        color=_BEFORE,
+    _bars(
+        ax, x - 0.4, x, np.abs(b) * factor, color=_BEFORE,
         label=f"before: RMS {sb.rms:.4g}, max {sb.max:.4g} {label}",
-    )
-    ax.bar(
-        x + 0.2,
-        np.abs(a) * factor,
-        0.4,
-        color=_AFTER,
+    )  # fmt: skip
+    _bars(
+        ax, x, x + 0.4, np.abs(a) * factor, color=_AFTER,
         label=f"after: RMS {sa.rms:.4g}, max {sa.max:.4g} {label}",
-    )
+    )  # fmt: skip
     ax.set_xlabel("pose")
     ax.set_ylabel(f"error [{label}]")
     ax.set_title(title)
@@ -186,8 +181,12 @@ def plot_error_histogram(
     ax = fig.add_subplot()
     if log_x:
         _log_scale(ax, "x")
-    ax.hist(b * factor, edges.tolist(), color=_BEFORE, alpha=0.6, label=f"before (n = {b.size})")
-    ax.hist(a * factor, edges.tolist(), color=_AFTER, alpha=0.6, label=f"after (n = {a.size})")
+    for values, color, side in ((b, _BEFORE, "before"), (a, _AFTER, "after")):
+        counts, _ = np.histogram(values * factor, edges)
+        _bars(
+            ax, edges[:-1], edges[1:], counts, color=color, alpha=0.6,
+            label=f"{side} (n = {values.size})",
+        )  # fmt: skip
     ax.set_xlabel(f"error [{label}]")
     ax.set_ylabel("count")
     ax.set_title(title)
