@@ -122,3 +122,30 @@ def test_log_labels_are_left_out_where_matplotlib_leaves_them_out():
     reference.set_locs(values)
     assert [bool(ours(v)) for v in values] == [bool(reference(v)) for v in values]
     assert ours(2e3) == "" and ours(1e3) == "10³"
+
+
+def _modules_after(code: str) -> set[str]:
+    import subprocess
+    import sys
+
+    probe = code + "\nimport sys; print(' '.join(sorted(m.split('.')[0] for m in sys.modules)))"
+    done = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, check=True, timeout=300
+    )
+    return set(done.stdout.split())
+
+
+HEAVY = {"matplotlib", "meshcat", "scipy", "joblib"}
+
+
+def test_the_cli_imports_no_plotting_viewer_or_scipy():
+    assert not HEAVY & _modules_after("import pincal.cli")
+
+
+@pytest.mark.slow
+def test_a_demo_without_report_imports_no_plotting_viewer_or_scipy(tmp_path):
+    code = (
+        "from pincal.cli._demo_job import DemoSettings, run_demo\n"
+        f"run_demo(DemoSettings(n_poses=12, n_validation=5, report=False), {str(tmp_path)!r})"
+    )
+    assert not HEAVY & _modules_after(code)
