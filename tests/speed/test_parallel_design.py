@@ -66,3 +66,21 @@ def test_random_candidates_in_two_processes_are_the_same(model, preset):
     two = candidate_set(mech, params, "random:60", np.random.default_rng(4), n_jobs=2)
     assert len(one) == 60
     _assert_same(one, two)
+
+
+@pytest.mark.slow
+def test_poses_command_selects_the_same_poses_for_any_jobs(tmp_path):
+    from click.testing import CliRunner
+
+    from pincal.cli import main
+
+    written = []
+    for jobs in ("1", "2"):
+        out = tmp_path / jobs / "p.csv"
+        args = ["poses", "stewart_6ups", "--candidates", "grid:3", "--count", "12"]
+        result = CliRunner().invoke(main, [*args, "--jobs", jobs, "--out", str(out)])
+        assert result.exit_code == 0, result.output
+        written.append(out.read_bytes())
+    assert written[0] == written[1]
+    bad = CliRunner().invoke(main, ["poses", "stewart_6ups", "--jobs", "0"])
+    assert bad.exit_code != 0 and "jobs" in bad.output
