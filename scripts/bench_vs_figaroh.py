@@ -2,13 +2,14 @@
 
 Usage:
     pip install figaroh          # the optional [bench] extra
-    python scripts/bench_vs_figaroh.py [--seed 0] [--noise 0.01]
+    python scripts/bench_vs_figaroh.py [--seed 0] [--noise 0.01] [--sizes 50 200 1000]
 
 Problem (scripts/ur10_calibration.py): example-robot-data UR10, a position target
 80 mm off the tool0 flange, unknown base (instrument) frame and target offset,
-joint-origin errors 0.1–1 mm / 0.5–2 mrad and joint offsets 0.5–2 mrad; N = 50 and
-200 random configurations, position noise σ per coordinate; validation on 200 fresh
-configurations. Both tools get the same configurations and the same noisy points.
+joint-origin errors 0.1–1 mm / 0.5–2 mrad and joint offsets 0.5–2 mrad; N = 50, 200
+and 1000 random configurations (``--sizes``), position noise σ per coordinate;
+validation on 200 fresh configurations. Both tools get the same configurations and
+the same noisy points.
 
 pincal: ``pincal.identification._identify`` (Gauss–Newton, analytic Jacobian) on the ``chain``
 preset, reduced to its identifiable base set. figaroh: its structural base-parameter
@@ -19,6 +20,11 @@ config-file/CSV layer is bypassed by filling the ``calib_config`` dict directly.
 figaroh's base parameters are linear combinations in its own convention, so its
 parameter error is not comparable and is not reported; the validation error is.
 
+Times are wall seconds of the identification alone (model loading excluded for both),
+the median of ``--repeats`` runs; BLAS runs single-threaded for both tools
+(threadpoolctl), as pincal's small dense solves are fastest that way on a shared
+machine. The last column is figaroh's time over pincal's at the same N.
+
 If figaroh is not installed or fails, the script says why and exits with status 0.
 """
 
@@ -27,6 +33,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import logging
+import statistics
 import sys
 import time
 import traceback
@@ -52,10 +59,20 @@ def _rms_max(x: np.ndarray) -> tuple[float, float]:
     return float(np.sqrt(np.mean(x**2))), float(np.max(np.abs(x)))
 
 
-def run_pincal(study, problem, meas) -> dict:
-    t0 = time.perf_counter()
-    result = pincal.identify(problem.nominal, problem.params, meas)
-    seconds = time.perf_counter() - t0
+def _median_time(run, repeats: int):
+    """Median wall seconds of ``repeats`` calls of ``run()`` and the last result."""
+    times, result = [], None
+    for _ in range(max(1, repeats)):
+        t0 = time.perf_counter()
+        result = run()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), result
+
+
+def run_pincal(study, problem, meas, repeats: int = 1) -> dict:
+    seconds, result = _median_time(
+        lambda: pincal.identify(problem.nominal, problem.params, meas), repeats
+    )
     idx = [problem.params.index(n) for n in result.params.names]
     err = result.values - problem.truth[idx]
     is_len = np.array([u == "m" for u in result.params.units])
@@ -109,7 +126,7 @@ def figaroh_config(model, n_samples: int) -> dict:
     }
 
 
-def run_figaroh(problem, meas) -> dict:
+def run_figaroh(problem, meas, repeats: int = 1) -> dict:
     import scipy.optimize
     from figaroh.calibration import calibration_tools as ct
     from figaroh.calibration.parameter import add_base_name, add_pee_name
@@ -122,18 +139,21 @@ def run_figaroh(problem, meas) -> dict:
     if model.nq != q.shape[1]:
         raise RuntimeError(f"figaroh UR10 model has nq={model.nq}, expected {q.shape[1]}")
     n = len(q)
-    t0 = time.perf_counter()
-    cfg = figaroh_config(model, n)
-    ct.calculate_base_kinematics_regressor(q, model, data, cfg, tol_qr=1e-6)
-    add_base_name(cfg)
-    add_pee_name(cfg)
     measured = meas.positions.T.ravel()  # component-major, as figaroh's PEE
 
-    def residual(var):
-        return ct.calc_updated_fkm(model, data, var, q, cfg) - measured
+    def solve():
+        cfg = figaroh_config(model, n)
+        ct.calculate_base_kinematics_regressor(q, model, data, cfg, tol_qr=1e-6)
+        add_base_name(cfg)
+        add_pee_name(cfg)
 
-    sol = scipy.optimize.least_squares(residual, np.zeros(len(cfg["param_name"])), method="lm")
-    seconds = time.perf_counter() - t0
+        def residual(var):
+            return ct.calc_updated_fkm(model, data, var, q, cfg) - measured
+
+        x0 = np.zeros(len(cfg["param_name"]))
+        return cfg, scipy.optimize.least_squares(residual, x0, method="lm")
+
+    seconds, (cfg, sol) = _median_time(solve, repeats)
     qv = problem.q_validation
     cfg_v = dict(cfg, NbSample=len(qv))
     predicted = ct.calc_updated_fkm(model, data, sol.x, qv, cfg_v).reshape(3, -1).T
@@ -153,6 +173,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--noise", type=float, default=0.01, help="position noise σ [mm]")
+    parser.add_argument("--sizes", type=int, nargs="+", default=[50, 200, 1000])
+    parser.add_argument("--repeats", type=int, default=3, help="timed runs per tool and N")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
     try:
@@ -164,7 +186,10 @@ def main(argv: list[str] | None = None) -> int:
         figaroh_error = f"figaroh cannot be imported: {type(exc).__name__}: {exc}"
     study = _load_study()
     rows = []
-    for n in (50, 200):
+    from threadpoolctl import threadpool_limits
+
+    blas = threadpool_limits(limits=1, user_api="blas")
+    for n in args.sizes:
         problem = study.make_problem("ur10", n, "position", seed=args.seed)
         meas = pincal.simulate_measurements(
             problem.actual,
@@ -172,31 +197,35 @@ def main(argv: list[str] | None = None) -> int:
             {"position": args.noise},
             np.random.default_rng(args.seed + 100),
         )
-        rows.append(("pincal", n, run_pincal(study, problem, meas)))
+        rows.append(("pincal", n, run_pincal(study, problem, meas, args.repeats)))
         if figaroh_error is None:
             try:
-                rows.append(("figaroh", n, run_figaroh(problem, meas)))
+                rows.append(("figaroh", n, run_figaroh(problem, meas, args.repeats)))
             except Exception as exc:
                 figaroh_error = (
                     f"figaroh failed on this problem: {type(exc).__name__}: {exc}\n"
                     + traceback.format_exc(limit=3)
                 )
+    blas.restore_original_limits()
     print(
         f"UR10, position target 80 mm off tool0, unknown base + tool frames, "
-        f"noise σ = {args.noise} mm per coordinate, validation on 200 fresh configurations"
+        f"noise σ = {args.noise} mm per coordinate, validation on 200 fresh configurations; "
+        f"median of {args.repeats} runs, BLAS 1 thread"
     )
     print(
         "| tool | N | time [s] | identified | param err RMS/max [µm] | "
-        "param err RMS/max [µrad] | validation RMS/max [mm] |"
+        "param err RMS/max [µrad] | validation RMS/max [mm] | figaroh / pincal |"
     )
-    print("|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|")
+    pincal_time = {n: r["seconds"] for tool, n, r in rows if tool == "pincal"}
     for tool, n, r in rows:
         pl, pa, v = r["param_len"], r["param_ang"], r["validation"]
         ptxt = "n/a" if np.isnan(pl[0]) else f"{pl[0] * 1e6:.2f} / {pl[1] * 1e6:.2f}"
         atxt = "n/a" if np.isnan(pa[0]) else f"{pa[0] * 1e6:.2f} / {pa[1] * 1e6:.2f}"
         print(
             f"| {tool} | {n} | {r['seconds']:.3f} | {r['n_params']} | {ptxt} | {atxt} | "
-            f"{v[0] * 1e3:.4f} / {v[1] * 1e3:.4f} |"
+            f"{v[0] * 1e3:.4f} / {v[1] * 1e3:.4f} | "
+            + (f"{r['seconds'] / pincal_time[n]:.1f}× |" if tool == "figaroh" else "|")
         )
     if figaroh_error is not None:
         print(f"\nfigaroh not compared: {figaroh_error}")

@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from pincal.design import (
+    MAX_CANDIDATE_BYTES,
+    MAX_CANDIDATES,
     CramerRaoReport,
     DesignScaling,
     PoseDesign,
@@ -105,7 +107,22 @@ def run_demo(
     out_dir: str | Path | None = "pincal-out",
     progress: Callable[[str], None] | None = None,
 ) -> DemoResult:
-    """Run the simulated calibration and write the calibrated model to ``out_dir``."""
+    """Run the simulated calibration and write the calibrated model to ``out_dir``.
+
+    BLAS runs single-threaded throughout: every dense solve here is small, and a
+    threaded BLAS on a busy machine made them several times slower.
+    """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):
+        return _run_demo(settings, out_dir, progress)
+
+
+def _run_demo(
+    settings: DemoSettings,
+    out_dir: str | Path | None,
+    progress: Callable[[str], None] | None,
+) -> DemoResult:
     say = progress or (lambda _msg: None)
     rng = np.random.default_rng(settings.seed)
     nominal = load_mechanism(settings.model)
@@ -119,8 +136,11 @@ def run_demo(
         q_meas = sample_actuators(nominal, settings.n_poses, rng)
     else:
         say(f"candidate poses {settings.candidates}")
-        unbounded = {} if settings.bounded else {"max_candidates": None, "max_bytes": None}
-        cands = candidate_set(nominal, params, settings.candidates, rng, **unbounded)
+        cands = candidate_set(
+            nominal, params, settings.candidates, rng,
+            max_candidates=MAX_CANDIDATES if settings.bounded else None,
+            max_bytes=MAX_CANDIDATE_BYTES if settings.bounded else None,
+        )  # fmt: skip
         sig = settings.noise.std(("x", "rx"))
         scaling = DesignScaling("noise", position_std=sig[0], orientation_std=sig[1])
         say(f"selecting {settings.n_poses} of {len(cands)} poses by {settings.index}")
@@ -172,7 +192,7 @@ def run_demo(
             from pincal.report import calibration_report
 
             say("writing the report (plots)")
-            written = calibration_report(out)
+            written = calibration_report(out, n_jobs=-1)
             files += [written.html, written.markdown]
             if written.json is not None:
                 files.append(written.json)

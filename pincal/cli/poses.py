@@ -61,6 +61,14 @@ from pincal.cli.common import fail_cleanly, guard_paths, model_input
     show_default=True,
     help="Pose file to write (+ <stem>.commands.csv and <stem>.json beside it).",
 )
+@click.option(
+    "--jobs",
+    "n_jobs",
+    type=click.IntRange(min=-1),
+    default=1,
+    show_default=True,
+    help="Processes evaluating the candidates (-1: every CPU); same poses for any value.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @yes_option
 @fail_cleanly
@@ -77,6 +85,7 @@ def poses(
     restarts: int,
     seed: int,
     out: str,
+    n_jobs: int,
     as_json: bool,
     yes: bool,
 ) -> None:
@@ -94,6 +103,30 @@ def poses(
       pincal poses hexaslide_6pus --count 40 --candidates random:300 --out poses.csv
       pincal poses stewart_6ups --count 18 --index O3 --scaling K --out p.csv --json
     """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):  # small dense solves: one BLAS thread is fastest
+        _poses(model, count, index_name, spec, preset, scaling, K_mm, noise, method,
+               restarts, seed, out, n_jobs, as_json, yes)  # fmt: skip
+
+
+def _poses(
+    model: str,
+    count: int,
+    index_name: str,
+    spec: str,
+    preset: str | None,
+    scaling: str,
+    K_mm: float | None,
+    noise: tuple[float, float],
+    method: str,
+    restarts: int,
+    seed: int,
+    out: str,
+    n_jobs: int,
+    as_json: bool,
+    yes: bool,
+) -> None:
     import sys
     from pathlib import Path
 
@@ -149,7 +182,7 @@ def poses(
             cands = candidate_set(
                 mech, params, spec, rng=seed, progress=progress,
                 max_candidates=None if yes else MAX_CANDIDATES,
-                max_bytes=None if yes else MAX_CANDIDATE_BYTES,
+                max_bytes=None if yes else MAX_CANDIDATE_BYTES, n_jobs=n_jobs,
             )  # fmt: skip
     click.echo(cands.summary(), err=True)
     noise_model = NoiseModel(*noise)

@@ -47,7 +47,7 @@ def report(directory: Path, out: Path | None, name: str, as_json: bool) -> None:
         _inputs(directory),
         {f"--name's {x}": target / f"{name}.{x}" for x in ("html", "md", "json")},
     )
-    files = calibration_report(directory, out, name=name)
+    files = calibration_report(directory, out, name=name, n_jobs=-1)
     if as_json:
         paths = {"html": str(files.html), "markdown": str(files.markdown)}
         click.echo(json.dumps({**paths, "json": str(files.json)}))

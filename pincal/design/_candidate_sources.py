@@ -90,6 +90,7 @@ def grid_candidates(
     progress: Progress | None = None,
     max_candidates: int | None = MAX_CANDIDATES,
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
+    n_jobs: int = 1,
 ) -> CandidateSet:
     """Seed 000: a full joint-space grid pushed through the forward kinematics.
 
@@ -105,6 +106,7 @@ def grid_candidates(
             :func:`default_grid_ranges`.
         in_workspace: keep only poses inside the sidecar pose workspace.
         progress: callback ``(done, total)``.
+        n_jobs: processes evaluating the rows (see :func:`evaluate_candidates`).
         max_candidates: refuse more rows than this (None: no bound).
         max_bytes: refuse a larger memory estimate [bytes] (None: no bound).
 
@@ -124,7 +126,13 @@ def grid_candidates(
     axes = [np.linspace(lo, hi, int(levels)) for lo, hi in rng_arr]
     rows = np.array(list(itertools.product(*axes)))
     return evaluate_candidates(
-        mech, params, rows, source=f"grid:{levels}", in_workspace=in_workspace, progress=progress
+        mech,
+        params,
+        rows,
+        source=f"grid:{levels}",
+        in_workspace=in_workspace,
+        progress=progress,
+        n_jobs=n_jobs,
     )
 
 
@@ -137,8 +145,11 @@ def random_candidates(
     progress: Progress | None = None,
     max_candidates: int | None = MAX_CANDIDATES,
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
+    n_jobs: int = 1,
 ) -> CandidateSet:
     """``count`` random feasible workspace poses (:func:`pincal.sample_actuators`).
+
+    ``n_jobs``: processes evaluating the rows (see :func:`evaluate_candidates`).
 
     Raises:
         OptionValueError: ``count`` is not an integer ≥ 1.
@@ -150,7 +161,13 @@ def random_candidates(
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     rows = sample_actuators(mech, int(count), gen)
     return evaluate_candidates(
-        mech, params, rows, source=f"random:{count}", in_workspace=False, progress=progress
+        mech,
+        params,
+        rows,
+        source=f"random:{count}",
+        in_workspace=False,
+        progress=progress,
+        n_jobs=n_jobs,
     )
 
 
@@ -162,6 +179,7 @@ def orthogonal_candidates(
     progress: Progress | None = None,
     max_candidates: int | None = MAX_CANDIDATES,
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
+    n_jobs: int = 1,
 ) -> CandidateSet:
     """Seed 001: a strength-2 orthogonal array over the six workspace pose factors.
 
@@ -170,7 +188,8 @@ def orthogonal_candidates(
     mapped evenly onto the sidecar's pose ranges (a factor without a range stays
     at its home value) and each run is solved by inverse kinematics. Unreachable
     runs are counted as ``"no IK"``. ``max_candidates`` and ``max_bytes`` bound the
-    estimated cost as in :func:`grid_candidates`.
+    estimated cost as in :func:`grid_candidates`; ``n_jobs``: processes evaluating the
+    solved rows (see :func:`evaluate_candidates`).
     """
     if not isinstance(levels, (int, np.integer)) or levels < 2:
         raise OptionValueError(f"an orthogonal array needs levels >= 2; got {levels!r}")
@@ -217,6 +236,7 @@ def orthogonal_candidates(
         tried=total,
         rejected={"no IK": failed},
         progress=second_half,
+        n_jobs=n_jobs,
     )
 
 
@@ -253,11 +273,14 @@ def candidate_set(
     progress: Progress | None = None,
     max_candidates: int | None = MAX_CANDIDATES,
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
+    n_jobs: int = 1,
 ) -> CandidateSet:
     """Candidates from a spec string: ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``.
 
     The cost (rows, memory) is estimated before any work and refused past
-    ``max_candidates`` rows or ``max_bytes`` (None: no bound).
+    ``max_candidates`` rows or ``max_bytes`` (None: no bound). ``n_jobs``: processes
+    evaluating the rows (see :func:`evaluate_candidates`); the candidates do not depend
+    on it.
 
     Raises:
         OptionValueError: the spec is malformed (kind, or a number that is not an integer
@@ -265,19 +288,22 @@ def candidate_set(
         InputLimitError: the estimate passes a bound, naming the estimate and the bound.
     """
     kind, value = parse_candidate_spec(spec)
-    limit, mem = max_candidates, max_bytes
+    lim, mem = max_candidates, max_bytes
     if kind == "grid":
         result = grid_candidates(
-            mech, params, value, progress=progress, max_candidates=limit, max_bytes=mem
-        )
+            mech, params, value, progress=progress, max_candidates=lim, max_bytes=mem,
+            n_jobs=n_jobs,
+        )  # fmt: skip
     elif kind == "random":
         result = random_candidates(
-            mech, params, value, rng, progress=progress, max_candidates=limit, max_bytes=mem
-        )
+            mech, params, value, rng, progress=progress, max_candidates=lim, max_bytes=mem,
+            n_jobs=n_jobs,
+        )  # fmt: skip
     else:
         result = orthogonal_candidates(
-            mech, params, value, progress=progress, max_candidates=limit, max_bytes=mem
-        )
+            mech, params, value, progress=progress, max_candidates=lim, max_bytes=mem,
+            n_jobs=n_jobs,
+        )  # fmt: skip
     if len(result) == 0:
         raise PincalError(f"no feasible candidate poses from {spec!r}: {result.summary()}")
     return result

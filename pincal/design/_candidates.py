@@ -32,6 +32,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from pincal.design._parallel import check_n_jobs, parallel_rows
 from pincal.errors import (
     ConvergenceError,
     InputLimitError,
@@ -222,6 +223,7 @@ def evaluate_candidates(
     tried: int | None = None,
     rejected: dict[str, int] | None = None,
     progress: Progress | None = None,
+    n_jobs: int = 1,
 ) -> CandidateSet:
     """Forward kinematics and Jacobian blocks of actuator rows; infeasible rows dropped.
 
@@ -243,9 +245,17 @@ def evaluate_candidates(
         rejected: rejection counts by reason (``"no FK"``, ``"singular"``, ...) from an
             earlier stage (e.g. failed IK), added to this stage's counts.
         progress: callback ``(done, N)`` after each row.
+        n_jobs: processes for the batched forward kinematics and Jacobian blocks
+            (joblib, one chunk of rows per worker; -1 = every CPU). Workers rebuild the
+            mechanism (:mod:`pincal.design._parallel`); the result does not depend on
+            ``n_jobs``. Pays off for thousands of rows (a worker's start-up costs
+            about an import of pincal).
 
     Returns:
         The feasible candidates, in input order.
+
+    Raises:
+        PincalError: rows of the wrong shape, or ``n_jobs`` not a positive integer or -1.
     """
     rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
     n_act = len(mech.actuated)
@@ -263,10 +273,13 @@ def evaluate_candidates(
         counts[k] = counts.get(k, 0) + v
     total = rows.shape[0]
     inside = np.all((rows >= lo - 1e-12) & (rows <= hi + 1e-12), axis=1)
-    Q, solved, bk = mech.try_configurations_batch(rows)
-    fid = mech.frame_id(mech.measured_frame)
-    if bk is not None:
-        R_all, p_all = mech.batch_model.frame_placement(bk, fid)
+    parallel = check_n_jobs(n_jobs) != 1 and total > 1
+    if parallel:
+        Q, solved, R_all, p_all = parallel_rows("fk", mech, rows, n_jobs)
+    else:
+        Q, solved, bk = mech.try_configurations_batch(rows)
+        if bk is not None:
+            R_all, p_all = mech.batch_model.frame_placement(bk, mech.frame_id(mech.measured_frame))
     keep: list[int] = []
     guess = mech.q_home
     for i, row in enumerate(rows):
@@ -299,9 +312,13 @@ def evaluate_candidates(
             continue
         guess = q
         keep.append(i)
-    sens = sensitivities_batch(mech, params, Q[keep].reshape(-1, mech.model.nq))
-    keep_q, keep_p, keep_R = rows[keep], sens.positions, sens.rotations
-    keep_J = sens.jacobian[:, comp_rows]
+    Q_keep = Q[keep].reshape(-1, mech.model.nq)
+    if parallel and len(keep) > 1:
+        keep_p, keep_R, J = parallel_rows("sensitivity", mech, Q_keep, n_jobs, params)
+    else:
+        sens = sensitivities_batch(mech, params, Q_keep)
+        keep_p, keep_R, J = sens.positions, sens.rotations, sens.jacobian
+    keep_q, keep_J = rows[keep], J[:, comp_rows]
     n = len(params)
     result = CandidateSet(
         q_act=np.array(keep_q).reshape(-1, n_act),

@@ -11,7 +11,6 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-import scipy.optimize
 
 from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._outcome import Progress, SolverOutcome
@@ -214,6 +213,8 @@ def levenberg_marquardt(
             if progress:
                 progress(len(history), history[-1])
         return cache[key]
+
+    import scipy.optimize  # here, not at import: scipy.optimize costs ~0.3 s to import
 
     max_nfev = opts.max_iterations * 10
     sol = scipy.optimize.least_squares(

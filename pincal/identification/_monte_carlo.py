@@ -28,7 +28,6 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-from joblib import Parallel, delayed
 from threadpoolctl import threadpool_limits
 
 from pincal.errors import ParameterError, ShapeError
@@ -150,6 +149,8 @@ def monte_carlo(
     if n_jobs == 1:
         out = [_one_run(*a) for a in args]
     else:
+        from joblib import Parallel, delayed  # here, not at import: joblib costs ~0.1 s
+
         out = Parallel(n_jobs=n_jobs)(delayed(_one_run)(*a) for a in args)
     values = np.array([v for v, _ in out]).reshape(int(runs), len(params))
     success = np.array([s for _, s in out], dtype=bool)

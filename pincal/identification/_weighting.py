@@ -13,7 +13,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import norm
 
 __all__ = [
     "DOWNWEIGHT_LIMIT",
@@ -36,10 +35,10 @@ ROBUST_F_SCALE = {
     "arctan": 3.0,  # 1 / (1 + (r/f)⁴): 0.5 at f
 }
 #: variance of a standard normal truncated to |z| ≤ INLIER_LIMIT (robust-estimate correction)
+# P(|z| ≤ c) = erf(c/√2) and φ(c) = exp(-c²/2)/√(2π): no scipy.stats import (0.5 s)
 _C = INLIER_LIMIT
-TRUNCATED_VARIANCE = float(
-    ((2 * norm.cdf(_C) - 1) - 2 * _C * norm.pdf(_C)) / (2 * norm.cdf(_C) - 1)
-)
+_INSIDE = math.erf(_C / math.sqrt(2.0))
+TRUNCATED_VARIANCE = (_INSIDE - 2 * _C * math.exp(-_C * _C / 2) / math.sqrt(2 * math.pi)) / _INSIDE
 
 
 @dataclass(frozen=True)

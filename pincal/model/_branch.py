@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
-import scipy.linalg
 
 from pincal.errors import ConvergenceError
 from pincal.model._assembly import Assembly
@@ -70,6 +69,8 @@ class BranchTracking(Assembly):
         None when that square block is not well-conditioned at home (then no branch is
         checked, as before).
         """
+        import scipy.linalg  # here: importing pincal must not load scipy
+
         J = self.closure_jacobian(self.q_home)[:, self._free_v]
         r = self._rank_u
         _, _, row_piv = scipy.linalg.qr(J.T, pivoting=True)

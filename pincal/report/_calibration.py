@@ -27,6 +27,7 @@ from pincal.report._plots import (
     plot_index_history,
     plot_validation_summary,
 )
+from pincal.report._render import PlotJobs
 from pincal.report._sections import (
     UNITS_NOTE,
     data_section,
@@ -148,7 +149,7 @@ def _summary(result: IdentificationResult) -> Section:
     return Section("Summary", text + ".")
 
 
-def _validation(notes: dict, plots: Path) -> Section | None:
+def _validation(notes: dict, plots: Path, jobs: PlotJobs) -> Section | None:
     before, after = notes.get("validation_before"), notes.get("validation_after")
     if before is None or after is None:
         return None
@@ -158,7 +159,9 @@ def _validation(notes: dict, plots: Path) -> Section | None:
             _SUMMARY_KEYS, _SUMMARY_LABELS, _SUMMARY_UNITS, strict=True
         )
     ]
-    images = [plot_validation_summary(before, after, plots / "validation_summary.png")]
+    images = [
+        jobs.add(plot_validation_summary, before, after, path=plots / "validation_summary.png")
+    ]
     ve: dict = notes.get("validation_errors") or {"before": {}, "after": {}}
     for key, unit in (("position", "um"), ("orientation", "urad")):
         if key in ve["before"] and key in ve["after"]:
@@ -166,14 +169,16 @@ def _validation(notes: dict, plots: Path) -> Section | None:
             title = key.capitalize()
             if b.size == a.size:
                 images.append(
-                    plot_errors_before_after(
-                        b, a, unit, plots / f"validation_{key}.png",
+                    jobs.add(
+                        plot_errors_before_after, b, a, unit,
+                        path=plots / f"validation_{key}.png",
                         title=f"{title} error per validation pose",
                     )
                 )  # fmt: skip
             images.append(
-                plot_error_histogram(
-                    b, a, unit, plots / f"validation_{key}_histogram.png",
+                jobs.add(
+                    plot_error_histogram, b, a, unit,
+                    path=plots / f"validation_{key}_histogram.png",
                     title=f"{title} error distribution",
                 )
             )  # fmt: skip
@@ -191,6 +196,7 @@ def calibration_report(
     out: str | os.PathLike | None = None,
     *,
     name: str = "report",
+    n_jobs: int | None = 1,
 ) -> ReportFiles:
     """Write the report of a calibration output directory: HTML, Markdown and JSON.
 
@@ -203,8 +209,16 @@ def calibration_report(
     validation and convergence. ``out`` defaults to ``directory``; nothing else is
     read or changed.
 
+    Args:
+        directory: calibration output directory (holds ``identification.json``).
+        out: folder of the written report; default ``directory``.
+        name: file stem of the report files.
+        n_jobs: processes drawing the plots (-1: every CPU; forked workers, see
+            :mod:`pincal.report._render`); the files do not depend on it.
+
     Raises:
-        ReportError: the directory or its identification.json is missing or malformed.
+        ReportError: the directory or its identification.json is missing or malformed,
+            or ``n_jobs`` is not a positive integer or -1.
     """
     src = Path(directory)
     if not src.is_dir():
@@ -215,24 +229,27 @@ def calibration_report(
     files = sorted(p.name for p in src.iterdir() if p.suffix in (".urdf", ".yaml", ".json"))
     with tempfile.TemporaryDirectory(prefix="pincal-report-") as tmp:
         plots = Path(tmp)
+        jobs = PlotJobs()
         data, noise = data_section(result, notes)
-        sections = [_summary(result), data, residual_section(result, plots)]
+        sections = [_summary(result), data, residual_section(result, plots, jobs)]
         outliers, out_idx, down_idx = outlier_section(result)
         sections.append(outliers)
-        params, poor = parameter_section(result, plots)
+        params, poor = parameter_section(result, plots, jobs)
         sections += [params, prediction_section(result)]
-        validation = _validation(notes, plots)
+        validation = _validation(notes, plots, jobs)
         if validation is not None:
             sections.append(validation)
         extra_images = []
         if result.cost_history:
             extra_images.append(
-                plot_convergence(list(result.cost_history), plots / "convergence.png",
-                                 ylabel="½‖r/σ‖²")
+                jobs.add(plot_convergence, list(result.cost_history),
+                         path=plots / "convergence.png", ylabel="½‖r/σ‖²")
             )  # fmt: skip
         if "index_history" in notes:
             extra_images.append(
-                plot_index_history(notes["index_history"], plots / "index_history.png")
+                jobs.add(
+                    plot_index_history, notes["index_history"], path=plots / "index_history.png"
+                )
             )
         if extra_images:
             w = result.weighting
@@ -259,6 +276,7 @@ def calibration_report(
                 "downweighted_poses": down_idx,
             },
         }
+        jobs.render(n_jobs)
         return write_report(
             out_dir,
             sections,

@@ -21,6 +21,8 @@ from matplotlib.figure import Figure
 
 from pincal.errors import ReportError
 from pincal.io._atomic import atomic_write_bytes
+from pincal.report._axes import bars as _bars
+from pincal.report._axes import log_scale as _log_scale
 
 __all__ = [
     "ErrorStats",
@@ -136,27 +138,21 @@ def plot_errors_before_after(
     fig = _figure()
     ax = fig.add_subplot()
     x = np.arange(b.size)
-    ax.bar(
-        x - 0.2,
-        np.abs(b) * factor,
-        0.4,
-        color=_BEFORE,
+    _bars(
+        ax, x - 0.4, x, np.abs(b) * factor, color=_BEFORE,
         label=f"before: RMS {sb.rms:.4g}, max {sb.max:.4g} {label}",
-    )
-    ax.bar(
-        x + 0.2,
-        np.abs(a) * factor,
-        0.4,
-        color=_AFTER,
+    )  # fmt: skip
+    _bars(
+        ax, x, x + 0.4, np.abs(a) * factor, color=_AFTER,
         label=f"after: RMS {sa.rms:.4g}, max {sa.max:.4g} {label}",
-    )
+    )  # fmt: skip
     ax.set_xlabel("pose")
     ax.set_ylabel(f"error [{label}]")
     ax.set_title(title)
     positive = np.abs(np.concatenate([a, b]))
     positive = positive[positive > 0]
     if positive.size and positive.max() > 20 * positive.min():
-        ax.set_yscale("log")  # calibration typically shrinks errors by decades
+        _log_scale(ax, "y")  # calibration typically shrinks errors by decades
     if b.size <= 30:
         ax.set_xticks(x)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, fontsize=8)  # not on bars
@@ -184,9 +180,13 @@ def plot_error_histogram(
     fig = _figure()
     ax = fig.add_subplot()
     if log_x:
-        ax.set_xscale("log")
-    ax.hist(b * factor, edges.tolist(), color=_BEFORE, alpha=0.6, label=f"before (n = {b.size})")
-    ax.hist(a * factor, edges.tolist(), color=_AFTER, alpha=0.6, label=f"after (n = {a.size})")
+        _log_scale(ax, "x")
+    for values, color, side in ((b, _BEFORE, "before"), (a, _AFTER, "after")):
+        counts, _ = np.histogram(values * factor, edges)
+        _bars(
+            ax, edges[:-1], edges[1:], counts, color=color, alpha=0.6,
+            label=f"{side} (n = {values.size})",
+        )  # fmt: skip
     ax.set_xlabel(f"error [{label}]")
     ax.set_ylabel("count")
     ax.set_title(title)
@@ -220,7 +220,7 @@ def plot_index_history(
         ax.grid(alpha=0.3)
         positive = values > 0
         if positive.all() and values.max() / values.min() > 100:
-            ax.set_yscale("log")
+            _log_scale(ax, "y")
     axes[-1].set_xlabel("iteration")
     axes[0].set_title(title)
     return _save(fig, path)
@@ -239,7 +239,7 @@ def plot_convergence(
     ax = fig.add_subplot()
     ax.plot(np.arange(cost.size), cost, "o-", ms=4)
     if np.all(cost > 0):
-        ax.set_yscale("log")
+        _log_scale(ax, "y")
     ax.set_xlabel("iteration")
     ax.set_ylabel(ylabel)
     ax.set_title(title)
@@ -352,7 +352,7 @@ def plot_validation_summary(
         ax.set_ylabel(f"{quantity} error [{unit}]")
         positive = [v for v in b + a if v > 0]
         if positive and max(positive) / min(positive) > 30:
-            ax.set_yscale("log")
+            _log_scale(ax, "y")
         ax.grid(axis="y", alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.suptitle("Validation: predicted vs actual measured-frame pose")

@@ -19,6 +19,7 @@ from pincal.report._plots import (
     plot_errors_before_after,
     plot_parameters,
 )
+from pincal.report._render import PlotJobs
 
 __all__ = [
     "POOR_ANGLE_2SIGMA",
@@ -105,8 +106,11 @@ def _norms(r: np.ndarray, comps: tuple[str, ...], block: tuple[str, ...]) -> np.
     return np.linalg.norm(r[:, cols], axis=1) if cols and r.size else None
 
 
-def residual_section(result: IdentificationResult, plots: Path) -> Section:
-    """Residuals before and after per pose (plots), as histograms, and their statistics."""
+def residual_section(result: IdentificationResult, plots: Path, jobs: PlotJobs) -> Section:
+    """Residuals before and after per pose (plots), as histograms, and their statistics.
+
+    The plots are recorded in ``jobs`` (files under ``plots``), drawn by the caller.
+    """
     comps = _components(result)
     rows, images = [], []
     for block, label, unit in ((_POS, "position", "um"), (_ORI, "orientation", "urad")):
@@ -125,13 +129,15 @@ def residual_section(result: IdentificationResult, plots: Path) -> Section:
         if before is not None:
             title = f"{label.capitalize()} residual per pose"
             images.append(
-                plot_errors_before_after(
-                    before, after, unit, plots / f"residual_{label}.png", title=title
+                jobs.add(
+                    plot_errors_before_after, before, after, unit,
+                    path=plots / f"residual_{label}.png", title=title,
                 )
-            )
+            )  # fmt: skip
             images.append(
-                plot_error_histogram(
-                    before, after, unit, plots / f"residual_{label}_histogram.png",
+                jobs.add(
+                    plot_error_histogram, before, after, unit,
+                    path=plots / f"residual_{label}_histogram.png",
                     title=f"{label.capitalize()} residual distribution",
                 )
             )  # fmt: skip
@@ -171,8 +177,13 @@ def outlier_section(result: IdentificationResult) -> tuple[Section, list[int], l
     return Section("Outliers", text, (), [table]), list(w.outliers), list(w.downweighted)
 
 
-def parameter_section(result: IdentificationResult, plots: Path) -> tuple[Section, list[str]]:
-    """Identified values with 2σ, poorly determined flags, plot and correlation map."""
+def parameter_section(
+    result: IdentificationResult, plots: Path, jobs: PlotJobs
+) -> tuple[Section, list[str]]:
+    """Identified values with 2σ, poorly determined flags, plot and correlation map.
+
+    The plots are recorded in ``jobs`` (files under ``plots``), drawn by the caller.
+    """
     names = list(result.identified_names)
     values, std = result.values, result.std
     units = [u for u, ok in zip(result.units, result.identified, strict=True) if ok]
@@ -180,13 +191,15 @@ def parameter_section(result: IdentificationResult, plots: Path) -> tuple[Sectio
     truth = result.annotations.get("truth") or {}
     true = np.array([float(truth[n]) for n in names]) if all(n in truth for n in names) else None
     images = [
-        plot_parameters(
-            names, values, std, true, plots / "parameters.png",
+        jobs.add(
+            plot_parameters, names, values, std, true, path=plots / "parameters.png",
             kinds=kinds, length_unit="um", angle_unit="urad",
         )
     ]  # fmt: skip
     if len(names) > 1:
-        images.append(plot_correlation(names, result.covariance, plots / "correlation.png"))
+        images.append(
+            jobs.add(plot_correlation, names, result.covariance, path=plots / "correlation.png")
+        )
     poor = set(poorly_determined(result))
     headers = ["parameter", "value [µm | µrad]", "2σ [µm | µrad]", "unit"]
     headers += ["true [µm | µrad]", "error / σ"] if true is not None else []
