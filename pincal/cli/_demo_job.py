@@ -24,8 +24,10 @@ from pincal.design import (
     cramer_rao_from_jacobian,
     select_poses,
 )
+from pincal.errors import QualityGateError
 from pincal.identification import (
     IdentificationResult,
+    check_quality,
     identify,
 )
 from pincal.io import MANIFEST, write_calibration
@@ -60,6 +62,7 @@ class DemoSettings:
         candidates: candidate spec for pose selection (``grid:4``, ``random:300``,
             ``oa:5``) or ``"none"`` for random measurement poses.
         index: observability index maximised on the noise-whitened Jacobian.
+        force: write the calibration even when the quality gate refuses it (recorded).
     """
 
     model: str = "stewart_6ups"
@@ -73,6 +76,7 @@ class DemoSettings:
     report: bool = True
     candidates: str = "grid:4"
     index: str = "O1"
+    force: bool = False
 
 
 @dataclass(frozen=True)
@@ -136,6 +140,9 @@ def run_demo(
     meas = simulate_measurements(actual, q_meas, settings.noise, rng)
     say(f"identifying {len(params)} parameters ({settings.method})")
     result = identify(nominal, params, meas, settings.method)
+    verdict = check_quality(result, meas, mech=nominal)
+    if not verdict.passed and not settings.force and out_dir is not None:
+        raise QualityGateError(verdict.reason(), verdict)
     say(f"validating on {settings.n_validation} fresh poses")
     before = pose_errors(nominal, actual, q_val)
     after = pose_errors(result.calibrated, actual, q_val)
@@ -143,6 +150,7 @@ def run_demo(
     if out_dir is not None:
         out = Path(out_dir)
         notes: dict[str, object] = {
+            "quality": verdict.to_dict(overridden=settings.force),
             "truth": dict(zip(params.names, (float(t) for t in true), strict=True)),
             "validation_before": before.summary(),
             "validation_after": after.summary(),

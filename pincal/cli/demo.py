@@ -26,6 +26,9 @@ from pincal.cli.common import fail_cleanly
 @click.option("--out", default="pincal-out", show_default=True, help="Output directory.")
 @click.option("--report/--no-report", default=True, show_default=True, help="Write report.html.")
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
+@click.option(
+    "--force", is_flag=True, help="Write the calibration even if the quality gate refuses it."
+)
 @fail_cleanly
 def demo(
     seed: int,
@@ -36,6 +39,7 @@ def demo(
     out: str,
     report: bool,
     as_json: bool,
+    force: bool,
 ) -> None:
     """Simulated calibration of the bundled 6-UPS Stewart platform (42 parameters).
 
@@ -59,6 +63,7 @@ def demo(
         method=method,
         candidates=candidates,
         report=report,
+        force=force,
     )
     result = run_demo(settings, out, progress=lambda msg: click.echo(f"… {msg}", err=True))
     if as_json:
