@@ -17,6 +17,9 @@ __all__ = ["check_measurements"]
 _UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "in": 0.0254, "ft": 0.3048}
 #: length units a pincal measurement file can declare
 _READABLE = ("m", "mm", "um")
+#: a spread ratio outside the band refuses only when the spreads differ by more [m]
+#: (honest geometric errors cannot change the spread of the poses that much)
+_MIN_SPREAD_CHANGE = 2e-3
 #: scale ratio within this relative distance (in log) of a unit ratio names that unit
 _UNIT_MATCH = 0.15
 
@@ -38,20 +41,31 @@ def _duplicates(meas: Measurements) -> tuple[tuple[int, int], ...]:
     return tuple(out)
 
 
-def _nominal_positions(mech: Mechanism, q_act: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Nominal positions (m, 3) and a mask of the rows whose forward kinematics solved."""
-    pos = np.full((len(q_act), 3), np.nan)
+def _nominal_poses(
+    mech: Mechanism, q_act: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Nominal positions (m, 3), rotations (m, 3, 3) and a mask of the rows that solved."""
+    pos, rot = np.full((len(q_act), 3), np.nan), np.full((len(q_act), 3, 3), np.nan)
     try:
-        qs = mech.configurations(q_act)
-        for i, q in enumerate(qs):
-            pos[i] = mech.frame_placement(q).translation
+        for i, q in enumerate(mech.configurations(q_act)):
+            T = mech.frame_placement(q)
+            pos[i], rot[i] = T.translation, T.rotation
     except PincalError:
         for i, row in enumerate(q_act):
             try:
-                pos[i] = mech.forward(row).translation
+                T = mech.forward(row)
             except PincalError:
                 continue
-    return pos, np.all(np.isfinite(pos), axis=1)
+            pos[i], rot[i] = T.translation, T.rotation
+    return pos, rot, np.all(np.isfinite(pos), axis=1)
+
+
+def _mean_rotation_angle(measured: np.ndarray, nominal: np.ndarray) -> float:
+    """Angle [rad] of the chordal mean of ``R_meas R_nomᵀ`` (a world-frame rotation)."""
+    M = np.einsum("mij,mkj->ik", measured, nominal)
+    U, _, Vt = np.linalg.svd(M)
+    R = U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
+    return float(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)))
 
 
 def _spread(p: np.ndarray) -> float:
@@ -103,16 +117,21 @@ def check_measurements(
             f"{shown}): each copy shrinks the reported σ without new information; remove "
             "copied rows",
         ))  # fmt: skip
-    ratio, unit, offset = float("nan"), None, float("nan")
+    ratio, unit, offset, rotation = float("nan"), None, float("nan"), float("nan")
     cause, text = "", ""
     if any(c in ("x", "y", "z") for c in measurements.components) and len(measurements) >= 3:
-        nominal, ok = _nominal_positions(mech, measurements.q_act)
+        nominal, nominal_rot, ok = _nominal_poses(mech, measurements.q_act)
+        if measurements.rotations is not None and ok.sum() >= 3:
+            rotation = _mean_rotation_angle(measurements.rotations[ok], nominal_rot[ok])
         measured = measurements.positions[ok]
         s_nom = _spread(nominal[ok]) if ok.sum() >= 3 else 0.0
         if s_nom > 1e-6:
             ratio = _spread(measured) / s_nom
             offset = float(np.linalg.norm(measured.mean(axis=0) - nominal[ok].mean(axis=0)))
-            if not 1.0 / lim.scale_band <= ratio <= lim.scale_band:
+            s_meas = _spread(measured)
+            if not 1.0 / lim.scale_band <= ratio <= lim.scale_band and (
+                abs(s_meas - s_nom) > _MIN_SPREAD_CHANGE
+            ):
                 unit = _unit_of(ratio, length_unit)
                 fix = (
                     f"set length_unit {unit}"
@@ -127,9 +146,9 @@ def check_measurements(
                 issues.append(QualityIssue(
                     "units", True,
                     f"measured positions spread {ratio:.3g}× as much as the nominal model's at "
-                    f"the same actuator values ({_spread(measured) * 1e3:.4g} mm vs "
+                    f"the same actuator values ({s_meas * 1e3:.4g} mm vs "
                     f"{s_nom * 1e3:.4g} mm; accepted {1 / lim.scale_band:g}–{lim.scale_band:g}×)",
                 ))  # fmt: skip
                 cause, text = "units", f"{guess}."
     return QualityVerdict(tuple(issues), cause, text, (), float("nan"), dup, ratio, unit,
-                          (), offset, lim)  # fmt: skip
+                          (), offset, rotation, lim)  # fmt: skip

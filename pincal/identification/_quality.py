@@ -16,8 +16,8 @@ Thresholds (:class:`GateLimits`, defaults):
   < 0.01 warns (the declared noise is 10× too large);
 - a parameter moving by more than 20 mm (lengths) or 0.1 rad (angles) refuses;
 - measured positions whose spread about their centroid is outside ½–2× the nominal
-  model's at the same actuator values refuse before fitting (a known unit ratio —
-  1000, 0.001, 10, 0.1, 25.4… — is named);
+  model's at the same actuator values (and differs from it by more than 2 mm) refuse
+  before fitting (a known unit ratio — 1000, 0.001, 10, 0.1, 1/25.4… — is named);
 - a pose is an outlier when one of its residuals — whitened, studentised by its
   leverage and divided by the robust (MAD) scale of its block — exceeds
   ``max(5, Φ⁻¹(1 − 1e-3 / 2N))`` (5σ, or the Bonferroni bound of family-wise risk 1e-3
@@ -48,6 +48,7 @@ from pincal.model._mechanism import Mechanism
 __all__ = ["check_quality", "outlier_poses"]
 
 _MAD = 1.4826  # σ of a Gaussian per median absolute deviation
+_FRAME_ANGLE = 0.05  # mean measured-vs-nominal rotation that names the frame [rad]
 _MIN_LIMIT = 5.0  # smallest outlier threshold [robust σ]
 _EXACT = 1e-9  # residuals below this [m, rad] are exact data: no outlier test
 
@@ -253,13 +254,14 @@ def _cause(v: QualityVerdict, result: IdentificationResult, m: int) -> tuple[str
     """The likely cause of a refusal, in order: frame, singular pose, outliers, else."""
     lim = v.limits
     kinds = {i.kind for i in v.refusals}
-    if math.isfinite(v.frame_offset) and v.frame_offset > lim.max_length_change and (
-        "change" in kinds or "chi2" in kinds
-    ):
+    shifted = math.isfinite(v.frame_offset) and v.frame_offset > lim.max_length_change
+    turned = math.isfinite(v.frame_rotation) and v.frame_rotation > _FRAME_ANGLE
+    if (shifted or turned) and kinds & {"change", "chi2", "solver"}:
         return "frame", (
-            f"the measured positions are offset {v.frame_offset * 1e3:.4g} mm from the "
-            "nominal model's (same spread): measured in an unregistered frame? Register the "
-            "instrument to the machine base (pincal import-tracker) or fit the base frame."
+            f"the measured poses are offset {v.frame_offset * 1e3:.4g} mm and turned "
+            f"{v.frame_rotation:.3g} rad from the nominal model's: measured in an "
+            "unregistered frame? Register the instrument to the machine base (pincal "
+            "import-tracker) or fit the base frame."
         )
     if v.singular_poses:
         return "singular pose", (

@@ -84,6 +84,8 @@ class QualityVerdict:
         singular_poses: indices of poses of outsized sensitivity.
         frame_offset: distance between the centroids of the measured and nominal
             positions [m] (NaN when not checked).
+        frame_rotation: angle of the mean rotation from the nominal to the measured
+            orientations, in the world frame [rad] (NaN when not checked).
         limits: the thresholds used.
     """
 
@@ -97,6 +99,7 @@ class QualityVerdict:
     likely_unit: str | None = None
     singular_poses: tuple[int, ...] = ()
     frame_offset: float = float("nan")
+    frame_rotation: float = float("nan")
     limits: GateLimits = field(default_factory=GateLimits)
 
     @property

@@ -53,8 +53,11 @@ def test_clean_data_pass(tmp_path, campaign):
 
 @pytest.mark.parametrize(
     ("written", "declared", "scale", "named"),
-    [("mm", "m", 1.0, "mm declared as m"), ("m", "mm", 1.0, "m declared as mm"),
-     ("mm", "mm", 0.1, "cm declared as mm")],  # fmt: skip
+    [
+        ("mm", "m", 1.0, "mm declared as m"),
+        ("m", "mm", 1.0, "m declared as mm"),
+        ("mm", "mm", 0.1, "cm declared as mm"),
+    ],
 )
 def test_unit_mistakes_exit_nonzero_and_write_nothing(
     tmp_path, campaign, written, declared, scale, named
@@ -135,3 +138,19 @@ def test_max_change_option(tmp_path, campaign):
     assert res.exit_code == 1 and "moved beyond 0.001 mm" in res.stderr
     res = _calibrate(path, tmp_path / "cal", "--max-change", "x")
     assert res.exit_code == 2 and "length_mm,angle_rad" in res.output
+
+
+def test_run_stops_at_a_refused_calibration_and_force_passes_it_on(tmp_path, campaign):
+    path = _relabel(_file(tmp_path, campaign[1]), "mm", "m")
+    camp = tmp_path / "c.yaml"
+    camp.write_text(
+        f"model: stewart_6ups\nmeasurements: {{source: file, file: {path}}}\n"
+        "validation: {source: none}\nreport: false\n"
+    )
+    res = CliRunner().invoke(main, ["run", str(camp), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 1 and "step 'calibrate' failed" in res.stderr
+    assert "Likely cause: units" in res.stderr and not (tmp_path / "out").exists()
+    res = CliRunner().invoke(main, ["run", str(camp), "--out", str(tmp_path / "out"), "--force"])
+    assert res.exit_code == 0, res.output
+    manifest = json.loads((tmp_path / "out" / "calibration.json").read_text())
+    assert manifest["quality"]["overridden"] is True

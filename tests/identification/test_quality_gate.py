@@ -184,3 +184,22 @@ def test_robust_fits_with_outliers_succeed_and_pass(stewart, stewart42, clean, l
     result = identify(stewart, stewart42, meas, "lm", options=LMOptions(loss=loss))
     assert result.success, result.message
     assert check_quality(result, meas, mech=stewart).passed
+
+
+def test_unregistered_frame_is_named(stewart, stewart42, clean):
+    shifted = dataclasses.replace(clean, positions=clean.positions + np.array([0.05, 0.0, 0.0]))
+    result = identify(stewart, stewart42, shifted)
+    verdict = check_quality(result, shifted, mech=stewart)
+    assert "change" in [i.kind for i in verdict.refusals] and verdict.cause == "frame"
+    assert verdict.frame_offset == pytest.approx(0.05, abs=2e-3)
+    R = pin.rpy.rpyToMatrix(0.0, 0.0, 0.3)
+    turned = dataclasses.replace(
+        clean,
+        positions=clean.positions @ R.T,
+        rotations=np.einsum("ij,mjk->mik", R, clean.rotations),
+    )
+    result = identify(stewart, stewart42, turned)
+    verdict = check_quality(result, turned, mech=stewart)
+    assert not verdict.passed and verdict.cause == "frame"
+    assert verdict.frame_rotation == pytest.approx(0.3, abs=0.02)
+    assert "unregistered frame" in verdict.reason()
