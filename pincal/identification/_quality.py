@@ -114,9 +114,10 @@ def _whitened_jacobian(
         return None
     with np.errstate(divide="ignore", invalid="ignore"):
         sigma = np.abs(raw / z)
-    typical = np.nanmedian(np.where(np.isfinite(sigma) & (sigma > 0), sigma, np.nan), axis=0)
-    typical = np.where(np.isfinite(typical), typical, 1.0)
-    sigma = np.where(np.isfinite(sigma) & (sigma > 0), sigma, typical[None, :])
+    good = np.isfinite(sigma) & (sigma > 0)
+    typical = [float(np.median(sigma[good[:, j], j])) if good[:, j].any() else 1.0
+               for j in range(k)]  # fmt: skip
+    sigma = np.where(good, sigma, np.array(typical)[None, :])
     return J[:, result.identified].reshape(m, k, -1) / sigma[:, :, None]
 
 
