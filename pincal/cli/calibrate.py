@@ -109,10 +109,17 @@ def format_report(doc: dict) -> str:
     show_default=True,
     help="Robust loss (needs --method lm); poses it down-weights are reported.",
 )
-@click.option("--force", is_flag=True,
-              help="Write the calibration even when the quality gate refuses it (recorded).")
-@click.option("--max-change", default=None, metavar="MM,RAD",
-              help="Quality gate: largest parameter change [default: 20,0.1].")  # fmt: skip
+@click.option(
+    "--force",
+    is_flag=True,
+    help="Write the calibration even when the quality gate refuses it (recorded).",
+)
+@click.option(
+    "--max-change",
+    default=None,
+    metavar="MM,RAD",
+    help="Quality gate: largest parameter change [default: 20,0.1].",
+)
 @fail_cleanly
 def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max_change) -> None:
     """Identify MODEL's geometric parameters from measured poses (--data).
