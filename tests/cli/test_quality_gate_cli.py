@@ -73,13 +73,14 @@ def test_unit_mistakes_exit_nonzero_and_write_nothing(
 
 
 def test_force_writes_and_the_report_says_so(tmp_path, campaign):
-    path = _relabel(_file(tmp_path, campaign[1]), "mm", "m")
-    res = _calibrate(path, tmp_path / "cal", "--force")
+    path = _file(tmp_path, campaign[1])
+    tight = ("--max-change", "0.001,0.00001")  # clean data, but the bound refuses them
+    res = _calibrate(path, tmp_path / "cal", *tight, "--force")
     assert res.exit_code == 0, res.output
     assert "--force: writing despite the quality gate" in res.stderr
     quality = json.loads((tmp_path / "cal" / "calibration.json").read_text())["quality"]
     assert quality["passed"] is False and quality["overridden"] is True
-    assert quality["cause"] == "units" and "mm declared as m" in quality["reason"]
+    assert "moved beyond 0.001 mm" in quality["reason"]
     ident = json.loads((tmp_path / "cal" / "identification.json").read_text())
     assert ident["quality"]["overridden"] is True
     assert "OVERRIDDEN with --force" in (tmp_path / "cal" / "report.txt").read_text()
@@ -89,6 +90,16 @@ def test_force_writes_and_the_report_says_so(tmp_path, campaign):
     assert "## Quality gate" in md and "overridden with --force" in md
     report = json.loads((tmp_path / "cal" / "report.json").read_text())
     assert report["quality"]["overridden"] is True
+
+
+@pytest.mark.slow
+def test_force_past_a_unit_mistake_records_the_cause(tmp_path, campaign):
+    path = _relabel(_file(tmp_path, campaign[1]), "mm", "m")
+    res = _calibrate(path, tmp_path / "cal", "--force")
+    assert res.exit_code == 0, res.output
+    quality = json.loads((tmp_path / "cal" / "calibration.json").read_text())["quality"]
+    assert quality["overridden"] is True and quality["cause"] == "units"
+    assert "mm declared as m" in quality["reason"]
 
 
 def test_outliers_refused_then_huber_passes(tmp_path, campaign):
@@ -140,16 +151,26 @@ def test_max_change_option(tmp_path, campaign):
     assert res.exit_code == 2 and "length_mm,angle_rad" in res.output
 
 
-def test_run_stops_at_a_refused_calibration_and_force_passes_it_on(tmp_path, campaign):
+def _campaign_file(tmp_path, campaign):
     path = _relabel(_file(tmp_path, campaign[1]), "mm", "m")
     camp = tmp_path / "c.yaml"
     camp.write_text(
         f"model: stewart_6ups\nmeasurements: {{source: file, file: {path}}}\n"
         "validation: {source: none}\nreport: false\n"
     )
+    return camp
+
+
+def test_run_stops_at_a_refused_calibration(tmp_path, campaign):
+    camp = _campaign_file(tmp_path, campaign)
     res = CliRunner().invoke(main, ["run", str(camp), "--out", str(tmp_path / "out")])
     assert res.exit_code == 1 and "step 'calibrate' failed" in res.stderr
     assert "Likely cause: units" in res.stderr and not (tmp_path / "out").exists()
+
+
+@pytest.mark.slow
+def test_run_force_passes_it_on(tmp_path, campaign):
+    camp = _campaign_file(tmp_path, campaign)
     res = CliRunner().invoke(main, ["run", str(camp), "--out", str(tmp_path / "out"), "--force"])
     assert res.exit_code == 0, res.output
     manifest = json.loads((tmp_path / "out" / "calibration.json").read_text())
