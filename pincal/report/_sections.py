@@ -266,7 +266,8 @@ def quality_section(notes: dict) -> Section | None:
         text = "The quality gate passed: the fit is consistent with the data and the noise."
     elif q.get("overridden"):
         text = (
-            "**The quality gate refused this calibration and was overridden with --force.** "
+            "OVERRIDDEN: the quality gate refused this calibration and was overridden with "
+            "--force. "
             f"{q.get('reason') or ''}"
         )
     else:
