@@ -174,7 +174,7 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
                 param_hint="--data",
             )
         result, noise_model = _identify_instrument(mech, params, data, method), None
-        verdict = check_quality(result, limits=limits)
+        verdict = check_quality(result, limits=limits, scalar_instrument=True)
     else:
         mf = read_measurement_file(data, mech)
         for w in mf.warnings:

@@ -158,6 +158,7 @@ def check_quality(
     mech: Mechanism | None = None,
     data: QualityVerdict | None = None,
     limits: GateLimits | None = None,
+    scalar_instrument: bool = False,
 ) -> QualityVerdict:
     """Judge an identification result; refusals mean: do not write this calibration.
 
@@ -169,6 +170,11 @@ def check_quality(
         data: the verdict of :func:`check_measurements` on the same data (computed here
             when None and both ``mech`` and ``measurements`` are given).
         limits: thresholds (default :class:`GateLimits`, or ``data``'s).
+        scalar_instrument: the result is a ballbar / probe / plane / gauge fit, whose
+            near-gauge directions (an instrument pivot against a translation of the
+            machine) let parameters drift and the solver stop at its iteration limit
+            without changing the fit: with a reduced χ² within the limit, parameter
+            changes and an unfinished solve are warnings, not refusals.
 
     Returns:
         QualityVerdict with the data issues first, then the result's.
@@ -189,12 +195,13 @@ def check_quality(
     out, limit = outlier_poses(result, lim.outlier_risk, lev)
     m = int(np.asarray(result.residuals).shape[0])
     singular = _singular(Jw, lim.singular_ratio)
-    if not result.success:
-        issues.append(QualityIssue(
-            "solver", True, f"the solver did not succeed ({result.message.strip()[:160]})"
-        ))  # fmt: skip
     declared = w is not None and w.source in ("declared", "per-pose")
     chi2 = float(result.reduced_chi2)
+    lenient = scalar_instrument and chi2 <= lim.max_reduced_chi2
+    if not result.success:
+        issues.append(QualityIssue(
+            "solver", not lenient, f"the solver did not succeed ({result.message.strip()[:160]})"
+        ))  # fmt: skip
     if w is not None and declared and robust and out:
         keep = np.setdiff1d(np.arange(m), out)  # a robust fit is judged on its inliers
         z = np.asarray(w.whitened)[keep]
@@ -213,7 +220,7 @@ def check_quality(
         ))  # fmt: skip
     change = _changes(result, lim)
     if change is not None:
-        issues.append(change)
+        issues.append(replace(change, refuse=not lenient))
     if out:
         shown = ", ".join(map(str, out[:12])) + (" …" if len(out) > 12 else "")
         text = (
