@@ -36,6 +36,7 @@ __all__ = [
     "ParameterError",
     "PincalError",
     "PoseFitError",
+    "QualityGateError",
     "ReportError",
     "ShapeError",
     "SingularConfigurationError",
@@ -326,3 +327,15 @@ class ImportMatchError(MeasurementError):
 
 class CampaignError(InputFileError):
     """A campaign file (``pincal run``) is malformed: unknown key, bad value, missing file."""
+
+
+class QualityGateError(PincalError):
+    """A calibration is refused by the quality gate (units, frame, outliers, singular pose).
+
+    Attributes:
+        verdict: the :class:`pincal.identification.QualityVerdict` that refused it.
+    """
+
+    def __init__(self, message: str, verdict: object = None):
+        self.verdict = verdict
+        super().__init__(message)

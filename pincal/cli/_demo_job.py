@@ -26,8 +26,10 @@ from pincal.design import (
     cramer_rao_from_jacobian,
     select_poses,
 )
+from pincal.errors import QualityGateError
 from pincal.identification import (
     IdentificationResult,
+    check_quality,
     identify,
 )
 from pincal.io import MANIFEST, write_calibration
@@ -64,6 +66,7 @@ class DemoSettings:
         index: observability index maximised on the noise-whitened Jacobian.
         bounded: refuse a candidate set past the default bounds of
             :func:`pincal.design.candidate_set` (False: ``--yes``).
+        force: write the calibration even when the quality gate refuses it (recorded).
     """
 
     model: str = "stewart_6ups"
@@ -78,6 +81,7 @@ class DemoSettings:
     candidates: str = "grid:4"
     index: str = "O1"
     bounded: bool = True
+    force: bool = False
 
 
 @dataclass(frozen=True)
@@ -160,6 +164,9 @@ def _run_demo(
     meas = simulate_measurements(actual, q_meas, settings.noise, rng)
     say(f"identifying {len(params)} parameters ({settings.method})")
     result = identify(nominal, params, meas, settings.method)
+    verdict = check_quality(result, meas, mech=nominal)
+    if not verdict.passed and not settings.force and out_dir is not None:
+        raise QualityGateError(verdict.reason(), verdict)
     say(f"validating on {settings.n_validation} fresh poses")
     before = pose_errors(nominal, actual, q_val)
     after = pose_errors(result.calibrated, actual, q_val)
@@ -167,6 +174,7 @@ def _run_demo(
     if out_dir is not None:
         out = Path(out_dir)
         notes: dict[str, object] = {
+            "quality": verdict.to_dict(overridden=settings.force),
             "truth": dict(zip(params.names, (float(t) for t in true), strict=True)),
             "validation_before": before.summary(),
             "validation_after": after.summary(),

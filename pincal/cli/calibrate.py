@@ -63,7 +63,9 @@ def format_report(doc: dict) -> str:
                 f"{s['max_orientation_mrad']:.6f} mrad"
             )
         lines.append(f"residuals {when:6s}: " + "; ".join(parts))
-    return "\n".join(lines) + "\n"
+    from pincal.cli._gate import quality_lines
+
+    return "\n".join(lines + quality_lines(doc.get("quality"))) + "\n"
 
 
 @click.command()
@@ -108,14 +110,27 @@ def format_report(doc: dict) -> str:
     show_default=True,
     help="Robust loss (needs --method lm); poses it down-weights are reported.",
 )
+@click.option(
+    "--force",
+    is_flag=True,
+    help="Write the calibration even when the quality gate refuses it (recorded).",
+)
+@click.option(
+    "--max-change",
+    default=None,
+    metavar="MM,RAD",
+    help="Quality gate: largest parameter change [default: 20,0.1].",
+)
 @fail_cleanly
-def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
+def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max_change) -> None:
     """Identify MODEL's geometric parameters from measured poses (--data).
 
     Writes one calibration directory OUT (whole or not at all) that `pincal view
     --calibrated`, `compensate`, `validate` and `report` read as it is. Without a noise
     declaration (file header or --noise) the noise of each block is estimated from the
-    residuals and reported.
+    residuals and reported. A quality gate refuses to write a calibration whose data or
+    fit are implausible (unit mistake, outliers, failed solve, reduced χ² > 100 with
+    declared noise, a parameter moving > 20 mm / 0.1 rad); --force writes it anyway.
 
     \b
     Examples:
@@ -123,6 +138,8 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
       pincal calibrate hexaslide_6pus --data m.csv --noise 0.01,0.02 --out cal/
       pincal calibrate wedge3 --data m.csv --params patent --method lm --loss huber --out cal/
     """
+    from pincal.cli._gate import apply_gate, gate_limits
+    from pincal.identification import check_measurements, check_quality
     from pincal.io import (
         CALIBRATED_SIDECAR,
         CALIBRATED_URDF,
@@ -132,6 +149,8 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
         write_calibration,
     )
     from pincal.model import load_mechanism, parameters
+
+    limits = gate_limits(max_change)
 
     if loss != "linear" and method != "lm":
         raise click.BadParameter(
@@ -154,15 +173,21 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
                 param_hint="--data",
             )
         result, noise_model = _identify_instrument(mech, params, data, method), None
+        verdict = check_quality(result, limits=limits, scalar_instrument=True)
     else:
         mf = read_measurement_file(data, mech)
         for w in mf.warnings:
             click.echo(f"pincal: warning: {w}", err=True)
         meas = mf.measurements
         noise_model = meas.noise
+        gate = check_measurements(mech, meas, length_unit=mf.length_unit, limits=limits)
+        apply_gate(gate, force, before_fit=True)
         result = _identify_poses(mech, params, preset, meas, method, declared, loss)
+        verdict = check_quality(result, meas, mech=mech, data=gate)
+    quality = apply_gate(verdict, force)
     out_dir = Path(out)
     doc = result_json(result, str(data), CALIBRATED_URDF)
+    doc["quality"] = quality
     report = format_report(doc)
     cal = write_calibration(
         out_dir,
@@ -170,7 +195,7 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss) -> None:
         model_source=model_source(model),
         data_files=[data],
         noise=noise_model,
-        annotations={"data": str(data)},
+        annotations={"data": str(data), "quality": quality},
         texts={"report.txt": report},
     )
     if as_json:

@@ -28,6 +28,9 @@ from pincal.cli.common import fail_cleanly
 @click.option("--report/--no-report", default=True, show_default=True, help="Write report.html.")
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @yes_option
+@click.option(
+    "--force", is_flag=True, help="Write the calibration even if the quality gate refuses it."
+)
 @fail_cleanly
 def demo(
     seed: int,
@@ -39,6 +42,7 @@ def demo(
     report: bool,
     as_json: bool,
     yes: bool,
+    force: bool,
 ) -> None:
     """Simulated calibration of the bundled 6-UPS Stewart platform (42 parameters).
 
@@ -69,6 +73,7 @@ def demo(
         candidates=candidates,
         report=report,
         bounded=not yes,
+        force=force,
     )
     with naming_option("--candidates" if candidates != "none" else "--poses"):
         result = run_demo(settings, out, progress=lambda msg: click.echo(f"… {msg}", err=True))

@@ -84,6 +84,8 @@ def _measure_validation(c: Campaign, p: Paths) -> list[str] | None:
 
 def _calibrate(c: Campaign, p: Paths) -> list[str] | None:
     args = [c.model, "--data", str(p.data), "--method", c.identification.method]
+    ctx = click.get_current_context(silent=True)  # `pincal run --force` passes it on
+    args += ["--force"] if ctx is not None and ctx.params.get("force") else []
     return args + (["--params", c.preset] if c.preset else []) + ["--out", str(p.out)]
 
 
@@ -155,13 +157,15 @@ def _invoke(ctx: click.Context, step: Step, args: list[str], quiet: bool, yes: b
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Output directory (default: the file's 'out' key).")  # fmt: skip
 @click.option("--dry-run", is_flag=True, help="Check the file and print the steps only.")
+@click.option("--force", is_flag=True,
+              help="calibrate: write even when the quality gate refuses (recorded).")  # fmt: skip
 @click.option("--json", "as_json", is_flag=True,
               help="Print a JSON summary on stdout (step output goes to stderr).")  # fmt: skip
 @yes_option
 @fail_cleanly
 @click.pass_context
 def run(ctx: click.Context, campaign_file: Path, out: Path | None, dry_run: bool,
-        as_json: bool, yes: bool) -> None:  # fmt: skip
+        force: bool, as_json: bool, yes: bool) -> None:  # fmt: skip
     """Run the calibration campaign described in CAMPAIGN_FILE (YAML).
 
     The steps are the pincal subcommands a user would type, in order: poses

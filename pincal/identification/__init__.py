@@ -8,6 +8,7 @@ One :class:`IdentificationProblem`, solved by a registered solver (``"gauss-newt
 
 from __future__ import annotations
 
+from pincal.identification._data_check import check_measurements
 from pincal.identification._identify import identify, qpso_identify, step_planned_identify
 from pincal.identification._instrument_design import (
     InstrumentIdentifiability,
@@ -33,6 +34,7 @@ from pincal.identification._problem import CalibrationProblem, IdentificationPro
 from pincal.identification._qpso import QPSOResult, qpso
 from pincal.identification._qpso_identify import COST_MODELS, QPSOOptions
 from pincal.identification._qpso_stepwise import QPSOStage, QPSOStepwiseResult, qpso_stepwise
+from pincal.identification._quality import check_quality, outlier_poses
 from pincal.identification._result import (
     IdentificationResult,
     LocalSolverExtras,
@@ -43,6 +45,7 @@ from pincal.identification._result import (
 )
 from pincal.identification._result_io import FORMAT_VERSION
 from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
+from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
 from pincal.identification._weighting import Weighting
 
 #: pincal 0.1 result names: every solver now returns an IdentificationResult
@@ -56,6 +59,7 @@ __all__ = [
     "METHODS",
     "SOLVERS",
     "CalibrationProblem",
+    "GateLimits",
     "GaussNewtonOptions",
     "IdentificationProblem",
     "IdentificationResult",
@@ -71,6 +75,8 @@ __all__ = [
     "QPSOResult",
     "QPSOStage",
     "QPSOStepwiseResult",
+    "QualityIssue",
+    "QualityVerdict",
     "ResidualStats",
     "Solver",
     "SolverExtras",
@@ -78,6 +84,8 @@ __all__ = [
     "StepPlanningOptions",
     "StepPlanningResult",
     "Weighting",
+    "check_measurements",
+    "check_quality",
     "default_instrument",
     "identify",
     "identify_instruments",
@@ -86,6 +94,7 @@ __all__ = [
     "instrument_cramer_rao",
     "instrument_identifiability",
     "monte_carlo",
+    "outlier_poses",
     "qpso",
     "qpso_identify",
     "qpso_stepwise",

@@ -23,7 +23,7 @@ import numpy as np
 
 from pincal.errors import NoiseEstimationError
 from pincal.identification._outcome import Progress, SolverOutcome
-from pincal.identification._problem import CalibrationProblem
+from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import LocalSolverExtras
 from pincal.identification._weighting import (
     INLIER_LIMIT,
@@ -122,6 +122,55 @@ def _loss(opts: Any) -> tuple[str, float]:
     return loss, float(ROBUST_F_SCALE[loss] if f is None else f)
 
 
+def robust_cost(loss: str, r_w: np.ndarray, f_scale: float) -> float:
+    """The robust cost ``½ f² Σ ρ((r/f)²)`` of scipy's losses for whitened residuals [σ²]."""
+    z = (np.asarray(r_w, dtype=float).ravel() / f_scale) ** 2
+    if loss == "huber":
+        rho = np.where(z <= 1.0, z, 2.0 * np.sqrt(z) - 1.0)
+    elif loss == "soft_l1":
+        rho = 2.0 * (np.sqrt(1.0 + z) - 1.0)
+    elif loss == "cauchy":
+        rho = np.log1p(z)
+    elif loss == "arctan":
+        rho = np.arctan(z)
+    else:
+        rho = z
+    return 0.5 * f_scale**2 * float(np.sum(rho))
+
+
+def _robust_progress(
+    model: CalibrationProblem,
+    x0: np.ndarray,
+    x: np.ndarray,
+    r_w: np.ndarray,
+    loss: str,
+    f_scale: float,
+    out: SolverOutcome,
+) -> SolverOutcome:
+    """``out`` with success False when the robust fit ends worse than its start.
+
+    Both ends are scored with the final weights: the robust cost, and — since a robust
+    cost can fall by giving up on most poses — the median whitened residual norm per pose.
+    """
+    try:
+        _, _, raw0 = model.evaluate(x0)
+    except TRIAL_FAILURES:
+        return out
+    r0 = raw0 / model.sigma
+    c0, c1 = robust_cost(loss, r0, f_scale), robust_cost(loss, r_w, f_scale)
+    m0 = float(np.median(np.linalg.norm(r0, axis=1)))
+    m1 = float(np.median(np.linalg.norm(r_w, axis=1)))
+    if c1 <= c0 * (1 + 1e-9) and m1 <= m0 * (1 + 1e-9):
+        return out
+    msg = (
+        f"the {loss} fit ended worse than its start (robust cost {c0:.6g} → {c1:.6g}, median "
+        f"pose residual {m0:.4g}σ → {m1:.4g}σ); not a solution: try --loss huber or a "
+        f"least-squares fit first. Solver said: {out.message}"
+    )
+    log.warning(msg)
+    return SolverOutcome(out.x, out.iterations, out.history, False, msg, out.extras, out.fitted)
+
+
 def weighted_fit(
     model: CalibrationProblem,
     entry: Any,
@@ -205,6 +254,8 @@ def weighted_fit(
         pose_weights=np.ones(raw.shape[0]) if pose_w is None else pose_w,
         whitened=r_w,
     )
+    if loss != "linear" and out.success:
+        out = _robust_progress(model, x0, x, r_w, loss, f_scale, out)
     if estimating:
         note = (
             f"noise estimated from the residuals in {rounds} re-weighted fits"

@@ -281,6 +281,8 @@ def _write_locked(
             atomic_write_text(tmp / name, text)
         files = {p.name: sha256_file(p) for p in sorted(tmp.iterdir()) if p.is_file()}
         manifest = _manifest(result, model_source, data_files, noise, files)
+        if annotations and "quality" in annotations:  # the quality gate's verdict / override
+            manifest["quality"] = annotations["quality"]
         atomic_write_text(tmp / MANIFEST, json.dumps(manifest, indent=1) + "\n")
         os.chmod(tmp, 0o755)
         _check_replaceable(out)

@@ -34,6 +34,7 @@ from pincal.report._sections import (
     outlier_section,
     parameter_section,
     prediction_section,
+    quality_section,
     residual_section,
 )
 
@@ -232,6 +233,9 @@ def calibration_report(
         jobs = PlotJobs()
         data, noise = data_section(result, notes)
         sections = [_summary(result), data, residual_section(result, plots, jobs)]
+        quality = quality_section(notes)
+        if quality is not None:
+            sections.insert(1, quality)
         outliers, out_idx, down_idx = outlier_section(result)
         sections.append(outliers)
         params, poor = parameter_section(result, plots, jobs)
@@ -275,6 +279,7 @@ def calibration_report(
                 "outlier_poses": out_idx,
                 "downweighted_poses": down_idx,
             },
+            "quality": notes.get("quality"),
         }
         jobs.render(n_jobs)
         return write_report(

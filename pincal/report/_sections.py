@@ -30,6 +30,7 @@ __all__ = [
     "parameter_section",
     "poorly_determined",
     "prediction_section",
+    "quality_section",
     "residual_section",
 ]
 
@@ -267,3 +268,32 @@ def prediction_section(result: IdentificationResult) -> Section:
         (),
         [Table(["quantity", "unit", "predicted", "achieved"], rows)],
     )
+
+
+def quality_section(notes: dict) -> Section | None:
+    """The quality gate's verdict (``annotations['quality']``): passed, or overridden and why."""
+    q = notes.get("quality")
+    if not isinstance(q, dict):
+        return None
+    if q.get("passed"):
+        text = "The quality gate passed: the fit is consistent with the data and the noise."
+    elif q.get("overridden"):
+        text = (
+            "OVERRIDDEN: the quality gate refused this calibration and was overridden with "
+            "--force. "
+            f"{q.get('reason') or ''}"
+        )
+    else:
+        text = f"The quality gate refused this calibration. {q.get('reason') or ''}"
+    rows = [["refused", str(i.get("kind")), str(i.get("message"))] for i in q.get("refusals", [])]
+    rows += [["warning", str(i.get("kind")), str(i.get("message"))] for i in q.get("warnings", [])]
+    if q.get("outlier_poses"):
+        limit = q.get("outlier_limit")
+        text += (
+            f"\n\nOutlier poses (robust normalised residual > {limit if limit else '?'}): "
+            f"{q['outlier_poses']}; a robust fit (--method lm --loss huber) down-weights them."
+        )
+    if q.get("duplicate_rows"):
+        text += f"\n\nDuplicate rows (copy, original): {q['duplicate_rows']}."
+    tables = [Table(["verdict", "check", "finding"], rows)] if rows else []
+    return Section("Quality gate", text, (), tables)

@@ -1,0 +1,84 @@
+"""The quality gate on the command line: options, printing, refusal and override.
+
+The verdict itself is :func:`pincal.identification.check_quality`'s; this module only
+prints it, raises :class:`pincal.errors.QualityGateError` for a refusal without
+``--force`` and formats the lines of ``report.txt``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import click
+
+from pincal.errors import QualityGateError
+
+__all__ = ["apply_gate", "gate_limits", "quality_lines"]
+
+
+def gate_limits(max_change: str | None):
+    """:class:`GateLimits` from ``--max-change 'mm,rad'`` (None: the defaults).
+
+    Raises:
+        click.BadParameter: not two positive numbers.
+    """
+    from pincal.errors import SolverOptionError
+    from pincal.identification import GateLimits
+
+    if max_change is None:
+        return GateLimits()
+    try:
+        mm, rad = (float(v) for v in max_change.split(","))
+        return GateLimits(max_length_change=mm * 1e-3, max_angle_change=rad)
+    except (ValueError, SolverOptionError):
+        raise click.BadParameter(
+            "give 'length_mm,angle_rad', two numbers > 0, e.g. 20,0.1", param_hint="--max-change"
+        ) from None
+
+
+def apply_gate(verdict, force: bool, *, before_fit: bool = False) -> dict[str, Any]:
+    """Print the verdict's warnings; refuse (raise) or record a forced override.
+
+    Args:
+        verdict: a :class:`pincal.identification.QualityVerdict`.
+        force: ``--force`` was given: write anyway and say so.
+        before_fit: the data check before fitting (its refusal stops before the fit).
+
+    Returns:
+        The verdict as JSON (``overridden`` True when forced past a refusal).
+
+    Raises:
+        QualityGateError: the verdict refuses and ``force`` is False.
+    """
+    if not verdict.passed and not force:
+        raise QualityGateError(verdict.reason(), verdict)
+    if before_fit:  # the verdict after fitting repeats the data's issues
+        return verdict.to_dict(overridden=force)
+    for issue in verdict.warnings:
+        click.echo(f"pincal: warning: {issue.message}", err=True)
+    if not verdict.passed:
+        click.echo(
+            "pincal: warning: --force: writing despite the quality gate: "
+            + "; ".join(i.message for i in verdict.refusals),
+            err=True,
+        )
+    return verdict.to_dict(overridden=force)
+
+
+def quality_lines(quality: dict | None) -> list[str]:
+    """Lines of ``report.txt`` for the gate's verdict (``doc['quality']``)."""
+    if not quality:
+        return []
+    if quality.get("passed"):
+        lines = ["quality gate: passed"]
+    elif quality.get("overridden"):
+        lines = [f"quality gate: OVERRIDDEN with --force — {quality.get('reason')}"]
+    else:
+        lines = [f"quality gate: refused — {quality.get('reason')}"]
+    lines += [f"  warning: {w['message']}" for w in quality.get("warnings", [])]
+    if quality.get("outlier_poses"):
+        lines.append(
+            f"  outlier poses (normalised residual > {quality.get('outlier_limit') or 0:.2f}): "
+            f"{quality['outlier_poses']}; consider --method lm --loss huber"
+        )
+    return lines

@@ -1,0 +1,159 @@
+"""The verdict of the quality gate: thresholds, issues, likely cause.
+
+See :mod:`pincal.identification._quality` for what is checked and the default
+thresholds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from pincal.identification._options import check_real
+
+__all__ = ["GateLimits", "QualityIssue", "QualityVerdict"]
+
+
+@dataclass(frozen=True)
+class GateLimits:
+    """Thresholds of the quality gate.
+
+    Attributes:
+        max_reduced_chi2: with declared noise, a reduced χ² above this refuses (> 1).
+        max_length_change: largest accepted change of a length parameter [m] (> 0).
+        max_angle_change: largest accepted change of an angle parameter [rad] (> 0).
+        outlier_risk: family-wise false-alarm probability of the outlier test over all
+            equations (0 < risk < 1).
+        max_downweighted: largest fraction of poses a robust loss may down-weight.
+        scale_band: measured / nominal position spread accepted before fitting is
+            [1/band, band] (> 1).
+        singular_ratio: a pose whose whitened sensitivity exceeds this multiple of the
+            median pose's is called near-singular (> 1).
+    """
+
+    max_reduced_chi2: float = 100.0
+    max_length_change: float = 0.02
+    max_angle_change: float = 0.1
+    outlier_risk: float = 1e-3
+    max_downweighted: float = 0.25
+    scale_band: float = 2.0
+    singular_ratio: float = 100.0
+
+    def __post_init__(self) -> None:
+        o = type(self).__name__
+        check_real(o, "max_reduced_chi2", self.max_reduced_chi2, 1.0, open_low=True)
+        check_real(o, "max_length_change", self.max_length_change, 0.0, open_low=True)
+        check_real(o, "max_angle_change", self.max_angle_change, 0.0, open_low=True)
+        check_real(o, "outlier_risk", self.outlier_risk, 0.0, 0.5, open_low=True)
+        check_real(o, "max_downweighted", self.max_downweighted, 0.0, 1.0, open_low=True)
+        check_real(o, "scale_band", self.scale_band, 1.0, open_low=True)
+        check_real(o, "singular_ratio", self.singular_ratio, 1.0, open_low=True)
+
+
+@dataclass(frozen=True)
+class QualityIssue:
+    """One finding of the gate.
+
+    Attributes:
+        kind: ``units``, ``duplicates``, ``solver``, ``chi2``, ``low-chi2``, ``change``,
+            ``outliers``, ``breakdown`` or ``singular``.
+        refuse: True when it refuses the calibration (else a warning).
+        message: one line saying what was found, with the threshold.
+    """
+
+    kind: str
+    refuse: bool
+    message: str
+
+
+@dataclass(frozen=True)
+class QualityVerdict:
+    """What the gate found; :attr:`passed` is False when a calibration must not be written.
+
+    Attributes:
+        issues: refusals and warnings, in the order found.
+        cause: the likely cause of a refusal: ``units``, ``frame``, ``outliers``,
+            ``singular pose``, ``noise or model`` ("" when passed).
+        cause_text: one sentence explaining the cause and what to try.
+        outlier_poses: indices of the poses flagged as outliers.
+        outlier_limit: the normalised-residual threshold used (NaN when not tested).
+        duplicate_rows: (copy, original) row index pairs of exact duplicates.
+        scale_ratio: measured / nominal spread of the positions (NaN when not checked).
+        likely_unit: the length unit the data seem to be in, when the ratio names one.
+        singular_poses: indices of poses of outsized sensitivity.
+        frame_offset: distance between the centroids of the measured and nominal
+            positions [m] (NaN when not checked).
+        frame_rotation: angle of the mean rotation from the nominal to the measured
+            orientations, in the world frame [rad] (NaN when not checked).
+        limits: the thresholds used.
+    """
+
+    issues: tuple[QualityIssue, ...] = ()
+    cause: str = ""
+    cause_text: str = ""
+    outlier_poses: tuple[int, ...] = ()
+    outlier_limit: float = float("nan")
+    duplicate_rows: tuple[tuple[int, int], ...] = ()
+    scale_ratio: float = float("nan")
+    likely_unit: str | None = None
+    singular_poses: tuple[int, ...] = ()
+    frame_offset: float = float("nan")
+    frame_rotation: float = float("nan")
+    limits: GateLimits = field(default_factory=GateLimits)
+
+    @property
+    def passed(self) -> bool:
+        """True when no issue refuses the calibration."""
+        return not self.refusals
+
+    @property
+    def refusals(self) -> tuple[QualityIssue, ...]:
+        return tuple(i for i in self.issues if i.refuse)
+
+    @property
+    def warnings(self) -> tuple[QualityIssue, ...]:
+        return tuple(i for i in self.issues if not i.refuse)
+
+    def reason(self, override_hint: bool = True) -> str:
+        """One line: why the calibration is refused, the likely cause, how to override."""
+        if self.passed:
+            return "quality gate passed"
+        found = "; ".join(i.message for i in self.refusals)
+        text = f"calibration refused by the quality gate: {found}. Likely cause: {self.cause}"
+        text += f" — {self.cause_text}" if self.cause_text else "."
+        if override_hint:
+            text += (
+                " Nothing was written; fix the data, or pass --force (force=True) to write "
+                "it anyway (the report records the override)"
+            )
+        return text
+
+    def to_dict(self, overridden: bool = False) -> dict[str, Any]:
+        """JSON-ready form (SI); ``overridden`` records a forced write."""
+
+        def num(v: float) -> float | None:
+            return float(v) if math.isfinite(v) else None
+
+        lim = self.limits
+        return {
+            "passed": self.passed,
+            "overridden": bool(overridden and not self.passed),
+            "reason": None if self.passed else self.reason(override_hint=False),
+            "cause": self.cause or None,
+            "refusals": [{"kind": i.kind, "message": i.message} for i in self.refusals],
+            "warnings": [{"kind": i.kind, "message": i.message} for i in self.warnings],
+            "outlier_poses": list(self.outlier_poses),
+            "outlier_limit": num(round(self.outlier_limit, 3)),
+            "duplicate_rows": [list(p) for p in self.duplicate_rows],
+            "scale_ratio": num(self.scale_ratio),
+            "likely_unit": self.likely_unit,
+            "singular_poses": list(self.singular_poses),
+            "limits": {
+                "max_reduced_chi2": lim.max_reduced_chi2,
+                "max_length_change_m": lim.max_length_change,
+                "max_angle_change_rad": lim.max_angle_change,
+                "outlier_risk": lim.outlier_risk,
+                "max_downweighted": lim.max_downweighted,
+            },
+        }
