@@ -151,12 +151,15 @@ def residual_section(result: IdentificationResult, plots: Path, jobs: PlotJobs) 
     return Section("Residuals", text, images, [Table(headers, rows)])
 
 
+LARGE_RESIDUALS = "Large residuals"
+
+
 def outlier_section(result: IdentificationResult) -> tuple[Section, list[int], list[int]]:
     """Poses with |whitened residual| > 3 and poses a robust loss down-weighted."""
     w = result.weighting
     if w is None or w.whitened.size == 0:
         text = "No weights in this file (pincal 0.1): outliers cannot be flagged."
-        return Section("Outliers", text), [], []
+        return Section(LARGE_RESIDUALS, text), [], []
     comps = _components(result)
     z = np.asarray(w.whitened)
     rows = []
@@ -166,7 +169,8 @@ def outlier_section(result: IdentificationResult) -> tuple[Section, list[int], l
     text = (
         f"{len(w.outliers)} of {z.shape[0]} poses have a whitened residual |r/σ| > "
         f"{OUTLIER_LIMIT:g} (expected for Gaussian noise: ~{0.0027 * z.size:.1f} "
-        "components in all)."
+        "components in all). The quality gate's outlier test (leverage-corrected, robust "
+        "scale, Bonferroni bound) is in its own section when it found any."
     )
     if w.loss != "linear":
         text += (
@@ -175,7 +179,7 @@ def outlier_section(result: IdentificationResult) -> tuple[Section, list[int], l
         )
     headers = ["pose", "worst component", "whitened residual [σ]", "robust weight"]
     table = Table(headers, rows) if rows else Table(headers, [["none", "", "", ""]])
-    return Section("Outliers", text, (), [table]), list(w.outliers), list(w.downweighted)
+    return Section(LARGE_RESIDUALS, text, (), [table]), list(w.outliers), list(w.downweighted)
 
 
 def parameter_section(

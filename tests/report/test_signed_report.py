@@ -85,7 +85,7 @@ def test_report_is_self_contained_and_consistent(calibration, tmp_path):
     for s in doc["sections"]:
         for t in s["tables"]:
             assert any(u in h for h in t["headers"] for u in ("µm", "µrad", "unit", "σ]")) or (
-                s["title"] in ("Outliers",)
+                s["title"] in ("Large residuals",)
             ), (s["title"], t["headers"])
     # the displaced pose is an outlier in all three
     assert 7 in doc["flags"]["outlier_poses"]
