@@ -47,9 +47,14 @@ def main(ctx: click.Context, debug: bool) -> None:
       1  error in the input or the computation (one line on stderr)
       2  wrong command-line usage (unknown option, missing argument)
     """
+    from threadpoolctl import threadpool_limits
+
     ctx.ensure_object(dict)
     ctx.obj["debug"] = debug
     logging.basicConfig(level=logging.DEBUG if debug else logging.WARNING)
+    # pincal's dense solves are small (≤ a few thousand rows × ~100 columns): one BLAS
+    # thread is fastest, and threaded BLAS on a busy machine was 12–48× slower.
+    ctx.with_resource(threadpool_limits(1))
 
 
 from pincal.cli import acceptance as _acceptance  # noqa: E402

@@ -103,30 +103,6 @@ def poses(
       pincal poses hexaslide_6pus --count 40 --candidates random:300 --out poses.csv
       pincal poses stewart_6ups --count 18 --index O3 --scaling K --out p.csv --json
     """
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(1):  # small dense solves: one BLAS thread is fastest
-        _poses(model, count, index_name, spec, preset, scaling, K_mm, noise, method,
-               restarts, seed, out, n_jobs, as_json, yes)  # fmt: skip
-
-
-def _poses(
-    model: str,
-    count: int,
-    index_name: str,
-    spec: str,
-    preset: str | None,
-    scaling: str,
-    K_mm: float | None,
-    noise: tuple[float, float],
-    method: str,
-    restarts: int,
-    seed: int,
-    out: str,
-    n_jobs: int,
-    as_json: bool,
-    yes: bool,
-) -> None:
     import sys
     from pathlib import Path
 
