@@ -128,11 +128,13 @@ class UnknownNameError(PincalError, KeyError):
         valid: the names that would have been accepted.
     """
 
-    def __init__(self, kind: str, name: str, valid: Iterable[str]):
+    def __init__(self, kind: str, name: str, valid: Iterable[str], hint: str = ""):
         self.kind = kind
         self.name = name
         self.valid = list(valid)
-        super().__init__(f"{kind} {name!r} not found; {kind}s are: {_listing(self.valid)}")
+        super().__init__(
+            f"{kind} {clip(name, quote=True)} not found; {kind}s are: {_listing(self.valid)}{hint}"
+        )
 
     def __str__(self) -> str:  # KeyError would add quotes around the message
         return str(self.args[0])

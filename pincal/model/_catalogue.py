@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import difflib
+import os
 from pathlib import Path
 from typing import Any
 
@@ -66,12 +68,29 @@ def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
             raise ModelFileError(f"URDF file {str(path)!r} does not exist")
     elif (MODELS_DIR / str(spec)).is_dir():
         return resolve_model_path(MODELS_DIR / str(spec))
+    elif path.exists() or os.sep in str(spec):
+        if not path.exists():
+            what = "does not exist"
+        elif not path.is_file():
+            what = "is not a regular file"
+        else:
+            what = "is neither a model directory nor a .urdf or MJCF .xml file"
+        raise ModelFileError(
+            f"model {clip(str(spec))} {what}; give a model directory, a .urdf or an MJCF "
+            ".xml file, or a model name (pincal --help lists them)"
+        )
     else:
         from pincal.model._robots import example_robot_names, example_robot_urdf
 
-        if str(spec) not in example_robot_names():
-            valid = bundled_models() + [f"{n} (example-robot-data)" for n in example_robot_names()]
-            raise UnknownNameError("model", str(spec), valid)
+        robots = example_robot_names()
+        if str(spec) not in robots:
+            close = difflib.get_close_matches(str(spec), robots, n=3)
+            raise UnknownNameError(
+                "model",
+                str(spec),
+                bundled_models() + [f"{n} (example-robot-data)" for n in close],
+                f" or one of {len(robots)} example-robot-data robots (e.g. ur10, panda)",
+            )
         urdf = example_robot_urdf(str(spec))
     sidecar = urdf.with_suffix(".yaml")
     return urdf, sidecar if sidecar.is_file() else None
