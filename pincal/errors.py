@@ -227,7 +227,7 @@ class OptionValueError(PincalError, ValueError):
     """
 
 
-class CalibrationDirectoryError(PincalError):
+class CalibrationDirectoryError(InputFileError):
     """A calibration directory is missing, incomplete, of a newer format or damaged."""
 
 

@@ -38,7 +38,8 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
-from pincal.errors import CalibrationDirectoryError, PincalError
+from pincal._files import read_text
+from pincal.errors import CalibrationDirectoryError, PincalError, clip
 from pincal.identification import IdentificationResult
 from pincal.io._atomic import (
     _temp_prefix,
@@ -80,6 +81,8 @@ def sha256_file(path: str | Path) -> str:
         CalibrationDirectoryError: the file cannot be read.
     """
     h = hashlib.sha256()
+    if not Path(path).is_file():  # a FIFO or device would block or never end
+        raise CalibrationDirectoryError(f"{clip(str(path))} is not a regular file")
     try:
         with open(path, "rb") as fh:
             for block in iter(lambda: fh.read(1 << 20), b""):
@@ -135,12 +138,7 @@ class CalibrationDirectory:
         if "calibrated" not in self._cache:
             urdf = self.calibrated_urdf
             side = urdf.with_suffix(".yaml")
-            try:
-                text = urdf.read_text(encoding="utf-8")
-            except OSError as exc:
-                raise CalibrationDirectoryError(
-                    f"cannot read {str(urdf)!r}: {exc.strerror}"
-                ) from exc
+            text = read_text(urdf, "calibrated URDF", error=CalibrationDirectoryError)
             sidecar = read_sidecar(side) if side.is_file() else {}
             self._cache["calibrated"] = Mechanism(text, sidecar, name=self.model, source=urdf)
         return self._cache["calibrated"]
@@ -293,12 +291,10 @@ def _write_locked(
 
 
 def _load_json(path: Path) -> dict:
+    text = read_text(path, "JSON file", _MAX_JSON_BYTES, CalibrationDirectoryError)
     try:
-        raw = path.read_bytes()[: _MAX_JSON_BYTES + 1]
-        data = json.loads(raw.decode("utf-8"))
-    except OSError as exc:
-        raise CalibrationDirectoryError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
         raise CalibrationDirectoryError(f"{str(path)!r} is not valid JSON: {exc}") from exc
     if not isinstance(data, dict):
         raise CalibrationDirectoryError(f"{str(path)!r} must hold a JSON object")

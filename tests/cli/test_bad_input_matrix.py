@@ -101,3 +101,25 @@ def test_report_directory(tmp_path, kind):
         d = str(tmp_path / "cal")
     res = CliRunner().invoke(main, ["report", d, "--out", str(tmp_path / "r")])
     _clean_failure(res, Path(d).name)
+
+
+def test_a_fifo_inside_a_calibration_directory_does_not_block(tmp_path, calibration):
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    cal = tmp_path / "cal"
+    shutil.copytree(calibration, cal)
+    (cal / "identification.json").unlink()
+    os.mkfifo(cal / "identification.json")
+    held = calibration.parent / "m.csv"
+    proc = subprocess.run(
+        [sys.executable, "-m", "pincal.cli", "validate", str(cal), "--data", str(held)],
+        capture_output=True,
+        text=True,
+        timeout=60,  # a blocking read would hang here, not fail
+    )
+    assert proc.returncode == 1, proc.stderr
+    assert "identification.json" in proc.stderr, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
