@@ -111,18 +111,18 @@ class MeasurementFile:
     warnings: tuple[str, ...]
 
 
-def _check_magnitudes(mech: Mechanism, positions: np.ndarray, unit: str) -> str | None:
-    """A warning when measured positions are ~1000× off the model's home pose scale."""
-    home = mech.frame_placement(mech.q_home).translation
-    scale_model = max(float(np.linalg.norm(home)), 1e-3)
-    scale_data = float(np.median(np.linalg.norm(positions, axis=1)))
-    ratio = scale_data / scale_model
-    if 0.03 < ratio < 30.0:
-        return None
-    return (
-        f"measured positions are {ratio:.3g}× the model's size (median distance "
-        f"{scale_data:.4g} m vs home {scale_model:.4g} m): is length_unit {shown(unit)} right?"
-    )
+def _check_magnitudes(mech: Mechanism, meas: Measurements, unit: str) -> str | None:
+    """A warning when the measured positions' spread says the length unit is wrong.
+
+    The test is the quality gate's (:func:`pincal.identification.check_measurements`:
+    spread about the centroid against the nominal model's at the same actuator values),
+    so reading warns exactly where ``calibrate`` would refuse.
+    """
+    from pincal.identification import check_measurements
+
+    verdict = check_measurements(mech, meas, length_unit=unit)
+    found = [i.message for i in verdict.issues if i.kind == "units"]
+    return f"{found[0]}; {verdict.cause_text}" if found else None
 
 
 def _components(header: Header, name: str) -> list[str]:
@@ -279,7 +279,7 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
             unknown=unknown,
         )
     warnings = []
-    w = _check_magnitudes(mech, meas.positions, lu)
+    w = _check_magnitudes(mech, meas, lu)
     if w:
         log.warning("%s: %s", name, w)
         warnings.append(w)

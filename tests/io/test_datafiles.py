@@ -167,9 +167,25 @@ def test_wrong_length_unit_is_flagged(tmp_path, hexa, meas, caplog):
     lines = [s.replace("length_unit: m", "length_unit: mm") for s in _good(tmp_path, meas)]
     with caplog.at_level(logging.WARNING):
         mf = read_measurement_file(_write(tmp_path, lines), hexa)
-    assert mf.suspect_units and "length_unit 'mm'" in mf.warnings[0]
+    assert mf.suspect_units and "m declared as mm: set length_unit m" in mf.warnings[0]
     assert "length_unit" in caplog.text
     assert not read_measurement_file(tmp_path / "good.csv", hexa).suspect_units
+
+
+def test_no_unit_warning_for_a_machine_whose_home_is_at_the_origin(tmp_path):
+    """wedge3's measured frame is at the world origin at home: a distance from the origin
+    says nothing about the unit (seed 1: median distance 30× the 1 mm floor, which 0.1's
+    check took for a unit mistake); the spread of the poses does."""
+    from pincal.io import write_measurements
+    from pincal.measure import NoiseModel, simulate_measurements
+    from pincal.model import load_mechanism, sample_actuators
+
+    mech = load_mechanism("wedge3")
+    rng = np.random.default_rng(1)
+    m = simulate_measurements(mech, sample_actuators(mech, 30, rng), NoiseModel(0.001, 0.01), rng)
+    for unit in ("m", "mm"):
+        path = write_measurements(tmp_path / f"w_{unit}.csv", m, length_unit=unit)
+        assert not read_measurement_file(path, mech).suspect_units
 
 
 def test_too_few_poses(meas):
