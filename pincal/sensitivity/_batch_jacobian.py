@@ -24,7 +24,7 @@ from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._jacobian import _Plan, _plan, pose_sensitivity
 
-__all__ = ["BatchSensitivity", "batch_applies", "sensitivities_batch"]
+__all__ = ["BatchSensitivity", "batch_applies", "predict_configurations", "sensitivities_batch"]
 
 
 @dataclass(frozen=True)
@@ -58,11 +58,20 @@ def _param_twists(
     bk: BatchKinematics,
     values: np.ndarray,
     plan: _Plan,
+    direction: np.ndarray | None = None,
 ) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], dict[str, np.ndarray]]:
-    """Placements of the plan's frames and their (N, 6, n) local parameter twists."""
+    """Placements of the plan's frames and their (N, 6, n) local parameter twists.
+
+    With a ``direction`` (n,) in parameter space, the twists (N, 6, 1) per unit step
+    along it instead.
+    """
     bm, model = mech.batch_model, mech.model
     N, n = bk.q.shape[0], len(params)
     twists = params.joint_twists(values)
+    if direction is not None:
+        zero = np.zeros(1, dtype=int)
+        twists = {j: (zero, v, (eff @ direction[c])[:, None]) for j, (c, v, eff) in twists.items()}
+        n = 1
     placements = {f: bm.frame_placement(bk, mech.frame_id(f)) for f in plan.frames}
     origins = {}
     for j, (fid, jid, parent) in plan.origins.items():
@@ -83,8 +92,8 @@ def _param_twists(
             Rx = mm(Rft, Ro)  # oMf⁻¹ · A_j
             px = mv(Rft, po - pf)
             ang = mm(Rx, eff[3:])
-            P[:, 3:, cols] = ang
-            P[:, :3, cols] = mm(Rx, eff[:3]) + cross_cols(px[:, :, None], ang)
+            P[:, 3:, cols] += ang  # columns distinct per joint, or one direction
+            P[:, :3, cols] += mm(Rx, eff[:3]) + cross_cols(px[:, :, None], ang)
         out[frame] = P
     return placements, out
 
@@ -341,3 +350,55 @@ def _local_path(
     # Jm_u · dq_u/dp = −(Jf⁻ᵀ Jm_uᵀ)ᵀ Jc_p: one solve with 6 right-hand sides
     Y = np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
     return Rm, pm, J - np.swapaxes(Y, 1, 2) @ Jc_p
+
+
+def predict_configurations(
+    mech: Mechanism,
+    params: ParameterSet,
+    bk: BatchKinematics,
+    values: np.ndarray,
+    delta: np.ndarray,
+) -> np.ndarray | None:
+    """First-order prediction of closed configurations after a parameter change.
+
+    The implicit-function step of the passive joints, ``dq_u = −(∂c/∂q_u)⁻¹ ∂c/∂p · δ``,
+    from the closed configurations ``bk`` of ``mech`` (at parameter ``values``): a start
+    guess whose closure residual is O(‖δ‖²), so the loop-closing Newton needs one
+    iteration where it needed three from ``bk.q``. The prediction is only a guess: the
+    solve that follows still closes the loops to its tolerance and checks the branch.
+
+    Args:
+        mech: the mechanism at parameter ``values`` (the one ``bk`` was solved on).
+        params: the n parameters.
+        bk: (N poses) kinematics of its closed configurations, with ``closure_jacobian``.
+        values: (n,) parameter values of ``mech`` [SI].
+        delta: (n,) parameter change [SI].
+
+    Returns:
+        (N, nq) predicted configurations (rows whose step is not finite or exceeds the
+        solver's ``max_step`` keep ``bk.q``), or None when the prediction does not apply
+        (no closures, no square closure Jacobian, batched kinematics unsupported).
+    """
+    Jf = bk.closure_jacobian
+    if not mech.closures or Jf is None or not batch_applies(mech):
+        return None
+    plan = _plan(mech, params)
+    place, P = _param_twists(mech, params, bk, values, plan, np.asarray(delta, dtype=float))
+    Jc = np.concatenate(
+        [
+            closure_jacobian_batch(c, *place[c.frame_a], *place[c.frame_b], P[c.frame_a], P[c.frame_b])
+            for c in mech.closures
+        ],
+        axis=1,
+    )
+    try:
+        step = -np.linalg.solve(Jf, Jc)[..., 0]
+    except np.linalg.LinAlgError:
+        return None
+    keep = ~np.all(np.isfinite(step), axis=1) | (
+        np.linalg.norm(step, axis=1) > mech.options.max_step
+    )
+    step[keep] = 0.0
+    DV = np.zeros((step.shape[0], mech.model.nv))
+    DV[:, mech.free_dofs] = step
+    return mech.batch_model.integrate(bk.q, DV)
