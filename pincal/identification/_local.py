@@ -66,6 +66,21 @@ def gauss_newton(
     Returns:
         SolverOutcome with :class:`LocalSolverExtras`.
     """
+    predicting, problem.predict_starts = problem.predict_starts, True
+    try:
+        return _gauss_newton(problem, x0, free, opts, progress)
+    finally:
+        problem.predict_starts = predicting
+
+
+def _gauss_newton(
+    problem: CalibrationProblem,
+    x0: np.ndarray,
+    free: np.ndarray,
+    opts: GaussNewtonOptions,
+    progress: Progress,
+) -> SolverOutcome:
+    """The body of :func:`gauss_newton` (closed-loop solves start from predictions)."""
     x = x0.copy()
     r, J, _ = problem.evaluate(x)
     evals, rejected = 1, 0

@@ -29,10 +29,12 @@ import numpy as np
 
 from pincal.errors import ClosureError, ConvergenceError, MeasurementError, ParameterError
 from pincal.measure._measurements import Measurements, NoiseModel
+from pincal.model._batch import BatchKinematics
 from pincal.model._batch_ops import jlog3_batch, log3_batch
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._batch_jacobian import predict_configurations, sensitivities_batch
+from pincal.sensitivity._batch_jacobian import sensitivities_batch
+from pincal.sensitivity._batch_predict import predict_configurations
 
 __all__ = ["BLOCKS", "TRIAL_FAILURES", "CalibrationProblem", "IdentificationProblem"]
 
@@ -101,7 +103,10 @@ class CalibrationProblem:
             self.sigma = np.ones((m, k))
             self.noise_source = "estimate"
         self._qs: np.ndarray | None = None
-        self._solved: tuple[np.ndarray, Mechanism, object] | None = None  # values, mech, bk
+        self._solved: tuple[np.ndarray, Mechanism, BatchKinematics] | None = None
+        #: start each solve from the first-order prediction of the parameter change
+        #: (switched on by Gauss–Newton for its run; other solvers keep the last solution)
+        self.predict_starts = False
         self._cache: tuple[bytes, Mechanism] | None = None
         self._memo: dict[bytes, tuple] = {}  # last evaluations: r_w, J_w, r_raw, qs, kinematics
 
@@ -196,9 +201,12 @@ class CalibrationProblem:
         return out
 
     def _guesses(self, values: np.ndarray) -> np.ndarray | None:
-        """Start configurations for a solve at ``values``: the last solution, moved by
-        the first-order passive-joint prediction of the parameter change when it applies."""
-        if self._solved is None:
+        """Start configurations for a solve at ``values``.
+
+        The last solution, moved by the first-order passive-joint prediction of the
+        parameter change when predictions are on (:attr:`predict_starts`) and apply.
+        """
+        if self._solved is None or not self.predict_starts:
             return self._qs
         v0, mech0, bk0 = self._solved
         pred = predict_configurations(mech0, self.params, bk0, v0, values - v0)

@@ -24,7 +24,7 @@ from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._jacobian import _Plan, _plan, pose_sensitivity
 
-__all__ = ["BatchSensitivity", "batch_applies", "predict_configurations", "sensitivities_batch"]
+__all__ = ["BatchSensitivity", "batch_applies", "sensitivities_batch"]
 
 
 @dataclass(frozen=True)
@@ -209,6 +209,13 @@ def _closure_maps(
         C[:, i] -= np.swapaxes(Y[:, r0 : r0 + c.size], 1, 2) @ blk
 
 
+def _adjoint(bk: BatchKinematics, Jf: np.ndarray, Jm_u: np.ndarray) -> np.ndarray:
+    """``Y = Jf⁻ᵀ Jm_uᵀ`` (N, k, 6): from the solve's inverse when it kept one, else a solve."""
+    if bk.closure_inverse is not None:
+        return np.swapaxes(Jm_u @ bk.closure_inverse, 1, 2)
+    return np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
+
+
 def _world_path(
     mech: Mechanism,
     params: ParameterSet,
@@ -249,7 +256,7 @@ def _world_path(
         if Jf is None:
             Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
         Jm_u = _measured_free_jacobian(mech, bk, Rm, pm)
-        Y = np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
+        Y = _adjoint(bk, Jf, Jm_u)
         C = np.zeros((N, len(names), 6, 6))
         _closure_maps(mech, plan, names, Ro, po, place, Y, C)
     twists = params.joint_twists(values)
@@ -348,57 +355,6 @@ def _local_path(
         Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
     Jm_u = _measured_free_jacobian(mech, bk, Rm, pm)
     # Jm_u · dq_u/dp = −(Jf⁻ᵀ Jm_uᵀ)ᵀ Jc_p: one solve with 6 right-hand sides
-    Y = np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
+    Y = _adjoint(bk, Jf, Jm_u)
     return Rm, pm, J - np.swapaxes(Y, 1, 2) @ Jc_p
 
-
-def predict_configurations(
-    mech: Mechanism,
-    params: ParameterSet,
-    bk: BatchKinematics,
-    values: np.ndarray,
-    delta: np.ndarray,
-) -> np.ndarray | None:
-    """First-order prediction of closed configurations after a parameter change.
-
-    The implicit-function step of the passive joints, ``dq_u = −(∂c/∂q_u)⁻¹ ∂c/∂p · δ``,
-    from the closed configurations ``bk`` of ``mech`` (at parameter ``values``): a start
-    guess whose closure residual is O(‖δ‖²), so the loop-closing Newton needs one
-    iteration where it needed three from ``bk.q``. The prediction is only a guess: the
-    solve that follows still closes the loops to its tolerance and checks the branch.
-
-    Args:
-        mech: the mechanism at parameter ``values`` (the one ``bk`` was solved on).
-        params: the n parameters.
-        bk: (N poses) kinematics of its closed configurations, with ``closure_jacobian``.
-        values: (n,) parameter values of ``mech`` [SI].
-        delta: (n,) parameter change [SI].
-
-    Returns:
-        (N, nq) predicted configurations (rows whose step is not finite or exceeds the
-        solver's ``max_step`` keep ``bk.q``), or None when the prediction does not apply
-        (no closures, no square closure Jacobian, batched kinematics unsupported).
-    """
-    Jf = bk.closure_jacobian
-    if not mech.closures or Jf is None or not batch_applies(mech):
-        return None
-    plan = _plan(mech, params)
-    place, P = _param_twists(mech, params, bk, values, plan, np.asarray(delta, dtype=float))
-    Jc = np.concatenate(
-        [
-            closure_jacobian_batch(c, *place[c.frame_a], *place[c.frame_b], P[c.frame_a], P[c.frame_b])
-            for c in mech.closures
-        ],
-        axis=1,
-    )
-    try:
-        step = -np.linalg.solve(Jf, Jc)[..., 0]
-    except np.linalg.LinAlgError:
-        return None
-    keep = ~np.all(np.isfinite(step), axis=1) | (
-        np.linalg.norm(step, axis=1) > mech.options.max_step
-    )
-    step[keep] = 0.0
-    DV = np.zeros((step.shape[0], mech.model.nv))
-    DV[:, mech.free_dofs] = step
-    return mech.batch_model.integrate(bk.q, DV)
