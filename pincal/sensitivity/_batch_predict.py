@@ -16,7 +16,7 @@ from pincal.model._batch import BatchKinematics, mv
 from pincal.model._batch_fk import closure_jacobian_batch
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._batch_jacobian import _param_twists, batch_applies
+from pincal.sensitivity._batch_jacobian import _cross, _param_twists, batch_applies
 from pincal.sensitivity._jacobian import _Plan, _plan
 
 __all__ = ["predict_configurations"]
@@ -125,9 +125,3 @@ def _point_closure_rates(
     rate = (Sb - Sa) @ U + _cross(Sb @ W, p[:, 1::2]) - _cross(Sa @ W, p[:, 0::2])  # (N, C, 3)
     return rate.reshape(rate.shape[0], -1)
 
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross products of stacked vectors (…, 3) (without ``np.cross``'s overhead)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
