@@ -16,7 +16,7 @@ from pincal.model._batch import BatchKinematics, mv
 from pincal.model._batch_fk import closure_jacobian_batch
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._batch_jacobian import _cross, _param_twists, batch_applies
+from pincal.sensitivity._batch_jacobian import _anchors, _cross, _param_twists, batch_applies
 from pincal.sensitivity._jacobian import _Plan, _plan
 
 __all__ = ["predict_configurations"]
@@ -99,21 +99,9 @@ def _point_closure_rates(
     by ``V_j + W_j × (x − o_j)`` (V, W: v, ω in world axes; o_j: origin position); a
     residual ``p_b − p_a`` by the sum over the joints that move b minus those that move a.
     """
-    model, names = mech.model, list(plan.origins)
+    names, parents, R0, p0 = _anchors(mech, plan)
     twists = params.joint_twists(values)
     T = np.array([twists[j][2] @ delta[twists[j][0]] for j in names])  # (J, 6)
-    # origin j = parent joint placement · constant placement (R0, p0)
-    anchors = []
-    for j in names:
-        fid, jid, parent = plan.origins[j]
-        if fid >= 0:
-            fr = model.frames[fid]
-            anchors.append((fr.parentJoint, fr.placement))
-        else:
-            anchors.append((parent, model.jointPlacements[jid]))
-    parents = np.array([a[0] for a in anchors])
-    R0 = np.array([a[1].rotation for a in anchors])
-    p0 = np.array([a[1].translation for a in anchors])
     Rp = bk.rotations[:, parents]
     po = bk.translations[:, parents] + mv(Rp, p0)
     V, W = mv(Rp, mv(R0, T[:, :3])), mv(Rp, mv(R0, T[:, 3:]))  # (N, J, 3) world axes
