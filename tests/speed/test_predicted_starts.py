@@ -148,3 +148,25 @@ def test_identify_result_unchanged_by_predicted_starts(monkeypatch):
     assert np.max(np.abs(a - b)) <= 1e-10 * np.max(np.abs(b))
     cov_a, cov_b = np.asarray(with_prediction.covariance), np.asarray(plain.covariance)
     assert np.max(np.abs(cov_a - cov_b)) <= 1e-8 * np.max(np.abs(cov_b))
+
+
+def test_identify_solves_and_differentiates_once_per_accepted_point(monkeypatch):
+    mech, params, meas = _measurements(120)
+    calls = {"solve": 0, "sens": 0}
+    solve, sens = Mechanism.configurations_batch, _problem.sensitivities_batch
+
+    def count_solve(self, *a, **k):
+        calls["solve"] += 1
+        return solve(self, *a, **k)
+
+    def count_sens(*a, **k):
+        calls["sens"] += 1
+        return sens(*a, **k)
+
+    monkeypatch.setattr(Mechanism, "configurations_batch", count_solve)
+    monkeypatch.setattr(_problem, "sensitivities_batch", count_sens)
+    res = pincal.identify(mech, params, meas)
+    # start + one per accepted step; the convergence test and the covariance reuse the
+    # last evaluation (no extra solve or Jacobian)
+    assert res.extras.rejected_steps == 0
+    assert calls["solve"] == calls["sens"] == res.iterations
