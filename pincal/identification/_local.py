@@ -66,6 +66,8 @@ def gauss_newton(
     Returns:
         SolverOutcome with :class:`LocalSolverExtras`.
     """
+    if not isinstance(problem, CalibrationProblem):  # instrument models: no predictions
+        return _gauss_newton(problem, x0, free, opts, progress)
     predicting, problem.predict_starts = problem.predict_starts, True
     try:
         return _gauss_newton(problem, x0, free, opts, progress)
