@@ -55,6 +55,8 @@ def gauss_newton(
     ``(JᵀJ + μ·diag(JᵀJ)) δ = −Jᵀr``, with μ raised ×10 per rejected and lowered ÷10 per
     accepted step until it falls below 1e-7 and pure Gauss–Newton resumes. With
     ``opts.damping`` False the full step is instead halved up to ``max_halvings`` times.
+    The closed-loop solves of a :class:`CalibrationProblem` start from the first-order
+    prediction of each parameter step (:attr:`CalibrationProblem.predict_starts`).
 
     Args:
         problem: residual model (n parameters).
