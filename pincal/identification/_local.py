@@ -54,6 +54,8 @@ def gauss_newton(
     ``(JᵀJ + μ·diag(JᵀJ)) δ = −Jᵀr``, with μ raised ×10 per rejected and lowered ÷10 per
     accepted step until it falls below 1e-7 and pure Gauss–Newton resumes. With
     ``opts.damping`` False the full step is instead halved up to ``max_halvings`` times.
+    The closed-loop solves of a :class:`CalibrationProblem` start from the first-order
+    prediction of each parameter step (:attr:`CalibrationProblem.predict_starts`).
 
     Args:
         problem: residual model (n parameters).
@@ -65,6 +67,23 @@ def gauss_newton(
     Returns:
         SolverOutcome with :class:`LocalSolverExtras`.
     """
+    if not isinstance(problem, CalibrationProblem):  # instrument models: no predictions
+        return _gauss_newton(problem, x0, free, opts, progress)
+    predicting, problem.predict_starts = problem.predict_starts, True
+    try:
+        return _gauss_newton(problem, x0, free, opts, progress)
+    finally:
+        problem.predict_starts = predicting
+
+
+def _gauss_newton(
+    problem: CalibrationProblem,
+    x0: np.ndarray,
+    free: np.ndarray,
+    opts: GaussNewtonOptions,
+    progress: Progress,
+) -> SolverOutcome:
+    """The body of :func:`gauss_newton` (closed-loop solves start from predictions)."""
     x = x0.copy()
     r, J, _ = problem.evaluate(x)
     evals, rejected = 1, 0

@@ -29,10 +29,12 @@ import numpy as np
 
 from pincal.errors import ClosureError, ConvergenceError, MeasurementError, ParameterError
 from pincal.measure._measurements import Measurements, NoiseModel
+from pincal.model._batch import BatchKinematics
 from pincal.model._batch_ops import jlog3_batch, log3_batch
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._batch_jacobian import sensitivities_batch
+from pincal.sensitivity._batch_predict import predict_configurations
 
 __all__ = ["BLOCKS", "TRIAL_FAILURES", "CalibrationProblem", "IdentificationProblem"]
 
@@ -101,6 +103,10 @@ class CalibrationProblem:
             self.sigma = np.ones((m, k))
             self.noise_source = "estimate"
         self._qs: np.ndarray | None = None
+        self._solved: tuple[np.ndarray, Mechanism, BatchKinematics] | None = None
+        #: start each solve from the first-order prediction of the parameter change
+        #: (switched on by Gauss–Newton for its run; other solvers keep the last solution)
+        self.predict_starts = False
         self._cache: tuple[bytes, Mechanism] | None = None
         self._memo: dict[bytes, tuple] = {}  # last evaluations: r_w, J_w, r_raw, qs, kinematics
 
@@ -184,7 +190,7 @@ class CalibrationProblem:
         if hit is not None and (hit[1] is not None or not jacobian):
             return hit[0], (hit[1] if jacobian else None), hit[2]
         mech = self.mechanism(values)
-        qs, bk = (hit[3], hit[4]) if hit is not None else self._configurations(mech)
+        qs, bk = (hit[3], hit[4]) if hit is not None else self._configurations(mech, values)
         out = self._residuals(mech, values, qs, bk, jacobian)
         for a in out:
             if a is not None:
@@ -194,11 +200,23 @@ class CalibrationProblem:
         self._memo[key] = (*out, qs, bk)
         return out
 
-    def _configurations(self, mech: Mechanism):
+    def _guesses(self, values: np.ndarray) -> np.ndarray | None:
+        """Start configurations for a solve at ``values``.
+
+        The last solution, moved by the first-order passive-joint prediction of the
+        parameter change when predictions are on (:attr:`predict_starts`) and apply.
+        """
+        if self._solved is None or not self.predict_starts:
+            return self._qs
+        v0, mech0, bk0 = self._solved
+        pred = predict_configurations(mech0, self.params, bk0, v0, values - v0)
+        return self._qs if pred is None else pred
+
+    def _configurations(self, mech: Mechanism, values: np.ndarray):
         """Closed configurations (m, nq) of the measured poses (warm-started), kinematics."""
         meas = self.meas
         try:
-            qs, bk = mech.configurations_batch(meas.q_act, self._qs)
+            qs, bk = mech.configurations_batch(meas.q_act, self._guesses(values))
         except ConvergenceError:
             if self._qs is None:
                 raise
@@ -210,6 +228,7 @@ class CalibrationProblem:
                     qs[i] = mech.configuration(q_act, None, pose_index=i)
             bk = None
         self._qs = qs
+        self._solved = None if bk is None else (values.copy(), mech, bk)
         return qs, bk
 
     def _residuals(self, mech: Mechanism, values: np.ndarray, qs, bk, jacobian: bool):

@@ -280,17 +280,22 @@ class BatchTracking(BranchTracking):
             DV[:, free] = step
             Q[ig[~bad]] = bm.integrate(Q[ig[~bad]], DV[~bad])
         ok = done.copy()
+        inv = np.full((N, k, k), np.nan)
         if ok.any():
             io = np.nonzero(ok)[0]
             Jd = Jf_done[io]
             signs = np.sign(np.linalg.det(Jd))
             with np.errstate(all="ignore"):
-                inv_norm = np.abs(np.linalg.inv(Jd)).sum(axis=1).max(axis=1)
+                try:
+                    inv[io] = np.linalg.inv(Jd)
+                except np.linalg.LinAlgError:  # a singular row: every row gets the exact check
+                    inv[io] = np.inf
+                inv_norm = np.abs(inv[io]).sum(axis=1).max(axis=1)
             cond1 = np.abs(Jd).sum(axis=1).max(axis=1) * inv_norm
             # cond₂ ≤ k·cond₁: rows that might exceed the limit get the exact check
             risky = ~np.isfinite(cond1) | (k * cond1 > opt.max_condition)
             ok[io[(signs != self.home_branch) | risky]] = False
-        return Q, ok, BatchKinematics(Q, out_R, out_p, out_J, Jf_done)
+        return Q, ok, BatchKinematics(Q, out_R, out_p, out_J, Jf_done, inv)
 
     def try_configurations_batch(
         self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
@@ -356,5 +361,8 @@ class BatchTracking(BranchTracking):
             bk.rotations[redo], bk.translations[redo] = fix.rotations, fix.translations
             bk.jacobian[redo] = fix.jacobian
             if bk.closure_jacobian is not None:
-                bk.closure_jacobian[redo] = self.closure_terms_batch(fix, columns=self._free_v)[1]
+                Jr = self.closure_terms_batch(fix, columns=self._free_v)[1]
+                bk.closure_jacobian[redo] = Jr
+                if bk.closure_inverse is not None:  # regular: configuration() checked it
+                    bk.closure_inverse[redo] = np.linalg.pinv(Jr)
         return Q, bk

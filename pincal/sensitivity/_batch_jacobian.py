@@ -58,11 +58,20 @@ def _param_twists(
     bk: BatchKinematics,
     values: np.ndarray,
     plan: _Plan,
+    direction: np.ndarray | None = None,
 ) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], dict[str, np.ndarray]]:
-    """Placements of the plan's frames and their (N, 6, n) local parameter twists."""
+    """Placements of the plan's frames and their (N, 6, n) local parameter twists.
+
+    With a ``direction`` (n,) in parameter space, the twists (N, 6, 1) per unit step
+    along it instead.
+    """
     bm, model = mech.batch_model, mech.model
     N, n = bk.q.shape[0], len(params)
     twists = params.joint_twists(values)
+    if direction is not None:
+        zero = np.zeros(1, dtype=int)
+        twists = {j: (zero, v, (eff @ direction[c])[:, None]) for j, (c, v, eff) in twists.items()}
+        n = 1
     placements = {f: bm.frame_placement(bk, mech.frame_id(f)) for f in plan.frames}
     origins = {}
     for j, (fid, jid, parent) in plan.origins.items():
@@ -83,8 +92,8 @@ def _param_twists(
             Rx = mm(Rft, Ro)  # oMf⁻¹ · A_j
             px = mv(Rft, po - pf)
             ang = mm(Rx, eff[3:])
-            P[:, 3:, cols] = ang
-            P[:, :3, cols] = mm(Rx, eff[:3]) + cross_cols(px[:, :, None], ang)
+            P[:, 3:, cols] += ang  # columns distinct per joint, or one direction
+            P[:, :3, cols] += mm(Rx, eff[:3]) + cross_cols(px[:, :, None], ang)
         out[frame] = P
     return placements, out
 
@@ -185,7 +194,7 @@ def _closure_maps(
         # −Yᵀ[σ Ro, skew(d) Ro] = −[σ Yᵀ Ro, (Yᵀ skew(d)) Ro], rows of Yᵀ skew(d) = y × d
         contrib = np.empty((*Yt.shape[:2], 6, 6))
         contrib[..., :3] = (sa - sb)[:, None, None] * (Yt @ RoP)
-        contrib[..., 3:] = np.cross(d[:, :, None], Yt) @ RoP
+        contrib[..., 3:] = _cross(d[:, :, None], Yt) @ RoP
         if np.unique(jP).size == jP.size:
             C[:, jP] += contrib
         else:  # a joint moving several closures (a base joint, say)
@@ -198,6 +207,20 @@ def _closure_maps(
         pmap = np.concatenate([Ro[:, i], _cross_rows(po[:, i] - pb, Ro[:, i])], axis=-1)
         blk = (np.swapaxes(Ra, 1, 2) @ pmap)[:, list(c.components)] * (sb_ - sa_)
         C[:, i] -= np.swapaxes(Y[:, r0 : r0 + c.size], 1, 2) @ blk
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products of stacked vectors (…, 3) (without ``np.cross``'s overhead)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def _adjoint(bk: BatchKinematics, Jf: np.ndarray, Jm_u: np.ndarray) -> np.ndarray:
+    """``Y = Jf⁻ᵀ Jm_uᵀ`` (N, k, 6): from the solve's inverse when it kept one, else a solve."""
+    if bk.closure_inverse is not None:
+        return np.swapaxes(Jm_u @ bk.closure_inverse, 1, 2)
+    return np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
 
 
 def _world_path(
@@ -218,6 +241,8 @@ def _world_path(
     −(Jm_u Jf⁻¹) ∂c/∂p`` uses one adjoint solve ``Y = Jf⁻ᵀ Jm_uᵀ`` (6 right-hand sides,
     not n).
     """
+    if not mech.closures:
+        return _serial_path(mech, params, bk, values, plan, out)
     N, n = bk.q.shape[0], len(params)
     names, Ro, po = _origins(mech, bk, plan)
     key = [mech.measured_frame, *(f for c in mech.closures for f in (c.frame_a, c.frame_b))]
@@ -240,7 +265,7 @@ def _world_path(
         if Jf is None:
             Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
         Jm_u = _measured_free_jacobian(mech, bk, Rm, pm)
-        Y = np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
+        Y = _adjoint(bk, Jf, Jm_u)
         C = np.zeros((N, len(names), 6, 6))
         _closure_maps(mech, plan, names, Ro, po, place, Y, C)
     twists = params.joint_twists(values)
@@ -256,6 +281,60 @@ def _world_path(
             continue
         cols, _, eff = twists[j]
         J[:, :, _columns(cols)] = (Ci.reshape(-1, 6) @ eff).reshape(N, 6, -1)
+    return Rm, pm, J
+
+
+def _anchors(
+    mech: Mechanism, plan: _Plan
+) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
+    """Parameterised joints, their origins' parent joints (J,) and constant placements.
+
+    Origin j = ``oMi[parent_j] · (R0_j, p0_j)`` with R0 (J, 3, 3), p0 (J, 3) [m].
+    """
+    model, names = mech.model, list(plan.origins)
+    parents, R0, p0 = [], [], []
+    for j in names:
+        fid, jid, parent = plan.origins[j]
+        M = model.frames[fid].placement if fid >= 0 else model.jointPlacements[jid]
+        parents.append(model.frames[fid].parentJoint if fid >= 0 else parent)
+        R0.append(M.rotation)
+        p0.append(M.translation)
+    return names, np.array(parents, dtype=int), np.array(R0), np.array(p0)
+
+
+def _serial_path(
+    mech: Mechanism,
+    params: ParameterSet,
+    bk: BatchKinematics,
+    values: np.ndarray,
+    plan: _Plan,
+    out: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_world_path` of a chain without closures, column-wise.
+
+    The local twist ``[v; ω] = eff_j[:, k]`` of origin j (world rotation R_o = R_p R0_j,
+    position p_o) moves the measured frame's origin by ``R_o v + (R_o ω) × (p_m − p_o)``
+    and turns it by ``R_mᵀ R_o ω`` (local): ``R_p · (R0_j [v | ω])`` of all poses is one
+    GEMM per joint, the cross products and the rotation into the measured frame are
+    formed for all n columns at once.
+    """
+    N, n = bk.q.shape[0], len(params)
+    Rm, pm = mech.batch_model.frame_placement(bk, mech.frame_id(mech.measured_frame))
+    twists = params.joint_twists(values)
+    moves = set(plan.moves[mech.measured_frame])
+    names, parents, R0, p0 = _anchors(mech, plan)
+    J = np.zeros((N, 6, n)) if out is None else out
+    Rmt = np.swapaxes(Rm, 1, 2)
+    for i, j in enumerate(names):  # small temporaries per joint (no large fresh arrays)
+        if j not in moves:
+            continue
+        cols, _, eff = twists[j]
+        c, k = _columns(cols), cols.size
+        Rp = bk.rotations[:, parents[i]]
+        G = _mmc(Rp, R0[i] @ np.concatenate([eff[:3], eff[3:]], axis=1))
+        d = pm - bk.translations[:, parents[i]] - mv(Rp, p0[i])  # p_m − p_o
+        J[:, :3, c] = G[..., :k] + cross_cols(G[..., k:], d[:, :, None])
+        J[:, 3:, c] = mm(Rmt, G[..., k:])
     return Rm, pm, J
 
 
@@ -339,5 +418,6 @@ def _local_path(
         Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
     Jm_u = _measured_free_jacobian(mech, bk, Rm, pm)
     # Jm_u · dq_u/dp = −(Jf⁻ᵀ Jm_uᵀ)ᵀ Jc_p: one solve with 6 right-hand sides
-    Y = np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
+    Y = _adjoint(bk, Jf, Jm_u)
     return Rm, pm, J - np.swapaxes(Y, 1, 2) @ Jc_p
+
