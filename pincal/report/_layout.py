@@ -36,8 +36,7 @@ def _tick_labels(axis: Axis) -> list[tuple[Text, int]]:
     """(label, 1 or 2) of the visible, non-empty tick labels of ticks in the view interval."""
     lo, hi = sorted(axis.get_view_interval())
     slack = 1e-10 * (hi - lo)
-    axis.get_majorticklabels()  # sets the tick locations and label texts
-    axis.get_minorticklabels()
+    axis.get_majorticklabels()  # places the major and minor ticks and sets their label texts
     labels = []
     for ticks, locs in (
         (axis.get_major_ticks(), axis.get_majorticklocs()),
