@@ -102,7 +102,7 @@ def _save(fig: Figure, path: str | os.PathLike, grid: Any, suptitle: Text | None
 
 def _figure(width: float = 7.0, height: float = 4.0) -> Figure:
     """A figure with an Agg canvas and no layout engine (margins: :func:`fit_margins`)."""
-    fig = Figure(figsize=(width, height))
+    fig = Figure(figsize=(width, height), dpi=_DPI)  # text measured at the saved dpi
     FigureCanvasAgg(fig)
     return fig
 
