@@ -9,8 +9,10 @@ import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import LogLocator
 
 from pincal.report import _plots
+from pincal.report._axes import log_scale
 from pincal.report._layout import fit_margins
 
 LONG = [f"platform_p{i}_joint_with_a_long_name.t{'xyz'[i % 3]}" for i in range(14)]
@@ -106,3 +108,30 @@ def test_default_margins_would_clip_these_labels():
     fit_margins(fig, [ax])
     fig.canvas.draw()
     _assert_nothing_clipped(fig)
+
+
+def _log_plot_png(minor_locator) -> bytes:
+    import io
+
+    fig = Figure(figsize=(4.0, 3.0), dpi=80)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.plot([1, 2, 3], [3.0, 40.0, 2000.0])
+    log_scale(ax, "y")
+    if minor_locator is not None:
+        ax.yaxis.set_minor_locator(minor_locator)
+    ax.grid(which="both")
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png")
+    return buffer.getvalue()
+
+
+def test_log_minor_ticks_outside_the_view_are_not_made_and_the_plot_is_the_same():
+    fig = Figure()
+    ax = fig.add_subplot()
+    ax.set_ylim(3.0, 2000.0)
+    log_scale(ax, "y")
+    locs = ax.yaxis.get_minorticklocs()
+    assert locs.min() >= 3.0 and locs.max() <= 2000.0
+    assert len(locs) < len(LogLocator(10.0, None).tick_values(3.0, 2000.0))
+    assert _log_plot_png(None) == _log_plot_png(LogLocator(10.0, None))
