@@ -127,8 +127,14 @@ def fit_margins(fig: Figure, axes: np.ndarray | list[Axes], suptitle: Text | Non
         [needs[ax]["right"] + needs[nxt]["left"] for ax, nxt in zip(
             grid[:, :-1].ravel(), grid[:, 1:].ravel(), strict=True)] or [0.0]
     ) + _GAP  # fmt: skip
-    axes_h = max((height - bottom - top - (rows - 1) * hgap) / rows, 0.1)
-    axes_w = max((width - left - right - (cols - 1) * wgap) / cols, 0.1)
+    # labels too big for the figure: shrink the margins so the axes keep 30 % of it (the
+    # labels are then cut, as with any layout engine, but the plot is still drawn)
+    shrink_h = min(1.0, 0.7 * height / (bottom + top + (rows - 1) * hgap))
+    shrink_w = min(1.0, 0.7 * width / (left + right + (cols - 1) * wgap))
+    bottom, top, hgap = (v * shrink_h for v in (bottom, top, hgap))
+    left, right, wgap = (v * shrink_w for v in (left, right, wgap))
+    axes_h = (height - bottom - top - (rows - 1) * hgap) / rows
+    axes_w = (width - left - right - (cols - 1) * wgap) / cols
     fig.subplots_adjust(
         left=left / width,
         right=1.0 - right / width,

@@ -135,3 +135,9 @@ def test_log_minor_ticks_outside_the_view_are_not_made_and_the_plot_is_the_same(
     assert locs.min() >= 3.0 and locs.max() <= 2000.0
     assert len(locs) < len(LogLocator(10.0, None).tick_values(3.0, 2000.0))
     assert _log_plot_png(None) == _log_plot_png(LogLocator(10.0, None))
+
+
+def test_labels_wider_than_the_figure_still_give_a_plot(tmp_path):
+    names = ["x" * 300 + str(i) for i in range(3)]
+    path = _plots.plot_parameters(names, [1e-4] * 3, [1e-5] * 3, path=tmp_path / "wide.png")
+    assert _png_size(path) == (int(7.5 * 110), int(3.0 * 110))
