@@ -170,7 +170,7 @@ def outlier_section(result: IdentificationResult) -> tuple[Section, list[int], l
         f"{len(w.outliers)} of {z.shape[0]} poses have a whitened residual |r/σ| > "
         f"{OUTLIER_LIMIT:g} (expected for Gaussian noise: ~{0.0027 * z.size:.1f} "
         "components in all). The quality gate's outlier test (leverage-corrected, robust "
-        "scale, Bonferroni bound) is in its own section when it found any."
+        "scale, Bonferroni bound) is reported in the Quality gate section."
     )
     if w.loss != "linear":
         text += (
