@@ -19,7 +19,7 @@ from pincal.errors import (
     SingularConfigurationError,
 )
 from pincal.model._kinematics import KinematicQueries
-from pincal.model._newton import Solution, damped_newton
+from pincal.model._newton import Solution, SolverOptions, damped_newton
 
 __all__ = ["Assembly"]
 
@@ -44,10 +44,17 @@ class Assembly(KinematicQueries):
         return q
 
     # ---------------------------------------------------------------- kinematics core
-    def _newton(self, q0: np.ndarray, free: np.ndarray, extra=None) -> Solution:
+    def _newton(
+        self,
+        q0: np.ndarray,
+        free: np.ndarray,
+        extra=None,
+        options: SolverOptions | None = None,
+    ) -> Solution:
         """Damped Newton on the closure (+ optional extra) residual over tangent dofs ``free``.
 
-        ``extra`` is a callable of the computed data returning ``(r (k,), J (k, nv))``.
+        ``extra`` is a callable of the computed data returning ``(r (k,), J (k, nv))``;
+        ``options`` replaces :attr:`options` for this solve.
         """
         data = self._data()
         extra_jacobian = [np.zeros((0, self.model.nv))]
@@ -64,7 +71,7 @@ class Assembly(KinematicQueries):
             J = self._closure_jacobian(data)
             return J if extra is None else np.vstack([J, extra_jacobian[0]])
 
-        return damped_newton(self.model, q0, free, evaluate, jacobian, self.options)
+        return damped_newton(self.model, q0, free, evaluate, jacobian, options or self.options)
 
     def _assemble(self, guess: np.ndarray, keep_actuators: bool = False) -> np.ndarray:
         """Close the loops from ``guess``.

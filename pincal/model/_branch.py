@@ -16,21 +16,40 @@ them. Here a solution is accepted only when it is on the branch of ``q_home``:
 * a direct solve from the start configuration that fails this test is replaced by a
   continuation: a straight path in actuator space from the start (then from home),
   in steps that halve until each step converges, keeps the sign and moves the passive
-  joints as the first-order predictor says.
+  joints as the first-order predictor says. Its corrector starts next to the solution
+  when the step is good, so it gets a short budget (a few iterations, a few line-search
+  halvings): a corrector that needs more — the step runs past the edge of the workspace,
+  where the loops have no assembly — fails fast and the step is halved, instead of
+  creeping toward a non-zero minimum of the residual for the full Newton budget.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ConvergenceError
 from pincal.model._assembly import Assembly
-from pincal.model._newton import Solution
+from pincal.model._newton import Solution, SolverOptions
 
 __all__ = ["BranchTracking"]
 
 _MIN_STEP = 1.0 / 4096  # smallest continuation step, as a fraction of the path
+#: corrector budget of one continuation step: converging correctors take <= 9 iterations
+#: and (almost) never backtrack on the bundled machines
+_CORRECTOR_ITERATIONS = 12
+_CORRECTOR_BACKTRACKS = 4
+
+
+def corrector_options(options: SolverOptions) -> SolverOptions:
+    """The short-budget Newton settings of a continuation corrector (same tolerances)."""
+    return dataclasses.replace(
+        options,
+        max_iterations=min(options.max_iterations, _CORRECTOR_ITERATIONS),
+        max_backtracks=min(options.max_backtracks, _CORRECTOR_BACKTRACKS),
+    )
 
 
 class BranchTracking(Assembly):
@@ -121,13 +140,14 @@ class BranchTracking(Assembly):
         t, h = 0.0, 0.25
         sol = None
         residual = np.inf
+        corrector = corrector_options(self.options)
         while t < 1.0:
             h = min(h, 1.0 - t)
             a = a0 + (t + h) * (q_act - a0)
             ok = False
             try:
                 pred = self._predict(q, a - self.actuators_of(q))
-                cand = self._newton(self.with_actuators(pred, a), self._free_v)
+                cand = self._newton(self.with_actuators(pred, a), self._free_v, options=corrector)
                 correction = pin.difference(self.model, pred, cand.q)[self._free_v]
                 moved = pin.difference(self.model, q, pred)[self._free_v]
                 ok = self._on_branch(cand) and (

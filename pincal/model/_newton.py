@@ -38,6 +38,8 @@ class SolverOptions:
         max_condition: condition number above which a solution is called singular.
         polish_steps: extra Newton steps after convergence, each kept only when it lowers
             the largest residual component (0: stop at ``tol``).
+        max_backtracks: step halvings of the line search before an iteration is called
+            stalled (the solve then fails with :class:`~pincal.errors.ConvergenceError`).
     """
 
     tol: float = 1e-12
@@ -46,6 +48,7 @@ class SolverOptions:
     rcond: float = 1e-10
     max_condition: float = 1e8
     polish_steps: int = 2
+    max_backtracks: int = 30
 
 
 @dataclass(frozen=True)
@@ -155,7 +158,7 @@ def damped_newton(
         dv = np.zeros(nv)
         dv[free] = step
         alpha = 1.0
-        for _ in range(30):
+        for _ in range(opt.max_backtracks):
             q_try = pin.integrate(model, q, alpha * dv)
             r_try = evaluate(q_try)
             n_try = np.linalg.norm(r_try)
