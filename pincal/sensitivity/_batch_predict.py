@@ -16,7 +16,8 @@ from pincal.model._batch import BatchKinematics, mv
 from pincal.model._batch_fk import closure_jacobian_batch
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._batch_jacobian import _anchors, _cross, _param_twists, batch_applies
+from pincal.sensitivity._batch_jacobian import _cross, _param_twists, batch_applies
+from pincal.sensitivity._batch_serial import _anchors
 from pincal.sensitivity._jacobian import _Plan, _plan
 
 __all__ = ["predict_configurations"]
