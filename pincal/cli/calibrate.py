@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -139,7 +140,7 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
       pincal calibrate wedge3 --data m.csv --params patent --method lm --loss huber --out cal/
     """
     from pincal.cli._gate import apply_gate, gate_limits
-    from pincal.identification import check_measurements, check_quality
+    from pincal.identification import check_quality
     from pincal.io import (
         CALIBRATED_SIDECAR,
         CALIBRATED_URDF,
@@ -175,12 +176,10 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
         result, noise_model = _identify_instrument(mech, params, data, method), None
         verdict = check_quality(result, limits=limits, scalar_instrument=True)
     else:
-        mf = read_measurement_file(data, mech)
-        for w in mf.warnings:
-            click.echo(f"pincal: warning: {w}", err=True)
+        mf = read_measurement_file(data, mech)  # its data check is the gate's first look
         meas = mf.measurements
         noise_model = meas.noise
-        gate = check_measurements(mech, meas, length_unit=mf.length_unit, limits=limits)
+        gate = dataclasses.replace(mf.data_check, limits=limits)
         apply_gate(gate, force, before_fit=True)
         result = _identify_poses(mech, params, preset, meas, method, declared, loss)
         verdict = check_quality(result, meas, mech=mech, data=gate)

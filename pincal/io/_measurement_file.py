@@ -51,6 +51,7 @@ from pincal.errors import (
     MeasurementFormatError,
     TooFewPosesError,
 )
+from pincal.identification import QualityVerdict, check_measurements
 from pincal.io._csv import (
     Header,
     actuator_columns,
@@ -101,6 +102,9 @@ class MeasurementFile:
         length_unit, angle_unit: as declared.
         suspect_units: True when magnitudes suggest a wrong length unit (also logged).
         warnings: human-readable warnings.
+        data_check: the quality gate's look at the data
+            (:func:`pincal.identification.check_measurements`, default limits), computed
+            once here so that ``calibrate`` does not repeat it.
     """
 
     measurements: Measurements
@@ -109,18 +113,16 @@ class MeasurementFile:
     angle_unit: str
     suspect_units: bool
     warnings: tuple[str, ...]
+    data_check: QualityVerdict
 
 
-def _check_magnitudes(mech: Mechanism, meas: Measurements, unit: str) -> str | None:
-    """A warning when the measured positions' spread says the length unit is wrong.
+def _unit_warning(verdict: QualityVerdict) -> str | None:
+    """The unit finding of the gate's data check as a reader's warning, if any.
 
-    The test is the quality gate's (:func:`pincal.identification.check_measurements`:
-    spread about the centroid against the nominal model's at the same actuator values),
-    so reading warns exactly where ``calibrate`` would refuse.
+    The test is the quality gate's (spread of the measured positions about their centroid
+    against the nominal model's at the same actuator values), so reading warns exactly
+    where ``calibrate`` would refuse.
     """
-    from pincal.identification import check_measurements
-
-    verdict = check_measurements(mech, meas, length_unit=unit)
     found = [i.message for i in verdict.issues if i.kind == "units"]
     return f"{found[0]}; {verdict.cause_text}" if found else None
 
@@ -278,12 +280,11 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
             f"model {mech.name!r})",
             unknown=unknown,
         )
-    warnings = []
-    w = _check_magnitudes(mech, meas, lu)
+    check = check_measurements(mech, meas, length_unit=lu)
+    w = _unit_warning(check)
     if w:
         log.warning("%s: %s", name, w)
-        warnings.append(w)
-    return MeasurementFile(meas, targets, lu, au, w is not None, tuple(warnings))
+    return MeasurementFile(meas, targets, lu, au, w is not None, (w,) if w else (), check)
 
 
 def read_measurements(path: str | Path, mech: Mechanism) -> Measurements:
