@@ -22,8 +22,6 @@ from pincal.identification import IdentificationResult
 from pincal.report._document import ReportFiles, Section, Table, write_report
 from pincal.report._plots import (
     plot_convergence,
-    plot_error_histogram,
-    plot_errors_before_after,
     plot_index_history,
     plot_validation_summary,
 )
@@ -31,6 +29,7 @@ from pincal.report._render import PlotJobs
 from pincal.report._sections import (
     UNITS_NOTE,
     data_section,
+    error_images,
     outlier_section,
     parameter_section,
     prediction_section,
@@ -167,21 +166,9 @@ def _validation(notes: dict, plots: Path, jobs: PlotJobs) -> Section | None:
     for key, unit in (("position", "um"), ("orientation", "urad")):
         if key in ve["before"] and key in ve["after"]:
             b, a = np.array(ve["before"][key]), np.array(ve["after"][key])
-            title = key.capitalize()
-            if b.size == a.size:
-                images.append(
-                    jobs.add(
-                        plot_errors_before_after, b, a, unit,
-                        path=plots / f"validation_{key}.png",
-                        title=f"{title} error per validation pose",
-                    )
-                )  # fmt: skip
-            images.append(
-                jobs.add(
-                    plot_error_histogram, b, a, unit,
-                    path=plots / f"validation_{key}_histogram.png",
-                    title=f"{title} error distribution",
-                )
+            images += error_images(
+                jobs, b, a, unit, plots / f"validation_{key}",
+                f"{key.capitalize()} error", b.size == a.size, "validation pose",
             )  # fmt: skip
     return Section(
         "Validation",

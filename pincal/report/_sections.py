@@ -128,20 +128,10 @@ def residual_section(result: IdentificationResult, plots: Path, jobs: PlotJobs) 
              _r(np.sqrt(np.mean(after**2)) * _U), _r(after.max() * _U)]
         )  # fmt: skip
         if before is not None:
-            title = f"{label.capitalize()} residual per pose"
-            images.append(
-                jobs.add(
-                    plot_errors_before_after, before, after, unit,
-                    path=plots / f"residual_{label}.png", title=title,
-                )
-            )  # fmt: skip
-            images.append(
-                jobs.add(
-                    plot_error_histogram, before, after, unit,
-                    path=plots / f"residual_{label}_histogram.png",
-                    title=f"{label.capitalize()} residual distribution",
-                )
-            )  # fmt: skip
+            images += error_images(
+                jobs, before, after, unit, plots / f"residual_{label}",
+                f"{label.capitalize()} residual",
+            )
     headers = ["residual (norm per pose)", "unit", "RMS before", "max before", "RMS after",
                "max after"]  # fmt: skip
     text = (
@@ -149,6 +139,48 @@ def residual_section(result: IdentificationResult, plots: Path, jobs: PlotJobs) 
         "(before) and the identified one (after); norms per pose, in µm and µrad."
     )
     return Section("Residuals", text, images, [Table(headers, rows)])
+
+
+def error_images(
+    jobs: PlotJobs,
+    before: np.ndarray,
+    after: np.ndarray,
+    unit: str,
+    stem: Path,
+    what: str,
+    per_pose: bool = True,
+    pose_noun: str = "pose",
+) -> list[Path]:
+    """The per-pose bars and the distribution of before/after error norms.
+
+    Args:
+        jobs: where the plots are recorded.
+        before: (m,) error norms per pose of the nominal model [``unit``].
+        after: (m',) the same of the identified model.
+        unit: ``um`` or ``urad``.
+        stem: path without suffix; the plots are ``stem.png`` and ``stem_histogram.png``.
+        what: e.g. "Position residual" (titles "… per pose", "… distribution").
+        per_pose: draw the per-pose bars (needs ``before`` and ``after`` pose by pose).
+        pose_noun: the per-pose title's noun ("… per validation pose").
+
+    Returns:
+        The images' paths, in order.
+    """
+    images = []
+    if per_pose:
+        images.append(
+            jobs.add(
+                plot_errors_before_after, before, after, unit,
+                path=stem.with_name(stem.name + ".png"), title=f"{what} per {pose_noun}",
+            )
+        )  # fmt: skip
+    images.append(
+        jobs.add(
+            plot_error_histogram, before, after, unit,
+            path=stem.with_name(stem.name + "_histogram.png"), title=f"{what} distribution",
+        )
+    )  # fmt: skip
+    return images
 
 
 LARGE_RESIDUALS = "Large residuals"
