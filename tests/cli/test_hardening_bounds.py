@@ -7,8 +7,6 @@ behaviour was minutes, a hang or a MemoryError).
 
 from __future__ import annotations
 
-import time
-
 import pytest
 from click.testing import CliRunner
 
@@ -19,21 +17,19 @@ from pincal.design import (
     candidate_set,
     parse_candidate_spec,
 )
+from pincal.design import _candidate_sources as candidate_sources
 from pincal.errors import InputLimitError, OptionValueError, PincalError
 from pincal.model import load_mechanism, parameters
 
 
 def refused(args: list[str], error: str, *needles: str) -> str:
-    t0 = time.perf_counter()
     res = CliRunner().invoke(main, args)
-    took = time.perf_counter() - t0
     assert res.exit_code == 1, res.output
     assert "Traceback" not in res.output
     line = res.output.strip().splitlines()[-1]
     assert line.startswith(f"pincal: error: {error}: "), line
     for n in needles:
         assert n in line, (n, line)
-    assert took < 60, f"refusal took {took:.1f} s"
     return line
 
 
@@ -157,14 +153,19 @@ def test_candidate_cost_estimates():
     candidate_cost("grid", 4, 6, 6, 42).check("grid:4")  # the default is fine
 
 
-def test_library_candidate_set_bounds():
+def test_library_candidate_set_bounds(monkeypatch):
     mech = load_mechanism("hexaslide_6pus")
     params = parameters(mech, next(iter(mech.presets)))
-    t0 = time.perf_counter()
-    for spec in ("grid:100", "oa:1000", "random:100000000"):
-        with pytest.raises(InputLimitError, match=r"candidate poses, ~.* GB; the bound is"):
-            candidate_set(mech, params, spec)
-    assert time.perf_counter() - t0 < 5
+
+    def never(*args, **kwargs):
+        raise AssertionError("candidate work started before the cost was checked")
+
+    with monkeypatch.context() as m:
+        for name in ("evaluate_candidates", "sample_actuators"):
+            m.setattr(candidate_sources, name, never)
+        for spec in ("grid:100", "oa:1000", "random:100000000"):
+            with pytest.raises(InputLimitError, match=r"candidate poses, ~.* GB; the bound is"):
+                candidate_set(mech, params, spec)
     with pytest.raises(InputLimitError):
         candidate_set(mech, params, "random:20", max_candidates=10)
     assert len(candidate_set(mech, params, "random:20", rng=0, max_candidates=None)) > 0

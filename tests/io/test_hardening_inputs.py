@@ -11,7 +11,6 @@ import os
 import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -91,17 +90,15 @@ def _model_copy(tmp_path: Path, name: str = "wedge3") -> Path:
 # --- bullet 1: YAML -----------------------------------------------------------------------
 
 
-def test_sidecar_alias_bomb_is_refused_fast_naming_the_file(tmp_path):
+def test_sidecar_alias_bomb_is_refused_naming_the_file(tmp_path):
     d = _model_copy(tmp_path)
     side = d / "wedge3.yaml"
     side.write_text(side.read_text() + BOMB.replace("a:", "zz_bomb:", 1))
     assert len(BOMB) < 1024
-    t = time.perf_counter()
     with pytest.raises(InputLimitError, match="wedge3.yaml.*expands to more than"):
         read_sidecar(side)
     with pytest.raises(InputLimitError):
         load_mechanism(d)
-    assert time.perf_counter() - t < 10
     err = _one_line_error(_cli("info", str(d)), "wedge3.yaml", "alias")
     assert "InputLimitError" in err
 
@@ -186,8 +183,7 @@ def test_fifo_without_writer_fails_at_once(tmp_path, hexa):
         read_measurement_file(fifo, hexa)
     with pytest.raises(MeasurementFileError):
         read_pose_rows(fifo, hexa)
-    t = time.perf_counter()
-    proc = subprocess.run(
+    proc = subprocess.run(  # a blocking read would end in TimeoutExpired
         [*CALIBRATE, "--data", str(fifo), "--out", str(tmp_path / "cal")],
         capture_output=True,
         text=True,
@@ -196,7 +192,6 @@ def test_fifo_without_writer_fails_at_once(tmp_path, hexa):
     )
     assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
     assert "data.csv" in proc.stderr and "regular file" in proc.stderr
-    assert time.perf_counter() - t < 120
 
 
 def test_size_cap_applies_before_reading(tmp_path, hexa, good_csv, monkeypatch):

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 from pincal._yaml import MAX_NODES, load_yaml, parse_yaml
@@ -21,13 +19,11 @@ def test_small_aliases_and_merge_overrides_are_plain_yaml():
     }
 
 
-def test_expansion_is_counted_per_alias_use_and_refused_quickly():
+def test_expansion_is_counted_per_alias_use_and_refused():
     levels = ["l0: &l0 [" + ", ".join(["x"] * 10) + "]"]
     levels += [f"l{i}: &l{i} [" + ", ".join([f"*l{i - 1}"] * 10) + "]" for i in range(1, 12)]
-    t = time.perf_counter()
     with pytest.raises(InputLimitError, match=f"doc.yaml expands to more than {MAX_NODES}"):
-        parse_yaml("\n".join(levels), "doc.yaml")
-    assert time.perf_counter() - t < 5
+        parse_yaml("\n".join(levels), "doc.yaml")  # 10¹² nodes if expanded
     # the same bomb through merge keys (which really copy at construction)
     merges = ["m0: &m0 {" + ", ".join(f"k{j}: {j}" for j in range(10)) + "}"]
     merges += [
