@@ -29,6 +29,7 @@ from pincal.model._batch_ops import (
 )
 from pincal.model._batch_ops import sinc_terms as _sinc_terms
 from pincal.model._batch_ops import skew as _skew
+from pincal.model._block_solve import PassiveFactor, concat_factors
 
 __all__ = [
     "BatchKinematics",
@@ -101,8 +102,8 @@ class BatchKinematics:
         jacobian: (N, 6, nv) WORLD joint Jacobian ``[v_o; ω]`` (``data.J`` of Pinocchio).
         closure_jacobian: (N, n_closure_rows, k) closure Jacobian on the mechanism's k
             free dofs at ``q``, when the loop-closing solve computed it (else None).
-        closure_inverse: (N, k, k) its inverse when square (computed by the solve's
-            condition check and reused by the sensitivities), else None.
+        closure_factor: its factorisation when square (computed by the solve's branch
+            and condition checks, reused by the sensitivities), else None.
     """
 
     q: np.ndarray
@@ -110,33 +111,33 @@ class BatchKinematics:
     translations: np.ndarray
     jacobian: np.ndarray
     closure_jacobian: np.ndarray | None = None
-    closure_inverse: np.ndarray | None = None
+    closure_factor: PassiveFactor | None = None
 
 
 def concat_kinematics(parts: list[BatchKinematics]) -> BatchKinematics:
     """The kinematics of consecutive chunks of poses as one :class:`BatchKinematics`."""
     cj = [p.closure_jacobian for p in parts if p.closure_jacobian is not None]
-    ci = [p.closure_inverse for p in parts if p.closure_inverse is not None]
+    ci = [p.closure_factor for p in parts if p.closure_factor is not None]
     return BatchKinematics(
         np.concatenate([p.q for p in parts]),
         np.concatenate([p.rotations for p in parts]),
         np.concatenate([p.translations for p in parts]),
         np.concatenate([p.jacobian for p in parts]),
         np.concatenate(cj) if len(cj) == len(parts) else None,
-        np.concatenate(ci) if len(ci) == len(parts) else None,
+        concat_factors(ci) if len(ci) == len(parts) else None,
     )
 
 
 def slice_kinematics(bk: BatchKinematics, rows: slice) -> BatchKinematics:
     """The kinematics of poses ``rows`` (views, not copies)."""
-    cj, ci = bk.closure_jacobian, bk.closure_inverse
+    cj, ci = bk.closure_jacobian, bk.closure_factor
     return BatchKinematics(
         bk.q[rows],
         bk.rotations[rows],
         bk.translations[rows],
         bk.jacobian[rows],
         None if cj is None else cj[rows],
-        None if ci is None else ci[rows],
+        None if ci is None else ci.take(rows),
     )
 
 

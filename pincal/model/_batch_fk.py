@@ -14,74 +14,26 @@ so results and errors are those of the pose-by-pose path.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import TYPE_CHECKING, Literal, overload
 
 import numpy as np
-import pinocchio as pin
 
 from pincal.errors import ShapeError
-from pincal.model._batch import (
-    BatchKinematics,
-    BatchModel,
-    concat_kinematics,
-    cross_cols,
-    mm,
-    mv,
+from pincal.model._batch import BatchKinematics, BatchModel, concat_kinematics
+from pincal.model._batch_closures import (
+    PointClosures,
+    closure_jacobian_batch,
+    closure_residual_batch,
 )
+from pincal.model._block_solve import BlockSolver, DenseFactor, PassiveFactor
 from pincal.model._branch import BranchTracking
-from pincal.model._closures import Closure
 
 __all__ = ["BatchTracking", "closure_jacobian_batch", "closure_residual_batch"]
 
 _MAX_BATCH_ITERATIONS = 30
 #: poses per chunk of the batched solves (temporaries of a chunk stay in the L2 cache)
 CHUNK = 256
-
-
-def closure_residual_batch(
-    c: Closure, Ra: np.ndarray, pa: np.ndarray, Rb: np.ndarray, pb: np.ndarray
-) -> np.ndarray:
-    """Residuals (N, c.size) of closure ``c`` from frame placements (N, 3, 3), (N, 3)."""
-    if c.is_point:
-        return pb - pa
-    Rat = np.swapaxes(Ra, 1, 2)
-    full = [mv(Rat, pb - pa)]
-    if c.components[-1] >= 3:
-        full.append(np.array([pin.log3(M) for M in mm(Rat, Rb)]))
-    return np.concatenate(full, axis=1)[:, list(c.components)]
-
-
-def closure_jacobian_batch(
-    c: Closure,
-    Ra: np.ndarray,
-    pa: np.ndarray,
-    Rb: np.ndarray,
-    pb: np.ndarray,
-    Ta: np.ndarray,
-    Tb: np.ndarray,
-) -> np.ndarray:
-    """(N, c.size, n) derivative of :func:`closure_residual_batch` given local twists.
-
-    Args:
-        c: the closure.
-        Ra: (N, 3, 3) world rotations of the closure's frame a.
-        pa: (N, 3) world positions of frame a [m].
-        Rb: (N, 3, 3) world rotations of the closure's frame b.
-        pb: (N, 3) world positions of frame b [m].
-        Ta: (N, 6, n) local twists ``[v; ω]`` of frame a per unit of each of n
-            variables (LOCAL frame Jacobians or parameter sensitivities) [m, rad].
-        Tb: (N, 6, n) local twists ``[v; ω]`` of frame b, as ``Ta``.
-    """
-    if c.is_point:
-        return mm(Rb, Tb[:, :3]) - mm(Ra, Ta[:, :3])
-    Rat = np.swapaxes(Ra, 1, 2)
-    t = mv(Rat, pb - pa)
-    Rab = mm(Rat, Rb)
-    blocks = [cross_cols(t[:, :, None], Ta[:, 3:]) + mm(Rab, Tb[:, :3]) - Ta[:, :3]]
-    if c.components[-1] >= 3:
-        dw = Tb[:, 3:] - mm(np.swapaxes(Rab, 1, 2), Ta[:, 3:])
-        blocks.append(np.array([pin.Jlog3(M) for M in Rab]) @ dw)
-    return np.concatenate(blocks, axis=1)[:, list(c.components)]
 
 
 class BatchTracking(BranchTracking):
@@ -130,6 +82,42 @@ class BatchTracking(BranchTracking):
     def _batchable(self) -> bool:
         return bool(self.closures) and self.home_branch != 0.0 and self.batch_model.supported
 
+    def _point_closures(self, cols: np.ndarray) -> PointClosures:
+        """The point closures on Jacobian columns ``cols`` (built once for the free dofs)."""
+        free = cols.shape == self._free_v.shape and bool(np.all(cols == self._free_v))
+        if free and "_point_closures_cache" in self.__dict__:
+            return self.__dict__["_point_closures_cache"]
+        rows, frames, r0 = [], [], 0
+        for fids, c in zip(self._closure_fids, self.closures, strict=True):
+            if c.is_point:
+                rows.append(r0)
+                frames.append(fids)
+            r0 += c.size
+        pc = PointClosures(self.batch_model, frames, rows, cols)
+        if free:
+            self.__dict__["_point_closures_cache"] = pc
+        return pc
+
+    @property
+    def passive_solver(self) -> BlockSolver | None:
+        """The block structure of the square passive closure Jacobian (None: dense)."""
+        if "_passive_solver_cache" not in self.__dict__:
+            bm, free = self.batch_model, self._free_v
+            blocks, support, r0 = [], [], 0
+            for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
+                moves = (bm.support_of_frame(a) | bm.support_of_frame(b))[free]
+                blocks.append(np.arange(r0, r0 + c.size))
+                support += [moves] * c.size
+                r0 += c.size
+            solver = BlockSolver.build(blocks, np.array(support)) if support else None
+            self.__dict__["_passive_solver_cache"] = solver
+        return self.__dict__["_passive_solver_cache"]
+
+    def passive_factor(self, Jf: np.ndarray) -> PassiveFactor:
+        """Factor passive closure Jacobians ``Jf`` (N, k, k): by blocks where they reduce."""
+        solver = self.passive_solver
+        return DenseFactor.of(Jf) if solver is None else solver.factor(Jf)
+
     @overload
     def closure_terms_batch(
         self,
@@ -161,16 +149,12 @@ class BatchTracking(BranchTracking):
         sizes = [c.size for c in self.closures]
         r = np.empty((N, sum(sizes)))
         J = np.zeros((N, sum(sizes), cols.size)) if jacobian else None
+        self._point_closures(cols).terms(bk, r, J)
         row = 0
         for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
             rows = slice(row, row + c.size)
             row += c.size
-            if c.is_point:  # world point velocities: v_o + ω × p
-                pa = bm.frame_positions(bk, np.array([a, b]))
-                pa, pb = pa[:, 0], pa[:, 1]
-                r[:, rows] = pb - pa
-                if J is not None:
-                    self._point_closure_jacobian(bk, a, b, pa, pb, cols, J[:, rows])
+            if c.is_point:
                 continue
             Ra, pa = bm.frame_placement(bk, a)
             Rb, pb = bm.frame_placement(bk, b)
@@ -179,29 +163,6 @@ class BatchTracking(BranchTracking):
                 Ja, Jb = bm.frame_jacobian(bk, a), bm.frame_jacobian(bk, b)
                 J[:, rows] = closure_jacobian_batch(c, Ra, pa, Rb, pb, Ja, Jb)[:, :, cols]
         return r, J
-
-    def _point_closure_jacobian(
-        self,
-        bk: BatchKinematics,
-        a: int,
-        b: int,
-        pa: np.ndarray,
-        pb: np.ndarray,
-        cols: np.ndarray,
-        out: np.ndarray,
-    ) -> None:
-        """Write the derivative of ``p_b − p_a`` (world axes) into ``out`` (N, 3, len(cols)).
-
-        From the WORLD joint Jacobian, on the columns of the dofs that support frame a or
-        b (the others stay 0): a point p on a moving body has velocity ``v_o + ω × p``.
-        """
-        bm = self.batch_model
-        ma, mb = bm.support_of_frame(a)[cols], bm.support_of_frame(b)[cols]
-        sub = np.nonzero(ma | mb)[0]
-        ma, mb, idx = ma[sub], mb[sub], cols[sub]
-        Jv, Jw = bk.jacobian[:, :3, idx], bk.jacobian[:, 3:, idx]
-        P = pb[:, :, None] * mb - pa[:, :, None] * ma
-        out[:, :, sub] = Jv * (mb.astype(float) - ma) + cross_cols(Jw, P)
 
     def _actuators_batch(self, Q: np.ndarray, A: np.ndarray) -> np.ndarray:
         out = np.array(Q, dtype=float)
@@ -267,11 +228,13 @@ class BatchTracking(BranchTracking):
             if ig.size == 0:
                 continue
             prev[ig] = norm[go]
+            factor = self.passive_factor(Jf[go])
             try:
-                step = -np.linalg.solve(Jf[go], r[go][:, :, None])[..., 0]
+                step = -factor.solve(r[go][:, :, None])[..., 0]
             except np.linalg.LinAlgError:
                 failed[ig] = True
                 continue
+            step[factor.singular] = np.nan
             sn = np.linalg.norm(step, axis=1)
             step *= np.minimum(1.0, opt.max_step / np.maximum(sn, 1e-300))[:, None]
             bad = ~np.all(np.isfinite(step), axis=1)
@@ -280,22 +243,15 @@ class BatchTracking(BranchTracking):
             DV[:, free] = step
             Q[ig[~bad]] = bm.integrate(Q[ig[~bad]], DV[~bad])
         ok = done.copy()
-        inv = np.full((N, k, k), np.nan)
-        if ok.any():
-            io = np.nonzero(ok)[0]
-            Jd = Jf_done[io]
-            signs = np.sign(np.linalg.det(Jd))
-            with np.errstate(all="ignore"):
-                try:
-                    inv[io] = np.linalg.inv(Jd)
-                except np.linalg.LinAlgError:  # a singular row: every row gets the exact check
-                    inv[io] = np.inf
-                inv_norm = np.abs(inv[io]).sum(axis=1).max(axis=1)
-            cond1 = np.abs(Jd).sum(axis=1).max(axis=1) * inv_norm
-            # cond₂ ≤ k·cond₁: rows that might exceed the limit get the exact check
-            risky = ~np.isfinite(cond1) | (k * cond1 > opt.max_condition)
-            ok[io[(signs != self.home_branch) | risky]] = False
-        return Q, ok, BatchKinematics(Q, out_R, out_p, out_J, Jf_done, inv)
+        Jf_done[~ok] = np.eye(k)  # rows to be redone pose by pose: any regular matrix
+        factor = self.passive_factor(Jf_done)
+        with np.errstate(all="ignore"):
+            # ‖Jf‖_F · (bound of ‖Jf⁻¹‖₂) ≥ cond₂: rows that might exceed the limit get
+            # the exact check pose by pose
+            cond = np.sqrt(np.sum(Jf_done**2, axis=(1, 2))) * factor.inverse_norm_bound()
+        risky = ~np.isfinite(cond) | (cond > opt.max_condition) | factor.singular
+        ok &= (factor.sign() == self.home_branch) & ~risky
+        return Q, ok, BatchKinematics(Q, out_R, out_p, out_J, Jf_done, factor)
 
     def try_configurations_batch(
         self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
@@ -360,9 +316,9 @@ class BatchTracking(BranchTracking):
             fix = self.batch_model.kinematics(Q[redo])
             bk.rotations[redo], bk.translations[redo] = fix.rotations, fix.translations
             bk.jacobian[redo] = fix.jacobian
-            if bk.closure_jacobian is not None:
-                Jr = self.closure_terms_batch(fix, columns=self._free_v)[1]
-                bk.closure_jacobian[redo] = Jr
-                if bk.closure_inverse is not None:  # regular: configuration() checked it
-                    bk.closure_inverse[redo] = np.linalg.pinv(Jr)
+            if bk.closure_jacobian is not None:  # regular there: configuration() checked it
+                bk.closure_jacobian[redo] = self.closure_terms_batch(fix, columns=self._free_v)[1]
+                bk = dataclasses.replace(
+                    bk, closure_factor=self.passive_factor(bk.closure_jacobian)
+                )
         return Q, bk

@@ -105,8 +105,10 @@ class JointGroup:
         ids, parents, iq, iv: (G,) joint ids, parent ids, first q and v indices.
         axis: (G, 3) unit axes (R, RU, P; zeros otherwise).
         R0, p0: (G, 3, 3), (G, 3) joint placements in their parents.
-        R0K, R0K2: (G, 3, 3) ``R0·K`` and ``R0·K²`` with K = skew(axis) (Rodrigues terms).
-        u: (G, 3) ``R0·axis`` (prismatic direction in the parent frame).
+        C: (G, 3, 11) the constant right factors ``[R0, R0·K, R0·K², R0·axis, p0]``
+            (K = skew(axis)) multiplied by the parent rotation in one product: the
+            Rodrigues terms of the joint rotation, the world axis and the world offset.
+        root: every parent is the universe (its rotation is the identity).
     """
 
     kind: str
@@ -117,9 +119,8 @@ class JointGroup:
     axis: np.ndarray
     R0: np.ndarray
     p0: np.ndarray
-    R0K: np.ndarray
-    R0K2: np.ndarray
-    u: np.ndarray
+    C: np.ndarray
+    root: bool
 
 
 def group_joints(
@@ -141,42 +142,87 @@ def group_joints(
     for (_, kind), ids in sorted(keys.items()):
         k = np.array(ids) - 1
         K = skew(axes[k])
+        R, a, p = R0[k], axes[k], p0[k]
+        C = np.concatenate([R, R @ K, R @ K @ K, mv(R, a)[..., None], p[..., None]], axis=2)
+        par = np.array([parents[i] for i in k])
         groups.append(
             JointGroup(
                 kind,
                 np.array(ids),
-                np.array([parents[i] for i in k]),
+                par,
                 np.array([iq[i] for i in k]),
                 np.array([iv[i] for i in k]),
-                axes[k],
-                R0[k],
-                p0[k],
-                R0[k] @ K,
-                R0[k] @ K @ K,
-                mv(R0[k], axes[k]),
+                a,
+                R,
+                p,
+                C,
+                bool(np.all(par == 0)),
             )
         )
     return tuple(groups)
 
 
-def _local(g: JointGroup, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Joint placements in the parents, (N, G, 3, 3) and (N, G, 3), of group ``g``."""
-    N = Q.shape[0]
-    if g.kind in ("R", "RU"):
+def _cross_last(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products of stacked vectors (…, 3) (without ``np.cross``'s overhead)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def _step(
+    g: JointGroup, Q: np.ndarray, Rp: np.ndarray, pp: np.ndarray, Jt: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """World rotations (G, N, 3, 3) and positions (G, N, 3) of group ``g``'s joints.
+
+    Writes their WORLD Jacobian columns into ``Jt`` (nv, N, 6). ``Rp``, ``pp``: the
+    parents' world rotations (G, N, 3, 3) and positions (G, N, 3).
+    """
+    G, N = Rp.shape[:2]
+    q = Q[:, g.iq].T  # (G, N) first coordinate of each joint
+    if g.kind in ("R", "RU", "P"):
+        # one product per joint for all poses: Rp · [R0, R0K, R0K², u, p0]
+        X = (Rp.reshape(G, N * 3, 3) @ g.C).reshape(G, N, 3, 11)
+        w, off = X[..., 9], X[..., 10]
+        if g.kind == "P":
+            Ri = X[..., 0:3]
+            pi = pp + off + q[..., None] * w
+            Jt[g.iv, :, :3] = w
+            Jt[g.iv, :, 3:] = 0.0
+            return np.ascontiguousarray(Ri), pi
         if g.kind == "R":
-            th = Q[:, g.iq]
-            c, s = np.cos(th), np.sin(th)
+            c, s = np.cos(q), np.sin(q)
         else:
-            c, s = Q[:, g.iq], Q[:, g.iq + 1]
-        liR = g.R0 + s[..., None, None] * g.R0K + (1.0 - c)[..., None, None] * g.R0K2
-        return liR, np.broadcast_to(g.p0, (N, *g.p0.shape))
-    if g.kind == "P":
-        return np.broadcast_to(g.R0, (N, *g.R0.shape)), g.p0 + Q[:, g.iq, None] * g.u
+            c, s = q, Q[:, g.iq + 1].T
+        Ri = (
+            X[..., 0:3]
+            + s[..., None, None] * X[..., 3:6]
+            + (1.0 - c)[..., None, None] * X[..., 6:9]
+        )
+        pi = pp + off
+        Jt[g.iv, :, 3:] = w
+        Jt[g.iv, :, :3] = _cross_last(pi, w)
+        return Ri, pi
     i4 = g.iq + (3 if g.kind == "F" else 0)
-    liR = g.R0 @ quat_to_matrix(Q[:, i4[:, None] + np.arange(4)])
-    if g.kind == "F":
-        return liR, g.p0 + mv(g.R0, Q[:, g.iq[:, None] + np.arange(3)])
-    return liR, np.broadcast_to(g.p0, (N, *g.p0.shape))
+    quat = np.swapaxes(Q[:, i4[:, None] + np.arange(4)], 0, 1)  # (G, N, 4)
+    liR = g.R0[:, None] @ quat_to_matrix(quat)
+    lip = g.p0[:, None] + (
+        mv(g.R0[:, None], np.swapaxes(Q[:, g.iq[:, None] + np.arange(3)], 0, 1))
+        if g.kind == "F"
+        else 0.0
+    )
+    if g.root:
+        Ri, pi = liR, np.broadcast_to(lip, (G, N, 3)) + pp
+    else:
+        Ri, pi = Rp @ liR, pp + mv(Rp, np.broadcast_to(lip, (G, N, 3)))
+    cols = np.swapaxes(Ri, 2, 3)  # (G, N, c, 3): the world axes
+    v0 = g.iv + (3 if g.kind == "F" else 0)
+    for a in range(3):
+        if g.kind == "F":  # local linear velocity columns
+            Jt[v0 - 3 + a, :, :3] = cols[:, :, a]
+            Jt[v0 - 3 + a, :, 3:] = 0.0
+        Jt[v0 + a, :, 3:] = cols[:, :, a]
+        Jt[v0 + a, :, :3] = _cross_last(pi, cols[:, :, a])
+    return Ri, pi
 
 
 def walk(
@@ -186,36 +232,24 @@ def walk(
 
     Pinocchio's order: ``liMi = placement · M_joint(q)``, ``oMi = oM_parent · liMi``; a
     joint column of the WORLD Jacobian is the joint's motion subspace seen from the
-    world origin (``[v_o; ω]``).
+    world origin (``[v_o; ω]``). The walk stores joints first (arrays (njoints, N, …)),
+    so that a group's parent rotations form one matrix per joint and the constant
+    factors of a revolute or prismatic group multiply them in one product per joint
+    (numpy's stacked products of 3 × 3 matrices cost per matrix, not per flop).
     """
     N = Q.shape[0]
-    oR = np.empty((N, njoints, 3, 3))
-    op = np.empty((N, njoints, 3))
-    oR[:, 0], op[:, 0] = np.eye(3), 0.0
-    Jw = np.zeros((N, 6, nv))
+    oR = np.empty((njoints, N, 3, 3))
+    op = np.empty((njoints, N, 3))
+    oR[0], op[0] = np.eye(3), 0.0
+    Jt = np.zeros((nv, N, 6))
     for g in groups:
-        Rp, pp = oR[:, g.parents], op[:, g.parents]
-        liR, lip = _local(g, Q)
-        Ri = Rp @ liR
-        pi = pp + mv(Rp, lip)
-        oR[:, g.ids], op[:, g.ids] = Ri, pi
-        if g.kind in ("R", "RU"):
-            w = mv(Ri, g.axis)
-            Jw[:, 3:, g.iv] = np.swapaxes(w, 1, 2)
-            Jw[:, :3, g.iv] = np.swapaxes(np.cross(pi, w), 1, 2)
-        elif g.kind == "P":
-            Jw[:, :3, g.iv] = np.swapaxes(mv(Ri, g.axis), 1, 2)
-        else:
-            v0 = g.iv + (3 if g.kind == "F" else 0)
-            cols = v0[:, None] + np.arange(3)  # (G, 3)
-            if g.kind == "F":  # local linear velocity columns
-                Jw[:, :3, cols - 3] = Ri.transpose(0, 2, 1, 3)
-            Jw[:, 3:, cols] = Ri.transpose(0, 2, 1, 3)
-            # columns p × R[:, c]: (N, G, c, 3) → (N, 3, G, c)
-            Jw[:, :3, cols] = np.cross(pi[:, :, None, :], np.swapaxes(Ri, 2, 3)).transpose(
-                0, 3, 1, 2
-            )
-    return oR, op, Jw
+        Ri, pi = _step(g, Q, oR[g.parents], op[g.parents], Jt)
+        oR[g.ids], op[g.ids] = Ri, pi
+    return (
+        np.ascontiguousarray(np.swapaxes(oR, 0, 1)),
+        np.ascontiguousarray(np.swapaxes(op, 0, 1)),
+        np.ascontiguousarray(np.transpose(Jt, (1, 2, 0))),
+    )
 
 
 def log3_batch(R: np.ndarray) -> np.ndarray:

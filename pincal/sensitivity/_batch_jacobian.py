@@ -19,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.model._batch import BatchKinematics, cross_cols, mm, mv, slice_kinematics
-from pincal.model._batch_fk import CHUNK, closure_jacobian_batch
+from pincal.model._batch_closures import closure_jacobian_batch
+from pincal.model._batch_fk import CHUNK
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._batch_serial import _columns, _serial_path
@@ -205,9 +206,9 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _adjoint(bk: BatchKinematics, Jf: np.ndarray, Jm_u: np.ndarray) -> np.ndarray:
-    """``Y = Jf⁻ᵀ Jm_uᵀ`` (N, k, 6): from the solve's inverse when it kept one, else a solve."""
-    if bk.closure_inverse is not None:
-        return np.swapaxes(Jm_u @ bk.closure_inverse, 1, 2)
+    """``Y = Jf⁻ᵀ Jm_uᵀ`` (N, k, 6): with the solve's factorisation when it kept one."""
+    if bk.closure_factor is not None:
+        return bk.closure_factor.solve_transposed(np.swapaxes(Jm_u, 1, 2))
     return np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
 
 

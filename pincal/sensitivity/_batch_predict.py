@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from pincal.model._batch import BatchKinematics, mv
-from pincal.model._batch_fk import closure_jacobian_batch
+from pincal.model._batch_closures import closure_jacobian_batch
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._batch_jacobian import _cross, _param_twists, batch_applies
@@ -69,8 +69,8 @@ def predict_configurations(
             ],
             axis=1,
         )[..., 0]
-    if bk.closure_inverse is not None:
-        step = -np.einsum("nij,nj->ni", bk.closure_inverse, Jc)
+    if bk.closure_factor is not None:
+        step = -bk.closure_factor.solve(Jc[..., None])[..., 0]
     else:
         try:
             step = -np.linalg.solve(Jf, Jc[..., None])[..., 0]
