@@ -18,6 +18,7 @@ import pinocchio as pin
 
 __all__ = [
     "JointGroup",
+    "cross3",
     "cross_cols",
     "exp3_batch",
     "group_joints",
@@ -162,7 +163,7 @@ def group_joints(
     return tuple(groups)
 
 
-def _cross_last(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Cross products of stacked vectors (…, 3) (without ``np.cross``'s overhead)."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
@@ -187,7 +188,6 @@ def _step(
             Ri = X[..., 0:3]
             pi = pp + off + q[..., None] * w
             Jt[g.iv, :, :3] = w
-            Jt[g.iv, :, 3:] = 0.0
             return np.ascontiguousarray(Ri), pi
         if g.kind == "R":
             c, s = np.cos(q), np.sin(q)
@@ -200,7 +200,7 @@ def _step(
         )
         pi = pp + off
         Jt[g.iv, :, 3:] = w
-        Jt[g.iv, :, :3] = _cross_last(pi, w)
+        Jt[g.iv, :, :3] = cross3(pi, w)
         return Ri, pi
     i4 = g.iq + (3 if g.kind == "F" else 0)
     quat = np.swapaxes(Q[:, i4[:, None] + np.arange(4)], 0, 1)  # (G, N, 4)
@@ -219,9 +219,8 @@ def _step(
     for a in range(3):
         if g.kind == "F":  # local linear velocity columns
             Jt[v0 - 3 + a, :, :3] = cols[:, :, a]
-            Jt[v0 - 3 + a, :, 3:] = 0.0
         Jt[v0 + a, :, 3:] = cols[:, :, a]
-        Jt[v0 + a, :, :3] = _cross_last(pi, cols[:, :, a])
+        Jt[v0 + a, :, :3] = cross3(pi, cols[:, :, a])
     return Ri, pi
 
 

@@ -32,6 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pincal.model._batch_ops import cross3
+
 __all__ = ["BlockFactor", "BlockSolver", "DenseFactor", "PassiveFactor", "concat_factors"]
 
 
@@ -176,11 +178,11 @@ def _null_and_inverse(B: np.ndarray, m: int, p: int) -> tuple[np.ndarray, np.nda
         return eye, eye, np.ones(lead)
     if (m, p) == (3, 2):
         b1, b2 = B[..., 0], B[..., 1]
-        n = _cross(b1, b2)
+        n = cross3(b1, b2)
         det = np.sqrt(np.sum(n * n, axis=-1))  # det [b1 b2 n/|n|] = |b1 × b2|
         d = np.where(det > 0.0, det, 1.0)[..., None]
         n = n / d
-        Tinv = np.stack([_cross(b2, n) / d, _cross(n, b1) / d, n], axis=-2)
+        Tinv = np.stack([cross3(b2, n) / d, cross3(n, b1) / d, n], axis=-2)
         return n[..., None], Tinv, det
     if (m, p) == (2, 1):
         b = B[..., 0]
@@ -199,13 +201,6 @@ def _null_and_inverse(B: np.ndarray, m: int, p: int) -> tuple[np.ndarray, np.nda
     det = np.linalg.det(T)
     T = np.where(((det == 0.0) | ~np.isfinite(det))[..., None, None], np.eye(m), T)
     return Nul, np.linalg.inv(T), det
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross products of stacked vectors (…, 3) (without ``np.cross``'s overhead)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _apply(A: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -13,8 +13,9 @@ them. Here a solution is accepted only when it is on the branch of ``q_home``:
   when those carrying most of the idle motion at home are dropped (column-pivoted QR
   of the home nullspace). Its sign is ``idle_branch``; ``home_branch`` stays 0 for
   such mechanisms;
-* a direct solve from the start configuration that fails this test is replaced by a
-  continuation: a straight path in actuator space from the start (then from home),
+* a direct solve from the start configuration that fails this test is followed by a
+  direct solve from home (a warm start never loses a pose the solve from home closes),
+  then by a continuation: a straight path in actuator space from the start (then from home),
   in steps that halve until each step converges, keeps the sign and moves the passive
   joints as the first-order predictor says. Its corrector starts next to the solution
   when the step is good, so it gets a short budget (a few iterations, a few line-search
@@ -118,13 +119,16 @@ class BranchTracking(Assembly):
             ConvergenceError: no solution on the home branch is reachable (the residual
                 of the last attempt is attached).
         """
-        try:
-            sol = self._newton(self.with_actuators(start, q_act), self._free_v)
-            if self._on_branch(sol):
-                return sol
-        except ConvergenceError:
-            pass
+        # direct solves first, from the start then from home (so a guess never makes a
+        # pose fail that the solve from home closes), then the continuations
         starts = [start] if start is self.q_home else [start, self.q_home]
+        for q0 in starts:
+            try:
+                sol = self._newton(self.with_actuators(q0, q_act), self._free_v)
+                if self._on_branch(sol):
+                    return sol
+            except ConvergenceError:
+                pass
         last: ConvergenceError | None = None
         for q0 in starts:
             try:

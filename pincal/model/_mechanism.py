@@ -202,8 +202,8 @@ class Mechanism(BatchTracking):
         """Full configuration (nq,) with loops closed for actuator values ``q_act``.
 
         The solution stays on the assembly mode of :attr:`q_home` (see ``_branch``):
-        a solve from ``q_guess`` (default home) that lands on another branch is redone
-        by continuation from the guess, then from home.
+        a solve from ``q_guess`` (default home) that fails or lands on another branch is
+        redone from home, then by continuation from the guess, then from home.
 
         Raises:
             ConvergenceError: no solution on the home branch (the message names the pose).

@@ -21,6 +21,7 @@ import numpy as np
 from pincal.model._batch import BatchKinematics, cross_cols, mm, mv, slice_kinematics
 from pincal.model._batch_closures import closure_jacobian_batch
 from pincal.model._batch_fk import CHUNK
+from pincal.model._batch_ops import cross3
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._batch_serial import _columns, _serial_path
@@ -183,7 +184,7 @@ def _closure_maps(
         # −Yᵀ[σ Ro, skew(d) Ro] = −[σ Yᵀ Ro, (Yᵀ skew(d)) Ro], rows of Yᵀ skew(d) = y × d
         contrib = np.empty((*Yt.shape[:2], 6, 6))
         contrib[..., :3] = (sa - sb)[:, None, None] * (Yt @ RoP)
-        contrib[..., 3:] = _cross(d[:, :, None], Yt) @ RoP
+        contrib[..., 3:] = cross3(d[:, :, None], Yt) @ RoP
         if np.unique(jP).size == jP.size:
             C[:, jP] += contrib
         else:  # a joint moving several closures (a base joint, say)
@@ -196,13 +197,6 @@ def _closure_maps(
         pmap = np.concatenate([Ro[:, i], _cross_rows(po[:, i] - pb, Ro[:, i])], axis=-1)
         blk = (np.swapaxes(Ra, 1, 2) @ pmap)[:, list(c.components)] * (sb_ - sa_)
         C[:, i] -= np.swapaxes(Y[:, r0 : r0 + c.size], 1, 2) @ blk
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross products of stacked vectors (…, 3) (without ``np.cross``'s overhead)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _adjoint(bk: BatchKinematics, Jf: np.ndarray, Jm_u: np.ndarray) -> np.ndarray:

@@ -14,9 +14,10 @@ import numpy as np
 
 from pincal.model._batch import BatchKinematics, mv
 from pincal.model._batch_closures import closure_jacobian_batch
+from pincal.model._batch_ops import cross3
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._batch_jacobian import _cross, _param_twists, batch_applies
+from pincal.sensitivity._batch_jacobian import _param_twists, batch_applies
 from pincal.sensitivity._batch_serial import _anchors
 from pincal.sensitivity._jacobian import _Plan, _plan
 
@@ -106,11 +107,11 @@ def _point_closure_rates(
     Rp = bk.rotations[:, parents]
     po = bk.translations[:, parents] + mv(Rp, p0)
     V, W = mv(Rp, mv(R0, T[:, :3])), mv(Rp, mv(R0, T[:, 3:]))  # (N, J, 3) world axes
-    U = V - _cross(W, po)
+    U = V - cross3(W, po)
     Sa = np.array([[float(j in plan.moves[c.frame_a]) for j in names] for c in mech.closures])
     Sb = np.array([[float(j in plan.moves[c.frame_b]) for j in names] for c in mech.closures])
     fids = [mech.frame_id(f) for c in mech.closures for f in (c.frame_a, c.frame_b)]
     p = mech.batch_model.frame_positions(bk, np.array(fids))
-    rate = (Sb - Sa) @ U + _cross(Sb @ W, p[:, 1::2]) - _cross(Sa @ W, p[:, 0::2])  # (N, C, 3)
+    rate = (Sb - Sa) @ U + cross3(Sb @ W, p[:, 1::2]) - cross3(Sa @ W, p[:, 0::2])  # (N, C, 3)
     return rate.reshape(rate.shape[0], -1)
 

@@ -96,7 +96,7 @@ def test_machines_use_blocks_and_keep_the_branch(name):
     assert mech.passive_solver is not None
     rows = pincal.sample_actuators(mech, 30, np.random.default_rng(4))
     Q, bk = mech.configurations_batch(rows)
-    r, Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)
+    _, Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)
     for i, q in enumerate(Q):  # the free-column path equals Pinocchio's Jacobian
         np.testing.assert_allclose(Jf[i], mech.closure_jacobian(q)[:, mech.free_dofs], atol=1e-12)
     F = mech.passive_factor(Jf)

@@ -110,3 +110,24 @@ def test_batched_solve_from_the_other_mode_returns_home_branch():
     np.testing.assert_allclose(Qb[0], Q[1], atol=1e-9)
     _, ok, _ = prs3.try_configurations_batch(rows[1:], guesses=other[None])
     assert not ok[0]  # the batched Newton alone stays on the guess's mode: rejected
+
+
+def test_every_sampled_pose_closes_whatever_the_warm_start():
+    """A warm start never loses a pose the solve from home closes (prs3, 256 draws).
+
+    Pose 84 of this draw closed from home but failed from pose 83's solution (direct solve
+    and both continuations), so ``configurations_batch`` raised on rows that
+    ``sample_actuators`` had accepted.
+    """
+    from tests.model.test_open_world import MACHINES
+
+    prs3 = pincal.load_mechanism(MACHINES / "prs3")
+    rows = pincal.sample_actuators(prs3, 256, np.random.default_rng(0))
+    Q, _ = prs3.configurations_batch(rows)
+    q_prev = prs3.configuration(rows[83])
+    q84 = prs3.configuration(rows[84], q_prev)
+    np.testing.assert_allclose(
+        prs3.frame_placement(Q[84]).homogeneous, prs3.frame_placement(q84).homogeneous, atol=1e-11
+    )
+    for i in (84, 0, 255):
+        assert np.max(np.abs(prs3.closure_residual(Q[i]))) <= prs3.options.tol
