@@ -31,6 +31,7 @@ from pincal.sensitivity._jacobian import _Plan
 
 __all__: list[str] = []
 
+
 def _columns(cols: np.ndarray) -> slice | np.ndarray:
     """A slice for contiguous parameter columns (faster to write), else the indices."""
     if cols.size and np.all(np.diff(cols) == 1):
@@ -38,9 +39,7 @@ def _columns(cols: np.ndarray) -> slice | np.ndarray:
     return cols
 
 
-def _anchors(
-    mech: Mechanism, plan: _Plan
-) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
+def _anchors(mech: Mechanism, plan: _Plan) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
     """Parameterised joints, their origins' parent joints (J,) and constant placements.
 
     Origin j = ``oMi[parent_j] · (R0_j, p0_j)`` with R0 (J, 3, 3), p0 (J, 3) [m].
