@@ -34,8 +34,9 @@ __all__: list[str] = []
 
 def _columns(cols: np.ndarray) -> slice | np.ndarray:
     """A slice for contiguous parameter columns (faster to write), else the indices."""
-    if cols.size and np.all(np.diff(cols) == 1):
-        return slice(int(cols[0]), int(cols[-1]) + 1)
+    ks = cols.tolist()  # plain Python: a handful of columns, called per joint and call
+    if ks and ks == list(range(ks[0], ks[0] + len(ks))):
+        return slice(ks[0], ks[0] + len(ks))
     return cols
 
 
