@@ -9,9 +9,10 @@ measured frame m by ``B_k · Ad(C_j) · ξ``, where the (6, 6) map
     B_k = [[R_k, [p_k − p_m]× R_k], [0, R_mᵀ R_k]]
 
 gives the world velocity of m's origin and m's local angular velocity from a twist
-expressed at body k's frame. Only the B_k depend on the pose; they are formed for all
-poses and bodies at once, and the columns of joint j are one GEMM of all poses' B_k
-(6N, 6) by the constant ``Ad(C_j) · eff_j`` (6, c_j), written straight into the result.
+expressed at body k's frame. Only the B_k depend on the pose; they are formed for a
+block of poses and all bodies at once (poses on the innermost axis, a block sized to
+stay in the L2 cache), and the columns of joint j are one stacked GEMM of the block's
+B_k by the constant ``Ad(C_j) · eff_j`` (6, c_j), written straight into the result.
 This is the right-multiplication structure of Pinocchio's
 ``computeFrameKinematicRegressor`` (the map from joint-placement twists to the frame's
 twist) evaluated in numpy over the batch, on the placements the batched kinematics
