@@ -21,6 +21,7 @@ already computed.
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,6 +32,24 @@ from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._jacobian import _Plan
 
 __all__: list[str] = []
+
+#: poses × bodies per block of body maps: a block's maps take 288 bytes × this ≈ 512 KB
+#: (half the L2 cache of a core)
+BLOCK = 1820
+_scratch = threading.local()
+
+
+def _scratch_maps(K: int, M: int) -> np.ndarray:
+    """A (6, 6, K, M) scratch array, kept per thread between calls.
+
+    A fresh block-sized array on every call is, depending on the allocator's state,
+    fresh pages from the system each time: their page faults cost more than the
+    arithmetic on a few hundred poses. The array only ever holds temporaries.
+    """
+    buf = getattr(_scratch, "maps", None)
+    if buf is None or buf.shape != (6, 6, K, M):
+        buf = _scratch.maps = np.empty((6, 6, K, M))
+    return buf
 
 
 def _columns(cols: np.ndarray) -> slice | np.ndarray:
@@ -97,7 +116,12 @@ def _layout(mech: Mechanism, params: ParameterSet, values: np.ndarray, plan: _Pl
 
 
 def _body_maps(
-    bk: BatchKinematics, rows: slice, lay: _Layout, Rm: np.ndarray, pm: np.ndarray
+    bk: BatchKinematics,
+    rows: slice,
+    lay: _Layout,
+    Rm: np.ndarray,
+    pm: np.ndarray,
+    buf: np.ndarray,
 ) -> np.ndarray:
     """The maps B_k of poses ``rows`` as a (6, 6, K, M) array (map row, map column, body, pose).
 
@@ -111,12 +135,13 @@ def _body_maps(
         lay: the bodies.
         Rm: (M, 3, 3) measured frame rotations of these poses.
         pm: (M, 3) their positions [m].
+        buf: (6, 6, K, ≥ M) scratch array the maps are written into (a view is returned).
     """
     b = lay.bodies
     R = bk.rotations[rows, b] if isinstance(b, slice) else bk.rotations[rows][:, b]
     p = bk.translations[rows, b] if isinstance(b, slice) else bk.translations[rows][:, b]
     M = R.shape[0]
-    S = np.empty((6, 6, lay.size, M))
+    S = buf[..., :M]
     Rs = S[:3, :3]  # R_k[l, j] as (l, j, K, M)
     Rs[...] = R.transpose(2, 3, 1, 0)
     S[3:, :3] = 0.0
@@ -174,10 +199,11 @@ def _serial_path(
     lay = _layout(mech, params, values, plan)
     if not lay.runs:
         return Rm, pm, J
-    chunk = max(32, 1820 // lay.size)  # S of a block ≈ 512 KB (half an L2)
+    chunk = max(32, BLOCK // lay.size)
+    buf = _scratch_maps(lay.size, chunk)
     for start in range(0, N, chunk):
         rows = slice(start, start + chunk)
-        S = _body_maps(bk, rows, lay, Rm[rows], pm[rows])
+        S = _body_maps(bk, rows, lay, Rm[rows], pm[rows], buf)
         Jr = J[rows]
         for pos, cols, G in lay.runs:
             A = S[:, :, pos].transpose(0, 2, 1)  # (6 map rows, M, 6)

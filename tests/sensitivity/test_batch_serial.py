@@ -136,7 +136,7 @@ def test_chain_blocks_and_out(chain):
     values = 1e-3 * np.random.default_rng(15).standard_normal(len(params))
     at = params.apply(chain, values)
     lay = _batch_serial._layout(at, params, values, _plan(at, params))
-    block = max(32, 1820 // lay.size)
+    block = max(32, _batch_serial.BLOCK // lay.size)
     qs, bk = at.configurations_batch(_rows(at, 2 * block + 7, 16))
     batch = sensitivities_batch(at, params, qs, bk, values)
     picks = [0, block - 1, block, 2 * block - 1, 2 * block, 2 * block + 6]
@@ -167,3 +167,25 @@ def test_serial_arm_presets_match_pose_sensitivity(preset):
     values = 1e-3 * np.random.default_rng(18).standard_normal(len(params))
     at, qs, batch = _batch(ur, params, values, _rows(ur, 5, 19))
     _assert_matches_pose_sensitivity(at, params, values, qs, batch)
+
+
+def test_scratch_is_per_thread_and_reshaped(chain):
+    """The per-thread scratch maps: other shapes in between and concurrent threads."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    ur = pincal.load_mechanism("ur10")
+    jobs = [(chain, pincal.parameters(chain, "full")), (ur, pincal.parameters(ur, "full"))]
+    data = []
+    for mech, params in jobs:
+        qs, bk = mech.configurations_batch(_rows(mech, 300, 20))
+        data.append((mech, params, qs, bk))
+
+    def run(i):
+        mech, params, qs, bk = data[i % 2]
+        return sensitivities_batch(mech, params, qs, bk).jacobian
+
+    first = [run(0), run(1)]
+    np.testing.assert_array_equal(run(0), first[0])  # after the other shape
+    with ThreadPoolExecutor(4) as pool:
+        for i, J in enumerate(pool.map(run, range(16))):
+            np.testing.assert_array_equal(J, first[i % 2])
