@@ -305,6 +305,9 @@ def sensitivities_batch(
         )
     bk = bk if bk is not None else mech.kinematics_batch(qs)
     N = bk.q.shape[0]
+    if not mech.closures:  # a serial chain: one call, blocked inside for the cache
+        Rm, pm, J = _serial_path(mech, params, bk, values, plan, None)
+        return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
     if any(c.components[-1] >= 3 for c in mech.closures):
         parts = [
             _local_path(mech, params, slice_kinematics(bk, slice(k, k + CHUNK)), values, plan)
