@@ -290,15 +290,20 @@ class BlockFactor:
         sv = self.solver
         N, r = g_rhs.shape[0], g_rhs.shape[2]
         rhs = np.array(g_rhs[:, sv.shared])
-        heads = []
+        heads: list[np.ndarray | None] = []
         for g, part in zip(sv.groups, self.parts, strict=True):
-            h = _apply(np.swapaxes(part.tinv[..., : g.p, :], 2, 3), g_rhs[:, g.cols])
-            rhs -= np.sum(_apply(np.swapaxes(part.shared, 2, 3), h), axis=1)  # h: (N, G, m, r)
-            heads.append(h)
+            gc = g_rhs[:, g.cols]
+            if g.p == 0 or not gc.any():  # e.g. a measured frame on the shared body
+                heads.append(None)
+                continue
+            head = _apply(np.swapaxes(part.tinv[..., : g.p, :], 2, 3), gc)  # (N, G, m, r)
+            rhs -= np.sum(_apply(np.swapaxes(part.shared, 2, 3), head), axis=1)
+            heads.append(head)
         z = np.linalg.solve(np.swapaxes(self.reduced, 1, 2), rhs)
         y = np.empty((N, sv.k, r))
         for g, part, h in zip(sv.groups, self.parts, heads, strict=True):
-            y[:, g.rows.ravel()] = (h + _apply(part.null, z[:, g.red])).reshape(N, -1, r)
+            yc = _apply(part.null, z[:, g.red])
+            y[:, g.rows.ravel()] = (yc if h is None else h + yc).reshape(N, -1, r)
         return y
 
     def inverse_norm_bound(self) -> np.ndarray:

@@ -24,6 +24,12 @@ from pincal.model._batch_fk import CHUNK
 from pincal.model._batch_ops import cross3
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
+from pincal.sensitivity._batch_points import (
+    _adjoint,
+    _measured_free_jacobian,
+    _origins,
+    point_path,
+)
 from pincal.sensitivity._batch_serial import _columns, _serial_path
 from pincal.sensitivity._jacobian import _Plan, _plan, pose_sensitivity
 
@@ -101,50 +107,11 @@ def _param_twists(
     return placements, out
 
 
-def _origins(
-    mech: Mechanism, bk: BatchKinematics, plan: _Plan
-) -> tuple[list[str], np.ndarray, np.ndarray]:
-    """Parameterised joints (fixed ones first) and their origins' world placements.
-
-    Returns:
-        The J joint names, rotations (N, J, 3, 3) and positions (N, J, 3) [m].
-    """
-    bm, model = mech.batch_model, mech.model
-    fixed = [j for j, o in plan.origins.items() if o[0] >= 0]
-    moving = [j for j, o in plan.origins.items() if o[0] < 0]
-    N = bk.q.shape[0]
-    Rs, ps = [np.empty((N, 0, 3, 3))], [np.empty((N, 0, 3))]
-    if fixed:
-        R, p = bm.frame_placements(bk, np.array([plan.origins[j][0] for j in fixed]))
-        Rs.append(R)
-        ps.append(p)
-    if moving:
-        jids = [plan.origins[j][1] for j in moving]
-        parents = np.array([plan.origins[j][2] for j in moving])
-        MR = np.array([model.jointPlacements[j].rotation for j in jids])
-        Mp = np.array([model.jointPlacements[j].translation for j in jids])
-        Rp = bk.rotations[:, parents]
-        Rs.append(Rp @ MR)
-        ps.append(bk.translations[:, parents] + mv(Rp, Mp))
-    return fixed + moving, np.concatenate(Rs, axis=1), np.concatenate(ps, axis=1)
-
-
 def _cross_rows(d: np.ndarray, R: np.ndarray) -> np.ndarray:
     """``skew(d) @ R`` of stacked vectors d (…, 3) and matrices R (…, 3, 3)."""
     r0, r1, r2 = R[..., 0, :], R[..., 1, :], R[..., 2, :]
     d0, d1, d2 = d[..., 0:1], d[..., 1:2], d[..., 2:3]
     return np.stack([d1 * r2 - d2 * r1, d2 * r0 - d0 * r2, d0 * r1 - d1 * r0], axis=-2)
-
-
-def _measured_free_jacobian(
-    mech: Mechanism, bk: BatchKinematics, Rm: np.ndarray, pm: np.ndarray
-) -> np.ndarray:
-    """(N, 6, k) derivative of ``[p_world; rotation (local)]`` w.r.t. the free dofs."""
-    free = mech.free_dofs
-    sup = mech.batch_model.support_of_frame(mech.frame_id(mech.measured_frame))[free]
-    Jv, Jw = bk.jacobian[:, :3, free], bk.jacobian[:, 3:, free]
-    v = Jv + cross_cols(Jw, pm[:, :, None])
-    return np.concatenate([v, np.swapaxes(Rm, 1, 2) @ Jw], axis=1) * sup
 
 
 def _closure_maps(
@@ -199,13 +166,6 @@ def _closure_maps(
         C[:, i] -= np.swapaxes(Y[:, r0 : r0 + c.size], 1, 2) @ blk
 
 
-def _adjoint(bk: BatchKinematics, Jf: np.ndarray, Jm_u: np.ndarray) -> np.ndarray:
-    """``Y = Jf⁻ᵀ Jm_uᵀ`` (N, k, 6): with the solve's factorisation when it kept one."""
-    if bk.closure_factor is not None:
-        return bk.closure_factor.solve_transposed(np.swapaxes(Jm_u, 1, 2))
-    return np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
-
-
 def _world_path(
     mech: Mechanism,
     params: ParameterSet,
@@ -226,6 +186,8 @@ def _world_path(
     """
     if not mech.closures:
         return _serial_path(mech, params, bk, values, plan, out)
+    if all(c.is_point for c in mech.closures):
+        return point_path(mech, params, bk, values, plan, out)
     N, n = bk.q.shape[0], len(params)
     names, Ro, po = _origins(mech, bk, plan)
     key = [mech.measured_frame, *(f for c in mech.closures for f in (c.frame_a, c.frame_b))]

@@ -1,0 +1,183 @@
+"""The identification Jacobian of N poses of a machine closed by point closures only.
+
+Stewart platforms, hexapods with sliders, PRS/RPR legs: every loop is cut at a ball
+joint, ``p_b = p_a`` in world axes. There the whole Jacobian is a few dense products:
+
+* every parameter column k (of joint j) displaces j's origin by a constant local twist
+  ``eff_j[:, k]``; in world axes, taken at the world origin, that is the twist
+  ``W_k = R_o ω``, ``V_k = R_o v + p_o × W_k`` (one GEMM per group of joints with as
+  many parameters, all poses at once: arrays (N, 3, n));
+* a world point x fixed to a moved body moves by ``V + W × x``, so the measured frame
+  moves by ``[V + W × p_m; R_mᵀ W]`` on the columns of the joints below it, and a point
+  closure ``p_b − p_a`` by ``∂c/∂p = (s_b − s_a) V + W × (s_b p_b − s_a p_a)``
+  (s = 1 for the joints below that frame);
+* the passive joints re-close the loops: ``J −= Yᵀ ∂c/∂p`` with the adjoint
+  ``Y = Jf⁻ᵀ Jm_uᵀ`` (6 right-hand sides, from the solve's factorisation).
+
+The helpers shared with :mod:`pincal.sensitivity._batch_jacobian` (joint origins, the
+measured frame's free-dof Jacobian, the adjoint) live here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pincal.model._batch import BatchKinematics, cross_cols, mv
+from pincal.model._mechanism import Mechanism
+from pincal.model._parameters import ParameterSet
+from pincal.sensitivity._batch_serial import _anchors
+from pincal.sensitivity._jacobian import _Plan
+
+__all__ = ["point_path"]
+
+
+def _origins(
+    mech: Mechanism, bk: BatchKinematics, plan: _Plan
+) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Parameterised joints (fixed ones first) and their origins' world placements.
+
+    Returns:
+        The J joint names, rotations (N, J, 3, 3) and positions (N, J, 3) [m].
+    """
+    bm, model = mech.batch_model, mech.model
+    fixed = [j for j, o in plan.origins.items() if o[0] >= 0]
+    moving = [j for j, o in plan.origins.items() if o[0] < 0]
+    N = bk.q.shape[0]
+    Rs, ps = [np.empty((N, 0, 3, 3))], [np.empty((N, 0, 3))]
+    if fixed:
+        R, p = bm.frame_placements(bk, np.array([plan.origins[j][0] for j in fixed]))
+        Rs.append(R)
+        ps.append(p)
+    if moving:
+        jids = [plan.origins[j][1] for j in moving]
+        parents = np.array([plan.origins[j][2] for j in moving])
+        MR = np.array([model.jointPlacements[j].rotation for j in jids])
+        Mp = np.array([model.jointPlacements[j].translation for j in jids])
+        Rp = bk.rotations[:, parents]
+        Rs.append(Rp @ MR)
+        ps.append(bk.translations[:, parents] + mv(Rp, Mp))
+    return fixed + moving, np.concatenate(Rs, axis=1), np.concatenate(ps, axis=1)
+
+
+def _measured_free_jacobian(
+    mech: Mechanism, bk: BatchKinematics, Rm: np.ndarray, pm: np.ndarray
+) -> np.ndarray:
+    """(N, 6, k) derivative of ``[p_world; rotation (local)]`` w.r.t. the free dofs."""
+    free = mech.free_dofs
+    sup = mech.batch_model.support_of_frame(mech.frame_id(mech.measured_frame))[free]
+    Jv, Jw = bk.jacobian[:, :3, free], bk.jacobian[:, 3:, free]
+    v = Jv + cross_cols(Jw, pm[:, :, None])
+    return np.concatenate([v, np.swapaxes(Rm, 1, 2) @ Jw], axis=1) * sup
+
+
+def _adjoint(bk: BatchKinematics, Jf: np.ndarray, Jm_u: np.ndarray) -> np.ndarray:
+    """``Y = Jf⁻ᵀ Jm_uᵀ`` (N, k, 6): with the solve's factorisation when it kept one."""
+    if bk.closure_factor is not None:
+        return bk.closure_factor.solve_transposed(np.swapaxes(Jm_u, 1, 2))
+    return np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
+
+
+def _world_twists(
+    mech: Mechanism, params: ParameterSet, bk: BatchKinematics, values: np.ndarray, plan: _Plan
+) -> tuple[np.ndarray, np.ndarray]:
+    """World twists ``V`` and ``W`` (N, 3, n) of every parameter column (see module doc).
+
+    Origin j hangs at the constant placement ``(R0_j, p0_j)`` on body ``parent_j``, so
+    ``R_o eff = R_parent (R0_j eff)``: the constant factors ``[R0 eff_v, R0 eff_ω, p0]``
+    of a group of joints with the same number of parameters multiply the parents'
+    rotations in one product per joint, for all poses.
+    """
+    names, parents, R0, p0 = _anchors(mech, plan)
+    N, n = bk.q.shape[0], len(params)
+    twists = params.joint_twists(values)
+    V, W = np.zeros((N, 3, n)), np.zeros((N, 3, n))
+    groups: dict[int, list[int]] = {}
+    for i, j in enumerate(names):
+        groups.setdefault(twists[j][2].shape[1], []).append(i)
+    for c, members in groups.items():
+        G = len(members)
+        eff = np.stack([twists[names[i]][2] for i in members])  # (G, 6, c)
+        R = R0[members]
+        E = np.concatenate([R @ eff[:, :3], R @ eff[:, 3:], p0[members, :, None]], axis=2)
+        Rp = np.ascontiguousarray(np.swapaxes(bk.rotations[:, parents[members]], 0, 1))
+        X = (Rp.reshape(G, N * 3, 3) @ E).reshape(G, N, 3, 2 * c + 1)
+        A, B = X[..., :c], X[..., c : 2 * c]  # R_o v, R_o ω: (G, N, 3, c)
+        p = (np.swapaxes(bk.translations[:, parents[members]], 0, 1) + X[..., -1])[..., None]
+        pxB = np.stack(
+            [
+                p[:, :, 1] * B[:, :, 2] - p[:, :, 2] * B[:, :, 1],
+                p[:, :, 2] * B[:, :, 0] - p[:, :, 0] * B[:, :, 2],
+                p[:, :, 0] * B[:, :, 1] - p[:, :, 1] * B[:, :, 0],
+            ],
+            axis=2,
+        )
+        cols = np.concatenate([twists[names[i]][0] for i in members])
+        V[:, :, cols] = (A + pxB).transpose(1, 2, 0, 3).reshape(N, 3, G * c)
+        W[:, :, cols] = B.transpose(1, 2, 0, 3).reshape(N, 3, G * c)
+    return V, W
+
+
+def _column_masks(
+    mech: Mechanism, params: ParameterSet, plan: _Plan, frame: str
+) -> np.ndarray:
+    """(n,) 1.0 on the columns of the parameterised joints below ``frame``."""
+    below = set(plan.moves[frame])
+    return np.array([float(p.joint in below) for p in params.parameters])
+
+
+def _closure_columns(
+    mech: Mechanism, params: ParameterSet, plan: _Plan
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per point closure, the parameter columns that move its frames (padded to w).
+
+    Returns:
+        Columns (C, w) (a closure's list padded by repeating its first column, written
+        twice with the same value), masks s_a and s_b (C, w) of the columns below frame
+        a and b, and the flat index (3, C, w) of each entry in a (3C × n) array.
+    """
+    n = len(params)
+    ma = np.array([_column_masks(mech, params, plan, c.frame_a) for c in mech.closures])
+    mb = np.array([_column_masks(mech, params, plan, c.frame_b) for c in mech.closures])
+    touched = [np.nonzero(a + b)[0] for a, b in zip(ma, mb, strict=True)]
+    w = max(t.size for t in touched)
+    cols = np.array(
+        [np.pad(t, (0, w - t.size), mode="edge") if t.size else np.zeros(w, int) for t in touched]
+    ).reshape(len(touched), w)
+    sa, sb = np.take_along_axis(ma, cols, 1), np.take_along_axis(mb, cols, 1)
+    rows = 3 * np.arange(len(touched))[None, :, None] + np.arange(3)[:, None, None]
+    return cols, sa, sb, rows * n + cols[None]
+
+
+def point_path(
+    mech: Mechanism,
+    params: ParameterSet,
+    bk: BatchKinematics,
+    values: np.ndarray,
+    plan: _Plan,
+    out: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Measured rotation (N, 3, 3), position (N, 3) and Jacobian (N, 6, n), point closures.
+
+    The Jacobian of ``[p_world; rotation (local)]`` is written into ``out`` when given.
+    """
+    N, n = bk.q.shape[0], len(params)
+    V, W = _world_twists(mech, params, bk, values, plan)
+    bm = mech.batch_model
+    Rm, pm = bm.frame_placement(bk, mech.frame_id(mech.measured_frame))
+    m = _column_masks(mech, params, plan, mech.measured_frame)
+    J = np.empty((N, 6, n)) if out is None else out
+    J[:, :3] = (V + cross_cols(W, pm[:, :, None])) * m
+    J[:, 3:] = (np.swapaxes(Rm, 1, 2) @ W) * m
+    cols, sa, sb, flat = _closure_columns(mech, params, plan)
+    pa = bm.frame_positions(bk, np.array([mech.frame_id(c.frame_a) for c in mech.closures]))
+    pb = bm.frame_positions(bk, np.array([mech.frame_id(c.frame_b) for c in mech.closures]))
+    # ∂c/∂p on each closure's columns (N, 3, C, w), written into (N, 3C, n)
+    P = pb.transpose(0, 2, 1)[..., None] * sb - pa.transpose(0, 2, 1)[..., None] * sa
+    dc = np.zeros((N, 3 * len(mech.closures), n))
+    dc.reshape(N, -1)[:, flat] = V[:, :, cols] * (sb - sa) + cross_cols(W[:, :, cols], P)
+    Jf = bk.closure_jacobian
+    if Jf is None:
+        Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
+    Y = _adjoint(bk, Jf, _measured_free_jacobian(mech, bk, Rm, pm))
+    J -= np.swapaxes(Y, 1, 2) @ dc
+    return Rm, pm, J
