@@ -29,12 +29,11 @@ from pincal.model._batch_ops import (
 )
 from pincal.model._batch_ops import sinc_terms as _sinc_terms
 from pincal.model._batch_ops import skew as _skew
-from pincal.model._block_solve import PassiveFactor, concat_factors
+from pincal.model._block_solve import PassiveFactor
 
 __all__ = [
     "BatchKinematics",
     "BatchModel",
-    "concat_kinematics",
     "cross_cols",
     "exp3_batch",
     "mm",
@@ -112,20 +111,6 @@ class BatchKinematics:
     jacobian: np.ndarray
     closure_jacobian: np.ndarray | None = None
     closure_factor: PassiveFactor | None = None
-
-
-def concat_kinematics(parts: list[BatchKinematics]) -> BatchKinematics:
-    """The kinematics of consecutive chunks of poses as one :class:`BatchKinematics`."""
-    cj = [p.closure_jacobian for p in parts if p.closure_jacobian is not None]
-    ci = [p.closure_factor for p in parts if p.closure_factor is not None]
-    return BatchKinematics(
-        np.concatenate([p.q for p in parts]),
-        np.concatenate([p.rotations for p in parts]),
-        np.concatenate([p.translations for p in parts]),
-        np.concatenate([p.jacobian for p in parts]),
-        np.concatenate(cj) if len(cj) == len(parts) else None,
-        concat_factors(ci) if len(ci) == len(parts) else None,
-    )
 
 
 def slice_kinematics(bk: BatchKinematics, rows: slice) -> BatchKinematics:

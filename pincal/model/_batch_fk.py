@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Literal, overload
 import numpy as np
 
 from pincal.errors import ShapeError
-from pincal.model._batch import BatchKinematics, BatchModel, concat_kinematics
+from pincal.model._batch import BatchKinematics, BatchModel
 from pincal.model._batch_closures import (
     PointClosures,
     closure_jacobian_batch,
@@ -179,32 +179,51 @@ class BatchTracking(BranchTracking):
         """Batched Newton: configurations (N, nq), accepted mask (N,), their kinematics.
 
         Rows not accepted (no decrease, no convergence, other branch, possibly
-        singular) hold garbage and must be redone pose by pose. Solved in chunks of
-        :data:`CHUNK` poses (temporaries that stay in cache: cost linear in N).
+        singular) hold garbage and must be redone pose by pose. The Newton iterations
+        run in chunks of :data:`CHUNK` poses (temporaries that stay in cache: cost
+        linear in N), writing into the whole batch's arrays; the branch and condition
+        checks then factor all the converged Jacobians at once.
         """
-        if A.shape[0] <= CHUNK:
-            return self._solve_chunk(A, Q0)
-        parts = [
-            self._solve_chunk(A[s : s + CHUNK], Q0[s : s + CHUNK])
-            for s in range(0, A.shape[0], CHUNK)
-        ]
-        Q = np.concatenate([p[0] for p in parts])
-        return Q, np.concatenate([p[1] for p in parts]), concat_kinematics([p[2] for p in parts])
-
-    def _solve_chunk(
-        self, A: np.ndarray, Q0: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, BatchKinematics]:
-        """:meth:`_solve_batch` of one chunk of poses."""
-        bm, opt, free = self.batch_model, self.options, self._free_v
-        N, k = A.shape[0], free.size
+        N, nj, k = A.shape[0], self.model.njoints, self._free_v.size
         Q = self._actuators_batch(Q0, A)
+        R = np.empty((N, nj, 3, 3))
+        p = np.empty((N, nj, 3))
+        J = np.empty((N, 6, self.model.nv))
+        Jf = np.empty((N, k, k))
+        done = np.zeros(N, dtype=bool)
+        for s in range(0, N, CHUNK):
+            rows = slice(s, s + CHUNK)
+            done[rows] = self._newton_chunk(Q[rows], R[rows], p[rows], J[rows], Jf[rows])
+        Jf[~done] = np.eye(k)  # rows to be redone pose by pose: any regular matrix
+        factor = self.passive_factor(Jf)
+        with np.errstate(all="ignore"):
+            # ‖Jf‖_F · (bound of ‖Jf⁻¹‖₂) ≥ cond₂: rows that might exceed the limit get
+            # the exact check pose by pose
+            cond = np.sqrt(np.sum(Jf**2, axis=(1, 2))) * factor.inverse_norm_bound()
+        risky = ~np.isfinite(cond) | (cond > self.options.max_condition) | factor.singular
+        ok = done & (factor.sign() == self.home_branch) & ~risky
+        return Q, ok, BatchKinematics(Q, R, p, J, Jf, factor)
+
+    def _newton_chunk(
+        self,
+        Q: np.ndarray,
+        out_R: np.ndarray,
+        out_p: np.ndarray,
+        out_J: np.ndarray,
+        Jf_done: np.ndarray,
+    ) -> np.ndarray:
+        """Newton iterations of one chunk, in place: converged mask (N,).
+
+        ``Q`` (N, nq) holds the start configurations (actuators set) and receives the
+        iterates; the joint placements, joint Jacobian and passive closure Jacobian of
+        each converged configuration are written into ``out_R``, ``out_p``, ``out_J``
+        and ``Jf_done``.
+        """
+        bm, opt, free = self.batch_model, self.options, self._free_v
+        N = Q.shape[0]
         done = np.zeros(N, dtype=bool)
         failed = np.zeros(N, dtype=bool)
         prev = np.full(N, np.inf)
-        out_R = np.empty((N, self.model.njoints, 3, 3))
-        out_p = np.empty((N, self.model.njoints, 3))
-        out_J = np.empty((N, 6, self.model.nv))
-        Jf_done = np.empty((N, k, k))
         for _ in range(_MAX_BATCH_ITERATIONS + 1):
             ia = np.nonzero(~done & ~failed)[0]
             if ia.size == 0:
@@ -242,16 +261,7 @@ class BatchTracking(BranchTracking):
             DV = np.zeros((ig.size, self.model.nv))
             DV[:, free] = step
             Q[ig[~bad]] = bm.integrate(Q[ig[~bad]], DV[~bad])
-        ok = done.copy()
-        Jf_done[~ok] = np.eye(k)  # rows to be redone pose by pose: any regular matrix
-        factor = self.passive_factor(Jf_done)
-        with np.errstate(all="ignore"):
-            # ‖Jf‖_F · (bound of ‖Jf⁻¹‖₂) ≥ cond₂: rows that might exceed the limit get
-            # the exact check pose by pose
-            cond = np.sqrt(np.sum(Jf_done**2, axis=(1, 2))) * factor.inverse_norm_bound()
-        risky = ~np.isfinite(cond) | (cond > opt.max_condition) | factor.singular
-        ok &= (factor.sign() == self.home_branch) & ~risky
-        return Q, ok, BatchKinematics(Q, out_R, out_p, out_J, Jf_done, factor)
+        return done
 
     def try_configurations_batch(
         self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None

@@ -34,7 +34,7 @@ import numpy as np
 
 from pincal.model._batch_ops import cross3
 
-__all__ = ["BlockFactor", "BlockSolver", "DenseFactor", "PassiveFactor", "concat_factors"]
+__all__ = ["BlockFactor", "BlockSolver", "DenseFactor", "PassiveFactor"]
 
 
 @dataclass(frozen=True)
@@ -370,31 +370,3 @@ class DenseFactor:
 
 #: the factor of passive closure Jacobians, block-structured or dense
 PassiveFactor = BlockFactor | DenseFactor
-
-
-def concat_factors(parts: Sequence[PassiveFactor]) -> PassiveFactor:
-    """The factors of consecutive chunks of poses as one factor (all of one kind)."""
-    first = parts[0]
-    if isinstance(first, DenseFactor):
-        dense = [p for p in parts if isinstance(p, DenseFactor)]
-        return DenseFactor(
-            np.concatenate([p.jacobian for p in dense]),
-            np.concatenate([p.singular for p in dense]),
-        )
-    block = [p for p in parts if isinstance(p, BlockFactor)]
-    joined = tuple(
-        _Part(
-            *(
-                np.concatenate([getattr(p.parts[i], f) for p in block])
-                for f in ("null", "tinv", "shared")
-            )
-        )
-        for i in range(len(first.parts))
-    )
-    return BlockFactor(
-        first.solver,
-        joined,
-        np.concatenate([p.reduced for p in block]),
-        np.concatenate([p.block_sign for p in block]),
-        np.concatenate([p.singular for p in block]),
-    )
