@@ -100,6 +100,8 @@ class PointClosures:
         self.ma = np.take_along_axis(ma, local, axis=1).astype(float) if touched else local
         self.mb = np.take_along_axis(mb, local, axis=1).astype(float) if touched else local
         self.dofs = cols[local]  # (C, w) tangent dof of each column
+        self._ma, self._mb = self.ma[:, :, None, None], self.mb[:, :, None, None]
+        self._sign = self._mb - self._ma
         #: (3, C, w) flat index of each entry in a (rows × len(columns)) Jacobian
         self.flat = self.rows.T[:, :, None] * cols.size + local[None]
 
@@ -114,8 +116,16 @@ class PointClosures:
         r[:, self.rows] = pb - pa
         if J is None or self.flat.size == 0:
             return
-        Jv = bk.jacobian[:, :3][:, :, self.dofs]  # (N, 3, C, w)
-        Jw = bk.jacobian[:, 3:][:, :, self.dofs]
-        P = pb.transpose(0, 2, 1)[..., None] * self.mb - pa.transpose(0, 2, 1)[..., None] * self.ma
-        out = Jv * (self.mb - self.ma) + cross_cols(Jw, P)  # (N, 3, C, w)
-        J.reshape(J.shape[0], -1)[:, self.flat] = out
+        # poses last (arrays (C, w, 3, N)): the masks broadcast over long contiguous rows
+        G = np.ascontiguousarray(np.transpose(bk.jacobian, (2, 1, 0)))[self.dofs]  # (C, w, 6, N)
+        Jw = G[:, :, 3:]
+        P = (
+            np.transpose(pb, (1, 2, 0))[:, None] * self._mb
+            - np.transpose(pa, (1, 2, 0))[:, None] * self._ma
+        )  # (C, w, 3, N)
+        out = np.empty_like(P)
+        out[:, :, 0] = Jw[:, :, 1] * P[:, :, 2] - Jw[:, :, 2] * P[:, :, 1]
+        out[:, :, 1] = Jw[:, :, 2] * P[:, :, 0] - Jw[:, :, 0] * P[:, :, 2]
+        out[:, :, 2] = Jw[:, :, 0] * P[:, :, 1] - Jw[:, :, 1] * P[:, :, 0]
+        out += G[:, :, :3] * self._sign
+        J.reshape(J.shape[0], -1)[:, self.flat] = np.transpose(out, (3, 2, 0, 1))
