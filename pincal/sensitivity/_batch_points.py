@@ -77,20 +77,28 @@ def _adjoint(bk: BatchKinematics, Jf: np.ndarray, Jm_u: np.ndarray) -> np.ndarra
     return np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
 
 
+def _cross_t(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products ``a × b`` of vectors stored on axis −2 (arrays (…, 3, N), broadcast)."""
+    a0, a1, a2 = a[..., 0, :], a[..., 1, :], a[..., 2, :]
+    b0, b1, b2 = b[..., 0, :], b[..., 1, :], b[..., 2, :]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-2)
+
+
 def _world_twists(
     mech: Mechanism, params: ParameterSet, bk: BatchKinematics, values: np.ndarray, plan: _Plan
 ) -> tuple[np.ndarray, np.ndarray]:
-    """World twists ``V`` and ``W`` (N, 3, n) of every parameter column (see module doc).
+    """World twists ``V`` and ``W`` (n, 3, N) of every parameter column (see module doc).
 
     Origin j hangs at the constant placement ``(R0_j, p0_j)`` on body ``parent_j``, so
     ``R_o eff = R_parent (R0_j eff)``: the constant factors ``[R0 eff_v, R0 eff_ω, p0]``
     of a group of joints with the same number of parameters multiply the parents'
-    rotations in one product per joint, for all poses.
+    rotations in one product per joint, for all poses. Poses are the last axis, so that
+    per-column factors broadcast over long contiguous rows.
     """
     names, parents, R0, p0 = _anchors(mech, plan)
     N, n = bk.q.shape[0], len(params)
     twists = params.joint_twists(values)
-    V, W = np.zeros((N, 3, n)), np.zeros((N, 3, n))
+    V, W = np.zeros((n, 3, N)), np.zeros((n, 3, N))
     groups: dict[int, list[int]] = {}
     for i, j in enumerate(names):
         groups.setdefault(twists[j][2].shape[1], []).append(i)
@@ -101,19 +109,12 @@ def _world_twists(
         E = np.concatenate([R @ eff[:, :3], R @ eff[:, 3:], p0[members, :, None]], axis=2)
         Rp = np.ascontiguousarray(np.swapaxes(bk.rotations[:, parents[members]], 0, 1))
         X = (Rp.reshape(G, N * 3, 3) @ E).reshape(G, N, 3, 2 * c + 1)
-        A, B = X[..., :c], X[..., c : 2 * c]  # R_o v, R_o ω: (G, N, 3, c)
-        p = (np.swapaxes(bk.translations[:, parents[members]], 0, 1) + X[..., -1])[..., None]
-        pxB = np.stack(
-            [
-                p[:, :, 1] * B[:, :, 2] - p[:, :, 2] * B[:, :, 1],
-                p[:, :, 2] * B[:, :, 0] - p[:, :, 0] * B[:, :, 2],
-                p[:, :, 0] * B[:, :, 1] - p[:, :, 1] * B[:, :, 0],
-            ],
-            axis=2,
-        )
+        X = np.ascontiguousarray(np.transpose(X, (0, 3, 2, 1)))  # (G, 2c + 1, 3, N)
+        A, B = X[:, :c], X[:, c : 2 * c]  # R_o v, R_o ω: (G, c, 3, N)
+        p = np.transpose(bk.translations[:, parents[members]], (1, 2, 0)) + X[:, -1]
         cols = np.concatenate([twists[names[i]][0] for i in members])
-        V[:, :, cols] = (A + pxB).transpose(1, 2, 0, 3).reshape(N, 3, G * c)
-        W[:, :, cols] = B.transpose(1, 2, 0, 3).reshape(N, 3, G * c)
+        V[cols] = (A + _cross_t(p[:, None], B)).reshape(G * c, 3, N)
+        W[cols] = B.reshape(G * c, 3, N)
     return V, W
 
 
@@ -161,20 +162,25 @@ def point_path(
     The Jacobian of ``[p_world; rotation (local)]`` is written into ``out`` when given.
     """
     N, n = bk.q.shape[0], len(params)
-    V, W = _world_twists(mech, params, bk, values, plan)
+    V, W = _world_twists(mech, params, bk, values, plan)  # (n, 3, N)
     bm = mech.batch_model
     Rm, pm = bm.frame_placement(bk, mech.frame_id(mech.measured_frame))
-    m = _column_masks(mech, params, plan, mech.measured_frame)
+    m = _column_masks(mech, params, plan, mech.measured_frame)[:, None, None]
+    Rt = np.transpose(Rm, (1, 2, 0))  # (3, 3, N)
     J = np.empty((N, 6, n)) if out is None else out
-    J[:, :3] = (V + cross_cols(W, pm[:, :, None])) * m
-    J[:, 3:] = (np.swapaxes(Rm, 1, 2) @ W) * m
+    J[:, :3] = np.transpose((V + _cross_t(W, pm.T)) * m, (2, 1, 0))
+    rot = Rt[0] * W[:, 0:1] + Rt[1] * W[:, 1:2] + Rt[2] * W[:, 2:3]  # Rmᵀ W
+    J[:, 3:] = np.transpose(rot * m, (2, 1, 0))
     cols, sa, sb, flat = _closure_columns(mech, params, plan)
-    pa = bm.frame_positions(bk, np.array([mech.frame_id(c.frame_a) for c in mech.closures]))
-    pb = bm.frame_positions(bk, np.array([mech.frame_id(c.frame_b) for c in mech.closures]))
-    # ∂c/∂p on each closure's columns (N, 3, C, w), written into (N, 3C, n)
-    P = pb.transpose(0, 2, 1)[..., None] * sb - pa.transpose(0, 2, 1)[..., None] * sa
+    fa = np.array([mech.frame_id(c.frame_a) for c in mech.closures])
+    fb = np.array([mech.frame_id(c.frame_b) for c in mech.closures])
+    pa = np.transpose(bm.frame_positions(bk, fa), (1, 2, 0))[:, None]  # (C, 1, 3, N)
+    pb = np.transpose(bm.frame_positions(bk, fb), (1, 2, 0))[:, None]
+    sa, sb = sa[..., None, None], sb[..., None, None]
+    # ∂c/∂p on each closure's columns (C, w, 3, N), written into (N, 3C, n)
+    rate = V[cols] * (sb - sa) + _cross_t(W[cols], pb * sb - pa * sa)
     dc = np.zeros((N, 3 * len(mech.closures), n))
-    dc.reshape(N, -1)[:, flat] = V[:, :, cols] * (sb - sa) + cross_cols(W[:, :, cols], P)
+    dc.reshape(N, -1)[:, flat] = np.transpose(rate, (3, 2, 0, 1))
     Jf = bk.closure_jacobian
     if Jf is None:
         Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
