@@ -3,11 +3,14 @@
 :class:`BatchTracking` is the part of :class:`~pincal.model.Mechanism` that closes the
 loops for N actuator rows together: each Newton iteration evaluates the closure
 residuals and Jacobians of all unfinished poses with :class:`~pincal.model._batch.BatchModel`
-(numpy over the kinematic tree) and solves the N square passive systems with one
-``np.linalg.solve`` over (N, k, k). A pose is accepted when its residual is below
-``options.tol`` and it is on home's assembly branch (sign of det of the passive closure
-Jacobian). Poses whose residual does not decrease, that leave the branch, or whose
-condition estimate comes near ``options.max_condition`` are handed to the pose-by-pose
+(numpy over the kinematic tree; every point closure in one set of array operations) and
+solves the N square passive systems through their block structure
+(:mod:`pincal.model._block_solve`: one reduced system for the shared joints, small
+blocks per leg; LAPACK on (N, k, k) where no column is private to one closure). A pose
+is accepted when its residual is below ``options.tol`` and it is on home's assembly
+branch (sign of det of the passive closure Jacobian, from the same factors). Poses whose
+residual does not decrease, that leave the branch, or whose condition bound comes near
+``options.max_condition`` are handed to the pose-by-pose
 solver (:meth:`configuration`: damped Newton, continuation, exact singularity check),
 so results and errors are those of the pose-by-pose path.
 """
