@@ -251,3 +251,12 @@ def test_a_demo_with_a_report_imports_no_plotting_in_the_calling_process(tmp_pat
     )
     assert out.split() == ["[]", "7"]
     assert (tmp_path / "report.html").read_text().count("data:image/png;base64,") >= 9
+
+
+@forked
+def test_workers_closed_while_warming_up_stop_at_once():
+    before = set(multiprocessing.active_children())
+    workers = PlotWorkers(2)
+    (leader,) = set(multiprocessing.active_children()) - before
+    workers.close()  # at once: the first worker is still importing matplotlib
+    assert not leader.is_alive()
