@@ -39,7 +39,7 @@ _SCRATCH: ContextVar[bool] = ContextVar("pincal_report_scratch", default=False)
 
 @contextmanager
 def scratch_files() -> Iterator[None]:
-    """Within this context :func:`write_png` writes plainly (no temporary, fsync, rename).
+    """Within this context :func:`write_png` writes without fsync.
 
     For plots drawn into a private temporary folder, read back and deleted (a
     report's plots): durability buys nothing there and costs a few ms per file.
@@ -52,11 +52,8 @@ def scratch_files() -> Iterator[None]:
 
 
 def write_png(path: Path, data: bytes) -> Path:
-    """Write a plot's bytes to ``path``: atomically, or plainly inside :func:`scratch_files`."""
-    if _SCRATCH.get():
-        path.write_bytes(data)
-        return path
-    return atomic_write_bytes(path, data)
+    """Write a plot's bytes to ``path`` atomically (without fsync in :func:`scratch_files`)."""
+    return atomic_write_bytes(path, data, durable=not _SCRATCH.get())
 
 
 def bars(
@@ -115,4 +112,5 @@ def warm_up() -> None:
     fig = Figure(figsize=(1.0, 1.0))
     FigureCanvasAgg(fig)
     fig.text(0.5, 0.5, "0")
-    fig.savefig(io.BytesIO(), format="png")
+    buffer = io.BytesIO()  # in memory: nothing is written
+    fig.savefig(buffer, format="png")

@@ -41,7 +41,7 @@ Job = tuple[Callable[..., Path], tuple, dict]
 
 
 def _draw(job: Job, scratch: bool = False) -> Path:
-    """Call one recorded plot; ``scratch``: write it plainly (see :class:`PlotJobs`)."""
+    """Call one recorded plot; ``scratch``: write it without fsync (see :class:`PlotJobs`)."""
     function, args, kwargs = job
     if not scratch:
         return function(*args, **kwargs)
@@ -58,8 +58,7 @@ class PlotJobs:
     Attributes:
         jobs: ``(plot function, args, kwargs)`` in the order they were added.
         scratch: the plots go to a private temporary folder that is read back and
-            deleted, so they are written plainly, without the temporary file, fsync
-            and rename of an atomic write.
+            deleted, so they are written without fsync.
     """
 
     jobs: list[Job] = field(default_factory=list)
