@@ -93,46 +93,41 @@ class PlotWorkers:
         n = len(jobs.jobs)
         paths: list[Path | None] = [None] * n
         errors: dict[int, BaseException] = {}
-        todo, here = deque(range(n)), []
+        todo, here = deque(range(n)), list[int]()  # ``here``: drawn in this process
         idle, busy = list(self._conns), dict[Connection, int]()
-        while todo or busy:
-            while todo and idle:
-                conn, i = idle.pop(), todo.popleft()
-                try:
-                    payload = pickle.dumps((jobs.jobs[i], jobs.scratch))
-                except Exception:  # e.g. a locally defined plot function: drawn here
-                    here.append(i)
+        try:
+            while todo or busy:
+                while todo and idle:
+                    i, conn = todo.popleft(), idle.pop()
+                    sent = self._send(conn, jobs, i)
+                    if sent == "sent":
+                        busy[conn] = i
+                    elif sent == "here":  # cannot be sent (e.g. a locally defined function)
+                        here.append(i)
+                        idle.append(conn)
+                    else:  # the worker is gone
+                        todo.appendleft(i)
+                if not busy:
+                    break  # no worker left: the rest is drawn here
+                for ready in wait(list(busy)):
+                    conn = cast(Connection, ready)
+                    i = busy.pop(conn)
+                    answer = self._answer(conn, i)
+                    if answer is None:  # the worker died on this plot
+                        todo.appendleft(i)
+                        continue
                     idle.append(conn)
-                    continue
-                try:
-                    conn.send_bytes(payload)
-                except OSError:  # the worker is gone
-                    self._drop(conn)
-                    todo.appendleft(i)
-                    continue
-                busy[conn] = i
-            if not busy:
-                break  # no worker left: the rest is drawn here
-            for ready in wait(list(busy)):
-                conn = cast(Connection, ready)
-                i = busy.pop(conn)
-                try:
-                    answer = conn.recv_bytes()
-                except (EOFError, OSError):  # the worker died on this plot
-                    _log.warning("a plot worker ended unexpectedly; drawing plot %d here", i)
-                    self._drop(conn)
-                    todo.appendleft(i)
-                    continue
-                idle.append(conn)
-                try:
-                    ok, value = pickle.loads(answer)
-                except Exception as exc:
-                    errors[i] = ReportError(f"the answer of a plot worker is unreadable: {exc}")
-                    continue
-                if ok:
-                    paths[i] = Path(value)
-                else:
-                    errors[i] = value
+                    kind, value = answer
+                    if kind == "done":
+                        paths[i] = Path(cast(str, value))
+                    elif kind == "here":
+                        here.append(i)
+                    else:
+                        errors[i] = cast(BaseException, value)
+        except BaseException:  # e.g. Ctrl-C: a busy worker's answer must not be read later
+            for conn in busy:
+                self._drop(conn)
+            raise
         for i in sorted([*here, *todo]):
             try:
                 paths[i] = _draw(jobs.jobs[i], jobs.scratch)
@@ -141,6 +136,37 @@ class PlotWorkers:
         if errors:
             raise errors[min(errors)]
         return [p for p in paths if p is not None]
+
+    def _send(self, conn: Connection, jobs: PlotJobs, i: int) -> str:
+        """Send plot ``i`` to the worker on ``conn``: "sent", "here" (unpicklable), "gone"."""
+        try:
+            payload = pickle.dumps((jobs.jobs[i], jobs.scratch))
+        except Exception:
+            return "here"
+        try:
+            conn.send_bytes(payload)
+        except OSError:
+            self._drop(conn)
+            return "gone"
+        return "sent"
+
+    def _answer(self, conn: Connection, i: int) -> tuple[str, object] | None:
+        """The answer of the worker on ``conn`` about plot ``i`` (see :func:`_serve`).
+
+        Returns:
+            ``(kind, value)``, or None when the worker died (it is dropped).
+        """
+        try:
+            data = conn.recv_bytes()
+        except (EOFError, OSError):
+            _log.warning("a plot worker ended unexpectedly; drawing plot %d here", i)
+            self._drop(conn)
+            return None
+        try:
+            answer = pickle.loads(data)
+        except Exception as exc:
+            return "error", ReportError(f"the answer of a plot worker is unreadable: {exc}")
+        return cast(tuple[str, object], answer)
 
     def _drop(self, conn: Connection) -> None:
         conn.close()
@@ -202,21 +228,31 @@ def _lead(theirs: list[Connection], ours: list[Connection]) -> None:
 
 
 def _serve(conn: Connection) -> None:
-    """Draw the plots received on ``conn`` until it closes; answer (ok, path or error)."""
+    """Draw the plots received on ``conn`` until it closes.
+
+    Answers ``("done", path)``, ``("error", exception)``, or ``("here", reason)`` when
+    the plot cannot be loaded here (e.g. its function was defined after the fork):
+    the caller then draws it.
+    """
     while True:
         try:
             payload = conn.recv_bytes()
         except (EOFError, OSError):
             return
         try:
-            answer: tuple[bool, object] = (True, _draw(*pickle.loads(payload)))
+            job, scratch = pickle.loads(payload)
         except Exception as exc:
-            answer = (False, exc)
+            answer: tuple[str, object] = ("here", f"{type(exc).__name__}: {exc}")
+        else:
+            try:
+                answer = ("done", _draw(job, scratch))
+            except Exception as exc:
+                answer = ("error", exc)
         try:
             data = pickle.dumps(answer)
         except Exception:
             error = answer[1]
-            data = pickle.dumps((False, ReportError(f"{type(error).__name__}: {error}")))
+            data = pickle.dumps(("error", ReportError(f"{type(error).__name__}: {error}")))
         try:
             conn.send_bytes(data)
         except OSError:

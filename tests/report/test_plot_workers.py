@@ -260,3 +260,36 @@ def test_workers_closed_while_warming_up_stop_at_once():
     (leader,) = set(multiprocessing.active_children()) - before
     workers.close()  # at once: the first worker is still importing matplotlib
     assert not leader.is_alive()
+
+
+@forked
+def test_a_plot_the_workers_cannot_load_is_drawn_here(tmp_path, monkeypatch):
+    with PlotWorkers(2) as workers:
+
+        def late(*, path: Path) -> Path:  # module-level only after the workers started
+            return _pid_plot(path=path)
+
+        late.__name__ = late.__qualname__ = "_late_plot"
+        monkeypatch.setattr(sys.modules[__name__], "_late_plot", late, raising=False)
+        jobs = PlotJobs()
+        path = jobs.add(late, path=tmp_path / "late.txt")
+        assert workers.render(jobs) == [path]
+        assert int(path.read_text()) == os.getpid()
+        assert workers.running == 2  # the workers stay
+
+
+@forked
+def test_an_interrupted_render_drops_the_busy_workers(tmp_path, monkeypatch):
+    import pincal.report._workers as module
+
+    def interrupted(conns):
+        raise KeyboardInterrupt
+
+    with PlotWorkers(2) as workers:
+        with monkeypatch.context() as patch:
+            patch.setattr(module, "wait", interrupted)
+            with pytest.raises(KeyboardInterrupt):
+                workers.render(_pid_jobs(tmp_path, 4))
+        assert workers.running == 0  # their pending answers are never read as others'
+        paths = workers.render(_pid_jobs(tmp_path, 2))
+        assert all(int(p.read_text()) == os.getpid() for p in paths)
