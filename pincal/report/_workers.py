@@ -2,9 +2,9 @@
 
 A report's plots are known only at the end of a computation (a calibration), and the
 first plot a process draws costs importing matplotlib (≈ 0.3 s). :class:`PlotWorkers`
-forks one process when it is made; that process imports matplotlib and draws a few
-small plots (:func:`pincal.report._canvas.warm_up`) on the core the computation leaves
-idle, then forks the other workers, which start as warm copies of it.
+forks one process when it is made; that process imports matplotlib and loads its font
+and PNG encoder (:func:`pincal.report._canvas.warm_up`) on the core the computation
+leaves idle, then forks the other workers, which start as warm copies of it.
 :meth:`PlotWorkers.render` hands the plots of a :class:`PlotJobs` out one at a time,
 the next to whichever worker is free, and returns the files in the order the plots
 were added. The calling process never imports matplotlib.
@@ -13,10 +13,10 @@ Lifetime: each worker talks to the calling process through its own pipe and exit
 soon as that pipe is closed — by :meth:`PlotWorkers.close` or by the calling process
 ending in any way, killed included — so no worker outlives its caller. Workers ignore
 Ctrl-C (SIGINT reaches the whole process group; the caller decides). A plot whose
-worker died, or that cannot be sent to a worker, is drawn in the calling process.
-Where ``fork`` is not available, or with one worker, no process is started and
-:meth:`PlotWorkers.render` draws in the calling process. The PNG bytes are the same
-either way.
+worker died, or that cannot be sent to or loaded by a worker, is drawn in the calling
+process. Where ``fork`` is not available, or with one worker, no process is started
+and :meth:`PlotWorkers.render` draws in the calling process. The PNG bytes are the
+same either way.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from pincal.report._render import PlotJobs, _draw, worker_count
 __all__ = ["PlotWorkers"]
 
 _log = logging.getLogger(__name__)
-_MAX_WORKERS = 64
+_MAX_WORKERS = 16  # a report has about 15 plots: more workers would only wait
 
 
 class PlotWorkers:
@@ -52,8 +52,8 @@ class PlotWorkers:
             calibration_report(out, workers=workers)
 
     Args:
-        n_jobs: worker processes (-1 or None: one per CPU; 1: none, plots are drawn in
-            the calling process).
+        n_jobs: worker processes, at most 16 (-1 or None: one per CPU; 1: none, the
+            plots are drawn in the calling process).
 
     Raises:
         ReportError: ``n_jobs`` is 0 or below -1.
