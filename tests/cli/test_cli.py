@@ -55,3 +55,23 @@ def test_demo_freezes_the_objects_at_exit_instead_of_collecting_them(tmp_path):
     )
     assert done.returncode == 0, done.stderr
     assert done.stdout.splitlines()[-1] == "frozen True"
+
+
+def test_demo_runs_with_the_imported_objects_frozen_and_unfreezes_them(monkeypatch):
+    import gc
+
+    import pincal.cli._demo_job as job
+    from pincal.errors import PincalError
+
+    seen: list[int] = []
+
+    def fake_run_demo(*args, **kwargs):
+        seen.append(gc.get_freeze_count())
+        raise PincalError("stop here")
+
+    monkeypatch.setattr(job, "run_demo", fake_run_demo)
+    before = gc.get_freeze_count()
+    res = CliRunner().invoke(main, ["demo", "--no-report"])
+    assert res.exit_code == 1 and "stop here" in res.output
+    assert seen and seen[0] > before  # the modules loaded so far were frozen for the run
+    assert gc.get_freeze_count() == before  # and unfrozen after it
