@@ -21,7 +21,7 @@ from typing import Any
 
 from pincal.errors import ReportError
 
-__all__ = ["PlotJobs", "worker_count"]
+__all__ = ["Job", "PlotJobs", "draw_job", "worker_count"]
 
 
 def worker_count(n_jobs: int | None, tasks: int) -> int:
@@ -40,7 +40,7 @@ def worker_count(n_jobs: int | None, tasks: int) -> int:
 Job = tuple[Callable[..., Path], tuple, dict]
 
 
-def _draw(job: Job, scratch: bool = False) -> Path:
+def draw_job(job: Job, scratch: bool = False) -> Path:
     """Call one recorded plot; ``scratch``: write it without fsync (see :class:`PlotJobs`)."""
     function, args, kwargs = job
     if not scratch:
@@ -81,10 +81,10 @@ class PlotJobs:
         workers = worker_count(n_jobs, len(self.jobs))
         scratch = [self.scratch] * len(self.jobs)
         if workers == 1 or "fork" not in multiprocessing.get_all_start_methods():
-            return list(map(_draw, self.jobs, scratch))
+            return list(map(draw_job, self.jobs, scratch))
         from pincal.report._canvas import import_matplotlib
 
         import_matplotlib()  # once here, not once per forked worker
         context = multiprocessing.get_context("fork")
         with ProcessPoolExecutor(workers, mp_context=context) as pool:
-            return list(pool.map(_draw, self.jobs, scratch))
+            return list(pool.map(draw_job, self.jobs, scratch))

@@ -34,7 +34,7 @@ from types import TracebackType
 from typing import cast
 
 from pincal.errors import ReportError
-from pincal.report._render import Job, PlotJobs, _draw, worker_count
+from pincal.report._render import Job, PlotJobs, draw_job, worker_count
 
 __all__ = ["PlotWorkers"]
 
@@ -131,7 +131,7 @@ class PlotWorkers:
             raise
         for i in sorted([*here, *todo]):
             try:
-                paths[i] = _draw(jobs.jobs[i], jobs.scratch)
+                paths[i] = draw_job(jobs.jobs[i], jobs.scratch)
             except Exception as exc:
                 errors[i] = exc
         if errors:
@@ -229,7 +229,7 @@ def _lead(theirs: list[Connection], ours: list[Connection]) -> None:
 
 
 def _draw_without_collections(job: Job, scratch: bool) -> Path:
-    """:func:`_draw` with the garbage collector paused, then one young collection.
+    """:func:`draw_job` with the garbage collector paused, then one young collection.
 
     A plot allocates some 10⁵ short-lived objects, which trigger collections of the
     older generations too (the whole of matplotlib, numpy and pincal) during the
@@ -238,7 +238,7 @@ def _draw_without_collections(job: Job, scratch: bool) -> Path:
     """
     gc.disable()
     try:
-        return _draw(job, scratch)
+        return draw_job(job, scratch)
     finally:
         gc.enable()
         gc.collect(0)
