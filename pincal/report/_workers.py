@@ -68,13 +68,19 @@ class PlotWorkers:
             context = multiprocessing.get_context("fork")
             pairs = [context.Pipe() for _ in range(self.n_workers)]
             ours, theirs = [a for a, _ in pairs], [b for _, b in pairs]
-            self._process = context.Process(
+            process = context.Process(
                 target=_lead, args=(theirs, ours), name="pincal-plots", daemon=True
             )
-            self._process.start()
+            try:
+                process.start()
+            except OSError as exc:  # no process to be had: the plots are drawn here
+                _log.warning("plot workers not started (%s); drawing the plots here", exc)
+                for conn in ours:
+                    conn.close()
+            else:
+                self._process, self._conns = process, ours
             for conn in theirs:
                 conn.close()
-            self._conns = ours
 
     @property
     def running(self) -> int:

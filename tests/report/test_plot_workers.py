@@ -293,3 +293,15 @@ def test_an_interrupted_render_drops_the_busy_workers(tmp_path, monkeypatch):
         assert workers.running == 0  # their pending answers are never read as others'
         paths = workers.render(_pid_jobs(tmp_path, 2))
         assert all(int(p.read_text()) == os.getpid() for p in paths)
+
+
+@forked
+def test_workers_that_cannot_be_started_leave_the_plots_here(tmp_path, monkeypatch, caplog):
+    def no_fork(self):
+        raise OSError(11, "Resource temporarily unavailable")
+
+    monkeypatch.setattr(multiprocessing.context.ForkProcess, "start", no_fork)
+    with caplog.at_level(logging.WARNING), PlotWorkers(2) as workers:
+        assert workers.running == 0
+        assert workers.render(_pid_jobs(tmp_path, 1))[0].read_text() == str(os.getpid())
+    assert "not started" in caplog.text
