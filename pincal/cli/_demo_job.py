@@ -11,8 +11,10 @@ directory (:func:`pincal.io.write_calibration`) is written out.
 from __future__ import annotations
 
 from collections.abc import Callable
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -48,6 +50,9 @@ from pincal.model import (
     sample_actuators,
 )
 from pincal.sensitivity import identification_jacobian
+
+if TYPE_CHECKING:
+    from pincal.report import PlotWorkers
 
 
 @dataclass(frozen=True)
@@ -114,18 +119,32 @@ def run_demo(
     """Run the simulated calibration and write the calibrated model to ``out_dir``.
 
     BLAS runs single-threaded throughout: every dense solve here is small, and a
-    threaded BLAS on a busy machine made them several times slower.
+    threaded BLAS on a busy machine made them several times slower. With a report,
+    its plot workers (:class:`pincal.report.PlotWorkers`) start first and import
+    matplotlib on the second core while this process computes.
     """
     from threadpoolctl import threadpool_limits
 
-    with threadpool_limits(1):
-        return _run_demo(settings, out_dir, progress)
+    with threadpool_limits(1), _plot_workers(settings, out_dir) as workers:
+        return _run_demo(settings, out_dir, progress, workers)
+
+
+def _plot_workers(
+    settings: DemoSettings, out_dir: str | Path | None
+) -> AbstractContextManager[PlotWorkers | None]:
+    """Plot workers for the report (one per CPU), or nothing when no report is written."""
+    if not settings.report or out_dir is None:
+        return nullcontext(None)
+    from pincal.report import PlotWorkers
+
+    return PlotWorkers(-1)
 
 
 def _run_demo(
     settings: DemoSettings,
     out_dir: str | Path | None,
     progress: Callable[[str], None] | None,
+    workers: PlotWorkers | None = None,
 ) -> DemoResult:
     say = progress or (lambda _msg: None)
     rng = np.random.default_rng(settings.seed)
@@ -200,7 +219,7 @@ def _run_demo(
             from pincal.report import calibration_report
 
             say("writing the report (plots)")
-            written = calibration_report(out, n_jobs=-1)
+            written = calibration_report(out, workers=workers)
             files += [written.html, written.markdown]
             if written.json is not None:
                 files.append(written.json)

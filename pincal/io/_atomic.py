@@ -56,11 +56,12 @@ def _remove_dead_writers_temporaries(path: Path) -> None:
             stale.unlink(missing_ok=True)
 
 
-def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
+def atomic_write_bytes(path: str | Path, data: bytes, *, durable: bool = True) -> Path:
     """Write ``data`` to ``path`` through a temporary file in the same directory.
 
     The temporary is named ``.NAME.<pid>.XXXX.tmp``; those of writers no longer running
-    (killed by SIGKILL, so their cleanup never ran) are removed here.
+    (killed by SIGKILL, so their cleanup never ran) are removed here. ``durable=False``
+    skips the fsync (a few ms per file): for scratch files read back and deleted.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -72,7 +73,8 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
-            os.fsync(fh.fileno())
+            if durable:
+                os.fsync(fh.fileno())
         os.chmod(tmp, 0o644)  # mkstemp creates 0600; outputs are meant to be shared
         os.replace(tmp, path)
     except BaseException:

@@ -22,10 +22,12 @@ from pincal.report._plots import (
     plot_parameters,
     plot_validation_summary,
 )
+from pincal.report._workers import PlotWorkers
 
 __all__ = [
     "IDENTIFICATION_JSON",
     "ErrorStats",
+    "PlotWorkers",
     "ReportFiles",
     "Section",
     "Table",

@@ -36,6 +36,7 @@ from pincal.report._sections import (
     quality_section,
     residual_section,
 )
+from pincal.report._workers import PlotWorkers
 
 __all__ = ["IDENTIFICATION_JSON", "MAX_JSON_BYTES", "calibration_report", "read_identification"]
 
@@ -185,6 +186,7 @@ def calibration_report(
     *,
     name: str = "report",
     n_jobs: int | None = 1,
+    workers: PlotWorkers | None = None,
 ) -> ReportFiles:
     """Write the report of a calibration output directory: HTML, Markdown and JSON.
 
@@ -203,6 +205,9 @@ def calibration_report(
         name: file stem of the report files.
         n_jobs: processes drawing the plots (-1: every CPU; forked workers, see
             :mod:`pincal.report._render`); the files do not depend on it.
+        workers: plot workers started earlier (:class:`PlotWorkers`, already warm
+            when the plots come); when given they draw the plots and ``n_jobs`` is
+            not used.
 
     Raises:
         ReportError: the directory or its identification.json is missing or malformed,
@@ -217,7 +222,7 @@ def calibration_report(
     files = sorted(p.name for p in src.iterdir() if p.suffix in (".urdf", ".yaml", ".json"))
     with tempfile.TemporaryDirectory(prefix="pincal-report-") as tmp:
         plots = Path(tmp)
-        jobs = PlotJobs()
+        jobs = PlotJobs(scratch=True)  # drawn into ``tmp``, embedded, deleted
         data, noise = data_section(result, notes)
         sections = [_summary(result), data, residual_section(result, plots, jobs)]
         quality = quality_section(notes)
@@ -268,7 +273,10 @@ def calibration_report(
             },
             "quality": notes.get("quality"),
         }
-        jobs.render(n_jobs)
+        if workers is not None:
+            workers.render(jobs)
+        else:
+            jobs.render(n_jobs)
         return write_report(
             out_dir,
             sections,

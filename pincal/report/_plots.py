@@ -1,9 +1,10 @@
 """Plots of a calibration (PNG files).
 
 All plots use matplotlib's Agg canvas directly (no pyplot, no window, no global
-state) and are written atomically (temporary file + rename). Values are passed
-in SI units (m, rad); a ``unit`` argument chooses the displayed unit:
-``m, mm, um (µm), rad, mrad, urad (µrad), deg``.
+state) and are written atomically (temporary file + rename). Values are passed in SI
+units (m, rad); a ``unit`` argument chooses the displayed unit: ``m, mm, um (µm),
+rad, mrad, urad (µrad), deg``. Matplotlib is imported by the first plot drawn, not
+with this module (:mod:`pincal.report._canvas`).
 """
 
 from __future__ import annotations
@@ -14,18 +15,18 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
-from matplotlib.text import Text
 
 from pincal.errors import ReportError
-from pincal.io._atomic import atomic_write_bytes
-from pincal.report._axes import bars as _bars
-from pincal.report._axes import log_scale as _log_scale
-from pincal.report._layout import fit_margins
+from pincal.report._canvas import bars as _bars
+from pincal.report._canvas import fit_margins, write_png
+from pincal.report._canvas import log_scale as _log_scale
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+    from matplotlib.text import Text
 
 __all__ = [
     "ErrorStats",
@@ -97,11 +98,14 @@ def _save(fig: Figure, path: str | os.PathLike, grid: Any, suptitle: Text | None
     fit_margins(fig, grid, suptitle)
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=_DPI, pil_kwargs={"compress_level": _PNG_LEVEL})
-    return atomic_write_bytes(Path(path), buffer.getvalue())
+    return write_png(Path(path), buffer.getvalue())
 
 
 def _figure(width: float = 7.0, height: float = 4.0) -> Figure:
     """A figure with an Agg canvas and no layout engine (margins: :func:`fit_margins`)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(width, height), dpi=_DPI)  # text measured at the saved dpi
     FigureCanvasAgg(fig)
     return fig

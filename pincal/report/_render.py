@@ -2,10 +2,11 @@
 
 Each plot is an independent matplotlib figure written to its own PNG file, so the
 plots of one report can be drawn in parallel worker processes. Workers are forked
-from the calling process (they inherit matplotlib already imported, so a worker
+from the calling process after it imported matplotlib (they inherit it, so a worker
 costs a few milliseconds, not an interpreter start); where ``fork`` is not available
 (Windows, macOS) or ``n_jobs`` is 1 the plots are drawn here, one after the other.
-The PNG bytes do not depend on ``n_jobs``.
+The PNG bytes do not depend on ``n_jobs``. :class:`pincal.report.PlotWorkers` draws
+the same jobs in processes started ahead of time.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from typing import Any
 
 from pincal.errors import ReportError
 
-__all__ = ["PlotJobs", "worker_count"]
+__all__ = ["Job", "PlotJobs", "draw_job", "worker_count"]
 
 
 def worker_count(n_jobs: int | None, tasks: int) -> int:
@@ -36,9 +37,18 @@ def worker_count(n_jobs: int | None, tasks: int) -> int:
     return max(1, min(n_jobs, tasks))
 
 
-def _draw(job: tuple[Callable[..., Path], tuple, dict]) -> Path:
+Job = tuple[Callable[..., Path], tuple, dict]
+
+
+def draw_job(job: Job, scratch: bool = False) -> Path:
+    """Call one recorded plot; ``scratch``: write it without fsync (see :class:`PlotJobs`)."""
     function, args, kwargs = job
-    return function(*args, **kwargs)
+    if not scratch:
+        return function(*args, **kwargs)
+    from pincal.report._canvas import scratch_files
+
+    with scratch_files():
+        return function(*args, **kwargs)
 
 
 @dataclass
@@ -47,9 +57,12 @@ class PlotJobs:
 
     Attributes:
         jobs: ``(plot function, args, kwargs)`` in the order they were added.
+        scratch: the plots go to a private temporary folder that is read back and
+            deleted, so they are written without fsync.
     """
 
-    jobs: list[tuple[Callable[..., Path], tuple, dict]] = field(default_factory=list)
+    jobs: list[Job] = field(default_factory=list)
+    scratch: bool = False
 
     def add(self, function: Callable[..., Path], *args: Any, path: Path, **kwargs: Any) -> Path:
         """Record ``function(*args, path=path, **kwargs)``; return ``path`` (drawn later)."""
@@ -66,8 +79,12 @@ class PlotJobs:
             ReportError: a plot's inputs are malformed (raised by the plot function).
         """
         workers = worker_count(n_jobs, len(self.jobs))
+        scratch = [self.scratch] * len(self.jobs)
         if workers == 1 or "fork" not in multiprocessing.get_all_start_methods():
-            return [_draw(job) for job in self.jobs]
+            return list(map(draw_job, self.jobs, scratch))
+        from pincal.report._canvas import import_matplotlib
+
+        import_matplotlib()  # once here, not once per forked worker
         context = multiprocessing.get_context("fork")
         with ProcessPoolExecutor(workers, mp_context=context) as pool:
-            return list(pool.map(_draw, self.jobs))
+            return list(pool.map(draw_job, self.jobs, scratch))

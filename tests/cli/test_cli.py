@@ -35,3 +35,43 @@ def test_info_and_clean_error():
 def test_help():
     res = CliRunner().invoke(main, ["--help"])
     assert res.exit_code == 0 and "pincal demo" in res.output
+
+
+def test_demo_freezes_the_objects_at_exit_instead_of_collecting_them(tmp_path):
+    """The demo process ends without Python's last full garbage collection."""
+    import subprocess
+    import sys
+
+    out = str(tmp_path / "out")
+    code = (
+        "import atexit, gc, sys\n"
+        "atexit.register(lambda: print('frozen', gc.get_freeze_count() > 0))\n"
+        "from pincal.cli import main\n"
+        "main(['demo', '--poses', '12', '--validation', '5', '--candidates', 'none',"
+        f" '--no-report', '--out', {out!r}])\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[-1] == "frozen True"
+
+
+def test_demo_runs_with_the_imported_objects_frozen_and_unfreezes_them(monkeypatch):
+    import gc
+
+    import pincal.cli._demo_job as job
+    from pincal.errors import PincalError
+
+    seen: list[int] = []
+
+    def fake_run_demo(*args, **kwargs):
+        seen.append(gc.get_freeze_count())
+        raise PincalError("stop here")
+
+    monkeypatch.setattr(job, "run_demo", fake_run_demo)
+    before = gc.get_freeze_count()
+    res = CliRunner().invoke(main, ["demo", "--no-report"])
+    assert res.exit_code == 1 and "stop here" in res.output
+    assert seen and seen[0] > before  # the modules loaded so far were frozen for the run
+    assert gc.get_freeze_count() == before  # and unfrozen after it
