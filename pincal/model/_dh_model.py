@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -27,6 +26,19 @@ __all__ = ["dh_errors_to_parameters", "dh_preset", "dh_urdf", "parameters_to_dh_
 
 
 # --------------------------------------------------------------------------- URDF
+
+
+def _attr(value: str) -> str:
+    """A double-quoted XML attribute value (``& < > "`` and line breaks escaped).
+
+    Written here rather than imported from ``xml.sax.saxutils``, whose import pulls in
+    ``urllib.request`` (tens of ms of every command's start).
+    """
+    for raw, esc in (("&", "&amp;"), ("<", "&lt;"), (">", "&gt;"), ('"', "&quot;")):
+        value = value.replace(raw, esc)
+    for raw, esc in (("\n", "&#10;"), ("\r", "&#13;"), ("\t", "&#9;")):
+        value = value.replace(raw, esc)
+    return f'"{value}"'
 
 
 def _f(x: float) -> str:
@@ -49,8 +61,8 @@ def _cylinder(length: float, radius: float, xyz: Sequence[float], rpy: Sequence[
 
 def _link(name: str, visuals: Sequence[str] = ()) -> str:
     if not visuals:
-        return f"  <link name={quoteattr(name)}/>\n"
-    return f"  <link name={quoteattr(name)}>\n{''.join(visuals)}  </link>\n"
+        return f"  <link name={_attr(name)}/>\n"
+    return f"  <link name={_attr(name)}>\n{''.join(visuals)}  </link>\n"
 
 
 def _joint(
@@ -62,8 +74,8 @@ def _joint(
     limits: tuple[float, float] | None = None,
 ) -> str:
     text = (
-        f"  <joint name={quoteattr(name)} type={quoteattr(jtype)}>\n"
-        f"    <parent link={quoteattr(parent)}/>\n    <child link={quoteattr(child)}/>\n"
+        f"  <joint name={_attr(name)} type={_attr(jtype)}>\n"
+        f"    <parent link={_attr(parent)}/>\n    <child link={_attr(child)}/>\n"
         f"    {origin}\n"
     )
     if jtype != "fixed":
@@ -133,7 +145,7 @@ def dh_urdf(
         The URDF document as a string.
     """
     layout = dh_layout(rows, convention, joint_names, link_names, base_link, probe is not None)
-    parts = [f'<?xml version="1.0"?>\n<robot name={quoteattr(name)}>\n']
+    parts = [f'<?xml version="1.0"?>\n<robot name={_attr(name)}>\n']
     parts.append('  <material name="pincal_grey"><color rgba="0.6 0.6 0.65 1"/></material>\n')
     parts.append(_link(base_link))
     parent = base_link

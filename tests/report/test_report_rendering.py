@@ -142,6 +142,15 @@ def test_the_cli_imports_no_plotting_viewer_or_scipy():
     assert not HEAVY & _modules_after("import pincal.cli")
 
 
+def test_the_cli_imports_no_network_stack():
+    """``xml.sax.saxutils`` pulled in urllib.request, http and ssl at every start."""
+    probe = "import sys, pincal.cli; print(' '.join(sorted(sys.modules)))"
+    done = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, check=True, timeout=300
+    )
+    assert not {"urllib.request", "http.client", "ssl"} & set(done.stdout.split())
+
+
 @pytest.mark.slow
 def test_a_demo_without_report_imports_no_plotting_viewer_or_scipy(tmp_path):
     code = (
