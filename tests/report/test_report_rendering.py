@@ -144,6 +144,9 @@ def test_the_cli_imports_no_plotting_viewer_or_scipy():
 
 def test_the_cli_imports_no_network_stack():
     """``xml.sax.saxutils`` pulled in urllib.request, http and ssl at every start."""
+    import subprocess
+    import sys
+
     probe = "import sys, pincal.cli; print(' '.join(sorted(sys.modules)))"
     done = subprocess.run(
         [sys.executable, "-c", probe], capture_output=True, text=True, check=True, timeout=300
