@@ -10,7 +10,8 @@ Every operation is timed per pose (median of repeats) for
   pointing there (skipped when the directory is missing),
 * the floors: a plain-numpy batched Newton/closed-form Stewart (same sizes: 6 legs,
   42 parameters) and, for the UR10, the Pinocchio calls alone
-  (``framesForwardKinematics`` + ``computeFrameJacobian`` per pose).
+  (``framesForwardKinematics`` + ``computeFrameJacobian`` per pose), each timed in turns
+  with its operation, repeat by repeat (the same machine conditions for both).
 
 All processes run with one BLAS thread (``threadpool_limits(1)``; stated in the
 output) and every time is CPU time of the process (``time.process_time``), which other
@@ -96,7 +97,31 @@ def numpy_stewart_jacobian(R, n, a_w):
     return dX
 
 
-def floors(repeats: int, n: int) -> dict[str, float]:
+def paired_times(now: dict, floor: dict, repeats: int, n: int) -> tuple[dict, dict]:
+    """Median CPU time per pose of each operation and of its floor, timed alternately.
+
+    The shared machine's speed changes from minute to minute (the other core's load);
+    timing an operation and its floor in turns, repeat by repeat, lets both see the
+    same conditions, so their ratio is steadier than timing one block after the other.
+    Each timed call follows an untimed call of the same operation (warm caches).
+    """
+    t_now: dict[str, list[float]] = {k: [] for k in now}
+    t_floor: dict[str, list[float]] = {k: [] for k in floor}
+    for _ in range(repeats):
+        for key in floor:
+            for fns, times in ((now, t_now), (floor, t_floor)):
+                if key in fns:
+                    fns[key]()  # untimed: caches warm for this operation, as in a block
+                    t0 = time.process_time()
+                    fns[key]()
+                    times[key].append(time.process_time() - t0)
+    return (
+        {k: statistics.median(v) / n for k, v in t_now.items()},
+        {k: statistics.median(v) / n for k, v in t_floor.items()},
+    )
+
+
+def floors(n: int) -> dict:
     import pincal
 
     rng = np.random.default_rng(0)
@@ -110,14 +135,14 @@ def floors(repeats: int, n: int) -> dict[str, float]:
     p0, R0 = np.tile(T0.translation, (n, 1)), np.tile(T0.rotation, (n, 1, 1))
     pw, Rw = p_true + 1e-4, _exp3(np.full((n, 3), 1e-4)) @ R_true
     out = {}
-    out["stewart FK cold"] = median_time(lambda: numpy_stewart_fk(L, p0, R0), repeats) / n
+    out["stewart FK cold"] = lambda: numpy_stewart_fk(L, p0, R0)
 
     def warm_eval():
         _, R, nn, a_w = numpy_stewart_fk(L, pw, Rw)
         numpy_stewart_jacobian(R, nn, a_w)
 
-    out["stewart FK warm"] = median_time(lambda: numpy_stewart_fk(L, pw, Rw), repeats) / n
-    out["stewart evaluate+J"] = median_time(warm_eval, repeats) / n
+    out["stewart FK warm"] = lambda: numpy_stewart_fk(L, pw, Rw)
+    out["stewart evaluate+J"] = warm_eval
     ur = pincal.load_mechanism("ur10")
     model, data = ur.model, ur.model.createData()
     fid = ur.frame_id(ur.measured_frame)
@@ -133,8 +158,8 @@ def floors(repeats: int, n: int) -> dict[str, float]:
             pin.framesForwardKinematics(model, data, q)
             pin.computeFrameKinematicRegressor(model, data, fid, pin.LOCAL)
 
-    out["ur10 evaluate+J"] = median_time(ur_calls, repeats) / n
-    out["ur10 FK+regressor"] = median_time(ur_regressor, repeats) / n
+    out["ur10 evaluate+J"] = ur_calls
+    out["ur10 FK+regressor"] = ur_regressor
     return out
 
 
@@ -177,15 +202,20 @@ def worker(repeats: int, n: int, sizes: list[int]) -> dict:
             for r, q in zip(rr, qq, strict=True):
                 sens_mod.pose_sensitivity(m, params, m.configuration(r + 1e-4, q))
 
-    res["stewart FK cold"] = median_time(fk_cold, repeats) / n
-    res["stewart FK warm"] = median_time(fk_warm, repeats) / n
-    res["stewart evaluate+J"] = median_time(lambda: evaluate(mech, p42, rows, qs), repeats) / n
+    ops = {
+        "stewart FK cold": fk_cold,
+        "stewart FK warm": fk_warm,
+        "stewart evaluate+J": lambda: evaluate(mech, p42, rows, qs),
+    }
     ur = pincal.load_mechanism("ur10")
     full = pincal.parameters(ur, "full")
     ur_rows = pincal.sample_actuators(ur, n, rng)
     ur_qs = ur.configurations(ur_rows)
-    res["ur10 evaluate+J"] = median_time(lambda: evaluate(ur, full, ur_rows, ur_qs), repeats) / n
-    res["floor"] = floors(repeats, n)  # same process, right after: load-comparable
+    ops["ur10 evaluate+J"] = lambda: evaluate(ur, full, ur_rows, ur_qs)
+    for fn in ops.values():  # warm-up: first calls build caches
+        fn()
+    times, res["floor"] = paired_times(ops, floors(n), repeats, n)
+    res.update(times)
     noise = pincal.NoiseModel(0.01, 0.02)
     true = np.random.default_rng(1).normal(0, 0.5e-3, len(p42))
     actual = p42.apply(mech, true)
@@ -296,8 +326,9 @@ def main() -> None:
           f"(threadpool_limits(1), OPENBLAS_NUM_THREADS=1; libraries: {libs})")  # fmt: skip
     print(f"CPU time (time.process_time), median of {args.repeats} repeats over {args.poses} "
           f"random workspace poses; shared machine: compare the ratios (same run)\n")  # fmt: skip
-    print("per pose; 'floor' = the floor measured in the same process right after; the")
-    print("normalised 0.1/now ratio divides each version's time by its own floor (load drift)\n")
+    print("per pose; 'floor' = the floor timed in the same process, in turns with the operation")
+    print("(repeat by repeat); the normalised 0.1/now ratio divides each version's time by its")
+    print("own floor (load drift between the two processes)\n")
     head = f"{'operation':22s} {'now':>11s} {'floor':>10s} {'now/floor':>9s}"
     print(head + f" {'0.1':>11s} {'floor':>10s} {'0.1/now':>8s} {'normalised':>10s}")
     for key in ("stewart FK cold", "stewart FK warm", "stewart evaluate+J", "ur10 evaluate+J"):
