@@ -104,7 +104,6 @@ class JointGroup:
         kind: "R" revolute, "RU" unbounded revolute, "P" prismatic, "S" spherical,
             "F" free flyer.
         ids, parents, iq, iv: (G,) joint ids, parent ids, first q and v indices.
-        axis: (G, 3) unit axes (R, RU, P; zeros otherwise).
         R0, p0: (G, 3, 3), (G, 3) joint placements in their parents.
         C: (G, 3, 11) the constant right factors ``[R0, R0·K, R0·K², R0·axis, p0]``
             (K = skew(axis)) multiplied by the parent rotation in one product: the
@@ -117,7 +116,6 @@ class JointGroup:
     parents: np.ndarray
     iq: np.ndarray
     iv: np.ndarray
-    axis: np.ndarray
     R0: np.ndarray
     p0: np.ndarray
     C: np.ndarray
@@ -153,7 +151,6 @@ def group_joints(
                 par,
                 np.array([iq[i] for i in k]),
                 np.array([iv[i] for i in k]),
-                a,
                 R,
                 p,
                 C,
