@@ -3,7 +3,6 @@ matplotlib, errors and dead workers handled, and no worker outlives its caller."
 
 from __future__ import annotations
 
-import json
 import logging
 import multiprocessing
 import os
@@ -13,14 +12,12 @@ import textwrap
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-import pincal
 from pincal.errors import ReportError
-from pincal.identification import identify
 from pincal.report import PlotWorkers, calibration_report, plot_convergence
 from pincal.report._render import PlotJobs
+from tests.report._identified import identified_directory
 
 forked = pytest.mark.skipif(
     "fork" not in multiprocessing.get_all_start_methods(), reason="workers are forked"
@@ -29,24 +26,7 @@ forked = pytest.mark.skipif(
 
 @pytest.fixture(scope="module")
 def calibration(tmp_path_factory, stewart, stewart42, stewart_poses):
-    rng = np.random.default_rng(8)
-    truth = rng.normal(0.0, 3e-4, len(stewart42))
-    noise = pincal.NoiseModel(0.01, 0.02)
-    meas = pincal.simulate_measurements(stewart42.apply(stewart, truth), stewart_poses, noise, rng)
-    res = identify(stewart, stewart42, meas)
-    out = tmp_path_factory.mktemp("cal")
-    notes = {
-        "truth": dict(zip(stewart42.names, truth, strict=True)),
-        "validation_before": {"rms_position_mm": 1.2, "max_position_mm": 2.0},
-        "validation_after": {"rms_position_mm": 0.01, "max_position_mm": 0.02},
-        "validation_errors": {
-            "before": {"position": list(rng.uniform(1e-3, 2e-3, 12))},
-            "after": {"position": list(rng.uniform(1e-6, 2e-5, 12))},
-        },
-        "index_history": {"O1": [1.0, 2.0, 2.5]},
-    }
-    (out / "identification.json").write_text(json.dumps(res.to_dict(notes)))
-    return out
+    return identified_directory(tmp_path_factory, stewart, stewart42, stewart_poses, seed=8)
 
 
 def _pid_plot(*, path: Path) -> Path:

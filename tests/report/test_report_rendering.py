@@ -3,42 +3,23 @@ give byte-identical files, and log axes are labelled without mathtext."""
 
 from __future__ import annotations
 
-import json
 import multiprocessing
 
-import numpy as np
 import pytest
 from matplotlib.figure import Figure
 from matplotlib.ticker import LogFormatterSciNotation
 
 import pincal
 from pincal.errors import ReportError
-from pincal.identification import identify
 from pincal.report import calibration_report
 from pincal.report._axes import log_scale
 from pincal.report._render import PlotJobs, worker_count
+from tests.report._identified import identified_directory
 
 
 @pytest.fixture(scope="module")
 def calibration(tmp_path_factory, stewart, stewart42, stewart_poses):
-    rng = np.random.default_rng(5)
-    truth = rng.normal(0.0, 3e-4, len(stewart42))
-    noise = pincal.NoiseModel(0.01, 0.02)
-    meas = pincal.simulate_measurements(stewart42.apply(stewart, truth), stewart_poses, noise, rng)
-    res = identify(stewart, stewart42, meas)
-    out = tmp_path_factory.mktemp("cal")
-    notes = {
-        "truth": dict(zip(stewart42.names, truth, strict=True)),
-        "validation_before": {"rms_position_mm": 1.2, "max_position_mm": 2.0},
-        "validation_after": {"rms_position_mm": 0.01, "max_position_mm": 0.02},
-        "validation_errors": {
-            "before": {"position": list(rng.uniform(1e-3, 2e-3, 12))},
-            "after": {"position": list(rng.uniform(1e-6, 2e-5, 12))},
-        },
-        "index_history": {"O1": [1.0, 2.0, 2.5]},
-    }
-    (out / "identification.json").write_text(json.dumps(res.to_dict(notes)))
-    return out
+    return identified_directory(tmp_path_factory, stewart, stewart42, stewart_poses, seed=5)
 
 
 @pytest.mark.skipif(
