@@ -66,6 +66,10 @@ class Mechanism(BatchTracking):
     * ``sidecar``: the typed :class:`Sidecar`; ``notes``: remarks for ``pincal info``;
     * ``mobility``, ``closure_rank`` and ``idle_joints`` (passive joints the actuators
       do not hold and that do not move the measured frame).
+
+    ``tree`` passes the already parsed :class:`UrdfTree` of ``urdf_xml`` (as
+    :meth:`UrdfTree.displaced` returns it), so that the text is not parsed and checked
+    again; it must be the tree of exactly that text.
     """
 
     def __init__(
@@ -78,9 +82,10 @@ class Mechanism(BatchTracking):
         measured_frame: str | None = None,
         q_guess: np.ndarray | None = None,
         options: SolverOptions | None = None,
+        tree: UrdfTree | None = None,
     ):
         self.urdf_xml = urdf_xml
-        self.tree = UrdfTree(urdf_xml)
+        self.tree = UrdfTree(urdf_xml) if tree is None else tree
         self.sidecar: Sidecar = Sidecar.from_dict(sidecar)
         self.name = name or self.tree.name
         self.source = source

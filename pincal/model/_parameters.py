@@ -213,14 +213,16 @@ class ParameterSet:
             if j not in mech.tree.joints:
                 raise UnknownNameError("joint", j, list(mech.tree.joints))
             origins[j] = mech.tree.joints[j].origin * pin.exp6(v)
+        urdf_xml, tree = mech.tree.displaced(origins)
         return Mechanism(
-            mech.tree.with_origins(origins),
+            urdf_xml,
             mech.sidecar,
             name=mech.name,
             source=mech.source,
             measured_frame=mech.measured_frame,
             q_guess=mech.q_home,
             options=mech.options,
+            tree=tree,
         )
 
     def format_value(self, k: int, value: float) -> str:

@@ -7,6 +7,8 @@ from the text. This keeps the exported URDF exactly the identified model.
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import os
 import re
 import xml.etree.ElementTree as ET
@@ -228,8 +230,21 @@ class UrdfTree:
 
     def with_origins(self, origins: dict[str, pin.SE3]) -> str:
         """Return the URDF text with the given joint origins replaced (full precision)."""
-        root = ET.fromstring(ET.tostring(self.root))
+        return self.displaced(origins)[0]
+
+    def displaced(self, origins: dict[str, pin.SE3]) -> tuple[str, UrdfTree]:
+        """The URDF text with the given joint origins replaced, and its parsed tree.
+
+        The tree is this one with the new origins, equal to parsing the text (the
+        numbers are written in full precision and read back from the same values),
+        without parsing and checking the text again.
+
+        Raises:
+            UnknownNameError: an origin names a joint the URDF does not have.
+        """
+        root = copy.deepcopy(self.root)
         by_name = {str(e.get("name")): e for e in root.findall("joint")}
+        joints = dict(self.joints)
         for name, M in origins.items():
             if name not in by_name:
                 raise UnknownNameError("joint", name, list(by_name))
@@ -237,8 +252,15 @@ class UrdfTree:
             origin = e.find("origin")
             if origin is None:
                 origin = ET.SubElement(e, "origin")
-            rpy = pin.rpy.matrixToRpy(M.rotation)
-            origin.set("xyz", " ".join(repr(float(v)) for v in M.translation))
-            origin.set("rpy", " ".join(repr(float(v)) for v in rpy))
+            xyz = [float(v) for v in M.translation]
+            rpy = [float(v) for v in pin.rpy.matrixToRpy(M.rotation)]
+            origin.set("xyz", " ".join(repr(v) for v in xyz))
+            origin.set("rpy", " ".join(repr(v) for v in rpy))
+            joints[name] = dataclasses.replace(
+                self.joints[name], origin=se3_from_xyz_rpy(np.array(xyz), np.array(rpy))
+            )
         ET.indent(root)
-        return ET.tostring(root, encoding="unicode")
+        tree = copy.copy(self)
+        tree.root, tree.joints, tree._elements = root, joints, by_name
+        tree._ancestors = dict(self._ancestors)
+        return ET.tostring(root, encoding="unicode"), tree
