@@ -27,10 +27,9 @@ from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._batch_points import (
     _adjoint,
     _measured_free_jacobian,
-    _origins,
     point_path,
 )
-from pincal.sensitivity._batch_serial import _columns, _serial_path
+from pincal.sensitivity._batch_serial import _anchors, _columns, _serial_path
 from pincal.sensitivity._jacobian import _Plan, _plan, pose_sensitivity
 
 __all__ = ["BatchSensitivity", "batch_applies", "sensitivities_batch"]
@@ -105,6 +104,19 @@ def _param_twists(
             P[:, :3, cols] += mm(Rx, eff[:3]) + cross_cols(px[:, :, None], ang)
         out[frame] = P
     return placements, out
+
+
+def _origins(
+    mech: Mechanism, bk: BatchKinematics, plan: _Plan
+) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Parameterised joints and their origins' world placements.
+
+    Returns:
+        The J joint names, rotations (N, J, 3, 3) and positions (N, J, 3) [m].
+    """
+    names, parents, R0, p0 = _anchors(mech, plan)
+    Rp = bk.rotations[:, parents]
+    return names, Rp @ R0, bk.translations[:, parents] + mv(Rp, p0)
 
 
 def _cross_rows(d: np.ndarray, R: np.ndarray) -> np.ndarray:

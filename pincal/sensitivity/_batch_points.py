@@ -14,49 +14,21 @@ joint, ``p_b = p_a`` in world axes. There the whole Jacobian is a few dense prod
 * the passive joints re-close the loops: ``J −= Yᵀ ∂c/∂p`` with the adjoint
   ``Y = Jf⁻ᵀ Jm_uᵀ`` (6 right-hand sides, from the solve's factorisation).
 
-The helpers shared with :mod:`pincal.sensitivity._batch_jacobian` (joint origins, the
-measured frame's free-dof Jacobian, the adjoint) live here.
+The helpers shared with :mod:`pincal.sensitivity._batch_jacobian` (the measured
+frame's free-dof Jacobian, the adjoint) live here.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from pincal.model._batch import BatchKinematics, cross_cols, mv
+from pincal.model._batch import BatchKinematics, cross_cols
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._batch_serial import _anchors
 from pincal.sensitivity._jacobian import _Plan
 
 __all__ = ["point_path"]
-
-
-def _origins(
-    mech: Mechanism, bk: BatchKinematics, plan: _Plan
-) -> tuple[list[str], np.ndarray, np.ndarray]:
-    """Parameterised joints (fixed ones first) and their origins' world placements.
-
-    Returns:
-        The J joint names, rotations (N, J, 3, 3) and positions (N, J, 3) [m].
-    """
-    bm, model = mech.batch_model, mech.model
-    fixed = [j for j, o in plan.origins.items() if o[0] >= 0]
-    moving = [j for j, o in plan.origins.items() if o[0] < 0]
-    N = bk.q.shape[0]
-    Rs, ps = [np.empty((N, 0, 3, 3))], [np.empty((N, 0, 3))]
-    if fixed:
-        R, p = bm.frame_placements(bk, np.array([plan.origins[j][0] for j in fixed]))
-        Rs.append(R)
-        ps.append(p)
-    if moving:
-        jids = [plan.origins[j][1] for j in moving]
-        parents = np.array([plan.origins[j][2] for j in moving])
-        MR = np.array([model.jointPlacements[j].rotation for j in jids])
-        Mp = np.array([model.jointPlacements[j].translation for j in jids])
-        Rp = bk.rotations[:, parents]
-        Rs.append(Rp @ MR)
-        ps.append(bk.translations[:, parents] + mv(Rp, Mp))
-    return fixed + moving, np.concatenate(Rs, axis=1), np.concatenate(ps, axis=1)
 
 
 def _measured_free_jacobian(
