@@ -291,13 +291,8 @@ def evaluate_candidates(
         if solved[i]:
             q, p, R = Q[i], p_all[i], R_all[i]
         else:
-            try:
-                try:
-                    q = mech.configuration(row, guess, pose_index=i)
-                except SingularConfigurationError:
-                    raise
-                except ConvergenceError:
-                    q = mech.configuration(row, mech.q_home, pose_index=i)
+            try:  # from the previous feasible row; configuration() also tries from home
+                q = mech.configuration(row, guess, pose_index=i)
             except SingularConfigurationError:
                 counts["singular"] += 1
                 continue
