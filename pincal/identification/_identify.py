@@ -76,9 +76,10 @@ def _fit_set(
     params = problem.params
     candidates = problem.fit_indices
     breaking = np.zeros(len(params), dtype=bool)
-    # square regular passive closures (the batched Jacobian's domain) break nothing: the
-    # start evaluation already solved every pose there, so no second pass is needed
-    if problem.mech.closures and not batch_applies(model.mechanism(problem.x0)):
+    # closures without redundant rows break nothing where the batched Jacobian applies
+    # (the start evaluation solved every pose there): no second pass is needed
+    mech = model.mechanism(problem.x0)
+    if mech.closures and (mech.n_closure_rows > mech.closure_rank or not batch_applies(mech)):
         breaking = closure_breaking(problem.mech, params, problem.measurements.q_act, problem.x0)
     ident = analyse_jacobian(J0, params.names, breaks_closure=breaking)
     if np.array_equal(candidates, np.arange(len(params))):

@@ -11,9 +11,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-import pinocchio as pin
 
 from pincal.model._batch import BatchKinematics, BatchModel, cross_cols, mm, mv
+from pincal.model._batch_ops import jlog3_batch, log3_batch
 from pincal.model._closures import Closure
 
 __all__ = ["PointClosures", "closure_jacobian_batch", "closure_residual_batch"]
@@ -28,7 +28,7 @@ def closure_residual_batch(
     Rat = np.swapaxes(Ra, 1, 2)
     full = [mv(Rat, pb - pa)]
     if c.components[-1] >= 3:
-        full.append(np.array([pin.log3(M) for M in mm(Rat, Rb)]))
+        full.append(log3_batch(mm(Rat, Rb)))
     return np.concatenate(full, axis=1)[:, list(c.components)]
 
 
@@ -61,7 +61,7 @@ def closure_jacobian_batch(
     blocks = [cross_cols(t[:, :, None], Ta[:, 3:]) + mm(Rab, Tb[:, :3]) - Ta[:, :3]]
     if c.components[-1] >= 3:
         dw = Tb[:, 3:] - mm(np.swapaxes(Rab, 1, 2), Ta[:, 3:])
-        blocks.append(np.array([pin.Jlog3(M) for M in Rab]) @ dw)
+        blocks.append(jlog3_batch(log3_batch(Rab)) @ dw)
     return np.concatenate(blocks, axis=1)[:, list(c.components)]
 
 

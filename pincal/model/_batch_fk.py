@@ -31,10 +31,14 @@ from pincal.model._batch_closures import (
 )
 from pincal.model._block_solve import BlockSolver, DenseFactor, PassiveFactor
 from pincal.model._branch import BranchTracking
+from pincal.model._range_factor import RangeFactor
 
 __all__ = ["BatchTracking", "closure_jacobian_batch", "closure_residual_batch"]
 
 _MAX_BATCH_ITERATIONS = 30
+#: residual [m, rad] below which a converged row is not polished (round-off of
+#: metre-sized machines: a further Newton step cannot halve it)
+_ROUND_OFF = 1e-15
 #: poses per chunk of the batched solves (temporaries of a chunk stay in the L2 cache)
 CHUNK = 256
 
@@ -82,8 +86,21 @@ class BatchTracking(BranchTracking):
         return out
 
     @property
-    def _batchable(self) -> bool:
-        return bool(self.closures) and self.home_branch != 0.0 and self.batch_model.supported
+    def batch_solvable(self) -> bool:
+        """Whether the batched loop closing applies (else poses are closed one by one).
+
+        It needs closures, the batched kinematics of every joint type, a passive
+        closure Jacobian of full rank min(rows, passive dofs) at home, and a branch
+        block regular there (``idle_branch`` ≠ 0): square systems, redundant closure
+        rows and idle passive motion are all solved in batch.
+        """
+        rows, k = self.n_closure_rows, self._free_v.size
+        return (
+            bool(self.closures)
+            and self.idle_branch != 0.0
+            and self.batch_model.supported
+            and self._rank_u == min(rows, k)
+        )
 
     def _point_closures(self, cols: np.ndarray) -> PointClosures:
         """The point closures on Jacobian columns ``cols`` (built once for the free dofs)."""
@@ -117,7 +134,13 @@ class BatchTracking(BranchTracking):
         return self.__dict__["_passive_solver_cache"]
 
     def passive_factor(self, Jf: np.ndarray) -> PassiveFactor:
-        """Factor passive closure Jacobians ``Jf`` (N, k, k): by blocks where they reduce."""
+        """Factor passive closure Jacobians ``Jf`` (N, rows, k).
+
+        Square ones by blocks where they reduce (else dense LU); non-square ones by
+        QR (minimum-norm least squares, :class:`RangeFactor`).
+        """
+        if Jf.shape[1] != Jf.shape[2]:
+            return RangeFactor.of(Jf, self._branch_block)
         solver = self.passive_solver
         return DenseFactor.of(Jf) if solver is None else solver.factor(Jf)
 
@@ -188,23 +211,24 @@ class BatchTracking(BranchTracking):
         checks then factor all the converged Jacobians at once.
         """
         N, nj, k = A.shape[0], self.model.njoints, self._free_v.size
+        m = self.n_closure_rows
         Q = self._actuators_batch(Q0, A)
         R = np.empty((N, nj, 3, 3))
         p = np.empty((N, nj, 3))
         J = np.empty((N, 6, self.model.nv))
-        Jf = np.empty((N, k, k))
+        Jf = np.empty((N, m, k))
         done = np.zeros(N, dtype=bool)
         for s in range(0, N, CHUNK):
             rows = slice(s, s + CHUNK)
             done[rows] = self._newton_chunk(Q[rows], R[rows], p[rows], J[rows], Jf[rows])
-        Jf[~done] = np.eye(k)  # rows to be redone pose by pose: any regular matrix
+        Jf[~done] = np.eye(m, k)  # rows to be redone pose by pose: any full-rank matrix
         factor = self.passive_factor(Jf)
         with np.errstate(all="ignore"):
             # ‖Jf‖_F · (bound of ‖Jf⁻¹‖₂) ≥ cond₂: rows that might exceed the limit get
             # the exact check pose by pose
             cond = np.sqrt(np.sum(Jf**2, axis=(1, 2))) * factor.inverse_norm_bound()
         risky = ~np.isfinite(cond) | (cond > self.options.max_condition) | factor.singular
-        ok = done & (factor.sign() == self.home_branch) & ~risky
+        ok = done & (factor.sign() == self.idle_branch) & ~risky
         return Q, ok, BatchKinematics(Q, R, p, J, Jf, factor)
 
     def _newton_chunk(
@@ -218,52 +242,65 @@ class BatchTracking(BranchTracking):
         """Newton iterations of one chunk, in place: converged mask (N,).
 
         ``Q`` (N, nq) holds the start configurations (actuators set) and receives the
-        iterates; the joint placements, joint Jacobian and passive closure Jacobian of
+        solutions; the joint placements, joint Jacobian and passive closure Jacobian of
         each converged configuration are written into ``out_R``, ``out_p``, ``out_J``
-        and ``Jf_done``.
+        and ``Jf_done``. A converged row is polished as in the pose-by-pose solve: up
+        to ``options.polish_steps`` more full steps, each kept only when it halves the
+        largest residual (rows already at round-off, ≤ :data:`_ROUND_OFF`, stop).
         """
         bm, opt, free = self.batch_model, self.options, self._free_v
         N = Q.shape[0]
+        active = np.ones(N, dtype=bool)
         done = np.zeros(N, dtype=bool)
-        failed = np.zeros(N, dtype=bool)
+        best = np.full(N, np.inf)  # largest residual of the recorded solution
+        polished = np.zeros(N, dtype=int)
         prev = np.full(N, np.inf)
-        for _ in range(_MAX_BATCH_ITERATIONS + 1):
-            ia = np.nonzero(~done & ~failed)[0]
+        Q_done = np.empty_like(Q)
+        for _ in range(_MAX_BATCH_ITERATIONS + opt.polish_steps + 1):
+            ia = np.nonzero(active)[0]
             if ia.size == 0:
                 break
             bk = bm.kinematics(Q[ia])
             r, Jf = self.closure_terms_batch(bk, columns=free)
             rmax = np.max(np.abs(r), axis=1)
             norm = np.linalg.norm(r, axis=1)
-            conv = rmax <= opt.tol
-            ic = ia[conv]
-            done[ic] = True
+            had = done[ia]  # polishing: a solution is recorded
+            better = (rmax <= opt.tol) & (rmax < 0.5 * best[ia])
+            ic = ia[better]
+            done[ic], best[ic], Q_done[ic] = True, rmax[better], Q[ic]
             out_R[ic], out_p[ic], out_J[ic] = (
-                bk.rotations[conv],
-                bk.translations[conv],
-                bk.jacobian[conv],
+                bk.rotations[better],
+                bk.translations[better],
+                bk.jacobian[better],
             )
-            Jf_done[ic] = Jf[conv]
-            go = ~conv & (norm < prev[ia])
-            failed[ia[~conv & ~go]] = True
+            Jf_done[ic] = Jf[better]
+            back = ia[had & ~better]  # a polishing step that did not halve the residual
+            Q[back] = Q_done[back]
+            polish = better & (polished[ia] < opt.polish_steps) & (rmax > _ROUND_OFF)
+            descend = ~had & ~better & (norm < prev[ia])
+            go = polish | descend
+            active[ia[~go]] = False
             ig = ia[go]
             if ig.size == 0:
                 continue
+            polished[ia[polish]] += 1
             prev[ig] = norm[go]
             factor = self.passive_factor(Jf[go])
             try:
                 step = -factor.solve(r[go][:, :, None])[..., 0]
             except np.linalg.LinAlgError:
-                failed[ig] = True
+                active[ig] = False
+                Q[ig[done[ig]]] = Q_done[ig[done[ig]]]
                 continue
             step[factor.singular] = np.nan
             sn = np.linalg.norm(step, axis=1)
             step *= np.minimum(1.0, opt.max_step / np.maximum(sn, 1e-300))[:, None]
             bad = ~np.all(np.isfinite(step), axis=1)
-            failed[ig[bad]] = True
+            active[ig[bad]] = False
             DV = np.zeros((ig.size, self.model.nv))
             DV[:, free] = step
             Q[ig[~bad]] = bm.integrate(Q[ig[~bad]], DV[~bad])
+        Q[done] = Q_done[done]  # rows stopped after a polishing step: their solution
         return done
 
     def try_configurations_batch(
@@ -282,7 +319,7 @@ class BatchTracking(BranchTracking):
         if not self.closures and self.batch_model.supported:
             Q = self._actuators_batch(G, rows)
             return Q, np.ones(N, dtype=bool), self.batch_model.kinematics(Q)
-        if not self._batchable:
+        if not self.batch_solvable:
             return np.array(G), np.zeros(N, dtype=bool), None
         return self._solve_batch(rows, G)
 
@@ -312,7 +349,7 @@ class BatchTracking(BranchTracking):
         if not self.closures:
             out = self._actuators_batch(np.tile(self.q_home, (N, 1)) if G is None else G, rows)
             return out, (self.batch_model.kinematics(out) if self.batch_model.supported else None)
-        if not self._batchable:
+        if not self.batch_solvable:
             out = np.empty((N, self.model.nq))
             for i, row in enumerate(rows):
                 guess = G[i] if G is not None else (out[i - 1] if i else self.q_home)

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.model._batch_ops import cross3
+from pincal.model._range_factor import RangeFactor
 
 __all__ = ["BlockFactor", "BlockSolver", "DenseFactor", "PassiveFactor"]
 
@@ -368,5 +369,5 @@ class DenseFactor:
         return np.sqrt(np.sum(inv * inv, axis=(1, 2)))
 
 
-#: the factor of passive closure Jacobians, block-structured or dense
-PassiveFactor = BlockFactor | DenseFactor
+#: the factor of passive closure Jacobians: block-structured, dense, or non-square
+PassiveFactor = BlockFactor | DenseFactor | RangeFactor

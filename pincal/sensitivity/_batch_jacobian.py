@@ -24,13 +24,16 @@ from pincal.model._batch_fk import CHUNK
 from pincal.model._batch_ops import cross3
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
+from pincal.model._range_factor import RangeFactor
 from pincal.sensitivity._batch_points import (
     _adjoint,
+    _factor,
     _measured_free_jacobian,
     point_path,
 )
 from pincal.sensitivity._batch_serial import _anchors, _columns, _serial_path
 from pincal.sensitivity._jacobian import _Plan, _plan, pose_sensitivity
+from pincal.sensitivity._rank import RANK_RTOL
 
 __all__ = ["BatchSensitivity", "batch_applies", "sensitivities_batch"]
 
@@ -56,8 +59,8 @@ class BatchSensitivity:
 
 
 def batch_applies(mech: Mechanism) -> bool:
-    """Whether the batched Jacobian applies: serial, or square regular passive closures."""
-    return mech.batch_model.supported and (not mech.closures or mech.home_branch != 0.0)
+    """Whether the batched Jacobian applies: serial chains, or batch-solvable closures."""
+    return mech.batch_model.supported and (not mech.closures or mech.batch_solvable)
 
 
 def _param_twists(
@@ -218,11 +221,7 @@ def _world_path(
         Cm[:, :, :3, 3:] = _cross_rows(po[:, mj] - pm[:, None], R)
         Cm[:, :, 3:, 3:] = np.swapaxes(Rm, 1, 2)[:, None] @ R
     if mech.closures:
-        Jf = bk.closure_jacobian
-        if Jf is None:
-            Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
-        Jm_u = _measured_free_jacobian(mech, bk, Rm, pm)
-        Y = _adjoint(bk, Jf, Jm_u)
+        Y = _adjoint(mech, bk, _measured_free_jacobian(mech, bk, Rm, pm))
         C = np.zeros((N, len(names), 6, 6))
         _closure_maps(mech, plan, names, Ro, po, place, Y, C)
     twists = params.joint_twists(values)
@@ -282,13 +281,15 @@ def sensitivities_batch(
     if not mech.closures:  # a serial chain: one call, blocked inside for the cache
         Rm, pm, J = _serial_path(mech, params, bk, values, plan, None)
         return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
-    if any(c.components[-1] >= 3 for c in mech.closures):
+    redundant = mech.n_closure_rows > mech.closure_rank  # rows some parameters can break
+    if redundant or any(c.components[-1] >= 3 for c in mech.closures):
         parts = [
             _local_path(mech, params, slice_kinematics(bk, slice(k, k + CHUNK)), values, plan)
             for k in range(0, N, CHUNK)
         ]
         Rm, pm, J = (np.concatenate([p[i] for p in parts]) for i in range(3))
-        return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
+        breaks = np.any([p[3] for p in parts], axis=0)
+        return BatchSensitivity(bk.q.copy(), pm, Rm, J, breaks)
     Rm, pm, J = np.empty((N, 3, 3)), np.empty((N, 3)), np.zeros((N, 6, n))
     for start in range(0, N, CHUNK):
         rows = slice(start, start + CHUNK)
@@ -300,11 +301,13 @@ def sensitivities_batch(
 
 def _local_path(
     mech: Mechanism, params: ParameterSet, bk: BatchKinematics, values: np.ndarray, plan: _Plan
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Measured rotation, position and Jacobian (N, 6, n) from local parameter twists.
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Measured rotation, position, Jacobian (N, 6, n) and closure breaking (n,).
 
-    The general path (closures with orientation components): closure Jacobians from
-    the frames' local twists, passive correction by one adjoint solve.
+    The general path (closures with orientation components, redundant closure rows):
+    closure Jacobians from the frames' local twists, passive correction by one adjoint
+    solve. A parameter breaks closure when its closure column has a part outside the
+    range of the passive closure Jacobian (the rule of :func:`pose_sensitivity`).
     """
     placements, P = _param_twists(mech, params, bk, values, plan)
     Rm, pm = placements[mech.measured_frame]
@@ -319,11 +322,13 @@ def _local_path(
         ],
         axis=1,
     )
-    Jf = bk.closure_jacobian
-    if Jf is None:
-        Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
-    Jm_u = _measured_free_jacobian(mech, bk, Rm, pm)
-    # Jm_u · dq_u/dp = −(Jf⁻ᵀ Jm_uᵀ)ᵀ Jc_p: one solve with 6 right-hand sides
-    Y = _adjoint(bk, Jf, Jm_u)
-    return Rm, pm, J - np.swapaxes(Y, 1, 2) @ Jc_p
-
+    factor = _factor(mech, bk)
+    # Jm_u · dq_u/dp = −((Jfᵀ)⁺ Jm_uᵀ)ᵀ Jc_p: one solve with 6 right-hand sides
+    Y = factor.solve_transposed(np.swapaxes(_measured_free_jacobian(mech, bk, Rm, pm), 1, 2))
+    breaks = np.zeros(len(params), dtype=bool)
+    if isinstance(factor, RangeFactor):
+        out = factor.out_of_range(Jc_p)  # (N, n)
+        norms = np.sqrt(np.sum(Jc_p * Jc_p, axis=1))
+        floor = 1e-12 * np.max(norms, axis=1, keepdims=True, initial=0.0)
+        breaks = np.any((out > RANK_RTOL * norms) & (out > floor), axis=0)
+    return Rm, pm, J - np.swapaxes(Y, 1, 2) @ Jc_p, breaks

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from pincal.model._batch import BatchKinematics, cross_cols
+from pincal.model._block_solve import PassiveFactor
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._batch_serial import _anchors
@@ -42,11 +43,19 @@ def _measured_free_jacobian(
     return np.concatenate([v, np.swapaxes(Rm, 1, 2) @ Jw], axis=1) * sup
 
 
-def _adjoint(bk: BatchKinematics, Jf: np.ndarray, Jm_u: np.ndarray) -> np.ndarray:
-    """``Y = Jf⁻ᵀ Jm_uᵀ`` (N, k, 6): with the solve's factorisation when it kept one."""
+def _factor(mech: Mechanism, bk: BatchKinematics) -> PassiveFactor:
+    """The passive closure factorisation of ``bk``: the solve's, or computed here."""
     if bk.closure_factor is not None:
-        return bk.closure_factor.solve_transposed(np.swapaxes(Jm_u, 1, 2))
-    return np.linalg.solve(np.swapaxes(Jf, 1, 2), np.swapaxes(Jm_u, 1, 2))
+        return bk.closure_factor
+    Jf = bk.closure_jacobian
+    if Jf is None:
+        Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
+    return mech.passive_factor(Jf)
+
+
+def _adjoint(mech: Mechanism, bk: BatchKinematics, Jm_u: np.ndarray) -> np.ndarray:
+    """``Y = (Jfᵀ)⁺ Jm_uᵀ`` (N, rows, 6) (``Jf⁻ᵀ Jm_uᵀ`` where Jf is square)."""
+    return _factor(mech, bk).solve_transposed(np.swapaxes(Jm_u, 1, 2))
 
 
 def _cross_t(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -90,9 +99,7 @@ def _world_twists(
     return V, W
 
 
-def _column_masks(
-    mech: Mechanism, params: ParameterSet, plan: _Plan, frame: str
-) -> np.ndarray:
+def _column_masks(mech: Mechanism, params: ParameterSet, plan: _Plan, frame: str) -> np.ndarray:
     """(n,) 1.0 on the columns of the parameterised joints below ``frame``."""
     below = set(plan.moves[frame])
     return np.array([float(p.joint in below) for p in params.parameters])
@@ -153,9 +160,6 @@ def point_path(
     rate = V[cols] * (sb - sa) + _cross_t(W[cols], pb * sb - pa * sa)
     dc = np.zeros((N, 3 * len(mech.closures), n))
     dc.reshape(N, -1)[:, flat] = np.transpose(rate, (3, 2, 0, 1))
-    Jf = bk.closure_jacobian
-    if Jf is None:
-        Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)[1]
-    Y = _adjoint(bk, Jf, _measured_free_jacobian(mech, bk, Rm, pm))
+    Y = _adjoint(mech, bk, _measured_free_jacobian(mech, bk, Rm, pm))
     J -= np.swapaxes(Y, 1, 2) @ dc
     return Rm, pm, J

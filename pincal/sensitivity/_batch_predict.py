@@ -70,13 +70,11 @@ def predict_configurations(
             ],
             axis=1,
         )[..., 0]
-    if bk.closure_factor is not None:
-        step = -bk.closure_factor.solve(Jc[..., None])[..., 0]
-    else:
-        try:
-            step = -np.linalg.solve(Jf, Jc[..., None])[..., 0]
-        except np.linalg.LinAlgError:
-            return None
+    factor = bk.closure_factor if bk.closure_factor is not None else mech.passive_factor(Jf)
+    try:
+        step = -factor.solve(Jc[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        return None
     # rows keep bk.q when the step is not finite, too long, or below the solver's
     # tolerance (a change the solve would not see: the old solution is reused exactly)
     size = np.linalg.norm(step, axis=1)
@@ -114,4 +112,3 @@ def _point_closure_rates(
     p = mech.batch_model.frame_positions(bk, np.array(fids))
     rate = (Sb - Sa) @ U + cross3(Sb @ W, p[:, 1::2]) - cross3(Sa @ W, p[:, 0::2])  # (N, C, 3)
     return rate.reshape(rate.shape[0], -1)
-

@@ -53,13 +53,14 @@ def test_batch_jacobian_matches_finite_differences():
             np.testing.assert_allclose(J[i, :3, k], (pp - pm) / (2 * h), atol=1e-7)
 
 
-def test_over_constrained_falls_back_with_closure_breaking():
+def test_over_constrained_batched_with_closure_breaking():
     from pincal.model import Mechanism
     from tests.sensitivity.five_bar import FIVE_BAR_SIDECAR, FIVE_BAR_URDF
 
     mech = Mechanism(FIVE_BAR_URDF, FIVE_BAR_SIDECAR)
     params = pincal.parameters(mech, "full")
-    assert not batch_applies(mech)
+    assert mech.n_closure_rows > mech.closure_rank  # a 6d closure of a planar loop
+    assert batch_applies(mech)
     rows = mech.actuators_of(mech.q_home) + np.array([[0.0, 0.0], [0.05, -0.03]])
     qs, bk = mech.configurations_batch(rows)
     batch = sensitivities_batch(mech, params, qs, bk)
