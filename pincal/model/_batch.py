@@ -281,5 +281,9 @@ class BatchModel:
                 V = np.eye(3) + b[:, None, None] * K + c[:, None, None] * (K @ K)
                 R = quat_to_matrix(Q[:, iq + 3 : iq + 7])
                 out[:, iq : iq + 3] = Q[:, iq : iq + 3] + (R @ (V @ v[:, :, None]))[..., 0]
-                out[:, iq + 3 : iq + 7] = _quat_mul_exp(Q[:, iq + 3 : iq + 7], w)
+                quat = _quat_mul_exp(Q[:, iq + 3 : iq + 7], w)
+                # Pinocchio's SE(3) integrate keeps the quaternion in q's hemisphere
+                # (its spherical joint does not: q ⊗ exp(w) as it comes)
+                flip = np.sum(quat * Q[:, iq + 3 : iq + 7], axis=1) < 0.0
+                out[:, iq + 3 : iq + 7] = np.where(flip[:, None], -quat, quat)
         return out

@@ -3,17 +3,21 @@
 Random trees mixing ``JointModelUniversal`` (unit axes, perpendicular or not) and
 ``JointModelPlanar`` with revolute, unbounded revolute, prismatic, spherical and
 free-flyer joints: placements, the WORLD joint Jacobian, frame Jacobians and
-``integrate`` against Pinocchio on 50 random configurations; then the sidecar's
-universal joint on the spatial RUSR four-bar runs the batched path end to end.
+``integrate`` against Pinocchio on 50 random configurations; then two machines run the
+batched path end to end: the sidecar's universal joint on the spatial RUSR four-bar and
+a planar 3-RPR whose platform is a URDF planar joint.
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import pincal
+from pincal.model import COMPONENTS
 from pincal.model._batch import BatchModel
 from pincal.sensitivity import pose_sensitivity
 from tests.open_world.machines import rusr_universal, write_machine
@@ -153,33 +157,59 @@ def test_universal_joint_with_non_unit_axes_falls_back():
 
 
 # ------------------------------------------------------------------ through the loader
-@pytest.fixture(scope="module")
-def rusr(tmp_path_factory) -> pincal.Mechanism:
-    return pincal.load_mechanism(
-        write_machine(tmp_path_factory.mktemp("m"), "rusr", *rusr_universal())
-    )
+RPR3 = Path(__file__).parent / "machines" / "rpr3"
+
+
+def _planar_rpr3() -> pincal.Mechanism:
+    """The planar 3-RPR of tests/model/machines/rpr3 with its platform on a URDF planar
+    joint (instead of a floating one) and planar pin closures (components x y)."""
+    urdf = (RPR3 / "rpr3.urdf").read_text(encoding="utf-8")
+    planar = urdf.replace('name="ee_float" type="floating"', 'name="ee_float" type="planar"')
+    assert planar != urdf
+    sidecar = {
+        "closed_loop": [["leg1", "pin1"], ["leg2", "pin2"], ["leg3", "pin3"]],
+        "type": ["x y"] * 3,
+        "name_mot": ["leg1", "leg2", "leg3"],
+        "measured_frame": "end_effector",
+        "home": {
+            "ee_float": [0.0, 0.0, float(np.cos(0.3)), float(np.sin(0.3))],
+            **{f"leg{i}": 0.2066 for i in (1, 2, 3)},
+        },
+    }
+    return pincal.Mechanism(planar, sidecar)
+
+
+@pytest.fixture(scope="module", params=["rusr_universal", "planar_rpr3"])
+def machine(request, tmp_path_factory) -> pincal.Mechanism:
+    if request.param == "planar_rpr3":
+        return _planar_rpr3()
+    folder = tmp_path_factory.mktemp("m")
+    return pincal.load_mechanism(write_machine(folder, "rusr", *rusr_universal()))
 
 
 @pytest.fixture(scope="module")
-def rows(rusr) -> np.ndarray:
-    return pincal.sample_actuators(rusr, 20, np.random.default_rng(21))
+def rows(machine) -> np.ndarray:
+    return pincal.sample_actuators(machine, 20, np.random.default_rng(21))
 
 
-def test_rusr_universal_runs_batched(rusr, rows):
-    assert rusr.batch_model.supported
-    qs, bk = rusr.configurations_batch(rows)
+def test_machine_runs_batched(machine, rows):
+    kinds = {machine.model.joints[j].shortname() for j in range(1, machine.model.njoints)}
+    assert kinds & {"JointModelUniversal", "JointModelPlanar"}
+    assert machine.batch_model.supported and machine.home_branch != 0.0
+    qs, bk = machine.configurations_batch(rows)
     assert bk is not None
     for i, row in enumerate(rows):
-        np.testing.assert_allclose(qs[i], rusr.configuration(row), rtol=0, atol=1e-10)
+        np.testing.assert_allclose(qs[i], machine.configuration(row), rtol=0, atol=1e-10)
 
 
-def test_rusr_identification_jacobian_equals_pose_by_pose(rusr, rows):
-    params = pincal.parameters(rusr, "base")
-    J = pincal.sensitivity.identification_jacobian(rusr, params, rows)
-    k = len(rusr.measured_components)
-    assert J.shape == (len(rows) * k, len(params))
-    ref = np.concatenate(
-        [pose_sensitivity(rusr, params, rusr.configuration(row)).jacobian[:k] for row in rows]
-    )
+def test_identification_jacobian_equals_pose_by_pose(machine, rows):
+    """As tests/sensitivity/test_batch_points.py: pose_sensitivity at the batch's
+    configurations, stacked on the measured components."""
+    params = pincal.parameters(machine, "base")
+    J = pincal.sensitivity.identification_jacobian(machine, params, rows)
+    qs, _ = machine.configurations_batch(rows)
+    comp = [COMPONENTS.index(c) for c in machine.measured_components]
+    ref = np.concatenate([pose_sensitivity(machine, params, q).jacobian[comp] for q in qs])
+    assert J.shape == ref.shape == (len(rows) * len(comp), len(params))
     scale = max(1.0, float(np.max(np.abs(ref))))
     np.testing.assert_allclose(J, ref, rtol=0, atol=1e-10 * scale)
