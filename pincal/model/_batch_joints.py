@@ -5,7 +5,7 @@ joints its product ``X = R_parent · [R0, R0·K, R0·K², R0·a, p0]`` (G, N, 3,
 the first axis (universal) or z (planar), and K = skew(a); the functions here finish
 the joints' world placements and WORLD Jacobian columns ``[v_o; ω]`` (the linear part
 is the velocity of the point at the world origin, ``p × ω`` for an axis through p).
-Conventions, checked against Pinocchio 3/4 on random configurations:
+Conventions, found by comparison with Pinocchio 4.1 on random configurations:
 
 * ``JointModelUniversal(a, b)`` (unit axes, not necessarily perpendicular), q = (q1, q2)
   [rad]: ``M(q) = (exp(q1·a)·exp(q2·b), 0)``; the motion subspace's angular columns,
