@@ -6,9 +6,10 @@ product, every joint's motion-subspace columns a batched adjoint. It reproduces
 ``pin.computeJointJacobians`` + ``pin.updateFramePlacements`` (placements ``oMi``,
 ``oMf`` and the WORLD joint Jacobian) and ``pin.integrate`` for the joint types the
 loader produces: revolute (axis-aligned, unaligned, unbounded), prismatic
-(axis-aligned, unaligned), spherical and free-flyer joints. A model with another joint
-type is reported by :attr:`BatchModel.supported` = False and callers fall back to
-Pinocchio pose by pose. Pinocchio stays the reference: the tests compare both to 1e-12.
+(axis-aligned, unaligned), universal (unit axes), planar, spherical and free-flyer
+joints. A model with another joint type (or a universal joint with non-unit axes) is
+reported by :attr:`BatchModel.supported` = False and callers fall back to Pinocchio
+pose by pose. Pinocchio stays the reference: the tests compare both to 1e-12.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from pincal.model._batch_joints import planar_integrate
 from pincal.model._batch_ops import (
     cross_cols,
     exp3_batch,
@@ -61,32 +63,42 @@ def _quat_mul_exp(quat: np.ndarray, w: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _Joint:
-    kind: str  # "R" revolute, "RU" unbounded revolute, "P" prismatic, "S", "F" free flyer
+    kind: str  # "R", "RU" unbounded revolute, "P", "U" universal, "PL" planar, "S", "F"
     parent: int
     iq: int
     iv: int
-    axis: np.ndarray  # (3,) unit axis (R, RU, P)
+    axis: np.ndarray  # (3,) unit axis (R, RU, P), first axis (U), z (PL)
+    axis2: np.ndarray  # (3,) second axis (U)
     K: np.ndarray  # (3, 3) skew(axis)
     R0: np.ndarray  # (3, 3) rotation of the joint placement in its parent
     p0: np.ndarray  # (3,) translation of the joint placement
 
 
-def _joint_kind(jm: pin.JointModel) -> tuple[str, np.ndarray] | None:
+def _joint_kind(jm: pin.JointModel) -> tuple[str, np.ndarray, np.ndarray] | None:
+    """Kind, axis and second axis of a joint, None when not implemented here."""
     name = jm.shortname()
+    none = np.zeros(3)
     for prefix, kind in (("JointModelRUB", "RU"), ("JointModelR", "R"), ("JointModelP", "P")):
         if name.startswith(prefix) and name[len(prefix) :] in _AXES:
-            return kind, np.array(_AXES[name[len(prefix) :]])
+            return kind, np.array(_AXES[name[len(prefix) :]]), none
     unaligned = {
         "JointModelRevoluteUnaligned": "R",
         "JointModelRevoluteUnboundedUnaligned": "RU",
         "JointModelPrismaticUnaligned": "P",
     }
     if name in unaligned:
-        return unaligned[name], np.array(jm.extract().axis, dtype=float)
+        return unaligned[name], np.array(jm.extract().axis, dtype=float), none
+    if name == "JointModelUniversal":
+        a, b = (np.array(x, dtype=float) for x in (jm.extract().axis1, jm.extract().axis2))
+        # Pinocchio does not normalise the axes; its placement is no rotation otherwise
+        unit = abs(np.linalg.norm(a) - 1.0) < 1e-12 and abs(np.linalg.norm(b) - 1.0) < 1e-12
+        return ("U", a, b) if unit else None
+    if name == "JointModelPlanar":
+        return "PL", np.array(_AXES["Z"]), none
     if name == "JointModelSpherical":
-        return "S", np.zeros(3)
+        return "S", none, none
     if name == "JointModelFreeFlyer":
-        return "F", np.zeros(3)
+        return "F", none, none
     return None
 
 
@@ -150,6 +162,7 @@ class BatchModel:
                     jm.idx_q,
                     jm.idx_v,
                     kind[1],
+                    kind[2],
                     _skew(kind[1]),
                     M.rotation.copy(),
                     M.translation.copy(),
@@ -167,13 +180,20 @@ class BatchModel:
                 np.array([jt.axis for jt in joints]).reshape(-1, 3),
                 np.array([jt.R0 for jt in joints]).reshape(-1, 3, 3),
                 np.array([jt.p0 for jt in joints]).reshape(-1, 3),
+                np.array([jt.axis2 for jt in joints]).reshape(-1, 3),
             )
             if ok
             else ()
         )
-        linear = [jt for jt in self._joints if jt.kind in ("R", "P")]
-        self._linear_q = np.array([jt.iq for jt in linear], dtype=int)
-        self._linear_v = np.array([jt.iv for jt in linear], dtype=int)
+        # vector-space joints (q and v coordinates alike): R, P and the two angles of U
+        linear = [
+            (jt.iq + k, jt.iv + k)
+            for jt in self._joints
+            for k in range(2 if jt.kind == "U" else 1)
+            if jt.kind in ("R", "P", "U")
+        ]
+        self._linear_q = np.array([i for i, _ in linear], dtype=int)
+        self._linear_v = np.array([i for _, i in linear], dtype=int)
         self._frames = [
             (int(f.parentJoint), f.placement.rotation.copy(), f.placement.translation.copy())
             for f in model.frames
@@ -240,7 +260,10 @@ class BatchModel:
         out[:, self._linear_q] += DV[:, self._linear_v]
         for jt in self._joints:
             iq, iv = jt.iq, jt.iv
-            if jt.kind in ("R", "P"):
+            if jt.kind in ("R", "P", "U"):
+                continue
+            if jt.kind == "PL":
+                out[:, iq : iq + 4] = planar_integrate(Q[:, iq : iq + 4], DV[:, iv : iv + 3])
                 continue
             if jt.kind == "RU":
                 c, s = Q[:, iq], Q[:, iq + 1]
@@ -258,5 +281,9 @@ class BatchModel:
                 V = np.eye(3) + b[:, None, None] * K + c[:, None, None] * (K @ K)
                 R = quat_to_matrix(Q[:, iq + 3 : iq + 7])
                 out[:, iq : iq + 3] = Q[:, iq : iq + 3] + (R @ (V @ v[:, :, None]))[..., 0]
-                out[:, iq + 3 : iq + 7] = _quat_mul_exp(Q[:, iq + 3 : iq + 7], w)
+                quat = _quat_mul_exp(Q[:, iq + 3 : iq + 7], w)
+                # Pinocchio's SE(3) integrate keeps the quaternion in q's hemisphere
+                # (its spherical joint does not: q ⊗ exp(w) as it comes)
+                flip = np.sum(quat * Q[:, iq + 3 : iq + 7], axis=1) < 0.0
+                out[:, iq + 3 : iq + 7] = np.where(flip[:, None], -quat, quat)
         return out

@@ -16,6 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from pincal.model._batch_joints import cross3, planar_step, universal_factors, universal_step
+
 __all__ = [
     "JointGroup",
     "cross3",
@@ -101,14 +103,16 @@ class JointGroup:
     """Joints of one type at one depth of the tree (computed together).
 
     Attributes:
-        kind: "R" revolute, "RU" unbounded revolute, "P" prismatic, "S" spherical,
-            "F" free flyer.
+        kind: "R" revolute, "RU" unbounded revolute, "P" prismatic, "U" universal,
+            "PL" planar, "S" spherical, "F" free flyer.
         ids, parents, iq, iv: (G,) joint ids, parent ids, first q and v indices.
         R0, p0: (G, 3, 3), (G, 3) joint placements in their parents.
         C: (G, 3, 11) the constant right factors ``[R0, R0·K, R0·K², R0·axis, p0]``
             (K = skew(axis)) multiplied by the parent rotation in one product: the
-            Rodrigues terms of the joint rotation, the world axis and the world offset.
+            Rodrigues terms of the joint rotation, the world axis and the world offset
+            (a universal joint's first axis; z for a planar joint).
         root: every parent is the universe (its rotation is the identity).
+        D: (G, 3, 7) universal joints' second-axis factors ``[b, Kb, Kb²]`` (else None).
     """
 
     kind: str
@@ -120,6 +124,7 @@ class JointGroup:
     p0: np.ndarray
     C: np.ndarray
     root: bool
+    D: np.ndarray | None = None
 
 
 def group_joints(
@@ -130,8 +135,13 @@ def group_joints(
     axes: np.ndarray,
     R0: np.ndarray,
     p0: np.ndarray,
+    axes2: np.ndarray | None = None,
 ) -> tuple[JointGroup, ...]:
-    """Groups of joints 1 … njoints−1 (given per joint, in id order) by depth and type."""
+    """Groups of joints 1 … njoints−1 (given per joint, in id order) by depth and type.
+
+    ``axes`` (njoints−1, 3) are the joints' (first) axes, ``axes2`` the second axes of
+    universal joints (rows of other joints are ignored; needed when there is one).
+    """
     depth = [0]
     keys: dict[tuple[int, str], list[int]] = {}
     for j, (kind, parent) in enumerate(zip(kinds, parents, strict=True), start=1):
@@ -155,16 +165,12 @@ def group_joints(
                 p,
                 C,
                 bool(np.all(par == 0)),
+                universal_factors(axes2[k], skew(axes2[k]))
+                if kind == "U" and axes2 is not None
+                else None,
             )
         )
     return tuple(groups)
-
-
-def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross products of stacked vectors (…, 3) (without ``np.cross``'s overhead)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _step(
@@ -177,9 +183,14 @@ def _step(
     """
     G, N = Rp.shape[:2]
     q = Q[:, g.iq].T  # (G, N) first coordinate of each joint
-    if g.kind in ("R", "RU", "P"):
+    if g.kind in ("R", "RU", "P", "U", "PL"):
         # one product per joint for all poses: Rp · [R0, R0K, R0K², u, p0]
         X = (Rp.reshape(G, N * 3, 3) @ g.C).reshape(G, N, 3, 11)
+        if g.kind == "U":
+            assert g.D is not None
+            return universal_step(X, g.D, Q[:, g.iq[:, None] + np.arange(2)].T, pp, g.iv, Jt)
+        if g.kind == "PL":
+            return planar_step(X, Q[:, g.iq[:, None] + np.arange(4)].T, pp, g.iv, Jt)
         w, off = X[..., 9], X[..., 10]
         if g.kind == "P":
             Ri = X[..., 0:3]

@@ -95,6 +95,7 @@ def test_integrate_spherical_matches_pinocchio():
 
 
 def test_unsupported_joint_is_reported():
+    # (planar joints are supported since: tests/model/test_batch_joint_kinds.py)
     model = pin.Model()
-    model.addJoint(0, pin.JointModelPlanar(), pin.SE3.Identity(), "planar")
+    model.addJoint(0, pin.JointModelTranslation(), pin.SE3.Identity(), "translation")
     assert not BatchModel(model).supported
