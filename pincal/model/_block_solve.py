@@ -88,8 +88,9 @@ class BlockSolver:
                 is safe (a column private in truth but marked shared is only slower).
 
         Returns:
-            None when ``Jf`` is not square, no column is private to one closure, or a
-            closure has more private columns than rows (singular by structure).
+            None when ``Jf`` is not square, no column is private to one closure, no
+            column is shared (one closure, or independent ones: nothing to reduce), or
+            a closure has more private columns than rows (singular by structure).
         """
         support = np.asarray(support, dtype=bool)
         k = support.shape[1]
@@ -102,7 +103,9 @@ class BlockSolver:
             owner[touched & ~elsewhere] = c
         shared = np.nonzero(owner < 0)[0]
         private = [np.nonzero(owner == c)[0] for c in range(len(blocks))]
-        if shared.size == k or any(len(p) > len(b) for p, b in zip(private, blocks, strict=True)):
+        # no shared column (one closure, or independent ones): the dense solve
+        too_many = any(len(p) > len(b) for p, b in zip(private, blocks, strict=True))
+        if shared.size in (0, k) or too_many:
             return None
         # reduced rows in closure order; the sign constant σ of the permutations
         red, r0 = [], 0

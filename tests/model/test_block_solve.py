@@ -88,6 +88,11 @@ def test_structures_that_do_not_reduce():
     support[3:, 4:] = True
     assert BlockSolver.build(blocks, support) is None
     assert BlockSolver.build([np.arange(3)], np.ones((3, 4), dtype=bool)) is None
+    # one closure owning every column (a single loop): nothing shared to reduce
+    assert BlockSolver.build([np.arange(3)], np.ones((3, 3), dtype=bool)) is None
+    independent = np.zeros((k, k), dtype=bool)
+    independent[:3, :3] = independent[3:, 3:] = True
+    assert BlockSolver.build(blocks, independent) is None
 
 
 @pytest.mark.parametrize("name", MACHINES)
