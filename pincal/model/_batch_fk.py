@@ -1,50 +1,36 @@
 """Forward kinematics of many poses at once (batched Newton on the passive joints).
 
 :class:`BatchTracking` is the part of :class:`~pincal.model.Mechanism` that closes the
-loops for N actuator rows together: each Newton iteration evaluates the closure
-residuals and Jacobians of all unfinished poses with :class:`~pincal.model._batch.BatchModel`
-(numpy over the kinematic tree; every point closure in one set of array operations) and
-solves the N square passive systems through their block structure
-(:mod:`pincal.model._block_solve`: one reduced system for the shared joints, small
-blocks per leg; LAPACK on (N, k, k) where no column is private to one closure). A pose
-is accepted when its residual is below ``options.tol`` and it is on home's assembly
-branch (sign of det of the passive closure Jacobian, from the same factors). Poses whose
-residual does not decrease, that leave the branch, or whose condition bound comes near
-``options.max_condition`` are handed to the pose-by-pose
-solver (:meth:`configuration`: damped Newton, continuation, exact singularity check),
-so results and errors are those of the pose-by-pose path.
+loops for N actuator rows together, on :class:`~pincal.model._batch_newton.BatchNewton`
+(closure terms, passive factors, Newton iterations in chunks of :data:`CHUNK` poses).
+A pose is accepted when its residual is below ``options.tol`` and it is on home's
+assembly branch (sign of det of the passive closure Jacobian or of its branch block,
+from the same factors). Poses whose residual does not decrease, that leave the
+branch, or whose condition bound comes near ``options.max_condition`` are handed to
+the pose-by-pose solver (:meth:`configuration`: damped Newton, continuation, exact
+singularity check), so results and errors are those of the pose-by-pose path.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Literal, overload
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pincal.errors import ShapeError
-from pincal.model._batch import BatchKinematics, BatchModel
-from pincal.model._batch_closures import (
-    PointClosures,
-    closure_jacobian_batch,
-    closure_residual_batch,
-)
-from pincal.model._block_solve import BlockSolver, DenseFactor, PassiveFactor
-from pincal.model._branch import BranchTracking
-from pincal.model._range_factor import RangeFactor
+from pincal.model._batch import BatchKinematics
+from pincal.model._batch_closures import closure_jacobian_batch, closure_residual_batch
+from pincal.model._batch_newton import BatchNewton
 
 __all__ = ["BatchTracking", "closure_jacobian_batch", "closure_residual_batch"]
 
-_MAX_BATCH_ITERATIONS = 30
-#: residual [m, rad] below which a converged row is not polished (round-off of
-#: metre-sized machines: a further Newton step cannot halve it)
-_ROUND_OFF = 1e-15
 #: poses per chunk of the batched solves (temporaries of a chunk stay in the L2 cache)
 CHUNK = 256
 
 
-class BatchTracking(BranchTracking):
-    """Batched loop closing and kinematics (mixed into Mechanism)."""
+class BatchTracking(BatchNewton):
+    """Batched loop closing (mixed into Mechanism)."""
 
     if TYPE_CHECKING:  # provided by Mechanism, which mixes this class in
 
@@ -54,36 +40,6 @@ class BatchTracking(BranchTracking):
             q_guess: np.ndarray | None = None,
             pose_index: int | None = None,
         ) -> np.ndarray: ...
-
-    @property
-    def batch_model(self) -> BatchModel:
-        """The batched numpy kinematics of :attr:`model` (built once)."""
-        bm = self.__dict__.get("_batch_model_cache")
-        if bm is None:
-            bm = self.__dict__["_batch_model_cache"] = BatchModel(self.model)
-        return bm
-
-    def kinematics_batch(self, qs: np.ndarray) -> BatchKinematics:
-        """Joint placements and WORLD joint Jacobian of configurations ``qs`` (N, nq).
-
-        Raises:
-            ShapeError: ``qs`` is not (N, nq).
-        """
-        qs = self._check_rows(qs, self.model.nq, "configurations")
-        if not self.batch_model.supported:
-            raise ShapeError(  # pragma: no cover - every loader joint type is implemented
-                f"mechanism {self.name!r} has a joint type the batched kinematics lacks"
-            )
-        return self.batch_model.kinematics(qs)
-
-    def _check_rows(self, rows: np.ndarray, width: int, what: str) -> np.ndarray:
-        try:
-            out = np.atleast_2d(np.asarray(rows, dtype=float))
-        except (TypeError, ValueError) as exc:
-            raise ShapeError(f"{what} must be numbers: {exc}") from exc
-        if out.ndim != 2 or out.shape[1] != width:
-            raise ShapeError(f"{what} must have shape (N, {width}), got {np.shape(rows)}")
-        return out
 
     @property
     def batch_solvable(self) -> bool:
@@ -101,103 +57,6 @@ class BatchTracking(BranchTracking):
             and self.batch_model.supported
             and self._rank_u == min(rows, k)
         )
-
-    def _point_closures(self, cols: np.ndarray) -> PointClosures:
-        """The point closures on Jacobian columns ``cols`` (built once for the free dofs)."""
-        free = cols.shape == self._free_v.shape and bool(np.all(cols == self._free_v))
-        if free and "_point_closures_cache" in self.__dict__:
-            return self.__dict__["_point_closures_cache"]
-        rows, frames, r0 = [], [], 0
-        for fids, c in zip(self._closure_fids, self.closures, strict=True):
-            if c.is_point:
-                rows.append(r0)
-                frames.append(fids)
-            r0 += c.size
-        pc = PointClosures(self.batch_model, frames, rows, cols)
-        if free:
-            self.__dict__["_point_closures_cache"] = pc
-        return pc
-
-    @property
-    def passive_solver(self) -> BlockSolver | None:
-        """The block structure of the square passive closure Jacobian (None: dense)."""
-        if "_passive_solver_cache" not in self.__dict__:
-            bm, free = self.batch_model, self._free_v
-            blocks, support, r0 = [], [], 0
-            for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
-                moves = (bm.support_of_frame(a) | bm.support_of_frame(b))[free]
-                blocks.append(np.arange(r0, r0 + c.size))
-                support += [moves] * c.size
-                r0 += c.size
-            solver = BlockSolver.build(blocks, np.array(support)) if support else None
-            self.__dict__["_passive_solver_cache"] = solver
-        return self.__dict__["_passive_solver_cache"]
-
-    def passive_factor(self, Jf: np.ndarray) -> PassiveFactor:
-        """Factor passive closure Jacobians ``Jf`` (N, rows, k).
-
-        Square ones by blocks where they reduce (else dense LU); non-square ones by
-        QR (minimum-norm least squares, :class:`RangeFactor`).
-        """
-        if Jf.shape[1] != Jf.shape[2]:
-            return RangeFactor.of(Jf, self._branch_block)
-        solver = self.passive_solver
-        return DenseFactor.of(Jf) if solver is None else solver.factor(Jf)
-
-    @overload
-    def closure_terms_batch(
-        self,
-        bk: BatchKinematics,
-        jacobian: Literal[True] = ...,
-        columns: np.ndarray | None = None,
-    ) -> tuple[np.ndarray, np.ndarray]: ...
-
-    @overload
-    def closure_terms_batch(
-        self, bk: BatchKinematics, jacobian: bool, columns: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray | None]: ...
-
-    def closure_terms_batch(
-        self, bk: BatchKinematics, jacobian: bool = True, columns: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray | None]:
-        """Closure residuals (N, n_closure_rows) and Jacobians (N, n_closure_rows, nv).
-
-        Args:
-            bk: the batched kinematics.
-            jacobian: also compute the Jacobians.
-            columns: tangent dofs whose Jacobian columns to return (default all nv).
-        """
-        bm = self.batch_model
-        N = bk.q.shape[0]
-        cols = np.arange(self.model.nv) if columns is None else np.asarray(columns)
-        if not self.closures:
-            return np.zeros((N, 0)), (np.zeros((N, 0, cols.size)) if jacobian else None)
-        sizes = [c.size for c in self.closures]
-        r = np.empty((N, sum(sizes)))
-        J = np.zeros((N, sum(sizes), cols.size)) if jacobian else None
-        self._point_closures(cols).terms(bk, r, J)
-        row = 0
-        for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
-            rows = slice(row, row + c.size)
-            row += c.size
-            if c.is_point:
-                continue
-            Ra, pa = bm.frame_placement(bk, a)
-            Rb, pb = bm.frame_placement(bk, b)
-            r[:, rows] = closure_residual_batch(c, Ra, pa, Rb, pb)
-            if J is not None:
-                Ja, Jb = bm.frame_jacobian(bk, a), bm.frame_jacobian(bk, b)
-                J[:, rows] = closure_jacobian_batch(c, Ra, pa, Rb, pb, Ja, Jb)[:, :, cols]
-        return r, J
-
-    def _actuators_batch(self, Q: np.ndarray, A: np.ndarray) -> np.ndarray:
-        out = np.array(Q, dtype=float)
-        for k, (qi, nq) in enumerate(zip(self._act_q, self._act_nq, strict=True)):
-            if nq == 1:
-                out[:, qi] = A[:, k]
-            else:
-                out[:, qi], out[:, qi + 1] = np.cos(A[:, k]), np.sin(A[:, k])
-        return out
 
     def _solve_batch(
         self, A: np.ndarray, Q0: np.ndarray
@@ -230,78 +89,6 @@ class BatchTracking(BranchTracking):
         risky = ~np.isfinite(cond) | (cond > self.options.max_condition) | factor.singular
         ok = done & (factor.sign() == self.idle_branch) & ~risky
         return Q, ok, BatchKinematics(Q, R, p, J, Jf, factor)
-
-    def _newton_chunk(
-        self,
-        Q: np.ndarray,
-        out_R: np.ndarray,
-        out_p: np.ndarray,
-        out_J: np.ndarray,
-        Jf_done: np.ndarray,
-    ) -> np.ndarray:
-        """Newton iterations of one chunk, in place: converged mask (N,).
-
-        ``Q`` (N, nq) holds the start configurations (actuators set) and receives the
-        solutions; the joint placements, joint Jacobian and passive closure Jacobian of
-        each converged configuration are written into ``out_R``, ``out_p``, ``out_J``
-        and ``Jf_done``. A converged row is polished as in the pose-by-pose solve: up
-        to ``options.polish_steps`` more full steps, each kept only when it halves the
-        largest residual (rows already at round-off, ≤ :data:`_ROUND_OFF`, stop).
-        """
-        bm, opt, free = self.batch_model, self.options, self._free_v
-        N = Q.shape[0]
-        active = np.ones(N, dtype=bool)
-        done = np.zeros(N, dtype=bool)
-        best = np.full(N, np.inf)  # largest residual of the recorded solution
-        polished = np.zeros(N, dtype=int)
-        prev = np.full(N, np.inf)
-        Q_done = np.empty_like(Q)
-        for _ in range(_MAX_BATCH_ITERATIONS + opt.polish_steps + 1):
-            ia = np.nonzero(active)[0]
-            if ia.size == 0:
-                break
-            bk = bm.kinematics(Q[ia])
-            r, Jf = self.closure_terms_batch(bk, columns=free)
-            rmax = np.max(np.abs(r), axis=1)
-            norm = np.linalg.norm(r, axis=1)
-            had = done[ia]  # polishing: a solution is recorded
-            better = (rmax <= opt.tol) & (rmax < 0.5 * best[ia])
-            ic = ia[better]
-            done[ic], best[ic], Q_done[ic] = True, rmax[better], Q[ic]
-            out_R[ic], out_p[ic], out_J[ic] = (
-                bk.rotations[better],
-                bk.translations[better],
-                bk.jacobian[better],
-            )
-            Jf_done[ic] = Jf[better]
-            back = ia[had & ~better]  # a polishing step that did not halve the residual
-            Q[back] = Q_done[back]
-            polish = better & (polished[ia] < opt.polish_steps) & (rmax > _ROUND_OFF)
-            descend = ~had & ~better & (norm < prev[ia])
-            go = polish | descend
-            active[ia[~go]] = False
-            ig = ia[go]
-            if ig.size == 0:
-                continue
-            polished[ia[polish]] += 1
-            prev[ig] = norm[go]
-            factor = self.passive_factor(Jf[go])
-            try:
-                step = -factor.solve(r[go][:, :, None])[..., 0]
-            except np.linalg.LinAlgError:
-                active[ig] = False
-                Q[ig[done[ig]]] = Q_done[ig[done[ig]]]
-                continue
-            step[factor.singular] = np.nan
-            sn = np.linalg.norm(step, axis=1)
-            step *= np.minimum(1.0, opt.max_step / np.maximum(sn, 1e-300))[:, None]
-            bad = ~np.all(np.isfinite(step), axis=1)
-            active[ig[bad]] = False
-            DV = np.zeros((ig.size, self.model.nv))
-            DV[:, free] = step
-            Q[ig[~bad]] = bm.integrate(Q[ig[~bad]], DV[~bad])
-        Q[done] = Q_done[done]  # rows stopped after a polishing step: their solution
-        return done
 
     def try_configurations_batch(
         self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
