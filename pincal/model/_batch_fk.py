@@ -22,11 +22,17 @@ from pincal.errors import ShapeError
 from pincal.model._batch import BatchKinematics
 from pincal.model._batch_closures import closure_jacobian_batch, closure_residual_batch
 from pincal.model._batch_newton import BatchNewton
+from pincal.model._block_solve import PassiveFactor
+from pincal.model._branch import _CORRECTOR_ITERATIONS, _MIN_STEP
 
 __all__ = ["BatchTracking", "closure_jacobian_batch", "closure_residual_batch"]
 
 #: poses per chunk of the batched solves (temporaries of a chunk stay in the L2 cache)
 CHUNK = 256
+#: fewest rows a batched continuation step is run for: a step costs about the same
+#: for 1 row as for 50 (array-call overhead; 2–3 ms on the test machines), while the
+#: pose-by-pose solver closes such a row in 2–10 ms; fewer rows go pose by pose
+_MIN_CONTINUATION_ROWS = 16
 
 
 class BatchTracking(BatchNewton):
@@ -58,6 +64,96 @@ class BatchTracking(BatchNewton):
             and self._rank_u == min(rows, k)
         )
 
+    def _continue_batch(self, A: np.ndarray, Q0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Start configurations for the rows a direct batched solve missed.
+
+        The pose-by-pose continuation (``_branch``), all rows at once: from the closed
+        configurations ``Q0``, each row follows the straight actuator path to its row
+        of ``A`` (n, n_act) in steps that double after a success and halve after a
+        failure, down to 1/4096 of the path. A step is predicted to first order
+        (passive motion ``−Jf⁺ Ja Δa``), corrected by a short batched Newton, and kept
+        when the corrector converges on home's branch near the prediction (its steps
+        add up to at most a quarter of the predicted motion). Each row's path is its
+        own: the result does not depend on the other rows of the batch. When fewer
+        than :data:`_MIN_CONTINUATION_ROWS` rows are still on the way, they stop
+        (unreached: the pose-by-pose solver closes them faster).
+
+        Returns:
+            The configurations reached at the path ends (r, nq), and the mask (n,) of
+            the r rows that reached it.
+        """
+        n, nv = A.shape[0], self.model.nv
+        free, act = self._free_v, self._act_v_arr
+        a0 = self._actuator_values_batch(Q0)
+        t, h = np.zeros(n), np.full(n, 0.25)
+        Q = np.array(Q0)
+        alive = np.ones(n, dtype=bool)
+        while True:
+            i = np.nonzero(alive & (t < 1.0))[0]
+            if i.size < _MIN_CONTINUATION_ROWS:  # a short tail: faster pose by pose
+                alive[i] = False
+                break
+            h[i] = np.minimum(h[i], 1.0 - t[i])
+            a = a0[i] + (t[i] + h[i])[:, None] * (A[i] - a0[i])
+            bk = self.batch_model.kinematics(Q[i])
+            Jc = self.closure_terms_batch(bk, columns=np.arange(nv))[1]
+            rhs = -(Jc[:, :, act] @ (a - self._actuator_values_batch(Q[i]))[..., None])
+            try:
+                step = self.passive_factor(Jc[:, :, free]).solve(rhs)[..., 0]
+            except np.linalg.LinAlgError:  # an exactly singular row: all to the fallback
+                alive[i] = False
+                break
+            DV = np.zeros((i.size, nv))
+            DV[:, free] = step
+            cand = self._actuators_batch(self.batch_model.integrate(Q[i], DV), a)
+            travel = np.zeros(i.size)
+            Jf = np.empty((i.size, self.n_closure_rows, free.size))
+            conv = self._newton_chunk(
+                cand,
+                np.empty((i.size, self.model.njoints, 3, 3)),
+                np.empty((i.size, self.model.njoints, 3)),
+                np.empty((i.size, 6, nv)),
+                Jf,
+                max_iterations=_CORRECTOR_ITERATIONS,
+                travel=travel,
+                polish=False,
+            )
+            Jf[~conv] = np.eye(*Jf.shape[1:])
+            ok = conv & (self.passive_factor(Jf).sign() == self.idle_branch)
+            ok &= travel <= 0.25 * np.linalg.norm(step, axis=1) + 1e-7
+            Q[i[ok]], t[i[ok]] = cand[ok], t[i[ok]] + h[i[ok]]
+            h[i] = np.where(ok, 2.0 * h[i], 0.5 * h[i])
+            alive[i[h[i] < _MIN_STEP]] = False
+        reached = alive & (t >= 1.0)
+        return self._actuators_batch(Q[reached], A[reached]), reached
+
+    def _close_chunks(
+        self, Q: np.ndarray, R: np.ndarray, p: np.ndarray, J: np.ndarray, Jf: np.ndarray
+    ) -> np.ndarray:
+        """Batched Newton in chunks of :data:`CHUNK` rows, in place: converged mask (N,)."""
+        done = np.zeros(Q.shape[0], dtype=bool)
+        for s in range(0, Q.shape[0], CHUNK):
+            rows = slice(s, s + CHUNK)
+            done[rows] = self._newton_chunk(Q[rows], R[rows], p[rows], J[rows], Jf[rows])
+        return done
+
+    def _accept(
+        self, Jf: np.ndarray, done: np.ndarray
+    ) -> tuple[PassiveFactor, np.ndarray, np.ndarray]:
+        """Factors of ``Jf`` (N, rows, k), accepted mask (N,) and possibly singular mask (N,).
+
+        A converged row is accepted on home's branch when its condition bound
+        ``‖Jf‖_F · (bound of ‖Jf⁺‖₂) ≥ cond₂`` is within ``options.max_condition``;
+        the others get the exact check pose by pose. Rows not converged are given an
+        identity stand-in in ``Jf`` (any full-rank matrix).
+        """
+        Jf[~done] = np.eye(*Jf.shape[1:])
+        factor = self.passive_factor(Jf)
+        with np.errstate(all="ignore"):
+            cond = np.sqrt(np.sum(Jf**2, axis=(1, 2))) * factor.inverse_norm_bound()
+        risky = ~np.isfinite(cond) | (cond > self.options.max_condition) | factor.singular
+        return factor, done & (factor.sign() == self.idle_branch) & ~risky, risky
+
     def _solve_batch(
         self, A: np.ndarray, Q0: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, BatchKinematics]:
@@ -76,18 +172,18 @@ class BatchTracking(BatchNewton):
         p = np.empty((N, nj, 3))
         J = np.empty((N, 6, self.model.nv))
         Jf = np.empty((N, m, k))
-        done = np.zeros(N, dtype=bool)
-        for s in range(0, N, CHUNK):
-            rows = slice(s, s + CHUNK)
-            done[rows] = self._newton_chunk(Q[rows], R[rows], p[rows], J[rows], Jf[rows])
-        Jf[~done] = np.eye(m, k)  # rows to be redone pose by pose: any full-rank matrix
-        factor = self.passive_factor(Jf)
-        with np.errstate(all="ignore"):
-            # ‖Jf‖_F · (bound of ‖Jf⁻¹‖₂) ≥ cond₂: rows that might exceed the limit get
-            # the exact check pose by pose
-            cond = np.sqrt(np.sum(Jf**2, axis=(1, 2))) * factor.inverse_norm_bound()
-        risky = ~np.isfinite(cond) | (cond > self.options.max_condition) | factor.singular
-        ok = done & (factor.sign() == self.idle_branch) & ~risky
+        done = self._close_chunks(Q, R, p, J, Jf)
+        factor, ok, risky = self._accept(Jf, done)
+        # not closed or on another branch (not merely near a singularity): continuation
+        retry = np.nonzero(~ok & ~(done & risky))[0]
+        if retry.size >= _MIN_CONTINUATION_ROWS:
+            Qc, reached = self._continue_batch(A[retry], np.tile(self.q_home, (retry.size, 1)))
+            idx = retry[reached]
+            if idx.size:
+                Rc, pc, Jc, Jfc = R[idx], p[idx], J[idx], Jf[idx]
+                done[idx] = self._close_chunks(Qc, Rc, pc, Jc, Jfc)
+                Q[idx], R[idx], p[idx], J[idx], Jf[idx] = Qc, Rc, pc, Jc, Jfc
+                factor, ok, _ = self._accept(Jf, done)
         return Q, ok, BatchKinematics(Q, R, p, J, Jf, factor)
 
     def try_configurations_batch(

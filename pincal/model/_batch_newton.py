@@ -165,6 +165,13 @@ class BatchNewton(BranchTracking):
                 out[:, qi], out[:, qi + 1] = np.cos(A[:, k]), np.sin(A[:, k])
         return out
 
+    def _actuator_values_batch(self, Q: np.ndarray) -> np.ndarray:
+        """Actuated joint values (N, n_act) of configurations ``Q`` (N, nq)."""
+        out = np.empty((Q.shape[0], len(self._act_q)))
+        for k, (qi, nq) in enumerate(zip(self._act_q, self._act_nq, strict=True)):
+            out[:, k] = Q[:, qi] if nq == 1 else np.arctan2(Q[:, qi + 1], Q[:, qi])
+        return out
+
     def _newton_chunk(
         self,
         Q: np.ndarray,
@@ -172,6 +179,9 @@ class BatchNewton(BranchTracking):
         out_p: np.ndarray,
         out_J: np.ndarray,
         Jf_done: np.ndarray,
+        max_iterations: int = MAX_BATCH_ITERATIONS,
+        travel: np.ndarray | None = None,
+        polish: bool = True,
     ) -> np.ndarray:
         """Newton iterations of one chunk, in place: converged mask (N,).
 
@@ -181,6 +191,9 @@ class BatchNewton(BranchTracking):
         and ``Jf_done``. A converged row is polished as in the pose-by-pose solve: up
         to ``options.polish_steps`` more full steps, each kept only when it halves the
         largest residual (rows already at round-off, ≤ :data:`_ROUND_OFF`, stop).
+        ``max_iterations`` bounds the Newton iterations; ``travel`` (N,), when given,
+        receives the sum of the step norms of each row (≥ its distance moved);
+        ``polish=False`` stops at convergence (intermediate points of a continuation).
         """
         bm, opt, free = self.batch_model, self.options, self._free_v
         N = Q.shape[0]
@@ -190,7 +203,8 @@ class BatchNewton(BranchTracking):
         polished = np.zeros(N, dtype=int)
         prev = np.full(N, np.inf)
         Q_done = np.empty_like(Q)
-        for _ in range(MAX_BATCH_ITERATIONS + opt.polish_steps + 1):
+        polish_steps = opt.polish_steps if polish else 0
+        for _ in range(max_iterations + polish_steps + 1):
             ia = np.nonzero(active)[0]
             if ia.size == 0:
                 break
@@ -210,7 +224,7 @@ class BatchNewton(BranchTracking):
             Jf_done[ic] = Jf[better]
             back = ia[had & ~better]  # a polishing step that did not halve the residual
             Q[back] = Q_done[back]
-            polish = better & (polished[ia] < opt.polish_steps) & (rmax > _ROUND_OFF)
+            polish = better & (polished[ia] < polish_steps) & (rmax > _ROUND_OFF)
             descend = ~had & ~better & (norm < prev[ia])
             go = polish | descend
             active[ia[~go]] = False
@@ -234,5 +248,7 @@ class BatchNewton(BranchTracking):
             DV = np.zeros((ig.size, self.model.nv))
             DV[:, free] = step
             Q[ig[~bad]] = bm.integrate(Q[ig[~bad]], DV[~bad])
+            if travel is not None:
+                travel[ig[~bad]] += np.minimum(sn, opt.max_step)[~bad]
         Q[done] = Q_done[done]  # rows stopped after a polishing step: their solution
         return done
