@@ -113,7 +113,7 @@ class BatchKinematics:
         jacobian: (N, 6, nv) WORLD joint Jacobian ``[v_o; ω]`` (``data.J`` of Pinocchio).
         closure_jacobian: (N, n_closure_rows, k) closure Jacobian on the mechanism's k
             free dofs at ``q``, when the loop-closing solve computed it (else None).
-        closure_factor: its factorisation when square (computed by the solve's branch
+        closure_factor: its factorisation (computed by the solve's branch
             and condition checks, reused by the sensitivities), else None.
     """
 

@@ -97,9 +97,9 @@ class BatchTracking(BatchNewton):
             a = a0[i] + (t[i] + h[i])[:, None] * (A[i] - a0[i])
             bk = self.batch_model.kinematics(Q[i])
             Jc = self.closure_terms_batch(bk, columns=np.arange(nv))[1]
-            rhs = -(Jc[:, :, act] @ (a - self._actuator_values_batch(Q[i]))[..., None])
+            rate = (Jc[:, :, act] @ (a - self._actuator_values_batch(Q[i]))[..., None])[..., 0]
             try:
-                step = self.passive_factor(Jc[:, :, free]).solve(rhs)[..., 0]
+                step = self.passive_steps(Jc[:, :, free], rate)
             except np.linalg.LinAlgError:  # an exactly singular row: all to the fallback
                 alive[i] = False
                 break

@@ -110,6 +110,27 @@ class BatchNewton(BranchTracking):
         solver = self.passive_solver
         return DenseFactor.of(Jf) if solver is None else solver.factor(Jf)
 
+    def passive_steps(self, Jf: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """Newton steps ``−Jf⁺ r`` (N, k) of passive systems Jf (N, rows, k), r (N, rows).
+
+        Square systems are solved with their factors (NaN rows where singular);
+        non-square ones, of full rank min(rows, k) on the batched domain, by the normal
+        equations of their smaller side (the minimum-norm least-squares step; its
+        accuracy only sets the speed of convergence, the residual decides it).
+
+        Raises:
+            numpy.linalg.LinAlgError: a system is exactly singular.
+        """
+        if Jf.shape[1] == Jf.shape[2]:
+            factor = self.passive_factor(Jf)
+            step = -factor.solve(r[..., None])[..., 0]
+            step[factor.singular] = np.nan
+            return step
+        Jt = np.swapaxes(Jf, 1, 2)
+        if Jf.shape[1] < Jf.shape[2]:
+            return -(Jt @ np.linalg.solve(Jf @ Jt, r[..., None]))[..., 0]
+        return -np.linalg.solve(Jt @ Jf, Jt @ r[..., None])[..., 0]
+
     @overload
     def closure_terms_batch(
         self,
@@ -233,14 +254,12 @@ class BatchNewton(BranchTracking):
                 continue
             polished[ia[polish]] += 1
             prev[ig] = norm[go]
-            factor = self.passive_factor(Jf[go])
             try:
-                step = -factor.solve(r[go][:, :, None])[..., 0]
+                step = self.passive_steps(Jf[go], r[go])
             except np.linalg.LinAlgError:
                 active[ig] = False
                 Q[ig[done[ig]]] = Q_done[ig[done[ig]]]
                 continue
-            step[factor.singular] = np.nan
             sn = np.linalg.norm(step, axis=1)
             step *= np.minimum(1.0, opt.max_step / np.maximum(sn, 1e-300))[:, None]
             bad = ~np.all(np.isfinite(step), axis=1)

@@ -61,7 +61,8 @@ class Mechanism(BatchTracking):
     * ``q_home``: assembled home configuration (nq,); forward kinematics stays on its
       assembly mode (``home_branch``: sign of det of the passive closure Jacobian, 0
       where that Jacobian is not square; ``idle_branch``: the same sign with idle passive
-      directions left out, see ``_branch``);
+      directions left out, see ``_branch``); ``batch_solvable``: whether
+      :meth:`configurations_batch` closes the loops of many poses together;
     * ``workspace``: :class:`Workspace`; ``presets``: raw parameter presets;
     * ``sidecar``: the typed :class:`Sidecar`; ``notes``: remarks for ``pincal info``;
     * ``mobility``, ``closure_rank`` and ``idle_joints`` (passive joints the actuators

@@ -4,11 +4,16 @@ The same mathematics as :func:`pincal.sensitivity.pose_sensitivity` (see
 :mod:`pincal.sensitivity._jacobian`), evaluated on the batched kinematics of
 :mod:`pincal.model._batch`: the local twist of a key frame per unit of each parameter
 is a batched adjoint ``Ad(oMf⁻¹ · A_j) · eff_j``; the passive motion
-``dq_u/dp = −(∂c/∂q_u)⁻¹ ∂c/∂p`` is one ``np.linalg.solve`` over (N, k, k).
+``dq_u/dp = −(∂c/∂q_u)⁺ ∂c/∂p`` enters through one adjoint solve with the forward
+kinematics' factorisation of ``∂c/∂q_u`` (block LU where square; thin QR where
+closure rows are redundant or passive motion is idle, the minimum-norm least-squares
+solution of the pose-by-pose truncated SVD). With redundant rows, a parameter whose
+closure column leaves the range of ``∂c/∂q_u`` is reported as breaking closure, by the
+rule of :func:`pose_sensitivity`.
 
-It applies where the passive closure Jacobian is square and regular on the forward
-kinematics' branch (every bundled closed-loop model) and to serial chains; elsewhere
-(over-constrained loops, where the truncated SVD and closure breaking matter)
+It applies to serial chains and wherever the forward kinematics closes the loops in
+batch (:attr:`Mechanism.batch_solvable`); elsewhere (a joint type the batched
+kinematics lacks, a passive closure Jacobian of rank below min(rows, dofs) at home)
 :func:`sensitivities_batch` falls back to :func:`pose_sensitivity` pose by pose.
 """
 

@@ -49,7 +49,7 @@ def predict_configurations(
     Returns:
         (N, nq) predicted configurations (rows whose step is not finite, exceeds the
         solver's ``max_step`` or is below its ``tol`` keep ``bk.q``), or None when the
-        prediction does not apply (no closures, no square closure Jacobian, batched
+        prediction does not apply (no closures, closures not batch-solvable, batched
         kinematics unsupported).
     """
     Jf = bk.closure_jacobian
