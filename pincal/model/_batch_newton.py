@@ -69,20 +69,18 @@ class BatchNewton(BranchTracking):
         return out
 
     def _point_closures(self, cols: np.ndarray) -> PointClosures:
-        """The point closures on Jacobian columns ``cols`` (built once for the free dofs)."""
-        free = cols.shape == self._free_v.shape and bool(np.all(cols == self._free_v))
-        if free and "_point_closures_cache" in self.__dict__:
-            return self.__dict__["_point_closures_cache"]
-        rows, frames, r0 = [], [], 0
-        for fids, c in zip(self._closure_fids, self.closures, strict=True):
-            if c.is_point:
-                rows.append(r0)
-                frames.append(fids)
-            r0 += c.size
-        pc = PointClosures(self.batch_model, frames, rows, cols)
-        if free:
-            self.__dict__["_point_closures_cache"] = pc
-        return pc
+        """The point closures on Jacobian columns ``cols`` (built once per column set)."""
+        cache = self.__dict__.setdefault("_point_closures_cache", {})
+        key = np.asarray(cols, dtype=np.int64).tobytes()
+        if key not in cache:
+            rows, frames, r0 = [], [], 0
+            for fids, c in zip(self._closure_fids, self.closures, strict=True):
+                if c.is_point:
+                    rows.append(r0)
+                    frames.append(fids)
+                r0 += c.size
+            cache[key] = PointClosures(self.batch_model, frames, rows, cols)
+        return cache[key]
 
     @property
     def passive_solver(self) -> BlockSolver | None:
