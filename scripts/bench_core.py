@@ -17,7 +17,9 @@ All processes run with one BLAS thread (``threadpool_limits(1)``; stated in the
 output) and every time is CPU time of the process (``time.process_time``), which other
 jobs on a shared machine disturb far less than wall-clock time; compare the ratios,
 which are measured in the same run, rather than absolute times. Also printed:
-identify time and peak memory for N = 1 000 … 10 000 poses (fresh subprocess each),
+the cost of one generic Stewart evaluation's parts (tree walk, closure residuals and
+Jacobian) against the floor's whole evaluate + Jacobian, identify time and peak memory
+for N = 1 000 … 10 000 poses (fresh subprocess each),
 ``pincal demo`` and the 4 096-candidate Stewart pose selection.
 """
 
@@ -214,8 +216,20 @@ def worker(repeats: int, n: int, sizes: list[int]) -> dict:
     ops["ur10 evaluate+J"] = lambda: evaluate(ur, full, ur_rows, ur_qs)
     for fn in ops.values():  # warm-up: first calls build caches
         fn()
-    times, res["floor"] = paired_times(ops, floors(n), repeats, n)
+    fl = floors(n)
+    times, res["floor"] = paired_times(ops, fl, repeats, n)
     res.update(times)
+    if batched:  # the parts of one generic evaluation, in turns with the floor's whole one
+        Qs = mech.configurations(rows)
+        bk = mech.batch_model.kinematics(Qs)
+        parts = {
+            "tree walk": lambda: mech.batch_model.kinematics(Qs),
+            "closure terms": lambda: mech.closure_terms_batch(bk, columns=mech.free_dofs),
+        }
+        t_parts, t_floor = paired_times(
+            parts, {k: fl["stewart evaluate+J"] for k in parts}, repeats, n
+        )
+        res["parts"] = {k: (t_parts[k], t_floor[k]) for k in parts}
     noise = pincal.NoiseModel(0.01, 0.02)
     true = np.random.default_rng(1).normal(0, 0.5e-3, len(p42))
     actual = p42.apply(mech, true)
@@ -342,6 +356,11 @@ def main() -> None:
         print(line)
     print(f"{'ur10 FK + regressor':22s} {'':>11s} {_fmt(now['floor']['ur10 FK+regressor']):>10s}"
           f"  (pin.computeFrameKinematicRegressor, for reference)")  # fmt: skip
+    if "parts" in now:
+        print("\none generic Stewart evaluation (a warm solve makes three), in turns with the "
+              "floor's whole evaluate + Jacobian:")  # fmt: skip
+        for key, (t, f) in now["parts"].items():
+            print(f"  {key:14s} {_fmt(t):>10s}   floor evaluate+J {_fmt(f):>10s}   {t / f:5.2f}×")
     print("\nidentify, Stewart 42 parameters (Gauss–Newton):")
     for m, r in now["identify"].items():
         line = f"  N = {int(m):5d}: now {r['time']:7.3f} s ({r['iterations']} it.)"
