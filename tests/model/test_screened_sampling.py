@@ -1,0 +1,62 @@
+"""Random actuator rows of a machine without a pose workspace, screened in batches.
+
+The 3-PRS test machine gives only slider ranges: most draws cannot be assembled. The
+sampler closes blocks of draws with the batched solve; every row it returns must be
+feasible by the pose-by-pose definition (forward kinematics on home's branch, away
+from singularities), inside the ranges, and reproducible from the seed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pincal
+from pincal.errors import ModelFileError
+
+PRS3 = Path(__file__).parent / "machines" / "prs3"
+
+
+@pytest.fixture(scope="module")
+def mech():
+    m = pincal.load_mechanism(PRS3)
+    assert not m.workspace.pose and m.batch_solvable  # the case this is about
+    return m
+
+
+def test_rows_are_feasible_inside_the_ranges_and_reproducible(mech):
+    rows = pincal.sample_actuators(mech, 40, np.random.default_rng(3))
+    assert rows.shape == (40, len(mech.actuated))
+    lo, hi = np.array([mech.workspace.joints[a] for a in mech.actuated]).T
+    assert np.all((rows >= lo) & (rows <= hi))
+    for row in rows:  # the pose-by-pose solver closes each one on home's branch
+        q = mech.configuration(row)
+        assert np.max(np.abs(mech.closure_residual(q))) <= 1e-12
+    again = pincal.sample_actuators(mech, 40, np.random.default_rng(3))
+    np.testing.assert_array_equal(rows, again)
+
+
+def test_most_draws_are_infeasible_yet_sampling_succeeds(mech):
+    lo, hi = np.array([mech.workspace.joints[a] for a in mech.actuated]).T
+    draws = np.random.default_rng(5).uniform(lo, hi, size=(200, len(lo)))
+    ok = mech.try_configurations_batch(draws)[1]
+    assert ok.mean() < 0.5
+    assert len(pincal.sample_actuators(mech, 30, np.random.default_rng(5))) == 30
+
+
+def test_too_few_feasible_draws_is_a_clear_error(mech):
+    with pytest.raises(ModelFileError, match=r"only \d+ of 500 random poses were feasible"):
+        pincal.sample_actuators(mech, 500, np.random.default_rng(0), max_tries_per_pose=1)
+
+
+def test_draws_are_not_closed_one_by_one(monkeypatch):
+    """Infeasible draws cost a batched solve, not a failing pose-by-pose continuation."""
+    m = pincal.load_mechanism(PRS3)
+
+    def one_by_one(*args, **kwargs):
+        raise AssertionError("a draw went through the pose-by-pose solver")
+
+    monkeypatch.setattr(m, "configuration", one_by_one)
+    assert len(pincal.sample_actuators(m, 20, np.random.default_rng(7))) == 20
