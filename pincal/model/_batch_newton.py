@@ -175,22 +175,6 @@ class BatchNewton(BranchTracking):
                 J[:, rows] = closure_jacobian_batch(c, Ra, pa, Rb, pb, Ja, Jb)[:, :, cols]
         return r, J
 
-    def _actuators_batch(self, Q: np.ndarray, A: np.ndarray) -> np.ndarray:
-        out = np.array(Q, dtype=float)
-        for k, (qi, nq) in enumerate(zip(self._act_q, self._act_nq, strict=True)):
-            if nq == 1:
-                out[:, qi] = A[:, k]
-            else:
-                out[:, qi], out[:, qi + 1] = np.cos(A[:, k]), np.sin(A[:, k])
-        return out
-
-    def _actuator_values_batch(self, Q: np.ndarray) -> np.ndarray:
-        """Actuated joint values (N, n_act) of configurations ``Q`` (N, nq)."""
-        out = np.empty((Q.shape[0], len(self._act_q)))
-        for k, (qi, nq) in enumerate(zip(self._act_q, self._act_nq, strict=True)):
-            out[:, k] = Q[:, qi] if nq == 1 else np.arctan2(Q[:, qi + 1], Q[:, qi])
-        return out
-
     def _newton_chunk(
         self,
         Q: np.ndarray,

@@ -207,22 +207,28 @@ class KinematicQueries:
 
     def actuators_of(self, q: np.ndarray) -> np.ndarray:
         """Actuated joint values (n_act,) of a configuration q (nq,)."""
-        q = self._check_q(q)
-        out = np.empty(len(self.actuated))
-        for k, (qi, nq) in enumerate(zip(self._act_q, self._act_nq, strict=True)):
-            out[k] = q[qi] if nq == 1 else np.arctan2(q[qi + 1], q[qi])
-        return out
+        return self._actuator_values_batch(self._check_q(q)[None])[0]
 
     def with_actuators(self, q: np.ndarray, q_act: np.ndarray) -> np.ndarray:
         """Copy of configuration q with the actuated joints set to ``q_act``."""
-        q = np.array(self._check_q(q), dtype=float)
-        q_act = self._check_q_act(q_act)
-        for v, qi, nq in zip(q_act, self._act_q, self._act_nq, strict=True):
+        return self._actuators_batch(self._check_q(q)[None], self._check_q_act(q_act)[None])[0]
+
+    def _actuator_values_batch(self, Q: np.ndarray) -> np.ndarray:
+        """Actuated joint values (N, n_act) of configurations ``Q`` (N, nq)."""
+        out = np.empty((Q.shape[0], len(self._act_q)))
+        for k, (qi, nq) in enumerate(zip(self._act_q, self._act_nq, strict=True)):
+            out[:, k] = Q[:, qi] if nq == 1 else np.arctan2(Q[:, qi + 1], Q[:, qi])
+        return out
+
+    def _actuators_batch(self, Q: np.ndarray, A: np.ndarray) -> np.ndarray:
+        """Copies of configurations ``Q`` (N, nq) with the actuators set to ``A`` (N, n_act)."""
+        out = np.array(Q, dtype=float)
+        for k, (qi, nq) in enumerate(zip(self._act_q, self._act_nq, strict=True)):
             if nq == 1:
-                q[qi] = v
+                out[:, qi] = A[:, k]
             else:
-                q[qi : qi + 2] = (np.cos(v), np.sin(v))
-        return q
+                out[:, qi], out[:, qi + 1] = np.cos(A[:, k]), np.sin(A[:, k])
+        return out
 
     def _check_q_act(self, q_act: np.ndarray) -> np.ndarray:
         q_act = _as_floats(q_act, "q_act")
