@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pincal.errors import ShapeError
+from pincal.errors import ConvergenceError, ShapeError
 from pincal.model._batch import BatchKinematics
 from pincal.model._batch_closures import closure_jacobian_batch, closure_residual_batch
 from pincal.model._batch_newton import BatchNewton
@@ -64,7 +64,9 @@ class BatchTracking(BatchNewton):
             and self._rank_u == min(rows, k)
         )
 
-    def _continue_batch(self, A: np.ndarray, Q0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _continue_batch(
+        self, A: np.ndarray, Q0: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Start configurations for the rows a direct batched solve missed.
 
         The pose-by-pose continuation (``_branch``), all rows at once: from the closed
@@ -79,15 +81,19 @@ class BatchTracking(BatchNewton):
         (unreached: the pose-by-pose solver closes them faster).
 
         Returns:
-            The configurations reached at the path ends (r, nq), and the mask (n,) of
-            the r rows that reached it.
+            The configurations reached at the path ends (r, nq), the mask (n,) of the r
+            rows that reached it, and the mask (n,) of the rows given up on (step below
+            1/4096 of the path: the pose-by-pose continuation's own failure).
         """
         n, nv = A.shape[0], self.model.nv
         free, act = self._free_v, self._act_v_arr
         a0 = self._actuator_values_batch(Q0)
         t, h = np.zeros(n), np.full(n, 0.25)
         Q = np.array(Q0)
+        kin = self.batch_model.kinematics(Q)  # of each row's last closed configuration
+        R, p, J = kin.rotations, kin.translations, kin.jacobian
         alive = np.ones(n, dtype=bool)
+        gave_up = np.zeros(n, dtype=bool)
         while True:
             i = np.nonzero(alive & (t < 1.0))[0]
             if i.size < _MIN_CONTINUATION_ROWS:  # a short tail: faster pose by pose
@@ -95,7 +101,7 @@ class BatchTracking(BatchNewton):
                 break
             h[i] = np.minimum(h[i], 1.0 - t[i])
             a = a0[i] + (t[i] + h[i])[:, None] * (A[i] - a0[i])
-            bk = self.batch_model.kinematics(Q[i])
+            bk = BatchKinematics(Q[i], R[i], p[i], J[i])
             Jc = self.closure_terms_batch(bk, columns=np.arange(nv))[1]
             rate = (Jc[:, :, act] @ (a - self._actuator_values_batch(Q[i]))[..., None])[..., 0]
             try:
@@ -107,12 +113,13 @@ class BatchTracking(BatchNewton):
             DV[:, free] = step
             cand = self._actuators_batch(self.batch_model.integrate(Q[i], DV), a)
             travel = np.zeros(i.size)
+            Rc, pc, Jjc = np.empty_like(R[i]), np.empty_like(p[i]), np.empty_like(J[i])
             Jf = np.empty((i.size, self.n_closure_rows, free.size))
             conv = self._newton_chunk(
                 cand,
-                np.empty((i.size, self.model.njoints, 3, 3)),
-                np.empty((i.size, self.model.njoints, 3)),
-                np.empty((i.size, 6, nv)),
+                Rc,
+                pc,
+                Jjc,
                 Jf,
                 max_iterations=_CORRECTOR_ITERATIONS,
                 travel=travel,
@@ -122,10 +129,12 @@ class BatchTracking(BatchNewton):
             ok = conv & (self.passive_factor(Jf).sign() == self.idle_branch)
             ok &= travel <= 0.25 * np.linalg.norm(step, axis=1) + 1e-7
             Q[i[ok]], t[i[ok]] = cand[ok], t[i[ok]] + h[i[ok]]
+            R[i[ok]], p[i[ok]], J[i[ok]] = Rc[ok], pc[ok], Jjc[ok]
             h[i] = np.where(ok, 2.0 * h[i], 0.5 * h[i])
-            alive[i[h[i] < _MIN_STEP]] = False
+            gave_up[i[h[i] < _MIN_STEP]] = True
+            alive &= ~gave_up
         reached = alive & (t >= 1.0)
-        return self._actuators_batch(Q[reached], A[reached]), reached
+        return self._actuators_batch(Q[reached], A[reached]), reached, gave_up
 
     def _close_chunks(
         self, Q: np.ndarray, R: np.ndarray, p: np.ndarray, J: np.ndarray, Jf: np.ndarray
@@ -156,14 +165,16 @@ class BatchTracking(BatchNewton):
 
     def _solve_batch(
         self, A: np.ndarray, Q0: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, BatchKinematics]:
-        """Batched Newton: configurations (N, nq), accepted mask (N,), their kinematics.
+    ) -> tuple[np.ndarray, np.ndarray, BatchKinematics, np.ndarray]:
+        """Batched Newton: configurations, accepted rows, kinematics, rows given up on.
 
-        Rows not accepted (no decrease, no convergence, other branch, possibly
-        singular) hold garbage and must be redone pose by pose. The Newton iterations
-        run in chunks of :data:`CHUNK` poses (temporaries that stay in cache: cost
-        linear in N), writing into the whole batch's arrays; the branch and condition
-        checks then factor all the converged Jacobians at once.
+        Returns the configurations (N, nq), the accepted mask (N,), their kinematics and
+        the mask (N,) of rows the batched continuation gave up on. Rows not accepted
+        (no decrease, no convergence, other branch, possibly singular) hold garbage and
+        must be redone pose by pose. The Newton iterations run in chunks of
+        :data:`CHUNK` poses (temporaries that stay in cache: cost linear in N), writing
+        into the whole batch's arrays; the branch and condition checks then factor all
+        the converged Jacobians at once.
         """
         N, nj, k = A.shape[0], self.model.njoints, self._free_v.size
         m = self.n_closure_rows
@@ -176,15 +187,18 @@ class BatchTracking(BatchNewton):
         factor, ok, risky = self._accept(Jf, done)
         # not closed or on another branch (not merely near a singularity): continuation
         retry = np.nonzero(~ok & ~(done & risky))[0]
+        hopeless = np.zeros(N, dtype=bool)
         if retry.size >= _MIN_CONTINUATION_ROWS:
-            Qc, reached = self._continue_batch(A[retry], np.tile(self.q_home, (retry.size, 1)))
+            home = np.tile(self.q_home, (retry.size, 1))
+            Qc, reached, gave_up = self._continue_batch(A[retry], home)
+            hopeless[retry[gave_up]] = True
             idx = retry[reached]
             if idx.size:
                 Rc, pc, Jc, Jfc = R[idx], p[idx], J[idx], Jf[idx]
                 done[idx] = self._close_chunks(Qc, Rc, pc, Jc, Jfc)
                 Q[idx], R[idx], p[idx], J[idx], Jf[idx] = Qc, Rc, pc, Jc, Jfc
                 factor, ok, _ = self._accept(Jf, done)
-        return Q, ok, BatchKinematics(Q, R, p, J, Jf, factor)
+        return Q, ok, BatchKinematics(Q, R, p, J, Jf, factor), hopeless
 
     def try_configurations_batch(
         self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
@@ -204,7 +218,30 @@ class BatchTracking(BatchNewton):
             return Q, np.ones(N, dtype=bool), self.batch_model.kinematics(Q)
         if not self.batch_solvable:
             return np.array(G), np.zeros(N, dtype=bool), None
-        return self._solve_batch(rows, G)
+        return self._solve_batch(rows, G)[:3]
+
+    def closable_batch(self, q_act_rows: np.ndarray) -> np.ndarray:
+        """Whether each actuator row (N, n_act) closes on home's branch (N,) bool.
+
+        The answer of :meth:`configuration` (no error: closed on home's branch away
+        from singularities), decided in batch where possible: rows the batched solve
+        closes, and rows its continuation gives up on by the pose-by-pose criterion
+        (a step below 1/4096 of the path); the others are tried pose by pose.
+        """
+        rows = self._check_rows(q_act_rows, len(self.actuated), "actuator rows")
+        ok = np.zeros(rows.shape[0], dtype=bool)
+        hopeless = np.zeros_like(ok)
+        if not self.closures:
+            ok[:] = True
+        elif self.batch_solvable:
+            _, ok, _, hopeless = self._solve_batch(rows, np.tile(self.q_home, (len(rows), 1)))
+        for j in np.nonzero(~ok & ~hopeless)[0]:
+            try:
+                self.configuration(rows[j])
+                ok[j] = True
+            except ConvergenceError:
+                pass
+        return ok
 
     def configurations_batch(
         self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
@@ -240,7 +277,7 @@ class BatchTracking(BatchNewton):
             bk = self.batch_model.kinematics(out) if self.batch_model.supported else None
             return out, bk
         start = np.tile(self.q_home, (N, 1)) if G is None else G
-        Q, ok, bk = self._solve_batch(rows, start)
+        Q, ok, bk, _ = self._solve_batch(rows, start)
         for j in np.nonzero(~ok)[0]:
             guess = G[j] if G is not None else (Q[j - 1] if j else self.q_home)
             Q[j] = self.configuration(rows[j], guess, pose_index=int(j))

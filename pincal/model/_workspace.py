@@ -115,11 +115,11 @@ def _screened_draws(
 ) -> np.ndarray:
     """``n`` feasible actuator rows drawn in their ranges, screened in blocks.
 
-    Each block of draws is closed by the batched solve (direct Newton from home, then
-    the batched continuation); a draw counts as feasible when that solve closes it on
-    home's branch away from singularities. Infeasible draws (actuator values no
-    assembly reaches) then cost one batched solve together, instead of a pose-by-pose
-    continuation each that fails only after halving its step 12 times.
+    Each block of draws is decided by :meth:`Mechanism.closable_batch` (feasible: forward
+    kinematics on home's branch away from singularities, as one by one). Infeasible
+    draws (actuator values no assembly reaches) then mostly cost one batched solve
+    together, instead of a pose-by-pose continuation each that fails only after
+    halving its step 12 times.
     """
     rows: list[np.ndarray] = []
     draws = 0
@@ -130,7 +130,7 @@ def _screened_draws(
         size = min(max_draws - draws, 4096, max(32, int(1.5 * (n - len(rows)) / rate)))
         block = rng.uniform(ranges[:, 0], ranges[:, 1], size=(size, len(ranges)))
         draws += size
-        ok = mech.try_configurations_batch(block)[1]
+        ok = mech.closable_batch(block)
         rows.extend(block[ok][: n - len(rows)])
     return np.array(rows)
 
