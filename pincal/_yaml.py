@@ -7,10 +7,20 @@ whose aliases would expand to more than :data:`MAX_NODES` nodes (a "billion laug
 alias bomb is a few hundred bytes) or that is nested deeper than :data:`MAX_DEPTH`,
 and refuses a mapping that gives the same key twice (YAML would silently keep the
 last one), naming the key and both lines.
+
+Mappings, sequences and merge keys (``<<``) are built here, not by PyYAML's
+constructor, whose handling of nested merges changed between releases (6.0.3 and
+6.0.4 give different values for ``{<<: *m}`` when ``m`` itself holds a merge). The
+rules are those of the YAML 1.1 merge-key type: a key written in a mapping overrides
+every merged key; a merged mapping is taken as it is fully built (its own merges
+resolved first); in a merged sequence ``<<: [*a, *b]``, an earlier mapping overrides
+a later one. Scalars (numbers, booleans, dates, null) are still resolved by PyYAML's
+safe constructor.
 """
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +36,8 @@ MAX_NODES = 200_000
 #: deepest nesting of sequences and mappings
 MAX_DEPTH = 200
 _MERGE_TAG = "tag:yaml.org,2002:merge"
+_MAP_TAG = "tag:yaml.org,2002:map"
+_SEQ_TAG = "tag:yaml.org,2002:seq"
 
 
 def shown(value: Any, limit: int = 80) -> str:
@@ -119,6 +131,60 @@ def _children(node: Any) -> list[Any]:
     return []
 
 
+class _Builder:
+    """Plain data from a composed node graph, merge keys resolved by YAML 1.1's rules.
+
+    Built values are memoised per node, so an alias yields the object of its anchor
+    (as PyYAML does); the graph was bounded by :func:`_expanded_size` beforehand, which
+    also bounds the recursion depth here.
+    """
+
+    def __init__(self, loader: yaml.SafeLoader):
+        self.loader = loader
+        self.built: dict[int, Any] = {}
+
+    def build(self, node: Any) -> Any:
+        nid = id(node)
+        if nid not in self.built:
+            if isinstance(node, yaml.MappingNode) and node.tag == _MAP_TAG:
+                self.built[nid] = self._mapping(node)
+            elif isinstance(node, yaml.SequenceNode) and node.tag == _SEQ_TAG:
+                self.built[nid] = [self.build(item) for item in node.value]
+            else:  # scalars and the rare typed collections (!!set, !!omap, ...)
+                self.built[nid] = self.loader.construct_object(node, deep=True)
+        return self.built[nid]
+
+    def _mapping(self, node: yaml.MappingNode) -> dict[Any, Any]:
+        own: dict[Any, Any] = {}
+        merged: dict[Any, Any] = {}
+        for key_node, value_node in node.value:
+            if key_node.tag == _MERGE_TAG:
+                merged.update(self._merged(value_node))
+                continue
+            key = self.build(key_node)
+            if not isinstance(key, Hashable):
+                raise yaml.constructor.ConstructorError(
+                    None, None, "a mapping key is a list or a mapping; keys must be scalars",
+                    key_node.start_mark,
+                )
+            own[key] = self.build(value_node)
+        return {**merged, **own}
+
+    def _merged(self, value_node: Any) -> dict[Any, Any]:
+        """The keys one ``<<`` brings: a mapping, or a sequence of them (earlier wins)."""
+        sources = value_node.value if isinstance(value_node, yaml.SequenceNode) else [value_node]
+        out: dict[Any, Any] = {}
+        for source in reversed(sources):
+            value = self.build(source)
+            if not isinstance(value, dict):
+                raise yaml.constructor.ConstructorError(
+                    None, None, "a merge key '<<' must name a mapping or a list of mappings",
+                    source.start_mark,
+                )
+            out.update(value)
+        return out
+
+
 def parse_yaml(text: str, where: str, error: type[InputFileError] = InputFileError) -> Any:
     """Parse YAML ``text`` safely (see the module doc).
 
@@ -150,7 +216,7 @@ def parse_yaml(text: str, where: str, error: type[InputFileError] = InputFileErr
         if node is None:
             return None
         _check_duplicates(_expanded_size(node, where), loader)
-        return loader.construct_document(node)
+        return _Builder(loader).build(node)
     except _DuplicateKey as dup:
         raise error(
             f"{where} line {dup.line}: key {shown(dup.key)} is given twice (first on line "

@@ -64,3 +64,40 @@ def test_sidecar_errors_are_model_file_errors_naming_the_file(tmp_path):
     with pytest.raises(ModelFileError, match="m.yaml must be a mapping"):
         read_sidecar(side)
     assert load_yaml(side, "list") == ["a", "b"]
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        # a merged anchor that itself holds a merge is taken fully built (PyYAML 6.0.4
+        # gives a: 0 here, 6.0.3 a: 1; YAML 1.1 says the merged mapping's own value)
+        ("b: &b {a: 0}\nm: &m {<<: *b, a: 1}\ny: {<<: *m}\n", {"a": 1}),
+        # three levels, each overriding one key
+        (
+            "a: &a {p: 1, q: 1, r: 1}\nb: &b {<<: *a, q: 2}\nc: &c {<<: *b, r: 3}\n"
+            "y: {<<: *c}\n",
+            {"p": 1, "q": 2, "r": 3},
+        ),
+        # in a merged list the earlier mapping wins; keys written in place win over all
+        ("b: &b {a: 0}\nc: &c {a: 5, q: 1}\ny: {<<: [*b, *c]}\n", {"a": 0, "q": 1}),
+        ("b: &b {a: 0}\nc: &c {a: 5, q: 1}\ny: {q: 9, <<: [*c, *b]}\n", {"a": 5, "q": 9}),
+        # a merge inside a list of merges is resolved first
+        ("b: &b {a: 0}\nm: &m {<<: *b, a: 1}\nc: &c {a: 2, z: 0}\ny: {<<: [*m, *c]}\n",
+         {"a": 1, "z": 0}),
+    ],
+)
+def test_nested_merges_follow_yaml_1_1_whatever_the_pyyaml_release(text, expected):
+    assert parse_yaml(text, "f")["y"] == expected
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("a: 1\ny: {<<: *x}\n", "not valid YAML"),
+        ("a: &a [1, 2]\ny: {<<: *a}\n", "merge key '<<' must name a mapping"),
+        ("y: {[1, 2]: 3}\n", "keys must be scalars"),
+    ],
+)
+def test_bad_merges_and_keys_are_refused_naming_the_line(text, match):
+    with pytest.raises(InputFileError, match=match):
+        parse_yaml(text, "doc.yaml")
