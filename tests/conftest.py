@@ -23,6 +23,3 @@ def stewart_poses(stewart) -> np.ndarray:
 
     return sample_actuators(stewart, 30, np.random.default_rng(11))
 
-
-def pytest_configure(config: pytest.Config) -> None:
-    config.addinivalue_line("markers", "slow: takes more than ~20 s (deselect with -m 'not slow')")
