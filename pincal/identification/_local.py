@@ -236,10 +236,11 @@ def levenberg_marquardt(
     import scipy.optimize  # here, not at import: scipy.optimize costs ~0.3 s to import
 
     max_nfev = opts.max_iterations * 10
+    # copies: scipy < 1.14 scales the residual and Jacobian of robust losses in place
     sol = scipy.optimize.least_squares(
-        lambda z: both(z)[0],
+        lambda z: both(z)[0].copy(),
         x0[free],
-        jac=lambda z: both(z)[1],
+        jac=lambda z: both(z)[1].copy(),
         method="lm" if opts.loss == "linear" else "trf",
         loss=opts.loss,
         f_scale=1.0 if opts.loss == "linear" else _f_scale(opts),

@@ -108,7 +108,12 @@ def test_lm_out_of_evaluations_at_zero_cost_is_success(stewart, stewart42, stewa
     # cost in σ-whitened units (noise estimated; start σ = RMS start residual per block)
     assert res.iterations == 10 and res.cost_history[-1] < 1e-20 * res.cost_history[0]
     assert res.success, res.message
-    assert "evaluation limit" in res.message and "precision" in res.message
+    # scipy >= 1.14 runs out of evaluations here (pincal then judges the cost, at the
+    # solver's precision); older releases stop on xtol first, a plain convergence
+    if "evaluation limit" in res.message:
+        assert "precision" in res.message
+    else:
+        assert res.message.endswith("converged (`xtol` termination condition is satisfied.)")
 
 
 def test_lm_out_of_evaluations_while_decreasing_is_failure(far_start):
