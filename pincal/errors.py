@@ -29,6 +29,7 @@ __all__ = [
     "MobilityError",
     "ModelFileError",
     "MovedTargetError",
+    "NoTestCubeError",
     "NoiseEstimationError",
     "NonFiniteValueError",
     "OptionValueError",
@@ -194,6 +195,11 @@ class UnidentifiableError(PincalError):
     def __init__(self, message: str, names: Iterable[str] = ()):
         self.names = list(names)
         super().__init__(message)
+
+
+class NoTestCubeError(PincalError):
+    """No ISO 9283 test cube (square) fits in the machine's workspace, or none is defined
+    on its measured components."""
 
 
 class TooFewPosesError(PincalError):
