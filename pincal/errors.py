@@ -198,8 +198,7 @@ class UnidentifiableError(PincalError):
 
 
 class NoTestCubeError(PincalError):
-    """No ISO 9283 test cube (square) fits in the machine's workspace, or none is defined
-    on its measured components."""
+    """No ISO 9283 test cube (square) fits the workspace or the measured components."""
 
 
 class TooFewPosesError(PincalError):

@@ -55,13 +55,13 @@ from pincal.measure._validation import (
 
 __all__ = [
     "INSTRUMENT_KINDS",
+    "ORIENTATION_CONVENTION",
     "HeldOutValidation",
     "Instrument",
     "InstrumentData",
     "LaserTracker",
     "Measurements",
     "NoiseModel",
-    "ORIENTATION_CONVENTION",
     "PointAccuracy",
     "PoseCharacteristics",
     "PoseErrors",

@@ -126,7 +126,7 @@ def _model_errors(
         R = None if meas.rotations is None else meas.rotations[rows]
         for i in rows:
             ep[i] = meas.positions[i] - T.translation
-            if R is not None:
+            if meas.rotations is not None:
                 er[i] = pin.log3(T.rotation.T @ meas.rotations[i])
         pa = point_accuracy(T, meas.positions[rows], R, comps)
         entry: dict[str, Any] = {"AP_p_mm": pa.ap_p * 1e3 if pos else None}

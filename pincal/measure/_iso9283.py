@@ -201,7 +201,10 @@ class PoseCharacteristics:
             row += "".join(f"   {a[k]:+12.4f}" for k in rot_k)
             row += f"   {self.rp_l[j] * 1e3:9.4f}" + "".join(f"   {r[k]:14.4f}" for k in rot_k)
             out.append(row)
-        worst = f"  worst   AP_p {self.ap_p.max() * 1e3:.4f} mm, RP_l {self.rp_l.max() * 1e3:.4f} mm"
+        worst = (
+            f"  worst   AP_p {self.ap_p.max() * 1e3:.4f} mm, "
+            f"RP_l {self.rp_l.max() * 1e3:.4f} mm"
+        )
         for k in rot_k:
             worst += f", |AP_{'abc'[k]}| {np.abs(self.ap_abc[:, k]).max() * 1e3:.4f} mrad"
         out.append(worst + f" ({self.cycles} cycles)")
