@@ -13,8 +13,9 @@ edge and face centres, centre) is reached: inverse kinematics within the actuato
 (and the sidecar's ``workspace.joints`` travel), then forward kinematics on home's
 assembly branch returning the target on the measured components to 1 µm / 1 µrad. The
 box is the sidecar's declared ``workspace.pose`` when it declares every measured position
-axis ("declared"), otherwise the bounding box of the forward kinematics of random feasible
-actuator values, centred at their mean ("sampled").
+axis ("declared", the cube centred in it), otherwise the bounding box of the forward
+kinematics of random feasible actuator values ("sampled", the cube centred at their mean
+or at home's position, whichever holds the larger one).
 
 Test points: P1 at the centre; P2–P5 on the diagonals of the diagonal plane (a cube) or
 of the square itself at ``inset`` (the standard's (10 ± 2) %) of the diagonal from the
@@ -26,6 +27,7 @@ C8 = c + h(−1,−1,1), C1 = c + h(−1,−1,−1), C2 = c + h(1,1,−1); for a
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -153,7 +155,13 @@ def _workspace_box(
     return "sampled", P.mean(axis=0), np.stack([P.min(axis=0), P.max(axis=0)], axis=1)
 
 
-def _advice(source: str, axes: list[str]) -> str:
+def _advice(source: str, axes: list[str], flat: list[str]) -> str:
+    if flat:
+        return (
+            f"the machine does not move its measured frame along {', '.join(flat)} in this "
+            f"workspace: declare only the components it moves (sidecar 'measured', e.g. "
+            f"x, y, rz for a planar machine)"
+        )
     if source == "declared":
         return (
             f"widen the sidecar's workspace.pose ranges of {', '.join(axes)} to where the "
@@ -165,6 +173,39 @@ def _advice(source: str, axes: list[str]) -> str:
     )
 
 
+def _largest_edge(
+    reached: Callable[[np.ndarray], bool],
+    centre: np.ndarray,
+    idx: list[int],
+    bounds: np.ndarray,
+    tol: float,
+) -> float | None:
+    """The largest reached cube edge [m] about ``centre`` inside ``bounds``, or None.
+
+    Reached: every point of the 3^d lattice (bisection to ``tol``); None when the centre
+    itself is not reached.
+    """
+    lattice = [np.array(d, dtype=float) for d in itertools.product((-1, 0, 1), repeat=len(idx))]
+    mid = centre[idx]
+
+    def reachable(edge: float) -> bool:
+        for d in lattice:
+            p = centre.copy()
+            p[idx] += edge / 2 * d
+            if not reached(p):
+                return False
+        return True
+
+    if not reachable(0.0):
+        return None
+    hi = max(float(2 * np.min(np.minimum(mid - bounds[:, 0], bounds[:, 1] - mid))), 0.0)
+    lo = hi if reachable(hi) else 0.0
+    while hi - lo > tol:
+        m = 0.5 * (lo + hi)
+        lo, hi = (m, hi) if reachable(m) else (lo, m)
+    return lo
+
+
 def iso_test_cube(
     mech: Mechanism,
     n_samples: int = 300,
@@ -174,6 +215,9 @@ def iso_test_cube(
     min_edge: float = 1e-3,
 ) -> TestCube:
     """The largest reached cube (square) of the measured position axes in the workspace.
+
+    Centred on the declared box; in a sampled workspace on the samples' mean or on home's
+    position, whichever holds the larger cube.
 
     Args:
         mech: the (nominal) machine.
@@ -205,43 +249,41 @@ def iso_test_cube(
     lim = mech.workspace.pose
     r = np.array([np.mean(lim[k]) if k in lim else 0.0 for k in ("rx", "ry", "rz")])
     R = home.rotation @ pin.exp3(r)
-    centre = home.translation.copy()
-    centre[idx] = mid
     travel = _travel(mech)
-    lattice = [np.array(d, dtype=float) for d in itertools.product((-1, 0, 1), repeat=len(idx))]
+    candidates = [mid]
+    h = home.translation[idx]
+    if source == "sampled" and np.all((h >= bounds[:, 0]) & (h <= bounds[:, 1])):
+        candidates.append(h)
+    best: tuple[float, np.ndarray] | None = None
+    for c in candidates:
+        centre = home.translation.copy()
+        centre[idx] = c
+        edge = _largest_edge(lambda p: _reached(mech, pin.SE3(R, p), travel), centre, idx,
+                             bounds, tol)  # fmt: skip
+        if edge is not None and (best is None or edge > best[0]):
+            best = edge, centre
     where = "declared workspace" if source == "declared" else "sampled reachable workspace"
     box = ", ".join(f"{a} [{lo * 1e3:.3g}, {hi * 1e3:.3g}] mm" for a, (lo, hi) in
                     zip(axes, bounds, strict=True))  # fmt: skip
-
-    def reachable(edge: float) -> bool:
-        for d in lattice:
-            p = centre.copy()
-            p[idx] += edge / 2 * d
-            if not _reached(mech, pin.SE3(R, p), travel):
-                return False
-        return True
-
-    if not reachable(0.0):
+    flat = [  # axes the sampled motion does not span (a declared box is the user's choice)
+        a for a, (lo, hi) in zip(axes, bounds, strict=True)
+        if source == "sampled" and hi - lo < min_edge
+    ]  # fmt: skip
+    if best is None:
         raise NoTestCubeError(
             f"the centre {np.round(mid * 1e3, 3).tolist()} mm ({' '.join(axes)}) of the {where} "
             f"of {mech.name!r} ({box}) is not reached at the commanded orientation; "
-            + _advice(source, axes)
+            + _advice(source, axes, flat)
         )
-    hi = float(2 * np.min(np.minimum(mid - bounds[:, 0], bounds[:, 1] - mid)))
-    lo = 0.0
-    if reachable(hi):
-        lo = hi
-    while hi - lo > tol:
-        m = 0.5 * (lo + hi)
-        lo, hi = (m, hi) if reachable(m) else (lo, m)
+    edge, centre = best
     shape = "cube" if len(idx) == 3 else "square"
-    if lo < min_edge:
+    if edge < min_edge:
         raise NoTestCubeError(
             f"no ISO 9283 test {shape} in {' '.join(axes)} with an edge of at least "
             f"{min_edge * 1e3:.3g} mm fits inside the {where} of {mech.name!r} ({box}; "
-            f"largest reached edge {lo * 1e3:.3g} mm); " + _advice(source, axes)
+            f"largest reached edge {edge * 1e3:.3g} mm); " + _advice(source, axes, flat)
         )
     return TestCube(
-        centre, lo, R, _test_points(centre, idx, lo, inset), inset, tuple(axes), comps, source,
-        bounds,
+        centre, edge, R, _test_points(centre, idx, edge, inset), inset, tuple(axes), comps,
+        source, bounds,
     )  # fmt: skip

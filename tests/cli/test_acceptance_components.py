@@ -144,6 +144,14 @@ def test_refuses_with_fewer_than_two_measured_position_components(tmp_path):
     assert "at least two measured position components" in res.stderr
 
 
+def test_refuses_a_planar_machine_declared_as_measuring_z(tmp_path):
+    """rpr3 (planar, sidecar measures the full pose): z never moves, so no cube; say so."""
+    res = _run("acceptance", MACHINES / "rpr3" / "rpr3.urdf", "--errors", "none")
+    assert_clean_failure(res, "NoTestCubeError")
+    assert "sampled reachable workspace" in res.stderr
+    assert "does not move its measured frame along z" in res.stderr
+
+
 def test_validate_uses_the_same_convention_and_components(rrr3_campaign):
     d = rrr3_campaign
     res = _run("simulate", RRR3, "--random", 6, "--seed", 9, "--params", "base",
