@@ -102,8 +102,9 @@ def _grouped(meas, controller):
     "data_file",
     type=click.Path(dir_okay=False),
     default=None,
-    help="Measured repeated poses (pincal measurements CSV, full poses; rows with equal "
-    "actuator values are one commanded pose) instead of a simulation.",
+    help="Measured repeated poses (pincal measurements CSV; its components are judged, "
+    "at least one position axis; rows with equal actuator values are one commanded pose) "
+    "instead of a simulation.",
 )
 @click.option("--params", "preset", default=None, help="Preset of the simulated errors.")
 @click.option("--errors", default="seed:0", show_default=True, help="seed:N or none.")

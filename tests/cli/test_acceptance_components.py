@@ -169,3 +169,28 @@ def test_validate_uses_the_same_convention_and_components(rrr3_campaign):
     assert res.exit_code == 0, res.output
     assert f"AP_c only (measured): {ORIENTATION_CONVENTION}" in res.stdout
     assert "AP_p, RP_l over x y;" in res.stdout
+
+
+def test_measured_cycles_are_judged_on_their_components(tmp_path):
+    """--data on rrr3: x y rz measured; AP_p over x y, only AP_c among the angles."""
+    from pincal.io import write_measurements
+    from pincal.measure import Measurements, iso_test_cube, pose_characteristics, simulate_cycles
+    from pincal.model import parameters
+
+    nominal = load_mechanism(RRR3)
+    cube = iso_test_cube(nominal, rng=1)
+    params = parameters(nominal, "base")
+    actual = params.apply(nominal, np.full(len(params), 2e-4))
+    q, pos, rot = simulate_cycles(actual, nominal, cube.poses, 4, 1e-6, 3)
+    m = Measurements(np.repeat(q, 4, axis=0), pos.reshape(-1, 3), rot.reshape(-1, 3, 3),
+                     ("x", "y", "rz"), nominal.measured_frame, nominal.actuated)  # fmt: skip
+    data = write_measurements(tmp_path / "cycles.csv", m)
+    res = _run("acceptance", RRR3, "--data", data, "--json")
+    assert res.exit_code == 0, res.output
+    got = json.loads(res.stdout)["measured"]
+    assert got["components"] == ["x", "y", "rz"]
+    ref = pose_characteristics(cube.poses, pos, rot, ("x", "y", "rz"))
+    np.testing.assert_allclose(got["AP_p"], ref.ap_p, atol=1e-9)
+    xy = np.linalg.norm(pos.mean(axis=1)[:, :2] - cube.points[:, :2], axis=1)
+    np.testing.assert_allclose(got["AP_p"], xy, atol=1e-9)  # z plays no part
+    assert all(a[0] is None and a[1] is None for a in got["AP_abc"])
