@@ -29,6 +29,7 @@ __all__ = [
     "MobilityError",
     "ModelFileError",
     "MovedTargetError",
+    "NoTestCubeError",
     "NoiseEstimationError",
     "NonFiniteValueError",
     "OptionValueError",
@@ -194,6 +195,10 @@ class UnidentifiableError(PincalError):
     def __init__(self, message: str, names: Iterable[str] = ()):
         self.names = list(names)
         super().__init__(message)
+
+
+class NoTestCubeError(PincalError):
+    """No ISO 9283 test cube (square) fits the workspace or the measured components."""
 
 
 class TooFewPosesError(PincalError):

@@ -73,15 +73,19 @@ def _grouped(meas, controller):
             f"every commanded pose must be measured the same number (≥ 2) of times; got "
             f"counts {counts[order].tolist()}"
         )
-    if meas.rotations is None:
-        raise MeasurementError("ISO 9283 needs the attained orientation: measure full poses")
+    if meas.rotations is None and any(c.startswith("r") for c in meas.components):
+        raise MeasurementError(
+            f"the file declares components {' '.join(meas.components)} but holds no "
+            "orientation; measure the orientation or declare position components only"
+        )
     poses, pos, rot = [], [], []
     for g in order:
         rows = np.flatnonzero(inverse.reshape(-1) == g)
         poses.append(controller.forward(keys[g]))
         pos.append(meas.positions[rows])
-        rot.append(meas.rotations[rows])
-    return poses, np.array(pos), np.array(rot)
+        if meas.rotations is not None:
+            rot.append(meas.rotations[rows])
+    return poses, np.array(pos), (np.array(rot) if rot else None)
 
 
 @click.command()
@@ -98,8 +102,9 @@ def _grouped(meas, controller):
     "data_file",
     type=click.Path(dir_okay=False),
     default=None,
-    help="Measured repeated poses (pincal measurements CSV, full poses; rows with equal "
-    "actuator values are one commanded pose) instead of a simulation.",
+    help="Measured repeated poses (pincal measurements CSV; its components are judged, "
+    "at least one position axis; rows with equal actuator values are one commanded pose) "
+    "instead of a simulation.",
 )
 @click.option("--params", "preset", default=None, help="Preset of the simulated errors.")
 @click.option("--errors", default="seed:0", show_default=True, help="seed:N or none.")
@@ -125,6 +130,14 @@ def acceptance(
 ) -> None:
     """ISO 9283 acceptance of MODEL: AP and RP at P1–P5 of the test cube.
 
+    The test uses the components MODEL measures: a cube in x, y, z, a square in the
+    plane of two measured position axes (x, y for a planar machine; orientation only
+    where measured, e.g. rz). It is the largest one whose lattice the machine reaches
+    (inverse then forward kinematics) inside the sidecar's declared workspace.pose, or,
+    without one, inside the sampled reachable workspace; the output says which. When
+    none fits, the command stops and says what to change. AP_a/b/c are the rotation
+    vector log3(R_cmdᵀ R) about the commanded frame's x, y, z axes [mrad].
+
     Simulates the actual machine (MODEL with the errors of `pincal simulate`, same
     defaults) commanded by the nominal model (before) and by the calibrated one
     (after, with --calibrated), or evaluates measured cycles (--data).
@@ -139,7 +152,7 @@ def acceptance(
 
     from pincal.cli.simulate import _parse_errors, _parse_pair
     from pincal.io import atomic_write_text, read_measurements
-    from pincal.measure._iso9283 import iso_test_cube, pose_characteristics, simulate_cycles
+    from pincal.measure import iso_test_cube, pose_characteristics, simulate_cycles
     from pincal.model import load_mechanism, parameters
 
     guard_paths(
@@ -155,19 +168,26 @@ def acceptance(
     report: dict = {"model": nominal.name}
     if data_file is not None:
         controller = calibrated or nominal
-        poses, pos, rot = _grouped(read_measurements(data_file, nominal), controller)
-        pc = pose_characteristics(poses, pos, rot)
+        meas = read_measurements(data_file, nominal)
+        poses, pos, rot = _grouped(meas, controller)
+        pc = pose_characteristics(poses, pos, rot, tuple(meas.components))
         for line in pc.lines(f"measured ({data_file}), commands from the "
                              f"{'calibrated' if calibrated else 'nominal'} model"):  # fmt: skip
             say(line)
         report["measured"] = pc.to_dict()
     else:
         cube = iso_test_cube(nominal, rng=seed)
-        say(
-            f"test cube: centre {np.round(cube.centre * 1e3, 3).tolist()} mm, edge "
-            f"{cube.edge * 1e3:.2f} mm, P2–P5 at {cube.inset:.0%} of the diagonal"
-        )
-        report["cube"] = {"centre": cube.centre.tolist(), "edge": cube.edge}
+        say(cube.describe())
+        report["cube"] = {
+            "shape": cube.shape,
+            "axes": list(cube.axes),
+            "components": list(cube.components),
+            "workspace": cube.workspace,
+            "bounds": np.asarray(cube.bounds).tolist(),
+            "centre": cube.centre.tolist(),
+            "edge": cube.edge,
+            "points": cube.points.tolist(),
+        }
         err_seed = _parse_errors(errors)
         size_mm, size_mrad = _parse_pair(error_size, "--error-size")
         params = parameters(nominal, preset or next(iter(nominal.presets), "full"))
@@ -184,7 +204,7 @@ def acceptance(
             _, pos, rot = simulate_cycles(
                 actual, controller, cube.poses, cycles, repeatability * 1e-6, seed
             )
-            pc = pose_characteristics(cube.poses, pos, rot)
+            pc = pose_characteristics(cube.poses, pos, rot, cube.components)
             for line in pc.lines(f"{label} calibration (simulated, {cycles} cycles)"):
                 say(line)
             report[label] = pc.to_dict()

@@ -14,6 +14,16 @@ def _fmt(v: float | None, width: int = 9, digits: int = 4) -> str:
     return f"{'-':>{width}s}" if v is None else f"{v:{width}.{digits}f}"
 
 
+def _iso_components(doc: dict) -> str:
+    """The line naming the components the ISO 9283 table judges and the angle convention."""
+    pos = [c for c in doc["components"] if c in ("x", "y", "z")]
+    rot = ["abc"["xyz".index(c[1])] for c in doc["components"] if c in ("rx", "ry", "rz")]
+    text = f"  AP_p, RP_l over {' '.join(pos) or '(no position measured)'}; "
+    if not rot or not doc.get("orientation_convention"):
+        return text + "orientation not measured (AP_a/b/c '-')"
+    return text + f"AP_{'/'.join(rot)} only (measured): {doc['orientation_convention']}"
+
+
 def format_validation(doc: dict, max_rows: int = 40) -> str:
     """The printed validation report (mm / mrad)."""
     b, a, p = doc["before"], doc["after"], doc["predicted"]
@@ -38,6 +48,7 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
         "",
         "  ISO 9283 pose accuracy per commanded pose (AP: mean attained − commanded;"
         " RP_l = l̄ + 3 S_l over repeats)",
+        _iso_components(doc),
         "  pose  n   AP_p nominal  AP_p calibrated   AP_a      AP_b      AP_c    RP_l",
         "                 [mm]        [mm]         calibrated [mrad]            [mm]",
     ]

@@ -19,11 +19,16 @@ from pincal.measure._instruments import (
     simulate_instrument,
 )
 from pincal.measure._iso9283 import (
+    ORIENTATION_CONVENTION,
+    PointAccuracy,
     PoseCharacteristics,
-    TestCube,
-    iso_test_cube,
+    point_accuracy,
     pose_characteristics,
     simulate_cycles,
+)
+from pincal.measure._iso_cube import (
+    TestCube,
+    iso_test_cube,
 )
 from pincal.measure._measurements import (
     Measurements,
@@ -50,12 +55,14 @@ from pincal.measure._validation import (
 
 __all__ = [
     "INSTRUMENT_KINDS",
+    "ORIENTATION_CONVENTION",
     "HeldOutValidation",
     "Instrument",
     "InstrumentData",
     "LaserTracker",
     "Measurements",
     "NoiseModel",
+    "PointAccuracy",
     "PoseCharacteristics",
     "PoseErrors",
     "PoseMeasurement",
@@ -66,6 +73,7 @@ __all__ = [
     "fit_rigid_transform",
     "initial_instrument_values",
     "iso_test_cube",
+    "point_accuracy",
     "pose_characteristics",
     "pose_errors",
     "pose_from_target_points",

@@ -10,10 +10,12 @@ measured components of log3(R_predictedᵀ R_measured) [rad] (measured frame).
 ISO 9283 (pose accuracy and repeatability) per commanded pose j (rows with the same
 actuator values are repeats of one command):
 
-- AP_p = ‖P̄ − P_c‖: distance between the mean attained position and the commanded one
-  (the pose the model predicts for the command);
-- AP_a, AP_b, AP_c: mean attained orientation minus the commanded one, about x, y, z
-  (components of log3(R_cᵀ R), small angles) [rad];
+- AP_p = ‖P̄ − P_c‖ over the measured position axes: distance between the mean attained
+  position and the commanded one (the pose the model predicts for the command);
+- AP_a, AP_b, AP_c: mean deviation of the attained orientation from the commanded one,
+  the rotation vector log3(R_cᵀ R) about the commanded frame's x, y, z axes [rad], for
+  the measured rotation components (``ORIENTATION_CONVENTION``, the same as
+  ``pincal acceptance``: both use :func:`~pincal.measure._iso9283.point_accuracy`);
 - RP_l = l̄ + 3 S_l with l_i = ‖P_i − P̄‖ and S_l their sample std (n ≥ 2 repeats).
 """
 
@@ -25,6 +27,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from pincal.measure._iso9283 import ORIENTATION_CONVENTION, point_accuracy
 from pincal.measure._measurements import Measurements, NoiseModel
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
 
@@ -85,6 +88,7 @@ class HeldOutValidation:
             )
         return {
             "components": list(self.components),
+            "orientation_convention": ORIENTATION_CONVENTION if hr else None,
             "poses": int(sum(len(g) for g in self.groups)),
             "commanded_poses": len(self.groups),
             "before": self.before.summary(hp, hr),
@@ -116,18 +120,18 @@ def _model_errors(
     ep = np.zeros((m, 3))
     er = np.zeros((m, 3))
     ap: list[dict[str, Any]] = []
+    comps = tuple(COMPONENTS[k] for k in pos) + tuple(COMPONENTS[3 + k] for k in rot)
     for rows in groups:
         T = model.forward(meas.q_act[rows[0]])
+        R = None if meas.rotations is None else meas.rotations[rows]
         for i in rows:
             ep[i] = meas.positions[i] - T.translation
             if meas.rotations is not None:
                 er[i] = pin.log3(T.rotation.T @ meas.rotations[i])
-        entry: dict[str, Any] = {
-            "AP_p_mm": float(np.linalg.norm(ep[rows][:, pos].mean(axis=0)) * 1e3) if pos else None
-        }
-        mean_r = er[rows].mean(axis=0)
+        pa = point_accuracy(T, meas.positions[rows], R, comps)
+        entry: dict[str, Any] = {"AP_p_mm": pa.ap_p * 1e3 if pos else None}
         for k, label in enumerate(("AP_a_mrad", "AP_b_mrad", "AP_c_mrad")):
-            entry[label] = float(mean_r[k] * 1e3) if k in rot else None
+            entry[label] = float(pa.ap_abc[k] * 1e3) if k in rot else None
         ap.append(entry)
     position = np.linalg.norm(ep[:, pos], axis=1) if pos else np.zeros(m)
     orientation = np.linalg.norm(er[:, rot], axis=1) if rot else np.zeros(m)
@@ -137,9 +141,9 @@ def _model_errors(
 def _repeatability(meas: Measurements, rows: np.ndarray, pos: list[int]) -> float | None:
     if len(rows) < 2 or not pos:
         return None
-    P = meas.positions[rows][:, pos]
-    d = np.linalg.norm(P - P.mean(axis=0), axis=1)
-    return float((d.mean() + 3.0 * d.std(ddof=1)) * 1e3)
+    comps = tuple(COMPONENTS[k] for k in pos)
+    T = pin.SE3.Identity()  # RP does not depend on the command
+    return float(point_accuracy(T, meas.positions[rows], None, comps).rp_l * 1e3)
 
 
 def _prediction(

@@ -1,21 +1,25 @@
-"""ISO 9283 pose accuracy and repeatability on the standard test cube.
+"""ISO 9283 pose accuracy (AP) and repeatability (RP) on the measured components.
 
-The test cube is the largest axis-aligned cube, centred at the centre of the sampled
-reachable workspace, whose 3×3×3 lattice of points (corners, edge and face centres,
-centre) is reachable at the home orientation (bisection on the edge length). The five
-test points lie in the cube's diagonal plane through the corners C1 = c + h(−1,−1,−1),
-C2 = c + h(1,1,−1), C7 = c + h(1,1,1), C8 = c + h(−1,−1,1) (h = edge / 2): P1 at the
-centre and P2–P5 on the plane's diagonals at ``inset`` (default 10 %, the standard's
-(10 ± 2) %) of the diagonal length from the corners C7, C8, C1, C2.
+Per test point j, with n attained poses (p_i, R_i) for the commanded pose (p_c, R_c),
+over the components the machine measures (the others are neither commanded nor judged):
 
-Per test point j, with n attained poses (x_i, y_i, z_i, a_i, b_i, c_i) for the
-commanded pose (x_c, …, c_c) (a, b, c: roll, pitch, yaw about the base x, y, z axes):
+* ``AP_p = sqrt(Σ_k (x̄_k − x_ck)²)`` over the measured position axes k (barycentre vs
+  command); ``RP_l = l̄ + 3 S_l`` with ``l_i = ‖p_i − p̄‖`` over the same axes and
+  ``S_l = sqrt(Σ (l_i − l̄)² / (n − 1))``.
+* Orientation (ISO 9283 expresses it as angles a, b, c about the x, y, z axes): pincal's
+  convention, :data:`ORIENTATION_CONVENTION`, takes the deviation of each attained
+  orientation from the command as the rotation vector ``(a_i, b_i, c_i) = log3(R_cᵀ R_i)``,
+  i.e. small rotations about the x, y, z axes of the *commanded* measured frame — the axes
+  of the components rx, ry, rz that pincal measures, calibrates and commands — so that
+  ``AP_a = ā``, ``AP_b = b̄``, ``AP_c = c̄`` (the command's own angles are 0) and
+  ``RP_a = ±3 S_a`` etc. (sample standard deviations). When the commanded orientation is
+  parallel to the base (the bundled machines' test poses) these are the base-axis angles
+  of the standard to first order; unlike differences of roll–pitch–yaw angles they stay
+  defined at any orientation (no gimbal lock at b = ±90°). Only the measured rotation
+  components are reported.
 
-* ``AP_p = sqrt((x̄ − x_c)² + (ȳ − y_c)² + (z̄ − z_c)²)`` (barycentre vs command),
-  ``AP_a = ā − a_c``, ``AP_b = b̄ − b_c``, ``AP_c = c̄ − c_c``;
-* ``RP_l = l̄ + 3 S_l`` with ``l_i = ‖x_i − x̄‖`` and
-  ``S_l = sqrt(Σ (l_i − l̄)² / (n − 1))``; ``RP_a = ±3 S_a`` (S_a the sample standard
-  deviation of a_i), likewise b, c.
+:func:`point_accuracy` computes one test point; ``pincal acceptance`` (through
+:func:`pose_characteristics`) and ``pincal validate`` both use it.
 """
 
 from __future__ import annotations
@@ -25,106 +29,22 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import ConvergenceError, MeasurementError, PincalError
-from pincal.model._mechanism import Mechanism
-from pincal.model._workspace import sample_actuators
+from pincal.errors import MeasurementError
+from pincal.model import COMPONENTS, Mechanism
 
 __all__ = [
+    "ORIENTATION_CONVENTION",
+    "PointAccuracy",
     "PoseCharacteristics",
-    "TestCube",
-    "iso_test_cube",
+    "point_accuracy",
     "pose_characteristics",
     "simulate_cycles",
 ]
 
-
-@dataclass(frozen=True)
-class TestCube:
-    """The ISO 9283 test cube and its five test poses.
-
-    Attributes:
-        centre: (3,) cube centre [m]; edge: edge length [m].
-        rotation: (3, 3) commanded orientation of every test pose (home's).
-        points: (5, 3) P1..P5 [m].
-        inset: fraction of the plane diagonal between a corner and its test point.
-    """
-
-    __test__ = False  # not a pytest class
-
-    centre: np.ndarray
-    edge: float
-    rotation: np.ndarray
-    points: np.ndarray
-    inset: float
-
-    @property
-    def poses(self) -> list[pin.SE3]:
-        """The five commanded poses P1..P5."""
-        return [pin.SE3(self.rotation, p) for p in self.points]
-
-
-def _test_points(c: np.ndarray, edge: float, inset: float) -> np.ndarray:
-    h = edge / 2
-    C1, C2 = c + h * np.array([-1, -1, -1.0]), c + h * np.array([1, 1, -1.0])
-    C7, C8 = c + h * np.array([1, 1, 1.0]), c + h * np.array([-1, -1, 1.0])
-    corners = [C7, C8, C1, C2]
-    opposite = [C1, C2, C7, C8]
-    return np.array([c, *(a + inset * (b - a) for a, b in zip(corners, opposite, strict=True))])
-
-
-def iso_test_cube(
-    mech: Mechanism,
-    n_samples: int = 300,
-    rng: np.random.Generator | int = 0,
-    inset: float = 0.1,
-    tol: float = 1e-4,
-) -> TestCube:
-    """The largest reachable axis-aligned cube around the sampled workspace's centre.
-
-    Args:
-        mech: the (nominal) machine; its home orientation is commanded.
-        n_samples: random reachable poses sampled for the centre and the initial size.
-        rng: random generator or seed.
-        inset: (0.08..0.12) fraction of the plane diagonal by which the test points
-            P2..P5 are set in from the cube corners.
-        tol: edge-length resolution of the bisection [m].
-
-    Raises:
-        PincalError: inset outside the standard's (10 ± 2) % or no reachable cube.
-    """
-    if not 0.08 <= inset <= 0.12:
-        raise PincalError(f"inset must be within the standard's 0.08..0.12, got {inset}")
-    gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    q = sample_actuators(mech, n_samples, gen)
-    P = np.array([mech.frame_placement(x).translation for x in mech.configurations(q)])
-    centre = P.mean(axis=0)
-    R = mech.frame_placement(mech.q_home).rotation
-    lattice = np.array([[i, j, k] for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)])
-
-    def reachable(edge: float) -> bool:
-        for d in lattice:
-            try:
-                mech.inverse(pin.SE3(R, centre + edge / 2 * d))
-            except ConvergenceError:
-                return False
-        return True
-
-    if not reachable(0.0):
-        raise PincalError(
-            f"the centre {centre} of the sampled workspace is not reachable at the home "
-            "orientation; check the workspace limits of the sidecar"
-        )
-    lo, hi = 0.0, max(float(np.max(P.max(axis=0) - P.min(axis=0))), 8 * tol)
-    for _ in range(20):  # grow until out of reach, then bisect
-        if not reachable(hi):
-            break
-        lo, hi = hi, 2 * hi
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if reachable(mid) else (lo, mid)
-    if lo <= 0:
-        raise PincalError("no cube of positive size is reachable around the workspace centre")
-    return TestCube(centre, lo, R, _test_points(centre, lo, inset), inset)
+#: the orientation convention of AP_a/b/c and RP_a/b/c, as printed by acceptance/validate
+ORIENTATION_CONVENTION = (
+    "a, b, c = rotation vector log3(R_cmdᵀ R) about the commanded frame's x, y, z axes"
+)
 
 
 def simulate_cycles(
@@ -159,15 +79,96 @@ def simulate_cycles(
 
 
 @dataclass(frozen=True)
+class PointAccuracy:
+    """AP and RP of one test point (NaN where a component is not measured / n < 2).
+
+    Attributes:
+        ap_xyz: (3,) x̄ − x_c, ȳ − y_c, z̄ − z_c [m]; ap_p: ‖·‖ over the measured axes [m].
+        ap_abc: (3,) ā, b̄, c̄ [rad]; rp_l: l̄ + 3 S_l [m]; rp_abc: (3,) 3 S_a, 3 S_b, 3 S_c
+            [rad]; n: attained poses.
+    """
+
+    ap_xyz: np.ndarray
+    ap_p: float
+    ap_abc: np.ndarray
+    rp_l: float
+    rp_abc: np.ndarray
+    n: int
+
+
+def _axes(components: tuple[str, ...] | list[str]) -> tuple[list[int], list[int]]:
+    """Measured position axes and rotation axes (indices 0..2) of ``components``."""
+    bad = [c for c in components if c not in COMPONENTS]
+    if bad:
+        raise MeasurementError(f"unknown components {bad}; valid: {' '.join(COMPONENTS)}")
+    return (
+        [k for k in range(3) if COMPONENTS[k] in components],
+        [k for k in range(3) if COMPONENTS[3 + k] in components],
+    )
+
+
+def point_accuracy(
+    commanded: pin.SE3,
+    positions: np.ndarray,
+    rotations: np.ndarray | None,
+    components: tuple[str, ...] | list[str] = COMPONENTS,
+) -> PointAccuracy:
+    """AP and RP (module doc) of n attained poses of one commanded pose.
+
+    Args:
+        commanded: the commanded pose (p_c, R_c).
+        positions: (n, 3) attained positions [m].
+        rotations: (n, 3, 3) attained orientations, or None when no rotation is measured.
+        components: the measured components; the others are NaN in the result.
+
+    Raises:
+        MeasurementError: unknown components, or rotations missing for measured ones.
+    """
+    pos_k, rot_k = _axes(components)
+    P = np.asarray(positions, dtype=float).reshape(-1, 3)
+    n = len(P)
+    nan3 = np.full(3, np.nan)
+    bary = P.mean(axis=0)
+    ap_xyz = np.where(np.isin(np.arange(3), pos_k), bary - commanded.translation, np.nan)
+    ap_p = float(np.linalg.norm(ap_xyz[pos_k])) if pos_k else float("nan")
+    rp_l = float("nan")
+    if pos_k and n >= 2:
+        l = np.linalg.norm(P[:, pos_k] - bary[pos_k], axis=1)  # noqa: E741
+        rp_l = float(l.mean() + 3 * l.std(ddof=1))
+    ap_abc, rp_abc = nan3.copy(), nan3.copy()
+    if rot_k:
+        if rotations is None:
+            raise MeasurementError(
+                f"components {' '.join(components)} include rotations but no orientation "
+                "was given"
+            )
+        Rc = commanded.rotation
+        ang = np.array([pin.log3(Rc.T @ R) for R in np.asarray(rotations, dtype=float)])
+        ap_abc[rot_k] = ang.mean(axis=0)[rot_k]
+        if n >= 2:
+            rp_abc[rot_k] = 3 * ang.std(axis=0, ddof=1)[rot_k]
+    return PointAccuracy(ap_xyz, ap_p, ap_abc, rp_l, rp_abc, n)
+
+
+def _none(x: np.ndarray) -> list:
+    """A JSON-ready list with None for NaN (unmeasured components)."""
+    return [None if v != v else float(v) for v in np.asarray(x, dtype=float).ravel()]
+
+
+def _nested(x: np.ndarray) -> list:
+    return [_none(row) for row in np.asarray(x, dtype=float)]
+
+
+@dataclass(frozen=True)
 class PoseCharacteristics:
     """ISO 9283 pose accuracy (AP) and repeatability (RP) per test point.
 
     Attributes:
-        ap_p: (P,) positional accuracy [m]; ap_xyz: (P, 3) x̄ − x_c etc. [m].
-        ap_abc: (P, 3) orientation accuracy ā − a_c, b̄ − b_c, c̄ − c_c [rad].
+        ap_p: (P,) positional accuracy over the measured axes [m]; ap_xyz: (P, 3) [m].
+        ap_abc: (P, 3) orientation accuracy ā, b̄, c̄ [rad] (module doc; NaN: not measured).
         rp_l: (P,) positional repeatability l̄ + 3 S_l [m].
         rp_abc: (P, 3) orientation repeatability 3 S_a, 3 S_b, 3 S_c [rad] (read ±).
-        cycles: n.
+        cycles: n; components: the measured components judged.
     """
 
     ap_p: np.ndarray
@@ -176,78 +177,90 @@ class PoseCharacteristics:
     rp_l: np.ndarray
     rp_abc: np.ndarray
     cycles: int
+    components: tuple[str, ...] = COMPONENTS
 
     def lines(self, title: str = "") -> list[str]:
-        """A table in mm and mrad, one row per test point, then the worst case."""
+        """A table in mm and mrad, one row per test point, then the worst case.
+
+        Only the measured components get a column; the header names them and the
+        orientation convention.
+        """
+        pos_k, rot_k = _axes(self.components)
         out = [title] if title else []
-        out.append(
-            "  point   AP_p [mm]   AP_a      AP_b      AP_c [mrad]   RP_l [mm]   "
-            "RP_a      RP_b      RP_c [±mrad]"
-        )
+        axes = " ".join(COMPONENTS[k] for k in pos_k)
+        out.append(f"  AP_p, RP_l over {axes}" + (
+            f"; AP/RP_{'/'.join('abc'[k] for k in rot_k)}: {ORIENTATION_CONVENTION}"
+            if rot_k else "; orientation not measured"))  # fmt: skip
+        head = "  point   AP_p [mm]"
+        head += "".join(f"   AP_{'abc'[k]} [mrad]" for k in rot_k)
+        head += "   RP_l [mm]" + "".join(f"   RP_{'abc'[k]} [±mrad]" for k in rot_k)
+        out.append(head)
         for j in range(len(self.ap_p)):
             a, r = self.ap_abc[j] * 1e3, self.rp_abc[j] * 1e3
-            out.append(
-                f"  P{j + 1}    {self.ap_p[j] * 1e3:9.4f}   {a[0]:+8.4f}  {a[1]:+8.4f}  "
-                f"{a[2]:+8.4f}      {self.rp_l[j] * 1e3:9.4f}   {r[0]:7.4f}   {r[1]:7.4f}   "
-                f"{r[2]:7.4f}"
-            )
-        out.append(
-            f"  worst   AP_p {self.ap_p.max() * 1e3:.4f} mm, RP_l {self.rp_l.max() * 1e3:.4f} mm "
-            f"({self.cycles} cycles)"
+            row = f"  P{j + 1}    {self.ap_p[j] * 1e3:9.4f}"
+            row += "".join(f"   {a[k]:+12.4f}" for k in rot_k)
+            row += f"   {self.rp_l[j] * 1e3:9.4f}" + "".join(f"   {r[k]:14.4f}" for k in rot_k)
+            out.append(row)
+        worst = (
+            f"  worst   AP_p {self.ap_p.max() * 1e3:.4f} mm, "
+            f"RP_l {self.rp_l.max() * 1e3:.4f} mm"
         )
+        for k in rot_k:
+            worst += f", |AP_{'abc'[k]}| {np.abs(self.ap_abc[:, k]).max() * 1e3:.4f} mrad"
+        out.append(worst + f" ({self.cycles} cycles)")
         return out
 
     def to_dict(self) -> dict:
-        """JSON-ready values [m, rad]."""
+        """JSON-ready values [m, rad]; None for components not measured."""
         return {
             "cycles": self.cycles,
+            "components": list(self.components),
+            "orientation_convention": ORIENTATION_CONVENTION,
             "AP_p": self.ap_p.tolist(),
-            "AP_abc": self.ap_abc.tolist(),
+            "AP_xyz": _nested(self.ap_xyz),
+            "AP_abc": _nested(self.ap_abc),
             "RP_l": self.rp_l.tolist(),
-            "RP_abc": self.rp_abc.tolist(),
+            "RP_abc": _nested(self.rp_abc),
         }
 
 
-def _rpy(R: np.ndarray) -> np.ndarray:
-    return np.asarray(pin.rpy.matrixToRpy(np.asarray(R, dtype=float)))
-
-
 def pose_characteristics(
-    commanded: list[pin.SE3], positions: np.ndarray, rotations: np.ndarray
+    commanded: list[pin.SE3],
+    positions: np.ndarray,
+    rotations: np.ndarray | None,
+    components: tuple[str, ...] | list[str] = COMPONENTS,
 ) -> PoseCharacteristics:
     """AP and RP (see the module doc) of attained poses against the commands.
 
     Args:
         commanded: P commanded poses.
         positions: (P, n, 3) attained positions [m].
-        rotations: (P, n, 3, 3) attained orientations (rotation matrices).
+        rotations: (P, n, 3, 3) attained orientations, or None (no rotation measured).
+        components: the measured components to judge (at least one position axis).
 
     Raises:
-        MeasurementError: shapes that do not match, or fewer than 2 cycles.
+        MeasurementError: shapes that do not match, fewer than 2 cycles, no measured
+            position axis.
     """
     pos = np.asarray(positions, dtype=float)
-    rot = np.asarray(rotations, dtype=float)
     if pos.ndim != 3 or pos.shape[0] != len(commanded) or pos.shape[2] != 3:
         raise MeasurementError(f"positions must be ({len(commanded)}, n, 3), got {pos.shape}")
-    if rot.shape != (*pos.shape[:2], 3, 3):
+    rot = None if rotations is None else np.asarray(rotations, dtype=float)
+    if rot is not None and rot.shape != (*pos.shape[:2], 3, 3):
         raise MeasurementError(f"rotations must be {(*pos.shape[:2], 3, 3)}, got {rot.shape}")
     n = pos.shape[1]
     if n < 2:
         raise MeasurementError(f"repeatability needs at least 2 cycles, got {n}")
-    ap_xyz, ap_abc, rp_l, rp_abc = [], [], [], []
-    for j, T in enumerate(commanded):
-        bary = pos[j].mean(axis=0)
-        ap_xyz.append(bary - T.translation)
-        l = np.linalg.norm(pos[j] - bary, axis=1)  # noqa: E741
-        rp_l.append(l.mean() + 3 * l.std(ddof=1))
-        cmd = _rpy(T.rotation)
-        # angles relative to the command, wrapped to (−π, π]
-        ang = np.array([_rpy(R) for R in rot[j]]) - cmd
-        ang = (ang + np.pi) % (2 * np.pi) - np.pi
-        ap_abc.append(ang.mean(axis=0))
-        rp_abc.append(3 * ang.std(axis=0, ddof=1))
-    ap_xyz_a = np.array(ap_xyz)
+    if not _axes(components)[0]:
+        raise MeasurementError(
+            f"components {' '.join(components)} hold no position axis; AP_p needs x, y or z"
+        )
+    pts = [
+        point_accuracy(T, pos[j], None if rot is None else rot[j], components)
+        for j, T in enumerate(commanded)
+    ]
     return PoseCharacteristics(
-        np.linalg.norm(ap_xyz_a, axis=1), ap_xyz_a, np.array(ap_abc), np.array(rp_l),
-        np.array(rp_abc), n,
+        np.array([p.ap_p for p in pts]), np.array([p.ap_xyz for p in pts]),
+        np.array([p.ap_abc for p in pts]), np.array([p.rp_l for p in pts]),
+        np.array([p.rp_abc for p in pts]), n, tuple(components),
     )  # fmt: skip

@@ -12,7 +12,7 @@ from click.testing import CliRunner
 
 from pincal.cli import main
 from pincal.errors import MeasurementError, PincalError
-from pincal.measure._iso9283 import (
+from pincal.measure import (
     iso_test_cube,
     pose_characteristics,
     simulate_cycles,
@@ -30,16 +30,18 @@ def _by_definition(cmd, pos, rot):
         lb = sum(l) / n
         s_l = math.sqrt(sum((li - lb) ** 2 for li in l) / (n - 1))
 
-        # roll-pitch-yaw of R = Rz(c) Ry(b) Rx(a)
-        def abc(R):
-            return (math.atan2(R[2, 1], R[2, 2]), math.asin(-R[2, 0]), math.atan2(R[1, 0], R[0, 0]))
+        # a, b, c: rotation vector of the deviation E = R_cᵀ R about the commanded
+        # frame's x, y, z axes (angle θ from the trace, axis from the skew part)
+        def abc(E):
+            theta = math.acos(max(-1.0, min(1.0, (E[0, 0] + E[1, 1] + E[2, 2] - 1) / 2)))
+            f = theta / (2 * math.sin(theta))
+            return (f * (E[2, 1] - E[1, 2]), f * (E[0, 2] - E[2, 0]), f * (E[1, 0] - E[0, 1]))
 
-        ac = abc(T.rotation)
-        angs = [abc(R) for R in rot[j]]
+        angs = [abc(T.rotation.T @ R) for R in rot[j]]
         ap_abc, rp_abc = [], []
         for k in range(3):
             mean = sum(a[k] for a in angs) / n
-            ap_abc.append(mean - ac[k])
+            ap_abc.append(mean)
             rp_abc.append(3 * math.sqrt(sum((a[k] - mean) ** 2 for a in angs) / (n - 1)))
         out.append((ap_p, ap_abc, lb + 3 * s_l, rp_abc))
     return out
@@ -73,7 +75,7 @@ def test_ap_rp_match_the_definition():
         np.testing.assert_allclose(pc.ap_abc[j], ap_abc, rtol=1e-9, atol=1e-13)
         assert pc.rp_l[j] == pytest.approx(rp_l, rel=1e-12)
         np.testing.assert_allclose(pc.rp_abc[j], rp_abc, rtol=1e-9)
-    assert pc.cycles == 30 and len(pc.lines("x")) == 8
+    assert pc.cycles == 30 and len(pc.lines("x")) == 9
     assert 2.2e-3 < pc.ap_p.max() < 2.4e-3  # the offset of 2.29 mm
     with pytest.raises(MeasurementError, match="2 cycles"):
         pose_characteristics(cmd, pos[:, :1], rot[:, :1])
@@ -81,21 +83,17 @@ def test_ap_rp_match_the_definition():
         pose_characteristics(cmd[:2], pos, rot)
 
 
-def test_test_cube_is_the_largest_reachable_cube_with_the_standard_points(stewart):
+def test_test_cube_lies_in_the_declared_workspace_with_the_standard_points(stewart):
     cube = iso_test_cube(stewart, n_samples=100, rng=0)
     h = cube.edge / 2
-    assert 0.05 < cube.edge < 1.0
+    lim = stewart.workspace.pose  # x, y ±60 mm, z 410..490 mm: the cube is 80 mm
+    assert cube.workspace == "declared" and cube.axes == ("x", "y", "z")
+    assert cube.edge == pytest.approx(0.08, abs=1e-4)
+    for k, a in enumerate("xyz"):
+        assert lim[a][0] - 1e-12 <= cube.centre[k] - h and cube.centre[k] + h <= lim[a][1] + 1e-12
     for T in cube.poses:
-        stewart.inverse(T)  # reachable
-    # slightly larger: some lattice point is out of reach
-    lattice = [np.array([i, j, k]) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)]
-    failed = 0
-    for d in lattice:
-        try:
-            stewart.inverse(pin.SE3(cube.rotation, cube.centre + 1.02 * h * d))
-        except PincalError:
-            failed += 1
-    assert failed > 0
+        T_back = stewart.forward(stewart.inverse(T))  # reached, by forward kinematics
+        np.testing.assert_allclose(T_back.translation, T.translation, atol=1e-6)
     P = cube.points
     np.testing.assert_allclose(P[0], cube.centre)
     diag = 2 * h * math.sqrt(3)  # the diagonal plane's diagonal is the cube's diagonal
