@@ -135,8 +135,8 @@ def acceptance(
     where measured, e.g. rz). It is the largest one whose lattice the machine reaches
     (inverse then forward kinematics) inside the sidecar's declared workspace.pose, or,
     without one, inside the sampled reachable workspace; the output says which. When
-    none fits, the command stops and says what to change. AP_a/b/c are the rotation
-    vector log3(R_cmdᵀ R) about the commanded frame's x, y, z axes [mrad].
+    none fits, the command stops and says what to change. AP_a/b/c follow ISO 9283:
+    differences of the angles a, b, c about the base x, y, z axes [mrad].
 
     Simulates the actual machine (MODEL with the errors of `pincal simulate`, same
     defaults) commanded by the nominal model (before) and by the calibrated one

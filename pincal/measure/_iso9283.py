@@ -6,17 +6,13 @@ over the components the machine measures (the others are neither commanded nor j
 * ``AP_p = sqrt(Σ_k (x̄_k − x_ck)²)`` over the measured position axes k (barycentre vs
   command); ``RP_l = l̄ + 3 S_l`` with ``l_i = ‖p_i − p̄‖`` over the same axes and
   ``S_l = sqrt(Σ (l_i − l̄)² / (n − 1))``.
-* Orientation (ISO 9283 expresses it as angles a, b, c about the x, y, z axes): pincal's
-  convention, :data:`ORIENTATION_CONVENTION`, takes the deviation of each attained
-  orientation from the command as the rotation vector ``(a_i, b_i, c_i) = log3(R_cᵀ R_i)``,
-  i.e. small rotations about the x, y, z axes of the *commanded* measured frame — the axes
-  of the components rx, ry, rz that pincal measures, calibrates and commands — so that
-  ``AP_a = ā``, ``AP_b = b̄``, ``AP_c = c̄`` (the command's own angles are 0) and
-  ``RP_a = ±3 S_a`` etc. (sample standard deviations). When the commanded orientation is
-  parallel to the base (the bundled machines' test poses) these are the base-axis angles
-  of the standard to first order; unlike differences of roll–pitch–yaw angles they stay
-  defined at any orientation (no gimbal lock at b = ±90°). Only the measured rotation
-  components are reported.
+* Orientation, ISO 9283's convention (:data:`ORIENTATION_CONVENTION`): each orientation
+  is given by the angles (a, b, c) about the base x, y, z axes, ``R = Rz(c)·Ry(b)·Rx(a)``
+  (ISO 9787's roll, pitch, yaw); ``AP_a = ā − a_c``, ``AP_b = b̄ − b_c``, ``AP_c = c̄ − c_c``
+  with each angle difference wrapped to (−π, π], and ``RP_a = ±3 S_a`` etc. (sample
+  standard deviations). The angles are undefined at b = ±90° (gimbal lock); a test pose
+  there is refused. Only the measured rotation components are reported; for a planar
+  machine measuring rz, c is its rotation about z exactly.
 
 :func:`point_accuracy` computes one test point; ``pincal acceptance`` (through
 :func:`pose_characteristics`) and ``pincal validate`` both use it.
@@ -43,8 +39,28 @@ __all__ = [
 
 #: the orientation convention of AP_a/b/c and RP_a/b/c, as printed by acceptance/validate
 ORIENTATION_CONVENTION = (
-    "a, b, c = rotation vector log3(R_cmdᵀ R) about the commanded frame's x, y, z axes"
+    "ISO 9283: a, b, c = angles about the base x, y, z axes, R = Rz(c)·Ry(b)·Rx(a); "
+    "AP_a = ā − a_c (differences wrapped to ±π)"
 )
+#: |b| closer than this to 90° [rad]: the angles a and c are not defined
+_GIMBAL_MARGIN = 1e-6
+
+
+def iso_angles(R: np.ndarray) -> np.ndarray:
+    """ISO 9283 orientation angles (a, b, c) [rad] of R = Rz(c)·Ry(b)·Rx(a), shape (3,).
+
+    Raises:
+        MeasurementError: b within 1e-6 rad of ±90° (gimbal lock: a and c undefined).
+    """
+    R = np.asarray(R, dtype=float)
+    sb = -float(R[2, 0])
+    if abs(abs(sb) - 1.0) < _GIMBAL_MARGIN**2 / 2:
+        raise MeasurementError(
+            "an orientation has b = ±90° (its x axis along the base z axis): ISO 9283's "
+            "angles a and c are not defined there; choose test poses away from it"
+        )
+    a, c = np.arctan2(R[2, 1], R[2, 2]), np.arctan2(R[1, 0], R[0, 0])
+    return np.array([a, np.arcsin(np.clip(sb, -1.0, 1.0)), c])
 
 
 def simulate_cycles(
@@ -142,8 +158,9 @@ def point_accuracy(
                 f"components {' '.join(components)} include rotations but no orientation "
                 "was given"
             )
-        Rc = commanded.rotation
-        ang = np.array([pin.log3(Rc.T @ R) for R in np.asarray(rotations, dtype=float)])
+        abc_c = iso_angles(commanded.rotation)
+        ang = np.array([iso_angles(R) for R in np.asarray(rotations, dtype=float)]) - abc_c
+        ang = (ang + np.pi) % (2 * np.pi) - np.pi  # each difference in [−π, π)
         ap_abc[rot_k] = ang.mean(axis=0)[rot_k]
         if n >= 2:
             rp_abc[rot_k] = 3 * ang.std(axis=0, ddof=1)[rot_k]

@@ -30,14 +30,15 @@ def _by_definition(cmd, pos, rot):
         lb = sum(l) / n
         s_l = math.sqrt(sum((li - lb) ** 2 for li in l) / (n - 1))
 
-        # a, b, c: rotation vector of the deviation E = R_cᵀ R about the commanded
-        # frame's x, y, z axes (angle θ from the trace, axis from the skew part)
-        def abc(E):
-            theta = math.acos(max(-1.0, min(1.0, (E[0, 0] + E[1, 1] + E[2, 2] - 1) / 2)))
-            f = theta / (2 * math.sin(theta))
-            return (f * (E[2, 1] - E[1, 2]), f * (E[0, 2] - E[2, 0]), f * (E[1, 0] - E[0, 1]))
+        # a, b, c: ISO 9283's angles about the base x, y, z axes, R = Rz(c) Ry(b) Rx(a),
+        # read off the matrix; AP_a = ā − a_c with each difference wrapped to ±π
+        def abc(R):
+            return (math.atan2(R[2, 1], R[2, 2]), -math.asin(R[2, 0]), math.atan2(R[1, 0], R[0, 0]))
 
-        angs = [abc(T.rotation.T @ R) for R in rot[j]]
+        def wrap(x):
+            return (x + math.pi) % (2 * math.pi) - math.pi
+
+        angs = [[wrap(u - v) for u, v in zip(abc(R), abc(T.rotation), strict=True)] for R in rot[j]]
         ap_abc, rp_abc = [], []
         for k in range(3):
             mean = sum(a[k] for a in angs) / n
@@ -79,6 +80,14 @@ def test_ap_rp_match_the_definition():
     assert 2.2e-3 < pc.ap_p.max() < 2.4e-3  # the offset of 2.29 mm
     with pytest.raises(MeasurementError, match="2 cycles"):
         pose_characteristics(cmd, pos[:, :1], rot[:, :1])
+    # a command at c = 179.9°: attained angles on both sides of ±180° are wrapped
+    turn = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, np.pi - 1e-3), np.zeros(3))
+    across = np.array([[pin.rpy.rpyToMatrix(0.0, 0.0, np.pi + d) for d in (1e-3, 3e-3)]])
+    pc = pose_characteristics([turn], np.zeros((1, 2, 3)), across)
+    assert pc.ap_abc[0, 2] == pytest.approx(3e-3, abs=1e-12)
+    gimbal = pin.SE3(pin.rpy.rpyToMatrix(0.0, np.pi / 2, 0.0), np.zeros(3))
+    with pytest.raises(MeasurementError, match="b = ±90°"):
+        pose_characteristics([gimbal], np.zeros((1, 2, 3)), np.array([[gimbal.rotation] * 2]))
     with pytest.raises(MeasurementError, match="positions"):
         pose_characteristics(cmd[:2], pos, rot)
 
