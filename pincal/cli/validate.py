@@ -15,8 +15,13 @@ def _fmt(v: float | None, width: int = 9, digits: int = 4) -> str:
 
 
 def format_validation(doc: dict, max_rows: int = 40) -> str:
-    """The printed validation report (mm / mrad)."""
+    """The printed validation report (mm / mrad), each block over its measured components."""
+    from pincal.report import block_label
+
     b, a, p = doc["before"], doc["after"], doc["predicted"]
+    comps = tuple(doc["components"])
+    pos = f"{block_label('position', comps)} [mm]"
+    ori = f"{block_label('orientation', comps)} [mrad]"
     lines = [
         f"pincal validate {doc['calibration']['directory']} ({doc['calibration']['model']}, "
         f"preset {doc['calibration']['preset']}) on {doc['data']}: {doc['poses']} poses, "
@@ -25,7 +30,7 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
     if not doc["independent"]:
         lines.append("  WARNING: this file was used for fitting; the validation is not independent")
     lines += [
-        "                        position [mm]          orientation [mrad]",
+        f"                        {pos:23s}{ori}",
         "                        RMS        max         RMS        max",
         f"  nominal model      {_fmt(b['rms_position_mm'])}  {_fmt(b['max_position_mm'])}"
         f"   {_fmt(b['rms_orientation_mrad'])}  {_fmt(b['max_orientation_mrad'])}",

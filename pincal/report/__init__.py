@@ -22,6 +22,7 @@ from pincal.report._plots import (
     plot_parameters,
     plot_validation_summary,
 )
+from pincal.report._sections import block_label
 from pincal.report._workers import PlotWorkers
 
 __all__ = [
@@ -31,6 +32,7 @@ __all__ = [
     "ReportFiles",
     "Section",
     "Table",
+    "block_label",
     "calibration_report",
     "error_statistics",
     "plot_convergence",
