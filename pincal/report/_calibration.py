@@ -109,7 +109,8 @@ def read_identification(path: str | os.PathLike) -> IdentificationResult:
     max_orientation_mrad``; null for a block not measured), ``validation_components``
     (the components the validation errors are taken over), ``validation_errors``
     (``{before|after: {position: [m], orientation: [rad]}}`` per validation pose),
-    ``index_history`` (``{O1: [...], ...}``) and the parameters' ``true`` values (as ``annotations["truth"]``) — are checked here.
+    ``index_history`` (``{O1: [...], ...}``) and the parameters' ``true`` values (as
+    ``annotations["truth"]``) — are checked here.
 
     Returns:
         IdentificationResult (no parameter set or mechanism; context in ``annotations``).
