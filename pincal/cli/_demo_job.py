@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from contextlib import AbstractContextManager, nullcontext
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -36,6 +36,7 @@ from pincal.identification import (
 )
 from pincal.io import MANIFEST, write_calibration
 from pincal.measure import (
+    DEFAULT_NOISE,
     NoiseModel,
     PoseErrors,
     pose_errors,
@@ -80,7 +81,7 @@ class DemoSettings:
     n_poses: int = 30
     n_validation: int = 60
     error_std: float = 0.5
-    noise: NoiseModel = field(default_factory=lambda: NoiseModel(0.01, 0.02))
+    noise: NoiseModel = DEFAULT_NOISE
     method: str = "gauss-newton"
     report: bool = True
     candidates: str = "grid:4"

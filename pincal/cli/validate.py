@@ -68,8 +68,14 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
     help="Held-out measurement file (not used for fitting).",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print the full validation as JSON.")
+@click.option(
+    "--out",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="Also write the full validation JSON to this file (for `pincal report --validation`).",
+)
 @fail_cleanly
-def validate(calibration: Path, data: Path, as_json: bool) -> None:
+def validate(calibration: Path, data: Path, as_json: bool, out: Path | None) -> None:
     """Check the calibration in CALIBRATION on measurements not used for fitting.
 
     Prints the nominal (before) and calibrated (after) errors on --data (RMS and max
@@ -85,10 +91,16 @@ def validate(calibration: Path, data: Path, as_json: bool) -> None:
       pincal validate cal/ --data held_out.csv
       pincal validate cal/ --data held_out.csv --json
     """
-    from pincal.io import read_calibration, read_measurement_file, sha256_file
+    from pincal.cli.common import guard_paths
+    from pincal.io import atomic_write_text, read_calibration, read_measurement_file, sha256_file
     from pincal.measure import validate_held_out
     from pincal.model import parameters
 
+    if out is not None:
+        inputs = {"--data": data}
+        inputs |= {f"CALIBRATION's {n}": calibration / n
+                   for n in ("identification.json", "calibration.json")}  # fmt: skip
+        guard_paths(inputs, {"--out": out})
     cal = read_calibration(calibration)
     nominal = cal.nominal()
     mf = read_measurement_file(data, nominal)
@@ -118,6 +130,8 @@ def validate(calibration: Path, data: Path, as_json: bool) -> None:
         "independent": independent,
         **validation.to_dict(),
     }
+    if out is not None:
+        atomic_write_text(out, json.dumps(doc, indent=1) + "\n")
     if as_json:
         click.echo(json.dumps(doc))
     else:

@@ -26,6 +26,7 @@ from pincal.measure._iso9283 import (
     simulate_cycles,
 )
 from pincal.measure._measurements import (
+    DEFAULT_NOISE,
     Measurements,
     NoiseModel,
     simulate_measurements,
@@ -49,6 +50,7 @@ from pincal.measure._validation import (
 )
 
 __all__ = [
+    "DEFAULT_NOISE",
     "INSTRUMENT_KINDS",
     "HeldOutValidation",
     "Instrument",

@@ -11,6 +11,7 @@ from pincal.report._calibration import (
     calibration_report,
     read_identification,
 )
+from pincal.report._campaign_notes import campaign_notes
 from pincal.report._document import ReportFiles, Section, Table, write_report
 from pincal.report._plots import (
     ErrorStats,
@@ -34,6 +35,7 @@ __all__ = [
     "Table",
     "block_label",
     "calibration_report",
+    "campaign_notes",
     "error_statistics",
     "plot_convergence",
     "plot_error_histogram",

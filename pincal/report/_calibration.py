@@ -7,12 +7,14 @@ own annotations (validation errors, index history) and draws them.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
 import tempfile
+from collections.abc import Mapping
 from pathlib import Path
-from typing import SupportsFloat, cast
+from typing import Any, SupportsFloat, cast
 
 import numpy as np
 
@@ -217,6 +219,7 @@ def calibration_report(
     name: str = "report",
     n_jobs: int | None = 1,
     workers: PlotWorkers | None = None,
+    notes: Mapping[str, Any] | None = None,
 ) -> ReportFiles:
     """Write the report of a calibration output directory: HTML, Markdown and JSON.
 
@@ -238,6 +241,8 @@ def calibration_report(
         workers: plot workers started earlier (:class:`PlotWorkers`, already warm
             when the plots come); when given they draw the plots and ``n_jobs`` is
             not used.
+        notes: annotations added over the file's (e.g. :func:`campaign_notes` of a
+            campaign's validation, truth and design files), checked like the file's.
 
     Raises:
         ReportError: the directory or its identification.json is missing or malformed,
@@ -247,6 +252,9 @@ def calibration_report(
     if not src.is_dir():
         raise ReportError(f"calibration directory {str(src)!r} does not exist")
     result = read_identification(src / IDENTIFICATION_JSON)
+    if notes:
+        _check_annotations(dict(notes))
+        result = dataclasses.replace(result, annotations={**result.annotations, **notes})
     notes = dict(result.annotations)
     out_dir = Path(out) if out is not None else src
     files = sorted(p.name for p in src.iterdir() if p.suffix in (".urdf", ".yaml", ".json"))
