@@ -4,8 +4,9 @@ keep each block's unit — through the CLI: poses → simulate → calibrate →
 Machines measuring [x, y, rz] (the planar 3-RRR of tests/model/machines/rrr3, written in
 another engineer's habits), [x, y, z] (the delta of tests/open_world/machines.py,
 ``measured: position``), [y, z, rx, ry] (pkm5 as bundled), [x, y, z, rx, ry] (the
-Stewart platform with rz left out of its sidecar) and the full pose (stewart_6ups). The numbers of every report
-(report.txt, report.md / .json / .html) must be the ones the CLI printed.
+Stewart platform with rz left out of its sidecar) and the full pose (stewart_6ups). The
+numbers of every report (report.txt, report.md / .json / .html) must be the ones the CLI
+printed.
 """
 
 from __future__ import annotations
@@ -85,10 +86,9 @@ def campaign(request, tmp_path_factory):
     _ok(["simulate", model, "--random", "15", "--seed", "9", "--params", preset,
          "--out", str(tmp / "v.csv")])  # fmt: skip
     cal = tmp / "cal"
-    doc = json.loads(
-        _ok(["calibrate", model, "--data", str(tmp / "m.csv"), "--params", preset,
-             "--out", str(cal), "--json"]).stdout  # fmt: skip
-    )
+    res = _ok(["calibrate", model, "--data", str(tmp / "m.csv"), "--params", preset,
+               "--out", str(cal), "--json"])  # fmt: skip
+    doc = json.loads(res.stdout)
     text = _ok(["validate", str(cal), "--data", str(tmp / "v.csv"),
                 "--out", str(tmp / "v.json")]).stdout  # fmt: skip
     val = json.loads((tmp / "v.json").read_text())
@@ -125,7 +125,7 @@ def test_the_calibration_records_and_names_its_components(campaign):
     data = _table(report, "Data and noise")
     assert data["measured components"][1] == " ".join(comps)
     assert f"| measured components | {' '.join(comps)} |" in campaign["md"]
-    for block, _, label in _blocks(comps):
+    for _, _, label in _blocks(comps):
         assert f"noise σ {label}" in data
     shown = {b for b, _, _ in _blocks(comps)}
     for block in {"position", "orientation"} - shown:  # a block not measured: no row
@@ -155,7 +155,7 @@ def test_residuals_in_every_report_are_the_cli_numbers(campaign):
 def test_prediction_is_per_block_and_near_the_achieved(campaign):
     comps = campaign["comps"]
     rows = _table(campaign["json"], "Prediction (Cramér–Rao) vs achievement")
-    for block, _, label in _blocks(comps):
+    for _, _, label in _blocks(comps):
         predicted, achieved = rows[f"{label} residual RMS per component"][2:]
         assert 0.5 < achieved / predicted < 2.0  # the same unit: a fit at the noise level
     assert "RMS(error / σ) of the parameters" in rows  # the simulated truth is shown
