@@ -177,7 +177,7 @@ def _validation(notes: dict, plots: Path, jobs: PlotJobs) -> Section | None:
     images = [
         jobs.add(
             plot_validation_summary, before, after, path=plots / "validation_summary.png",
-            components=comps,
+            labels={b: block_label(b, comps) for b in ("position", "orientation")},
         )
     ]  # fmt: skip
     ve: dict = notes.get("validation_errors") or {"before": {}, "after": {}}
