@@ -20,6 +20,7 @@ from typing import Any
 
 from pincal._yaml import shown
 from pincal.errors import CampaignError, PincalError, clip
+from pincal.measure import DEFAULT_NOISE
 
 __all__ = ["KEYS_HELP", "Campaign", "load_campaign"]
 
@@ -46,7 +47,7 @@ Campaign file keys (YAML; relative paths are relative to the file):
     poses: 30                simulated without a design: random workspace poses
     errors_seed: 0           simulated "actual" machine: seed of its geometric errors
     error_size: [1, 10]      uniform error bounds [mm, mrad]
-    noise: [0.01, 0.05]      measurement noise 1 sigma [mm, mrad]
+    noise: [0.01, 0.02]      measurement noise 1 sigma [mm, mrad] (pincal's default)
     seed: 1                  seed of the poses and the noise
   identification:
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
@@ -101,7 +102,7 @@ class MeasurementSource:
     poses: int | None = None
     errors_seed: int = 0
     error_size: tuple[float, float] = (1.0, 10.0)
-    noise: tuple[float, float] = (0.01, 0.05)
+    noise: tuple[float, float] = (DEFAULT_NOISE.position, DEFAULT_NOISE.orientation)
     seed: int = 1
 
     def check(self, key: str) -> None:

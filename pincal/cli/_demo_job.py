@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from contextlib import AbstractContextManager, nullcontext
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -36,6 +36,7 @@ from pincal.identification import (
 )
 from pincal.io import MANIFEST, write_calibration
 from pincal.measure import (
+    DEFAULT_NOISE,
     NoiseModel,
     PoseErrors,
     pose_errors,
@@ -80,7 +81,7 @@ class DemoSettings:
     n_poses: int = 30
     n_validation: int = 60
     error_std: float = 0.5
-    noise: NoiseModel = field(default_factory=lambda: NoiseModel(0.01, 0.02))
+    noise: NoiseModel = DEFAULT_NOISE
     method: str = "gauss-newton"
     report: bool = True
     candidates: str = "grid:4"
@@ -179,6 +180,8 @@ def _run_demo(
     J_val = identification_jacobian(nominal, params, q_val, components=COMPONENTS).reshape(
         len(q_val), 6, len(params)
     )
+    # the prediction, like the validation, is over the measured components only
+    J_val[:, [k for k, c in enumerate(COMPONENTS) if c not in comps], :] = 0.0
     crb = cramer_rao_from_jacobian(J_meas, comps, settings.noise, J_val, params.names, params.units)
     meas = simulate_measurements(actual, q_meas, settings.noise, rng)
     say(f"identifying {len(params)} parameters ({settings.method})")
@@ -187,8 +190,8 @@ def _run_demo(
     if not verdict.passed and not settings.force and out_dir is not None:
         raise QualityGateError(verdict.reason(), verdict)
     say(f"validating on {settings.n_validation} fresh poses")
-    before = pose_errors(nominal, actual, q_val)
-    after = pose_errors(result.calibrated, actual, q_val)
+    before = pose_errors(nominal, actual, q_val, comps)
+    after = pose_errors(result.calibrated, actual, q_val, comps)
     files: list[Path] = []
     if out_dir is not None:
         out = Path(out_dir)
@@ -197,6 +200,9 @@ def _run_demo(
             "truth": dict(zip(params.names, (float(t) for t in true), strict=True)),
             "validation_before": before.summary(),
             "validation_after": after.summary(),
+            "validation_components": list(before.components),
+            "validation_source": f"{settings.n_validation} fresh poses of the simulated actual "
+            "machine (truth)",
             "validation_errors": {
                 "before": {
                     "position": before.position.tolist(),
@@ -228,34 +234,50 @@ def _run_demo(
     )
 
 
-def _row(label: str, s: dict[str, float]) -> str:
+def _f(v: float | None) -> str:
+    return f"{'-':>8s}" if v is None else f"{v:8.4f}"
+
+
+def _row(label: str, s: dict[str, float | None]) -> str:
     return (
-        f"    {label:30s} {s['rms_position_mm']:8.4f}  {s['max_position_mm']:8.4f}"
-        f"   {s['rms_orientation_mrad']:8.4f}  {s['max_orientation_mrad']:8.4f}"
+        f"    {label:30s} {_f(s['rms_position_mm'])}  {_f(s['max_position_mm'])}"
+        f"   {_f(s['rms_orientation_mrad'])}  {_f(s['max_orientation_mrad'])}"
     )
 
 
-def _prediction_lines(d: DemoResult, err: np.ndarray, after: dict[str, float]) -> list[str]:
+def _prediction_lines(
+    d: DemoResult, err: np.ndarray, after: dict[str, float | None]
+) -> list[str]:
     """Predicted (Cramér–Rao, before measuring) vs achieved accuracy."""
+    from pincal.report import block_label
+
     if d.crb is None:
         return []
     c = d.crb
     idx = [c.names.index(n) for n in d.result.params.names]
     pred_std = float(np.sqrt(np.mean(c.std[idx] ** 2)))
-    return [
+    lines = [
         "  predicted before measuring (Cramér–Rao) vs achieved:",
-        "                                      predicted   achieved",
-        f"    RMS parameter error [µm]          {pred_std * 1e6:9.3f}  "
+        f"    {'':46s} predicted   achieved",
+        f"    {'RMS parameter error [µm]':46s} {pred_std * 1e6:9.3f}  "
         f"{np.sqrt(np.mean(err**2)) * 1e6:9.3f}",
-        f"    validation position RMS [mm]      {c.validation_position_rms * 1e3:9.5f}  "
-        f"{after['rms_position_mm']:9.5f}",
-        f"    validation orientation RMS [mrad] {c.validation_orientation_rms * 1e3:9.5f}  "
-        f"{after['rms_orientation_mrad']:9.5f}",
     ]
+    comps = d.before.components
+    for block, unit, pred in (
+        ("position", "mm", c.validation_position_rms),
+        ("orientation", "mrad", c.validation_orientation_rms),
+    ):
+        got = after[f"rms_{block}_{unit}"]
+        if got is not None:
+            label = f"validation {block_label(block, comps)} RMS [{unit}]"
+            lines.append(f"    {label:46s} {pred * 1e3:9.5f}  {got:9.5f}")
+    return lines
 
 
 def format_demo(d: DemoResult) -> str:
     """The printed report of a demo run."""
+    from pincal.report import block_label
+
     r, s = d.result, d.settings
     b, a = d.before.summary(), d.after.summary()
     idx = [d.params.index(n) for n in r.params.names]
@@ -278,7 +300,10 @@ def format_demo(d: DemoResult) -> str:
         f"  identification: {r.method}, {r.iterations} iterations, {r.message}; reduced χ² "
         f"{r.reduced_chi2:.3f}",
         "",
-        f"  validation on {s.n_validation} fresh poses   position [mm]        orientation [mrad]",
+        f"  validation on {s.n_validation} fresh poses, over the measured components "
+        f"{' '.join(d.before.components)}:",
+        f"    {'':30s} {block_label('position', d.before.components) + ' [mm]':20s} "
+        f"{block_label('orientation', d.before.components)} [mrad]",
         "                                      RMS       max        RMS       max",
         _row("nominal model", b),
         _row("calibrated model", a),

@@ -26,10 +26,18 @@ def result_json(result, data_path: str, urdf: str | None = None) -> dict:
 
 
 def format_report(doc: dict) -> str:
-    """Human-readable identification report: values and 2σ in µm / µrad (as report.md)."""
+    """Human-readable identification report: values and 2σ in µm / µrad (as report.md).
+
+    Position and orientation are reported apart, each over its measured components
+    (named: ``position (x y)``, ``orientation (rz)``) and in its own unit.
+    """
+    from pincal.report import block_label
+
+    comps = tuple(doc.get("components") or ()) or None
+    measured = f", measured components {' '.join(comps)}" if comps else ""
     lines = [
         f"pincal calibration of {doc['model']} (preset {doc['preset']}, {doc['method']})",
-        f"data: {doc['data']} ({doc['poses']} poses)",
+        f"data: {doc['data']} ({doc['poses']} poses{measured})",
         f"solver: {doc['message']} after {doc['iterations']} iterations; "
         f"reduced chi2 {doc['reduced_chi2']:.4g}",
     ]
@@ -41,8 +49,13 @@ def format_report(doc: dict) -> str:
     w = doc.get("weighting") or {}
     if w.get("position_std") is not None or w.get("orientation_std") is not None:
         pos, ori = w.get("position_std"), w.get("orientation_std")
-        parts = [f"position {pos * 1e6:.3f} µm" if pos is not None else "",
-                 f"orientation {ori * 1e6:.3f} µrad" if ori is not None else ""]  # fmt: skip
+        s_after = doc["residuals"]["after"]
+        if comps is not None:  # the σ of a block not measured is not shown
+            pos = pos if s_after["rms_position_mm"] is not None else None
+            ori = ori if s_after["rms_orientation_mrad"] is not None else None
+        parts = [f"{block_label('position', comps)} {pos * 1e6:.3f} µm" if pos is not None else "",
+                 f"{block_label('orientation', comps)} {ori * 1e6:.3f} µrad"
+                 if ori is not None else ""]  # fmt: skip
         lines.append(f"noise (1σ, {w.get('source', '?')}): " + ", ".join(x for x in parts if x))
     header = f"{'parameter':32s} {'value':>14s} {'2σ':>12s}  (µm for lengths, µrad for angles)"
     lines += ["", header]
@@ -56,11 +69,12 @@ def format_report(doc: dict) -> str:
         parts = []
         if s["rms_position_mm"] is not None:
             parts.append(
-                f"position RMS {s['rms_position_mm']:.6f} max {s['max_position_mm']:.6f} mm"
+                f"{block_label('position', comps)} RMS {s['rms_position_mm']:.6f} max "
+                f"{s['max_position_mm']:.6f} mm"
             )
         if s["rms_orientation_mrad"] is not None:
             parts.append(
-                f"orientation RMS {s['rms_orientation_mrad']:.6f} max "
+                f"{block_label('orientation', comps)} RMS {s['rms_orientation_mrad']:.6f} max "
                 f"{s['max_orientation_mrad']:.6f} mrad"
             )
         lines.append(f"residuals {when:6s}: " + "; ".join(parts))

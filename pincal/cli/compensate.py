@@ -47,15 +47,33 @@ def load_calibrated(spec: str):
     is_flag=True,
     help="Leave unreachable targets out (reported) instead of failing.",
 )
+@click.option(
+    "--allow-branch-change",
+    is_flag=True,
+    help="Keep commands on another branch than their start (|Δq| > 0.5 rad / 50 mm from "
+    "the nominal command, > π rad from another target's, or det of the actuator → pose "
+    "Jacobian changing sign); listed. Default: refused.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
-def compensate(calibration, targets, out, components, skip_unreachable, as_json) -> None:
+def compensate(
+    calibration, targets, out, components, skip_unreachable, allow_branch_change, as_json
+) -> None:
     """Compensated actuator commands: inverse kinematics of the calibrated machine.
 
     CALIBRATION is the directory written by `pincal calibrate` (a model name or URDF
     is accepted too). Only the components the machine controls are imposed: the
     model's measured components unless --components says otherwise; a target file may
     give only those columns. The commands file states each actuator's unit.
+
+    Each target's inverse kinematics starts from its own nominal command when the
+    targets file carries the actuator columns (a `pincal poses` file does), otherwise
+    from the command solved for the nearest target before it. A command on another
+    branch than its start — an actuator moved more than 0.5 rad (revolute) or 50 mm
+    (prismatic) from the target's nominal command, or more than π rad from another
+    target's, or the determinant of the actuator → pose Jacobian changed sign (a
+    singularity crossed) — is refused unless --allow-branch-change. The largest
+    |Δq| from the starts is printed (rad for revolute, mm for prismatic actuators).
 
     \b
     Examples:
@@ -81,8 +99,12 @@ def compensate(calibration, targets, out, components, skip_unreachable, as_json)
             missing=absent,
         )
     poses = pf.poses
+    starts, start_note = _starts(pf, mech)
     with click.progressbar(length=len(poses), label="compensating", file=sys.stderr) as bar:
-        result = run(mech, poses, progress=lambda done, total: bar.update(1), components=comps)
+        result = run(
+            mech, poses, progress=lambda done, total: bar.update(1), components=comps,
+            starts=starts, allow_branch_change=allow_branch_change,
+        )  # fmt: skip
     if result.unreachable and not skip_unreachable:
         first = result.unreachable[0]
         raise UnreachablePoseError(
@@ -102,6 +124,10 @@ def compensate(calibration, targets, out, components, skip_unreachable, as_json)
         "commands": len(idx),
         "unreachable": list(result.unreachable),
         "reasons": {str(k): v for k, v in result.reasons.items()},
+        "starts": start_note,
+        "branch_changes": {str(k): v for k, v in (result.branch_changes or {}).items()},
+        "branch_changes_allowed": allow_branch_change,
+        "largest_step": _largest_steps(result, mech),
     }
     if as_json:
         click.echo(json.dumps(summary))
@@ -114,5 +140,47 @@ def compensate(calibration, targets, out, components, skip_unreachable, as_json)
         if result.unreachable:
             msg += f"; unreachable: {list(result.unreachable)}"
         click.echo(msg)
+        click.echo(f"starts: {start_note}")
+        for line in _step_lines(summary["largest_step"]):
+            click.echo(line)
         for k in result.unreachable:
             click.echo(f"  target {k}: {result.reasons[k]}")
+        if allow_branch_change and result.branch_changes:
+            click.echo(f"BRANCH CHANGES (allowed): targets {sorted(result.branch_changes)}")
+            for k, why in sorted(result.branch_changes.items()):
+                click.echo(f"  target {k}: {why}")
+
+
+def _starts(pf, mech):
+    """The targets file's nominal commands in ``mech``'s actuator order, and a note."""
+    import numpy as np
+
+    if pf.q_act is None or not pf.actuated:
+        return None, "no commands in the targets file: each target starts from the nearest solved"
+    if sorted(pf.actuated) != sorted(mech.actuated):
+        return None, (
+            f"the targets file's actuator columns {list(pf.actuated)} are not the machine's "
+            f"{list(mech.actuated)}: each target starts from the nearest solved one"
+        )
+    order = [list(pf.actuated).index(a) for a in mech.actuated]
+    starts = np.asarray(pf.q_act, dtype=float)[:, order]
+    return starts, f"the nominal command of each target ({len(starts)} in the targets file)"
+
+
+def _largest_steps(result, mech) -> dict:
+    """Largest |Δq| from the start per actuator kind: {"rad"|"mm": {value, target, actuator}}."""
+    out = {}
+    for unit, shown, factor in (("rad", "rad", 1.0), ("m", "mm", 1e3)):
+        step = result.largest_step(unit)
+        if step is not None:
+            value, i, k = step
+            out[shown] = {"value": value * factor, "target": i, "actuator": mech.actuated[k]}
+    return out
+
+
+def _step_lines(steps: dict) -> list[str]:
+    return [
+        f"largest |Δq| from the start: {s['value']:.4g} {unit} "
+        f"({s['actuator']}, target {s['target']})"
+        for unit, s in steps.items()
+    ]

@@ -77,8 +77,8 @@ def demo(
     """Simulated calibration of the bundled 6-UPS Stewart platform (42 parameters).
 
     Draws an "actual" machine (0.5 mm errors), simulates a laser-tracker campaign
-    (noise 0.01 mm / 0.02 mrad), identifies the parameters, validates on fresh poses
-    and writes the calibration directory OUT (calibration.json, calibrated.urdf +
+    (pincal's default noise, 0.01 mm / 0.02 mrad), identifies the parameters, validates
+    on fresh poses and writes the calibration directory OUT (calibration.json, calibrated.urdf +
     calibrated.yaml, identification.json) with report.html.
 
     \b

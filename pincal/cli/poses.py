@@ -15,6 +15,7 @@ from pincal.cli._limits import (
     yes_option,
 )
 from pincal.cli.common import fail_cleanly, guard_paths, model_input
+from pincal.measure import DEFAULT_NOISE
 
 
 @click.command()
@@ -45,8 +46,10 @@ from pincal.cli.common import fail_cleanly, guard_paths, model_input
     help="Row scaling: noise whitening, Jzg with --K, or unscaled SI.",
 )
 @click.option("--K", "K_mm", type=float, default=None, help="Characteristic length [mm] (Jzg).")
-@click.option("--noise", nargs=2, type=float, default=(0.01, 0.01), show_default=True,
-              help="Noise std: position [mm] orientation [mrad].")  # fmt: skip
+@click.option("--noise", nargs=2, type=float,
+              default=(DEFAULT_NOISE.position, DEFAULT_NOISE.orientation), show_default=True,
+              help="Noise std: position [mm] orientation [mrad] (the default of every "
+              "command).")  # fmt: skip
 @click.option(
     "--method",
     type=click.Choice(["exchange", "detmax", "greedy"]),

@@ -20,9 +20,35 @@ from pincal.errors import PincalError
     help="Where to write the report (default: DIRECTORY).",
 )
 @click.option("--name", default="report", show_default=True, help="Report file stem.")
+@click.option(
+    "--validation",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="Validation JSON of `pincal validate --out`: adds the Validation section.",
+)
+@click.option(
+    "--truth",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="<data>.truth.json of `pincal simulate`: true values beside the identified ones.",
+)
+@click.option(
+    "--design",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="<poses>.json of `pincal poses`: the index history of the pose selection.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the written paths as JSON.")
 @fail_cleanly
-def report(directory: Path, out: Path | None, name: str, as_json: bool) -> None:
+def report(
+    directory: Path,
+    out: Path | None,
+    name: str,
+    validation: Path | None,
+    truth: Path | None,
+    design: Path | None,
+    as_json: bool,
+) -> None:
     """Assemble the plots and numbers of a calibration in DIRECTORY into one report.
 
     Reads DIRECTORY/identification.json (written by `pincal demo` and
@@ -31,14 +57,17 @@ def report(directory: Path, out: Path | None, name: str, as_json: bool) -> None:
     uncertainties 2σ): data and noise (declared or estimated), residuals before
     and after, outliers and down-weighted poses, parameters with 2σ (poorly
     determined ones flagged) and their correlations, Cramér–Rao prediction vs
-    achievement, validation and convergence when the JSON holds them.
+    achievement, validation and convergence when the JSON holds them. Position and
+    orientation are reported apart, each over its measured components (named).
+    --validation, --truth and --design add what a campaign's other steps wrote
+    (`pincal run` passes them), so its report has the sections of `pincal demo`'s.
 
     \b
     Examples:
       pincal demo --out pincal-out && pincal report pincal-out
       pincal report pincal-out --out /tmp/report --json
     """
-    from pincal.report import calibration_report
+    from pincal.report import calibration_report, campaign_notes
 
     if not name or "/" in name or "\\" in name or name.startswith("."):
         raise click.BadParameter("must be a plain file stem", param_hint="--name")
@@ -47,7 +76,8 @@ def report(directory: Path, out: Path | None, name: str, as_json: bool) -> None:
         _inputs(directory),
         {f"--name's {x}": target / f"{name}.{x}" for x in ("html", "md", "json")},
     )
-    files = calibration_report(directory, out, name=name, n_jobs=-1)
+    notes = campaign_notes(validation, truth, design)
+    files = calibration_report(directory, out, name=name, n_jobs=-1, notes=notes)
     if as_json:
         paths = {"html": str(files.html), "markdown": str(files.markdown)}
         click.echo(json.dumps({**paths, "json": str(files.json)}))

@@ -35,6 +35,7 @@ class Paths:
     design: Path
     data: Path
     validation: Path | None
+    validation_json: Path
 
 
 @dataclass(frozen=True)
@@ -90,11 +91,23 @@ def _calibrate(c: Campaign, p: Paths) -> list[str] | None:
 
 
 def _validate(c: Campaign, p: Paths) -> list[str] | None:
-    return None if p.validation is None else [str(p.out), "--data", str(p.validation)]
+    if p.validation is None:
+        return None
+    return [str(p.out), "--data", str(p.validation), "--out", str(p.validation_json)]
 
 
 def _report(c: Campaign, p: Paths) -> list[str] | None:
-    return [str(p.out)] if c.report else None
+    """The report, with what the other steps wrote: validation, truth, pose design."""
+    if not c.report:
+        return None
+    args = [str(p.out)]
+    if p.validation is not None:
+        args += ["--validation", str(p.validation_json)]
+    if c.measurements.source == "simulated":
+        args += ["--truth", str(p.data.with_suffix(".truth.json"))]
+    if c.design is not None:
+        args += ["--design", str(p.design.with_suffix(".json"))]
+    return args
 
 
 #: the campaign, in order: (step name, pincal subcommand, argument builder)
@@ -114,7 +127,7 @@ def campaign_paths(c: Campaign, out: Path) -> Paths:
     data = Path(c.measurements.file) if c.measurements.file else inputs / "measurements.csv"
     v = c.validation
     val = None if v.source == "none" else Path(v.file) if v.file else inputs / "validation.csv"
-    return Paths(out, inputs / "design.csv", data, val)
+    return Paths(out, inputs / "design.csv", data, val, out / "validation.json")
 
 
 def _invoke(ctx: click.Context, step: Step, args: list[str], quiet: bool, yes: bool) -> str:
@@ -171,8 +184,10 @@ def run(ctx: click.Context, campaign_file: Path, out: Path | None, dry_run: bool
     The steps are the pincal subcommands a user would type, in order: poses
     (design) → simulate (calibration and validation data of a seeded "actual"
     machine, or your measurement files) → calibrate → validate → report. Every
-    output lands in one calibration directory: the calibrated URDF, identification
-    and report files and the resolved campaign in campaign.yaml; the generated inputs
+    output lands in one calibration directory: the calibrated URDF, identification,
+    validation (validation.json) and report files and the resolved campaign in
+    campaign.yaml. The report carries what the demo's does: validation, the simulated
+    true values and the pose-selection history. The generated inputs
     go to OUT-inputs/ beside it. The whole file is checked before the first step; each step
     prints a progress line on stderr.
 

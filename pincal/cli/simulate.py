@@ -10,6 +10,7 @@ import click
 
 from pincal.cli._limits import MAX_POSES, check_count, number_pair, yes_option
 from pincal.cli.common import fail_cleanly, guard_paths, model_input
+from pincal.measure import DEFAULT_NOISE
 
 if TYPE_CHECKING:
     from pincal.measure import InstrumentData, Measurements
@@ -65,9 +66,9 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
 )
 @click.option(
     "--noise",
-    default="0.01,0.05",
+    default=f"{DEFAULT_NOISE.position:g},{DEFAULT_NOISE.orientation:g}",
     show_default=True,
-    help="Measurement noise 1σ 'position_mm,orientation_mrad'.",
+    help="Measurement noise 1σ 'position_mm,orientation_mrad' (the default of every command).",
 )
 @click.option("--seed", default=1, show_default=True, help="Seed of poses and noise.")
 @click.option(

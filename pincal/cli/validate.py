@@ -25,8 +25,13 @@ def _iso_components(doc: dict) -> str:
 
 
 def format_validation(doc: dict, max_rows: int = 40) -> str:
-    """The printed validation report (mm / mrad)."""
+    """The printed validation report (mm / mrad), each block over its measured components."""
+    from pincal.report import block_label
+
     b, a, p = doc["before"], doc["after"], doc["predicted"]
+    comps = tuple(doc["components"])
+    pos = f"{block_label('position', comps)} [mm]"
+    ori = f"{block_label('orientation', comps)} [mrad]"
     lines = [
         f"pincal validate {doc['calibration']['directory']} ({doc['calibration']['model']}, "
         f"preset {doc['calibration']['preset']}) on {doc['data']}: {doc['poses']} poses, "
@@ -35,7 +40,7 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
     if not doc["independent"]:
         lines.append("  WARNING: this file was used for fitting; the validation is not independent")
     lines += [
-        "                        position [mm]          orientation [mrad]",
+        f"                        {pos:23s}{ori}",
         "                        RMS        max         RMS        max",
         f"  nominal model      {_fmt(b['rms_position_mm'])}  {_fmt(b['max_position_mm'])}"
         f"   {_fmt(b['rms_orientation_mrad'])}  {_fmt(b['max_orientation_mrad'])}",
@@ -74,8 +79,14 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
     help="Held-out measurement file (not used for fitting).",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print the full validation as JSON.")
+@click.option(
+    "--out",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="Also write the full validation JSON to this file (for `pincal report --validation`).",
+)
 @fail_cleanly
-def validate(calibration: Path, data: Path, as_json: bool) -> None:
+def validate(calibration: Path, data: Path, as_json: bool, out: Path | None) -> None:
     """Check the calibration in CALIBRATION on measurements not used for fitting.
 
     Prints the nominal (before) and calibrated (after) errors on --data (RMS and max
@@ -91,10 +102,16 @@ def validate(calibration: Path, data: Path, as_json: bool) -> None:
       pincal validate cal/ --data held_out.csv
       pincal validate cal/ --data held_out.csv --json
     """
-    from pincal.io import read_calibration, read_measurement_file, sha256_file
+    from pincal.cli.common import guard_paths
+    from pincal.io import atomic_write_text, read_calibration, read_measurement_file, sha256_file
     from pincal.measure import validate_held_out
     from pincal.model import parameters
 
+    if out is not None:
+        inputs = {"--data": data}
+        inputs |= {f"CALIBRATION's {n}": calibration / n
+                   for n in ("identification.json", "calibration.json")}  # fmt: skip
+        guard_paths(inputs, {"--out": out})
     cal = read_calibration(calibration)
     nominal = cal.nominal()
     mf = read_measurement_file(data, nominal)
@@ -124,6 +141,8 @@ def validate(calibration: Path, data: Path, as_json: bool) -> None:
         "independent": independent,
         **validation.to_dict(),
     }
+    if out is not None:
+        atomic_write_text(out, json.dumps(doc, indent=1) + "\n")
     if as_json:
         click.echo(json.dumps(doc))
     else:

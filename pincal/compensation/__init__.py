@@ -6,6 +6,7 @@ machine controls.
 
 from __future__ import annotations
 
+from pincal.compensation._branch import BRANCH_STEP_M, BRANCH_STEP_RAD, branch_change
 from pincal.compensation._compensate import (
     Compensation,
     compensate,
@@ -14,7 +15,10 @@ from pincal.compensation._compensate import (
 )
 
 __all__ = [
+    "BRANCH_STEP_M",
+    "BRANCH_STEP_RAD",
     "Compensation",
+    "branch_change",
     "compensate",
     "compensation_components",
     "poses_from_array",

@@ -1,8 +1,12 @@
 """Compensation: actuator commands that bring the *calibrated* model to target poses.
 
 Compensation is inverse kinematics with the calibrated model: the commands for
-which the identified machine (not the nominal one) reaches each target. Targets
-are solved in order, each warm-started from the previous solution.
+which the identified machine (not the nominal one) reaches each target. Each target's
+inverse kinematics starts from a *start command*: the target's own nominal command when
+one is given (``starts``, e.g. the actuator columns of a pose file), otherwise the
+solved command of the nearest target solved before it (home for the first). A solution
+on another branch than its start (see :mod:`pincal.compensation._branch`) is refused
+unless ``allow_branch_change``; either way it is reported.
 
 Only the components the machine controls are imposed: by default the model's
 measured components (``mech.measured_components``, e.g. ``x z ry`` for the 3-DOF
@@ -20,6 +24,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from pincal.compensation._branch import actuator_units, branch_change
 from pincal.errors import ConvergenceError, MeasurementError, MobilityError, ModelFileError
 from pincal.model import COMPONENTS, Mechanism
 
@@ -39,6 +44,12 @@ class Compensation:
         reasons: message per unreachable index.
         actuated: actuated joint names (columns of ``q_act``).
         components: the pose components imposed (subset of x y z rx ry rz).
+        starts: (m, n_act) start command of each target's inverse kinematics [m, rad].
+        start_sources: per target, where its start came from (``"nominal"``,
+            ``"target j"`` — the nearest solved one — or ``"home"``).
+        branch_changes: {index: why} of solutions on another branch than their start
+            (refused, i.e. unreachable, unless allowed).
+        units: ``"rad"`` or ``"m"`` per actuator.
     """
 
     q_act: np.ndarray
@@ -47,11 +58,33 @@ class Compensation:
     reasons: dict[int, str]
     actuated: tuple[str, ...]
     components: tuple[str, ...] = COMPONENTS
+    starts: np.ndarray | None = None
+    start_sources: tuple[str, ...] = ()
+    branch_changes: dict[int, str] | None = None
+    units: tuple[str, ...] = ()
 
     @property
     def commands(self) -> np.ndarray:
         """(r, n_act) the rows of the reachable targets only."""
         return self.q_act[self.reachable]
+
+    def largest_step(self, unit: str) -> tuple[float, int, int] | None:
+        """Largest |q_act − start| over reachable targets and actuators of ``unit``.
+
+        Args:
+            unit: ``"rad"`` (revolute actuators) or ``"m"`` (prismatic ones).
+
+        Returns:
+            (|Δq| [unit], target index, actuator index), or None when no actuator has
+            that unit or no target was reached.
+        """
+        cols = np.array([k for k, u in enumerate(self.units) if u == unit], dtype=int)
+        rows = np.flatnonzero(self.reachable)
+        if self.starts is None or not cols.size or not rows.size:
+            return None
+        dq = np.abs(self.q_act[np.ix_(rows, cols)] - self.starts[np.ix_(rows, cols)])
+        i, k = np.unravel_index(int(np.argmax(dq)), dq.shape)
+        return float(dq[i, k]), int(rows[i]), int(cols[k])
 
 
 def poses_from_array(poses: ArrayLike) -> list[pin.SE3]:
@@ -153,12 +186,38 @@ def _solver(mech: Mechanism, comps: tuple[str, ...]) -> Mechanism:
         raise MeasurementError(f"components {comps}: {exc}") from exc
 
 
+def _nearest(T: pin.SE3, solved: list[tuple[int, pin.SE3]]) -> int | None:
+    """Index of the solved target nearest to ``T`` (position + 0.1 m per rad of rotation)."""
+    if not solved:
+        return None
+    d = [
+        np.linalg.norm(T.translation - S.translation)
+        + 0.1 * np.linalg.norm(pin.log3(S.rotation.T @ T.rotation))
+        for _, S in solved
+    ]
+    return solved[int(np.argmin(d))][0]
+
+
+def _check_starts(starts: ArrayLike | None, m: int, n: int) -> np.ndarray | None:
+    if starts is None:
+        return None
+    arr = np.asarray(starts, dtype=float)
+    if arr.shape != (m, n):
+        raise MeasurementError(
+            f"start commands must be (targets, actuators) = ({m}, {n}), got {arr.shape}"
+        )
+    return arr
+
+
 def compensate(
     calibrated: Mechanism,
     targets: Sequence[pin.SE3] | np.ndarray,
     check_limits: bool = True,
     progress: Callable[[int, int], None] | None = None,
     components: Sequence[str] | str | None = None,
+    *,
+    starts: ArrayLike | None = None,
+    allow_branch_change: bool = False,
 ) -> Compensation:
     """Actuator commands reaching ``targets`` with the calibrated model's inverse kinematics.
 
@@ -170,29 +229,55 @@ def compensate(
         progress: optional callback ``(done, total)``.
         components: the pose components to impose (see :func:`compensation_components`;
             default: the model's measured components).
+        starts: (m, n_act) nominal command of each target [m, rad] (rows of NaN: none),
+            the start of its inverse kinematics; without one a target starts from the
+            solved command of the nearest target solved before it (home for the first).
+        allow_branch_change: keep solutions on another branch than their start
+            (reported in ``branch_changes``); by default they are refused.
 
     Returns:
-        A :class:`Compensation`; unreachable targets are reported by index with the
-        reason, not raised.
+        A :class:`Compensation`; unreachable targets (and refused branch changes) are
+        reported by index with the reason, not raised.
 
     Raises:
         MeasurementError: targets that are neither ``pin.SE3`` poses nor an (m, 6)
-            array of finite numbers, or bad ``components``.
+            array of finite numbers, bad ``components`` or ``starts`` of the wrong shape.
         MobilityError: more components than the machine's mobility.
     """
     poses = _as_poses(targets)
     comps = compensation_components(calibrated, components)
     solver = _solver(calibrated, comps)
     m, n = len(poses), calibrated.n_actuated
+    nominal = _check_starts(starts, m, n)
+    units = actuator_units(calibrated)
+    lo, hi = np.asarray(calibrated.actuator_limits, dtype=float).T
     q_act = np.full((m, n), np.nan)
+    start_rows = np.full((m, n), np.nan)
+    sources: list[str] = []
     reasons: dict[int, str] = {}
-    guess = None
+    changes: dict[int, str] = {}
+    solved: list[tuple[int, pin.SE3]] = []
+    full: dict[int, np.ndarray] = {}
     for i, T in enumerate(poses):
+        guess, source = None, "home"
+        if nominal is not None and np.all(np.isfinite(nominal[i])):
+            start_rows[i], source = nominal[i], "nominal"
+            try:
+                guess = solver.configuration(nominal[i])
+            except ConvergenceError:
+                guess = None  # the closure of the start failed: Newton starts from home
+        else:
+            j = _nearest(T, solved)
+            if j is not None:
+                guess, source = full[j], f"target {j}"
+                start_rows[i] = q_act[j]
+        if source == "home":
+            start_rows[i] = solver.actuators_of(solver.q_home)
+        sources.append(source)
         try:
             q = solver.inverse_configuration(T, guess)
             row = solver.actuators_of(q)
             if check_limits:
-                lo, hi = np.asarray(calibrated.actuator_limits, dtype=float).T
                 out = np.nonzero((row < lo - 1e-12) | (row > hi + 1e-12))[0]
                 if out.size:
                     k = int(out[0])
@@ -200,8 +285,19 @@ def compensate(
                         f"needs {calibrated.actuated[k]} = {row[k]:.6g}, outside "
                         f"[{lo[k]:.6g}, {hi[k]:.6g}]"
                     )
+            why = branch_change(
+                solver, start_rows[i], row, guess, q, units, own_start=source == "nominal"
+            )
+            if why:
+                changes[i] = why
+                if not allow_branch_change:
+                    raise ConvergenceError(
+                        f"the solution is on another branch than its {source} start: {why}; "
+                        "allow it with --allow-branch-change (allow_branch_change=True)"
+                    )
             q_act[i] = row
-            guess = q
+            full[i] = q
+            solved.append((i, T))
         except ConvergenceError as exc:
             reasons[i] = f"{exc} (imposing {' '.join(comps)})"
             log.info("target %d unreachable: %s", i, exc)
@@ -209,5 +305,6 @@ def compensate(
             progress(i + 1, m)
     reachable = np.all(np.isfinite(q_act), axis=1)
     return Compensation(
-        q_act, reachable, tuple(sorted(reasons)), reasons, tuple(calibrated.actuated), comps
-    )
+        q_act, reachable, tuple(sorted(reasons)), reasons, tuple(calibrated.actuated), comps,
+        start_rows, tuple(sources), changes, units,
+    )  # fmt: skip

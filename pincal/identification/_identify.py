@@ -159,6 +159,7 @@ def _finish(
         identifiability=ident,
         weighting=weighting,
         initial_residuals=raw0,
+        components=tuple(comps),
     )
 
 

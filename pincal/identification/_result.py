@@ -154,6 +154,9 @@ class IdentificationResult:
             poses it down-weighted (:class:`Weighting`); None for pincal 0.1 files.
         initial_residuals: (m, c) unweighted residuals at the start values [m, rad]
             (None when read from a file that lacks them).
+        components: names of the c residual columns (measured components, e.g.
+            ``("x", "y", "rz")``); empty when unknown (files written before pincal
+            recorded them, or scalar instrument readings).
     """
 
     method: str
@@ -182,6 +185,7 @@ class IdentificationResult:
     annotations: Mapping[str, Any] = field(default_factory=dict, repr=False)
     weighting: Weighting | None = field(default=None, repr=False)
     initial_residuals: np.ndarray | None = field(default=None, repr=False)
+    components: tuple[str, ...] = ()
 
     @property
     def values(self) -> np.ndarray:

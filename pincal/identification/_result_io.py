@@ -5,6 +5,7 @@ Format version 2 (pincal ≥ 0.2), SI values::
     {"format": "pincal identification", "version": 2, "units": "SI (m, rad)",
      "model", "preset", "method", "success", "message", "iterations", "reduced_chi2",
      "equations", "poses", "names" (all n, in order),
+     "components": [...]  # measured components of the residual columns, e.g. x y rz
      "parameters": [{"name", "unit", "value", "std", "initial"[, "true"]}],  # identified
      "held": [{"name", "unit", "value"[, "true"]}],                         # not identified
      "covariance": [[...]],                  # (k, k) of the identified parameters
@@ -58,6 +59,7 @@ _OWNED = {
     "reduced_chi2",
     "equations",
     "poses",
+    "components",
     "names",
     "parameters",
     "held",
@@ -165,6 +167,7 @@ def result_to_dict(
         "reduced_chi2": _json_float(result.reduced_chi2),
         "equations": int(result.n_equations),
         "poses": int(result.residuals.shape[0]),
+        "components": list(result.components),
         "names": list(result.names),
         "parameters": entries,
         "held": held,
@@ -284,6 +287,30 @@ def _read_extras(e: object, src: str):
     raise ReportError(f"{src}: unknown extras type {e.get('type')!r}")
 
 
+_KNOWN_COMPONENTS = ("x", "y", "z", "rx", "ry", "rz")
+
+
+def _read_components(value: object, residuals: np.ndarray, src: str) -> tuple[str, ...]:
+    """The residual columns' component names (empty when the file does not say)."""
+    if value is None or value == []:
+        return ()
+    if (
+        not isinstance(value, list)
+        or not all(isinstance(c, str) and c in _KNOWN_COMPONENTS for c in value)
+        or len(set(value)) != len(value)
+    ):
+        raise ReportError(
+            f"{src}: 'components' must list distinct names from {' '.join(_KNOWN_COMPONENTS)}, "
+            f"got {value!r}"
+        )
+    if residuals.size and residuals.shape[1] != len(value):
+        raise ReportError(
+            f"{src}: 'components' names {len(value)} columns but the residuals have "
+            f"{residuals.shape[1]}"
+        )
+    return tuple(value)
+
+
 def result_from_dict(data: Mapping[str, Any], source: str = "identification.json"):
     """Read a result document (format version 2, or pincal 0.1 without ``version``).
 
@@ -360,6 +387,7 @@ def result_from_dict(data: Mapping[str, Any], source: str = "identification.json
             initial_residuals = None
         if initial_residuals is None or initial_residuals.shape != residuals.shape:
             raise ReportError(f"{src}: residuals.per_pose_before_SI must match per_pose_SI")
+    components = _read_components(data.get("components"), residuals, src)
     weighting = None
     if isinstance(data.get("weighting"), dict):
         try:
@@ -396,4 +424,5 @@ def result_from_dict(data: Mapping[str, Any], source: str = "identification.json
         annotations=notes,
         weighting=weighting,
         initial_residuals=initial_residuals,
+        components=components,
     )

@@ -31,6 +31,7 @@ from pincal.measure._iso_cube import (
     iso_test_cube,
 )
 from pincal.measure._measurements import (
+    DEFAULT_NOISE,
     Measurements,
     NoiseModel,
     simulate_measurements,
@@ -54,6 +55,7 @@ from pincal.measure._validation import (
 )
 
 __all__ = [
+    "DEFAULT_NOISE",
     "INSTRUMENT_KINDS",
     "ORIENTATION_CONVENTION",
     "HeldOutValidation",

@@ -17,7 +17,7 @@ import pinocchio as pin
 from pincal.errors import MeasurementError
 from pincal.model import COMPONENTS, Mechanism
 
-__all__ = ["Measurements", "NoiseModel", "simulate_measurements"]
+__all__ = ["DEFAULT_NOISE", "Measurements", "NoiseModel", "simulate_measurements"]
 
 
 @dataclass(frozen=True)
@@ -79,6 +79,12 @@ class NoiseModel:
         return np.array(
             [self.position * 1e-3 if c in "xyz" else self.orientation * 1e-3 for c in components]
         )
+
+
+#: the default instrument noise (1σ) of every command that simulates or designs a
+#: campaign (`poses`, `simulate`, `demo`, `run`): a laser tracker measuring the full pose,
+#: 0.01 mm per position coordinate and 0.02 mrad per rotation component. Defined here once.
+DEFAULT_NOISE = NoiseModel(0.01, 0.02)
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ from pincal.report._calibration import (
     calibration_report,
     read_identification,
 )
+from pincal.report._campaign_notes import campaign_notes
 from pincal.report._document import ReportFiles, Section, Table, write_report
 from pincal.report._plots import (
     ErrorStats,
@@ -22,6 +23,7 @@ from pincal.report._plots import (
     plot_parameters,
     plot_validation_summary,
 )
+from pincal.report._sections import block_label
 from pincal.report._workers import PlotWorkers
 
 __all__ = [
@@ -31,7 +33,9 @@ __all__ = [
     "ReportFiles",
     "Section",
     "Table",
+    "block_label",
     "calibration_report",
+    "campaign_notes",
     "error_statistics",
     "plot_convergence",
     "plot_error_histogram",

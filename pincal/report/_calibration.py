@@ -7,12 +7,14 @@ own annotations (validation errors, index history) and draws them.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
 import tempfile
+from collections.abc import Mapping
 from pathlib import Path
-from typing import SupportsFloat, cast
+from typing import Any, SupportsFloat, cast
 
 import numpy as np
 
@@ -28,6 +30,8 @@ from pincal.report._plots import (
 from pincal.report._render import PlotJobs
 from pincal.report._sections import (
     UNITS_NOTE,
+    block_label,
+    components_of,
     data_section,
     error_images,
     outlier_section,
@@ -44,6 +48,7 @@ __all__ = ["IDENTIFICATION_JSON", "MAX_JSON_BYTES", "calibration_report", "read_
 IDENTIFICATION_JSON = "identification.json"
 #: largest identification.json read [bytes]
 MAX_JSON_BYTES = 20_000_000
+_ALL = ("x", "y", "z", "rx", "ry", "rz")
 _SUMMARY_KEYS = (
     ("rms_position_mm", "RMS position [mm]"),
     ("max_position_mm", "max position [mm]"),
@@ -85,6 +90,10 @@ def _check_annotations(notes: dict) -> None:
             for key in ("position", "orientation"):
                 if key in ve[side]:
                     _numbers(ve[side][key], f"validation_errors.{side}.{key}")
+    if "validation_components" in notes:
+        vc = notes["validation_components"]
+        if not isinstance(vc, list) or not vc or not set(vc) <= set(_ALL):
+            raise ReportError(f"'validation_components' must list names from {' '.join(_ALL)}")
     if "index_history" in notes:
         ih = notes["index_history"]
         if not isinstance(ih, dict) or not ih:
@@ -99,9 +108,11 @@ def read_identification(path: str | os.PathLike) -> IdentificationResult:
     The result part is read by :meth:`IdentificationResult.from_dict` (format version 2,
     or pincal 0.1's files); the report's annotations — ``validation_before`` /
     ``validation_after`` (``rms_position_mm, max_position_mm, rms_orientation_mrad,
-    max_orientation_mrad``), ``validation_errors`` (``{before|after: {position: [m],
-    orientation: [rad]}}`` per validation pose), ``index_history`` (``{O1: [...], ...}``)
-    and the parameters' ``true`` values (as ``annotations["truth"]``) — are checked here.
+    max_orientation_mrad``; null for a block not measured), ``validation_components``
+    (the components the validation errors are taken over), ``validation_errors``
+    (``{before|after: {position: [m], orientation: [rad]}}`` per validation pose),
+    ``index_history`` (``{O1: [...], ...}``) and the parameters' ``true`` values (as
+    ``annotations["truth"]``) — are checked here.
 
     Returns:
         IdentificationResult (no parameter set or mechanism; context in ``annotations``).
@@ -154,30 +165,51 @@ def _validation(notes: dict, plots: Path, jobs: PlotJobs) -> Section | None:
     before, after = notes.get("validation_before"), notes.get("validation_after")
     if before is None or after is None:
         return None
-    rows = [
-        [label, unit, _r(before.get(key)), _r(after.get(key))]
-        for (key, _), label, unit in zip(
-            _SUMMARY_KEYS, _SUMMARY_LABELS, _SUMMARY_UNITS, strict=True
-        )
-    ]
+    comps = notes.get("validation_components")
+    comps = tuple(comps) if comps else None
+    rows = []
+    for (key, _), label, unit in zip(_SUMMARY_KEYS, _SUMMARY_LABELS, _SUMMARY_UNITS, strict=True):
+        if before.get(key) is None and after.get(key) is None:
+            continue  # a block not measured
+        stat, block = label.split(" ", 1)
+        rows.append([f"{stat} {block_label(block, comps)}", unit,
+                     _r(before.get(key)), _r(after.get(key))])  # fmt: skip
     images = [
-        jobs.add(plot_validation_summary, before, after, path=plots / "validation_summary.png")
-    ]
+        jobs.add(
+            plot_validation_summary, before, after, path=plots / "validation_summary.png",
+            labels={b: block_label(b, comps) for b in ("position", "orientation")},
+        )
+    ]  # fmt: skip
     ve: dict = notes.get("validation_errors") or {"before": {}, "after": {}}
     for key, unit in (("position", "um"), ("orientation", "urad")):
-        if key in ve["before"] and key in ve["after"]:
+        measured = before.get(f"rms_{key}_{'mm' if unit == 'um' else 'mrad'}") is not None
+        if measured and key in ve["before"] and key in ve["after"]:
             b, a = np.array(ve["before"][key]), np.array(ve["after"][key])
             images += error_images(
                 jobs, b, a, unit, plots / f"validation_{key}",
-                f"{key.capitalize()} error", b.size == a.size, "validation pose",
+                f"{block_label(key, comps).capitalize()} error", b.size == a.size,
+                "validation pose",
             )  # fmt: skip
-    return Section(
-        "Validation",
-        "Errors of the predicted measured-frame pose on validation poses, "
-        "nominal vs calibrated model.",
-        images,
-        [Table(["quantity", "unit", "nominal model", "calibrated model"], rows)],
+    over = f" over the components {' '.join(comps)}" if comps else ""
+    source = notes.get("validation_source")
+    text = (
+        f"Errors of the predicted measured-frame pose on validation poses{over}, "
+        "nominal vs calibrated model"
+        + (f" ({source})" if isinstance(source, str) and source else "")
+        + "."
     )
+    tables = [Table(["quantity", "unit", "nominal model", "calibrated model"], rows)]
+    predicted = notes.get("validation_predicted")
+    if isinstance(predicted, dict):
+        prows = []
+        for kind, what in (("model", "calibrated model"), ("observed", "+ instrument noise")):
+            for block, k, u in (("position", "mm", "µm"), ("orientation", "mrad", "µrad")):
+                v = predicted.get(f"{kind}_rms_{block}_{k}")
+                if v is not None:
+                    prows.append([f"RMS {block_label(block, comps)}, {what}", u, _r(v)])
+        if prows:
+            tables.append(Table(["Cramér–Rao prediction", "unit", "value"], prows))
+    return Section("Validation", text, images, tables)
 
 
 def calibration_report(
@@ -187,6 +219,7 @@ def calibration_report(
     name: str = "report",
     n_jobs: int | None = 1,
     workers: PlotWorkers | None = None,
+    notes: Mapping[str, Any] | None = None,
 ) -> ReportFiles:
     """Write the report of a calibration output directory: HTML, Markdown and JSON.
 
@@ -208,6 +241,8 @@ def calibration_report(
         workers: plot workers started earlier (:class:`PlotWorkers`, already warm
             when the plots come); when given they draw the plots and ``n_jobs`` is
             not used.
+        notes: annotations added over the file's (e.g. :func:`campaign_notes` of a
+            campaign's validation, truth and design files), checked like the file's.
 
     Raises:
         ReportError: the directory or its identification.json is missing or malformed,
@@ -217,6 +252,9 @@ def calibration_report(
     if not src.is_dir():
         raise ReportError(f"calibration directory {str(src)!r} does not exist")
     result = read_identification(src / IDENTIFICATION_JSON)
+    if notes:
+        _check_annotations(dict(notes))
+        result = dataclasses.replace(result, annotations={**result.annotations, **notes})
     notes = dict(result.annotations)
     out_dir = Path(out) if out is not None else src
     files = sorted(p.name for p in src.iterdir() if p.suffix in (".urdf", ".yaml", ".json"))
@@ -266,6 +304,11 @@ def calibration_report(
             "preset": result.preset,
             "method": result.method,
             "noise": noise,
+            "components": {
+                "measured": list(components_of(result)),
+                "position": [c for c in components_of(result) if c in _ALL[:3]],
+                "orientation": [c for c in components_of(result) if c in _ALL[3:]],
+            },
             "flags": {
                 "poorly_determined": poor,
                 "outlier_poses": out_idx,

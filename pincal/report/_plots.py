@@ -344,17 +344,25 @@ def plot_parameters(
 
 
 def plot_validation_summary(
-    before: Mapping[str, float], after: Mapping[str, float], path: str | os.PathLike
+    before: Mapping[str, float | None],
+    after: Mapping[str, float | None],
+    path: str | os.PathLike,
+    *,
+    labels: Mapping[str, str] | None = None,
 ) -> Path:
-    """Grouped bars of RMS and max position [mm] / orientation [mrad] errors, before vs after."""
-    fig = _figure(7.5, 3.6)
-    axes = fig.subplots(1, 2)
-    for ax, (quantity, unit) in zip(
-        axes, (("position", "mm"), ("orientation", "mrad")), strict=True
-    ):
+    """Grouped bars of RMS and max position [mm] / orientation [mrad] errors, before vs after.
+
+    A block whose values are None (not measured) gets no panel; ``labels`` names the
+    blocks' axes (e.g. ``{"position": "position (x y)"}``).
+    """
+    blocks = [(q, u) for q, u in (("position", "mm"), ("orientation", "mrad"))
+              if before.get(f"rms_{q}_{u}") is not None] or [("position", "mm")]  # fmt: skip
+    fig = _figure(3.75 * len(blocks) if len(blocks) > 1 else 4.5, 3.6)
+    axes = np.atleast_1d(fig.subplots(1, len(blocks)))
+    for ax, (quantity, unit) in zip(axes, blocks, strict=True):
         keys = [f"rms_{quantity}_{unit}", f"max_{quantity}_{unit}"]
-        b = [float(before.get(k, np.nan)) for k in keys]
-        a = [float(after.get(k, np.nan)) for k in keys]
+        b = [float(v) if (v := before.get(k)) is not None else math.nan for k in keys]
+        a = [float(v) if (v := after.get(k)) is not None else math.nan for k in keys]
         x = np.arange(2)
         bars_b = ax.bar(x - 0.2, b, 0.4, color=_BEFORE, label="nominal model")
         bars_a = ax.bar(x + 0.2, a, 0.4, color=_AFTER, label="calibrated model")
@@ -362,7 +370,7 @@ def plot_validation_summary(
         ax.bar_label(bars_a, fmt="%.3g", fontsize=8)
         ax.set_xticks(x)
         ax.set_xticklabels(["RMS", "max"])
-        ax.set_ylabel(f"{quantity} error [{unit}]")
+        ax.set_ylabel(f"{(labels or {}).get(quantity, quantity)} error [{unit}]")
         positive = [v for v in b + a if v > 0]
         if positive and max(positive) / min(positive) > 30:
             _log_scale(ax, "y")

@@ -22,9 +22,12 @@ from pincal.report._plots import (
 from pincal.report._render import PlotJobs
 
 __all__ = [
+    "BLOCKS",
     "POOR_ANGLE_2SIGMA",
     "POOR_LENGTH_2SIGMA",
     "UNITS_NOTE",
+    "block_label",
+    "components_of",
     "data_section",
     "outlier_section",
     "parameter_section",
@@ -49,10 +52,46 @@ def _r(v: float, digits: int = 3) -> float:
     return round(float(v), digits) if math.isfinite(float(v)) else float("nan")
 
 
-def _components(result: IdentificationResult) -> tuple[str, ...]:
-    """Measured components (from the residual width: 3 = position, 6 = full pose)."""
+#: the two blocks of a pose: (name, its components, report unit)
+BLOCKS = (("position", _POS, "µm"), ("orientation", _ORI, "µrad"))
+
+
+def components_of(result: IdentificationResult) -> tuple[str, ...]:
+    """Names of the residual columns: the recorded measured components.
+
+    Files written before pincal recorded them fall back to the residual width (3 =
+    x y z, 6 = the full pose; other widths are named c0, c1, ...).
+    """
+    if result.components:
+        return tuple(result.components)
     k = result.residuals.shape[1] if result.residuals.ndim == 2 else 0
     return {3: _POS, 6: _POS + _ORI}.get(k, tuple(f"c{j}" for j in range(k)))
+
+
+def block_label(block: str, comps: tuple[str, ...] | None) -> str:
+    """``"position (x y)"``: a block named with the components measured in it.
+
+    Args:
+        block: ``"position"`` or ``"orientation"``.
+        comps: the measured components (all six, or those of a file), or None (unknown:
+            the bare block name).
+    """
+    if comps is None:
+        return block
+    names = [c for c in comps if c in (_POS if block == "position" else _ORI)]
+    return f"{block} ({' '.join(names) or 'not measured'})"
+
+
+def _measured_blocks(comps: tuple[str, ...]) -> list[tuple[str, list[int], str]]:
+    """(block, its column indices in ``comps``, unit) for each block with a measured column."""
+    out = []
+    for block, names, unit in BLOCKS:
+        cols = [j for j, c in enumerate(comps) if c in names]
+        if cols:
+            out.append((block, cols, unit))
+    return out
+
+
 
 
 def poorly_determined(result: IdentificationResult) -> list[str]:
@@ -65,12 +104,19 @@ def poorly_determined(result: IdentificationResult) -> list[str]:
 
 def data_section(result: IdentificationResult, notes: dict) -> tuple[Section, dict]:
     """Poses, components, instrument and noise (declared or estimated)."""
-    comps = _components(result)
+    comps = components_of(result)
     m = int(result.residuals.shape[0])
     w = result.weighting
+    blocks = _measured_blocks(comps)
     rows: list[list[object]] = [
         ["poses", m, ""],
         ["measured components", " ".join(comps), ""],
+    ]
+    rows += [
+        [f"{block} components", " ".join(comps[j] for j in cols), unit]
+        for block, cols, unit in blocks
+    ]
+    rows += [
         ["scalar equations", int(result.n_equations), ""],
         ["identified parameters", int(result.identified.sum()), ""],
     ]
@@ -86,15 +132,15 @@ def data_section(result: IdentificationResult, notes: dict) -> tuple[Section, di
             "per-pose": "per-pose σ of the measurement file",
         }.get(w.source, w.source)
         rows.append(["noise", how, ""])
-        rows.append(["noise σ position", _r(w.position_std * _U), "µm"])
-        rows.append(["noise σ orientation", _r(w.orientation_std * _U), "µrad"])
+        measured = {block for block, _, _ in blocks}
+        pos = _r(w.position_std * _U) if "position" in measured else None
+        ori = _r(w.orientation_std * _U) if "orientation" in measured else None
+        if pos is not None:
+            rows.append([f"noise σ {block_label('position', comps)}", pos, "µm"])
+        if ori is not None:
+            rows.append([f"noise σ {block_label('orientation', comps)}", ori, "µrad"])
         rows.append(["loss", w.loss, ""])
-        noise = {
-            "source": w.source,
-            "position_um": _r(w.position_std * _U),
-            "orientation_urad": _r(w.orientation_std * _U),
-            "loss": w.loss,
-        }
+        noise = {"source": w.source, "position_um": pos, "orientation_urad": ori, "loss": w.loss}
     text = (
         "What was measured and how it was weighted. The noise σ is per component "
         "(1σ); when it is estimated, each block's σ² = rᵀr / (n − tr H) at the fit."
@@ -102,41 +148,35 @@ def data_section(result: IdentificationResult, notes: dict) -> tuple[Section, di
     return Section("Data and noise", text, (), [Table(["item", "value", "unit"], rows)]), noise
 
 
-def _norms(r: np.ndarray, comps: tuple[str, ...], block: tuple[str, ...]) -> np.ndarray | None:
-    cols = [j for j, c in enumerate(comps) if c in block]
-    return np.linalg.norm(r[:, cols], axis=1) if cols and r.size else None
-
-
 def residual_section(result: IdentificationResult, plots: Path, jobs: PlotJobs) -> Section:
     """Residuals before and after per pose (plots), as histograms, and their statistics.
 
     The plots are recorded in ``jobs`` (files under ``plots``), drawn by the caller.
     """
-    comps = _components(result)
+    comps = components_of(result)
     rows, images = [], []
-    for block, label, unit in ((_POS, "position", "um"), (_ORI, "orientation", "urad")):
-        after = _norms(result.residuals, comps, block)
-        if after is None:
-            continue
+    for block, cols, shown in _measured_blocks(comps):
+        after = np.linalg.norm(result.residuals[:, cols], axis=1)
         before = None
         if result.initial_residuals is not None:
-            before = _norms(np.asarray(result.initial_residuals), comps, block)
-        shown = "µm" if unit == "um" else "µrad"
-        b_stats = getattr(result.before, f"rms_{label}"), getattr(result.before, f"max_{label}")
-        rows.append(
-            [label, shown, _r(b_stats[0] * _U), _r(b_stats[1] * _U),
-             _r(np.sqrt(np.mean(after**2)) * _U), _r(after.max() * _U)]
-        )  # fmt: skip
+            before = np.linalg.norm(np.asarray(result.initial_residuals)[:, cols], axis=1)
+        # the statistics the calibration printed (ResidualStats over the same columns)
+        stats = [getattr(s, f"{k}_{block}") for s in (result.before, result.after)
+                 for k in ("rms", "max")]  # fmt: skip
+        if not math.isfinite(stats[2]):  # a file without them: from the residuals
+            stats[2:] = [float(np.sqrt(np.mean(after**2))), float(after.max())]
+        rows.append([block_label(block, comps), shown, *(_r(v * _U) for v in stats)])
         if before is not None:
             images += error_images(
-                jobs, before, after, unit, plots / f"residual_{label}",
-                f"{label.capitalize()} residual",
-            )
+                jobs, before, after, "um" if shown == "µm" else "urad",
+                plots / f"residual_{block}", f"{block_label(block, comps).capitalize()} residual",
+            )  # fmt: skip
     headers = ["residual (norm per pose)", "unit", "RMS before", "max before", "RMS after",
                "max after"]  # fmt: skip
     text = (
         "Residual = measured − model at the measured poses, with the nominal model "
-        "(before) and the identified one (after); norms per pose, in µm and µrad."
+        "(before) and the identified one (after); norms per pose over the measured "
+        "components of each block (named in brackets), in µm and µrad."
     )
     return Section("Residuals", text, images, [Table(headers, rows)])
 
@@ -192,7 +232,7 @@ def outlier_section(result: IdentificationResult) -> tuple[Section, list[int], l
     if w is None or w.whitened.size == 0:
         text = "No weights in this file (pincal 0.1): outliers cannot be flagged."
         return Section(LARGE_RESIDUALS, text), [], []
-    comps = _components(result)
+    comps = components_of(result)
     z = np.asarray(w.whitened)
     rows = []
     for i in w.outliers:
@@ -269,20 +309,17 @@ def prediction_section(result: IdentificationResult) -> Section:
     w = result.weighting
     rows: list[list[object]] = []
     if w is not None and w.whitened.size:
-        comps = _components(result)
-        for block, label, sig in (
-            (_POS, "position", w.position_std), (_ORI, "orientation", w.orientation_std)
-        ):  # fmt: skip
-            cols = [j for j, c in enumerate(comps) if c in block]
-            if not cols or not math.isfinite(sig) or label not in w.redundancy:
+        comps = components_of(result)
+        for label, cols, unit in _measured_blocks(comps):
+            sig = w.position_std if label == "position" else w.orientation_std
+            if not math.isfinite(sig) or label not in w.redundancy:
                 continue
             n_b = len(cols) * result.residuals.shape[0]
             predicted = sig * math.sqrt(w.redundancy[label] / n_b)
             achieved = float(np.sqrt(np.mean(result.residuals[:, cols] ** 2)))
-            unit = "µm" if label == "position" else "µrad"
             rows.append(
-                [f"{label} residual RMS per component", unit, _r(predicted * _U),
-                 _r(achieved * _U)]
+                [f"{block_label(label, comps)} residual RMS per component", unit,
+                 _r(predicted * _U), _r(achieved * _U)]
             )  # fmt: skip
     rows.append(["reduced χ²", "", 1.0, _r(result.reduced_chi2, 4)])
     truth = result.annotations.get("truth") or {}

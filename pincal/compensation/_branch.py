@@ -1,0 +1,138 @@
+"""Branch changes of inverse kinematics: when a command leaves the branch of its start.
+
+Compensation starts each target's inverse kinematics from a *start command* (the
+target's own nominal command, or the nearest solved one). A calibration moves the
+machine by millimetres and milliradians, so the compensated command must stay next to
+its start. It is said to be on **another branch** when either
+
+1. some actuator moved more than the step bound from the start. When the start is the
+   target's own nominal command: |Δq| > 0.5 rad for a revolute actuator, > 50 mm for a
+   prismatic one (:data:`BRANCH_STEP_RAD`, :data:`BRANCH_STEP_M`). When it is another
+   target's command (nearest solved, or home), the targets themselves lie apart, so
+   only a revolute |Δq| > π counts (:data:`FAR_STEP_RAD`: a half turn, the same pose
+   being nearer the other way round). A 2π turn of a revolute joint counts either way:
+   the same tip pose but a different arm motion. Or
+2. the actuator → imposed-components Jacobian G = ∂(pose components)/∂q_act is square
+   and det G changes sign between start and solution: the solution lies across a
+   singularity (another elbow / shoulder / wrist configuration of an arm, another
+   working mode of a parallel machine). det G is taken by central differences of the
+   forward kinematics; a sign is only trusted when |det G| exceeds 1e-6 of the product
+   of G's column norms (else "unknown", not a change).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.errors import ConvergenceError
+from pincal.model import COMPONENTS, Mechanism
+
+__all__ = [
+    "BRANCH_STEP_M",
+    "BRANCH_STEP_RAD",
+    "FAR_STEP_RAD",
+    "actuator_units",
+    "branch_change",
+    "det_sign",
+]
+
+#: largest |Δq| of a revolute actuator that stays on the start's branch [rad]
+BRANCH_STEP_RAD = 0.5
+#: largest |Δq| of a prismatic actuator that stays on the start's branch [m]
+BRANCH_STEP_M = 0.05
+#: largest revolute |Δq| from another target's command that stays on its branch [rad]
+FAR_STEP_RAD = np.pi
+_FD_STEP = 1e-6  # central-difference step [m or rad]
+_SIGN_FLOOR = 1e-6  # |det G| / Π‖G_j‖ below this: sign unknown
+
+
+def actuator_units(mech: Mechanism) -> tuple[str, ...]:
+    """``"rad"`` per revolute / continuous actuator, ``"m"`` per prismatic one (n_act,)."""
+    return tuple(
+        "rad" if mech.tree.joints[j].type in ("revolute", "continuous") else "m"
+        for j in mech.actuated
+    )
+
+
+def _components(T: pin.SE3, ref: pin.SE3, cols: list[int]) -> np.ndarray:
+    r = np.concatenate([T.translation - ref.translation, pin.log3(ref.rotation.T @ T.rotation)])
+    return r[cols]
+
+
+def det_sign(mech: Mechanism, q_act: np.ndarray, q: np.ndarray | None = None) -> int:
+    """Sign of det G at ``q_act`` (G: actuators → ``mech``'s measured components).
+
+    Args:
+        mech: the mechanism whose measured components are imposed.
+        q_act: (n_act,) actuator values [m, rad].
+        q: full configuration at ``q_act`` (guess for the loop closure), or None.
+
+    Returns:
+        +1 or -1; 0 when G is not square, (nearly) singular, or a closure fails.
+    """
+    cols = [COMPONENTS.index(c) for c in mech.measured_components]
+    n = len(q_act)
+    if len(cols) != n:
+        return 0
+    try:
+        ref = mech.forward(q_act, q)
+        G = np.empty((n, n))
+        for k in range(n):
+            step = np.zeros(n)
+            step[k] = _FD_STEP
+            plus = _components(mech.forward(q_act + step, q), ref, cols)
+            minus = _components(mech.forward(q_act - step, q), ref, cols)
+            G[:, k] = (plus - minus) / (2 * _FD_STEP)
+    except ConvergenceError:
+        return 0
+    det = float(np.linalg.det(G))
+    scale = float(np.prod(np.linalg.norm(G, axis=0)))
+    if scale == 0.0 or abs(det) < _SIGN_FLOOR * scale:
+        return 0
+    return 1 if det > 0 else -1
+
+
+def branch_change(
+    mech: Mechanism,
+    start: np.ndarray,
+    solution: np.ndarray,
+    q_start: np.ndarray | None,
+    q_solution: np.ndarray,
+    units: tuple[str, ...],
+    own_start: bool = True,
+) -> str:
+    """Why ``solution`` is on another branch than ``start`` ("" when it is not).
+
+    Args:
+        mech: the mechanism whose measured components the compensation imposes.
+        start: (n_act,) start command [m, rad].
+        solution: (n_act,) solved command [m, rad].
+        q_start: full configuration (nq,) of the start, or None.
+        q_solution: full configuration (nq,) of the solution.
+        units: :func:`actuator_units` of ``mech``.
+        own_start: ``start`` is the target's own nominal command (tight step bounds);
+            False: another target's command (only a revolute half turn counts).
+
+    Returns:
+        A sentence naming the criterion (see the module docstring), or "".
+    """
+    dq = np.abs(np.asarray(solution, float) - np.asarray(start, float))
+    if own_start:
+        bound = np.array([BRANCH_STEP_RAD if u == "rad" else BRANCH_STEP_M for u in units])
+    else:
+        bound = np.array([FAR_STEP_RAD if u == "rad" else np.inf for u in units])
+    over = np.nonzero(dq > bound)[0]
+    if over.size:
+        k = int(over[np.argmax(dq[over] / bound[over])])
+        shown = f"{dq[k]:.4g} rad" if units[k] == "rad" else f"{dq[k] * 1e3:.4g} mm"
+        limit = f"{bound[k]:.4g} rad" if units[k] == "rad" else f"{bound[k] * 1e3:.4g} mm"
+        return f"actuator {mech.actuated[k]} moved {shown} from its start (bound {limit})"
+    s0 = det_sign(mech, np.asarray(start, float), q_start)
+    s1 = det_sign(mech, np.asarray(solution, float), q_solution)
+    if s0 and s1 and s0 != s1:
+        return (
+            "det of the actuator → pose Jacobian changed sign between start and solution "
+            "(a singularity lies between them)"
+        )
+    return ""
