@@ -80,8 +80,9 @@ def lock_joints(urdf_xml: str, values: Mapping[str, float]) -> str:
     """URDF text with the named movable joints made fixed at the given values.
 
     A locked joint's origin becomes ``origin · motion(value)`` (a rotation about or a
-    translation along its axis [rad or m]). Joints that ``<mimic>`` a locked joint are
-    locked too, at ``multiplier · value + offset``.
+    translation along its axis [rad or m]). Movable joints that ``<mimic>`` a locked
+    joint are locked too, at ``multiplier · value + offset``; a ``<mimic>`` on a joint
+    that is already fixed (PAL's TALOS and TIAGo grippers) has no effect and is dropped.
 
     Raises:
         UnknownNameError: a name is not a movable joint of the URDF.
@@ -101,6 +102,9 @@ def lock_joints(urdf_xml: str, values: Mapping[str, float]) -> str:
             mimic = e.find("mimic")
             leader = None if mimic is None else mimic.get("joint")
             if name in locked or mimic is None or leader is None or leader not in locked:
+                continue
+            if not tree.joints[name].movable:  # PAL URDFs: <mimic> on fixed joints, inert
+                e.remove(mimic)
                 continue
             mult = float(mimic.get("multiplier", "1"))
             off = float(mimic.get("offset", "0"))
