@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import difflib
 import os
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -97,17 +98,34 @@ def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
 
 
 def load_mechanism(
-    spec: str | Path, measured_frame: str | None = None, options: SolverOptions | None = None
+    spec: str | Path,
+    measured_frame: str | None = None,
+    options: SolverOptions | None = None,
+    *,
+    sidecar: str | Path | None = None,
+    lock: Mapping[str, float] | None = None,
 ) -> Mechanism:
     """Load a mechanism from a model directory, a ``.urdf`` or MJCF ``.xml`` path or a name.
 
     Names are bundled models (:func:`bundled_models`) or example-robot-data robots.
     An MJCF file is converted to URDF + sidecar first (:func:`pincal.model.load_mjcf`).
+    A ``.yaml`` file (or a directory holding one) whose key ``robot`` names a robot is
+    a local sidecar for it (see :mod:`pincal.model._named`).
 
     A sidecar ``<name>.yaml`` beside the URDF declares closures, actuation, measured
-    frame and presets (see models/README.md). A bare serial URDF needs none: all its
-    1-dof joints are actuated and the measured frame is chosen by name (effector, ee,
-    tcp, tool, flange, platform...) or as the deepest leaf link without a closure.
+    frame and presets (see models/README.md). A bare serial URDF needs none: its 1-dof
+    joints that move the measured frame are actuated and the measured frame is chosen
+    by name (effector, ee, tcp, tool, flange, platform...) or as the deepest leaf link
+    without a closure. An example-robot-data robot without a sidecar takes its home
+    from the package's SRDF; ``mech.notes`` says what was loaded and assumed.
+
+    Args:
+        spec: the model.
+        measured_frame: the measured frame (wins over the sidecar's).
+        options: solver options.
+        sidecar: a sidecar file for the model (its keys replace the model's own).
+        lock: joints made fixed ``{name: value}`` [rad or m] (wins over the sidecar's
+            ``lock``); joints that mimic them are locked too.
 
     Raises:
         ModelFileError, UnknownNameError, ClosureError, MobilityError.
@@ -115,16 +133,43 @@ def load_mechanism(
     if Path(spec).suffix.lower() == ".xml":
         from pincal.model._mjcf import load_mjcf
 
+        if sidecar is not None or lock:
+            raise ModelFileError("--sidecar and --lock apply to URDF models, not to MJCF files")
         return load_mjcf(spec, measured_frame, options=options)
-    urdf, sidecar_path = resolve_model_path(spec)
-    sidecar = read_sidecar(sidecar_path) if sidecar_path else {}
+    from pincal.model._named import resolve_named, turn_note
+    from pincal.model._serial import lock_joints
+
+    named = resolve_named(spec, sidecar, lock)
+    urdf = named.urdf
     urdf_xml = read_text(urdf, "URDF", error=ModelFileError)
     UrdfTree(urdf_xml, source=urdf)  # checked first, so that a bad URDF's messages name the file
-    return Mechanism(
-        urdf_xml,
-        sidecar,
-        name=urdf.stem,
-        source=urdf,
-        measured_frame=measured_frame,
-        options=options,
+    side = dict(named.sidecar)
+    if named.lock:
+        urdf_xml = lock_joints(urdf_xml, named.lock)
+        gone = set(named.lock) | {n for n, j in UrdfTree(urdf_xml).joints.items() if not j.movable}
+        if side.get("name_mot") is not None:
+            side["name_mot"] = [n for n in side["name_mot"] if n not in gone]
+        if isinstance(side.get("home"), Mapping):
+            side["home"] = {k: v for k, v in side["home"].items() if k not in gone}
+    joints = (side.get("workspace") or {}).get("joints") if named.erd_defaults else None
+    if joints:  # the defaults' ranges, kept for the actuated joints only
+        ws = dict(side["workspace"])
+        ws.pop("joints")
+        side["workspace"] = ws
+    mech = Mechanism(
+        urdf_xml, side, name=urdf.stem, source=urdf, measured_frame=measured_frame, options=options
     )
+    kept = {k: v for k, v in (joints or {}).items() if k in mech.actuated}
+    if kept:
+        side["workspace"] = {**side["workspace"], "joints": kept}
+        mech = Mechanism(
+            urdf_xml, side, name=urdf.stem, source=urdf, measured_frame=measured_frame,
+            options=options,
+        )  # fmt: skip
+    notes = list(named.notes)
+    if named.lock:
+        notes.append(f"locked: {', '.join(f'{k} = {v:.6g}' for k, v in named.lock.items())}")
+    if kept:
+        notes.append(turn_note(list(kept)))
+    mech.notes = tuple(notes) + mech.notes
+    return mech
