@@ -39,6 +39,7 @@ from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
 from pincal.model._named import find_local_sidecar, model_record, srdf_home
 from pincal.model._newton import SolverOptions
+from pincal.model._readings import JointReadings
 from pincal.model._parameters import (
     DOFS,
     Parameter,
@@ -94,6 +95,7 @@ __all__ = [
     "DHLayout",
     "DHNames",
     "DHRow",
+    "JointReadings",
     "Kinematics",
     "Mechanism",
     "ModelLimits",
