@@ -71,7 +71,8 @@ def test_tiago_by_a_local_sidecar_file_and_directory(tmp_path):
     (folder / "cell.yaml").write_text(text)
     assert info_json(str(folder))["actuated"] == ARM
     # the same file beside the robot's name; the CLI's --lock wins over the file's
-    doc = info_json("tiago", "--sidecar", str(tmp_path / "my_tiago.yaml"), "--lock", "arm_1_joint=0")
+    side = str(tmp_path / "my_tiago.yaml")
+    doc = info_json("tiago", "--sidecar", side, "--lock", "arm_1_joint=0")
     assert doc["actuated"] == ARM[1:]
     # a sidecar for another robot is refused
     res = run(["info", "panda", "--sidecar", str(tmp_path / "my_tiago.yaml")])
@@ -119,10 +120,11 @@ def _renamed_in_degrees(src: Path, dst: Path, reference: dict[str, float]) -> No
     k = next(i for i, line in enumerate(lines) if not line.startswith("#"))
     cols = lines[k].split(",")
     names = {c: f"J{i + 1}" for i, c in enumerate(cols[:6])}
-    out = lines[:k] + [",".join(names.get(c, c) for c in cols)]
+    out = [*lines[:k], ",".join(names.get(c, c) for c in cols)]
     for line in lines[k + 1 :]:
         v = line.split(",")
-        joints = [math.degrees(float(x) - reference[c]) for c, x in zip(cols[:6], v[:6])]
+        pairs = zip(cols[:6], v[:6], strict=True)
+        joints = [math.degrees(float(x) - reference[c]) for c, x in pairs]
         out.append(",".join([repr(x) for x in joints] + v[6:]))
     dst.write_text("\n".join(out) + "\n")
 
