@@ -275,8 +275,12 @@ def resolve_named(
                 base[key] = value
                 if note:
                     notes.append(f"{note} (example-robot-data defaults: no pincal sidecar)")
-    locks = _lock_values(data.get("lock"), f"sidecar {local}") | dict(lock or {})
-    merged = base | {k: v for k, v in data.items() if k not in LOADER_KEYS}
+    locks = (
+        _lock_values(base.get("lock"), f"sidecar {own}")
+        | _lock_values(data.get("lock"), f"sidecar {local}")
+        | dict(lock or {})
+    )
+    merged = {k: v for k, v in (base | data).items() if k not in LOADER_KEYS}
     return NamedModel(urdf, merged, locks, local, tuple(dict.fromkeys(notes)), erd)
 
 

@@ -5,7 +5,7 @@ offsets from a reference pose. Declared once, in the sidecar (or a measurement f
 header, which wins key by key)::
 
     columns: {torso1: torso_lift_joint, armL1: arm_1_joint}   # file column → URDF joint
-    joint_units: {angle: deg, length: mm}      # by joint kind, or {arm_1_joint: deg}
+    joint_units: {angle: deg, length: mm}      # by joint kind, {arm_1_joint: deg}, or deg
     joint_reference: home                      # readings are offsets from home, or
                                                # {arm_1_joint: 0.5} [rad or m, SI]
 
@@ -27,6 +27,7 @@ __all__ = ["KINDS", "JointReadings"]
 
 #: keys of ``joint_units`` that name a joint kind rather than a joint
 KINDS = ("angle", "length")
+_ANGLES = ("rad", "mrad", "urad", "deg")
 
 
 @dataclass(frozen=True)
@@ -55,8 +56,8 @@ class JointReadings:
         twice = sorted({j for j in joints if joints.count(j) > 1})
         if twice:
             raise ModelFileError(f"{where} 'columns' maps several columns to {shown(twice)}")
-        if isinstance(units, str):
-            units = {kind: units for kind in KINDS}
+        if isinstance(units, str):  # one unit: for the joints of its kind
+            units = {"angle" if units in _ANGLES else "length": units}
         unit_map = _str_map(units, f"{where} 'joint_units'", "angle/length or joints to units")
         ref: str | dict[str, float]
         if reference is None or reference == {}:
