@@ -64,7 +64,7 @@ class ModelOptions:
 
     sidecar: str | None = None
     frame: str | None = None
-    lock: dict[str, float] = field(default_factory=dict)
+    lock: dict[str, float | str] = field(default_factory=dict)
 
     @property
     def given(self) -> bool:
@@ -72,18 +72,22 @@ class ModelOptions:
         return bool(self.sidecar or self.frame or self.lock)
 
 
-def _parse_locks(values: tuple[str, ...]) -> dict[str, float]:
-    out: dict[str, float] = {}
+def _parse_locks(values: tuple[str, ...]) -> dict[str, float | str]:
+    out: dict[str, float | str] = {}
     for text in values:
         for item in filter(None, (t.strip() for t in text.split(","))):
             name, eq, value = item.partition("=")
+            if eq and name.strip() and value.strip() == "home":
+                out[name.strip()] = "home"
+                continue
             try:
                 number = float(value)
             except ValueError:
                 number = float("nan")
             if not eq or not name.strip() or number != number or abs(number) == float("inf"):
                 raise click.BadParameter(
-                    f"{clip(item, 200)!r}: write JOINT=VALUE [rad or m], e.g. head_1_joint=0",
+                    f"{clip(item, 200)!r}: write JOINT=VALUE [rad or m] or JOINT=home, e.g. "
+                    "head_1_joint=0",
                     param_hint="--lock",
                 )
             out[name.strip()] = number
@@ -119,7 +123,8 @@ def model_options(func):
                 "--lock",
                 multiple=True,
                 metavar="JOINT=VALUE",
-                help="Make a joint fixed at VALUE [rad or m] (repeat, or comma-separate).",
+                help="Make a joint fixed at VALUE [rad or m] or at 'home' (repeat, or "
+                "comma-separate).",
             ),
         ]
     ):

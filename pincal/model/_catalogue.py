@@ -103,7 +103,7 @@ def load_mechanism(
     options: SolverOptions | None = None,
     *,
     sidecar: str | Path | None = None,
-    lock: Mapping[str, float] | None = None,
+    lock: Mapping[str, float | str] | None = None,
 ) -> Mechanism:
     """Load a mechanism from a model directory, a ``.urdf`` or MJCF ``.xml`` path or a name.
 
@@ -124,8 +124,9 @@ def load_mechanism(
         measured_frame: the measured frame (wins over the sidecar's).
         options: solver options.
         sidecar: a sidecar file for the model (its keys replace the model's own).
-        lock: joints made fixed ``{name: value}`` [rad or m] (wins over the sidecar's
-            ``lock``); joints that mimic them are locked too.
+        lock: joints made fixed ``{name: value}`` [rad or m] or ``"home"`` (the home
+            value: sidecar or SRDF, else 0) (wins over the sidecar's ``lock``); joints
+            that mimic them are locked too.
 
     Raises:
         ModelFileError, UnknownNameError, ClosureError, MobilityError.
@@ -144,9 +145,10 @@ def load_mechanism(
     urdf_xml = read_text(urdf, "URDF", error=ModelFileError)
     UrdfTree(urdf_xml, source=urdf)  # checked first, so that a bad URDF's messages name the file
     side = dict(named.sidecar)
-    if named.lock:
-        urdf_xml = lock_joints(urdf_xml, named.lock)
-        gone = set(named.lock) | {n for n, j in UrdfTree(urdf_xml).joints.items() if not j.movable}
+    locks = _lock_values_at_home(named.lock, side.get("home"))
+    if locks:
+        urdf_xml = lock_joints(urdf_xml, locks)
+        gone = set(locks) | {n for n, j in UrdfTree(urdf_xml).joints.items() if not j.movable}
         if side.get("name_mot") is not None:
             side["name_mot"] = [n for n in side["name_mot"] if n not in gone]
         if isinstance(side.get("home"), Mapping):
@@ -167,9 +169,21 @@ def load_mechanism(
             options=options,
         )  # fmt: skip
     notes = list(named.notes)
-    if named.lock:
-        notes.append(f"locked: {', '.join(f'{k} = {v:.6g}' for k, v in named.lock.items())}")
+    if locks:
+        notes.append(f"locked: {', '.join(f'{k} = {v:.6g}' for k, v in locks.items())}")
     if kept:
         notes.append(turn_note(list(kept)))
     mech.notes = tuple(notes) + mech.notes
     return mech
+
+
+def _lock_values_at_home(lock: Mapping[str, float | str], home: Any) -> dict[str, float]:
+    """Lock values with ``"home"`` replaced by the joint's home value (else 0) [rad or m]."""
+    home = home if isinstance(home, Mapping) else {}
+    out = {}
+    for name, value in lock.items():
+        if value == "home":
+            h = home.get(name, 0.0)
+            value = h[0] if isinstance(h, list | tuple) else h
+        out[name] = float(value)
+    return out

@@ -7,7 +7,7 @@ path, relative paths being relative to the file)::
     # my_tiago.yaml — used as `pincal info my_tiago.yaml` (or a directory holding it)
     robot: tiago
     measured_frame: arm_7_link
-    lock: {head_1_joint: 0.0, head_2_joint: 0.0}    # joints made fixed [rad or m]
+    lock: {torso_lift_joint: 0.2, arm_1_joint: home}  # made fixed [rad or m, or home]
     columns: {torso1: torso_lift_joint}             # measurement-file column → joint
 
 The same file can be given to any command with ``--sidecar FILE`` beside a model
@@ -62,7 +62,8 @@ class NamedModel:
     Attributes:
         urdf: the URDF file.
         sidecar: the merged sidecar mapping (loader keys removed).
-        lock: joints to make fixed ``{name: value}`` [rad or m].
+        lock: joints to make fixed ``{name: value}`` [rad or m], or ``"home"`` (the
+            joint's home value).
         local: the local sidecar file, if one was used.
         notes: what was loaded and which defaults were applied, for the user.
         erd_defaults: whether example-robot-data defaults were applied (no sidecar).
@@ -70,7 +71,7 @@ class NamedModel:
 
     urdf: Path
     sidecar: dict[str, Any]
-    lock: dict[str, float]
+    lock: dict[str, float | str]
     local: Path | None
     notes: tuple[str, ...]
     erd_defaults: bool
@@ -93,17 +94,20 @@ def find_local_sidecar(spec: str | Path) -> Path | None:
     return None
 
 
-def _lock_values(v: Any, where: str) -> dict[str, float]:
+def _lock_values(v: Any, where: str) -> dict[str, float | str]:
     if v is None:
         return {}
     if not isinstance(v, Mapping):
         raise ModelFileError(f"{where} 'lock' must map joint names to values [rad, m]: {shown(v)}")
-    out = {}
+    out: dict[str, float | str] = {}
     for name, value in v.items():
+        if value == "home":
+            out[str(name)] = "home"
+            continue
         number = isinstance(value, int | float) and not isinstance(value, bool)
         if not number or not math.isfinite(value):
             raise ModelFileError(
-                f"{where} lock[{shown(name)}] must be a finite number, got {shown(value)}"
+                f"{where} lock[{shown(name)}] must be a finite number or 'home', got {shown(value)}"
             )
         out[str(name)] = float(value)
     return out
@@ -230,7 +234,7 @@ def turn_note(names: list[str]) -> str:
 def resolve_named(
     spec: str | Path,
     sidecar_file: str | Path | None = None,
-    lock: Mapping[str, float] | None = None,
+    lock: Mapping[str, float | str] | None = None,
 ) -> NamedModel:
     """Resolve a model spec with its local sidecar, locks and defaults (see module doc).
 
@@ -288,7 +292,7 @@ def model_record(
     spec: str | Path,
     sidecar_file: str | Path | None = None,
     frame: str | None = None,
-    lock: Mapping[str, float] | None = None,
+    lock: Mapping[str, float | str] | None = None,
 ) -> dict[str, Any]:
     """A local sidecar mapping that reloads ``spec`` with these options from anywhere.
 

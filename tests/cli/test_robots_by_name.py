@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from pincal._files import read_text
 from pincal.cli import main
-from pincal.model import example_robot_urdf, load_mechanism
+from pincal.model import UrdfTree, example_robot_urdf, load_mechanism, srdf_home
 
 ARM = [f"arm_{i}_joint" for i in range(1, 8)]
 
@@ -92,10 +93,13 @@ def test_bad_lock_option_is_a_usage_error():
 def test_talos_lock_skips_mimic_on_fixed_joints():
     # talos' gripper has <mimic> on fixed joints (gripper_left_inner_double_joint …)
     args = ["talos_reduced", "--frame", "gripper_left_base_link"]
-    locks = ["--lock", "gripper_left_joint=0,torso_1_joint=0,torso_2_joint=0"]
+    locks = ["--lock", "gripper_left_joint=0,torso_1_joint=0", "--lock", "torso_2_joint=home"]
     doc = info_json(*args, *locks)
     assert doc["actuated"] == [f"arm_left_{i}_joint" for i in range(1, 8)]
     assert any("state 'half_sitting' of talos.srdf" in n for n in doc["notes"])
+    urdf = example_robot_urdf("talos_reduced")
+    home = srdf_home(urdf, UrdfTree(read_text(urdf, "URDF")))[0]["torso_2_joint"]
+    assert home != 0 and any(f"torso_2_joint = {home:.6g}" in n for n in doc["notes"])
 
 
 def test_local_directory_shadowing_a_robot_name_is_said(tmp_path, monkeypatch):
