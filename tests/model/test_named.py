@@ -17,6 +17,7 @@ from pincal.model import (
     load_mechanism,
     lock_joints,
     model_record,
+    serial_mechanism,
     srdf_home,
 )
 
@@ -65,3 +66,11 @@ def test_local_sidecar_needs_robot_and_record_reloads(tmp_path):
     (tmp_path / "b.yaml").write_text("robot: ur5\nlock: {wrist_3_joint: big}\n")
     with pytest.raises(ModelFileError, match="must be a finite number"):
         load_mechanism(tmp_path / "b.yaml")
+
+
+def test_serial_mechanism_takes_a_local_sidecar_with_locks(tmp_path):
+    (tmp_path / "t.yaml").write_text("robot: tiago\nlock: {torso_lift_joint: 0.2}\n")
+    mech = serial_mechanism(str(tmp_path / "t.yaml"), "arm_7_link", measured="position")
+    assert mech.measured_frame == "tool"
+    assert list(mech.actuated) == [f"arm_{i}_joint" for i in range(1, 8)]
+    assert not mech.tree.joints["torso_lift_joint"].movable
