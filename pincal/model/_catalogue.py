@@ -49,14 +49,19 @@ def bundled_models() -> list[str]:
     return sorted(p.name for p in MODELS_DIR.iterdir() if (p / f"{p.name}.urdf").is_file())
 
 
-def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
+def resolve_model_path(spec: str | Path, by_name: bool = False) -> tuple[Path, Path | None]:
     """Find the URDF (and sidecar, if any) for a model spec.
 
     The spec is a model directory, a URDF path, a bundled model name or an
-    example-robot-data robot name (e.g. ``ur10``).
+    example-robot-data robot name (e.g. ``ur10``). With ``by_name`` it is a name only
+    (a local path of that name is not looked at).
     """
     path = Path(spec)
-    if path.is_dir():
+    if by_name and (MODELS_DIR / str(spec)).is_dir():
+        return resolve_model_path(MODELS_DIR / str(spec))
+    if by_name:
+        urdf = _named_urdf(str(spec))
+    elif path.is_dir():
         urdf = path / f"{path.name}.urdf"
         if not urdf.is_file():
             candidates = sorted(path.glob("*.urdf"))
@@ -81,20 +86,25 @@ def resolve_model_path(spec: str | Path) -> tuple[Path, Path | None]:
             ".xml file, or a model name (pincal --help lists them)"
         )
     else:
-        from pincal.model._robots import example_robot_names, example_robot_urdf
-
-        robots = example_robot_names()
-        if str(spec) not in robots:
-            close = difflib.get_close_matches(str(spec), robots, n=3)
-            raise UnknownNameError(
-                "model",
-                str(spec),
-                bundled_models() + [f"{n} (example-robot-data)" for n in close],
-                f" or one of {len(robots)} example-robot-data robots (e.g. ur10, panda)",
-            )
-        urdf = example_robot_urdf(str(spec))
+        urdf = _named_urdf(str(spec))
     sidecar = urdf.with_suffix(".yaml")
     return urdf, sidecar if sidecar.is_file() else None
+
+
+def _named_urdf(name: str) -> Path:
+    """The URDF of an example-robot-data robot name (UnknownNameError lists the names)."""
+    from pincal.model._robots import example_robot_names, example_robot_urdf
+
+    robots = example_robot_names()
+    if name not in robots:
+        close = difflib.get_close_matches(name, robots, n=3)
+        raise UnknownNameError(
+            "model",
+            name,
+            bundled_models() + [f"{n} (example-robot-data)" for n in close],
+            f" or one of {len(robots)} example-robot-data robots (e.g. ur10, panda)",
+        )
+    return example_robot_urdf(name)
 
 
 def load_mechanism(

@@ -121,8 +121,12 @@ def _robot_spec(local: Path, data: Mapping[str, Any]) -> str:
             "the robot it describes (e.g. `robot: ur5`, a model directory or a .urdf path)"
         )
     beside = local.parent / robot
-    path_like = os.sep in robot or robot.endswith(".urdf")  # a bare name stays a name
-    return str(beside) if path_like and beside.exists() else robot
+    return str(beside) if _path_like(robot) and beside.exists() else robot
+
+
+def _path_like(robot: str) -> bool:
+    """A sidecar's ``robot`` names a path (else a robot name, never a local path)."""
+    return os.sep in robot or robot.endswith(".urdf")
 
 
 def _shadow_note(spec: str, urdf: Path) -> str | None:
@@ -251,21 +255,24 @@ def resolve_named(
         )
     data: dict[str, Any] = {}
     robot = str(spec)
+    by_name = False  # a bare robot name in a sidecar is a name, never a local path
     if local is not None:
         data = dict(read_sidecar(local))
         robot = _robot_spec(local, data)
+        by_name = not _path_like(str(data["robot"]))
     elif sidecar_file is not None:
         local = Path(sidecar_file)
         data = dict(read_sidecar(local))
         if "robot" in data:
-            named = resolve_model_path(_robot_spec(local, data))[0].resolve()
+            by = not _path_like(str(data["robot"]))
+            named = resolve_model_path(_robot_spec(local, data), by_name=by)[0].resolve()
             if named != resolve_model_path(spec)[0].resolve():
                 raise ModelFileError(
                     f"--sidecar {shown(str(local))} describes robot {shown(data['robot'])}, "
                     f"not the model {shown(str(spec))}; give the matching model or drop the key"
                 )
-    urdf, own = resolve_model_path(robot)
-    shadow = _shadow_note(robot, urdf)
+    urdf, own = resolve_model_path(robot, by_name=by_name)
+    shadow = None if by_name else _shadow_note(robot, urdf)
     if shadow:
         notes.append(shadow)
     if local is not None:
@@ -300,10 +307,16 @@ def model_record(
     """
     local = find_local_sidecar(spec) or (Path(sidecar_file) if sidecar_file else None)
     doc: dict[str, Any] = dict(read_sidecar(local)) if local is not None else {}
-    robot = _robot_spec(local, doc) if local is not None and "robot" in doc else str(spec)
-    if sidecar_file is not None:
-        robot = str(spec)
-    doc["robot"] = str(Path(robot).resolve()) if Path(robot).exists() else robot
+    from_file = sidecar_file is None and local is not None and "robot" in doc
+    if not (from_file and not _path_like(str(doc["robot"]))):  # a robot name stays a name
+        robot = _robot_spec(local, doc) if from_file and local is not None else str(spec)
+        doc["robot"] = str(Path(robot).resolve()) if Path(robot).exists() else robot
+    return _with_options(doc, frame, lock)
+
+
+def _with_options(
+    doc: dict[str, Any], frame: str | None, lock: Mapping[str, float | str] | None
+) -> dict[str, Any]:
     if frame:
         doc["measured_frame"] = frame
     if lock:

@@ -74,3 +74,14 @@ def test_serial_mechanism_takes_a_local_sidecar_with_locks(tmp_path):
     assert mech.measured_frame == "tool"
     assert list(mech.actuated) == [f"arm_{i}_joint" for i in range(1, 8)]
     assert not mech.tree.joints["torso_lift_joint"].movable
+
+
+def test_a_robot_name_in_a_sidecar_is_not_a_local_path(tmp_path, monkeypatch):
+    # the natural layout: ./ur5/ur5.yaml says `robot: ur5` (the example-robot-data arm)
+    (tmp_path / "ur5").mkdir()
+    (tmp_path / "ur5" / "ur5.yaml").write_text("robot: ur5\nmeasured_frame: tool0\n")
+    monkeypatch.chdir(tmp_path)
+    mech = load_mechanism("ur5")
+    assert mech.measured_frame == "tool0" and mech.source == example_robot_urdf("ur5")
+    assert not any("local path" in n for n in mech.notes)
+    assert model_record("ur5", frame="wrist_3_link")["robot"] == "ur5"
