@@ -34,7 +34,7 @@ import shutil
 import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -175,7 +175,7 @@ def _manifest(
         "format": CALIBRATION_FORMAT,
         "version": CALIBRATION_VERSION,
         "pincal_version": __version__,
-        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "model": result.model,
         "model_source": model_source,
         "preset": result.preset,

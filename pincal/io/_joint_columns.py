@@ -10,8 +10,9 @@ may give them too and wins key by key::
 
 A joint's column is the column mapped to it, else the one named after it. Its unit
 is the column title's bracketed unit, else the declared one (joint, then kind), else
-SI. Values implausible for their unit (more than two turns of angle, more than 10 m)
-are refused naming the column and the row: they are the usual sign of a unit mistake.
+SI. Values outside the joint's URDF range, and for joints without one values
+implausible for their unit (more than two turns of angle, more than 10 m), are refused
+naming the column and the row: they are the usual sign of a unit mistake.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import numpy as np
 from pincal._yaml import shown
 from pincal.errors import BadValueError, ColumnError, MeasurementFormatError, PincalError
 from pincal.io._csv import Header, header_value
-from pincal.io._units import ANGLE_UNITS, LENGTH_UNITS, unit_factor
+from pincal.io._units import ANGLE_UNITS, LENGTH_UNITS, check_actuator_ranges, unit_factor
 from pincal.model import JointReadings, Mechanism
 
 __all__ = ["HEADER_KEYS", "joint_columns", "read_joints"]
@@ -140,8 +141,9 @@ def read_joints(
         name: file name for messages.
 
     Raises:
-        MeasurementFormatError: an unknown unit; BadValueError: a reading implausible for
-            its unit (names the column and data row).
+        MeasurementFormatError: an unknown unit; ActuatorRangeError: a value outside its
+            joint's URDF range (names the column and data row); BadValueError: a reading
+            of a joint without a URDF range implausible for its unit (the same).
     """
     if isinstance(decl.reference, dict):
         unknown = [j for j in decl.reference if j not in mech.actuated]
@@ -152,12 +154,25 @@ def read_joints(
             )
     q = np.empty_like(raw, dtype=float)
     home = mech.actuators_of(mech.q_home) if decl.reference == "home" else None
+    factors = []
     for k, joint in enumerate(mech.actuated):
         kind = _kind(mech, joint)
         unit = units[k] or decl.units.get(joint) or decl.units.get(kind)
         table = ANGLE_UNITS if kind == "angle" else LENGTH_UNITS
-        si = "rad" if kind == "angle" else "m"
         factor = unit_factor(table, unit, kind, f"{name} column {titles[k]}") if unit else 1.0
+        factors.append(factor)
+        if home is not None:
+            offset = float(home[k])
+        elif isinstance(decl.reference, dict):
+            offset = decl.reference.get(joint, 0.0)
+        else:
+            offset = 0.0
+        q[:, k] = raw[:, k] / factor + offset
+    check_actuator_ranges(mech, q, name, titles)
+    for k, joint in enumerate(mech.actuated):  # joints without a URDF range
+        kind, factor = _kind(mech, joint), factors[k]
+        unit = units[k] or decl.units.get(joint) or decl.units.get(kind)
+        si = "rad" if kind == "angle" else "m"
         limit = _PLAUSIBLE[kind] * factor
         bad = np.flatnonzero(np.abs(raw[:, k]) > limit)
         if bad.size:
@@ -171,11 +186,4 @@ def read_joints(
                 i + 1,
                 titles[k],
             )
-        if home is not None:
-            offset = float(home[k])
-        elif isinstance(decl.reference, dict):
-            offset = decl.reference.get(joint, 0.0)
-        else:
-            offset = 0.0
-        q[:, k] = raw[:, k] / factor + offset
     return q

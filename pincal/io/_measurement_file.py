@@ -72,7 +72,6 @@ from pincal.io._units import (
     ANGLE_UNITS,
     LENGTH_UNITS,
     actuator_write_factors,
-    check_actuator_ranges,
     unit_factor,
 )
 from pincal.measure import Measurements, NoiseModel
@@ -204,8 +203,7 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
     col = {c: k for k, c in enumerate(names)}
     titles = [columns[k] for k in act_idx]
     units = [parsed[k][1] for k in act_idx]
-    q_act = read_joints(mech, data[:, act_idx], declared, units, titles, name)
-    check_actuator_ranges(mech, q_act, name, titles)
+    q_act = read_joints(mech, data[:, act_idx], declared, units, titles, name)  # range-checked
     used = set(act_idx)
 
     def take(cols: Sequence[str], what: str) -> np.ndarray:

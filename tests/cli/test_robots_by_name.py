@@ -183,5 +183,5 @@ def test_degrees_read_as_radians_are_refused_naming_column_and_row(tmp_path):
     args = ["calibrate", "ur5", "--data", str(tmp_path / "deg.csv"), "--sidecar", str(side)]
     res = run([*args, "--out", str(tmp_path / "c")])
     assert res.exit_code == 1
-    assert "BadValueError" in res.output and "degrees read as radians?" in res.output
+    assert "ActuatorRangeError" in res.output and "check the column's unit" in res.output
     assert "data row" in res.output and "column 'J" in res.output

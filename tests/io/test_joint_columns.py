@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pincal.errors import BadValueError, ColumnError, MeasurementFormatError, ModelFileError
+from pincal.errors import (
+    ActuatorRangeError,
+    BadValueError,
+    ColumnError,
+    MeasurementFormatError,
+    ModelFileError,
+)
 from pincal.io import read_measurements, write_measurements
 from pincal.measure import simulate_measurements
 from pincal.model import Mechanism, Sidecar, load_mechanism, sample_actuators
@@ -78,23 +84,29 @@ def test_missing_and_wrongly_mapped_columns_are_named(tmp_path, hexa, meas):
         read_measurements(tmp_path / "b.csv", _with(hexa, columns=mapped))
 
 
-def test_values_implausible_for_their_unit_name_column_and_row(tmp_path, hexa, meas):
+def test_values_outside_the_range_or_implausible_name_column_and_row(tmp_path, hexa, meas):
     src = write_measurements(tmp_path / "a.csv", meas)
     names = [f"axis{i}" for i in range(1, 7)]
     mech = _with(hexa, columns=dict(zip(names, hexa.actuated, strict=True)))
-    lines = _rewrite(src, hexa, [0] * 6, 1.0, names)
-    lines[-1] = "12.0," + lines[-1].split(",", 1)[1]  # 12 m in the last row
-    (tmp_path / "b.csv").write_text("\n".join(lines) + "\n")
-    with pytest.raises(BadValueError, match=r"data row 6, column 'axis1': 12 m is implausible"):
-        read_measurements(tmp_path / "b.csv", mech)
     lines = _rewrite(src, hexa, [0] * 6, 1e3, names)  # mm, declared as nothing (m)
     (tmp_path / "c.csv").write_text("\n".join(lines) + "\n")
-    k = next(i for i, x in enumerate(lines) if x.startswith("axis1"))
-    first = float(lines[k + 1].split(",")[0])
-    with pytest.raises(BadValueError, match=rf"data row 1, column 'axis1': {first:.6g} m is impl"):
+    with pytest.raises(ActuatorRangeError, match=r"data row 1, column 'axis1': joint 'leg1_slide'"):
         read_measurements(tmp_path / "c.csv", mech)
     back = read_measurements(tmp_path / "c.csv", _with(mech, joint_units={"length": "mm"}))
     assert np.allclose(back.q_act, meas.q_act, rtol=0, atol=1e-12)
+    # joints without a URDF range (continuous): a reading over two turns is refused
+    pend = load_mechanism("double_pendulum_continuous")
+    rng = np.random.default_rng(2)
+    q = rng.uniform(-3, 3, (4, 2))
+    src = write_measurements(tmp_path / "p.csv", simulate_measurements(pend, q, None, rng))
+    lines = _rewrite(src, pend, [0, 0], 180 / np.pi, ["a1", "a2"])  # degrees
+    (tmp_path / "d.csv").write_text("\n".join(lines) + "\n")
+    cols = {"columns": {"a1": "joint1", "a2": "joint2"}}
+    row = 1 + int(np.argmax(np.abs(np.degrees(q[:, 0])) > 4 * np.pi))
+    with pytest.raises(BadValueError, match=rf"data row {row}, column 'a1'.*radians\?"):
+        read_measurements(tmp_path / "d.csv", _with(pend, **cols))
+    back = read_measurements(tmp_path / "d.csv", _with(pend, **cols, joint_units="deg"))
+    assert np.allclose(back.q_act, q, rtol=0, atol=1e-12)
 
 
 def test_bad_declarations_are_refused():
