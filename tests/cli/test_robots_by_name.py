@@ -185,3 +185,11 @@ def test_degrees_read_as_radians_are_refused_naming_column_and_row(tmp_path):
     assert res.exit_code == 1
     assert "ActuatorRangeError" in res.output and "check the column's unit" in res.output
     assert "data row" in res.output and "column 'J" in res.output
+
+
+def test_view_takes_the_model_options(tmp_path):
+    html = tmp_path / "v.html"
+    args = ["view", "tiago", "--frame", "arm_tool_link", "--lock", "torso_lift_joint=0.3"]
+    res = run([*args, "--html", str(html), "--json"])
+    assert res.exit_code == 0, res.output
+    assert html.is_file() and json.loads(res.stdout)["poses"] == 5
