@@ -183,6 +183,9 @@ def load_mechanism(
         notes.append(f"locked: {', '.join(f'{k} = {v:.6g}' for k, v in locks.items())}")
     if kept:
         notes.append(turn_note(list(kept)))
+    singular = _singular_home(mech) if named.erd_defaults or named.local else None
+    if singular:
+        notes.append(singular)
     mech.notes = tuple(notes) + mech.notes
     return mech
 
@@ -197,3 +200,33 @@ def _lock_values_at_home(lock: Mapping[str, float | str], home: Any) -> dict[str
             value = h[0] if isinstance(h, list | tuple) else h
         out[name] = float(value)
     return out
+
+
+def _singular_home(mech: Mechanism) -> str | None:
+    """A note when an open chain's home is singular for its measured frame, else None.
+
+    Inverse kinematics started there (acceptance, compensation) may not move.
+    """
+    if mech.closures:
+        return None
+    import numpy as np
+    import pinocchio as pin
+
+    from pincal.model._closures import COMPONENTS
+
+    data = mech.model.createData()
+    fid = mech.frame_id(mech.measured_frame)
+    J = pin.computeFrameJacobian(mech.model, data, mech.q_home, fid, pin.LOCAL)
+    rows = [COMPONENTS.index(c) for c in mech.measured_components]
+    cols = [mech.model.idx_vs[mech.model.getJointId(n)] for n in mech.actuated]
+    G = J[np.ix_(rows, cols)]
+    rank = int(np.linalg.matrix_rank(G, tol=1e-9 * max(float(np.abs(G).max()), 1e-300)))
+    if rank >= min(G.shape):
+        return None
+    return (
+        f"home is a singular configuration of the measured frame {mech.measured_frame!r} "
+        f"(its actuators move it in {rank} of {min(G.shape)} directions there): inverse "
+        f"kinematics from home may not move (acceptance, compensation); give a home away "
+        f"from it in a sidecar ('home: {{joint: value}}', with --sidecar FILE or in a YAML "
+        f"file with 'robot: {mech.name}')"
+    )

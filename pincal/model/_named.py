@@ -230,7 +230,7 @@ def turn_note(names: list[str]) -> str:
     """The note about joints sampled over one turn (example-robot-data defaults)."""
     return (
         f"{len(names)} joint(s) with a URDF range over one turn are sampled over one turn "
-        f"around home: {', '.join(names)} (example-robot-data defaults: no pincal sidecar; "
+        f"around home: {', '.join(names)} (example-robot-data default, no sidecar sets it; "
         f"a sidecar workspace 'joints' changes this)"
     )
 
@@ -285,7 +285,7 @@ def resolve_named(
             if key not in data:
                 base[key] = value
                 if note:
-                    notes.append(f"{note} (example-robot-data defaults: no pincal sidecar)")
+                    notes.append(f"{note} (example-robot-data default, no sidecar sets it)")
     locks = (
         _lock_values(base.get("lock"), f"sidecar {own}")
         | _lock_values(data.get("lock"), f"sidecar {local}")
