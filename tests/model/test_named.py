@@ -85,3 +85,20 @@ def test_a_robot_name_in_a_sidecar_is_not_a_local_path(tmp_path, monkeypatch):
     assert mech.measured_frame == "tool0" and mech.source == example_robot_urdf("ur5")
     assert not any("local path" in n for n in mech.notes)
     assert model_record("ur5", frame="wrist_3_link")["robot"] == "ur5"
+
+
+@pytest.mark.parametrize(
+    ("robot", "srdf", "state"),
+    [("panda", "panda.srdf", "default"), ("talos_reduced", "talos.srdf", "half_sitting")],
+)
+def test_srdf_home_agrees_with_pinocchio_reference_configurations(robot, srdf, state):
+    import pinocchio as pin
+
+    urdf = example_robot_urdf(robot)
+    model = pin.buildModelFromUrdf(str(urdf))
+    pin.loadReferenceConfigurations(model, str(urdf.parents[1] / "srdf" / srdf), False)
+    q = model.referenceConfigurations[state]
+    home, where = srdf_home(urdf, UrdfTree(read_text(urdf, "URDF")))
+    assert where == f"state {state!r} of {srdf}" and len(home) >= 7
+    for joint, value in home.items():
+        assert q[model.idx_qs[model.getJointId(joint)]] == value, joint
