@@ -163,17 +163,12 @@ def load_mechanism(
             side["name_mot"] = [n for n in side["name_mot"] if n not in gone]
         if isinstance(side.get("home"), Mapping):
             side["home"] = {k: v for k, v in side["home"].items() if k not in gone}
-    joints = (side.get("workspace") or {}).get("joints") if named.erd_defaults else None
-    if joints:  # the defaults' ranges, kept for the actuated joints only
-        ws = dict(side["workspace"])
-        ws.pop("joints")
-        side["workspace"] = ws
     mech = Mechanism(
         urdf_xml, side, name=urdf.stem, source=urdf, measured_frame=measured_frame, options=options
     )
-    kept = {k: v for k, v in (joints or {}).items() if k in mech.actuated}
-    if kept:
-        side["workspace"] = {**side["workspace"], "joints": kept}
+    kept = {k: v for k, v in named.turns.items() if k in mech.actuated}
+    if kept:  # the defaults' one-turn ranges, for the actuated joints only
+        side["workspace"] = {**(side.get("workspace") or {}), "joints": kept}
         mech = Mechanism(
             urdf_xml, side, name=urdf.stem, source=urdf, measured_frame=measured_frame,
             options=options,

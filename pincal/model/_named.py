@@ -67,6 +67,9 @@ class NamedModel:
         local: the local sidecar file, if one was used.
         notes: what was loaded and which defaults were applied, for the user.
         erd_defaults: whether example-robot-data defaults were applied (no sidecar).
+        turns: default sampling ranges ``{joint: [lower, upper]}`` [rad] of joints whose
+            URDF range is over one turn (not in ``sidecar``: the loader keeps those of
+            the actuated joints), {} when a sidecar gives the workspace.
     """
 
     urdf: Path
@@ -75,6 +78,7 @@ class NamedModel:
     local: Path | None
     notes: tuple[str, ...]
     erd_defaults: bool
+    turns: dict[str, list[float]]
 
 
 def find_local_sidecar(spec: str | Path) -> Path | None:
@@ -279,20 +283,24 @@ def resolve_named(
         notes.append(f"sidecar {local} describes {robot!r} ({urdf})")
     base = dict(read_sidecar(own)) if own else {}
     erd = own is None and _is_erd(urdf)
+    turns: dict[str, list[float]] = {}
     if erd:
         xml = read_text(urdf, "URDF", error=ModelFileError)
         for key, (value, note) in _erd_defaults(urdf, xml).items():
-            if key not in data:
-                base[key] = value
-                if note:
-                    notes.append(f"{note} (example-robot-data default, no sidecar sets it)")
+            if key in data:
+                continue
+            if key == "workspace":
+                turns = value["joints"]
+                continue
+            base[key] = value
+            notes.append(f"{note} (example-robot-data default, no sidecar sets it)")
     locks = (
         _lock_values(base.get("lock"), f"sidecar {own}")
         | _lock_values(data.get("lock"), f"sidecar {local}")
         | dict(lock or {})
     )
     merged = {k: v for k, v in (base | data).items() if k not in LOADER_KEYS}
-    return NamedModel(urdf, merged, locks, local, tuple(dict.fromkeys(notes)), erd)
+    return NamedModel(urdf, merged, locks, local, tuple(dict.fromkeys(notes)), erd, turns)
 
 
 def model_record(

@@ -244,7 +244,8 @@ def serial_mechanism(
         spec: anything :func:`pincal.load_mechanism` accepts (bundled model, URDF path,
             example-robot-data name such as ``"ur10"`` or ``"panda"``, a local sidecar
             with ``robot:``, whose ``lock`` applies too); an example-robot-data robot
-            takes its SRDF home but keeps its URDF ranges for sampling.
+            takes its SRDF home but keeps its URDF ranges for sampling (the scripts'
+            seeded draws are unchanged).
         flange: link carrying the tool frame; the measured frame becomes ``tool``.
             None: no tool frame, the sidecar's (or the automatically chosen) measured frame.
         lock: movable joints to make fixed, ``{name: value}`` (e.g. Panda fingers).
@@ -264,8 +265,6 @@ def serial_mechanism(
 
     named = resolve_named(spec)
     urdf_path, sidecar = named.urdf, dict(named.sidecar)
-    if named.erd_defaults:  # URDF sampling ranges kept (scripts' seeded draws unchanged)
-        sidecar.pop("workspace", None)
     lock = _lock_values_at_home({**named.lock, **(lock or {})}, sidecar.get("home"))
     xml = read_text(urdf_path, "URDF", error=ModelFileError)
     if lock:

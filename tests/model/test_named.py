@@ -102,3 +102,14 @@ def test_srdf_home_agrees_with_pinocchio_reference_configurations(robot, srdf, s
     assert where == f"state {state!r} of {srdf}" and len(home) >= 7
     for joint, value in home.items():
         assert q[model.idx_qs[model.getJointId(joint)]] == value, joint
+
+
+def test_a_sidecar_workspace_replaces_the_one_turn_default(tmp_path):
+    default = load_mechanism("ur5")
+    assert len(default.workspace.joints) == 5  # elbow_joint's URDF range is one turn
+    (tmp_path / "w.yaml").write_text(
+        "robot: ur5\nworkspace: {joints: {shoulder_pan_joint: [-1.0, 1.0]}}\n"
+    )
+    mech = load_mechanism(tmp_path / "w.yaml")
+    assert mech.workspace.joints == {"shoulder_pan_joint": (-1.0, 1.0)}
+    assert not any("one turn" in n for n in mech.notes)
