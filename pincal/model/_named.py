@@ -119,6 +119,11 @@ def _lock_values(v: Any, where: str) -> dict[str, float | str]:
 
 def _robot_spec(local: Path, data: Mapping[str, Any]) -> str:
     robot = data.get("robot")
+    if (not isinstance(robot, str) or not robot) and local.with_suffix(".urdf").is_file():
+        raise ModelFileError(
+            f"{shown(str(local))} is the sidecar of {local.with_suffix('.urdf').name}: give "
+            f"that URDF or its directory as the model"
+        )
     if not isinstance(robot, str) or not robot:
         raise ModelFileError(
             f"sidecar {shown(str(local))} is given as the model but has no 'robot' key naming "
