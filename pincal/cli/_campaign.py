@@ -32,7 +32,7 @@ VALIDATION_SOURCES = ("simulated", "file", "none")
 KEYS_HELP = """\
 \b
 Campaign file keys (YAML; relative paths are relative to the file):
-  model: NAME|DIR|URDF       required; the nominal model
+  model: NAME|DIR|URDF|YAML  required; the nominal model (YAML: a sidecar with robot: NAME)
   preset: NAME               parameter preset (default: the model's first)
   out: DIR                   output directory (default: campaign-out; --out overrides)
   design:                    optional pose design (pincal poses)
@@ -279,7 +279,7 @@ def load_campaign(path: str | Path) -> Campaign:
     m = dataclasses.replace(camp.measurements, file=_resolve(camp.measurements.file, base))
     v = dataclasses.replace(camp.validation, file=_resolve(camp.validation.file, base))
     model = camp.model
-    if "/" in model or model.endswith((".urdf", ".xml")):
+    if "/" in model or model.endswith((".urdf", ".xml", ".yaml", ".yml")):
         model = _resolve(model, base) or model
     for key, f in (("measurements.file", m.file), ("validation.file", v.file)):
         if f is not None and not Path(f).is_file():

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import click
 
 from pincal.cli._limits import MAX_POSES, check_count, check_number, yes_option
-from pincal.cli.common import fail_cleanly, guard_paths, model_input
+from pincal.cli.common import fail_cleanly, guard_paths, load_model, model_input, model_options
 
 if TYPE_CHECKING:
     from pincal.model import Mechanism
@@ -123,11 +123,12 @@ def _grouped(meas, controller):
 )
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON on stdout.")
 @yes_option
+@model_options
 @fail_cleanly
 def acceptance(
     model, cal, data_file, preset, errors, error_size, cycles, repeatability, seed, json_out,
-    as_json, yes,
-) -> None:
+    as_json, yes, model_opts,
+) -> None:  # fmt: skip
     """ISO 9283 acceptance of MODEL: AP and RP at P1–P5 of the test cube.
 
     The test uses the components MODEL measures: a cube in x, y, z, a square in the
@@ -153,7 +154,7 @@ def acceptance(
     from pincal.cli.simulate import _parse_errors, _parse_pair
     from pincal.io import atomic_write_text, read_measurements
     from pincal.measure import iso_test_cube, pose_characteristics, simulate_cycles
-    from pincal.model import load_mechanism, parameters
+    from pincal.model import parameters
 
     guard_paths(
         {"MODEL": model_input(model), "--calibrated": cal, "--data": data_file},
@@ -163,7 +164,7 @@ def acceptance(
     check_number(repeatability, "--repeatability")
     _parse_pair(error_size, "--error-size")
     say = (lambda _line: None) if as_json else click.echo
-    nominal = load_mechanism(model)
+    nominal = load_model(model, model_opts)
     calibrated = load_calibrated(cal, nominal) if cal else None
     report: dict = {"model": nominal.name}
     if data_file is not None:

@@ -9,7 +9,15 @@ from pathlib import Path
 import click
 
 from pincal.cli._limits import number_pair
-from pincal.cli.common import fail_cleanly, guard_paths, model_input, model_source
+from pincal.cli.common import (
+    fail_cleanly,
+    guard_paths,
+    load_model,
+    model_input,
+    model_options,
+    model_record,
+    model_source,
+)
 from pincal.identification import METHODS
 
 
@@ -136,8 +144,11 @@ def format_report(doc: dict) -> str:
     metavar="MM,RAD",
     help="Quality gate: largest parameter change [default: 20,0.1].",
 )
+@model_options
 @fail_cleanly
-def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max_change) -> None:
+def calibrate(
+    model, data, preset, method, out, as_json, noise, loss, force, max_change, model_opts
+) -> None:  # fmt: skip
     """Identify MODEL's geometric parameters from measured poses (--data).
 
     Writes one calibration directory OUT (whole or not at all) that `pincal view
@@ -163,7 +174,7 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
         read_measurement_file,
         write_calibration,
     )
-    from pincal.model import load_mechanism, parameters
+    from pincal.model import parameters
 
     limits = gate_limits(max_change)
 
@@ -171,13 +182,16 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
         raise click.BadParameter(
             f"a robust loss needs --method lm, not {method}", param_hint="--loss"
         )
-    guard_paths({"MODEL": model_input(model), "--data": data}, out_dirs={"--out": out})
+    guard_paths(
+        {"MODEL": model_input(model), "--data": data, "--sidecar": model_opts.sidecar},
+        out_dirs={"--out": out},
+    )
     click.get_current_context().with_resource(calibration_lock(out))  # until the end
     declared = None
     if noise is not None:
         pos_mm, ori_mrad = number_pair(noise, "--noise", positive=True, form="pos_mm,ori_mrad")
         declared = {"position": pos_mm, "orientation": ori_mrad}
-    mech = load_mechanism(model)
+    mech = load_model(model, model_opts)
     preset = preset or (next(iter(mech.presets), "full"))
     params = parameters(mech, preset)
     if _is_instrument_file(data):
@@ -202,14 +216,19 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
     doc = result_json(result, str(data), CALIBRATED_URDF)
     doc["quality"] = quality
     report = format_report(doc)
+    texts = {"report.txt": report}
+    record = model_record(model, model_opts)  # the model with --sidecar/--frame/--lock
+    if record is not None:
+        texts["model.yaml"] = record
+    source = str(out_dir.resolve() / "model.yaml") if record else model_source(model)
     cal = write_calibration(
         out_dir,
         result,
-        model_source=model_source(model),
+        model_source=source,
         data_files=[data],
         noise=noise_model,
         annotations={"data": str(data), "quality": quality},
-        texts={"report.txt": report},
+        texts=texts,
     )
     if as_json:
         click.echo(json.dumps(doc))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Mapping
+from dataclasses import dataclass, field
 from functools import wraps
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -15,6 +16,7 @@ from pincal.errors import OutputPathError, PincalError, clip
 
 if TYPE_CHECKING:
     from pincal.io import CalibrationDirectory
+    from pincal.model import Mechanism
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 
@@ -54,6 +56,107 @@ def model_source(spec: str) -> str:
 def model_input(spec: str) -> str | None:
     """The model spec as an input path for :func:`guard_paths` (None for a bundled name)."""
     return spec if Path(spec).exists() else None
+
+
+@dataclass(frozen=True)
+class ModelOptions:
+    """The model-loading options of a command (``--sidecar``, ``--frame``, ``--lock``)."""
+
+    sidecar: str | None = None
+    frame: str | None = None
+    lock: dict[str, float | str] = field(default_factory=dict)
+
+    @property
+    def given(self) -> bool:
+        """Whether any option was given."""
+        return bool(self.sidecar or self.frame or self.lock)
+
+
+def _parse_locks(values: tuple[str, ...]) -> dict[str, float | str]:
+    out: dict[str, float | str] = {}
+    for text in values:
+        for item in filter(None, (t.strip() for t in text.split(","))):
+            name, eq, value = item.partition("=")
+            if eq and name.strip() and value.strip() == "home":
+                out[name.strip()] = "home"
+                continue
+            try:
+                number = float(value)
+            except ValueError:
+                number = float("nan")
+            if not eq or not name.strip() or number != number or abs(number) == float("inf"):
+                raise click.BadParameter(
+                    f"{clip(item, 200)!r}: write JOINT=VALUE [rad or m] or JOINT=home, e.g. "
+                    "head_1_joint=0",
+                    param_hint="--lock",
+                )
+            out[name.strip()] = number
+    return out
+
+
+def model_options(func):
+    """Add ``--sidecar``, ``--frame`` and ``--lock`` to a command that loads a model.
+
+    The command receives them as one ``model_opts`` (:class:`ModelOptions`) argument.
+    """
+
+    @wraps(func)
+    def wrapper(*args, sidecar=None, frame=None, lock=(), **kwargs):
+        opts = ModelOptions(sidecar, frame, _parse_locks(lock))
+        return func(*args, model_opts=opts, **kwargs)
+
+    for decorator in reversed(
+        [
+            click.option(
+                "--sidecar",
+                type=click.Path(dir_okay=False),
+                default=None,
+                help="Sidecar YAML for the model (its keys replace the model's own; "
+                "e.g. measured_frame, home, workspace, lock, columns).",
+            ),
+            click.option(
+                "--frame",
+                default=None,
+                help="Measured frame (a link or frame of the model; wins over the sidecar).",
+            ),
+            click.option(
+                "--lock",
+                multiple=True,
+                metavar="JOINT=VALUE",
+                help="Make a joint fixed at VALUE [rad or m] or at 'home' (repeat, or "
+                "comma-separate).",
+            ),
+        ]
+    ):
+        wrapper = decorator(wrapper)
+    return wrapper
+
+
+def load_model(spec: str, opts: ModelOptions | None = None, quiet: bool = False) -> Mechanism:
+    """Load MODEL with its options; say on stderr when a local path shadows a robot name."""
+    from pincal.model import load_mechanism
+
+    opts = opts or ModelOptions()
+    mech = load_mechanism(spec, opts.frame, sidecar=opts.sidecar, lock=opts.lock or None)
+    if not quiet:
+        for note in mech.notes:
+            if note.startswith(("model ", "home is a singular")):
+                click.echo(f"pincal: note: {note}", err=True)
+    return mech
+
+
+def model_record(spec: str, opts: ModelOptions) -> str | None:
+    """A local sidecar (YAML text) that reloads MODEL with its options, None without options.
+
+    Calibrations write it as ``model.yaml`` so that later commands load the same model.
+    """
+    if not opts.given:
+        return None
+    import yaml
+
+    from pincal.model import model_record as record
+
+    return yaml.safe_dump(record(spec, opts.sidecar, opts.frame, opts.lock), sort_keys=False)
 
 
 def calibration_summary(cal: CalibrationDirectory) -> dict[str, Any]:

@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from pincal.cli._limits import check_number
-from pincal.cli.common import fail_cleanly, guard_paths, model_input
+from pincal.cli.common import fail_cleanly, guard_paths, load_model, model_input, model_options
 
 _FILE = click.Path(exists=True, dir_okay=False, path_type=Path)
 
@@ -45,11 +45,12 @@ _FILE = click.Path(exists=True, dir_okay=False, path_type=Path)
 @click.option("--ignore-unknown-points", is_flag=True,
               help="Skip points that are not in --targets (e.g. base nests).")  # fmt: skip
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary.")
+@model_options
 @fail_cleanly
 def import_tracker(
     points, log_path, targets_path, model, out, match, tolerance, unit, log_length_unit,
     log_angle_unit, columns, target_columns, log_columns, delimiter, decimal, point_std,
-    max_residual, out_unit, ignore_unknown_points, as_json,
+    max_residual, out_unit, ignore_unknown_points, as_json, model_opts,
 ) -> None:  # fmt: skip
     """Pair a laser tracker's POINTS export with a controller log into a targets file.
 
@@ -72,7 +73,6 @@ def import_tracker(
     """
     from pincal.io import TrackerImportOptions, import_tracker, write_target_measurements
     from pincal.io._delimited import parse_mapping
-    from pincal.model import load_mechanism
 
     guard_paths(
         {"POINTS": points, "--log": log_path, "--targets": targets_path,
@@ -81,7 +81,7 @@ def import_tracker(
     )  # fmt: skip
     check_number(tolerance, "--tolerance", positive=True)
     check_number(point_std, "--point-std", positive=True)
-    mech = load_mechanism(model)
+    mech = load_model(model, model_opts)
     opts = TrackerImportOptions(
         match=match,
         tolerance=tolerance,

@@ -6,13 +6,13 @@ from typing import TYPE_CHECKING
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_options
 
 if TYPE_CHECKING:
     from pincal.model import Mechanism
 
 
-def structure_lines(mech: Mechanism) -> list[str]:
+def structure_lines(mech: Mechanism, frame_given: bool = False) -> list[str]:
     """The model's structure as text lines.
 
     Lists joints, closures (rank at home), actuated, passive and idle joints, mobility,
@@ -51,7 +51,7 @@ def structure_lines(mech: Mechanism) -> list[str]:
     lines.append(f"  mobility: {mech.mobility} (= {mech.n_actuated} actuated joints)")
     lines.append(
         f"  measured frame: {mech.measured_frame} [{' '.join(mech.measured_components)}]"
-        f"{'' if mech.sidecar.measured_frame else ' (chosen automatically)'}"
+        f"{'' if mech.sidecar.measured_frame or frame_given else ' (chosen automatically)'}"
     )
     others = [c for c in mech.measured_frame_candidates if c != mech.measured_frame][:5]
     if others:
@@ -72,8 +72,15 @@ def structure_lines(mech: Mechanism) -> list[str]:
     "base set, absorbed combinations and the unseen motions in words.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON description on stdout.")
+@model_options
 @fail_cleanly
-def info(model: str, preset: str | None, instrument: str | None, as_json: bool) -> None:
+def info(
+    model: str,
+    preset: str | None,
+    instrument: str | None,
+    as_json: bool,
+    model_opts: ModelOptions,
+) -> None:
     """Describe MODEL (bundled name, model directory, .urdf or MJCF .xml path).
 
     
@@ -82,17 +89,19 @@ def info(model: str, preset: str | None, instrument: str | None, as_json: bool) 
       pincal info wedge3 --preset patent
       pincal info stewart_6ups --instrument distance    what a ballbar cannot see
       pincal info models/pkm5 --json
+      pincal info tiago --frame arm_tool_link --lock torso_lift_joint=0.2
+      pincal info my_tiago.yaml                 a sidecar file with `robot: tiago`
     """
     import json
 
     import numpy as np
 
-    from pincal.model import degenerate_translations, load_mechanism, parameters
+    from pincal.model import degenerate_translations, parameters
     from pincal.sensitivity import BASE_POSES, base_set, identifiability
 
-    mech = load_mechanism(model)
+    mech = load_model(model, model_opts, quiet=True)
     if not as_json:
-        for line in structure_lines(mech):
+        for line in structure_lines(mech, bool(model_opts.frame)):
             click.echo(line)
     if instrument is not None:
         from pincal.identification import instrument_identifiability

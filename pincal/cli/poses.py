@@ -14,7 +14,14 @@ from pincal.cli._limits import (
     naming_option,
     yes_option,
 )
-from pincal.cli.common import fail_cleanly, guard_paths, model_input
+from pincal.cli.common import (
+    ModelOptions,
+    fail_cleanly,
+    guard_paths,
+    load_model,
+    model_input,
+    model_options,
+)
 from pincal.measure import DEFAULT_NOISE
 
 
@@ -74,6 +81,7 @@ from pincal.measure import DEFAULT_NOISE
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @yes_option
+@model_options
 @fail_cleanly
 def poses(
     model: str,
@@ -91,6 +99,7 @@ def poses(
     n_jobs: int,
     as_json: bool,
     yes: bool,
+    model_opts: ModelOptions,
 ) -> None:
     """Select measurement poses of MODEL from a candidate set and write them to OUT.
 
@@ -125,7 +134,7 @@ def poses(
     from pincal.errors import PincalError
     from pincal.io import si_actuator_units, write_pose_design
     from pincal.measure import NoiseModel
-    from pincal.model import load_mechanism, parameters
+    from pincal.model import parameters
     from pincal.sensitivity import base_parameters
 
     guard_paths(
@@ -140,7 +149,7 @@ def poses(
         check_number(value, name, positive=True)
     with naming_option("--candidates"):
         parse_candidate_spec(spec)  # a malformed spec fails before the model loads
-    mech = load_mechanism(model)
+    mech = load_model(model, model_opts)
     preset = preset or (next(iter(mech.presets)) if mech.presets else "full")
     params = parameters(mech, preset)
     reduced = base_parameters(mech, params)

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import click
 
 from pincal.cli._limits import MAX_POSES, check_count, number_pair, yes_option
-from pincal.cli.common import fail_cleanly, guard_paths, model_input
+from pincal.cli.common import fail_cleanly, guard_paths, load_model, model_input, model_options
 from pincal.measure import DEFAULT_NOISE
 
 if TYPE_CHECKING:
@@ -93,10 +93,11 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @yes_option
+@model_options
 @fail_cleanly
 def simulate(
     model, poses_file, n_random, preset, errors, error_size, noise, seed, length_unit, out,
-    instrument, as_json, yes,
+    instrument, as_json, yes, model_opts,
 ) -> None:  # fmt: skip
     """Simulate a measurement campaign of MODEL with random geometric errors.
 
@@ -123,7 +124,7 @@ def simulate(
         NoiseModel,
         simulate_measurements,
     )
-    from pincal.model import load_mechanism, parameters, sample_actuators
+    from pincal.model import parameters, sample_actuators
 
     if (poses_file is None) == (n_random is None):
         raise click.UsageError("give exactly one of --poses FILE or --random N")
@@ -136,7 +137,7 @@ def simulate(
         {"MODEL": model_input(model), "--poses": poses_file},
         {"--out": out, "--out's truth file": truth_path},
     )
-    nominal = load_mechanism(model)
+    nominal = load_model(model, model_opts)
     preset = preset or (next(iter(nominal.presets), "full"))
     params = parameters(nominal, preset)
     values = np.zeros(len(params))

@@ -25,7 +25,14 @@ from typing import TYPE_CHECKING, TypedDict
 import click
 import numpy as np
 
-from pincal.cli.common import fail_cleanly, guard_paths, model_input
+from pincal.cli.common import (
+    ModelOptions,
+    fail_cleanly,
+    guard_paths,
+    load_model,
+    model_input,
+    model_options,
+)
 from pincal.errors import ModelFileError
 from pincal.io import read_pose_rows
 
@@ -123,6 +130,7 @@ def _urdf_for_viz(mech) -> str | Path:
     "embeds their bytes, so only for a URDF you trust.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary instead of text.")
+@model_options
 @fail_cleanly
 def view(
     model: str,
@@ -139,6 +147,7 @@ def view(
     arrow_scale: float | None,
     allow_mesh_outside: bool,
     as_json: bool,
+    model_opts: ModelOptions,
 ) -> None:
     """Show MODEL at measurement poses: an offline HTML page (no server, no network).
 
@@ -163,7 +172,7 @@ def view(
       pincal view pkm5 --random 4 --live
     """
     from pincal import viz
-    from pincal.model import load_mechanism, sample_actuators
+    from pincal.model import sample_actuators
 
     if html_path is None and not live:
         raise click.UsageError("give --html FILE and/or --live")
@@ -173,7 +182,7 @@ def view(
         {"MODEL": model_input(model), "--poses": poses_file, "--calibrated": calibrated},
         {"--html": html_path},
     )
-    mech = load_mechanism(model)
+    mech = load_model(model, model_opts)
     if poses_file is not None:
         rows = read_pose_rows(poses_file, mech, MAX_POSES)
         if n_random:

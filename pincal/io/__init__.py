@@ -37,6 +37,7 @@ from pincal.io._instrument_file import (
     read_instrument_data,
     write_instrument_data,
 )
+from pincal.io._joint_columns import joint_columns, read_joints
 from pincal.io._measurement_file import (
     MeasurementFile,
     check_enough_poses,
@@ -85,10 +86,12 @@ __all__ = [
     "check_enough_poses",
     "file_kind",
     "import_tracker",
+    "joint_columns",
     "read_actuator_rows",
     "read_calibration",
     "read_commands",
     "read_instrument_data",
+    "read_joints",
     "read_measurement_file",
     "read_measurements",
     "read_pose_file",

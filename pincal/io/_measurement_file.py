@@ -14,6 +14,9 @@
 
 - actuator columns come first, named by the model's actuated joints; a bracketed
   unit (``[mm]``, ``[deg]``…) is optional, without one the value is SI (m or rad);
+  other column names, units declared once and readings relative to a reference pose
+  are declared in the sidecar or the header (``# columns: torso1=torso_lift_joint``,
+  ``# joint_units: angle=deg``, ``# joint_reference: home``; see ``_joint_columns``);
 - ``x y z`` is the measured frame's origin in the world (machine base) frame;
   the orientation is the frame's rotation in the world frame, as a rotation
   vector (``rx ry rz``) or as the 9 entries of the matrix, row-major
@@ -62,14 +65,13 @@ from pincal.io._csv import (
     split_file,
     write_csv,
 )
+from pincal.io._joint_columns import joint_columns, read_joints
 from pincal.io._names import is_decimal, is_non_finite, quote_value
 from pincal.io._tracker_file import TargetMeasurements, parse_target_limits, parse_targets
 from pincal.io._units import (
     ANGLE_UNITS,
     LENGTH_UNITS,
-    actuator_read_factors,
     actuator_write_factors,
-    check_actuator_ranges,
     unit_factor,
 )
 from pincal.measure import Measurements, NoiseModel
@@ -187,27 +189,21 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
     if frame != mech.measured_frame:
         raise FrameMismatchError(
             f"{name} measures frame {shown(frame)} but the model measures {mech.measured_frame!r} "
-            f"(load the model with measured_frame={shown(frame)})"
+            f"(load the model with --frame {shown(frame)} or measured_frame= in its sidecar)"
         )
     parsed = [parse_column(c) for c in columns]
     names = [p[0] for p in parsed]
     dup = sorted({c for c in names if names.count(c) > 1})
     if dup:
         raise ColumnError(f"{name}: duplicate columns {shown(dup)}")
-    missing_act = [j for j in mech.actuated if j not in names]
-    if missing_act:
-        raise ColumnError(
-            f"{name}: missing actuator columns {missing_act} (model {mech.name!r} actuates "
-            f"{list(mech.actuated)})",
-            missing=missing_act,
-        )
+    act_idx, declared = joint_columns(mech, header, parsed, name)
     data = parse_numbers(rows, columns, name)
     if data.shape[0] == 0:
         raise MeasurementFormatError(f"{name}: no data rows")
     col = {c: k for k, c in enumerate(names)}
-    act_idx = [col[j] for j in mech.actuated]
-    q_act = data[:, act_idx] / actuator_read_factors(mech, [parsed[k][1] for k in act_idx], name)
-    check_actuator_ranges(mech, q_act, name, [columns[k] for k in act_idx])
+    titles = [columns[k] for k in act_idx]
+    units = [parsed[k][1] for k in act_idx]
+    q_act = read_joints(mech, data[:, act_idx], declared, units, titles, name)  # range-checked
     used = set(act_idx)
 
     def take(cols: Sequence[str], what: str) -> np.ndarray:

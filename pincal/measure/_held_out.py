@@ -13,8 +13,9 @@ actuator values are repeats of one command):
 - AP_p = ‖P̄ − P_c‖ over the measured position axes: distance between the mean attained
   position and the commanded one (the pose the model predicts for the command);
 - AP_a, AP_b, AP_c: ā − a_c etc., ISO 9283's angles a, b, c about the base x, y, z axes
-  (R = Rz(c)·Ry(b)·Rx(a)) [rad], for the measured rotation components (``ORIENTATION_CONVENTION``, the same as
-  ``pincal acceptance``: both use :func:`~pincal.measure._iso9283.point_accuracy`);
+  (R = Rz(c)·Ry(b)·Rx(a)) [rad], for the measured rotation components
+  (``ORIENTATION_CONVENTION``, the same as ``pincal acceptance``: both use
+  :func:`~pincal.measure._iso9283.point_accuracy`);
 - RP_l = l̄ + 3 S_l with l_i = ‖P_i − P̄‖ and S_l their sample std (n ≥ 2 repeats).
 """
 

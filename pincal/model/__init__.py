@@ -37,6 +37,7 @@ from pincal.model._dh_model import (
 from pincal.model._kinematics import Kinematics
 from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
+from pincal.model._named import find_local_sidecar, model_record, srdf_home
 from pincal.model._newton import SolverOptions
 from pincal.model._parameters import (
     DOFS,
@@ -47,6 +48,7 @@ from pincal.model._parameters import (
     parameters,
     register_preset,
 )
+from pincal.model._readings import JointReadings
 from pincal.model._robots import example_robot_names, example_robot_urdf
 from pincal.model._serial import (
     BASE_JOINT,
@@ -93,6 +95,7 @@ __all__ = [
     "DHLayout",
     "DHNames",
     "DHRow",
+    "JointReadings",
     "Kinematics",
     "Mechanism",
     "ModelLimits",
@@ -114,11 +117,13 @@ __all__ = [
     "dh_urdf",
     "example_robot_names",
     "example_robot_urdf",
+    "find_local_sidecar",
     "full_parameters",
     "load_mechanism",
     "load_mjcf",
     "lock_joints",
     "mjcf_to_urdf",
+    "model_record",
     "parameters",
     "parameters_to_dh_errors",
     "parse_components",
@@ -129,6 +134,7 @@ __all__ = [
     "sample_pose",
     "se3_from_xyz_rpy",
     "serial_mechanism",
+    "srdf_home",
     "validate_sidecar",
     "with_joint_origin",
     "wrap_base_tool",

@@ -91,5 +91,5 @@ def default_measured_frame(tree: UrdfTree, closure_links: Iterable[str], model_n
     listed = ", ".join(map(repr, candidates[:10])) or "none"
     raise ModelFileError(
         f"cannot choose the measured frame of {model_name!r}: {why} (candidates: {listed}); "
-        f"pass measured_frame= to load_mechanism or set 'measured_frame' in the sidecar"
+        f"choose one with --frame (measured_frame= in Python) or 'measured_frame' in the sidecar"
     )

@@ -98,9 +98,9 @@ class Mechanism(BatchTracking):
         self._scratch = threading.local()  # per-thread pin.Data, never read across calls
         self._frame_ids = {f.name: i for i, f in enumerate(self.model.frames)}
         self.closures = self._parse_closures()
+        self.measured_frame = self._resolve_measured_frame(measured_frame)
         self.actuated = self._parse_actuated()
         self._setup_indices()
-        self.measured_frame = self._resolve_measured_frame(measured_frame)
         #: the frames a sensitivity needs: the measured frame and every closure frame
         self.key_frames = tuple(
             dict.fromkeys(
@@ -147,13 +147,32 @@ class Mechanism(BatchTracking):
                 raise ModelFileError(
                     "a closed-loop mechanism needs 'name_mot' (actuated joints) in its sidecar"
                 )
-            return tuple(movable)
+            return self._chain_joints(movable)
         for n in names:
             if n not in movable:
                 raise UnknownNameError("actuated joint", str(n), movable)
         if len(set(names)) != len(names):
             raise ModelFileError(f"sidecar 'name_mot' lists a joint twice: {names}")
         return tuple(str(n) for n in names)
+
+    def _chain_joints(self, movable: list[str]) -> tuple[str, ...]:
+        """An open chain's actuated joints: the 1-dof joints that move the measured frame.
+
+        The others (a gripper's fingers, a mobile manipulator's head) stay passive and
+        idle: they are not actuated for calibration, and a note says so.
+        """
+        model = self.model
+        support = set(model.supports[model.frames[self.frame_id(self.measured_frame)].parentJoint])
+        chain = tuple(n for n in movable if model.getJointId(n) in support)
+        off = [n for n in movable if n not in chain]
+        if off:
+            shown = ", ".join(off[:6]) + (f" and {len(off) - 6} more" if len(off) > 6 else "")
+            self.notes += (
+                f"{len(off)} joint(s) do not move the measured frame {self.measured_frame!r} and "
+                f"are not actuated for calibration: {shown} (list the actuated joints in the "
+                f"sidecar 'name_mot' to change this)",
+            )
+        return chain
 
     def _setup_indices(self) -> None:
         model = self.model

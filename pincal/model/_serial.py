@@ -40,7 +40,7 @@ import pinocchio as pin
 
 from pincal._files import read_text
 from pincal.errors import ModelFileError, UnknownNameError
-from pincal.model._catalogue import read_sidecar, resolve_model_path
+from pincal.model._catalogue import _lock_values_at_home
 from pincal.model._mechanism import Mechanism
 from pincal.model._urdf import MOVABLE_TYPES, UrdfTree
 
@@ -80,8 +80,9 @@ def lock_joints(urdf_xml: str, values: Mapping[str, float]) -> str:
     """URDF text with the named movable joints made fixed at the given values.
 
     A locked joint's origin becomes ``origin · motion(value)`` (a rotation about or a
-    translation along its axis [rad or m]). Joints that ``<mimic>`` a locked joint are
-    locked too, at ``multiplier · value + offset``.
+    translation along its axis [rad or m]). Movable joints that ``<mimic>`` a locked
+    joint are locked too, at ``multiplier · value + offset``; a ``<mimic>`` on a joint
+    that is already fixed (PAL's TALOS and TIAGo grippers) has no effect and is dropped.
 
     Raises:
         UnknownNameError: a name is not a movable joint of the URDF.
@@ -101,6 +102,9 @@ def lock_joints(urdf_xml: str, values: Mapping[str, float]) -> str:
             mimic = e.find("mimic")
             leader = None if mimic is None else mimic.get("joint")
             if name in locked or mimic is None or leader is None or leader not in locked:
+                continue
+            if not tree.joints[name].movable:  # PAL URDFs: <mimic> on fixed joints, inert
+                e.remove(mimic)
                 continue
             mult = float(mimic.get("multiplier", "1"))
             off = float(mimic.get("offset", "0"))
@@ -238,7 +242,10 @@ def serial_mechanism(
 
     Args:
         spec: anything :func:`pincal.load_mechanism` accepts (bundled model, URDF path,
-            example-robot-data name such as ``"ur10"`` or ``"panda"``).
+            example-robot-data name such as ``"ur10"`` or ``"panda"``, a local sidecar
+            with ``robot:``, whose ``lock`` applies too); an example-robot-data robot
+            takes its SRDF home but keeps its URDF ranges for sampling (the scripts'
+            seeded draws are unchanged).
         flange: link carrying the tool frame; the measured frame becomes ``tool``.
             None: no tool frame, the sidecar's (or the automatically chosen) measured frame.
         lock: movable joints to make fixed, ``{name: value}`` (e.g. Panda fingers).
@@ -254,11 +261,17 @@ def serial_mechanism(
     overridden and two presets added: ``chain`` (:func:`chain_preset`) and
     ``base_tool`` (only the 6 + 6 frame parameters).
     """
-    urdf_path, sidecar_path = resolve_model_path(spec)
-    sidecar = dict(read_sidecar(sidecar_path)) if sidecar_path else {}
+    from pincal.model._named import resolve_named
+
+    named = resolve_named(spec)
+    urdf_path, sidecar = named.urdf, dict(named.sidecar)
+    lock = _lock_values_at_home({**named.lock, **(lock or {})}, sidecar.get("home"))
     xml = read_text(urdf_path, "URDF", error=ModelFileError)
     if lock:
         xml = lock_joints(xml, lock)
+        gone = {n for n, j in UrdfTree(xml).joints.items() if not j.movable}
+        if isinstance(sidecar.get("home"), Mapping):
+            sidecar["home"] = {k: v for k, v in sidecar["home"].items() if k not in gone}
     xml = wrap_base_tool(xml, flange, T_instrument_base, T_flange_tool, base=base)
     if flange is not None:
         sidecar["measured_frame"] = TOOL_LINK

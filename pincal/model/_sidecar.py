@@ -17,6 +17,7 @@ from typing import Any
 from pincal._yaml import shown
 from pincal.errors import ModelFileError
 from pincal.model._closures import COMPONENTS, parse_components
+from pincal.model._readings import JointReadings
 
 __all__ = ["JOINT_KINDS", "WORKSPACE_POSE_KEYS", "Sidecar", "Workspace", "validate_sidecar"]
 
@@ -212,6 +213,8 @@ class Sidecar:
         measurement_regions: informational list (kept as written).
         closure_names: a name per closure pair (e.g. the MJCF equality names).
         actuator_names: ``{actuator: joint}`` (e.g. the MJCF actuator names).
+        readings: how measurement files name and scale joint readings (YAML keys
+            ``columns``, ``joint_units``, ``joint_reference``; see ``_readings``).
     """
 
     closed_loop: tuple[tuple[str, str], ...] = ()
@@ -228,11 +231,13 @@ class Sidecar:
     measurement_regions: tuple[Any, ...] = ()
     closure_names: tuple[str, ...] = ()
     actuator_names: dict[str, str] = field(default_factory=dict)
+    readings: JointReadings = field(default_factory=JointReadings)
 
     @classmethod
     def keys(cls) -> tuple[str, ...]:
         """The valid top-level keys."""
-        return tuple(f.name for f in fields(cls))
+        names = tuple(f.name for f in fields(cls) if f.name != "readings")
+        return (*names, "columns", "joint_units", "joint_reference")
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any] | Sidecar | None) -> Sidecar:
@@ -305,6 +310,9 @@ class Sidecar:
             measurement_regions=tuple(regions),
             closure_names=tuple(closure_names),
             actuator_names=dict(actuator_names),
+            readings=JointReadings.from_values(
+                d.get("columns"), d.get("joint_units"), d.get("joint_reference"), "sidecar"
+            ),
         )
 
     def replace(self, **changes: Any) -> Sidecar:
@@ -349,6 +357,7 @@ class Sidecar:
             out["closure_names"] = list(self.closure_names)
         if self.actuator_names:
             out["actuator_names"] = dict(self.actuator_names)
+        out.update(self.readings.to_dict())
         return out
 
 
