@@ -146,6 +146,7 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
         CALIBRATED_URDF,
         MANIFEST,
         calibration_lock,
+        check_replaceable,
         read_measurement_file,
         write_calibration,
     )
@@ -159,6 +160,7 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
         )
     guard_paths({"MODEL": model_input(model), "--data": data}, out_dirs={"--out": out})
     click.get_current_context().with_resource(calibration_lock(out))  # until the end
+    check_replaceable(out)  # a user's directory is refused before the fit, not after
     declared = None
     if noise is not None:
         pos_mm, ori_mrad = number_pair(noise, "--noise", positive=True, form="pos_mm,ori_mrad")

@@ -83,38 +83,93 @@ def _inside(path: Path, directory: Path) -> bool:
     return path != directory and path.is_relative_to(directory)
 
 
+def _is_calibration_dir(path: Path) -> bool:
+    from pincal.io import IDENTIFICATION_FILE, MANIFEST
+
+    return path.is_dir() and any((path / n).exists() for n in (MANIFEST, IDENTIFICATION_FILE))
+
+
+#: what an implied file pincal wrote begins with (CSV header) or holds (JSON key)
+PINCAL_CSV_HEADER = b"# pincal "
+WRITTEN_BY = "written_by"
+
+
+def pincal_wrote(path: Path) -> bool:
+    """True when the existing file ``path`` is one pincal wrote (so it may be replaced).
+
+    A CSV file pincal wrote starts with ``# pincal``; a JSON file holds a ``written_by``
+    entry starting with ``pincal``.
+    """
+    import json
+
+    from pincal._files import read_bytes
+
+    try:
+        data = read_bytes(path, "file", limit=50_000_000)
+    except PincalError:
+        return False
+    if data.startswith(PINCAL_CSV_HEADER):
+        return True
+    try:
+        doc = json.loads(data)
+    except (ValueError, RecursionError):
+        return False
+    return isinstance(doc, dict) and str(doc.get(WRITTEN_BY, "")).startswith("pincal")
+
+
 def guard_paths(
     inputs: Mapping[str, PathLike],
     outputs: Mapping[str, PathLike] = {},
     out_dirs: Mapping[str, PathLike] = {},
+    implied: Mapping[str, PathLike] = {},
 ) -> None:
     """Refuse, before any work, outputs that would overwrite an input or each other.
 
     Every command calls this with its inputs and outputs. Paths are compared resolved
     (symbolic links followed, hard links by ``samefile``). An output directory that is
-    replaced as a whole (``calibrate --out``) may not contain an input.
+    replaced as a whole (``calibrate --out``) may not contain an input; no output may lie
+    inside an input calibration directory. Outputs must be regular files or absent
+    (devices, FIFOs, directories and links to them are refused; a file path ending
+    with ``/`` is refused). Implied outputs (side files the user did not name, e.g.
+    ``<out>.truth.json``) replace an existing file only when pincal wrote it.
 
     Args:
         inputs: ``{label: path}`` of the files or directories read (None: not given);
             the label names the option in messages, e.g. ``"--targets"``.
         outputs: ``{label: path}`` of the files written.
         out_dirs: ``{label: path}`` of the directories written (replaced) as a whole.
+        implied: ``{label: path}`` of side files written beside an output.
 
     Raises:
         OutputPathError: naming both paths.
     """
+    from pincal.io import output_target
 
     def given(m: Mapping[str, PathLike]) -> list[tuple[str, Path, str]]:
         return [(k, Path(v).resolve(), os.fspath(v)) for k, v in m.items() if v is not None]
 
-    ins, outs, dirs = given(inputs), given(outputs), given(out_dirs)
+    ins, dirs, sides = given(inputs), given(out_dirs), given(implied)
+    outs = given(outputs) + sides
     fix = "inputs are never modified; choose another output path"
+    for o_label, _o_path, o_text in outs:
+        if o_text.endswith(("/", os.sep)):
+            raise OutputPathError(
+                f"{o_label} {clip(o_text, 300)} ends with '/', which names a directory; "
+                f"give a file name (e.g. {clip(o_text, 200)}out.csv)"
+            )
+        output_target(o_text, o_label)
     for o_label, o_path, o_text in outs + dirs:
         for i_label, i_path, i_text in ins:
             if _same(o_path, i_path):
                 raise OutputPathError(
                     f"{o_label} {clip(o_text, 300)} is the same file as the input {i_label} "
                     f"{clip(i_text, 300)}; {fix}"
+                )
+            if _inside(o_path, i_path) and _is_calibration_dir(i_path):
+                raise OutputPathError(
+                    f"{o_label} {clip(o_text, 300)} is inside the input calibration directory "
+                    f"{i_label} {clip(i_text, 300)}, whose files are never modified; "
+                    "choose an output path outside it"
                 )
     for d_label, d_path, d_text in dirs:
         for i_label, i_path, i_text in ins:
@@ -130,3 +185,10 @@ def guard_paths(
                     f"{a_label} {clip(a_text, 300)} and {b_label} {clip(b_text, 300)} are the same "
                     f"file (the command writes both); give output paths that differ"
                 )
+    for s_label, s_path, s_text in sides:
+        target = output_target(s_path, s_label)
+        if target.exists() and not pincal_wrote(target):
+            raise OutputPathError(
+                f"{s_label} {clip(s_text, 300)} exists and was not written by pincal; it "
+                "would be replaced: move it away or choose another --out"
+            )

@@ -127,8 +127,9 @@ def poses(
 
     guard_paths(
         {"MODEL": model_input(model)},
-        {"--out": out, "--out's commands file": Path(out).with_suffix(".commands.csv"),
-         "--out's JSON record": Path(out).with_suffix(".json")},
+        {"--out": out},
+        implied={"--out's commands file": Path(out).with_suffix(".commands.csv"),
+                 "--out's JSON record": Path(out).with_suffix(".json")},
     )  # fmt: skip
     check_count(count, "--count", MAX_POSES, yes)
     check_count(restarts, "--restarts", MAX_RESTARTS, yes, what="restarts")

@@ -113,6 +113,7 @@ def simulate(
     """
     import numpy as np
 
+    from pincal import __version__
     from pincal.io import (
         atomic_write_text,
         read_pose_rows,
@@ -133,7 +134,8 @@ def simulate(
     truth_path = Path(out).with_suffix(".truth.json")
     guard_paths(
         {"MODEL": model_input(model), "--poses": poses_file},
-        {"--out": out, "--out's truth file": truth_path},
+        {"--out": out},
+        implied={"--out's truth file": truth_path},
     )
     nominal = load_mechanism(model)
     preset = preset or (next(iter(nominal.presets), "full"))
@@ -169,6 +171,7 @@ def simulate(
         path = write_measurements(out, poses, length_unit=length_unit)
         meas, components = poses, list(poses.components)
     truth = {
+        "written_by": f"pincal {__version__}",
         "model": nominal.name,
         "preset": preset,
         "errors": errors,

@@ -10,6 +10,7 @@ from pincal.io._atomic import (
     atomic_write_bytes,
     atomic_write_text,
     calibration_lock,
+    output_target,
 )
 from pincal.io._calibration_dir import (
     CALIBRATED_SIDECAR,
@@ -18,6 +19,7 @@ from pincal.io._calibration_dir import (
     CALIBRATION_VERSION,
     MANIFEST,
     CalibrationDirectory,
+    check_replaceable,
     read_calibration,
     sha256_file,
     write_calibration,
@@ -83,8 +85,10 @@ __all__ = [
     "atomic_write_text",
     "calibration_lock",
     "check_enough_poses",
+    "check_replaceable",
     "file_kind",
     "import_tracker",
+    "output_target",
     "read_actuator_rows",
     "read_calibration",
     "read_commands",

@@ -34,7 +34,7 @@ import shutil
 import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -59,7 +59,9 @@ __all__ = [
     "CALIBRATION_VERSION",
     "IDENTIFICATION_FILE",
     "MANIFEST",
+    "PINCAL_EXTRAS",
     "CalibrationDirectory",
+    "check_replaceable",
     "read_calibration",
     "sha256_file",
     "write_calibration",
@@ -175,7 +177,7 @@ def _manifest(
         "format": CALIBRATION_FORMAT,
         "version": CALIBRATION_VERSION,
         "pincal_version": __version__,
-        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "model": result.model,
         "model_source": model_source,
         "preset": result.preset,
@@ -205,17 +207,53 @@ def _manifest(
     }
 
 
+#: files other pincal commands put into a calibration directory (``pincal report``,
+#: ``pincal run``); stale once the calibration is replaced, so replaced with it
+PINCAL_EXTRAS = frozenset({"campaign.yaml", "report.html", "report.md", "report.json"})
+
+
+def check_replaceable(out: str | Path) -> None:
+    """Refuse, before any work, an ``--out`` that :func:`write_calibration` would refuse.
+
+    Raises:
+        CalibrationDirectoryError: ``out`` is a file, a non-empty directory without a valid
+            manifest, or a calibration directory holding files pincal did not write.
+    """
+    _check_replaceable(Path(out).resolve())
+
+
 def _check_replaceable(out: Path) -> None:
-    """Refuse to replace anything but a calibration directory or an empty directory."""
+    """Refuse to replace anything but a calibration directory pincal wrote, or an empty one.
+
+    The manifest proves pincal wrote the directory; any entry it does not list (other
+    than :data:`PINCAL_EXTRAS`) is a user's file and would be deleted: refused, named.
+    """
     if not out.exists():
         return
     if not out.is_dir():
-        raise CalibrationDirectoryError(f"{str(out)!r} exists and is not a directory")
-    entries = list(out.iterdir())
-    if entries and not ((out / MANIFEST).is_file() or (out / IDENTIFICATION_FILE).is_file()):
         raise CalibrationDirectoryError(
-            f"{str(out)!r} is a non-empty directory that is not a calibration directory "
-            f"({len(entries)} entries); choose a new --out directory"
+            f"--out {str(out)!r} exists and is not a directory; choose a new --out directory"
+        )
+    entries = sorted(p.name for p in out.iterdir())
+    if not entries:
+        return
+    try:
+        manifest = _load_json(out / MANIFEST) if (out / MANIFEST).is_file() else {}
+    except PincalError:
+        manifest = {}
+    files = manifest.get("files")
+    if manifest.get("format") != CALIBRATION_FORMAT or not isinstance(files, dict):
+        raise CalibrationDirectoryError(
+            f"--out {str(out)!r} is a non-empty directory ({len(entries)} entries) without "
+            f"a valid {MANIFEST}, so not a calibration directory pincal wrote; it is never "
+            "replaced: choose a new --out directory"
+        )
+    foreign = [n for n in entries if n not in files and n != MANIFEST and n not in PINCAL_EXTRAS]
+    if foreign:
+        raise CalibrationDirectoryError(
+            f"--out {str(out)!r} is a calibration directory that also holds files pincal did "
+            f"not write ({clip(', '.join(foreign), 200)}); replacing it would delete them: "
+            "move them out or choose a new --out directory"
         )
 
 
@@ -253,7 +291,7 @@ def write_calibration(
     out.parent.mkdir(parents=True, exist_ok=True)
     with calibration_lock(out):
         _write_locked(out, result, model_source, data_files, noise, annotations, texts)
-    return read_calibration(path)
+    return read_calibration(out)  # resolved: "." names the old directory after the swap
 
 
 def _write_locked(
