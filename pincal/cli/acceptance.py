@@ -26,11 +26,17 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
         ModelFileError / ReportError: nothing usable at ``spec``.
     """
     from pincal._files import read_text
+    from pincal.cli.common import announce
     from pincal.errors import ModelFileError, ParameterError, ReportError, clip
     from pincal.identification import IdentificationResult
+    from pincal.io import MANIFEST, read_calibration
     from pincal.model import load_mechanism, parameters
 
     path = Path(spec)
+    if (path / MANIFEST).is_file():  # a calibration directory: read (and checked) as one
+        cal = read_calibration(path)
+        announce(cal)
+        return cal.calibrated()
     if path.is_dir():
         urdfs = sorted(path.glob("*.urdf"))
         pick = [u for u in urdfs if u.stem == "calibrated"] or urdfs

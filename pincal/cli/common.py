@@ -56,6 +56,12 @@ def model_input(spec: str) -> str | None:
     return spec if Path(spec).exists() else None
 
 
+def announce(cal: CalibrationDirectory) -> None:
+    """Print the calibration's caveat (forced past the gate, failed solve) on stderr."""
+    if cal.caveat:
+        click.echo(f"pincal: warning: {cal.caveat}", err=True)
+
+
 def calibration_summary(cal: CalibrationDirectory) -> dict[str, Any]:
     """JSON-ready summary of a calibration directory (paths and identity)."""
     return {

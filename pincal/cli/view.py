@@ -49,12 +49,15 @@ class _ViewOptions(TypedDict):
 
 def _calibrated_mechanism(spec: Path):
     """The calibrated mechanism of a calibration directory (a bare .urdf as in 0.1)."""
+    from pincal.cli.common import announce
     from pincal.io import read_calibration
     from pincal.model import load_mechanism
 
     if spec.is_file() and spec.suffix.lower() == ".urdf":
         return load_mechanism(spec)
-    return read_calibration(spec).calibrated()
+    cal = read_calibration(spec)
+    announce(cal)
+    return cal.calibrated()
 
 
 def _urdf_for_viz(mech) -> str | Path:
