@@ -154,7 +154,7 @@ def check_campaign_outputs(c: Campaign, p: Paths) -> None:
     if c.validation.source == "simulated" and c.validation.file is None:
         generated["validation"] = p.validation
     sides = {"design": (".commands.csv", ".json")}
-    implied = {f"{k}'s side file {s}": Path(v).with_suffix(s)
+    implied = {f"the {k} step's {s} file": Path(v).with_suffix(s)
                for k, v in generated.items() if v is not None
                for s in sides.get(k, (".truth.json",))}  # fmt: skip
     try:

@@ -99,20 +99,21 @@ def check_listed_file(path: Path) -> int:
         CalibrationDirectoryError: missing, a link, not a regular file, or too large.
         InputLimitError: ``PINCAL_MAX_FILE_MB`` is malformed.
     """
+    shown = f"{path.name!r} in {clip(str(path.parent), 200)}"
     try:
         st = os.lstat(path)
     except OSError as exc:
-        raise CalibrationDirectoryError(f"cannot read {clip(str(path))}: {exc.strerror}") from None
+        raise CalibrationDirectoryError(f"cannot read {shown}: {exc.strerror}") from None
     if not stat.S_ISREG(st.st_mode):
         kind = "a symbolic link" if stat.S_ISLNK(st.st_mode) else "not a regular file"
         raise CalibrationDirectoryError(
-            f"{clip(str(path))} is {kind}; a calibration directory holds regular files only "
+            f"{shown} is {kind}; a calibration directory holds regular files only "
             "(copy the directory with its files, not links)"
         )
     cap = max_bytes()
     if st.st_size > cap:
         raise CalibrationDirectoryError(
-            f"{clip(str(path))} is {st.st_size / 1e6:.1f} MB, over the {cap / 1e6:.0f} MB "
+            f"{shown} is {st.st_size / 1e6:.1f} MB, over the {cap / 1e6:.0f} MB "
             "limit of one file; if it is right, raise the limit with PINCAL_MAX_FILE_MB"
         )
     return st.st_size

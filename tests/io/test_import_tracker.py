@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from datetime import datetime, timedelta, timezone
+from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
 import numpy as np
@@ -55,7 +55,7 @@ def _num(v: float, comma: bool) -> str:
 def _write_pair(tmp, data, *, delim=";", comma=True, unit=1e3, time=False, seed=3):
     """Long-format points (mm, shuffled) + log (mm, shuffled) + targets; the log order."""
     rng = np.random.default_rng(seed)
-    t0 = datetime(2026, 11, 23, 9, 0, tzinfo=timezone.utc)
+    t0 = datetime(2026, 11, 23, 9, 0, tzinfo=UTC)
     ids = [f"P{i + 1:02d}" for i in range(M)]
     times = [t0 + timedelta(seconds=20 * i) for i in range(M)]
     rows = []
