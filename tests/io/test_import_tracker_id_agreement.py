@@ -64,7 +64,8 @@ def test_cli_time_match_with_disagreeing_ids_is_refused(campaign, tmp_path):  # 
     _write(tmp_path, data, swap=True)
     args = ["import-tracker", str(tmp_path / "points.csv"), "--log", str(tmp_path / "log.csv"),
             "--targets", str(tmp_path / "targets.csv"), "--model", "hexaslide_6pus",
-            "--match", "time", "--tolerance", "1", "--unit", "m", "--out", str(tmp_path / "out.csv")]  # fmt: skip
+            "--match", "time", "--tolerance", "1", "--unit", "m",
+            "--out", str(tmp_path / "out.csv")]  # fmt: skip
     res = CliRunner().invoke(main, args)
     assert (
         res.exit_code == 1 and "ImportMatchError" in res.output and "another pose id" in res.output
