@@ -272,8 +272,11 @@ def load_campaign(path: str | Path) -> Campaign:
 
     path = Path(path)
     data = load_yaml(path, "campaign file", CampaignError)
-    camp = _build(Campaign, data, "")
-    camp.check()
+    try:
+        camp = _build(Campaign, data, "")
+        camp.check()
+    except CampaignError as exc:  # the message names the key; say which file holds it
+        raise CampaignError(f"{clip(str(path), 200)}: {exc}") from None
     base = path.resolve().parent
     m = dataclasses.replace(camp.measurements, file=_resolve(camp.measurements.file, base))
     v = dataclasses.replace(camp.validation, file=_resolve(camp.validation.file, base))

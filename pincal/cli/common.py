@@ -19,23 +19,60 @@ if TYPE_CHECKING:
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 
 
+def _wants_json(ctx: click.Context) -> bool:
+    return bool(ctx.params.get("as_json"))
+
+
+def _json_error(exc: BaseException, message: str) -> None:
+    import json
+
+    doc = {"error": {"type": type(exc).__name__, "message": message}}
+    click.echo(json.dumps(doc, ensure_ascii=False))
+
+
+def _pipe_closed() -> None:
+    """The reader of stdout went away (``| head``): stop quietly, exit 0 (Unix convention)."""
+    try:  # further writes (and the flush at exit) go nowhere instead of raising again
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass
+    sys.exit(EXIT_OK)
+
+
 def fail_cleanly(func):
     """Report PincalError (and file/value errors) as one line on stderr, exit code 1.
 
-    With ``pincal --debug`` the exception propagates with its traceback.
+    With ``--json`` (the command's ``as_json``) the error is instead one JSON object on
+    stdout, ``{"error": {"type": …, "message": …}}``, with the same exit code (2 for
+    command-line usage errors). A closed stdout (``pincal … | head``) ends the command
+    silently with exit 0. With ``pincal --debug`` the exception propagates with its
+    traceback.
     """
 
     @wraps(func)
     def wrapper(*args, **kwargs):
         ctx = click.get_current_context()
         try:
-            return func(*args, **kwargs)
+            out = func(*args, **kwargs)
+            sys.stdout.flush()  # a closed pipe is reported here, not at interpreter exit
+            return out
+        except BrokenPipeError:
+            _pipe_closed()
+        except click.ClickException as exc:
+            if not _wants_json(ctx) or (ctx.find_root().obj or {}).get("debug"):
+                raise
+            _json_error(exc, " ".join(exc.format_message().split()))
+            sys.exit(exc.exit_code)
         except (PincalError, OSError, ValueError) as exc:
             root = ctx.find_root().obj or {}
             if root.get("debug"):
                 raise
             text = " ".join(str(exc).split())  # errors stay one line
-            click.echo(f"pincal: error: {type(exc).__name__}: {text}", err=True)
+            if _wants_json(ctx):
+                _json_error(exc, text)
+            else:
+                click.echo(f"pincal: error: {type(exc).__name__}: {text}", err=True)
             sys.exit(EXIT_ERROR)
 
     return wrapper

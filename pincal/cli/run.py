@@ -210,8 +210,11 @@ def _invoke(ctx: click.Context, step: Step, args: list[str], quiet: bool, yes: b
             f"step {step.name!r} (`pincal {step.command}`): {exc.format_message()}"
         ) from exc
     except SystemExit as exc:
-        if exc.code:
-            click.echo(f"pincal run: step {step.name!r} failed; the run stops here", err=True)
+        if exc.code:  # the step printed its error on stderr
+            raise CampaignError(
+                f"step {step.name!r} failed (`pincal {step.command}`, its error is above); "
+                "the run stops here"
+            ) from None
         raise
     return "done"
 
