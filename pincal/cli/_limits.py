@@ -64,15 +64,27 @@ def check_number(
     return float(value)
 
 
+#: range of a noise σ [mm, mrad] (1 nm .. 1 m): outside it, weights under/overflow
+NOISE_RANGE = (1e-6, 1e3)
+#: range of a simulated error bound [mm, mrad]
+ERROR_SIZE_RANGE = (1e-6, 1e3)
+
+
 def number_pair(
-    spec: str, option: str, *, positive: bool = False, form: str = "a,b"
+    spec: str,
+    option: str,
+    *,
+    positive: bool = False,
+    form: str = "a,b",
+    bounds: tuple[float, float] | None = None,
 ) -> tuple[float, float]:
     """Parse ``'a,b'`` into two finite numbers ≥ 0 (> 0 with ``positive``).
 
     ``form`` names the two numbers in the message (e.g. ``"pos_mm,ori_mrad"``).
+    ``bounds`` (lo, hi): each number must lie in [lo, hi] (or be 0 without ``positive``).
 
     Raises:
-        OptionValueError: not two numbers, or one is not finite / negative.
+        OptionValueError: not two numbers, or one is not finite / negative / out of bounds.
     """
     parts = str(spec).split(",")
     try:
@@ -86,6 +98,12 @@ def number_pair(
             valid = "> 0" if positive else ">= 0"
             raise OptionValueError(
                 f"{option} {clip(spec)}: both numbers '{form}' must be finite and {valid}"
+            )
+        if bounds is not None and v != 0 and not bounds[0] <= v <= bounds[1]:
+            zero = "" if positive else "0 or "
+            raise OptionValueError(
+                f"{option} {clip(spec)}: both numbers '{form}' must be {zero}between "
+                f"{bounds[0]:g} and {bounds[1]:g}; got {v:g}"
             )
     return a, b
 

@@ -114,7 +114,8 @@ def _grouped(meas, controller):
 @click.option(
     "--repeatability", default=2.0, show_default=True, help="Actuator repeatability 1σ [µm]."
 )
-@click.option("--seed", default=1, show_default=True, help="Seed of the cube search and cycles.")
+@click.option("--seed", default=1, type=click.IntRange(min=0), show_default=True,
+              help="Seed of the cube search and cycles.")  # fmt: skip
 @click.option(
     "--out",
     "json_out",

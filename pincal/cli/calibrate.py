@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli._limits import number_pair
+from pincal.cli._limits import NOISE_RANGE, number_pair
 from pincal.cli.common import fail_cleanly, guard_paths, model_input, model_source
 from pincal.identification import METHODS
 
@@ -163,7 +163,9 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
     check_replaceable(out)  # a user's directory is refused before the fit, not after
     declared = None
     if noise is not None:
-        pos_mm, ori_mrad = number_pair(noise, "--noise", positive=True, form="pos_mm,ori_mrad")
+        pos_mm, ori_mrad = number_pair(
+            noise, "--noise", positive=True, form="pos_mm,ori_mrad", bounds=NOISE_RANGE
+        )
         declared = {"position": pos_mm, "orientation": ori_mrad}
     mech = load_mechanism(model)
     preset = preset or (next(iter(mech.presets), "full"))

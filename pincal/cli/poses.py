@@ -9,6 +9,7 @@ import click
 from pincal.cli._limits import (
     MAX_POSES,
     MAX_RESTARTS,
+    NOISE_RANGE,
     check_count,
     check_number,
     naming_option,
@@ -54,7 +55,8 @@ from pincal.cli.common import fail_cleanly, guard_paths, model_input
     show_default=True,
 )
 @click.option("--restarts", default=3, show_default=True, help="Random starts (best kept).")
-@click.option("--seed", default=0, show_default=True, help="Random seed.")
+@click.option("--seed", default=0, type=click.IntRange(min=0), show_default=True,
+              help="Random seed.")  # fmt: skip
 @click.option(
     "--out",
     default="poses.csv",
@@ -119,7 +121,7 @@ def poses(
         parse_candidate_spec,
         select_poses,
     )
-    from pincal.errors import PincalError
+    from pincal.errors import OptionValueError, PincalError
     from pincal.io import si_actuator_units, write_pose_design
     from pincal.measure import NoiseModel
     from pincal.model import load_mechanism, parameters
@@ -136,6 +138,11 @@ def poses(
     check_number(K_mm, "--K", positive=True)
     for value, name in zip(noise, ("--noise (position)", "--noise (orientation)"), strict=True):
         check_number(value, name, positive=True)
+        if not NOISE_RANGE[0] <= value <= NOISE_RANGE[1]:
+            raise OptionValueError(
+                f"{name} {value:g} must be between {NOISE_RANGE[0]:g} and {NOISE_RANGE[1]:g} "
+                "(mm, mrad)"
+            )
     with naming_option("--candidates"):
         parse_candidate_spec(spec)  # a malformed spec fails before the model loads
     mech = load_mechanism(model)
@@ -162,6 +169,12 @@ def poses(
                 max_bytes=None if yes else MAX_CANDIDATE_BYTES, n_jobs=n_jobs,
             )  # fmt: skip
     click.echo(cands.summary(), err=True)
+    if count > len(cands):
+        raise OptionValueError(
+            f"--count {count} is more than the {len(cands)} feasible candidate poses of "
+            f"--candidates {spec}; ask for at most {len(cands)} poses or generate more "
+            "candidates (e.g. --candidates random:2000 or a finer grid:LEVELS)"
+        )
     noise_model = NoiseModel(*noise)
     if scaling == "K":
         K = (

@@ -8,7 +8,14 @@ from typing import TYPE_CHECKING
 
 import click
 
-from pincal.cli._limits import MAX_POSES, check_count, number_pair, yes_option
+from pincal.cli._limits import (
+    ERROR_SIZE_RANGE,
+    MAX_POSES,
+    NOISE_RANGE,
+    check_count,
+    number_pair,
+    yes_option,
+)
 from pincal.cli.common import fail_cleanly, guard_paths, model_input
 
 if TYPE_CHECKING:
@@ -28,8 +35,9 @@ def _parse_errors(spec: str) -> int | None:
 
 def _parse_pair(spec: str, option: str) -> tuple[float, float]:
     """Two finite numbers ≥ 0 (:func:`pincal.cli._limits.number_pair`)."""
-    form = "length_mm,angle_mrad" if option == "--error-size" else "position_mm,orientation_mrad"
-    return number_pair(spec, option, form=form)
+    if option == "--error-size":
+        return number_pair(spec, option, form="length_mm,angle_mrad", bounds=ERROR_SIZE_RANGE)
+    return number_pair(spec, option, form="position_mm,orientation_mrad", bounds=NOISE_RANGE)
 
 
 @click.command()
@@ -69,7 +77,8 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
     show_default=True,
     help="Measurement noise 1σ 'position_mm,orientation_mrad'.",
 )
-@click.option("--seed", default=1, show_default=True, help="Seed of poses and noise.")
+@click.option("--seed", default=1, type=click.IntRange(min=0), show_default=True,
+              help="Seed of poses and noise.")  # fmt: skip
 @click.option(
     "--length-unit",
     type=click.Choice(["m", "mm"]),

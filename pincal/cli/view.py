@@ -84,7 +84,8 @@ def _urdf_for_viz(mech) -> str | Path:
     default=None,
     help="Draw N random workspace poses (default 5 when --poses is not given).",
 )
-@click.option("--seed", default=0, show_default=True, help="Seed of the random poses.")
+@click.option("--seed", default=0, type=click.IntRange(min=0), show_default=True,
+              help="Seed of the random poses.")  # fmt: skip
 @click.option(
     "--calibrated",
     type=click.Path(path_type=Path),
