@@ -51,7 +51,7 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
             )
     try:
         data = json.loads(read_text(path, "identification.json"))
-    except ValueError as exc:
+    except (ValueError, RecursionError) as exc:
         raise ReportError(
             f"cannot read {clip(str(path))} as identification.json: {clip(str(exc))}"
         ) from None

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli._limits import NOISE_RANGE, number_pair
+from pincal.cli._limits import NOISE_RANGE, check_data_rows, number_pair, yes_option
 from pincal.cli.common import fail_cleanly, guard_paths, model_input, model_source
 from pincal.identification import METHODS
 
@@ -122,8 +122,11 @@ def format_report(doc: dict) -> str:
     metavar="MM,RAD",
     help="Quality gate: largest parameter change [default: 20,0.1].",
 )
+@yes_option
 @fail_cleanly
-def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max_change) -> None:
+def calibrate(
+    model, data, preset, method, out, as_json, noise, loss, force, max_change, yes
+) -> None:
     """Identify MODEL's geometric parameters from measured poses (--data).
 
     Writes one calibration directory OUT (whole or not at all) that `pincal view
@@ -170,6 +173,7 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
     mech = load_mechanism(model)
     preset = preset or (next(iter(mech.presets), "full"))
     params = parameters(mech, preset)
+    check_data_rows(data, "--data", len(params), yes)
     if _is_instrument_file(data):
         if declared is not None or loss != "linear":
             raise click.BadParameter(

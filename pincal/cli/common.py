@@ -64,11 +64,16 @@ def fail_cleanly(func):
                 raise
             _json_error(exc, " ".join(exc.format_message().split()))
             sys.exit(exc.exit_code)
-        except (PincalError, OSError, ValueError) as exc:
+        except (PincalError, OSError, ValueError, RecursionError) as exc:
             root = ctx.find_root().obj or {}
             if root.get("debug"):
                 raise
             text = " ".join(str(exc).split())  # errors stay one line
+            if isinstance(exc, RecursionError):
+                text = (
+                    "an input is nested too deeply to read (JSON, YAML or XML thousands of "
+                    "levels deep); pincal's files are shallow: check the file given"
+                )
             if _wants_json(ctx):
                 _json_error(exc, text)
             else:

@@ -171,6 +171,11 @@ def view(
 
     if html_path is None and not live:
         raise click.UsageError("give --html FILE and/or --live")
+    if live and (sys.stdin is None or sys.stdin.closed):
+        raise click.UsageError(
+            "--live waits for Enter on stdin to stop the viewer, but stdin is closed; run it "
+            "with a terminal or a pipe on stdin, or write --html FILE instead"
+        )
     if arrow_scale is not None and not (math.isfinite(arrow_scale) and arrow_scale > 0):
         raise click.BadParameter("must be a positive number", param_hint="--arrow-scale")
     guard_paths(

@@ -136,6 +136,9 @@ def _components(header: Header, name: str) -> list[str]:
     return [c for c in COMPONENTS if c in comps]
 
 
+#: largest |measured coordinate| [m]: beyond, a cell is a typo (and spreads overflow)
+MAX_COORDINATE = 1e4
+
 #: a declared noise σ [mm, mrad] is 0 or in this range (1 nm .. 1 m)
 NOISE_RANGE = (1e-6, 1e3)
 
@@ -245,6 +248,16 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
     else:
         comps = _components(header, name)
         positions = take(["x", "y", "z"], "position") / lf
+        far = np.argwhere(np.abs(positions) > MAX_COORDINATE)
+        if far.size:
+            i, j = far[0]
+            raise BadValueError(
+                f"{name} data row {i + 1}, column {'xyz'[j]!r}: {positions[i, j]:g} m is more "
+                f"than {MAX_COORDINATE / 1e3:g} km from the origin; check the value and the "
+                "length unit",
+                int(i) + 1,
+                "xyz"[j],
+            )
         rotations = None
         orient = header_value(header, "orientation", "rotvec", name)
         if orient not in ORIENTATIONS:
