@@ -17,6 +17,7 @@ outside the directory). After the hashes, the contents are cross-checked:
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import re
 import stat
@@ -26,11 +27,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pincal._files import max_bytes
+from pincal._files import max_bytes, read_text
 from pincal.errors import CalibrationDirectoryError, PincalError, clip
+from pincal.identification import IdentificationResult
+from pincal.measure import NoiseModel
 
 if TYPE_CHECKING:
-    from pincal.identification import IdentificationResult
     from pincal.model import Mechanism
 
 __all__ = [
@@ -40,9 +42,13 @@ __all__ = [
     "check_listed_file",
     "check_parameters",
     "hash_bounded",
+    "load_json",
     "model_files",
+    "read_noise",
+    "read_result",
 ]
 
+_MAX_JSON_BYTES = 50_000_000
 _HEX64 = re.compile(r"[0-9a-f]{64}")
 #: agreement of the manifest's values with identification.json, and of calibrated.urdf's
 #: joint origins with the nominal model displaced by them (both are written at full
@@ -291,3 +297,45 @@ def check_geometry(
                 "mrad away from the nominal model with identification.json's values applied; "
                 "the files of the directory disagree: re-run `pincal calibrate`"
             )
+
+
+def load_json(path: Path) -> dict:
+    text = read_text(path, "JSON file", _MAX_JSON_BYTES, CalibrationDirectoryError)
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise CalibrationDirectoryError(f"{str(path)!r} is not valid JSON: {exc}") from exc
+    except RecursionError:
+        raise CalibrationDirectoryError(
+            f"{str(path)!r} is nested too deeply to be a pincal file; re-run `pincal calibrate`"
+        ) from None
+    if not isinstance(data, dict):
+        raise CalibrationDirectoryError(f"{str(path)!r} must hold a JSON object")
+    return data
+
+
+def read_noise(entry: object, where: str) -> NoiseModel | None:
+    if entry is None:
+        return None
+    try:
+        return NoiseModel(float(entry["position_mm"]), float(entry["orientation_mrad"]))  # type: ignore[index]
+    except (TypeError, KeyError, ValueError, PincalError) as exc:
+        raise CalibrationDirectoryError(
+            f"{where}: 'noise' must be {{position_mm, orientation_mrad}} (positive numbers); "
+            f"got {clip(repr(entry))}"
+        ) from exc
+
+
+def read_result(path: Path) -> IdentificationResult:
+    """``identification.json`` read, any malformation reported with the file named."""
+    try:
+        return IdentificationResult.from_dict(load_json(path), source=str(path))
+    except CalibrationDirectoryError:
+        raise
+    except PincalError as exc:
+        raise CalibrationDirectoryError(str(exc)) from exc
+    except (TypeError, ValueError, KeyError, AttributeError, IndexError) as exc:
+        raise CalibrationDirectoryError(
+            f"{str(path)!r} is malformed ({type(exc).__name__}: {clip(str(exc), 120)}); "
+            "re-run `pincal calibrate`"
+        ) from None

@@ -56,8 +56,12 @@ from pincal.io._calibration_checks import (
     check_model_files,
     check_parameters,
     hash_bounded,
+    load_json,
     model_files,
+    read_noise,
+    read_result,
 )
+from pincal.io._calibration_replace import PINCAL_EXTRAS, _check_replaceable, check_replaceable
 from pincal.io._urdf_export import save_urdf
 from pincal.measure import NoiseModel
 from pincal.model import Mechanism, load_mechanism, read_sidecar
@@ -83,7 +87,6 @@ MANIFEST = "calibration.json"
 CALIBRATED_URDF = "calibrated.urdf"
 CALIBRATED_SIDECAR = "calibrated.yaml"
 IDENTIFICATION_FILE = "identification.json"
-_MAX_JSON_BYTES = 50_000_000
 
 
 def sha256_file(path: str | Path) -> str:
@@ -248,56 +251,6 @@ def _manifest(
     }
 
 
-#: files other pincal commands put into a calibration directory (``pincal report``,
-#: ``pincal run``); stale once the calibration is replaced, so replaced with it
-PINCAL_EXTRAS = frozenset({"campaign.yaml", "report.html", "report.md", "report.json"})
-
-
-def check_replaceable(out: str | Path) -> None:
-    """Refuse, before any work, an ``--out`` that :func:`write_calibration` would refuse.
-
-    Raises:
-        CalibrationDirectoryError: ``out`` is a file, a non-empty directory without a valid
-            manifest, or a calibration directory holding files pincal did not write.
-    """
-    _check_replaceable(Path(out).resolve())
-
-
-def _check_replaceable(out: Path) -> None:
-    """Refuse to replace anything but a calibration directory pincal wrote, or an empty one.
-
-    The manifest proves pincal wrote the directory; any entry it does not list (other
-    than :data:`PINCAL_EXTRAS`) is a user's file and would be deleted: refused, named.
-    """
-    if not out.exists():
-        return
-    if not out.is_dir():
-        raise CalibrationDirectoryError(
-            f"--out {str(out)!r} exists and is not a directory; choose a new --out directory"
-        )
-    entries = sorted(p.name for p in out.iterdir())
-    if not entries:
-        return
-    try:
-        manifest = _load_json(out / MANIFEST) if (out / MANIFEST).is_file() else {}
-    except PincalError:
-        manifest = {}
-    files = manifest.get("files")
-    if manifest.get("format") != CALIBRATION_FORMAT or not isinstance(files, dict):
-        raise CalibrationDirectoryError(
-            f"--out {str(out)!r} is a non-empty directory ({len(entries)} entries) without "
-            f"a valid {MANIFEST}, so not a calibration directory pincal wrote; it is never "
-            "replaced: choose a new --out directory"
-        )
-    foreign = [n for n in entries if n not in files and n != MANIFEST and n not in PINCAL_EXTRAS]
-    if foreign:
-        raise CalibrationDirectoryError(
-            f"--out {str(out)!r} is a calibration directory that also holds files pincal did "
-            f"not write ({clip(', '.join(foreign), 200)}); replacing it would delete them: "
-            "move them out or choose a new --out directory"
-        )
-
-
 def write_calibration(
     path: str | Path,
     result: IdentificationResult,
@@ -369,48 +322,6 @@ def _write_locked(
         raise
 
 
-def _load_json(path: Path) -> dict:
-    text = read_text(path, "JSON file", _MAX_JSON_BYTES, CalibrationDirectoryError)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise CalibrationDirectoryError(f"{str(path)!r} is not valid JSON: {exc}") from exc
-    except RecursionError:
-        raise CalibrationDirectoryError(
-            f"{str(path)!r} is nested too deeply to be a pincal file; re-run `pincal calibrate`"
-        ) from None
-    if not isinstance(data, dict):
-        raise CalibrationDirectoryError(f"{str(path)!r} must hold a JSON object")
-    return data
-
-
-def _noise(entry: object, where: str) -> NoiseModel | None:
-    if entry is None:
-        return None
-    try:
-        return NoiseModel(float(entry["position_mm"]), float(entry["orientation_mrad"]))  # type: ignore[index]
-    except (TypeError, KeyError, ValueError, PincalError) as exc:
-        raise CalibrationDirectoryError(
-            f"{where}: 'noise' must be {{position_mm, orientation_mrad}} (positive numbers); "
-            f"got {clip(repr(entry))}"
-        ) from exc
-
-
-def _result(path: Path) -> IdentificationResult:
-    """``identification.json`` read, any malformation reported with the file named."""
-    try:
-        return IdentificationResult.from_dict(_load_json(path), source=str(path))
-    except CalibrationDirectoryError:
-        raise
-    except PincalError as exc:
-        raise CalibrationDirectoryError(str(exc)) from exc
-    except (TypeError, ValueError, KeyError, AttributeError, IndexError) as exc:
-        raise CalibrationDirectoryError(
-            f"{str(path)!r} is malformed ({type(exc).__name__}: {clip(str(exc), 120)}); "
-            "re-run `pincal calibrate`"
-        ) from None
-
-
 def read_calibration(path: str | Path, *, verify: bool = True) -> CalibrationDirectory:
     """Read a calibration directory (see the module doc).
 
@@ -443,7 +354,7 @@ def read_calibration(path: str | Path, *, verify: bool = True) -> CalibrationDir
             f"that proves pincal wrote it (write one with `pincal calibrate MODEL --data FILE "
             f"--out {d}`)"
         )
-    manifest = _load_json(d / MANIFEST)
+    manifest = load_json(d / MANIFEST)
     where = str(d / MANIFEST)
     if manifest.get("format") != CALIBRATION_FORMAT:
         raise CalibrationDirectoryError(
@@ -471,11 +382,11 @@ def read_calibration(path: str | Path, *, verify: bool = True) -> CalibrationDir
                 f"calibration directory {str(d)!r}: {changed} changed after it was written "
                 f"(SHA-256 mismatch); re-run `pincal calibrate` or restore the files"
             )
-    result = _result(ident_path)
+    result = read_result(ident_path)
     check_parameters(manifest, result, where, IDENTIFICATION_FILE)
     check_covariance(result, str(ident_path))
     for key in ("model", "model_source", "preset"):
         if manifest.get(key) is not None and not isinstance(manifest[key], str):
             raise CalibrationDirectoryError(f"{where}: {key!r} must be a string")
-    noise = _noise(manifest.get("noise"), where)
+    noise = read_noise(manifest.get("noise"), where)
     return CalibrationDirectory(d, manifest, result, d / CALIBRATED_URDF, noise)
