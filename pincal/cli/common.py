@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from pincal.errors import OutputPathError, PincalError, clip
+from pincal.errors import InputFileError, OutputPathError, PincalError, clip
 
 if TYPE_CHECKING:
     from pincal.io import CalibrationDirectory
@@ -193,8 +193,17 @@ def guard_paths(
     """
     from pincal.io import output_target
 
+    def resolved(label: str, v: str | os.PathLike) -> Path:
+        try:
+            return Path(v).resolve()
+        except (RuntimeError, OSError):  # Python < 3.13 raises RuntimeError on a loop
+            raise InputFileError(
+                f"{label} {clip(os.fspath(v), 300)} is a symbolic link loop (links that point "
+                "back to each other); give the path of the file itself"
+            ) from None
+
     def given(m: Mapping[str, PathLike]) -> list[tuple[str, Path, str]]:
-        return [(k, Path(v).resolve(), os.fspath(v)) for k, v in m.items() if v is not None]
+        return [(k, resolved(k, v), os.fspath(v)) for k, v in m.items() if v is not None]
 
     ins, dirs, sides = given(inputs), given(out_dirs), given(implied)
     outs = given(outputs) + sides
