@@ -134,6 +134,7 @@ def poses(
                  "--out's JSON record": Path(out).with_suffix(".json")},
     )  # fmt: skip
     check_count(count, "--count", MAX_POSES, yes)
+    n_jobs = _jobs(n_jobs)
     check_count(restarts, "--restarts", MAX_RESTARTS, yes, what="restarts")
     check_number(K_mm, "--K", positive=True)
     for value, name in zip(noise, ("--noise (position)", "--noise (orientation)"), strict=True):
@@ -238,3 +239,22 @@ def poses(
         f"wrote {csv_path} ({len(design.candidates)} nominal poses with their actuator "
         f"values), {cmd_path} and {json_path}"
     )
+
+
+def _jobs(n_jobs: int) -> int:
+    """``--jobs`` checked and clamped to the CPU count (more processes only compete)."""
+    import os
+
+    from pincal.errors import OptionValueError
+
+    cpus = os.cpu_count() or 1
+    if n_jobs == 0:
+        raise OptionValueError(
+            f"--jobs 0 is not valid; give a number of processes from 1 to {cpus} (the CPU "
+            "count), or -1 for every CPU"
+        )
+    if n_jobs > cpus:
+        click.echo(f"pincal: note: --jobs {n_jobs} is more than the {cpus} CPUs; using {cpus}",
+                   err=True)  # fmt: skip
+        return cpus
+    return n_jobs

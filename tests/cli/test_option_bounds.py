@@ -106,3 +106,18 @@ def test_per_pose_std_out_of_range_names_row_and_column(measured, tmp_path):
     f.write_text("\n".join(lines) + "\n")
     line = one_line_error(["calibrate", "wedge3", "--data", str(f), "--out", str(tmp_path / "c")])
     assert "s.csv data row 2, column 'std_x'" in line and "between 1e-06 and 1000" in line
+
+
+def test_jobs_zero_names_the_option_and_range(tmp_path):
+    line = one_line_error(["poses", "wedge3", "--jobs", "0", "--out", str(tmp_path / "p.csv")])
+    assert "--jobs 0 is not valid" in line and "-1 for every CPU" in line
+    assert "n_jobs" not in line
+
+
+def test_jobs_above_the_cpu_count_is_clamped_with_a_note(tmp_path, monkeypatch):
+    monkeypatch.setattr("os.cpu_count", lambda: 1)  # one worker: no process pool in the test
+    res = CliRunner().invoke(main, ["poses", "wedge3", "--count", "6", "--candidates",
+                                    "random:100", "--jobs", "1000000",
+                                    "--out", str(tmp_path / "p.csv")])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    assert "pincal: note: --jobs 1000000 is more than the 1 CPUs; using 1" in res.stderr
