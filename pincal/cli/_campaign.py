@@ -192,6 +192,14 @@ def _type_name(tp: Any) -> str:
     return getattr(tp, "__name__", str(tp))
 
 
+def _looks_numeric(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _coerce(value: Any, tp: Any, key: str) -> Any:
     origin = typing.get_origin(tp)
     if origin in (typing.Union, types.UnionType):
@@ -217,7 +225,12 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
         str: isinstance(value, str),
     }.get(tp, False)
     if not ok:
-        raise CampaignError(f"{key}: expected {_type_name(tp)}, got {shown(value)}")
+        hint = ""
+        if tp in (int, float) and isinstance(value, str) and _looks_numeric(value):
+            r = repr(float(value))
+            r = r.replace("e", ".0e") if "e" in r and "." not in r else r
+            hint = f" (YAML reads an exponent without '.' or sign as text: write {r})"
+        raise CampaignError(f"{key}: expected {_type_name(tp)}, got {shown(value)}{hint}")
     if tp is float:
         try:
             number = float(value)
