@@ -93,3 +93,11 @@ def test_run_json_reports_a_failed_step_as_json(tmp_path, measured):
     doc = json.loads(res.stdout)
     assert doc["error"]["type"] == "CampaignError"
     assert "step 'calibrate' failed" in doc["error"]["message"]
+
+
+def test_live_host_not_on_this_machine_is_refused_at_once():
+    """An address no interface holds fails on the first bind, not after a port scan."""
+    res = CliRunner().invoke(main, ["view", "wedge3", "--random", "2", "--live",
+                                    "--host", "192.0.2.1"])  # fmt: skip  (TEST-NET-1)
+    line = _one_line(res)
+    assert "--host 192.0.2.1 is not an address of this machine" in line and "127.0.0.1" in line
