@@ -172,7 +172,12 @@ class CalibrationDirectory:
             side = urdf.with_suffix(".yaml")
             text = read_text(urdf, "calibrated URDF", error=CalibrationDirectoryError)
             sidecar = read_sidecar(side) if side.is_file() else {}
-            mech = Mechanism(text, sidecar, name=self.model, source=urdf)
+            try:
+                mech = Mechanism(text, sidecar, name=self.model, source=urdf)
+            except PincalError as exc:
+                if urdf.name in str(exc):
+                    raise
+                raise CalibrationDirectoryError(f"{clip(str(urdf), 200)}: {exc}") from exc
             nominal = self._nominal_if_found()
             if nominal is not None:
                 check_geometry(nominal, mech, self.result, urdf)

@@ -18,7 +18,7 @@ import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
-from pincal.errors import CalibrationDirectoryError
+from pincal.errors import CalibrationDirectoryError, PincalError
 from pincal.identification import identify
 from pincal.io import (
     CALIBRATED_URDF,
@@ -235,3 +235,14 @@ def test_a_forced_calibration_is_announced_on_every_use(made, cal):
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
     assert "pincal: warning: calibration" in res.stderr and "--force" in res.stderr
+
+
+@pytest.mark.parametrize(
+    "name, text", [(CALIBRATED_URDF, "<robot"), ("calibrated.yaml", "a: [b\n")]
+)
+def test_a_malformed_file_of_the_directory_is_named(cal, name, text):
+    (cal / name).write_text(text)
+    _save(cal, _manifest(cal))  # re-hashed: the content, not the hash, is what is wrong
+    with pytest.raises(PincalError) as exc:
+        read_calibration(cal).calibrated()
+    assert f"cal/{name}" in str(exc.value)
