@@ -55,6 +55,8 @@ _HEX64 = re.compile(r"[0-9a-f]{64}")
 #: precision: the tolerance only absorbs the rounding of a re-computation)
 _VALUE_RTOL = 1e-9
 _ORIGIN_TOL = 1e-9  # m / rad
+_CORR_ASYMMETRY = 1e-2
+_EIG_TOL = 1e-6
 
 
 def _plain_name(name: object) -> bool:
@@ -190,17 +192,30 @@ def check_covariance(result: IdentificationResult, ident: str) -> None:
     fix = "re-run `pincal calibrate`"
     if not np.all(np.isfinite(cov)):
         raise CalibrationDirectoryError(f"{ident}: the covariance has non-finite entries; {fix}")
-    scale = float(np.max(np.abs(cov))) or 1.0
-    asym = float(np.max(np.abs(cov - cov.T)))
-    if asym > 1e-9 * scale:
+    diag = np.diag(cov)
+    if np.any(diag < 0):
+        k = int(np.argmin(diag))
         raise CalibrationDirectoryError(
-            f"{ident}: the covariance is not symmetric (largest |C - Cᵀ| = {asym:.3g}); {fix}"
+            f"{ident}: the covariance gives {result.identified_names[k]!r} the negative "
+            f"variance {diag[k]:.3g}; a variance is ≥ 0: {fix}"
         )
-    low = float(np.linalg.eigvalsh(0.5 * (cov + cov.T))[0])
-    if low < -1e-9 * scale:
+    # in correlation units (scale-free): an ill-conditioned inverse is symmetric only to
+    # ~1e-3 there, so only gross asymmetry and clearly negative directions are refused
+    s = np.sqrt(diag)
+    s[s == 0] = 1.0
+    corr = cov / np.outer(s, s)
+    asym = float(np.max(np.abs(corr - corr.T)))
+    if asym > _CORR_ASYMMETRY:
         raise CalibrationDirectoryError(
-            f"{ident}: the covariance is not positive semi-definite (smallest eigenvalue "
-            f"{low:.3g}); a covariance has no negative variance: {fix}"
+            f"{ident}: the covariance is not symmetric (largest correlation difference "
+            f"{asym:.3g}); {fix}"
+        )
+    eig = np.linalg.eigvalsh(0.5 * (corr + corr.T))
+    if eig[0] < -_EIG_TOL * max(float(eig[-1]), 1.0):
+        raise CalibrationDirectoryError(
+            f"{ident}: the covariance is not positive semi-definite (smallest eigenvalue of "
+            f"the correlation matrix {eig[0]:.3g}); a covariance has no negative variance "
+            f"in any direction: {fix}"
         )
     root = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     if std.shape == root.shape and np.all(np.isfinite(std)):

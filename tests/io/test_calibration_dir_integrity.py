@@ -191,6 +191,18 @@ def test_manifest_values_disagreeing_with_identification_are_refused(cal):
 def test_negative_definite_covariance_is_refused(cal):
     _edit_ident(cal, lambda doc: doc.update(covariance=(-np.eye(len(doc["covariance"]))).tolist()))
     _save(cal, _manifest(cal))
+    with pytest.raises(CalibrationDirectoryError, match="negative variance"):
+        read_calibration(cal)
+
+
+def test_indefinite_covariance_is_refused(cal):
+    def correlate_twice(doc: dict) -> None:
+        c = np.array(doc["covariance"])
+        c[0, 1] = c[1, 0] = 2.0 * np.sqrt(c[0, 0] * c[1, 1])  # a correlation of 2
+        doc["covariance"] = c.tolist()
+
+    _edit_ident(cal, correlate_twice)
+    _save(cal, _manifest(cal))
     with pytest.raises(CalibrationDirectoryError, match="not positive semi-definite"):
         read_calibration(cal)
 
