@@ -10,6 +10,7 @@ environment variable.
 
 from __future__ import annotations
 
+import math
 import os
 import stat
 from pathlib import Path
@@ -20,6 +21,7 @@ __all__ = ["DEFAULT_MAX_BYTES", "max_bytes", "read_bytes", "read_text"]
 
 #: Default cap on one input file: 200 MB (a 100 000-pose CSV is ~30 MB).
 DEFAULT_MAX_BYTES = 200 * 1024 * 1024
+_MAX_MB = 1e9  # PINCAL_MAX_FILE_MB above one petabyte is a typo
 
 
 def max_bytes() -> int:
@@ -27,12 +29,16 @@ def max_bytes() -> int:
     env = os.environ.get("PINCAL_MAX_FILE_MB")
     if env:
         try:
-            return max(1, int(float(env) * 1024 * 1024))
+            mb = float(env)
         except ValueError:
+            mb = math.nan
+        if not 0 < mb <= _MAX_MB:  # also refuses nan and inf
             raise InputLimitError(
-                f"PINCAL_MAX_FILE_MB={clip(env)} is not a number of megabytes; "
-                "set it to e.g. 500 or unset it"
-            ) from None
+                f"PINCAL_MAX_FILE_MB={clip(env)} is not a number of megabytes in (0, "
+                f"{_MAX_MB:.0f}]; set it to e.g. 500 or unset it (default "
+                f"{DEFAULT_MAX_BYTES // 2**20})"
+            )
+        return max(1, int(mb * 1024 * 1024))
     return DEFAULT_MAX_BYTES
 
 

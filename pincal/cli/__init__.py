@@ -8,12 +8,29 @@ decorated with :func:`pincal.cli.common.fail_cleanly`, registered below.
 
 from __future__ import annotations
 
+import json
 import logging
+import sys
 
 import click
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Group(click.Group):
+    """The pincal group: a usage error of a subcommand given ``--json`` is JSON too."""
+
+    def invoke(self, ctx: click.Context):
+        args = [*getattr(ctx, "_protected_args", []), *ctx.args]
+        try:
+            return super().invoke(ctx)
+        except click.ClickException as exc:
+            if "--json" not in args[1:] or (ctx.obj or {}).get("debug"):
+                raise
+            message = " ".join(exc.format_message().split())
+            click.echo(json.dumps({"error": {"type": type(exc).__name__, "message": message}}))
+            sys.exit(exc.exit_code)
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.option("--debug", is_flag=True, help="Show tracebacks and debug logging.")
 @click.pass_context
 def main(ctx: click.Context, debug: bool) -> None:

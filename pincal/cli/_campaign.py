@@ -193,6 +193,14 @@ def _type_name(tp: Any) -> str:
     return getattr(tp, "__name__", str(tp))
 
 
+def _looks_numeric(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _coerce(value: Any, tp: Any, key: str) -> Any:
     origin = typing.get_origin(tp)
     if origin in (typing.Union, types.UnionType):
@@ -218,7 +226,12 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
         str: isinstance(value, str),
     }.get(tp, False)
     if not ok:
-        raise CampaignError(f"{key}: expected {_type_name(tp)}, got {shown(value)}")
+        hint = ""
+        if tp in (int, float) and isinstance(value, str) and _looks_numeric(value):
+            r = repr(float(value))
+            r = r.replace("e", ".0e") if "e" in r and "." not in r else r
+            hint = f" (YAML reads an exponent without '.' or sign as text: write {r})"
+        raise CampaignError(f"{key}: expected {_type_name(tp)}, got {shown(value)}{hint}")
     if tp is float:
         try:
             number = float(value)
@@ -273,8 +286,11 @@ def load_campaign(path: str | Path) -> Campaign:
 
     path = Path(path)
     data = load_yaml(path, "campaign file", CampaignError)
-    camp = _build(Campaign, data, "")
-    camp.check()
+    try:
+        camp = _build(Campaign, data, "")
+        camp.check()
+    except CampaignError as exc:  # the message names the key; say which file holds it
+        raise CampaignError(f"{clip(str(path), 200)}: {exc}") from None
     base = path.resolve().parent
     m = dataclasses.replace(camp.measurements, file=_resolve(camp.measurements.file, base))
     v = dataclasses.replace(camp.validation, file=_resolve(camp.validation.file, base))

@@ -26,11 +26,17 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
         ModelFileError / ReportError: nothing usable at ``spec``.
     """
     from pincal._files import read_text
+    from pincal.cli.common import announce
     from pincal.errors import ModelFileError, ParameterError, ReportError, clip
     from pincal.identification import IdentificationResult
+    from pincal.io import MANIFEST, read_calibration
     from pincal.model import load_mechanism, parameters
 
     path = Path(spec)
+    if (path / MANIFEST).is_file():  # a calibration directory: read (and checked) as one
+        cal = read_calibration(path)
+        announce(cal)
+        return cal.calibrated()
     if path.is_dir():
         urdfs = sorted(path.glob("*.urdf"))
         pick = [u for u in urdfs if u.stem == "calibrated"] or urdfs
@@ -45,7 +51,7 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
             )
     try:
         data = json.loads(read_text(path, "identification.json"))
-    except ValueError as exc:
+    except (ValueError, RecursionError) as exc:
         raise ReportError(
             f"cannot read {clip(str(path))} as identification.json: {clip(str(exc))}"
         ) from None
@@ -113,7 +119,8 @@ def _grouped(meas, controller):
 @click.option(
     "--repeatability", default=2.0, show_default=True, help="Actuator repeatability 1σ [µm]."
 )
-@click.option("--seed", default=1, show_default=True, help="Seed of the cube search and cycles.")
+@click.option("--seed", default=1, type=click.IntRange(min=0), show_default=True,
+              help="Seed of the cube search and cycles.")  # fmt: skip
 @click.option(
     "--out",
     "json_out",

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli._limits import number_pair
+from pincal.cli._limits import NOISE_RANGE, check_data_rows, number_pair, yes_option
 from pincal.cli.common import (
     fail_cleanly,
     guard_paths,
@@ -144,10 +144,11 @@ def format_report(doc: dict) -> str:
     metavar="MM,RAD",
     help="Quality gate: largest parameter change [default: 20,0.1].",
 )
+@yes_option
 @model_options
 @fail_cleanly
 def calibrate(
-    model, data, preset, method, out, as_json, noise, loss, force, max_change, model_opts
+    model, data, preset, method, out, as_json, noise, loss, force, max_change, yes, model_opts
 ) -> None:  # fmt: skip
     """Identify MODEL's geometric parameters from measured poses (--data).
 
@@ -171,6 +172,7 @@ def calibrate(
         CALIBRATED_URDF,
         MANIFEST,
         calibration_lock,
+        check_replaceable,
         read_measurement_file,
         write_calibration,
     )
@@ -187,13 +189,17 @@ def calibrate(
         out_dirs={"--out": out},
     )
     click.get_current_context().with_resource(calibration_lock(out))  # until the end
+    check_replaceable(out)  # a user's directory is refused before the fit, not after
     declared = None
     if noise is not None:
-        pos_mm, ori_mrad = number_pair(noise, "--noise", positive=True, form="pos_mm,ori_mrad")
+        pos_mm, ori_mrad = number_pair(
+            noise, "--noise", positive=True, form="pos_mm,ori_mrad", bounds=NOISE_RANGE
+        )
         declared = {"position": pos_mm, "orientation": ori_mrad}
     mech = load_model(model, model_opts)
     preset = preset or (next(iter(mech.presets), "full"))
     params = parameters(mech, preset)
+    check_data_rows(data, "--data", len(params), yes)
     if _is_instrument_file(data):
         if declared is not None or loss != "linear":
             raise click.BadParameter(

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from pincal.errors import OutputPathError, PincalError, clip
+from pincal.errors import InputFileError, OutputPathError, PincalError, clip
 
 if TYPE_CHECKING:
     from pincal.io import CalibrationDirectory
@@ -21,23 +21,65 @@ if TYPE_CHECKING:
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 
 
+def _wants_json(ctx: click.Context) -> bool:
+    return bool(ctx.params.get("as_json"))
+
+
+def _json_error(exc: BaseException, message: str) -> None:
+    import json
+
+    doc = {"error": {"type": type(exc).__name__, "message": message}}
+    click.echo(json.dumps(doc, ensure_ascii=False))
+
+
+def _pipe_closed() -> None:
+    """The reader of stdout went away (``| head``): stop quietly, exit 0 (Unix convention)."""
+    try:  # further writes (and the flush at exit) go nowhere instead of raising again
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass
+    sys.exit(EXIT_OK)
+
+
 def fail_cleanly(func):
     """Report PincalError (and file/value errors) as one line on stderr, exit code 1.
 
-    With ``pincal --debug`` the exception propagates with its traceback.
+    With ``--json`` (the command's ``as_json``) the error is instead one JSON object on
+    stdout, ``{"error": {"type": …, "message": …}}``, with the same exit code (2 for
+    command-line usage errors). A closed stdout (``pincal … | head``) ends the command
+    silently with exit 0. With ``pincal --debug`` the exception propagates with its
+    traceback.
     """
 
     @wraps(func)
     def wrapper(*args, **kwargs):
         ctx = click.get_current_context()
         try:
-            return func(*args, **kwargs)
-        except (PincalError, OSError, ValueError) as exc:
+            out = func(*args, **kwargs)
+            sys.stdout.flush()  # a closed pipe is reported here, not at interpreter exit
+            return out
+        except BrokenPipeError:
+            _pipe_closed()
+        except click.ClickException as exc:
+            if not _wants_json(ctx) or (ctx.find_root().obj or {}).get("debug"):
+                raise
+            _json_error(exc, " ".join(exc.format_message().split()))
+            sys.exit(exc.exit_code)
+        except (PincalError, OSError, ValueError, RecursionError) as exc:
             root = ctx.find_root().obj or {}
             if root.get("debug"):
                 raise
             text = " ".join(str(exc).split())  # errors stay one line
-            click.echo(f"pincal: error: {type(exc).__name__}: {text}", err=True)
+            if isinstance(exc, RecursionError):
+                text = (
+                    "an input is nested too deeply to read (JSON, YAML or XML thousands of "
+                    "levels deep); pincal's files are shallow: check the file given"
+                )
+            if _wants_json(ctx):
+                _json_error(exc, text)
+            else:
+                click.echo(f"pincal: error: {type(exc).__name__}: {text}", err=True)
             sys.exit(EXIT_ERROR)
 
     return wrapper
@@ -159,6 +201,12 @@ def model_record(spec: str, opts: ModelOptions) -> str | None:
     return yaml.safe_dump(record(spec, opts.sidecar, opts.frame, opts.lock), sort_keys=False)
 
 
+def announce(cal: CalibrationDirectory) -> None:
+    """Print the calibration's caveat (forced past the gate, failed solve) on stderr."""
+    if cal.caveat:
+        click.echo(f"pincal: warning: {cal.caveat}", err=True)
+
+
 def calibration_summary(cal: CalibrationDirectory) -> dict[str, Any]:
     """JSON-ready summary of a calibration directory (paths and identity)."""
     return {
@@ -186,38 +234,102 @@ def _inside(path: Path, directory: Path) -> bool:
     return path != directory and path.is_relative_to(directory)
 
 
+def _is_calibration_dir(path: Path) -> bool:
+    from pincal.io import IDENTIFICATION_FILE, MANIFEST
+
+    return path.is_dir() and any((path / n).exists() for n in (MANIFEST, IDENTIFICATION_FILE))
+
+
+#: what an implied file pincal wrote begins with (CSV header) or holds (JSON key)
+PINCAL_CSV_HEADER = b"# pincal "
+WRITTEN_BY = "written_by"
+
+
+def pincal_wrote(path: Path) -> bool:
+    """True when the existing file ``path`` is one pincal wrote (so it may be replaced).
+
+    A CSV file pincal wrote starts with ``# pincal``; a JSON file holds a ``written_by``
+    entry starting with ``pincal``.
+    """
+    import json
+
+    from pincal._files import read_bytes
+
+    try:
+        data = read_bytes(path, "file", limit=50_000_000)
+    except PincalError:
+        return False
+    if data.startswith(PINCAL_CSV_HEADER):
+        return True
+    try:
+        doc = json.loads(data)
+    except (ValueError, RecursionError):
+        return False
+    return isinstance(doc, dict) and str(doc.get(WRITTEN_BY, "")).startswith("pincal")
+
+
 def guard_paths(
     inputs: Mapping[str, PathLike],
     outputs: Mapping[str, PathLike] = {},
     out_dirs: Mapping[str, PathLike] = {},
+    implied: Mapping[str, PathLike] = {},
 ) -> None:
     """Refuse, before any work, outputs that would overwrite an input or each other.
 
     Every command calls this with its inputs and outputs. Paths are compared resolved
     (symbolic links followed, hard links by ``samefile``). An output directory that is
-    replaced as a whole (``calibrate --out``) may not contain an input.
+    replaced as a whole (``calibrate --out``) may not contain an input; no output may lie
+    inside an input calibration directory. Outputs must be regular files or absent
+    (devices, FIFOs, directories and links to them are refused; a file path ending
+    with ``/`` is refused). Implied outputs (side files the user did not name, e.g.
+    ``<out>.truth.json``) replace an existing file only when pincal wrote it.
 
     Args:
         inputs: ``{label: path}`` of the files or directories read (None: not given);
             the label names the option in messages, e.g. ``"--targets"``.
         outputs: ``{label: path}`` of the files written.
         out_dirs: ``{label: path}`` of the directories written (replaced) as a whole.
+        implied: ``{label: path}`` of side files written beside an output.
 
     Raises:
         OutputPathError: naming both paths.
     """
+    from pincal.io import output_target
+
+    def resolved(label: str, v: str | os.PathLike) -> Path:
+        try:
+            return Path(v).resolve()
+        except (RuntimeError, OSError):  # Python < 3.13 raises RuntimeError on a loop
+            raise InputFileError(
+                f"{label} {clip(os.fspath(v), 300)} is a symbolic link loop (links that point "
+                "back to each other); give the path of the file itself"
+            ) from None
 
     def given(m: Mapping[str, PathLike]) -> list[tuple[str, Path, str]]:
-        return [(k, Path(v).resolve(), os.fspath(v)) for k, v in m.items() if v is not None]
+        return [(k, resolved(k, v), os.fspath(v)) for k, v in m.items() if v is not None]
 
-    ins, outs, dirs = given(inputs), given(outputs), given(out_dirs)
+    ins, dirs, sides = given(inputs), given(out_dirs), given(implied)
+    outs = given(outputs) + sides
     fix = "inputs are never modified; choose another output path"
+    for o_label, _o_path, o_text in outs:
+        if o_text.endswith(("/", os.sep)):
+            raise OutputPathError(
+                f"{o_label} {clip(o_text, 300)} ends with '/', which names a directory; "
+                f"give a file name (e.g. {clip(o_text, 200)}out.csv)"
+            )
+        output_target(o_text, o_label)
     for o_label, o_path, o_text in outs + dirs:
         for i_label, i_path, i_text in ins:
             if _same(o_path, i_path):
                 raise OutputPathError(
                     f"{o_label} {clip(o_text, 300)} is the same file as the input {i_label} "
                     f"{clip(i_text, 300)}; {fix}"
+                )
+            if _inside(o_path, i_path) and _is_calibration_dir(i_path):
+                raise OutputPathError(
+                    f"{o_label} {clip(o_text, 300)} is inside the input calibration directory "
+                    f"{i_label} {clip(i_text, 300)}, whose files are never modified; "
+                    "choose an output path outside it"
                 )
     for d_label, d_path, d_text in dirs:
         for i_label, i_path, i_text in ins:
@@ -233,3 +345,10 @@ def guard_paths(
                     f"{a_label} {clip(a_text, 300)} and {b_label} {clip(b_text, 300)} are the same "
                     f"file (the command writes both); give output paths that differ"
                 )
+    for s_label, s_path, s_text in sides:
+        target = output_target(s_path, s_label)
+        if target.exists() and not pincal_wrote(target):
+            raise OutputPathError(
+                f"{s_label} {clip(s_text, 300)} exists and was not written by pincal; it "
+                "would be replaced: move it away or choose another --out"
+            )

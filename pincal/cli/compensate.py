@@ -17,11 +17,13 @@ def load_calibrated(spec: str):
     Returns:
         (mechanism, description of where it came from).
     """
+    from pincal.cli.common import announce
     from pincal.io import read_calibration
     from pincal.model import load_mechanism
 
     if Path(spec).is_dir() and not Path(spec, f"{Path(spec).name}.urdf").is_file():
         cal = read_calibration(spec)
+        announce(cal)
         return cal.calibrated(), f"calibration {spec}"
     return load_mechanism(spec), f"model {spec}"
 

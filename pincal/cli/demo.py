@@ -39,7 +39,8 @@ def _collections_skip_the_imports() -> Iterator[None]:
 
 
 @click.command()
-@click.option("--seed", default=7, show_default=True, help="Random seed of the simulation.")
+@click.option("--seed", default=7, type=click.IntRange(min=0), show_default=True,
+              help="Random seed of the simulation.")  # fmt: skip
 @click.option("--poses", default=30, show_default=True, help="Number of measurement poses.")
 @click.option("--validation", default=60, show_default=True, help="Fresh validation poses.")
 @click.option(

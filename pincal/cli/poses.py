@@ -9,6 +9,7 @@ import click
 from pincal.cli._limits import (
     MAX_POSES,
     MAX_RESTARTS,
+    NOISE_RANGE,
     check_count,
     check_number,
     naming_option,
@@ -64,7 +65,8 @@ from pincal.measure import DEFAULT_NOISE
     show_default=True,
 )
 @click.option("--restarts", default=3, show_default=True, help="Random starts (best kept).")
-@click.option("--seed", default=0, show_default=True, help="Random seed.")
+@click.option("--seed", default=0, type=click.IntRange(min=0), show_default=True,
+              help="Random seed.")  # fmt: skip
 @click.option(
     "--out",
     default="poses.csv",
@@ -131,7 +133,7 @@ def poses(
         parse_candidate_spec,
         select_poses,
     )
-    from pincal.errors import PincalError
+    from pincal.errors import OptionValueError, PincalError
     from pincal.io import si_actuator_units, write_pose_design
     from pincal.measure import NoiseModel
     from pincal.model import parameters
@@ -139,14 +141,21 @@ def poses(
 
     guard_paths(
         {"MODEL": model_input(model)},
-        {"--out": out, "--out's commands file": Path(out).with_suffix(".commands.csv"),
-         "--out's JSON record": Path(out).with_suffix(".json")},
+        {"--out": out},
+        implied={"--out's commands file": Path(out).with_suffix(".commands.csv"),
+                 "--out's JSON record": Path(out).with_suffix(".json")},
     )  # fmt: skip
     check_count(count, "--count", MAX_POSES, yes)
+    n_jobs = _jobs(n_jobs)
     check_count(restarts, "--restarts", MAX_RESTARTS, yes, what="restarts")
     check_number(K_mm, "--K", positive=True)
     for value, name in zip(noise, ("--noise (position)", "--noise (orientation)"), strict=True):
         check_number(value, name, positive=True)
+        if not NOISE_RANGE[0] <= value <= NOISE_RANGE[1]:
+            raise OptionValueError(
+                f"{name} {value:g} must be between {NOISE_RANGE[0]:g} and {NOISE_RANGE[1]:g} "
+                "(mm, mrad)"
+            )
     with naming_option("--candidates"):
         parse_candidate_spec(spec)  # a malformed spec fails before the model loads
     mech = load_model(model, model_opts)
@@ -173,6 +182,12 @@ def poses(
                 max_bytes=None if yes else MAX_CANDIDATE_BYTES, n_jobs=n_jobs,
             )  # fmt: skip
     click.echo(cands.summary(), err=True)
+    if count > len(cands):
+        raise OptionValueError(
+            f"--count {count} is more than the {len(cands)} feasible candidate poses of "
+            f"--candidates {spec}; ask for at most {len(cands)} poses or generate more "
+            "candidates (e.g. --candidates random:2000 or a finer grid:LEVELS)"
+        )
     noise_model = NoiseModel(*noise)
     if scaling == "K":
         K = (
@@ -236,3 +251,22 @@ def poses(
         f"wrote {csv_path} ({len(design.candidates)} nominal poses with their actuator "
         f"values), {cmd_path} and {json_path}"
     )
+
+
+def _jobs(n_jobs: int) -> int:
+    """``--jobs`` checked and clamped to the CPU count (more processes only compete)."""
+    import os
+
+    from pincal.errors import OptionValueError
+
+    cpus = os.cpu_count() or 1
+    if n_jobs == 0:
+        raise OptionValueError(
+            f"--jobs 0 is not valid; give a number of processes from 1 to {cpus} (the CPU "
+            "count), or -1 for every CPU"
+        )
+    if n_jobs > cpus:
+        click.echo(f"pincal: note: --jobs {n_jobs} is more than the {cpus} CPUs; using {cpus}",
+                   err=True)  # fmt: skip
+        return cpus
+    return n_jobs

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import fail_cleanly, guard_paths
+from pincal.cli.common import announce, fail_cleanly, guard_paths
 from pincal.errors import PincalError
 
 
@@ -95,5 +95,6 @@ def _inputs(directory: Path) -> dict[str, Path]:
     except PincalError:
         pass  # the report names the problem
     else:
+        announce(cal)
         names |= set(cal.manifest.get("files") or {}) | {cal.calibrated_urdf.name}
     return {f"DIRECTORY's {n}": directory / n for n in sorted(names) if (directory / n).exists()}

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import sys
 import time
 from collections.abc import Callable
@@ -130,6 +131,69 @@ def campaign_paths(c: Campaign, out: Path) -> Paths:
     return Paths(out, inputs / "design.csv", data, val, out / "validation.json")
 
 
+def _writable_ancestor(path: Path) -> Path:
+    """The nearest existing ancestor of ``path`` (the directory that gets the new entries)."""
+    for parent in path.parents:
+        if parent.exists():
+            return parent
+    return Path(path.anchor or ".")
+
+
+def check_campaign_outputs(c: Campaign, p: Paths) -> None:
+    """Refuse, before the first step, any output location a step would refuse or damage.
+
+    Checks the calibration directory (not the file system root, replaceable: see
+    :func:`pincal.io.check_replaceable`), the generated-inputs folder ``<out>-inputs/``,
+    every file a step writes there (and its side files) against the campaign's inputs,
+    and that the parent directories are writable.
+
+    Raises:
+        CampaignError: naming the location and what to change.
+    """
+    from pincal.cli.common import guard_paths, model_input
+    from pincal.errors import CampaignError, PincalError
+    from pincal.io import check_replaceable
+
+    out = p.out.resolve()
+    if out.parent == out:
+        raise CampaignError(
+            f"out: {str(p.out)!r} is the file system root; give a directory of its own, "
+            "e.g. out: campaign-out (the generated inputs go to OUT-inputs/ beside it)"
+        )
+    inputs = p.design.parent
+    generated = {"design": p.design if c.design else None}
+    if c.measurements.file is None:
+        generated["measurements"] = p.data
+    if c.validation.source == "simulated" and c.validation.file is None:
+        generated["validation"] = p.validation
+    sides = {"design": (".commands.csv", ".json")}
+    implied = {f"the {k} step's {s} file": Path(v).with_suffix(s)
+               for k, v in generated.items() if v is not None
+               for s in sides.get(k, (".truth.json",))}  # fmt: skip
+    try:
+        check_replaceable(p.out)
+        if inputs.exists() and not inputs.is_dir():
+            raise CampaignError(
+                f"{str(inputs)!r} (out's inputs folder) exists and is not a directory"
+            )
+        guard_paths(
+            {"model": model_input(c.model), "measurements.file": c.measurements.file,
+             "validation.file": c.validation.file},
+            {f"{k} file": v for k, v in generated.items()},
+            out_dirs={"out": p.out},
+            implied=implied,
+        )  # fmt: skip
+    except PincalError as exc:
+        raise CampaignError(f"campaign output: {exc}") from exc
+    for where in (out, inputs.resolve()):
+        base = _writable_ancestor(where)
+        if not os.access(base, os.W_OK | os.X_OK):
+            raise CampaignError(
+                f"campaign output: cannot create {str(where)!r}: {str(base)!r} is not writable; "
+                "choose another out"
+            )
+
+
 def _invoke(ctx: click.Context, step: Step, args: list[str], quiet: bool, yes: bool) -> str:
     """Run one step; returns its status (``done`` or ``skipped``).
 
@@ -159,8 +223,11 @@ def _invoke(ctx: click.Context, step: Step, args: list[str], quiet: bool, yes: b
             f"step {step.name!r} (`pincal {step.command}`): {exc.format_message()}"
         ) from exc
     except SystemExit as exc:
-        if exc.code:
-            click.echo(f"pincal run: step {step.name!r} failed; the run stops here", err=True)
+        if exc.code:  # the step printed its error on stderr
+            raise CampaignError(
+                f"step {step.name!r} failed (`pincal {step.command}`, its error is above); "
+                "the run stops here"
+            ) from None
         raise
     return "done"
 
@@ -199,11 +266,15 @@ def run(ctx: click.Context, campaign_file: Path, out: Path | None, dry_run: bool
     """
     import yaml  # type: ignore[import-untyped]
 
-    from pincal.io import atomic_write_text
+    from pincal.io import atomic_write_text, calibration_lock
 
     camp = load_campaign(campaign_file)
     out_dir = Path(out) if out is not None else Path(camp.out)
     paths = campaign_paths(camp, out_dir)
+    check_campaign_outputs(camp, paths)
+    if not dry_run:  # the whole output, inputs folder included, is this run's until the end
+        ctx.with_resource(calibration_lock(paths.out))
+        ctx.with_resource(calibration_lock(paths.design.parent))
     summary: dict = {"campaign": str(campaign_file), "out": str(out_dir), "steps": []}
     for k, step in enumerate(STEPS, start=1):
         args = step.arguments(camp, paths)

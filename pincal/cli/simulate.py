@@ -8,7 +8,14 @@ from typing import TYPE_CHECKING
 
 import click
 
-from pincal.cli._limits import MAX_POSES, check_count, number_pair, yes_option
+from pincal.cli._limits import (
+    ERROR_SIZE_RANGE,
+    MAX_POSES,
+    NOISE_RANGE,
+    check_count,
+    number_pair,
+    yes_option,
+)
 from pincal.cli.common import fail_cleanly, guard_paths, load_model, model_input, model_options
 from pincal.measure import DEFAULT_NOISE
 
@@ -29,8 +36,9 @@ def _parse_errors(spec: str) -> int | None:
 
 def _parse_pair(spec: str, option: str) -> tuple[float, float]:
     """Two finite numbers ≥ 0 (:func:`pincal.cli._limits.number_pair`)."""
-    form = "length_mm,angle_mrad" if option == "--error-size" else "position_mm,orientation_mrad"
-    return number_pair(spec, option, form=form)
+    if option == "--error-size":
+        return number_pair(spec, option, form="length_mm,angle_mrad", bounds=ERROR_SIZE_RANGE)
+    return number_pair(spec, option, form="position_mm,orientation_mrad", bounds=NOISE_RANGE)
 
 
 @click.command()
@@ -70,7 +78,8 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
     show_default=True,
     help="Measurement noise 1σ 'position_mm,orientation_mrad' (the default of every command).",
 )
-@click.option("--seed", default=1, show_default=True, help="Seed of poses and noise.")
+@click.option("--seed", default=1, type=click.IntRange(min=0), show_default=True,
+              help="Seed of poses and noise.")  # fmt: skip
 @click.option(
     "--length-unit",
     type=click.Choice(["m", "mm"]),
@@ -115,6 +124,7 @@ def simulate(
     """
     import numpy as np
 
+    from pincal import __version__
     from pincal.io import (
         atomic_write_text,
         read_pose_rows,
@@ -135,7 +145,8 @@ def simulate(
     truth_path = Path(out).with_suffix(".truth.json")
     guard_paths(
         {"MODEL": model_input(model), "--poses": poses_file},
-        {"--out": out, "--out's truth file": truth_path},
+        {"--out": out},
+        implied={"--out's truth file": truth_path},
     )
     nominal = load_model(model, model_opts)
     preset = preset or (next(iter(nominal.presets), "full"))
@@ -171,6 +182,7 @@ def simulate(
         path = write_measurements(out, poses, length_unit=length_unit)
         meas, components = poses, list(poses.components)
     truth = {
+        "written_by": f"pincal {__version__}",
         "model": nominal.name,
         "preset": preset,
         "errors": errors,

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import calibration_summary, fail_cleanly
+from pincal.cli.common import announce, calibration_summary, fail_cleanly
 
 
 def _fmt(v: float | None, width: int = 9, digits: int = 4) -> str:
@@ -113,6 +113,7 @@ def validate(calibration: Path, data: Path, as_json: bool, out: Path | None) -> 
                    for n in ("identification.json", "calibration.json")}  # fmt: skip
         guard_paths(inputs, {"--out": out})
     cal = read_calibration(calibration)
+    announce(cal)
     nominal = cal.nominal()
     mf = read_measurement_file(data, nominal)
     for w in mf.warnings:

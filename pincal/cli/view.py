@@ -56,12 +56,15 @@ class _ViewOptions(TypedDict):
 
 def _calibrated_mechanism(spec: Path):
     """The calibrated mechanism of a calibration directory (a bare .urdf as in 0.1)."""
+    from pincal.cli.common import announce
     from pincal.io import read_calibration
     from pincal.model import load_mechanism
 
     if spec.is_file() and spec.suffix.lower() == ".urdf":
         return load_mechanism(spec)
-    return read_calibration(spec).calibrated()
+    cal = read_calibration(spec)
+    announce(cal)
+    return cal.calibrated()
 
 
 def _urdf_for_viz(mech) -> str | Path:
@@ -88,7 +91,8 @@ def _urdf_for_viz(mech) -> str | Path:
     default=None,
     help="Draw N random workspace poses (default 5 when --poses is not given).",
 )
-@click.option("--seed", default=0, show_default=True, help="Seed of the random poses.")
+@click.option("--seed", default=0, type=click.IntRange(min=0), show_default=True,
+              help="Seed of the random poses.")  # fmt: skip
 @click.option(
     "--calibrated",
     type=click.Path(path_type=Path),
@@ -176,6 +180,11 @@ def view(
 
     if html_path is None and not live:
         raise click.UsageError("give --html FILE and/or --live")
+    if live and (sys.stdin is None or sys.stdin.closed):
+        raise click.UsageError(
+            "--live waits for Enter on stdin to stop the viewer, but stdin is closed; run it "
+            "with a terminal or a pipe on stdin, or write --html FILE instead"
+        )
     if arrow_scale is not None and not (math.isfinite(arrow_scale) and arrow_scale > 0):
         raise click.BadParameter("must be a positive number", param_hint="--arrow-scale")
     guard_paths(

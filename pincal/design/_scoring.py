@@ -55,7 +55,10 @@ class _Problem:
 
     def check_m(self, m: int, min_m: int = 1) -> int:
         if not isinstance(m, (int, np.integer)) or not min_m <= m <= self.N:
-            raise PincalError(f"m must be an integer in [{min_m}, {self.N}]; got {m!r}")
+            raise PincalError(
+                f"the number of poses to select must be an integer in [{min_m}, {self.N}] "
+                f"(at most the {self.N} candidate poses); got {m!r}"
+            )
         if m * self.k < self.n:
             raise TooFewPosesError(
                 f"{m} poses × {self.k} rows < {self.n} parameters; need at least "

@@ -74,6 +74,8 @@ def _spread(p: np.ndarray) -> float:
 
 def _unit_of(ratio: float, declared: str) -> str | None:
     """The unit the data are likely in, given measured/nominal spread ``ratio``."""
+    if not (math.isfinite(ratio) and ratio > 0):
+        return None
     f_declared = _UNITS.get(declared, 1.0)
     f_true = f_declared / ratio  # value·f_declared = x·ratio → the file holds x / f_true
     best = min(_UNITS, key=lambda u: abs(math.log(_UNITS[u] / f_true)))

@@ -15,6 +15,7 @@ import errno
 import glob
 import os
 import shutil
+import stat
 import sys
 import tempfile
 import threading
@@ -22,13 +23,14 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from pincal.errors import CalibrationDirectoryError
+from pincal.errors import CalibrationDirectoryError, OutputPathError, clip
 
 __all__ = [
     "atomic_write_bytes",
     "atomic_write_text",
     "calibration_lock",
     "exchange_paths",
+    "output_target",
     "remove_stale_temporaries",
     "swap_in_directory",
 ]
@@ -56,14 +58,65 @@ def _remove_dead_writers_temporaries(path: Path) -> None:
             stale.unlink(missing_ok=True)
 
 
+def output_target(path: str | Path, what: str = "output") -> Path:
+    """The regular file an output named ``path`` is written to.
+
+    An absent path or a regular file is written as named. A symbolic link is never
+    replaced: the file it points to is written instead (so ``--out link.csv`` updates
+    the linked file and keeps the link). Devices, FIFOs, sockets, directories, links to
+    them and dangling links are refused: replacing them would turn ``/dev/null`` or
+    ``/dev/stdout`` into a regular file. Nothing under ``/dev`` or ``/proc`` is written.
+
+    Args:
+        path: the output path.
+        what: what names it in messages (e.g. ``"--out"``).
+
+    Raises:
+        OutputPathError: the path names something other than a regular file.
+    """
+    p = Path(path)
+    target = p
+    fix = "outputs are written only to regular files: give the path of a file"
+    if Path(os.path.abspath(p)).parts[1:2] in (("dev",), ("proc",)):
+        raise OutputPathError(f"{what} {clip(str(p), 300)} is under /dev or /proc; {fix}")
+    if p.is_symlink():
+        try:
+            target = p.resolve(strict=True)
+        except (FileNotFoundError, RuntimeError, OSError):
+            raise OutputPathError(
+                f"{what} {clip(str(p), 300)} is a symbolic link to a missing file (or a "
+                "link loop); pincal never replaces a link: remove it or give another path"
+            ) from None
+    try:
+        st = os.stat(target)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        raise OutputPathError(f"cannot write {what} {clip(str(p), 300)}: {exc.strerror}") from None
+    system = Path(os.path.abspath(target)).parts[1:2] in (("dev",), ("proc",))
+    if system or (st is not None and not stat.S_ISREG(st.st_mode)):
+        kind = (
+            "a file under /dev or /proc" if system
+            else "a directory" if stat.S_ISDIR(st.st_mode)  # type: ignore[union-attr]
+            else "a device, FIFO or socket"
+        )  # fmt: skip
+        via = f" (the link points to {clip(str(target), 200)})" if target != p else ""
+        raise OutputPathError(f"{what} {clip(str(p), 300)} is {kind}{via}; {fix}")
+    return target
+
+
 def atomic_write_bytes(path: str | Path, data: bytes, *, durable: bool = True) -> Path:
     """Write ``data`` to ``path`` through a temporary file in the same directory.
 
     The temporary is named ``.NAME.<pid>.XXXX.tmp``; those of writers no longer running
     (killed by SIGKILL, so their cleanup never ran) are removed here. ``durable=False``
     skips the fsync (a few ms per file): for scratch files read back and deleted.
+    A symbolic link is written through to its target (see :func:`output_target`).
+
+    Raises:
+        OutputPathError: ``path`` is a device, FIFO, directory, or a link to one.
     """
-    path = Path(path)
+    path = output_target(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     _remove_dead_writers_temporaries(path)
     fd, tmp = tempfile.mkstemp(

@@ -21,8 +21,8 @@ SHA-256 and the SHA-256 of every file of the directory, and the creation time (U
 (``.NAME.pincal-tmp-*``) and swaps it in with one rename, so the directory is at every
 instant the complete old set or the complete new one; a lock file beside it
 (``.NAME.pincal-lock``) keeps a second writer out. :func:`read_calibration` is the one
-reader. Directories of pincal 0.1 (``identification.json`` beside
-``<model>_calibrated.urdf`` or ``<model>.urdf``, no manifest) are read too.
+reader: a directory without a valid manifest is not a calibration, and what the
+manifest lists is checked before use (see :mod:`pincal.io._calibration_checks`).
 """
 
 from __future__ import annotations
@@ -48,6 +48,20 @@ from pincal.io._atomic import (
     remove_stale_temporaries,
     swap_in_directory,
 )
+from pincal.io._calibration_checks import (
+    check_covariance,
+    check_files_map,
+    check_geometry,
+    check_listed_file,
+    check_model_files,
+    check_parameters,
+    hash_bounded,
+    load_json,
+    model_files,
+    read_noise,
+    read_result,
+)
+from pincal.io._calibration_replace import PINCAL_EXTRAS, _check_replaceable, check_replaceable
 from pincal.io._urdf_export import save_urdf
 from pincal.measure import NoiseModel
 from pincal.model import Mechanism, load_mechanism, read_sidecar
@@ -59,7 +73,9 @@ __all__ = [
     "CALIBRATION_VERSION",
     "IDENTIFICATION_FILE",
     "MANIFEST",
+    "PINCAL_EXTRAS",
     "CalibrationDirectory",
+    "check_replaceable",
     "read_calibration",
     "sha256_file",
     "write_calibration",
@@ -71,7 +87,6 @@ MANIFEST = "calibration.json"
 CALIBRATED_URDF = "calibrated.urdf"
 CALIBRATED_SIDECAR = "calibrated.yaml"
 IDENTIFICATION_FILE = "identification.json"
-_MAX_JSON_BYTES = 50_000_000
 
 
 def sha256_file(path: str | Path) -> str:
@@ -98,11 +113,11 @@ class CalibrationDirectory:
 
     Attributes:
         path: the directory.
-        manifest: the ``calibration.json`` content (a synthesised one for 0.1 directories).
+        manifest: the ``calibration.json`` content.
         result: the identification result (values, std, covariance (k, k) [SI]).
         calibrated_urdf: path of the calibrated URDF (its sidecar ``.yaml`` beside it).
         noise: instrument noise of the fitted data (mm, mrad), if known.
-        legacy: True for a pincal 0.1 directory without a manifest.
+        legacy: always False (directories without a manifest are no longer read).
     """
 
     path: Path
@@ -125,6 +140,23 @@ class CalibrationDirectory:
         return str(src) if src else None
 
     @property
+    def caveat(self) -> str | None:
+        """Why this calibration must be used with care, or None.
+
+        Set when it was written with ``--force`` past the quality gate or from a solve
+        that did not succeed; commands that use the calibration print it every time.
+        """
+        why = []
+        quality = self.manifest.get("quality")
+        if isinstance(quality, dict) and quality.get("overridden"):
+            why.append(f"written with --force past the quality gate ({quality.get('reason')})")
+        if not self.result.success:
+            why.append(f"fitted by a solve that did not succeed ({self.result.message})")
+        if not why:
+            return None
+        return f"calibration {str(self.path)!r} was " + " and ".join(why)
+
+    @property
     def preset(self) -> str:
         """Parameter preset of the identification."""
         return str(self.manifest.get("preset") or self.result.preset)
@@ -140,8 +172,25 @@ class CalibrationDirectory:
             side = urdf.with_suffix(".yaml")
             text = read_text(urdf, "calibrated URDF", error=CalibrationDirectoryError)
             sidecar = read_sidecar(side) if side.is_file() else {}
-            self._cache["calibrated"] = Mechanism(text, sidecar, name=self.model, source=urdf)
+            try:
+                mech = Mechanism(text, sidecar, name=self.model, source=urdf)
+            except PincalError as exc:
+                if urdf.name in str(exc):
+                    raise
+                raise CalibrationDirectoryError(f"{clip(str(urdf), 200)}: {exc}") from exc
+            nominal = self._nominal_if_found()
+            if nominal is not None:
+                check_geometry(nominal, mech, self.result, urdf)
+            self._cache["calibrated"] = mech
         return self._cache["calibrated"]
+
+    def _nominal_if_found(self) -> Mechanism | None:
+        try:
+            return self.nominal()
+        except CalibrationDirectoryError as exc:
+            if isinstance(exc.__cause__, PincalError):  # not found: nothing to check against
+                return None
+            raise
 
     def nominal(self) -> Mechanism:
         """The nominal mechanism (from ``model_source``, else the bundled model's name).
@@ -151,6 +200,7 @@ class CalibrationDirectory:
         """
         if "nominal" not in self._cache:
             spec = self.model_source or self.model
+            check_model_files(self.manifest.get("model_files"), str(self.path / MANIFEST))
             try:
                 self._cache["nominal"] = load_mechanism(spec)
             except PincalError as exc:
@@ -178,6 +228,7 @@ def _manifest(
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "model": result.model,
         "model_source": model_source,
+        "model_files": model_files(model_source) if model_source else {},
         "preset": result.preset,
         "method": result.method,
         "units": {"length": "m", "angle": "rad"},
@@ -203,20 +254,6 @@ def _manifest(
         "identification": IDENTIFICATION_FILE,
         "files": files,
     }
-
-
-def _check_replaceable(out: Path) -> None:
-    """Refuse to replace anything but a calibration directory or an empty directory."""
-    if not out.exists():
-        return
-    if not out.is_dir():
-        raise CalibrationDirectoryError(f"{str(out)!r} exists and is not a directory")
-    entries = list(out.iterdir())
-    if entries and not ((out / MANIFEST).is_file() or (out / IDENTIFICATION_FILE).is_file()):
-        raise CalibrationDirectoryError(
-            f"{str(out)!r} is a non-empty directory that is not a calibration directory "
-            f"({len(entries)} entries); choose a new --out directory"
-        )
 
 
 def write_calibration(
@@ -253,7 +290,7 @@ def write_calibration(
     out.parent.mkdir(parents=True, exist_ok=True)
     with calibration_lock(out):
         _write_locked(out, result, model_source, data_files, noise, annotations, texts)
-    return read_calibration(path)
+    return read_calibration(out)  # resolved: "." names the old directory after the swap
 
 
 def _write_locked(
@@ -290,41 +327,6 @@ def _write_locked(
         raise
 
 
-def _load_json(path: Path) -> dict:
-    text = read_text(path, "JSON file", _MAX_JSON_BYTES, CalibrationDirectoryError)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise CalibrationDirectoryError(f"{str(path)!r} is not valid JSON: {exc}") from exc
-    if not isinstance(data, dict):
-        raise CalibrationDirectoryError(f"{str(path)!r} must hold a JSON object")
-    return data
-
-
-def _legacy_urdf(d: Path, model: str) -> Path:
-    for name in (f"{model}_calibrated.urdf", f"{model}.urdf"):
-        if (d / name).is_file():
-            return d / name
-    found = sorted(d.glob("*.urdf"))
-    if len(found) == 1:
-        return found[0]
-    raise CalibrationDirectoryError(
-        f"calibration directory {str(d)!r} has no {MANIFEST} and no single calibrated URDF "
-        f"({model}_calibrated.urdf or {model}.urdf; found {[p.name for p in found]})"
-    )
-
-
-def _noise(entry: object, where: str) -> NoiseModel | None:
-    if entry is None:
-        return None
-    try:
-        return NoiseModel(float(entry["position_mm"]), float(entry["orientation_mrad"]))  # type: ignore[index]
-    except (TypeError, KeyError, ValueError) as exc:
-        raise CalibrationDirectoryError(
-            f"{where}: 'noise' must be {{position_mm, orientation_mrad}}; got {entry!r}"
-        ) from exc
-
-
 def read_calibration(path: str | Path, *, verify: bool = True) -> CalibrationDirectory:
     """Read a calibration directory (see the module doc).
 
@@ -336,9 +338,11 @@ def read_calibration(path: str | Path, *, verify: bool = True) -> CalibrationDir
         The :class:`CalibrationDirectory`.
 
     Raises:
-        CalibrationDirectoryError: the directory or a file is missing (named), the manifest
-            is of another format or a newer version, or a file was changed after writing.
-        ReportError: a malformed ``identification.json``.
+        CalibrationDirectoryError: no valid manifest (then it is not a calibration), a
+            file is missing, a link, too large or changed after writing (named), the
+            manifest is of another format, a newer version or malformed, or the files of
+            the directory disagree (values, covariance; see
+            :mod:`pincal.io._calibration_checks`).
     """
     d = Path(path)
     if not d.is_dir():
@@ -350,47 +354,44 @@ def read_calibration(path: str | Path, *, verify: bool = True) -> CalibrationDir
         raise CalibrationDirectoryError(f"calibration directory {str(d)!r} does not exist{hint}")
     ident_path = d / IDENTIFICATION_FILE
     if not (d / MANIFEST).is_file():
-        if not ident_path.is_file():
-            raise CalibrationDirectoryError(
-                f"{str(d)!r} is not a calibration directory: it has neither {MANIFEST} nor "
-                f"{IDENTIFICATION_FILE} (write one with `pincal calibrate MODEL --data FILE "
-                f"--out {d}`)"
-            )
-        result = IdentificationResult.from_dict(_load_json(ident_path), source=str(ident_path))
-        manifest = {"model": result.model, "preset": result.preset, "legacy": True}
-        return CalibrationDirectory(d, manifest, result, _legacy_urdf(d, result.model), None, True)
-    manifest = _load_json(d / MANIFEST)
+        raise CalibrationDirectoryError(
+            f"{str(d)!r} is not a calibration directory: it has no {MANIFEST}, the manifest "
+            f"that proves pincal wrote it (write one with `pincal calibrate MODEL --data FILE "
+            f"--out {d}`)"
+        )
+    manifest = load_json(d / MANIFEST)
     where = str(d / MANIFEST)
     if manifest.get("format") != CALIBRATION_FORMAT:
         raise CalibrationDirectoryError(
-            f"{where}: format {manifest.get('format')!r}, expected {CALIBRATION_FORMAT!r}"
+            f"{where}: format {clip(repr(manifest.get('format')))}, expected {CALIBRATION_FORMAT!r}"
         )
     version = manifest.get("version")
-    if not isinstance(version, int) or version > CALIBRATION_VERSION:
+    if not isinstance(version, int) or isinstance(version, bool) or version > CALIBRATION_VERSION:
         raise CalibrationDirectoryError(
-            f"{where}: format version {version!r}; this pincal reads versions ≤ "
+            f"{where}: format version {clip(repr(version))}; this pincal reads versions ≤ "
             f"{CALIBRATION_VERSION} (upgrade pincal)"
         )
-    files = manifest.get("files") or {}
-    needed = {CALIBRATED_URDF, IDENTIFICATION_FILE} | set(files)
-    missing = sorted(n for n in needed if not (d / n).is_file())
+    files = check_files_map(manifest.get("files"), where, (CALIBRATED_URDF, IDENTIFICATION_FILE))
+    missing = sorted(n for n in files if not (d / n).exists() and not (d / n).is_symlink())
     if missing:
         raise CalibrationDirectoryError(
             f"calibration directory {str(d)!r} is incomplete: missing {missing} "
             f"(copy the whole directory, not single files)"
         )
+    for n in files:
+        check_listed_file(d / n)
     if verify:
-        changed = sorted(n for n, h in files.items() if sha256_file(d / n) != h)
+        changed = sorted(n for n, h in files.items() if hash_bounded(d / n) != h)
         if changed:
             raise CalibrationDirectoryError(
                 f"calibration directory {str(d)!r}: {changed} changed after it was written "
                 f"(SHA-256 mismatch); re-run `pincal calibrate` or restore the files"
             )
-    result = IdentificationResult.from_dict(_load_json(ident_path), source=str(ident_path))
-    names = [p.get("name") for p in manifest.get("parameters", [])]
-    if names and tuple(names) != tuple(result.identified_names):
-        raise CalibrationDirectoryError(
-            f"{where}: parameters {names[:3]}… differ from {IDENTIFICATION_FILE}'s"
-        )
-    noise = _noise(manifest.get("noise"), where)
+    result = read_result(ident_path)
+    check_parameters(manifest, result, where, IDENTIFICATION_FILE)
+    check_covariance(result, str(ident_path))
+    for key in ("model", "model_source", "preset"):
+        if manifest.get(key) is not None and not isinstance(manifest[key], str):
+            raise CalibrationDirectoryError(f"{where}: {key!r} must be a string")
+    noise = read_noise(manifest.get("noise"), where)
     return CalibrationDirectory(d, manifest, result, d / CALIBRATED_URDF, noise)

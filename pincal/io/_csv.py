@@ -133,6 +133,15 @@ def split_file(path: str | Path, magic: str) -> tuple[Header, list[str], list[li
                     raise MeasurementFormatError(
                         f"{name} line {n}: this is a {clip(text)} file, expected 'pincal {magic}'"
                     )
+                version = text.split()[2:3]
+                if version and version != ["1"]:
+                    v = version[0]
+                    newer = v.isdigit() and int(v) > 1
+                    raise MeasurementFormatError(
+                        f"{name} line {n}: format version {clip(v)}"
+                        + ("; this pincal reads version 1 (upgrade pincal)" if newer
+                           else f" is not valid; the first line is '# pincal {magic} 1'")
+                    )  # fmt: skip
                 seen_magic = True
                 continue
             if ":" in text:
@@ -145,6 +154,19 @@ def split_file(path: str | Path, magic: str) -> tuple[Header, list[str], list[li
     if not body:
         raise MeasurementFormatError(f"{name}: no column line and no data rows")
     columns = split_columns(body[0][1], f"{name} line {body[0][0]}")
+    if len(columns) == 1 and (";" in columns[0] or "\t" in columns[0]):
+        sep = "';'" if ";" in columns[0] else "tabs"
+        raise MeasurementFormatError(
+            f"{name} line {body[0][0]}: the columns are separated by {sep}; a pincal "
+            f"{magic} file separates them by ',' (with '.' as the decimal point)"
+        )
+    empty = [k for k, c in enumerate(columns, start=1) if not c.strip()]
+    if empty:
+        trailing = " (a trailing ',' at the end of the line?)" if empty[-1] == len(columns) else ""
+        raise MeasurementFormatError(
+            f"{name} line {body[0][0]}: column {empty[0]} of {len(columns)} has no title"
+            f"{trailing}; every column needs a title such as x or x [mm]"
+        )
     return header, columns, _rows(body[1:], name)
 
 

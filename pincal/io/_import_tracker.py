@@ -266,9 +266,31 @@ def _assign(points: Table, log: Table, opts: TrackerImportOptions):
                 f"the time between poses",
                 points_lines=lines,
             )
+    if pk["pose"] is not None and lk["pose"] is not None:
+        _check_ids_agree(points, log, owner, pk["pose"], lk["pose"])
     ids = [log.rows[i][lcol].strip() for i in range(n_log)]
     ok = offset[owner >= 0]
     return mode, owner, ids, float(ok.max()) if ok.size else None
+
+
+def _check_ids_agree(points: Table, log: Table, owner: np.ndarray, pcol: int, lcol: int) -> None:
+    """Points paired by time carry the pose id of their log row (when both files have ids)."""
+    bad = [
+        i
+        for i, r in enumerate(owner)
+        if r >= 0 and _norm_id(points.text(i, pcol)) != _norm_id(log.text(int(r), lcol))
+    ]
+    if bad:
+        i, r = bad[0], int(owner[bad[0]])
+        lines = [points.lines[k] for k in bad]
+        raise ImportMatchError(
+            f"{points.name}: matching by time pairs {len(bad)} points with a log row of "
+            f"another pose id, e.g. line {points.lines[i]} (pose "
+            f"{shown(points.text(i, pcol))}) with {log.name} line {log.lines[r]} (pose "
+            f"{shown(log.text(r, lcol))}); both files give pose ids and times, and they "
+            "must agree: fix the ids or the clocks, or match by pose (--match pose)",
+            points_lines=lines,
+        )
 
 
 def import_tracker(

@@ -37,7 +37,6 @@ other units scale by powers of ten and round-trip to one unit in the last place.
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -139,6 +138,13 @@ def _components(header: Header, name: str) -> list[str]:
     return [c for c in COMPONENTS if c in comps]
 
 
+#: largest |measured coordinate| [m]: beyond, a cell is a typo (and spreads overflow)
+MAX_COORDINATE = 1e4
+
+#: a declared noise σ [mm, mrad] is 0 or in this range (1 nm .. 1 m)
+NOISE_RANGE = (1e-6, 1e3)
+
+
 def _parse_noise(header: Header, name: str) -> NoiseModel | None:
     if "noise" not in header:
         return None
@@ -154,8 +160,12 @@ def _parse_noise(header: Header, name: str) -> NoiseModel | None:
                 f"{name}: noise entry {shown(item)} is not a number; write e.g. position_mm=0.01"
             )
         sigma = float(v)
-        if not (math.isfinite(sigma) and sigma >= 0):
-            raise MeasurementFormatError(f"{name}: noise entry {shown(item)} must be finite, ≥ 0")
+        lo, hi = NOISE_RANGE
+        if not (sigma == 0 or lo <= sigma <= hi):
+            raise MeasurementFormatError(
+                f"{name}: noise entry {shown(item)} must be 0 or between {lo:g} and {hi:g} "
+                "(mm, mrad); a σ outside makes the weights under- or overflow"
+            )
         vals[key.split("_")[0]] = sigma
     return NoiseModel(vals.get("position", 0.0), vals.get("orientation", 0.0))
 
@@ -234,6 +244,16 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
     else:
         comps = _components(header, name)
         positions = take(["x", "y", "z"], "position") / lf
+        far = np.argwhere(np.abs(positions) > MAX_COORDINATE)
+        if far.size:
+            i, j = far[0]
+            raise BadValueError(
+                f"{name} data row {i + 1}, column {'xyz'[j]!r}: {positions[i, j]:g} m is more "
+                f"than {MAX_COORDINATE / 1e3:g} km from the origin; check the value and the "
+                "length unit",
+                int(i) + 1,
+                "xyz"[j],
+            )
         rotations = None
         orient = header_value(header, "orientation", "rotvec", name)
         if orient not in ORIENTATIONS:
@@ -258,11 +278,14 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
         if any(c in col for c in std_cols):
             std = take(std_cols, "standard deviation")
             std = std / np.array([lf if c in "xyz" else af for c in comps])
-            bad = np.argwhere(std <= 0)
+            lo, hi = NOISE_RANGE
+            bad = np.argwhere(~((std * 1e3 >= lo) & (std * 1e3 <= hi)))  # mm, mrad
             if bad.size:
                 i, j = bad[0]
                 raise BadValueError(
-                    f"{name} data row {i + 1}, column {shown(std_cols[j])}: std must be > 0",
+                    f"{name} data row {i + 1}, column {shown(std_cols[j])}: std must be "
+                    f"between {lo:g} and {hi:g} mm (mrad for angles); a σ outside makes the "
+                    "weights under- or overflow",
                     int(i) + 1,
                     std_cols[j],
                 )

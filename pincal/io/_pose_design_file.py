@@ -58,7 +58,10 @@ def write_pose_design(
         out.with_suffix(".commands.csv"), c.actuated, c.q_act, actuator_units=actuator_units
     )
     sel = design.selection
+    from pincal import __version__
+
     record = {
+        "written_by": f"pincal {__version__}",  # recognised as pincal's when replaced
         "units": "SI (m, rad)",
         "actuated": list(c.actuated),
         "count": len(c),

@@ -72,7 +72,38 @@ def build_model(urdf_xml: str, tree: UrdfTree, sidecar: Sidecar) -> tuple[pin.Mo
             for n, k in zip(sidecar.joint_name, sidecar.joint_type, strict=True)
         ]
     notes += _open_zero_ranges(model, sidecar)
+    notes += _mimic_notes(urdf_xml, tree, list(model.names)[1:])
     return model, notes
+
+
+_mimics_told: set[tuple[str, str]] = set()  # (robot, joint) already warned about
+
+
+def _mimic_notes(urdf_xml: str, tree: UrdfTree, movable: list[str]) -> list[str]:
+    """A note (and one warning per process) per movable joint with a ``<mimic>``.
+
+    Pinocchio builds it as an independent joint: the coupling is not modelled.
+    """
+    if "<mimic" not in urdf_xml:
+        return []
+    import xml.etree.ElementTree as ET
+
+    notes = []
+    for e in ET.fromstring(urdf_xml).iter("joint"):
+        mimic = e.find("mimic")
+        name = e.get("name", "")
+        if mimic is None or name not in movable:
+            continue
+        note = (
+            f"joint {name!r} mimics {mimic.get('joint')!r} in the URDF; pincal moves it as an "
+            "independent joint (the <mimic> coupling is not modelled): its value is needed "
+            "in every pose like any other joint's"
+        )
+        notes.append(note)
+        if (tree.name, name) not in _mimics_told:
+            _mimics_told.add((tree.name, name))
+            log.warning("%s", note)
+    return notes
 
 
 def _replace_joints(model: pin.Model, tree: UrdfTree, sidecar: Sidecar) -> pin.Model:

@@ -81,6 +81,18 @@ def _check_host(host: str) -> str:
             f"--host {clip(host)} is not an IPv4 address; give 127.0.0.1 (loopback, the "
             f"default) or the address of one local interface (0.0.0.0: every interface)"
         )
+    if not addr.is_unspecified:  # an address no interface holds fails here, not port by port
+        import socket
+
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+            try:
+                probe.bind((str(addr), 0))
+            except OSError as exc:
+                raise VisualizationError(
+                    f"--host {clip(host)} is not an address of this machine ({exc.strerror}); "
+                    "give 127.0.0.1 (loopback, the default), the address of one local "
+                    "interface, or 0.0.0.0 (every interface)"
+                ) from None
     if not addr.is_loopback:
         log.warning("the meshcat server listens on %s: reachable from other machines", host)
     return str(addr)

@@ -117,17 +117,14 @@ def test_rewriting_replaces_an_old_calibration(wedge_result, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cal"]
 
 
-def test_reads_a_pincal_01_directory(wedge_result, tmp_path):
+def test_a_directory_without_manifest_is_not_a_calibration(wedge_result, tmp_path):
+    """The pre-manifest layout is not read: nothing would prove its files belong together."""
     _, result, _ = wedge_result
     d = tmp_path / "old"
     d.mkdir()
     save_urdf(result.calibrated, d / "wedge3_calibrated.urdf")
     (d / "identification.json").write_text(json.dumps(result.to_dict()))
-    cal = read_calibration(d)
-    assert cal.legacy and cal.calibrated_urdf.name == "wedge3_calibrated.urdf"
-    row = sample_actuators(cal.nominal(), 1, np.random.default_rng(1))[0]
-    np.testing.assert_allclose(
-        cal.calibrated().forward(row).translation,
-        result.calibrated.forward(row).translation,
-        atol=1e-12,
-    )
+    with pytest.raises(CalibrationDirectoryError, match="has no calibration.json, the manifest"):
+        read_calibration(d)
+
+

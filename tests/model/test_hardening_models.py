@@ -3,6 +3,7 @@ numbers and a pose workspace off home's assembly branch. Library and CLI for eac
 
 from __future__ import annotations
 
+import json
 import os
 import threading
 from pathlib import Path
@@ -247,8 +248,11 @@ def test_identifiability_parameter_count_is_bounded(monkeypatch):
     monkeypatch.setenv("PINCAL_MAX_PARAMETERS", str(len(params) - 1))
     with pytest.raises(InputLimitError, match=rf"{len(params)} parameters in set 'full'"):
         identifiability(mech, params, rng=np.random.default_rng(0))
-    line = cli_error(["info", "stewart_6ups", "--json"], "InputLimitError")
-    assert "PINCAL_MAX_PARAMETERS" in line and "stewart_6ups" in line
+    res = CliRunner().invoke(main, ["info", "stewart_6ups", "--json"])  # error as JSON
+    assert res.exit_code == 1, res.output
+    err = json.loads(res.stdout)["error"]
+    assert err["type"] == "InputLimitError"
+    assert "PINCAL_MAX_PARAMETERS" in err["message"] and "stewart_6ups" in err["message"]
 
 
 def test_limit_variables_must_be_positive_integers(monkeypatch):

@@ -1,0 +1,78 @@
+"""May ``calibrate --out DIR`` replace DIR? Only when pincal wrote it (and only its files).
+
+The manifest (``calibration.json`` with format ``pincal calibration`` and a ``files``
+map) proves pincal wrote a directory. An entry it does not list, other than the files
+other pincal commands put there (:data:`PINCAL_EXTRAS`), is a user's file: replacing the
+directory would delete it, so the write is refused, naming it. Anything else that
+exists at DIR (a file, a non-empty directory without a valid manifest) is refused too.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from pincal._files import read_text
+from pincal.errors import CalibrationDirectoryError, PincalError, clip
+
+__all__ = ["PINCAL_EXTRAS", "check_replaceable"]
+
+_FORMAT = "pincal calibration"  # pincal.io._calibration_dir._FORMAT
+_MANIFEST = "calibration.json"
+
+
+def _manifest(out: Path) -> dict:
+    try:
+        doc = json.loads(
+            read_text(out / _MANIFEST, "manifest", 50_000_000, CalibrationDirectoryError)
+        )
+    except (PincalError, ValueError, RecursionError):
+        return {}
+    return doc if isinstance(doc, dict) else {}
+
+
+#: files other pincal commands put into a calibration directory (``pincal report``,
+#: ``pincal run``); stale once the calibration is replaced, so replaced with it
+PINCAL_EXTRAS = frozenset({"campaign.yaml", "report.html", "report.md", "report.json"})
+
+
+def check_replaceable(out: str | Path) -> None:
+    """Refuse, before any work, an ``--out`` that :func:`write_calibration` would refuse.
+
+    Raises:
+        CalibrationDirectoryError: ``out`` is a file, a non-empty directory without a valid
+            manifest, or a calibration directory holding files pincal did not write.
+    """
+    _check_replaceable(Path(out).resolve())
+
+
+def _check_replaceable(out: Path) -> None:
+    """Refuse to replace anything but a calibration directory pincal wrote, or an empty one.
+
+    The manifest proves pincal wrote the directory; any entry it does not list (other
+    than :data:`PINCAL_EXTRAS`) is a user's file and would be deleted: refused, named.
+    """
+    if not out.exists():
+        return
+    if not out.is_dir():
+        raise CalibrationDirectoryError(
+            f"--out {str(out)!r} exists and is not a directory; choose a new --out directory"
+        )
+    entries = sorted(p.name for p in out.iterdir())
+    if not entries:
+        return
+    manifest = _manifest(out) if (out / _MANIFEST).is_file() else {}
+    files = manifest.get("files")
+    if manifest.get("format") != _FORMAT or not isinstance(files, dict):
+        raise CalibrationDirectoryError(
+            f"--out {str(out)!r} is a non-empty directory ({len(entries)} entries) without "
+            f"a valid {_MANIFEST}, so not a calibration directory pincal wrote; it is never "
+            "replaced: choose a new --out directory"
+        )
+    foreign = [n for n in entries if n not in files and n != _MANIFEST and n not in PINCAL_EXTRAS]
+    if foreign:
+        raise CalibrationDirectoryError(
+            f"--out {str(out)!r} is a calibration directory that also holds files pincal did "
+            f"not write ({clip(', '.join(foreign), 200)}); replacing it would delete them: "
+            "move them out or choose a new --out directory"
+        )
