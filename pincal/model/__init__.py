@@ -34,6 +34,8 @@ from pincal.model._dh_model import (
     dh_urdf,
     parameters_to_dh_errors,
 )
+from pincal.model._floor import DEFAULT_FLOOR, above_floor
+from pincal.model._home_search import conditioning, regular_home
 from pincal.model._kinematics import Kinematics
 from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
@@ -61,8 +63,6 @@ from pincal.model._serial import (
     with_joint_origin,
     wrap_base_tool,
 )
-from pincal.model._floor import DEFAULT_FLOOR, above_floor
-from pincal.model._home_search import conditioning, regular_home
 from pincal.model._sidecar import (
     JOINT_KINDS,
     Sidecar,

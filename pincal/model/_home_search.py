@@ -11,12 +11,14 @@ Search (deterministic): home itself and 512 candidates home + k·15° (k an inte
 ``numpy.random.default_rng(0)``; a candidate counts when it is inside the sampling
 ranges and, with a floor (:mod:`pincal.model._floor`), keeps the moving points above it.
 The chosen home is the counting candidate nearest home (Euclidean norm of the joint
-change) whose σ_min is at least half the best one found: well-conditioned, yet near
-where the URDF put the arm.
+change) whose σ_min is at least half the best one found, then moved back toward home
+one 15° step of one joint at a time while it still counts and keeps that σ_min:
+well-conditioned, yet near where the URDF put the arm (joints that do not help stay).
 """
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -55,7 +57,7 @@ def _chain_length(mech: Mechanism) -> float:
     while j > 0:
         points.append(data.oMi[j].translation)
         j = model.parents[j]
-    length = sum(float(np.linalg.norm(a - b)) for a, b in zip(points, points[1:], strict=False))
+    length = sum(float(np.linalg.norm(a - b)) for a, b in itertools.pairwise(points))
     return max(length, 1e-3)
 
 
@@ -87,19 +89,35 @@ def regular_home(mech: Mechanism, ranges: np.ndarray, floor: float | None) -> Re
     steps = rng.integers(-STEPS, STEPS + 1, size=(CANDIDATES, start.size)) * revolute
     candidates = np.vstack([start, start + STEP * steps])
     points = moving_points(mech) if floor is not None else np.zeros(0, dtype=int)
-    scores = np.full(len(candidates), -1.0)
-    for k, row in enumerate(candidates):
+
+    def score(row: np.ndarray) -> float:
+        """σ_min at ``row``, −1 outside the ranges or below the floor."""
         if np.any(row < ranges[:, 0]) or np.any(row > ranges[:, 1]):
-            continue
+            return -1.0
         q = mech.with_actuators(mech.q_home, row)
-        if points.size and point_heights(mech, q, points).min() < floor:
-            continue
-        scores[k] = conditioning(mech, q, L)
-    good = np.flatnonzero(scores >= SHARE * scores.max()) if scores.max() > 0 else np.zeros(1, int)
-    distance = np.linalg.norm(candidates[good] - start, axis=1)
-    best = int(good[np.argmin(distance)])
+        if floor is not None and points.size and point_heights(mech, q, points).min() < floor:
+            return -1.0
+        return conditioning(mech, q, L)
+
+    scores = np.array([score(row) for row in candidates])
     at_start = conditioning(mech, mech.q_home, L)
-    return RegularHome(candidates[best], float(scores[best]), at_start if at_start > 1e-9 else 0.0)
+    if scores.max() <= 0:
+        return RegularHome(start, max(float(scores[0]), 0.0), at_start if at_start > 1e-9 else 0.0)
+    good = np.flatnonzero(scores >= SHARE * scores.max())
+    best = int(good[np.argmin(np.linalg.norm(candidates[good] - start, axis=1))])
+    row, sigma = candidates[best].copy(), float(scores[best])
+    moved = True
+    while moved:  # back toward the start, one step of one joint at a time
+        moved = False
+        for j in np.flatnonzero(np.abs(row - start) > 1e-12):
+            trial = row.copy()
+            trial[j] -= STEP * np.sign(row[j] - start[j])
+            if abs(trial[j] - start[j]) < 1e-9:
+                trial[j] = start[j]
+            trial_sigma = score(trial)
+            if trial_sigma >= SHARE * scores.max():
+                row, sigma, moved = trial, trial_sigma, True
+    return RegularHome(row, sigma, at_start if at_start > 1e-9 else 0.0)
 
 
 def by_name_defaults(
@@ -141,8 +159,8 @@ def by_name_defaults(
     side["home"] = {n: float(v) for n, v in zip(mech.actuated, found.q_act, strict=True)}
     degrees = ", ".join(f"{n} = {np.degrees(v):.0f}°" for n, v in side["home"].items() if v)
     notes.append(
-        f"home: {degrees} (no SRDF reference pose; searched near q = 0 for a regular "
-        f"configuration of {mech.measured_frame!r}: smallest singular value of the "
+        f"home: {degrees}, other joints 0 (no SRDF reference pose; searched near q = 0 for a "
+        f"regular configuration of {mech.measured_frame!r}: smallest singular value of the "
         f"length-scaled Jacobian {found.sigma_start:.2g} at q = 0, {found.sigma:.2g} there; "
         f"a sidecar 'home' wins)"
     )

@@ -181,7 +181,7 @@ def _workspace(v: Any) -> Workspace:
             f"0.05) or false (no floor check), got {_q(floor)}"
         )
     off = floor is None or floor is False  # `floor: 0` is a floor at the base plane
-    return Workspace(parts["pose"], parts["joints"], None if off else float(floor))
+    return Workspace(parts["pose"], parts["joints"], None if off else float(floor or 0.0))
 
 
 def _presets(v: Any) -> dict[str, list[Any]]:
