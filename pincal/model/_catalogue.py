@@ -127,7 +127,9 @@ def load_mechanism(
     joints that move the measured frame are actuated and the measured frame is chosen
     by name (effector, ee, tcp, tool, flange, platform...) or as the deepest leaf link
     without a closure. An example-robot-data robot without a sidecar takes its home
-    from the package's SRDF; ``mech.notes`` says what was loaded and assumed.
+    from the package's SRDF, else a searched regular one, and an open chain standing on
+    its base a floor (:mod:`pincal.model._home_search`, :mod:`pincal.model._floor`);
+    ``mech.notes`` says what was loaded and assumed.
 
     Args:
         spec: the model.
