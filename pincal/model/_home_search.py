@@ -159,7 +159,7 @@ def by_name_defaults(
     side["home"] = {n: float(v) for n, v in zip(mech.actuated, found.q_act, strict=True)}
     degrees = ", ".join(f"{n} = {np.degrees(v):.0f}°" for n, v in side["home"].items() if v)
     notes.append(
-        f"home: {degrees}, other joints 0 (no SRDF reference pose; searched near q = 0 for a "
+        f"home (searched): {degrees}, other joints 0 (no SRDF reference pose; near q = 0, a "
         f"regular configuration of {mech.measured_frame!r}: smallest singular value of the "
         f"length-scaled Jacobian {found.sigma_start:.2g} at q = 0, {found.sigma:.2g} there; "
         f"a sidecar 'home' wins)"

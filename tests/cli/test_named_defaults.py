@@ -36,7 +36,7 @@ def lowest_point(mech: Mechanism, q_act: np.ndarray) -> float:
 def test_arm_by_name_gets_a_regular_home_and_poses_above_the_floor(robot, tmp_path):
     res = run(["info", robot])
     assert res.exit_code == 0, res.output
-    assert "searched near q = 0 for a regular configuration" in res.output
+    assert "home (searched): " in res.output and "regular configuration of" in res.output
     assert "home is a singular" not in res.output
     assert f"{DEFAULT_FLOOR * 1e3:.0f} mm above the base plane" in res.output
     mech = load_mechanism(robot)
@@ -50,6 +50,7 @@ def test_arm_by_name_gets_a_regular_home_and_poses_above_the_floor(robot, tmp_pa
     res = run(["poses", robot, "--count", "12", "--out", str(tmp_path / "p.csv")])
     assert res.exit_code == 0, res.output
     assert "below floor" in res.output
+    assert "pincal: note: home (searched): " in res.stderr  # every command says it
     posed = read_pose_file(tmp_path / "p.csv").q_act
     assert posed is not None and len(posed) == 12
     for rows in (read_measurements(tmp_path / "m.csv", mech).q_act, posed):
@@ -83,7 +84,7 @@ def test_a_sidecar_home_and_floor_win(tmp_path):
     )
     res = run(["info", "ur5", "--sidecar", str(side)])
     assert res.exit_code == 0, res.output
-    assert "searched near q = 0" not in res.output and "above the base plane" not in res.output
+    assert "home (searched)" not in res.output and "above the base plane" not in res.output
     mech = load_mechanism("ur5", sidecar=side)
     got = dict(zip(mech.actuated, mech.actuators_of(mech.q_home), strict=True))
     assert got == pytest.approx({**dict.fromkeys(mech.actuated, 0.0), **home})

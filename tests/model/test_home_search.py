@@ -33,6 +33,7 @@ def arm(side: dict | None = None) -> Mechanism:
 
 def fd_sigma(mech: Mechanism, q_act: np.ndarray, h: float = 1e-6) -> float:
     """σ_min of the finite-difference tool-position Jacobian over the chain length."""
+
     def tip(q: np.ndarray) -> np.ndarray:
         return mech.frame_placement(mech.with_actuators(mech.q_home, q)).translation
 
