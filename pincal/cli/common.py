@@ -182,7 +182,7 @@ def load_model(spec: str, opts: ModelOptions | None = None, quiet: bool = False)
     mech = load_mechanism(spec, opts.frame, sidecar=opts.sidecar, lock=opts.lock or None)
     if not quiet:
         for note in mech.notes:
-            if note.startswith(("model ", "home is a singular")):
+            if note.startswith(("model ", "home is a singular", "home (searched)")):
                 click.echo(f"pincal: note: {note}", err=True)
     return mech
 

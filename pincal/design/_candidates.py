@@ -39,6 +39,7 @@ from pincal.errors import (
     PincalError,
     SingularConfigurationError,
 )
+from pincal.model import above_floor
 from pincal.model._closures import COMPONENTS
 from pincal.model._mechanism import WORKSPACE_POSE_KEYS, Mechanism
 from pincal.model._parameters import ParameterSet
@@ -230,7 +231,9 @@ def evaluate_candidates(
     A row is rejected when its loops do not close (``"no FK"``), the closed
     configuration is singular (``"singular"``), an actuator is outside its limits
     (``"outside limits"``), or, with ``in_workspace`` and a sidecar pose
-    workspace, the measured-frame pose is outside it (``"outside workspace"``).
+    workspace, the measured-frame pose is outside it (``"outside workspace"``), or
+    a moving link frame is below the sidecar's ``workspace.floor`` (``"below floor"``,
+    open chains, see :func:`pincal.model.above_floor`).
     Rows are warm-started from the previous feasible row (the order of a grid
     keeps neighbours close), falling back to the home configuration.
 
@@ -273,6 +276,10 @@ def evaluate_candidates(
         counts[k] = counts.get(k, 0) + v
     total = rows.shape[0]
     inside = np.all((rows >= lo - 1e-12) & (rows <= hi + 1e-12), axis=1)
+    below = np.zeros(total, dtype=bool)  # a moving link frame below workspace.floor
+    if in_workspace and mech.workspace.floor is not None:
+        below = ~above_floor(mech, rows)
+        counts["below floor"] = 0
     parallel = check_n_jobs(n_jobs) != 1 and total > 1
     if parallel:
         Q, solved, R_all, p_all = parallel_rows("fk", mech, rows, n_jobs)
@@ -287,6 +294,9 @@ def evaluate_candidates(
             progress(i + 1, total)
         if not inside[i]:
             counts["outside limits"] += 1
+            continue
+        if below[i]:
+            counts["below floor"] += 1
             continue
         if solved[i]:
             q, p, R = Q[i], p_all[i], R_all[i]

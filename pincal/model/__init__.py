@@ -34,6 +34,8 @@ from pincal.model._dh_model import (
     dh_urdf,
     parameters_to_dh_errors,
 )
+from pincal.model._floor import DEFAULT_FLOOR, above_floor
+from pincal.model._home_search import conditioning, regular_home
 from pincal.model._kinematics import Kinematics
 from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
@@ -82,6 +84,7 @@ from pincal.model._workspace import (
 __all__ = [
     "BASE_JOINT",
     "COMPONENTS",
+    "DEFAULT_FLOOR",
     "DOFS",
     "INSTRUMENT_LINK",
     "JOINT_KINDS",
@@ -106,8 +109,10 @@ __all__ = [
     "UrdfJoint",
     "UrdfTree",
     "Workspace",
+    "above_floor",
     "bundled_models",
     "chain_preset",
+    "conditioning",
     "degenerate_translations",
     "dh_apply_errors",
     "dh_errors_to_parameters",
@@ -129,6 +134,7 @@ __all__ = [
     "parse_components",
     "read_sidecar",
     "register_preset",
+    "regular_home",
     "resolve_model_path",
     "sample_actuators",
     "sample_pose",

@@ -127,7 +127,9 @@ def load_mechanism(
     joints that move the measured frame are actuated and the measured frame is chosen
     by name (effector, ee, tcp, tool, flange, platform...) or as the deepest leaf link
     without a closure. An example-robot-data robot without a sidecar takes its home
-    from the package's SRDF; ``mech.notes`` says what was loaded and assumed.
+    from the package's SRDF, else a searched regular one, and an open chain standing on
+    its base a floor (:mod:`pincal.model._home_search`, :mod:`pincal.model._floor`);
+    ``mech.notes`` says what was loaded and assumed.
 
     Args:
         spec: the model.
@@ -173,11 +175,23 @@ def load_mechanism(
             urdf_xml, side, name=urdf.stem, source=urdf, measured_frame=measured_frame,
             options=options,
         )  # fmt: skip
+    extra: list[str] = []
+    if named.erd_defaults:  # floor and a regular home (see pincal.model._home_search)
+        from pincal.model._home_search import by_name_defaults
+
+        user_ws = read_sidecar(named.local).get("workspace") if named.local else None
+        side, extra = by_name_defaults(mech, side, user_ws)
+        if extra:
+            mech = Mechanism(
+                urdf_xml, side, name=urdf.stem, source=urdf, measured_frame=measured_frame,
+                options=options,
+            )  # fmt: skip
     notes = list(named.notes)
     if locks:
         notes.append(f"locked: {', '.join(f'{k} = {v:.6g}' for k, v in locks.items())}")
     if kept:
         notes.append(turn_note(list(kept)))
+    notes.extend(extra)
     singular = _singular_home(mech) if named.erd_defaults or named.local else None
     if singular:
         notes.append(singular)

@@ -219,7 +219,7 @@ class Mechanism(BatchTracking):
         for k in ws.joints:
             if k not in self.actuated:
                 raise UnknownNameError("actuated joint", k, self.actuated)
-        return Workspace(dict(ws.pose), dict(ws.joints))
+        return Workspace(dict(ws.pose), dict(ws.joints), ws.floor)
 
     def configuration(
         self, q_act: np.ndarray, q_guess: np.ndarray | None = None, pose_index: int | None = None

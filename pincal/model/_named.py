@@ -20,7 +20,10 @@ A robot of example-robot-data without a pincal sidecar gets (each said in a note
 - ``home``: the SRDF reference configuration (``group_state``: ``home``, ``ready``,
   ``default``, ``half_sitting``… else the first) of the package's SRDF for that URDF;
 - sampling ranges: a revolute joint whose URDF range is wider than one turn is sampled
-  over one turn centred on home (angles beyond repeat the same poses).
+  over one turn centred on home (angles beyond repeat the same poses);
+- without an SRDF pose, a searched regular home, and for an open chain standing on its
+  base a floor under drawn poses (applied by :func:`pincal.model.load_mechanism`, see
+  :mod:`pincal.model._home_search`).
 """
 
 from __future__ import annotations

@@ -36,10 +36,14 @@ class Workspace:
         pose: measured-frame pose ranges; keys among x, y, z (world position [m]) and
             rx, ry, rz (rotation vector relative to the home orientation [rad]).
         joints: actuated-joint ranges [m or rad] (URDF limits where not given).
+        floor: height [m] above the base plane z = 0 that every moving link frame and
+            joint origin keeps in drawn poses (see :mod:`pincal.model._floor`); None:
+            no floor (YAML ``floor: false``).
     """
 
     pose: dict[str, tuple[float, float]] = field(default_factory=dict)
     joints: dict[str, tuple[float, float]] = field(default_factory=dict)
+    floor: float | None = None
 
 
 def _is_number(v: Any) -> bool:
@@ -154,8 +158,10 @@ def _workspace(v: Any) -> Workspace:
     if v is None:
         return Workspace()
     if not isinstance(v, Mapping):
-        raise ModelFileError("sidecar 'workspace' must be a mapping with 'pose' and/or 'joints'")
-    _refuse_unknown(v, ("pose", "joints"), "workspace key")
+        raise ModelFileError(
+            "sidecar 'workspace' must be a mapping with 'pose', 'joints' and/or 'floor'"
+        )
+    _refuse_unknown(v, ("pose", "joints", "floor"), "workspace key")
     parts: dict[str, dict[str, tuple[float, float]]] = {}
     for part in ("pose", "joints"):
         ranges = v.get(part)
@@ -168,7 +174,14 @@ def _workspace(v: Any) -> Workspace:
             if part == "pose" and name not in WORKSPACE_POSE_KEYS:
                 _refuse_unknown({name: r}, WORKSPACE_POSE_KEYS, "workspace pose key")
             parts[part][str(name)] = _range(r, f"workspace.{part}[{_q(name)}]")
-    return Workspace(parts["pose"], parts["joints"])
+    floor = v.get("floor")
+    if floor is not None and floor is not False and not _is_number(floor):
+        raise ModelFileError(
+            f"sidecar workspace.floor must be a height [m] above the base plane z = 0 (e.g. "
+            f"0.05) or false (no floor check), got {_q(floor)}"
+        )
+    off = floor is None or floor is False  # `floor: 0` is a floor at the base plane
+    return Workspace(parts["pose"], parts["joints"], None if off else float(floor or 0.0))
 
 
 def _presets(v: Any) -> dict[str, list[Any]]:
@@ -347,6 +360,8 @@ class Sidecar:
             ranges = getattr(self.workspace, part)
             if ranges:
                 ws[part] = {k: list(v) for k, v in ranges.items()}
+        if self.workspace.floor is not None:
+            ws["floor"] = self.workspace.floor
         if ws:
             out["workspace"] = ws
         if self.presets:

@@ -13,6 +13,7 @@ import pinocchio as pin
 
 from pincal.errors import ConvergenceError, ModelFileError, UnreachablePoseError
 from pincal.model._closures import COMPONENTS
+from pincal.model._floor import above_floor, moving_points
 from pincal.model._mechanism import Mechanism
 
 __all__ = ["sample_actuators", "sample_pose"]
@@ -73,7 +74,9 @@ def sample_actuators(
     kinematics; otherwise actuator values are drawn in their ranges and kept when the
     forward kinematics converges away from singularities (in blocks closed by the
     batched solve where the mechanism allows it, else one by one). Infeasible draws
-    are rejected, and so are poses reached only in another assembly mode than home's.
+    are rejected, and so are poses reached only in another assembly mode than home's
+    and, for an open chain with a ``workspace.floor``, poses with a moving link frame
+    below the floor (:mod:`pincal.model._floor`).
 
     Raises:
         ModelFileError: fewer than ``n`` feasible poses in ``max_tries_per_pose · n``
@@ -86,6 +89,7 @@ def sample_actuators(
         return _screened_draws(mech, n, rng, ranges, max_tries_per_pose * n)
     rows: list[np.ndarray] = []
     tries = mirrored = 0
+    points = moving_points(mech) if mech.workspace.floor is not None else None
     while len(rows) < n:
         tries += 1
         if tries > max_tries_per_pose * n:
@@ -106,6 +110,8 @@ def sample_actuators(
             continue
         except ConvergenceError:
             continue
+        if points is not None and not above_floor(mech, q_act, points)[0]:
+            continue  # a link through the floor (workspace.floor)
         rows.append(q_act)
     return np.array(rows)
 
@@ -136,10 +142,13 @@ def _screened_draws(
 
 
 def _infeasible(mech: Mechanism, got: int, n: int, mirrored: int, tries: int) -> str:
+    floor = mech.workspace.floor
     text = (
         f"only {got} of {n} random poses were feasible for {mech.name!r} ({tries} draws); "
         "check the sidecar workspace limits"
     )
+    if floor is not None:
+        text += f" and its floor ({floor:.3g} m above the base plane; 'floor: false' drops it)"
     if mirrored:
         text += (
             f": {mirrored} drawn poses are reached only in another assembly mode than home's "

@@ -53,14 +53,14 @@ def test_ur5_joints_over_one_turn_are_sampled_over_one_turn():
 
 
 def test_a_singular_home_is_said_and_a_sidecar_home_removes_it(tmp_path):
-    # ur5 has no SRDF reference pose: q = 0 (arm stretched) is home, a singular one
-    res = run(["poses", "ur5", "--count", "8", "--out", str(tmp_path / "p.csv")])
+    # a sidecar home wins over the searched one, even a singular one (wrist_2_joint = 0)
+    side = tmp_path / "ur5_cell.yaml"
+    side.write_text("robot: ur5\nhome: {shoulder_lift_joint: -1.2, elbow_joint: 1.5}\n")
+    res = run(["poses", str(side), "--count", "8", "--out", str(tmp_path / "p.csv")])
     assert res.exit_code == 0, res.output
     assert "pincal: note: home is a singular configuration" in res.stderr
     assert "--sidecar FILE" in res.stderr
-    side = tmp_path / "ur5_cell.yaml"
-    side.write_text("robot: ur5\nhome: {shoulder_lift_joint: -1.2, elbow_joint: 1.5}\n")
-    res = run(["info", str(side)])  # the wrist is still singular (wrist_2_joint = 0)
+    res = run(["info", str(side)])
     assert res.exit_code == 0 and "home is a singular configuration" in res.output
     side.write_text(
         "robot: ur5\nhome: {shoulder_lift_joint: -1.2, elbow_joint: 1.5, wrist_2_joint: -1.5}\n"
