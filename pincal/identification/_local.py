@@ -1,8 +1,9 @@
 """Local solvers: damped Gauss–Newton and scipy's Levenberg–Marquardt.
 
 Both minimise ``0.5·‖r_w(x)‖²`` of :class:`pincal.identification.CalibrationProblem`
-over the free parameters. A trial vector whose model cannot be assembled
-(:class:`pincal.ClosureError`) or whose poses cannot be solved
+over the free parameters. A trial vector whose model cannot be built or assembled
+(:class:`pincal.ModelFileError`, :class:`pincal.MobilityError`,
+:class:`pincal.ClosureError`) or whose poses cannot be solved
 (:class:`pincal.ConvergenceError`) is a rejected step, never an error.
 """
 
@@ -106,7 +107,19 @@ def _gauss_newton(
             message, success = "converged (predicted decrease below 1e-12 of the cost)", True
             break
         accepted, alpha, x_try = False, 1.0, x
-        if mu == 0.0:
+        if mu > 0.0 and opts.damping:
+            # damping on: the full Gauss–Newton step is still tried first; when it delivers
+            # a quarter of its predicted decrease the damping is switched off again (else
+            # a damped run crawls on ill-conditioned loops and stops on its iteration limit)
+            x_try = x.copy()
+            x_try[free] += step
+            cost_try = problem.cost(x_try)
+            evals += 1
+            if cost_try < cost and cost - cost_try >= 0.25 * predicted:
+                accepted, mu = True, 0.0
+            else:
+                rejected += 1
+        if mu == 0.0 and not accepted:
             # the full Gauss–Newton step; with damping off, a halving line search
             for _ in range(1 if opts.damping else opts.max_halvings):
                 x_try = x.copy()

@@ -27,7 +27,14 @@ from functools import cached_property
 
 import numpy as np
 
-from pincal.errors import ClosureError, ConvergenceError, MeasurementError, ParameterError
+from pincal.errors import (
+    ClosureError,
+    ConvergenceError,
+    MeasurementError,
+    MobilityError,
+    ModelFileError,
+    ParameterError,
+)
 from pincal.measure._measurements import Measurements, NoiseModel
 from pincal.model._batch import BatchKinematics
 from pincal.model._batch_ops import jlog3_batch, log3_batch
@@ -38,8 +45,11 @@ from pincal.sensitivity._batch_predict import predict_configurations
 
 __all__ = ["BLOCKS", "TRIAL_FAILURES", "CalibrationProblem", "IdentificationProblem"]
 
-#: exceptions that make a trial parameter vector unusable (model not assembled / not solved)
-TRIAL_FAILURES = (ConvergenceError, ClosureError)
+#: exceptions that make a trial parameter vector unusable: the model cannot be built
+#: (ModelFileError), its mobility changes (MobilityError, e.g. an emulated ball joint
+#: whose axes no longer meet), its loops cannot be assembled (ClosureError) or a pose
+#: cannot be solved (ConvergenceError, SingularConfigurationError)
+TRIAL_FAILURES = (ConvergenceError, ClosureError, MobilityError, ModelFileError)
 #: noise blocks: name → measured components of the block
 BLOCKS = {"position": ("x", "y", "z"), "orientation": ("rx", "ry", "rz")}
 
