@@ -154,6 +154,68 @@ def rusr_universal() -> tuple[str, dict]:
     return urdf, sidecar
 
 
+# ------------------------------------------------------------------ RUSR, U joint named UJOINT_ab
+def _frame_for(kind: str) -> np.ndarray:
+    """Rotation of a ``UJOINT_ab`` joint frame in the crank frame: axis a along crank z,
+    the third axis c (normal to a and b) along crank y; b is then along ±x."""
+    a, b = ("xyz".index(ch) for ch in kind[-2:].lower())
+    c = 3 - a - b
+    R = np.zeros((3, 3))
+    R[2, a], R[1, c] = 1.0, 1.0
+    R[:, b] = np.cross(R[:, (b + 1) % 3], R[:, (b + 2) % 3])
+    return R
+
+
+def rusr_ujoint(kind: str = "UJOINT_ZY") -> tuple[str, dict]:
+    """The RUSR four-bar of :func:`rusr_universal` written as the robot.yaml collection
+    writes a U joint: ``joint_type: [<kind>, FIXED]`` with ``kind`` one of UJOINT_XY,
+    UJOINT_YZ, UJOINT_ZY — two revolutes about the joint frame's first then second named
+    axis. The joint ``<origin>`` is rotated so that the first named axis is the crank's
+    z and the coupler runs 0.17 along the joint frame's third axis (the crank's y): the
+    same machine as :func:`rusr_universal` (its second U axis is ±x). The placeholder's
+    ``<axis>`` (1 1 0) is deliberately not one of the named axes: it is not used.
+
+    ``mark`` is a revolute joint (axis 0 1 1, range ±1 rad) that the sidecar locks
+    (``FIXED``): the mark hangs at its origin, as in :func:`rusr_universal`.
+    Measured: position of ``coupler_mark``.
+    """
+    crank_home = 0.5
+    c = np.array([0.05 * np.cos(crank_home), 0.05 * np.sin(crank_home), 0.0])
+    u = np.array([0.1, 1.0, 0.15]) / np.linalg.norm([0.1, 1.0, 0.15])
+    pivot = c + 0.17 * u - np.array([0.0, 0.0, 0.08])
+    R = _frame_for(kind)
+    third = np.zeros(3)
+    third[3 - sum("xyz".index(ch) for ch in kind[-2:].lower())] = 0.17
+    mark = R.T @ np.array([0.02, 0.085, 0.01])
+    urdf = (
+        '<?xml version="1.0"?>\n<robot name="rusr_ujoint">\n'
+        + "".join(
+            _link(n)
+            for n in ("base_link", "crank", "coupler", "coupler_tip", "coupler_mark", "rocker")
+        )
+        + _link("rocker_tip")
+        + _joint("crank_mot", "revolute", "base_link", "crank")
+        + _joint("u_joint", "revolute", "crank", "coupler", _se3(R, (0.05, 0, 0)), "1 1 0")
+        + _joint("coupler_end", "fixed", "coupler", "coupler_tip", _se3(p=third))
+        + _joint("mark", "revolute", "coupler", "coupler_mark", _se3(p=mark), "0 1 1", (-1, 1))
+        + _joint("rocker_pivot", "revolute", "base_link", "rocker", _se3(p=pivot), "1 0 0")
+        + _joint("rocker_end", "fixed", "rocker", "rocker_tip", _se3(p=(0, 0, 0.08)))
+        + "</robot>\n"
+    )
+    sidecar = {
+        "closed_loop": [["coupler_end", "rocker_end"]],
+        "type": ["3D"],
+        "name_mot": ["crank_mot"],
+        "joint_name": ["u_joint", "mark"],
+        "joint_type": [kind, "FIXED"],
+        "measured_frame": "coupler_mark",
+        "measured": "position",
+        "home": {"crank_mot": crank_home},
+        "workspace": {"joints": {"crank_mot": list(RUSR_CRANK_RANGE)}},
+    }
+    return urdf, sidecar
+
+
 # ------------------------------------------------------------------ Delta with 4R parallelograms
 R_BASE, L_ARM, L_ROD, R_PLAT, HALF_W, THETA = 0.2, 0.25, 0.5, 0.05, 0.03, np.radians(30.0)
 
