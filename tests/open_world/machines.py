@@ -216,6 +216,110 @@ def rusr_ujoint(kind: str = "UJOINT_ZY") -> tuple[str, dict]:
     return urdf, sidecar
 
 
+# ------------------------------------------------------------------ 2-RSU ankle of a leg
+ANKLE_MOTOR_RANGE = (-0.3, 0.3)
+"""Motor range [rad] of :func:`ankle_2rsu` when its limits are given."""
+
+
+def ankle_2rsu(zero_limits: bool = False) -> tuple[str, dict]:
+    """A legged robot's parallel ankle, two loops, written as a leg URDF often is.
+
+    The shin (``base_link``) carries the foot on an emulated U joint (``ankle_pitch``
+    about y, then ``ankle_roll`` about x, 0.30 m below the knee-side origin, zero-length
+    link between them) and two motors ``mot_l`` / ``mot_r`` (axis y, at z = −0.05 m,
+    y = ±0.035 m) whose 0.05 m cranks point backwards (−x). Each crank ends in an
+    emulated ball joint (``ball_a_*`` z, ``ball_b_*`` y, ``ball_c_*`` x, zero-length
+    links) carrying a rod whose end (0.015, 0, −0.25) in the rod frame meets the foot
+    point (−0.035, ±0.035, 0) in a ball (``3D`` closure). Both motors turning together
+    pitch the foot, opposite ways roll it; the foot lever (0.035 m) is shorter than the
+    crank, so the motors cannot turn all the way round: turned together, the loops stop
+    closing near +1.24 rad. The rods' spins are idle. The file pose (q = 0) is assembled. Measured:
+    the pose of ``sole`` (0.03, 0, −0.05) on the foot.
+
+    With ``zero_limits`` every revolute has ``<limit lower="0" upper="0">`` (no range,
+    as many exported leg URDFs write it) and the sidecar gives no workspace.
+    """
+    lim = (0.0, 0.0) if zero_limits else None
+    mot = (0.0, 0.0) if zero_limits else ANKLE_MOTOR_RANGE
+    links = ["base_link", "ankle_cross", "foot", "sole"]
+    joints = [
+        _joint(
+            "ankle_pitch",
+            "revolute",
+            "base_link",
+            "ankle_cross",
+            _se3(p=(0, 0, -0.3)),
+            "0 1 0",
+            lim,
+        ),
+        _joint("ankle_roll", "revolute", "ankle_cross", "foot", axis="1 0 0", limit=lim),
+        _joint("sole_joint", "fixed", "foot", "sole", _se3(p=(0.03, 0, -0.05))),
+    ]
+    closures = []
+    for side, y in (("l", 0.035), ("r", -0.035)):
+        links += [f"crank_{side}", f"gimbal1_{side}", f"gimbal2_{side}", f"rod_{side}"]
+        links += [f"rod_end_{side}", f"foot_att_{side}"]
+        joints += [
+            _joint(
+                f"mot_{side}",
+                "revolute",
+                "base_link",
+                f"crank_{side}",
+                _se3(p=(0, y, -0.05)),
+                "0 1 0",
+                mot,
+            ),
+            _joint(
+                f"ball_a_{side}",
+                "revolute",
+                f"crank_{side}",
+                f"gimbal1_{side}",
+                _se3(p=(-0.05, 0, 0)),
+                "0 0 1",
+                lim,
+            ),
+            _joint(
+                f"ball_b_{side}",
+                "revolute",
+                f"gimbal1_{side}",
+                f"gimbal2_{side}",
+                axis="0 1 0",
+                limit=lim,
+            ),
+            _joint(
+                f"ball_c_{side}",
+                "revolute",
+                f"gimbal2_{side}",
+                f"rod_{side}",
+                axis="1 0 0",
+                limit=lim,
+            ),
+            _joint(
+                f"rod_end_{side}",
+                "fixed",
+                f"rod_{side}",
+                f"rod_end_{side}",
+                _se3(p=(0.015, 0, -0.25)),
+            ),
+            _joint(f"foot_att_{side}", "fixed", "foot", f"foot_att_{side}", _se3(p=(-0.035, y, 0))),
+        ]
+        closures.append([f"rod_end_{side}", f"foot_att_{side}"])
+    urdf = (
+        '<?xml version="1.0"?>\n<robot name="ankle_2rsu">\n'
+        + "".join(_link(n) for n in links)
+        + "".join(joints)
+        + "</robot>\n"
+    )
+    sidecar: dict = {
+        "closed_loop": closures,
+        "type": ["3D", "3D"],
+        "name_mot": ["mot_l", "mot_r"],
+        "measured_frame": "sole",
+        "measured": "pose",
+    }
+    return urdf, sidecar
+
+
 # ------------------------------------------------------------------ Delta with 4R parallelograms
 R_BASE, L_ARM, L_ROD, R_PLAT, HALF_W, THETA = 0.2, 0.25, 0.5, 0.05, 0.03, np.radians(30.0)
 
