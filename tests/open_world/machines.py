@@ -439,3 +439,49 @@ def copy_machine(folder: Path, name: str, **sidecar_changes) -> Path:
 FIVEBAR_WORKSPACE = {"joints": {"mot_l": [1.8, 2.2], "mot_r": [0.9, 1.3]}}
 
 MJCF = Path(__file__).parents[1] / "model" / "mjcf"
+
+FOURBAR_KEYFRAME = (-0.4, 1.059932, -0.390232)
+"""(crank, coupler, rocker) [rad] of :func:`mjcf_fourbar_straight`'s keyframe ``home``."""
+
+
+def mjcf_fourbar_straight(
+    keyframe: bool = True, crank_range: str = "-60 -10", coupler_range: str = "-180 180"
+) -> str:
+    """MJCF text of a planar four-bar whose file pose (``qpos0``) is its extended dead
+    point: crank AB = 0.1 m along +y from A = (0, 0), rocker DC = 0.2 m from
+    D = (0.3, 0), coupler BC = |BD| − 0.2 ≈ 0.1162 m, so that B, C and D are collinear at
+    qpos0 and the loop's passive Jacobian loses rank there (the crank cannot turn
+    positive). Written the way MJCF legs are: ``<equality><connect>`` closing the loop,
+    a position actuator on the crank, degrees, a spring (``stiffness="2"``) on the
+    rocker, and — with ``keyframe`` — a ``<keyframe><key name="home">`` at crank −0.4 rad
+    (:data:`FOURBAR_KEYFRAME`). Measured: the coupler site ``tool``.
+    """
+    key = (
+        '  <keyframe><key name="home" qpos="' + " ".join(map(str, FOURBAR_KEYFRAME)) + '"/>'
+        "</keyframe>\n"
+        if keyframe
+        else ""
+    )
+    return f"""<mujoco model="fourbar_straight">
+  <compiler angle="degree"/>
+  <default><joint type="hinge" axis="0 0 1"/></default>
+  <worldbody>
+    <body name="ground" pos="0 0 0.1">
+      <body name="crank" euler="0 0 90">
+        <joint name="crank_joint" range="{crank_range}"/>
+        <body name="coupler" pos="0.1 0 0" euler="0 0 -108.43494882292201">
+          <joint name="coupler_joint" range="{coupler_range}"/>
+          <site name="tool" pos="0.06 0.03 0"/>
+        </body>
+      </body>
+      <body name="rocker" pos="0.3 0 0" euler="0 0 161.565051177078">
+        <joint name="rocker_joint" range="-180 180" stiffness="2"/>
+      </body>
+    </body>
+  </worldbody>
+  <equality>
+    <connect name="pin_C" body1="coupler" body2="rocker" anchor="0.11622776601683793 0 0"/>
+  </equality>
+  <actuator><position name="crank_motor" joint="crank_joint" kp="10"/></actuator>
+{key}</mujoco>
+"""
