@@ -302,6 +302,8 @@ def weighted_fit(
             break
         if rounds >= MAX_ROUNDS or not local:
             break  # a global / planned search is run once (start weights, then estimated)
+        if rounds >= 2 and not out.success:
+            break  # two fits in a row did not converge: more weights will not help
     r_w = raw / model.sigma
     if not red:
         h = hat_diagonal(J[:, fitted]).reshape(raw.shape)

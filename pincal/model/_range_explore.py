@@ -10,9 +10,11 @@ range of actuator k is *explored*: from home, actuator k alone is moved in steps
 ``span / STEPS`` (the others held at home), each configuration solved from the last on
 home's assembly branch (:meth:`Mechanism.configuration`), until the loops stop
 closing, the branch changes or the closure turns singular, or the default span
-:data:`DEFAULT_SPAN` (π/2 rad, 0.1 m) is reached — on each side. The range is the
-last value that closed. A warning says the range was found, not declared, and how to
-declare one.
+:data:`DEFAULT_SPAN` (π/2 rad, 0.1 m) is reached — on each side. Where the loops
+stopped closing, the range ends :data:`BACK_OFF` steps (π/24 rad, 8.3 mm) short of the
+last value that closed: a margin to the edge of the workspace, where poses are
+ill-conditioned and a slightly different machine (a calibration's trial) does not
+close. A warning says the range was found, not declared, and how to declare one.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import numpy as np
 
 from pincal.errors import ConvergenceError, ModelFileError
 
-__all__ = ["DEFAULT_SPAN", "STEPS", "explored_ranges"]
+__all__ = ["BACK_OFF", "DEFAULT_SPAN", "STEPS", "explored_ranges"]
 
 log = logging.getLogger(__name__)
 
@@ -31,24 +33,29 @@ log = logging.getLogger(__name__)
 DEFAULT_SPAN = {"rad": np.pi / 2, "m": 0.1}
 #: continuation steps over the default span
 STEPS = 24
+#: steps given back where the loops stop closing (a margin to the workspace's edge)
+BACK_OFF = 2
 
 
 def _side(mech, k: int, q_home: np.ndarray, q_act0: np.ndarray, sign: float, span: float):
     """Walk actuator k from home towards ``sign``·span.
 
-    Returns the last value that closed and whether the walk stopped early (loops
-    open, branch change, singularity).
+    Returns the end of the range on that side and whether the walk stopped early
+    (loops open, branch change, singularity): then the end is :data:`BACK_OFF` steps
+    short of the last value that closed, so that poses (and the slightly different
+    machines a calibration tries) stay clear of the edge of the workspace.
     """
-    q_prev, value = q_home, float(q_act0[k])
+    q_prev, closed = q_home, 0
     for i in range(1, STEPS + 1):
         trial = q_act0.copy()
         trial[k] = q_act0[k] + sign * span * i / STEPS
         try:
             q_prev = mech.configuration(trial, q_guess=q_prev)
         except ConvergenceError:  # includes SingularConfigurationError
-            return value, True
-        value = float(trial[k])
-    return value, False
+            kept = max(closed - BACK_OFF, 0)
+            return float(q_act0[k] + sign * span * kept / STEPS), True
+        closed = i
+    return float(q_act0[k] + sign * span), False
 
 
 def explored_ranges(mech) -> dict[int, tuple[float, float]]:
