@@ -3,11 +3,12 @@
 Run: python scripts/bench_open_world.py [--poses 500] [--repeats 5]
 
 The machines are the test suite's open-world models (tests/open_world/machines.py,
-tests/model/mjcf/*.xml, tests/model/machines/*): MJCF files, emulated ball joints,
-universal joints, ``6d`` parallelogram cuts, idle passive spins, planar loops with
-redundant rows. For each, ``--poses`` random workspace rows are closed and
-differentiated (``base`` preset) two ways, timed in turns (repeat by repeat, after an
-untimed warm-up call):
+tests/model/mjcf/*.xml, tests/model/machines/*): MJCF files (one with a singular
+``qpos0`` and a keyframe), emulated ball joints, universal joints (pincal's and the
+robot.yaml ``UJOINT_ZY``), a two-loop 2-RSU ankle, ``6d`` parallelogram cuts, idle
+passive spins, planar loops with redundant rows. For each, ``--poses`` random
+workspace rows are closed and differentiated (``base`` preset) two ways, timed in
+turns (repeat by repeat, after an untimed warm-up call):
 
 * pose by pose: ``mech.configuration(row)`` then ``pose_sensitivity`` per row (the
   path every non-square or universal-joint machine took before they were batched);
@@ -42,9 +43,21 @@ from tests.open_world import machines  # noqa: E402
 
 def _machines(folder: Path) -> dict[str, Path]:
     out = {f"mjcf {n}": machines.MJCF / f"{n}.xml" for n in ("fourbar", "fivebar", "delta")}
-    for fn in (machines.rssr_emulated_ball, machines.rusr_universal, machines.delta_4r):
+    for fn in (
+        machines.rssr_emulated_ball,
+        machines.rusr_universal,
+        machines.rusr_ujoint,
+        machines.delta_4r,
+        machines.ankle_2rsu,
+    ):
         urdf, sidecar = fn()
         out[fn.__name__] = machines.write_machine(folder, fn.__name__, urdf, sidecar)
+    straight = folder / "fourbar_straight.xml"  # singular qpos0, keyframe home
+    straight.write_text(machines.mjcf_fourbar_straight(), encoding="utf-8")
+    straight.with_suffix(".yaml").write_text(
+        "measured_frame: tool\nmeasured: position\n", encoding="utf-8"
+    )
+    out["mjcf fourbar_straight"] = straight
     for n in ("fivebar", "rssr", "prs3", "rpr3"):
         out[n] = ROOT / "tests" / "model" / "machines" / n
     return out

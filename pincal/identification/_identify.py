@@ -27,7 +27,7 @@ from pincal.identification._solvers import solver
 from pincal.identification._weighting import Weighting
 from pincal.measure._measurements import Measurements
 from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
+from pincal.model._parameters import ParameterSet, degenerate_translations
 from pincal.sensitivity._batch_jacobian import batch_applies
 from pincal.sensitivity._identifiability import Identifiability, analyse_jacobian
 from pincal.sensitivity._jacobian import closure_breaking
@@ -71,7 +71,8 @@ def _fit_set(
     """Indices fitted and the analysis at the start.
 
     The fitted set is the identifiable base set of ``problem.fit`` without the parameters
-    that break loop closure.
+    that break loop closure and without the translations inside emulated ball or
+    universal joints (:func:`pincal.model.degenerate_translations`), both reported apart.
     """
     params = problem.params
     candidates = problem.fit_indices
@@ -81,7 +82,8 @@ def _fit_set(
     mech = model.mechanism(problem.x0)
     if mech.closures and (mech.n_closure_rows > mech.closure_rank or not batch_applies(mech)):
         breaking = closure_breaking(problem.mech, params, problem.measurements.q_act, problem.x0)
-    ident = analyse_jacobian(J0, params.names, breaks_closure=breaking)
+    splitting = np.isin(params.names, degenerate_translations(problem.mech))
+    ident = analyse_jacobian(J0, params.names, breaks_closure=breaking, splits_joint=splitting)
     if np.array_equal(candidates, np.arange(len(params))):
         sub = ident  # fitting every parameter: the same analysis
     else:
@@ -89,6 +91,7 @@ def _fit_set(
             J0[:, candidates],
             tuple(params.names[i] for i in candidates),
             breaks_closure=breaking[candidates],
+            splits_joint=splitting[candidates],
         )
     n, n_eq = candidates.size, model.n_equations
     if sub.rank < n and sub.rank >= n_eq:
@@ -267,10 +270,13 @@ def _run(problem: IdentificationProblem, method: str, entry: Any, opts: Any, pro
     if free.size < n_fit:
         held = np.setdiff1d(problem.fit_indices, free)
         n_break = int(np.isin(held, ident.breaks_closure).sum())
+        n_split = int(np.isin(held, ident.splits_joint).sum())
+        why = [f"{n_break} break loop closure"] if n_break else []
+        why += [f"{n_split} would split an emulated ball or universal joint"] if n_split else []
         prefix = (
             f"identified the {free.size} base parameters; held {n_fit - free.size} "
             f"unidentifiable ones at their initial values"
-            + (f" ({n_break} break loop closure)" if n_break else "")
+            + (f" ({'; '.join(why)})" if why else "")
             + ". "
         )
         log.info(prefix)

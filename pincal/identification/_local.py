@@ -1,8 +1,9 @@
 """Local solvers: damped Gauss–Newton and scipy's Levenberg–Marquardt.
 
 Both minimise ``0.5·‖r_w(x)‖²`` of :class:`pincal.identification.CalibrationProblem`
-over the free parameters. A trial vector whose model cannot be assembled
-(:class:`pincal.ClosureError`) or whose poses cannot be solved
+over the free parameters. A trial vector whose model cannot be built or assembled
+(:class:`pincal.ModelFileError`, :class:`pincal.MobilityError`,
+:class:`pincal.ClosureError`) or whose poses cannot be solved
 (:class:`pincal.ConvergenceError`) is a rejected step, never an error.
 """
 
@@ -92,6 +93,7 @@ def _gauss_newton(
     message, success = "maximum iterations reached", False
     lam = opts.regularization
     mu = 0.0
+    skip, wait = 0, 1  # iterations until the full step is tried again while damped
     it = 0
     for it in range(1, opts.max_iterations + 1):
         Jf = J[:, free]
@@ -106,7 +108,24 @@ def _gauss_newton(
             message, success = "converged (predicted decrease below 1e-12 of the cost)", True
             break
         accepted, alpha, x_try = False, 1.0, x
-        if mu == 0.0:
+        if mu > 0.0 and opts.damping and skip == 0:
+            # damping on: the full Gauss–Newton step is still tried; when it delivers a
+            # quarter of its predicted decrease the damping is switched off again (else a
+            # damped run can crawl on ill-conditioned loops to its iteration limit). After
+            # a failed try the next one waits twice as many iterations as the last wait.
+            x_try = x.copy()
+            x_try[free] += step
+            cost_try = problem.cost(x_try)
+            evals += 1
+            if cost_try < cost and cost - cost_try >= 0.25 * predicted:
+                accepted, mu, wait = True, 0.0, 1
+            else:
+                rejected += 1
+                wait *= 2
+                skip = wait
+        elif skip > 0:
+            skip -= 1
+        if mu == 0.0 and not accepted:
             # the full Gauss–Newton step; with damping off, a halving line search
             for _ in range(1 if opts.damping else opts.max_halvings):
                 x_try = x.copy()
@@ -123,6 +142,12 @@ def _gauss_newton(
                 alpha *= 0.5
             if not accepted and _at_floor(problem, cost, history[0]):
                 message, success = "converged (solver precision)", True
+                break
+            if not accepted and opts.damping and predicted <= 1e-9 * cost:
+                # the model promises only round-off (the verdict the damped search below
+                # would reach after up to 17 rejected solves): converged at the noise floor
+                message = "converged (noise floor: the step promises below 1e-9 of the cost)"
+                success = True
                 break
             if not accepted and not opts.damping:
                 message = "no decrease along the step"

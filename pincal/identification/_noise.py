@@ -12,6 +12,17 @@ r_b the raw residuals of the block's n_b equations at the fit with the current �
 n_b − tr(H_bb) the block's redundancy (its equations not used up by the fit). With a
 robust loss, equations whose whitened residual exceeds 3 are left out of the estimate
 (and the sum is corrected for the truncated Gaussian tail).
+
+Only the ratio of the blocks' σ changes the fit (a common factor scales the cost, not
+its minimum). For least squares with a local solver the estimate is therefore iterated
+without re-fitting first: on the fit linearised at the current solution (the
+Jacobian and residuals already evaluated there; no kinematics), until the σ ratio
+changes by at most :data:`RATIO_RTOL` (1 %); only then is the model re-fitted,
+warm-started from the current solution (and from its last evaluation, re-weighted),
+and the estimate checked once more on the re-fitted residuals. A well-posed problem
+so needs two fits in all. The estimate has settled when the ratio moved by at most
+``RATIO_RTOL`` between two fits (one block: after one fit); with a robust loss, when
+no block's σ moved by more than :data:`RTOL` (0.1 %).
 """
 
 from __future__ import annotations
@@ -34,13 +45,27 @@ from pincal.identification._weighting import (
     robust_weights,
 )
 
-__all__ = ["MAX_ROUNDS", "RTOL", "initial_weights", "variance_components", "weighted_fit"]
+__all__ = [
+    "MAX_ROUNDS",
+    "RATIO_RTOL",
+    "RTOL",
+    "initial_weights",
+    "variance_components",
+    "weighted_fit",
+]
 
 log = logging.getLogger(__name__)
 #: largest number of re-weighted fits of the noise estimation
 MAX_ROUNDS = 30
-#: the estimate has converged when no block's σ changes by more than this (relative)
+#: with a robust loss, the estimate has settled when no block's σ changes by more than
+#: this (relative) between two fits
 RTOL = 1e-3
+#: least squares: the estimate has settled when the ratio of the blocks' σ changes by at
+#: most this (relative) between two fits. The weighted least-squares solution moves by
+#: about this fraction of its standard deviations per relative change of the ratio, so
+#: the next re-fit would move the parameters by ~1 % of their σ: well inside their
+#: uncertainty, and not worth another fit
+RATIO_RTOL = 1e-2
 
 
 def initial_weights(
@@ -112,6 +137,41 @@ def variance_components(
             var /= TRUNCATED_VARIANCE
         std[b] = max(float(np.sqrt(var)), model.sigma_floor)
     return std, red
+
+
+def _ratio_change(new: dict[str, float], old: dict[str, float]) -> float:
+    """Relative change of the ratio of the blocks' σ (0 for one block)."""
+    q = [new[b] / old[b] for b in new]
+    return max(q) / min(q) - 1.0
+
+
+def _settle_linearised(
+    model: CalibrationProblem, raw: np.ndarray, J_w: np.ndarray, std: dict[str, float]
+) -> dict[str, float]:
+    """Variance components iterated on the fit linearised at the current solution.
+
+    Args:
+        model: the residual model the solution was fitted with (its ``sigma`` whitens
+            ``J_w``).
+        raw: (m, k) raw residuals at the solution [m, rad].
+        J_w: (N, p) whitened Jacobian of the fitted parameters there.
+        std: the first estimate {block: σ} from ``raw``.
+
+    Returns:
+        {block: σ} whose ratio no longer changes (≤ ``RATIO_RTOL``) on the linearised fit.
+    """
+    J_raw = J_w * model.sigma.reshape(-1)[:, None]  # Jacobian of the raw residuals
+    r0 = raw.reshape(-1)
+    for _ in range(MAX_ROUNDS):
+        trial = model.with_block_std(std)
+        w = 1.0 / trial.sigma.reshape(-1)
+        A = J_raw * w[:, None]
+        step = -np.linalg.lstsq(A, r0 * w, rcond=None)[0]
+        new, _ = variance_components(trial, (r0 + J_raw @ step).reshape(raw.shape), A)
+        change, std = _ratio_change(new, std), new
+        if change <= RATIO_RTOL:
+            break
+    return std
 
 
 def _loss(opts: Any) -> tuple[str, float]:
@@ -208,6 +268,7 @@ def weighted_fit(
     converged = not estimating
     red: dict[str, float] = {}
     first, evaluations, rejected = None, 0, 0
+    tol = RATIO_RTOL if loss == "linear" else RTOL
     while True:
         out = entry.solve(model, x, free, opts, progress)
         first = first or out
@@ -224,18 +285,25 @@ def weighted_fit(
             break
         std, red = variance_components(model, raw, J[:, fitted], loss)
         old = model.block_std()
-        change = max(abs(std[b] / old[b] - 1.0) for b in std)
+        exact = all(v <= model.sigma_floor for v in std.values())
+        if loss == "linear":  # only the ratio moves the fit: settle it without kinematics
+            change, tol = _ratio_change(std, old), RATIO_RTOL
+            if local and not exact and change > tol:
+                std = _settle_linearised(model, raw, J[:, fitted], std)
+        else:
+            change, tol = max(abs(std[b] / old[b] - 1.0) for b in std), RTOL
         log.info("noise estimate round %d: %s (change %.2g)", rounds, std, change)
         new = model.with_block_std(std)
         J = J * (model.sigma / new.sigma).reshape(-1)[:, None]
         model = new
-        exact = all(v <= model.sigma_floor for v in std.values())
-        if change <= RTOL or exact or (len(std) == 1 and loss == "linear"):
-            # settled; or data fitted to the solver's precision (weights change nothing);
-            converged = True  # one block and least squares: σ does not move the fit
+        if change <= tol or exact:
+            # settled (one block and least squares: at once, σ does not move the fit);
+            converged = True  # or data fitted to the solver's precision
             break
         if rounds >= MAX_ROUNDS or not local:
             break  # a global / planned search is run once (start weights, then estimated)
+        if rounds >= 2 and not out.success:
+            break  # two fits in a row did not converge: more weights will not help
     r_w = raw / model.sigma
     if not red:
         h = hat_diagonal(J[:, fitted]).reshape(raw.shape)
@@ -259,7 +327,7 @@ def weighted_fit(
     if estimating:
         note = (
             f"noise estimated from the residuals in {rounds} re-weighted fits"
-            + ("" if converged else f" (not settled to {RTOL:g} after {rounds})")
+            + ("" if converged else f" (not settled to {tol:g} after {rounds})")
             + "; "
         )
         extras = first.extras  # a global solver's own extras; local ones summed

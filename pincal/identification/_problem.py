@@ -27,7 +27,14 @@ from functools import cached_property
 
 import numpy as np
 
-from pincal.errors import ClosureError, ConvergenceError, MeasurementError, ParameterError
+from pincal.errors import (
+    ClosureError,
+    ConvergenceError,
+    MeasurementError,
+    MobilityError,
+    ModelFileError,
+    ParameterError,
+)
 from pincal.measure._measurements import Measurements, NoiseModel
 from pincal.model._batch import BatchKinematics
 from pincal.model._batch_ops import jlog3_batch, log3_batch
@@ -38,8 +45,11 @@ from pincal.sensitivity._batch_predict import predict_configurations
 
 __all__ = ["BLOCKS", "TRIAL_FAILURES", "CalibrationProblem", "IdentificationProblem"]
 
-#: exceptions that make a trial parameter vector unusable (model not assembled / not solved)
-TRIAL_FAILURES = (ConvergenceError, ClosureError)
+#: exceptions that make a trial parameter vector unusable: the model cannot be built
+#: (ModelFileError), its mobility changes (MobilityError, e.g. an emulated ball joint
+#: whose axes no longer meet), its loops cannot be assembled (ClosureError) or a pose
+#: cannot be solved (ConvergenceError, SingularConfigurationError)
+TRIAL_FAILURES = (ConvergenceError, ClosureError, MobilityError, ModelFileError)
 #: noise blocks: name → measured components of the block
 BLOCKS = {"position": ("x", "y", "z"), "orientation": ("rx", "ry", "rz")}
 
@@ -131,8 +141,10 @@ class CalibrationProblem:
     def with_block_std(self, std: Mapping[str, float]) -> CalibrationProblem:
         """A copy weighted by one σ per block (``{"position": m, "orientation": rad}``).
 
-        The copy has ``noise_source == "estimated"`` and shares the nominal mechanism
-        and the last configurations (as start guesses) with this one.
+        The copy has ``noise_source == "estimated"`` and shares the nominal mechanism,
+        the last configurations (as start guesses) and the last evaluations (re-weighted:
+        a re-fit from the last solution starts without solving the kinematics again)
+        with this one.
 
         Raises:
             MeasurementError: a measured block without a finite σ > 0.
@@ -145,7 +157,15 @@ class CalibrationProblem:
             sigma[:, cols] = float(v)
         new = CalibrationProblem(self.mech, self.params, self.meas)
         new.sigma, new.noise_source = sigma, "estimated"
-        new._qs = self._qs
+        new._qs, new._solved, new._cache = self._qs, self._solved, self._cache
+        scale = (self.sigma / sigma).reshape(-1)
+        for key, (r_w, J_w, raw, qs, bk) in self._memo.items():  # warm: re-weighted only
+            r_new = r_w * scale
+            J_new = None if J_w is None else J_w * scale[:, None]
+            for a in (r_new, J_new):
+                if a is not None:
+                    a.setflags(write=False)
+            new._memo[key] = (r_new, J_new, raw, qs, bk)
         return new
 
     @property

@@ -9,6 +9,15 @@
   axis; the second is the joint-frame unit vector e that follows a's largest component
   in the cycle x → y → z → x, made perpendicular to a (e − (e·a)a, normalised) — for
   a = z it is x, for x it is y, for y it is z. Rotate the joint ``<origin>`` to orient it.
+  ``ujoint_<a><b>`` (``UJOINT_XY``, ``UJOINT_YZ``, ``UJOINT_ZY``…, the robot.yaml
+  collection's names) is the universal joint of two revolutes about the joint frame's
+  unit axes a, then b (b turned with the first angle), both at the joint origin:
+  ``R = R_a(q1) R_b(q2)`` — the axes are named, the placeholder's ``<axis>`` is not used
+  (so ``ujoint_zy`` differs from ``universal`` on a z axis, whose second axis is x).
+  Its placeholder is any one-dof joint. ``fixed`` locks a one-dof joint at 0: the
+  URDF text is rewritten with the joint ``fixed`` (:func:`lock_joints`), so the child
+  hangs at the joint origin, the joint has the six origin parameters of a fixed joint
+  and the exported calibrated URDF keeps it fixed.
 * A revolute or prismatic joint whose ``<limit>`` has no ``lower``/``upper`` gets the
   URDF default 0/0: a zero-width range means "no range given" and is made unlimited.
   Each such joint yields a note (``Mechanism.notes``, printed by ``pincal info``).
@@ -23,10 +32,10 @@ import pinocchio as pin
 
 from pincal.errors import ModelFileError, UnknownNameError, clip
 from pincal.model._sidecar import Sidecar
-from pincal.model._urdf import UrdfTree
+from pincal.model._urdf import MOVABLE_TYPES, UrdfTree
 from pincal.model._urdf_check import ModelLimits, captured_stderr
 
-__all__ = ["build_model"]
+__all__ = ["build_model", "lock_joints"]
 
 log = logging.getLogger(__name__)
 
@@ -57,7 +66,7 @@ def build_model(urdf_xml: str, tree: UrdfTree, sidecar: Sidecar) -> tuple[pin.Mo
         log.warning("the URDF parser reports for %r: %s", tree.name, clip(said, 2000))
     model = built
     notes: list[str] = []
-    if sidecar.joint_name:
+    if any(k != "fixed" for k in sidecar.joint_type):
         model = _replace_joints(model, tree, sidecar)
         limits = ModelLimits.from_env()
         limits.check(
@@ -67,10 +76,13 @@ def build_model(urdf_xml: str, tree: UrdfTree, sidecar: Sidecar) -> tuple[pin.Mo
             "PINCAL_MAX_DOF",
             f"URDF robot '{clip(tree.name)}'",
         )
-        notes += [
-            f"joint {n!r} is a {k} joint (sidecar joint_type)"
-            for n, k in zip(sidecar.joint_name, sidecar.joint_type, strict=True)
-        ]
+    notes += [
+        f"joint {n!r} is locked at 0 (sidecar joint_type FIXED)"
+        if k == "fixed"
+        else f"joint {n!r} is a {k.upper() if k.startswith('ujoint_') else k} joint "
+        "(sidecar joint_type)"
+        for n, k in zip(sidecar.joint_name, sidecar.joint_type, strict=True)
+    ]
     notes += _open_zero_ranges(model, sidecar)
     notes += _mimic_notes(urdf_xml, tree, list(model.names)[1:])
     return model, notes
@@ -106,8 +118,26 @@ def _mimic_notes(urdf_xml: str, tree: UrdfTree, movable: list[str]) -> list[str]
     return notes
 
 
+def lock_joints(urdf_xml: str, tree: UrdfTree, sidecar: Sidecar) -> tuple[str, UrdfTree]:
+    """The URDF text and tree with the sidecar's ``fixed`` joints locked.
+
+    Unchanged when there are none or they are fixed already.
+
+    Raises:
+        UnknownNameError: a ``fixed`` joint the URDF does not have.
+        ModelFileError: a ``fixed`` joint that is not a one-dof joint.
+    """
+    kinds = zip(sidecar.joint_name, sidecar.joint_type, strict=True)
+    names = [n for n, k in kinds if k == "fixed"]
+    if all(n in tree.joints and tree.joints[n].type == "fixed" for n in names):
+        return urdf_xml, tree
+    return tree.locked(names)
+
+
 def _replace_joints(model: pin.Model, tree: UrdfTree, sidecar: Sidecar) -> pin.Model:
-    kinds = dict(zip(sidecar.joint_name, sidecar.joint_type, strict=True))
+    kinds = {
+        n: k for n, k in zip(sidecar.joint_name, sidecar.joint_type, strict=True) if k != "fixed"
+    }
     movable = list(model.names)[1:]
     for name, kind in kinds.items():
         if name not in tree.joints:
@@ -117,6 +147,12 @@ def _replace_joints(model: pin.Model, tree: UrdfTree, sidecar: Sidecar) -> pin.M
                 f"sidecar joint_name {name!r} is a {tree.joints[name].type} URDF joint, which "
                 f"Pinocchio merges away; declare it as a revolute (any axis) placeholder to make "
                 f"it {kind}"
+            )
+        if kind.startswith("ujoint_") and tree.joints[name].type not in MOVABLE_TYPES:
+            raise ModelFileError(
+                f"sidecar joint_type {kind.upper()!r} for {name!r}: the placeholder must be a "
+                f"one-dof joint (revolute, continuous or prismatic; its <axis> is not used), "
+                f"got a {tree.joints[name].type} joint"
             )
         if kind == "universal" and tree.joints[name].type not in ("revolute", "continuous"):
             raise ModelFileError(
@@ -130,11 +166,14 @@ def _replace_joints(model: pin.Model, tree: UrdfTree, sidecar: Sidecar) -> pin.M
         name = model.names[j]
         placement = model.jointPlacements[j]
         if name in kinds:
-            joint = (
-                _universal(tree.joints[name].axis)
-                if kinds[name] == "universal"
-                else pin.JointModelSpherical()
-            )
+            kind = kinds[name]
+            if kind == "universal":
+                joint = _universal(tree.joints[name].axis)
+            elif kind.startswith("ujoint_"):
+                a, b = (np.eye(3)["xyz".index(c)] for c in kind[-2:])
+                joint = pin.JointModelUniversal(a, b)
+            else:
+                joint = pin.JointModelSpherical()
             jid = new.addJoint(model.parents[j], joint, placement, name)
         else:
             qi, nq, vi, nv = model.idx_qs[j], model.nqs[j], model.idx_vs[j], model.nvs[j]

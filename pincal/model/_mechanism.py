@@ -25,7 +25,7 @@ from pincal.errors import (
     UnreachablePoseError,
 )
 from pincal.model._batch_fk import BatchTracking
-from pincal.model._build import build_model
+from pincal.model._build import build_model, lock_joints
 from pincal.model._closures import (
     COMPONENTS,
     Closure,
@@ -85,13 +85,14 @@ class Mechanism(BatchTracking):
         options: SolverOptions | None = None,
         tree: UrdfTree | None = None,
     ):
-        self.urdf_xml = urdf_xml
-        self.tree = UrdfTree(urdf_xml) if tree is None else tree
         self.sidecar: Sidecar = Sidecar.from_dict(sidecar)
+        self.urdf_xml, self.tree = lock_joints(
+            urdf_xml, UrdfTree(urdf_xml) if tree is None else tree, self.sidecar
+        )
         self.name = name or self.tree.name
         self.source = source
         self.options = options or SolverOptions()
-        model, notes = build_model(urdf_xml, self.tree, self.sidecar)
+        model, notes = build_model(self.urdf_xml, self.tree, self.sidecar)
         self.model = model
         #: remarks about the model (joint kinds from the sidecar, ranges), for `pincal info`
         self.notes: tuple[str, ...] = tuple(notes)

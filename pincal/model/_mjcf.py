@@ -18,7 +18,10 @@ is translated once into the URDF route (models/README.md, section "MJCF"):
   (``relpose``, else the ``qpos0`` relative pose); equality names are kept in the
   sidecar key ``closure_names``;
 * actuators with ``joint=`` give ``name_mot`` (names in ``actuator_names``); the
-  ``home`` guess is the keyframe ``home`` (else the first keyframe, else ``qpos0``).
+  ``home`` guess is the keyframe ``home`` (else the first keyframe, else ``qpos0``;
+  a ``home:`` in the sidecar beside the file overrides it). A singular ``qpos0`` is
+  replaced by a regular configuration nearby, a home outside a joint's range and
+  joints with springs (``stiffness``) are reported (:mod:`pincal.model._mjcf_home`).
 
 Joint/tendon/flex equalities and ``<include>`` are refused (:class:`ModelFileError`);
 actuators on tendons, sites or bodies are skipped with a logged warning. Geometry,
@@ -37,6 +40,7 @@ import pinocchio as pin
 
 from pincal._files import read_text
 from pincal.errors import ModelFileError, UnknownNameError
+from pincal.model._mjcf_home import build_with_home
 from pincal.model._mjcf_tree import MjcfTree, euler_xyz, quat_matrix, unit, vec
 
 if TYPE_CHECKING:
@@ -151,8 +155,10 @@ class _Converter(MjcfTree):
             raise UnknownNameError("MJCF keyframe", keyframe, [k.get("name", "") for k in keys])
         key = named[0] if named else (keys[0] if keys else None)
         qpos = np.array(self.qpos0)
+        self.home_source = "qpos0"
         if key is not None and key.get("qpos") is not None:
             qpos = vec(key.get("qpos"), qpos.size, f"keyframe {key.get('name', '')!r} qpos")
+            self.home_source = f"keyframe {key.get('name', '')!r}"
         home: dict[str, Any] = {}
         i = 0
         for jname, (kind, urdf) in self.mj_joints.items():
@@ -189,6 +195,14 @@ def mjcf_to_urdf(
         ModelFileError: unreadable or unsupported MJCF. UnknownNameError: a reference to a
         body, site, joint, class or keyframe that does not exist.
     """
+    urdf, sidecar, _ = _convert(source, name, keyframe)
+    return urdf, sidecar
+
+
+def _convert(
+    source: str | Path, name: str | None, keyframe: str | None
+) -> tuple[str, dict[str, Any], _Converter]:
+    """:func:`mjcf_to_urdf`, and the converter (ranges, springs, where home came from)."""
     text = str(source)
     if not (isinstance(source, str) and text.lstrip().startswith("<")):
         path = Path(source)
@@ -210,7 +224,7 @@ def mjcf_to_urdf(
     sidecar["home"] = conv.home(keyframe)
     sidecar["measured_frame"] = conv.leaves[-1]
     sidecar |= {"closure_names": eq_names, "actuator_names": actuators}
-    return conv.urdf(), sidecar
+    return conv.urdf(), sidecar, conv
 
 
 def load_mjcf(
@@ -237,17 +251,26 @@ def load_mjcf(
         The Mechanism; ``urdf_xml`` is the converted URDF, so export writes URDF.
 
     Raises:
-        ModelFileError, UnknownNameError, ClosureError, MobilityError.
+        ModelFileError, UnknownNameError, ClosureError, MobilityError,
+        SingularConfigurationError: no home assembles (the message names joints the
+        home puts outside their ranges).
     """
     from pincal.model import Mechanism, read_sidecar
 
     path = Path(path)
-    urdf, sidecar = mjcf_to_urdf(path, keyframe=keyframe)
+    urdf, sidecar, conv = _convert(path, None, keyframe)
+    source = conv.home_source
     extra = path.with_suffix(".yaml")
     if extra.is_file():
-        sidecar |= read_sidecar(extra)
+        own = read_sidecar(extra)
+        source = "sidecar" if "home" in own else source
+        sidecar |= own
     if actuated is not None:
         sidecar["name_mot"] = list(actuated)
-    return Mechanism(
-        urdf, sidecar, name=path.stem, source=path, measured_frame=measured_frame, options=options
-    )
+
+    def build(sc: dict[str, Any]) -> Mechanism:
+        return Mechanism(
+            urdf, sc, name=path.stem, source=path, measured_frame=measured_frame, options=options
+        )
+
+    return build_with_home(build, sidecar, source, conv.ranges, conv.stiffness)

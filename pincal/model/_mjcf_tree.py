@@ -129,6 +129,9 @@ class MjcfTree:
         self.mj_joints: dict[str, tuple[str, list[str]]] = {}  # name -> (type, urdf joints)
         self.qpos0: list[float] = []
         self.leaves: list[str] = []
+        #: hinge/slide joint → (lower, upper) URDF range [rad, m] and MJCF spring stiffness
+        self.ranges: dict[str, tuple[float, float]] = {}
+        self.stiffness: dict[str, float] = {}
 
     # ------------------------------------------------------------------ attributes
     def _read_default(self, elem: ET.Element, parent: dict[str, dict[str, str]]) -> None:
@@ -320,6 +323,10 @@ class MjcfTree:
                 )
                 self.qpos0.append(ref)
                 self.mj_joints[jname] = (kind, [jname])
+                self.ranges[jname] = (float(lo), float(hi))
+                k_spring = float(vec(a.get("stiffness"), 1, f"joint {jname!r} stiffness")[0])
+                if k_spring > 0:
+                    self.stiffness[jname] = k_spring
                 link = child
             else:
                 raise ModelFileError(

@@ -60,17 +60,28 @@ class Solution:
     jacobian: np.ndarray  # (m, k) the Jacobian over the free dofs at q
 
 
+#: longest LU step accepted, relative to ‖r‖/‖J‖_F (a condition number bound)
+_LU_CONDITION = 1e6
+
+
 def newton_step(J: np.ndarray, r: np.ndarray, rcond: float) -> np.ndarray:
     """Minimum-norm least-squares solution of ``J dx = −r`` (rank-revealing).
 
     A square, well-conditioned J is solved by LU; anything else (redundant closure rows,
-    rank loss) by a truncated SVD with relative cut-off ``rcond``.
+    rank loss) by a truncated SVD with relative cut-off ``rcond``. An LU step longer
+    than 1e6·‖r‖/‖J‖_F shows a J conditioned worse than 1e6 (e.g. a planar loop's ``3d``
+    closure in a tilted plane: three rows of rank two, none exactly zero), whose LU
+    solution may be dominated by a null-space component of rounding size: the SVD
+    decides then.
     """
     if J.shape[0] == J.shape[1] and J.size:
         try:
             step = -np.linalg.solve(J, r)
-            if np.all(np.isfinite(step)) and np.linalg.norm(J @ step + r) <= 1e-8 * (
-                np.linalg.norm(r) + 1e-300
+            r_norm = np.linalg.norm(r)
+            if (
+                np.all(np.isfinite(step))
+                and np.linalg.norm(J @ step + r) <= 1e-8 * (r_norm + 1e-300)
+                and np.linalg.norm(step) * np.linalg.norm(J) <= _LU_CONDITION * r_norm
             ):
                 return step
         except np.linalg.LinAlgError:

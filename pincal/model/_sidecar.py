@@ -22,8 +22,17 @@ from pincal.model._readings import JointReadings
 __all__ = ["JOINT_KINDS", "WORKSPACE_POSE_KEYS", "Sidecar", "Workspace", "validate_sidecar"]
 
 WORKSPACE_POSE_KEYS = ("x", "y", "z", "rx", "ry", "rz")
-#: joint kinds the ``joint_type`` key accepts (lower case; YAML files may use upper case)
-JOINT_KINDS = ("spherical", "universal")
+#: joint kinds the ``joint_type`` key accepts (lower case; YAML files may use upper case):
+#: ``spherical``, ``universal`` (first axis = the URDF ``<axis>``), ``ujoint_<a><b>``
+#: (revolute about the joint frame's axis a, then about its axis b; the robot.yaml
+#: collection's own names) and ``fixed`` (the joint locked at 0); see
+#: :mod:`pincal.model._build`
+JOINT_KINDS = (
+    "spherical",
+    "universal",
+    *(f"ujoint_{a}{b}" for a in "xyz" for b in "xyz" if a != b),
+    "fixed",
+)
 
 ClosureKind = str | tuple[str, ...]
 

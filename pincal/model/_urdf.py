@@ -228,6 +228,43 @@ class UrdfTree:
             self._ancestors[link] = tuple(reversed(chain))
         return self._ancestors[link]
 
+    def locked(self, names: list[str]) -> tuple[str, UrdfTree]:
+        """The URDF text with the joints ``names`` made ``fixed``, and its parsed tree.
+
+        A locked joint stays at 0: its child hangs at the joint origin. Joints that are
+        fixed already are left as they are.
+
+        Raises:
+            UnknownNameError: a name the URDF does not have.
+            ModelFileError: a joint that is neither fixed nor a one-dof joint (revolute,
+                continuous, prismatic).
+        """
+        root = copy.deepcopy(self.root)
+        by_name = {str(e.get("name")): e for e in root.findall("joint")}
+        joints = dict(self.joints)
+        for name in names:
+            if name not in by_name:
+                raise UnknownNameError("joint", name, list(by_name))
+            uj = self.joints[name]
+            if uj.type == "fixed":
+                continue
+            if uj.type not in MOVABLE_TYPES:
+                raise ModelFileError(
+                    f"sidecar joint_type 'fixed' for {name!r}: only a revolute, continuous or "
+                    f"prismatic joint can be locked, got a {uj.type} joint"
+                )
+            e = by_name[name]
+            e.set("type", "fixed")
+            for tag in ("axis", "limit", "mimic", "dynamics", "safety_controller"):
+                for sub in e.findall(tag):
+                    e.remove(sub)
+            joints[name] = dataclasses.replace(uj, type="fixed", axis=np.zeros(3))
+        ET.indent(root)
+        tree = copy.copy(self)
+        tree.root, tree.joints, tree._elements = root, joints, by_name
+        tree._ancestors = dict(self._ancestors)
+        return ET.tostring(root, encoding="unicode"), tree
+
     def with_origins(self, origins: dict[str, pin.SE3]) -> str:
         """Return the URDF text with the given joint origins replaced (full precision)."""
         return self.displaced(origins)[0]

@@ -15,6 +15,7 @@ from pincal.errors import ConvergenceError, ModelFileError, UnreachablePoseError
 from pincal.model._closures import COMPONENTS
 from pincal.model._floor import above_floor, moving_points
 from pincal.model._mechanism import Mechanism
+from pincal.model._range_explore import explored_ranges
 
 __all__ = ["sample_actuators", "sample_pose"]
 
@@ -24,10 +25,19 @@ _ROUND_TRIP_TOL = 1e-6
 
 
 def _joint_ranges(mech: Mechanism) -> np.ndarray:
+    """(n_act, 2) sampling ranges [m, rad].
+
+    The sidecar workspace, else the URDF limits, else (no range declared) the range
+    explored from home (:mod:`pincal.model._range_explore`); a mechanism without loops
+    falls back to ±π for what is still unlimited.
+    """
     ranges = np.array(mech.actuator_limits, dtype=float)
     for k, name in enumerate(mech.actuated):
         if name in mech.workspace.joints:
             ranges[k] = mech.workspace.joints[name]
+    if mech.closures:
+        for k, bounds in explored_ranges(mech).items():
+            ranges[k] = bounds
     ranges[~np.isfinite(ranges[:, 0]), 0] = -np.pi
     ranges[~np.isfinite(ranges[:, 1]), 1] = np.pi
     with np.errstate(over="ignore"):

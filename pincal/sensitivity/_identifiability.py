@@ -88,6 +88,11 @@ class Identifiability:
         column_scale: norms used to scale each column (n,).
         breaks_closure: indices of the parameters that cannot change without breaking a
             loop closure (over-constrained loops); not counted as identifiable.
+        splits_joint: indices of the translations between coincident revolute axes
+            (:func:`pincal.model.degenerate_translations`): changing one splits an
+            emulated ball or universal joint, an error the physical joint cannot have
+            (and the mechanism it gives may not be buildable); not counted as
+            identifiable, never fitted.
     """
 
     names: tuple[str, ...]
@@ -98,6 +103,7 @@ class Identifiability:
     singular_values: np.ndarray
     column_scale: np.ndarray
     breaks_closure: np.ndarray = field(default_factory=_empty)
+    splits_joint: np.ndarray = field(default_factory=_empty)
 
     @property
     def full_rank(self) -> bool:
@@ -114,6 +120,10 @@ class Identifiability:
     @property
     def breaks_closure_names(self) -> tuple[str, ...]:
         return tuple(self.names[i] for i in self.breaks_closure)
+
+    @property
+    def splits_joint_names(self) -> tuple[str, ...]:
+        return tuple(self.names[i] for i in self.splits_joint)
 
     def describe(self, max_terms: int = 4) -> list[str]:
         """One sentence per parameter that is not identifiable.
@@ -135,12 +145,19 @@ class Identifiability:
                 f"{self.names[k]} breaks loop closure (no passive-joint motion can close the "
                 "loops after changing it; it is not identifiable)"
             )
+        for k in self.splits_joint:
+            lines.append(
+                f"{self.names[k]} would split an emulated ball or universal joint (a "
+                "translation between revolute axes that meet at one point; not fitted)"
+            )
         return lines
 
     def summary(self) -> str:
         head = f"{self.rank} of {len(self.names)} parameters identifiable"
         if self.breaks_closure.size:
             head += f"; {self.breaks_closure.size} break loop closure"
+        if self.splits_joint.size:
+            head += f"; {self.splits_joint.size} would split an emulated joint"
         return "\n".join([head, *self.describe()])
 
 
@@ -179,6 +196,7 @@ def analyse_jacobian(
     names: tuple[str, ...],
     rtol: float = RANK_RTOL,
     breaks_closure: np.ndarray | None = None,
+    splits_joint: np.ndarray | None = None,
 ) -> Identifiability:
     """Identifiability of the parameters whose identification Jacobian is ``J`` (N, n).
 
@@ -193,6 +211,8 @@ def analyse_jacobian(
         rtol: relative rank threshold (default :data:`pincal.sensitivity._rank.RANK_RTOL`).
         breaks_closure: indices (or an (n,) boolean mask) of parameters that break loop
             closure; they are reported apart and left out of the rank.
+        splits_joint: indices (or an (n,) boolean mask) of translations inside emulated
+            ball or universal joints; reported apart and left out of the rank likewise.
 
     Raises:
         PincalError: J is not 2-D with one column per name, or contains NaN/inf.
@@ -206,19 +226,16 @@ def analyse_jacobian(
     if not np.all(np.isfinite(J)):
         raise PincalError("J contains NaN or infinite entries; check the poses and parameters")
     n = J.shape[1]
-    breaking = np.zeros(n, dtype=bool)
-    if breaks_closure is not None:
-        b = np.asarray(breaks_closure)
-        if b.dtype == bool and b.shape == (n,):
-            breaking = b.copy()
-        else:
-            breaking[b.astype(int).reshape(-1)] = True
+    breaking, splitting = (
+        _mask(breaks_closure, n),
+        _mask(splits_joint, n) & ~_mask(breaks_closure, n),
+    )
     scale = np.linalg.norm(J, axis=0)
     scale[scale <= 1e-12 * max(float(scale.max(initial=0.0)), 1e-300)] = 0.0  # no effect
     safe = np.where(scale > 0, scale, 1.0)
     Js = J / safe
     Js[:, scale == 0] = 0.0
-    closable = np.flatnonzero(~breaking)
+    closable = np.flatnonzero(~breaking & ~splitting)
     Jc = Js[:, closable]
     sv = np.linalg.svd(Jc, compute_uv=False) if Jc.size else np.zeros(0)
     rank = numerical_rank(sv, rtol)
@@ -235,8 +252,28 @@ def analyse_jacobian(
                 if abs(beta_s[i, col]) > _COMBINATION_CUTOFF
             }
     return Identifiability(
-        tuple(names), rank, base, others, combos, sv, scale[:n], np.flatnonzero(breaking)
+        tuple(names),
+        rank,
+        base,
+        others,
+        combos,
+        sv,
+        scale[:n],
+        np.flatnonzero(breaking),
+        np.flatnonzero(splitting),
     )
+
+
+def _mask(indices: np.ndarray | None, n: int) -> np.ndarray:
+    """(n,) boolean mask from indices or a mask (None: all False)."""
+    out = np.zeros(n, dtype=bool)
+    if indices is not None:
+        b = np.asarray(indices)
+        if b.dtype == bool and b.shape == (n,):
+            out = b.copy()
+        else:
+            out[b.astype(int).reshape(-1)] = True
+    return out
 
 
 def identifiability(
@@ -251,7 +288,9 @@ def identifiability(
 
     Parameters that break loop closure (over-constrained loops, see
     :func:`pincal.sensitivity.closure_breaking`) at any of the poses are reported in
-    ``breaks_closure`` and not counted as identifiable.
+    ``breaks_closure``, translations inside emulated ball or universal joints
+    (:func:`pincal.model.degenerate_translations`) in ``splits_joint``; neither is
+    counted as identifiable.
 
     Args:
         mech: nominal mechanism.
@@ -265,7 +304,7 @@ def identifiability(
         InputLimitError: more parameters than ``ModelLimits.parameters`` (raise it with
             the environment variable ``PINCAL_MAX_PARAMETERS``).
     """
-    from pincal.model import ModelLimits
+    from pincal.model import ModelLimits, degenerate_translations
     from pincal.model._workspace import sample_actuators
     from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
 
@@ -280,7 +319,8 @@ def identifiability(
     if q_act_rows is None:
         q_act_rows = sample_actuators(mech, n_poses, rng or np.random.default_rng(0))
     J, breaking = jacobian_and_closure_breaking(mech, params, q_act_rows)
-    return analyse_jacobian(J, params.names, rtol, breaks_closure=breaking)
+    splitting = np.isin(params.names, degenerate_translations(mech))
+    return analyse_jacobian(J, params.names, rtol, breaks_closure=breaking, splits_joint=splitting)
 
 
 @dataclass(frozen=True)

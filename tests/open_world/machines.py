@@ -154,6 +154,172 @@ def rusr_universal() -> tuple[str, dict]:
     return urdf, sidecar
 
 
+# ------------------------------------------------------------------ RUSR, U joint named UJOINT_ab
+def _frame_for(kind: str) -> np.ndarray:
+    """Rotation of a ``UJOINT_ab`` joint frame in the crank frame: axis a along crank z,
+    the third axis c (normal to a and b) along crank y; b is then along ±x."""
+    a, b = ("xyz".index(ch) for ch in kind[-2:].lower())
+    c = 3 - a - b
+    R = np.zeros((3, 3))
+    R[2, a], R[1, c] = 1.0, 1.0
+    R[:, b] = np.cross(R[:, (b + 1) % 3], R[:, (b + 2) % 3])
+    return R
+
+
+def rusr_ujoint(kind: str = "UJOINT_ZY") -> tuple[str, dict]:
+    """The RUSR four-bar of :func:`rusr_universal` written as the robot.yaml collection
+    writes a U joint: ``joint_type: [<kind>, FIXED]`` with ``kind`` one of UJOINT_XY,
+    UJOINT_YZ, UJOINT_ZY — two revolutes about the joint frame's first then second named
+    axis. The joint ``<origin>`` is rotated so that the first named axis is the crank's
+    z and the coupler runs 0.17 along the joint frame's third axis (the crank's y): the
+    same machine as :func:`rusr_universal` (its second U axis is ±x). The placeholder's
+    ``<axis>`` (1 1 0) is deliberately not one of the named axes: it is not used.
+
+    ``mark`` is a revolute joint (axis 0 1 1, range ±1 rad) that the sidecar locks
+    (``FIXED``): the mark hangs at its origin, as in :func:`rusr_universal`.
+    Measured: position of ``coupler_mark``.
+    """
+    crank_home = 0.5
+    c = np.array([0.05 * np.cos(crank_home), 0.05 * np.sin(crank_home), 0.0])
+    u = np.array([0.1, 1.0, 0.15]) / np.linalg.norm([0.1, 1.0, 0.15])
+    pivot = c + 0.17 * u - np.array([0.0, 0.0, 0.08])
+    R = _frame_for(kind)
+    third = np.zeros(3)
+    third[3 - sum("xyz".index(ch) for ch in kind[-2:].lower())] = 0.17
+    mark = R.T @ np.array([0.02, 0.085, 0.01])
+    urdf = (
+        '<?xml version="1.0"?>\n<robot name="rusr_ujoint">\n'
+        + "".join(
+            _link(n)
+            for n in ("base_link", "crank", "coupler", "coupler_tip", "coupler_mark", "rocker")
+        )
+        + _link("rocker_tip")
+        + _joint("crank_mot", "revolute", "base_link", "crank")
+        + _joint("u_joint", "revolute", "crank", "coupler", _se3(R, (0.05, 0, 0)), "1 1 0")
+        + _joint("coupler_end", "fixed", "coupler", "coupler_tip", _se3(p=third))
+        + _joint("mark", "revolute", "coupler", "coupler_mark", _se3(p=mark), "0 1 1", (-1, 1))
+        + _joint("rocker_pivot", "revolute", "base_link", "rocker", _se3(p=pivot), "1 0 0")
+        + _joint("rocker_end", "fixed", "rocker", "rocker_tip", _se3(p=(0, 0, 0.08)))
+        + "</robot>\n"
+    )
+    sidecar = {
+        "closed_loop": [["coupler_end", "rocker_end"]],
+        "type": ["3D"],
+        "name_mot": ["crank_mot"],
+        "joint_name": ["u_joint", "mark"],
+        "joint_type": [kind, "FIXED"],
+        "measured_frame": "coupler_mark",
+        "measured": "position",
+        "home": {"crank_mot": crank_home},
+        "workspace": {"joints": {"crank_mot": list(RUSR_CRANK_RANGE)}},
+    }
+    return urdf, sidecar
+
+
+# ------------------------------------------------------------------ 2-RSU ankle of a leg
+ANKLE_MOTOR_RANGE = (-0.3, 0.3)
+"""Motor range [rad] of :func:`ankle_2rsu` when its limits are given."""
+
+
+def ankle_2rsu(zero_limits: bool = False) -> tuple[str, dict]:
+    """A legged robot's parallel ankle, two loops, written as a leg URDF often is.
+
+    The shin (``base_link``) carries the foot on an emulated U joint (``ankle_pitch``
+    about y, then ``ankle_roll`` about x, 0.30 m below the knee-side origin, zero-length
+    link between them) and two motors ``mot_l`` / ``mot_r`` (axis y, at z = −0.05 m,
+    y = ±0.035 m) whose 0.05 m cranks point backwards (−x). Each crank ends in an
+    emulated ball joint (``ball_a_*`` z, ``ball_b_*`` y, ``ball_c_*`` x, zero-length
+    links) carrying a rod whose end (0.015, 0, −0.25) in the rod frame meets the foot
+    point (−0.035, ±0.035, 0) in a ball (``3D`` closure). Both motors turning together
+    pitch the foot, opposite ways roll it; the foot lever (0.035 m) is shorter than the
+    crank, so the motors cannot turn all the way round: turned together, the loops stop
+    closing near +1.24 rad. The rods' spins are idle. The file pose (q = 0) is assembled. Measured:
+    the pose of ``sole`` (0.03, 0, −0.05) on the foot.
+
+    With ``zero_limits`` every revolute has ``<limit lower="0" upper="0">`` (no range,
+    as many exported leg URDFs write it) and the sidecar gives no workspace.
+    """
+    lim = (0.0, 0.0) if zero_limits else None
+    mot = (0.0, 0.0) if zero_limits else ANKLE_MOTOR_RANGE
+    links = ["base_link", "ankle_cross", "foot", "sole"]
+    joints = [
+        _joint(
+            "ankle_pitch",
+            "revolute",
+            "base_link",
+            "ankle_cross",
+            _se3(p=(0, 0, -0.3)),
+            "0 1 0",
+            lim,
+        ),
+        _joint("ankle_roll", "revolute", "ankle_cross", "foot", axis="1 0 0", limit=lim),
+        _joint("sole_joint", "fixed", "foot", "sole", _se3(p=(0.03, 0, -0.05))),
+    ]
+    closures = []
+    for side, y in (("l", 0.035), ("r", -0.035)):
+        links += [f"crank_{side}", f"gimbal1_{side}", f"gimbal2_{side}", f"rod_{side}"]
+        links += [f"rod_end_{side}", f"foot_att_{side}"]
+        joints += [
+            _joint(
+                f"mot_{side}",
+                "revolute",
+                "base_link",
+                f"crank_{side}",
+                _se3(p=(0, y, -0.05)),
+                "0 1 0",
+                mot,
+            ),
+            _joint(
+                f"ball_a_{side}",
+                "revolute",
+                f"crank_{side}",
+                f"gimbal1_{side}",
+                _se3(p=(-0.05, 0, 0)),
+                "0 0 1",
+                lim,
+            ),
+            _joint(
+                f"ball_b_{side}",
+                "revolute",
+                f"gimbal1_{side}",
+                f"gimbal2_{side}",
+                axis="0 1 0",
+                limit=lim,
+            ),
+            _joint(
+                f"ball_c_{side}",
+                "revolute",
+                f"gimbal2_{side}",
+                f"rod_{side}",
+                axis="1 0 0",
+                limit=lim,
+            ),
+            _joint(
+                f"rod_end_{side}",
+                "fixed",
+                f"rod_{side}",
+                f"rod_end_{side}",
+                _se3(p=(0.015, 0, -0.25)),
+            ),
+            _joint(f"foot_att_{side}", "fixed", "foot", f"foot_att_{side}", _se3(p=(-0.035, y, 0))),
+        ]
+        closures.append([f"rod_end_{side}", f"foot_att_{side}"])
+    urdf = (
+        '<?xml version="1.0"?>\n<robot name="ankle_2rsu">\n'
+        + "".join(_link(n) for n in links)
+        + "".join(joints)
+        + "</robot>\n"
+    )
+    sidecar: dict = {
+        "closed_loop": closures,
+        "type": ["3D", "3D"],
+        "name_mot": ["mot_l", "mot_r"],
+        "measured_frame": "sole",
+        "measured": "pose",
+    }
+    return urdf, sidecar
+
+
 # ------------------------------------------------------------------ Delta with 4R parallelograms
 R_BASE, L_ARM, L_ROD, R_PLAT, HALF_W, THETA = 0.2, 0.25, 0.5, 0.05, 0.03, np.radians(30.0)
 
@@ -273,3 +439,49 @@ def copy_machine(folder: Path, name: str, **sidecar_changes) -> Path:
 FIVEBAR_WORKSPACE = {"joints": {"mot_l": [1.8, 2.2], "mot_r": [0.9, 1.3]}}
 
 MJCF = Path(__file__).parents[1] / "model" / "mjcf"
+
+FOURBAR_KEYFRAME = (-0.4, 1.059932, -0.390232)
+"""(crank, coupler, rocker) [rad] of :func:`mjcf_fourbar_straight`'s keyframe ``home``."""
+
+
+def mjcf_fourbar_straight(
+    keyframe: bool = True, crank_range: str = "-60 -10", coupler_range: str = "-180 180"
+) -> str:
+    """MJCF text of a planar four-bar whose file pose (``qpos0``) is its extended dead
+    point: crank AB = 0.1 m along +y from A = (0, 0), rocker DC = 0.2 m from
+    D = (0.3, 0), coupler BC = |BD| − 0.2 ≈ 0.1162 m, so that B, C and D are collinear at
+    qpos0 and the loop's passive Jacobian loses rank there (the crank cannot turn
+    positive). Written the way MJCF legs are: ``<equality><connect>`` closing the loop,
+    a position actuator on the crank, degrees, a spring (``stiffness="2"``) on the
+    rocker, and — with ``keyframe`` — a ``<keyframe><key name="home">`` at crank −0.4 rad
+    (:data:`FOURBAR_KEYFRAME`). Measured: the coupler site ``tool``.
+    """
+    key = (
+        '  <keyframe><key name="home" qpos="' + " ".join(map(str, FOURBAR_KEYFRAME)) + '"/>'
+        "</keyframe>\n"
+        if keyframe
+        else ""
+    )
+    return f"""<mujoco model="fourbar_straight">
+  <compiler angle="degree"/>
+  <default><joint type="hinge" axis="0 0 1"/></default>
+  <worldbody>
+    <body name="ground" pos="0 0 0.1">
+      <body name="crank" euler="0 0 90">
+        <joint name="crank_joint" range="{crank_range}"/>
+        <body name="coupler" pos="0.1 0 0" euler="0 0 -108.43494882292201">
+          <joint name="coupler_joint" range="{coupler_range}"/>
+          <site name="tool" pos="0.06 0.03 0"/>
+        </body>
+      </body>
+      <body name="rocker" pos="0.3 0 0" euler="0 0 161.565051177078">
+        <joint name="rocker_joint" range="-180 180" stiffness="2"/>
+      </body>
+    </body>
+  </worldbody>
+  <equality>
+    <connect name="pin_C" body1="coupler" body2="rocker" anchor="0.11622776601683793 0 0"/>
+  </equality>
+  <actuator><position name="crank_motor" joint="crank_joint" kp="10"/></actuator>
+{key}</mujoco>
+"""

@@ -21,7 +21,14 @@ MACHINES = Path(__file__).parents[1] / "model" / "machines"
 
 
 @pytest.fixture(scope="module", params=["rssr", "fivebar"])
-def mech(request):
+def mech(request, tmp_path_factory):
+    if request.param == "fivebar":  # drawn over ±π, as before ranges were explored
+        from tests.open_world.machines import copy_machine
+
+        circle = {"joints": {m: [-np.pi, np.pi] for m in ("mot_l", "mot_r")}}
+        return pincal.load_mechanism(
+            copy_machine(tmp_path_factory.mktemp("m"), "fivebar", workspace=circle)
+        )
     return pincal.load_mechanism(MACHINES / request.param)
 
 
