@@ -74,6 +74,11 @@ class GaussNewtonOptions:
             ``damping`` is False (1–60).
         damping: damp rejected steps (True) or halve them (False).
         damping_start: first μ of the fallback (> 0, ≤ 1).
+        prior_std: a Gaussian prior: per parameter (all n, in the parameter set's
+            order) its 1σ [m or rad] about ``prior_mean``; ``inf`` = no prior on that
+            parameter. The cost becomes ``½‖r‖² + ½ Σ ((x_i − mean_i)/σ_i)²`` with ``r``
+            the whitened residual (a maximum a posteriori fit); None = no prior.
+        prior_mean: (n,) the prior's centre [m, rad] (required with ``prior_std``).
     """
 
     max_iterations: int = 50
@@ -82,6 +87,8 @@ class GaussNewtonOptions:
     max_halvings: int = 20
     damping: bool = True
     damping_start: float = 1.0
+    prior_std: tuple[float, ...] | None = None
+    prior_mean: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         o = type(self).__name__
@@ -92,6 +99,31 @@ class GaussNewtonOptions:
         check_real(o, "damping_start", self.damping_start, 0.0, 1.0, open_low=True)
         if not isinstance(self.damping, bool):
             raise SolverOptionError(f"{o}.damping must be True or False, got {self.damping!r}")
+        if (self.prior_std is None) != (self.prior_mean is None):
+            raise SolverOptionError(f"{o}: give prior_std and prior_mean together")
+        if self.prior_std is not None and self.prior_mean is not None:
+            std = tuple(float(v) for v in self.prior_std)
+            mean = tuple(float(v) for v in self.prior_mean)
+            if len(std) != len(mean) or any(not v > 0 for v in std):
+                raise SolverOptionError(
+                    f"{o}.prior_std must hold one σ > 0 (inf = none) per prior_mean entry"
+                )
+            object.__setattr__(self, "prior_std", std)
+            object.__setattr__(self, "prior_mean", mean)
+
+    def prior_weights(self, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """(1/σ (n,), mean (n,)) of the prior, 0 weight where σ is inf; None without one.
+
+        Raises:
+            SolverOptionError: the prior does not have ``n`` entries.
+        """
+        if self.prior_std is None or self.prior_mean is None:
+            return None
+        if len(self.prior_std) != n:
+            raise SolverOptionError(
+                f"GaussNewtonOptions.prior_std has {len(self.prior_std)} entries for {n} parameters"
+            )
+        return 1.0 / np.asarray(self.prior_std), np.asarray(self.prior_mean)
 
 
 @dataclass(frozen=True)

@@ -37,6 +37,7 @@ from pincal.io._instrument_file import (
     read_instrument_data,
     write_instrument_data,
 )
+from pincal.io._marker_file import read_marker_table
 from pincal.io._measurement_file import (
     MeasurementFile,
     check_enough_poses,
@@ -89,6 +90,7 @@ __all__ = [
     "read_calibration",
     "read_commands",
     "read_instrument_data",
+    "read_marker_table",
     "read_measurement_file",
     "read_measurements",
     "read_pose_file",

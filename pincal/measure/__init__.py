@@ -25,6 +25,12 @@ from pincal.measure._iso9283 import (
     pose_characteristics,
     simulate_cycles,
 )
+from pincal.measure._markers import (
+    MarkerRegistration,
+    MarkerSetup,
+    marker_mechanism,
+    register_markers,
+)
 from pincal.measure._measurements import (
     Measurements,
     NoiseModel,
@@ -54,6 +60,8 @@ __all__ = [
     "Instrument",
     "InstrumentData",
     "LaserTracker",
+    "MarkerRegistration",
+    "MarkerSetup",
     "Measurements",
     "NoiseModel",
     "PoseCharacteristics",
@@ -66,10 +74,12 @@ __all__ = [
     "fit_rigid_transform",
     "initial_instrument_values",
     "iso_test_cube",
+    "marker_mechanism",
     "pose_characteristics",
     "pose_errors",
     "pose_from_target_points",
     "register_instrument",
+    "register_markers",
     "rigid_fit_covariance",
     "simulate_cycles",
     "simulate_instrument",
