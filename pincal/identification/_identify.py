@@ -19,7 +19,7 @@ from threadpoolctl import threadpool_limits
 
 from pincal.errors import SolverOptionError, TooFewPosesError, UnidentifiableError
 from pincal.identification._noise import initial_weights, weighted_fit
-from pincal.identification._options import GaussNewtonOptions
+from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import CalibrationProblem, IdentificationProblem
 from pincal.identification._qpso_identify import QPSOOptions
@@ -279,7 +279,8 @@ def _run(problem: IdentificationProblem, method: str, entry: Any, opts: Any, pro
         )
         log.info(prefix)
     out, model, weighting = weighted_fit(model, entry, x0, free, opts, progress)
-    prior = opts.prior_weights(x0.size) if isinstance(opts, GaussNewtonOptions) else None
+    local = isinstance(opts, (GaussNewtonOptions, LMOptions))
+    prior = opts.prior_weights(x0.size) if local else None
     w = None if prior is None else prior[0]
     return _finish(problem, method, out, free, ident, raw0, prefix, model, weighting, w)
 

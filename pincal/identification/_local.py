@@ -222,6 +222,9 @@ def levenberg_marquardt(
 
     last: list[tuple[np.ndarray, np.ndarray]] = []
 
+    prior = opts.prior_weights(x0.size)
+    wf, mean = (prior[0][free], prior[1][free]) if prior is not None else (None, None)
+
     def both(z):
         key = z.tobytes()
         if key not in cache:
@@ -229,6 +232,9 @@ def levenberg_marquardt(
             try:
                 r, J, _ = problem.evaluate(full(z))
                 J = J[:, free]
+                if wf is not None:  # the prior's rows
+                    r = np.concatenate([r, wf * (z - mean)])
+                    J = np.vstack([J, np.diag(wf)])
                 last[:] = [(r, J)]
             except TRIAL_FAILURES:
                 if not last:

@@ -24,7 +24,7 @@ from pincal.io._units import (
     check_actuator_ranges,
     unit_factor,
 )
-from pincal.measure import Measurements, MarkerSetup
+from pincal.measure import MarkerSetup, Measurements
 from pincal.model import Mechanism
 
 __all__ = ["read_marker_table"]

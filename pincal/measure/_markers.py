@@ -209,7 +209,8 @@ def register_markers(
     mk = np.asarray(T_tool.translation, dtype=float).copy()
     T = T_base
     it = 0
-    for it in range(1, max_iterations + 1):
+    while it < max_iterations:
+        it += 1
         pred = t_f + np.einsum("mij,j->mi", R_f, mk)
         fit = None if frame_known else fit_rigid_transform(pred, P)
         T = T_base if fit is None else fit.T
