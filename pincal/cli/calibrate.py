@@ -236,10 +236,20 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
         model, data, setup, preset, method, prior_spec, loss
     )
     start = fit.registration.mechanism
-    # MARKER HOOK (until the gate has its own bounds for registration unknowns, issue 23
-    # item 5): the instrument frame and marker are judged from the closed-form registration,
-    # which is the start of the fit, so their move limit applies to the refinement only.
-    verdict = check_quality(fit.result, meas, mech=start, limits=limits)
+    # MARKER HOOK (issue 23 item 5, until the gate has its own bounds for registration
+    # unknowns): the move limit judges the machine's parameters only; the instrument frame
+    # and marker are unknowns whose start is a closed-form guess, so their refinement is
+    # not a defect. The gate sees a copy whose registration parameters did not "move".
+    import numpy as np
+
+    from pincal.identification import is_registration
+
+    res = fit.result
+    reg = np.array([is_registration(n) for n in res.names])
+    seen = dataclasses.replace(
+        res, initial_values=np.where(reg, res.full_values, res.initial_values)
+    )
+    verdict = check_quality(seen, meas, mech=start, limits=limits)
     quality = apply_gate(verdict, force)
     doc = result_json(fit.result, str(data), CALIBRATED_URDF)
     doc["quality"] = quality

@@ -82,7 +82,7 @@ class CrossValidation:
         return {
             "held_out_rms_mm": self.rms * 1e3,
             "held_out_max_mm": self.max * 1e3,
-            "fit_rms_mm": float(np.sqrt(np.mean(self.fit_rms**2))) * 1e3,
+            "fold_fit_rms_mm": float(np.sqrt(np.mean(self.fit_rms**2))) * 1e3,
         }
 
 
