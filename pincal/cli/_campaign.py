@@ -339,6 +339,9 @@ def load_campaign(path: str | Path) -> Campaign:
 
     path = Path(path)
     data = load_yaml(path, "campaign file", CampaignError)
+    mk = data.get("markers") if isinstance(data, dict) else None
+    if isinstance(mk, dict) and mk.get("marker") == "unknown":  # the default, spelt out
+        data = {**data, "markers": {**mk, "marker": None}}
     camp = _build(Campaign, data, "")
     camp.check()
     base = path.resolve().parent
