@@ -249,7 +249,7 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
     seen = dataclasses.replace(
         res, initial_values=np.where(reg, res.full_values, res.initial_values)
     )
-    verdict = check_quality(seen, meas, mech=start, limits=limits)
+    verdict = _outliers_as_warnings(check_quality(seen, meas, mech=start, limits=limits))
     quality = apply_gate(verdict, force)
     doc = result_json(fit.result, str(data), CALIBRATED_URDF)
     doc["quality"] = quality
@@ -269,6 +269,28 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
     else:
         click.echo(report, nl=False)
         click.echo(f"wrote calibration directory {cal.path}/")
+
+
+def _outliers_as_warnings(verdict):
+    """MARKER HOOK (issue 23 item 5, until the gate judges estimated noise itself).
+
+    A marker table declares no noise: σ is estimated from the very residuals the outlier
+    test divides by, and on a real arm they are mostly model error (elasticity,
+    backlash), not instrument noise. An outlier flag then refuses a sound calibration, so
+    here it is a warning (still printed and recorded, with the poses named); every other
+    refusal stands.
+    """
+    from pincal.identification import QualityIssue
+
+    issues = tuple(
+        QualityIssue(i.kind, False, i.message + " (a warning: the noise is estimated from "
+                     "these residuals; --loss huber down-weights them)")
+        if i.kind == "outliers" and i.refuse
+        else i
+        for i in verdict.issues
+    )  # fmt: skip
+    out = dataclasses.replace(verdict, issues=issues)
+    return out if not out.passed else dataclasses.replace(out, cause="", cause_text="")
 
 
 def _is_instrument_file(path: str) -> bool:

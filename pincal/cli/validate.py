@@ -114,6 +114,7 @@ def validate(calibration: Path, data: Path | None, cv_folds: int | None, cv_seed
             return
     else:
         cv_doc = None
+    assert data is not None
     from pincal.measure import validate_held_out
     from pincal.model import parameters
 

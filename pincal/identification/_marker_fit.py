@@ -90,7 +90,16 @@ def _prior_std(params: ParameterSet, setup: MarkerSetup, prior: Prior | None) ->
     return std
 
 
-def _fit(mech, params, meas, names, method, std, loss="linear", initial=None):
+def _fit(
+    mech: Mechanism,
+    params: ParameterSet,
+    meas: Measurements,
+    names: list[str],
+    method: str,
+    std: np.ndarray,
+    loss: str = "linear",
+    initial: np.ndarray | None = None,
+) -> IdentificationResult:
     prior: dict = {}
     if np.isfinite(std).any():
         prior = {"prior_std": tuple(std), "prior_mean": tuple(np.zeros(len(std)))}
