@@ -150,6 +150,31 @@ def test_given_marker_is_held_and_bad_options_are_named(tmp_path):
     assert _run("validate", tmp_path / "cal").exit_code != 0  # neither --data nor --cv
 
 
+def test_marker_campaign_runs_and_is_checked(tmp_path):
+    """A campaign file with a markers section: calibrate + validate --cv from `pincal run`."""
+    mech, actual = _truth(1e-3)
+    q = sample_actuators(mech, 30, np.random.default_rng(21))
+    _table(tmp_path / "m.csv", actual, q, 2e-5, 22)
+    text = (
+        "model: ur5\npreset: chain\nout: cal\n"
+        "measurements: {source: file, file: m.csv}\n"
+        "markers: {link: wrist_3_link, columns: [mx, my, mz], length_unit: mm, "
+        "marker: unknown}\n"
+        "validation: {source: none, cv: 3, cv_seed: 1}\nreport: false\n"
+    )
+    (tmp_path / "c.yaml").write_text(text)
+    r = _run("run", tmp_path / "c.yaml")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "cal" / "nominal.urdf").is_file()
+    assert (tmp_path / "cal-inputs" / "cv_folds.csv").is_file()
+    (tmp_path / "bad.yaml").write_text(text.replace("source: file, file: m.csv", "poses: 9"))
+    bad = _run("run", tmp_path / "bad.yaml", "--dry-run")
+    assert bad.exit_code != 0 and "markers: needs measurements.source: file" in bad.output
+    (tmp_path / "bad2.yaml").write_text(text.replace("length_unit: mm", "length_unit: furlong"))
+    bad = _run("run", tmp_path / "bad2.yaml", "--dry-run")
+    assert bad.exit_code != 0 and "markers.length_unit" in bad.output
+
+
 def test_kfold_is_a_seeded_partition():
     a, b = kfold(34, 5, 0), kfold(34, 5, 0)
     assert [x.tolist() for x in a] == [x.tolist() for x in b]
