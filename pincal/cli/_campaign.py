@@ -55,8 +55,8 @@ Campaign file keys (YAML; relative paths are relative to the file):
     length_unit: m           m | mm | um (marker columns)
     instrument_frame: unknown  unknown (registered, then identified) | known
     marker: unknown          unknown, or [x, y, z] in LINK's frame [mm]
-    marker_std: null         1σ of a given marker [mm] (none: held)
-    lock: null               "JOINT=VALUE,…" [m, rad]; joints off the chain are locked
+    marker_std: null         1σ of a given marker [mm] (none: held); joints off the
+                             chain to LINK are locked at 0
   identification:
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
     loss: linear             linear | huber | soft_l1 | cauchy (marker campaigns)
@@ -161,7 +161,6 @@ class Markers:
     instrument_frame: str = "unknown"
     marker: tuple[float, float, float] | None = None
     marker_std: float | None = None
-    lock: str | None = None
 
     def check(self, key: str) -> None:
         _choice(self.length_unit, ("m", "mm", "um"), f"{key}.length_unit")
@@ -176,7 +175,7 @@ class Markers:
         if self.marker is not None:
             given = [*self.marker, *([self.marker_std] if self.marker_std else [])]
             opts += ["--marker", ",".join(repr(float(v)) for v in given)]
-        return opts + (["--lock", self.lock] if self.lock else [])
+        return opts
 
 
 @dataclass(frozen=True)

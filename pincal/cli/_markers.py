@@ -51,9 +51,6 @@ def marker_options(f: Callable[..., Any]) -> Callable[..., Any]:
                      help="The marker's three position columns (e.g. x1,y1,z1)."),
         click.option("--length-unit", type=click.Choice(["m", "mm", "um"]), default="m",
                      show_default=True, help="Unit of the marker columns."),
-        click.option("--lock", "lock_spec", default=None, metavar="JOINT=VALUE,…",
-                     help="Joints to hold fixed [m, rad]; joints off the chain to LINK are "
-                     "locked at 0 anyway."),
         click.option("--prior", "prior_spec", default=None, metavar="LEN_MM,ANG_MRAD|auto",
                      help="Gaussian prior on the machine's parameters about nominal (1σ); "
                      "auto: strength chosen by 5-fold cross-validation."),
@@ -87,8 +84,12 @@ def parse_prior(spec: str | None) -> str | tuple[float, float] | None:
 
 
 def setup_from_options(link: str, frame: str, marker_spec: str, columns: str, unit: str,
-                       lock_spec: str | None):  # fmt: skip
-    """The :class:`pincal.measure.MarkerSetup` of the command-line options."""
+                       lock_spec: str | None = None):  # fmt: skip
+    """The :class:`pincal.measure.MarkerSetup` of the command-line options.
+
+    ``lock_spec`` (``JOINT=VALUE,…`` [m, rad]) is for the model options' ``--lock`` of
+    the main line (h-arms); joints off the chain to ``link`` are locked at 0 anyway.
+    """
     from pincal.measure import MarkerSetup
 
     marker = std = None
@@ -267,4 +268,3 @@ def fold_fitter(mech, setup, doc: dict, registration_only: bool):
         return fit_markers(mech, setup, meas, preset, method, prior, loss=loss).calibrated
 
     return fit
-

@@ -126,7 +126,7 @@ def format_report(doc: dict) -> str:
 @marker_options
 @fail_cleanly
 def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max_change,
-              link, instrument_frame, marker_spec, marker_columns, length_unit, lock_spec,
+              link, instrument_frame, marker_spec, marker_columns, length_unit,
               prior_spec) -> None:  # fmt: skip
     """Identify MODEL's geometric parameters from measured poses (--data).
 
@@ -173,7 +173,7 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
         from pincal.cli._markers import setup_from_options
 
         setup = setup_from_options(link, instrument_frame, marker_spec, marker_columns,
-                                   length_unit, lock_spec)  # fmt: skip
+                                   length_unit)  # fmt: skip
         _calibrate_markers(model, data, setup, preset, method, out, as_json, force, limits,
                            prior_spec, loss)  # fmt: skip
         return

@@ -94,7 +94,8 @@ def test_full_calibration_recovers_the_arm_and_validates_by_cv(tmp_path):
     q = sample_actuators(mech, 40, np.random.default_rng(3))
     _table(tmp_path / "m.csv", actual, q, 2e-5, 4)
     r = _run("calibrate", "ur5", "--link", "wrist_3_link", "--data", tmp_path / "m.csv",
-             "--marker-columns", "mx,my,mz", "--length-unit", "mm", "--out", tmp_path / "cal")  # fmt: skip
+             "--marker-columns", "mx,my,mz", "--length-unit", "mm",
+             "--out", tmp_path / "cal")  # fmt: skip
     assert r.exit_code == 0, r.output
     assert "registration (closed form" in r.output
     from pincal.io import read_calibration
@@ -123,7 +124,8 @@ def test_no_gain_is_said_plainly(tmp_path):
     q = sample_actuators(mech, 30, np.random.default_rng(11))
     _table(tmp_path / "m.csv", actual, q, 1e-4, 12)
     r = _run("calibrate", "ur5", "--link", "wrist_3_link", "--data", tmp_path / "m.csv",
-             "--marker-columns", "mx,my,mz", "--length-unit", "mm", "--out", tmp_path / "cal")  # fmt: skip
+             "--marker-columns", "mx,my,mz", "--length-unit", "mm",
+             "--out", tmp_path / "cal")  # fmt: skip
     assert r.exit_code == 0, r.output
     out = _run("validate", tmp_path / "cal", "--cv", 3)
     assert out.exit_code == 0, out.output
