@@ -49,10 +49,20 @@ def subset(meas: Measurements, rows: np.ndarray) -> Measurements:
 
 
 def position_errors(mech: Mechanism, meas: Measurements) -> np.ndarray:
-    """(m,) distances [m] between predicted and measured positions of the measured frame."""
+    """(m,) distances [m] between predicted and measured positions of the measured frame.
+
+    Over the measured position components only (``x z`` of a machine measuring
+    ``x z ry``).
+
+    Raises:
+        MeasurementError: no position component is measured.
+    """
+    cols = [i for i, c in enumerate("xyz") if c in meas.components]
+    if not cols:
+        raise MeasurementError("cross-validation compares positions; none is measured")
     qs = mech.configurations(meas.q_act)
     pred = np.array([mech.frame_placement(q).translation for q in qs])
-    return np.linalg.norm(pred - meas.positions, axis=1)
+    return np.linalg.norm((pred - meas.positions)[:, cols], axis=1)
 
 
 @dataclass(frozen=True)

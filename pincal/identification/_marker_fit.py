@@ -99,15 +99,16 @@ def _fit(
     std: np.ndarray,
     loss: str = "linear",
     initial: np.ndarray | None = None,
+    max_iterations: int = 100,
 ) -> IdentificationResult:
     prior: dict = {}
     if np.isfinite(std).any():
         prior = {"prior_std": tuple(std), "prior_mean": tuple(np.zeros(len(std)))}
     opts: GaussNewtonOptions | LMOptions | None = None
     if method == "gauss-newton":
-        opts = GaussNewtonOptions(max_iterations=100, **prior)
+        opts = GaussNewtonOptions(max_iterations=max_iterations, **prior)
     elif method == "lm":
-        opts = LMOptions(max_iterations=100, loss=loss, **prior)
+        opts = LMOptions(max_iterations=max_iterations, loss=loss, **prior)
     return identify(mech, params, meas, method, options=opts, fit=names, initial=initial)
 
 
@@ -138,6 +139,7 @@ def fit_markers(
     bounds: tuple[float, float] = (0.02, 0.1),
     registration_only: bool = False,
     loss: str = "linear",
+    max_iterations: int = 100,
 ) -> MarkerFit:
     """Register, then identify the machine with the instrument frame and marker.
 
@@ -153,6 +155,7 @@ def fit_markers(
         registration_only: fit only the instrument frame and the marker (the baseline
             of an uncalibrated robot).
         loss: robust loss of ``lm`` (a robust loss runs ``lm``; see ``LMOptions.loss``).
+        max_iterations: iteration limit of each solve (``lm``: 10 × evaluations).
 
     Raises:
         PincalError subclasses of :func:`identify` and :func:`register_markers`.
@@ -178,14 +181,14 @@ def fit_markers(
         return MarkerFit(result, reg, (), method)
     used = method
     for _ in range(6):  # each round holds at least one more parameter, or stops
-        result = _fit(start, params, measurements, names, used, std, loss)
+        result = _fit(start, params, measurements, names, used, std, loss, None, max_iterations)
         if not result.success and used == "gauss-newton":
             notes.append(
                 f"Gauss–Newton did not converge ({result.message.strip()}); switched to "
                 "Levenberg–Marquardt from the same start"
             )
             used = "lm"
-            result = _fit(start, params, measurements, names, used, std, loss)
+            result = _fit(start, params, measurements, names, used, std, loss, None, max_iterations)
         weak = _weak(result, params, bounds)
         if not weak:
             break

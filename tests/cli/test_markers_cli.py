@@ -177,6 +177,19 @@ def test_marker_campaign_runs_and_is_checked(tmp_path):
     assert bad.exit_code != 0 and "markers.length_unit" in bad.output
 
 
+def test_cv_of_a_pose_file_calibration(tmp_path):
+    """--cv on an ordinary campaign (wedge3, measures x z ry): baseline = nominal model."""
+    assert _run("simulate", "wedge3", "--random", 24, "--out", tmp_path / "m.csv").exit_code == 0
+    res = _run("calibrate", "wedge3", "--data", tmp_path / "m.csv", "--out", tmp_path / "cal")
+    assert res.exit_code == 0, res.output
+    out = _run("validate", tmp_path / "cal", "--cv", 3, "--seed", 2, "--json")
+    assert out.exit_code == 0, out.output
+    cv = json.loads(out.output)["cv"]
+    assert cv["baseline"]["model"] == "nominal model" and cv["k"] == 3
+    assert cv["held_out_rms_mm"] < 0.1 * cv["baseline"]["held_out_rms_mm"]
+    assert cv["folds"] == [f.tolist() for f in kfold(24, 3, 2)]
+
+
 def test_kfold_is_a_seeded_partition():
     a, b = kfold(34, 5, 0), kfold(34, 5, 0)
     assert [x.tolist() for x in a] == [x.tolist() for x in b]

@@ -100,3 +100,11 @@ def test_prior_keeps_weak_parameters_near_nominal():
     vals = fit.result.full_values
     machine = [not is_registration(n) for n in fit.result.names]
     assert np.max(np.abs(vals[machine])) < 0.02  # no 0.25 m / 1.4 rad excursions
+
+
+def test_gauss_newton_falls_back_to_lm_and_says_so():
+    mech, setup, meas = _ur5_case(30, None, 4)
+    fit = fit_markers(mech, setup, meas, max_iterations=1)  # GN cannot finish in one step
+    assert fit.method == "lm"
+    assert any("switched to Levenberg–Marquardt" in n for n in fit.notes)
+    assert fit_markers(mech, setup, meas).method == "gauss-newton"
