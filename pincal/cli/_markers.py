@@ -183,10 +183,35 @@ def marker_calibration(model: str, data: str, setup, preset: str | None, method:
             "instrument_translation_mm": [float(v) * 1e3
                                           for v in reg.T_instrument_base.translation],
         },
+        "identified": _identified(fit),
         "solver": fit.method,
         "notes": list(fit.notes),
     }  # fmt: skip
     return fit, meas, doc
+
+
+def _identified(fit) -> dict:
+    """The refined instrument frame and marker [mm, mrad] with 2σ where identified."""
+    import pinocchio as pin
+
+    from pincal.model import BASE_JOINT, TOOL_JOINT
+
+    res = fit.result
+    joints = fit.calibrated.tree.joints
+    two_sigma = dict(zip(res.identified_names, 2 * res.std, strict=True))
+
+    def sig(prefix: str, dofs: str) -> list[float | None]:
+        out = [two_sigma.get(f"{prefix}.{d}") for d in dofs.split()]
+        return [None if v is None else float(v) * 1e3 for v in out]
+
+    T = joints[BASE_JOINT].origin
+    return {
+        "instrument_translation_mm": [float(v) * 1e3 for v in T.translation],
+        "instrument_rotation_rpy_mrad": [float(v) * 1e3 for v in pin.rpy.matrixToRpy(T.rotation)],
+        "instrument_2sigma_mm_mrad": sig(BASE_JOINT, "tx ty tz rx ry rz"),
+        "marker_mm": [float(v) * 1e3 for v in joints[TOOL_JOINT].origin.translation],
+        "marker_2sigma_mm": sig(TOOL_JOINT, "tx ty tz"),
+    }
 
 
 def marker_lines(doc: dict) -> list[str]:
@@ -200,6 +225,20 @@ def marker_lines(doc: dict) -> list[str]:
         f"registration (closed form, {r['iterations']} alternations): RMS {r['rms_mm']:.3f} mm; "
         f"marker [{mk}] mm in {doc['link']}",
     ]
+    ident = doc.get("identified")
+    if ident:
+
+        def nums(v: list) -> str:
+            return ", ".join("–" if a is None else f"{a:.2f}" for a in v)
+
+        lines += [
+            f"identified instrument frame: translation [{nums(ident['instrument_translation_mm'])}]"
+            f" mm, rotation rpy [{nums(ident['instrument_rotation_rpy_mrad'])}] mrad; 2σ of "
+            f"base_frame tx ty tz rx ry rz [{nums(ident['instrument_2sigma_mm_mrad'])}] mm/mrad",
+            f"identified marker [{nums(ident['marker_mm'])}] mm in {doc['link']}; 2σ of "
+            f"tool_frame tx ty tz [{nums(ident['marker_2sigma_mm'])}] mm "
+            "(–: held, or absorbed by another parameter)",
+        ]
     p = doc.get("prior")
     if p is None:
         lines.append("prior: none")
