@@ -190,6 +190,27 @@ def test_cv_of_a_pose_file_calibration(tmp_path):
     assert cv["folds"] == [f.tolist() for f in kfold(24, 3, 2)]
 
 
+def test_prior_auto_is_chosen_by_cv_and_recorded(tmp_path):
+    mech, actual = _truth(1e-3)
+    q = sample_actuators(mech, 25, np.random.default_rng(31))
+    _table(tmp_path / "m.csv", actual, q, 2e-5, 32)
+    r = _run("calibrate", "ur5", "--link", "wrist_3_link", "--data", tmp_path / "m.csv",
+             "--marker-columns", "mx,my,mz", "--length-unit", "mm", "--prior", "auto",
+             "--out", tmp_path / "cal", "--json")  # fmt: skip
+    assert r.exit_code == 0, r.output
+    markers = json.loads(r.output.splitlines()[-1])["markers"]
+    table = markers["prior_cv"]
+    assert [t["sigma"] for t in table] == [None, 0.3, 1.0, 3.0, 10.0]
+    best = min(table, key=lambda t: t["held_out_rms_mm"])
+    chosen = markers["prior"]
+    assert (chosen is None) == (best["sigma"] is None)
+    if chosen is not None:
+        assert chosen["length_mm"] == pytest.approx(best["sigma"])
+    bad = _run("calibrate", "ur5", "--data", tmp_path / "m.csv", "--prior", "1,1",
+               "--out", tmp_path / "c2")  # fmt: skip
+    assert bad.exit_code != 0 and "--prior applies to marker calibrations" in bad.output
+
+
 def test_kfold_is_a_seeded_partition():
     a, b = kfold(34, 5, 0), kfold(34, 5, 0)
     assert [x.tolist() for x in a] == [x.tolist() for x in b]
