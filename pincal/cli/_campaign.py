@@ -49,13 +49,26 @@ Campaign file keys (YAML; relative paths are relative to the file):
     error_size: [1, 10]      uniform error bounds [mm, mrad]
     noise: [0.01, 0.02]      measurement noise 1 sigma [mm, mrad] (pincal's default)
     seed: 1                  seed of the poses and the noise
+  markers:                   optional: measurements.file is a marker table (motion
+                             capture, tracker) in an unknown instrument frame
+    link: LINK               required; the measured link carrying the marker
+    columns: [x, y, z]       the marker's position columns (e.g. [x1, y1, z1])
+    length_unit: m           m | mm | um (marker columns)
+    instrument_frame: unknown  unknown (registered, then identified) | known
+    marker: unknown          unknown, or [x, y, z] in LINK's frame [mm]
+    marker_std: null         1σ of a given marker [mm] (none: held); joints off the
+                             chain to LINK are locked at 0
   identification:
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
+    loss: linear             linear | huber | soft_l1 | cauchy (marker campaigns)
+    prior: null              marker campaigns: "LEN_MM,ANG_MRAD" or auto (by CV)
   validation:                held-out poses, measured on the same actual machine
     source: simulated        simulated | file | none
     file: PATH               source file: a pincal measurement file
     poses: 20                simulated: random workspace poses
     seed: 2
+    cv: null                 K: K-fold cross-validation of the fit (pincal validate --cv)
+    cv_seed: 0               seed of the folds
   report: true               write report.html / report.md into the output directory
 """
 
@@ -120,11 +133,50 @@ class Identification:
     """Identification options (``pincal calibrate``)."""
 
     method: str = "gauss-newton"
+    loss: str = "linear"
+    prior: str | None = None
 
     def check(self, key: str) -> None:
         from pincal.identification import METHODS
 
         _choice(self.method, tuple(METHODS), f"{key}.method")
+        _choice(self.loss, ("linear", "huber", "soft_l1", "cauchy"), f"{key}.loss")
+        if self.prior is not None:
+            from pincal.cli._markers import parse_prior
+
+            try:
+                parse_prior(self.prior)
+            except Exception as exc:  # click.BadParameter
+                raise CampaignError(
+                    f"{key}.prior: {shown(self.prior)} is not 'auto' or 'LEN_MM,ANG_MRAD'"
+                ) from exc
+
+
+@dataclass(frozen=True)
+class Markers:
+    """A marker table in an unknown instrument frame (``pincal calibrate --link``)."""
+
+    link: str
+    columns: tuple[str, str, str] = ("x", "y", "z")
+    length_unit: str = "m"
+    instrument_frame: str = "unknown"
+    marker: tuple[float, float, float] | None = None
+    marker_std: float | None = None
+
+    def check(self, key: str) -> None:
+        _choice(self.length_unit, ("m", "mm", "um"), f"{key}.length_unit")
+        _choice(self.instrument_frame, ("unknown", "known"), f"{key}.instrument_frame")
+        if self.marker_std is not None and (self.marker is None or self.marker_std <= 0):
+            raise CampaignError(f"{key}.marker_std needs a given marker and must be > 0 [mm]")
+
+    def options(self) -> list[str]:
+        """The ``pincal calibrate`` options of this section."""
+        opts = ["--link", self.link, "--marker-columns", ",".join(self.columns)]
+        opts += ["--length-unit", self.length_unit, "--instrument-frame", self.instrument_frame]
+        if self.marker is not None:
+            given = [*self.marker, *([self.marker_std] if self.marker_std else [])]
+            opts += ["--marker", ",".join(repr(float(v)) for v in given)]
+        return opts
 
 
 @dataclass(frozen=True)
@@ -135,8 +187,12 @@ class Validation:
     file: str | None = None
     poses: int = 20
     seed: int = 2
+    cv: int | None = None
+    cv_seed: int = 0
 
     def check(self, key: str) -> None:
+        if self.cv is not None and self.cv < 2:
+            raise CampaignError(f"{key}.cv must be ≥ 2 folds, got {self.cv}")
         _choice(self.source, VALIDATION_SOURCES, f"{key}.source")
         if (self.source == "file") != (self.file is not None):
             raise CampaignError(f"{key}.file is required with source: file, and only then")
@@ -153,6 +209,7 @@ class Campaign:
     out: str = "campaign-out"
     design: Design | None = None
     measurements: MeasurementSource = field(default_factory=MeasurementSource)
+    markers: Markers | None = None
     identification: Identification = field(default_factory=Identification)
     validation: Validation = field(default_factory=Validation)
     report: bool = True
@@ -167,6 +224,15 @@ class Campaign:
             raise CampaignError(
                 "simulated measurements need exactly one of a 'design' section or "
                 "'measurements.poses' (random workspace poses)"
+            )
+        if self.markers is not None and m.source != "file":
+            raise CampaignError("markers: needs measurements.source: file (a marker table)")
+        ident = self.identification
+        robust = ident.loss != "linear" and ident.method != "lm"
+        if self.markers is None and (ident.prior is not None or robust):
+            raise CampaignError(
+                "identification.prior (and a robust loss without method: lm) apply to "
+                "marker campaigns (a 'markers' section)"
             )
         if m.source == "file" and m.poses is not None:
             raise CampaignError("measurements.poses applies to source: simulated only")
@@ -286,6 +352,9 @@ def load_campaign(path: str | Path) -> Campaign:
 
     path = Path(path)
     data = load_yaml(path, "campaign file", CampaignError)
+    mk = data.get("markers") if isinstance(data, dict) else None
+    if isinstance(mk, dict) and mk.get("marker") == "unknown":  # the default, spelt out
+        data = {**data, "markers": {**mk, "marker": None}}
     try:
         camp = _build(Campaign, data, "")
         camp.check()

@@ -85,16 +85,24 @@ def _measure_validation(c: Campaign, p: Paths) -> list[str] | None:
 
 
 def _calibrate(c: Campaign, p: Paths) -> list[str] | None:
-    args = [c.model, "--data", str(p.data), "--method", c.identification.method]
+    i = c.identification
+    args = [c.model, "--data", str(p.data), "--method", i.method]
+    if c.markers is not None:
+        args += c.markers.options()
+        args += ["--prior", i.prior] if i.prior else []
+    args += ["--loss", i.loss] if i.loss != "linear" else []
     ctx = click.get_current_context(silent=True)  # `pincal run --force` passes it on
     args += ["--force"] if ctx is not None and ctx.params.get("force") else []
     return args + (["--params", c.preset] if c.preset else []) + ["--out", str(p.out)]
 
 
 def _validate(c: Campaign, p: Paths) -> list[str] | None:
-    if p.validation is None:
-        return None
-    return [str(p.out), "--data", str(p.validation), "--out", str(p.validation_json)]
+    v = c.validation
+    args = [] if p.validation is None else ["--data", str(p.validation)]
+    if v.cv is not None:
+        folds = p.out.parent / f"{p.out.name}-inputs" / "cv_folds.csv"
+        args += ["--cv", str(v.cv), "--seed", str(v.cv_seed), "--folds-out", str(folds)]
+    return [str(p.out), *args, "--out", str(p.validation_json)] if args else None
 
 
 def _report(c: Campaign, p: Paths) -> list[str] | None:

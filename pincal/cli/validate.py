@@ -74,10 +74,17 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
 @click.argument("calibration", type=click.Path(path_type=Path))
 @click.option(
     "--data",
-    required=True,
+    default=None,
     type=click.Path(dir_okay=False, path_type=Path),
-    help="Held-out measurement file (not used for fitting).",
+    help="Held-out measurement file (not used for fitting); required without --cv.",
 )
+@click.option("--cv", "cv_folds", type=click.IntRange(2, 1000), default=None, metavar="K",
+              help="K-fold cross-validation over the fitted poses: each fold refitted "
+              "as calibrate ran, held-out RMS/max beside the registration-only model.")
+@click.option("--seed", "cv_seed", type=int, default=0, show_default=True,
+              help="Seed of the --cv folds.")
+@click.option("--folds-out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Write the --cv folds (pose row, fold) as CSV.")
 @click.option("--json", "as_json", is_flag=True, help="Print the full validation as JSON.")
 @click.option(
     "--out",
@@ -86,7 +93,10 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
     help="Also write the full validation JSON to this file (for `pincal report --validation`).",
 )
 @fail_cleanly
-def validate(calibration: Path, data: Path, as_json: bool, out: Path | None) -> None:
+def validate(
+    calibration: Path, data: Path | None, cv_folds: int | None, cv_seed: int,
+    folds_out: Path | None, as_json: bool, out: Path | None,
+) -> None:  # fmt: skip
     """Check the calibration in CALIBRATION on measurements not used for fitting.
 
     Prints the nominal (before) and calibrated (after) errors on --data (RMS and max
@@ -101,24 +111,53 @@ def validate(calibration: Path, data: Path, as_json: bool, out: Path | None) -> 
       pincal simulate hexaslide_6pus --random 20 --seed 9 --out held_out.csv
       pincal validate cal/ --data held_out.csv
       pincal validate cal/ --data held_out.csv --json
+      pincal validate cal/ --cv 5 --seed 0      5-fold cross-validation of the fit
+
+    With --cv K the poses the calibration was fitted on are split into K folds (seeded);
+    each fold is predicted by a calibration refitted, as calibrate ran it, on the other
+    folds. Printed: held-out RMS / max [mm] beside the fit RMS, and beside the same for
+    the registration-only model (instrument frame + marker, the uncalibrated robot) for
+    a marker calibration, or the nominal model otherwise; and whether the calibration
+    beats it by more than the standard error.
     """
     from pincal.cli.common import guard_paths
     from pincal.io import atomic_write_text, read_calibration, read_measurement_file, sha256_file
+
+    if data is None and cv_folds is None:
+        raise click.UsageError("give --data (held-out measurements) or --cv K (or both)")
+    if out is not None or folds_out is not None:
+        inputs: dict = {} if data is None else {"--data": data}
+        inputs |= {f"CALIBRATION's {n}": calibration / n
+                   for n in ("identification.json", "calibration.json")}  # fmt: skip
+        guard_paths(inputs, {"--out": out, "--folds-out": folds_out})
+    cv_doc = None
+    if cv_folds is not None:
+        from pincal.cli._cv import format_cv, run_cv
+
+        cv_doc = run_cv(read_calibration(calibration), cv_folds, cv_seed, folds_out)
+        if data is None:
+            only = {"calibration": str(calibration), "cv": cv_doc}
+            if out is not None:
+                atomic_write_text(out, json.dumps(only, indent=1) + "\n")
+            click.echo(json.dumps(only) if as_json else format_cv(cv_doc), nl=as_json)
+            return
+    assert data is not None
     from pincal.measure import validate_held_out
     from pincal.model import parameters
 
-    if out is not None:
-        inputs = {"--data": data}
-        inputs |= {f"CALIBRATION's {n}": calibration / n
-                   for n in ("identification.json", "calibration.json")}  # fmt: skip
-        guard_paths(inputs, {"--out": out})
     cal = read_calibration(calibration)
     announce(cal)
     nominal = cal.nominal()
-    mf = read_measurement_file(data, nominal)
-    for w in mf.warnings:
-        click.echo(f"pincal: warning: {w}", err=True)
-    meas = mf.measurements
+    if cal.manifest.get("markers"):  # a marker table, read as calibrate read it
+        from pincal.io import read_marker_table
+        from pincal.measure import MarkerSetup
+
+        meas = read_marker_table(data, nominal, MarkerSetup.from_dict(cal.manifest["markers"]))
+    else:
+        mf = read_measurement_file(data, nominal)
+        for w in mf.warnings:
+            click.echo(f"pincal: warning: {w}", err=True)
+        meas = mf.measurements
     digest = sha256_file(data)
     fitted = {d.get("sha256") for d in cal.manifest.get("data_files", []) or []}
     independent = digest not in fitted
@@ -142,9 +181,15 @@ def validate(calibration: Path, data: Path, as_json: bool, out: Path | None) -> 
         "independent": independent,
         **validation.to_dict(),
     }
+    if cv_doc is not None:
+        doc["cv"] = cv_doc
     if out is not None:
         atomic_write_text(out, json.dumps(doc, indent=1) + "\n")
     if as_json:
         click.echo(json.dumps(doc))
     else:
         click.echo(format_validation(doc), nl=False)
+        if cv_doc is not None:
+            from pincal.cli._cv import format_cv
+
+            click.echo(format_cv(cv_doc), nl=False)

@@ -8,6 +8,14 @@ One :class:`IdentificationProblem`, solved by a registered solver (``"gauss-newt
 
 from __future__ import annotations
 
+from pincal.identification._cross_validation import (
+    CrossValidation,
+    compare,
+    cross_validate,
+    kfold,
+    position_errors,
+    subset,
+)
 from pincal.identification._data_check import check_measurements
 from pincal.identification._identify import identify, qpso_identify, step_planned_identify
 from pincal.identification._instrument_design import (
@@ -22,6 +30,13 @@ from pincal.identification._instrument_problem import (
     InstrumentIdentification,
     InstrumentProblem,
     identify_instruments,
+)
+from pincal.identification._marker_fit import (
+    REGISTRATION_PRESET,
+    MarkerFit,
+    Prior,
+    fit_markers,
+    is_registration,
 )
 from pincal.identification._monte_carlo import MonteCarloStudy, monte_carlo
 from pincal.identification._options import (
@@ -57,8 +72,10 @@ __all__ = [
     "FORMAT_VERSION",
     "LOSSES",
     "METHODS",
+    "REGISTRATION_PRESET",
     "SOLVERS",
     "CalibrationProblem",
+    "CrossValidation",
     "GateLimits",
     "GaussNewtonOptions",
     "IdentificationProblem",
@@ -68,7 +85,9 @@ __all__ = [
     "InstrumentProblem",
     "LMOptions",
     "LocalSolverExtras",
+    "MarkerFit",
     "MonteCarloStudy",
+    "Prior",
     "QPSOExtras",
     "QPSOIdentification",
     "QPSOOptions",
@@ -86,18 +105,25 @@ __all__ = [
     "Weighting",
     "check_measurements",
     "check_quality",
+    "compare",
+    "cross_validate",
     "default_instrument",
+    "fit_markers",
     "identify",
     "identify_instruments",
     "instrument_blocks",
     "instrument_candidates",
     "instrument_cramer_rao",
     "instrument_identifiability",
+    "is_registration",
+    "kfold",
     "monte_carlo",
     "outlier_poses",
+    "position_errors",
     "qpso",
     "qpso_identify",
     "qpso_stepwise",
     "solver",
     "step_planned_identify",
+    "subset",
 ]

@@ -19,6 +19,7 @@ from threadpoolctl import threadpool_limits
 
 from pincal.errors import SolverOptionError, TooFewPosesError, UnidentifiableError
 from pincal.identification._noise import initial_weights, weighted_fit
+from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import CalibrationProblem, IdentificationProblem
 from pincal.identification._qpso_identify import QPSOOptions
@@ -122,6 +123,7 @@ def _finish(
     prefix: str,
     model: CalibrationProblem,
     weighting: Weighting,
+    prior_weights: np.ndarray | None = None,
 ) -> IdentificationResult:
     params = problem.params
     fitted = free if out.fitted is None else np.asarray(out.fitted, dtype=int)
@@ -129,7 +131,10 @@ def _finish(
     Jf = J[:, fitted]
     dof = max(model.n_equations - fitted.size, 1)
     chi2 = float(r @ r) / dof
-    JtJ_inv = np.linalg.pinv(Jf.T @ Jf)
+    JtJ = Jf.T @ Jf
+    if prior_weights is not None:  # the posterior information: data plus prior
+        JtJ = JtJ + np.diag(prior_weights[fitted] ** 2)
+    JtJ_inv = np.linalg.pinv(JtJ)
     cov = JtJ_inv if model.known_noise else JtJ_inv * chi2
     mask = np.zeros(len(params), dtype=bool)
     mask[fitted] = True
@@ -281,7 +286,10 @@ def _run(problem: IdentificationProblem, method: str, entry: Any, opts: Any, pro
         )
         log.info(prefix)
     out, model, weighting = weighted_fit(model, entry, x0, free, opts, progress)
-    return _finish(problem, method, out, free, ident, raw0, prefix, model, weighting)
+    local = isinstance(opts, (GaussNewtonOptions, LMOptions))
+    prior = opts.prior_weights(x0.size) if local else None
+    w = None if prior is None else prior[0]
+    return _finish(problem, method, out, free, ident, raw0, prefix, model, weighting, w)
 
 
 def qpso_identify(

@@ -88,7 +88,13 @@ def _gauss_newton(
     x = x0.copy()
     r, J, _ = problem.evaluate(x)
     evals, rejected = 1, 0
-    cost = 0.5 * float(r @ r)
+    prior = opts.prior_weights(x0.size)
+    wf, mean = (prior[0][free], prior[1]) if prior is not None else (np.zeros(free.size), x0)
+
+    def cost_of(values: np.ndarray) -> float:  # the data cost plus the prior's
+        return problem.cost(values) + 0.5 * float(np.sum((wf * (values - mean)[free]) ** 2))
+
+    cost = 0.5 * float(r @ r) + 0.5 * float(np.sum((wf * (x - mean)[free]) ** 2))
     history = [cost]
     message, success = "maximum iterations reached", False
     lam = opts.regularization
@@ -97,7 +103,10 @@ def _gauss_newton(
     it = 0
     for it in range(1, opts.max_iterations + 1):
         Jf = J[:, free]
-        if lam > 0:
+        if prior is not None:
+            A = np.vstack([Jf, np.diag(wf)])
+            b = np.concatenate([r, wf * (x - mean)[free]])
+        elif lam > 0:
             A = np.vstack([Jf, np.sqrt(lam) * np.eye(free.size)])
             b = np.concatenate([r, np.sqrt(lam) * (x[free] - x0[free])])
         else:
@@ -130,7 +139,7 @@ def _gauss_newton(
             for _ in range(1 if opts.damping else opts.max_halvings):
                 x_try = x.copy()
                 x_try[free] += alpha * step
-                cost_try = problem.cost(x_try)
+                cost_try = cost_of(x_try)
                 evals += 1
                 # with damping on, a full step must deliver a quarter of its predicted
                 # decrease (else the linear model is not trusted and the step is damped)
@@ -161,7 +170,7 @@ def _gauss_newton(
                 step = _damped_step(A, b, mu)
                 x_try = x.copy()
                 x_try[free] += step
-                cost_try = problem.cost(x_try)
+                cost_try = cost_of(x_try)
                 evals += 1
                 if cost_try < cost:
                     accepted = True
@@ -188,7 +197,7 @@ def _gauss_newton(
         small = np.linalg.norm(alpha * step) <= opts.xtol * (np.linalg.norm(x[free]) + opts.xtol)
         r, J, _ = problem.evaluate(x)
         evals += 1
-        cost = 0.5 * float(r @ r)
+        cost = 0.5 * float(r @ r) + 0.5 * float(np.sum((wf * (x - mean)[free]) ** 2))
         history.append(cost)
         if progress:
             progress(it, cost)
@@ -238,6 +247,9 @@ def levenberg_marquardt(
 
     last: list[tuple[np.ndarray, np.ndarray]] = []
 
+    prior = opts.prior_weights(x0.size)
+    wf, mean = (prior[0][free], prior[1][free]) if prior is not None else (None, None)
+
     def both(z):
         key = z.tobytes()
         if key not in cache:
@@ -245,6 +257,9 @@ def levenberg_marquardt(
             try:
                 r, J, _ = problem.evaluate(full(z))
                 J = J[:, free]
+                if wf is not None:  # the prior's rows
+                    r = np.concatenate([r, wf * (z - mean)])
+                    J = np.vstack([J, np.diag(wf)])
                 last[:] = [(r, J)]
             except TRIAL_FAILURES:
                 if not last:

@@ -56,6 +56,32 @@ def check_real(
         )
 
 
+def _check_prior(opts: Any, owner: str) -> None:
+    """Validate and normalise ``opts.prior_std`` / ``opts.prior_mean`` (tuples of floats)."""
+    if (opts.prior_std is None) != (opts.prior_mean is None):
+        raise SolverOptionError(f"{owner}: give prior_std and prior_mean together")
+    if opts.prior_std is not None and opts.prior_mean is not None:
+        std = tuple(float(v) for v in opts.prior_std)
+        mean = tuple(float(v) for v in opts.prior_mean)
+        if len(std) != len(mean) or any(not v > 0 for v in std):
+            raise SolverOptionError(
+                f"{owner}.prior_std must hold one σ > 0 (inf = none) per prior_mean entry"
+            )
+        object.__setattr__(opts, "prior_std", std)
+        object.__setattr__(opts, "prior_mean", mean)
+
+
+def _prior_weights(opts: Any, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+    if opts.prior_std is None or opts.prior_mean is None:
+        return None
+    if len(opts.prior_std) != n:
+        raise SolverOptionError(
+            f"{type(opts).__name__}.prior_std has {len(opts.prior_std)} entries for {n} "
+            "parameters"
+        )
+    return 1.0 / np.asarray(opts.prior_std), np.asarray(opts.prior_mean)
+
+
 @dataclass(frozen=True)
 class GaussNewtonOptions:
     """Options of ``"gauss-newton"``.
@@ -74,6 +100,11 @@ class GaussNewtonOptions:
             ``damping`` is False (1–60).
         damping: damp rejected steps (True) or halve them (False).
         damping_start: first μ of the fallback (> 0, ≤ 1).
+        prior_std: a Gaussian prior: per parameter (all n, in the parameter set's
+            order) its 1σ [m or rad] about ``prior_mean``; ``inf`` = no prior on that
+            parameter. The cost becomes ``½‖r‖² + ½ Σ ((x_i − mean_i)/σ_i)²`` with ``r``
+            the whitened residual (a maximum a posteriori fit); None = no prior.
+        prior_mean: (n,) the prior's centre [m, rad] (required with ``prior_std``).
     """
 
     max_iterations: int = 50
@@ -82,6 +113,8 @@ class GaussNewtonOptions:
     max_halvings: int = 20
     damping: bool = True
     damping_start: float = 1.0
+    prior_std: tuple[float, ...] | None = None
+    prior_mean: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         o = type(self).__name__
@@ -92,6 +125,11 @@ class GaussNewtonOptions:
         check_real(o, "damping_start", self.damping_start, 0.0, 1.0, open_low=True)
         if not isinstance(self.damping, bool):
             raise SolverOptionError(f"{o}.damping must be True or False, got {self.damping!r}")
+        _check_prior(self, o)
+
+    def prior_weights(self, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """(1/σ (n,), mean (n,)) of the prior, 0 weight where σ is inf; None without one."""
+        return _prior_weights(self, n)
 
 
 @dataclass(frozen=True)
@@ -106,12 +144,16 @@ class LMOptions:
         f_scale: the robust loss' soft margin in σ of the (whitened) residuals, i.e.
             tied to the noise (> 0); None: the loss' default, at which a residual of
             3σ gets the weight 0.5 (huber 1.5, soft_l1 √3, cauchy 3, arctan 3).
+        prior_std, prior_mean: a Gaussian prior as in :class:`GaussNewtonOptions` (its
+            rows join the whitened residuals, so a robust loss applies to them too).
     """
 
     max_iterations: int = 50
     xtol: float = 1e-10
     loss: str = "linear"
     f_scale: float | None = None
+    prior_std: tuple[float, ...] | None = None
+    prior_mean: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         o = type(self).__name__
@@ -121,6 +163,11 @@ class LMOptions:
             raise SolverOptionError(f"{o}.loss must be one of {LOSSES}, got {self.loss!r}")
         if self.f_scale is not None:
             check_real(o, "f_scale", self.f_scale, 0.0, open_low=True)
+        _check_prior(self, o)
+
+    def prior_weights(self, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """(1/σ (n,), mean (n,)) of the prior, 0 weight where σ is inf; None without one."""
+        return _prior_weights(self, n)
 
 
 @dataclass(frozen=True)

@@ -87,6 +87,8 @@ MANIFEST = "calibration.json"
 CALIBRATED_URDF = "calibrated.urdf"
 CALIBRATED_SIDECAR = "calibrated.yaml"
 IDENTIFICATION_FILE = "identification.json"
+#: the registered start model of a marker calibration (instrument frame + marker set)
+NOMINAL_URDF = "nominal.urdf"
 
 
 def sha256_file(path: str | Path) -> str:
@@ -195,9 +197,18 @@ class CalibrationDirectory:
     def nominal(self) -> Mechanism:
         """The nominal mechanism (from ``model_source``, else the bundled model's name).
 
+        A marker calibration stores its nominal model (the chain to the marker with the
+        registered instrument frame and marker) as ``nominal.urdf``; that is read then.
+
         Raises:
             CalibrationDirectoryError: the nominal model cannot be found.
         """
+        if "nominal" not in self._cache and self.manifest.get("nominal_urdf"):
+            urdf = self.path / NOMINAL_URDF  # hashed with the other files; never a path
+            side = urdf.with_suffix(".yaml")
+            text = read_text(urdf, "nominal URDF", error=CalibrationDirectoryError)
+            sidecar = read_sidecar(side) if side.is_file() else {}
+            self._cache["nominal"] = Mechanism(text, sidecar, name=self.model, source=urdf)
         if "nominal" not in self._cache:
             spec = self.model_source or self.model
             check_model_files(self.manifest.get("model_files"), str(self.path / MANIFEST))
@@ -265,6 +276,7 @@ def write_calibration(
     noise: NoiseModel | None = None,
     annotations: Mapping[str, Any] | None = None,
     texts: Mapping[str, str] | None = None,
+    nominal: Mechanism | None = None,
 ) -> CalibrationDirectory:
     """Write a calibration directory atomically (whole or absent).
 
@@ -277,6 +289,9 @@ def write_calibration(
         noise: instrument noise of those data (mm, mrad), if known.
         annotations: extra entries of ``identification.json`` (validation, truth, ...).
         texts: further text files to write ``{file name: content}`` (e.g. report.txt).
+        nominal: the nominal mechanism to store as ``nominal.urdf`` (+ sidecar) when it
+            is not ``model_source`` as loaded (a marker calibration's registered chain);
+            ``annotations["markers"]`` then goes into the manifest too.
 
     Returns:
         The directory as :func:`read_calibration` reads it.
@@ -289,7 +304,7 @@ def write_calibration(
     out = Path(path).resolve()  # "." or "cal/" name a directory we can replace by rename
     out.parent.mkdir(parents=True, exist_ok=True)
     with calibration_lock(out):
-        _write_locked(out, result, model_source, data_files, noise, annotations, texts)
+        _write_locked(out, result, model_source, data_files, noise, annotations, texts, nominal)
     return read_calibration(out)  # resolved: "." names the old directory after the swap
 
 
@@ -301,6 +316,7 @@ def _write_locked(
     noise: NoiseModel | None,
     annotations: Mapping[str, Any] | None,
     texts: Mapping[str, str] | None,
+    nominal: Mechanism | None = None,
 ) -> None:
     _check_replaceable(out)
     remove_stale_temporaries(out)
@@ -314,10 +330,15 @@ def _write_locked(
         atomic_write_text(tmp / IDENTIFICATION_FILE, json.dumps(doc, indent=1) + "\n")
         for name, text in (texts or {}).items():
             atomic_write_text(tmp / name, text)
+        if nominal is not None:
+            save_urdf(nominal, tmp / NOMINAL_URDF)
         files = {p.name: sha256_file(p) for p in sorted(tmp.iterdir()) if p.is_file()}
         manifest = _manifest(result, model_source, data_files, noise, files)
         if annotations and "quality" in annotations:  # the quality gate's verdict / override
             manifest["quality"] = annotations["quality"]
+        if nominal is not None:
+            manifest["nominal_urdf"] = NOMINAL_URDF
+            manifest["markers"] = (annotations or {}).get("markers")
         atomic_write_text(tmp / MANIFEST, json.dumps(manifest, indent=1) + "\n")
         os.chmod(tmp, 0o755)
         _check_replaceable(out)

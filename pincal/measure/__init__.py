@@ -30,6 +30,12 @@ from pincal.measure._iso_cube import (
     TestCube,
     iso_test_cube,
 )
+from pincal.measure._markers import (
+    MarkerRegistration,
+    MarkerSetup,
+    marker_mechanism,
+    register_markers,
+)
 from pincal.measure._measurements import (
     DEFAULT_NOISE,
     Measurements,
@@ -62,6 +68,8 @@ __all__ = [
     "Instrument",
     "InstrumentData",
     "LaserTracker",
+    "MarkerRegistration",
+    "MarkerSetup",
     "Measurements",
     "NoiseModel",
     "PointAccuracy",
@@ -75,11 +83,13 @@ __all__ = [
     "fit_rigid_transform",
     "initial_instrument_values",
     "iso_test_cube",
+    "marker_mechanism",
     "point_accuracy",
     "pose_characteristics",
     "pose_errors",
     "pose_from_target_points",
     "register_instrument",
+    "register_markers",
     "rigid_fit_covariance",
     "simulate_cycles",
     "simulate_instrument",

@@ -1,0 +1,132 @@
+"""K-fold cross-validation over the poses: held-out error of a fitting procedure.
+
+:func:`kfold` splits m poses into K folds from a seed (a permutation by
+``numpy.random.default_rng(seed)``, then K near-equal consecutive parts), so the same
+seed gives the same folds on every machine. :func:`cross_validate` fits on K − 1 folds
+and predicts the held-out one, for each fold; every pose is held out exactly once.
+:func:`compare` states whether one procedure beats another by more than the standard
+error of the paired difference of their per-pose squared errors.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from pincal.errors import MeasurementError
+from pincal.measure import Measurements
+from pincal.model import Mechanism
+
+__all__ = ["CrossValidation", "compare", "cross_validate", "kfold", "position_errors", "subset"]
+
+
+def kfold(m: int, k: int, seed: int) -> tuple[np.ndarray, ...]:
+    """K folds of pose indices (each sorted), reproducible from ``seed``.
+
+    Raises:
+        MeasurementError: K < 2 or more folds than poses.
+    """
+    if k < 2 or k > m:
+        raise MeasurementError(f"cross-validation needs 2 ≤ K ≤ {m} poses, got K = {k}")
+    perm = np.random.default_rng(seed).permutation(m)
+    return tuple(np.sort(f) for f in np.array_split(perm, k))
+
+
+def subset(meas: Measurements, rows: np.ndarray) -> Measurements:
+    """The measurements of the given rows (same frame, components, noise)."""
+    return Measurements(
+        meas.q_act[rows],
+        meas.positions[rows],
+        None if meas.rotations is None else meas.rotations[rows],
+        meas.components,
+        meas.frame,
+        meas.actuated,
+        meas.noise,
+        None if meas.std is None else meas.std[rows],
+    )
+
+
+def position_errors(mech: Mechanism, meas: Measurements) -> np.ndarray:
+    """(m,) distances [m] between predicted and measured positions of the measured frame.
+
+    Over the measured position components only (``x z`` of a machine measuring
+    ``x z ry``).
+
+    Raises:
+        MeasurementError: no position component is measured.
+    """
+    cols = [i for i, c in enumerate("xyz") if c in meas.components]
+    if not cols:
+        raise MeasurementError("cross-validation compares positions; none is measured")
+    qs = mech.configurations(meas.q_act)
+    pred = np.array([mech.frame_placement(q).translation for q in qs])
+    return np.linalg.norm((pred - meas.positions)[:, cols], axis=1)
+
+
+@dataclass(frozen=True)
+class CrossValidation:
+    """Held-out position errors of one fitting procedure.
+
+    Attributes:
+        folds: the K folds (pose indices, 0-based rows of the data file).
+        held_out: (m,) each pose's error [m] predicted by the fit that did not see it.
+        fit_rms: (K,) RMS position error [m] of each fold's fit on its own poses.
+    """
+
+    folds: tuple[np.ndarray, ...]
+    held_out: np.ndarray
+    fit_rms: np.ndarray
+
+    @property
+    def rms(self) -> float:
+        return float(np.sqrt(np.mean(self.held_out**2)))
+
+    @property
+    def max(self) -> float:
+        return float(self.held_out.max())
+
+    def to_dict(self) -> dict:
+        """Held-out RMS / max and the folds' fit RMS [mm], for JSON."""
+        return {
+            "held_out_rms_mm": self.rms * 1e3,
+            "held_out_max_mm": self.max * 1e3,
+            "fold_fit_rms_mm": float(np.sqrt(np.mean(self.fit_rms**2))) * 1e3,
+        }
+
+
+def cross_validate(
+    fit: Callable[[Measurements], Mechanism], meas: Measurements, k: int, seed: int
+) -> CrossValidation:
+    """Fit on K − 1 folds, predict the held-out fold, for every fold.
+
+    Args:
+        fit: measurements → calibrated mechanism (the whole procedure, registration
+            included, so nothing of the held-out fold leaks into the fit).
+        meas: all poses (positions measured).
+        k: number of folds.
+        seed: the folds' seed (:func:`kfold`).
+    """
+    folds = kfold(len(meas), k, seed)
+    held = np.empty(len(meas))
+    fit_rms = np.empty(k)
+    for j, rows in enumerate(folds):
+        train = np.setdiff1d(np.arange(len(meas)), rows)
+        mech = fit(subset(meas, train))
+        held[rows] = position_errors(mech, subset(meas, rows))
+        fit_rms[j] = float(np.sqrt(np.mean(position_errors(mech, subset(meas, train)) ** 2)))
+    return CrossValidation(folds, held, fit_rms)
+
+
+def compare(model: CrossValidation, baseline: CrossValidation) -> tuple[float, float, bool]:
+    """(gain, its standard error, beats) of ``model`` over ``baseline`` on the same folds.
+
+    ``gain`` is the baseline's held-out mean squared error minus the model's [m²], its
+    standard error that of the mean of the paired per-pose differences; ``beats`` is
+    True when the gain exceeds its standard error.
+    """
+    d = baseline.held_out**2 - model.held_out**2
+    se = float(np.std(d, ddof=1) / np.sqrt(d.size)) if d.size > 1 else float("inf")
+    gain = float(np.mean(d))
+    return gain, se, gain > se

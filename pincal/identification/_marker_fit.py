@@ -1,0 +1,210 @@
+"""Identification from marker positions: registration first, then a guarded joint fit.
+
+:func:`fit_markers` is what ``pincal calibrate --link`` runs:
+
+1. the instrument frame and the marker offset in closed form
+   (:func:`pincal.measure.register_markers`);
+2. one identification of the machine's parameters together with both (Gauss–Newton,
+   with the optional Gaussian prior of :class:`Prior` on the machine's parameters);
+   when Gauss–Newton does not converge, Levenberg–Marquardt takes over from the same
+   start, and the switch is noted;
+3. the identifiable set decided again *at the solution* (the start can hide
+   parameters, e.g. a marker guessed on the last joint axis), and the fit repeated
+   from there when it differs;
+4. machine parameters whose 2σ exceeds a physical bound (``bounds``) held at their
+   nominal values and the fit repeated — each said in words in :attr:`MarkerFit.notes`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pincal.identification._identify import identify
+from pincal.identification._options import GaussNewtonOptions, LMOptions
+from pincal.identification._result import IdentificationResult
+from pincal.measure import MarkerRegistration, MarkerSetup, Measurements, register_markers
+from pincal.model import BASE_JOINT, TOOL_JOINT, Mechanism, ParameterSet, parameters
+
+__all__ = ["REGISTRATION_PRESET", "MarkerFit", "Prior", "fit_markers", "is_registration"]
+
+#: the preset of the registration-only model (instrument frame + marker)
+REGISTRATION_PRESET = "base_tool"
+
+
+def is_registration(name: str) -> bool:
+    """True for an instrument-frame or marker parameter (``base_frame.*``, ``tool_frame.*``)."""
+    return name.startswith((f"{BASE_JOINT}.", f"{TOOL_JOINT}."))
+
+
+@dataclass(frozen=True)
+class Prior:
+    """A Gaussian prior on the machine's parameters about their nominal values.
+
+    Attributes:
+        length: 1σ of length parameters [m] (inf = none).
+        angle: 1σ of angle parameters (rotations and revolute offsets) [rad].
+    """
+
+    length: float
+    angle: float
+
+    def scaled(self, s: float) -> Prior:
+        return Prior(self.length * s, self.angle * s)
+
+    def describe(self) -> str:
+        return f"σ {self.length * 1e3:.3g} mm / {self.angle * 1e3:.3g} mrad"
+
+
+@dataclass(frozen=True)
+class MarkerFit:
+    """A fit of :func:`fit_markers`.
+
+    Attributes:
+        result: the identification (parameters of ``registration.mechanism``).
+        registration: the closed-form start.
+        notes: what the guards did, in words (switches, parameters held and why).
+        method: the solver that produced ``result``.
+    """
+
+    result: IdentificationResult
+    registration: MarkerRegistration
+    notes: tuple[str, ...]
+    method: str
+
+    @property
+    def calibrated(self) -> Mechanism:
+        mech = self.result.calibrated_mechanism
+        assert mech is not None
+        return mech
+
+
+def _prior_std(params: ParameterSet, setup: MarkerSetup, prior: Prior | None) -> np.ndarray:
+    std = np.full(len(params), np.inf)
+    for i, (name, unit) in enumerate(zip(params.names, params.units, strict=True)):
+        if name.startswith(f"{TOOL_JOINT}.") and setup.marker_std is not None:
+            std[i] = setup.marker_std
+        elif prior is not None and not is_registration(name):
+            std[i] = prior.length if unit == "m" else prior.angle
+    return std
+
+
+def _fit(
+    mech: Mechanism,
+    params: ParameterSet,
+    meas: Measurements,
+    names: list[str],
+    method: str,
+    std: np.ndarray,
+    loss: str = "linear",
+    initial: np.ndarray | None = None,
+    max_iterations: int = 100,
+) -> IdentificationResult:
+    prior: dict = {}
+    if np.isfinite(std).any():
+        prior = {"prior_std": tuple(std), "prior_mean": tuple(np.zeros(len(std)))}
+    opts: GaussNewtonOptions | LMOptions | None = None
+    if method == "gauss-newton":
+        opts = GaussNewtonOptions(max_iterations=max_iterations, **prior)
+    elif method == "lm":
+        opts = LMOptions(max_iterations=max_iterations, loss=loss, **prior)
+    return identify(mech, params, meas, method, options=opts, fit=names, initial=initial)
+
+
+def _amount(value: float, unit: str) -> str:
+    return f"{value * 1e3:.3g} {'mm' if unit == 'm' else 'mrad'}"
+
+
+def _weak(
+    result: IdentificationResult, params: ParameterSet, bounds: tuple[float, float]
+) -> list[tuple[str, str]]:
+    """Machine parameters whose 2σ exceeds the bound (NaN counts), with their 2σ in words."""
+    weak = []
+    for k, i in enumerate(np.flatnonzero(result.identified)):  # std: identified ones only
+        name, unit = params.names[i], params.units[i]
+        two_sigma = 2 * float(result.std[k])
+        if not is_registration(name) and not two_sigma <= bounds[0 if unit == "m" else 1]:
+            weak.append((name, f"2σ {_amount(two_sigma, unit)}"))
+    return weak
+
+
+def fit_markers(
+    mech: Mechanism,
+    setup: MarkerSetup,
+    measurements: Measurements,
+    preset: str = "chain",
+    method: str = "gauss-newton",
+    prior: Prior | None = None,
+    bounds: tuple[float, float] = (0.02, 0.1),
+    registration_only: bool = False,
+    loss: str = "linear",
+    max_iterations: int = 100,
+) -> MarkerFit:
+    """Register, then identify the machine with the instrument frame and marker.
+
+    Args:
+        mech: from :func:`pincal.measure.marker_mechanism`.
+        setup: what is known (instrument frame, marker, its σ).
+        measurements: marker positions [m] in the instrument frame.
+        preset: parameter preset of the full model (``chain``: every joint's geometry).
+        method: ``gauss-newton`` (falls back to ``lm``) or another registered solver.
+        prior: prior on the machine's parameters (Gauss–Newton only), or None.
+        bounds: (length [m], angle [rad]) largest plausible 2σ of a machine parameter;
+            a parameter above it is held at its nominal value.
+        registration_only: fit only the instrument frame and the marker (the baseline
+            of an uncalibrated robot).
+        loss: robust loss of ``lm`` (a robust loss runs ``lm``; see ``LMOptions.loss``).
+        max_iterations: iteration limit of each solve (``lm``: 10 × evaluations).
+
+    Raises:
+        PincalError subclasses of :func:`identify` and :func:`register_markers`.
+    """
+    reg = register_markers(
+        mech,
+        measurements,
+        marker_known=setup.marker is not None,
+        frame_known=setup.instrument_frame == "known",
+    )
+    start = reg.mechanism
+    params = parameters(start, REGISTRATION_PRESET if registration_only else preset)
+    names = [n for n in params.names if n not in setup.held]
+    std = _prior_std(params, setup, None if registration_only else prior)
+    notes: list[str] = []
+    if registration_only:
+        result = _fit(start, params, measurements, names, "gauss-newton", std)
+        return MarkerFit(result, reg, (), "gauss-newton")
+    if loss != "linear":
+        method = "lm"
+    if method not in ("gauss-newton", "lm"):
+        result = _fit(start, params, measurements, names, method, std)
+        return MarkerFit(result, reg, (), method)
+    used = method
+    for _ in range(6):  # each round holds at least one more parameter, or stops
+        result = _fit(start, params, measurements, names, used, std, loss, None, max_iterations)
+        if not result.success and used == "gauss-newton":
+            notes.append(
+                f"Gauss–Newton did not converge ({result.message.strip()}); switched to "
+                "Levenberg–Marquardt from the same start"
+            )
+            used = "lm"
+            result = _fit(start, params, measurements, names, used, std, loss, None, max_iterations)
+        weak = _weak(result, params, bounds)
+        if not weak:
+            break
+        notes.append(
+            f"held {len(weak)} machine parameters at their nominal values, their 2σ "
+            f"exceeding {_amount(bounds[0], 'm')} / {_amount(bounds[1], 'rad')} (the poses "
+            "barely move those directions): " + ", ".join(f"{n} ({v})" for n, v in weak)
+        )
+        held = {n for n, _ in weak}
+        names = [n for n in names if n not in held]
+    again = _fit(start, params, measurements, names, used, std, loss, result.full_values)
+    n0, n1 = int(result.identified.sum()), int(again.identified.sum())
+    if n1 != n0 and (again.success or not result.success):
+        notes.append(
+            f"the identifiable set decided again at the solution has {n1} parameters "
+            f"(at the start {n0}); the fit was refined from the solution with that set"
+        )
+        result = again
+    return MarkerFit(result, reg, tuple(notes), used)
