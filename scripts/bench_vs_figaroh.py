@@ -4,7 +4,7 @@ Usage:
     pip install figaroh          # the optional [bench] extra
     python scripts/bench_vs_figaroh.py [--seed 0] [--noise 0.01] [--sizes 50 200 1000]
 
-Problem (scripts/ur10_calibration.py): example-robot-data UR10, a position target
+Problem (scripts/studies/ur10_calibration.py): example-robot-data UR10, a position target
 80 mm off the tool0 flange, unknown base (instrument) frame and target offset,
 joint-origin errors 0.1–1 mm / 0.5–2 mrad and joint offsets 0.5–2 mrad; N = 50, 200
 and 1000 random configurations (``--sizes``), position noise σ per coordinate;
@@ -48,7 +48,8 @@ HERE = Path(__file__).resolve().parent
 
 
 def _load_study():
-    spec = importlib.util.spec_from_file_location("ur10_calibration", HERE / "ur10_calibration.py")
+    path = HERE / "studies" / "ur10_calibration.py"
+    spec = importlib.util.spec_from_file_location("ur10_calibration", path)
     module = importlib.util.module_from_spec(spec)
     sys.modules["ur10_calibration"] = module
     spec.loader.exec_module(module)

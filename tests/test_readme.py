@@ -26,10 +26,10 @@ README = (ROOT / "README.md").read_text(encoding="utf-8")
 LONG = {
     "scripts/bench_core.py": "benchmark (timings, no assertion)",
     "scripts/bench_design.py": "benchmark (timings, no assertion)",
-    "scripts/bench_open_world.py": "benchmark; equality in tests/speed/test_batch_nonsquare.py",
+    "scripts/bench_open_world.py": "benchmark; equality in tests/model/test_batch_nonsquare.py",
     "scripts/bench_vs_figaroh.py": "needs the optional [bench] extra",
-    "scripts/stewart_pose_selection.py": "Monte-Carlo study; core claim in test_seed000_study.py",
-    "scripts/pkm5_qpso.py": "QPSO study; core claim in test_identify_qpso.py",
+    "scripts/studies/stewart_pose_selection.py": "Monte-Carlo; core claim in test_seed000_study.py",
+    "scripts/studies/pkm5_qpso.py": "QPSO study; core claim in test_identify_qpso.py",
     "scripts/studies/instrument_campaigns.py": "Monte-Carlo study; core claim in tests/instruments",
 }
 

@@ -19,7 +19,7 @@ Two cost models:
   poses, errors U(±0.03 mm)) the exact minimiser of the cost linearised at the nominal
   is 0.49–5.3 µm from the truth (max over the parameters; median 1.7 µm over 5 error
   draws) and 1e-5 µm after one re-linearisation there, measured by
-  ``python scripts/pkm5_qpso.py`` — still below the 35–76 µm QPSO reaches, and on wedge3
+  ``python scripts/studies/pkm5_qpso.py`` — still below the 35–76 µm QPSO reaches, and on wedge3
   both models give identical swarms (tested). With ``passes > 1`` the model is
   re-linearised at the best particle and the search repeated (each pass a full QPSO
   run); the reported cost is always the exact one.

@@ -1,6 +1,6 @@
 """Every subcommand against every class of bad input file: one line, exit 1, no traceback.
 
-tests/io/test_hardening_inputs.py covers the data-file options of calibrate, simulate,
+tests/io/test_bad_input_files.py covers the data-file options of calibrate, simulate,
 compensate, view, acceptance and import-tracker; this module covers the remaining
 inputs: the model argument of every command that takes one, the data file of
 ``validate``, the campaign file of ``run`` and the directory of ``report``.

@@ -168,6 +168,7 @@ def test_view_calibrated_arrows_match_independent_forward_kinematics(demo_dir, t
 # ----------------------------------------------------------------------------- report
 
 
+@pytest.mark.slow
 def test_report_assembles_demo_output(demo_dir, tmp_path):
     res = _invoke("report", str(demo_dir), "--out", str(tmp_path / "rep"), "--json")
     assert res.exit_code == 0, res.output

@@ -102,6 +102,7 @@ def test_force_past_a_unit_mistake_records_the_cause(tmp_path, campaign):
     assert "mm declared as m" in quality["reason"]
 
 
+@pytest.mark.slow
 def test_outliers_refused_then_huber_passes(tmp_path, campaign):
     meas = campaign[1]
     pos = meas.positions.copy()
@@ -131,6 +132,7 @@ def test_duplicate_rows_warn(tmp_path, campaign):
     assert "repeat an earlier row" in (tmp_path / "cal" / "report.txt").read_text()
 
 
+@pytest.mark.slow
 def test_near_singular_pose_refused(tmp_path, stewart, campaign):
     actual, meas = campaign
     home = stewart.frame_placement(stewart.q_home)

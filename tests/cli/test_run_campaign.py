@@ -189,6 +189,7 @@ def test_a_step_usage_error_is_a_campaign_error(tmp_path, monkeypatch, args, mes
     assert re.search(f"CampaignError: {message}", res.output), res.output
 
 
+@pytest.mark.slow
 def test_tracker_example_imports_and_calibrates(tmp_path):
     import shutil
 

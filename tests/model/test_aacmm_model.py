@@ -24,7 +24,7 @@ MODEL = ROOT / "models" / "aacmm"
 
 def _script():
     spec = importlib.util.spec_from_file_location(
-        "build_aacmm", ROOT / "scripts" / "build_aacmm.py"
+        "build_aacmm", ROOT / "scripts" / "models" / "build_aacmm.py"
     )
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -43,7 +43,8 @@ def probe_tip_mm(urdf_text, joints_deg):
 
 def test_committed_files_are_up_to_date():
     for name, text in _script().build().items():
-        assert (MODEL / name).read_text() == text, f"{name} is stale: run scripts/build_aacmm.py"
+        stale = f"{name} is stale: run scripts/models/build_aacmm.py"
+        assert (MODEL / name).read_text() == text, stale
 
 
 def test_sidecar_and_presets_name_urdf_joints():

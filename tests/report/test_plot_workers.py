@@ -92,6 +92,7 @@ def test_importing_the_report_package_imports_no_matplotlib():
     ]
 
 
+@pytest.mark.slow
 @forked
 def test_the_caller_of_the_workers_never_imports_matplotlib(calibration, tmp_path):
     out = _run(

@@ -25,6 +25,7 @@ def calibration(tmp_path_factory, stewart, stewart42, stewart_poses):
 @pytest.mark.skipif(
     "fork" not in multiprocessing.get_all_start_methods(), reason="workers are forked"
 )
+@pytest.mark.slow
 def test_parallel_plots_give_the_same_report(calibration, tmp_path):
     one = calibration_report(calibration, tmp_path / "one", n_jobs=1)
     two = calibration_report(calibration, tmp_path / "two", n_jobs=2)

@@ -1,4 +1,4 @@
-"""Full calibration of the AACMM from probe positions (scripts/aacmm_calibration.py)."""
+"""Full calibration of the AACMM from probe positions (scripts/studies/aacmm_calibration.py)."""
 
 from __future__ import annotations
 
@@ -16,16 +16,16 @@ from pincal.model import dh_fk
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _load(name):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
+def _load(folder, name):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / folder / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
     spec.loader.exec_module(module)
     return module
 
 
-script = _load("aacmm_calibration")
-build = _load("build_aacmm")
+script = _load("studies", "aacmm_calibration")
+build = _load("models", "build_aacmm")
 
 
 def test_identifiability_names_the_five_position_blind_dh_errors():

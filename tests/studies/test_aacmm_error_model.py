@@ -1,4 +1,4 @@
-"""scripts/aacmm_error_model.py: seed 004 Table 2 and the sensitivity experiment."""
+"""scripts/studies/aacmm_error_model.py: seed 004 Table 2 and the sensitivity experiment."""
 
 from __future__ import annotations
 
@@ -17,16 +17,16 @@ from pincal.model import (
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _load(name):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
+def _load(folder, name):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / folder / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # dataclasses look their module up
     spec.loader.exec_module(module)
     return module
 
 
-script = _load("aacmm_error_model")
-build = _load("build_aacmm")
+script = _load("studies", "aacmm_error_model")
+build = _load("models", "build_aacmm")
 ROWS = script.table2_rows()
 COARSE = {(11, 2): 5e-3}  # row 11's z is printed with two decimals
 

@@ -1,4 +1,4 @@
-"""Seed-001 study core claims (small instances of scripts/hexaslide_calibration.py)."""
+"""Seed-001 study core claims (small instances of scripts/studies/hexaslide_calibration.py)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Seed-000 study (scripts/stewart_pose_selection.py): Monte-Carlo ratios vs the bound.
+"""Seed-000 study (scripts/studies/stewart_pose_selection.py): Monte-Carlo ratios vs the bound.
 
 In the linear regime of the study (0.5 mm errors, Gauss–Newton to convergence) the
 expected mean-square errors are the Cramér–Rao ones, so the ratio Jz ÷ Jzg of the
@@ -29,7 +29,7 @@ from pincal.model import COMPONENTS
 
 ROOT = Path(__file__).resolve().parents[2]
 _spec = importlib.util.spec_from_file_location(
-    "stewart_pose_selection", ROOT / "scripts" / "stewart_pose_selection.py"
+    "stewart_pose_selection", ROOT / "scripts" / "studies" / "stewart_pose_selection.py"
 )
 study = importlib.util.module_from_spec(_spec)
 sys.modules[_spec.name] = study  # dataclasses look their module up

@@ -2,7 +2,7 @@
 sensitivity experiment, with pincal's model and identification Jacobian.
 
 Usage:
-    python scripts/aacmm_error_model.py
+    python scripts/studies/aacmm_error_model.py
 
 For each of the paper's 20 configurations: our nominal probe coordinates (DH model
 ``models/aacmm``), the norm of the actual error (model with Table 1's errors minus
@@ -32,7 +32,7 @@ import yaml
 
 import pincal
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "scripts" / "data" / "seed004.yaml"
 ERRORS = ROOT / "models" / "aacmm" / "table1_errors.yaml"
 CLASSES = {"d": "Δd", "a": "Δa", "alpha": "Δα", "theta": "Δθ"}

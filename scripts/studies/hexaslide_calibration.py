@@ -12,7 +12,7 @@ the calibrated model's IK on 24 validation poses; maxima "in one direction" (lar
 single-axis error) and "in three directions" (largest error norm) beside the paper's,
 and the Cramér–Rao predicted RMS. Acceptance: measured/predicted RMS ≤ 1.25.
 
-Run: /opt/venv/bin/python scripts/hexaslide_calibration.py [--trials N] [--extra N]
+Run: python scripts/studies/hexaslide_calibration.py [--trials N] [--extra N]
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from pincal.model import load_mechanism, parameters  # noqa: E402

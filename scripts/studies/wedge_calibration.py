@@ -10,7 +10,7 @@
 3. Compensation: the calibrated geometry in the closed form (``wedge_forward``) against
    the calibrated closed-loop model's forward kinematics.
 
-    PYTHONPATH=. /opt/venv/bin/python scripts/wedge_calibration.py
+    python scripts/studies/wedge_calibration.py
 """
 
 from __future__ import annotations

@@ -35,7 +35,7 @@ Cramér–Rao predictions (the exact expectation of the Monte-Carlo ratio in tha
 linear regime). Finally O1-optimised poses (noise-whitened scaling) vs 18 random
 poses at equal noise.
 
-Usage: python scripts/stewart_pose_selection.py [--reps 100] [--reps-random 30]
+Usage: python scripts/studies/stewart_pose_selection.py [--reps 100] [--reps-random 30]
        [--levels 4] [--K 600] [--seed 0] [--indices O1 O2 O3 O4 O5] [--jobs 2]
 """
 

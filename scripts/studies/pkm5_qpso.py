@@ -22,7 +22,7 @@ two full swarm runs; see pincal.identification), with the paper's N = 80, t_max 
 per particle, so it is only practical with small settings
 (e.g. ``--exact --particles 20 --iterations 30 --repeats 0``).
 
-    PYTHONPATH=. /opt/venv/bin/python scripts/pkm5_qpso.py [--seed 3] [--poses-per-region 5]
+    python scripts/studies/pkm5_qpso.py [--seed 3] [--poses-per-region 5]
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 joint offsets, from N position or full-pose measurements.
 
 Usage:
-    python scripts/ur10_calibration.py [--robot ur10|panda] [--poses 50] [--seed 0]
+    python scripts/studies/ur10_calibration.py [--robot ur10|panda] [--poses 50] [--seed 0]
 
 Model: the example-robot-data URDF wrapped by ``pincal.model._serial.serial_mechanism``
 (``instrument → base_frame → robot … → tool0 → tool_frame → tool``); Panda with its

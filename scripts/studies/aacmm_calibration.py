@@ -1,7 +1,7 @@
 """Seed 004: full calibration of the articulated-arm CMM from probe positions.
 
 Usage:
-    python scripts/aacmm_calibration.py [--poses 60] [--noise 0.005] [--seed 4]
+    python scripts/studies/aacmm_calibration.py [--poses 60] [--noise 0.005] [--seed 4]
 
 The "actual" arm is models/aacmm with Table 1's errors (28 ``dh`` parameters). A CMM
 arm measures points, not orientations: the simulated measurements are probe-centre
@@ -48,7 +48,7 @@ from pincal.model import (
     with_joint_origin,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 ERRORS = ROOT / "models" / "aacmm" / "table1_errors.yaml"
 D7 = 0.150  # nominal probe length d7 [m]
 D6 = 0.100  # nominal d6 [m]
