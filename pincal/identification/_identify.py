@@ -84,6 +84,7 @@ def _fit_set(
     if mech.closures and (mech.n_closure_rows > mech.closure_rank or not batch_applies(mech)):
         breaking = closure_breaking(problem.mech, params, problem.measurements.q_act, problem.x0)
     splitting = np.isin(params.names, degenerate_translations(problem.mech))
+    J0 = model.structural_jacobian(problem.x0)  # not the measured deviation's mixing
     ident = analyse_jacobian(J0, params.names, breaks_closure=breaking, splits_joint=splitting)
     if np.array_equal(candidates, np.arange(len(params))):
         sub = ident  # fitting every parameter: the same analysis

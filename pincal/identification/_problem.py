@@ -220,6 +220,23 @@ class CalibrationProblem:
         self._memo[key] = (*out, qs, bk)
         return out
 
+    def structural_jacobian(self, values: np.ndarray) -> np.ndarray:
+        """Whitened Jacobian (N, n) of the model's measured components alone.
+
+        The residual Jacobian of :meth:`evaluate` maps the model's rotation through
+        ``Jlog3`` of the measured deviation; far from the solution (a tilted actual
+        machine measured in rz only) that mixes unmeasured rotations into the measured
+        rows and makes second-order effects look identifiable. Which parameters are
+        identifiable is decided on this Jacobian instead: the same rows and weights,
+        the deviation taken as zero.
+        """
+        values = np.asarray(values, dtype=float)
+        self.evaluate(values, jacobian=False)  # closed configurations, memoised
+        _, _, _, qs, bk = self._memo[values.tobytes()]
+        sens = sensitivities_batch(self.mechanism(values), self.params, qs, bk, values)
+        J = -np.asarray(sens.jacobian)[:, self.rows] / self.sigma[:, :, None]
+        return J.reshape(-1, len(self.params))
+
     def _guesses(self, values: np.ndarray) -> np.ndarray | None:
         """Start configurations for a solve at ``values``.
 
