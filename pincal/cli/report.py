@@ -79,7 +79,7 @@ def report(
     )
     notes = campaign_notes(validation, truth, design)
     with counted("plots", unit="plot") as step:
-        files = calibration_report(directory, out, name=name, n_jobs=-1, notes=notes, progress=step)
+        files = calibration_report(directory, out, name=name, notes=notes, progress=step)
     if as_json:
         paths = {"html": str(files.html), "markdown": str(files.markdown)}
         click.echo(json.dumps({**paths, "json": str(files.json)}))
