@@ -11,10 +11,8 @@ directory (:func:`pincal.io.write_calibration`) is written out.
 from __future__ import annotations
 
 from collections.abc import Callable
-from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -51,9 +49,6 @@ from pincal.model import (
     sample_actuators,
 )
 from pincal.sensitivity import identification_jacobian
-
-if TYPE_CHECKING:
-    from pincal.report import PlotWorkers
 
 
 @dataclass(frozen=True)
@@ -120,32 +115,19 @@ def run_demo(
     """Run the simulated calibration and write the calibrated model to ``out_dir``.
 
     BLAS runs single-threaded throughout: every dense solve here is small, and a
-    threaded BLAS on a busy machine made them several times slower. With a report,
-    its plot workers (:class:`pincal.report.PlotWorkers`) start first and import
-    matplotlib on the second core while this process computes.
+    threaded BLAS on a busy machine made them several times slower. The report's
+    plots are drawn in this process.
     """
     from threadpoolctl import threadpool_limits
 
-    with threadpool_limits(1), _plot_workers(settings, out_dir) as workers:
-        return _run_demo(settings, out_dir, progress, workers)
-
-
-def _plot_workers(
-    settings: DemoSettings, out_dir: str | Path | None
-) -> AbstractContextManager[PlotWorkers | None]:
-    """Plot workers for the report (one per CPU), or nothing when no report is written."""
-    if not settings.report or out_dir is None:
-        return nullcontext(None)
-    from pincal.report import PlotWorkers
-
-    return PlotWorkers(-1)
+    with threadpool_limits(1):
+        return _run_demo(settings, out_dir, progress)
 
 
 def _run_demo(
     settings: DemoSettings,
     out_dir: str | Path | None,
     progress: Callable[[str], None] | None,
-    workers: PlotWorkers | None = None,
 ) -> DemoResult:
     say = progress or (lambda _msg: None)
     rng = np.random.default_rng(settings.seed)
@@ -225,7 +207,7 @@ def _run_demo(
             from pincal.report import calibration_report
 
             say("writing the report (plots)")
-            written = calibration_report(out, workers=workers)
+            written = calibration_report(out)
             files += [written.html, written.markdown]
             if written.json is not None:
                 files.append(written.json)

@@ -158,6 +158,7 @@ def acceptance(
     """
     import numpy as np
 
+    from pincal.cli._progress import counted
     from pincal.cli.simulate import _parse_errors, _parse_pair
     from pincal.io import atomic_write_text, read_measurements
     from pincal.measure import iso_test_cube, pose_characteristics, simulate_cycles
@@ -209,9 +210,10 @@ def acceptance(
         actual = params.apply(nominal, values)
         runs = [("before", nominal)] + ([("after", calibrated)] if calibrated else [])
         for label, controller in runs:
-            _, pos, rot = simulate_cycles(
-                actual, controller, cube.poses, cycles, repeatability * 1e-6, seed
-            )
+            with counted(f"{label}: cycles", unit="cycle") as step:
+                _, pos, rot = simulate_cycles(
+                    actual, controller, cube.poses, cycles, repeatability * 1e-6, seed, step
+                )
             pc = pose_characteristics(cube.poses, pos, rot, cube.components)
             for line in pc.lines(f"{label} calibration (simulated, {cycles} cycles)"):
                 say(line)

@@ -357,18 +357,21 @@ def _is_instrument_file(path: str) -> bool:
 
 def _identify_instrument(mech, params, data: str, method: str):
     """Machine and instrument parameters from a ballbar / probe / plane / gauge file."""
+    from pincal.cli._progress import iterations
     from pincal.identification import identify_instruments
     from pincal.io import read_instrument_data
 
     readings = read_instrument_data(data, mech)
     click.echo(f"… identifying from {len(readings.q_act)} {readings.kind} readings", err=True)
-    return identify_instruments(mech, params, [readings], method=method).result
+    with iterations("identifying") as step:
+        return identify_instruments(mech, params, [readings], method=method, progress=step).result
 
 
 def _identify_poses(mech, params, preset: str, meas, method: str, declared, loss: str):
     """Identification from a pose / position / target measurement file."""
     import numpy as np
 
+    from pincal.cli._progress import iterations
     from pincal.cli.info import reduction_line
     from pincal.identification import LMOptions, identify
     from pincal.io import check_enough_poses
@@ -382,13 +385,14 @@ def _identify_poses(mech, params, preset: str, meas, method: str, declared, loss
         f"… identifying {structural.rank} of {len(params)} parameters from {len(meas)} poses",
         err=True,
     )
-    result = identify(
-        mech,
-        params,
-        meas,
-        method=method,
-        progress=lambda it, cost: click.echo(f"… iteration {it}: cost {cost:.6g}", err=True),
-        noise=declared,
-        options=LMOptions(loss=loss) if method == "lm" else None,
-    )
+    with iterations("identifying") as step:
+        result = identify(
+            mech,
+            params,
+            meas,
+            method=method,
+            progress=step,
+            noise=declared,
+            options=LMOptions(loss=loss) if method == "lm" else None,
+        )
     return result

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import click
 
+from pincal.cli._progress import counted
 from pincal.cli.common import fail_cleanly, guard_paths
 
 
@@ -102,9 +102,9 @@ def compensate(
         )
     poses = pf.poses
     starts, start_note = _starts(pf, mech)
-    with click.progressbar(length=len(poses), label="compensating", file=sys.stderr) as bar:
+    with counted("compensating", unit="pose") as step:
         result = run(
-            mech, poses, progress=lambda done, total: bar.update(1), components=comps,
+            mech, poses, progress=step, components=comps,
             starts=starts, allow_branch_change=allow_branch_change,
         )  # fmt: skip
     if result.unreachable and not skip_unreachable:

@@ -21,8 +21,7 @@ def _collections_skip_the_imports() -> Iterator[None]:
     just before the process ends and its memory goes back anyway. The objects frozen
     here are unfrozen on leaving unless the caller had frozen some (a process that
     runs the command and goes on, a test session, collects them again); the freeze at
-    exit is registered once with :mod:`atexit`. Forked plot workers start with the
-    frozen objects shared.
+    exit is registered once with :mod:`atexit`.
     """
     import atexit
     import gc

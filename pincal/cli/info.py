@@ -96,6 +96,7 @@ def info(
 
     import numpy as np
 
+    from pincal.cli._progress import counted
     from pincal.model import degenerate_translations, parameters
     from pincal.sensitivity import BASE_POSES, base_set, identifiability
 
@@ -115,10 +116,17 @@ def info(
                 click.echo(f"  {line}")
         return
     names = [preset] if preset else ["full", *mech.presets]
+    with_base = preset is None and "base" not in mech.presets
+    steps = len(names) + with_base
+    sets, idents = [parameters(mech, name) for name in names], []
+    with counted("identifiability", unit="set") as step:  # random-pose Jacobian SVDs
+        for params in sets:
+            idents.append(identifiability(mech, params, rng=np.random.default_rng(0)))
+            step(len(idents), steps)
+        found = base_set(mech) if with_base else None  # = parameters(mech, "base")
+        step(steps, steps)
     presets = []
-    for name in names:
-        params = parameters(mech, name)
-        ident = identifiability(mech, params, rng=np.random.default_rng(0))
+    for name, params, ident in zip(names, sets, idents, strict=True):
         n_breaking = int(ident.breaks_closure.size)
         presets.append(
             {
@@ -139,8 +147,7 @@ def info(
             for line in ident.describe():
                 click.echo(f"    {line}")
     base = None
-    if preset is None and "base" not in mech.presets:
-        found = base_set(mech)  # = parameters(mech, "base"), with what it leaves out
+    if found is not None:  # the base preset, with what it leaves out
         n_base, n_degenerate = len(found.params), len(degenerate_translations(mech))
         base = {"parameters": n_base, "degenerate_translations_left_out": n_degenerate}
         base["weak_directions_left_out"] = found.weak

@@ -117,11 +117,11 @@ def poses(
       pincal poses hexaslide_6pus --count 40 --candidates random:300 --out poses.csv
       pincal poses stewart_6ups --count 18 --index O3 --scaling K --out p.csv --json
     """
-    import sys
     from pathlib import Path
 
     import numpy as np
 
+    from pincal.cli._progress import counted
     from pincal.cli.info import reduction_line
     from pincal.design import (
         MAX_CANDIDATE_BYTES,
@@ -166,15 +166,7 @@ def poses(
         click.echo(reduction_line(preset, len(reduced), len(params)), err=True)
         params = reduced
     click.echo(f"{mech.name}: {len(params)} parameters (preset {preset!r})", err=True)
-    with click.progressbar(length=1, label=f"candidates {spec}", file=sys.stderr) as bar:
-        state = {"total": 1}
-
-        def progress(done: int, total: int) -> None:
-            if total != state["total"]:
-                bar.length = total
-                state["total"] = total
-            bar.update(done - bar.pos)
-
+    with counted(f"candidates {spec}", unit="pose") as progress:
         with naming_option("--candidates"):
             cands = candidate_set(
                 mech, params, spec, rng=seed, progress=progress,

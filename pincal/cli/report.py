@@ -67,6 +67,7 @@ def report(
       pincal demo --out pincal-out && pincal report pincal-out
       pincal report pincal-out --out /tmp/report --json
     """
+    from pincal.cli._progress import counted
     from pincal.report import calibration_report, campaign_notes
 
     if not name or "/" in name or "\\" in name or name.startswith("."):
@@ -77,7 +78,8 @@ def report(
         {f"--name's {x}": target / f"{name}.{x}" for x in ("html", "md", "json")},
     )
     notes = campaign_notes(validation, truth, design)
-    files = calibration_report(directory, out, name=name, n_jobs=-1, notes=notes)
+    with counted("plots", unit="plot") as step:
+        files = calibration_report(directory, out, name=name, notes=notes, progress=step)
     if as_json:
         paths = {"html": str(files.html), "markdown": str(files.markdown)}
         click.echo(json.dumps({**paths, "json": str(files.json)}))

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, TypedDict
 import click
 import numpy as np
 
+from pincal.cli._progress import counted
 from pincal.cli.common import (
     ModelOptions,
     fail_cleanly,
@@ -233,9 +234,17 @@ def view(
     with viz.allow_mesh_outside(allow_mesh_outside):  # meshes are read (and embedded) here
         if html_path is not None:
             title = f"{mech.name}: {len(rows)} poses" + (" — calibration changes" if arrows else "")
-            page = viz.static_html(mech.model, source, list(qs), title=title, **options)
+            with counted("scene", unit="pose") as step:
+                page = viz.static_html(
+                    mech.model, source, list(qs), title=title, progress=step, **options
+                )
             summary["html"] = str(viz.write_html(html_path, page))
-        session = viz.live(mech.model, source, list(qs), host=host, **options) if live else None
+        session = None
+        if live:
+            with counted("live scene", unit="pose") as step:
+                session = viz.live(
+                    mech.model, source, list(qs), host=host, progress=step, **options
+                )
     if session is not None:
         summary["live_url"] = session.web_url
     if as_json:

@@ -17,7 +17,7 @@ parameters first, so what an instrument absorbs is held on the machine side).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -262,6 +262,7 @@ def identify_instruments(
     *,
     options: Any = None,
     labels: Sequence[str] | None = None,
+    progress: Callable[[int, float], None] | None = None,
 ) -> InstrumentIdentification:
     """Identify machine and instrument parameters jointly from several datasets.
 
@@ -273,6 +274,7 @@ def identify_instruments(
         options: that solver's options dataclass (``GaussNewtonOptions`` or
             ``LMOptions``; None = its defaults).
         labels: names of the datasets (prefix of the instrument parameter names).
+        progress: optional ``(iteration, cost)`` callback passed to the solver.
 
     Returns:
         InstrumentIdentification (the machine part is an IdentificationResult).
@@ -293,7 +295,7 @@ def identify_instruments(
     ident = model.analyse(x0)
     order = np.r_[np.arange(model.n_machine, len(model.names)), np.arange(model.n_machine)]
     free = np.sort(order[ident.base])
-    out = entry.solve(model, x0, free, opts, None)
+    out = entry.solve(model, x0, free, opts, progress)
     r, J, raws = model.evaluate(out.x)
     Jf = J[:, free]
     success, message = out.success, out.message

@@ -20,6 +20,7 @@ over the components the machine measures (the others are neither commanded nor j
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -70,11 +71,13 @@ def simulate_cycles(
     cycles: int = 30,
     actuator_std: float = 2e-6,
     rng: np.random.Generator | int = 0,
+    progress: Callable[[int, int], None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Attained poses of ``actual`` commanded by ``controller``'s inverse kinematics.
 
     Each cycle visits every pose; the actuators reach the commanded values with an
     independent error N(0, actuator_std²) per cycle (the machine's repeatability).
+    ``progress``: optional callback ``(cycles done, cycles)`` after each cycle.
 
     Returns:
         commanded actuator rows (P, n_act), attained positions (P, cycles, 3) [m] and
@@ -91,6 +94,8 @@ def simulate_cycles(
         for j, q in enumerate(q_cmd):
             T = actual.forward(q + gen.normal(0.0, actuator_std, q.shape))
             pos[j, c], rot[j, c] = T.translation, T.rotation
+        if progress is not None:
+            progress(c + 1, cycles)
     return q_cmd, pos, rot
 
 

@@ -24,12 +24,10 @@ from pincal.report._plots import (
     plot_validation_summary,
 )
 from pincal.report._sections import block_label
-from pincal.report._workers import PlotWorkers
 
 __all__ = [
     "IDENTIFICATION_JSON",
     "ErrorStats",
-    "PlotWorkers",
     "ReportFiles",
     "Section",
     "Table",

@@ -12,7 +12,7 @@ import json
 import math
 import os
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, SupportsFloat, cast
 
@@ -40,7 +40,6 @@ from pincal.report._sections import (
     quality_section,
     residual_section,
 )
-from pincal.report._workers import PlotWorkers
 
 __all__ = ["IDENTIFICATION_JSON", "MAX_JSON_BYTES", "calibration_report", "read_identification"]
 
@@ -218,8 +217,8 @@ def calibration_report(
     *,
     name: str = "report",
     n_jobs: int | None = 1,
-    workers: PlotWorkers | None = None,
     notes: Mapping[str, Any] | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> ReportFiles:
     """Write the report of a calibration output directory: HTML, Markdown and JSON.
 
@@ -238,11 +237,9 @@ def calibration_report(
         name: file stem of the report files.
         n_jobs: processes drawing the plots (-1: every CPU; forked workers, see
             :mod:`pincal.report._render`); the files do not depend on it.
-        workers: plot workers started earlier (:class:`PlotWorkers`, already warm
-            when the plots come); when given they draw the plots and ``n_jobs`` is
-            not used.
         notes: annotations added over the file's (e.g. :func:`campaign_notes` of a
             campaign's validation, truth and design files), checked like the file's.
+        progress: optional callback ``(plots drawn, plots)`` after each plot.
 
     Raises:
         ReportError: the directory or its identification.json is missing or malformed,
@@ -316,10 +313,7 @@ def calibration_report(
             },
             "quality": notes.get("quality"),
         }
-        if workers is not None:
-            workers.render(jobs)
-        else:
-            jobs.render(n_jobs)
+        jobs.render(n_jobs, progress)
         return write_report(
             out_dir,
             sections,

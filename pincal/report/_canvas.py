@@ -2,8 +2,7 @@
 
 Importing matplotlib (with its Agg backend, fonts and PIL for the PNG) costs about
 0.3 s. ``import pincal.report`` does not pay it: the plot functions import it when
-they draw, so a report whose plots are drawn in worker processes
-(:class:`pincal.report.PlotWorkers`) never imports it in the calling process.
+they draw, so a process that writes no plot never imports it.
 """
 
 from __future__ import annotations
@@ -30,7 +29,6 @@ __all__ = [
     "import_matplotlib",
     "log_scale",
     "scratch_files",
-    "warm_up",
     "write_png",
 ]
 
@@ -94,23 +92,3 @@ def import_matplotlib() -> None:
     import pincal.report._axes
     import pincal.report._layout  # noqa: F401
 
-
-def warm_up() -> None:
-    """Import matplotlib and draw one tiny figure with a text into memory.
-
-    A process that will draw plots later does this while it would otherwise wait: the
-    imports, the font file and PIL's PNG encoder are then loaded when the plots come.
-    (Drawing whole report plots ahead was measured: it did not make later plots
-    faster.) Nothing of it changes what a later plot draws.
-    """
-    import io
-
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    import_matplotlib()
-    fig = Figure(figsize=(1.0, 1.0))
-    FigureCanvasAgg(fig)
-    fig.text(0.5, 0.5, "0")
-    buffer = io.BytesIO()  # in memory: nothing is written
-    fig.savefig(buffer, format="png")

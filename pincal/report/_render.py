@@ -5,15 +5,14 @@ plots of one report can be drawn in parallel worker processes. Workers are forke
 from the calling process after it imported matplotlib (they inherit it, so a worker
 costs a few milliseconds, not an interpreter start); where ``fork`` is not available
 (Windows, macOS) or ``n_jobs`` is 1 the plots are drawn here, one after the other.
-The PNG bytes do not depend on ``n_jobs``. :class:`pincal.report.PlotWorkers` draws
-the same jobs in processes started ahead of time.
+The PNG bytes do not depend on ``n_jobs``.
 """
 
 from __future__ import annotations
 
 import multiprocessing
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -69,8 +68,12 @@ class PlotJobs:
         self.jobs.append((function, args, {"path": path, **kwargs}))
         return Path(path)
 
-    def render(self, n_jobs: int | None = 1) -> list[Path]:
+    def render(
+        self, n_jobs: int | None = 1, progress: Callable[[int, int], None] | None = None
+    ) -> list[Path]:
         """Draw every recorded plot, in ``n_jobs`` processes (-1: every CPU).
+
+        ``progress``: optional callback ``(plots drawn, plots)`` after each plot.
 
         Returns:
             The written files, in the order the plots were added.
@@ -81,10 +84,21 @@ class PlotJobs:
         workers = worker_count(n_jobs, len(self.jobs))
         scratch = [self.scratch] * len(self.jobs)
         if workers == 1 or "fork" not in multiprocessing.get_all_start_methods():
-            return list(map(draw_job, self.jobs, scratch))
+            return self._collect(map(draw_job, self.jobs, scratch), progress)
         from pincal.report._canvas import import_matplotlib
 
         import_matplotlib()  # once here, not once per forked worker
         context = multiprocessing.get_context("fork")
         with ProcessPoolExecutor(workers, mp_context=context) as pool:
-            return list(pool.map(draw_job, self.jobs, scratch))
+            return self._collect(pool.map(draw_job, self.jobs, scratch), progress)
+
+    def _collect(
+        self, drawn: Iterator[Path], progress: Callable[[int, int], None] | None
+    ) -> list[Path]:
+        """The files of ``drawn`` (in order), reporting each to ``progress``."""
+        paths: list[Path] = []
+        for path in drawn:
+            paths.append(path)
+            if progress is not None:
+                progress(len(paths), len(self.jobs))
+        return paths

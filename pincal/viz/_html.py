@@ -10,7 +10,7 @@ from __future__ import annotations
 import base64
 import html
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -144,6 +144,7 @@ def static_html(
     fps: int = 30,
     up: str = "+z",
     allow_mesh_outside: bool = False,
+    progress: Callable[[int, int], None] | None = None,
 ) -> str:
     """A self-contained HTML page showing ``model`` at ``configurations``.
 
@@ -171,6 +172,8 @@ def static_html(
             machine whose world z points down, towards the table), ``±x``, ``±y``.
         allow_mesh_outside: also read meshes outside the model's directory (absolute
             paths, ``../``): their bytes end up in the page, so only for trusted URDFs.
+        progress: optional callback ``(done, total)`` while the scene is built
+            (each pose, then each animation segment).
 
     Returns:
         The HTML text (a few MB: meshcat's viewer is inlined). Opening it needs no
@@ -199,6 +202,7 @@ def static_html(
         fps=fps,
         up=up,
         allow_mesh_outside=allow_mesh_outside or None,
+        progress=progress,
     )
     commands = ",\n".join('"' + base64.b64encode(c).decode("ascii") + '"' for c in window.commands)
     return _PAGE.format(

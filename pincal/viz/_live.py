@@ -22,7 +22,7 @@ import signal
 import subprocess
 import sys
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import meshcat
@@ -172,6 +172,7 @@ def live(
     ghost_opacity: float = 0.35,
     up: str = "+z",
     host: str = "127.0.0.1",
+    progress: Callable[[int, int], None] | None = None,
 ) -> LiveSession:
     """Start a meshcat server on ``host`` and draw the same view as :func:`static_html`.
 
@@ -209,6 +210,7 @@ def live(
             ghost_opacity=ghost_opacity,
             fps=30,
             up=up,
+            progress=progress,
         )
     except BaseException:
         session.close()

@@ -16,6 +16,7 @@ from __future__ import annotations
 import itertools
 import logging
 import os
+from collections.abc import Callable
 
 import meshcat
 import numpy as np
@@ -82,10 +83,13 @@ def build_scene(
     fps: int,
     up: str = "+z",
     allow_mesh_outside: bool | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> dict:
     """Send the scene to ``vis``; returns legend facts (colours, arrow scale).
 
     ``allow_mesh_outside`` None follows :func:`~pincal.viz.allow_mesh_outside`.
+    ``progress``: optional callback ``(done, total)`` after each pose drawn and each
+    animation segment (total: the poses, twice with an animation).
     """
     R_view_world = up_rotation(up)
     frame_id = None
@@ -158,6 +162,7 @@ def build_scene(
     }
     opacity = ghost_opacity if (animate or len(qs) > 1) else 1.0
     triad = (0.08 if arrows else 0.12) * size  # axis length [m]
+    total = len(qs) * (2 if animate else 1)
     for k, poses in enumerate(pose_sets):
         rgb = ghost_colour(k, len(qs))
         legend["poses"].append(rgb)
@@ -170,6 +175,8 @@ def build_scene(
                 triad,
                 1.0,
             )
+        if progress is not None:
+            progress(k + 1, total)
 
     if animate:
         robot = root["robot"]
@@ -191,13 +198,15 @@ def build_scene(
 
         cycle = [*qs, qs[0]]
         start = 0
-        for q_from, q_to in itertools.pairwise(cycle):
+        for k, (q_from, q_to) in enumerate(itertools.pairwise(cycle)):
             key(start, q_from)
             key(start + hold, q_from)
             for s in range(1, steps + 1):
                 t = s / steps
                 key(start + hold + round(t * move), pin.interpolate(model, q_from, q_to, t))
             start += hold + move
+            if progress is not None:
+                progress(len(qs) + k + 1, total)
         vis.window.send(_SetAnimationLooped(animation))
 
     width = 0.006 * size

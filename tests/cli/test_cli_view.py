@@ -122,7 +122,7 @@ def test_view_writes_html_from_a_poses_file_only_where_asked(tmp_path):
     out = tmp_path / "out" / "view.html"
     res = _invoke("view", "stewart_6ups", "--poses", str(poses), "--html", str(out), "--json")
     assert res.exit_code == 0, res.output
-    summary = json.loads(res.output)
+    summary = json.loads(res.stdout)
     assert summary == {"model": "stewart_6ups", "poses": 2, "up": "+z", "html": str(out)}
     page = out.read_text()
     assert "stewart_6ups: 2 poses" in page and "axes of frame <b>effector</b>" in page
@@ -134,7 +134,7 @@ def test_view_uses_sidecar_up_direction(tmp_path):
     out = tmp_path / "pkm5.html"
     res = _invoke("view", "pkm5", "--random", "2", "--html", str(out), "--json")
     assert res.exit_code == 0, res.output
-    assert json.loads(res.output)["up"] == "-z"
+    assert json.loads(res.stdout)["up"] == "-z"
     assert "world <b>-z</b> pointing up" in out.read_text()
 
 
@@ -159,7 +159,7 @@ def test_view_calibrated_arrows_match_independent_forward_kinematics(demo_dir, t
     )  # fmt: skip
     assert res.exit_code == 0, res.output
     expected = np.linalg.norm(cal.forward(q_act).translation - mech.forward(q_act).translation)
-    summary = json.loads(res.output)
+    summary = json.loads(res.stdout)
     assert summary["max_prediction_change_mm"] == pytest.approx(expected * 1e3, rel=1e-6)
     assert expected > 1e-4  # the demo's errors are 0.5 mm: a visible change
     assert f"pose 0: {expected * 1e3:.3f} mm" in out.read_text()
@@ -172,7 +172,7 @@ def test_view_calibrated_arrows_match_independent_forward_kinematics(demo_dir, t
 def test_report_assembles_demo_output(demo_dir, tmp_path):
     res = _invoke("report", str(demo_dir), "--out", str(tmp_path / "rep"), "--json")
     assert res.exit_code == 0, res.output
-    files = json.loads(res.output)
+    files = json.loads(res.stdout)
     md = Path(files["markdown"]).read_text()
     data = json.loads((demo_dir / "identification.json").read_text())
     rms_after = data["validation_after"]["rms_position_mm"]

@@ -166,6 +166,22 @@ def test_page_is_self_contained(prim):
     assert "two &lt;legs&gt;" in page  # title escaped
 
 
+
+@pytest.mark.parametrize("animate", [True, False])
+def test_scene_progress_counts_poses_then_animation_segments(prim, animate):
+    model, path, qs = prim
+    calls: list[tuple[int, int]] = []
+    quiet = viz.static_html(model, path, qs, frame="effector", animate=animate)
+    page = viz.static_html(
+        model, path, qs, frame="effector", animate=animate,
+        progress=lambda k, n: calls.append((k, n)),
+    )  # fmt: skip
+    total = len(qs) * (2 if animate and len(qs) > 1 else 1)
+    assert calls == [(k, total) for k in range(1, total + 1)]
+    drawn, drawn_quietly = _transforms(page), _transforms(quiet)  # (objects carry UUIDs)
+    assert drawn.keys() == drawn_quietly.keys()  # reporting progress changes nothing drawn
+    assert all(np.array_equal(drawn[k], drawn_quietly[k]) for k in drawn)
+
 def test_ghost_poses_match_independent_kinematics(prim):
     model, path, qs = prim
     commands = _commands(viz.static_html(model, path, qs, frame="effector", animate=False))
