@@ -10,6 +10,7 @@ import click
 
 from pincal.cli._limits import number_pair
 from pincal.cli.common import fail_cleanly, guard_paths, model_input, model_source
+from pincal.errors import PincalError
 from pincal.identification import METHODS
 
 
@@ -122,16 +123,37 @@ def format_report(doc: dict) -> str:
     metavar="MM,RAD",
     help="Quality gate: largest parameter change [default: 20,0.1].",
 )
+@click.option(
+    "--significance",
+    type=float,
+    default=None,
+    metavar="P",
+    help="Quality gate: p-value below which the χ² test (declared noise) and the "
+    "misspecification probes (scale, actuator gains, drift) refuse [default: 1e-3].",
+)
+@click.option(
+    "--instrument",
+    "instrument",
+    default=None,
+    metavar="NAME",
+    help="Instrument profile judging an estimated noise: laser-tracker, motion-capture, "
+    "ballbar, touch-probe, cmm (overrides the file's '# instrument:').",
+)
 @fail_cleanly
-def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max_change) -> None:
+def calibrate(
+    model, data, preset, method, out, as_json, noise, loss, force, max_change, significance,
+    instrument,
+) -> None:
     """Identify MODEL's geometric parameters from measured poses (--data).
 
     Writes one calibration directory OUT (whole or not at all) that `pincal view
     --calibrated`, `compensate`, `validate` and `report` read as it is. Without a noise
     declaration (file header or --noise) the noise of each block is estimated from the
     residuals and reported. A quality gate refuses to write a calibration whose data or
-    fit are implausible (unit mistake, outliers, failed solve, reduced χ² > 100 with
-    declared noise, a parameter moving > 20 mm / 0.1 rad); --force writes it anyway.
+    fit are implausible (unit mistake, outliers, failed solve, a χ² beyond the declared
+    noise at p < 1e-3, a parameter moving > 20 mm / 0.1 rad, a misspecification probe —
+    scale, actuator gains, drift — explaining the residual, an estimated noise beyond
+    the --instrument profile); --force writes it anyway.
 
     \b
     Examples:
@@ -151,7 +173,15 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
     )
     from pincal.model import load_mechanism, parameters
 
-    limits = gate_limits(max_change)
+    limits = gate_limits(max_change, significance)
+    profile = None
+    if instrument is not None:
+        from pincal.identification import instrument_profile
+
+        try:
+            profile = instrument_profile(instrument).name
+        except PincalError as e:
+            raise click.BadParameter(str(e), param_hint="--instrument") from None
 
     if loss != "linear" and method != "lm":
         raise click.BadParameter(
@@ -182,7 +212,9 @@ def calibrate(model, data, preset, method, out, as_json, noise, loss, force, max
         gate = dataclasses.replace(mf.data_check, limits=limits)
         apply_gate(gate, force, before_fit=True)
         result = _identify_poses(mech, params, preset, meas, method, declared, loss)
-        verdict = check_quality(result, meas, mech=mech, data=gate)
+        verdict = check_quality(
+            result, meas, mech=mech, data=gate, instrument=profile or mf.instrument
+        )
     quality = apply_gate(verdict, force)
     out_dir = Path(out)
     doc = result_json(result, str(data), CALIBRATED_URDF)

@@ -23,6 +23,11 @@ from pincal.identification._instrument_problem import (
     InstrumentProblem,
     identify_instruments,
 )
+from pincal.identification._instrument_profiles import (
+    INSTRUMENT_PROFILES,
+    InstrumentProfile,
+    instrument_profile,
+)
 from pincal.identification._monte_carlo import MonteCarloStudy, monte_carlo
 from pincal.identification._options import (
     LOSSES,
@@ -55,6 +60,7 @@ StepPlanningResult = IdentificationResult
 __all__ = [
     "COST_MODELS",
     "FORMAT_VERSION",
+    "INSTRUMENT_PROFILES",
     "LOSSES",
     "METHODS",
     "SOLVERS",
@@ -66,6 +72,7 @@ __all__ = [
     "InstrumentIdentifiability",
     "InstrumentIdentification",
     "InstrumentProblem",
+    "InstrumentProfile",
     "LMOptions",
     "LocalSolverExtras",
     "MonteCarloStudy",
@@ -93,6 +100,7 @@ __all__ = [
     "instrument_candidates",
     "instrument_cramer_rao",
     "instrument_identifiability",
+    "instrument_profile",
     "monte_carlo",
     "outlier_poses",
     "qpso",
