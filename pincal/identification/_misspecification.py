@@ -38,6 +38,7 @@ from pincal.model._mechanism import Mechanism
 __all__ = ["BlockChi2", "Probe", "chi2_blocks", "probe_columns", "probe_misspecification"]
 
 _POS = ("x", "y", "z")
+_OUTSIDE = 1e-2  # a nuisance column with < 1 % of its norm outside the model is absorbed
 
 
 @dataclass(frozen=True)
@@ -199,9 +200,14 @@ def probe_misspecification(
     if not rss > 0:
         return probes
     for name, raw in columns.items():
-        B = (raw / sigma[:, :, None]).reshape(z.size, -1)
-        B = B - U @ (U.T @ B)
-        coef, _, rank, _sv = np.linalg.lstsq(B, zr, rcond=1e-8)
+        B0 = (raw / sigma[:, :, None]).reshape(z.size, -1)
+        B = B0 - U @ (U.T @ B0)
+        # a term the model (nearly) spans is absorbed by it: no test (only rounding is left)
+        outside = np.linalg.norm(B, axis=0) > _OUTSIDE * np.linalg.norm(B0, axis=0)
+        B = B[:, outside]
+        if B.shape[1] == 0:
+            continue
+        coef, _, rank, _sv = np.linalg.lstsq(B, zr, rcond=1e-6)
         q = int(rank)
         if q == 0 or nu - q < 1:
             continue
@@ -209,7 +215,9 @@ def probe_misspecification(
         f = (delta / q) / max((rss - delta) / (nu - q), 1e-300)
         p = float(stats.f.sf(f, q, nu - q))
         touched = np.any(raw != 0, axis=2).ravel()  # the blocks the term acts on
-        share = min(delta / max(float(np.sum(zr[touched] ** 2)), 1e-300), 1.0)
+        before = float(np.sum(zr[touched] ** 2))
+        after = float(np.sum((zr - B @ coef)[touched] ** 2))
+        share = min(max(1.0 - after / before, 0.0), 1.0) if before > 0 else 0.0
         probes.append(Probe(name, q, f, p, share, _size(name, coef)))
     return probes
 
