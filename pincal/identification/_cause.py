@@ -47,9 +47,13 @@ def likely_cause(v: QualityVerdict, result: IdentificationResult, m: int) -> tup
         )
     if "model" in kinds and v.probes:
         best = max(v.probes, key=lambda p: p[1])
+        alpha = lim.probe_significance / len(v.probes)
+        also = [f"{p[3]} ({p[1]:.0%})" for p in v.probes
+                if p is not best and p[2] < alpha and p[1] >= lim.probe_explained]  # fmt: skip
         return "model or instrument", (
-            f"{best[3]} explains {best[1]:.0%} of the residual (F-test p = {best[2]:.2g}): "
-            "the model misses an error the data show, or the instrument is off. Check the "
+            f"{best[3]} explains {best[1]:.0%} of the residual (F-test p = {best[2]:.2g})"
+            + (f"; so do {', '.join(also)}, which these poses cannot tell apart" if also else "")
+            + ": the model misses an error the data show, or the instrument is off. Check the "
             "instrument's scale and the actuators' scales (encoder / lead-screw gains), "
             "look for drift, or fit a larger --params preset."
         )

@@ -196,7 +196,7 @@ def probe_misspecification(
     zr = z - U @ (U.T @ z)
     rss = float(zr @ zr)
     nu = z.size - U.shape[1]
-    probes = []
+    probes: list[Probe] = []
     if not rss > 0:
         return probes
     for name, raw in columns.items():

@@ -282,7 +282,10 @@ def check_quality(
             f"{len(out)} of {m} poses are outliers (normalised residual > {limit:.2f}: "
             f"poses {shown})"
         )
-        if len(out) > cap:
+        if fired is not None:  # judged with the probe's term, yet the model error remains
+            text += f"; judge them again once the {fired.name} error is fixed"
+            issues.append(QualityIssue("outliers", False, text))
+        elif len(out) > cap:
             text += ": too many for outliers, the residuals are not noise (model, units, frame?)"
             issues.append(QualityIssue("outliers", not robust, text))
         elif robust:

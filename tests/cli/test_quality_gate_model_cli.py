@@ -1,0 +1,89 @@
+"""`pincal calibrate`'s gate on wrong models: probes, profiles, significance, causes."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import pincal
+from pincal.cli import main
+from pincal.io import write_measurements
+from pincal.model import sample_actuators
+
+NOISE = pincal.NoiseModel(0.01, 0.02)
+RRR3 = Path(__file__).resolve().parents[1] / "model" / "machines" / "rrr3"
+
+
+@pytest.fixture(scope="module")
+def campaign(stewart, stewart42):
+    rng = np.random.default_rng(31)
+    actual = stewart42.apply(stewart, rng.uniform(-1e-3, 1e-3, len(stewart42)))
+    meas = pincal.simulate_measurements(actual, sample_actuators(stewart, 40, rng), NOISE, rng)
+    return actual, meas
+
+
+def _calibrate(path, out, *extra, model="stewart_6ups"):
+    args = ["calibrate", str(model), "--data", str(path), "--out", str(out)]
+    return CliRunner().invoke(main, [*args, *extra])
+
+
+def _file(tmp_path, meas, header: str = ""):
+    path = tmp_path / "m.csv"
+    write_measurements(path, meas, length_unit="mm")
+    if header:
+        text = path.read_text().replace("# kind: pose\n", f"# kind: pose\n{header}\n")
+        path.write_text(text)
+    return path
+
+
+def test_scale_error_without_declared_noise_is_refused(tmp_path, campaign):
+    meas = dataclasses.replace(campaign[1], positions=campaign[1].positions * 1.01, noise=None)
+    res = _calibrate(_file(tmp_path, meas), tmp_path / "cal")
+    assert res.exit_code == 1 and not (tmp_path / "cal").exists()
+    assert "Likely cause: model or instrument" in res.stderr
+    assert "scale of the measured positions explains" in res.stderr
+    assert "declared noise" not in res.stderr
+    # --significance is the override of the test's level (not of the whole gate)
+    res = _calibrate(_file(tmp_path, meas), tmp_path / "cal", "--significance", "1e-300")
+    assert res.exit_code == 0, res.output
+    res = _calibrate(_file(tmp_path, meas), tmp_path / "cal", "--significance", "2")
+    assert res.exit_code == 2 and "--significance" in res.output
+
+
+def test_instrument_profile_from_the_header_and_the_option(tmp_path, campaign):
+    actual, clean = campaign
+    rng = np.random.default_rng(32)
+    noisy = pincal.simulate_measurements(actual, clean.q_act, pincal.NoiseModel(0.1, 0.2), rng)
+    noisy = dataclasses.replace(noisy, noise=None)
+    path = _file(tmp_path, noisy, "# instrument: laser-tracker")
+    res = _calibrate(path, tmp_path / "cal")
+    assert res.exit_code == 1 and "Likely cause: instrument or model" in res.stderr
+    assert "typical 0.02 mm of a laser tracker" in res.stderr
+    res = _calibrate(path, tmp_path / "cal", "--instrument", "motion-capture", "--json")
+    assert res.exit_code == 0, res.output
+    quality = json.loads(res.stdout)["quality"]
+    assert quality["instrument_profile"] == "motion-capture"
+    assert quality["noise_source"] == "estimated" and quality["chi2_blocks"] == []
+    res = _calibrate(path, tmp_path / "cal2", "--instrument", "theodolite")
+    assert res.exit_code == 2 and "laser-tracker" in res.output
+    bad = _file(tmp_path, noisy, "# instrument: theodolite")
+    res = _calibrate(bad, tmp_path / "cal3")
+    assert res.exit_code == 1 and "MeasurementFormatError" in res.stderr
+    assert "instrument 'theodolite' unknown" in res.stderr
+
+
+def test_planar_full_preset_refusal_names_what_was_measured(tmp_path):
+    """Issue 22: the refusal named the declared noise though χ²/ν was 1.1."""
+    data = tmp_path / "m.csv"
+    res = CliRunner().invoke(main, ["simulate", str(RRR3), "--random", "40", "--out", str(data)])
+    assert res.exit_code == 0, res.output
+    res = _calibrate(data, tmp_path / "cal", "--params", "full", model=RRR3)
+    assert res.exit_code == 1
+    assert "the solver did not succeed" in res.stderr
+    assert "Likely cause: solver" in res.stderr and "against the declared noise" in res.stderr
+    assert "larger than the declared noise" not in res.stderr
