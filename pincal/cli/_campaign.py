@@ -50,6 +50,8 @@ Campaign file keys (YAML; relative paths are relative to the file):
     seed: 1                  seed of the poses and the noise
   identification:
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
+    instrument: NAME         optional profile judging an estimated noise: laser-tracker |
+                             motion-capture | ballbar | touch-probe | cmm
   validation:                held-out poses, measured on the same actual machine
     source: simulated        simulated | file | none
     file: PATH               source file: a pincal measurement file
@@ -119,11 +121,14 @@ class Identification:
     """Identification options (``pincal calibrate``)."""
 
     method: str = "gauss-newton"
+    instrument: str | None = None
 
     def check(self, key: str) -> None:
-        from pincal.identification import METHODS
+        from pincal.identification import INSTRUMENT_PROFILES, METHODS
 
         _choice(self.method, tuple(METHODS), f"{key}.method")
+        if self.instrument is not None:
+            _choice(self.instrument, tuple(INSTRUMENT_PROFILES), f"{key}.instrument")
 
 
 @dataclass(frozen=True)

@@ -2,27 +2,41 @@
 
 A fit can "converge" on data that cannot give a calibration: millimetres declared as
 metres, a world frame that was never registered, gross outliers, a pose next to a
-singularity. :func:`check_measurements` looks at the data before fitting (scale of the
-measured positions against the nominal model's at the same poses, duplicate rows);
-:func:`check_quality` judges the result (solver success, reduced χ² against the declared
-noise, size of the parameter changes, outlying poses, robust-fit breakdown, poses of
+singularity — or on a model that is wrong: an instrument scale, an actuator gain the
+model lacks, a noise larger than declared. :func:`check_measurements` looks at the data
+before fitting (scale of the measured positions against the nominal model's at the same
+poses, duplicate rows); :func:`check_quality` judges the result (solver success, χ²
+against the declared noise, misspecification probes, estimated noise against the
+instrument's profile, parameter changes, outlying poses, robust-fit breakdown, poses of
 outsized sensitivity). Both return a :class:`QualityVerdict`: issues that refuse the
-calibration, warnings, and the likely cause named once (``units``, ``frame``,
-``outliers``, ``singular pose``, ``noise or model``).
+calibration, warnings, and the likely cause named once, from what was measured
+(:mod:`pincal.identification._cause`). See ``docs/quality_gate.md`` for the measured
+false-alarm and detection rates.
 
 Thresholds (:class:`GateLimits`, defaults):
 
-- reduced χ² > 100 with declared noise (residual RMS 10× the declared σ) refuses;
-  < 0.01 warns (the declared noise is 10× too large);
-- a parameter moving by more than 20 mm (lengths) or 0.1 rad (angles) refuses;
+- declared noise: a block (position, orientation) whose χ² has a p-value for χ²(ν_b)
+  below 1e-3 *and* χ²/ν_b > 1.5 refuses (ν_b the block's redundancy), as does a reduced
+  χ² > 100 whatever its p-value; a reduced χ² < 0.01 warns (the noise is 10× too large);
+- misspecification probes (any noise): a global scale of the measured positions, a
+  gain per actuator and a linear drift over the pose order are added to the linearised
+  fit; one whose F-test p-value is below 1e-3 / (number of probes) *and* that explains
+  ≥ 25 % of the residual of the blocks it acts on refuses ("model or instrument error
+  suspected", :mod:`pincal.identification._misspecification`);
+- estimated noise with an instrument profile (``--instrument``, ``# instrument:``):
+  σ̂ above 3× the profile's typical σ refuses (:mod:`._instrument_profiles`);
+- a machine parameter moving by more than 20 mm (lengths) or 0.1 rad (angles) refuses;
+  registration unknowns (the ``base_frame`` / ``tool_frame`` joints: instrument frame,
+  marker) have their own bound, 1 m / π rad (a rough registration moves them far);
 - measured positions whose spread about their centroid is outside ½–2× the nominal
   model's at the same actuator values (and differs from it by more than 2 mm) refuse
   before fitting (a known unit ratio — 1000, 0.001, 10, 0.1, 1/25.4… — is named);
-- a pose is an outlier when one of its residuals — whitened, studentised by its
-  leverage and divided by the robust (MAD) scale of its block — exceeds
-  ``max(5, Φ⁻¹(1 − 1e-3 / 2N))`` (5σ, or the Bonferroni bound of family-wise risk 1e-3
-  over N equations when larger: 5.3 for 10 000); outliers refuse a least-squares fit
-  and are listed for a robust one;
+- outliers by deletion (:mod:`pincal.identification._outliers`): the pose whose
+  deleted (leave-one-out) residual is largest against the others' scale is named when
+  its F(k, ν − k) statistic passes the Bonferroni bound of family-wise risk 1e-3 over
+  the m poses, removed, and the search repeated; they refuse a least-squares fit and
+  are listed for a robust one (without a measured model, the older per-equation MAD
+  test of :func:`outlier_poses` is used);
 - a robust fit that down-weights more than 25 % of the poses has broken down (refuses);
 - a pose whose whitened sensitivity (norm of its Jacobian block) exceeds 100× the
   median pose's is near a singular configuration: it dominates the fit with a leverage

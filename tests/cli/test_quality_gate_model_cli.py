@@ -87,3 +87,22 @@ def test_planar_full_preset_refusal_names_what_was_measured(tmp_path):
     assert "the solver did not succeed" in res.stderr
     assert "Likely cause: solver" in res.stderr and "against the declared noise" in res.stderr
     assert "larger than the declared noise" not in res.stderr
+
+
+def test_campaign_names_the_instrument(tmp_path, campaign):
+    actual, clean = campaign
+    rng = np.random.default_rng(33)
+    noisy = pincal.simulate_measurements(actual, clean.q_act, pincal.NoiseModel(0.1, 0.2), rng)
+    path = _file(tmp_path, dataclasses.replace(noisy, noise=None))
+    camp = tmp_path / "c.yaml"
+    body = (
+        f"model: stewart_6ups\nmeasurements: {{source: file, file: {path}}}\n"
+        "validation: {source: none}\nreport: false\n"
+    )
+    camp.write_text(body + "identification: {instrument: laser-tracker}\n")
+    res = CliRunner().invoke(main, ["run", str(camp), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 1 and "Likely cause: instrument or model" in res.stderr
+    camp.write_text(body + "identification: {instrument: laser}\n")
+    res = CliRunner().invoke(main, ["run", str(camp), "--out", str(tmp_path / "out")])
+    assert res.exit_code != 0 and "identification.instrument" in res.stderr
+    assert "laser-tracker" in res.stderr
