@@ -62,6 +62,7 @@ from pincal.identification._misspecification import (
     probe_columns,
     probe_misspecification,
 )
+from pincal.identification._outlier_refit import confirm_outliers
 from pincal.identification._outliers import deletion_outliers
 from pincal.identification._result import IdentificationResult
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
@@ -251,6 +252,9 @@ def check_quality(
     if Jw is not None and sigma is not None and w is not None and _inexact(result):
         z = np.asarray(w.whitened, dtype=float)
         out, limit = deletion_outliers(Jw, z, lim.outlier_risk, cap)
+        if out and len(out) <= cap and measurements is not None and mech is not None:
+            out, limit = confirm_outliers(result, mech, measurements, out, lim.outlier_risk,
+                                          cap) or (out, limit)  # fmt: skip
         if not scalar_instrument and measurements is not None:
             rows = np.setdiff1d(np.arange(m), out) if len(out) <= cap else np.arange(m)
             cols = probe_columns(result, mech, measurements)
