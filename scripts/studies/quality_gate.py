@@ -15,8 +15,8 @@ the mechanism and the measurements — the checks ``pincal calibrate`` runs. Fau
   the model does not have);
 - ``noise10``: the simulated noise is 10× the noise the file declares (or, with the
   noise estimated, 10× the laser-tracker profile's limit check);
-- ``outlier``: one pose of 30 moved by 5 mm along x (rate of *exact* naming: refused
-  with cause ``outliers`` and exactly that pose named).
+- ``outlier``: one pose of 30 (two of 40 on wedge3) moved by 5 mm along x (rate of
+  *exact* naming: refused with cause ``outliers`` and exactly those poses named).
 
 A cell's rate is the share of refused fits (false alarms on clean cells, detections on
 fault cells) with its binomial standard error √(p(1−p)/n). Seeded: fit i of every cell
@@ -54,6 +54,7 @@ class Cell:
     declared: bool
     profile: str | None = None
     poses: int | None = None  # None: --poses
+    outliers: int = 1  # poses moved by the outlier fault
 
     @property
     def clean(self) -> bool:
@@ -78,6 +79,8 @@ CELLS = (
          poses=30),
     Cell("one 5 mm outlier in 30, Stewart, estimated", "stewart_6ups", "outlier", 5e-3, False,
          poses=30),
+    Cell("two 5 mm outliers in 40, wedge3, estimated", "wedge3", "outlier", 5e-3, False,
+         poses=40, outliers=2),
 )  # fmt: skip
 
 _MECHS: dict[str, tuple[pincal.Mechanism, pincal.ParameterSet]] = {}
@@ -101,20 +104,20 @@ def run_fit(cell: Cell, seed: int, poses: int) -> tuple[bool, str, bool]:
     sim = pincal.NoiseModel(NOISE[0] * factor, NOISE[1] * factor)
     meas = pincal.simulate_measurements(actual, q, sim, rng)
     meas = dataclasses.replace(meas, noise=pincal.NoiseModel(*NOISE) if cell.declared else None)
-    bad = -1
+    bad: tuple[int, ...] = ()
     if cell.fault == "scale":
         meas = dataclasses.replace(meas, positions=meas.positions * (1.0 + cell.size))
     elif cell.fault == "gain":
         meas = dataclasses.replace(meas, q_act=meas.q_act / (1.0 + cell.size))
     elif cell.fault == "outlier":
-        bad = int(rng.integers(len(meas)))
+        bad = tuple(sorted(rng.choice(len(meas), cell.outliers, replace=False).tolist()))
         pos = meas.positions.copy()
-        pos[bad, 0] += cell.size
+        pos[list(bad), 0] += cell.size
         meas = dataclasses.replace(meas, positions=pos)
     result = identify(mech, params, meas)
     verdict = check_quality(result, meas, mech=mech, instrument=cell.profile)
     kinds = ",".join(sorted({i.kind for i in verdict.refusals}))
-    exact = verdict.cause == "outliers" and verdict.outlier_poses == (bad,)
+    exact = verdict.cause == "outliers" and verdict.outlier_poses == bad
     return not verdict.passed, kinds, exact
 
 

@@ -174,3 +174,23 @@ def test_deletion_outliers_name_the_bad_pose_only():
             z[7, 0] += 30.0
             assert deletion_outliers(A, z, 1e-3)[0] == (7,)
     assert named_clean <= 2
+
+
+def test_outliers_on_another_machine_name_no_good_pose():
+    """wedge3, noise estimated, two 5 mm outliers: the linearised deletion alone also
+    named a good pose (19); the refit without the named poses clears it."""
+    from pincal.model import load_mechanism, parameters
+
+    mech = load_mechanism("wedge3")
+    ps = parameters(mech, next(iter(mech.presets)))
+    rng = np.random.default_rng(0)
+    bound = np.array([1e-3 if u == "m" else 1e-2 for u in ps.units])
+    actual = ps.apply(mech, rng.uniform(-bound, bound))
+    q = sample_actuators(mech, 40, rng)
+    meas = pincal.simulate_measurements(actual, q, pincal.NoiseModel(0.01, 0.05), rng)
+    pos = meas.positions.copy()
+    pos[[4, 22], 0] += 5e-3
+    meas = dataclasses.replace(meas, noise=None, positions=pos)
+    result = identify(mech, ps, meas)
+    v = check_quality(result, meas, mech=mech)
+    assert not v.passed and v.cause == "outliers" and v.outlier_poses == (4, 22)
