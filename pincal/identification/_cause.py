@@ -65,9 +65,9 @@ def likely_cause(v: QualityVerdict, result: IdentificationResult, m: int) -> tup
     if "chi2" in kinds:
         worst = _worst_block(v)
         return "noise or model", (
-            f"the {worst} residuals are larger than the declared noise: the instrument is "
-            "noisier than declared (check --noise or the file's '# noise:'), or the model "
-            "misses an error the data show (check the measured frame and --params)."
+            f"the {worst} are larger than the declared noise: the instrument is "
+            "noisier than declared (check --noise, the file's '# noise:' or '# std:'), or the "
+            "model misses an error the data show (check the measured frame and --params)."
         )
     if "noise" in kinds:
         return "instrument or model", (
@@ -103,6 +103,9 @@ def likely_cause(v: QualityVerdict, result: IdentificationResult, m: int) -> tup
 
 def _worst_block(v: QualityVerdict) -> str:
     if not v.chi2_blocks:
-        return "fit"
+        return "residuals"
     b = max(v.chi2_blocks, key=lambda t: t[1] / t[2] if t[2] > 0 else 0.0)
-    return f"{b[0]} (χ²/ν {b[1] / b[2]:.3g} on {b[2]:.0f} degrees of freedom, p = {b[3]:.2g})"
+    return (
+        f"{b[0]} residuals (χ²/ν {b[1] / b[2]:.3g} on {b[2]:.0f} degrees of freedom, "
+        f"p = {b[3]:.2g})"
+    )

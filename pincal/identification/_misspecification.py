@@ -35,7 +35,14 @@ from pincal.identification._result import IdentificationResult
 from pincal.measure._measurements import Measurements
 from pincal.model._mechanism import Mechanism
 
-__all__ = ["BlockChi2", "Probe", "chi2_blocks", "probe_columns", "probe_misspecification"]
+__all__ = [
+    "BlockChi2",
+    "Probe",
+    "chi2_blocks",
+    "instrument_chi2",
+    "probe_columns",
+    "probe_misspecification",
+]
 
 _POS = ("x", "y", "z")
 _OUTSIDE = 1e-2  # a nuisance column with < 1 % of its norm outside the model is absorbed
@@ -123,6 +130,20 @@ def chi2_blocks(
         c2 = float(np.sum(zb**2))
         out.append(BlockChi2(block, c2, dof, float(stats.chi2.sf(c2, dof))))
     return out
+
+
+def instrument_chi2(result: IdentificationResult) -> list[BlockChi2]:
+    """χ² of a scalar-instrument fit (ballbar, sphere, plane, gauge) against its file's σ.
+
+    Its residuals are whitened by the instrument file's ``std``; the redundancy (readings
+    minus fitted machine and instrument parameters) is the result's ``redundancy``
+    annotation. Empty when it is missing or below 1.
+    """
+    dof = float((result.annotations or {}).get("redundancy", 0.0))
+    c2 = float(result.reduced_chi2) * dof
+    if dof < 1.0 or not math.isfinite(c2):
+        return []
+    return [BlockChi2("instrument", c2, dof, float(stats.chi2.sf(c2, dof)))]
 
 
 def _components(components: tuple[str, ...] | None, k: int) -> tuple[str, ...]:

@@ -59,6 +59,7 @@ from pincal.identification._misspecification import (
     BlockChi2,
     Probe,
     chi2_blocks,
+    instrument_chi2,
     probe_columns,
     probe_misspecification,
 )
@@ -219,8 +220,9 @@ def check_quality(
         scalar_instrument: the result is a ballbar / probe / plane / gauge fit, whose
             near-gauge directions (an instrument pivot against a translation of the
             machine) let parameters drift and the solver stop at its iteration limit
-            without changing the fit: with a reduced χ² within the limit, parameter
-            changes and an unfinished solve are warnings, not refusals.
+            without changing the fit: its χ² is judged against the file's σ (the
+            result's ``redundancy`` annotation gives ν) and, when that passes,
+            parameter changes and an unfinished solve are warnings, not refusals.
         instrument: the instrument's profile (or its name, see
             :data:`INSTRUMENT_PROFILES`): with estimated noise, a σ̂ beyond
             ``limits.noise_factor`` × its typical σ refuses.
@@ -275,18 +277,23 @@ def check_quality(
         out, limit = (), float("nan")
     singular = _singular(Jw, lim.singular_ratio)
     chi2 = float(result.reduced_chi2)
-    lenient = scalar_instrument and chi2 <= lim.max_reduced_chi2
-    if not result.success:
-        issues.append(QualityIssue(
-            "solver", not lenient, f"the solver did not succeed ({result.message.strip()[:160]})"
-        ))  # fmt: skip
     inliers = None
     if w is not None and declared and robust and out:
         inliers = np.setdiff1d(np.arange(m), out)  # a robust fit is judged on its inliers
         zi = np.asarray(w.whitened)[inliers]
         chi2 = float(np.sum(zi**2)) / max(zi.size - int(result.identified.sum()), 1)
-    blocks = chi2_blocks(result, _comps(measurements), inliers) if declared else []
-    issues += _chi2_issues(chi2, blocks, declared, lim)
+    if scalar_instrument and w is None:  # judged against the instrument file's std
+        blocks, declared = instrument_chi2(result), True
+    else:
+        comps = None if measurements is None else tuple(measurements.components)
+        blocks = chi2_blocks(result, comps, inliers) if declared else []
+    fit_issues = _chi2_issues(chi2, blocks, declared, lim)
+    lenient = scalar_instrument and not any(i.refuse for i in fit_issues)
+    if not result.success:
+        issues.append(QualityIssue(
+            "solver", not lenient, f"the solver did not succeed ({result.message.strip()[:160]})"
+        ))  # fmt: skip
+    issues += fit_issues
     if profile is not None and source == "estimated" and w is not None:
         issues += _profile_issues(w, profile, lim)
     issues += [replace(c, refuse=not lenient) for c in _changes(result, lim)]
@@ -337,10 +344,6 @@ def check_quality(
         return verdict
     cause, text = likely_cause(verdict, result, m)
     return replace(verdict, cause=cause, cause_text=text)
-
-
-def _comps(meas: Measurements | None) -> tuple[str, ...] | None:
-    return None if meas is None else tuple(meas.components)
 
 
 def _inexact(result: IdentificationResult) -> bool:

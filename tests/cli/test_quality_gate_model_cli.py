@@ -106,3 +106,29 @@ def test_campaign_names_the_instrument(tmp_path, campaign):
     res = CliRunner().invoke(main, ["run", str(camp), "--out", str(tmp_path / "out")])
     assert res.exit_code != 0 and "identification.instrument" in res.stderr
     assert "laser-tracker" in res.stderr
+
+
+def _scaled_readings(path: Path, out: Path, factor: float) -> Path:
+    lines = path.read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    body = lines[len(head) :]
+    rows = [body[0]]
+    for row in body[1:]:
+        v = row.split(",")
+        v[-1] = repr(float(v[-1]) * factor)
+        rows.append(",".join(v))
+    out.write_text("\n".join(head + rows) + "\n")
+    return out
+
+
+def test_instrument_file_chi2_is_judged(tmp_path):
+    """Ballbar readings: the fit is judged against the file's std (issue 25, bar scale)."""
+    data = tmp_path / "b.csv"
+    args = ["simulate", "stewart_6ups", "--random", "60", "--instrument", "distance"]
+    res = CliRunner().invoke(main, [*args, "--out", str(data)])
+    assert res.exit_code == 0, res.output
+    res = _calibrate(data, tmp_path / "cal")
+    assert res.exit_code == 0, res.output
+    res = _calibrate(_scaled_readings(data, tmp_path / "s.csv", 1.01), tmp_path / "cal2")
+    assert res.exit_code == 1 and "instrument χ²/ν" in res.stderr
+    assert "Likely cause: noise or model" in res.stderr and not (tmp_path / "cal2").exists()
