@@ -92,6 +92,15 @@ def quality_lines(quality: dict | None) -> list[str]:
     else:
         lines = [f"quality gate: refused — {quality.get('reason')}"]
     lines += [f"  warning: {w['message']}" for w in quality.get("warnings", [])]
+    blocks = [b for b in quality.get("chi2_blocks", []) if b.get("dof")]
+    if blocks:
+        lines.append("  χ² against the declared noise: " + "; ".join(
+            f"{b['block']} χ²/ν {b['chi2'] / b['dof']:.3g} on {b['dof']:.0f} "
+            f"(p = {b['p_value']:.2g})" for b in blocks))  # fmt: skip
+    if quality.get("probes"):
+        lines.append("  misspecification probes: " + "; ".join(
+            f"{p['size']} explains {p['explained']:.0%} (p = {p['p_value']:.2g})"
+            for p in quality["probes"]))  # fmt: skip
     if quality.get("outlier_poses"):
         lines.append(
             f"  outlier poses (normalised residual > {quality.get('outlier_limit') or 0:.2f}): "

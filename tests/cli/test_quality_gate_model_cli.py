@@ -132,3 +132,12 @@ def test_instrument_file_chi2_is_judged(tmp_path):
     res = _calibrate(_scaled_readings(data, tmp_path / "s.csv", 1.01), tmp_path / "cal2")
     assert res.exit_code == 1 and "instrument χ²/ν" in res.stderr
     assert "Likely cause: noise or model" in res.stderr and not (tmp_path / "cal2").exists()
+
+
+def test_report_shows_the_tests_a_clean_fit_passed(tmp_path, campaign):
+    res = _calibrate(_file(tmp_path, campaign[1]), tmp_path / "cal")
+    assert res.exit_code == 0, res.output
+    text = (tmp_path / "cal" / "report.txt").read_text()
+    assert "quality gate: passed" in text
+    assert "χ² against the declared noise: position χ²/ν" in text and "orientation" in text
+    assert "misspecification probes: a " in text and "actuator gains" in text
