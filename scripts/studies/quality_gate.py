@@ -72,6 +72,7 @@ CELLS = (
     Cell("1 % leg gain, Stewart, estimated", "stewart_6ups", "gain", 0.01, False),
     Cell("1 % scale, hexaslide, declared", "hexaslide_6pus", "scale", 0.01, True),
     Cell("0.1 % scale, Stewart, declared", "stewart_6ups", "scale", 0.001, True),
+    Cell("0.1 % scale, Stewart, estimated", "stewart_6ups", "scale", 0.001, False),
     Cell("10x noise, Stewart, declared", "stewart_6ups", "noise10", 10.0, True),
     Cell("10x noise, Stewart, estimated, tracker", "stewart_6ups", "noise10", 10.0, False,
          "laser-tracker"),
