@@ -2,7 +2,7 @@
 
 Usage:
     python scripts/studies/quality_gate.py [--fits 20] [--poses 50] [--seed 0]
-        [--cells clean-declared,scale-1pct-estimated,...]
+        [--cells "clean, Stewart;1 % leg gain"]
 
 Each fit: an "actual" machine drawn as ``pincal simulate`` draws it (geometric errors
 uniform in ±1 mm / ±10 mrad on the model's first preset), random workspace poses, noise
@@ -133,11 +133,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--fits", type=int, default=20, help="fits per cell (≥ 20 for the table)")
     ap.add_argument("--poses", type=int, default=50, help="random poses per fit")
     ap.add_argument("--seed", type=int, default=0, help="first seed")
-    ap.add_argument("--cells", default=None, help="comma-separated cell-name substrings")
+    ap.add_argument("--cells", default=None, help="';'-separated cell-name substrings")
     a = ap.parse_args(argv)
     cells = CELLS
     if a.cells:
-        keys = [k.strip() for k in a.cells.split(",")]
+        keys = [k.strip() for k in a.cells.split(";")]
         cells = tuple(c for c in CELLS if any(k in c.name for k in keys))
     print(f"# quality gate study: {a.fits} fits per cell, {a.poses} poses, seeds "
           f"{a.seed}..{a.seed + a.fits - 1}, noise {NOISE[0]} mm / {NOISE[1]} mrad")  # fmt: skip
