@@ -71,9 +71,9 @@ def likely_cause(v: QualityVerdict, result: IdentificationResult, m: int) -> tup
         )
     if "noise" in kinds:
         return "instrument or model", (
-            f"the noise estimated from the residuals exceeds what a {v.profile} typically "
-            "reaches: the model misses an error the data show, or the instrument is off "
-            "(check its calibration, or declare its real noise with --noise)."
+            f"the noise estimated from the residuals exceeds what the {v.profile!r} "
+            "profile typically reaches: the model misses an error the data show, or the "
+            "instrument is off (check its calibration, or declare its real noise with --noise)."
         )
     if "change" in kinds:
         return "parameter change", (

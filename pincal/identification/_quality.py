@@ -393,7 +393,8 @@ def _profile_issues(
             issues.append(QualityIssue(
                 "noise", True,
                 f"the estimated {block} noise {est * f:.3g} {unit} is {est / typ:.3g}× the "
-                f"typical {typ * f:.3g} {unit} of a {profile.description} (limit "
-                f"{lim.noise_factor:g}×): model or instrument error suspected",
+                f"typical {typ * f:.3g} {unit} of the {profile.name!r} profile "
+                f"({profile.description}; limit {lim.noise_factor:g}×): model or instrument "
+                "error suspected",
             ))  # fmt: skip
     return issues

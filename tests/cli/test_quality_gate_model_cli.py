@@ -63,7 +63,7 @@ def test_instrument_profile_from_the_header_and_the_option(tmp_path, campaign):
     path = _file(tmp_path, noisy, "# instrument: laser-tracker")
     res = _calibrate(path, tmp_path / "cal")
     assert res.exit_code == 1 and "Likely cause: instrument or model" in res.stderr
-    assert "typical 0.02 mm of a laser tracker" in res.stderr
+    assert "typical 0.02 mm of the 'laser-tracker' profile (laser tracker" in res.stderr
     res = _calibrate(path, tmp_path / "cal", "--instrument", "motion-capture", "--json")
     assert res.exit_code == 0, res.output
     quality = json.loads(res.stdout)["quality"]

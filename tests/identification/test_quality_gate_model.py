@@ -102,7 +102,7 @@ def test_estimated_noise_against_an_instrument_profile(stewart, stewart42, actua
     noisy = dataclasses.replace(noisy, noise=None)
     result, v = _judge(stewart, stewart42, noisy, instrument="laser-tracker")
     assert not v.passed and "noise" in [i.kind for i in v.refusals]
-    assert v.cause == "instrument or model" and "laser tracker" in v.reason()
+    assert v.cause == "instrument or model" and "'laser-tracker' profile" in v.reason()
     assert "declared" not in v.reason()
     assert check_quality(result, noisy, mech=stewart, instrument="motion-capture").passed
     assert check_quality(result, noisy, mech=stewart).passed  # no profile: nothing to judge by
