@@ -62,6 +62,8 @@ Campaign file keys (YAML; relative paths are relative to the file):
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
     loss: linear             linear | huber | soft_l1 | cauchy (marker campaigns)
     prior: null              marker campaigns: "LEN_MM,ANG_MRAD" or auto (by CV)
+    instrument: NAME         optional profile judging an estimated noise: laser-tracker |
+                             motion-capture | ballbar | touch-probe | cmm
   validation:                held-out poses, measured on the same actual machine
     source: simulated        simulated | file | none
     file: PATH               source file: a pincal measurement file
@@ -135,9 +137,10 @@ class Identification:
     method: str = "gauss-newton"
     loss: str = "linear"
     prior: str | None = None
+    instrument: str | None = None
 
     def check(self, key: str) -> None:
-        from pincal.identification import METHODS
+        from pincal.identification import INSTRUMENT_PROFILES, METHODS
 
         _choice(self.method, tuple(METHODS), f"{key}.method")
         _choice(self.loss, ("linear", "huber", "soft_l1", "cauchy"), f"{key}.loss")
@@ -150,6 +153,8 @@ class Identification:
                 raise CampaignError(
                     f"{key}.prior: {shown(self.prior)} is not 'auto' or 'LEN_MM,ANG_MRAD'"
                 ) from exc
+        if self.instrument is not None:
+            _choice(self.instrument, tuple(INSTRUMENT_PROFILES), f"{key}.instrument")
 
 
 @dataclass(frozen=True)

@@ -16,24 +16,40 @@ from pincal.errors import QualityGateError
 __all__ = ["apply_gate", "gate_limits", "quality_lines"]
 
 
-def gate_limits(max_change: str | None):
-    """:class:`GateLimits` from ``--max-change 'mm,rad'`` (None: the defaults).
+def gate_limits(max_change: str | None, significance: float | None = None):
+    """:class:`GateLimits` from ``--max-change 'mm,rad'`` and ``--significance P``.
+
+    ``--significance`` sets both the χ² test's (declared noise) and the
+    misspecification probes' significance; None keeps the defaults (1e-3).
 
     Raises:
-        click.BadParameter: not two positive numbers.
+        click.BadParameter: not two positive numbers, or a significance outside (0, 0.5].
     """
     from pincal.errors import SolverOptionError
     from pincal.identification import GateLimits
 
-    if max_change is None:
-        return GateLimits()
-    try:
-        mm, rad = (float(v) for v in max_change.split(","))
-        return GateLimits(max_length_change=mm * 1e-3, max_angle_change=rad)
-    except (ValueError, SolverOptionError):
-        raise click.BadParameter(
-            "give 'length_mm,angle_rad', two numbers > 0, e.g. 20,0.1", param_hint="--max-change"
-        ) from None
+    opts: dict[str, Any] = {}
+    if max_change is not None:
+        try:
+            mm, rad = (float(v) for v in max_change.split(","))
+            opts.update(max_length_change=mm * 1e-3, max_angle_change=rad)
+            GateLimits(**opts)
+        except (ValueError, SolverOptionError):
+            raise click.BadParameter(
+                "give 'length_mm,angle_rad', two numbers > 0, e.g. 20,0.1",
+                param_hint="--max-change",
+            ) from None
+    if significance is not None:
+        try:
+            return GateLimits(
+                **opts, chi2_significance=significance, probe_significance=significance
+            )
+        except SolverOptionError:
+            raise click.BadParameter(
+                f"{significance!r} is not a probability in (0, 0.5], e.g. 1e-3",
+                param_hint="--significance",
+            ) from None
+    return GateLimits(**opts)
 
 
 def apply_gate(verdict, force: bool, *, before_fit: bool = False) -> dict[str, Any]:
@@ -76,6 +92,15 @@ def quality_lines(quality: dict | None) -> list[str]:
     else:
         lines = [f"quality gate: refused — {quality.get('reason')}"]
     lines += [f"  warning: {w['message']}" for w in quality.get("warnings", [])]
+    blocks = [b for b in quality.get("chi2_blocks", []) if b.get("dof")]
+    if blocks:
+        lines.append("  χ² against the declared noise: " + "; ".join(
+            f"{b['block']} χ²/ν {b['chi2'] / b['dof']:.3g} on {b['dof']:.0f} "
+            f"(p = {b['p_value']:.2g})" for b in blocks))  # fmt: skip
+    if quality.get("probes"):
+        lines.append("  misspecification probes: " + "; ".join(
+            f"{p['size']} explains {p['explained']:.0%} (p = {p['p_value']:.2g})"
+            for p in quality["probes"]))  # fmt: skip
     if quality.get("outlier_poses"):
         lines.append(
             f"  outlier poses (normalised residual > {quality.get('outlier_limit') or 0:.2f}): "

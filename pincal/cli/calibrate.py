@@ -19,6 +19,7 @@ from pincal.cli.common import (
     model_record,
     model_source,
 )
+from pincal.errors import PincalError
 from pincal.identification import METHODS
 
 
@@ -145,13 +146,29 @@ def format_report(doc: dict) -> str:
     metavar="MM,RAD",
     help="Quality gate: largest parameter change [default: 20,0.1].",
 )
+@click.option(
+    "--significance",
+    type=float,
+    default=None,
+    metavar="P",
+    help="Quality gate: p-value below which the χ² test (declared noise) and the "
+    "misspecification probes (scale, actuator gains, drift) refuse [default: 1e-3].",
+)
+@click.option(
+    "--instrument",
+    "instrument",
+    default=None,
+    metavar="NAME",
+    help="Instrument profile judging an estimated noise: laser-tracker, motion-capture, "
+    "ballbar, touch-probe, cmm (overrides the file's '# instrument:').",
+)
 @yes_option
 @model_options
 @marker_options
 @fail_cleanly
 def calibrate(
-    model, data, preset, method, out, as_json, noise, loss, force, max_change,
-    link, instrument_frame, marker_spec, marker_columns, length_unit, prior_spec,
+    model, data, preset, method, out, as_json, noise, loss, force, max_change, significance,
+    instrument, link, instrument_frame, marker_spec, marker_columns, length_unit, prior_spec,
     yes, model_opts,
 ) -> None:  # fmt: skip
     """Identify MODEL's geometric parameters from measured poses (--data).
@@ -160,8 +177,10 @@ def calibrate(
     --calibrated`, `compensate`, `validate` and `report` read as it is. Without a noise
     declaration (file header or --noise) the noise of each block is estimated from the
     residuals and reported. A quality gate refuses to write a calibration whose data or
-    fit are implausible (unit mistake, outliers, failed solve, reduced χ² > 100 with
-    declared noise, a parameter moving > 20 mm / 0.1 rad); --force writes it anyway.
+    fit are implausible (unit mistake, outliers, failed solve, a χ² beyond the declared
+    noise at p < 1e-3, a parameter moving > 20 mm / 0.1 rad, a misspecification probe —
+    scale, actuator gains, drift — explaining the residual, an estimated noise beyond
+    the --instrument profile); --force writes it anyway.
 
     \b
     Examples:
@@ -184,7 +203,15 @@ def calibrate(
     )
     from pincal.model import parameters
 
-    limits = gate_limits(max_change)
+    limits = gate_limits(max_change, significance)
+    profile = None
+    if instrument is not None:
+        from pincal.identification import instrument_profile
+
+        try:
+            profile = instrument_profile(instrument).name
+        except PincalError as e:
+            raise click.BadParameter(str(e), param_hint="--instrument") from None
 
     if loss != "linear" and method != "lm" and link is None:
         raise click.BadParameter(
@@ -245,7 +272,9 @@ def calibrate(
         gate = dataclasses.replace(mf.data_check, limits=limits)
         apply_gate(gate, force, before_fit=True)
         result = _identify_poses(mech, params, preset, meas, method, declared, loss)
-        verdict = check_quality(result, meas, mech=mech, data=gate)
+        verdict = check_quality(
+            result, meas, mech=mech, data=gate, instrument=profile or mf.instrument
+        )
     quality = apply_gate(verdict, force)
     out_dir = Path(out)
     doc = result_json(result, str(data), CALIBRATED_URDF)

@@ -93,6 +93,8 @@ def _calibrate(c: Campaign, p: Paths) -> list[str] | None:
     args += ["--loss", i.loss] if i.loss != "linear" else []
     ctx = click.get_current_context(silent=True)  # `pincal run --force` passes it on
     args += ["--force"] if ctx is not None and ctx.params.get("force") else []
+    inst = c.identification.instrument
+    args += ["--instrument", inst] if inst is not None else []
     return args + (["--params", c.preset] if c.preset else []) + ["--out", str(p.out)]
 
 

@@ -31,6 +31,11 @@ from pincal.identification._instrument_problem import (
     InstrumentProblem,
     identify_instruments,
 )
+from pincal.identification._instrument_profiles import (
+    INSTRUMENT_PROFILES,
+    InstrumentProfile,
+    instrument_profile,
+)
 from pincal.identification._marker_fit import (
     REGISTRATION_PRESET,
     MarkerFit,
@@ -70,6 +75,7 @@ StepPlanningResult = IdentificationResult
 __all__ = [
     "COST_MODELS",
     "FORMAT_VERSION",
+    "INSTRUMENT_PROFILES",
     "LOSSES",
     "METHODS",
     "REGISTRATION_PRESET",
@@ -83,6 +89,7 @@ __all__ = [
     "InstrumentIdentifiability",
     "InstrumentIdentification",
     "InstrumentProblem",
+    "InstrumentProfile",
     "LMOptions",
     "LocalSolverExtras",
     "MarkerFit",
@@ -115,6 +122,7 @@ __all__ = [
     "instrument_candidates",
     "instrument_cramer_rao",
     "instrument_identifiability",
+    "instrument_profile",
     "is_registration",
     "kfold",
     "monte_carlo",

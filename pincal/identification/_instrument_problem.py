@@ -345,6 +345,6 @@ def identify_instruments(
         extras=out.extras,
         parameter_set=params,
         calibrated_mechanism=model.mechanism(x),
-        annotations={"instruments": inst, "datasets": list(model.labels)},
+        annotations={"instruments": inst, "datasets": list(model.labels), "redundancy": dof},
     )
     return InstrumentIdentification(result, model.names, x, x0, free, cov, raws, ident)

@@ -20,7 +20,18 @@ class GateLimits:
     """Thresholds of the quality gate.
 
     Attributes:
-        max_reduced_chi2: with declared noise, a reduced χ² above this refuses (> 1).
+        max_reduced_chi2: with declared noise, a reduced χ² above this refuses (> 1),
+            whatever its p-value.
+        chi2_significance: with declared noise, a block (position, orientation) whose
+            χ² has an upper-tail p-value for χ²(ν) below this refuses (0 < · < 0.5) …
+        min_chi2_ratio: … when its χ²/ν also exceeds this (≥ 1: a 5 % misfit on 10⁵
+            equations is significant but harmless).
+        probe_significance: family-wise p-value of the misspecification probes (scale,
+            gains, drift; Bonferroni over the probes run) below which a probe fires …
+        probe_explained: … when it also explains at least this share of the residual
+            sum of squares (0 < · < 1).
+        noise_factor: with estimated noise and a named instrument profile, a σ̂ above
+            this multiple of the profile's typical σ refuses (> 1).
         max_length_change: largest accepted change of a length parameter [m] (> 0).
         max_angle_change: largest accepted change of an angle parameter [rad] (> 0).
         outlier_risk: family-wise false-alarm probability of the outlier test over all
@@ -30,6 +41,10 @@ class GateLimits:
             [1/band, band] (> 1).
         singular_ratio: a pose whose whitened sensitivity exceeds this multiple of the
             median pose's is called near-singular (> 1).
+        registration_joints: joints whose parameters are registration unknowns (the
+            instrument frame, the marker / tool offset), judged by their own bounds.
+        max_registration_length: largest accepted change of a registration length [m].
+        max_registration_angle: largest accepted change of a registration angle [rad].
     """
 
     max_reduced_chi2: float = 100.0
@@ -39,6 +54,14 @@ class GateLimits:
     max_downweighted: float = 0.25
     scale_band: float = 2.0
     singular_ratio: float = 100.0
+    chi2_significance: float = 1e-3
+    min_chi2_ratio: float = 1.5
+    probe_significance: float = 1e-3
+    probe_explained: float = 0.25
+    noise_factor: float = 3.0
+    registration_joints: tuple[str, ...] = ("base_frame", "tool_frame")
+    max_registration_length: float = 1.0
+    max_registration_angle: float = math.pi
 
     def __post_init__(self) -> None:
         o = type(self).__name__
@@ -49,6 +72,15 @@ class GateLimits:
         check_real(o, "max_downweighted", self.max_downweighted, 0.0, 1.0, open_low=True)
         check_real(o, "scale_band", self.scale_band, 1.0, open_low=True)
         check_real(o, "singular_ratio", self.singular_ratio, 1.0, open_low=True)
+        check_real(o, "chi2_significance", self.chi2_significance, 0.0, 0.5, open_low=True)
+        check_real(o, "min_chi2_ratio", self.min_chi2_ratio, 1.0)
+        check_real(o, "probe_significance", self.probe_significance, 0.0, 0.5, open_low=True)
+        check_real(o, "probe_explained", self.probe_explained, 0.0, 1.0, open_low=True)
+        check_real(o, "noise_factor", self.noise_factor, 1.0, open_low=True)
+        check_real(o, "max_registration_length", self.max_registration_length, 0.0,
+                   open_low=True)  # fmt: skip
+        check_real(o, "max_registration_angle", self.max_registration_angle, 0.0,
+                   open_low=True)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -57,7 +89,9 @@ class QualityIssue:
 
     Attributes:
         kind: ``units``, ``duplicates``, ``solver``, ``chi2``, ``low-chi2``, ``change``,
-            ``outliers``, ``breakdown`` or ``singular``.
+            ``registration``, ``model`` (a misspecification probe fired), ``noise``
+            (σ̂ beyond the instrument profile), ``outliers``, ``breakdown`` or
+            ``singular``.
         refuse: True when it refuses the calibration (else a warning).
         message: one line saying what was found, with the threshold.
     """
@@ -74,7 +108,8 @@ class QualityVerdict:
     Attributes:
         issues: refusals and warnings, in the order found.
         cause: the likely cause of a refusal: ``units``, ``frame``, ``outliers``,
-            ``singular pose``, ``noise or model`` ("" when passed).
+            ``singular pose``, ``model or instrument``, ``noise or model``, ``solver``,
+            ``parameter change``, ``units, frame or model`` ("" when passed).
         cause_text: one sentence explaining the cause and what to try.
         outlier_poses: indices of the poses flagged as outliers.
         outlier_limit: the normalised-residual threshold used (NaN when not tested).
@@ -87,6 +122,10 @@ class QualityVerdict:
         frame_rotation: angle of the mean rotation from the nominal to the measured
             orientations, in the world frame [rad] (NaN when not checked).
         limits: the thresholds used.
+        noise_source: ``declared``, ``per-pose`` or ``estimated`` ("" when unknown).
+        chi2_blocks: per block ``(name, χ², ν, p-value)`` (declared noise only).
+        probes: per misspecification probe ``(name, explained share, p-value, size)``.
+        profile: the instrument profile the estimated noise was compared with ("").
     """
 
     issues: tuple[QualityIssue, ...] = ()
@@ -101,6 +140,10 @@ class QualityVerdict:
     frame_offset: float = float("nan")
     frame_rotation: float = float("nan")
     limits: GateLimits = field(default_factory=GateLimits)
+    noise_source: str = ""
+    chi2_blocks: tuple[tuple[str, float, float, float], ...] = ()
+    probes: tuple[tuple[str, float, float, str], ...] = ()
+    profile: str = ""
 
     @property
     def passed(self) -> bool:
@@ -149,11 +192,28 @@ class QualityVerdict:
             "scale_ratio": num(self.scale_ratio),
             "likely_unit": self.likely_unit,
             "singular_poses": list(self.singular_poses),
+            "noise_source": self.noise_source or None,
+            "chi2_blocks": [
+                {"block": b, "chi2": num(c), "dof": num(n), "p_value": num(p)}
+                for b, c, n, p in self.chi2_blocks
+            ],
+            "probes": [
+                {"name": n, "explained": num(e), "p_value": num(p), "size": t}
+                for n, e, p, t in self.probes
+            ],
+            "instrument_profile": self.profile or None,
             "limits": {
                 "max_reduced_chi2": lim.max_reduced_chi2,
                 "max_length_change_m": lim.max_length_change,
                 "max_angle_change_rad": lim.max_angle_change,
                 "outlier_risk": lim.outlier_risk,
                 "max_downweighted": lim.max_downweighted,
+                "chi2_significance": lim.chi2_significance,
+                "min_chi2_ratio": lim.min_chi2_ratio,
+                "probe_significance": lim.probe_significance,
+                "probe_explained": lim.probe_explained,
+                "noise_factor": lim.noise_factor,
+                "max_registration_length_m": lim.max_registration_length,
+                "max_registration_angle_rad": lim.max_registration_angle,
             },
         }

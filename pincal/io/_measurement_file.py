@@ -10,6 +10,7 @@
     # components: x y z rx ry rz      components used for identification (pose kind)
     # orientation: rotvec             rotvec (rx ry rz = log3 R) | matrix (r11 … r33)
     # noise: position_mm=0.01 orientation_mrad=0.02     optional instrument noise
+    # instrument: laser-tracker       optional instrument profile (judges an estimated noise)
     leg1_slide [mm],…,leg6_slide [mm],x,y,z,rx,ry,rz,std_x,…,std_rz
 
 - actuator columns come first, named by the model's actuated joints; a bracketed
@@ -52,8 +53,14 @@ from pincal.errors import (
     MeasurementError,
     MeasurementFormatError,
     TooFewPosesError,
+    UnknownNameError,
 )
-from pincal.identification import QualityVerdict, check_measurements
+from pincal.identification import (
+    INSTRUMENT_PROFILES,
+    QualityVerdict,
+    check_measurements,
+    instrument_profile,
+)
 from pincal.io._csv import (
     Header,
     actuator_columns,
@@ -106,6 +113,8 @@ class MeasurementFile:
         data_check: the quality gate's look at the data
             (:func:`pincal.identification.check_measurements`, default limits), computed
             once here so that ``calibrate`` does not repeat it.
+        instrument: the ``# instrument:`` profile name (see
+            :data:`pincal.identification.INSTRUMENT_PROFILES`), or None.
     """
 
     measurements: Measurements
@@ -115,6 +124,7 @@ class MeasurementFile:
     suspect_units: bool
     warnings: tuple[str, ...]
     data_check: QualityVerdict
+    instrument: str | None = None
 
 
 def _unit_warning(verdict: QualityVerdict) -> str | None:
@@ -224,6 +234,7 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
         return data[:, [col[c] for c in cols]]
 
     noise = _parse_noise(header, name)
+    instrument = _parse_instrument(header, name)
     targets = None
     if kind == "targets":
         tnames, local = parse_targets(header, lf, name)
@@ -303,7 +314,22 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
     w = _unit_warning(check)
     if w:
         log.warning("%s: %s", name, w)
-    return MeasurementFile(meas, targets, lu, au, w is not None, (w,) if w else (), check)
+    return MeasurementFile(
+        meas, targets, lu, au, w is not None, (w,) if w else (), check, instrument
+    )
+
+
+def _parse_instrument(header: Header, name: str) -> str | None:
+    if "instrument" not in header:
+        return None
+    value = header_value(header, "instrument", None, name)
+    try:
+        return instrument_profile(value).name
+    except UnknownNameError:
+        raise MeasurementFormatError(
+            f"{name}: instrument {shown(value)} unknown; use one of "
+            f"{', '.join(INSTRUMENT_PROFILES)} (or remove the '# instrument:' line)"
+        ) from None
 
 
 def read_measurements(path: str | Path, mech: Mechanism) -> Measurements:

@@ -1,0 +1,111 @@
+"""The likely cause of a refusal of the quality gate, named from what it measured.
+
+The cause is chosen from the refusals actually found, in order of how directly they
+explain the others: a frame offset, a singular pose, a few outliers, a fired
+misspecification probe, a robust-fit breakdown, a χ² beyond the declared noise, an
+estimated noise beyond the instrument profile, a parameter change, a registration
+change, and last an unfinished solve (often a consequence of the others). A
+refusal names "the declared noise" only when noise was declared.
+"""
+
+from __future__ import annotations
+
+import math
+
+from pincal.identification._result import IdentificationResult
+from pincal.identification._verdict import QualityVerdict
+
+__all__ = ["likely_cause"]
+
+_FRAME_ANGLE = 0.05  # mean measured-vs-nominal rotation that names the frame [rad]
+
+
+def likely_cause(v: QualityVerdict, result: IdentificationResult, m: int) -> tuple[str, str]:
+    """(cause, one sentence with what to try) for a refused verdict over m poses."""
+    lim = v.limits
+    kinds = {i.kind for i in v.refusals}
+    shifted = math.isfinite(v.frame_offset) and v.frame_offset > lim.max_length_change
+    turned = math.isfinite(v.frame_rotation) and v.frame_rotation > _FRAME_ANGLE
+    estimated = v.noise_source == "estimated"
+    if (shifted or turned) and kinds & {"change", "chi2", "solver", "model", "noise"}:
+        return "frame", (
+            f"the measured poses are offset {v.frame_offset * 1e3:.4g} mm and turned "
+            f"{v.frame_rotation:.3g} rad from the nominal model's: measured in an "
+            "unregistered frame? Register the instrument to the machine base (pincal "
+            "import-tracker) or fit the base frame."
+        )
+    if v.singular_poses:
+        return "singular pose", (
+            f"poses {list(v.singular_poses[:8])} are near a singular configuration; remove "
+            "them or choose poses with `pincal poses`."
+        )
+    few = v.outlier_poses and len(v.outlier_poses) <= lim.max_downweighted * m
+    if few and "outliers" in kinds:
+        return "outliers", (
+            f"poses {list(v.outlier_poses[:12])} do not fit the others; refit with "
+            "--method lm --loss huber, or remove them."
+        )
+    if "model" in kinds and v.probes:
+        best = max(v.probes, key=lambda p: p[1])
+        alpha = lim.probe_significance / len(v.probes)
+        also = [f"{p[3]} ({p[1]:.0%})" for p in v.probes
+                if p is not best and p[2] < alpha and p[1] >= lim.probe_explained]  # fmt: skip
+        return "model or instrument", (
+            f"{best[3]} explains {best[1]:.0%} of the residual (F-test p = {best[2]:.2g})"
+            + (f"; so do {', '.join(also)}, which these poses cannot tell apart" if also else "")
+            + ": the model misses an error the data show, or the instrument is off. Check the "
+            "instrument's scale and the actuators' scales (encoder / lead-screw gains), "
+            "look for drift, or fit a larger --params preset."
+        )
+    if "breakdown" in kinds or ("outliers" in kinds and not few):
+        return "units, frame or model", (
+            "most poses disagree with the model: check the units, the measured frame and "
+            "the model."
+        )
+    if "chi2" in kinds:
+        worst = _worst_block(v)
+        return "noise or model", (
+            f"the {worst} are larger than the declared noise: the instrument is "
+            "noisier than declared (check --noise, the file's '# noise:' or '# std:'), or the "
+            "model misses an error the data show (check the measured frame and --params)."
+        )
+    if "noise" in kinds:
+        return "instrument or model", (
+            f"the noise estimated from the residuals exceeds what the {v.profile!r} "
+            "profile typically reaches: the model misses an error the data show, or the "
+            "instrument is off (check its calibration, or declare its real noise with --noise)."
+        )
+    if "change" in kinds:
+        return "parameter change", (
+            "parameters moved further than the bound: a large real error, or directions "
+            "the poses barely excite (see their 2σ); hold them (a smaller --params preset), "
+            "add poses, or raise the bound with --max-change."
+        )
+    if "registration" in kinds:
+        return "registration", (
+            "the instrument frame or marker moved further than a registration error can "
+            "explain: check the registration (frame, marker link) and its start values."
+        )
+    if "solver" in kinds:
+        chi2 = float(result.reduced_chi2)
+        judged = (
+            f"with the noise estimated from the residuals (reduced χ² {chi2:.3g} by "
+            "construction)"
+            if estimated
+            else f"at reduced χ² {chi2:.3g} against the declared noise"
+        )
+        return "solver", (
+            f"the solver stopped before converging, {judged}: try --method lm, or a "
+            "smaller --params preset (parameters the poses barely excite converge slowly)."
+        )
+    return "data or model", "check the data, the measured frame and the model (--params)."
+
+
+def _worst_block(v: QualityVerdict) -> str:
+    if not v.chi2_blocks:
+        return "residuals"
+    b = max(v.chi2_blocks, key=lambda t: t[1] / t[2] if t[2] > 0 else 0.0)
+    return (
+        f"{b[0]} residuals (χ²/ν {b[1] / b[2]:.3g} on {b[2]:.0f} degrees of freedom, "
+        f"p = {b[3]:.2g})"
+    )

@@ -1,0 +1,74 @@
+"""Outliers confirmed by a refit without them: a smeared fit never names good poses.
+
+:func:`pincal.identification._outliers.deletion_outliers` linearises at the fitted
+solution. When gross outliers pulled that solution far (5 mm among 10 µm noise), the
+linearisation is poor there and a good pose can look bad once the outliers are deleted
+linearly. Here the poses it named are left out and the model refitted (Gauss–Newton,
+the same parameters, the noise as the fit had it); the deletion test is then run again
+over *all* poses, linearised at the refit — a point near the outlier-free solution,
+where deleting the true outliers is exact to first order. Only the poses named there
+are reported.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pincal.errors import PincalError
+from pincal.identification._outliers import deletion_outliers
+from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
+from pincal.identification._result import IdentificationResult
+from pincal.measure._measurements import Measurements
+from pincal.model._mechanism import Mechanism
+
+__all__ = ["confirm_outliers"]
+
+
+def confirm_outliers(
+    result: IdentificationResult,
+    mech: Mechanism,
+    meas: Measurements,
+    named: tuple[int, ...],
+    risk: float,
+    cap: int,
+) -> tuple[tuple[int, ...], float] | None:
+    """The deletion test over all poses, linearised at a refit without ``named``.
+
+    Args:
+        result: the fit that named them (its parameter set and noise are reused).
+        mech: the nominal mechanism.
+        meas: all m measured poses.
+        named: pose indices the first deletion test named (1 ≤ len ≤ cap).
+        risk: family-wise false-alarm probability over the poses.
+        cap: most poses named (as in :func:`deletion_outliers`).
+
+    Returns:
+        (named poses, bound) of the test at the refit, or None when the refit fails
+        (too few poses left, a solve that does not close…): keep the first answer.
+    """
+    from pincal.identification._identify import identify
+
+    ps, w = result.parameter_set, result.weighting
+    if ps is None or w is None or not named:
+        return None
+    keep = np.setdiff1d(np.arange(len(meas)), np.asarray(named, dtype=int))
+    declared = None
+    if w.source == "declared":
+        declared = {"position": w.position_std * 1e3, "orientation": w.orientation_std * 1e3}
+        declared = {b: v for b, v in declared.items() if np.isfinite(v)}
+    try:
+        refit = identify(mech, ps, meas.subset(keep), initial=result.full_values,
+                         noise=declared or None)  # fmt: skip
+        rw = refit.weighting
+        model = CalibrationProblem(mech, ps, meas, noise=declared or None)
+        if rw is not None and rw.source.startswith("estimate"):
+            std = {"position": rw.position_std, "orientation": rw.orientation_std}
+            model = model.with_block_std({b: std[b] for b in model.blocks})
+        r_w, J_w, _ = model.evaluate(refit.full_values)
+    except (PincalError, *TRIAL_FAILURES):
+        return None
+    if J_w is None:
+        return None
+    m, k = len(meas), len(meas.components)
+    A = J_w[:, refit.identified].reshape(m, k, -1)
+    return deletion_outliers(A, np.asarray(r_w).reshape(m, k), risk, cap)

@@ -1,0 +1,165 @@
+"""Study: how often the quality gate refuses clean data, and how often it sees a fault.
+
+Usage:
+    python scripts/studies/quality_gate.py [--fits 20] [--poses 50] [--seed 0]
+        [--cells "clean, Stewart;1 % leg gain"]
+
+Each fit: an "actual" machine drawn as ``pincal simulate`` draws it (geometric errors
+uniform in ±1 mm / ±10 mrad on the model's first preset), random workspace poses, noise
+0.01 mm / 0.05 mrad (the ``simulate`` default), identification with Gauss–Newton
+(``pincal calibrate``'s default) and :func:`pincal.identification.check_quality` with
+the mechanism and the measurements — the checks ``pincal calibrate`` runs. Faults:
+
+- ``scale``: measured positions × (1 + s) about the world origin (a tracker scale);
+- ``gain``: the actuator readings are the true values / 1.01 (a 1 % leg-length gain
+  the model does not have);
+- ``noise10``: the simulated noise is 10× the noise the file declares (or, with the
+  noise estimated, 10× the laser-tracker profile's limit check);
+- ``outlier``: one pose of 30 (two of 40 on wedge3) moved by 5 mm along x (rate of
+  *exact* naming: refused with cause ``outliers`` and exactly those poses named).
+
+A cell's rate is the share of refused fits (false alarms on clean cells, detections on
+fault cells) with its binomial standard error √(p(1−p)/n). Seeded: fit i of every cell
+uses seed ``seed + i`` for the machine, the poses and the noise.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+import sys
+import time
+from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+
+import pincal
+from pincal.identification import check_quality, identify
+from pincal.model import load_mechanism, parameters, sample_actuators
+
+NOISE = (0.01, 0.05)  # mm, mrad: `pincal simulate`'s default
+ERRORS = (1.0, 10.0)  # mm, mrad: `pincal simulate`'s default error bounds
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One row of the table: a machine, a fault, declared or estimated noise."""
+
+    name: str
+    model: str
+    fault: str  # none | scale | gain | noise10 | outlier
+    size: float
+    declared: bool
+    profile: str | None = None
+    poses: int | None = None  # None: --poses
+    outliers: int = 1  # poses moved by the outlier fault
+
+    @property
+    def clean(self) -> bool:
+        return self.fault == "none"
+
+
+CELLS = (
+    Cell("clean, Stewart, declared", "stewart_6ups", "none", 0.0, True),
+    Cell("clean, Stewart, estimated", "stewart_6ups", "none", 0.0, False),
+    Cell("clean, Stewart, estimated, tracker", "stewart_6ups", "none", 0.0, False,
+         "laser-tracker"),
+    Cell("clean, hexaslide, declared", "hexaslide_6pus", "none", 0.0, True),
+    Cell("clean, hexaslide, estimated", "hexaslide_6pus", "none", 0.0, False),
+    Cell("1 % scale, Stewart, estimated", "stewart_6ups", "scale", 0.01, False),
+    Cell("1 % leg gain, Stewart, estimated", "stewart_6ups", "gain", 0.01, False),
+    Cell("1 % scale, hexaslide, declared", "hexaslide_6pus", "scale", 0.01, True),
+    Cell("0.1 % scale, Stewart, declared", "stewart_6ups", "scale", 0.001, True),
+    Cell("0.1 % scale, Stewart, estimated", "stewart_6ups", "scale", 0.001, False),
+    Cell("10x noise, Stewart, declared", "stewart_6ups", "noise10", 10.0, True),
+    Cell("10x noise, Stewart, estimated, tracker", "stewart_6ups", "noise10", 10.0, False,
+         "laser-tracker"),
+    Cell("one 5 mm outlier in 30, Stewart, declared", "stewart_6ups", "outlier", 5e-3, True,
+         poses=30),
+    Cell("one 5 mm outlier in 30, Stewart, estimated", "stewart_6ups", "outlier", 5e-3, False,
+         poses=30),
+    Cell("two 5 mm outliers in 40, wedge3, estimated", "wedge3", "outlier", 5e-3, False,
+         poses=40, outliers=2),
+)  # fmt: skip
+
+_MECHS: dict[str, tuple[pincal.Mechanism, pincal.ParameterSet]] = {}
+
+
+def _model(name: str) -> tuple[pincal.Mechanism, pincal.ParameterSet]:
+    if name not in _MECHS:
+        mech = load_mechanism(name)
+        _MECHS[name] = (mech, parameters(mech, next(iter(mech.presets), "full")))
+    return _MECHS[name]
+
+
+def run_fit(cell: Cell, seed: int, poses: int) -> tuple[bool, str, bool]:
+    """One fit: (refused, the refusals' kinds, the outlier named exactly)."""
+    mech, params = _model(cell.model)
+    rng = np.random.default_rng(seed)
+    bound = np.array([ERRORS[0] * 1e-3 if u == "m" else ERRORS[1] * 1e-3 for u in params.units])
+    actual = params.apply(mech, rng.uniform(-bound, bound))
+    q = sample_actuators(mech, cell.poses or poses, rng)
+    factor = cell.size if cell.fault == "noise10" else 1.0
+    sim = pincal.NoiseModel(NOISE[0] * factor, NOISE[1] * factor)
+    meas = pincal.simulate_measurements(actual, q, sim, rng)
+    meas = dataclasses.replace(meas, noise=pincal.NoiseModel(*NOISE) if cell.declared else None)
+    bad: tuple[int, ...] = ()
+    if cell.fault == "scale":
+        meas = dataclasses.replace(meas, positions=meas.positions * (1.0 + cell.size))
+    elif cell.fault == "gain":
+        meas = dataclasses.replace(meas, q_act=meas.q_act / (1.0 + cell.size))
+    elif cell.fault == "outlier":
+        bad = tuple(sorted(rng.choice(len(meas), cell.outliers, replace=False).tolist()))
+        pos = meas.positions.copy()
+        pos[list(bad), 0] += cell.size
+        meas = dataclasses.replace(meas, positions=pos)
+    result = identify(mech, params, meas)
+    verdict = check_quality(result, meas, mech=mech, instrument=cell.profile)
+    kinds = ",".join(sorted({i.kind for i in verdict.refusals}))
+    exact = verdict.cause == "outliers" and verdict.outlier_poses == bad
+    return not verdict.passed, kinds, exact
+
+
+def _rate(k: int, n: int) -> str:
+    p = k / n if n else float("nan")
+    se = math.sqrt(p * (1 - p) / n) if n else float("nan")
+    return f"{k:3d}/{n:<3d} {100 * p:5.1f} % ± {100 * se:4.1f}"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--fits", type=int, default=20, help="fits per cell (≥ 20 for the table)")
+    ap.add_argument("--poses", type=int, default=50, help="random poses per fit")
+    ap.add_argument("--seed", type=int, default=0, help="first seed")
+    ap.add_argument("--cells", default=None, help="';'-separated cell-name substrings")
+    a = ap.parse_args(argv)
+    cells = CELLS
+    if a.cells:
+        keys = [k.strip() for k in a.cells.split(";")]
+        cells = tuple(c for c in CELLS if any(k in c.name for k in keys))
+    print(f"# quality gate study: {a.fits} fits per cell, {a.poses} poses, seeds "
+          f"{a.seed}..{a.seed + a.fits - 1}, noise {NOISE[0]} mm / {NOISE[1]} mrad")  # fmt: skip
+    print(f"| {'cell':44s} | {'refused (rate ± s.e.)':24s} | refusals seen |")
+    print(f"|{'-' * 46}|{'-' * 26}|---|")
+    t0 = time.perf_counter()
+    for cell in cells:
+        refused, exact, seen = 0, 0, Counter()
+        for i in range(a.fits):
+            r, kinds, ex = run_fit(cell, a.seed + i, a.poses)
+            refused += r
+            exact += ex
+            if kinds:
+                seen[kinds] += 1
+        what = "false alarms" if cell.clean else "detected"
+        note = ", ".join(f"{k} ×{n}" for k, n in seen.most_common(3)) or "—"
+        if cell.fault == "outlier":
+            note += f"; named exactly: {_rate(exact, a.fits)}"
+        print(f"| {cell.name:44s} | {_rate(refused, a.fits):24s} | {what}: {note} |", flush=True)
+    print(f"# {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,30 @@
+"""Smoke test of scripts/studies/quality_gate.py: one fit of a clean and a faulty cell."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _load():
+    path = ROOT / "scripts" / "studies" / "quality_gate.py"
+    spec = importlib.util.spec_from_file_location("quality_gate_study", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["quality_gate_study"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_one_fit_per_cell_reports_rates(capsys):
+    study = _load()
+    cells = "clean, Stewart, declared;1 % leg gain"
+    assert study.main(["--fits", "1", "--poses", "40", "--cells", cells]) == 0
+    out = capsys.readouterr().out
+    clean = next(ln for ln in out.splitlines() if ln.startswith("| clean, Stewart, declared"))
+    fault = next(ln for ln in out.splitlines() if ln.startswith("| 1 % leg gain"))
+    assert "0/1" in clean and "false alarms: —" in clean
+    assert "1/1" in fault and "detected: model" in fault
+    assert len([ln for ln in out.splitlines() if ln.startswith("| ") and "/1 " in ln]) == 2
