@@ -247,7 +247,7 @@ def calibrate(
         setup = setup_from_options(link, instrument_frame, marker_spec, marker_columns,
                                    length_unit, lock_spec)  # fmt: skip
         _calibrate_markers(model, data, setup, preset, method, out, as_json, force, limits,
-                           prior_spec, loss)  # fmt: skip
+                           prior_spec, loss, profile)  # fmt: skip
         return
     if prior_spec is not None:
         raise click.BadParameter("--prior applies to marker calibrations (--link)",
@@ -305,7 +305,7 @@ def calibrate(
 
 
 def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, limits,
-                       prior_spec, loss) -> None:  # fmt: skip
+                       prior_spec, loss, profile) -> None:  # fmt: skip
     """``calibrate --link``: registration + joint fit from a marker table."""
     from pincal.cli._gate import apply_gate
     from pincal.cli._markers import marker_calibration, marker_lines
@@ -316,20 +316,9 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
         model, data, setup, preset, method, prior_spec, loss
     )
     start = fit.registration.mechanism
-    # MARKER HOOK (issue 23 item 5, until the gate has its own bounds for registration
-    # unknowns): the move limit judges the machine's parameters only; the instrument frame
-    # and marker are unknowns whose start is a closed-form guess, so their refinement is
-    # not a defect. The gate sees a copy whose registration parameters did not "move".
-    import numpy as np
-
-    from pincal.identification import is_registration
-
-    res = fit.result
-    reg = np.array([is_registration(n) for n in res.names])
-    seen = dataclasses.replace(
-        res, initial_values=np.where(reg, res.full_values, res.initial_values)
-    )
-    verdict = _outliers_as_warnings(check_quality(seen, meas, mech=start, limits=limits))
+    # the gate bounds registration unknowns (instrument frame, marker) apart from the
+    # machine's parameters, and judges an estimated noise by the instrument profile
+    verdict = check_quality(fit.result, meas, mech=start, limits=limits, instrument=profile)
     quality = apply_gate(verdict, force)
     doc = result_json(fit.result, str(data), CALIBRATED_URDF)
     doc["quality"] = quality
@@ -349,28 +338,6 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
     else:
         click.echo(report, nl=False)
         click.echo(f"wrote calibration directory {cal.path}/")
-
-
-def _outliers_as_warnings(verdict):
-    """MARKER HOOK (issue 23 item 5, until the gate judges estimated noise itself).
-
-    A marker table declares no noise: σ is estimated from the very residuals the outlier
-    test divides by, and on a real arm they are mostly model error (elasticity,
-    backlash), not instrument noise. An outlier flag then refuses a sound calibration, so
-    here it is a warning (still printed and recorded, with the poses named); every other
-    refusal stands.
-    """
-    from pincal.identification import QualityIssue
-
-    issues = tuple(
-        QualityIssue(i.kind, False, i.message + " (a warning: the noise is estimated from "
-                     "these residuals; --loss huber down-weights them)")
-        if i.kind == "outliers" and i.refuse
-        else i
-        for i in verdict.issues
-    )  # fmt: skip
-    out = dataclasses.replace(verdict, issues=issues)
-    return out if not out.passed else dataclasses.replace(out, cause="", cause_text="")
 
 
 def _is_instrument_file(path: str) -> bool:

@@ -18,6 +18,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from pincal.errors import SolverOptionError, TooFewPosesError, UnidentifiableError
+from pincal.identification._covariance import covariance_from_jacobian
 from pincal.identification._noise import initial_weights, weighted_fit
 from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._outcome import Progress, SolverOutcome
@@ -132,10 +133,10 @@ def _finish(
     Jf = J[:, fitted]
     dof = max(model.n_equations - fitted.size, 1)
     chi2 = float(r @ r) / dof
-    JtJ = Jf.T @ Jf
-    if prior_weights is not None:  # the posterior information: data plus prior
-        JtJ = JtJ + np.diag(prior_weights[fitted] ** 2)
-    JtJ_inv = np.linalg.pinv(JtJ)
+    # the posterior information: data plus prior (rank-revealing, from an SVD of Jf)
+    JtJ_inv = covariance_from_jacobian(
+        Jf, None if prior_weights is None else prior_weights[fitted]
+    )
     cov = JtJ_inv if model.known_noise else JtJ_inv * chi2
     mask = np.zeros(len(params), dtype=bool)
     mask[fitted] = True

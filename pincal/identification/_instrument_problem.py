@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import ConvergenceError, MeasurementError, SolverOptionError
+from pincal.identification._covariance import covariance_from_jacobian
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import solver
@@ -314,7 +315,7 @@ def identify_instruments(
             )
     dof = max(model.n_equations - free.size, 1)
     chi2 = float(r @ r) / dof
-    cov = np.linalg.pinv(Jf.T @ Jf)
+    cov = covariance_from_jacobian(Jf)
     n = model.n_machine
     mach = free < n
     cov_m = cov[np.ix_(mach, mach)]
