@@ -23,6 +23,10 @@ from pincal.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text(encoding="utf-8")
+#: the README and the pages it points to (studies, performance, …): their script commands
+DOCS = README + "".join(
+    p.read_text(encoding="utf-8") for p in sorted((ROOT / "docs").glob("*.md"))
+)
 LONG = {
     "scripts/bench_core.py": "benchmark (timings, no assertion)",
     "scripts/bench_design.py": "benchmark (timings, no assertion)",
@@ -45,7 +49,7 @@ def _commands() -> list[str]:
         for line in block.splitlines():
             line = line.split("#")[0].strip()
             cmds += [part.strip() for part in line.split("&&") if part.strip()]
-    cmds += re.findall(r"`(python scripts/[^`]+)`", README)
+    cmds += re.findall(r"`(python scripts/[^`]+)`", DOCS)
     cmds += [c.split("&&")[-1].strip() for c in re.findall(r"`(pip install[^`]+)`", README)]
     return [c for c in dict.fromkeys(cmds) if not c.startswith("pip install")]
 

@@ -119,6 +119,9 @@ class CalibrationProblem:
         self.predict_starts = False
         self._cache: tuple[bytes, Mechanism] | None = None
         self._memo: dict[bytes, tuple] = {}  # last evaluations: r_w, J_w, r_raw, qs, kinematics
+        #: (values key, (m, k, n) model Jacobian of the measured components) of the last
+        #: Jacobian evaluation, for :meth:`structural_jacobian`
+        self._structural: tuple[bytes, np.ndarray] | None = None
 
     @property
     def known_noise(self) -> bool:
@@ -158,6 +161,7 @@ class CalibrationProblem:
         new = CalibrationProblem(self.mech, self.params, self.meas)
         new.sigma, new.noise_source = sigma, "estimated"
         new._qs, new._solved, new._cache = self._qs, self._solved, self._cache
+        new._structural = self._structural
         scale = (self.sigma / sigma).reshape(-1)
         for key, (r_w, J_w, raw, qs, bk) in self._memo.items():  # warm: re-weighted only
             r_new = r_w * scale
@@ -228,14 +232,19 @@ class CalibrationProblem:
         machine measured in rz only) that mixes unmeasured rotations into the measured
         rows and makes second-order effects look identifiable. Which parameters are
         identifiable is decided on this Jacobian instead: the same rows and weights,
-        the deviation taken as zero.
+        the deviation taken as zero. Kept from the last Jacobian evaluation at
+        ``values`` (no new solve); evaluated otherwise.
         """
         values = np.asarray(values, dtype=float)
-        self.evaluate(values, jacobian=False)  # closed configurations, memoised
-        _, _, _, qs, bk = self._memo[values.tobytes()]
-        sens = sensitivities_batch(self.mechanism(values), self.params, qs, bk, values)
-        J = -np.asarray(sens.jacobian)[:, self.rows] / self.sigma[:, :, None]
-        return J.reshape(-1, len(self.params))
+        key = values.tobytes()
+        if self._structural is None or self._structural[0] != key:
+            hit = self._memo.get(key)
+            qs, bk = (hit[3], hit[4]) if hit is not None else self._configurations(
+                self.mechanism(values), values
+            )
+            self._residuals(self.mechanism(values), values, qs, bk, True)
+        assert self._structural is not None
+        return (self._structural[1] / self.sigma[:, :, None]).reshape(-1, len(self.params))
 
     def _guesses(self, values: np.ndarray) -> np.ndarray | None:
         """Start configurations for a solve at ``values``.
@@ -292,6 +301,7 @@ class CalibrationProblem:
         if not jacobian:
             return r_w, None, r_raw
         Js = sens.jacobian
+        self._structural = (values.tobytes(), -np.asarray(Js)[:, self.rows])
         J = -np.concatenate([Js[:, :3], Js[:, 3:] if D_rot is None else D_rot @ Js[:, 3:]], 1)
         J_w = (J[:, self.rows] * w[:, :, None]).reshape(-1, len(self.params))
         return r_w, J_w, r_raw

@@ -83,10 +83,12 @@ def test_planar_full_preset_refusal_names_what_was_measured(tmp_path):
     res = CliRunner().invoke(main, ["simulate", str(RRR3), "--random", "40", "--out", str(data)])
     assert res.exit_code == 0, res.output
     res = _calibrate(data, tmp_path / "cal", "--params", "full", model=RRR3)
-    assert res.exit_code == 1
-    assert "the solver did not succeed" in res.stderr
-    assert "Likely cause: solver" in res.stderr and "against the declared noise" in res.stderr
-    assert "larger than the declared noise" not in res.stderr
+    # the root cause is gone: the identifiable set is decided on the model's measured
+    # components (tests/identification/test_structural_rank.py), so the fit converges;
+    # a solver-only refusal names the solver (test_solver_refusal_names_the_solver_not_
+    # the_noise in tests/identification/test_quality_gate_model.py)
+    assert res.exit_code == 0, res.stderr[-2000:]
+    assert "larger than the declared noise" not in res.stderr + res.stdout
 
 
 def test_campaign_names_the_instrument(tmp_path, campaign):
