@@ -5,7 +5,9 @@
 ``x = [machine parameters (n); θ of instrument 1; θ of instrument 2; …]``. Each dataset
 is either :class:`pincal.measure.Measurements` (pose, position, component subset, tracker
 poses — residuals exactly as in ``CalibrationProblem``) or
-:class:`pincal.measure.InstrumentData` (one scalar per pose); every block is whitened
+:class:`pincal.measure.InstrumentData` (one scalar per pose) or :class:`pincal.measure.SocketData` (a ball seated in sockets:
+three residuals per pose, socket centres shared by the files of one plate, one
+residual per known distance, see :mod:`pincal.measure._sockets`); every block is whitened
 by its own noise, so several files of different kinds combine in one fit. The
 Jacobian is analytic: ``∂v/∂p · ∂p/∂x`` with ``∂p/∂x`` from
 :func:`pincal.sensitivity.pose_sensitivity`, and ``∂v/∂θ`` from the instrument.
@@ -18,7 +20,7 @@ parameters first, so what an instrument absorbs is held on the machine side).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -29,6 +31,7 @@ from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import solver
 from pincal.measure._instruments import InstrumentData, initial_instrument_values
 from pincal.measure._measurements import Measurements
+from pincal.measure._sockets import SCALE_MESSAGE, SocketData, SocketPlate
 from pincal.model._closures import measurement_residual
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
@@ -37,7 +40,7 @@ from pincal.sensitivity._jacobian import _plan, pose_sensitivity
 
 __all__ = ["InstrumentIdentification", "InstrumentProblem", "identify_instruments"]
 
-Dataset = InstrumentData | Measurements
+Dataset = InstrumentData | Measurements | SocketData
 
 
 class InstrumentProblem:
@@ -67,7 +70,7 @@ class InstrumentProblem:
             list(labels)
             if labels is not None
             else [
-                f"{d.kind if isinstance(d, InstrumentData) else 'pose'}{i}"
+                f"{'pose' if isinstance(d, Measurements) else d.kind}{i}"
                 for i, d in enumerate(datasets)
             ]
         )
@@ -89,6 +92,13 @@ class InstrumentProblem:
             if isinstance(d, Measurements):
                 self.instruments.append(None)
                 self.sigma.append(CalibrationProblem(mech, params, d).sigma)
+            elif isinstance(d, SocketData):
+                self.instruments.append(d)
+                th = np.zeros(len(d.parameter_names))
+                theta0.append(th)
+                self.sigma.append(np.full((m, 3), d.plate.std))
+                names += [f"{label}.{n}" for n in d.parameter_names]
+                units += ["m"] * th.size
             else:
                 P = np.array([mech.frame_placement(q).translation for q in qs[start : start + m]])
                 inst, th = initial_instrument_values(d, P)
@@ -98,11 +108,67 @@ class InstrumentProblem:
                 names += [f"{label}.{n}" for n in inst.parameter_names]
                 units += list(inst.parameter_units)
             start += m
+        self.plates = _plates([d for d in datasets if isinstance(d, SocketData)])
+        self.centre_cols: dict[tuple[str, str], int] = {}
+        col = len(params) + sum(t.size for t in theta0)
+        for plate, sockets in self.plates.values():
+            for s in sockets:
+                self.centre_cols[(plate.name, s)] = col
+                col += 3
+                names += [f"{plate.name}.{s}_{a}" for a in "xyz"]
+                units += ["m"] * 3
+        n_known = sum(len(p.distances) for p, _ in self.plates.values())
+        if n_known:
+            self.sigma.append(
+                np.array([[k.std] for p, _ in self.plates.values() for k in p.distances])
+            )
         self.names, self.units = tuple(names), tuple(units)
         self.n_machine = len(params)
-        self.x0 = np.concatenate([np.zeros(self.n_machine), *theta0])
+        self.x0 = np.concatenate(
+            [np.zeros(self.n_machine), *theta0, np.zeros(3 * len(self.centre_cols))]
+        )
+        self._start_centres(qs)
         self._qs: np.ndarray | None = None
         self._cache: tuple[bytes, Mechanism] | None = None
+
+    @property
+    def fixes_scale(self) -> bool:
+        """False when only sockets without a known distance were measured.
+
+        Socket residuals ``c − b`` scale with every length of the model: with no other
+        dataset (a reading of a length, a measured position) and no known distance,
+        nothing measured fixes the length scale.
+        """
+        return not self.plates or any(
+            not isinstance(d, SocketData) for d in self.datasets
+        ) or any(p.fixes_scale for p, _ in self.plates.values())
+
+    @property
+    def scale_warnings(self) -> tuple[str, ...]:
+        """:data:`pincal.measure.SCALE_MESSAGE` when :attr:`fixes_scale` is False."""
+        return () if self.fixes_scale else (SCALE_MESSAGE,)
+
+    def _start_centres(self, qs: np.ndarray) -> None:
+        """Start each socket centre at the mean nominal ball centre of its poses."""
+        start = 0
+        sums: dict[tuple[str, str], list[np.ndarray]] = {}
+        for d in self.datasets:
+            m = len(d)
+            if isinstance(d, SocketData):
+                T = [self.mech.frame_placement(q) for q in qs[start : start + m]]
+                P = np.array([t.translation for t in T])
+                Rs = np.array([t.rotation for t in T])
+                B, _ = d.ball_centres(P, Rs, np.zeros(3))
+                for s, b in zip(d.socket, B, strict=True):
+                    sums.setdefault((d.plate.name, s), []).append(b)
+            start += m
+        for key, col in self.centre_cols.items():
+            self.x0[col : col + 3] = np.mean(sums[key], axis=0)
+
+    def socket_centres(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """``"plate.socket"`` → (3,) socket centre at ``x`` [m]."""
+        x = np.asarray(x, dtype=float)
+        return {f"{p}.{s}": x[c : c + 3].copy() for (p, s), c in self.centre_cols.items()}
 
     @property
     def n_equations(self) -> int:
@@ -157,7 +223,8 @@ class InstrumentProblem:
         plan = _plan(mech, self.params) if jacobian else None
         r_all, J_all, raws = [], [], []
         start, col = 0, n
-        for d, inst, sig in zip(self.datasets, self.instruments, self.sigma, strict=True):
+        blocks = zip(self.datasets, self.instruments, self.sigma[: len(self.datasets)], strict=True)
+        for d, inst, sig in blocks:
             m = len(d)
             q_block = qs[start : start + m]
             start += m
@@ -169,7 +236,10 @@ class InstrumentProblem:
                 placements = [mech.frame_placement(q) for q in q_block]
                 P = np.array([T.translation for T in placements])
                 Rs = [T.rotation for T in placements]
-            if isinstance(d, Measurements):
+            if isinstance(d, SocketData):
+                raw, J = self._socket_block(d, x, col, P, Rs, sens if jacobian else None)
+                col += len(d.parameter_names)
+            elif isinstance(d, Measurements):
                 rows = d.component_indices
                 raw = np.empty((m, rows.size))
                 J = np.zeros((m, rows.size, len(x)))
@@ -192,8 +262,49 @@ class InstrumentProblem:
             raws.append(raw)
             r_all.append((raw / sig).ravel())
             J_all.append((J / sig[:, :, None]).reshape(-1, len(x)))
+        if len(self.sigma) > len(self.datasets):  # the known distances of the plates
+            raw, J = self._distance_block(x)
+            sig = self.sigma[-1]
+            raws.append(raw)
+            r_all.append((raw / sig).ravel())
+            J_all.append((J / sig[:, :, None]).reshape(-1, len(x)))
         r_w = np.concatenate(r_all)
         return r_w, (np.vstack(J_all) if jacobian else None), raws
+
+    def _socket_block(self, d: SocketData, x: np.ndarray, col: int, P: np.ndarray,
+                      Rs: list[np.ndarray], sens: list[Any] | None):  # fmt: skip
+        """Raw residuals ``c_s − b`` (m, 3) [m] and their Jacobian (m, 3, len(x))."""
+        n, m, k = self.n_machine, len(d), len(d.parameter_names)
+        R = np.asarray(Rs)
+        B, off = d.ball_centres(P, R, x[col : col + k])
+        cols = np.array([self.centre_cols[(d.plate.name, s)] for s in d.socket])
+        C = x[cols[:, None] + np.arange(3)]
+        J = np.zeros((m, 3, len(x)))
+        if sens is not None:
+            # b = p + R t; a local rotation δ of the flange moves b by −R [t]× δ
+            t = d.ball if d.ball is not None else x[col : col + 3]
+            tx = np.array([[0, -t[2], t[1]], [t[2], 0, -t[0]], [-t[1], t[0], 0]])
+            for i, s in enumerate(sens):
+                J[i, :, :n] = -(s.jacobian[:3] - R[i] @ tx @ s.jacobian[3:6])
+                J[i, :, cols[i] : cols[i] + 3] = np.eye(3)
+                if k:
+                    J[i, :, col : col + 3] = -R[i]
+        return C - B, J
+
+    def _distance_block(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Raw residuals ``D − ‖c_a − c_b‖`` (d, 1) [m] and their Jacobian (d, 1, len(x))."""
+        raws, rows = [], []
+        for plate, _ in self.plates.values():
+            centres = {s: x[c : c + 3] for (p, s), c in self.centre_cols.items() if p == plate.name}
+            r, derivs = plate.distance_residuals(centres)
+            raws.append(r)
+            for a, b, u in derivs:
+                row = np.zeros(len(x))
+                ca, cb = self.centre_cols[(plate.name, a)], self.centre_cols[(plate.name, b)]
+                row[ca : ca + 3] -= u
+                row[cb : cb + 3] += u
+                rows.append(row)
+        return np.concatenate(raws)[:, None], np.array(rows)[:, None, :]
 
     def analyse(self, x: np.ndarray | None = None) -> Identifiability:
         """Identifiability of the joint parameters at ``x`` (default the start values).
@@ -203,6 +314,30 @@ class InstrumentProblem:
         _, J, _ = self.evaluate(self.x0 if x is None else x)
         order = np.r_[np.arange(self.n_machine, len(self.names)), np.arange(self.n_machine)]
         return analyse_jacobian(J[:, order], tuple(self.names[i] for i in order))
+
+
+def _plates(data: list[SocketData]) -> dict[str, tuple[SocketPlate, list[str]]]:
+    """Plate name → (the plate with the known distances of all its files, its sockets).
+
+    Raises:
+        MeasurementError: two files give different values for one known distance.
+    """
+    out: dict[str, tuple[SocketPlate, list[str]]] = {}
+    for d in data:
+        plate, sockets = out.get(d.plate.name, (d.plate, []))
+        known = {(k.a, k.b): k for k in plate.distances}
+        for k in d.plate.distances:
+            same = known.get((k.a, k.b)) or known.get((k.b, k.a))
+            if same is None:
+                known[(k.a, k.b)] = k
+            elif (same.value, same.std) != (k.value, k.std):
+                raise MeasurementError(
+                    f"plate {d.plate.name!r}: the known distance {k.a}–{k.b} is given as "
+                    f"{same.value * 1e3:g} mm and {k.value * 1e3:g} mm by two files; give it once"
+                )
+        plate = SocketPlate(plate.name, plate.std, tuple(known.values()))
+        out[d.plate.name] = (plate, sockets + [s for s in d.sockets if s not in sockets])
+    return out
 
 
 @dataclass(frozen=True)
@@ -220,6 +355,9 @@ class InstrumentIdentification:
         covariance: covariance of the fitted values (order of ``fitted``).
         residuals: per dataset, (m_i, k_i) raw residuals at the solution [m, rad].
         identifiability: joint analysis at the start (instrument parameters first).
+        socket_centres: ``"plate.socket"`` → (3,) identified socket centre [m].
+        warnings: what no measurement fixes, in words (e.g. the length scale of a
+            socket campaign without a known distance).
     """
 
     result: IdentificationResult
@@ -230,6 +368,8 @@ class InstrumentIdentification:
     covariance: np.ndarray
     residuals: list[np.ndarray]
     identifiability: Identifiability
+    socket_centres: dict[str, np.ndarray] = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
 
     def instrument_values(self) -> dict[str, float]:
         """Instrument parameter name → identified (or start) value [SI]."""
@@ -239,8 +379,11 @@ class InstrumentIdentification:
 
 def _stats(raws: list[np.ndarray], datasets: Sequence[Dataset]) -> ResidualStats:
     pos, rot = [], []
-    for raw, d in zip(raws, datasets, strict=True):
-        if isinstance(d, Measurements):
+    kinds: list[Dataset | None] = [*datasets, *[None] * (len(raws) - len(datasets))]
+    for raw, d in zip(raws, kinds, strict=True):
+        if isinstance(d, SocketData):
+            pos += list(np.linalg.norm(raw, axis=1))
+        elif isinstance(d, Measurements):
             comps = d.components
             ip = [i for i, c in enumerate(comps) if not c.startswith("r")]
             ir = [i for i, c in enumerate(comps) if c.startswith("r")]
@@ -333,7 +476,9 @@ def identify_instruments(
         reduced_chi2=chi2,
         iterations=out.iterations,
         success=success,
-        message=f"joint fit of {free.size} of {len(model.names)} parameters; " + message,
+        message=f"joint fit of {free.size} of {len(model.names)} parameters; "
+        + "".join(f"WARNING: {w}; " for w in model.scale_warnings)
+        + message,
         cost_history=tuple(out.history),
         residuals=np.concatenate([np.linalg.norm(a, axis=1) for a in raws])[:, None],
         initial_values=np.zeros(n),
@@ -343,6 +488,11 @@ def identify_instruments(
         extras=out.extras,
         parameter_set=params,
         calibrated_mechanism=model.mechanism(x),
-        annotations={"instruments": inst, "datasets": list(model.labels)},
+        annotations={
+            "instruments": inst,
+            "datasets": list(model.labels),
+            **({"warnings": list(model.scale_warnings)} if model.scale_warnings else {}),
+        },
     )
-    return InstrumentIdentification(result, model.names, x, x0, free, cov, raws, ident)
+    return InstrumentIdentification(result, model.names, x, x0, free, cov, raws, ident,
+                                    model.socket_centres(x), model.scale_warnings)  # fmt: skip
