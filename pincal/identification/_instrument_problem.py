@@ -87,6 +87,7 @@ class InstrumentProblem:
         names: list[str] = list(params.names)
         units: list[str] = list(params.units)
         start = 0
+        self._ball_cols: dict[int, int] = {}  # dataset index → column of its ball_x
         for d, label in zip(datasets, self.labels, strict=True):
             m = len(d)
             if isinstance(d, Measurements):
@@ -94,7 +95,8 @@ class InstrumentProblem:
                 self.sigma.append(CalibrationProblem(mech, params, d).sigma)
             elif isinstance(d, SocketData):
                 self.instruments.append(d)
-                th = np.zeros(len(d.parameter_names))
+                th = np.zeros(len(d.parameter_names))  # the ball: see _start_centres
+                self._ball_cols[len(self.instruments) - 1] = len(names)
                 theta0.append(th)
                 self.sigma.append(np.full((m, 3), d.plate.std))
                 names += [f"{label}.{n}" for n in d.parameter_names]
@@ -149,16 +151,27 @@ class InstrumentProblem:
         return () if self.fixes_scale else (SCALE_MESSAGE,)
 
     def _start_centres(self, qs: np.ndarray) -> None:
-        """Start each socket centre at the mean nominal ball centre of its poses."""
+        """Start unknown balls and socket centres from the nominal model.
+
+        An unknown ball centre t starts at the linear least-squares solution of
+        ``p_i + R_i t = c_s(i)`` over the file's poses (its own socket centres unknown
+        too), not at 0, where the flange's rotation would not move the ball and the
+        identifiable set decided there would hold it. Each socket centre starts at
+        the mean nominal ball centre of its poses.
+        """
         start = 0
         sums: dict[tuple[str, str], list[np.ndarray]] = {}
-        for d in self.datasets:
+        for i, d in enumerate(self.datasets):
             m = len(d)
             if isinstance(d, SocketData):
                 T = [self.mech.frame_placement(q) for q in qs[start : start + m]]
                 P = np.array([t.translation for t in T])
                 Rs = np.array([t.rotation for t in T])
-                B, _ = d.ball_centres(P, Rs, np.zeros(3))
+                t0 = np.zeros(3)
+                if d.ball is None:
+                    t0 = _ball_start(d, P, Rs)
+                    self.x0[self._ball_cols[i] : self._ball_cols[i] + 3] = t0
+                B, _ = d.ball_centres(P, Rs, t0)
                 for s, b in zip(d.socket, B, strict=True):
                     sums.setdefault((d.plate.name, s), []).append(b)
             start += m
@@ -316,6 +329,17 @@ class InstrumentProblem:
         return analyse_jacobian(J[:, order], tuple(self.names[i] for i in order))
 
 
+def _ball_start(d: SocketData, P: np.ndarray, Rs: np.ndarray) -> np.ndarray:
+    """Least-squares ball centre t (3,) [m] from ``R_i t − c_s(i) = −p_i`` (nominal poses)."""
+    sockets = d.sockets
+    A = np.zeros((3 * len(d), 3 + 3 * len(sockets)))
+    for i, s in enumerate(d.socket):
+        A[3 * i : 3 * i + 3, :3] = Rs[i]
+        k = 3 + 3 * sockets.index(s)
+        A[3 * i : 3 * i + 3, k : k + 3] = -np.eye(3)
+    return np.linalg.lstsq(A, -P.reshape(-1), rcond=None)[0][:3]
+
+
 def _plates(data: list[SocketData]) -> dict[str, tuple[SocketPlate, list[str]]]:
     """Plate name → (the plate with the known distances of all its files, its sockets).
 
@@ -469,7 +493,7 @@ def identify_instruments(
         units=params.units,
         full_values=x[:n].copy(),
         identified=mask,
-        std=np.sqrt(np.diag(cov_m)),
+        std=np.sqrt(np.clip(np.diag(cov_m), 0.0, None)),
         covariance=cov_m,
         before=_stats(raw0, datasets),
         after=_stats(raws, datasets),
