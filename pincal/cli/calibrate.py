@@ -201,8 +201,8 @@ def calibrate(
             f"a robust loss needs --method lm, not {method}", param_hint="--loss"
         )
     guard_paths(
-        {"MODEL": model_input(model), "--sidecar": model_opts.sidecar,
-         **{f"--data {f}": f for f in files}},  # fmt: skip
+        {"MODEL": model_input(model), "--sidecar": model_opts.sidecar}
+        | {f"--data {f}": f for f in files},
         out_dirs={"--out": out},
     )
     click.get_current_context().with_resource(calibration_lock(out))  # until the end

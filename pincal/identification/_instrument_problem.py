@@ -5,10 +5,11 @@
 ``x = [machine parameters (n); θ of instrument 1; θ of instrument 2; …]``. Each dataset
 is either :class:`pincal.measure.Measurements` (pose, position, component subset, tracker
 poses — residuals exactly as in ``CalibrationProblem``) or
-:class:`pincal.measure.InstrumentData` (one scalar per pose) or :class:`pincal.measure.SocketData` (a ball seated in sockets:
-three residuals per pose, socket centres shared by the files of one plate, one
-residual per known distance, see :mod:`pincal.measure._sockets`); every block is whitened
-by its own noise, so several files of different kinds combine in one fit. The
+:class:`pincal.measure.InstrumentData` (one scalar per pose) or
+:class:`pincal.measure.SocketData` (a ball seated in sockets: three residuals per pose,
+socket centres shared by the files of one plate and appended after every file's own
+unknowns, one residual per known distance); every block is whitened by its own noise,
+so several files of different kinds combine in one fit. The
 Jacobian is analytic: ``∂v/∂p · ∂p/∂x`` with ``∂p/∂x`` from
 :func:`pincal.sensitivity.pose_sensitivity`, and ``∂v/∂θ`` from the instrument.
 
@@ -28,10 +29,11 @@ import numpy as np
 from pincal.errors import ConvergenceError, MeasurementError, SolverOptionError
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
+from pincal.identification._socket_terms import SocketTerms
 from pincal.identification._solvers import solver
 from pincal.measure._instruments import InstrumentData, initial_instrument_values
 from pincal.measure._measurements import Measurements
-from pincal.measure._sockets import SCALE_MESSAGE, SocketData, SocketPlate
+from pincal.measure._sockets import SocketData
 from pincal.model._closures import measurement_residual
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
@@ -110,78 +112,33 @@ class InstrumentProblem:
                 names += [f"{label}.{n}" for n in inst.parameter_names]
                 units += list(inst.parameter_units)
             start += m
-        self.plates = _plates([d for d in datasets if isinstance(d, SocketData)])
-        self.centre_cols: dict[tuple[str, str], int] = {}
-        col = len(params) + sum(t.size for t in theta0)
-        for plate, sockets in self.plates.values():
-            for s in sockets:
-                self.centre_cols[(plate.name, s)] = col
-                col += 3
-                names += [f"{plate.name}.{s}_{a}" for a in "xyz"]
-                units += ["m"] * 3
-        n_known = sum(len(p.distances) for p, _ in self.plates.values())
-        if n_known:
-            self.sigma.append(
-                np.array([[k.std] for p, _ in self.plates.values() for k in p.distances])
-            )
-        self.names, self.units = tuple(names), tuple(units)
         self.n_machine = len(params)
+        self.sockets = SocketTerms(datasets, len(names), self._ball_cols)
+        names += self.sockets.names
+        units += ["m"] * len(self.sockets.names)
+        if self.sockets.sigma is not None:
+            self.sigma.append(self.sockets.sigma)
+        self.names, self.units = tuple(names), tuple(units)
         self.x0 = np.concatenate(
-            [np.zeros(self.n_machine), *theta0, np.zeros(3 * len(self.centre_cols))]
+            [np.zeros(self.n_machine), *theta0, np.zeros(len(self.sockets.names))]
         )
-        self._start_centres(qs)
+        self.sockets.start(mech, qs, self.x0)
         self._qs: np.ndarray | None = None
         self._cache: tuple[bytes, Mechanism] | None = None
 
     @property
     def fixes_scale(self) -> bool:
-        """False when only sockets without a known distance were measured.
-
-        Socket residuals ``c − b`` scale with every length of the model: with no other
-        dataset (a reading of a length, a measured position) and no known distance,
-        nothing measured fixes the length scale.
-        """
-        return not self.plates or any(
-            not isinstance(d, SocketData) for d in self.datasets
-        ) or any(p.fixes_scale for p, _ in self.plates.values())
+        """False when only sockets without a known distance were measured."""
+        return self.sockets.fixes_scale
 
     @property
     def scale_warnings(self) -> tuple[str, ...]:
-        """:data:`pincal.measure.SCALE_MESSAGE` when :attr:`fixes_scale` is False."""
-        return () if self.fixes_scale else (SCALE_MESSAGE,)
-
-    def _start_centres(self, qs: np.ndarray) -> None:
-        """Start unknown balls and socket centres from the nominal model.
-
-        An unknown ball centre t starts at the linear least-squares solution of
-        ``p_i + R_i t = c_s(i)`` over the file's poses (its own socket centres unknown
-        too), not at 0, where the flange's rotation would not move the ball and the
-        identifiable set decided there would hold it. Each socket centre starts at
-        the mean nominal ball centre of its poses.
-        """
-        start = 0
-        sums: dict[tuple[str, str], list[np.ndarray]] = {}
-        for i, d in enumerate(self.datasets):
-            m = len(d)
-            if isinstance(d, SocketData):
-                T = [self.mech.frame_placement(q) for q in qs[start : start + m]]
-                P = np.array([t.translation for t in T])
-                Rs = np.array([t.rotation for t in T])
-                t0 = np.zeros(3)
-                if d.ball is None:
-                    t0 = _ball_start(d, P, Rs)
-                    self.x0[self._ball_cols[i] : self._ball_cols[i] + 3] = t0
-                B, _ = d.ball_centres(P, Rs, t0)
-                for s, b in zip(d.socket, B, strict=True):
-                    sums.setdefault((d.plate.name, s), []).append(b)
-            start += m
-        for key, col in self.centre_cols.items():
-            self.x0[col : col + 3] = np.mean(sums[key], axis=0)
+        """What no measurement fixes, in words (see :class:`SocketTerms`)."""
+        return self.sockets.warnings
 
     def socket_centres(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """``"plate.socket"`` → (3,) socket centre at ``x`` [m]."""
-        x = np.asarray(x, dtype=float)
-        return {f"{p}.{s}": x[c : c + 3].copy() for (p, s), c in self.centre_cols.items()}
+        return self.sockets.centres(x)
 
     @property
     def n_equations(self) -> int:
@@ -250,7 +207,7 @@ class InstrumentProblem:
                 P = np.array([T.translation for T in placements])
                 Rs = [T.rotation for T in placements]
             if isinstance(d, SocketData):
-                raw, J = self._socket_block(d, x, col, P, Rs, sens if jacobian else None)
+                raw, J = self.sockets.block(d, x, col, n, P, Rs, sens if jacobian else None)
                 col += len(d.parameter_names)
             elif isinstance(d, Measurements):
                 rows = d.component_indices
@@ -276,48 +233,13 @@ class InstrumentProblem:
             r_all.append((raw / sig).ravel())
             J_all.append((J / sig[:, :, None]).reshape(-1, len(x)))
         if len(self.sigma) > len(self.datasets):  # the known distances of the plates
-            raw, J = self._distance_block(x)
+            raw, J = self.sockets.distance_block(x)
             sig = self.sigma[-1]
             raws.append(raw)
             r_all.append((raw / sig).ravel())
             J_all.append((J / sig[:, :, None]).reshape(-1, len(x)))
         r_w = np.concatenate(r_all)
         return r_w, (np.vstack(J_all) if jacobian else None), raws
-
-    def _socket_block(self, d: SocketData, x: np.ndarray, col: int, P: np.ndarray,
-                      Rs: list[np.ndarray], sens: list[Any] | None):  # fmt: skip
-        """Raw residuals ``c_s − b`` (m, 3) [m] and their Jacobian (m, 3, len(x))."""
-        n, m, k = self.n_machine, len(d), len(d.parameter_names)
-        R = np.asarray(Rs)
-        B, off = d.ball_centres(P, R, x[col : col + k])
-        cols = np.array([self.centre_cols[(d.plate.name, s)] for s in d.socket])
-        C = x[cols[:, None] + np.arange(3)]
-        J = np.zeros((m, 3, len(x)))
-        if sens is not None:
-            # b = p + R t; a local rotation δ of the flange moves b by −R [t]× δ
-            t = d.ball if d.ball is not None else x[col : col + 3]
-            tx = np.array([[0, -t[2], t[1]], [t[2], 0, -t[0]], [-t[1], t[0], 0]])
-            for i, s in enumerate(sens):
-                J[i, :, :n] = -(s.jacobian[:3] - R[i] @ tx @ s.jacobian[3:6])
-                J[i, :, cols[i] : cols[i] + 3] = np.eye(3)
-                if k:
-                    J[i, :, col : col + 3] = -R[i]
-        return C - B, J
-
-    def _distance_block(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Raw residuals ``D − ‖c_a − c_b‖`` (d, 1) [m] and their Jacobian (d, 1, len(x))."""
-        raws, rows = [], []
-        for plate, _ in self.plates.values():
-            centres = {s: x[c : c + 3] for (p, s), c in self.centre_cols.items() if p == plate.name}
-            r, derivs = plate.distance_residuals(centres)
-            raws.append(r)
-            for a, b, u in derivs:
-                row = np.zeros(len(x))
-                ca, cb = self.centre_cols[(plate.name, a)], self.centre_cols[(plate.name, b)]
-                row[ca : ca + 3] -= u
-                row[cb : cb + 3] += u
-                rows.append(row)
-        return np.concatenate(raws)[:, None], np.array(rows)[:, None, :]
 
     def analyse(self, x: np.ndarray | None = None) -> Identifiability:
         """Identifiability of the joint parameters at ``x`` (default the start values).
@@ -327,41 +249,6 @@ class InstrumentProblem:
         _, J, _ = self.evaluate(self.x0 if x is None else x)
         order = np.r_[np.arange(self.n_machine, len(self.names)), np.arange(self.n_machine)]
         return analyse_jacobian(J[:, order], tuple(self.names[i] for i in order))
-
-
-def _ball_start(d: SocketData, P: np.ndarray, Rs: np.ndarray) -> np.ndarray:
-    """Least-squares ball centre t (3,) [m] from ``R_i t − c_s(i) = −p_i`` (nominal poses)."""
-    sockets = d.sockets
-    A = np.zeros((3 * len(d), 3 + 3 * len(sockets)))
-    for i, s in enumerate(d.socket):
-        A[3 * i : 3 * i + 3, :3] = Rs[i]
-        k = 3 + 3 * sockets.index(s)
-        A[3 * i : 3 * i + 3, k : k + 3] = -np.eye(3)
-    return np.linalg.lstsq(A, -P.reshape(-1), rcond=None)[0][:3]
-
-
-def _plates(data: list[SocketData]) -> dict[str, tuple[SocketPlate, list[str]]]:
-    """Plate name → (the plate with the known distances of all its files, its sockets).
-
-    Raises:
-        MeasurementError: two files give different values for one known distance.
-    """
-    out: dict[str, tuple[SocketPlate, list[str]]] = {}
-    for d in data:
-        plate, sockets = out.get(d.plate.name, (d.plate, []))
-        known = {(k.a, k.b): k for k in plate.distances}
-        for k in d.plate.distances:
-            same = known.get((k.a, k.b)) or known.get((k.b, k.a))
-            if same is None:
-                known[(k.a, k.b)] = k
-            elif (same.value, same.std) != (k.value, k.std):
-                raise MeasurementError(
-                    f"plate {d.plate.name!r}: the known distance {k.a}–{k.b} is given as "
-                    f"{same.value * 1e3:g} mm and {k.value * 1e3:g} mm by two files; give it once"
-                )
-        plate = SocketPlate(plate.name, plate.std, tuple(known.values()))
-        out[d.plate.name] = (plate, sockets + [s for s in d.sockets if s not in sockets])
-    return out
 
 
 @dataclass(frozen=True)
@@ -504,7 +391,9 @@ def identify_instruments(
         + "".join(f"WARNING: {w}; " for w in model.scale_warnings)
         + message,
         cost_history=tuple(out.history),
-        residuals=np.concatenate([np.linalg.norm(a, axis=1) for a in raws])[:, None],
+        residuals=np.concatenate(  # per pose (a plate's known distances are not poses)
+            [np.linalg.norm(a, axis=1) for a in raws[: len(model.datasets)]]
+        )[:, None],
         initial_values=np.zeros(n),
         n_equations=model.n_equations,
         model=mech.name,

@@ -47,7 +47,6 @@ from pincal.io._instrument_registry import (
 )
 from pincal.io._joint_columns import joint_columns, read_joints
 from pincal.io._marker_file import read_marker_table
-from pincal.io._socket_file import read_socket_data, write_socket_data
 from pincal.io._measurement_file import (
     MeasurementFile,
     check_enough_poses,
@@ -63,6 +62,7 @@ from pincal.io._poses_file import (
     read_poses,
     write_poses,
 )
+from pincal.io._socket_file import read_socket_data, write_socket_data
 from pincal.io._tracker_file import (
     TargetMeasurements,
     write_target_measurements,

@@ -81,8 +81,7 @@ def read_socket_data(path: str | Path, mech: Mechanism) -> SocketData:
     frame = header_value(header, "frame", mech.measured_frame, name)
     if frame != mech.measured_frame:
         raise MeasurementFormatError(
-            f"{name} measures frame {frame!r} but the model's tool frame is "
-            f"{mech.measured_frame!r}"
+            f"{name} measures frame {frame!r} but the model's tool frame is {mech.measured_frame!r}"
         )
     std = positive_value(header_value(header, "std", None, name), "std", name) / lf
     distances = tuple(_distance(t, lf, name) for t in header.get("distance", []))

@@ -184,7 +184,9 @@ class SocketData:
         """Ball centres ``p + R t`` (m, 3) [m] and the offsets ``R t`` (m, 3).
 
         Args:
-            P: (m, 3) flange positions; Rs: (m, 3, 3) orientations; theta: own unknowns.
+            P: (m, 3) flange positions [m].
+            Rs: (m, 3, 3) flange orientations.
+            theta: this file's own unknowns (the ball centre when unknown) [m].
         """
         t = self.ball if self.ball is not None else np.asarray(theta, dtype=float)[:3]
         off = np.einsum("mij,j->mi", np.asarray(Rs), t)
@@ -209,9 +211,17 @@ def simulate_sockets(
 
     Args:
         actual: the machine (simulation truth); it must impose the position.
-        plate: the plate; centres: socket name → (3,) true centre [m].
-        n_per_socket: poses per socket; ball: true ball centre in the flange frame [m]
-            (default its origin); the returned data declare it unknown when given.
+        plate: the plate (its std is the seating noise).
+        centres: socket name → (3,) true centre [m].
+        n_per_socket: poses per socket.
+        rng: generator of orientations, starts and noise.
+        ball: true ball centre in the flange frame [m] (default its origin); the
+            returned data declare it unknown when given.
+        tilt: largest tilt of the flange from pointing down [rad].
+        noise: add the seating noise.
+
+    Returns:
+        SocketData of the poses reached, socket by socket.
 
     Raises:
         MeasurementError: fewer than ``n_per_socket`` poses reached in 20× as many tries.

@@ -20,8 +20,8 @@ from pincal.model import load_mechanism, parameters, sample_actuators
 
 STD = 5e-6  # seating 1σ per axis [m]
 A = np.array([0.45, 0.10, 0.05])
-SOCKETS = {"A": A, "B": A + [0.05, 0.0, 0.0]}
-HELD_OUT = {"A": A, "C": A + [0.0, 0.25, 0.0]}  # C is never used in a fit
+SOCKETS = {"A": A, "B": A + np.array([0.05, 0.0, 0.0])}
+HELD_OUT = {"A": A, "C": A + np.array([0.0, 0.25, 0.0])}  # C is never used in a fit
 
 
 @pytest.fixture(scope="module")
@@ -40,12 +40,9 @@ def _plate(known: bool) -> SocketPlate:
 def _held_out_distance_error(mech, actual, rng) -> float:
     """|‖c_A − c_C‖ − 0.25 m| from ball centres predicted by ``mech`` at held-out poses [m]."""
     held = simulate_sockets(actual, SocketPlate("held", STD), HELD_OUT, 10, rng)
-    centres = {
-        s: np.mean([mech.frame_placement(q).translation
-                    for q, t in zip(mech.configurations(held.q_act), held.socket, strict=True)
-                    if t == s], axis=0)  # fmt: skip
-        for s in held.sockets
-    }
+    P = np.array([mech.frame_placement(q).translation for q in mech.configurations(held.q_act)])
+    names = np.array(held.socket)
+    centres = {s: P[names == s].mean(axis=0) for s in held.sockets}
     return abs(float(np.linalg.norm(centres["A"] - centres["C"])) - 0.25)
 
 
