@@ -88,7 +88,9 @@ def format_report(doc: dict) -> str:
             )
         lines.append(f"residuals {when:6s}: " + "; ".join(parts))
     from pincal.cli._gate import quality_lines
+    from pincal.cli._sockets import socket_lines
 
+    lines += socket_lines(doc)
     return "\n".join(lines + quality_lines(doc.get("quality"))) + "\n"
 
 

@@ -374,6 +374,7 @@ def identify_instruments(
     mask[free[mach]] = True
     x = np.asarray(out.x, dtype=float)
     inst = {k: float(v) for k, v in zip(model.names[n:], x[n:], strict=True)}
+    centres_mm = {k: [float(v) * 1e3 for v in c] for k, c in model.socket_centres(x).items()}
     result = IdentificationResult(
         method=method,
         names=params.names,
@@ -405,6 +406,7 @@ def identify_instruments(
             "instruments": inst,
             "datasets": list(model.labels),
             **({"warnings": list(model.scale_warnings)} if model.scale_warnings else {}),
+            **({"socket_centres_mm": centres_mm} if centres_mm else {}),
         },
     )
     return InstrumentIdentification(result, model.names, x, x0, free, cov, raws, ident,

@@ -29,7 +29,8 @@ class SocketTerms:
         ball_columns: dataset index → column of its unknown ``ball_x``.
 
     Raises:
-        MeasurementError: two files give different values for one known distance.
+        MeasurementError: two files give different values for one known distance, or a
+            known distance names a socket that no file measured.
     """
 
     def __init__(
@@ -38,6 +39,14 @@ class SocketTerms:
         self.datasets = list(datasets)
         self.ball_columns = dict(ball_columns)
         self.plates = _plates([d for d in self.datasets if isinstance(d, SocketData)])
+        for plate, sockets in self.plates.values():
+            for k in plate.distances:
+                missing = [s for s in (k.a, k.b) if s not in sockets]
+                if missing:
+                    raise MeasurementError(
+                        f"plate {plate.name!r}: the known distance {k.a}–{k.b} names "
+                        f"socket(s) {missing} with no pose in any file; measured: {sockets}"
+                    )
         self.columns: dict[tuple[str, str], int] = {}
         col = first_column
         for plate, sockets in self.plates.values():

@@ -118,12 +118,6 @@ def read_socket_data(path: str | Path, mech: Mechanism) -> SocketData:
     units = [parse_column(numeric[k])[1] for k in act]
     q_act = data[:, act] / actuator_read_factors(mech, units, name)
     check_actuator_ranges(mech, q_act, name, [numeric[k] for k in act])
-    known = {s for k in distances for s in (k.a, k.b)}
-    if known - set(sockets):
-        raise MeasurementFormatError(
-            f"{name}: known distance names socket(s) {sorted(known - set(sockets))} with no "
-            f"pose in this file; sockets measured: {sorted(set(sockets))}"
-        )
     return SocketData(plate, q_act, sockets, mech.actuated, frame, ball)
 
 

@@ -137,7 +137,7 @@ def test_conflicting_known_distances_are_refused(ur5):
 
 
 def test_socket_file_round_trip_and_errors(ur5, tmp_path):
-    mech, _, actual = ur5
+    mech, params, actual = ur5
     data = simulate_sockets(actual, _plate(True), SOCKETS, 2, np.random.default_rng(9))
     path = write_socket_data(tmp_path / "s.csv", data)
     back = read_instrument_file(path, mech)
@@ -147,8 +147,8 @@ def test_socket_file_round_trip_and_errors(ur5, tmp_path):
     text = path.read_text()
     bad = tmp_path / "bad.csv"
     bad.write_text(text.replace("# distance: A, B,", "# distance: A, Z,"))
-    with pytest.raises(MeasurementFormatError, match=r"socket\(s\) \['Z'\] with no pose"):
-        read_socket_data(bad, mech)
+    with pytest.raises(MeasurementError, match=r"socket\(s\) \['Z'\] with no pose in any file"):
+        InstrumentProblem(mech, params, [read_socket_data(bad, mech)])
     bad.write_text(text.replace("# distance: A, B, 0.05,", "# distance: A, B,"))
     with pytest.raises(MeasurementFormatError, match="'A, B, distance, std'"):
         read_socket_data(bad, mech)
@@ -156,3 +156,14 @@ def test_socket_file_round_trip_and_errors(ur5, tmp_path):
     bad.write_text(text.replace("# ball: 0.0, 0.0, 0.0", "# ball: 1, 2"))
     with pytest.raises(MeasurementFormatError, match="'unknown' or x, y, z"):
         read_socket_data(bad, mech)
+
+
+def test_a_known_distance_may_join_sockets_of_two_files(ur5):
+    mech, params, actual = ur5
+    rng = np.random.default_rng(10)
+    a = simulate_sockets(actual, _plate(True), {"A": SOCKETS["A"]}, 3, rng)
+    b = simulate_sockets(actual, _plate(False), {"B": SOCKETS["B"]}, 3, rng)
+    prob = InstrumentProblem(mech, params, [a, b])
+    assert prob.fixes_scale
+    r, _, raws = prob.evaluate(prob.x0)
+    assert r.size == 3 * 6 + 1 and raws[-1].shape == (1, 1)

@@ -37,6 +37,8 @@ def test_simulated_socket_file_calibrates(socket_files, tmp_path):
     assert 0.5 < doc["reduced_chi2"] < 2.0
     assert sorted(doc["instruments"]) == sorted(truth["instrument"])
     assert (tmp_path / "cal" / "calibrated.urdf").exists()
+    report = (tmp_path / "cal" / "report.txt").read_text()
+    assert "distances between them [mm]: plate.A–plate.B 50.00" in report
 
 
 def test_without_the_known_distance_calibrate_refuses_in_words(socket_files, tmp_path):
