@@ -139,6 +139,8 @@ def simulate(
 
     if (poses_file is None) == (n_random is None):
         raise click.UsageError("give exactly one of --poses FILE or --random N")
+    if instrument == "socket" and n_random is None:
+        raise click.UsageError("--instrument socket seats the ball itself: give --random N")
     check_count(n_random, "--random", MAX_POSES, yes)
     err_seed = _parse_errors(errors)
     size_mm, size_mrad = _parse_pair(error_size, "--error-size")
@@ -171,8 +173,6 @@ def simulate(
     if instrument == "socket":
         from pincal.cli._sockets import simulate_socket_file
 
-        if n_random is None:
-            raise click.UsageError("--instrument socket seats the ball itself: give --random N")
         path, n_meas, truth_sockets = simulate_socket_file(
             nominal, actual, n_random, pos_mm * 1e-3, rng, out, length_unit
         )

@@ -78,3 +78,12 @@ def test_a_pose_file_beside_a_socket_file_is_refused(socket_files, tmp_path):
                                     "--out", str(tmp_path / "cal")])  # fmt: skip
     assert res.exit_code != 0
     assert "all are instrument files" in res.output
+
+
+def test_simulate_socket_needs_random_poses(tmp_path):
+    poses = tmp_path / "p.csv"
+    poses.write_text("x\n")
+    res = CliRunner().invoke(main, ["simulate", "ur5", "--poses", str(poses), "--instrument",
+                                    "socket", "--out", str(tmp_path / "s.csv")])  # fmt: skip
+    assert res.exit_code != 0
+    assert "--instrument socket seats the ball itself: give --random N" in res.output
