@@ -89,7 +89,9 @@ def format_report(doc: dict) -> str:
             )
         lines.append(f"residuals {when:6s}: " + "; ".join(parts))
     from pincal.cli._gate import quality_lines
+    from pincal.cli._sockets import socket_lines
 
+    lines += socket_lines(doc)
     return "\n".join(lines + quality_lines(doc.get("quality"))) + "\n"
 
 
@@ -98,8 +100,10 @@ def format_report(doc: dict) -> str:
 @click.option(
     "--data",
     required=True,
+    multiple=True,
     type=click.Path(dir_okay=False),
-    help="Measurement CSV (pincal measurements format).",
+    help="Measurement CSV (pincal measurements format); repeat it for several instrument "
+    "files fitted together (e.g. socket files of one plate, several tool positions).",
 )
 @click.option("--params", "preset", default=None, help="Parameter preset (default: first preset).")
 @click.option(
@@ -212,13 +216,22 @@ def calibrate(
             profile = instrument_profile(instrument).name
         except PincalError as e:
             raise click.BadParameter(str(e), param_hint="--instrument") from None
+    files = list(data)
+    data = files[0]
+    if len(files) > 1 and not all(_is_instrument_file(f) for f in files):
+        raise click.BadParameter(
+            "several --data files are fitted together only when all are instrument files "
+            "('# pincal instrument' / '# pincal sockets'); give one pose measurement file",
+            param_hint="--data",
+        )
 
     if loss != "linear" and method != "lm" and link is None:
         raise click.BadParameter(
             f"a robust loss needs --method lm, not {method}", param_hint="--loss"
         )
     guard_paths(
-        {"MODEL": model_input(model), "--data": data, "--sidecar": model_opts.sidecar},
+        {"MODEL": model_input(model), "--sidecar": model_opts.sidecar}
+        | {f"--data {f}": f for f in files},
         out_dirs={"--out": out},
     )
     click.get_current_context().with_resource(calibration_lock(out))  # until the end
@@ -255,7 +268,8 @@ def calibrate(
     mech = load_model(model, model_opts)
     preset = preset or (next(iter(mech.presets), "full"))
     params = parameters(mech, preset)
-    check_data_rows(data, "--data", len(params), yes)
+    for f in files:
+        check_data_rows(f, "--data", len(params), yes)
     if _is_instrument_file(data):
         if declared is not None or loss != "linear":
             raise click.BadParameter(
@@ -263,7 +277,7 @@ def calibrate(
                 "pose measurement files",
                 param_hint="--data",
             )
-        result, noise_model = _identify_instrument(mech, params, data, method), None
+        result, noise_model = _identify_instrument(mech, params, files, method, force), None
         verdict = check_quality(result, limits=limits, scalar_instrument=True)
     else:
         mf = read_measurement_file(data, mech)  # its data check is the gate's first look
@@ -277,7 +291,7 @@ def calibrate(
         )
     quality = apply_gate(verdict, force)
     out_dir = Path(out)
-    doc = result_json(result, str(data), CALIBRATED_URDF)
+    doc = result_json(result, ", ".join(map(str, files)), CALIBRATED_URDF)
     doc["quality"] = quality
     report = format_report(doc)
     texts = {"report.txt": report}
@@ -289,9 +303,9 @@ def calibrate(
         out_dir,
         result,
         model_source=source,
-        data_files=[data],
+        data_files=files,
         noise=noise_model,
-        annotations={"data": str(data), "quality": quality},
+        annotations={"data": ", ".join(map(str, files)), "quality": quality},
         texts=texts,
     )
     if as_json:
@@ -341,26 +355,44 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
 
 
 def _is_instrument_file(path: str) -> bool:
-    """True for a scalar-instrument file (``# pincal instrument`` header)."""
+    """True for an instrument file (``# pincal instrument`` / ``# pincal sockets``)."""
     from pincal.errors import PincalError
-    from pincal.io import file_kind
+    from pincal.io import is_instrument_file
 
     try:
-        return file_kind(path) == "instrument"
+        return is_instrument_file(path)
     except PincalError:
         return False  # the measurement reader reports the problem
 
 
-def _identify_instrument(mech, params, data: str, method: str):
-    """Machine and instrument parameters from a ballbar / probe / plane / gauge file."""
-    from pincal.cli._progress import iterations
-    from pincal.identification import identify_instruments
-    from pincal.io import read_instrument_data
+def _identify_instrument(mech, params, files: list[str], method: str, force: bool):
+    """Machine and instrument parameters from instrument files (ballbar, probe, sockets…).
 
-    readings = read_instrument_data(data, mech)
-    click.echo(f"… identifying from {len(readings.q_act)} {readings.kind} readings", err=True)
+    Raises:
+        UnidentifiableError: nothing measured fixes the length scale (sockets without a
+            known distance), unless ``force`` (then a warning on stderr).
+    """
+    from pathlib import Path
+
+    from pincal.errors import UnidentifiableError
+    from pincal.identification import identify_instruments
+    from pincal.io import read_instrument_file
+
+    datasets = [read_instrument_file(f, mech) for f in files]
+    stems = [Path(f).stem for f in files]
+    labels = stems if len(set(stems)) == len(stems) else None
+    what = ", ".join(f"{len(d.q_act)} {d.kind}" for d in datasets)
+    click.echo(f"… identifying from {what} readings", err=True)
+    from pincal.cli._progress import iterations
+
     with iterations("identifying") as step:
-        return identify_instruments(mech, params, [readings], method=method, progress=step).result
+        out = identify_instruments(mech, params, datasets, method=method, labels=labels,
+                                   progress=step)  # fmt: skip
+    for w in out.warnings:
+        if not force:
+            raise UnidentifiableError(f"{w} (--force writes the calibration anyway)")
+        click.echo(f"pincal: warning: {w}", err=True)
+    return out.result
 
 
 def _identify_poses(mech, params, preset: str, meas, method: str, declared, loss: str):

@@ -95,10 +95,11 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
 )
 @click.option(
     "--instrument",
-    type=click.Choice(["distance", "sphere", "plane", "point"]),
+    type=click.Choice(["distance", "sphere", "plane", "point", "socket"]),
     default=None,
     help="Write one scalar reading per pose (ballbar, sphere probe, planes, gauge) instead "
-    "of poses; its noise is the position noise.",
+    "of poses, or (socket) the poses of a ball seated in two sockets 50 mm apart (half "
+    "of --random each, the known distance declared); its noise is the position noise.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @yes_option
@@ -138,6 +139,8 @@ def simulate(
 
     if (poses_file is None) == (n_random is None):
         raise click.UsageError("give exactly one of --poses FILE or --random N")
+    if instrument == "socket" and n_random is None:
+        raise click.UsageError("--instrument socket seats the ball itself: give --random N")
     check_count(n_random, "--random", MAX_POSES, yes)
     err_seed = _parse_errors(errors)
     size_mm, size_mrad = _parse_pair(error_size, "--error-size")
@@ -167,7 +170,15 @@ def simulate(
     extra = {}
     meas: Measurements | InstrumentData
     components: list[str]
-    if instrument is not None:
+    if instrument == "socket":
+        from pincal.cli._sockets import simulate_socket_file
+
+        path, n_meas, truth_sockets = simulate_socket_file(
+            nominal, actual, n_random, pos_mm * 1e-3, rng, out, length_unit
+        )
+        meas, components = range(n_meas), ["socket"]  # type: ignore[assignment]
+        extra = {"instrument": truth_sockets}
+    elif instrument is not None:
         from pincal.identification import default_instrument
         from pincal.io import write_instrument_data
         from pincal.measure import simulate_instrument

@@ -5,8 +5,11 @@
 ``x = [machine parameters (n); θ of instrument 1; θ of instrument 2; …]``. Each dataset
 is either :class:`pincal.measure.Measurements` (pose, position, component subset, tracker
 poses — residuals exactly as in ``CalibrationProblem``) or
-:class:`pincal.measure.InstrumentData` (one scalar per pose); every block is whitened
-by its own noise, so several files of different kinds combine in one fit. The
+:class:`pincal.measure.InstrumentData` (one scalar per pose) or
+:class:`pincal.measure.SocketData` (a ball seated in sockets: three residuals per pose,
+socket centres shared by the files of one plate and appended after every file's own
+unknowns, one residual per known distance); every block is whitened by its own noise,
+so several files of different kinds combine in one fit. The
 Jacobian is analytic: ``∂v/∂p · ∂p/∂x`` with ``∂p/∂x`` from
 :func:`pincal.sensitivity.pose_sensitivity`, and ``∂v/∂θ`` from the instrument.
 
@@ -18,7 +21,7 @@ parameters first, so what an instrument absorbs is held on the machine side).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -27,9 +30,11 @@ from pincal.errors import ConvergenceError, MeasurementError, SolverOptionError
 from pincal.identification._covariance import covariance_from_jacobian
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
+from pincal.identification._socket_terms import SocketTerms
 from pincal.identification._solvers import solver
 from pincal.measure._instruments import InstrumentData, initial_instrument_values
 from pincal.measure._measurements import Measurements
+from pincal.measure._sockets import SocketData
 from pincal.model._closures import measurement_residual
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
@@ -38,7 +43,7 @@ from pincal.sensitivity._jacobian import _plan, pose_sensitivity
 
 __all__ = ["InstrumentIdentification", "InstrumentProblem", "identify_instruments"]
 
-Dataset = InstrumentData | Measurements
+Dataset = InstrumentData | Measurements | SocketData
 
 
 class InstrumentProblem:
@@ -68,7 +73,7 @@ class InstrumentProblem:
             list(labels)
             if labels is not None
             else [
-                f"{d.kind if isinstance(d, InstrumentData) else 'pose'}{i}"
+                f"{'pose' if isinstance(d, Measurements) else d.kind}{i}"
                 for i, d in enumerate(datasets)
             ]
         )
@@ -85,11 +90,20 @@ class InstrumentProblem:
         names: list[str] = list(params.names)
         units: list[str] = list(params.units)
         start = 0
+        self._ball_cols: dict[int, int] = {}  # dataset index → column of its ball_x
         for d, label in zip(datasets, self.labels, strict=True):
             m = len(d)
             if isinstance(d, Measurements):
                 self.instruments.append(None)
                 self.sigma.append(CalibrationProblem(mech, params, d).sigma)
+            elif isinstance(d, SocketData):
+                self.instruments.append(d)
+                th = np.zeros(len(d.parameter_names))  # the ball: see _start_centres
+                self._ball_cols[len(self.instruments) - 1] = len(names)
+                theta0.append(th)
+                self.sigma.append(np.full((m, 3), d.plate.std))
+                names += [f"{label}.{n}" for n in d.parameter_names]
+                units += ["m"] * th.size
             else:
                 P = np.array([mech.frame_placement(q).translation for q in qs[start : start + m]])
                 inst, th = initial_instrument_values(d, P)
@@ -99,11 +113,33 @@ class InstrumentProblem:
                 names += [f"{label}.{n}" for n in inst.parameter_names]
                 units += list(inst.parameter_units)
             start += m
-        self.names, self.units = tuple(names), tuple(units)
         self.n_machine = len(params)
-        self.x0 = np.concatenate([np.zeros(self.n_machine), *theta0])
+        self.sockets = SocketTerms(datasets, len(names), self._ball_cols)
+        names += self.sockets.names
+        units += ["m"] * len(self.sockets.names)
+        if self.sockets.sigma is not None:
+            self.sigma.append(self.sockets.sigma)
+        self.names, self.units = tuple(names), tuple(units)
+        self.x0 = np.concatenate(
+            [np.zeros(self.n_machine), *theta0, np.zeros(len(self.sockets.names))]
+        )
+        self.sockets.start(mech, qs, self.x0)
         self._qs: np.ndarray | None = None
         self._cache: tuple[bytes, Mechanism] | None = None
+
+    @property
+    def fixes_scale(self) -> bool:
+        """False when only sockets without a known distance were measured."""
+        return self.sockets.fixes_scale
+
+    @property
+    def scale_warnings(self) -> tuple[str, ...]:
+        """What no measurement fixes, in words (see :class:`SocketTerms`)."""
+        return self.sockets.warnings
+
+    def socket_centres(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """``"plate.socket"`` → (3,) socket centre at ``x`` [m]."""
+        return self.sockets.centres(x)
 
     @property
     def n_equations(self) -> int:
@@ -158,7 +194,8 @@ class InstrumentProblem:
         plan = _plan(mech, self.params) if jacobian else None
         r_all, J_all, raws = [], [], []
         start, col = 0, n
-        for d, inst, sig in zip(self.datasets, self.instruments, self.sigma, strict=True):
+        blocks = zip(self.datasets, self.instruments, self.sigma[: len(self.datasets)], strict=True)
+        for d, inst, sig in blocks:
             m = len(d)
             q_block = qs[start : start + m]
             start += m
@@ -170,7 +207,10 @@ class InstrumentProblem:
                 placements = [mech.frame_placement(q) for q in q_block]
                 P = np.array([T.translation for T in placements])
                 Rs = [T.rotation for T in placements]
-            if isinstance(d, Measurements):
+            if isinstance(d, SocketData):
+                raw, J = self.sockets.block(d, x, col, n, P, Rs, sens if jacobian else None)
+                col += len(d.parameter_names)
+            elif isinstance(d, Measurements):
                 rows = d.component_indices
                 raw = np.empty((m, rows.size))
                 J = np.zeros((m, rows.size, len(x)))
@@ -190,6 +230,12 @@ class InstrumentProblem:
                     J[:, 0, :n] = -np.einsum("mi,min->mn", dv_dp, Jp)
                     J[:, 0, col : col + k] = -dv_dth
                 col += k
+            raws.append(raw)
+            r_all.append((raw / sig).ravel())
+            J_all.append((J / sig[:, :, None]).reshape(-1, len(x)))
+        if len(self.sigma) > len(self.datasets):  # the known distances of the plates
+            raw, J = self.sockets.distance_block(x)
+            sig = self.sigma[-1]
             raws.append(raw)
             r_all.append((raw / sig).ravel())
             J_all.append((J / sig[:, :, None]).reshape(-1, len(x)))
@@ -221,6 +267,9 @@ class InstrumentIdentification:
         covariance: covariance of the fitted values (order of ``fitted``).
         residuals: per dataset, (m_i, k_i) raw residuals at the solution [m, rad].
         identifiability: joint analysis at the start (instrument parameters first).
+        socket_centres: ``"plate.socket"`` → (3,) identified socket centre [m].
+        warnings: what no measurement fixes, in words (e.g. the length scale of a
+            socket campaign without a known distance).
     """
 
     result: IdentificationResult
@@ -231,6 +280,8 @@ class InstrumentIdentification:
     covariance: np.ndarray
     residuals: list[np.ndarray]
     identifiability: Identifiability
+    socket_centres: dict[str, np.ndarray] = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
 
     def instrument_values(self) -> dict[str, float]:
         """Instrument parameter name → identified (or start) value [SI]."""
@@ -240,8 +291,11 @@ class InstrumentIdentification:
 
 def _stats(raws: list[np.ndarray], datasets: Sequence[Dataset]) -> ResidualStats:
     pos, rot = [], []
-    for raw, d in zip(raws, datasets, strict=True):
-        if isinstance(d, Measurements):
+    kinds: list[Dataset | None] = [*datasets, *[None] * (len(raws) - len(datasets))]
+    for raw, d in zip(raws, kinds, strict=True):
+        if isinstance(d, SocketData):
+            pos += list(np.linalg.norm(raw, axis=1))
+        elif isinstance(d, Measurements):
             comps = d.components
             ip = [i for i, c in enumerate(comps) if not c.startswith("r")]
             ir = [i for i, c in enumerate(comps) if c.startswith("r")]
@@ -323,22 +377,27 @@ def identify_instruments(
     mask[free[mach]] = True
     x = np.asarray(out.x, dtype=float)
     inst = {k: float(v) for k, v in zip(model.names[n:], x[n:], strict=True)}
+    centres_mm = {k: [float(v) * 1e3 for v in c] for k, c in model.socket_centres(x).items()}
     result = IdentificationResult(
         method=method,
         names=params.names,
         units=params.units,
         full_values=x[:n].copy(),
         identified=mask,
-        std=np.sqrt(np.diag(cov_m)),
+        std=np.sqrt(np.clip(np.diag(cov_m), 0.0, None)),
         covariance=cov_m,
         before=_stats(raw0, datasets),
         after=_stats(raws, datasets),
         reduced_chi2=chi2,
         iterations=out.iterations,
         success=success,
-        message=f"joint fit of {free.size} of {len(model.names)} parameters; " + message,
+        message=f"joint fit of {free.size} of {len(model.names)} parameters; "
+        + "".join(f"WARNING: {w}; " for w in model.scale_warnings)
+        + message,
         cost_history=tuple(out.history),
-        residuals=np.concatenate([np.linalg.norm(a, axis=1) for a in raws])[:, None],
+        residuals=np.concatenate(  # per pose (a plate's known distances are not poses)
+            [np.linalg.norm(a, axis=1) for a in raws[: len(model.datasets)]]
+        )[:, None],
         initial_values=np.zeros(n),
         n_equations=model.n_equations,
         model=mech.name,
@@ -346,6 +405,13 @@ def identify_instruments(
         extras=out.extras,
         parameter_set=params,
         calibrated_mechanism=model.mechanism(x),
-        annotations={"instruments": inst, "datasets": list(model.labels), "redundancy": dof},
+        annotations={
+            "instruments": inst,
+            "datasets": list(model.labels),
+            "redundancy": dof,
+            **({"warnings": list(model.scale_warnings)} if model.scale_warnings else {}),
+            **({"socket_centres_mm": centres_mm} if centres_mm else {}),
+        },
     )
-    return InstrumentIdentification(result, model.names, x, x0, free, cov, raws, ident)
+    return InstrumentIdentification(result, model.names, x, x0, free, cov, raws, ident,
+                                    model.socket_centres(x), model.scale_warnings)  # fmt: skip

@@ -40,6 +40,11 @@ from pincal.io._instrument_file import (
     read_instrument_data,
     write_instrument_data,
 )
+from pincal.io._instrument_registry import (
+    INSTRUMENT_FILES,
+    is_instrument_file,
+    read_instrument_file,
+)
 from pincal.io._joint_columns import joint_columns, read_joints
 from pincal.io._marker_file import read_marker_table
 from pincal.io._measurement_file import (
@@ -57,6 +62,7 @@ from pincal.io._poses_file import (
     read_poses,
     write_poses,
 )
+from pincal.io._socket_file import read_socket_data, write_socket_data
 from pincal.io._tracker_file import (
     TargetMeasurements,
     write_target_measurements,
@@ -77,6 +83,7 @@ __all__ = [
     "CALIBRATION_FORMAT",
     "CALIBRATION_VERSION",
     "IDENTIFICATION_FILE",
+    "INSTRUMENT_FILES",
     "LENGTH_UNITS",
     "MANIFEST",
     "CalibrationDirectory",
@@ -92,12 +99,14 @@ __all__ = [
     "check_replaceable",
     "file_kind",
     "import_tracker",
+    "is_instrument_file",
     "joint_columns",
     "output_target",
     "read_actuator_rows",
     "read_calibration",
     "read_commands",
     "read_instrument_data",
+    "read_instrument_file",
     "read_joints",
     "read_marker_table",
     "read_measurement_file",
@@ -105,6 +114,7 @@ __all__ = [
     "read_pose_file",
     "read_pose_rows",
     "read_poses",
+    "read_socket_data",
     "save_urdf",
     "sha256_file",
     "si_actuator_units",
@@ -114,5 +124,6 @@ __all__ = [
     "write_measurements",
     "write_pose_design",
     "write_poses",
+    "write_socket_data",
     "write_target_measurements",
 ]

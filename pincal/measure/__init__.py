@@ -46,6 +46,13 @@ from pincal.measure._registration import (
     Registration,
     register_instrument,
 )
+from pincal.measure._sockets import (
+    SCALE_MESSAGE,
+    KnownDistance,
+    SocketData,
+    SocketPlate,
+    simulate_sockets,
+)
 from pincal.measure._tracker import (
     LaserTracker,
     PoseMeasurement,
@@ -64,9 +71,11 @@ __all__ = [
     "DEFAULT_NOISE",
     "INSTRUMENT_KINDS",
     "ORIENTATION_CONVENTION",
+    "SCALE_MESSAGE",
     "HeldOutValidation",
     "Instrument",
     "InstrumentData",
+    "KnownDistance",
     "LaserTracker",
     "MarkerRegistration",
     "MarkerSetup",
@@ -78,6 +87,8 @@ __all__ = [
     "PoseMeasurement",
     "Registration",
     "RigidFit",
+    "SocketData",
+    "SocketPlate",
     "TestCube",
     "TrackerNoise",
     "fit_rigid_transform",
@@ -94,5 +105,6 @@ __all__ = [
     "simulate_cycles",
     "simulate_instrument",
     "simulate_measurements",
+    "simulate_sockets",
     "validate_held_out",
 ]

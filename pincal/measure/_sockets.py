@@ -1,0 +1,265 @@
+"""Artefact instrument: a ball on the flange seated in the fixed sockets of a plate.
+
+Every pose of one socket measures "the same point": the ball centre
+``b = p + R·t`` (``p``, ``R`` the measured frame's world position [m] and orientation,
+``t`` the ball centre in that frame [m]) sits at the socket centre ``c_s``, unknown.
+Each pose gives three residuals ``c_s − b`` (1σ :attr:`SocketPlate.std` per axis);
+each *known distance* between two sockets of the plate (a calibrated plate or bar)
+gives one more, ``D − ‖c_a − c_b‖`` (its own 1σ). Socket centres belong to the plate
+and are shared by every file of the same plate (several tool positions, several files).
+
+Without a known distance nothing measured fixes the length scale: every residual
+``c_s − b`` scales with the arm, so the fit may shrink it (the sockets come out too
+close) and no residual warns. :data:`SCALE_MESSAGE` says so in words.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pincal.errors import MeasurementError
+from pincal.model._mechanism import Mechanism
+
+__all__ = [
+    "SCALE_MESSAGE",
+    "KnownDistance",
+    "SocketData",
+    "SocketPlate",
+    "simulate_sockets",
+]
+
+#: the words for a socket campaign whose length scale no measurement fixes
+SCALE_MESSAGE = (
+    "nothing measured fixes the length scale: add the plate's known distance "
+    "('# distance: A, B, 50, 0.002' in the sockets file, length_unit); without it the "
+    "fitted arm shrinks or grows with the socket centres and no residual shows it"
+)
+
+
+@dataclass(frozen=True)
+class KnownDistance:
+    """A calibrated distance between two socket centres.
+
+    Attributes:
+        a, b: socket names; value: the distance [m] (> 0); std: its 1σ [m] (> 0).
+    """
+
+    a: str
+    b: str
+    value: float
+    std: float
+
+    def __post_init__(self) -> None:
+        if self.a == self.b:
+            raise MeasurementError(f"a known distance joins two sockets, got {self.a!r} twice")
+        for what, v in (("distance", self.value), ("distance std", self.std)):
+            if not (np.isfinite(v) and v > 0):
+                raise MeasurementError(f"{what} between {self.a!r} and {self.b!r} must be "
+                                       f"finite and > 0 [m], got {v}")  # fmt: skip
+
+
+@dataclass(frozen=True)
+class SocketPlate:
+    """A plate (or bar) of sockets whose centres are unknown.
+
+    Attributes:
+        name: the plate's name; files naming the same plate share its socket centres.
+        std: 1σ of one seating of the ball centre, per axis [m] (> 0).
+        distances: the known distances between its sockets.
+
+    Raises:
+        MeasurementError: std ≤ 0.
+    """
+
+    name: str = "plate"
+    std: float = 5e-6
+    distances: tuple[KnownDistance, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.std) and self.std > 0):
+            raise MeasurementError(f"socket seating std must be finite and > 0 [m], got {self.std}")
+        object.__setattr__(self, "distances", tuple(self.distances))
+
+    @property
+    def fixes_scale(self) -> bool:
+        """True when a known distance ties the plate (and so the arm) to a length."""
+        return bool(self.distances)
+
+    def distance_residuals(
+        self, centres: dict[str, np.ndarray]
+    ) -> tuple[np.ndarray, list[tuple[str, str, np.ndarray]]]:
+        """``D − ‖c_a − c_b‖`` per known distance [m] and its derivatives.
+
+        Args:
+            centres: socket name → (3,) centre [m].
+
+        Returns:
+            residuals (d,), and per distance (a, b, u) with ∂r/∂c_a = −u, ∂r/∂c_b = +u.
+
+        Raises:
+            MeasurementError: a distance names a socket that was never measured.
+        """
+        r, derivs = np.empty(len(self.distances)), []
+        for i, k in enumerate(self.distances):
+            missing = [s for s in (k.a, k.b) if s not in centres]
+            if missing:
+                raise MeasurementError(
+                    f"plate {self.name!r}: known distance {k.a}–{k.b} names socket(s) "
+                    f"{missing} with no measured pose; measured: {sorted(centres)}"
+                )
+            d = centres[k.a] - centres[k.b]
+            norm = float(np.linalg.norm(d))
+            if norm < 1e-12:
+                raise MeasurementError(f"sockets {k.a!r} and {k.b!r} coincide")
+            r[i] = k.value - norm
+            derivs.append((k.a, k.b, d / norm))
+        return r, derivs
+
+
+@dataclass(frozen=True, eq=False)
+class SocketData:
+    """Poses of a ball seated in the sockets of one plate (one tool position).
+
+    Attributes:
+        plate: the plate (its noise and known distances).
+        q_act: (m, n_act) actuator values [m, rad].
+        socket: (m,) socket name per pose.
+        actuated: actuated joint names (columns of ``q_act``).
+        frame: the measured frame (the flange).
+        ball: (3,) ball centre in the measured frame [m], or None when unknown
+            (identified, three unknowns of this file).
+
+    Raises:
+        MeasurementError: inconsistent shapes, non-finite values, empty socket names.
+    """
+
+    plate: SocketPlate
+    q_act: np.ndarray
+    socket: tuple[str, ...]
+    actuated: tuple[str, ...]
+    frame: str
+    ball: np.ndarray | None = None
+
+    kind = "socket"
+
+    def __post_init__(self) -> None:
+        q = np.atleast_2d(np.asarray(self.q_act, dtype=float))
+        names = tuple(str(s) for s in self.socket)
+        if q.shape != (len(names), len(self.actuated)):
+            raise MeasurementError(
+                f"q_act must be ({len(names)}, {len(self.actuated)}) for {len(names)} socket "
+                f"poses, got {q.shape}"
+            )
+        if not np.all(np.isfinite(q)):
+            raise MeasurementError("socket data contain NaN or inf")
+        if any(not s.strip() for s in names):
+            raise MeasurementError("every socket pose needs a socket name")
+        object.__setattr__(self, "q_act", q)
+        object.__setattr__(self, "socket", names)
+        object.__setattr__(self, "actuated", tuple(self.actuated))
+        if self.ball is not None:
+            b = np.asarray(self.ball, dtype=float).reshape(-1)
+            if b.size != 3 or not np.all(np.isfinite(b)):
+                raise MeasurementError(f"ball centre must be 3 finite numbers [m], got {self.ball}")
+            object.__setattr__(self, "ball", b)
+
+    def __len__(self) -> int:
+        return len(self.socket)
+
+    @property
+    def sockets(self) -> tuple[str, ...]:
+        """The socket names, in order of first appearance."""
+        return tuple(dict.fromkeys(self.socket))
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """This file's own unknowns: the ball centre when it is not given."""
+        return ("ball_x", "ball_y", "ball_z") if self.ball is None else ()
+
+    def ball_centres(
+        self, P: np.ndarray, Rs: np.ndarray, theta: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Ball centres ``p + R t`` (m, 3) [m] and the offsets ``R t`` (m, 3).
+
+        Args:
+            P: (m, 3) flange positions [m].
+            Rs: (m, 3, 3) flange orientations.
+            theta: this file's own unknowns (the ball centre when unknown) [m].
+        """
+        t = self.ball if self.ball is not None else np.asarray(theta, dtype=float)[:3]
+        off = np.einsum("mij,j->mi", np.asarray(Rs), t)
+        return np.asarray(P) + off, off
+
+
+def simulate_sockets(
+    actual: Mechanism,
+    plate: SocketPlate,
+    centres: dict[str, np.ndarray],
+    n_per_socket: int,
+    rng: np.random.Generator,
+    ball: np.ndarray | None = None,
+    tilt: float = 0.6,
+    noise: bool = True,
+) -> SocketData:
+    """Poses of the ``actual`` machine seating its ball in each socket.
+
+    Each pose reaches the socket centre (plus N(0, std²) per axis when ``noise``) with
+    the flange tilted up to ``tilt`` [rad] about a random axis from pointing down, by the
+    inverse kinematics of ``actual`` from a random start; unreachable tries are skipped.
+
+    Args:
+        actual: the machine (simulation truth); it must impose the position.
+        plate: the plate (its std is the seating noise).
+        centres: socket name → (3,) true centre [m].
+        n_per_socket: poses per socket.
+        rng: generator of orientations, starts and noise.
+        ball: true ball centre in the flange frame [m] (default its origin); the
+            returned data declare it unknown when given.
+        tilt: largest tilt of the flange from pointing down [rad].
+        noise: add the seating noise.
+
+    Returns:
+        SocketData of the poses reached, socket by socket.
+
+    Raises:
+        MeasurementError: fewer than ``n_per_socket`` poses reached in 20× as many tries.
+    """
+    import pinocchio as pin
+
+    from pincal.errors import ConvergenceError
+
+    t = np.zeros(3) if ball is None else np.asarray(ball, dtype=float)
+    if ball is not None and len(actual.measured_components) < 6:
+        raise MeasurementError("a ball off the flange origin needs a machine whose measured "
+                               "frame imposes its orientation")  # fmt: skip
+    lo, hi = actual.actuator_limits.T
+    rows, names = [], []
+    for name, c in centres.items():
+        got, tries = 0, 0
+        while got < n_per_socket:
+            tries += 1
+            if tries > 20 * n_per_socket:
+                raise MeasurementError(f"socket {name!r}: only {got} of {n_per_socket} poses "
+                                       "reachable; move the socket into the workspace")  # fmt: skip
+            axis = rng.normal(size=3)
+            R = pin.exp3(tilt * rng.uniform() * axis / np.linalg.norm(axis)) @ np.diag(
+                [1.0, -1.0, -1.0]
+            )
+            target = np.asarray(c, dtype=float) - R @ t
+            if noise:
+                target = target + rng.normal(0.0, plate.std, 3)
+            guess = actual.q_home + rng.uniform(-0.8, 0.8, actual.model.nq)
+            try:
+                q_act = actual.inverse(pin.SE3(R, target), guess)
+            except (ConvergenceError, ValueError):
+                continue
+            if np.any(q_act < lo) or np.any(q_act > hi):
+                continue
+            rows.append(q_act)
+            names.append(name)
+            got += 1
+    known = np.zeros(3) if ball is None else None
+    return SocketData(plate, np.array(rows), tuple(names), actual.actuated,
+                      actual.measured_frame, known)  # fmt: skip
