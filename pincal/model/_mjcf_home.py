@@ -100,8 +100,8 @@ def build_with_home(
             if springs:  # a spring left free: locking it is the usual answer
                 extra = ""
                 hint = (
-                    f" {', '.join(repr(j) for j in springs)} carry a spring (MJCF stiffness): "
-                    f"to hold them, 'lock: {{{springs[0]}: home}}' (or a value [rad, m]) in a "
+                    f" {', '.join(repr(j) for j in springs)}: a spring joint (MJCF stiffness); "
+                    f"to hold it, 'lock: {{{springs[0]}: home}}' (or a value [rad, m]) in a "
                     "sidecar <stem>.yaml beside the MJCF."
                 )
             raise type(exc)(f"{exc}{extra}.{hint}") from exc

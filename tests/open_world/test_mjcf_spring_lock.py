@@ -15,26 +15,12 @@ import yaml
 from pincal.errors import MobilityError, ModelFileError, UnknownNameError
 from pincal.model import load_mechanism, load_mjcf
 from tests.open_world import acceptance
-from tests.open_world.machines import mjcf_fourbar_straight
-
-
-def _toe_leg() -> str:
-    """The keyed four-bar with a toe body on a spring hinge (stiffness 5, ±30°) at the
-    coupler's old site; the measured site ``tool`` 3 cm along the toe. Its keyframe
-    gains the toe's value 0 (qpos order: crank, coupler, toe, rocker)."""
-    text = mjcf_fourbar_straight()
-    site = '<site name="tool" pos="0.06 0.03 0"/>'
-    toe = (
-        '<body name="toe" pos="0.06 0.03 0"><joint name="toe_joint" range="-30 30" '
-        'stiffness="5"/><site name="tool" pos="0.03 0 0"/></body>'
-    )
-    assert site in text and "1.059932 -0.390232" in text
-    return text.replace(site, toe).replace("1.059932 -0.390232", "1.059932 0 -0.390232")
+from tests.open_world.roster import mjcf_toe_leg
 
 
 def _write(folder: Path, sidecar: dict | None) -> Path:
     path = folder / "toe_leg.xml"
-    path.write_text(_toe_leg(), encoding="utf-8")
+    path.write_text(mjcf_toe_leg(), encoding="utf-8")
     if sidecar is not None:
         path.with_suffix(".yaml").write_text(yaml.safe_dump(sidecar), encoding="utf-8")
     return path
@@ -54,7 +40,7 @@ def test_a_free_spring_joint_is_refused_with_the_way_to_lock_it(tmp_path):
     """Measured on the toe, the spring joint is a passive dof nothing fixes."""
     with pytest.raises(MobilityError, match="free passive joints: \\['toe_joint'\\]") as err:
         load_mjcf(_write(tmp_path, {"measured_frame": "tool", "measured": "position"}))
-    assert "'toe_joint' carry a spring (MJCF stiffness)" in str(err.value)
+    assert "'toe_joint': a spring joint (MJCF stiffness)" in str(err.value)
     assert "'lock: {toe_joint: home}'" in str(err.value) and "keyframe" not in str(err.value)
 
 
