@@ -76,3 +76,21 @@ def test_lock_errors_name_the_joint_and_the_valid_values(tmp_path):
         load_mjcf(_write(tmp_path, {"lock": {"tow_joint": 0}}))
     with pytest.raises(ModelFileError, match="finite number or 'home'"):
         load_mjcf(_write(tmp_path, {"lock": {"toe_joint": "zero"}}))
+
+
+def test_lock_on_the_command_line_of_an_mjcf_points_to_its_sidecar(tmp_path):
+    from click.testing import CliRunner
+
+    from pincal.cli import main
+
+    path = _write(tmp_path, {"measured_frame": "tool", "measured": "position"})
+    res = CliRunner().invoke(main, ["info", str(path), "--lock", "toe_joint=0"])
+    assert res.exit_code != 0
+    assert "(e.g. 'lock: {joint: 0}') in the sidecar <stem>.yaml beside the MJCF" in res.output
+
+
+def test_load_mjcf_takes_lock_as_an_argument(tmp_path):
+    path = _write(tmp_path, {"measured_frame": "tool", "measured": "position"})
+    mech = load_mjcf(path, lock={"toe_joint": 0.2})
+    assert "toe_joint" not in list(mech.model.names)
+    assert any("toe_joint = 0.2 (a spring, MJCF stiffness 5)" in n for n in mech.notes)
