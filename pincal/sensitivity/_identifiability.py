@@ -4,8 +4,9 @@ The numerical rank r of the column-scaled identification Jacobian over many pose
 the number of identifiable parameters; it follows the one rank rule of
 :func:`pincal.sensitivity._rank.numerical_rank` (σi > rtol·σ1). The *base* parameters
 are chosen greedily in the set's order (an orthogonalisation that keeps a column when
-its part outside the span of the columns kept so far exceeds the same threshold
-rtol·σ1), so a preset's physically meaningful parameters, listed first, are preferred.
+its part outside the span of the columns kept so far exceeds max(rtol, BASE_RTOL)·σ1),
+so a preset's physically meaningful parameters, listed first, are preferred unless one
+is barely independent of those before it (a base conditioned like that column).
 The base always has exactly r members: the greedy pass stops at r, and if it found
 fewer, the remaining members are the columns with the largest part outside the span
 (column pivoting). Every other parameter's column is a combination of base columns,
