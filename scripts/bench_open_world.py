@@ -39,6 +39,7 @@ import pincal  # noqa: E402
 from pincal.sensitivity import pose_sensitivity  # noqa: E402
 from pincal.sensitivity._batch_jacobian import sensitivities_batch  # noqa: E402
 from tests.open_world import machines  # noqa: E402
+from tests.open_world.roster import ROSTER  # noqa: E402
 
 
 def _machines(folder: Path) -> dict[str, Path]:
@@ -60,6 +61,14 @@ def _machines(folder: Path) -> dict[str, Path]:
     out["mjcf fourbar_straight"] = straight
     for n in ("fivebar", "rssr", "prs3", "rpr3"):
         out[n] = ROOT / "tests" / "model" / "machines" / n
+    later = {  # roster machines (tests/open_world/roster.py) added after the rows above
+        "2-RSU ankle, limits `0 0`": "ankle, 0/0 limits",
+        "MJCF four-bar leg with a spring toe, locked": "mjcf toe leg, locked",
+        "rrr3": "rrr3",
+    }
+    for mc in ROSTER:
+        if mc.name in later:
+            out[later[mc.name]] = mc.write(folder)
     return out
 
 

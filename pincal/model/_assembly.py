@@ -202,13 +202,15 @@ class Assembly(KinematicQueries):
                     self._tangent_joint(int(self._free_v[k]))
                     for k in np.nonzero(motion > 0.1 * motion.max())[0]
                 ]
-                raise MobilityError(
+                err = MobilityError(
                     f"mechanism {self.name!r}: {int(np.sum(moved > 1e-9))} passive degree(s) "
                     f"of freedom are not fixed by the {n_act} actuated joints "
                     f"{list(self.actuated)} and move the measured frame; free passive joints: "
                     f"{list(dict.fromkeys(free))}. Actuate one of them (sidecar 'name_mot') or "
                     f"add closures"
                 )
+                err.free_joints = tuple(dict.fromkeys(free))  # type: ignore[attr-defined]
+                raise err
         if mobility != n_act or rank != rank_u:
             if self.closures:
                 self._check_not_singular_home(rank_u)

@@ -250,8 +250,11 @@ class BatchTracking(BatchNewton):
 
         Args:
             q_act_rows: (N, n_act) actuator values [m, rad].
-            guesses: (N, nq) start configurations (default: home for the batched solve;
-                rows redone pose by pose start from the previous row's solution).
+            guesses: (N, nq) start configurations (default: home, for the batched solve
+                and for the rows redone pose by pose: a neighbouring row's solution is
+                no safe start — on a mechanism of several loops a direct solve from it
+                can close on another assembly mode with the same branch sign, e.g. the
+                2-RSU ankle's foot turned over at wide motor angles).
 
         Returns:
             The configurations, and their :class:`BatchKinematics` (None when the
@@ -278,8 +281,8 @@ class BatchTracking(BatchNewton):
             return out, bk
         start = np.tile(self.q_home, (N, 1)) if G is None else G
         Q, ok, bk, _ = self._solve_batch(rows, start)
-        for j in np.nonzero(~ok)[0]:
-            guess = G[j] if G is not None else (Q[j - 1] if j else self.q_home)
+        for j in np.nonzero(~ok)[0]:  # from home (or the row's guess), as configuration()
+            guess = G[j] if G is not None else self.q_home
             Q[j] = self.configuration(rows[j], guess, pose_index=int(j))
         redo = np.nonzero(~ok)[0]
         if redo.size:

@@ -147,7 +147,10 @@ def load_mechanism(
         from pincal.model._mjcf import load_mjcf
 
         if sidecar is not None or lock:
-            raise ModelFileError("--sidecar and --lock apply to URDF models, not to MJCF files")
+            raise ModelFileError(
+                "--sidecar and --lock apply to URDF models, not to MJCF files: write the "
+                "keys (e.g. 'lock: {joint: 0}') in the sidecar <stem>.yaml beside the MJCF"
+            )
         return load_mjcf(spec, measured_frame, options=options)
     from pincal.model._named import resolve_named, turn_note
     from pincal.model._serial import lock_joints

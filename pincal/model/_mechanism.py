@@ -261,8 +261,9 @@ class Mechanism(BatchTracking):
         """Closed configurations (m, nq) for actuator rows (m, n_act) on home's branch.
 
         All rows are solved together from home (:meth:`configurations_batch`); a row the
-        batched Newton does not settle is redone from the previous row's solution
-        (continuation when a direct solve leaves the branch, then from home).
+        batched Newton does not settle is redone pose by pose from home, as
+        :meth:`configuration` closes it (continuation when a direct solve leaves the
+        branch).
         """
         return self.configurations_batch(q_act_rows)[0]
 

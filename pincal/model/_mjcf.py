@@ -234,11 +234,16 @@ def load_mjcf(
     actuated: list[str] | None = None,
     keyframe: str | None = None,
     options: SolverOptions | None = None,
+    lock: dict[str, float | str] | None = None,
 ) -> Mechanism:
     """Load an MJCF file as a :class:`~pincal.model.Mechanism` (via :func:`mjcf_to_urdf`).
 
     A sidecar ``<stem>.yaml`` beside the file, if present, is merged over the derived
-    keys (to add presets, a workspace, ``measured``, or to override them).
+    keys (to add presets, a workspace, ``measured``, or to override them). Its ``lock:``
+    (as for robots by name: ``{joint: value}`` [rad or m] or ``home``) makes joints
+    fixed, e.g. a spring joint (MJCF ``stiffness``) a calibration should not treat as a
+    free passive joint; ``home`` is the joint's value at the file's home (keyframe,
+    sidecar ``home:`` or ``qpos0``).
 
     Args:
         path: the ``.xml`` file.
@@ -246,6 +251,7 @@ def load_mjcf(
         actuated: actuated joint names, overriding the MJCF actuators.
         keyframe: keyframe giving the home guess (see :func:`mjcf_to_urdf`).
         options: :class:`~pincal.model.SolverOptions`.
+        lock: joints to make fixed (wins over the sidecar's ``lock``).
 
     Returns:
         The Mechanism; ``urdf_xml`` is the converted URDF, so export writes URDF.
@@ -256,21 +262,69 @@ def load_mjcf(
         home puts outside their ranges).
     """
     from pincal.model import Mechanism, read_sidecar
+    from pincal.model._named import _lock_values
 
     path = Path(path)
     urdf, sidecar, conv = _convert(path, None, keyframe)
     source = conv.home_source
     extra = path.with_suffix(".yaml")
+    locks: dict[str, float | str] = {}
     if extra.is_file():
-        own = read_sidecar(extra)
+        own = dict(read_sidecar(extra))
+        locks = _lock_values(own.pop("lock", None), f"sidecar {extra}")
         source = "sidecar" if "home" in own else source
         sidecar |= own
+    locks |= dict(lock or {})
     if actuated is not None:
         sidecar["name_mot"] = list(actuated)
+    urdf, stiffness, locked = _lock(urdf, sidecar, locks, conv.stiffness)
 
     def build(sc: dict[str, Any]) -> Mechanism:
         return Mechanism(
             urdf, sc, name=path.stem, source=path, measured_frame=measured_frame, options=options
         )
 
-    return build_with_home(build, sidecar, source, conv.ranges, conv.stiffness)
+    mech = build_with_home(build, sidecar, source, conv.ranges, stiffness)
+    if locked:
+        mech.notes = (locked, *mech.notes)
+    return mech
+
+
+def _lock(
+    urdf: str,
+    sidecar: dict[str, Any],
+    locks: dict[str, float | str],
+    stiffness: dict[str, float],
+) -> tuple[str, dict[str, float], str]:
+    """Lock joints of the converted URDF, in place on ``sidecar`` (see :func:`load_mjcf`).
+
+    Returns:
+        The URDF text, the springs left movable, and the note saying what was locked
+        ("" when nothing).
+
+    Raises:
+        UnknownNameError: a locked name is not a movable joint.
+    """
+    from pincal.model._catalogue import _lock_values_at_home
+    from pincal.model._serial import lock_joints
+    from pincal.model._urdf import UrdfTree
+
+    if not locks:
+        return urdf, stiffness, ""
+    values = _lock_values_at_home(locks, sidecar.get("home"))
+    urdf = lock_joints(urdf, values)
+    gone = set(values) | {n for n, j in UrdfTree(urdf).joints.items() if not j.movable}
+    if sidecar.get("name_mot") is not None:
+        sidecar["name_mot"] = [n for n in sidecar["name_mot"] if n not in gone]
+    if isinstance(sidecar.get("home"), dict):
+        sidecar["home"] = {k: v for k, v in sidecar["home"].items() if k not in gone}
+    if isinstance(sidecar.get("actuator_names"), dict):
+        sidecar["actuator_names"] = {
+            a: j for a, j in sidecar["actuator_names"].items() if j not in gone
+        }
+    said = [
+        f"{k} = {v:.6g}" + (f" (a spring, MJCF stiffness {stiffness[k]:g})" * (k in stiffness))
+        for k, v in values.items()
+    ]
+    kept = {j: k for j, k in stiffness.items() if j not in gone}
+    return urdf, kept, f"locked (lock: in the sidecar or asked): {', '.join(said)}"

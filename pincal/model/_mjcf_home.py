@@ -96,6 +96,14 @@ def build_with_home(
                 " Give a regular home: a <keyframe> in the MJCF, or 'home:' in a sidecar "
                 "<stem>.yaml beside it."
             )
+            springs = [j for j in getattr(exc, "free_joints", ()) if j in stiffness]
+            if springs:  # a spring left free: locking it is the usual answer
+                extra = ""
+                hint = (
+                    f" {', '.join(repr(j) for j in springs)}: a spring joint (MJCF stiffness); "
+                    f"to hold it, 'lock: {{{springs[0]}: home}}' (or a value [rad, m]) in a "
+                    "sidecar <stem>.yaml beside the MJCF."
+                )
             raise type(exc)(f"{exc}{extra}.{hint}") from exc
         notes.append(mech._mjcf_home_note)  # type: ignore[attr-defined]
     outside = _outside(_home_values(mech, ranges), ranges)
@@ -105,7 +113,8 @@ def build_with_home(
         role = "an actuated" if j in mech.actuated else "a passive"
         notes.append(
             f"joint {j!r} has a spring (MJCF stiffness {k:g}): {role} joint here; "
-            "calibration does not model the spring"
+            "calibration does not model the spring (to hold it, 'lock: {joint: value or "
+            "home}' in a sidecar <stem>.yaml beside the MJCF)"
         )
     for n in notes:
         log.warning("MJCF import of %r: %s", mech.name, n)

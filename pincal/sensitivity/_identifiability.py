@@ -4,8 +4,9 @@ The numerical rank r of the column-scaled identification Jacobian over many pose
 the number of identifiable parameters; it follows the one rank rule of
 :func:`pincal.sensitivity._rank.numerical_rank` (σi > rtol·σ1). The *base* parameters
 are chosen greedily in the set's order (an orthogonalisation that keeps a column when
-its part outside the span of the columns kept so far exceeds the same threshold
-rtol·σ1), so a preset's physically meaningful parameters, listed first, are preferred.
+its part outside the span of the columns kept so far exceeds max(rtol, BASE_RTOL)·σ1),
+so a preset's physically meaningful parameters, listed first, are preferred unless one
+is barely independent of those before it (a base conditioned like that column).
 The base always has exactly r members: the greedy pass stops at r, and if it found
 fewer, the remaining members are the columns with the largest part outside the span
 (column pivoting). Every other parameter's column is a combination of base columns,
@@ -162,7 +163,12 @@ class Identifiability:
 
 
 def _greedy_base(Js: np.ndarray, rank: int, threshold: float) -> list[int]:
-    """Exactly ``rank`` column indices of Js: in order while independent, then pivoted."""
+    """Exactly ``rank`` column indices of Js: in order while independent, then pivoted.
+
+    In order, a column is kept when its part outside the span of those kept exceeds
+    ``threshold``; the rest are the columns with the largest such part (column
+    pivoting: the best-conditioned completion).
+    """
     n = Js.shape[1]
     basis = np.zeros((Js.shape[0], 0))
     chosen: list[int] = []
@@ -239,7 +245,11 @@ def analyse_jacobian(
     Jc = Js[:, closable]
     sv = np.linalg.svd(Jc, compute_uv=False) if Jc.size else np.zeros(0)
     rank = numerical_rank(sv, rtol)
-    threshold = rtol * float(sv[0]) if sv.size else 0.0
+    # in set order only columns independent at BASE_RTOL (a column barely outside the
+    # span of those before it makes a base conditioned like its part: the 2-RSU ankle's
+    # full set took a rod-end offset at 1e-6 of σ1, whose Gauss–Newton steps went 48 mm
+    # off); the rank's other members are pivoted in
+    threshold = max(rtol, BASE_RTOL) * float(sv[0]) if sv.size else 0.0
     base = closable[_greedy_base(Jc, rank, threshold)] if rank else _empty()
     others = np.array([k for k in closable if k not in set(base.tolist())], dtype=int)
     combos: dict[int, dict[int, float]] = {}

@@ -97,3 +97,16 @@ def test_range_solver_one_factorisation_many_columns():
     np.testing.assert_allclose(X, np.linalg.pinv(A) @ B_in, atol=1e-12)
     assert np.all(solver.out_of_range(B_in) < 1e-12)
     assert np.all(solver.out_of_range(B_out) > 1e-3)
+
+
+def test_base_prefers_a_well_conditioned_column_to_a_barely_independent_one():
+    """In set order a column whose part outside the span of the earlier ones is below
+    BASE_RTOL·σ1 (here 1e-7) is passed over for a later, independent one: the same rank,
+    a base conditioned like the problem rather than like that column (the 2-RSU ankle's
+    `full` set took a rod-end offset at 1e-6 of σ1; Gauss–Newton then went 48 mm off)."""
+    e = np.eye(3)
+    J = np.column_stack([e[0], e[1], e[0] + 1e-7 * e[2], e[2]])
+    ident = analyse_jacobian(J, ("a", "b", "barely", "d"))
+    assert ident.rank == 3
+    assert ident.base_names == ("a", "b", "d")
+    assert ident.unidentifiable_names == ("barely",)

@@ -1,0 +1,57 @@
+"""The one acceptance test every machine of the roster passes (tests/open_world/roster.py):
+a loadable machine recovers a random error on the identifiable set of its ``base`` and
+``full`` presets to 1e-9 (parameters [m, rad] and predictions of the measured
+components) from exact measurements, from the nominal model; a machine with a defect
+of its own is refused with the message that names it (issue 28, cause 2 and "Done when")."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pytest
+
+from pincal.model import load_mechanism, sample_actuators
+from tests.open_world.roster import ROSTER, Machine, recover
+
+LOADS = [mc for mc in ROSTER if mc.refused is None]
+REFUSED = [mc for mc in ROSTER if mc.refused is not None]
+
+
+@pytest.mark.parametrize("preset", ["base", "full"])
+@pytest.mark.parametrize("machine", LOADS, ids=[mc.name for mc in LOADS])
+def test_noise_free_recovery_on_every_machine(machine: Machine, preset: str, tmp_path):
+    logging.disable(logging.WARNING)
+    try:
+        mech = load_mechanism(machine.write(tmp_path))
+    finally:
+        logging.disable(logging.NOTSET)
+    r = recover(mech, preset)
+    assert r.success, r.message
+    assert r.k > 0 and r.parameter_error <= 1e-9 and r.prediction_error <= 1e-9, r
+
+
+@pytest.mark.parametrize("machine", LOADS, ids=[mc.name for mc in LOADS])
+def test_batched_and_pose_by_pose_closing_agree_on_every_machine(machine: Machine, tmp_path):
+    """The batched solve keeps home's assembly mode as configuration() from home does
+    (the 0/0-limits ankle once closed 2 of 30 wide rows with its foot turned over)."""
+    logging.disable(logging.WARNING)
+    try:
+        mech = load_mechanism(machine.write(tmp_path))
+    finally:
+        logging.disable(logging.NOTSET)
+    rows = sample_actuators(mech, 30, np.random.default_rng(11))
+    Q, _ = mech.configurations_batch(rows)
+    for row, q in zip(rows, Q, strict=True):
+        a = mech.frame_placement(q).translation
+        b = mech.frame_placement(mech.configuration(row)).translation
+        assert np.max(np.abs(a - b)) <= 1e-9
+
+
+@pytest.mark.parametrize("machine", REFUSED, ids=[mc.name for mc in REFUSED])
+def test_machines_with_their_own_defects_are_refused_by_name(machine: Machine, tmp_path):
+    assert machine.refused is not None
+    error, fragment = machine.refused
+    with pytest.raises(error) as info:
+        load_mechanism(machine.write(tmp_path))
+    assert fragment in str(info.value)
