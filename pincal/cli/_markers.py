@@ -186,6 +186,7 @@ def marker_calibration(model: str, data: str, setup, preset: str | None, method:
         "identified": _identified(fit),
         "solver": fit.method,
         "notes": list(fit.notes),
+        "held_weak": list(fit.held_weak),
     }  # fmt: skip
     return fit, meas, doc
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from pincal.cli._limits import check_data_rows, yes_option
 from pincal.cli.common import announce, calibration_summary, fail_cleanly
 
 
@@ -46,10 +47,17 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
         f"   {_fmt(b['rms_orientation_mrad'])}  {_fmt(b['max_orientation_mrad'])}",
         f"  calibrated model   {_fmt(a['rms_position_mm'])}  {_fmt(a['max_position_mm'])}"
         f"   {_fmt(a['rms_orientation_mrad'])}  {_fmt(a['max_orientation_mrad'])}",
-        f"  Cramér–Rao (model) {_fmt(p['model_rms_position_mm'])}  {'':9s}"
-        f"   {_fmt(p['model_rms_orientation_mrad'])}",
-        f"  Cramér–Rao + noise {_fmt(p['observed_rms_position_mm'])}  {'':9s}"
-        f"   {_fmt(p['observed_rms_orientation_mrad'])}",
+    ]
+    if p.get("withheld"):
+        lines.append(f"  Cramér–Rao prediction not given: {p['withheld']}")
+    else:
+        lines += [
+            f"  Cramér–Rao (model) {_fmt(p['model_rms_position_mm'])}  {'':9s}"
+            f"   {_fmt(p['model_rms_orientation_mrad'])}",
+            f"  Cramér–Rao + noise {_fmt(p['observed_rms_position_mm'])}  {'':9s}"
+            f"   {_fmt(p['observed_rms_orientation_mrad'])}",
+        ]
+    lines += [
         "",
         "  ISO 9283 pose accuracy per commanded pose (AP: mean attained − commanded;"
         " RP_l = l̄ + 3 S_l over repeats)",
@@ -86,6 +94,7 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
 @click.option("--folds-out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write the --cv folds (pose row, fold) as CSV.")
 @click.option("--json", "as_json", is_flag=True, help="Print the full validation as JSON.")
+@yes_option
 @click.option(
     "--out",
     type=click.Path(dir_okay=False, path_type=Path),
@@ -95,7 +104,7 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
 @fail_cleanly
 def validate(
     calibration: Path, data: Path | None, cv_folds: int | None, cv_seed: int,
-    folds_out: Path | None, as_json: bool, out: Path | None,
+    folds_out: Path | None, as_json: bool, yes: bool, out: Path | None,
 ) -> None:  # fmt: skip
     """Check the calibration in CALIBRATION on measurements not used for fitting.
 
@@ -148,6 +157,8 @@ def validate(
     cal = read_calibration(calibration)
     announce(cal)
     nominal = cal.nominal()
+    params = parameters(nominal, cal.preset)
+    check_data_rows(str(data), "--data", len(params), yes)
     if cal.manifest.get("markers"):  # a marker table, read as calibrate read it
         from pincal.io import read_marker_table
         from pincal.measure import MarkerSetup
@@ -163,7 +174,6 @@ def validate(
     independent = digest not in fitted
     if not independent:
         click.echo(f"pincal: warning: {data} was used to fit this calibration", err=True)
-    params = parameters(nominal, cal.preset)
     result = cal.result
     validation = validate_held_out(
         nominal,
@@ -173,6 +183,7 @@ def validate(
         tuple(result.identified_names),
         result.covariance,
         meas.noise or cal.noise,
+        tuple((cal.manifest.get("markers") or {}).get("held_weak") or ()),
     )
     doc = {
         "calibration": calibration_summary(cal),

@@ -66,12 +66,15 @@ class MarkerFit:
         registration: the closed-form start.
         notes: what the guards did, in words (switches, parameters held and why).
         method: the solver that produced ``result``.
+        held_weak: machine parameters held at nominal because their 2σ exceeded the
+            bounds (named in ``notes`` too).
     """
 
     result: IdentificationResult
     registration: MarkerRegistration
     notes: tuple[str, ...]
     method: str
+    held_weak: tuple[str, ...] = ()
 
     @property
     def calibrated(self) -> Mechanism:
@@ -180,6 +183,7 @@ def fit_markers(
         result = _fit(start, params, measurements, names, method, std)
         return MarkerFit(result, reg, (), method)
     used = method
+    held_weak: list[str] = []
     for _ in range(6):  # each round holds at least one more parameter, or stops
         result = _fit(start, params, measurements, names, used, std, loss, None, max_iterations)
         if not result.success and used == "gauss-newton":
@@ -198,6 +202,7 @@ def fit_markers(
             "barely move those directions): " + ", ".join(f"{n} ({v})" for n, v in weak)
         )
         held = {n for n, _ in weak}
+        held_weak += [n for n, _ in weak]
         names = [n for n in names if n not in held]
     again = _fit(start, params, measurements, names, used, std, loss, result.full_values)
     n0, n1 = int(result.identified.sum()), int(again.identified.sum())
@@ -207,4 +212,4 @@ def fit_markers(
             f"(at the start {n0}); the fit was refined from the solution with that set"
         )
         result = again
-    return MarkerFit(result, reg, tuple(notes), used)
+    return MarkerFit(result, reg, tuple(notes), used, tuple(held_weak))

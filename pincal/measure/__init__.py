@@ -8,7 +8,9 @@ registration, pose errors against a reference, validation on held-out data.
 from __future__ import annotations
 
 from pincal.measure._held_out import (
+    PREDICTION_BOUNDS,
     HeldOutValidation,
+    prediction_caveat,
     validate_held_out,
 )
 from pincal.measure._instruments import (
@@ -64,6 +66,7 @@ __all__ = [
     "DEFAULT_NOISE",
     "INSTRUMENT_KINDS",
     "ORIENTATION_CONVENTION",
+    "PREDICTION_BOUNDS",
     "HeldOutValidation",
     "Instrument",
     "InstrumentData",
@@ -88,6 +91,7 @@ __all__ = [
     "pose_characteristics",
     "pose_errors",
     "pose_from_target_points",
+    "prediction_caveat",
     "register_instrument",
     "register_markers",
     "rigid_fit_covariance",
