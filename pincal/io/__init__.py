@@ -41,7 +41,7 @@ from pincal.io._instrument_file import (
     write_instrument_data,
 )
 from pincal.io._joint_columns import joint_columns, read_joints
-from pincal.io._marker_file import read_marker_table
+from pincal.io._marker_file import distinct_markers, read_marker_sets, read_marker_table
 from pincal.io._measurement_file import (
     MeasurementFile,
     check_enough_poses,
@@ -90,6 +90,7 @@ __all__ = [
     "calibration_lock",
     "check_enough_poses",
     "check_replaceable",
+    "distinct_markers",
     "file_kind",
     "import_tracker",
     "joint_columns",
@@ -99,6 +100,7 @@ __all__ = [
     "read_commands",
     "read_instrument_data",
     "read_joints",
+    "read_marker_sets",
     "read_marker_table",
     "read_measurement_file",
     "read_measurements",

@@ -35,7 +35,9 @@ from pincal.measure._iso_cube import (
 from pincal.measure._markers import (
     MarkerRegistration,
     MarkerSetup,
+    marker_frame,
     marker_mechanism,
+    marker_mechanisms,
     register_markers,
 )
 from pincal.measure._measurements import (
@@ -86,7 +88,9 @@ __all__ = [
     "fit_rigid_transform",
     "initial_instrument_values",
     "iso_test_cube",
+    "marker_frame",
     "marker_mechanism",
+    "marker_mechanisms",
     "point_accuracy",
     "pose_characteristics",
     "pose_errors",
