@@ -300,7 +300,17 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
     seen = dataclasses.replace(
         res, initial_values=np.where(reg, res.full_values, res.initial_values)
     )
-    verdict = _outliers_as_warnings(check_quality(seen, meas, mech=start, limits=limits))
+    if len(meas) == 1:
+        verdict = check_quality(seen, meas[0], mech=start, limits=limits)
+    else:  # the gate's per-pose tests assume one measured frame: judged without them
+        from pincal.identification import stacked_measurements
+
+        verdict = check_quality(seen, stacked_measurements(meas), limits=limits)
+        markers["notes"].append(
+            f"{len(meas)} markers: the quality gate judged the fit without its per-pose "
+            "data and sensitivity tests (they assume one measured frame)"
+        )
+    verdict = _outliers_as_warnings(verdict)
     quality = apply_gate(verdict, force)
     doc = result_json(fit.result, str(data), CALIBRATED_URDF)
     doc["quality"] = quality

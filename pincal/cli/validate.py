@@ -163,7 +163,11 @@ def validate(
         from pincal.io import read_marker_table
         from pincal.measure import MarkerSetup
 
-        meas = read_marker_table(data, nominal, MarkerSetup.from_dict(cal.manifest["markers"]))
+        setup = MarkerSetup.from_dict(cal.manifest["markers"])
+        meas = read_marker_table(data, nominal, setup)
+        if setup.more_columns:
+            click.echo(f"pincal: note: several markers; --data is judged on the first one "
+                       f"({','.join(setup.columns)}); --cv judges all", err=True)  # fmt: skip
     else:
         mf = read_measurement_file(data, nominal)
         for w in mf.warnings:
