@@ -129,3 +129,26 @@ def test_marker_option_and_campaign_errors_are_named(tmp_path):
     (tmp_path / "bad.yaml").write_text(text.replace("[[x2, y2, z2]]", "[[x2, y2]]"))
     bad = _run("run", tmp_path / "bad.yaml", "--dry-run")
     assert bad.exit_code != 0 and "markers.more_columns[0]" in bad.output
+
+
+def test_tiago_file_two_markers_and_its_copies(tmp_path):
+    """The real TIAGo export: markers 1 and 2 fitted together; columns 4 found to repeat 3."""
+    from pathlib import Path
+
+    data = Path(__file__).resolve().parents[2] / "docs/examples/tiago-mocap/measurements.csv"
+    r = _run("calibrate", "tiago", "--link", "arm_7_link", "--data", data,
+             "--marker-columns", "x1,y1,z1;x2,y2,z2;x3,y3,z3;x4,y4,z4",
+             "--out", tmp_path / "cal", "--json")  # fmt: skip
+    assert r.exit_code == 0, r.output
+    assert "columns x4,y4,z4 repeat x3,y3,z3 value for value" in r.stderr
+    doc = json.loads(r.stdout.splitlines()[-1])
+    assert doc["markers"]["more_columns"] == [["x2", "y2", "z2"], ["x3", "y3", "z3"]]
+    res = doc["residuals"]
+    assert res["after"]["rms_position_mm"] < res["before"]["rms_position_mm"]
+    # the markers' fitted offsets on the link are as far apart as the capture saw them
+    table = np.genfromtxt(data, delimiter=",", names=True)
+    seen = [np.c_[table[f"x{k}"], table[f"y{k}"], table[f"z{k}"]] * 1e3 for k in (1, 2)]
+    seen_gap = float(np.mean(np.linalg.norm(seen[1] - seen[0], axis=1)))  # 158.24 mm
+    ident = doc["markers"]["identified"]
+    gap = np.linalg.norm(np.subtract(ident["more_markers_mm"][0], ident["marker_mm"]))
+    assert abs(gap - seen_gap) < 1.0, (gap, seen_gap)
