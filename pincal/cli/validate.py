@@ -113,7 +113,10 @@ def validate(
     9283-style pose accuracy table (AP_p, AP_a/b/c per commanded pose; RP_l when
     poses are repeated, i.e. rows with the same actuator values) and the Cramér–Rao
     prediction from the calibration's covariance (without and with the instrument
-    noise). Warns when --data is a file the calibration was fitted on.
+    noise; withheld, with the reason, when the covariance is not valid or
+    ill-conditioned, a parameter's 2σ exceeds 20 mm / 0.1 rad, or parameters were held
+    for weakness). Warns when --data is a file the calibration was fitted on. A --data
+    file of more than 100000 rows is refused (with an estimate) unless --yes.
 
     \b
     Examples:
