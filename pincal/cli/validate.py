@@ -78,6 +78,25 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _more_markers(nominal, calibrated, more) -> list[dict]:
+    """Before / after position errors [mm] of each further marker (its own frame)."""
+    import numpy as np
+
+    from pincal.identification import position_errors
+
+    out = []
+    for columns, part in more:
+        before = position_errors(nominal, part) * 1e3
+        after = position_errors(calibrated, part) * 1e3
+        out.append({
+            "columns": list(columns),
+            "before_rms_position_mm": float(np.sqrt(np.mean(before**2))),
+            "after_rms_position_mm": float(np.sqrt(np.mean(after**2))),
+            "after_max_position_mm": float(after.max()),
+        })  # fmt: skip
+    return out
+
+
 @click.command()
 @click.argument("calibration", type=click.Path(path_type=Path))
 @click.option(
@@ -162,15 +181,14 @@ def validate(
     nominal = cal.nominal()
     params = parameters(nominal, cal.preset)
     check_data_rows(str(data), "--data", len(params), yes)
+    more: tuple = ()  # further markers' measurement sets
     if cal.manifest.get("markers"):  # a marker table, read as calibrate read it
-        from pincal.io import read_marker_table
+        from pincal.io import read_marker_sets
         from pincal.measure import MarkerSetup
 
         setup = MarkerSetup.from_dict(cal.manifest["markers"])
-        meas = read_marker_table(data, nominal, setup)
-        if setup.more_columns:
-            click.echo(f"pincal: note: several markers; --data is judged on the first one "
-                       f"({','.join(setup.columns)}); --cv judges all", err=True)  # fmt: skip
+        meas, *rest = read_marker_sets(data, nominal, setup)
+        more = tuple(zip(setup.more_columns, rest, strict=True))
     else:
         mf = read_measurement_file(data, nominal)
         for w in mf.warnings:
@@ -199,6 +217,8 @@ def validate(
         "independent": independent,
         **validation.to_dict(),
     }
+    if more:
+        doc["more_markers"] = _more_markers(nominal, cal.calibrated(), more)
     if cv_doc is not None:
         doc["cv"] = cv_doc
     if out is not None:
@@ -207,6 +227,12 @@ def validate(
         click.echo(json.dumps(doc))
     else:
         click.echo(format_validation(doc), nl=False)
+        for m in doc.get("more_markers", []):
+            click.echo(f"  marker {' '.join(m['columns'])}: position RMS nominal "
+                       f"{m['before_rms_position_mm']:.4f} mm, calibrated "
+                       f"{m['after_rms_position_mm']:.4f} mm (max "
+                       f"{m['after_max_position_mm']:.4f} mm); the table above: the first "
+                       "marker")  # fmt: skip
         if cv_doc is not None:
             from pincal.cli._cv import format_cv
 

@@ -82,6 +82,17 @@ def test_two_markers_fitted_together_recover_the_truth(tmp_path):
     assert out.exit_code == 0, out.output
     cv = json.loads(out.stdout)["cv"]
     assert cv["held_out_rms_mm"] < 0.1 < cv["baseline"]["held_out_rms_mm"]
+    # held-out poses: every marker judged (the second in its own frame)
+    _table(tmp_path / "held.csv", actual, q_new, 2e-5, 8)
+    out = _run("validate", tmp_path / "cal", "--data", tmp_path / "held.csv", "--json")
+    assert out.exit_code == 0, out.output
+    doc = json.loads(out.stdout)
+    assert doc["after"]["rms_position_mm"] < 0.1
+    (second,) = doc["more_markers"]
+    assert second["columns"] == ["x2", "y2", "z2"]
+    assert second["after_rms_position_mm"] < 0.1 < second["before_rms_position_mm"]
+    text = _run("validate", tmp_path / "cal", "--data", tmp_path / "held.csv").stdout
+    assert "marker x2 y2 z2: position RMS nominal" in text
 
 
 def test_registration_only_with_two_markers_shows_the_arm_errors(tmp_path):
