@@ -53,6 +53,8 @@ Campaign file keys (YAML; relative paths are relative to the file):
                              capture, tracker) in an unknown instrument frame
     link: LINK               required; the measured link carrying the marker
     columns: [x, y, z]       the marker's position columns (e.g. [x1, y1, z1])
+    more_columns: []         further markers on LINK, fitted together (an unknown
+                             offset each), e.g. [[x2, y2, z2]]; copies are used once
     length_unit: m           m | mm | um (marker columns)
     instrument_frame: unknown  unknown (registered, then identified) | known
     marker: unknown          unknown, or [x, y, z] in LINK's frame [mm]
@@ -167,6 +169,7 @@ class Markers:
     instrument_frame: str = "unknown"
     marker: tuple[float, float, float] | None = None
     marker_std: float | None = None
+    more_columns: tuple[tuple[str, str, str], ...] = ()
 
     def check(self, key: str) -> None:
         _choice(self.length_unit, ("m", "mm", "um"), f"{key}.length_unit")
@@ -176,7 +179,8 @@ class Markers:
 
     def options(self) -> list[str]:
         """The ``pincal calibrate`` options of this section."""
-        opts = ["--link", self.link, "--marker-columns", ",".join(self.columns)]
+        columns = ";".join(",".join(c) for c in (self.columns, *self.more_columns))
+        opts = ["--link", self.link, "--marker-columns", columns]
         opts += ["--length-unit", self.length_unit, "--instrument-frame", self.instrument_frame]
         if self.marker is not None:
             given = [*self.marker, *([self.marker_std] if self.marker_std else [])]
@@ -283,6 +287,10 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
         return _build(tp, value, key)
     if origin is tuple:
         args = typing.get_args(tp)
+        if len(args) == 2 and args[1] is Ellipsis:  # any length
+            if not isinstance(value, (list, tuple)):
+                raise CampaignError(f"{key}: expected a list, got {shown(value)}")
+            return tuple(_coerce(v, args[0], f"{key}[{k}]") for k, v in enumerate(value))
         if not isinstance(value, (list, tuple)) or len(value) != len(args):
             raise CampaignError(
                 f"{key}: expected a list of {len(args)} numbers, got {shown(value)}"

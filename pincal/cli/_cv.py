@@ -54,10 +54,11 @@ def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> dict[str, Any]:
     else:
         meas, fit, base = _pose_fit(cal)
         baseline_name = "nominal model"
+    poses = len(meas[0]) if isinstance(meas, tuple) else len(meas)  # one set per marker
     full = cross_validate(fit, meas, k, seed)
     ref = cross_validate(base, meas, k, seed)
     gain, se, beats = compare(full, ref)
-    fold_of = np.empty(len(meas), dtype=int)
+    fold_of = np.empty(poses, dtype=int)
     for j, rows in enumerate(full.folds):
         fold_of[rows] = j
     if folds_out is not None:
@@ -69,7 +70,7 @@ def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> dict[str, Any]:
     doc = {
         "k": k,
         "seed": seed,
-        "poses": len(meas),
+        "poses": poses,
         "folds": [[int(i) for i in rows] for rows in full.folds],
         "fit_rms_mm": float(after.rms_position) * 1e3,
         **full.to_dict(),

@@ -47,8 +47,11 @@ def marker_options(f: Callable[..., Any]) -> Callable[..., Any]:
                      metavar="unknown|X,Y,Z[,SIGMA]",
                      help="Marker in LINK's frame [mm]: unknown (identified), or given; "
                      "with SIGMA [mm] it is refined with that 1σ, without it held."),
-        click.option("--marker-columns", default="x,y,z", show_default=True,
-                     help="The marker's three position columns (e.g. x1,y1,z1)."),
+        click.option("--marker-columns", default=("x,y,z",), show_default=True, multiple=True,
+                     help="The marker's three position columns (e.g. x1,y1,z1). Several "
+                     "markers on LINK: separate them by ';' or repeat the option "
+                     "(x1,y1,z1;x2,y2,z2): fitted together, one instrument frame, an "
+                     "unknown offset each; a marker exported twice is used once."),
         click.option("--length-unit", type=click.Choice(["m", "mm", "um"]), default="m",
                      show_default=True, help="Unit of the marker columns."),
         click.option("--prior", "prior_spec", default=None, metavar="LEN_MM,ANG_MRAD|auto",
@@ -83,9 +86,12 @@ def parse_prior(spec: str | None) -> str | tuple[float, float] | None:
     return a * 1e-3, b * 1e-3
 
 
-def setup_from_options(link: str, frame: str, marker_spec: str, columns: str, unit: str,
-                       lock_spec: str | None = None):  # fmt: skip
+def setup_from_options(link: str, frame: str, marker_spec: str, columns: str | tuple[str, ...],
+                       unit: str, lock_spec: str | None = None):  # fmt: skip
     """The :class:`pincal.measure.MarkerSetup` of the command-line options.
+
+    ``columns``: ``--marker-columns`` (a text, or the texts of a repeated option), each
+    ``X,Y,Z`` or several joined by ``;``.
 
     ``lock_spec`` (``JOINT=VALUE,…`` [m, rad]) is for the model options' ``--lock`` of
     the main line (h-arms); joints off the chain to ``link`` are locked at 0 anyway.
@@ -108,11 +114,22 @@ def setup_from_options(link: str, frame: str, marker_spec: str, columns: str, un
         if not sep:
             raise click.BadParameter(f"{item!r} is not JOINT=VALUE", param_hint="--lock")
         lock[name.strip()] = _numbers(value, "--lock", (1,))[0]
-    cols = tuple(c.strip() for c in columns.split(","))
-    if len(cols) != 3:
-        raise click.BadParameter(f"give three columns, got {columns!r}",
-                                 param_hint="--marker-columns")  # fmt: skip
-    return MarkerSetup(link, frame, marker, std, lock, cols, unit)  # type: ignore[arg-type]
+    texts = (columns,) if isinstance(columns, str) else columns
+    sets = []
+    for text in (t for joined in texts for t in joined.split(";") if t.strip()):
+        cols = tuple(c.strip() for c in text.split(","))
+        if len(cols) != 3:
+            raise click.BadParameter(f"give three columns per marker, got {text!r}",
+                                     param_hint="--marker-columns")  # fmt: skip
+        sets.append(cols)
+    if not sets:
+        raise click.BadParameter("no columns given", param_hint="--marker-columns")
+    if len(sets) > 1 and marker is not None:
+        raise click.BadParameter("a given --marker applies to one marker; with several "
+                                 "--marker-columns every offset is unknown: use "
+                                 "--marker unknown", param_hint="--marker")  # fmt: skip
+    return MarkerSetup(link, frame, marker, std, lock, sets[0], unit,  # type: ignore[arg-type]
+                       tuple(sets[1:]))  # fmt: skip
 
 
 def _choose_prior(mech, setup, meas, preset: str, method: str, loss: str = "linear"):
@@ -139,15 +156,20 @@ def marker_calibration(model: str, data: str, setup, preset: str | None, method:
                        progress: bool = True):  # fmt: skip
     """Read the marker table, choose the prior, fit. Returns (fit, measurements, doc).
 
-    ``doc`` is the ``markers`` entry of the manifest / identification.json: the setup,
-    the registration, the prior (and the cross-validation table of ``auto``), the notes.
+    ``measurements`` has one set per marker (copies of one marker left out, said on
+    stderr and in the notes). ``doc`` is the ``markers`` entry of the manifest /
+    identification.json: the setup, the registration, the prior (and the
+    cross-validation table of ``auto``), the notes.
     """
     from pincal.identification import Prior, fit_markers
-    from pincal.io import read_marker_table
+    from pincal.io import distinct_markers, read_marker_sets
     from pincal.measure import marker_mechanism
 
+    setup, copies = distinct_markers(data, setup)
+    for note in copies:
+        click.echo(f"pincal: note: {note}", err=True)
     mech = marker_mechanism(model, setup)
-    meas = read_marker_table(data, mech, setup)
+    meas = read_marker_sets(data, mech, setup)
     preset = preset or "chain"
     if preset not in mech.presets:
         raise click.BadParameter(f"preset {preset!r} unknown; marker calibrations have "
@@ -162,8 +184,8 @@ def marker_calibration(model: str, data: str, setup, preset: str | None, method:
     elif parsed is not None:
         prior = Prior(*parsed)  # type: ignore[misc]
     if progress:
-        click.echo(f"… registering the instrument frame and marker, then identifying from "
-                   f"{len(meas)} poses", err=True)  # fmt: skip
+        click.echo(f"… registering the instrument frame and {len(meas)} marker(s), then "
+                   f"identifying from {len(meas[0])} poses", err=True)  # fmt: skip
     fit = fit_markers(mech, setup, meas, preset, method, prior, loss=loss)
     reg = fit.registration
     doc = {
@@ -180,20 +202,23 @@ def marker_calibration(model: str, data: str, setup, preset: str | None, method:
             "rms_mm": reg.fit.rms * 1e3,
             "iterations": reg.iterations,
             "marker_mm": [float(v) * 1e3 for v in reg.marker],
+            "more_markers_mm": [[float(v) * 1e3 for v in m] for m in reg.more_markers],
             "instrument_translation_mm": [float(v) * 1e3
                                           for v in reg.T_instrument_base.translation],
         },
-        "identified": _identified(fit),
+        "identified": _identified(fit, len(meas)),
         "solver": fit.method,
-        "notes": list(fit.notes),
+        "notes": [*copies, *fit.notes],
+        "held_weak": list(fit.held_weak),
     }  # fmt: skip
     return fit, meas, doc
 
 
-def _identified(fit) -> dict:
-    """The refined instrument frame and marker [mm, mrad] with 2σ where identified."""
+def _identified(fit, markers: int = 1) -> dict:
+    """The refined instrument frame and marker(s) [mm, mrad] with 2σ where identified."""
     import pinocchio as pin
 
+    from pincal.measure import marker_frame
     from pincal.model import BASE_JOINT, TOOL_JOINT
 
     res = fit.result
@@ -211,6 +236,11 @@ def _identified(fit) -> dict:
         "instrument_2sigma_mm_mrad": sig(BASE_JOINT, "tx ty tz rx ry rz"),
         "marker_mm": [float(v) * 1e3 for v in joints[TOOL_JOINT].origin.translation],
         "marker_2sigma_mm": sig(TOOL_JOINT, "tx ty tz"),
+        "more_markers_mm": [
+            [float(v) * 1e3 for v in joints[marker_frame(k)[0]].origin.translation]
+            for k in range(1, markers)
+        ],
+        "more_markers_2sigma_mm": [sig(marker_frame(k)[0], "tx ty tz") for k in range(1, markers)],
     }
 
 
@@ -218,10 +248,12 @@ def marker_lines(doc: dict) -> list[str]:
     """The report lines of a marker calibration (registration, prior, guards)."""
     r = doc["registration"]
     mk = ", ".join(f"{v:.2f}" for v in r["marker_mm"])
+    more = [" ".join(c) for c in doc.get("more_columns") or []]
+    also = "".join(f"; marker {k + 2}: columns {c}" for k, c in enumerate(more))
     lines = [
         "",
-        f"marker on {doc['link']} (columns {' '.join(doc['columns'])}, {doc['length_unit']}); "
-        f"instrument frame {doc['instrument_frame']}",
+        f"marker on {doc['link']} (columns {' '.join(doc['columns'])}, {doc['length_unit']}"
+        f"{also}); instrument frame {doc['instrument_frame']}",
         f"registration (closed form, {r['iterations']} alternations): RMS {r['rms_mm']:.3f} mm; "
         f"marker [{mk}] mm in {doc['link']}",
     ]
@@ -239,6 +271,10 @@ def marker_lines(doc: dict) -> list[str]:
             f"tool_frame tx ty tz [{nums(ident['marker_2sigma_mm'])}] mm "
             "(–: held, or absorbed by another parameter)",
         ]
+        for k, (v, two) in enumerate(zip(ident.get("more_markers_mm") or [],
+                                         ident.get("more_markers_2sigma_mm") or [], strict=True)):
+            lines.append(f"identified marker {k + 2} [{nums(v)}] mm in {doc['link']}; 2σ of "
+                         f"marker{k + 2}_frame tx ty tz [{nums(two)}] mm")  # fmt: skip
     p = doc.get("prior")
     if p is None:
         lines.append("prior: none")
@@ -259,12 +295,12 @@ def marker_lines(doc: dict) -> list[str]:
 
 
 def rebuild(cal) -> tuple[Any, Any, Any]:
-    """(setup, mechanism, measurements) of a marker calibration directory, for ``validate``.
+    """(setup, mechanism, measurements: one set per marker) of a marker calibration.
 
     Raises:
         PincalError: the data file is gone or changed.
     """
-    from pincal.io import read_marker_table, sha256_file
+    from pincal.io import read_marker_sets, sha256_file
     from pincal.measure import MarkerSetup, marker_mechanism
 
     doc = cal.manifest.get("markers") or {}
@@ -280,7 +316,7 @@ def rebuild(cal) -> tuple[Any, Any, Any]:
     if changed:
         raise PincalError(f"{path} changed since the calibration was written; re-run calibrate")
     mech = marker_mechanism(cal.model_source or cal.model, setup)
-    return setup, mech, read_marker_table(path, mech, setup)
+    return setup, mech, read_marker_sets(path, mech, setup)
 
 
 def as_prior(doc: dict):

@@ -332,7 +332,20 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
     start = fit.registration.mechanism
     # the gate bounds registration unknowns (instrument frame, marker) apart from the
     # machine's parameters, and judges an estimated noise by the instrument profile
-    verdict = check_quality(fit.result, meas, mech=start, limits=limits, instrument=profile)
+    if len(meas) == 1:
+        verdict = check_quality(
+            fit.result, meas[0], mech=start, limits=limits, instrument=profile
+        )
+    else:  # the gate's per-pose tests assume one measured frame: judged without them
+        from pincal.identification import stacked_measurements
+
+        verdict = check_quality(
+            fit.result, stacked_measurements(meas), limits=limits, instrument=profile
+        )
+        markers["notes"].append(
+            f"{len(meas)} markers: the quality gate judged the fit without its per-pose "
+            "data and sensitivity tests (they assume one measured frame)"
+        )
     quality = apply_gate(verdict, force)
     doc = result_json(fit.result, str(data), CALIBRATED_URDF)
     doc["quality"] = quality

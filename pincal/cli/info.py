@@ -97,7 +97,12 @@ def info(
     import numpy as np
 
     from pincal.cli._progress import counted
-    from pincal.model import degenerate_translations, parameters
+    from pincal.model import (
+        degenerate_translations,
+        describe_direction,
+        direction_record,
+        parameters,
+    )
     from pincal.sensitivity import BASE_POSES, base_set, identifiability
 
     mech = load_model(model, model_opts, quiet=True)
@@ -135,8 +140,10 @@ def info(
                 "identifiable": int(ident.rank),
                 "breaks_closure": n_breaking,
                 "explanation": list(ident.describe()) if preset else [],
+                "directions": [direction_record(mech, p.name, p.joint, p.dof, p.twist)
+                               for p in params.parameters] if preset else [],
             }
-        )
+        )  # fmt: skip
         if as_json:
             continue
         breaking = f", {n_breaking} break loop closure" if n_breaking else ""
@@ -146,6 +153,11 @@ def info(
         if preset:
             for line in ident.describe():
                 click.echo(f"    {line}")
+            click.echo("    what each parameter moves, in its parent link's frame (hold one in a "
+                       "preset by {joints: J, along_parent: x|y|z|[a,b,c], hold: true}; "
+                       "about_parent for rotations):")  # fmt: skip
+            for p in params.parameters:
+                click.echo(f"      {describe_direction(mech, p.name, p.joint, p.dof, p.twist)}")
     base = None
     if found is not None:  # the base preset, with what it leaves out
         n_base, n_degenerate = len(found.params), len(degenerate_translations(mech))

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from pincal.cli._limits import check_data_rows, yes_option
 from pincal.cli.common import announce, calibration_summary, fail_cleanly
 
 
@@ -46,10 +47,17 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
         f"   {_fmt(b['rms_orientation_mrad'])}  {_fmt(b['max_orientation_mrad'])}",
         f"  calibrated model   {_fmt(a['rms_position_mm'])}  {_fmt(a['max_position_mm'])}"
         f"   {_fmt(a['rms_orientation_mrad'])}  {_fmt(a['max_orientation_mrad'])}",
-        f"  Cramér–Rao (model) {_fmt(p['model_rms_position_mm'])}  {'':9s}"
-        f"   {_fmt(p['model_rms_orientation_mrad'])}",
-        f"  Cramér–Rao + noise {_fmt(p['observed_rms_position_mm'])}  {'':9s}"
-        f"   {_fmt(p['observed_rms_orientation_mrad'])}",
+    ]
+    if p.get("withheld"):
+        lines.append(f"  Cramér–Rao prediction not given: {p['withheld']}")
+    else:
+        lines += [
+            f"  Cramér–Rao (model) {_fmt(p['model_rms_position_mm'])}  {'':9s}"
+            f"   {_fmt(p['model_rms_orientation_mrad'])}",
+            f"  Cramér–Rao + noise {_fmt(p['observed_rms_position_mm'])}  {'':9s}"
+            f"   {_fmt(p['observed_rms_orientation_mrad'])}",
+        ]
+    lines += [
         "",
         "  ISO 9283 pose accuracy per commanded pose (AP: mean attained − commanded;"
         " RP_l = l̄ + 3 S_l over repeats)",
@@ -70,6 +78,25 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _more_markers(nominal, calibrated, more) -> list[dict]:
+    """Before / after position errors [mm] of each further marker (its own frame)."""
+    import numpy as np
+
+    from pincal.identification import position_errors
+
+    out = []
+    for columns, part in more:
+        before = position_errors(nominal, part) * 1e3
+        after = position_errors(calibrated, part) * 1e3
+        out.append({
+            "columns": list(columns),
+            "before_rms_position_mm": float(np.sqrt(np.mean(before**2))),
+            "after_rms_position_mm": float(np.sqrt(np.mean(after**2))),
+            "after_max_position_mm": float(after.max()),
+        })  # fmt: skip
+    return out
+
+
 @click.command()
 @click.argument("calibration", type=click.Path(path_type=Path))
 @click.option(
@@ -86,6 +113,7 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
 @click.option("--folds-out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write the --cv folds (pose row, fold) as CSV.")
 @click.option("--json", "as_json", is_flag=True, help="Print the full validation as JSON.")
+@yes_option
 @click.option(
     "--out",
     type=click.Path(dir_okay=False, path_type=Path),
@@ -95,7 +123,7 @@ def format_validation(doc: dict, max_rows: int = 40) -> str:
 @fail_cleanly
 def validate(
     calibration: Path, data: Path | None, cv_folds: int | None, cv_seed: int,
-    folds_out: Path | None, as_json: bool, out: Path | None,
+    folds_out: Path | None, as_json: bool, yes: bool, out: Path | None,
 ) -> None:  # fmt: skip
     """Check the calibration in CALIBRATION on measurements not used for fitting.
 
@@ -104,7 +132,10 @@ def validate(
     9283-style pose accuracy table (AP_p, AP_a/b/c per commanded pose; RP_l when
     poses are repeated, i.e. rows with the same actuator values) and the Cramér–Rao
     prediction from the calibration's covariance (without and with the instrument
-    noise). Warns when --data is a file the calibration was fitted on.
+    noise; withheld, with the reason, when the covariance is not valid or
+    ill-conditioned, a parameter's 2σ exceeds 20 mm / 0.1 rad, or parameters were held
+    for weakness). Warns when --data is a file the calibration was fitted on. A --data
+    file of more than 100000 rows is refused (with an estimate) unless --yes.
 
     \b
     Examples:
@@ -148,11 +179,16 @@ def validate(
     cal = read_calibration(calibration)
     announce(cal)
     nominal = cal.nominal()
+    params = parameters(nominal, cal.preset)
+    check_data_rows(str(data), "--data", len(params), yes)
+    more: tuple = ()  # further markers' measurement sets
     if cal.manifest.get("markers"):  # a marker table, read as calibrate read it
-        from pincal.io import read_marker_table
+        from pincal.io import read_marker_sets
         from pincal.measure import MarkerSetup
 
-        meas = read_marker_table(data, nominal, MarkerSetup.from_dict(cal.manifest["markers"]))
+        setup = MarkerSetup.from_dict(cal.manifest["markers"])
+        meas, *rest = read_marker_sets(data, nominal, setup)
+        more = tuple(zip(setup.more_columns, rest, strict=True))
     else:
         mf = read_measurement_file(data, nominal)
         for w in mf.warnings:
@@ -163,7 +199,6 @@ def validate(
     independent = digest not in fitted
     if not independent:
         click.echo(f"pincal: warning: {data} was used to fit this calibration", err=True)
-    params = parameters(nominal, cal.preset)
     result = cal.result
     validation = validate_held_out(
         nominal,
@@ -173,6 +208,7 @@ def validate(
         tuple(result.identified_names),
         result.covariance,
         meas.noise or cal.noise,
+        tuple((cal.manifest.get("markers") or {}).get("held_weak") or ()),
     )
     doc = {
         "calibration": calibration_summary(cal),
@@ -181,6 +217,8 @@ def validate(
         "independent": independent,
         **validation.to_dict(),
     }
+    if more:
+        doc["more_markers"] = _more_markers(nominal, cal.calibrated(), more)
     if cv_doc is not None:
         doc["cv"] = cv_doc
     if out is not None:
@@ -189,6 +227,12 @@ def validate(
         click.echo(json.dumps(doc))
     else:
         click.echo(format_validation(doc), nl=False)
+        for m in doc.get("more_markers", []):
+            click.echo(f"  marker {' '.join(m['columns'])}: position RMS nominal "
+                       f"{m['before_rms_position_mm']:.4f} mm, calibrated "
+                       f"{m['after_rms_position_mm']:.4f} mm (max "
+                       f"{m['after_max_position_mm']:.4f} mm); the table above: the first "
+                       "marker")  # fmt: skip
         if cv_doc is not None:
             from pincal.cli._cv import format_cv
 

@@ -43,6 +43,11 @@ from pincal.identification._marker_fit import (
     fit_markers,
     is_registration,
 )
+from pincal.identification._marker_set import (
+    MarkerSetProblem,
+    StackedProblem,
+    stacked_measurements,
+)
 from pincal.identification._monte_carlo import MonteCarloStudy, monte_carlo
 from pincal.identification._options import (
     LOSSES,
@@ -93,6 +98,7 @@ __all__ = [
     "LMOptions",
     "LocalSolverExtras",
     "MarkerFit",
+    "MarkerSetProblem",
     "MonteCarloStudy",
     "Prior",
     "QPSOExtras",
@@ -106,6 +112,7 @@ __all__ = [
     "ResidualStats",
     "Solver",
     "SolverExtras",
+    "StackedProblem",
     "StepPlanningExtras",
     "StepPlanningOptions",
     "StepPlanningResult",
@@ -132,6 +139,7 @@ __all__ = [
     "qpso_identify",
     "qpso_stepwise",
     "solver",
+    "stacked_measurements",
     "step_planned_identify",
     "subset",
 ]

@@ -4,14 +4,17 @@
 ``numpy.random.default_rng(seed)``, then K near-equal consecutive parts), so the same
 seed gives the same folds on every machine. :func:`cross_validate` fits on K − 1 folds
 and predicts the held-out one, for each fold; every pose is held out exactly once.
+With several markers per pose (one measurement set each, same rows) a pose's error is
+the RMS over its markers.
 :func:`compare` states whether one procedure beats another by more than the standard
 error of the paired difference of their per-pose squared errors.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -52,7 +55,7 @@ def position_errors(mech: Mechanism, meas: Measurements) -> np.ndarray:
     """(m,) distances [m] between predicted and measured positions of the measured frame.
 
     Over the measured position components only (``x z`` of a machine measuring
-    ``x z ry``).
+    ``x z ry``). The frame is ``meas.frame`` (another marker of the same mechanism).
 
     Raises:
         MeasurementError: no position component is measured.
@@ -61,7 +64,8 @@ def position_errors(mech: Mechanism, meas: Measurements) -> np.ndarray:
     if not cols:
         raise MeasurementError("cross-validation compares positions; none is measured")
     qs = mech.configurations(meas.q_act)
-    pred = np.array([mech.frame_placement(q).translation for q in qs])
+    frame = None if meas.frame == mech.measured_frame else meas.frame
+    pred = np.array([mech.frame_placement(q, frame).translation for q in qs])
     return np.linalg.norm((pred - meas.positions)[:, cols], axis=1)
 
 
@@ -96,26 +100,40 @@ class CrossValidation:
         }
 
 
+def _errors(mech: Mechanism, parts: tuple[Measurements, ...], rows: np.ndarray) -> np.ndarray:
+    """Per pose of ``rows``, the RMS over the markers of the position error [m]."""
+    e = np.array([position_errors(mech, subset(p, rows)) for p in parts])
+    return np.sqrt(np.mean(e**2, axis=0))
+
+
 def cross_validate(
-    fit: Callable[[Measurements], Mechanism], meas: Measurements, k: int, seed: int
+    fit: Callable[[Any], Mechanism],
+    meas: Measurements | Sequence[Measurements],
+    k: int,
+    seed: int,
 ) -> CrossValidation:
     """Fit on K − 1 folds, predict the held-out fold, for every fold.
 
     Args:
         fit: measurements → calibrated mechanism (the whole procedure, registration
-            included, so nothing of the held-out fold leaks into the fit).
-        meas: all poses (positions measured).
+            included, so nothing of the held-out fold leaks into the fit); with several
+            markers it receives the tuple of their training rows.
+        meas: all poses (positions measured), or one set per marker (same rows; the
+            mechanism ``fit`` returns predicts each set's frame).
         k: number of folds.
         seed: the folds' seed (:func:`kfold`).
     """
-    folds = kfold(len(meas), k, seed)
-    held = np.empty(len(meas))
+    parts = (meas,) if isinstance(meas, Measurements) else tuple(meas)
+    m = len(parts[0])
+    folds = kfold(m, k, seed)
+    held = np.empty(m)
     fit_rms = np.empty(k)
     for j, rows in enumerate(folds):
-        train = np.setdiff1d(np.arange(len(meas)), rows)
-        mech = fit(subset(meas, train))
-        held[rows] = position_errors(mech, subset(meas, rows))
-        fit_rms[j] = float(np.sqrt(np.mean(position_errors(mech, subset(meas, train)) ** 2)))
+        train = np.setdiff1d(np.arange(m), rows)
+        sets = tuple(subset(p, train) for p in parts)
+        mech = fit(sets[0] if isinstance(meas, Measurements) else sets)
+        held[rows] = _errors(mech, parts, rows)
+        fit_rms[j] = float(np.sqrt(np.mean(_errors(mech, parts, train) ** 2)))
     return CrossValidation(folds, held, fit_rms)
 
 

@@ -17,14 +17,23 @@
 
 from __future__ import annotations
 
+import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from pincal.identification._identify import identify
+from pincal.identification._marker_set import MarkerSetProblem
 from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._result import IdentificationResult
-from pincal.measure import MarkerRegistration, MarkerSetup, Measurements, register_markers
+from pincal.measure import (
+    MarkerRegistration,
+    MarkerSetup,
+    Measurements,
+    marker_mechanisms,
+    register_markers,
+)
 from pincal.model import BASE_JOINT, TOOL_JOINT, Mechanism, ParameterSet, parameters
 
 __all__ = ["REGISTRATION_PRESET", "MarkerFit", "Prior", "fit_markers", "is_registration"]
@@ -33,9 +42,15 @@ __all__ = ["REGISTRATION_PRESET", "MarkerFit", "Prior", "fit_markers", "is_regis
 REGISTRATION_PRESET = "base_tool"
 
 
+_MARKER_JOINT = re.compile(r"marker\d+_frame\.")
+
+
 def is_registration(name: str) -> bool:
-    """True for an instrument-frame or marker parameter (``base_frame.*``, ``tool_frame.*``)."""
-    return name.startswith((f"{BASE_JOINT}.", f"{TOOL_JOINT}."))
+    """True for an instrument-frame or marker parameter.
+
+    Those are ``base_frame.*``, ``tool_frame.*`` and ``marker<k>_frame.*``.
+    """
+    return name.startswith((f"{BASE_JOINT}.", f"{TOOL_JOINT}.")) or bool(_MARKER_JOINT.match(name))
 
 
 @dataclass(frozen=True)
@@ -66,12 +81,15 @@ class MarkerFit:
         registration: the closed-form start.
         notes: what the guards did, in words (switches, parameters held and why).
         method: the solver that produced ``result``.
+        held_weak: machine parameters held at nominal because their 2σ exceeded the
+            bounds (named in ``notes`` too).
     """
 
     result: IdentificationResult
     registration: MarkerRegistration
     notes: tuple[str, ...]
     method: str
+    held_weak: tuple[str, ...] = ()
 
     @property
     def calibrated(self) -> Mechanism:
@@ -91,9 +109,9 @@ def _prior_std(params: ParameterSet, setup: MarkerSetup, prior: Prior | None) ->
 
 
 def _fit(
-    mech: Mechanism,
+    mech: Mechanism | tuple[Mechanism, ...],
     params: ParameterSet,
-    meas: Measurements,
+    meas: Measurements | tuple[Measurements, ...],
     names: list[str],
     method: str,
     std: np.ndarray,
@@ -109,6 +127,11 @@ def _fit(
         opts = GaussNewtonOptions(max_iterations=max_iterations, **prior)
     elif method == "lm":
         opts = LMOptions(max_iterations=max_iterations, loss=loss, **prior)
+    if isinstance(mech, tuple):  # several markers: one problem over their stacked rows
+        assert isinstance(meas, tuple)
+        problem = MarkerSetProblem.build(mech, params, meas, initial, names)
+        return identify(problem, method=method, options=opts)
+    assert isinstance(meas, Measurements)
     return identify(mech, params, meas, method, options=opts, fit=names, initial=initial)
 
 
@@ -132,7 +155,7 @@ def _weak(
 def fit_markers(
     mech: Mechanism,
     setup: MarkerSetup,
-    measurements: Measurements,
+    measurements: Measurements | Sequence[Measurements],
     preset: str = "chain",
     method: str = "gauss-newton",
     prior: Prior | None = None,
@@ -146,7 +169,10 @@ def fit_markers(
     Args:
         mech: from :func:`pincal.measure.marker_mechanism`.
         setup: what is known (instrument frame, marker, its σ).
-        measurements: marker positions [m] in the instrument frame.
+        measurements: marker positions [m] in the instrument frame; with several
+            markers (``setup.more_columns``), one set per marker (same rows, from
+            :func:`pincal.io.read_marker_sets`), fitted together (one instrument frame,
+            an offset each).
         preset: parameter preset of the full model (``chain``: every joint's geometry).
         method: ``gauss-newton`` (falls back to ``lm``) or another registered solver.
         prior: prior on the machine's parameters (Gauss–Newton only), or None.
@@ -160,35 +186,41 @@ def fit_markers(
     Raises:
         PincalError subclasses of :func:`identify` and :func:`register_markers`.
     """
+    parts = (measurements,) if isinstance(measurements, Measurements) else tuple(measurements)
     reg = register_markers(
         mech,
-        measurements,
+        parts[0],
         marker_known=setup.marker is not None,
         frame_known=setup.instrument_frame == "known",
+        more=parts[1:],
     )
-    start = reg.mechanism
-    params = parameters(start, REGISTRATION_PRESET if registration_only else preset)
+    start: Mechanism | tuple[Mechanism, ...] = reg.mechanism
+    meas: Measurements | tuple[Measurements, ...] = parts[0]
+    if len(parts) > 1:
+        start, meas = marker_mechanisms(reg.mechanism, setup), parts
+    params = parameters(reg.mechanism, REGISTRATION_PRESET if registration_only else preset)
     names = [n for n in params.names if n not in setup.held]
     std = _prior_std(params, setup, None if registration_only else prior)
     notes: list[str] = []
     if registration_only:
-        result = _fit(start, params, measurements, names, "gauss-newton", std)
+        result = _fit(start, params, meas, names, "gauss-newton", std)
         return MarkerFit(result, reg, (), "gauss-newton")
     if loss != "linear":
         method = "lm"
     if method not in ("gauss-newton", "lm"):
-        result = _fit(start, params, measurements, names, method, std)
+        result = _fit(start, params, meas, names, method, std)
         return MarkerFit(result, reg, (), method)
     used = method
+    held_weak: list[str] = []
     for _ in range(6):  # each round holds at least one more parameter, or stops
-        result = _fit(start, params, measurements, names, used, std, loss, None, max_iterations)
+        result = _fit(start, params, meas, names, used, std, loss, None, max_iterations)
         if not result.success and used == "gauss-newton":
             notes.append(
                 f"Gauss–Newton did not converge ({result.message.strip()}); switched to "
                 "Levenberg–Marquardt from the same start"
             )
             used = "lm"
-            result = _fit(start, params, measurements, names, used, std, loss, None, max_iterations)
+            result = _fit(start, params, meas, names, used, std, loss, None, max_iterations)
         weak = _weak(result, params, bounds)
         if not weak:
             break
@@ -198,8 +230,9 @@ def fit_markers(
             "barely move those directions): " + ", ".join(f"{n} ({v})" for n, v in weak)
         )
         held = {n for n, _ in weak}
+        held_weak += [n for n, _ in weak]
         names = [n for n in names if n not in held]
-    again = _fit(start, params, measurements, names, used, std, loss, result.full_values)
+    again = _fit(start, params, meas, names, used, std, loss, result.full_values)
     n0, n1 = int(result.identified.sum()), int(again.identified.sum())
     if n1 != n0 and (again.success or not result.success):
         notes.append(
@@ -207,4 +240,4 @@ def fit_markers(
             f"(at the start {n0}); the fit was refined from the solution with that set"
         )
         result = again
-    return MarkerFit(result, reg, tuple(notes), used)
+    return MarkerFit(result, reg, tuple(notes), used, tuple(held_weak))

@@ -46,7 +46,7 @@ from pincal.io._instrument_registry import (
     read_instrument_file,
 )
 from pincal.io._joint_columns import joint_columns, read_joints
-from pincal.io._marker_file import read_marker_table
+from pincal.io._marker_file import distinct_markers, read_marker_sets, read_marker_table
 from pincal.io._measurement_file import (
     MeasurementFile,
     check_enough_poses,
@@ -97,6 +97,7 @@ __all__ = [
     "calibration_lock",
     "check_enough_poses",
     "check_replaceable",
+    "distinct_markers",
     "file_kind",
     "import_tracker",
     "is_instrument_file",
@@ -108,6 +109,7 @@ __all__ = [
     "read_instrument_data",
     "read_instrument_file",
     "read_joints",
+    "read_marker_sets",
     "read_marker_table",
     "read_measurement_file",
     "read_measurements",

@@ -8,7 +8,9 @@ registration, pose errors against a reference, validation on held-out data.
 from __future__ import annotations
 
 from pincal.measure._held_out import (
+    PREDICTION_BOUNDS,
     HeldOutValidation,
+    prediction_caveat,
     validate_held_out,
 )
 from pincal.measure._instruments import (
@@ -33,7 +35,9 @@ from pincal.measure._iso_cube import (
 from pincal.measure._markers import (
     MarkerRegistration,
     MarkerSetup,
+    marker_frame,
     marker_mechanism,
+    marker_mechanisms,
     register_markers,
 )
 from pincal.measure._measurements import (
@@ -71,6 +75,7 @@ __all__ = [
     "DEFAULT_NOISE",
     "INSTRUMENT_KINDS",
     "ORIENTATION_CONVENTION",
+    "PREDICTION_BOUNDS",
     "SCALE_MESSAGE",
     "HeldOutValidation",
     "Instrument",
@@ -94,11 +99,14 @@ __all__ = [
     "fit_rigid_transform",
     "initial_instrument_values",
     "iso_test_cube",
+    "marker_frame",
     "marker_mechanism",
+    "marker_mechanisms",
     "point_accuracy",
     "pose_characteristics",
     "pose_errors",
     "pose_from_target_points",
+    "prediction_caveat",
     "register_instrument",
     "register_markers",
     "rigid_fit_covariance",

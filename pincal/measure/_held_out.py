@@ -31,7 +31,78 @@ from pincal.measure._iso9283 import ORIENTATION_CONVENTION, point_accuracy
 from pincal.measure._measurements import Measurements, NoiseModel
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
 
-__all__ = ["HeldOutValidation", "validate_held_out"]
+__all__ = [
+    "PREDICTION_BOUNDS",
+    "PREDICTION_COND_BOUND",
+    "HeldOutValidation",
+    "prediction_caveat",
+    "validate_held_out",
+]
+
+#: (length [m], angle [rad]): largest 2σ of an identified parameter for which the
+#: linearised (Cramér–Rao) prediction is printed — the bound of the marker fit's guard
+PREDICTION_BOUNDS = (0.02, 0.1)
+#: largest condition number of the parameters' correlation matrix for which it is printed
+PREDICTION_COND_BOUND = 1e10
+
+
+def prediction_caveat(
+    names: tuple[str, ...],
+    units: tuple[str, ...],
+    covariance: np.ndarray,
+    bounds: tuple[float, float] = PREDICTION_BOUNDS,
+    cond_bound: float | None = None,
+) -> str | None:
+    """Why the Cramér–Rao prediction of a covariance would be meaningless, or None.
+
+    The prediction is first-order in the parameters' errors: it means nothing when the
+    covariance is not a covariance (non-finite, not positive semi-definite), when it is
+    ill-conditioned (condition number of the correlation matrix above ``cond_bound``:
+    some combination of parameters is barely determined) or when an identified
+    parameter's 2σ exceeds ``bounds`` (length [m], angle [rad]; outside the small-error
+    regime where the linearisation holds).
+
+    Args:
+        names: the k identified parameters, in ``covariance``'s order.
+        units: their units (``"m"`` or ``"rad"``).
+        covariance: (k, k) [SI].
+        bounds: default :data:`PREDICTION_BOUNDS`.
+        cond_bound: default :data:`PREDICTION_COND_BOUND`.
+    """
+    cond_bound = PREDICTION_COND_BOUND if cond_bound is None else cond_bound
+    cov = np.asarray(covariance, dtype=float)
+    k = len(names)
+    if cov.shape != (k, k) or not np.all(np.isfinite(cov)):
+        return "the calibration's covariance is not finite"
+    if k == 0:
+        return None
+    var = np.diag(cov)
+    eig = np.linalg.eigvalsh((cov + cov.T) / 2)
+    if np.any(var <= 0) or eig.min() < -1e-9 * max(eig.max(), 0.0):
+        return "the calibration's covariance is not positive definite"
+    d = 1 / np.sqrt(var)
+    corr_eig = np.linalg.eigvalsh(cov * np.outer(d, d))
+    cond = corr_eig.max() / corr_eig.min() if corr_eig.min() > 0 else np.inf
+    if not cond <= cond_bound:
+        return (
+            f"the calibration's covariance is ill-conditioned (condition number of its "
+            f"correlation matrix {cond:.2g} > {cond_bound:.0e}: some combination of "
+            "parameters is barely determined by the poses)"
+        )
+    two_sigma = 2 * np.sqrt(var)
+    limit = np.array([bounds[0] if u == "m" else bounds[1] for u in units])
+    big = [
+        f"{n} (2σ {v * 1e3:.3g} {'mm' if u == 'm' else 'mrad'})"
+        for n, u, v, b in zip(names, units, two_sigma, limit, strict=True)
+        if v > b
+    ]
+    if big:
+        return (
+            f"{len(big)} identified parameters have 2σ above {bounds[0] * 1e3:g} mm / "
+            f"{bounds[1] * 1e3:g} mrad, outside the small-error range where the "
+            "first-order prediction holds: " + ", ".join(big[:5]) + (" …" if len(big) > 5 else "")
+        )
+    return None
 
 
 @dataclass(frozen=True)
@@ -61,7 +132,7 @@ class HeldOutValidation:
     before: ModelErrors
     after: ModelErrors
     repeatability_mm: list[float | None]
-    predicted: dict[str, float | None]
+    predicted: dict[str, float | str | None]
 
     @property
     def has_position(self) -> bool:
@@ -155,15 +226,25 @@ def _prediction(
     pos: list[int],
     rot: list[int],
     noise: NoiseModel | None,
-) -> dict[str, float | None]:
-    """Cramér–Rao prediction of the calibrated model's validation RMS (mm, mrad)."""
+) -> dict[str, float | str | None]:
+    """Cramér–Rao prediction of the calibrated model's validation RMS (mm, mrad).
+
+    ``withheld`` is None, or why the prediction is not given (:func:`prediction_caveat`;
+    the RMS entries are then None).
+    """
     from pincal.design import predicted_validation_rms
     from pincal.sensitivity import identification_jacobian
 
     cols = [params.index(n) for n in names]
+    units = tuple(params.units[c] for c in cols)
+    caveat = prediction_caveat(names, units, covariance)
+    if caveat is not None:
+        none = {f"{w}_rms_{k}": None for w in ("model", "observed")
+                for k in ("position_mm", "orientation_mrad")}  # fmt: skip
+        return {**none, "withheld": caveat}
     J = identification_jacobian(nominal, params, q_rows, components=COMPONENTS)
     J = J.reshape(len(q_rows), 6, len(params))[:, :, cols]
-    out: dict[str, float | None] = {}
+    out: dict[str, float | str | None] = {"withheld": None}
     for key, idx, sigma in (
         ("position_mm", pos, None if noise is None else noise.position * 1e-3),
         ("orientation_mrad", rot, None if noise is None else noise.orientation * 1e-3),
@@ -187,6 +268,7 @@ def validate_held_out(
     names: tuple[str, ...],
     covariance: np.ndarray,
     noise: NoiseModel | None = None,
+    held_weak: tuple[str, ...] = (),
 ) -> HeldOutValidation:
     """Before (nominal) / after (calibrated) errors on held-out measurements.
 
@@ -198,6 +280,9 @@ def validate_held_out(
         names: identified parameter names (k,) in the order of ``covariance``.
         covariance: (k, k) covariance of the identified parameters [SI].
         noise: instrument noise of ``meas`` for the observed-RMS prediction, if known.
+        held_weak: parameters the fit held at nominal because the poses barely
+            determined them; their error is not in ``covariance``, so the prediction is
+            withheld (it would be optimistic).
 
     Returns:
         The :class:`HeldOutValidation`.
@@ -217,4 +302,12 @@ def validate_held_out(
     q_rows = np.array([meas.q_act[g[0]] for g in groups])
     cov = np.asarray(covariance, dtype=float)
     predicted = _prediction(nominal, params, names, cov, q_rows, pos, [3 + k for k in rot], noise)
+    if held_weak and predicted["withheld"] is None:
+        more = " …" if len(held_weak) > 5 else ""
+        predicted = {k: None for k in predicted}
+        predicted |= {
+            "withheld": f"{len(held_weak)} parameters were held at nominal because the poses "
+            f"barely determine them ({', '.join(held_weak[:5])}{more}); their error is not "
+            "in the covariance, so the prediction would be optimistic"
+        }
     return HeldOutValidation(comps, groups, before, after, rp, predicted)

@@ -32,7 +32,14 @@ from pincal.measure._measurements import Measurements
 from pincal.measure._tracker import RigidFit, fit_rigid_transform
 from pincal.model import BASE_JOINT, TOOL_JOINT, Mechanism, serial_mechanism, with_joint_origin
 
-__all__ = ["MarkerRegistration", "MarkerSetup", "marker_mechanism", "register_markers"]
+__all__ = [
+    "MarkerRegistration",
+    "MarkerSetup",
+    "marker_frame",
+    "marker_mechanism",
+    "marker_mechanisms",
+    "register_markers",
+]
 
 FRAME_CHOICES = ("unknown", "known")
 
@@ -52,6 +59,9 @@ class MarkerSetup:
             off the chain to ``link`` is locked at 0.
         columns: the marker's three position columns (x, y, z) in the file.
         length_unit: unit of the marker columns (``m``, ``mm``, ``um``).
+        more_columns: the columns of further distinct markers on the same link, each
+            with its own unknown offset (joint ``marker<k>_frame``, k = 2, 3, …) and the
+            same instrument frame; fitted together with the first.
     """
 
     link: str
@@ -61,6 +71,7 @@ class MarkerSetup:
     lock: Mapping[str, float] = field(default_factory=dict)
     columns: tuple[str, str, str] = ("x", "y", "z")
     length_unit: str = "m"
+    more_columns: tuple[tuple[str, str, str], ...] = ()
 
     def __post_init__(self) -> None:
         if self.instrument_frame not in FRAME_CHOICES:
@@ -85,6 +96,26 @@ class MarkerSetup:
             raise MeasurementError(f"marker_std must be > 0 [m], got {self.marker_std}")
         object.__setattr__(self, "lock", {str(k): float(v) for k, v in self.lock.items()})
         object.__setattr__(self, "columns", tuple(str(c) for c in self.columns))
+        more = tuple(tuple(str(c) for c in cols) for cols in self.more_columns)
+        object.__setattr__(self, "more_columns", more)
+        for cols in more:
+            if len(cols) != 3 or len(set(cols)) != 3:
+                raise MeasurementError(
+                    f"marker columns must be three distinct names (x, y, z), got {list(cols)}"
+                )
+        sets = self.marker_sets
+        if len(set(sets)) != len(sets):
+            raise MeasurementError(f"a marker is named twice: {[list(c) for c in sets]}")
+        if more and self.marker is not None:
+            raise MeasurementError(
+                "a given marker offset applies to a single marker; with several markers "
+                "every offset is unknown (registered, then identified)"
+            )
+
+    @property
+    def marker_sets(self) -> tuple[tuple[str, str, str], ...]:
+        """The columns of every marker used, the first one first."""
+        return (self.columns, *self.more_columns)  # type: ignore[return-value]
 
     @property
     def held(self) -> tuple[str, ...]:
@@ -104,6 +135,7 @@ class MarkerSetup:
             "lock": dict(self.lock),
             "columns": list(self.columns),
             "length_unit": self.length_unit,
+            "more_columns": [list(c) for c in self.more_columns],
         }
 
     @classmethod
@@ -117,6 +149,7 @@ class MarkerSetup:
             lock=dict(d.get("lock") or {}),
             columns=tuple(d.get("columns") or ("x", "y", "z")),  # type: ignore[arg-type]
             length_unit=str(d.get("length_unit", "m")),
+            more_columns=tuple(tuple(c) for c in d.get("more_columns") or ()),  # type: ignore[misc]
         )
 
 
@@ -137,21 +170,71 @@ def _off_chain_locks(model: str, link: str, lock: Mapping[str, float]) -> dict[s
     return {**out, **lock}
 
 
+def marker_frame(k: int) -> tuple[str, str]:
+    """(joint, link) of marker k (0-based): ``tool_frame``/``tool``, then ``marker<k+1>_frame``."""
+    return (TOOL_JOINT, "tool") if k == 0 else (f"marker{k + 1}_frame", f"marker{k + 1}")
+
+
 def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
     """The chain from the instrument to the marker: ``serial_mechanism`` measuring a point.
 
     Joints off the chain to ``setup.link`` (a mobile base's wheels, a head, a hand) are
     locked, and so are ``setup.lock``. The measured frame is ``tool`` (the marker);
-    ``base_frame`` and ``tool_frame`` start at identity, or at the given marker.
+    ``base_frame`` and ``tool_frame`` start at identity, or at the given marker. With
+    further markers (``setup.more_columns``), fixed joints ``marker<k>_frame`` from the
+    link to links ``marker<k>`` (start: identity) are added, and their ``tx ty tz``
+    join the ``chain`` and ``base_tool`` presets.
 
     Raises:
         UnknownNameError: unknown link or locked joint; ModelFileError: the URDF.
     """
     lock = _off_chain_locks(model, setup.link, setup.lock)
     marker = pin.SE3(np.eye(3), np.asarray(setup.marker)) if setup.marker is not None else None
-    return serial_mechanism(
+    mech = serial_mechanism(
         model, flange=setup.link, lock=lock, measured="position", T_flange_tool=marker
     )
+    if not setup.more_columns:
+        return mech
+    import xml.etree.ElementTree as ET
+
+    root = ET.fromstring(mech.urdf_xml)
+    extra = []
+    for k in range(1, len(setup.marker_sets)):
+        joint, link = marker_frame(k)
+        if joint in mech.tree.joints or link in mech.tree.links:
+            raise ModelFileError(f"cannot add marker {k + 1}: the URDF already has {joint!r}")
+        root.append(ET.Element("link", {"name": link}))
+        e = ET.SubElement(root, "joint", {"name": joint, "type": "fixed"})
+        ET.SubElement(e, "parent", {"link": setup.link})
+        ET.SubElement(e, "child", {"link": link})
+        ET.SubElement(e, "origin", {"xyz": "0 0 0", "rpy": "0 0 0"})
+        extra.append({"joints": joint, "dofs": ["tx", "ty", "tz"]})
+    sidecar = mech.sidecar.to_dict()
+    presets = dict(sidecar.get("presets") or {})
+    for name in ("chain", "base_tool"):
+        presets[name] = [*presets[name], *extra]
+    sidecar["presets"] = presets
+    return Mechanism(
+        ET.tostring(root, encoding="unicode"), sidecar, name=mech.name, source=mech.source
+    )
+
+
+def marker_mechanisms(mech: Mechanism, setup: MarkerSetup) -> tuple[Mechanism, ...]:
+    """One mechanism per marker: ``mech`` measuring marker k's link (k = 1 is ``mech``)."""
+    out = [mech]
+    for k in range(1, len(setup.marker_sets)):
+        out.append(
+            Mechanism(
+                mech.urdf_xml,
+                mech.sidecar,
+                name=mech.name,
+                source=mech.source,
+                measured_frame=marker_frame(k)[1],
+                q_guess=mech.q_home,
+                options=mech.options,
+            )
+        )
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -163,7 +246,9 @@ class MarkerRegistration:
         marker: marker in the measured link's frame [m].
         fit: the final rigid fit (``fit.rms`` [m] is what identification starts from).
         iterations: alternations used.
-        mechanism: the input mechanism with ``base_frame`` and ``tool_frame`` set.
+        mechanism: the input mechanism with ``base_frame`` and ``tool_frame`` set (and
+            ``marker<k>_frame`` of further markers).
+        more_markers: further markers in the link's frame [m] (k = 2, 3, …).
     """
 
     T_instrument_base: pin.SE3
@@ -171,6 +256,7 @@ class MarkerRegistration:
     fit: RigidFit
     iterations: int
     mechanism: Mechanism
+    more_markers: tuple[np.ndarray, ...] = ()
 
 
 def register_markers(
@@ -179,6 +265,7 @@ def register_markers(
     marker_known: bool = False,
     frame_known: bool = False,
     max_iterations: int = 500,
+    more: tuple[Measurements, ...] = (),
 ) -> MarkerRegistration:
     """Instrument frame and marker offset in closed form (alternating Kabsch / least squares).
 
@@ -188,13 +275,16 @@ def register_markers(
         marker_known: keep the mechanism's ``tool_frame`` translation.
         frame_known: keep the mechanism's ``base_frame``.
         max_iterations: alternation limit.
+        more: positions of further markers on the same link, rows as ``measurements``
+            (their offsets are unknown; all markers share the rigid fit).
 
     Raises:
         MeasurementError: too few poses, or collinear predicted points.
     """
-    for j in (BASE_JOINT, TOOL_JOINT):
+    joints = [BASE_JOINT, TOOL_JOINT] + [marker_frame(k)[0] for k in range(1, len(more) + 1)]
+    for j in joints:
         if j not in mech.tree.joints:
-            raise ModelFileError(f"marker registration needs the {j!r} joint (serial_mechanism)")
+            raise ModelFileError(f"marker registration needs the {j!r} joint (marker_mechanism)")
     if len(measurements) < 3:
         raise MeasurementError(f"registration needs at least 3 poses, got {len(measurements)}")
     T_base = mech.tree.joints[BASE_JOINT].origin
@@ -205,28 +295,33 @@ def register_markers(
     flange = [bare.frame_placement(q) for q in bare.configurations(measurements.q_act)]
     R_f = np.array([T.rotation for T in flange])  # (m, 3, 3) link in robot base
     t_f = np.array([T.translation for T in flange])
-    P = measurements.positions
-    mk = np.asarray(T_tool.translation, dtype=float).copy()
+    P = [measurements.positions, *(m.positions for m in more)]
+    mk = [np.asarray(T_tool.translation, dtype=float).copy()]
+    mk += [np.zeros(3) for _ in more]
     T = T_base
     it = 0
     while it < max_iterations:
         it += 1
-        pred = t_f + np.einsum("mij,j->mi", R_f, mk)
-        fit = None if frame_known else fit_rigid_transform(pred, P)
+        pred = [t_f + np.einsum("mij,j->mi", R_f, v) for v in mk]
+        fit = None if frame_known else fit_rigid_transform(np.vstack(pred), np.vstack(P))
         T = T_base if fit is None else fit.T
-        if marker_known:
-            break
         A = np.einsum("ij,mjk->mik", T.rotation, R_f).reshape(-1, 3)
-        b = (P - t_f @ T.rotation.T - T.translation).reshape(-1)
-        new = np.linalg.lstsq(A, b, rcond=None)[0]
-        moved = float(np.linalg.norm(new - mk))
-        mk = new
-        if moved < 1e-9 or frame_known:
+        moved = 0.0
+        for k, Pk in enumerate(P):
+            if k == 0 and marker_known:
+                continue
+            b = (Pk - t_f @ T.rotation.T - T.translation).reshape(-1)
+            new = np.linalg.lstsq(A, b, rcond=None)[0]
+            moved = max(moved, float(np.linalg.norm(new - mk[k])))
+            mk[k] = new
+        if moved < 1e-9 or frame_known or (marker_known and not more):
             break
-    pred = t_f + np.einsum("mij,j->mi", R_f, mk)
-    res = P - (pred @ T.rotation.T + T.translation)
+    stacked = np.vstack([t_f + np.einsum("mij,j->mi", R_f, v) for v in mk])
+    res = np.vstack(P) - (stacked @ T.rotation.T + T.translation)  # every marker's rows
     dist = np.linalg.norm(res, axis=1)
     fit = RigidFit(T, res, dist, float(np.sqrt(np.mean(dist**2))))
     out = with_joint_origin(mech, BASE_JOINT, T)
-    out = with_joint_origin(out, TOOL_JOINT, pin.SE3(T_tool.rotation, mk))
-    return MarkerRegistration(T, mk, fit, it, out)
+    out = with_joint_origin(out, TOOL_JOINT, pin.SE3(T_tool.rotation, mk[0]))
+    for k in range(1, len(mk)):
+        out = with_joint_origin(out, marker_frame(k)[0], pin.SE3(np.eye(3), mk[k]))
+    return MarkerRegistration(T, mk[0], fit, it, out, tuple(mk[1:]))

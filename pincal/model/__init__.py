@@ -34,6 +34,7 @@ from pincal.model._dh_model import (
     dh_urdf,
     parameters_to_dh_errors,
 )
+from pincal.model._directions import describe_direction, direction_record, parent_direction
 from pincal.model._floor import DEFAULT_FLOOR, above_floor
 from pincal.model._home_search import conditioning, regular_home
 from pincal.model._kinematics import Kinematics
@@ -114,12 +115,14 @@ __all__ = [
     "chain_preset",
     "conditioning",
     "degenerate_translations",
+    "describe_direction",
     "dh_apply_errors",
     "dh_errors_to_parameters",
     "dh_fk",
     "dh_layout",
     "dh_preset",
     "dh_urdf",
+    "direction_record",
     "example_robot_names",
     "example_robot_urdf",
     "find_local_sidecar",
@@ -131,6 +134,7 @@ __all__ = [
     "model_record",
     "parameters",
     "parameters_to_dh_errors",
+    "parent_direction",
     "parse_components",
     "read_sidecar",
     "register_preset",

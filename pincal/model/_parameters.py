@@ -318,7 +318,11 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
             the sensitivity stage; a sidecar preset of the same name takes
             precedence), a preset name from the sidecar, or a list whose entries are
             ``"<joint>.<dof>"`` strings or ``{"joints": pattern, "dofs": [...]}`` mappings
-            (fnmatch patterns over URDF joint names).
+            (fnmatch patterns over URDF joint names). Instead of ``dofs``, an entry may
+            name a direction in the parent link's frame (:mod:`pincal.model._directions`):
+            ``along_parent: x|y|z|[a, b, c]`` (the joint's translation parallel to it)
+            or ``about_parent`` (its rotation); an entry with ``hold: true`` removes
+            what it names from the parameters listed before it.
 
     Raises:
         UnknownNameError: unknown preset, joint or dof (valid names listed).
@@ -342,30 +346,69 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
     joint_names = list(mech.tree.joints)
     params: list[Parameter] = []
     for entry in entries:
-        if isinstance(entry, str):
-            joint, _, dof = entry.rpartition(".")
-            pairs = [(joint, [dof])]
-        elif isinstance(entry, dict) and "joints" in entry and "dofs" in entry:
-            if not isinstance(entry["joints"], str) or not isinstance(entry["dofs"], list | str):
+        held = isinstance(entry, dict) and entry.get("hold") is True
+        chosen = [_make(mech, j, d) for j, d in _entry_pairs(mech, entry, joint_names)]
+        if held:  # leave them out of the set built so far
+            out = {p.name for p in chosen}
+            if not out & {p.name for p in params}:
                 raise ParameterError(
-                    f"preset entry {entry!r}: 'joints' must be a name pattern and 'dofs' a list "
-                    f"of {', '.join(DOFS)}"
+                    f"preset entry {entry!r} holds {sorted(out)}, none of which is listed "
+                    "before it; list the parameters first, then the entries that hold some"
                 )
-            pattern = entry["joints"]
-            matched = [j for j in joint_names if fnmatch.fnmatchcase(j, pattern)]
-            if not matched:
-                raise UnknownNameError("joint", pattern, joint_names)
+            params = [p for p in params if p.name not in out]
+        else:
+            params += chosen
+    return ParameterSet(params, label)
+
+
+_DIRECTION_KEYS = ("along_parent", "about_parent")
+
+
+def _entry_pairs(mech: Mechanism, entry: object, joint_names: list[str]) -> list[tuple[str, str]]:
+    """(joint, dof) pairs of one preset entry (see :func:`parameters`)."""
+    from pincal.model._directions import matching_dofs
+
+    if isinstance(entry, str):
+        joint, _, dof = entry.rpartition(".")
+        pairs = [(joint, [dof])]
+    elif isinstance(entry, dict) and "joints" in entry and (
+        "dofs" in entry or any(k in entry for k in _DIRECTION_KEYS)
+    ):
+        keys = [k for k in ("dofs", *_DIRECTION_KEYS) if k in entry]
+        if len(keys) != 1 or not isinstance(entry["joints"], str):
+            raise ParameterError(
+                f"preset entry {entry!r}: 'joints' must be a name pattern, with one of "
+                f"'dofs' (a list of {', '.join(DOFS)}), 'along_parent' or 'about_parent'"
+            )
+        pattern = entry["joints"]
+        matched = [j for j in joint_names if fnmatch.fnmatchcase(j, pattern)]
+        if not matched:
+            raise UnknownNameError("joint", pattern, joint_names)
+        if keys[0] == "dofs":
             dofs_ = entry["dofs"]
+            if not isinstance(dofs_, list | str):
+                raise ParameterError(
+                    f"preset entry {entry!r}: 'dofs' must be a list of {', '.join(DOFS)}"
+                )
             pairs = [(j, [dofs_] if isinstance(dofs_, str) else list(dofs_)) for j in matched]
         else:
-            raise ParameterError(
-                f"preset entry {entry!r} must be '<joint>.<dof>' or {{joints: ..., dofs: [...]}}"
-            )
-        for joint, dofs in pairs:
-            if joint not in mech.tree.joints:
-                raise UnknownNameError("joint", joint, joint_names)
-            for dof in dofs:
-                if not isinstance(dof, str) or dof not in DOFS:
-                    raise UnknownNameError("dof", str(dof), DOFS)
-                params.append(_make(mech, joint, dof))
-    return ParameterSet(params, label)
+            key = keys[0]
+            pairs = [
+                (j, matching_dofs(mech, j, [(d, _make(mech, j, d).twist)
+                                            for d in _full_dofs(mech, j)], key, entry[key]))
+                for j in matched
+            ]  # fmt: skip
+    else:
+        raise ParameterError(
+            f"preset entry {entry!r} must be '<joint>.<dof>', {{joints: ..., dofs: [...]}} "
+            "or {joints: ..., along_parent: x|y|z|[a, b, c]} (about_parent for rotations)"
+        )
+    out = []
+    for joint, dofs in pairs:
+        if joint not in mech.tree.joints:
+            raise UnknownNameError("joint", joint, joint_names)
+        for dof in dofs:
+            if not isinstance(dof, str) or dof not in DOFS:
+                raise UnknownNameError("dof", str(dof), DOFS)
+            out.append((joint, dof))
+    return out
