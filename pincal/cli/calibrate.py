@@ -342,9 +342,11 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
         verdict = check_quality(
             fit.result, stacked_measurements(meas), limits=limits, instrument=profile
         )
+        verdict = _unconfirmed_outliers(verdict)
         markers["notes"].append(
             f"{len(meas)} markers: the quality gate judged the fit without its per-pose "
-            "data and sensitivity tests (they assume one measured frame)"
+            "data and sensitivity tests and without the refit that confirms outliers (they "
+            "assume one measured frame); outliers are reported as warnings"
         )
     quality = apply_gate(verdict, force)
     doc = result_json(fit.result, str(data), CALIBRATED_URDF)
@@ -365,6 +367,25 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
     else:
         click.echo(report, nl=False)
         click.echo(f"wrote calibration directory {cal.path}/")
+
+
+def _unconfirmed_outliers(verdict):
+    """Outlier refusals as warnings, for fits the gate cannot refit pose by pose.
+
+    The gate confirms an outlier by refitting without it, which needs one measured frame;
+    rows of several markers stacked are judged by their deleted residuals alone, so a
+    flag is reported, with its poses named, but does not refuse.
+    """
+    from pincal.identification import QualityIssue
+
+    issues = tuple(
+        QualityIssue(i.kind, False, i.message + " (a warning: not confirmed by a refit)")
+        if i.kind == "outliers" and i.refuse
+        else i
+        for i in verdict.issues
+    )
+    out = dataclasses.replace(verdict, issues=issues)
+    return out if not out.passed else dataclasses.replace(out, cause="", cause_text="")
 
 
 def _is_instrument_file(path: str) -> bool:
