@@ -3,7 +3,7 @@
 :func:`machines` writes them (with the habit each shows); :func:`recover` is the
 noise-free recovery every loadable one must pass for the ``base`` and ``full`` presets;
 :func:`table` runs both and gives the README's open-world table (``python
-scripts/open_world_table.py``). Refused ones must be refused with their own message.
+scripts/studies/open_world_table.py``). Refused ones must be refused with their own message.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Print the README's open-world table: what loads, calibrates, and is refused.
 
-Run: python scripts/open_world_table.py
+Run: python scripts/studies/open_world_table.py
 
 Every machine of tests/open_world/roster.py (written here in other people's habits:
 MJCF cuts and keyframes, emulated ball and U joints, robot.yaml joint kinds, 0/0 URDF
@@ -16,7 +16,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))  # the test suite's machine writers
 
 from tests.open_world.roster import table  # noqa: E402
