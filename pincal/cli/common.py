@@ -268,11 +268,22 @@ def pincal_wrote(path: Path) -> bool:
     return isinstance(doc, dict) and str(doc.get(WRITTEN_BY, "")).startswith("pincal")
 
 
+def overwrite_option(func):
+    """``--overwrite``: replace side files (``<stem>.json``…) pincal did not write."""
+    return click.option(
+        "--overwrite",
+        is_flag=True,
+        help="Replace existing side files of --out (e.g. <stem>.json, <stem>.commands.csv, "
+        "<stem>.truth.json) even when pincal did not write them.",
+    )(func)
+
+
 def guard_paths(
     inputs: Mapping[str, PathLike],
     outputs: Mapping[str, PathLike] = {},
     out_dirs: Mapping[str, PathLike] = {},
     implied: Mapping[str, PathLike] = {},
+    overwrite: bool = False,
 ) -> None:
     """Refuse, before any work, outputs that would overwrite an input or each other.
 
@@ -290,6 +301,8 @@ def guard_paths(
         outputs: ``{label: path}`` of the files written.
         out_dirs: ``{label: path}`` of the directories written (replaced) as a whole.
         implied: ``{label: path}`` of side files written beside an output.
+        overwrite: replace existing side files even when pincal did not write them
+            (``--overwrite``).
 
     Raises:
         OutputPathError: naming both paths.
@@ -347,8 +360,8 @@ def guard_paths(
                 )
     for s_label, s_path, s_text in sides:
         target = output_target(s_path, s_label)
-        if target.exists() and not pincal_wrote(target):
+        if target.exists() and not overwrite and not pincal_wrote(target):
             raise OutputPathError(
                 f"{s_label} {clip(s_text, 300)} exists and was not written by pincal; it "
-                "would be replaced: move it away or choose another --out"
+                "would be replaced: move it away, choose another --out, or pass --overwrite"
             )

@@ -22,6 +22,7 @@ from pincal.cli.common import (
     load_model,
     model_input,
     model_options,
+    overwrite_option,
 )
 from pincal.measure import DEFAULT_NOISE
 
@@ -83,6 +84,7 @@ from pincal.measure import DEFAULT_NOISE
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @yes_option
+@overwrite_option
 @model_options
 @fail_cleanly
 def poses(
@@ -101,6 +103,7 @@ def poses(
     n_jobs: int,
     as_json: bool,
     yes: bool,
+    overwrite: bool,
     model_opts: ModelOptions,
 ) -> None:
     """Select measurement poses of MODEL from a candidate set and write them to OUT.
@@ -144,6 +147,7 @@ def poses(
         {"--out": out},
         implied={"--out's commands file": Path(out).with_suffix(".commands.csv"),
                  "--out's JSON record": Path(out).with_suffix(".json")},
+        overwrite=overwrite,
     )  # fmt: skip
     check_count(count, "--count", MAX_POSES, yes)
     n_jobs = _jobs(n_jobs)

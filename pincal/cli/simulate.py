@@ -16,7 +16,14 @@ from pincal.cli._limits import (
     number_pair,
     yes_option,
 )
-from pincal.cli.common import fail_cleanly, guard_paths, load_model, model_input, model_options
+from pincal.cli.common import (
+    fail_cleanly,
+    guard_paths,
+    load_model,
+    model_input,
+    model_options,
+    overwrite_option,
+)
 from pincal.measure import DEFAULT_NOISE
 
 if TYPE_CHECKING:
@@ -103,11 +110,12 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @yes_option
+@overwrite_option
 @model_options
 @fail_cleanly
 def simulate(
     model, poses_file, n_random, preset, errors, error_size, noise, seed, length_unit, out,
-    instrument, as_json, yes, model_opts,
+    instrument, as_json, yes, overwrite, model_opts,
 ) -> None:  # fmt: skip
     """Simulate a measurement campaign of MODEL with random geometric errors.
 
@@ -150,6 +158,7 @@ def simulate(
         {"MODEL": model_input(model), "--poses": poses_file},
         {"--out": out},
         implied={"--out's truth file": truth_path},
+        overwrite=overwrite,
     )
     nominal = load_model(model, model_opts)
     preset = preset or (next(iter(nominal.presets), "full"))

@@ -6,6 +6,7 @@ line naming the option and path, and every protected file unchanged byte for byt
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
@@ -212,8 +213,18 @@ def test_poses_keeps_a_users_json_and_commands_file(tmp_path):
     assert "--out's JSON record" in line
     mine.unlink()
     (tmp_path / "p.commands.csv").write_text("a,b\n1,2\n")
-    refused(["poses", "wedge3", "--count", "3", "--out", str(tmp_path / "p.csv")],
-            tmp_path / "p.commands.csv", says="--out's commands file")  # fmt: skip
+    line = refused(["poses", "wedge3", "--count", "3", "--out", str(tmp_path / "p.csv")],
+                   tmp_path / "p.commands.csv", says="--out's commands file")  # fmt: skip
+    assert "--overwrite" in line
+
+
+def test_overwrite_replaces_a_users_side_files(tmp_path):
+    (tmp_path / "m.truth.json").write_text('{"my": "notes"}\n')
+    args = ["simulate", "wedge3", "--random", "3", "--out", str(tmp_path / "m.csv")]
+    assert CliRunner().invoke(main, args).exit_code == 1
+    res = CliRunner().invoke(main, [*args, "--overwrite"])
+    assert res.exit_code == 0, res.output
+    assert "my" not in json.loads((tmp_path / "m.truth.json").read_text())
 
 
 # --- campaign ------------------------------------------------------------------------
