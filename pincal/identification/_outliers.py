@@ -21,12 +21,18 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import stats
 
 __all__ = ["column_basis", "deletion_outliers"]
 
 _MIN_EIG = 0.05  # (I − H_ii) eigenvalues floored: a pose that alone fixes a direction
 
+
+
+def _f_isf(q: float, d1: float, d2: float) -> float:
+    """The F(d1, d2) quantile exceeded with probability q (scipy.stats: imported here)."""
+    from scipy import stats
+
+    return float(stats.f.isf(q, d1, d2))
 
 def deletion_outliers(
     A: np.ndarray, z: np.ndarray, risk: float = 1e-3, cap: int | None = None
@@ -67,7 +73,7 @@ def deletion_outliers(
         rss = float(np.sum(r**2))
         s2 = np.maximum(rss - d, 1e-300) / (nu - k)
         F = d / (k * s2)
-        crit = float(stats.f.isf(risk / m, k, nu - k))
+        crit = _f_isf(risk / m, k, nu - k)
         if math.isnan(bound):
             bound = math.sqrt(k * crit)
         worst = int(np.argmax(F))

@@ -39,8 +39,8 @@ QUANTITIES = ("P", "θ", "S")
 
 
 def readme_table() -> dict[str, dict[str, tuple[float, float, float]]]:
-    """{index: {quantity: (Monte-Carlo ratio, its SE, Cramér–Rao ratio)}} of the README."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    """{index: {quantity: (Monte-Carlo ratio, its SE, Cramér–Rao ratio)}} of docs/studies.md."""
+    text = (ROOT / "docs" / "studies.md").read_text(encoding="utf-8")
     section = text.split("### Seed 000", 1)[1].split("\n### ", 1)[0]
     rows = {}
     for line in section.splitlines():
