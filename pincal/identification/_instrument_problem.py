@@ -28,13 +28,11 @@ from pincal.identification._covariance import covariance_from_jacobian
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import solver
-from pincal.measure._instruments import InstrumentData, initial_instrument_values
-from pincal.measure._measurements import Measurements
-from pincal.model._closures import measurement_residual
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._identifiability import Identifiability, analyse_jacobian
-from pincal.sensitivity._jacobian import _plan, pose_sensitivity
+from pincal.measure import InstrumentData, Measurements, initial_instrument_values
+from pincal.model import Mechanism, ParameterSet
+from pincal.model.kernels import measurement_residual
+from pincal.sensitivity import Identifiability, analyse_jacobian, pose_sensitivity
+from pincal.sensitivity.kernels import jacobian_plan
 
 __all__ = ["InstrumentIdentification", "InstrumentProblem", "identify_instruments"]
 
@@ -155,7 +153,7 @@ class InstrumentProblem:
         n, values = self.n_machine, x[: self.n_machine]
         mech = self.mechanism(x)
         qs = self._configurations(mech)
-        plan = _plan(mech, self.params) if jacobian else None
+        plan = jacobian_plan(mech, self.params) if jacobian else None
         r_all, J_all, raws = [], [], []
         start, col = 0, n
         for d, inst, sig in zip(self.datasets, self.instruments, self.sigma, strict=True):

@@ -32,8 +32,8 @@ from scipy import stats
 from pincal.errors import PincalError
 from pincal.identification._outliers import column_basis
 from pincal.identification._result import IdentificationResult
-from pincal.measure._measurements import Measurements
-from pincal.model._mechanism import Mechanism
+from pincal.measure import Measurements
+from pincal.model import Mechanism
 
 __all__ = [
     "BlockChi2",

@@ -31,6 +31,7 @@ from pincal.io._commands_file import (
     write_commands,
 )
 from pincal.io._csv import file_kind
+from pincal.io._delimited import parse_mapping
 from pincal.io._import_tracker import (
     TrackerImport,
     TrackerImportOptions,
@@ -94,6 +95,7 @@ __all__ = [
     "import_tracker",
     "joint_columns",
     "output_target",
+    "parse_mapping",
     "read_actuator_rows",
     "read_calibration",
     "read_commands",

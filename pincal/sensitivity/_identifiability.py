@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pincal.errors import PincalError, UnidentifiableError
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import (
+from pincal.model import (
+    Mechanism,
     ParameterSet,
     degenerate_translations,
     full_parameters,
@@ -304,8 +304,7 @@ def identifiability(
         InputLimitError: more parameters than ``ModelLimits.parameters`` (raise it with
             the environment variable ``PINCAL_MAX_PARAMETERS``).
     """
-    from pincal.model import ModelLimits, degenerate_translations
-    from pincal.model._workspace import sample_actuators
+    from pincal.model import ModelLimits, degenerate_translations, sample_actuators
     from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
 
     limits = ModelLimits.from_env()
@@ -373,7 +372,7 @@ def base_set(mech: Mechanism, params: ParameterSet | None = None) -> BaseSet:
     Raises:
         UnidentifiableError: no candidate parameter changes the measured quantity.
     """
-    from pincal.model._workspace import sample_actuators
+    from pincal.model import sample_actuators
     from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
 
     candidates = params
