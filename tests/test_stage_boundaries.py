@@ -7,7 +7,8 @@ validation} → io → report / viz → cli. The rules checked here (issue 24):
 * another stage is entered only through its ``__init__`` or its declared interface
   module ``kernels`` — never through a private ``_module``, never for a ``_name``;
 * a stage imports only lower stages (at module level, lazily or under
-  ``TYPE_CHECKING`` alike) and registers nothing into a lower stage at import time.
+  ``TYPE_CHECKING`` alike) and registers nothing into a lower stage at import time;
+* outside the CLI, other stages are imported at module level, not inside functions.
 
 What could not be removed yet is in the allow-lists below, each entry with its reason;
 an entry that no longer occurs must be deleted, so the lists only shrink.
@@ -48,6 +49,13 @@ ORDER_ALLOWED = {
     # validation RMS with design's Cramér–Rao bound; design imports measure
     # (NoiseModel), so this import is lazy to dodge the cycle. It goes when validation
     # becomes its own stage after identification.
+    ("pincal/measure/_held_out.py", "pincal.design"),
+}
+
+#: (importing file, imported module) → why a library module imports another stage inside
+#: a function. The CLI is exempt: it imports lazily so that ``pincal --help`` stays fast.
+LAZY_ALLOWED = {
+    # issue 24 (third bullet): the cycle-dodging upward import listed in ORDER_ALLOWED.
     ("pincal/measure/_held_out.py", "pincal.design"),
 }
 
@@ -130,6 +138,24 @@ def order_violations() -> dict[tuple[str, str], list[int]]:
     return found
 
 
+def lazy_imports() -> dict[tuple[str, str], list[int]]:
+    """Imports of another stage inside a function body, outside the CLI."""
+    found: dict[tuple[str, str], list[int]] = {}
+    for rel, stage, tree in _files():
+        if stage == "cli":
+            continue
+        for func in ast.walk(tree):
+            if not isinstance(func, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            for node in ast.walk(func):
+                if isinstance(node, (ast.Import, ast.ImportFrom)):
+                    for line, module, _ in _imports(ast.Module([node], []), rel):
+                        if _cross_stage(stage, module) is not None:
+                            key = (rel, ".".join(module.split(".")[:2]))
+                            found.setdefault(key, []).append(line)
+    return found
+
+
 def import_time_registrations() -> dict[tuple[str, str], int]:
     """Module-level calls of a ``register*`` function imported from another stage."""
     found = {}
@@ -166,6 +192,16 @@ def test_stages_import_only_lower_stages():
     )
     stale = ORDER_ALLOWED - set(found)
     assert not stale, f"allowed upward imports that are gone, delete them: {sorted(stale)}"
+
+
+def test_library_imports_other_stages_at_module_level():
+    found = lazy_imports()
+    new = {k: v for k, v in found.items() if k not in LAZY_ALLOWED}
+    assert not new, "imports of another stage inside a function (import at the top):\n" + (
+        "\n".join(f"{rel}:{lines[0]}: {module}" for (rel, module), lines in sorted(new.items()))
+    )
+    stale = LAZY_ALLOWED - set(found)
+    assert not stale, f"allowed lazy imports that are gone, delete them: {sorted(stale)}"
 
 
 def test_no_stage_registers_into_a_lower_one_at_import():
@@ -232,3 +268,4 @@ def test_the_checks_see_violations(tmp_path, monkeypatch):
         ("pincal/model/_bad.py", "pincal.cli"),
     }
     assert import_time_registrations() == {("pincal/model/_bad.py", "register_solver"): 6}
+    assert lazy_imports() == {("pincal/model/_bad.py", "pincal.cli"): [5]}

@@ -22,6 +22,7 @@ import numpy as np
 
 from pincal.errors import PincalError
 from pincal.model import Mechanism, ParameterSet
+from pincal.sensitivity import sensitivities_batch
 
 __all__ = ["check_n_jobs", "parallel_rows"]
 
@@ -92,7 +93,6 @@ def _sensitivity_chunk(
     """Measured-frame positions, rotations and Jacobian blocks of a chunk of configurations."""
     from threadpoolctl import threadpool_limits
 
-    from pincal.sensitivity import sensitivities_batch
 
     with threadpool_limits(1):
         sens = sensitivities_batch(_rebuild(recipe), params, Q)

@@ -33,7 +33,8 @@ from pincal.errors import PincalError
 from pincal.identification._outliers import column_basis
 from pincal.identification._result import IdentificationResult
 from pincal.measure import Measurements
-from pincal.model import Mechanism
+from pincal.model import Mechanism, parameters
+from pincal.sensitivity import identification_jacobian
 
 __all__ = [
     "BlockChi2",
@@ -184,8 +185,6 @@ def probe_columns(
 
 
 def _gain_columns(mech: Mechanism, meas: Measurements) -> np.ndarray | None:
-    from pincal.model import parameters
-    from pincal.sensitivity import identification_jacobian
 
     try:
         offsets = parameters(mech, [f"{j}.offset" for j in mech.actuated])

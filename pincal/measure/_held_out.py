@@ -30,6 +30,7 @@ import pinocchio as pin
 from pincal.measure._iso9283 import ORIENTATION_CONVENTION, point_accuracy
 from pincal.measure._measurements import Measurements, NoiseModel
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
+from pincal.sensitivity import identification_jacobian
 
 __all__ = ["HeldOutValidation", "validate_held_out"]
 
@@ -158,7 +159,6 @@ def _prediction(
 ) -> dict[str, float | None]:
     """Cramér–Rao prediction of the calibrated model's validation RMS (mm, mrad)."""
     from pincal.design import predicted_validation_rms
-    from pincal.sensitivity import identification_jacobian
 
     cols = [params.index(n) for n in names]
     J = identification_jacobian(nominal, params, q_rows, components=COMPONENTS)

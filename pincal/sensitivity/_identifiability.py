@@ -33,10 +33,12 @@ import numpy as np
 from pincal.errors import PincalError, UnidentifiableError
 from pincal.model import (
     Mechanism,
+    ModelLimits,
     ParameterSet,
     degenerate_translations,
     full_parameters,
     register_preset,
+    sample_actuators,
 )
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
@@ -304,7 +306,6 @@ def identifiability(
         InputLimitError: more parameters than ``ModelLimits.parameters`` (raise it with
             the environment variable ``PINCAL_MAX_PARAMETERS``).
     """
-    from pincal.model import ModelLimits, degenerate_translations, sample_actuators
     from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
 
     limits = ModelLimits.from_env()
@@ -372,7 +373,6 @@ def base_set(mech: Mechanism, params: ParameterSet | None = None) -> BaseSet:
     Raises:
         UnidentifiableError: no candidate parameter changes the measured quantity.
     """
-    from pincal.model import sample_actuators
     from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
 
     candidates = params
