@@ -71,8 +71,12 @@ def import_tracker(
           --out targets.csv --json
       pincal calibrate stewart_6ups --data targets.csv --out cal/
     """
-    from pincal.io import TrackerImportOptions, import_tracker, write_target_measurements
-    from pincal.io._delimited import parse_mapping
+    from pincal.io import (
+        TrackerImportOptions,
+        import_tracker,
+        parse_mapping,
+        write_target_measurements,
+    )
 
     guard_paths(
         {"POINTS": points, "--log": log_path, "--targets": targets_path,

@@ -1,4 +1,4 @@
-"""Stage 3 — where to measure.
+"""Stage 4 — where to measure.
 
 Observability indices and Jacobian scalings, candidate
 poses, exchange / DETMAX / greedy selection, Cramér–Rao predictions.

@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from pincal.design._indices import _as_stacked
 from pincal.errors import PincalError, UnidentifiableError
-from pincal.sensitivity._rank import numerical_rank
+from pincal.sensitivity import numerical_rank
 
 __all__ = ["crb_covariance", "predicted_std", "predicted_validation_rms"]
 

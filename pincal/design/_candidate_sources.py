@@ -26,9 +26,8 @@ from pincal.design._candidates import (
     evaluate_candidates,
 )
 from pincal.errors import ConvergenceError, OptionValueError, PincalError, clip
-from pincal.model._mechanism import WORKSPACE_POSE_KEYS, Mechanism
-from pincal.model._parameters import ParameterSet
-from pincal.model._workspace import _joint_ranges, sample_actuators
+from pincal.model import WORKSPACE_POSE_KEYS, Mechanism, ParameterSet, sample_actuators
+from pincal.model.kernels import joint_ranges
 
 __all__ = [
     "candidate_set",
@@ -51,7 +50,7 @@ def default_grid_ranges(mech: Mechanism) -> NDArray[np.float64]:
     combine several extremes are then filtered by the pose workspace);
     otherwise the URDF limits. Always clipped to the actuator limits.
     """
-    ranges = _joint_ranges(mech)
+    ranges = joint_ranges(mech)
     limits = np.asarray(mech.actuator_limits, dtype=float)
     pose = mech.workspace.pose
     if pose:

@@ -39,11 +39,8 @@ from pincal.errors import (
     PincalError,
     SingularConfigurationError,
 )
-from pincal.model import above_floor
-from pincal.model._closures import COMPONENTS
-from pincal.model._mechanism import WORKSPACE_POSE_KEYS, Mechanism
-from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._batch_jacobian import sensitivities_batch
+from pincal.model import COMPONENTS, WORKSPACE_POSE_KEYS, Mechanism, ParameterSet, above_floor
+from pincal.sensitivity import sensitivities_batch
 
 __all__ = [
     "MAX_CANDIDATES",

@@ -37,11 +37,9 @@ from numpy.typing import ArrayLike, NDArray
 from pincal.design._bounds import crb_covariance
 from pincal.design._scaling import weight_rows
 from pincal.errors import PincalError
-from pincal.measure._measurements import NoiseModel
-from pincal.model._closures import COMPONENTS
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._jacobian import identification_jacobian
+from pincal.measure import NoiseModel
+from pincal.model import COMPONENTS, Mechanism, ParameterSet
+from pincal.sensitivity import identification_jacobian
 
 __all__ = [
     "CramerRaoReport",

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from pincal.errors import PincalError, UnknownNameError
-from pincal.sensitivity._rank import RANK_RTOL, numerical_rank, numerical_ranks
+from pincal.sensitivity import RANK_RTOL, numerical_rank, numerical_ranks
 
 __all__ = [
     "INDEX_NAMES",

@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import PincalError
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
+from pincal.model import Mechanism, ParameterSet
+from pincal.sensitivity import sensitivities_batch
 
 __all__ = ["check_n_jobs", "parallel_rows"]
 
@@ -93,7 +93,6 @@ def _sensitivity_chunk(
     """Measured-frame positions, rotations and Jacobian blocks of a chunk of configurations."""
     from threadpoolctl import threadpool_limits
 
-    from pincal.sensitivity._batch_jacobian import sensitivities_batch
 
     with threadpool_limits(1):
         sens = sensitivities_batch(_rebuild(recipe), params, Q)

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from pincal.design._indices import _as_stacked
 from pincal.errors import PincalError, UnknownNameError
-from pincal.model._closures import COMPONENTS
+from pincal.model import COMPONENTS
 
 __all__ = [
     "COLUMN_SCALINGS",

@@ -8,8 +8,8 @@ import numpy as np
 
 from pincal.errors import PincalError
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
-from pincal.measure._measurements import Measurements
-from pincal.model._mechanism import Mechanism
+from pincal.measure import Measurements
+from pincal.model import Mechanism
 
 __all__ = ["check_measurements"]
 

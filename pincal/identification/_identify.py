@@ -27,12 +27,10 @@ from pincal.identification._qpso_identify import QPSOOptions
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import solver
 from pincal.identification._weighting import Weighting
-from pincal.measure._measurements import Measurements
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet, degenerate_translations
-from pincal.sensitivity._batch_jacobian import batch_applies
-from pincal.sensitivity._identifiability import Identifiability, analyse_jacobian
-from pincal.sensitivity._jacobian import closure_breaking
+from pincal.measure import Measurements
+from pincal.model import Mechanism, ParameterSet, degenerate_translations
+from pincal.sensitivity import Identifiability, analyse_jacobian, closure_breaking
+from pincal.sensitivity.kernels import batch_applies
 
 __all__ = ["identify", "qpso_identify", "step_planned_identify"]
 

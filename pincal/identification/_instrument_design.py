@@ -23,15 +23,12 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from pincal.design._bounds import crb_covariance
-from pincal.design._candidates import CandidateSet
+from pincal.design import CandidateSet, crb_covariance
 from pincal.errors import ConvergenceError, MeasurementError
-from pincal.measure._instruments import INSTRUMENT_KINDS, Instrument
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
-from pincal.model._workspace import sample_actuators
-from pincal.sensitivity._identifiability import Identifiability, analyse_jacobian
-from pincal.sensitivity._jacobian import _plan, pose_sensitivity
+from pincal.measure import INSTRUMENT_KINDS, Instrument
+from pincal.model import Mechanism, ParameterSet, sample_actuators
+from pincal.sensitivity import Identifiability, analyse_jacobian, pose_sensitivity
+from pincal.sensitivity.kernels import jacobian_plan
 
 __all__ = [
     "InstrumentIdentifiability",
@@ -67,7 +64,7 @@ def instrument_blocks(
         sensitivities Jp (m, 3, n).
     """
     rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
-    plan = _plan(mech, params)
+    plan = jacobian_plan(mech, params)
     sens = [pose_sensitivity(mech, params, q, None, plan) for q in mech.configurations(rows)]
     P = np.array([s.position for s in sens])
     Jp = np.array([s.jacobian[:3] for s in sens])

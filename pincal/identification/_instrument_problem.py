@@ -32,14 +32,16 @@ from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._socket_terms import SocketTerms
 from pincal.identification._solvers import solver
-from pincal.measure._instruments import InstrumentData, initial_instrument_values
-from pincal.measure._measurements import Measurements
-from pincal.measure._sockets import SocketData
-from pincal.model._closures import measurement_residual
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._identifiability import Identifiability, analyse_jacobian
-from pincal.sensitivity._jacobian import _plan, pose_sensitivity
+from pincal.measure import (
+    InstrumentData,
+    Measurements,
+    SocketData,
+    initial_instrument_values,
+)
+from pincal.model import Mechanism, ParameterSet
+from pincal.model.kernels import measurement_residual
+from pincal.sensitivity import Identifiability, analyse_jacobian, pose_sensitivity
+from pincal.sensitivity.kernels import jacobian_plan
 
 __all__ = ["InstrumentIdentification", "InstrumentProblem", "identify_instruments"]
 
@@ -191,7 +193,7 @@ class InstrumentProblem:
         n, values = self.n_machine, x[: self.n_machine]
         mech = self.mechanism(x)
         qs = self._configurations(mech)
-        plan = _plan(mech, self.params) if jacobian else None
+        plan = jacobian_plan(mech, self.params) if jacobian else None
         r_all, J_all, raws = [], [], []
         start, col = 0, n
         blocks = zip(self.datasets, self.instruments, self.sigma[: len(self.datasets)], strict=True)

@@ -31,8 +31,9 @@ import numpy as np
 from pincal.errors import PincalError
 from pincal.identification._outliers import column_basis
 from pincal.identification._result import IdentificationResult
-from pincal.measure._measurements import Measurements
-from pincal.model._mechanism import Mechanism
+from pincal.measure import Measurements
+from pincal.model import Mechanism, parameters
+from pincal.sensitivity import identification_jacobian
 
 __all__ = [
     "BlockChi2",
@@ -190,8 +191,6 @@ def probe_columns(
 
 
 def _gain_columns(mech: Mechanism, meas: Measurements) -> np.ndarray | None:
-    from pincal.model import parameters
-    from pincal.sensitivity import identification_jacobian
 
     try:
         offsets = parameters(mech, [f"{j}.offset" for j in mech.actuated])

@@ -31,10 +31,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from pincal.errors import ParameterError, ShapeError
-from pincal.measure._measurements import NoiseModel, simulate_measurements
-from pincal.model._catalogue import load_mechanism
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet, parameters
+from pincal.measure import NoiseModel, simulate_measurements
+from pincal.model import Mechanism, ParameterSet, load_mechanism, parameters
 
 __all__ = ["MonteCarloStudy", "monte_carlo"]
 

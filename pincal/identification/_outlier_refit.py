@@ -18,8 +18,8 @@ from pincal.errors import PincalError
 from pincal.identification._outliers import deletion_outliers
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import IdentificationResult
-from pincal.measure._measurements import Measurements
-from pincal.model._mechanism import Mechanism
+from pincal.measure import Measurements
+from pincal.model import Mechanism
 
 __all__ = ["confirm_outliers"]
 

@@ -35,13 +35,11 @@ from pincal.errors import (
     ModelFileError,
     ParameterError,
 )
-from pincal.measure._measurements import Measurements, NoiseModel
-from pincal.model._batch import BatchKinematics
-from pincal.model._batch_ops import jlog3_batch, log3_batch
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._batch_jacobian import sensitivities_batch
-from pincal.sensitivity._batch_predict import predict_configurations
+from pincal.measure import Measurements, NoiseModel
+from pincal.model import BatchKinematics, Mechanism, ParameterSet
+from pincal.model.kernels import jlog3_batch, log3_batch
+from pincal.sensitivity import sensitivities_batch
+from pincal.sensitivity.kernels import predict_configurations
 
 __all__ = ["BLOCKS", "TRIAL_FAILURES", "CalibrationProblem", "IdentificationProblem"]
 

@@ -68,8 +68,9 @@ from pincal.identification._outliers import deletion_outliers
 from pincal.identification._result import IdentificationResult
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
 from pincal.identification._weighting import Weighting
-from pincal.measure._measurements import Measurements
-from pincal.model._mechanism import Mechanism
+from pincal.measure import Measurements
+from pincal.model import Mechanism
+from pincal.sensitivity import identification_jacobian
 
 __all__ = ["check_quality", "outlier_poses"]
 
@@ -145,7 +146,6 @@ def _whitened_jacobian(
     """(m, k, p) Jacobian of the identified parameters, whitened by the fit's σ, or None."""
     if mech is None or meas is None or result.parameter_set is None or sigma is None:
         return None
-    from pincal.sensitivity._jacobian import identification_jacobian
 
     try:
         J = identification_jacobian(mech, result.parameter_set, meas.q_act,

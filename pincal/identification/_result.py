@@ -18,9 +18,8 @@ import numpy as np
 
 from pincal.errors import ParameterError
 from pincal.identification._weighting import Weighting
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
-from pincal.sensitivity._identifiability import Identifiability
+from pincal.model import Mechanism, ParameterSet
+from pincal.sensitivity import Identifiability
 
 __all__ = [
     "IdentificationResult",

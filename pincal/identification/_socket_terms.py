@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import MeasurementError
-from pincal.measure._sockets import SCALE_MESSAGE, SocketData, SocketPlate
-from pincal.model._mechanism import Mechanism
+from pincal.measure import SCALE_MESSAGE, SocketData, SocketPlate
+from pincal.model import Mechanism
 
 __all__ = ["SocketTerms"]
 

@@ -34,7 +34,7 @@ from pincal.identification._options import StepPlanningOptions
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import CalibrationProblem
 from pincal.identification._result import StepPlanningExtras
-from pincal.sensitivity._global import global_sensitivity
+from pincal.sensitivity import global_sensitivity
 
 __all__ = ["step_planning"]
 

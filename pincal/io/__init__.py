@@ -31,6 +31,7 @@ from pincal.io._commands_file import (
     write_commands,
 )
 from pincal.io._csv import file_kind
+from pincal.io._delimited import parse_mapping
 from pincal.io._import_tracker import (
     TrackerImport,
     TrackerImportOptions,
@@ -103,6 +104,7 @@ __all__ = [
     "is_instrument_file",
     "joint_columns",
     "output_target",
+    "parse_mapping",
     "read_actuator_rows",
     "read_calibration",
     "read_commands",

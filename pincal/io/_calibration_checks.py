@@ -31,6 +31,7 @@ from pincal._files import max_bytes, read_text
 from pincal.errors import CalibrationDirectoryError, PincalError, clip
 from pincal.identification import IdentificationResult
 from pincal.measure import NoiseModel
+from pincal.model import parameters, resolve_model_path
 
 if TYPE_CHECKING:
     from pincal.model import Mechanism
@@ -234,8 +235,6 @@ def model_files(spec: str) -> dict[str, str]:
     Returns:
         An empty map when ``spec`` does not resolve to files (nothing to hash).
     """
-    from pincal.model import resolve_model_path
-
     try:
         urdf, side = resolve_model_path(spec)
     except (PincalError, OSError):
@@ -287,8 +286,6 @@ def check_geometry(
     Raises:
         CalibrationDirectoryError: a joint origin differs (named, with the offset).
     """
-    from pincal.model import parameters
-
     try:
         params = parameters(nominal, result.preset or "full")
     except PincalError:

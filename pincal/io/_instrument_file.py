@@ -44,7 +44,7 @@ from pincal.io._units import (
     check_actuator_ranges,
     unit_factor,
 )
-from pincal.measure._instruments import INSTRUMENT_KINDS, Instrument, InstrumentData
+from pincal.measure import INSTRUMENT_KINDS, Instrument, InstrumentData
 from pincal.model import Mechanism
 
 __all__ = ["read_instrument_data", "write_instrument_data"]

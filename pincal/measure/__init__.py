@@ -1,4 +1,4 @@
-"""Stage 4 — what an instrument sees.
+"""Stage 3 — what an instrument sees.
 
 Measurements and noise models (SI inside), scalar instruments (ballbar, sphere probe,
 planes, gauge), ISO 9283 pose characteristics, simulation, the laser tracker, instrument

@@ -30,6 +30,7 @@ import pinocchio as pin
 from pincal.measure._iso9283 import ORIENTATION_CONVENTION, point_accuracy
 from pincal.measure._measurements import Measurements, NoiseModel
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
+from pincal.sensitivity import identification_jacobian
 
 __all__ = [
     "PREDICTION_BOUNDS",
@@ -233,7 +234,6 @@ def _prediction(
     the RMS entries are then None).
     """
     from pincal.design import predicted_validation_rms
-    from pincal.sensitivity import identification_jacobian
 
     cols = [params.index(n) for n in names]
     units = tuple(params.units[c] for c in cols)

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pincal.errors import MeasurementError
-from pincal.model._mechanism import Mechanism
+from pincal.model import Mechanism
 
 __all__ = [
     "INSTRUMENT_KINDS",

@@ -30,7 +30,16 @@ import pinocchio as pin
 from pincal.errors import MeasurementError, ModelFileError, UnknownNameError
 from pincal.measure._measurements import Measurements
 from pincal.measure._tracker import RigidFit, fit_rigid_transform
-from pincal.model import BASE_JOINT, TOOL_JOINT, Mechanism, serial_mechanism, with_joint_origin
+from pincal.model import (
+    BASE_JOINT,
+    MOVABLE_TYPES,
+    TOOL_JOINT,
+    Mechanism,
+    UrdfTree,
+    resolve_model_path,
+    serial_mechanism,
+    with_joint_origin,
+)
 
 __all__ = [
     "MarkerRegistration",
@@ -156,7 +165,6 @@ class MarkerSetup:
 def _off_chain_locks(model: str, link: str, lock: Mapping[str, float]) -> dict[str, float]:
     """``lock`` plus every movable joint off the chain to ``link`` at 0."""
     from pincal._files import read_text
-    from pincal.model import MOVABLE_TYPES, UrdfTree, resolve_model_path
 
     urdf, _ = resolve_model_path(model)
     tree = UrdfTree(read_text(urdf, "URDF", error=ModelFileError))

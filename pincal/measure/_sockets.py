@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.errors import MeasurementError
-from pincal.model._mechanism import Mechanism
+from pincal.model import Mechanism
 
 __all__ = [
     "SCALE_MESSAGE",

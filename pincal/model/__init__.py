@@ -66,6 +66,7 @@ from pincal.model._serial import (
 )
 from pincal.model._sidecar import (
     JOINT_KINDS,
+    WORKSPACE_POSE_KEYS,
     Sidecar,
     Workspace,
     validate_sidecar,
@@ -92,6 +93,7 @@ __all__ = [
     "MOVABLE_TYPES",
     "TOOL_JOINT",
     "TOOL_LINK",
+    "WORKSPACE_POSE_KEYS",
     "BatchKinematics",
     "BatchModel",
     "Closure",

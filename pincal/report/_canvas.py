@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pincal.io._atomic import atomic_write_bytes
+from pincal.io import atomic_write_bytes
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any, SupportsFloat, cast
 
 from pincal.errors import ReportError
-from pincal.io._atomic import atomic_write_bytes
+from pincal.io import atomic_write_bytes
 
 __all__ = ["ReportFiles", "Section", "Table", "write_report"]
 

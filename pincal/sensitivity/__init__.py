@@ -29,7 +29,7 @@ from pincal.sensitivity._jacobian import (
     identification_jacobian,
     pose_sensitivity,
 )
-from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
+from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank, numerical_ranks
 
 __all__ = [
     "BASE_POSES",
@@ -50,6 +50,7 @@ __all__ = [
     "identifiability",
     "identification_jacobian",
     "numerical_rank",
+    "numerical_ranks",
     "pose_sensitivity",
     "sensitivities_batch",
 ]

@@ -23,13 +23,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pincal.model._batch import BatchKinematics, cross_cols, mm, mv, slice_kinematics
-from pincal.model._batch_closures import closure_jacobian_batch
-from pincal.model._batch_fk import CHUNK
-from pincal.model._batch_ops import cross3
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
-from pincal.model._range_factor import RangeFactor
+from pincal.model import BatchKinematics, Mechanism, ParameterSet
+from pincal.model.kernels import (
+    CHUNK,
+    RangeFactor,
+    closure_jacobian_batch,
+    cross3,
+    cross_cols,
+    mm,
+    mv,
+    slice_kinematics,
+)
 from pincal.sensitivity._batch_points import (
     _adjoint,
     _factor,

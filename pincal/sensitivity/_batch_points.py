@@ -22,10 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pincal.model._batch import BatchKinematics, cross_cols
-from pincal.model._block_solve import PassiveFactor
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
+from pincal.model import BatchKinematics, Mechanism, ParameterSet
+from pincal.model.kernels import PassiveFactor, cross_cols
 from pincal.sensitivity._batch_serial import _anchors
 from pincal.sensitivity._jacobian import _Plan
 

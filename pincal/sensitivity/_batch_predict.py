@@ -12,11 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pincal.model._batch import BatchKinematics, mv
-from pincal.model._batch_closures import closure_jacobian_batch
-from pincal.model._batch_ops import cross3
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
+from pincal.model import BatchKinematics, Mechanism, ParameterSet
+from pincal.model.kernels import closure_jacobian_batch, cross3, mv
 from pincal.sensitivity._batch_jacobian import _param_twists, batch_applies
 from pincal.sensitivity._batch_serial import _anchors
 from pincal.sensitivity._jacobian import _Plan, _plan

@@ -26,9 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pincal.model._batch import BatchKinematics
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
+from pincal.model import BatchKinematics, Mechanism, ParameterSet
 from pincal.sensitivity._jacobian import _Plan
 
 __all__: list[str] = []

@@ -22,9 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.errors import ParameterError
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet
-from pincal.model._workspace import sample_actuators
+from pincal.model import Mechanism, ParameterSet, sample_actuators
 from pincal.sensitivity._jacobian import identification_jacobian
 
 __all__ = ["GlobalSensitivity", "global_sensitivity", "global_sensitivity_from_jacobians"]

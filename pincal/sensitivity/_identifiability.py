@@ -32,12 +32,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pincal.errors import PincalError, UnidentifiableError
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import (
+from pincal.model import (
+    Mechanism,
+    ModelLimits,
     ParameterSet,
     degenerate_translations,
     full_parameters,
     register_preset,
+    sample_actuators,
 )
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
@@ -314,8 +316,6 @@ def identifiability(
         InputLimitError: more parameters than ``ModelLimits.parameters`` (raise it with
             the environment variable ``PINCAL_MAX_PARAMETERS``).
     """
-    from pincal.model import ModelLimits, degenerate_translations
-    from pincal.model._workspace import sample_actuators
     from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
 
     limits = ModelLimits.from_env()
@@ -383,7 +383,6 @@ def base_set(mech: Mechanism, params: ParameterSet | None = None) -> BaseSet:
     Raises:
         UnidentifiableError: no candidate parameter changes the measured quantity.
     """
-    from pincal.model._workspace import sample_actuators
     from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
 
     candidates = params

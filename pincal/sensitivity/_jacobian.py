@@ -25,9 +25,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from pincal.model._closures import COMPONENTS, measured_jacobian
-from pincal.model._mechanism import Kinematics, Mechanism
-from pincal.model._parameters import ParameterSet
+from pincal.model import COMPONENTS, Kinematics, Mechanism, ParameterSet
+from pincal.model.kernels import measured_jacobian
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver
 
 __all__ = ["PoseSensitivity", "closure_breaking", "identification_jacobian", "pose_sensitivity"]

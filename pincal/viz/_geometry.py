@@ -22,7 +22,7 @@ import umsgpack
 
 from pincal._files import read_bytes, read_text
 from pincal.errors import InputFileError, ModelFileError, VisualizationError, clip
-from pincal.model._urdf_check import captured_stderr
+from pincal.model.kernels import captured_stderr
 from pincal.viz._meshes import checked_urdf, mesh_access_allowed, mesh_references
 
 __all__ = [
