@@ -36,6 +36,14 @@ from pincal.model._dh_model import (
 )
 from pincal.model._floor import DEFAULT_FLOOR, above_floor
 from pincal.model._home_search import conditioning, regular_home
+from pincal.model._joint_term_set import (
+    actual_joint_values,
+    joint_term_basis,
+    joint_term_prior,
+    split_model,
+    with_joint_terms,
+)
+from pincal.model._joint_terms import JointTerm, joint_term, register_term, term_kinds
 from pincal.model._kinematics import Kinematics
 from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
@@ -99,6 +107,7 @@ __all__ = [
     "DHNames",
     "DHRow",
     "JointReadings",
+    "JointTerm",
     "Kinematics",
     "Mechanism",
     "ModelLimits",
@@ -110,6 +119,7 @@ __all__ = [
     "UrdfTree",
     "Workspace",
     "above_floor",
+    "actual_joint_values",
     "bundled_models",
     "chain_preset",
     "conditioning",
@@ -124,6 +134,9 @@ __all__ = [
     "example_robot_urdf",
     "find_local_sidecar",
     "full_parameters",
+    "joint_term",
+    "joint_term_basis",
+    "joint_term_prior",
     "load_mechanism",
     "load_mjcf",
     "lock_joints",
@@ -134,14 +147,18 @@ __all__ = [
     "parse_components",
     "read_sidecar",
     "register_preset",
+    "register_term",
     "regular_home",
     "resolve_model_path",
     "sample_actuators",
     "sample_pose",
     "se3_from_xyz_rpy",
     "serial_mechanism",
+    "split_model",
     "srdf_home",
+    "term_kinds",
     "validate_sidecar",
     "with_joint_origin",
+    "with_joint_terms",
     "wrap_base_tool",
 ]
