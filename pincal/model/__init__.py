@@ -43,7 +43,13 @@ from pincal.model._joint_term_set import (
     split_model,
     with_joint_terms,
 )
-from pincal.model._joint_terms import JointTerm, joint_term, register_term, term_kinds
+from pincal.model._joint_terms import (
+    JointTerm,
+    joint_term,
+    joint_term_units,
+    register_term,
+    term_kinds,
+)
 from pincal.model._kinematics import Kinematics
 from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
@@ -137,6 +143,7 @@ __all__ = [
     "joint_term",
     "joint_term_basis",
     "joint_term_prior",
+    "joint_term_units",
     "load_mechanism",
     "load_mjcf",
     "lock_joints",

@@ -26,7 +26,14 @@ from pincal.errors import ParameterError
 if TYPE_CHECKING:
     from pincal.model._mechanism import Mechanism
 
-__all__ = ["JointTerm", "joint_term", "register_term", "term_kinds", "term_of_dof"]
+__all__ = [
+    "JointTerm",
+    "joint_term",
+    "joint_term_units",
+    "register_term",
+    "term_kinds",
+    "term_of_dof",
+]
 
 
 class JointTerm(ABC):
@@ -106,3 +113,8 @@ def joint_term(kind: str) -> JointTerm:
             f"unknown error-model term {kind!r}; valid: geometric, {', '.join(_TERMS)}"
         )
     return _TERMS[kind]
+
+
+def joint_term_units() -> frozenset[str]:
+    """Every unit a registered joint term's parameters can have (e.g. ``"rad/(N·m)"``)."""
+    return frozenset(t.unit(k) for t in _TERMS.values() for k in ("revolute", "prismatic"))
