@@ -60,6 +60,7 @@ Campaign file keys (YAML; relative paths are relative to the file):
                              chain to LINK are locked at 0
   identification:
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
+    model: geometric         geometric[+compliance][+gain][+harmonics] (joint terms)
     loss: linear             linear | huber | soft_l1 | cauchy (marker campaigns)
     prior: null              marker campaigns: "LEN_MM,ANG_MRAD" or auto (by CV)
   validation:                held-out poses, measured on the same actual machine
@@ -135,9 +136,16 @@ class Identification:
     method: str = "gauss-newton"
     loss: str = "linear"
     prior: str | None = None
+    model: str = "geometric"
 
     def check(self, key: str) -> None:
         from pincal.identification import METHODS
+        from pincal.model import split_model
+
+        try:
+            split_model(self.model)
+        except PincalError as exc:
+            raise CampaignError(f"{key}.model: {exc}") from exc
 
         _choice(self.method, tuple(METHODS), f"{key}.method")
         _choice(self.loss, ("linear", "huber", "soft_l1", "cauchy"), f"{key}.loss")
