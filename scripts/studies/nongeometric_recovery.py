@@ -66,9 +66,7 @@ def draw(mech: Mechanism, params: ParameterSet, n_poses: int, rng: np.random.Gen
     truth = np.zeros(len(params))
     truth[base] = rng.normal(0.0, sigma[base])
     actual = params.apply(mech, truth)
-    meas = simulate_measurements(
-        actual, actual_joint_values(mech, params, truth, rows), NOISE, rng
-    )
+    meas = simulate_measurements(actual, actual_joint_values(mech, params, truth, rows), NOISE, rng)
     meas = dataclasses.replace(meas, q_act=rows.copy())
     res = identify(mech, params, meas, "gauss-newton")
     e = res.values - truth[res.identified]

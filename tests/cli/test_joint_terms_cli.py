@@ -36,7 +36,10 @@ def compliant_ur5_data(tmp_path_factory):
     rng = np.random.default_rng(5)
     rows = sample_actuators(mech, 60, rng)
     meas = simulate_measurements(
-        mech, actual_joint_values(mech, params, truth, rows), {"position": 0.01, "orientation": 0.01}, rng
+        mech,
+        actual_joint_values(mech, params, truth, rows),
+        {"position": 0.01, "orientation": 0.01},
+        rng,
     )
     path = tmp_path_factory.mktemp("jt") / "ur5.csv"
     write_measurements(path, dataclasses.replace(meas, q_act=rows))

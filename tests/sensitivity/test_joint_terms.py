@@ -1,4 +1,4 @@
-"""Joint-space error terms: parameters, basis, and analytic Jacobian columns vs finite differences."""
+"""Joint-space error terms: parameters, basis, Jacobian columns vs finite differences."""
 
 from __future__ import annotations
 
@@ -105,9 +105,11 @@ def test_jacobian_matches_finite_differences_serial(ur5):
 def test_jacobian_matches_finite_differences_closed_loops(machine):
     """Gain and harmonics act on the actuators of a parallel machine too (closure included)."""
     mech = load_mechanism(MACHINES / machine)
-    kinds = ("gain", "harmonics") if any(
-        mech.tree.joints[a].type in ("revolute", "continuous") for a in mech.actuated
-    ) else ("gain",)
+    kinds = (
+        ("gain", "harmonics")
+        if any(mech.tree.joints[a].type in ("revolute", "continuous") for a in mech.actuated)
+        else ("gain",)
+    )
     params = with_joint_terms(mech, parameters(mech, "base"), kinds)
     err = _fd_errors(mech, params, 8, seed=1)
     assert err.max() < 1e-5, params.names[int(np.argmax(err))]

@@ -1,4 +1,4 @@
-"""scripts/studies/nongeometric_recovery.py: joint terms recovered at the Cramér–Rao bound (fast)."""
+"""scripts/studies/nongeometric_recovery.py: joint terms recovered at the CRB (fast)."""
 
 from __future__ import annotations
 
