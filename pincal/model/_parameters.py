@@ -331,9 +331,11 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
         preset: ``"full"``, a computed preset (``"base"``: the identifiable base set,
             computed from 60 seeded random workspace poses, registered by
             the sensitivity stage; a sidecar preset of the same name takes
-            precedence), a preset name from the sidecar, or a list whose entries are
-            ``"<joint>.<dof>"`` strings or ``{"joints": pattern, "dofs": [...]}`` mappings
-            (fnmatch patterns over URDF joint names).
+            precedence), a preset name from the sidecar, ``PRESET+TERM[+TERM…]`` (the
+            preset and joint-space terms on every actuated joint, e.g.
+            ``base+compliance``; see :func:`pincal.model.with_joint_terms`), or a list
+            whose entries are ``"<joint>.<dof>"`` strings or ``{"joints": pattern,
+            "dofs": [...]}`` mappings (fnmatch patterns over URDF joint names).
 
     Raises:
         UnknownNameError: unknown preset, joint or dof (valid names listed).
@@ -342,6 +344,12 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
         raise ParameterError(
             f"preset must be a name or a list of entries, got {type(preset).__name__}"
         )
+    if isinstance(preset, str) and "+" in preset and preset not in mech.presets:
+        # PRESET+TERM[+TERM…]: the preset and joint terms (the term modules import this one)
+        from pincal.model._joint_term_set import with_joint_terms
+
+        base, *kinds = preset.split("+")
+        return with_joint_terms(mech, parameters(mech, base), kinds)
     if isinstance(preset, str):
         if preset == "full":
             return full_parameters(mech)

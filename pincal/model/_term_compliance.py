@@ -4,6 +4,9 @@
 of the nominal model's link inertias at the commanded configuration [N·m, N]; ``c_i``
 is the joint's compliance [rad/(N·m)] (revolute) or [m/N] (prismatic). Serial chains
 only: the static load of a closed loop needs its constraint forces (not done).
+Gravity is ``−9.81 m/s²`` along the z axis of the robot's own base: the model's world
+frame, or — for a robot wrapped with an instrument frame (``base_frame`` joint, e.g. a
+marker calibration whose world is the capture system) — the frame below that joint.
 A joint whose gravity torque never changes (a vertical first axis) gets a zero basis,
 which the rank analysis reports as unidentifiable.
 """
@@ -17,6 +20,7 @@ import pinocchio as pin
 
 from pincal.errors import ParameterError
 from pincal.model._joint_terms import JointTerm, register_term
+from pincal.model._serial import BASE_JOINT
 
 if TYPE_CHECKING:
     from pincal.model._mechanism import Mechanism
@@ -49,13 +53,25 @@ class Compliance(JointTerm):
 
     def basis(self, mech: Mechanism, q_act: np.ndarray) -> np.ndarray:
         q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
-        model, data = mech.model, mech.model.createData()
+        model = pin.Model(mech.model)  # a copy: its gravity is set below
+        model.gravity = pin.Motion(np.concatenate([_gravity(mech), np.zeros(3)]))
+        data = model.createData()
         cols = [model.idx_vs[model.getJointId(a)] for a in mech.actuated]
         out = np.empty((q_act.shape[0], len(cols), 1))
         for k, row in enumerate(q_act):
             q = mech.with_actuators(mech.q_home, row)
             out[k, :, 0] = pin.computeGeneralizedGravity(model, data, q)[cols]
         return out
+
+
+def _gravity(mech: Mechanism) -> np.ndarray:
+    """(3,) gravity in the model's world frame [m/s²]: −9.81 along the robot base's z."""
+    g = np.array([0.0, 0.0, -9.81])
+    if BASE_JOINT not in mech.tree.joints or not mech.model.existFrame(BASE_JOINT):
+        return g
+    data = mech.model.createData()
+    pin.framesForwardKinematics(mech.model, data, mech.q_home)
+    return data.oMf[mech.model.getFrameId(BASE_JOINT)].rotation @ g
 
 
 register_term(Compliance())
