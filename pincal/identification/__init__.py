@@ -38,6 +38,13 @@ from pincal.identification._marker_fit import (
     fit_markers,
     is_registration,
 )
+from pincal.identification._model_selection import (
+    CandidateScore,
+    Fitted,
+    ModelSelection,
+    fitted,
+    select_model,
+)
 from pincal.identification._monte_carlo import MonteCarloStudy, monte_carlo
 from pincal.identification._options import (
     LOSSES,
@@ -75,7 +82,9 @@ __all__ = [
     "REGISTRATION_PRESET",
     "SOLVERS",
     "CalibrationProblem",
+    "CandidateScore",
     "CrossValidation",
+    "Fitted",
     "GateLimits",
     "GaussNewtonOptions",
     "IdentificationProblem",
@@ -86,6 +95,7 @@ __all__ = [
     "LMOptions",
     "LocalSolverExtras",
     "MarkerFit",
+    "ModelSelection",
     "MonteCarloStudy",
     "Prior",
     "QPSOExtras",
@@ -109,6 +119,7 @@ __all__ = [
     "cross_validate",
     "default_instrument",
     "fit_markers",
+    "fitted",
     "identify",
     "identify_instruments",
     "instrument_blocks",
@@ -123,6 +134,7 @@ __all__ = [
     "qpso",
     "qpso_identify",
     "qpso_stepwise",
+    "select_model",
     "solver",
     "step_planned_identify",
     "subset",
