@@ -285,6 +285,13 @@ def calibrate(
         annotations={"data": str(data), "quality": quality},
         texts=texts,
     )
+    if terms:
+        click.echo(
+            f"pincal: note: the joint terms ({'+'.join(terms)}) are in identification.json; "
+            f"calibrated.urdf is the geometric part, and compensate, validate and export do "
+            f"not apply the joint terms yet (`pincal select-model` cross-validates with them)",
+            err=True,
+        )
     if as_json:
         click.echo(json.dumps(doc))
     else:
