@@ -51,19 +51,41 @@ def _marker_candidates(mech, setup, preset: str, models: list[str], method: str)
 
 @click.command("select-model")
 @click.argument("model")
-@click.option("--data", required=True, type=click.Path(dir_okay=False),
-              help="Measurement file (pose file, or a marker table with --link).")
-@click.option("--params", "preset", default=None,
-              help="Geometric preset of every candidate (default: the model's first; "
-              "chain with --link).")
-@click.option("--models", default=DEFAULT_MODELS, show_default=True,
-              help="Comma-separated candidate error models (geometric[+TERM…]).")
-@click.option("--cv", "k", type=click.IntRange(2, 100), default=5, show_default=True,
-              help="Number of folds.")
-@click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True,
-              help="Seed of the folds.")
-@click.option("--method", type=click.Choice(["gauss-newton", "lm"]), default="gauss-newton",
-              show_default=True, help="Identification solver of every fit.")
+@click.option(
+    "--data",
+    required=True,
+    type=click.Path(dir_okay=False),
+    help="Measurement file (pose file, or a marker table with --link).",
+)
+@click.option(
+    "--params",
+    "preset",
+    default=None,
+    help="Geometric preset of every candidate (default: the model's first; chain with --link).",
+)
+@click.option(
+    "--models",
+    default=DEFAULT_MODELS,
+    show_default=True,
+    help="Comma-separated candidate error models (geometric[+TERM…]).",
+)
+@click.option(
+    "--cv", "k", type=click.IntRange(2, 100), default=5, show_default=True, help="Number of folds."
+)
+@click.option(
+    "--seed",
+    type=click.IntRange(0, 2**32 - 1),
+    default=0,
+    show_default=True,
+    help="Seed of the folds.",
+)
+@click.option(
+    "--method",
+    type=click.Choice(["gauss-newton", "lm"]),
+    default="gauss-newton",
+    show_default=True,
+    help="Identification solver of every fit.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the ranking as JSON on stdout.")
 @model_options
 @marker_options
