@@ -125,3 +125,15 @@ def test_bad_requests_are_specific(ur5, stewart):
         with_joint_terms(stewart, parameters(stewart, "stewart42"), ["compliance"])
     with pytest.raises(ParameterError, match="actuated"):
         parameters(ur5, ["ee_fixed_joint.gain"])
+
+
+def test_pose_by_pose_sensitivity_refuses_joint_terms(ur5):
+    """The single-pose path has no joint-term columns: it says so instead of zeros."""
+    from pincal.sensitivity import pose_sensitivity, sensitivities_batch
+
+    params = parameters(ur5, "base+gain")
+    with pytest.raises(ParameterError, match="sensitivities_batch"):
+        pose_sensitivity(ur5, params, ur5.q_home)
+    q = ur5.with_actuators(ur5.q_home, np.full(6, 0.3))  # gain columns vanish at q = 0
+    J = sensitivities_batch(ur5, params, q[None]).jacobian
+    assert np.all(np.linalg.norm(J[0][:, params.joint_terms], axis=0) > 0)
