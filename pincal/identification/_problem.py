@@ -36,9 +36,9 @@ from pincal.errors import (
     ParameterError,
 )
 from pincal.measure._measurements import Measurements, NoiseModel
+from pincal.model import joint_term_basis
 from pincal.model._batch import BatchKinematics
 from pincal.model._batch_ops import jlog3_batch, log3_batch
-from pincal.model._joint_term_set import joint_term_basis
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 from pincal.sensitivity._batch_jacobian import sensitivities_batch

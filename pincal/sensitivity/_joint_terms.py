@@ -12,9 +12,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from pincal.model._joint_term_set import joint_term_basis
-from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet, parameters
+from pincal.model import Mechanism, ParameterSet, joint_term_basis, parameters
 
 __all__ = ["joint_term_sensitivities"]
 
