@@ -106,3 +106,16 @@ def test_campaign_key(tmp_path):
     f.write_text("model: ur5\nmeasurements: {poses: 10}\nidentification: {model: gain}\n")
     with pytest.raises(CampaignError, match="identification.model"):
         load_campaign(f)
+
+
+def test_validate_cv_refuses_joint_terms(compliant_ur5_data, tmp_path):
+    """validate --cv predicts with the URDF (no joint terms): it refuses, naming select-model."""
+    runner = CliRunner()
+    out = tmp_path / "cal"
+    res = runner.invoke(main, ["calibrate", "ur5", "--data", str(compliant_ur5_data),
+                               "--params", "base", "--model", "geometric+compliance",
+                               "--out", str(out)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(main, ["validate", str(out), "--cv", "3"])
+    assert res.exit_code != 0
+    assert "select-model" in res.output and "Traceback" not in res.output
