@@ -83,6 +83,7 @@ from pincal.cli import info as _info  # noqa: E402
 from pincal.cli import poses as _poses  # noqa: E402
 from pincal.cli import report as _report  # noqa: E402
 from pincal.cli import run as _run  # noqa: E402
+from pincal.cli import select_model as _select_model  # noqa: E402
 from pincal.cli import simulate as _simulate  # noqa: E402
 from pincal.cli import validate as _validate  # noqa: E402
 from pincal.cli import view as _view  # noqa: E402
@@ -103,6 +104,7 @@ for _command in (
     _import_cmd.import_tracker,
     _run.run,
     _acceptance.acceptance,
+    _select_model.select_model_cmd,
 ):
     main.add_command(_command)
 

@@ -62,6 +62,7 @@ Campaign file keys (YAML; relative paths are relative to the file):
                              chain to LINK are locked at 0
   identification:
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
+    model: geometric         geometric[+compliance][+gain][+harmonics] (joint terms)
     loss: linear             linear | huber | soft_l1 | cauchy (marker campaigns)
     prior: null              marker campaigns: "LEN_MM,ANG_MRAD" or auto (by CV)
     instrument: NAME         optional profile judging an estimated noise: laser-tracker |
@@ -140,9 +141,16 @@ class Identification:
     loss: str = "linear"
     prior: str | None = None
     instrument: str | None = None
+    model: str = "geometric"
 
     def check(self, key: str) -> None:
         from pincal.identification import INSTRUMENT_PROFILES, METHODS
+        from pincal.model import split_model
+
+        try:
+            split_model(self.model)
+        except PincalError as exc:
+            raise CampaignError(f"{key}.model: {exc}") from exc
 
         _choice(self.method, tuple(METHODS), f"{key}.method")
         _choice(self.loss, ("linear", "huber", "soft_l1", "cauchy"), f"{key}.loss")

@@ -31,6 +31,11 @@ def _pose_fit(cal):
     nominal = cal.nominal()
     meas = read_measurement_file(files[0]["path"], nominal).measurements
     params = parameters(nominal, cal.preset)
+    if params.joint_terms.size:
+        raise PincalError(
+            f"{cal.path}: validate --cv predicts with the calibrated URDF, which does not carry "
+            f"the joint terms of {cal.preset!r}; cross-validate them with `pincal select-model`"
+        )
     method = str(cal.manifest.get("method") or "gauss-newton")
 
     def fit(m):

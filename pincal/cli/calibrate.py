@@ -70,9 +70,12 @@ def format_report(doc: dict) -> str:
     header = f"{'parameter':32s} {'value':>14s} {'2σ':>12s}  (µm for lengths, µrad for angles)"
     lines += ["", header]
     for p in doc["parameters"]:
+        two_sigma = 2 * p["std"] if p["std"] is not None else float("nan")
+        if p["unit"] not in ("m", "rad"):  # a joint term: SI, its unit named
+            lines.append(f"{p['name']:32s} {p['value']:+14.4g} {two_sigma:12.4g}  {p['unit']}")
+            continue
         unit = "µm" if p["unit"] == "m" else "µrad"
-        two_sigma = 2 * p["std"] * 1e6 if p["std"] is not None else float("nan")
-        lines.append(f"{p['name']:32s} {p['value'] * 1e6:+14.3f} {two_sigma:12.3f}  {unit}")
+        lines.append(f"{p['name']:32s} {p['value'] * 1e6:+14.3f} {two_sigma * 1e6:12.3f}  {unit}")
     lines.append("")
     for when in ("before", "after"):
         s = doc["residuals"][when]
@@ -106,6 +109,15 @@ def format_report(doc: dict) -> str:
     "files fitted together (e.g. socket files of one plate, several tool positions).",
 )
 @click.option("--params", "preset", default=None, help="Parameter preset (default: first preset).")
+@click.option(
+    "--model",
+    "error_model",
+    default="geometric",
+    show_default=True,
+    help="Error model: 'geometric' or geometric+TERM[+TERM…] with TERM compliance (joint "
+    "compliance under gravity, serial chains), gain, harmonics: joint-space terms on every "
+    "actuated joint, identified beside the geometric parameters.",
+)
 @click.option(
     "--method",
     type=click.Choice(list(METHODS)),
@@ -171,8 +183,9 @@ def format_report(doc: dict) -> str:
 @marker_options
 @fail_cleanly
 def calibrate(
-    model, data, preset, method, out, as_json, noise, loss, force, max_change, significance,
-    instrument, link, instrument_frame, marker_spec, marker_columns, length_unit, prior_spec,
+    model, data, preset, error_model, method, out, as_json, noise, loss, force, max_change,
+    significance, instrument, link, instrument_frame, marker_spec, marker_columns,
+    length_unit, prior_spec,
     yes, model_opts,
 ) -> None:  # fmt: skip
     """Identify MODEL's geometric parameters from measured poses (--data).
@@ -205,7 +218,7 @@ def calibrate(
         read_measurement_file,
         write_calibration,
     )
-    from pincal.model import parameters
+    from pincal.model import parameters, split_model, with_joint_terms
 
     limits = gate_limits(max_change, significance)
     profile = None
@@ -224,6 +237,7 @@ def calibrate(
             "('# pincal instrument' / '# pincal sockets'); give one pose measurement file",
             param_hint="--data",
         )
+    terms = split_model(error_model)
 
     if loss != "linear" and method != "lm" and link is None:
         raise click.BadParameter(
@@ -244,6 +258,13 @@ def calibrate(
         declared = {"position": pos_mm, "orientation": ori_mrad}
     if link is not None:
         from pincal.cli._markers import setup_from_options
+
+        if terms:
+            raise click.BadParameter(
+                "joint-space terms are not yet fitted from marker tables (--link); use "
+                "--model geometric there",
+                param_hint="--model",
+            )
 
         if model_opts.sidecar or model_opts.frame:
             raise click.BadParameter(
@@ -267,7 +288,7 @@ def calibrate(
                                  param_hint="--prior")  # fmt: skip
     mech = load_model(model, model_opts)
     preset = preset or (next(iter(mech.presets), "full"))
-    params = parameters(mech, preset)
+    params = with_joint_terms(mech, parameters(mech, preset), terms)
     for f in files:
         check_data_rows(f, "--data", len(params), yes)
     if _is_instrument_file(data):
@@ -308,6 +329,13 @@ def calibrate(
         annotations={"data": ", ".join(map(str, files)), "quality": quality},
         texts=texts,
     )
+    if terms:
+        click.echo(
+            f"pincal: note: the joint terms ({'+'.join(terms)}) are in identification.json; "
+            f"calibrated.urdf is the geometric part, and compensate, validate and export do "
+            f"not apply the joint terms yet (`pincal select-model` cross-validates with them)",
+            err=True,
+        )
     if as_json:
         click.echo(json.dumps(doc))
     else:

@@ -71,6 +71,14 @@ def structure_lines(mech: Mechanism, frame_given: bool = False) -> list[str]:
     help="What this instrument identifies of the preset (default: first preset): rank, "
     "base set, absorbed combinations and the unseen motions in words.",
 )
+@click.option(
+    "--model",
+    "error_model",
+    default="geometric",
+    show_default=True,
+    help="Error model analysed: geometric[+compliance][+gain][+harmonics] (joint-space "
+    "terms on every actuated joint, beside each preset's parameters).",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON description on stdout.")
 @model_options
 @fail_cleanly
@@ -78,6 +86,7 @@ def info(
     model: str,
     preset: str | None,
     instrument: str | None,
+    error_model: str,
     as_json: bool,
     model_opts: ModelOptions,
 ) -> None:
@@ -90,6 +99,7 @@ def info(
       pincal info stewart_6ups --instrument distance    what a ballbar cannot see
       pincal info models/pkm5 --json
       pincal info tiago --frame arm_tool_link --lock torso_lift_joint=0.2
+      pincal info ur5 --preset base --model geometric+compliance+gain
       pincal info my_tiago.yaml                 a sidecar file with `robot: tiago`
     """
     import json
@@ -102,9 +112,12 @@ def info(
         describe_direction,
         direction_record,
         parameters,
+        split_model,
+        with_joint_terms,
     )
     from pincal.sensitivity import BASE_POSES, base_set, identifiability
 
+    terms = split_model(error_model)
     mech = load_model(model, model_opts, quiet=True)
     if not as_json:
         for line in structure_lines(mech, bool(model_opts.frame)):
@@ -123,7 +136,8 @@ def info(
     names = [preset] if preset else ["full", *mech.presets]
     with_base = preset is None and "base" not in mech.presets
     steps = len(names) + with_base
-    sets, idents = [parameters(mech, name) for name in names], []
+    sets = [with_joint_terms(mech, parameters(mech, name), terms) for name in names]
+    idents: list = []
     with counted("identifiability", unit="set") as step:  # random-pose Jacobian SVDs
         for params in sets:
             idents.append(identifiability(mech, params, rng=np.random.default_rng(0)))

@@ -48,6 +48,13 @@ from pincal.identification._marker_set import (
     StackedProblem,
     stacked_measurements,
 )
+from pincal.identification._model_selection import (
+    CandidateScore,
+    Fitted,
+    ModelSelection,
+    fitted,
+    select_model,
+)
 from pincal.identification._monte_carlo import MonteCarloStudy, monte_carlo
 from pincal.identification._options import (
     LOSSES,
@@ -86,7 +93,9 @@ __all__ = [
     "REGISTRATION_PRESET",
     "SOLVERS",
     "CalibrationProblem",
+    "CandidateScore",
     "CrossValidation",
+    "Fitted",
     "GateLimits",
     "GaussNewtonOptions",
     "IdentificationProblem",
@@ -99,6 +108,7 @@ __all__ = [
     "LocalSolverExtras",
     "MarkerFit",
     "MarkerSetProblem",
+    "ModelSelection",
     "MonteCarloStudy",
     "Prior",
     "QPSOExtras",
@@ -123,6 +133,7 @@ __all__ = [
     "cross_validate",
     "default_instrument",
     "fit_markers",
+    "fitted",
     "identify",
     "identify_instruments",
     "instrument_blocks",
@@ -138,6 +149,7 @@ __all__ = [
     "qpso",
     "qpso_identify",
     "qpso_stepwise",
+    "select_model",
     "solver",
     "stacked_measurements",
     "step_planned_identify",

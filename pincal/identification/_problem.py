@@ -36,7 +36,7 @@ from pincal.errors import (
     ParameterError,
 )
 from pincal.measure import Measurements, NoiseModel
-from pincal.model import BatchKinematics, Mechanism, ParameterSet
+from pincal.model import BatchKinematics, Mechanism, ParameterSet, joint_term_basis
 from pincal.model.kernels import jlog3_batch, log3_batch
 from pincal.sensitivity import sensitivities_batch
 from pincal.sensitivity.kernels import predict_configurations
@@ -110,6 +110,10 @@ class CalibrationProblem:
         else:
             self.sigma = np.ones((m, k))
             self.noise_source = "estimate"
+        #: joint-term basis (m, n_act, n) at the commanded values (None: geometric only)
+        self._basis = (
+            joint_term_basis(mech, params, measurements.q_act) if params.joint_terms.size else None
+        )
         self._qs: np.ndarray | None = None
         self._solved: tuple[np.ndarray, Mechanism, BatchKinematics] | None = None
         #: start each solve from the first-order prediction of the parameter change
@@ -259,17 +263,18 @@ class CalibrationProblem:
     def _configurations(self, mech: Mechanism, values: np.ndarray):
         """Closed configurations (m, nq) of the measured poses (warm-started), kinematics."""
         meas = self.meas
+        q_act = meas.q_act if self._basis is None else meas.q_act + self._basis @ values
         try:
-            qs, bk = mech.configurations_batch(meas.q_act, self._guesses(values))
+            qs, bk = mech.configurations_batch(q_act, self._guesses(values))
         except ConvergenceError:
             if self._qs is None:
                 raise
             qs = np.empty((len(meas), mech.model.nq))
-            for i, q_act in enumerate(meas.q_act):
+            for i, q_i in enumerate(q_act):
                 try:
-                    qs[i] = mech.configuration(q_act, self._qs[i], pose_index=i)
+                    qs[i] = mech.configuration(q_i, self._qs[i], pose_index=i)
                 except ConvergenceError:
-                    qs[i] = mech.configuration(q_act, None, pose_index=i)
+                    qs[i] = mech.configuration(q_i, None, pose_index=i)
             bk = None
         self._qs = qs
         self._solved = None if bk is None else (values.copy(), mech, bk)
@@ -278,7 +283,7 @@ class CalibrationProblem:
     def _residuals(self, mech: Mechanism, values: np.ndarray, qs, bk, jacobian: bool):
         meas = self.meas
         if jacobian:
-            sens = sensitivities_batch(mech, self.params, qs, bk, values)
+            sens = sensitivities_batch(mech, self.params, qs, bk, values, self._basis)
             p, R = sens.positions, sens.rotations
         elif bk is not None:
             R, p = mech.batch_model.frame_placement(bk, mech.frame_id(mech.measured_frame))

@@ -41,6 +41,7 @@ from pincal.identification._result import (
     StepPlanningExtras,
 )
 from pincal.identification._weighting import Weighting
+from pincal.model import joint_term_units
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "result_from_dict", "result_to_dict"]
 
@@ -229,9 +230,10 @@ def _entries(data: Mapping[str, Any], src: str) -> tuple[list[dict], list[dict]]
             raise ReportError(f"{src}: parameters[{k}] must be an object with a 'name'")
         for key in ("value", "std"):
             _number(p.get(key), f"parameters[{k}].{key}", src)
-        if p.get("unit", "m") not in ("m", "rad"):
+        if p.get("unit", "m") not in ("m", "rad", *joint_term_units()):
             raise ReportError(
-                f"{src}: parameters[{k}].unit must be 'm' or 'rad', got {p.get('unit')!r}"
+                f"{src}: parameters[{k}].unit must be 'm', 'rad' or a joint term's unit "
+                f"({', '.join(sorted(joint_term_units()))}), got {p.get('unit')!r}"
             )
     held = data.get("held", [])
     if not isinstance(held, list):

@@ -37,6 +37,20 @@ from pincal.model._dh_model import (
 from pincal.model._directions import describe_direction, direction_record, parent_direction
 from pincal.model._floor import DEFAULT_FLOOR, above_floor
 from pincal.model._home_search import conditioning, regular_home
+from pincal.model._joint_term_set import (
+    actual_joint_values,
+    joint_term_basis,
+    joint_term_prior,
+    split_model,
+    with_joint_terms,
+)
+from pincal.model._joint_terms import (
+    JointTerm,
+    joint_term,
+    joint_term_units,
+    register_term,
+    term_kinds,
+)
 from pincal.model._kinematics import Kinematics
 from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
@@ -102,6 +116,7 @@ __all__ = [
     "DHNames",
     "DHRow",
     "JointReadings",
+    "JointTerm",
     "Kinematics",
     "Mechanism",
     "ModelLimits",
@@ -113,6 +128,7 @@ __all__ = [
     "UrdfTree",
     "Workspace",
     "above_floor",
+    "actual_joint_values",
     "bundled_models",
     "chain_preset",
     "conditioning",
@@ -129,6 +145,10 @@ __all__ = [
     "example_robot_urdf",
     "find_local_sidecar",
     "full_parameters",
+    "joint_term",
+    "joint_term_basis",
+    "joint_term_prior",
+    "joint_term_units",
     "load_mechanism",
     "load_mjcf",
     "lock_joints",
@@ -140,14 +160,18 @@ __all__ = [
     "parse_components",
     "read_sidecar",
     "register_preset",
+    "register_term",
     "regular_home",
     "resolve_model_path",
     "sample_actuators",
     "sample_pose",
     "se3_from_xyz_rpy",
     "serial_mechanism",
+    "split_model",
     "srdf_home",
+    "term_kinds",
     "validate_sidecar",
     "with_joint_origin",
+    "with_joint_terms",
     "wrap_base_tool",
 ]

@@ -23,6 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ParameterError, UnknownNameError
+from pincal.model._joint_terms import term_of_dof
 from pincal.model._mechanism import Mechanism
 
 __all__ = [
@@ -75,9 +76,11 @@ class Parameter:
     Attributes:
         name: ``<joint>.<dof>``.
         joint: URDF joint name.
-        dof: one of ``tx ty tz rx ry rz offset``.
-        twist: (6,) unit twist ``[v; ω]`` in the joint-origin frame.
-        unit: ``"m"`` or ``"rad"``.
+        dof: one of ``tx ty tz rx ry rz offset``, or a joint term's dof
+            (:mod:`pincal.model._joint_terms`, e.g. ``compliance``).
+        twist: (6,) unit twist ``[v; ω]`` in the joint-origin frame (zero for a joint
+            term: it does not move the origin).
+        unit: ``"m"`` or ``"rad"`` (a joint term: its own, e.g. ``"rad/(N·m)"``).
     """
 
     name: str
@@ -110,7 +113,8 @@ class ParameterSet:
         parameters: tuple of :class:`Parameter`.
         names: parameter names, in order.
         units: ``"m"``/``"rad"`` per parameter.
-        joints: URDF joints touched, in first-use order.
+        joints: URDF joints whose origins are touched, in first-use order.
+        joint_terms: indices of the joint-term parameters (not geometric).
     """
 
     def __init__(self, parameters: Sequence[Parameter], label: str = "custom"):
@@ -125,8 +129,13 @@ class ParameterSet:
         self.names = tuple(names)
         self.units = tuple(p.unit for p in parameters)
         joints: dict[str, list[int]] = {}
+        terms = []
         for k, p in enumerate(parameters):
-            joints.setdefault(p.joint, []).append(k)
+            if term_of_dof(p.dof) is not None:
+                terms.append(k)
+            else:
+                joints.setdefault(p.joint, []).append(k)
+        self.joint_terms = np.array(terms, dtype=int)
         self.joints = tuple(joints)
         self._cols = {j: np.array(c) for j, c in joints.items()}
         self._twists = {
@@ -226,14 +235,20 @@ class ParameterSet:
         )
 
     def format_value(self, k: int, value: float) -> str:
-        """Human-readable value: µm for lengths, µrad for angles."""
+        """Human-readable value: µm for lengths, µrad for angles, SI with unit otherwise."""
         if self.units[k] == "m":
             return f"{value * 1e6:+.3f} µm"
-        return f"{value * 1e6:+.3f} µrad"
+        if self.units[k] == "rad":
+            return f"{value * 1e6:+.3f} µrad"
+        return f"{value:+.4g} {self.units[k]}"
 
 
 def _make(mech: Mechanism, joint: str, dof: str) -> Parameter:
     uj = mech.tree.joints[joint]
+    term = term_of_dof(dof)
+    if term is not None:
+        term.check(mech, joint)
+        return Parameter(f"{joint}.{dof}", joint, dof, np.zeros(6), term.unit(uj.type))
     if dof == "offset":
         if not uj.movable:
             raise ParameterError(f"joint {joint!r} is {uj.type}: it has no 'offset' parameter")
@@ -316,13 +331,16 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
         preset: ``"full"``, a computed preset (``"base"``: the identifiable base set,
             computed from 60 seeded random workspace poses, registered by
             the sensitivity stage; a sidecar preset of the same name takes
-            precedence), a preset name from the sidecar, or a list whose entries are
-            ``"<joint>.<dof>"`` strings or ``{"joints": pattern, "dofs": [...]}`` mappings
-            (fnmatch patterns over URDF joint names). Instead of ``dofs``, an entry may
-            name a direction in the parent link's frame (:mod:`pincal.model._directions`):
-            ``along_parent: x|y|z|[a, b, c]`` (the joint's translation parallel to it)
-            or ``about_parent`` (its rotation); an entry with ``hold: true`` removes
-            what it names from the parameters listed before it.
+            precedence), a preset name from the sidecar, ``PRESET+TERM[+TERM…]`` (the
+            preset and joint-space terms on every actuated joint, e.g.
+            ``base+compliance``; see :func:`pincal.model.with_joint_terms`), or a list
+            whose entries are ``"<joint>.<dof>"`` strings or ``{"joints": pattern, "dofs":
+            [...]}`` mappings (fnmatch patterns over URDF joint names). Instead of ``dofs``,
+            an entry may name a direction in the parent link's frame
+            (:mod:`pincal.model._directions`): ``along_parent: x|y|z|[a, b, c]`` (the
+            joint's translation parallel to it) or ``about_parent`` (its rotation); an
+            entry with ``hold: true`` removes what it names from the parameters listed
+            before it.
 
     Raises:
         UnknownNameError: unknown preset, joint or dof (valid names listed).
@@ -331,6 +349,12 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
         raise ParameterError(
             f"preset must be a name or a list of entries, got {type(preset).__name__}"
         )
+    if isinstance(preset, str) and "+" in preset and preset not in mech.presets:
+        # PRESET+TERM[+TERM…]: the preset and joint terms (the term modules import this one)
+        from pincal.model._joint_term_set import with_joint_terms
+
+        base, *kinds = preset.split("+")
+        return with_joint_terms(mech, parameters(mech, base), kinds)
     if isinstance(preset, str):
         if preset == "full":
             return full_parameters(mech)
@@ -408,7 +432,7 @@ def _entry_pairs(mech: Mechanism, entry: object, joint_names: list[str]) -> list
         if joint not in mech.tree.joints:
             raise UnknownNameError("joint", joint, joint_names)
         for dof in dofs:
-            if not isinstance(dof, str) or dof not in DOFS:
+            if not isinstance(dof, str) or (dof not in DOFS and term_of_dof(dof) is None):
                 raise UnknownNameError("dof", str(dof), DOFS)
             out.append((joint, dof))
     return out

@@ -42,6 +42,7 @@ from pincal.sensitivity._batch_points import (
 )
 from pincal.sensitivity._batch_serial import _anchors, _columns, _serial_path
 from pincal.sensitivity._jacobian import _Plan, _plan, pose_sensitivity
+from pincal.sensitivity._joint_terms import joint_term_sensitivities
 from pincal.sensitivity._rank import RANK_RTOL
 
 __all__ = ["BatchSensitivity", "batch_applies", "sensitivities_batch"]
@@ -255,6 +256,7 @@ def sensitivities_batch(
     qs: np.ndarray,
     bk: BatchKinematics | None = None,
     values: np.ndarray | None = None,
+    basis: np.ndarray | None = None,
 ) -> BatchSensitivity:
     """Sensitivity of the measured frame at N closed configurations.
 
@@ -265,11 +267,15 @@ def sensitivities_batch(
         bk: their batched kinematics when already computed (e.g. by
             ``mech.configurations_batch``); computed when None.
         values: (n,) parameter values (default zeros).
+        basis: (N, n_act, n) joint-term basis at the commanded joint values (see
+            :mod:`pincal.sensitivity._joint_terms`); None: at the actuated values of qs.
 
     Returns:
         The :class:`BatchSensitivity` (equal to :func:`pose_sensitivity` pose by pose).
     """
     values = params.check_values(values)
+    if params.joint_terms.size:
+        return joint_term_sensitivities(sensitivities_batch, mech, params, qs, bk, values, basis)
     qs = np.atleast_2d(np.asarray(qs, dtype=float))
     n = len(params)
     plan = _plan(mech, params)

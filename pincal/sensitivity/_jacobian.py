@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from pincal.errors import ParameterError
 from pincal.model import COMPONENTS, Kinematics, Mechanism, ParameterSet
 from pincal.model.kernels import measured_jacobian
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver
@@ -121,6 +122,11 @@ def pose_sensitivity(
         plan: the ``(mech, params)`` plan when evaluating many poses (computed if None).
     """
     values = params.check_values(values)
+    if params.joint_terms.size:
+        raise ParameterError(
+            f"joint terms ({params.names[params.joint_terms[0]]}, …) are differentiated by "
+            f"sensitivities_batch, not pose by pose (instrument calibrations do not take them yet)"
+        )
     twists = params.joint_twists(values)
     plan = plan or _plan(mech, params)
     kin = q if isinstance(q, Kinematics) else mech.kinematics(q, plan.frames)
