@@ -123,6 +123,6 @@ def test_open_world_benchmark_runs(tmp_path):
     bench = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench)
     found = bench._machines(tmp_path)
-    assert len(found) == 13 and all(Path(p).exists() for p in found.values())
+    assert len(found) == 16 and all(Path(p).exists() for p in found.values())
     r = bench.bench(found["mjcf fourbar"], 20, 1)
     assert r["shape"] == "3×2" and r["in_batch"] == 1.0 and r["pose"] > 0 and r["batch"] > 0
