@@ -43,6 +43,8 @@ _PARALLEL = 1 - 1e-9
 def parent_direction(mech: Mechanism, joint: str, twist: np.ndarray) -> tuple[str, np.ndarray]:
     """("translation" or "rotation", unit direction (3,) in the parent link's frame).
 
+    A joint-space term (compliance, gain…: zero twist) gives ("joint term", zeros).
+
     Args:
         mech: the mechanism.
         joint: the URDF joint.
@@ -53,6 +55,8 @@ def parent_direction(mech: Mechanism, joint: str, twist: np.ndarray) -> tuple[st
     v, w = np.asarray(twist[:3], dtype=float), np.asarray(twist[3:], dtype=float)
     if np.linalg.norm(w) > 0:
         return "rotation", R @ w / np.linalg.norm(w)
+    if np.linalg.norm(v) == 0:
+        return "joint term", np.zeros(3)
     return "translation", R @ v / np.linalg.norm(v)
 
 
@@ -64,6 +68,8 @@ def _vec(d: np.ndarray) -> str:
 def describe_direction(mech: Mechanism, name: str, joint: str, dof: str, twist: np.ndarray) -> str:
     """One line: what the parameter moves, in the joint-origin and the parent frame."""
     kind, d = parent_direction(mech, joint, twist)
+    if kind == "joint term":
+        return f"{name} = joint-space term '{dof}' of {joint} (changes its value, not its origin)"
     uj = mech.tree.joints[joint]
     rpy = pin.rpy.matrixToRpy(uj.origin.rotation)
     word = "along" if kind == "translation" else "about"

@@ -17,7 +17,7 @@ from click.testing import CliRunner
 
 from pincal.cli import main
 from pincal.errors import ParameterError
-from pincal.model import load_mechanism, parameters, parent_direction
+from pincal.model import direction_record, load_mechanism, parameters, parent_direction
 
 RRR3 = Path(__file__).resolve().parent / "machines" / "rrr3"
 
@@ -81,3 +81,12 @@ def test_info_shows_each_parameter_in_the_parent_frame():
     rec = {d["name"]: d for d in json.loads(r.stdout)["presets"][0]["directions"]}
     assert rec["base1.offset"]["kind"] == "rotation" and rec["base1.offset"]["parent"] == "world"
     assert np.allclose(rec["base1.ty"]["parent_direction"], [1, 0, 0], atol=1e-6)
+
+
+def test_a_joint_space_term_is_described_without_a_direction():
+    mech = load_mechanism("ur5")
+    params = parameters(mech, "base+gain")
+    p = next(q for q in params.parameters if q.dof == "gain")
+    rec = direction_record(mech, p.name, p.joint, p.dof, p.twist)
+    assert rec["kind"] == "joint term" and rec["parent_direction"] == [0.0, 0.0, 0.0]
+    assert "joint-space term 'gain'" in rec["text"]
