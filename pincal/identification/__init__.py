@@ -14,7 +14,6 @@ from pincal.identification._cross_validation import (
     cross_validate,
     kfold,
     position_errors,
-    subset,
 )
 from pincal.identification._data_check import check_measurements
 from pincal.identification._identify import identify, qpso_identify, step_planned_identify
@@ -153,5 +152,4 @@ __all__ = [
     "solver",
     "stacked_measurements",
     "step_planned_identify",
-    "subset",
 ]

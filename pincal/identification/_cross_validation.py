@@ -22,7 +22,7 @@ from pincal.errors import MeasurementError
 from pincal.measure import Measurements
 from pincal.model import Mechanism
 
-__all__ = ["CrossValidation", "compare", "cross_validate", "kfold", "position_errors", "subset"]
+__all__ = ["CrossValidation", "compare", "cross_validate", "kfold", "position_errors"]
 
 
 def kfold(m: int, k: int, seed: int) -> tuple[np.ndarray, ...]:
@@ -35,20 +35,6 @@ def kfold(m: int, k: int, seed: int) -> tuple[np.ndarray, ...]:
         raise MeasurementError(f"cross-validation needs 2 ≤ K ≤ {m} poses, got K = {k}")
     perm = np.random.default_rng(seed).permutation(m)
     return tuple(np.sort(f) for f in np.array_split(perm, k))
-
-
-def subset(meas: Measurements, rows: np.ndarray) -> Measurements:
-    """The measurements of the given rows (same frame, components, noise)."""
-    return Measurements(
-        meas.q_act[rows],
-        meas.positions[rows],
-        None if meas.rotations is None else meas.rotations[rows],
-        meas.components,
-        meas.frame,
-        meas.actuated,
-        meas.noise,
-        None if meas.std is None else meas.std[rows],
-    )
 
 
 def position_errors(mech: Mechanism, meas: Measurements) -> np.ndarray:
@@ -102,7 +88,7 @@ class CrossValidation:
 
 def _errors(mech: Mechanism, parts: tuple[Measurements, ...], rows: np.ndarray) -> np.ndarray:
     """Per pose of ``rows``, the RMS over the markers of the position error [m]."""
-    e = np.array([position_errors(mech, subset(p, rows)) for p in parts])
+    e = np.array([position_errors(mech, p.subset(rows)) for p in parts])
     return np.sqrt(np.mean(e**2, axis=0))
 
 
@@ -130,7 +116,7 @@ def cross_validate(
     fit_rms = np.empty(k)
     for j, rows in enumerate(folds):
         train = np.setdiff1d(np.arange(m), rows)
-        sets = tuple(subset(p, train) for p in parts)
+        sets = tuple(p.subset(train) for p in parts)
         mech = fit(sets[0] if isinstance(meas, Measurements) else sets)
         held[rows] = _errors(mech, parts, rows)
         fit_rms[j] = float(np.sqrt(np.mean(_errors(mech, parts, train) ** 2)))

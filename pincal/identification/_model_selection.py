@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.errors import MeasurementError
-from pincal.identification._cross_validation import kfold, position_errors, subset
+from pincal.identification._cross_validation import kfold, position_errors
 from pincal.identification._result import IdentificationResult
 from pincal.measure import Measurements
 from pincal.model import Mechanism, actual_joint_values
@@ -182,9 +182,9 @@ def select_model(
         sizes, train_sq = [], []
         for rows in folds:
             train = np.setdiff1d(np.arange(len(meas)), rows)
-            f = fit(subset(meas, train))
-            held[rows] = f.errors(subset(meas, rows))
-            train_sq.append(f.errors(subset(meas, train)) ** 2)
+            f = fit(meas.subset(train))
+            held[rows] = f.errors(meas.subset(rows))
+            train_sq.append(f.errors(meas.subset(train)) ** 2)
             sizes.append(f.n_parameters)
         fit_rms = float(np.sqrt(np.mean(np.concatenate(train_sq))))
         scores.append(CandidateScore(name, held, float(np.mean(sizes)), fit_rms))

@@ -8,7 +8,6 @@ own annotations (validation errors, index history) and draws them.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import os
 import tempfile
@@ -18,9 +17,9 @@ from typing import Any, SupportsFloat, cast
 
 import numpy as np
 
-from pincal._files import read_bytes
-from pincal.errors import InputFileError, InputLimitError, ReportError
+from pincal.errors import ReportError
 from pincal.identification import IdentificationResult
+from pincal.report._campaign_notes import read_json_object
 from pincal.report._document import ReportFiles, Section, Table, write_report
 from pincal.report._plots import (
     plot_convergence,
@@ -121,16 +120,7 @@ def read_identification(path: str | os.PathLike) -> IdentificationResult:
             entry (the message names the entry).
     """
     path = Path(path)
-    try:  # bounded; refuses FIFOs and devices
-        raw = read_bytes(path, "identification.json", MAX_JSON_BYTES)
-    except (InputFileError, InputLimitError) as exc:
-        raise ReportError(str(exc)) from None
-    try:
-        data = json.loads(raw.decode("utf-8-sig"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ReportError(f"{str(path)!r} is not valid JSON: {exc}") from exc
-    if not isinstance(data, dict):
-        raise ReportError(f"{str(path)!r} must hold a JSON object, got {type(data).__name__}")
+    data = read_json_object(path, "identification.json", MAX_JSON_BYTES)
     result = IdentificationResult.from_dict(data, source=repr(str(path)))
     _check_annotations(dict(result.annotations))
     return result

@@ -24,9 +24,16 @@ _MAX_BYTES = 50_000_000
 _KEYS = ("rms_position_mm", "max_position_mm", "rms_orientation_mrad", "max_orientation_mrad")
 
 
-def _load(path: str | os.PathLike, what: str) -> dict[str, Any]:
+def read_json_object(
+    path: str | os.PathLike, what: str, limit: int = _MAX_BYTES
+) -> dict[str, Any]:
+    """A JSON file holding one object, read bounded (no FIFOs or devices).
+
+    Raises:
+        ReportError: missing or oversized file, invalid JSON, not an object (file named).
+    """
     try:
-        raw = read_bytes(Path(path), what, _MAX_BYTES)
+        raw = read_bytes(Path(path), what, limit)
     except (InputFileError, InputLimitError) as exc:
         raise ReportError(str(exc)) from None
     try:
@@ -34,7 +41,9 @@ def _load(path: str | os.PathLike, what: str) -> dict[str, Any]:
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ReportError(f"{what} {str(path)!r} is not valid JSON: {exc}") from None
     if not isinstance(data, dict):
-        raise ReportError(f"{what} {str(path)!r} must hold a JSON object")
+        raise ReportError(
+            f"{what} {str(path)!r} must hold a JSON object, got {type(data).__name__}"
+        )
     return data
 
 
@@ -90,9 +99,9 @@ def campaign_notes(
     """
     notes: dict[str, Any] = {}
     if validation is not None:
-        notes.update(_validation(_load(validation, "validation file"), str(validation)))
+        notes.update(_validation(read_json_object(validation, "validation file"), str(validation)))
     if truth is not None:
-        doc = _load(truth, "truth file")
+        doc = read_json_object(truth, "truth file")
         try:
             notes["truth"] = {str(p["name"]): float(p["value"]) for p in doc["parameters"]}
         except (KeyError, TypeError, ValueError) as exc:
@@ -100,7 +109,7 @@ def campaign_notes(
                 f"truth file {str(truth)!r} is not a `pincal simulate` truth file ({exc})"
             ) from None
     if design is not None:
-        doc = _load(design, "pose design file")
+        doc = read_json_object(design, "pose design file")
         if not isinstance(doc.get("index"), str) or not isinstance(doc.get("history"), list):
             raise ReportError(
                 f"pose design file {str(design)!r} is not the JSON of `pincal poses` "
