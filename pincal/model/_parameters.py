@@ -222,17 +222,7 @@ class ParameterSet:
             if j not in mech.tree.joints:
                 raise UnknownNameError("joint", j, list(mech.tree.joints))
             origins[j] = mech.tree.joints[j].origin * pin.exp6(v)
-        urdf_xml, tree = mech.tree.displaced(origins)
-        return Mechanism(
-            urdf_xml,
-            mech.sidecar,
-            name=mech.name,
-            source=mech.source,
-            measured_frame=mech.measured_frame,
-            q_guess=mech.q_home,
-            options=mech.options,
-            tree=tree,
-        )
+        return mech.with_joint_origins(origins)
 
     def format_value(self, k: int, value: float) -> str:
         """Human-readable value: µm for lengths, µrad for angles, SI with unit otherwise."""
