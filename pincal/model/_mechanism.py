@@ -21,7 +21,7 @@ from typing import Any, Literal, overload
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import ModelFileError, UnknownNameError, UnreachablePoseError
+from pincal.errors import UnknownNameError, UnreachablePoseError
 from pincal.model._assembly import Assembly
 from pincal.model._batch import BatchKinematics, BatchModel
 from pincal.model._batch_fk import BatchLoopSolver
@@ -29,10 +29,18 @@ from pincal.model._batch_newton import BatchNewton
 from pincal.model._block_solve import BlockSolver, PassiveFactor
 from pincal.model._branch import LoopSolver
 from pincal.model._build import build_model, lock_joints
-from pincal.model._closures import COMPONENTS, Closure, parse_components
-from pincal.model._frames import default_measured_frame, measured_frame_candidates
+from pincal.model._closures import COMPONENTS, parse_components
+from pincal.model._description import (
+    actuator_limits,
+    closure_links,
+    parse_actuated,
+    parse_closures,
+    parse_workspace,
+    resolve_measured_frame,
+)
+from pincal.model._frames import measured_frame_candidates
 from pincal.model._inverse import inverse_configuration
-from pincal.model._kinematics import KinematicQueries, Kinematics, frame_index
+from pincal.model._kinematics import KinematicQueries, Kinematics
 from pincal.model._newton import SolverOptions
 from pincal.model._sidecar import WORKSPACE_POSE_KEYS, Sidecar, Workspace
 from pincal.model._urdf import UrdfTree
@@ -100,9 +108,14 @@ class Mechanism:
         #: remarks about the model (joint kinds from the sidecar, ranges), for `pincal info`
         self.notes: tuple[str, ...] = tuple(notes)
         frame_ids = {f.name: i for i, f in enumerate(model.frames)}
-        self.closures = _parse_closures(self.sidecar, frame_ids, self.tree)
-        self.measured_frame = self._resolve_measured_frame(measured_frame, frame_ids)
-        self.actuated = self._parse_actuated(frame_ids)
+        self.closures = parse_closures(self.sidecar, frame_ids, self.tree)
+        self.measured_frame = resolve_measured_frame(
+            measured_frame, self.sidecar, self.tree, self.closures, frame_ids, self.name
+        )
+        self.actuated, chain_notes = parse_actuated(
+            model, self.sidecar, self.closures, frame_ids, self.measured_frame
+        )
+        self.notes += chain_notes
         self.queries = KinematicQueries(
             model, self.tree, self.name, frame_ids, self.closures, self.actuated,
             self.measured_frame,
@@ -110,12 +123,12 @@ class Mechanism:
         #: the frames a sensitivity needs: the measured frame and every closure frame
         self.key_frames = self.queries.key_frames
         self.n_closure_rows = self.queries.n_closure_rows
-        self.actuator_limits = _actuator_limits(model, self.queries)  # (n_act, 2)
+        self.actuator_limits = actuator_limits(model, self.queries)  # (n_act, 2)
         self.measured_components = tuple(
             COMPONENTS[i] for i in parse_components(self.sidecar.measured, "sidecar 'measured'")
         )
         self.presets: dict[str, Any] = dict(self.sidecar.presets)
-        self.workspace = self._parse_workspace()
+        self.workspace = parse_workspace(self.sidecar, self.actuated)
         assembly = Assembly(self.queries, self.options)
         if q_guess is None:
             keep = any(n in self.sidecar.home for n in self.actuated)
@@ -164,67 +177,10 @@ class Mechanism:
             tree=tree,
         )
 
-    # ------------------------------------------------------------------ set-up
-    def _parse_actuated(self, frame_ids: dict[str, int]) -> tuple[str, ...]:
-        movable = [
-            self.model.names[j]
-            for j in range(1, self.model.njoints)
-            if self.model.joints[j].nv == 1
-        ]
-        names = self.sidecar.name_mot
-        if names is None:
-            if self.closures:
-                raise ModelFileError(
-                    "a closed-loop mechanism needs 'name_mot' (actuated joints) in its sidecar"
-                )
-            return self._chain_joints(movable, frame_ids)
-        for n in names:
-            if n not in movable:
-                raise UnknownNameError("actuated joint", str(n), movable)
-        if len(set(names)) != len(names):
-            raise ModelFileError(f"sidecar 'name_mot' lists a joint twice: {names}")
-        return tuple(str(n) for n in names)
-
-    def _chain_joints(self, movable: list[str], frame_ids: dict[str, int]) -> tuple[str, ...]:
-        """An open chain's actuated joints: the 1-dof joints that move the measured frame.
-
-        The others (a gripper's fingers, a mobile manipulator's head) stay passive and
-        idle: they are not actuated for calibration, and a note says so.
-        """
-        model = self.model
-        support = set(model.supports[model.frames[frame_ids[self.measured_frame]].parentJoint])
-        chain = tuple(n for n in movable if model.getJointId(n) in support)
-        off = [n for n in movable if n not in chain]
-        if off:
-            shown = ", ".join(off[:6]) + (f" and {len(off) - 6} more" if len(off) > 6 else "")
-            self.notes += (
-                f"{len(off)} joint(s) do not move the measured frame {self.measured_frame!r} and "
-                f"are not actuated for calibration: {shown} (list the actuated joints in the "
-                f"sidecar 'name_mot' to change this)",
-            )
-        return chain
-
-    def _resolve_measured_frame(self, requested: str | None, frame_ids: dict[str, int]) -> str:
-        name = requested or self.sidecar.measured_frame
-        if name is None:
-            name = default_measured_frame(self.tree, self._closure_links(), self.name)
-        frame_index(frame_ids, self.tree, str(name))
-        return str(name)
-
-    def _closure_links(self) -> set[str]:
-        return {_link_of(self.tree, f) for c in self.closures for f in (c.frame_a, c.frame_b)}
-
     @property
     def measured_frame_candidates(self) -> list[str]:
         """Frames the automatic choice would consider, best first (see ``_frames``)."""
-        return measured_frame_candidates(self.tree, self._closure_links())
-
-    def _parse_workspace(self) -> Workspace:
-        ws = self.sidecar.workspace
-        for k in ws.joints:
-            if k not in self.actuated:
-                raise UnknownNameError("actuated joint", k, self.actuated)
-        return Workspace(dict(ws.pose), dict(ws.joints), ws.floor)
+        return measured_frame_candidates(self.tree, closure_links(self.tree, self.closures))
 
     # ------------------------------------------------- single-pose queries (delegated)
     def frame_id(self, name: str) -> int:
@@ -402,37 +358,3 @@ class Mechanism:
         return inverse_configuration(
             self.loop_solver, self.measured_components, T_world_target, q_guess
         )
-
-
-def _parse_closures(
-    sidecar: Sidecar, frame_ids: dict[str, int], tree: UrdfTree
-) -> tuple[Closure, ...]:
-    """The sidecar's loop closures (their frames checked against ``frame_ids``)."""
-    closures = []
-    for k, ((a, b), kind) in enumerate(zip(sidecar.closed_loop, sidecar.type, strict=True)):
-        frame_index(frame_ids, tree, a)
-        frame_index(frame_ids, tree, b)
-        comps = parse_components(kind, f"sidecar type[{k}]")
-        label = kind if isinstance(kind, str) else " ".join(kind)
-        closures.append(Closure(a, b, comps, label))
-    return tuple(closures)
-
-
-def _link_of(tree: UrdfTree, frame: str) -> str:
-    """URDF link a frame is attached to (a frame named by a joint sits on its child)."""
-    if frame in tree.joints and frame not in tree.links:
-        return tree.joints[frame].child
-    return frame
-
-
-def _actuator_limits(model: pin.Model, queries: KinematicQueries) -> np.ndarray:
-    """(n_act, 2) lower and upper limits of the actuators (±inf for unbounded revolutes)."""
-    lower, upper = [], []
-    for qi, nq in zip(queries.act_q, queries.act_nq, strict=True):
-        if nq == 1:
-            lower.append(model.lowerPositionLimit[qi])
-            upper.append(model.upperPositionLimit[qi])
-        else:
-            lower.append(-np.inf)
-            upper.append(np.inf)
-    return np.array([lower, upper]).T

@@ -243,7 +243,8 @@ def test_open_closure_blames_the_home_guess_when_other_starts_close():
 def test_inverse_answers_only_on_the_home_branch(prs3):
     rows = np.array([[0.211, 0.237, 0.257], [0.208, 0.228, 0.265]])
     q0 = prs3.configurations(rows[:1])[0]
-    other = prs3.loop_solver.newton(prs3.with_actuators(q0, rows[1]), prs3.free_dofs).q  # other mode
+    start = prs3.with_actuators(q0, rows[1])
+    other = prs3.loop_solver.newton(start, prs3.free_dofs).q  # other mode
     targets = [prs3.frame_placement(q) for q in (q0, other)]
     answered = 0
     for T in targets:
