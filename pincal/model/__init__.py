@@ -58,6 +58,7 @@ from pincal.model._named import find_local_sidecar, model_record, srdf_home
 from pincal.model._newton import SolverOptions
 from pincal.model._parameters import (
     DOFS,
+    Linearisation,
     Parameter,
     ParameterSet,
     degenerate_translations,
@@ -118,6 +119,7 @@ __all__ = [
     "JointReadings",
     "JointTerm",
     "Kinematics",
+    "Linearisation",
     "Mechanism",
     "ModelLimits",
     "Parameter",

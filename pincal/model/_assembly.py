@@ -1,9 +1,9 @@
-"""Assembly of a closed-loop mechanism: home configuration, mobility, singularity checks.
+"""Assembly of a closed-loop mechanism: the loop-closing Newton, home, mobility.
 
-:func:`closure_newton` closes the loops of a :class:`~pincal.model._kinematics.KinematicQueries`
-(damped Newton from :mod:`pincal.model._newton`); :class:`Assembly` assembles the home
-configuration, diagnoses what goes wrong and measures the mobility there
-(:class:`Mobility`).
+:func:`closure_newton` closes the loops of a
+:class:`~pincal.model._kinematics.KinematicQueries` (damped Newton from
+:mod:`pincal.model._newton`); :class:`Assembly` assembles the home configuration,
+diagnoses why loops stay open and measures the mobility there (:class:`Mobility`).
 """
 
 from __future__ import annotations

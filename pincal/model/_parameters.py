@@ -16,7 +16,7 @@ nothing from the later stages.
 from __future__ import annotations
 
 import fnmatch
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,6 +28,7 @@ from pincal.model._mechanism import Mechanism
 
 __all__ = [
     "DOFS",
+    "Linearisation",
     "Parameter",
     "ParameterSet",
     "degenerate_translations",
@@ -141,7 +142,6 @@ class ParameterSet:
         self._twists = {
             j: np.stack([parameters[k].twist for k in c], axis=1) for j, c in joints.items()
         }
-        self._twist_cache: tuple[bytes, dict] | None = None
 
     def __len__(self) -> int:
         return len(self.parameters)
@@ -191,34 +191,42 @@ class ParameterSet:
             raise ParameterError("parameter values contain NaN or inf")
         return values
 
-    def joint_twists(
-        self, values: np.ndarray
-    ) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        """Per joint: (columns, twist v_j (6,), effective twists Jexp6(v_j)·Ξ_j (6, n_j)).
+    def linearise(self, values: np.ndarray | Linearisation | None) -> Linearisation:
+        """This set linearised at ``values`` (n,) [SI] (default zeros).
 
-        The effective twists are the exact derivatives, in the displaced origin frame, of
-        the origin with respect to the joint's parameters at ``values``.
+        Build it once per evaluation point and pass it on (to :meth:`apply` and the
+        sensitivity functions) instead of the values: the joint twists are then
+        computed once. A linearisation of this set is returned as it is.
+
+        Raises:
+            ParameterError: values of the wrong shape or not finite, or a linearisation
+                of another parameter set.
         """
-        key = values.tobytes()
-        if self._twist_cache is not None and self._twist_cache[0] == key:
-            return self._twist_cache[1]
-        out = {}
+        if isinstance(values, Linearisation):
+            if values.params is not self and values.params != self:
+                raise ParameterError(
+                    f"a linearisation of parameter set {values.params.label!r} was given for "
+                    f"set {self.label!r}: linearise this set at the values instead"
+                )
+            return values
+        values = np.array(self.check_values(values))  # own read-only copy
+        values.setflags(write=False)
+        twists = {}
         for j in self.joints:
             cols, Xi = self._cols[j], self._twists[j]
             v = Xi @ values[cols]
             eff = Xi if not np.any(v) else pin.Jexp6(v) @ Xi
-            out[j] = (cols, v, eff)
-        self._twist_cache = (key, out)
-        return out
+            twists[j] = (cols, v, eff)
+        return Linearisation(self, values, twists)
 
-    def apply(self, mech: Mechanism, values: np.ndarray | None) -> Mechanism:
+    def apply(self, mech: Mechanism, values: np.ndarray | Linearisation | None) -> Mechanism:
         """A new mechanism with the joint origins displaced by ``values`` (SI units).
 
-        The input mechanism is not modified.
+        ``values`` (n,), or their :class:`Linearisation`. The input mechanism is not
+        modified.
         """
-        values = self.check_values(values)
         origins = {}
-        for j, (_, v, _) in self.joint_twists(values).items():
+        for j, (_, v, _) in self.linearise(values).joint_twists.items():
             if j not in mech.tree.joints:
                 raise UnknownNameError("joint", j, list(mech.tree.joints))
             origins[j] = mech.tree.joints[j].origin * pin.exp6(v)
@@ -231,6 +239,24 @@ class ParameterSet:
         if self.units[k] == "rad":
             return f"{value * 1e6:+.3f} µrad"
         return f"{value:+.4g} {self.units[k]}"
+
+
+@dataclass(frozen=True, eq=False)
+class Linearisation:
+    """A parameter set linearised at given values (see :meth:`ParameterSet.linearise`).
+
+    Attributes:
+        params: the parameter set.
+        values: (n,) the parameter values [SI] (read-only).
+        joint_twists: per touched joint: (its parameter columns, its origin twist v_j
+            (6,), the effective twists ``Jexp6(v_j)·Ξ_j`` (6, n_j)); the effective twists
+            are the exact derivatives, in the displaced origin frame, of the origin with
+            respect to the joint's parameters at ``values``.
+    """
+
+    params: ParameterSet
+    values: np.ndarray
+    joint_twists: Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
 def _make(mech: Mechanism, joint: str, dof: str) -> Parameter:
