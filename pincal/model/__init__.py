@@ -52,13 +52,13 @@ from pincal.model._joint_terms import (
     term_kinds,
 )
 from pincal.model._kinematics import Kinematics
+from pincal.model._linearisation import Linearisation
 from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
 from pincal.model._named import find_local_sidecar, model_record, srdf_home
 from pincal.model._newton import SolverOptions
 from pincal.model._parameters import (
     DOFS,
-    Linearisation,
     Parameter,
     ParameterSet,
     degenerate_translations,

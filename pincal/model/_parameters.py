@@ -16,7 +16,7 @@ nothing from the later stages.
 from __future__ import annotations
 
 import fnmatch
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,11 +24,11 @@ import pinocchio as pin
 
 from pincal.errors import ParameterError, UnknownNameError
 from pincal.model._joint_terms import term_of_dof
+from pincal.model._linearisation import Linearisation
 from pincal.model._mechanism import Mechanism
 
 __all__ = [
     "DOFS",
-    "Linearisation",
     "Parameter",
     "ParameterSet",
     "degenerate_translations",
@@ -239,24 +239,6 @@ class ParameterSet:
         if self.units[k] == "rad":
             return f"{value * 1e6:+.3f} µrad"
         return f"{value:+.4g} {self.units[k]}"
-
-
-@dataclass(frozen=True, eq=False)
-class Linearisation:
-    """A parameter set linearised at given values (see :meth:`ParameterSet.linearise`).
-
-    Attributes:
-        params: the parameter set.
-        values: (n,) the parameter values [SI] (read-only).
-        joint_twists: per touched joint: (its parameter columns, its origin twist v_j
-            (6,), the effective twists ``Jexp6(v_j)·Ξ_j`` (6, n_j)); the effective twists
-            are the exact derivatives, in the displaced origin frame, of the origin with
-            respect to the joint's parameters at ``values``.
-    """
-
-    params: ParameterSet
-    values: np.ndarray
-    joint_twists: Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
 def _make(mech: Mechanism, joint: str, dof: str) -> Parameter:

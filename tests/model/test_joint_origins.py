@@ -79,7 +79,7 @@ def test_linearisation_holds_the_exact_origin_derivatives(rrr3):
     np.testing.assert_array_equal(lin.values, values)
     assert not lin.values.flags.writeable
     assert params.linearise(lin) is lin  # passed on as it is
-    for j, (cols, v, eff) in lin.joint_twists.items():
+    for cols, v, eff in lin.joint_twists.values():
         Xi = np.stack([params.parameters[k].twist for k in cols], axis=1)
         np.testing.assert_allclose(v, Xi @ values[cols], rtol=0, atol=1e-15)
         # d/dδ of origin·exp6(Xi (values + δ)) in the displaced origin frame, by central FD
