@@ -21,7 +21,7 @@ from typing import Any, Literal, overload
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import UnknownNameError, UnreachablePoseError
+from pincal.errors import UnreachablePoseError
 from pincal.model._assembly import Assembly
 from pincal.model._batch import BatchKinematics, BatchModel
 from pincal.model._batch_fk import BatchLoopSolver
@@ -162,9 +162,6 @@ class Mechanism:
         Raises:
             UnknownNameError: an origin names a joint the URDF does not have.
         """
-        for joint in origins:
-            if joint not in self.tree.joints:
-                raise UnknownNameError("joint", joint, list(self.tree.joints))
         urdf_xml, tree = self.tree.displaced(dict(origins))
         return Mechanism(
             urdf_xml,
