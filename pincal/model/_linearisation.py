@@ -10,22 +10,18 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
-
-if TYPE_CHECKING:  # the parameter set builds its linearisations
-    from pincal.model._parameters import ParameterSet
 
 __all__ = ["Linearisation"]
 
 
 @dataclass(frozen=True, eq=False)
 class Linearisation:
-    """A parameter set linearised at given values (see :meth:`ParameterSet.linearise`).
+    """A parameter set linearised at given values (see ``ParameterSet.linearise``).
 
     Attributes:
-        params: the parameter set.
+        names: the names of the set's parameters, in order (the set it belongs to).
         values: (n,) the parameter values [SI] (read-only).
         joint_twists: per touched joint: (its parameter columns, its origin twist v_j
             (6,), the effective twists ``Jexp6(v_j)·Ξ_j`` (6, n_j)); the effective twists
@@ -33,6 +29,6 @@ class Linearisation:
             respect to the joint's parameters at ``values``.
     """
 
-    params: ParameterSet
+    names: tuple[str, ...]
     values: np.ndarray
     joint_twists: Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarray]]

@@ -203,10 +203,11 @@ class ParameterSet:
                 of another parameter set.
         """
         if isinstance(values, Linearisation):
-            if values.params is not self and values.params != self:
+            if values.names != self.names:
                 raise ParameterError(
-                    f"a linearisation of parameter set {values.params.label!r} was given for "
-                    f"set {self.label!r}: linearise this set at the values instead"
+                    f"a linearisation of other parameters ({len(values.names)}: "
+                    f"{', '.join(values.names[:3])}, …) was given for set {self.label!r}: "
+                    f"linearise this set at the values instead"
                 )
             return values
         values = np.array(self.check_values(values))  # own read-only copy
@@ -217,7 +218,7 @@ class ParameterSet:
             v = Xi @ values[cols]
             eff = Xi if not np.any(v) else pin.Jexp6(v) @ Xi
             twists[j] = (cols, v, eff)
-        return Linearisation(self, values, twists)
+        return Linearisation(self.names, values, twists)
 
     def apply(self, mech: Mechanism, values: np.ndarray | Linearisation | None) -> Mechanism:
         """A new mechanism with the joint origins displaced by ``values`` (SI units).
