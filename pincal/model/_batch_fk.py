@@ -107,9 +107,8 @@ class BatchLoopSolver:
             a = a0[i] + (t[i] + h[i])[:, None] * (A[i] - a0[i])
             bk = BatchKinematics(Q[i], R[i], p[i], J[i])
             Jc = self.kernels.closure_terms_batch(bk, columns=np.arange(nv))[1]
-            rate = (Jc[:, :, act] @ (a - self.queries.actuator_values_batch(Q[i]))[..., None])[
-                ..., 0
-            ]
+            da = a - self.queries.actuator_values_batch(Q[i])
+            rate = (Jc[:, :, act] @ da[..., None])[..., 0]
             try:
                 step = self.kernels.passive_steps(Jc[:, :, free], rate)
             except np.linalg.LinAlgError:  # an exactly singular row: all to the fallback
