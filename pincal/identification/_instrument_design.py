@@ -65,7 +65,8 @@ def instrument_blocks(
     """
     rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
     plan = jacobian_plan(mech, params)
-    sens = [pose_sensitivity(mech, params, q, None, plan) for q in mech.configurations(rows)]
+    lin = params.linearise(None)
+    sens = [pose_sensitivity(mech, params, q, lin, plan) for q in mech.configurations(rows)]
     P = np.array([s.position for s in sens])
     Jp = np.array([s.jacobian[:3] for s in sens])
     _, dv_dp, dv_dth = instrument.predict(P, theta, plane)

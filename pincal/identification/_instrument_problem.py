@@ -194,6 +194,7 @@ class InstrumentProblem:
         mech = self.mechanism(x)
         qs = self._configurations(mech)
         plan = jacobian_plan(mech, self.params) if jacobian else None
+        lin = self.params.linearise(values) if jacobian else None  # once for all poses
         r_all, J_all, raws = [], [], []
         start, col = 0, n
         blocks = zip(self.datasets, self.instruments, self.sigma[: len(self.datasets)], strict=True)
@@ -202,7 +203,7 @@ class InstrumentProblem:
             q_block = qs[start : start + m]
             start += m
             if jacobian:
-                sens = [pose_sensitivity(mech, self.params, q, values, plan) for q in q_block]
+                sens = [pose_sensitivity(mech, self.params, q, lin, plan) for q in q_block]
                 P = np.array([s.position for s in sens])
                 Rs = [s.rotation for s in sens]
             else:

@@ -36,7 +36,13 @@ from pincal.errors import (
     ParameterError,
 )
 from pincal.measure import Measurements, NoiseModel
-from pincal.model import BatchKinematics, Mechanism, ParameterSet, joint_term_basis
+from pincal.model import (
+    BatchKinematics,
+    Linearisation,
+    Mechanism,
+    ParameterSet,
+    joint_term_basis,
+)
 from pincal.model.kernels import jlog3_batch, log3_batch
 from pincal.sensitivity import sensitivities_batch
 from pincal.sensitivity.kernels import predict_configurations
@@ -115,11 +121,13 @@ class CalibrationProblem:
             joint_term_basis(mech, params, measurements.q_act) if params.joint_terms.size else None
         )
         self._qs: np.ndarray | None = None
-        self._solved: tuple[np.ndarray, Mechanism, BatchKinematics] | None = None
+        self._solved: tuple[Linearisation, Mechanism, BatchKinematics] | None = None
         #: start each solve from the first-order prediction of the parameter change
         #: (switched on by Gauss–Newton for its run; other solvers keep the last solution)
         self.predict_starts = False
         self._cache: tuple[bytes, Mechanism] | None = None
+        #: (values key, the parameter set linearised there) of the last values evaluated
+        self._linearised: tuple[bytes, Linearisation] | None = None
         self._memo: dict[bytes, tuple] = {}  # last evaluations: r_w, J_w, r_raw, qs, kinematics
         #: (values key, (m, k, n) model Jacobian of the measured components) of the last
         #: Jacobian evaluation, for :meth:`structural_jacobian`
@@ -163,6 +171,7 @@ class CalibrationProblem:
         new = CalibrationProblem(self.mech, self.params, self.meas)
         new.sigma, new.noise_source = sigma, "estimated"
         new._qs, new._solved, new._cache = self._qs, self._solved, self._cache
+        new._linearised = self._linearised
         new._structural = self._structural
         scale = (self.sigma / sigma).reshape(-1)
         for key, (r_w, J_w, raw, qs, bk) in self._memo.items():  # warm: re-weighted only
@@ -184,11 +193,19 @@ class CalibrationProblem:
         """Scalar measurement equations: poses × measured components."""
         return len(self.meas) * len(self.rows)
 
+    def linearisation(self, values: np.ndarray) -> Linearisation:
+        """The parameter set linearised at values (n,) [SI] (kept for the last one)."""
+        key = np.asarray(values, dtype=float).tobytes()
+        if self._linearised is None or self._linearised[0] != key:
+            self._linearised = (key, self.params.linearise(values))
+        return self._linearised[1]
+
     def mechanism(self, values: np.ndarray) -> Mechanism:
         """The mechanism with parameter values (n,) [SI] applied (cached for the last one)."""
         key = np.asarray(values, dtype=float).tobytes()
         if self._cache is None or self._cache[0] != key:
-            mech = self.mech if not np.any(values) else self.params.apply(self.mech, values)
+            lin = self.linearisation(values)
+            mech = self.mech if not np.any(values) else self.params.apply(self.mech, lin)
             self._cache = (key, mech)
         return self._cache[1]
 
@@ -256,8 +273,8 @@ class CalibrationProblem:
         """
         if self._solved is None or not self.predict_starts:
             return self._qs
-        v0, mech0, bk0 = self._solved
-        pred = predict_configurations(mech0, self.params, bk0, v0, values - v0)
+        lin0, mech0, bk0 = self._solved
+        pred = predict_configurations(mech0, self.params, bk0, lin0, values - lin0.values)
         return self._qs if pred is None else pred
 
     def _configurations(self, mech: Mechanism, values: np.ndarray):
@@ -277,13 +294,14 @@ class CalibrationProblem:
                     qs[i] = mech.configuration(q_i, None, pose_index=i)
             bk = None
         self._qs = qs
-        self._solved = None if bk is None else (values.copy(), mech, bk)
+        self._solved = None if bk is None else (self.linearisation(values), mech, bk)
         return qs, bk
 
     def _residuals(self, mech: Mechanism, values: np.ndarray, qs, bk, jacobian: bool):
         meas = self.meas
         if jacobian:
-            sens = sensitivities_batch(mech, self.params, qs, bk, values, self._basis)
+            lin = self.linearisation(values)
+            sens = sensitivities_batch(mech, self.params, qs, bk, lin, self._basis)
             p, R = sens.positions, sens.rotations
         elif bk is not None:
             R, p = mech.batch_model.frame_placement(bk, mech.frame_id(mech.measured_frame))

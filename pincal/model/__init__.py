@@ -52,6 +52,7 @@ from pincal.model._joint_terms import (
     term_kinds,
 )
 from pincal.model._kinematics import Kinematics
+from pincal.model._linearisation import Linearisation
 from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
 from pincal.model._named import find_local_sidecar, model_record, srdf_home
@@ -118,6 +119,7 @@ __all__ = [
     "JointReadings",
     "JointTerm",
     "Kinematics",
+    "Linearisation",
     "Mechanism",
     "ModelLimits",
     "Parameter",

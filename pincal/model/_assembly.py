@@ -1,12 +1,16 @@
-"""Assembly of a closed-loop mechanism: home configuration, mobility, singularity checks.
+"""Assembly of a closed-loop mechanism: the loop-closing Newton, home, mobility.
 
-:class:`Assembly` is the part of :class:`~pincal.model.Mechanism` that closes the loops
-(damped Newton from :mod:`pincal.model._newton`) and diagnoses what goes wrong.
+:func:`closure_newton` closes the loops of a
+:class:`~pincal.model._kinematics.KinematicQueries` (damped Newton from
+:mod:`pincal.model._newton`); :class:`Assembly` assembles the home configuration,
+diagnoses why loops stay open and measures the mobility there (:class:`Mobility`).
 """
 
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -21,16 +25,81 @@ from pincal.errors import (
 from pincal.model._kinematics import KinematicQueries
 from pincal.model._newton import Solution, SolverOptions, damped_newton
 
-__all__ = ["Assembly"]
+__all__ = ["Assembly", "Mobility", "closure_newton"]
+
+#: extra residual rows of a Newton solve: ``extra(data) -> (r (k,), J (k, nv))``
+Extra = Callable[[pin.Data], tuple[np.ndarray, np.ndarray]]
 
 
-class Assembly(KinematicQueries):
-    """Loop closing and its diagnoses (mixed into Mechanism)."""
+def closure_newton(
+    queries: KinematicQueries,
+    q0: np.ndarray,
+    free: np.ndarray,
+    options: SolverOptions,
+    extra: Extra | None = None,
+) -> Solution:
+    """Damped Newton on the closure (+ optional extra) residual over tangent dofs ``free``.
 
-    def _home_guess(self) -> np.ndarray:
+    ``extra`` is a callable of the computed data returning ``(r (k,), J (k, nv))``.
+    """
+    data = queries.data()
+    extra_jacobian = [np.zeros((0, queries.model.nv))]
+
+    def evaluate(qq: np.ndarray) -> np.ndarray:
+        queries.compute(qq)
+        r = queries.residual_of(data)
+        if extra is not None:
+            r_extra, extra_jacobian[0] = extra(data)
+            r = np.concatenate([r, r_extra])
+        return r
+
+    def jacobian() -> np.ndarray:
+        J = queries.jacobian_of(data)
+        return J if extra is None else np.vstack([J, extra_jacobian[0]])
+
+    return damped_newton(queries.model, q0, free, evaluate, jacobian, options)
+
+
+@dataclass(frozen=True)
+class Mobility:
+    """Mobility of a mechanism at home.
+
+    Attributes:
+        mobility: degrees of freedom (nv − closure rank − idle passive motions).
+        closure_rank: rank of the closure Jacobian.
+        passive_rank: rank of the passive closure Jacobian (over the passive dofs).
+        idle_joints: passive joints the actuators do not hold and that do not move the
+            measured frame.
+    """
+
+    mobility: int
+    closure_rank: int
+    passive_rank: int
+    idle_joints: tuple[str, ...]
+
+
+class Assembly:
+    """Loop closing at home and its diagnoses.
+
+    Args:
+        queries: the kinematic queries of the mechanism.
+        options: the Newton settings.
+    """
+
+    def __init__(self, queries: KinematicQueries, options: SolverOptions):
+        self.queries, self.options = queries, options
+        self.model, self.name, self.closures = queries.model, queries.name, queries.closures
+        #: remarks gathered while assembling (for ``pincal info``)
+        self.notes: list[str] = []
+
+    def _newton(self, q0: np.ndarray, free: np.ndarray) -> Solution:
+        return closure_newton(self.queries, q0, free, self.options)
+
+    def home_guess(self, home: Mapping[str, object]) -> np.ndarray:
+        """The configuration (nq,) of the sidecar ``home`` values (neutral elsewhere)."""
         q = pin.neutral(self.model)
-        for name, value in self.sidecar.home.items():
-            j = self.joint_id(name)
+        for name, value in home.items():
+            j = self.queries.joint_id(name)
             qi, nq = self.model.idx_qs[j], self.model.nqs[j]
             vals = np.atleast_1d(np.asarray(value, dtype=float))
             if nq == 7 and vals.size == 6:  # floating: x y z roll pitch yaw
@@ -43,37 +112,7 @@ class Assembly(KinematicQueries):
             q[qi : qi + nq] = vals
         return q
 
-    # ---------------------------------------------------------------- kinematics core
-    def _newton(
-        self,
-        q0: np.ndarray,
-        free: np.ndarray,
-        extra=None,
-        options: SolverOptions | None = None,
-    ) -> Solution:
-        """Damped Newton on the closure (+ optional extra) residual over tangent dofs ``free``.
-
-        ``extra`` is a callable of the computed data returning ``(r (k,), J (k, nv))``;
-        ``options`` replaces :attr:`options` for this solve.
-        """
-        data = self._data()
-        extra_jacobian = [np.zeros((0, self.model.nv))]
-
-        def evaluate(qq: np.ndarray) -> np.ndarray:
-            self._compute(qq)
-            r = self._closure_residual(data)
-            if extra is not None:
-                r_extra, extra_jacobian[0] = extra(data)
-                r = np.concatenate([r, r_extra])
-            return r
-
-        def jacobian() -> np.ndarray:
-            J = self._closure_jacobian(data)
-            return J if extra is None else np.vstack([J, extra_jacobian[0]])
-
-        return damped_newton(self.model, q0, free, evaluate, jacobian, options or self.options)
-
-    def _assemble(self, guess: np.ndarray, keep_actuators: bool = False) -> np.ndarray:
+    def assemble(self, guess: np.ndarray, keep_actuators: bool = False) -> np.ndarray:
         """Close the loops from ``guess``.
 
         With ``keep_actuators`` only passive joints move (the actuator values of a
@@ -83,9 +122,9 @@ class Assembly(KinematicQueries):
             return guess
         if keep_actuators:
             try:
-                return self._newton(guess, self._free_v).q
+                return self._newton(guess, self.queries.free_v).q
             except ConvergenceError:
-                self._assembly_notes.append(
+                self.notes.append(
                     "the sidecar home actuator values do not close the loops: home was "
                     "assembled moving the actuated joints too"
                 )
@@ -98,11 +137,11 @@ class Assembly(KinematicQueries):
 
     def _open_closure_diagnosis(self, guess: np.ndarray, residual: float) -> str:
         """Why the loops stay open: frame names, the home guess, or the geometry."""
-        r = self.closure_residual(guess)
+        r = self.queries.closure_residual(guess)
         k = self._worst_closure_index(r)
         c = self.closures[k]
         k0 = sum(cc.size for cc in self.closures[:k])
-        rows = self.closure_jacobian(guess)[k0 : k0 + c.size]
+        rows = self.queries.closure_jacobian(guess)[k0 : k0 + c.size]
         head = (
             f"mechanism {self.name!r} cannot be assembled: closure {c.frame_a} ↔ {c.frame_b} "
             f"stays open (residual {residual * 1e3:.3f} mm/mrad after Newton; "
@@ -132,8 +171,8 @@ class Assembly(KinematicQueries):
     def _same_body(self, frame_a: str, frame_b: str) -> bool:
         """Whether no joint of the Pinocchio model lies between the two frames."""
         fa, fb = (
-            self.model.frames[self.frame_id(frame_a)],
-            self.model.frames[self.frame_id(frame_b)],
+            self.model.frames[self.queries.frame_id(frame_a)],
+            self.model.frames[self.queries.frame_id(frame_b)],
         )
         return fa.parentJoint == fb.parentJoint
 
@@ -142,13 +181,13 @@ class Assembly(KinematicQueries):
         return int(np.argmax([np.max(np.abs(r[a:b])) for a, b in itertools.pairwise(sizes)]))
 
     def _passive_rank(self, q: np.ndarray) -> int:
-        Jf = self.closure_jacobian(q)[:, self._free_v]
+        Jf = self.queries.closure_jacobian(q)[:, self.queries.free_v]
         if Jf.size == 0:
             return 0
         s = np.linalg.svd(Jf, compute_uv=False)
         return int(np.sum(s > self.options.rcond * s[0])) if s[0] > 0 else 0
 
-    def _check_not_singular_home(self, rank_u: int) -> None:
+    def _check_not_singular_home(self, q_home: np.ndarray, rank_u: int) -> None:
         """Report a rank drop at home that disappears nearby as a singular home.
 
         Such a drop is not a mobility problem: say so (instead of "actuate more joints").
@@ -156,7 +195,7 @@ class Assembly(KinematicQueries):
         rng = np.random.default_rng(0)
         nearby = max(
             self._passive_rank(
-                pin.integrate(self.model, self.q_home, 1e-3 * rng.standard_normal(self.model.nv))
+                pin.integrate(self.model, q_home, 1e-3 * rng.standard_normal(self.model.nv))
             )
             for _ in range(3)
         )
@@ -176,36 +215,45 @@ class Assembly(KinematicQueries):
                 return m.names[j]
         return "?"
 
-    def _check_mobility(self) -> None:
-        data = self._compute(self.q_home)
-        Jc = self._closure_jacobian(data)
-        n_act = len(self.actuated)
+    def mobility(self, q_home: np.ndarray) -> Mobility:
+        """The mobility at the assembled home ``q_home`` (nq,).
+
+        Raises:
+            MobilityError: the actuated joints do not fix the measured frame, or their
+                number is not the mobility.
+            SingularConfigurationError: home is singular (the rank drops only there).
+        """
+        free_v = self.queries.free_v
+        data = self.queries.compute(q_home)
+        Jc = self.queries.jacobian_of(data)
+        n_act = len(self.queries.actuated)
         if Jc.shape[0] == 0:
-            rank, rank_u, nullspace = 0, 0, np.eye(self._free_v.size)
+            rank, rank_u, nullspace = 0, 0, np.eye(free_v.size)
         else:
             s = np.linalg.svd(Jc, compute_uv=False)
             rank = int(np.sum(s > self.options.rcond * s[0])) if s[0] > 0 else 0
-            _, su, Vt = np.linalg.svd(Jc[:, self._free_v])
+            _, su, Vt = np.linalg.svd(Jc[:, free_v])
             rank_u = int(np.sum(su > self.options.rcond * su[0])) if su[0] > 0 else 0
             nullspace = Vt[rank_u:].T
-        idle = self._free_v.size - rank_u
+        idle = free_v.size - rank_u
         mobility = self.model.nv - rank - idle
         if idle:  # passive motions the actuators do not fix must not move the measured frame
-            fid = self.frame_id(self.measured_frame)
-            Jm = pin.getFrameJacobian(self.model, data, fid, pin.LOCAL)[:, self._free_v]
+            fid = self.queries.frame_id(self.queries.measured_frame)
+            Jm = pin.getFrameJacobian(self.model, data, fid, pin.LOCAL)[:, free_v]
             moved = np.linalg.norm(Jm @ nullspace, axis=0)
             if np.any(moved > 1e-9):
                 if self.closures:
-                    self._check_not_singular_home(rank_u)
+                    self._check_not_singular_home(q_home, rank_u)
                 motion = np.abs(nullspace[:, moved > 1e-9]).max(axis=1)
                 free = [
-                    self._tangent_joint(int(self._free_v[k]))
+                    self._tangent_joint(int(free_v[k]))
                     for k in np.nonzero(motion > 0.1 * motion.max())[0]
                 ]
                 err = MobilityError(
                     f"mechanism {self.name!r}: {int(np.sum(moved > 1e-9))} passive degree(s) "
                     f"of freedom are not fixed by the {n_act} actuated joints "
-                    f"{list(self.actuated)} and move the measured frame; free passive joints: "
+                    f"{list(self.queries.actuated)} and move the measured frame; free passive "
+                    f"joints: "
                     f"{list(dict.fromkeys(free))}. Actuate one of them (sidecar 'name_mot') or "
                     f"add closures"
                 )
@@ -213,33 +261,20 @@ class Assembly(KinematicQueries):
                 raise err
         if mobility != n_act or rank != rank_u:
             if self.closures:
-                self._check_not_singular_home(rank_u)
+                self._check_not_singular_home(q_home, rank_u)
             raise MobilityError(
                 f"mechanism {self.name!r} has mobility {mobility} (nv {self.model.nv} − closure "
                 f"rank {rank} − idle {idle}) but {n_act} actuated joints are declared "
-                f"{list(self.actuated)}"
+                f"{list(self.queries.actuated)}"
             )
-        self._rank_u = rank_u
-        self.mobility = mobility
-        self.closure_rank = rank
-        self.idle_joints = tuple(
-            dict.fromkeys(
-                self._tangent_joint(int(self._free_v[k]))
-                for k in np.nonzero(np.abs(nullspace).max(axis=1) > 1e-6)[0]
+        idle_joints = (
+            tuple(
+                dict.fromkeys(
+                    self._tangent_joint(int(free_v[k]))
+                    for k in np.nonzero(np.abs(nullspace).max(axis=1) > 1e-6)[0]
+                )
             )
             if idle
             else ()
         )
-
-    # ------------------------------------------------------------------ public API
-    def _check_singular(self, sol: Solution, where: str, pose_index: int | None) -> None:
-        s = sol.singular_values
-        r = self._rank_u
-        cond = s[0] / s[r - 1] if r and s[r - 1] > 0 else np.inf
-        if r and cond > self.options.max_condition:
-            raise SingularConfigurationError(
-                f"singular configuration at {where}: closure Jacobian condition number "
-                f"{cond:.3g} (limit {self.options.max_condition:.0e})",
-                pose_index=pose_index,
-                condition=float(cond),
-            )
+        return Mobility(mobility, rank, rank_u, idle_joints)

@@ -1,31 +1,31 @@
 """Forward kinematics of many poses at once (batched Newton on the passive joints).
 
-:class:`BatchTracking` is the part of :class:`~pincal.model.Mechanism` that closes the
-loops for N actuator rows together, on :class:`~pincal.model._batch_newton.BatchNewton`
+:class:`BatchLoopSolver` closes the loops for N actuator rows together, on
+:class:`~pincal.model._batch_newton.BatchNewton`
 (closure terms, passive factors, Newton iterations in chunks of :data:`CHUNK` poses).
 A pose is accepted when its residual is below ``options.tol`` and it is on home's
 assembly branch (sign of det of the passive closure Jacobian or of its branch block,
 from the same factors). Poses whose residual does not decrease, that leave the
 branch, or whose condition bound comes near ``options.max_condition`` are handed to
-the pose-by-pose solver (:meth:`configuration`: damped Newton, continuation, exact
-singularity check), so results and errors are those of the pose-by-pose path.
+the pose-by-pose solver (:meth:`~pincal.model._branch.LoopSolver.configuration`:
+damped Newton, continuation, exact singularity check), so results and errors are
+those of the pose-by-pose path.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pincal.errors import ConvergenceError, ShapeError
 from pincal.model._batch import BatchKinematics
 from pincal.model._batch_closures import closure_jacobian_batch, closure_residual_batch
-from pincal.model._batch_newton import BatchNewton
+from pincal.model._batch_newton import BatchNewton, check_rows
 from pincal.model._block_solve import PassiveFactor
-from pincal.model._branch import _CORRECTOR_ITERATIONS, _MIN_STEP
+from pincal.model._branch import _CORRECTOR_ITERATIONS, _MIN_STEP, LoopSolver
 
-__all__ = ["BatchTracking", "closure_jacobian_batch", "closure_residual_batch"]
+__all__ = ["BatchLoopSolver", "closure_jacobian_batch", "closure_residual_batch"]
 
 #: poses per chunk of the batched solves (temporaries of a chunk stay in the L2 cache)
 CHUNK = 256
@@ -35,17 +35,21 @@ CHUNK = 256
 _MIN_CONTINUATION_ROWS = 16
 
 
-class BatchTracking(BatchNewton):
-    """Batched loop closing (mixed into Mechanism)."""
+class BatchLoopSolver:
+    """Batched loop closing on home's branch, falling back on the pose-by-pose solver.
 
-    if TYPE_CHECKING:  # provided by Mechanism, which mixes this class in
+    Args:
+        kernels: the batched closure terms, factors and Newton iterations.
+        loop: the pose-by-pose solver (home, its branch, the fallback for rows the
+            batched solve does not accept).
+    """
 
-        def configuration(
-            self,
-            q_act: np.ndarray,
-            q_guess: np.ndarray | None = None,
-            pose_index: int | None = None,
-        ) -> np.ndarray: ...
+    def __init__(self, kernels: BatchNewton, loop: LoopSolver):
+        self.kernels, self.loop = kernels, loop
+        self.queries, self.options = loop.queries, loop.options
+        self.model, self.closures = loop.model, loop.closures
+        self.q_home, self.idle_branch = loop.q_home, loop.idle_branch
+        self._free_v = loop.queries.free_v
 
     @property
     def batch_solvable(self) -> bool:
@@ -56,12 +60,12 @@ class BatchTracking(BatchNewton):
         block regular there (``idle_branch`` ≠ 0): square systems, redundant closure
         rows and idle passive motion are all solved in batch.
         """
-        rows, k = self.n_closure_rows, self._free_v.size
+        rows, k = self.queries.n_closure_rows, self._free_v.size
         return (
             bool(self.closures)
             and self.idle_branch != 0.0
-            and self.batch_model.supported
-            and self._rank_u == min(rows, k)
+            and self.kernels.batch_model.supported
+            and self.loop.passive_rank == min(rows, k)
         )
 
     def _continue_batch(
@@ -86,11 +90,11 @@ class BatchTracking(BatchNewton):
             1/4096 of the path: the pose-by-pose continuation's own failure).
         """
         n, nv = A.shape[0], self.model.nv
-        free, act = self._free_v, self._act_v_arr
-        a0 = self._actuator_values_batch(Q0)
+        free, act = self._free_v, self.queries.act_v_arr
+        a0 = self.queries.actuator_values_batch(Q0)
         t, h = np.zeros(n), np.full(n, 0.25)
         Q = np.array(Q0)
-        kin = self.batch_model.kinematics(Q)  # of each row's last closed configuration
+        kin = self.kernels.batch_model.kinematics(Q)  # of each row's last closed configuration
         R, p, J = kin.rotations, kin.translations, kin.jacobian
         alive = np.ones(n, dtype=bool)
         gave_up = np.zeros(n, dtype=bool)
@@ -102,20 +106,21 @@ class BatchTracking(BatchNewton):
             h[i] = np.minimum(h[i], 1.0 - t[i])
             a = a0[i] + (t[i] + h[i])[:, None] * (A[i] - a0[i])
             bk = BatchKinematics(Q[i], R[i], p[i], J[i])
-            Jc = self.closure_terms_batch(bk, columns=np.arange(nv))[1]
-            rate = (Jc[:, :, act] @ (a - self._actuator_values_batch(Q[i]))[..., None])[..., 0]
+            Jc = self.kernels.closure_terms_batch(bk, columns=np.arange(nv))[1]
+            da = a - self.queries.actuator_values_batch(Q[i])
+            rate = (Jc[:, :, act] @ da[..., None])[..., 0]
             try:
-                step = self.passive_steps(Jc[:, :, free], rate)
+                step = self.kernels.passive_steps(Jc[:, :, free], rate)
             except np.linalg.LinAlgError:  # an exactly singular row: all to the fallback
                 alive[i] = False
                 break
             DV = np.zeros((i.size, nv))
             DV[:, free] = step
-            cand = self._actuators_batch(self.batch_model.integrate(Q[i], DV), a)
+            cand = self.queries.actuators_batch(self.kernels.batch_model.integrate(Q[i], DV), a)
             travel = np.zeros(i.size)
             Rc, pc, Jjc = np.empty_like(R[i]), np.empty_like(p[i]), np.empty_like(J[i])
-            Jf = np.empty((i.size, self.n_closure_rows, free.size))
-            conv = self._newton_chunk(
+            Jf = np.empty((i.size, self.queries.n_closure_rows, free.size))
+            conv = self.kernels.newton_chunk(
                 cand,
                 Rc,
                 pc,
@@ -126,7 +131,7 @@ class BatchTracking(BatchNewton):
                 polish=False,
             )
             Jf[~conv] = np.eye(*Jf.shape[1:])
-            ok = conv & (self.passive_factor(Jf).sign() == self.idle_branch)
+            ok = conv & (self.kernels.passive_factor(Jf).sign() == self.idle_branch)
             ok &= travel <= 0.25 * np.linalg.norm(step, axis=1) + 1e-7
             Q[i[ok]], t[i[ok]] = cand[ok], t[i[ok]] + h[i[ok]]
             R[i[ok]], p[i[ok]], J[i[ok]] = Rc[ok], pc[ok], Jjc[ok]
@@ -134,19 +139,19 @@ class BatchTracking(BatchNewton):
             gave_up[i[h[i] < _MIN_STEP]] = True
             alive &= ~gave_up
         reached = alive & (t >= 1.0)
-        return self._actuators_batch(Q[reached], A[reached]), reached, gave_up
+        return self.queries.actuators_batch(Q[reached], A[reached]), reached, gave_up
 
-    def _close_chunks(
+    def close_chunks(
         self, Q: np.ndarray, R: np.ndarray, p: np.ndarray, J: np.ndarray, Jf: np.ndarray
     ) -> np.ndarray:
         """Batched Newton in chunks of :data:`CHUNK` rows, in place: converged mask (N,)."""
         done = np.zeros(Q.shape[0], dtype=bool)
         for s in range(0, Q.shape[0], CHUNK):
             rows = slice(s, s + CHUNK)
-            done[rows] = self._newton_chunk(Q[rows], R[rows], p[rows], J[rows], Jf[rows])
+            done[rows] = self.kernels.newton_chunk(Q[rows], R[rows], p[rows], J[rows], Jf[rows])
         return done
 
-    def _accept(
+    def accept(
         self, Jf: np.ndarray, done: np.ndarray
     ) -> tuple[PassiveFactor, np.ndarray, np.ndarray]:
         """Factors of ``Jf`` (N, rows, k), accepted mask (N,) and possibly singular mask (N,).
@@ -157,7 +162,7 @@ class BatchTracking(BatchNewton):
         identity stand-in in ``Jf`` (any full-rank matrix).
         """
         Jf[~done] = np.eye(*Jf.shape[1:])
-        factor = self.passive_factor(Jf)
+        factor = self.kernels.passive_factor(Jf)
         with np.errstate(all="ignore"):
             cond = np.sqrt(np.sum(Jf**2, axis=(1, 2))) * factor.inverse_norm_bound()
         risky = ~np.isfinite(cond) | (cond > self.options.max_condition) | factor.singular
@@ -177,14 +182,14 @@ class BatchTracking(BatchNewton):
         the converged Jacobians at once.
         """
         N, nj, k = A.shape[0], self.model.njoints, self._free_v.size
-        m = self.n_closure_rows
-        Q = self._actuators_batch(Q0, A)
+        m = self.queries.n_closure_rows
+        Q = self.queries.actuators_batch(Q0, A)
         R = np.empty((N, nj, 3, 3))
         p = np.empty((N, nj, 3))
         J = np.empty((N, 6, self.model.nv))
         Jf = np.empty((N, m, k))
-        done = self._close_chunks(Q, R, p, J, Jf)
-        factor, ok, risky = self._accept(Jf, done)
+        done = self.close_chunks(Q, R, p, J, Jf)
+        factor, ok, risky = self.accept(Jf, done)
         # not closed or on another branch (not merely near a singularity): continuation
         retry = np.nonzero(~ok & ~(done & risky))[0]
         hopeless = np.zeros(N, dtype=bool)
@@ -195,9 +200,9 @@ class BatchTracking(BatchNewton):
             idx = retry[reached]
             if idx.size:
                 Rc, pc, Jc, Jfc = R[idx], p[idx], J[idx], Jf[idx]
-                done[idx] = self._close_chunks(Qc, Rc, pc, Jc, Jfc)
+                done[idx] = self.close_chunks(Qc, Rc, pc, Jc, Jfc)
                 Q[idx], R[idx], p[idx], J[idx], Jf[idx] = Qc, Rc, pc, Jc, Jfc
-                factor, ok, _ = self._accept(Jf, done)
+                factor, ok, _ = self.accept(Jf, done)
         return Q, ok, BatchKinematics(Q, R, p, J, Jf, factor), hopeless
 
     def try_configurations_batch(
@@ -209,13 +214,13 @@ class BatchTracking(BatchNewton):
         usable configuration: redo them with :meth:`configuration`. For a mechanism the
         batched solve does not apply to, nothing is accepted (kinematics None).
         """
-        rows = self._check_rows(q_act_rows, len(self.actuated), "actuator rows")
+        rows = check_rows(q_act_rows, len(self.queries.actuated), "actuator rows")
         N = rows.shape[0]
         G = np.tile(self.q_home, (N, 1)) if guesses is None else guesses
-        G = self._check_rows(G, self.model.nq, "guesses")
-        if not self.closures and self.batch_model.supported:
-            Q = self._actuators_batch(G, rows)
-            return Q, np.ones(N, dtype=bool), self.batch_model.kinematics(Q)
+        G = check_rows(G, self.model.nq, "guesses")
+        if not self.closures and self.kernels.batch_model.supported:
+            Q = self.queries.actuators_batch(G, rows)
+            return Q, np.ones(N, dtype=bool), self.kernels.batch_model.kinematics(Q)
         if not self.batch_solvable:
             return np.array(G), np.zeros(N, dtype=bool), None
         return self._solve_batch(rows, G)[:3]
@@ -228,7 +233,7 @@ class BatchTracking(BatchNewton):
         closes, and rows its continuation gives up on by the pose-by-pose criterion
         (a step below 1/4096 of the path); the others are tried pose by pose.
         """
-        rows = self._check_rows(q_act_rows, len(self.actuated), "actuator rows")
+        rows = check_rows(q_act_rows, len(self.queries.actuated), "actuator rows")
         ok = np.zeros(rows.shape[0], dtype=bool)
         hopeless = np.zeros_like(ok)
         if not self.closures:
@@ -237,7 +242,7 @@ class BatchTracking(BatchNewton):
             _, ok, _, hopeless = self._solve_batch(rows, np.tile(self.q_home, (len(rows), 1)))
         for j in np.nonzero(~ok & ~hopeless)[0]:
             try:
-                self.configuration(rows[j])
+                self.loop.configuration(rows[j])
                 ok[j] = True
             except ConvergenceError:
                 pass
@@ -264,34 +269,46 @@ class BatchTracking(BatchNewton):
             ConvergenceError, SingularConfigurationError: as :meth:`configuration`,
                 naming the pose index.
         """
-        rows = self._check_rows(q_act_rows, len(self.actuated), "actuator rows")
+        rows = check_rows(q_act_rows, len(self.queries.actuated), "actuator rows")
         N = rows.shape[0]
-        G = None if guesses is None else self._check_rows(guesses, self.model.nq, "guesses")
+        G = None if guesses is None else check_rows(guesses, self.model.nq, "guesses")
         if G is not None and G.shape[0] != N:
             raise ShapeError(f"guesses must have {N} rows (one per actuator row), got {len(G)}")
         if not self.closures:
-            out = self._actuators_batch(np.tile(self.q_home, (N, 1)) if G is None else G, rows)
-            return out, (self.batch_model.kinematics(out) if self.batch_model.supported else None)
+            out = self.queries.actuators_batch(
+                np.tile(self.q_home, (N, 1)) if G is None else G, rows
+            )
+            return out, (
+                self.kernels.batch_model.kinematics(out)
+                if self.kernels.batch_model.supported
+                else None
+            )
         if not self.batch_solvable:
             out = np.empty((N, self.model.nq))
             for i, row in enumerate(rows):
                 guess = G[i] if G is not None else (out[i - 1] if i else self.q_home)
-                out[i] = self.configuration(row, guess, pose_index=i)
-            bk = self.batch_model.kinematics(out) if self.batch_model.supported else None
+                out[i] = self.loop.configuration(row, guess, pose_index=i)
+            bk = (
+                self.kernels.batch_model.kinematics(out)
+                if self.kernels.batch_model.supported
+                else None
+            )
             return out, bk
         start = np.tile(self.q_home, (N, 1)) if G is None else G
         Q, ok, bk, _ = self._solve_batch(rows, start)
         for j in np.nonzero(~ok)[0]:  # from home (or the row's guess), as configuration()
             guess = G[j] if G is not None else self.q_home
-            Q[j] = self.configuration(rows[j], guess, pose_index=int(j))
+            Q[j] = self.loop.configuration(rows[j], guess, pose_index=int(j))
         redo = np.nonzero(~ok)[0]
         if redo.size:
-            fix = self.batch_model.kinematics(Q[redo])
+            fix = self.kernels.batch_model.kinematics(Q[redo])
             bk.rotations[redo], bk.translations[redo] = fix.rotations, fix.translations
             bk.jacobian[redo] = fix.jacobian
             if bk.closure_jacobian is not None:  # regular there: configuration() checked it
-                bk.closure_jacobian[redo] = self.closure_terms_batch(fix, columns=self._free_v)[1]
+                bk.closure_jacobian[redo] = self.kernels.closure_terms_batch(
+                    fix, columns=self._free_v
+                )[1]
                 bk = dataclasses.replace(
-                    bk, closure_factor=self.passive_factor(bk.closure_jacobian)
+                    bk, closure_factor=self.kernels.passive_factor(bk.closure_jacobian)
                 )
         return Q, bk

@@ -6,11 +6,13 @@ point closure in one set of array operations), factors the N passive closure
 Jacobians (:mod:`pincal.model._block_solve` for square systems: one reduced system for
 the shared joints, small blocks per leg; :class:`~pincal.model._range_factor.RangeFactor`
 for redundant rows or idle motion) and runs the Newton iterations of a chunk of poses.
-:mod:`pincal.model._batch_fk` builds the batched forward kinematics on it.
+:class:`~pincal.model._batch_fk.BatchLoopSolver` builds the batched forward
+kinematics on it.
 """
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import Literal, overload
 
 import numpy as np
@@ -23,10 +25,11 @@ from pincal.model._batch_closures import (
     closure_residual_batch,
 )
 from pincal.model._block_solve import BlockSolver, DenseFactor, PassiveFactor
-from pincal.model._branch import BranchTracking
+from pincal.model._kinematics import KinematicQueries
+from pincal.model._newton import SolverOptions
 from pincal.model._range_factor import RangeFactor
 
-__all__ = ["BatchNewton"]
+__all__ = ["BatchNewton", "check_rows"]
 
 #: Newton iterations of the batched solve before a row is handed to the pose-by-pose one
 MAX_BATCH_ITERATIONS = 30
@@ -35,16 +38,46 @@ MAX_BATCH_ITERATIONS = 30
 _ROUND_OFF = 1e-15
 
 
-class BatchNewton(BranchTracking):
-    """Batched closure terms, passive factors and Newton iterations (mixed into Mechanism)."""
+def check_rows(rows: np.ndarray, width: int, what: str) -> np.ndarray:
+    """``rows`` as a float array (N, width).
 
-    @property
+    Raises:
+        ShapeError: not numbers, or not of that shape.
+    """
+    try:
+        out = np.atleast_2d(np.asarray(rows, dtype=float))
+    except (TypeError, ValueError) as exc:
+        raise ShapeError(f"{what} must be numbers: {exc}") from exc
+    if out.ndim != 2 or out.shape[1] != width:
+        raise ShapeError(f"{what} must have shape (N, {width}), got {np.shape(rows)}")
+    return out
+
+
+class BatchNewton:
+    """Batched closure terms, passive factors and Newton iterations.
+
+    Args:
+        queries: the kinematic queries of the mechanism (model, closures, indices).
+        options: the Newton settings.
+        branch_block: the (rows, columns) branch block of the passive closure Jacobian
+            (:attr:`~pincal.model._branch.LoopSolver.branch_block`), None if none.
+    """
+
+    def __init__(
+        self,
+        queries: KinematicQueries,
+        options: SolverOptions,
+        branch_block: tuple[np.ndarray, np.ndarray] | None,
+    ):
+        self.queries, self.options, self.branch_block = queries, options, branch_block
+        self.model, self.name, self.closures = queries.model, queries.name, queries.closures
+        self._free_v = queries.free_v
+        self._point_closures_cache: dict[bytes, PointClosures] = {}
+
+    @cached_property
     def batch_model(self) -> BatchModel:
         """The batched numpy kinematics of :attr:`model` (built once)."""
-        bm = self.__dict__.get("_batch_model_cache")
-        if bm is None:
-            bm = self.__dict__["_batch_model_cache"] = BatchModel(self.model)
-        return bm
+        return BatchModel(self.model)
 
     def kinematics_batch(self, qs: np.ndarray) -> BatchKinematics:
         """Joint placements and WORLD joint Jacobian of configurations ``qs`` (N, nq).
@@ -52,29 +85,20 @@ class BatchNewton(BranchTracking):
         Raises:
             ShapeError: ``qs`` is not (N, nq).
         """
-        qs = self._check_rows(qs, self.model.nq, "configurations")
+        qs = check_rows(qs, self.model.nq, "configurations")
         if not self.batch_model.supported:
             raise ShapeError(  # pragma: no cover - every loader joint type is implemented
                 f"mechanism {self.name!r} has a joint type the batched kinematics lacks"
             )
         return self.batch_model.kinematics(qs)
 
-    def _check_rows(self, rows: np.ndarray, width: int, what: str) -> np.ndarray:
-        try:
-            out = np.atleast_2d(np.asarray(rows, dtype=float))
-        except (TypeError, ValueError) as exc:
-            raise ShapeError(f"{what} must be numbers: {exc}") from exc
-        if out.ndim != 2 or out.shape[1] != width:
-            raise ShapeError(f"{what} must have shape (N, {width}), got {np.shape(rows)}")
-        return out
-
     def _point_closures(self, cols: np.ndarray) -> PointClosures:
         """The point closures on Jacobian columns ``cols`` (built once per column set)."""
-        cache = self.__dict__.setdefault("_point_closures_cache", {})
+        cache = self._point_closures_cache
         key = np.asarray(cols, dtype=np.int64).tobytes()
         if key not in cache:
             rows, frames, r0 = [], [], 0
-            for fids, c in zip(self._closure_fids, self.closures, strict=True):
+            for fids, c in zip(self.queries.closure_fids, self.closures, strict=True):
                 if c.is_point:
                     rows.append(r0)
                     frames.append(fids)
@@ -82,20 +106,17 @@ class BatchNewton(BranchTracking):
             cache[key] = PointClosures(self.batch_model, frames, rows, cols)
         return cache[key]
 
-    @property
+    @cached_property
     def passive_solver(self) -> BlockSolver | None:
         """The block structure of the square passive closure Jacobian (None: dense)."""
-        if "_passive_solver_cache" not in self.__dict__:
-            bm, free = self.batch_model, self._free_v
-            blocks, support, r0 = [], [], 0
-            for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
-                moves = (bm.support_of_frame(a) | bm.support_of_frame(b))[free]
-                blocks.append(np.arange(r0, r0 + c.size))
-                support += [moves] * c.size
-                r0 += c.size
-            solver = BlockSolver.build(blocks, np.array(support)) if support else None
-            self.__dict__["_passive_solver_cache"] = solver
-        return self.__dict__["_passive_solver_cache"]
+        bm, free = self.batch_model, self._free_v
+        blocks, support, r0 = [], [], 0
+        for (a, b), c in zip(self.queries.closure_fids, self.closures, strict=True):
+            moves = (bm.support_of_frame(a) | bm.support_of_frame(b))[free]
+            blocks.append(np.arange(r0, r0 + c.size))
+            support += [moves] * c.size
+            r0 += c.size
+        return BlockSolver.build(blocks, np.array(support)) if support else None
 
     def passive_factor(self, Jf: np.ndarray) -> PassiveFactor:
         """Factor passive closure Jacobians ``Jf`` (N, rows, k).
@@ -104,7 +125,7 @@ class BatchNewton(BranchTracking):
         QR (minimum-norm least squares, :class:`RangeFactor`).
         """
         if Jf.shape[1] != Jf.shape[2]:
-            return RangeFactor.of(Jf, self._branch_block)
+            return RangeFactor.of(Jf, self.branch_block)
         solver = self.passive_solver
         return DenseFactor.of(Jf) if solver is None else solver.factor(Jf)
 
@@ -162,7 +183,7 @@ class BatchNewton(BranchTracking):
         J = np.zeros((N, sum(sizes), cols.size)) if jacobian else None
         self._point_closures(cols).terms(bk, r, J)
         row = 0
-        for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
+        for (a, b), c in zip(self.queries.closure_fids, self.closures, strict=True):
             rows = slice(row, row + c.size)
             row += c.size
             if c.is_point:
@@ -175,7 +196,7 @@ class BatchNewton(BranchTracking):
                 J[:, rows] = closure_jacobian_batch(c, Ra, pa, Rb, pb, Ja, Jb)[:, :, cols]
         return r, J
 
-    def _newton_chunk(
+    def newton_chunk(
         self,
         Q: np.ndarray,
         out_R: np.ndarray,

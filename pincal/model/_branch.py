@@ -31,11 +31,12 @@ import dataclasses
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import ConvergenceError
-from pincal.model._assembly import Assembly
+from pincal.errors import ConvergenceError, SingularConfigurationError
+from pincal.model._assembly import Extra, closure_newton
+from pincal.model._kinematics import KinematicQueries
 from pincal.model._newton import Solution, SolverOptions
 
-__all__ = ["BranchTracking"]
+__all__ = ["LoopSolver", "corrector_options"]
 
 _MIN_STEP = 1.0 / 4096  # smallest continuation step, as a fraction of the path
 #: corrector budget of one continuation step: converging correctors take <= 9 iterations
@@ -53,35 +54,73 @@ def corrector_options(options: SolverOptions) -> SolverOptions:
     )
 
 
-class BranchTracking(Assembly):
-    """Branch-preserving loop closing (mixed into Mechanism)."""
+class LoopSolver:
+    """Pose-by-pose loop closing on the assembly branch of home.
+
+    Args:
+        queries: the kinematic queries of the mechanism.
+        options: the Newton settings.
+        q_home: (nq,) the assembled home configuration.
+        passive_rank: rank of the passive closure Jacobian at home
+            (:attr:`~pincal.model._assembly.Mobility.passive_rank`).
+
+    Attributes:
+        home_branch: sign of det of the passive closure Jacobian at home (0 where it is
+            not square).
+        idle_branch: the sign of its branch block (the square block of rank rows and
+            non-idle columns; = ``home_branch`` where the Jacobian is square; 0: no
+            branch is checked).
+        branch_block: (rows, columns) of that block, None when there is none.
+    """
+
+    def __init__(
+        self,
+        queries: KinematicQueries,
+        options: SolverOptions,
+        q_home: np.ndarray,
+        passive_rank: int,
+    ):
+        self.queries, self.options, self.q_home = queries, options, q_home
+        self.model, self.closures = queries.model, queries.closures
+        self.passive_rank = passive_rank
+        self._free_v = queries.free_v
+        n, rows, r = self._free_v.size, queries.n_closure_rows, passive_rank
+        square = bool(self.closures and rows == n and r == n)
+        self.branch_block: tuple[np.ndarray, np.ndarray] | None = None
+        if square:
+            self.branch_block = (np.arange(n), np.arange(n))
+        elif self.closures and r > 0:
+            self.branch_block = self._reduced_block()
+        sign = self.branch_sign(q_home)
+        self.home_branch = sign if square else 0.0
+        self.idle_branch = sign
+
+    def newton(
+        self,
+        q0: np.ndarray,
+        free: np.ndarray,
+        extra: Extra | None = None,
+        options: SolverOptions | None = None,
+    ) -> Solution:
+        """Damped Newton on the closures (+ ``extra``) over tangent dofs ``free``.
+
+        ``options`` replaces :attr:`options` for this solve (see
+        :func:`~pincal.model._assembly.closure_newton`).
+        """
+        return closure_newton(self.queries, q0, free, options or self.options, extra)
 
     def _branch_det_sign(self, Jf: np.ndarray) -> float:
         """Sign of det of the branch block of a passive closure Jacobian (rows, n_free)."""
-        if self._branch_block is None:
+        if self.branch_block is None:
             return 0.0
-        rows, cols = self._branch_block
+        rows, cols = self.branch_block
         return float(np.sign(np.linalg.det(Jf[np.ix_(rows, cols)])))
 
-    def _branch_sign(self, q: np.ndarray) -> float:
+    def branch_sign(self, q: np.ndarray) -> float:
         """Sign of det of the (reduced) passive closure Jacobian at q, 0 if undefined."""
-        if self._branch_block is None:
+        if self.branch_block is None:
             return 0.0
-        return self._branch_det_sign(self.closure_jacobian(q)[:, self._free_v])
-
-    def _init_branch(self) -> None:
-        n, rows, r = self._free_v.size, self.n_closure_rows, self._rank_u
-        self._square_passive = bool(self.closures and rows == n and r == n)
-        self._branch_block: tuple[np.ndarray, np.ndarray] | None = None
-        if self._square_passive:
-            self._branch_block = (np.arange(n), np.arange(n))
-        elif self.closures and r > 0:
-            self._branch_block = self._reduced_block()
-        sign = self._branch_sign(self.q_home)
-        self.home_branch = sign if self._square_passive else 0.0
-        #: the branch sign of the square block of rank rows and non-idle columns
-        #: (= home_branch when the passive closure Jacobian is square; 0: no branch)
-        self.idle_branch = sign
+        return self._branch_det_sign(self.queries.closure_jacobian(q)[:, self._free_v])
 
     def _reduced_block(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Independent rows and non-idle columns of the passive closure Jacobian at home.
@@ -91,8 +130,8 @@ class BranchTracking(Assembly):
         """
         import scipy.linalg  # here: importing pincal must not load scipy
 
-        J = self.closure_jacobian(self.q_home)[:, self._free_v]
-        r = self._rank_u
+        J = self.queries.closure_jacobian(self.q_home)[:, self._free_v]
+        r = self.passive_rank
         _, _, row_piv = scipy.linalg.qr(J.T, pivoting=True)
         rows = np.sort(row_piv[:r])
         _, _, Vt = np.linalg.svd(J[rows])
@@ -106,13 +145,15 @@ class BranchTracking(Assembly):
             return None
         return rows, cols
 
-    def _on_branch(self, sol: Solution) -> bool:
+    def on_branch(self, sol: Solution) -> bool:
         """Whether a passive solve (Jacobian over the passive dofs kept) is on home's branch."""
         if self.idle_branch == 0.0:
             return True
-        return self._branch_det_sign(sol.jacobian[: self.n_closure_rows]) == self.idle_branch
+        return (
+            self._branch_det_sign(sol.jacobian[: self.queries.n_closure_rows]) == self.idle_branch
+        )
 
-    def _solve_on_branch(self, q_act: np.ndarray, start: np.ndarray) -> Solution:
+    def solve_on_branch(self, q_act: np.ndarray, start: np.ndarray) -> Solution:
         """Closed configuration for ``q_act`` on the home branch, starting from ``start``.
 
         Raises:
@@ -124,8 +165,8 @@ class BranchTracking(Assembly):
         starts = [start] if start is self.q_home else [start, self.q_home]
         for q0 in starts:
             try:
-                sol = self._newton(self.with_actuators(q0, q_act), self._free_v)
-                if self._on_branch(sol):
+                sol = self.newton(self.queries.with_actuators(q0, q_act), self._free_v)
+                if self.on_branch(sol):
                     return sol
             except ConvergenceError:
                 pass
@@ -140,7 +181,7 @@ class BranchTracking(Assembly):
 
     def _continue(self, q: np.ndarray, q_act: np.ndarray) -> Solution:
         """Predictor-corrector continuation along the straight actuator path."""
-        a0 = self.actuators_of(q)
+        a0 = self.queries.actuators_of(q)
         t, h = 0.0, 0.25
         sol = None
         residual = np.inf
@@ -150,11 +191,13 @@ class BranchTracking(Assembly):
             a = a0 + (t + h) * (q_act - a0)
             ok = False
             try:
-                pred = self._predict(q, a - self.actuators_of(q))
-                cand = self._newton(self.with_actuators(pred, a), self._free_v, options=corrector)
+                pred = self._predict(q, a - self.queries.actuators_of(q))
+                cand = self.newton(
+                    self.queries.with_actuators(pred, a), self._free_v, options=corrector
+                )
                 correction = pin.difference(self.model, pred, cand.q)[self._free_v]
                 moved = pin.difference(self.model, q, pred)[self._free_v]
-                ok = self._on_branch(cand) and (
+                ok = self.on_branch(cand) and (
                     np.linalg.norm(correction) <= 0.25 * np.linalg.norm(moved) + 1e-7
                 )
             except ConvergenceError as exc:
@@ -175,12 +218,61 @@ class BranchTracking(Assembly):
 
     def _predict(self, q: np.ndarray, da: np.ndarray) -> np.ndarray:
         """First-order passive motion for an actuator step ``da`` (configuration)."""
-        J = self.closure_jacobian(q)
+        J = self.queries.closure_jacobian(q)
         dv = np.zeros(self.model.nv)
-        dv[self._act_v_arr] = da
-        rhs = -(J[:, self._act_v_arr] @ da)
+        dv[self.queries.act_v_arr] = da
+        rhs = -(J[:, self.queries.act_v_arr] @ da)
         dv[self._free_v] = np.linalg.lstsq(J[:, self._free_v], rhs, rcond=None)[0]
-        q_act_part = self.with_actuators(q, self.actuators_of(q) + da)
+        q_act_part = self.queries.with_actuators(q, self.queries.actuators_of(q) + da)
         dv_free = np.zeros(self.model.nv)
         dv_free[self._free_v] = dv[self._free_v]
         return pin.integrate(self.model, q_act_part, dv_free)
+
+    def check_singular(self, sol: Solution, where: str, pose_index: int | None) -> None:
+        """Raise when the passive closure Jacobian of a solution is ill-conditioned.
+
+        Raises:
+            SingularConfigurationError: its condition number (over the passive rank at
+                home) exceeds ``options.max_condition``.
+        """
+        s = sol.singular_values
+        r = self.passive_rank
+        cond = s[0] / s[r - 1] if r and s[r - 1] > 0 else np.inf
+        if r and cond > self.options.max_condition:
+            raise SingularConfigurationError(
+                f"singular configuration at {where}: closure Jacobian condition number "
+                f"{cond:.3g} (limit {self.options.max_condition:.0e})",
+                pose_index=pose_index,
+                condition=float(cond),
+            )
+
+    def configuration(
+        self, q_act: np.ndarray, q_guess: np.ndarray | None = None, pose_index: int | None = None
+    ) -> np.ndarray:
+        """Full configuration (nq,) with loops closed for actuator values ``q_act``.
+
+        The solution stays on the assembly mode of :attr:`q_home`: a solve from
+        ``q_guess`` (default home) that fails or lands on another branch is redone from
+        home, then by continuation from the guess, then from home.
+
+        Raises:
+            ConvergenceError: no solution on the home branch (the message names the pose).
+            SingularConfigurationError: the passive joints are not locally unique.
+        """
+        q_act = self.queries.check_q_act(q_act)
+        guess = self.q_home if q_guess is None else self.queries.check_q(q_guess)
+        if not self.closures:
+            return self.queries.with_actuators(guess, q_act)
+        where = f"pose {pose_index}" if pose_index is not None else "pose"
+        try:
+            sol = self.solve_on_branch(q_act, guess)
+        except ConvergenceError as exc:
+            raise ConvergenceError(
+                f"forward kinematics failed at {where} (q_act = {np.round(q_act, 6).tolist()}): "
+                f"the loops do not close on the assembly branch of home (residual "
+                f"{exc.residual * 1e3:.3g} mm); {exc}",
+                pose_index=pose_index,
+                residual=exc.residual,
+            ) from exc
+        self.check_singular(sol, where, pose_index)
+        return sol.q

@@ -1,8 +1,10 @@
 """Kinematic queries of a mechanism at a given configuration (no shared state).
 
-:class:`KinematicQueries` is the part of :class:`~pincal.model.Mechanism` that
-evaluates placements, Jacobians and closure residuals at a configuration ``q``; each
-call fills a per-thread scratch ``pin.Data`` and returns fresh arrays.
+:class:`KinematicQueries` evaluates placements, Jacobians and closure residuals of a
+Pinocchio model with loop closures at a configuration ``q``; each call fills a
+per-thread scratch ``pin.Data`` and returns fresh arrays. It is built from explicit
+arguments (the model, its frames, closures and actuated joints) by
+:class:`~pincal.model.Mechanism`, and shared by its loop solvers.
 """
 
 from __future__ import annotations
@@ -16,11 +18,9 @@ import pinocchio as pin
 
 from pincal.errors import ShapeError, UnknownNameError
 from pincal.model._closures import Closure
-from pincal.model._newton import SolverOptions
-from pincal.model._sidecar import Sidecar
 from pincal.model._urdf import UrdfTree
 
-__all__ = ["KinematicQueries", "Kinematics"]
+__all__ = ["KinematicQueries", "Kinematics", "frame_index"]
 
 
 @dataclass(frozen=True)
@@ -51,76 +51,110 @@ def _as_floats(x: object, what: str) -> np.ndarray:
         raise ShapeError(f"{what} must be an array of numbers: {exc}") from exc
 
 
-class KinematicQueries:
-    """Configuration-in, fresh-arrays-out queries (mixed into Mechanism).
+def frame_index(frame_ids: Mapping[str, int], tree: UrdfTree, name: str) -> int:
+    """Pinocchio frame index of ``name`` in ``frame_ids`` (name → index).
 
-    Expects the attributes set by ``Mechanism.__init__`` (declared here for the mixins).
+    Raises:
+        UnknownNameError: no such frame (the URDF links are listed).
+    """
+    if name not in frame_ids:
+        raise UnknownNameError("frame", name, tree.links)
+    return frame_ids[name]
+
+
+class KinematicQueries:
+    """Configuration-in, fresh-arrays-out queries of a model with loop closures.
+
+    Args:
+        model: the Pinocchio model (not modified).
+        tree: the parsed URDF the model was built from.
+        name: the mechanism name (for messages).
+        frame_ids: frame name → Pinocchio frame index.
+        closures: the loop closures (their frames exist in ``frame_ids``).
+        actuated: actuated joint names (1-dof joints of ``model``).
+        measured_frame: the measured frame.
+
+    Attributes (besides the arguments):
+        key_frames: the measured frame and every closure frame, in that order.
+        n_closure_rows: number of closure residual rows.
+        closure_fids: (frame a, frame b) Pinocchio indices of each closure.
+        act_q, act_v, act_nq: configuration index, tangent index and nq of each actuator.
+        act_v_arr: (n_act,) tangent indices of the actuators.
+        free_v: (k,) tangent indices of the passive degrees of freedom.
     """
 
-    model: pin.Model
-    tree: UrdfTree
-    sidecar: Sidecar
-    name: str
-    options: SolverOptions
-    closures: tuple[Closure, ...]
-    actuated: tuple[str, ...]
-    measured_frame: str
-    key_frames: tuple[str, ...]
-    q_home: np.ndarray
-    n_closure_rows: int
-    _scratch: threading.local
-    _frame_ids: dict[str, int]
-    _closure_fids: list[tuple[int, int]]
-    _act_q: list[int]
-    _act_v: list[int]
-    _act_nq: list[int]
-    _act_v_arr: np.ndarray
-    _free_v: np.ndarray
-    _assembly_notes: list[str]
+    def __init__(
+        self,
+        model: pin.Model,
+        tree: UrdfTree,
+        name: str,
+        frame_ids: Mapping[str, int],
+        closures: tuple[Closure, ...],
+        actuated: tuple[str, ...],
+        measured_frame: str,
+    ):
+        self.model, self.tree, self.name = model, tree, name
+        self.frame_ids = dict(frame_ids)
+        self.closures, self.actuated, self.measured_frame = closures, actuated, measured_frame
+        self._scratch = threading.local()  # per-thread pin.Data, never read across calls
+        self.key_frames = tuple(
+            dict.fromkeys([measured_frame] + [f for c in closures for f in (c.frame_a, c.frame_b)])
+        )
+        self.act_q: list[int] = []
+        self.act_v: list[int] = []
+        self.act_nq: list[int] = []
+        for n in actuated:
+            j = model.getJointId(n)
+            self.act_q.append(model.idx_qs[j])
+            self.act_v.append(model.idx_vs[j])
+            self.act_nq.append(model.nqs[j])
+        act = set(self.act_v)
+        self.free_v = np.array([i for i in range(model.nv) if i not in act], dtype=int)
+        self.act_v_arr = np.array(self.act_v, dtype=int)
+        self.closure_fids = [(self.frame_id(c.frame_a), self.frame_id(c.frame_b)) for c in closures]
+        self.n_closure_rows = sum(c.size for c in closures)
 
     def frame_id(self, name: str) -> int:
         """Pinocchio frame index of a frame (URDF link or joint) by name."""
-        if name not in self._frame_ids:
-            raise UnknownNameError("frame", name, self.tree.links)
-        return self._frame_ids[name]
+        return frame_index(self.frame_ids, self.tree, name)
 
     def joint_id(self, name: str) -> int:
         if not self.model.existJointName(name):
             raise UnknownNameError("joint", name, list(self.model.names)[1:])
         return self.model.getJointId(name)
 
-    def _data(self) -> pin.Data:
+    def data(self) -> pin.Data:
         """This thread's scratch ``pin.Data``: filled and read within one call only."""
         data = getattr(self._scratch, "data", None)
         if data is None:
             data = self._scratch.data = self.model.createData()
         return data
 
-    def _compute(self, q: np.ndarray) -> pin.Data:
+    def compute(self, q: np.ndarray) -> pin.Data:
         """Placements and joint Jacobians at ``q`` in the scratch data."""
-        data = self._data()
+        data = self.data()
         pin.computeJointJacobians(self.model, data, q)
         pin.updateFramePlacements(self.model, data)
         return data
 
-    def _closure_residual(self, data: pin.Data) -> np.ndarray:
+    def residual_of(self, data: pin.Data) -> np.ndarray:
         if not self.closures:
             return np.zeros(0)
         oMf = data.oMf
         return np.concatenate(
             [
                 c.residual(oMf[a], oMf[b])
-                for (a, b), c in zip(self._closure_fids, self.closures, strict=True)
+                for (a, b), c in zip(self.closure_fids, self.closures, strict=True)
             ]
         )
 
-    def _closure_jacobian(self, data: pin.Data) -> np.ndarray:
+    def jacobian_of(self, data: pin.Data) -> np.ndarray:
         if not self.closures:
             return np.zeros((0, self.model.nv))
         oMf = data.oMf
         model, lwa, local = self.model, pin.LOCAL_WORLD_ALIGNED, pin.LOCAL
         blocks = []
-        for (a, b), c in zip(self._closure_fids, self.closures, strict=True):
+        for (a, b), c in zip(self.closure_fids, self.closures, strict=True):
             if c.is_point:  # world-aligned point velocities directly
                 Jb = pin.getFrameJacobian(model, data, b, lwa)
                 Ja = pin.getFrameJacobian(model, data, a, lwa)
@@ -131,7 +165,7 @@ class KinematicQueries:
                 blocks.append(c.jacobian(oMf[a], oMf[b], Ja, Jb))
         return np.vstack(blocks)
 
-    def _snapshot(
+    def snapshot(
         self, q: np.ndarray, data: pin.Data, frames: Sequence[str], jacobian_frames: Sequence[str]
     ) -> Kinematics:
         model = self.model
@@ -143,8 +177,8 @@ class KinematicQueries:
                 for f in jacobian_frames
             },
             joint_placements=tuple(pin.SE3(M) for M in data.oMi),
-            closure_residual=self._closure_residual(data),
-            closure_jacobian=self._closure_jacobian(data),
+            closure_residual=self.residual_of(data),
+            closure_jacobian=self.jacobian_of(data),
         )
 
     def kinematics(
@@ -162,9 +196,9 @@ class KinematicQueries:
             jacobian_frames: frames whose LOCAL Jacobian to keep (default: the measured
                 frame).
         """
-        q = self._check_q(q)
+        q = self.check_q(q)
         jac = (self.measured_frame,) if jacobian_frames is None else jacobian_frames
-        return self._snapshot(q, self._compute(q), frames or self.key_frames, jac)
+        return self.snapshot(q, self.compute(q), frames or self.key_frames, jac)
 
     def frame_link(self, frame: str) -> str:
         """URDF link a frame is attached to (a frame named by a joint sits on its child)."""
@@ -176,23 +210,23 @@ class KinematicQueries:
     @property
     def free_dofs(self) -> np.ndarray:
         """Tangent indices (k,) of the passive (not actuated) degrees of freedom."""
-        return self._free_v.copy()
+        return self.free_v.copy()
 
     def frame_placement(self, q: np.ndarray, frame: str | None = None) -> pin.SE3:
         """World placement (a new SE3) of ``frame`` (default: the measured frame) at ``q``."""
-        q = self._check_q(q)
+        q = self.check_q(q)
         fid = self.frame_id(frame or self.measured_frame)
-        return pin.SE3(self._compute(q).oMf[fid])
+        return pin.SE3(self.compute(q).oMf[fid])
 
     def closure_residual(self, q: np.ndarray) -> np.ndarray:
         """Closure residual at configuration q (n_closure_rows,) [m, rad]."""
-        return self._closure_residual(self._compute(self._check_q(q)))
+        return self.residual_of(self.compute(self.check_q(q)))
 
     def closure_jacobian(self, q: np.ndarray) -> np.ndarray:
         """(n_closure_rows, nv) closure Jacobian at configuration q."""
-        return self._closure_jacobian(self._compute(self._check_q(q)))
+        return self.jacobian_of(self.compute(self.check_q(q)))
 
-    def _check_q(self, q: np.ndarray) -> np.ndarray:
+    def check_q(self, q: np.ndarray) -> np.ndarray:
         q = _as_floats(q, "q")
         if q.shape != (self.model.nq,):
             raise ShapeError(
@@ -207,30 +241,30 @@ class KinematicQueries:
 
     def actuators_of(self, q: np.ndarray) -> np.ndarray:
         """Actuated joint values (n_act,) of a configuration q (nq,)."""
-        return self._actuator_values_batch(self._check_q(q)[None])[0]
+        return self.actuator_values_batch(self.check_q(q)[None])[0]
 
     def with_actuators(self, q: np.ndarray, q_act: np.ndarray) -> np.ndarray:
         """Copy of configuration q with the actuated joints set to ``q_act``."""
-        return self._actuators_batch(self._check_q(q)[None], self._check_q_act(q_act)[None])[0]
+        return self.actuators_batch(self.check_q(q)[None], self.check_q_act(q_act)[None])[0]
 
-    def _actuator_values_batch(self, Q: np.ndarray) -> np.ndarray:
+    def actuator_values_batch(self, Q: np.ndarray) -> np.ndarray:
         """Actuated joint values (N, n_act) of configurations ``Q`` (N, nq)."""
-        out = np.empty((Q.shape[0], len(self._act_q)))
-        for k, (qi, nq) in enumerate(zip(self._act_q, self._act_nq, strict=True)):
+        out = np.empty((Q.shape[0], len(self.act_q)))
+        for k, (qi, nq) in enumerate(zip(self.act_q, self.act_nq, strict=True)):
             out[:, k] = Q[:, qi] if nq == 1 else np.arctan2(Q[:, qi + 1], Q[:, qi])
         return out
 
-    def _actuators_batch(self, Q: np.ndarray, A: np.ndarray) -> np.ndarray:
+    def actuators_batch(self, Q: np.ndarray, A: np.ndarray) -> np.ndarray:
         """Copies of configurations ``Q`` (N, nq) with the actuators set to ``A`` (N, n_act)."""
         out = np.array(Q, dtype=float)
-        for k, (qi, nq) in enumerate(zip(self._act_q, self._act_nq, strict=True)):
+        for k, (qi, nq) in enumerate(zip(self.act_q, self.act_nq, strict=True)):
             if nq == 1:
                 out[:, qi] = A[:, k]
             else:
                 out[:, qi], out[:, qi + 1] = np.cos(A[:, k]), np.sin(A[:, k])
         return out
 
-    def _check_q_act(self, q_act: np.ndarray) -> np.ndarray:
+    def check_q_act(self, q_act: np.ndarray) -> np.ndarray:
         q_act = _as_floats(q_act, "q_act")
         if q_act.shape != (len(self.actuated),):
             raise ShapeError(

@@ -1,39 +1,46 @@
 """Mechanism: a URDF spanning tree, its loop closures, actuation and measured frame.
 
 A :class:`Mechanism` is immutable: applying parameter values or calibrating returns a
-new one. Configuration vectors ``q`` are Pinocchio configurations (size ``nq``;
-quaternions are x, y, z, w); actuator vectors ``q_act`` hold one value per actuated
-joint in the order of :attr:`Mechanism.actuated` [m or rad].
+new one (:meth:`Mechanism.with_joint_origins`). Configuration vectors ``q`` are
+Pinocchio configurations (size ``nq``; quaternions are x, y, z, w); actuator vectors
+``q_act`` hold one value per actuated joint in the order of :attr:`Mechanism.actuated`
+[m or rad].
+
+The mechanism is the description (model, frames, actuation, closures, workspace); it
+owns its single-pose kinematic queries, a pose-by-pose loop solver and a batched loop
+solver, each built from explicit arguments, and delegates to them.
 """
 
 from __future__ import annotations
 
 import logging
-import threading
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import (
-    ConvergenceError,
-    ModelFileError,
-    ShapeError,
-    UnknownNameError,
-    UnreachablePoseError,
-)
-from pincal.model._batch_fk import BatchTracking
+from pincal.errors import UnreachablePoseError
+from pincal.model._assembly import Assembly
+from pincal.model._batch import BatchKinematics, BatchModel
+from pincal.model._batch_fk import BatchLoopSolver
+from pincal.model._batch_newton import BatchNewton
+from pincal.model._block_solve import BlockSolver, PassiveFactor
+from pincal.model._branch import LoopSolver
 from pincal.model._build import build_model, lock_joints
-from pincal.model._closures import (
-    COMPONENTS,
-    Closure,
-    measured_jacobian,
-    parse_components,
+from pincal.model._closures import COMPONENTS, parse_components
+from pincal.model._description import (
+    actuator_limits,
+    closure_links,
+    parse_actuated,
+    parse_closures,
+    parse_workspace,
+    resolve_measured_frame,
 )
-from pincal.model._frames import default_measured_frame, measured_frame_candidates
-from pincal.model._kinematics import Kinematics
+from pincal.model._frames import measured_frame_candidates
+from pincal.model._inverse import inverse_configuration
+from pincal.model._kinematics import KinematicQueries, Kinematics
 from pincal.model._newton import SolverOptions
 from pincal.model._sidecar import WORKSPACE_POSE_KEYS, Sidecar, Workspace
 from pincal.model._urdf import UrdfTree
@@ -50,7 +57,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-class Mechanism(BatchTracking):
+class Mechanism:
     """A mechanism loaded from URDF (+ sidecar).
 
     Use :func:`load_mechanism` to create one. Attributes of interest:
@@ -63,6 +70,10 @@ class Mechanism(BatchTracking):
       where that Jacobian is not square; ``idle_branch``: the same sign with idle passive
       directions left out, see ``_branch``); ``batch_solvable``: whether
       :meth:`configurations_batch` closes the loops of many poses together;
+    * ``queries`` (:class:`~pincal.model._kinematics.KinematicQueries`: single-pose
+      kinematics), ``loop_solver`` (:class:`~pincal.model._branch.LoopSolver`: pose by
+      pose) and ``batch_solver`` (:class:`~pincal.model._batch_fk.BatchLoopSolver`):
+      the parts it owns and delegates to;
     * ``workspace``: :class:`Workspace`; ``presets``: raw parameter presets;
     * ``sidecar``: the typed :class:`Sidecar`; ``notes``: remarks for ``pincal info``;
     * ``mobility``, ``closure_rank`` and ``idle_joints`` (passive joints the actuators
@@ -96,132 +107,131 @@ class Mechanism(BatchTracking):
         self.model = model
         #: remarks about the model (joint kinds from the sidecar, ranges), for `pincal info`
         self.notes: tuple[str, ...] = tuple(notes)
-        self._scratch = threading.local()  # per-thread pin.Data, never read across calls
-        self._frame_ids = {f.name: i for i, f in enumerate(self.model.frames)}
-        self.closures = self._parse_closures()
-        self.measured_frame = self._resolve_measured_frame(measured_frame)
-        self.actuated = self._parse_actuated()
-        self._setup_indices()
-        #: the frames a sensitivity needs: the measured frame and every closure frame
-        self.key_frames = tuple(
-            dict.fromkeys(
-                [self.measured_frame] + [f for c in self.closures for f in (c.frame_a, c.frame_b)]
-            )
+        frame_ids = {f.name: i for i, f in enumerate(model.frames)}
+        self.closures = parse_closures(self.sidecar, frame_ids, self.tree)
+        self.measured_frame = resolve_measured_frame(
+            measured_frame, self.sidecar, self.tree, self.closures, frame_ids, self.name
         )
+        self.actuated, chain_notes = parse_actuated(
+            model, self.sidecar, self.closures, frame_ids, self.measured_frame
+        )
+        self.notes += chain_notes
+        self.queries = KinematicQueries(
+            model, self.tree, self.name, frame_ids, self.closures, self.actuated,
+            self.measured_frame,
+        )  # fmt: skip
+        #: the frames a sensitivity needs: the measured frame and every closure frame
+        self.key_frames = self.queries.key_frames
+        self.n_closure_rows = self.queries.n_closure_rows
+        self.actuator_limits = actuator_limits(model, self.queries)  # (n_act, 2)
         self.measured_components = tuple(
             COMPONENTS[i] for i in parse_components(self.sidecar.measured, "sidecar 'measured'")
         )
         self.presets: dict[str, Any] = dict(self.sidecar.presets)
-        self.workspace = self._parse_workspace()
-        self._assembly_notes: list[str] = []
+        self.workspace = parse_workspace(self.sidecar, self.actuated)
+        assembly = Assembly(self.queries, self.options)
         if q_guess is None:
             keep = any(n in self.sidecar.home for n in self.actuated)
-            self.q_home = self._assemble(self._home_guess(), keep_actuators=keep)
+            guess = assembly.home_guess(self.sidecar.home)
+            self.q_home = assembly.assemble(guess, keep_actuators=keep)
         else:
-            self.q_home = self._assemble(np.asarray(q_guess, dtype=float))
-        self.notes += tuple(self._assembly_notes)
-        self._check_mobility()
-        self._init_branch()
+            self.q_home = assembly.assemble(np.asarray(q_guess, dtype=float))
+        self.notes += tuple(assembly.notes)
+        mobility = assembly.mobility(self.q_home)
+        self.mobility, self.closure_rank = mobility.mobility, mobility.closure_rank
+        self.idle_joints = mobility.idle_joints
+        self.loop_solver = LoopSolver(
+            self.queries, self.options, self.q_home, mobility.passive_rank
+        )
+        self.home_branch = self.loop_solver.home_branch
+        #: the branch sign of the square block of rank rows and non-idle columns
+        #: (= home_branch when the passive closure Jacobian is square; 0: no branch)
+        self.idle_branch = self.loop_solver.idle_branch
+        kernels = BatchNewton(self.queries, self.options, self.loop_solver.branch_block)
+        self.batch_solver = BatchLoopSolver(kernels, self.loop_solver)
 
-    # ------------------------------------------------------------------ set-up
-    def _parse_closures(self) -> tuple[Closure, ...]:
-        closures = []
-        for k, ((a, b), kind) in enumerate(
-            zip(self.sidecar.closed_loop, self.sidecar.type, strict=True)
-        ):
-            self.frame_id(a)
-            self.frame_id(b)
-            comps = parse_components(kind, f"sidecar type[{k}]")
-            label = kind if isinstance(kind, str) else " ".join(kind)
-            closures.append(Closure(a, b, comps, label))
-        return tuple(closures)
+    def with_joint_origins(self, origins: Mapping[str, pin.SE3]) -> Mechanism:
+        """A new mechanism with URDF joint origins replaced (this one is not modified).
 
-    def _parse_actuated(self) -> tuple[str, ...]:
-        movable = [
-            self.model.names[j]
-            for j in range(1, self.model.njoints)
-            if self.model.joints[j].nv == 1
-        ]
-        names = self.sidecar.name_mot
-        if names is None:
-            if self.closures:
-                raise ModelFileError(
-                    "a closed-loop mechanism needs 'name_mot' (actuated joints) in its sidecar"
-                )
-            return self._chain_joints(movable)
-        for n in names:
-            if n not in movable:
-                raise UnknownNameError("actuated joint", str(n), movable)
-        if len(set(names)) != len(names):
-            raise ModelFileError(f"sidecar 'name_mot' lists a joint twice: {names}")
-        return tuple(str(n) for n in names)
+        Everything else is kept: sidecar, name, source, measured frame, solver options;
+        the loops are closed from this mechanism's home (on its assembly mode).
 
-    def _chain_joints(self, movable: list[str]) -> tuple[str, ...]:
-        """An open chain's actuated joints: the 1-dof joints that move the measured frame.
+        Args:
+            origins: joint name → new origin placement (parent link → joint frame) [m].
 
-        The others (a gripper's fingers, a mobile manipulator's head) stay passive and
-        idle: they are not actuated for calibration, and a note says so.
+        Raises:
+            UnknownNameError: an origin names a joint the URDF does not have.
         """
-        model = self.model
-        support = set(model.supports[model.frames[self.frame_id(self.measured_frame)].parentJoint])
-        chain = tuple(n for n in movable if model.getJointId(n) in support)
-        off = [n for n in movable if n not in chain]
-        if off:
-            shown = ", ".join(off[:6]) + (f" and {len(off) - 6} more" if len(off) > 6 else "")
-            self.notes += (
-                f"{len(off)} joint(s) do not move the measured frame {self.measured_frame!r} and "
-                f"are not actuated for calibration: {shown} (list the actuated joints in the "
-                f"sidecar 'name_mot' to change this)",
-            )
-        return chain
-
-    def _setup_indices(self) -> None:
-        model = self.model
-        self._act_q, self._act_v, self._act_nq = [], [], []
-        for n in self.actuated:
-            j = model.getJointId(n)
-            self._act_q.append(model.idx_qs[j])
-            self._act_v.append(model.idx_vs[j])
-            self._act_nq.append(model.nqs[j])
-        act = set(self._act_v)
-        self._free_v = np.array([i for i in range(model.nv) if i not in act], dtype=int)
-        self._act_v_arr = np.array(self._act_v, dtype=int)
-        self._closure_fids = [
-            (self.frame_id(c.frame_a), self.frame_id(c.frame_b)) for c in self.closures
-        ]
-        self.n_closure_rows = sum(c.size for c in self.closures)
-        lower, upper = [], []
-        for qi, nq in zip(self._act_q, self._act_nq, strict=True):
-            if nq == 1:
-                lower.append(model.lowerPositionLimit[qi])
-                upper.append(model.upperPositionLimit[qi])
-            else:
-                lower.append(-np.inf)
-                upper.append(np.inf)
-        self.actuator_limits = np.array([lower, upper]).T  # (n_act, 2)
-
-    def _resolve_measured_frame(self, requested: str | None) -> str:
-        name = requested or self.sidecar.measured_frame
-        if name is None:
-            name = default_measured_frame(self.tree, self._closure_links(), self.name)
-        self.frame_id(str(name))
-        return str(name)
-
-    def _closure_links(self) -> set[str]:
-        return {self.frame_link(f) for c in self.closures for f in (c.frame_a, c.frame_b)}
+        urdf_xml, tree = self.tree.displaced(dict(origins))
+        return Mechanism(
+            urdf_xml,
+            self.sidecar,
+            name=self.name,
+            source=self.source,
+            measured_frame=self.measured_frame,
+            q_guess=self.q_home,
+            options=self.options,
+            tree=tree,
+        )
 
     @property
     def measured_frame_candidates(self) -> list[str]:
         """Frames the automatic choice would consider, best first (see ``_frames``)."""
-        return measured_frame_candidates(self.tree, self._closure_links())
+        return measured_frame_candidates(self.tree, closure_links(self.tree, self.closures))
 
-    def _parse_workspace(self) -> Workspace:
-        ws = self.sidecar.workspace
-        for k in ws.joints:
-            if k not in self.actuated:
-                raise UnknownNameError("actuated joint", k, self.actuated)
-        return Workspace(dict(ws.pose), dict(ws.joints), ws.floor)
+    # ------------------------------------------------- single-pose queries (delegated)
+    def frame_id(self, name: str) -> int:
+        """Pinocchio frame index of a frame (URDF link or joint) by name."""
+        return self.queries.frame_id(name)
 
+    def joint_id(self, name: str) -> int:
+        """Pinocchio joint index of a joint by name."""
+        return self.queries.joint_id(name)
+
+    def frame_link(self, frame: str) -> str:
+        """URDF link a frame is attached to (a frame named by a joint sits on its child)."""
+        return self.queries.frame_link(frame)
+
+    @property
+    def free_dofs(self) -> np.ndarray:
+        """Tangent indices (k,) of the passive (not actuated) degrees of freedom."""
+        return self.queries.free_dofs
+
+    @property
+    def n_actuated(self) -> int:
+        """Number of actuated joints."""
+        return len(self.actuated)
+
+    def kinematics(
+        self,
+        q: np.ndarray,
+        frames: Sequence[str] | None = None,
+        jacobian_frames: Sequence[str] | None = None,
+    ) -> Kinematics:
+        """Kinematics of configuration ``q`` (nq,) (see :meth:`KinematicQueries.kinematics`)."""
+        return self.queries.kinematics(q, frames, jacobian_frames)
+
+    def frame_placement(self, q: np.ndarray, frame: str | None = None) -> pin.SE3:
+        """World placement (a new SE3) of ``frame`` (default: the measured frame) at ``q``."""
+        return self.queries.frame_placement(q, frame)
+
+    def closure_residual(self, q: np.ndarray) -> np.ndarray:
+        """Closure residual at configuration q (n_closure_rows,) [m, rad]."""
+        return self.queries.closure_residual(q)
+
+    def closure_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """(n_closure_rows, nv) closure Jacobian at configuration q."""
+        return self.queries.closure_jacobian(q)
+
+    def actuators_of(self, q: np.ndarray) -> np.ndarray:
+        """Actuated joint values (n_act,) of a configuration q (nq,)."""
+        return self.queries.actuators_of(q)
+
+    def with_actuators(self, q: np.ndarray, q_act: np.ndarray) -> np.ndarray:
+        """Copy of configuration q with the actuated joints set to ``q_act``."""
+        return self.queries.with_actuators(q, q_act)
+
+    # ------------------------------------------------------- loop closing (delegated)
     def configuration(
         self, q_act: np.ndarray, q_guess: np.ndarray | None = None, pose_index: int | None = None
     ) -> np.ndarray:
@@ -235,23 +245,7 @@ class Mechanism(BatchTracking):
             ConvergenceError: no solution on the home branch (the message names the pose).
             SingularConfigurationError: the passive joints are not locally unique.
         """
-        q_act = self._check_q_act(q_act)
-        guess = self.q_home if q_guess is None else self._check_q(q_guess)
-        if not self.closures:
-            return self.with_actuators(guess, q_act)
-        where = f"pose {pose_index}" if pose_index is not None else "pose"
-        try:
-            sol = self._solve_on_branch(q_act, guess)
-        except ConvergenceError as exc:
-            raise ConvergenceError(
-                f"forward kinematics failed at {where} (q_act = {np.round(q_act, 6).tolist()}): "
-                f"the loops do not close on the assembly branch of home (residual "
-                f"{exc.residual * 1e3:.3g} mm); {exc}",
-                pose_index=pose_index,
-                residual=exc.residual,
-            ) from exc
-        self._check_singular(sol, where, pose_index)
-        return sol.q
+        return self.loop_solver.configuration(q_act, q_guess, pose_index)
 
     def forward(self, q_act: np.ndarray, q_guess: np.ndarray | None = None) -> pin.SE3:
         """Pose of the measured frame in the world for actuator values ``q_act``."""
@@ -267,6 +261,70 @@ class Mechanism(BatchTracking):
         """
         return self.configurations_batch(q_act_rows)[0]
 
+    def configurations_batch(
+        self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
+    ) -> tuple[np.ndarray, BatchKinematics | None]:
+        """Closed configurations (N, nq) on home's branch and their kinematics.
+
+        See :meth:`BatchLoopSolver.configurations_batch
+        <pincal.model._batch_fk.BatchLoopSolver.configurations_batch>`.
+        """
+        return self.batch_solver.configurations_batch(q_act_rows, guesses)
+
+    def try_configurations_batch(
+        self, q_act_rows: np.ndarray, guesses: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, BatchKinematics | None]:
+        """Batched Newton only: configurations (N, nq), accepted mask (N,), kinematics."""
+        return self.batch_solver.try_configurations_batch(q_act_rows, guesses)
+
+    def closable_batch(self, q_act_rows: np.ndarray) -> np.ndarray:
+        """Whether each actuator row (N, n_act) closes on home's branch (N,) bool."""
+        return self.batch_solver.closable_batch(q_act_rows)
+
+    @property
+    def batch_solvable(self) -> bool:
+        """Whether the batched loop closing applies (else poses are closed one by one)."""
+        return self.batch_solver.batch_solvable
+
+    # ------------------------------------------------ batched kernels (delegated)
+    @property
+    def batch_model(self) -> BatchModel:
+        """The batched numpy kinematics of :attr:`model` (built once)."""
+        return self.batch_solver.kernels.batch_model
+
+    def kinematics_batch(self, qs: np.ndarray) -> BatchKinematics:
+        """Joint placements and WORLD joint Jacobian of configurations ``qs`` (N, nq)."""
+        return self.batch_solver.kernels.kinematics_batch(qs)
+
+    @property
+    def passive_solver(self) -> BlockSolver | None:
+        """The block structure of the square passive closure Jacobian (None: dense)."""
+        return self.batch_solver.kernels.passive_solver
+
+    def passive_factor(self, Jf: np.ndarray) -> PassiveFactor:
+        """Factor passive closure Jacobians ``Jf`` (N, rows, k)."""
+        return self.batch_solver.kernels.passive_factor(Jf)
+
+    @overload
+    def closure_terms_batch(
+        self,
+        bk: BatchKinematics,
+        jacobian: Literal[True] = ...,
+        columns: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]: ...
+
+    @overload
+    def closure_terms_batch(
+        self, bk: BatchKinematics, jacobian: bool, columns: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray | None]: ...
+
+    def closure_terms_batch(
+        self, bk: BatchKinematics, jacobian: bool = True, columns: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """Closure residuals (N, n_closure_rows) and Jacobians (N, n_closure_rows, nv)."""
+        return self.batch_solver.kernels.closure_terms_batch(bk, jacobian, columns)
+
+    # ------------------------------------------------------------ inverse kinematics
     def inverse(
         self, T_world_target: pin.SE3, q_guess: np.ndarray | None = None, check_limits: bool = True
     ) -> np.ndarray:
@@ -294,94 +352,6 @@ class Mechanism(BatchTracking):
         self, T_world_target: pin.SE3, q_guess: np.ndarray | None = None
     ) -> np.ndarray:
         """Full closed configuration (nq,) reaching the target (see :meth:`inverse`)."""
-        T_world_target = _as_se3(T_world_target)
-        fid = self.frame_id(self.measured_frame)
-        comps = np.array([COMPONENTS.index(c) for c in self.measured_components])
-        target_p, target_R = T_world_target.translation, T_world_target.rotation
-
-        def extra(data: pin.Data) -> tuple[np.ndarray, np.ndarray]:
-            oMf = data.oMf[fid]
-            r = np.zeros(6)
-            r[:3] = oMf.translation - target_p
-            E = target_R.T @ oMf.rotation
-            r[3:] = pin.log3(E)
-            J = measured_jacobian(oMf, pin.getFrameJacobian(self.model, data, fid, pin.LOCAL))
-            J[3:] = pin.Jlog3(E) @ J[3:]
-            return r[comps], J[comps]
-
-        guess = self.q_home if q_guess is None else self._check_q(q_guess)
-        try:
-            sol = self._newton(guess, np.arange(self.model.nv), extra)
-        except ConvergenceError as exc:
-            raise UnreachablePoseError(
-                f"target pose unreachable (p = {np.round(target_p * 1e3, 3).tolist()} mm): "
-                f"residual {exc.residual * 1e3:.3g} mm/mrad after Newton"
-                + self._dead_start_note(guess, fid, comps),
-                residual=exc.residual,
-            ) from exc
-        if self.idle_branch and self._branch_sign(sol.q) != self.idle_branch:
-            raise UnreachablePoseError(
-                f"target pose (p = {np.round(target_p * 1e3, 3).tolist()} mm) is reached only in "
-                f"another assembly mode than home's: forward kinematics would not return it; "
-                f"give q_guess on home's mode or choose another target",
-                residual=0.0,
-            )
-        return sol.q
-
-    def _output_rank(self, q: np.ndarray, fid: int, comps: np.ndarray) -> int:
-        """Rank of the actuator → measured-components map at q, the loops staying closed."""
-        data = self._compute(q)
-        J_frame = pin.getFrameJacobian(self.model, data, fid, pin.LOCAL)
-        Jm = measured_jacobian(data.oMf[fid], J_frame)[comps]
-        Jc = self._closure_jacobian(data)
-        act, free = self._act_v_arr, self._free_v
-        dq_free = -np.linalg.pinv(Jc[:, free], rcond=self.options.rcond) @ Jc[:, act]
-        G = Jm[:, act] + Jm[:, free] @ dq_free
-        s = np.linalg.svd(G, compute_uv=False)
-        scale = max(float(np.max(np.abs(Jm), initial=0.0)), 1e-300)
-        return int(np.sum(s > 1e-9 * scale))
-
-    def _dead_start_note(self, q: np.ndarray, fid: int, comps: np.ndarray) -> str:
-        """Why inverse kinematics may not leave ``q`` ("" when it is not a dead point).
-
-        A dead point: the actuators move the measured components in fewer directions at
-        q than at nearby configurations (first order, the loops staying closed).
-        """
-        rank = self._output_rank(q, fid, comps)
-        rng = np.random.default_rng(0)
-        nearby = max(
-            self._output_rank(
-                pin.integrate(self.model, q, 1e-3 * rng.standard_normal(self.model.nv)), fid, comps
-            )
-            for _ in range(3)
+        return inverse_configuration(
+            self.loop_solver, self.measured_components, T_world_target, q_guess
         )
-        if rank >= nearby:
-            return ""
-        return (
-            f". At the start configuration the actuators {list(self.actuated)} move the "
-            f"measured components {list(self.measured_components)} in only {rank} "
-            f"independent direction(s) at first order, {nearby} nearby (a dead point of the "
-            f"output): Newton cannot leave it, and nearby targets are reached by several "
-            f"actuator values (e.g. a mirror-symmetric machine). Give q_guess near the "
-            f"solution, or put the sidecar 'home' away from the dead point and keep the "
-            f"workspace on one side of it"
-        )
-
-
-def _as_se3(T: object) -> pin.SE3:
-    """A pin.SE3, or a (4, 4) homogeneous matrix turned into one."""
-    if isinstance(T, pin.SE3):
-        return T
-    try:
-        M = np.asarray(T, dtype=float)
-    except (TypeError, ValueError):
-        M = np.zeros(0)
-    if M.shape != (4, 4) or not np.all(np.isfinite(M)):
-        raise ShapeError(
-            f"target pose must be a pinocchio.SE3 or a finite (4, 4) matrix, got {type(T).__name__}"
-            f"{' of shape ' + str(M.shape) if M.size else ''}"
-        )
-    R = M[:3, :3]
-    if not np.allclose(R.T @ R, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
-        raise ShapeError("target pose matrix: the upper-left (3, 3) block must be a rotation")
-    return pin.SE3(R, M[:3, 3])

@@ -24,6 +24,7 @@ import pinocchio as pin
 
 from pincal.errors import ParameterError, UnknownNameError
 from pincal.model._joint_terms import term_of_dof
+from pincal.model._linearisation import Linearisation
 from pincal.model._mechanism import Mechanism
 
 __all__ = [
@@ -141,7 +142,6 @@ class ParameterSet:
         self._twists = {
             j: np.stack([parameters[k].twist for k in c], axis=1) for j, c in joints.items()
         }
-        self._twist_cache: tuple[bytes, dict] | None = None
 
     def __len__(self) -> int:
         return len(self.parameters)
@@ -191,48 +191,47 @@ class ParameterSet:
             raise ParameterError("parameter values contain NaN or inf")
         return values
 
-    def joint_twists(
-        self, values: np.ndarray
-    ) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        """Per joint: (columns, twist v_j (6,), effective twists Jexp6(v_j)·Ξ_j (6, n_j)).
+    def linearise(self, values: np.ndarray | Linearisation | None) -> Linearisation:
+        """This set linearised at ``values`` (n,) [SI] (default zeros).
 
-        The effective twists are the exact derivatives, in the displaced origin frame, of
-        the origin with respect to the joint's parameters at ``values``.
+        Build it once per evaluation point and pass it on (to :meth:`apply` and the
+        sensitivity functions) instead of the values: the joint twists are then
+        computed once. A linearisation of this set is returned as it is.
+
+        Raises:
+            ParameterError: values of the wrong shape or not finite, or a linearisation
+                of another parameter set.
         """
-        key = values.tobytes()
-        if self._twist_cache is not None and self._twist_cache[0] == key:
-            return self._twist_cache[1]
-        out = {}
+        if isinstance(values, Linearisation):
+            if values.names != self.names:
+                raise ParameterError(
+                    f"a linearisation of other parameters ({len(values.names)}: "
+                    f"{', '.join(values.names[:3])}, …) was given for set {self.label!r}: "
+                    f"linearise this set at the values instead"
+                )
+            return values
+        values = np.array(self.check_values(values))  # own read-only copy
+        values.setflags(write=False)
+        twists = {}
         for j in self.joints:
             cols, Xi = self._cols[j], self._twists[j]
             v = Xi @ values[cols]
             eff = Xi if not np.any(v) else pin.Jexp6(v) @ Xi
-            out[j] = (cols, v, eff)
-        self._twist_cache = (key, out)
-        return out
+            twists[j] = (cols, v, eff)
+        return Linearisation(self.names, values, twists)
 
-    def apply(self, mech: Mechanism, values: np.ndarray | None) -> Mechanism:
+    def apply(self, mech: Mechanism, values: np.ndarray | Linearisation | None) -> Mechanism:
         """A new mechanism with the joint origins displaced by ``values`` (SI units).
 
-        The input mechanism is not modified.
+        ``values`` (n,), or their :class:`Linearisation`. The input mechanism is not
+        modified.
         """
-        values = self.check_values(values)
         origins = {}
-        for j, (_, v, _) in self.joint_twists(values).items():
+        for j, (_, v, _) in self.linearise(values).joint_twists.items():
             if j not in mech.tree.joints:
                 raise UnknownNameError("joint", j, list(mech.tree.joints))
             origins[j] = mech.tree.joints[j].origin * pin.exp6(v)
-        urdf_xml, tree = mech.tree.displaced(origins)
-        return Mechanism(
-            urdf_xml,
-            mech.sidecar,
-            name=mech.name,
-            source=mech.source,
-            measured_frame=mech.measured_frame,
-            q_guess=mech.q_home,
-            options=mech.options,
-            tree=tree,
-        )
+        return mech.with_joint_origins(origins)
 
     def format_value(self, k: int, value: float) -> str:
         """Human-readable value: µm for lengths, µrad for angles, SI with unit otherwise."""

@@ -292,14 +292,4 @@ def serial_mechanism(
 
 def with_joint_origin(mech: Mechanism, joint: str, T_parent_child: pin.SE3) -> Mechanism:
     """A new mechanism with one URDF joint origin replaced (input unchanged)."""
-    if joint not in mech.tree.joints:
-        raise UnknownNameError("joint", joint, list(mech.tree.joints))
-    return Mechanism(
-        mech.tree.with_origins({joint: T_parent_child}),
-        mech.sidecar,
-        name=mech.name,
-        source=mech.source,
-        measured_frame=mech.measured_frame,
-        q_guess=mech.q_home,
-        options=mech.options,
-    )
+    return mech.with_joint_origins({joint: T_parent_child})

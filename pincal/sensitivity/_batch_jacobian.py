@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pincal.model import BatchKinematics, Mechanism, ParameterSet
+from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
 from pincal.model.kernels import (
     CHUNK,
     RangeFactor,
@@ -77,7 +77,7 @@ def _param_twists(
     mech: Mechanism,
     params: ParameterSet,
     bk: BatchKinematics,
-    values: np.ndarray,
+    values: np.ndarray | Linearisation,
     plan: _Plan,
     direction: np.ndarray | None = None,
 ) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], dict[str, np.ndarray]]:
@@ -88,7 +88,7 @@ def _param_twists(
     """
     bm, model = mech.batch_model, mech.model
     N, n = bk.q.shape[0], len(params)
-    twists = params.joint_twists(values)
+    twists = params.linearise(values).joint_twists
     if direction is not None:
         zero = np.zeros(1, dtype=int)
         twists = {j: (zero, v, (eff @ direction[c])[:, None]) for j, (c, v, eff) in twists.items()}
@@ -195,7 +195,7 @@ def _world_path(
     mech: Mechanism,
     params: ParameterSet,
     bk: BatchKinematics,
-    values: np.ndarray,
+    values: np.ndarray | Linearisation,
     plan: _Plan,
     out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -234,7 +234,7 @@ def _world_path(
         Y = _adjoint(mech, bk, _measured_free_jacobian(mech, bk, Rm, pm))
         C = np.zeros((N, len(names), 6, 6))
         _closure_maps(mech, plan, names, Ro, po, place, Y, C)
-    twists = params.joint_twists(values)
+    twists = params.linearise(values).joint_twists
     J = np.zeros((N, 6, n)) if out is None else out
     for i, j in enumerate(names):
         if C is not None and i in touched:
@@ -255,7 +255,7 @@ def sensitivities_batch(
     params: ParameterSet,
     qs: np.ndarray,
     bk: BatchKinematics | None = None,
-    values: np.ndarray | None = None,
+    values: np.ndarray | Linearisation | None = None,
     basis: np.ndarray | None = None,
 ) -> BatchSensitivity:
     """Sensitivity of the measured frame at N closed configurations.
@@ -266,21 +266,23 @@ def sensitivities_batch(
         qs: (N, nq) closed configurations.
         bk: their batched kinematics when already computed (e.g. by
             ``mech.configurations_batch``); computed when None.
-        values: (n,) parameter values (default zeros).
+        values: (n,) parameter values (default zeros), or their :class:`Linearisation`.
         basis: (N, n_act, n) joint-term basis at the commanded joint values (see
             :mod:`pincal.sensitivity._joint_terms`); None: at the actuated values of qs.
 
     Returns:
         The :class:`BatchSensitivity` (equal to :func:`pose_sensitivity` pose by pose).
     """
-    values = params.check_values(values)
+    lin = params.linearise(values)
     if params.joint_terms.size:
-        return joint_term_sensitivities(sensitivities_batch, mech, params, qs, bk, values, basis)
+        return joint_term_sensitivities(
+            sensitivities_batch, mech, params, qs, bk, lin.values, basis
+        )
     qs = np.atleast_2d(np.asarray(qs, dtype=float))
     n = len(params)
     plan = _plan(mech, params)
     if not batch_applies(mech):
-        sens = [pose_sensitivity(mech, params, q, values, plan) for q in qs]
+        sens = [pose_sensitivity(mech, params, q, lin, plan) for q in qs]
         breaks = np.zeros(n, dtype=bool)
         for s in sens:
             breaks |= s.breaks_closure
@@ -294,12 +296,12 @@ def sensitivities_batch(
     bk = bk if bk is not None else mech.kinematics_batch(qs)
     N = bk.q.shape[0]
     if not mech.closures:  # a serial chain: one call, blocked inside for the cache
-        Rm, pm, J = _serial_path(mech, params, bk, values, plan, None)
+        Rm, pm, J = _serial_path(mech, params, bk, lin, plan, None)
         return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
     redundant = mech.n_closure_rows > mech.closure_rank  # rows some parameters can break
     if redundant or any(c.components[-1] >= 3 for c in mech.closures):
         parts = [
-            _local_path(mech, params, slice_kinematics(bk, slice(k, k + CHUNK)), values, plan)
+            _local_path(mech, params, slice_kinematics(bk, slice(k, k + CHUNK)), lin, plan)
             for k in range(0, N, CHUNK)
         ]
         Rm, pm, J = (np.concatenate([p[i] for p in parts]) for i in range(3))
@@ -309,13 +311,17 @@ def sensitivities_batch(
     for start in range(0, N, CHUNK):
         rows = slice(start, start + CHUNK)
         Rm[rows], pm[rows], _ = _world_path(
-            mech, params, slice_kinematics(bk, rows), values, plan, J[rows]
+            mech, params, slice_kinematics(bk, rows), lin, plan, J[rows]
         )
     return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
 
 
 def _local_path(
-    mech: Mechanism, params: ParameterSet, bk: BatchKinematics, values: np.ndarray, plan: _Plan
+    mech: Mechanism,
+    params: ParameterSet,
+    bk: BatchKinematics,
+    values: np.ndarray | Linearisation,
+    plan: _Plan,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Measured rotation, position, Jacobian (N, 6, n) and closure breaking (n,).
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pincal.model import BatchKinematics, Mechanism, ParameterSet
+from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
 from pincal.model.kernels import PassiveFactor, cross_cols
 from pincal.sensitivity._batch_serial import _anchors
 from pincal.sensitivity._jacobian import _Plan
@@ -64,7 +64,11 @@ def _cross_t(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _world_twists(
-    mech: Mechanism, params: ParameterSet, bk: BatchKinematics, values: np.ndarray, plan: _Plan
+    mech: Mechanism,
+    params: ParameterSet,
+    bk: BatchKinematics,
+    values: np.ndarray | Linearisation,
+    plan: _Plan,
 ) -> tuple[np.ndarray, np.ndarray]:
     """World twists ``V`` and ``W`` (n, 3, N) of every parameter column (see module doc).
 
@@ -76,7 +80,7 @@ def _world_twists(
     """
     names, parents, R0, p0 = _anchors(mech, plan)
     N, n = bk.q.shape[0], len(params)
-    twists = params.joint_twists(values)
+    twists = params.linearise(values).joint_twists
     V, W = np.zeros((n, 3, N)), np.zeros((n, 3, N))
     groups: dict[int, list[int]] = {}
     for i, j in enumerate(names):
@@ -130,7 +134,7 @@ def point_path(
     mech: Mechanism,
     params: ParameterSet,
     bk: BatchKinematics,
-    values: np.ndarray,
+    values: np.ndarray | Linearisation,
     plan: _Plan,
     out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

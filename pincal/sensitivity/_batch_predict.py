@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pincal.model import BatchKinematics, Mechanism, ParameterSet
+from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
 from pincal.model.kernels import closure_jacobian_batch, cross3, mv
 from pincal.sensitivity._batch_jacobian import _param_twists, batch_applies
 from pincal.sensitivity._batch_serial import _anchors
@@ -25,7 +25,7 @@ def predict_configurations(
     mech: Mechanism,
     params: ParameterSet,
     bk: BatchKinematics,
-    values: np.ndarray,
+    values: np.ndarray | Linearisation,
     delta: np.ndarray,
 ) -> np.ndarray | None:
     """First-order prediction of closed configurations after a parameter change.
@@ -40,7 +40,7 @@ def predict_configurations(
         mech: the mechanism at parameter ``values`` (the one ``bk`` was solved on).
         params: the n parameters.
         bk: (N poses) kinematics of its closed configurations, with ``closure_jacobian``.
-        values: (n,) parameter values of ``mech`` [SI].
+        values: (n,) parameter values of ``mech`` [SI], or their :class:`Linearisation`.
         delta: (n,) parameter change [SI].
 
     Returns:
@@ -53,6 +53,7 @@ def predict_configurations(
     if not mech.closures or Jf is None or not batch_applies(mech):
         return None
     plan = _plan(mech, params)
+    values = params.linearise(values)
     delta = np.asarray(delta, dtype=float)
     if all(c.is_point for c in mech.closures):
         Jc = _point_closure_rates(mech, params, bk, values, plan, delta)
@@ -86,7 +87,7 @@ def _point_closure_rates(
     mech: Mechanism,
     params: ParameterSet,
     bk: BatchKinematics,
-    values: np.ndarray,
+    values: np.ndarray | Linearisation,
     plan: _Plan,
     delta: np.ndarray,
 ) -> np.ndarray:
@@ -97,7 +98,7 @@ def _point_closure_rates(
     residual ``p_b − p_a`` by the sum over the joints that move b minus those that move a.
     """
     names, parents, R0, p0 = _anchors(mech, plan)
-    twists = params.joint_twists(values)
+    twists = params.linearise(values).joint_twists
     T = np.array([twists[j][2] @ delta[twists[j][0]] for j in names])  # (J, 6)
     Rp = bk.rotations[:, parents]
     po = bk.translations[:, parents] + mv(Rp, p0)

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pincal.model import BatchKinematics, Mechanism, ParameterSet
+from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
 from pincal.sensitivity._jacobian import _Plan
 
 __all__: list[str] = []
@@ -92,10 +92,12 @@ class _Layout:
     runs: tuple[tuple[int, slice | np.ndarray, np.ndarray], ...]
 
 
-def _layout(mech: Mechanism, params: ParameterSet, values: np.ndarray, plan: _Plan) -> _Layout:
+def _layout(
+    mech: Mechanism, params: ParameterSet, values: np.ndarray | Linearisation, plan: _Plan
+) -> _Layout:
     """The :class:`_Layout` of the measured frame at parameter ``values``."""
     model = mech.model
-    twists = params.joint_twists(values)
+    twists = params.linearise(values).joint_twists
     found = []
     for j in plan.moves[mech.measured_frame]:
         fid, jid, parent = plan.origins[j]
@@ -172,7 +174,7 @@ def _serial_path(
     mech: Mechanism,
     params: ParameterSet,
     bk: BatchKinematics,
-    values: np.ndarray,
+    values: np.ndarray | Linearisation,
     plan: _Plan,
     out: np.ndarray | None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -182,7 +184,7 @@ def _serial_path(
         mech: a mechanism without closures, at parameter ``values``.
         params: the n parameters.
         bk: the batched kinematics of the N configurations.
-        values: (n,) parameter values.
+        values: (n,) parameter values, or their :class:`Linearisation`.
         plan: the ``(mech, params)`` plan.
         out: (N, 6, n) array of zeros to write the Jacobian into (allocated when None);
             only the columns of parameters that move the measured frame are written.

@@ -26,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ParameterError
-from pincal.model import COMPONENTS, Kinematics, Mechanism, ParameterSet
+from pincal.model import COMPONENTS, Kinematics, Linearisation, Mechanism, ParameterSet
 from pincal.model.kernels import measured_jacobian
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver
 
@@ -108,7 +108,7 @@ def pose_sensitivity(
     mech: Mechanism,
     params: ParameterSet,
     q: np.ndarray | Kinematics,
-    values: np.ndarray | None = None,
+    values: np.ndarray | Linearisation | None = None,
     plan: _Plan | None = None,
 ) -> PoseSensitivity:
     """Sensitivity of the measured frame at a closed configuration.
@@ -118,16 +118,17 @@ def pose_sensitivity(
             derivatives are with respect to those values (exact chain rule through exp6).
         params: the parameter set (n parameters).
         q: the closed configuration (nq,), or its :class:`Kinematics` when already computed.
-        values: (n,) parameter values (default zeros).
+        values: (n,) parameter values (default zeros), or their :class:`Linearisation`
+            (``params.linearise(values)``: pass it when evaluating many poses).
         plan: the ``(mech, params)`` plan when evaluating many poses (computed if None).
     """
-    values = params.check_values(values)
+    lin = params.linearise(values)
     if params.joint_terms.size:
         raise ParameterError(
             f"joint terms ({params.names[params.joint_terms[0]]}, …) are differentiated by "
             f"sensitivities_batch, not pose by pose (instrument calibrations do not take them yet)"
         )
-    twists = params.joint_twists(values)
+    twists = lin.joint_twists
     plan = plan or _plan(mech, params)
     kin = q if isinstance(q, Kinematics) else mech.kinematics(q, plan.frames)
     placements, joints = kin.placements, kin.joint_placements
@@ -185,10 +186,10 @@ def _sensitivities(
     """Batched sensitivities of the measured frame at the rows' closed configurations."""
     from pincal.sensitivity._batch_jacobian import sensitivities_batch
 
-    values = params.check_values(values)
-    at = mech if not np.any(values) else params.apply(mech, values)
+    lin = params.linearise(values)
+    at = mech if not np.any(lin.values) else params.apply(mech, lin)
     qs, bk = at.configurations_batch(q_act_rows)
-    return sensitivities_batch(at, params, qs, bk, values)
+    return sensitivities_batch(at, params, qs, bk, lin)
 
 
 def _rows(mech: Mechanism, components: tuple[str, ...] | None) -> list[int]:

@@ -40,13 +40,13 @@ def rows(mech):
 def _direct_only(mech, rows):
     """Rows a batched Newton from home alone accepts (no continuation)."""
     Q = np.tile(mech.q_home, (len(rows), 1))
-    Q = mech._actuators_batch(Q, rows)  # the Newton layer alone, for the check
+    Q = mech.queries.actuators_batch(Q, rows)  # the Newton layer alone, for the check
     R = np.empty((len(rows), mech.model.njoints, 3, 3))
     p = np.empty((len(rows), mech.model.njoints, 3))
     J = np.empty((len(rows), 6, mech.model.nv))
     Jf = np.empty((len(rows), mech.n_closure_rows, mech.free_dofs.size))
-    done = mech._close_chunks(Q, R, p, J, Jf)
-    return mech._accept(Jf, done)[1]
+    done = mech.batch_solver.close_chunks(Q, R, p, J, Jf)
+    return mech.batch_solver.accept(Jf, done)[1]
 
 
 def test_continuation_closes_what_the_direct_solve_misses(mech, rows):

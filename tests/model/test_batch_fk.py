@@ -103,7 +103,7 @@ def test_batched_solve_from_the_other_mode_returns_home_branch():
     prs3 = pincal.load_mechanism(MACHINES / "prs3")
     rows = np.array([[0.211, 0.237, 0.257], [0.208, 0.228, 0.265]])
     Q = prs3.configurations(rows)
-    other = prs3._newton(prs3.with_actuators(Q[0], rows[1]), prs3.free_dofs).q
+    other = prs3.loop_solver.newton(prs3.with_actuators(Q[0], rows[1]), prs3.free_dofs).q
     sign = np.sign(np.linalg.det(prs3.closure_jacobian(other)[:, prs3.free_dofs]))
     assert sign == -prs3.home_branch  # the guess is on the other assembly mode
     Qb, _ = prs3.configurations_batch(rows[1:], guesses=other[None])

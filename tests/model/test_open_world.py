@@ -165,7 +165,7 @@ def test_forward_kinematics_stays_on_the_home_branch(prs3):
     home_sign = _passive_det_sign(prs3, prs3.q_home)
     Q = prs3.configurations(rows)
     # a plain warm-started Newton from Q[0] lands on the other mode (det sign flips)
-    plain = prs3._newton(prs3.with_actuators(Q[0], rows[1]), prs3.free_dofs).q
+    plain = prs3.loop_solver.newton(prs3.with_actuators(Q[0], rows[1]), prs3.free_dofs).q
     assert _passive_det_sign(prs3, plain) == -home_sign
     assert [_passive_det_sign(prs3, q) for q in Q] == [home_sign, home_sign]
     # reference: fine continuation from Q[0] (each step a tiny move)
@@ -243,7 +243,8 @@ def test_open_closure_blames_the_home_guess_when_other_starts_close():
 def test_inverse_answers_only_on_the_home_branch(prs3):
     rows = np.array([[0.211, 0.237, 0.257], [0.208, 0.228, 0.265]])
     q0 = prs3.configurations(rows[:1])[0]
-    other = prs3._newton(prs3.with_actuators(q0, rows[1]), prs3.free_dofs).q  # other mode
+    start = prs3.with_actuators(q0, rows[1])
+    other = prs3.loop_solver.newton(start, prs3.free_dofs).q  # other mode
     targets = [prs3.frame_placement(q) for q in (q0, other)]
     answered = 0
     for T in targets:

@@ -57,14 +57,14 @@ def test_closable_batch_decides_most_draws_in_batch(monkeypatch):
     m = pincal.load_mechanism(PRS3)
     lo, hi = np.array([m.workspace.joints[a] for a in m.actuated]).T
     draws = np.random.default_rng(1).uniform(lo, hi, size=(150, len(lo)))
-    one_by_one = m.configuration
+    one_by_one = m.loop_solver.configuration
     calls = []
 
     def counted(*args, **kwargs):
         calls.append(1)
         return one_by_one(*args, **kwargs)
 
-    monkeypatch.setattr(m, "configuration", counted)
+    monkeypatch.setattr(m.loop_solver, "configuration", counted)
     ok = m.closable_batch(draws)
     infeasible = int((~ok).sum())
     assert infeasible > 75 and len(calls) < 0.2 * infeasible

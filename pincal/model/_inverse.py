@@ -1,0 +1,143 @@
+"""Inverse kinematics of a mechanism: actuator values that reach a measured-frame pose.
+
+A damped Newton over every tangent dof on the closure residual plus the measured
+components of the pose error, kept only on home's assembly branch, with a diagnosis
+of dead start points (where the actuators move the output in fewer directions).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.errors import ConvergenceError, ShapeError, UnreachablePoseError
+from pincal.model._branch import LoopSolver
+from pincal.model._closures import COMPONENTS, measured_jacobian
+
+__all__ = ["inverse_configuration"]
+
+
+def inverse_configuration(
+    loop: LoopSolver,
+    measured_components: tuple[str, ...],
+    T_world_target: pin.SE3,
+    q_guess: np.ndarray | None = None,
+) -> np.ndarray:
+    """Full closed configuration (nq,) that brings the measured frame to the target.
+
+    Only ``measured_components`` (names from x y z rx ry rz) are imposed.
+
+    Args:
+        loop: the pose-by-pose loop solver of the mechanism (its queries, home, branch).
+        measured_components: the components imposed.
+        T_world_target: the target placement of the measured frame (SE3 or (4, 4)) [m].
+        q_guess: (nq,) start configuration (default home).
+
+    Raises:
+        UnreachablePoseError: no convergence, or the target is reached only on another
+            assembly mode than home's.
+    """
+    queries = loop.queries
+    T_world_target = _as_se3(T_world_target)
+    fid = queries.frame_id(queries.measured_frame)
+    comps = np.array([COMPONENTS.index(c) for c in measured_components])
+    target_p, target_R = T_world_target.translation, T_world_target.rotation
+    model = queries.model
+
+    def extra(data: pin.Data) -> tuple[np.ndarray, np.ndarray]:
+        oMf = data.oMf[fid]
+        r = np.zeros(6)
+        r[:3] = oMf.translation - target_p
+        E = target_R.T @ oMf.rotation
+        r[3:] = pin.log3(E)
+        J = measured_jacobian(oMf, pin.getFrameJacobian(model, data, fid, pin.LOCAL))
+        J[3:] = pin.Jlog3(E) @ J[3:]
+        return r[comps], J[comps]
+
+    guess = loop.q_home if q_guess is None else queries.check_q(q_guess)
+    try:
+        sol = loop.newton(guess, np.arange(model.nv), extra)
+    except ConvergenceError as exc:
+        raise UnreachablePoseError(
+            f"target pose unreachable (p = {np.round(target_p * 1e3, 3).tolist()} mm): "
+            f"residual {exc.residual * 1e3:.3g} mm/mrad after Newton"
+            + _dead_start_note(loop, measured_components, guess, fid, comps),
+            residual=exc.residual,
+        ) from exc
+    if loop.idle_branch and loop.branch_sign(sol.q) != loop.idle_branch:
+        raise UnreachablePoseError(
+            f"target pose (p = {np.round(target_p * 1e3, 3).tolist()} mm) is reached only in "
+            f"another assembly mode than home's: forward kinematics would not return it; "
+            f"give q_guess on home's mode or choose another target",
+            residual=0.0,
+        )
+    return sol.q
+
+
+def _output_rank(loop: LoopSolver, q: np.ndarray, fid: int, comps: np.ndarray) -> int:
+    """Rank of the actuator → measured-components map at q, the loops staying closed."""
+    data = loop.queries.compute(q)
+    J_frame = pin.getFrameJacobian(loop.model, data, fid, pin.LOCAL)
+    Jm = measured_jacobian(data.oMf[fid], J_frame)[comps]
+    Jc = loop.queries.jacobian_of(data)
+    act, free = loop.queries.act_v_arr, loop.queries.free_v
+    dq_free = -np.linalg.pinv(Jc[:, free], rcond=loop.options.rcond) @ Jc[:, act]
+    G = Jm[:, act] + Jm[:, free] @ dq_free
+    s = np.linalg.svd(G, compute_uv=False)
+    scale = max(float(np.max(np.abs(Jm), initial=0.0)), 1e-300)
+    return int(np.sum(s > 1e-9 * scale))
+
+
+def _dead_start_note(
+    loop: LoopSolver,
+    measured_components: tuple[str, ...],
+    q: np.ndarray,
+    fid: int,
+    comps: np.ndarray,
+) -> str:
+    """Why inverse kinematics may not leave ``q`` ("" when it is not a dead point).
+
+    A dead point: the actuators move the measured components in fewer directions at
+    q than at nearby configurations (first order, the loops staying closed).
+    """
+    rank = _output_rank(loop, q, fid, comps)
+    rng = np.random.default_rng(0)
+    nearby = max(
+        _output_rank(
+            loop,
+            pin.integrate(loop.model, q, 1e-3 * rng.standard_normal(loop.model.nv)),
+            fid,
+            comps,
+        )
+        for _ in range(3)
+    )
+    if rank >= nearby:
+        return ""
+    return (
+        f". At the start configuration the actuators {list(loop.queries.actuated)} move the "
+        f"measured components {list(measured_components)} in only {rank} "
+        f"independent direction(s) at first order, {nearby} nearby (a dead point of the "
+        f"output): Newton cannot leave it, and nearby targets are reached by several "
+        f"actuator values (e.g. a mirror-symmetric machine). Give q_guess near the "
+        f"solution, or put the sidecar 'home' away from the dead point and keep the "
+        f"workspace on one side of it"
+    )
+
+
+def _as_se3(T: object) -> pin.SE3:
+    """A pin.SE3, or a (4, 4) homogeneous matrix turned into one."""
+    if isinstance(T, pin.SE3):
+        return T
+    try:
+        M = np.asarray(T, dtype=float)
+    except (TypeError, ValueError):
+        M = np.zeros(0)
+    if M.shape != (4, 4) or not np.all(np.isfinite(M)):
+        raise ShapeError(
+            f"target pose must be a pinocchio.SE3 or a finite (4, 4) matrix, got {type(T).__name__}"
+            f"{' of shape ' + str(M.shape) if M.size else ''}"
+        )
+    R = M[:3, :3]
+    if not np.allclose(R.T @ R, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
+        raise ShapeError("target pose matrix: the upper-left (3, 3) block must be a rotation")
+    return pin.SE3(R, M[:3, 3])
