@@ -25,7 +25,7 @@ import pinocchio as pin
 
 from pincal.design import CandidateSet, crb_covariance
 from pincal.errors import ConvergenceError, MeasurementError
-from pincal.measure import INSTRUMENT_KINDS, Instrument
+from pincal.measure import Instrument, instrument_class
 from pincal.model import Mechanism, ParameterSet, sample_actuators
 from pincal.sensitivity import Identifiability, analyse_jacobian, pose_sensitivity
 from pincal.sensitivity.kernels import jacobian_plan
@@ -46,7 +46,7 @@ def instrument_blocks(
     instrument: Instrument,
     theta: np.ndarray,
     q_act_rows: np.ndarray,
-    plane: np.ndarray | None = None,
+    ids: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Joint Jacobian blocks of the readings at the nominal machine.
 
@@ -57,7 +57,7 @@ def instrument_blocks(
         theta: (k,) instrument parameter values [m, rad] (see
             :attr:`Instrument.parameter_names`).
         q_act_rows: (m, n_act) actuator rows [m, rad].
-        plane: (m,) plane ids of a plane instrument (None for other kinds).
+        ids: (m,) ids of the kind's id column (e.g. plane ids; None for other kinds).
 
     Returns:
         J (m, 1, n + k) of dv/d[x; θ], tool positions P (m, 3) [m], position
@@ -68,7 +68,7 @@ def instrument_blocks(
     sens = [pose_sensitivity(mech, params, q, None, plan) for q in mech.configurations(rows)]
     P = np.array([s.position for s in sens])
     Jp = np.array([s.jacobian[:3] for s in sens])
-    _, dv_dp, dv_dth = instrument.predict(P, theta, plane)
+    _, dv_dp, dv_dth = instrument.predict(P, theta, ids)
     J = np.concatenate([np.einsum("mi,min->mn", dv_dp, Jp), dv_dth], axis=1)[:, None, :]
     return J, P, Jp
 
@@ -78,24 +78,21 @@ def default_instrument(
 ) -> tuple[Instrument, np.ndarray, np.ndarray | None]:
     """A typical set-up of ``kind`` beside the workspace of ``q_act_rows``.
 
-    Ballbar pivot and probe sphere 0.1 m below the centre of the tool positions (sphere
-    radius 0.02 m), one horizontal plane and a vertical one, a vertical gauge.
+    The kind's :meth:`pincal.measure.Instrument.typical` set-up at the nominal tool
+    points (built-in kinds: ballbar pivot and probe sphere 0.1 m below the centre of
+    the tool positions, sphere radius 0.02 m, one horizontal plane and a vertical one,
+    a vertical gauge).
 
     Returns:
-        (instrument, θ (k,), plane ids (m,) or None).
+        (instrument, θ (k,), ids (m,) or None).
+
+    Raises:
+        MeasurementError: an unregistered kind.
     """
+    cls = instrument_class(kind)
     rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
     P = np.array([mech.frame_placement(q).translation for q in mech.configurations(rows)])
-    c = P.mean(axis=0) - np.array([0.0, 0.0, 0.1])
-    if kind == "distance":
-        return Instrument(kind, std), np.r_[c, 0.0], None
-    if kind == "sphere":
-        return Instrument(kind, std, radius=0.02), c, None
-    if kind == "point":
-        return Instrument(kind, std), np.zeros(1), None
-    ids = np.arange(len(rows)) % 2
-    inst = Instrument("plane", std, normals=((0.0, 0.0, 1.0), (1.0, 0.0, 0.0)))
-    return inst, np.array([0.0, 0.0, P[:, 2].min(), 0.0, 0.0, P[:, 0].min()]), ids
+    return cls.typical(P, std)
 
 
 def _span(M: np.ndarray, tol: float = 1e-6, absolute: bool = False) -> np.ndarray:
@@ -256,12 +253,8 @@ def instrument_identifiability(
         if theta is None:
             raise MeasurementError("give theta with an Instrument")
         inst, th = kind, np.asarray(theta, dtype=float)
-        ids = np.arange(n_poses) % max(inst.n_planes, 1) if inst.kind == "plane" else None
+        ids = np.arange(n_poses) % max(inst.n_ids, 1) if inst.id_column is not None else None
     else:
-        if kind not in INSTRUMENT_KINDS:
-            raise MeasurementError(
-                f"unknown instrument kind {kind!r}; choose from {INSTRUMENT_KINDS}"
-            )
         inst, th, ids = default_instrument(mech, kind, q)
     J, P, Jp = instrument_blocks(mech, params, inst, th, q, ids)
     J = J[:, 0, :]
@@ -308,10 +301,11 @@ def instrument_candidates(
     rng: np.random.Generator | int = 0,
     max_tilt: float = 0.0,
 ) -> CandidateSet:
-    """Candidate poses for a ballbar (``distance``) or a probe on a sphere (``sphere``).
+    """Candidate poses on the instrument's sphere (ballbar, probe on a sphere, …).
 
-    Tool points on the sphere around the pivot / centre (bar length ``|θ_c − home|`` for
-    the ballbar, ``radius`` for the sphere) in directions drawn uniformly, at the home
+    Tool points on :meth:`pincal.measure.Instrument.candidate_sphere` (the ballbar: bar
+    length ``|θ_c − home|`` around the pivot; the probe: the sphere's radius around its
+    centre) in directions drawn uniformly, at the home
     orientation tilted by up to ``max_tilt`` [rad]; unreachable ones and those outside
     the sidecar's workspace joint ranges are dropped.
 
@@ -319,21 +313,18 @@ def instrument_candidates(
         CandidateSet with joint Jacobian blocks (N, 1, n + k), component ``"v"``.
 
     Raises:
-        MeasurementError: another kind, or no reachable candidate.
+        MeasurementError: a kind without a candidate sphere, or no reachable candidate.
     """
-    if instrument.kind not in ("distance", "sphere"):
+    home = mech.frame_placement(mech.q_home)
+    sphere = instrument.candidate_sphere(np.asarray(theta, dtype=float), home.translation)
+    if sphere is None:
         raise MeasurementError(
-            f"instrument_candidates makes ballbar/sphere candidates, not {instrument.kind!r}; "
-            "use random workspace poses (pincal.model.sample_actuators) for planes and gauges"
+            f"instrument_candidates makes candidates on an instrument's sphere (ballbar, "
+            f"sphere probe); the {instrument.kind!r} kind has none: use random workspace "
+            "poses (pincal.model.sample_actuators)"
         )
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    home = mech.frame_placement(mech.q_home)
-    c = np.asarray(theta[:3], dtype=float)
-    radius = (
-        float(np.linalg.norm(home.translation - c))
-        if instrument.kind == "distance"
-        else instrument.radius
-    )
+    c, radius = sphere
     # the sidecar's workspace joint ranges, where given, bound the candidates too
     limits = [
         (k, mech.workspace.joints[a])

@@ -224,7 +224,7 @@ class InstrumentProblem:
                         J[i, :, :n] = -(D @ sens[i].jacobian)[rows]
             else:
                 k = len(inst.parameter_names)
-                v, dv_dp, dv_dth = inst.predict(P, x[col : col + k], d.plane)
+                v, dv_dp, dv_dth = inst.predict(P, x[col : col + k], d.ids)
                 raw = (d.values - v)[:, None]
                 J = np.zeros((m, 1, len(x)))
                 if jacobian:
