@@ -25,6 +25,7 @@ import pinocchio as pin
 
 from pincal.design import CandidateSet, crb_covariance
 from pincal.errors import ConvergenceError, MeasurementError
+from pincal.identification._gauge import null_motions
 from pincal.measure import Instrument, instrument_class
 from pincal.model import Mechanism, ParameterSet, sample_actuators
 from pincal.sensitivity import Identifiability, analyse_jacobian, pose_sensitivity
@@ -93,89 +94,6 @@ def default_instrument(
     rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
     P = np.array([mech.frame_placement(q).translation for q in mech.configurations(rows)])
     return cls.typical(P, std)
-
-
-def _span(M: np.ndarray, tol: float = 1e-6, absolute: bool = False) -> np.ndarray:
-    """Orthonormal basis (columns) of the column span of M.
-
-    Keeps the singular directions with singular values above ``tol``, relative to the
-    largest unless ``absolute``.
-    """
-    if M.size == 0:
-        return np.zeros((M.shape[0], 0))
-    u, s, _ = np.linalg.svd(M, full_matrices=False)
-    return u[:, s > tol * (1.0 if absolute else max(float(s.max(initial=0.0)), 1e-300))]
-
-
-def _point(p: np.ndarray) -> str:
-    """A point as text (no "-0.000")."""
-    p = np.where(np.abs(np.asarray(p, dtype=float)) < 5e-4, 0.0, p)
-    return "(" + ", ".join(f"{x:+.3f}" for x in p) + ")"
-
-
-def _vec(v: np.ndarray) -> str:
-    """A direction as text, its sign fixed so the largest component is positive."""
-    v = np.asarray(v, dtype=float)
-    if v.size and v[np.argmax(np.abs(v))] < 0:
-        v = -v
-    v = np.where(np.abs(v) < 5e-4, 0.0, v)  # no "-0.000"
-    return "(" + ", ".join(f"{x:+.3f}" for x in v) + ")"
-
-
-def _rigid(F: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Rigid-motion content of tool-point fields F (3m, k).
-
-    Fits ``δp_i = v + ω × (p_i − p̄)`` per column (ω scaled by the RMS radius L of the
-    points so both parts are in metres).
-
-    Returns:
-        rotation axes (3, r) (orthonormal), translation directions (3, t) of the
-        rotation-free combinations, rotation centre (3,) [m] (NaN when r = 0).
-    """
-    mean = P.mean(axis=0)
-    Pc = P - mean
-    L = max(float(np.sqrt(np.mean(np.sum(Pc**2, axis=1)))), 1e-9)
-    A = np.vstack([np.hstack([np.eye(3), -pin.skew(p) / L]) for p in Pc])
-    C, *_ = np.linalg.lstsq(A, F, rcond=None)
-    tol = 1e-6 * max(float(np.abs(C).max(initial=0.0)), 1e-300)
-    u, sw, vw = np.linalg.svd(C[3:], full_matrices=True)
-    r = int(np.count_nonzero(sw > tol))
-    axes = u[:, :r]
-    trans = _span(C[:3] @ vw[r:].T, 1e-6) if vw[r:].size else np.zeros((3, 0))
-    centre = np.full(3, np.nan)
-    if r:
-        W = C[:, :] @ vw[:r].T  # combinations with rotation: v = −ω × (c − p̄)
-        M = np.vstack([-pin.skew(W[3:, j] / L) for j in range(r)])
-        centre = mean + np.linalg.lstsq(M, W[:3].T.reshape(-1), rcond=None)[0]
-    return axes, trans, centre
-
-
-def _complement(B: np.ndarray, A: np.ndarray) -> np.ndarray:
-    """Orthonormal basis of the part of span(B) orthogonal to span(A) (both (3, ·))."""
-    if B.shape[1] == 0:
-        return B
-    Q = _span(A) if A.shape[1] else np.zeros((3, 0))
-    return _span(B - Q @ (Q.T @ B), 1e-6, absolute=True)
-
-
-def _words(axes: np.ndarray, trans: np.ndarray, centre: np.ndarray | None) -> list[str]:
-    out = []
-    if axes.shape[1]:
-        where = "" if centre is None else f" through the point {_point(centre)} m"
-        out.append(
-            f"{axes.shape[1]} rotation(s) of every tool point about the "
-            f"{'axes' if axes.shape[1] > 1 else 'axis'} "
-            + ", ".join(_vec(axes[:, j]) for j in range(axes.shape[1]))
-            + where
-        )
-    if trans.shape[1] == 3:
-        out.append("3 translations of every tool point (in every direction)")
-    elif trans.shape[1]:
-        out.append(
-            f"{trans.shape[1]} translation(s) of every tool point along "
-            + ", ".join(_vec(trans[:, j]) for j in range(trans.shape[1]))
-        )
-    return out
 
 
 @dataclass(frozen=True)
@@ -262,33 +180,9 @@ def instrument_identifiability(
     names = (*params.names, *inst.parameter_names)
     order = np.r_[np.arange(n, len(names)), np.arange(n)]
     ident = analyse_jacobian(J[:, order], tuple(names[i] for i in order))
-    # null directions of the column-scaled Jacobian, back in parameter units
-    scale = np.where(ident.column_scale > 0, ident.column_scale, 1.0)
-    _, _, vt = np.linalg.svd(J[:, order] / scale, full_matrices=True)
-    null = (vt[ident.rank :] / scale).T  # (n + k, d) in the `order` columns
-    null_x = np.empty_like(null)
-    null_x[order] = null
-    machine, inst_part = null_x[:n], null_x[n:]
-    # machine-only motions: combinations with no instrument part
-    _, si, vi = np.linalg.svd(inst_part, full_matrices=True)
-    r_i = int(np.count_nonzero(si > 1e-9 * max(float(si.max(initial=0.0)), 1e-300)))
-    pure, mixed = vi[r_i:].T, vi[:r_i].T
-    fields = lambda V: np.einsum("mij,jk->mik", Jp, machine @ V).reshape(-1, V.shape[1])  # noqa: E731
-    F0, F1 = fields(pure), fields(mixed)
-    Q0 = _span(F0)
-    still = F0.shape[1] - Q0.shape[1]
-    ax0, tr0, c0 = _rigid(Q0, P)
-    Qu = _span(np.hstack([F0, F1]))
-    axu, tru, _ = _rigid(Qu, P)
-    invisible = _words(ax0, tr0, c0 if ax0.shape[1] else None)
-    absorbed = _words(_complement(axu, ax0), _complement(tru, tr0), None)
-    if absorbed:
-        used = [
-            inst.parameter_names[i] for i in range(len(th)) if np.any(np.abs(inst_part[i]) > 1e-9)
-        ]
-        absorbed = [f"{w} ({', '.join(used)})" for w in absorbed]
+    motions = null_motions(J, Jp, P, n, ident, order, inst.parameter_names)
     return InstrumentIdentifiability(
-        inst.kind, names, n, ident, tuple(invisible), tuple(absorbed), int(still)
+        inst.kind, names, n, ident, motions.invisible, motions.absorbed, motions.n_still
     )
 
 

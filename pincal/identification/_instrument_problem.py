@@ -28,6 +28,7 @@ import numpy as np
 
 from pincal.errors import ConvergenceError, MeasurementError, SolverOptionError
 from pincal.identification._covariance import covariance_from_jacobian
+from pincal.identification._gauge import null_motions, weak_parameters
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._socket_terms import SocketTerms
@@ -244,14 +245,29 @@ class InstrumentProblem:
         r_w = np.concatenate(r_all)
         return r_w, (np.vstack(J_all) if jacobian else None), raws
 
-    def analyse(self, x: np.ndarray | None = None) -> Identifiability:
+    @property
+    def order(self) -> np.ndarray:
+        """The column order of :meth:`analyse`: instrument parameters first."""
+        return np.r_[np.arange(self.n_machine, len(self.names)), np.arange(self.n_machine)]
+
+    def analyse(self, x: np.ndarray | None = None, J: np.ndarray | None = None) -> Identifiability:
         """Identifiability of the joint parameters at ``x`` (default the start values).
 
         The instrument parameters are listed first so they enter the base first.
+        ``J``: the whitened Jacobian at ``x`` when already evaluated.
         """
-        _, J, _ = self.evaluate(self.x0 if x is None else x)
-        order = np.r_[np.arange(self.n_machine, len(self.names)), np.arange(self.n_machine)]
-        return analyse_jacobian(J[:, order], tuple(self.names[i] for i in order))
+        if J is None:
+            _, J, _ = self.evaluate(self.x0 if x is None else x)
+        return analyse_jacobian(J[:, self.order], tuple(self.names[i] for i in self.order))
+
+    def tool_points(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tool points (m, 3) [m] of every pose at ``x`` and their sensitivities (m, 3, n)."""
+        x = np.asarray(x, dtype=float)
+        mech, values = self.mechanism(x), x[: self.n_machine]
+        plan = jacobian_plan(mech, self.params)
+        sens = [pose_sensitivity(mech, self.params, q, values, plan)
+                for q in self._configurations(mech)]  # fmt: skip
+        return np.array([s.position for s in sens]), np.array([s.jacobian[:3] for s in sens])
 
 
 @dataclass(frozen=True)
@@ -269,6 +285,9 @@ class InstrumentIdentification:
         covariance: covariance of the fitted values (order of ``fitted``).
         residuals: per dataset, (m_i, k_i) raw residuals at the solution [m, rad].
         identifiability: joint analysis at the start (instrument parameters first).
+        gauge: what the data do not observe (held at nominal), in words.
+        weak: names of the parameters held because the data place them only beyond
+            20 mm / 0.1 rad (1σ).
         socket_centres: ``"plate.socket"`` → (3,) identified socket centre [m].
         warnings: what no measurement fixes, in words (e.g. the length scale of a
             socket campaign without a known distance).
@@ -282,6 +301,8 @@ class InstrumentIdentification:
     covariance: np.ndarray
     residuals: list[np.ndarray]
     identifiability: Identifiability
+    gauge: tuple[str, ...] = ()
+    weak: tuple[str, ...] = ()
     socket_centres: dict[str, np.ndarray] = field(default_factory=dict)
     warnings: tuple[str, ...] = ()
 
@@ -320,6 +341,7 @@ def identify_instruments(
     options: Any = None,
     labels: Sequence[str] | None = None,
     progress: Callable[[int, float], None] | None = None,
+    weak_bound: tuple[float, float] | None = (0.02, 0.1),
 ) -> InstrumentIdentification:
     """Identify machine and instrument parameters jointly from several datasets.
 
@@ -332,6 +354,10 @@ def identify_instruments(
             ``LMOptions``; None = its defaults).
         labels: names of the datasets (prefix of the instrument parameter names).
         progress: optional ``(iteration, cost)`` callback passed to the solver.
+        weak_bound: (length [m], angle [rad]): a direction of the base set whose 1σ
+            (at the files' declared noise) exceeds it is held at nominal too, named in
+            the gauge (see :func:`pincal.identification._gauge.weak_parameters`); None
+            fits the whole identifiable base set.
 
     Returns:
         InstrumentIdentification (the machine part is an IdentificationResult).
@@ -348,10 +374,21 @@ def identify_instruments(
     opts = entry.check_options(options)
     model = InstrumentProblem(mech, params, datasets, labels)
     x0 = model.x0
-    _, _, raw0 = model.evaluate(x0, jacobian=False)
-    ident = model.analyse(x0)
-    order = np.r_[np.arange(model.n_machine, len(model.names)), np.arange(model.n_machine)]
-    free = np.sort(order[ident.base])
+    _, J0, raw0 = model.evaluate(x0)
+    ident = model.analyse(x0, J0)
+    free = np.sort(model.order[ident.base])
+    weak = (np.zeros(0, dtype=int) if weak_bound is None
+            else weak_parameters(J0, free, model.units, model.n_machine, weak_bound))  # fmt: skip
+    free = np.setdiff1d(free, weak)
+    P0, Jp0 = model.tool_points(x0)
+    motions = null_motions(J0, Jp0, P0, model.n_machine, ident, model.order,
+                           model.names[model.n_machine :])  # fmt: skip
+    gauge = tuple(motions.lines())
+    if weak.size:
+        assert weak_bound is not None
+        gauge += (f"seen too weakly to place within {weak_bound[0] * 1e3:g} mm / "
+                  f"{weak_bound[1]:g} rad (1σ), held at nominal: "
+                  f"{', '.join(model.names[i] for i in weak)}",)  # fmt: skip
     out = entry.solve(model, x0, free, opts, progress)
     r, J, raws = model.evaluate(out.x)
     Jf = J[:, free]
@@ -393,7 +430,8 @@ def identify_instruments(
         reduced_chi2=chi2,
         iterations=out.iterations,
         success=success,
-        message=f"joint fit of {free.size} of {len(model.names)} parameters; "
+        message=f"joint fit of {free.size} of {len(model.names)} parameters (the others "
+        "held at nominal: see the gauge); "
         + "".join(f"WARNING: {w}; " for w in model.scale_warnings)
         + message,
         cost_history=tuple(out.history),
@@ -411,9 +449,12 @@ def identify_instruments(
             "instruments": inst,
             "datasets": list(model.labels),
             "redundancy": dof,
+            "gauge": list(gauge),
             **({"warnings": list(model.scale_warnings)} if model.scale_warnings else {}),
             **({"socket_centres_mm": centres_mm} if centres_mm else {}),
         },
     )
-    return InstrumentIdentification(result, model.names, x, x0, free, cov, raws, ident,
-                                    model.socket_centres(x), model.scale_warnings)  # fmt: skip
+    return InstrumentIdentification(
+        result, model.names, x, x0, free, cov, raws, ident, gauge,
+        tuple(model.names[i] for i in weak), model.socket_centres(x), model.scale_warnings,
+    )  # fmt: skip

@@ -41,6 +41,35 @@ def _radial(P: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return r, d / r[:, None]
 
 
+def _coplanar(P: np.ndarray) -> np.ndarray | None:
+    """The unit normal (z component ≥ 0) of tool points that lie in one plane, else None."""
+    if len(P) < 3:
+        return None
+    _, s, vt = np.linalg.svd(P - P.mean(axis=0), full_matrices=True)
+    if s[0] <= 0 or s[-1] > 1e-9 * s[0]:
+        return None
+    n = vt[-1]
+    return n if n[2] >= 0 else -n
+
+
+def _centre_in_plane(P: np.ndarray, L: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Centre c (3,) [m] of a sphere through coplanar points P at distances L, below them.
+
+    In the plane of the points ``L² = |p − c'|² + h²`` (c' the centre's foot point, h its
+    height) is linear in (c', |c'|² + h²); which side of the plane the centre lies on no
+    reading tells: it is put on the side of −n (below a horizontal plane).
+    """
+    t1 = np.cross(n, np.eye(3)[int(np.argmin(np.abs(n)))])
+    t1 /= np.linalg.norm(t1)
+    T = np.column_stack([t1, np.cross(n, t1)])
+    origin = P.mean(axis=0)
+    Q = (P - origin) @ T
+    A = np.column_stack([2 * Q, -np.ones(len(P))])
+    a, b, k = np.linalg.lstsq(A, np.sum(Q**2, axis=1) - L**2, rcond=None)[0]
+    h = float(np.sqrt(max(k - a * a - b * b, 0.0)))
+    return origin + T @ np.array([a, b]) - h * n
+
+
 @dataclass(frozen=True)
 class Distance(Instrument):
     """Double ballbar from a fixed pivot to the tool point (pivot and bar offset unknown)."""
@@ -62,6 +91,9 @@ class Distance(Instrument):
         return r + theta[3], u, dth
 
     def start(self, P, v, ids):
+        n = _coplanar(P)
+        if n is not None:  # a planar machine: the bar offset starts at 0
+            return self, np.r_[_centre_in_plane(P, v, n), 0.0]
         # |p|² − v² = 2 p·c − 2 v e + (e² − |c|²), linear in (c, e, e² − |c|²)
         A = np.column_stack([2 * P, -2 * v, np.ones(len(P))])
         sol = np.linalg.lstsq(A, np.sum(P**2, axis=1) - v**2, rcond=None)[0]
@@ -100,6 +132,9 @@ class Sphere(Instrument):
         return r - self.radius, u, -u
 
     def start(self, P, v, ids):
+        n = _coplanar(P)
+        if n is not None:
+            return self, _centre_in_plane(P, self.radius + v, n)
         A = np.column_stack([2 * P, -np.ones(len(P))])  # 2 p·c − |c|² = |p|² − (r + v)²
         sol = np.linalg.lstsq(A, np.sum(P**2, axis=1) - (self.radius + v) ** 2, rcond=None)[0]
         return self, sol[:3]
