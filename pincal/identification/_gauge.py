@@ -170,7 +170,9 @@ def null_motions(
     else:
         vi, r_i = np.eye(null.shape[1]), 0
     pure, mixed = vi[r_i:].T, vi[:r_i].T
-    fields = lambda V: np.einsum("mij,jk->mik", Jp, machine @ V).reshape(3 * len(Jp), V.shape[1])  # noqa: E731,E501
+    def fields(V: np.ndarray) -> np.ndarray:
+        return np.einsum("mij,jk->mik", Jp, machine @ V).reshape(3 * len(Jp), V.shape[1])
+
     F0, F1 = fields(pure), fields(mixed)
     Q0 = _span(F0)
     still = F0.shape[1] - Q0.shape[1]
