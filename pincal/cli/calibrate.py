@@ -224,8 +224,9 @@ def calibrate(
                 "pose measurement files",
                 param_hint="--data",
             )
-        result, noise_model = _identify_instrument(mech, params, files, method, force), None
-        verdict = check_quality(result, limits=limits, scalar_instrument=True)
+        verdict, result = _identify_instrument(mech, params, files, method, force, limits,
+                                               profile)  # fmt: skip
+        noise_model = None
     else:
         mf = read_measurement_file(data, mech)  # its data check is the gate's first look
         meas = mf.measurements
@@ -353,8 +354,15 @@ def _is_instrument_file(path: str) -> bool:
         return False  # the measurement reader reports the problem
 
 
-def _identify_instrument(mech, params, files: list[str], method: str, force: bool):
+def _identify_instrument(mech, params, files: list[str], method: str, force: bool, limits,
+                         profile):  # fmt: skip
     """Machine and instrument parameters from instrument files (ballbar, probe, sockets…).
+
+    The readings' unit check refuses before the fit (unless ``force``); the fit is judged
+    by :func:`pincal.identification.instrument_gate`.
+
+    Returns:
+        (the gate's verdict, the machine part as an IdentificationResult).
 
     Raises:
         UnidentifiableError: nothing measured fixes the length scale (sockets without a
@@ -362,13 +370,16 @@ def _identify_instrument(mech, params, files: list[str], method: str, force: boo
     """
     from pathlib import Path
 
+    from pincal.cli._gate import apply_gate
     from pincal.errors import UnidentifiableError
-    from pincal.identification import identify_instruments
+    from pincal.identification import check_instrument_data, identify_instruments, instrument_gate
     from pincal.io import read_instrument_file
 
     datasets = [read_instrument_file(f, mech) for f in files]
     stems = [Path(f).stem for f in files]
     labels = stems if len(set(stems)) == len(stems) else None
+    data = check_instrument_data(mech, datasets, stems, limits)
+    apply_gate(data, force, before_fit=True)
     what = ", ".join(f"{len(d.q_act)} {d.kind}" for d in datasets)
     click.echo(f"… identifying from {what} readings", err=True)
     from pincal.cli._progress import iterations
@@ -380,7 +391,7 @@ def _identify_instrument(mech, params, files: list[str], method: str, force: boo
         if not force:
             raise UnidentifiableError(f"{w} (--force writes the calibration anyway)")
         click.echo(f"pincal: warning: {w}", err=True)
-    return out.result
+    return instrument_gate(out, data, limits, profile), out.result
 
 
 def _identify_poses(mech, params, preset: str, meas, method: str, declared, loss: str):

@@ -25,6 +25,7 @@ from pincal.identification._instrument_design import (
     instrument_cramer_rao,
     instrument_identifiability,
 )
+from pincal.identification._instrument_gate import check_instrument_data, instrument_gate
 from pincal.identification._instrument_problem import (
     InstrumentIdentification,
     InstrumentProblem,
@@ -126,6 +127,7 @@ __all__ = [
     "StepPlanningOptions",
     "StepPlanningResult",
     "Weighting",
+    "check_instrument_data",
     "check_measurements",
     "check_quality",
     "compare",
@@ -138,6 +140,7 @@ __all__ = [
     "instrument_blocks",
     "instrument_candidates",
     "instrument_cramer_rao",
+    "instrument_gate",
     "instrument_identifiability",
     "instrument_profile",
     "is_registration",

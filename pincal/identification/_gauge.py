@@ -26,7 +26,7 @@ import pinocchio as pin
 
 from pincal.sensitivity import Identifiability
 
-__all__ = ["NullMotions", "null_motions", "weak_parameters"]
+__all__ = ["NullMotions", "null_motions", "reading_scale_std", "weak_parameters"]
 
 
 @dataclass(frozen=True)
@@ -223,3 +223,28 @@ def weak_parameters(
             v = np.where(machine, v, -1.0)
         held.append(keep.pop(int(np.argmax(v))))
     return np.array(sorted(held), dtype=int)
+
+
+def reading_scale_std(Jf: np.ndarray, readings: np.ndarray) -> float:
+    """1σ of a relative scale error of the readings, as the fit can tell it apart [1].
+
+    A scale error k of an instrument's readings (a bar length, a probe's gain) adds
+    ``k · v`` to them; the fit absorbs the part of ``v/σ`` in the span of its whitened
+    Jacobian ``Jf`` (N, p). What is left, ``‖(I − Π_J) v/σ‖``, is the information on k:
+    its inverse is k's 1σ. Large (e.g. 1 % on an all-revolute machine, whose length
+    scale only the instrument sets) means a scale error of the instrument passes into
+    the calibrated machine unseen.
+
+    Args:
+        Jf: (N, p) whitened Jacobian of the fitted parameters.
+        readings: (N,) whitened readings ``v/σ`` (0 on rows of other measurements).
+    """
+    y = np.asarray(readings, dtype=float)
+    if not np.any(y):
+        return 0.0
+    Q = np.zeros((y.size, 0))
+    if Jf.size:
+        u, sv, _ = np.linalg.svd(Jf, full_matrices=False)
+        Q = u[:, sv > 1e-10 * sv[0]] if sv[0] > 0 else Q
+    rest = float(np.linalg.norm(y - Q @ (Q.T @ y)))
+    return float("inf") if rest <= 1e-12 * float(np.linalg.norm(y)) else 1.0 / rest

@@ -28,7 +28,7 @@ import numpy as np
 
 from pincal.errors import ConvergenceError, MeasurementError, SolverOptionError
 from pincal.identification._covariance import covariance_from_jacobian
-from pincal.identification._gauge import null_motions, weak_parameters
+from pincal.identification._gauge import null_motions, reading_scale_std, weak_parameters
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._socket_terms import SocketTerms
@@ -47,6 +47,8 @@ from pincal.sensitivity.kernels import jacobian_plan
 __all__ = ["InstrumentIdentification", "InstrumentProblem", "identify_instruments"]
 
 Dataset = InstrumentData | Measurements | SocketData
+#: a reading scale the data tell only beyond this 1σ [1] is named in the gauge
+SCALE_STD_LIMIT = 1e-3
 
 
 class InstrumentProblem:
@@ -245,6 +247,21 @@ class InstrumentProblem:
         r_w = np.concatenate(r_all)
         return r_w, (np.vstack(J_all) if jacobian else None), raws
 
+    def whitened_readings(self, raws: list[np.ndarray]) -> np.ndarray:
+        """(N,) the model's scalar readings / σ at the residuals ``raws`` of :meth:`evaluate`.
+
+        0 on the rows of poses and sockets: the Jacobian column of a relative scale
+        error of the readings.
+        """
+        out = []
+        for d, raw, sig in zip(self.datasets, raws, self.sigma, strict=False):
+            if isinstance(d, InstrumentData):
+                out.append((d.values - raw[:, 0]) / sig[:, 0])
+            else:
+                out.append(np.zeros(raw.size))
+        out += [np.zeros(s.size) for s in self.sigma[len(self.datasets) :]]
+        return np.concatenate(out)
+
     @property
     def order(self) -> np.ndarray:
         """The column order of :meth:`analyse`: instrument parameters first."""
@@ -288,6 +305,10 @@ class InstrumentIdentification:
         gauge: what the data do not observe (held at nominal), in words.
         weak: names of the parameters held because the data place them only beyond
             20 mm / 0.1 rad (1σ).
+        whitened: (m, k, p) Jacobian of the fitted parameters per pose and (m, k)
+            residuals, both divided by their σ, at the solution — for the quality gate's
+            per-pose tests; None when the poses have residuals of different sizes or a
+            plate's known distances add rows.
         socket_centres: ``"plate.socket"`` → (3,) identified socket centre [m].
         warnings: what no measurement fixes, in words (e.g. the length scale of a
             socket campaign without a known distance).
@@ -303,6 +324,7 @@ class InstrumentIdentification:
     identifiability: Identifiability
     gauge: tuple[str, ...] = ()
     weak: tuple[str, ...] = ()
+    whitened: tuple[np.ndarray, np.ndarray] | None = None
     socket_centres: dict[str, np.ndarray] = field(default_factory=dict)
     warnings: tuple[str, ...] = ()
 
@@ -392,6 +414,12 @@ def identify_instruments(
     out = entry.solve(model, x0, free, opts, progress)
     r, J, raws = model.evaluate(out.x)
     Jf = J[:, free]
+    scale_std = reading_scale_std(Jf, model.whitened_readings(raws))
+    if scale_std > SCALE_STD_LIMIT:
+        gauge += (f"the length scale: a scale error of the readings (a bar length, a gain) "
+                  f"passes into the calibrated machine — the data tell it only to "
+                  f"{scale_std * 100:.2g} % (1σ); the scale rests on the instrument's own "
+                  "calibration",)  # fmt: skip
     success, message = out.success, out.message
     if not success:
         # at the noise floor a Gauss–Newton step may promise less than the cost changes
@@ -454,7 +482,13 @@ def identify_instruments(
             **({"socket_centres_mm": centres_mm} if centres_mm else {}),
         },
     )
+    ks = {a.shape[1] for a in raws}
+    whitened = None
+    if len(raws) == len(model.datasets) and len(ks) == 1:
+        k = ks.pop()
+        whitened = (Jf.reshape(-1, k, free.size), r.reshape(-1, k))
     return InstrumentIdentification(
         result, model.names, x, x0, free, cov, raws, ident, gauge,
-        tuple(model.names[i] for i in weak), model.socket_centres(x), model.scale_warnings,
+        tuple(model.names[i] for i in weak), whitened, model.socket_centres(x),
+        model.scale_warnings,
     )  # fmt: skip

@@ -83,6 +83,9 @@ class Instrument(ABC):
     default_std: ClassVar[float] = 1e-6
     #: name of an integer column of ids the kind reads per row (e.g. ``"plane"``), or None
     id_column: ClassVar[str | None] = None
+    #: its readings change at most as fast as the tool point moves (``|∂v/∂p| ≤ 1``):
+    #: the gate's unit check bounds their spread by the tool points'
+    unit_gradient: ClassVar[bool] = True
 
     std: float
 
