@@ -26,11 +26,11 @@ from pincal.identification._instrument_design import (
     instrument_identifiability,
 )
 from pincal.identification._instrument_gate import check_instrument_data, instrument_gate
-from pincal.identification._instrument_problem import (
+from pincal.identification._instrument_identify import (
     InstrumentIdentification,
-    InstrumentProblem,
     identify_instruments,
 )
+from pincal.identification._instrument_problem import InstrumentProblem
 from pincal.identification._instrument_profiles import (
     INSTRUMENT_PROFILES,
     InstrumentProfile,

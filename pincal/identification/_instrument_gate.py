@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from pincal.identification._instrument_problem import InstrumentIdentification
+from pincal.identification._instrument_identify import InstrumentIdentification
 from pincal.identification._quality import check_quality
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
 from pincal.identification._weighting import Weighting
