@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import SolverOptionError
-from pincal.identification._covariance import covariance_from_jacobian
+from pincal.identification._covariance import fitted_covariance
 from pincal.identification._data_blocks import DataBlock
 from pincal.identification._gauge import null_motions, reading_scale_std, weak_parameters
 from pincal.identification._instrument_problem import Dataset, InstrumentProblem
@@ -174,12 +174,8 @@ def identify_instruments(
             )
     dof = max(model.n_equations - free.size, 1)
     chi2 = float(r @ r) / dof
-    cov = covariance_from_jacobian(Jf)
     n = model.n_machine
-    mach = free < n
-    cov_m = cov[np.ix_(mach, mach)]
-    mask = np.zeros(n, dtype=bool)
-    mask[free[mach]] = True
+    cov_m, mask, cov = fitted_covariance(Jf, free, n)  # free is sorted: cov in its order
     x = np.asarray(out.x, dtype=float)
     inst = {k: float(v) for k, v in zip(model.names[n:], x[n:], strict=True)}
     centres_mm = {k: [float(v) * 1e3 for v in c] for k, c in model.socket_centres(x).items()}
