@@ -74,6 +74,11 @@ def test_a_bar_scale_error_outlier_and_unit_error_are_refused(stewart_bar, tmp_p
     res = _calibrate(bad, tmp_path / "c2")
     assert res.exit_code == 1 and "1 of 60 poses are outliers" in res.stderr
     assert "poses 17)" in res.stderr
+    # real noise 10× the declared one (std 10 µm declared as 1 µm)
+    quiet = tmp_path / "n.csv"
+    quiet.write_text(stewart_bar.read_text().replace("# std: 1e-05", "# std: 1e-06"))
+    res = _calibrate(quiet, tmp_path / "c4")
+    assert res.exit_code == 1 and "instrument χ²/ν" in res.stderr
     # readings in mm written as m: refused before the fit, the cause named
     mm = _edit(stewart_bar, tmp_path / "u.csv", lambda i, v: 1e3 * v)
     res = _calibrate(mm, tmp_path / "c3")
