@@ -77,4 +77,8 @@ def format_report(doc: dict) -> str:
     from pincal.cli._sockets import socket_lines
 
     lines += socket_lines(doc)
+    gauge = doc.get("gauge") or ()
+    if gauge:  # what an instrument fit does not observe (held at nominal)
+        lines.append("not calibrated (held at nominal; the data do not observe it):")
+        lines += [f"  {g}" for g in gauge]
     return "\n".join(lines + quality_lines(doc.get("quality"))) + "\n"

@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from pincal.cli._calibrate_text import format_report, result_json
+from pincal.cli._instrument_fit import identify_instrument_files, is_instrument_file
 from pincal.cli._limits import NOISE_RANGE, check_data_rows, number_pair, yes_option
 from pincal.cli._markers import marker_options
 from pincal.cli.common import (
@@ -157,7 +158,7 @@ def calibrate(
             raise click.BadParameter(str(e), param_hint="--instrument") from None
     files = list(data)
     data = files[0]
-    if len(files) > 1 and not all(_is_instrument_file(f) for f in files):
+    if len(files) > 1 and not all(is_instrument_file(f) for f in files):
         raise click.BadParameter(
             "several --data files are fitted together only when all are instrument files "
             "('# pincal instrument' / '# pincal sockets'); give one pose measurement file",
@@ -217,15 +218,16 @@ def calibrate(
     params = with_joint_terms(mech, parameters(mech, preset), terms)
     for f in files:
         check_data_rows(f, "--data", len(params), yes)
-    if _is_instrument_file(data):
+    if is_instrument_file(data):
         if declared is not None or loss != "linear":
             raise click.BadParameter(
                 "an instrument file carries its own noise; --noise and --loss apply to "
                 "pose measurement files",
                 param_hint="--data",
             )
-        result, noise_model = _identify_instrument(mech, params, files, method, force), None
-        verdict = check_quality(result, limits=limits, scalar_instrument=True)
+        verdict, result = identify_instrument_files(mech, params, files, method, force,
+                                                    limits, profile)  # fmt: skip
+        noise_model = None
     else:
         mf = read_measurement_file(data, mech)  # its data check is the gate's first look
         meas = mf.measurements
@@ -340,47 +342,6 @@ def _unconfirmed_outliers(verdict):
     )
     out = dataclasses.replace(verdict, issues=issues)
     return out if not out.passed else dataclasses.replace(out, cause="", cause_text="")
-
-
-def _is_instrument_file(path: str) -> bool:
-    """True for an instrument file (``# pincal instrument`` / ``# pincal sockets``)."""
-    from pincal.errors import PincalError
-    from pincal.io import is_instrument_file
-
-    try:
-        return is_instrument_file(path)
-    except PincalError:
-        return False  # the measurement reader reports the problem
-
-
-def _identify_instrument(mech, params, files: list[str], method: str, force: bool):
-    """Machine and instrument parameters from instrument files (ballbar, probe, sockets…).
-
-    Raises:
-        UnidentifiableError: nothing measured fixes the length scale (sockets without a
-            known distance), unless ``force`` (then a warning on stderr).
-    """
-    from pathlib import Path
-
-    from pincal.errors import UnidentifiableError
-    from pincal.identification import identify_instruments
-    from pincal.io import read_instrument_file
-
-    datasets = [read_instrument_file(f, mech) for f in files]
-    stems = [Path(f).stem for f in files]
-    labels = stems if len(set(stems)) == len(stems) else None
-    what = ", ".join(f"{len(d.q_act)} {d.kind}" for d in datasets)
-    click.echo(f"… identifying from {what} readings", err=True)
-    from pincal.cli._progress import iterations
-
-    with iterations("identifying") as step:
-        out = identify_instruments(mech, params, datasets, method=method, labels=labels,
-                                   progress=step)  # fmt: skip
-    for w in out.warnings:
-        if not force:
-            raise UnidentifiableError(f"{w} (--force writes the calibration anyway)")
-        click.echo(f"pincal: warning: {w}", err=True)
-    return out.result
 
 
 def _identify_poses(mech, params, preset: str, meas, method: str, declared, loss: str):

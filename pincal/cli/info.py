@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from pincal.cli._kinds import InstrumentChoice
 from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_options
 
 if TYPE_CHECKING:
@@ -66,7 +67,7 @@ def structure_lines(mech: Mechanism, frame_given: bool = False) -> list[str]:
 @click.option("--preset", default=None, help="Parameter preset to analyse (default: all).")
 @click.option(
     "--instrument",
-    type=click.Choice(["distance", "sphere", "plane", "point"]),
+    type=InstrumentChoice(socket=False),
     default=None,
     help="What this instrument identifies of the preset (default: first preset): rank, "
     "base set, absorbed combinations and the unseen motions in words.",

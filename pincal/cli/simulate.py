@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from pincal.cli._kinds import SOCKET, InstrumentChoice
 from pincal.cli._limits import (
     ERROR_SIZE_RANGE,
     MAX_POSES,
@@ -102,9 +103,10 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
 )
 @click.option(
     "--instrument",
-    type=click.Choice(["distance", "sphere", "plane", "point", "socket"]),
+    type=InstrumentChoice(),
     default=None,
-    help="Write one scalar reading per pose (ballbar, sphere probe, planes, gauge) instead "
+    help="Write one scalar reading per pose (ballbar, sphere probe, planes, gauge, or a "
+    "registered kind) instead "
     "of poses, or (socket) the poses of a ball seated in two sockets 50 mm apart (half "
     "of --random each, the known distance declared); its noise is the position noise.",
 )
@@ -147,7 +149,7 @@ def simulate(
 
     if (poses_file is None) == (n_random is None):
         raise click.UsageError("give exactly one of --poses FILE or --random N")
-    if instrument == "socket" and n_random is None:
+    if instrument == SOCKET and n_random is None:
         raise click.UsageError("--instrument socket seats the ball itself: give --random N")
     check_count(n_random, "--random", MAX_POSES, yes)
     err_seed = _parse_errors(errors)
@@ -179,7 +181,7 @@ def simulate(
     extra = {}
     meas: Measurements | InstrumentData
     components: list[str]
-    if instrument == "socket":
+    if instrument == SOCKET:
         from pincal.cli._sockets import simulate_socket_file
 
         path, n_meas, truth_sockets = simulate_socket_file(
@@ -193,7 +195,7 @@ def simulate(
         from pincal.measure import simulate_instrument
 
         inst, theta, ids = default_instrument(nominal, instrument, q_act, std=pos_mm * 1e-3)
-        readings = simulate_instrument(actual, inst, theta, q_act, rng, plane=ids)
+        readings = simulate_instrument(actual, inst, theta, q_act, rng, ids=ids)
         path = write_instrument_data(out, readings, length_unit=length_unit)
         meas, components = readings, [readings.kind]
         extra = {"instrument": dict(zip(inst.parameter_names, map(float, theta), strict=True))}

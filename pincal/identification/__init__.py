@@ -25,11 +25,12 @@ from pincal.identification._instrument_design import (
     instrument_cramer_rao,
     instrument_identifiability,
 )
-from pincal.identification._instrument_problem import (
+from pincal.identification._instrument_gate import check_instrument_data, instrument_gate
+from pincal.identification._instrument_identify import (
     InstrumentIdentification,
-    InstrumentProblem,
     identify_instruments,
 )
+from pincal.identification._instrument_problem import InstrumentProblem
 from pincal.identification._instrument_profiles import (
     INSTRUMENT_PROFILES,
     InstrumentProfile,
@@ -126,6 +127,7 @@ __all__ = [
     "StepPlanningOptions",
     "StepPlanningResult",
     "Weighting",
+    "check_instrument_data",
     "check_measurements",
     "check_quality",
     "compare",
@@ -138,6 +140,7 @@ __all__ = [
     "instrument_blocks",
     "instrument_candidates",
     "instrument_cramer_rao",
+    "instrument_gate",
     "instrument_identifiability",
     "instrument_profile",
     "is_registration",

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["covariance_from_jacobian"]
+__all__ = ["covariance_from_jacobian", "fitted_covariance"]
 
 
 def covariance_from_jacobian(J: np.ndarray, prior: np.ndarray | None = None) -> np.ndarray:
@@ -34,3 +34,36 @@ def covariance_from_jacobian(J: np.ndarray, prior: np.ndarray | None = None) -> 
     keep = s > np.sqrt(max(n, 1) * np.finfo(float).eps) * s[0] if s[0] > 0 else s > np.inf
     V = Vt[keep].T / s[keep]
     return V @ V.T
+
+
+def fitted_covariance(
+    Jf: np.ndarray,
+    fitted: np.ndarray,
+    n: int,
+    prior: np.ndarray | None = None,
+    scale: float = 1.0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The finishing step's covariance, shared by every identification.
+
+    Args:
+        Jf: (N, f) whitened Jacobian of the fitted unknowns, columns in ``fitted`` order.
+        fitted: (f,) indices of the fitted unknowns; those below ``n`` are machine
+            parameters, the others an instrument's own unknowns.
+        n: the number of machine parameters.
+        prior: (f,) prior weights of the fitted unknowns (see
+            :func:`covariance_from_jacobian`).
+        scale: factor of the covariance (the reduced χ² when σ was estimated).
+
+    Returns:
+        The marginal covariance of the fitted machine parameters (b, b) in index order,
+        the (n,) mask of the fitted machine parameters, and the covariance of every
+        fitted unknown (f, f) in index order.
+    """
+    fitted = np.asarray(fitted, dtype=int)
+    order = np.argsort(fitted)
+    cov = covariance_from_jacobian(Jf, prior)[np.ix_(order, order)] * scale
+    f = fitted[order]
+    machine = f < n
+    mask = np.zeros(n, dtype=bool)
+    mask[f[machine]] = True
+    return cov[np.ix_(machine, machine)], mask, cov

@@ -18,7 +18,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from pincal.errors import SolverOptionError, TooFewPosesError, UnidentifiableError
-from pincal.identification._covariance import covariance_from_jacobian
+from pincal.identification._covariance import fitted_covariance
 from pincal.identification._noise import initial_weights, weighted_fit
 from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._outcome import Progress, SolverOutcome
@@ -131,15 +131,12 @@ def _finish(
     Jf = J[:, fitted]
     dof = max(model.n_equations - fitted.size, 1)
     chi2 = float(r @ r) / dof
-    # the posterior information: data plus prior (rank-revealing, from an SVD of Jf)
-    JtJ_inv = covariance_from_jacobian(
-        Jf, None if prior_weights is None else prior_weights[fitted]
+    # the posterior information: data plus prior (rank-revealing, from an SVD of Jf),
+    # in name order
+    cov, mask, _ = fitted_covariance(
+        Jf, fitted, len(params), None if prior_weights is None else prior_weights[fitted],
+        1.0 if model.known_noise else chi2,
     )
-    cov = JtJ_inv if model.known_noise else JtJ_inv * chi2
-    mask = np.zeros(len(params), dtype=bool)
-    mask[fitted] = True
-    order = np.argsort(fitted)  # covariance in name order
-    cov = cov[np.ix_(order, order)]
     comps = problem.measurements.components
     return IdentificationResult(
         method=method,

@@ -25,7 +25,8 @@ import pinocchio as pin
 
 from pincal.design import CandidateSet, crb_covariance
 from pincal.errors import ConvergenceError, MeasurementError
-from pincal.measure import INSTRUMENT_KINDS, Instrument
+from pincal.identification._gauge import null_motions
+from pincal.measure import Instrument, instrument_class
 from pincal.model import Mechanism, ParameterSet, sample_actuators
 from pincal.sensitivity import Identifiability, analyse_jacobian, pose_sensitivity
 from pincal.sensitivity.kernels import jacobian_plan
@@ -46,7 +47,7 @@ def instrument_blocks(
     instrument: Instrument,
     theta: np.ndarray,
     q_act_rows: np.ndarray,
-    plane: np.ndarray | None = None,
+    ids: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Joint Jacobian blocks of the readings at the nominal machine.
 
@@ -57,7 +58,7 @@ def instrument_blocks(
         theta: (k,) instrument parameter values [m, rad] (see
             :attr:`Instrument.parameter_names`).
         q_act_rows: (m, n_act) actuator rows [m, rad].
-        plane: (m,) plane ids of a plane instrument (None for other kinds).
+        ids: (m,) ids of the kind's id column (e.g. plane ids; None for other kinds).
 
     Returns:
         J (m, 1, n + k) of dv/d[x; θ], tool positions P (m, 3) [m], position
@@ -69,7 +70,7 @@ def instrument_blocks(
     sens = [pose_sensitivity(mech, params, q, lin, plan) for q in mech.configurations(rows)]
     P = np.array([s.position for s in sens])
     Jp = np.array([s.jacobian[:3] for s in sens])
-    _, dv_dp, dv_dth = instrument.predict(P, theta, plane)
+    _, dv_dp, dv_dth = instrument.predict(P, theta, ids)
     J = np.concatenate([np.einsum("mi,min->mn", dv_dp, Jp), dv_dth], axis=1)[:, None, :]
     return J, P, Jp
 
@@ -79,107 +80,21 @@ def default_instrument(
 ) -> tuple[Instrument, np.ndarray, np.ndarray | None]:
     """A typical set-up of ``kind`` beside the workspace of ``q_act_rows``.
 
-    Ballbar pivot and probe sphere 0.1 m below the centre of the tool positions (sphere
-    radius 0.02 m), one horizontal plane and a vertical one, a vertical gauge.
+    The kind's :meth:`pincal.measure.Instrument.typical` set-up at the nominal tool
+    points (built-in kinds: ballbar pivot and probe sphere 0.1 m below the centre of
+    the tool positions, sphere radius 0.02 m, one horizontal plane and a vertical one,
+    a vertical gauge).
 
     Returns:
-        (instrument, θ (k,), plane ids (m,) or None).
+        (instrument, θ (k,), ids (m,) or None).
+
+    Raises:
+        MeasurementError: an unregistered kind.
     """
+    cls = instrument_class(kind)
     rows = np.atleast_2d(np.asarray(q_act_rows, dtype=float))
     P = np.array([mech.frame_placement(q).translation for q in mech.configurations(rows)])
-    c = P.mean(axis=0) - np.array([0.0, 0.0, 0.1])
-    if kind == "distance":
-        return Instrument(kind, std), np.r_[c, 0.0], None
-    if kind == "sphere":
-        return Instrument(kind, std, radius=0.02), c, None
-    if kind == "point":
-        return Instrument(kind, std), np.zeros(1), None
-    ids = np.arange(len(rows)) % 2
-    inst = Instrument("plane", std, normals=((0.0, 0.0, 1.0), (1.0, 0.0, 0.0)))
-    return inst, np.array([0.0, 0.0, P[:, 2].min(), 0.0, 0.0, P[:, 0].min()]), ids
-
-
-def _span(M: np.ndarray, tol: float = 1e-6, absolute: bool = False) -> np.ndarray:
-    """Orthonormal basis (columns) of the column span of M.
-
-    Keeps the singular directions with singular values above ``tol``, relative to the
-    largest unless ``absolute``.
-    """
-    if M.size == 0:
-        return np.zeros((M.shape[0], 0))
-    u, s, _ = np.linalg.svd(M, full_matrices=False)
-    return u[:, s > tol * (1.0 if absolute else max(float(s.max(initial=0.0)), 1e-300))]
-
-
-def _point(p: np.ndarray) -> str:
-    """A point as text (no "-0.000")."""
-    p = np.where(np.abs(np.asarray(p, dtype=float)) < 5e-4, 0.0, p)
-    return "(" + ", ".join(f"{x:+.3f}" for x in p) + ")"
-
-
-def _vec(v: np.ndarray) -> str:
-    """A direction as text, its sign fixed so the largest component is positive."""
-    v = np.asarray(v, dtype=float)
-    if v.size and v[np.argmax(np.abs(v))] < 0:
-        v = -v
-    v = np.where(np.abs(v) < 5e-4, 0.0, v)  # no "-0.000"
-    return "(" + ", ".join(f"{x:+.3f}" for x in v) + ")"
-
-
-def _rigid(F: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Rigid-motion content of tool-point fields F (3m, k).
-
-    Fits ``δp_i = v + ω × (p_i − p̄)`` per column (ω scaled by the RMS radius L of the
-    points so both parts are in metres).
-
-    Returns:
-        rotation axes (3, r) (orthonormal), translation directions (3, t) of the
-        rotation-free combinations, rotation centre (3,) [m] (NaN when r = 0).
-    """
-    mean = P.mean(axis=0)
-    Pc = P - mean
-    L = max(float(np.sqrt(np.mean(np.sum(Pc**2, axis=1)))), 1e-9)
-    A = np.vstack([np.hstack([np.eye(3), -pin.skew(p) / L]) for p in Pc])
-    C, *_ = np.linalg.lstsq(A, F, rcond=None)
-    tol = 1e-6 * max(float(np.abs(C).max(initial=0.0)), 1e-300)
-    u, sw, vw = np.linalg.svd(C[3:], full_matrices=True)
-    r = int(np.count_nonzero(sw > tol))
-    axes = u[:, :r]
-    trans = _span(C[:3] @ vw[r:].T, 1e-6) if vw[r:].size else np.zeros((3, 0))
-    centre = np.full(3, np.nan)
-    if r:
-        W = C[:, :] @ vw[:r].T  # combinations with rotation: v = −ω × (c − p̄)
-        M = np.vstack([-pin.skew(W[3:, j] / L) for j in range(r)])
-        centre = mean + np.linalg.lstsq(M, W[:3].T.reshape(-1), rcond=None)[0]
-    return axes, trans, centre
-
-
-def _complement(B: np.ndarray, A: np.ndarray) -> np.ndarray:
-    """Orthonormal basis of the part of span(B) orthogonal to span(A) (both (3, ·))."""
-    if B.shape[1] == 0:
-        return B
-    Q = _span(A) if A.shape[1] else np.zeros((3, 0))
-    return _span(B - Q @ (Q.T @ B), 1e-6, absolute=True)
-
-
-def _words(axes: np.ndarray, trans: np.ndarray, centre: np.ndarray | None) -> list[str]:
-    out = []
-    if axes.shape[1]:
-        where = "" if centre is None else f" through the point {_point(centre)} m"
-        out.append(
-            f"{axes.shape[1]} rotation(s) of every tool point about the "
-            f"{'axes' if axes.shape[1] > 1 else 'axis'} "
-            + ", ".join(_vec(axes[:, j]) for j in range(axes.shape[1]))
-            + where
-        )
-    if trans.shape[1] == 3:
-        out.append("3 translations of every tool point (in every direction)")
-    elif trans.shape[1]:
-        out.append(
-            f"{trans.shape[1]} translation(s) of every tool point along "
-            + ", ".join(_vec(trans[:, j]) for j in range(trans.shape[1]))
-        )
-    return out
+    return cls.typical(P, std)
 
 
 @dataclass(frozen=True)
@@ -257,12 +172,8 @@ def instrument_identifiability(
         if theta is None:
             raise MeasurementError("give theta with an Instrument")
         inst, th = kind, np.asarray(theta, dtype=float)
-        ids = np.arange(n_poses) % max(inst.n_planes, 1) if inst.kind == "plane" else None
+        ids = np.arange(n_poses) % max(inst.n_ids, 1) if inst.id_column is not None else None
     else:
-        if kind not in INSTRUMENT_KINDS:
-            raise MeasurementError(
-                f"unknown instrument kind {kind!r}; choose from {INSTRUMENT_KINDS}"
-            )
         inst, th, ids = default_instrument(mech, kind, q)
     J, P, Jp = instrument_blocks(mech, params, inst, th, q, ids)
     J = J[:, 0, :]
@@ -270,33 +181,9 @@ def instrument_identifiability(
     names = (*params.names, *inst.parameter_names)
     order = np.r_[np.arange(n, len(names)), np.arange(n)]
     ident = analyse_jacobian(J[:, order], tuple(names[i] for i in order))
-    # null directions of the column-scaled Jacobian, back in parameter units
-    scale = np.where(ident.column_scale > 0, ident.column_scale, 1.0)
-    _, _, vt = np.linalg.svd(J[:, order] / scale, full_matrices=True)
-    null = (vt[ident.rank :] / scale).T  # (n + k, d) in the `order` columns
-    null_x = np.empty_like(null)
-    null_x[order] = null
-    machine, inst_part = null_x[:n], null_x[n:]
-    # machine-only motions: combinations with no instrument part
-    _, si, vi = np.linalg.svd(inst_part, full_matrices=True)
-    r_i = int(np.count_nonzero(si > 1e-9 * max(float(si.max(initial=0.0)), 1e-300)))
-    pure, mixed = vi[r_i:].T, vi[:r_i].T
-    fields = lambda V: np.einsum("mij,jk->mik", Jp, machine @ V).reshape(-1, V.shape[1])  # noqa: E731
-    F0, F1 = fields(pure), fields(mixed)
-    Q0 = _span(F0)
-    still = F0.shape[1] - Q0.shape[1]
-    ax0, tr0, c0 = _rigid(Q0, P)
-    Qu = _span(np.hstack([F0, F1]))
-    axu, tru, _ = _rigid(Qu, P)
-    invisible = _words(ax0, tr0, c0 if ax0.shape[1] else None)
-    absorbed = _words(_complement(axu, ax0), _complement(tru, tr0), None)
-    if absorbed:
-        used = [
-            inst.parameter_names[i] for i in range(len(th)) if np.any(np.abs(inst_part[i]) > 1e-9)
-        ]
-        absorbed = [f"{w} ({', '.join(used)})" for w in absorbed]
+    motions = null_motions(J, Jp, P, n, ident, order, inst.parameter_names)
     return InstrumentIdentifiability(
-        inst.kind, names, n, ident, tuple(invisible), tuple(absorbed), int(still)
+        inst.kind, names, n, ident, motions.invisible, motions.absorbed, motions.n_still
     )
 
 
@@ -309,10 +196,11 @@ def instrument_candidates(
     rng: np.random.Generator | int = 0,
     max_tilt: float = 0.0,
 ) -> CandidateSet:
-    """Candidate poses for a ballbar (``distance``) or a probe on a sphere (``sphere``).
+    """Candidate poses on the instrument's sphere (ballbar, probe on a sphere, …).
 
-    Tool points on the sphere around the pivot / centre (bar length ``|θ_c − home|`` for
-    the ballbar, ``radius`` for the sphere) in directions drawn uniformly, at the home
+    Tool points on :meth:`pincal.measure.Instrument.candidate_sphere` (the ballbar: bar
+    length ``|θ_c − home|`` around the pivot; the probe: the sphere's radius around its
+    centre) in directions drawn uniformly, at the home
     orientation tilted by up to ``max_tilt`` [rad]; unreachable ones and those outside
     the sidecar's workspace joint ranges are dropped.
 
@@ -320,21 +208,18 @@ def instrument_candidates(
         CandidateSet with joint Jacobian blocks (N, 1, n + k), component ``"v"``.
 
     Raises:
-        MeasurementError: another kind, or no reachable candidate.
+        MeasurementError: a kind without a candidate sphere, or no reachable candidate.
     """
-    if instrument.kind not in ("distance", "sphere"):
+    home = mech.frame_placement(mech.q_home)
+    sphere = instrument.candidate_sphere(np.asarray(theta, dtype=float), home.translation)
+    if sphere is None:
         raise MeasurementError(
-            f"instrument_candidates makes ballbar/sphere candidates, not {instrument.kind!r}; "
-            "use random workspace poses (pincal.model.sample_actuators) for planes and gauges"
+            f"instrument_candidates makes candidates on an instrument's sphere (ballbar, "
+            f"sphere probe); the {instrument.kind!r} kind has none: use random workspace "
+            "poses (pincal.model.sample_actuators)"
         )
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    home = mech.frame_placement(mech.q_home)
-    c = np.asarray(theta[:3], dtype=float)
-    radius = (
-        float(np.linalg.norm(home.translation - c))
-        if instrument.kind == "distance"
-        else instrument.radius
-    )
+    c, radius = sphere
     # the sidecar's workspace joint ranges, where given, bound the candidates too
     limits = [
         (k, mech.workspace.joints[a])

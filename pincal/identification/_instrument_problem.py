@@ -9,41 +9,34 @@ poses — residuals exactly as in ``CalibrationProblem``) or
 :class:`pincal.measure.SocketData` (a ball seated in sockets: three residuals per pose,
 socket centres shared by the files of one plate and appended after every file's own
 unknowns, one residual per known distance); every block is whitened by its own noise,
-so several files of different kinds combine in one fit. The
-Jacobian is analytic: ``∂v/∂p · ∂p/∂x`` with ``∂p/∂x`` from
-:func:`pincal.sensitivity.pose_sensitivity`, and ``∂v/∂θ`` from the instrument.
-
-:func:`identify_instruments` solves it with a registered local solver
-(``"gauss-newton"`` or ``"lm"``), fitting the identifiable base set (instrument
-parameters first, so what an instrument absorbs is held on the machine side).
+so several files of different kinds combine in one fit. Each dataset is one
+:class:`pincal.identification._data_blocks.DataBlock` (pose sensor, scalar instrument,
+sockets): one ``evaluate(x, jacobian)`` loops over them. The Jacobian is analytic:
+``∂v/∂p · ∂p/∂x`` with ``∂p/∂x`` from :func:`pincal.sensitivity.pose_sensitivity`, and
+``∂v/∂θ`` from the instrument. :func:`pincal.identification.identify_instruments`
+solves it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
-from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 
-from pincal.errors import ConvergenceError, MeasurementError, SolverOptionError
-from pincal.identification._covariance import covariance_from_jacobian
-from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
-from pincal.identification._result import IdentificationResult, ResidualStats
+from pincal.errors import ConvergenceError, MeasurementError
+from pincal.identification._data_blocks import DataBlock, SocketBlock, data_block
+from pincal.identification._problem import TRIAL_FAILURES
 from pincal.identification._socket_terms import SocketTerms
-from pincal.identification._solvers import solver
 from pincal.measure import (
     InstrumentData,
     Measurements,
     SocketData,
-    initial_instrument_values,
 )
 from pincal.model import Mechanism, ParameterSet
-from pincal.model.kernels import measurement_residual
 from pincal.sensitivity import Identifiability, analyse_jacobian, pose_sensitivity
 from pincal.sensitivity.kernels import jacobian_plan
 
-__all__ = ["InstrumentIdentification", "InstrumentProblem", "identify_instruments"]
+__all__ = ["Dataset", "InstrumentProblem"]
 
 Dataset = InstrumentData | Measurements | SocketData
 
@@ -86,45 +79,33 @@ class InstrumentProblem:
                     f"the model has {list(mech.actuated)} / {mech.measured_frame!r}"
                 )
         qs = mech.configurations(np.vstack([d.q_act for d in datasets]))
-        self.instruments: list[Any] = []
-        theta0: list[np.ndarray] = []
-        self.sigma: list[np.ndarray] = []
+        starts = np.cumsum([0] + [len(d) for d in datasets])
+        self.blocks: list[DataBlock] = []
         names: list[str] = list(params.names)
         units: list[str] = list(params.units)
-        start = 0
-        self._ball_cols: dict[int, int] = {}  # dataset index → column of its ball_x
-        for d, label in zip(datasets, self.labels, strict=True):
-            m = len(d)
-            if isinstance(d, Measurements):
-                self.instruments.append(None)
-                self.sigma.append(CalibrationProblem(mech, params, d).sigma)
-            elif isinstance(d, SocketData):
-                self.instruments.append(d)
-                th = np.zeros(len(d.parameter_names))  # the ball: see _start_centres
-                self._ball_cols[len(self.instruments) - 1] = len(names)
-                theta0.append(th)
-                self.sigma.append(np.full((m, 3), d.plate.std))
-                names += [f"{label}.{n}" for n in d.parameter_names]
-                units += ["m"] * th.size
-            else:
-                P = np.array([mech.frame_placement(q).translation for q in qs[start : start + m]])
-                inst, th = initial_instrument_values(d, P)
-                self.instruments.append(inst)
-                theta0.append(th)
-                self.sigma.append(np.full((m, 1), inst.std))
-                names += [f"{label}.{n}" for n in inst.parameter_names]
-                units += list(inst.parameter_units)
-            start += m
+        ball_cols: dict[int, int] = {}  # dataset index → column of its ball_x
+        for i, (d, label) in enumerate(zip(datasets, self.labels, strict=True)):
+            P0 = np.array([mech.frame_placement(q).translation
+                           for q in qs[starts[i] : starts[i + 1]]])  # fmt: skip
+            block = data_block(d, label, mech, params, P0)
+            if isinstance(block, SocketBlock) and block.own_names:
+                ball_cols[i] = len(names)
+            self.blocks.append(block)
+            names += block.own_names
+            units += block.own_units
+        self.sigma: list[np.ndarray] = [b.sigma for b in self.blocks]
         self.n_machine = len(params)
-        self.sockets = SocketTerms(datasets, len(names), self._ball_cols)
+        self.sockets = SocketTerms(datasets, len(names), ball_cols)
+        for b in self.blocks:
+            if isinstance(b, SocketBlock):
+                b.terms = self.sockets
         names += self.sockets.names
         units += ["m"] * len(self.sockets.names)
         if self.sockets.sigma is not None:
             self.sigma.append(self.sockets.sigma)
         self.names, self.units = tuple(names), tuple(units)
-        self.x0 = np.concatenate(
-            [np.zeros(self.n_machine), *theta0, np.zeros(len(self.sockets.names))]
-        )
+        self.x0 = np.concatenate([np.zeros(self.n_machine), *[b.theta0 for b in self.blocks],
+                                  np.zeros(len(self.sockets.names))])  # fmt: skip
         self.sockets.start(mech, qs, self.x0)
         self._qs: np.ndarray | None = None
         self._cache: tuple[bytes, Mechanism] | None = None
@@ -197,9 +178,8 @@ class InstrumentProblem:
         lin = self.params.linearise(values) if jacobian else None  # once for all poses
         r_all, J_all, raws = [], [], []
         start, col = 0, n
-        blocks = zip(self.datasets, self.instruments, self.sigma[: len(self.datasets)], strict=True)
-        for d, inst, sig in blocks:
-            m = len(d)
+        for block in self.blocks:
+            m = len(block)
             q_block = qs[start : start + m]
             start += m
             if jacobian:
@@ -210,29 +190,9 @@ class InstrumentProblem:
                 placements = [mech.frame_placement(q) for q in q_block]
                 P = np.array([T.translation for T in placements])
                 Rs = [T.rotation for T in placements]
-            if isinstance(d, SocketData):
-                raw, J = self.sockets.block(d, x, col, n, P, Rs, sens if jacobian else None)
-                col += len(d.parameter_names)
-            elif isinstance(d, Measurements):
-                rows = d.component_indices
-                raw = np.empty((m, rows.size))
-                J = np.zeros((m, rows.size, len(x)))
-                for i in range(m):
-                    R_meas = None if d.rotations is None else d.rotations[i]
-                    r, D = measurement_residual(P[i], Rs[i], d.positions[i], R_meas)
-                    raw[i] = r[rows]
-                    if jacobian:
-                        J[i, :, :n] = -(D @ sens[i].jacobian)[rows]
-            else:
-                k = len(inst.parameter_names)
-                v, dv_dp, dv_dth = inst.predict(P, x[col : col + k], d.plane)
-                raw = (d.values - v)[:, None]
-                J = np.zeros((m, 1, len(x)))
-                if jacobian:
-                    Jp = np.array([s.jacobian[:3] for s in sens])  # (m, 3, n)
-                    J[:, 0, :n] = -np.einsum("mi,min->mn", dv_dp, Jp)
-                    J[:, 0, col : col + k] = -dv_dth
-                col += k
+            raw, J = block.residuals(x, col, n, P, Rs, sens if jacobian else None)
+            col += len(block.own_names)
+            sig = block.sigma
             raws.append(raw)
             r_all.append((raw / sig).ravel())
             J_all.append((J / sig[:, :, None]).reshape(-1, len(x)))
@@ -245,176 +205,36 @@ class InstrumentProblem:
         r_w = np.concatenate(r_all)
         return r_w, (np.vstack(J_all) if jacobian else None), raws
 
-    def analyse(self, x: np.ndarray | None = None) -> Identifiability:
+    def whitened_readings(self, raws: list[np.ndarray]) -> np.ndarray:
+        """(N,) the model's scalar readings / σ at the residuals ``raws`` of :meth:`evaluate`.
+
+        0 on the rows of poses and sockets: the Jacobian column of a relative scale
+        error of the readings.
+        """
+        out = [b.readings(raw) / b.sigma.ravel() for b, raw in zip(self.blocks, raws, strict=False)]
+        out += [np.zeros(s.size) for s in self.sigma[len(self.datasets) :]]
+        return np.concatenate(out)
+
+    @property
+    def order(self) -> np.ndarray:
+        """The column order of :meth:`analyse`: instrument parameters first."""
+        return np.r_[np.arange(self.n_machine, len(self.names)), np.arange(self.n_machine)]
+
+    def analyse(self, x: np.ndarray | None = None, J: np.ndarray | None = None) -> Identifiability:
         """Identifiability of the joint parameters at ``x`` (default the start values).
 
         The instrument parameters are listed first so they enter the base first.
+        ``J``: the whitened Jacobian at ``x`` when already evaluated.
         """
-        _, J, _ = self.evaluate(self.x0 if x is None else x)
-        order = np.r_[np.arange(self.n_machine, len(self.names)), np.arange(self.n_machine)]
-        return analyse_jacobian(J[:, order], tuple(self.names[i] for i in order))
+        if J is None:
+            _, J, _ = self.evaluate(self.x0 if x is None else x)
+        return analyse_jacobian(J[:, self.order], tuple(self.names[i] for i in self.order))
 
-
-@dataclass(frozen=True)
-class InstrumentIdentification:
-    """Outcome of :func:`identify_instruments`.
-
-    Attributes:
-        result: the machine part as an :class:`IdentificationResult` (marginal
-            covariance of the machine base parameters; residual statistics over every
-            dataset, scalar readings counted as position residuals [m]; annotations
-            hold the instrument values).
-        names: all joint parameter names (machine, then ``label.θ`` names).
-        values: (n + Σk,) joint values at the solution [SI]; x0: start values.
-        fitted: indices (into ``names``) of the fitted base set.
-        covariance: covariance of the fitted values (order of ``fitted``).
-        residuals: per dataset, (m_i, k_i) raw residuals at the solution [m, rad].
-        identifiability: joint analysis at the start (instrument parameters first).
-        socket_centres: ``"plate.socket"`` → (3,) identified socket centre [m].
-        warnings: what no measurement fixes, in words (e.g. the length scale of a
-            socket campaign without a known distance).
-    """
-
-    result: IdentificationResult
-    names: tuple[str, ...]
-    values: np.ndarray
-    x0: np.ndarray
-    fitted: np.ndarray
-    covariance: np.ndarray
-    residuals: list[np.ndarray]
-    identifiability: Identifiability
-    socket_centres: dict[str, np.ndarray] = field(default_factory=dict)
-    warnings: tuple[str, ...] = ()
-
-    def instrument_values(self) -> dict[str, float]:
-        """Instrument parameter name → identified (or start) value [SI]."""
-        n = len(self.result.names)
-        return {k: float(v) for k, v in zip(self.names[n:], self.values[n:], strict=True)}
-
-
-def _stats(raws: list[np.ndarray], datasets: Sequence[Dataset]) -> ResidualStats:
-    pos, rot = [], []
-    kinds: list[Dataset | None] = [*datasets, *[None] * (len(raws) - len(datasets))]
-    for raw, d in zip(raws, kinds, strict=True):
-        if isinstance(d, SocketData):
-            pos += list(np.linalg.norm(raw, axis=1))
-        elif isinstance(d, Measurements):
-            comps = d.components
-            ip = [i for i, c in enumerate(comps) if not c.startswith("r")]
-            ir = [i for i, c in enumerate(comps) if c.startswith("r")]
-            pos += list(np.linalg.norm(raw[:, ip], axis=1)) if ip else []
-            rot += list(np.linalg.norm(raw[:, ir], axis=1)) if ir else []
-        else:
-            pos += list(np.abs(raw[:, 0]))
-    out = []
-    for e in (np.array(pos), np.array(rot)):
-        out += [float(np.sqrt(np.mean(e**2))), float(e.max())] if e.size else [np.nan, np.nan]
-    return ResidualStats(*out)
-
-
-def identify_instruments(
-    mech: Mechanism,
-    params: ParameterSet,
-    datasets: Sequence[Dataset],
-    method: str = "gauss-newton",
-    *,
-    options: Any = None,
-    labels: Sequence[str] | None = None,
-    progress: Callable[[int, float], None] | None = None,
-) -> InstrumentIdentification:
-    """Identify machine and instrument parameters jointly from several datasets.
-
-    Args:
-        mech: nominal mechanism.
-        params: the n machine parameters.
-        datasets: :class:`Measurements` and/or :class:`InstrumentData` (any mix).
-        method: ``"gauss-newton"`` or ``"lm"``.
-        options: that solver's options dataclass (``GaussNewtonOptions`` or
-            ``LMOptions``; None = its defaults).
-        labels: names of the datasets (prefix of the instrument parameter names).
-        progress: optional ``(iteration, cost)`` callback passed to the solver.
-
-    Returns:
-        InstrumentIdentification (the machine part is an IdentificationResult).
-
-    Raises:
-        SolverOptionError: a method other than the local solvers.
-        MeasurementError: inconsistent datasets.
-    """
-    if method not in ("gauss-newton", "lm"):
-        raise SolverOptionError(
-            f"joint instrument identification runs 'gauss-newton' or 'lm', not {method!r}"
-        )
-    entry = solver(method)
-    opts = entry.check_options(options)
-    model = InstrumentProblem(mech, params, datasets, labels)
-    x0 = model.x0
-    _, _, raw0 = model.evaluate(x0, jacobian=False)
-    ident = model.analyse(x0)
-    order = np.r_[np.arange(model.n_machine, len(model.names)), np.arange(model.n_machine)]
-    free = np.sort(order[ident.base])
-    out = entry.solve(model, x0, free, opts, progress)
-    r, J, raws = model.evaluate(out.x)
-    Jf = J[:, free]
-    success, message = out.success, out.message
-    if not success:
-        # at the noise floor a Gauss–Newton step may promise less than the cost changes
-        # with the kinematic solver's precision (100× its tolerance per reading)
-        step = np.linalg.lstsq(Jf, -r, rcond=None)[0]
-        predicted = 0.5 * float(r @ r - np.sum((r + Jf @ step) ** 2))
-        sig = np.concatenate([s.ravel() for s in model.sigma])
-        jitter = float(np.sum(np.abs(r) * 100 * mech.options.tol / sig))
-        if predicted <= max(jitter, 1e-9 * float(r @ r)):
-            success = True
-            message = (
-                f"converged (noise floor: a further step promises {predicted:.3g}, below the "
-                f"kinematic precision {jitter:.3g} of the cost; solver: {out.message})"
-            )
-    dof = max(model.n_equations - free.size, 1)
-    chi2 = float(r @ r) / dof
-    cov = covariance_from_jacobian(Jf)
-    n = model.n_machine
-    mach = free < n
-    cov_m = cov[np.ix_(mach, mach)]
-    mask = np.zeros(n, dtype=bool)
-    mask[free[mach]] = True
-    x = np.asarray(out.x, dtype=float)
-    inst = {k: float(v) for k, v in zip(model.names[n:], x[n:], strict=True)}
-    centres_mm = {k: [float(v) * 1e3 for v in c] for k, c in model.socket_centres(x).items()}
-    result = IdentificationResult(
-        method=method,
-        names=params.names,
-        units=params.units,
-        full_values=x[:n].copy(),
-        identified=mask,
-        std=np.sqrt(np.clip(np.diag(cov_m), 0.0, None)),
-        covariance=cov_m,
-        before=_stats(raw0, datasets),
-        after=_stats(raws, datasets),
-        reduced_chi2=chi2,
-        iterations=out.iterations,
-        success=success,
-        message=f"joint fit of {free.size} of {len(model.names)} parameters; "
-        + "".join(f"WARNING: {w}; " for w in model.scale_warnings)
-        + message,
-        cost_history=tuple(out.history),
-        residuals=np.concatenate(  # per pose (a plate's known distances are not poses)
-            [np.linalg.norm(a, axis=1) for a in raws[: len(model.datasets)]]
-        )[:, None],
-        initial_values=np.zeros(n),
-        n_equations=model.n_equations,
-        model=mech.name,
-        preset=params.label,
-        extras=out.extras,
-        parameter_set=params,
-        calibrated_mechanism=model.mechanism(x),
-        annotations={
-            "instruments": inst,
-            "datasets": list(model.labels),
-            "redundancy": dof,
-            **({"warnings": list(model.scale_warnings)} if model.scale_warnings else {}),
-            **({"socket_centres_mm": centres_mm} if centres_mm else {}),
-        },
-    )
-    return InstrumentIdentification(result, model.names, x, x0, free, cov, raws, ident,
-                                    model.socket_centres(x), model.scale_warnings)  # fmt: skip
+    def tool_points(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tool points (m, 3) [m] of every pose at ``x`` and their sensitivities (m, 3, n)."""
+        x = np.asarray(x, dtype=float)
+        mech, values = self.mechanism(x), x[: self.n_machine]
+        plan = jacobian_plan(mech, self.params)
+        sens = [pose_sensitivity(mech, self.params, q, values, plan)
+                for q in self._configurations(mech)]  # fmt: skip
+        return np.array([s.position for s in sens]), np.array([s.jacobian[:3] for s in sens])

@@ -205,6 +205,7 @@ def check_quality(
     limits: GateLimits | None = None,
     scalar_instrument: bool = False,
     instrument: str | InstrumentProfile | None = None,
+    jacobian: np.ndarray | None = None,
 ) -> QualityVerdict:
     """Judge an identification result; refusals mean: do not write this calibration.
 
@@ -226,6 +227,9 @@ def check_quality(
         instrument: the instrument's profile (or its name, see
             :data:`INSTRUMENT_PROFILES`): with estimated noise, a σ̂ beyond
             ``limits.noise_factor`` × its typical σ refuses.
+        jacobian: (m, k, p) whitened Jacobian of the fitted parameters, for fits whose
+            Jacobian cannot be built from ``measurements`` (instrument files; see
+            :func:`pincal.identification.instrument_gate`).
 
     Returns:
         QualityVerdict with the data issues first, then the result's.
@@ -245,6 +249,8 @@ def check_quality(
     down = w.downweighted if w is not None else ()
     sigma = _sigma(result)
     Jw = _whitened_jacobian(result, mech, measurements, sigma)
+    if Jw is None and jacobian is not None:
+        Jw = jacobian
     m = int(np.asarray(result.residuals).shape[0])
     source = "" if w is None else ("estimated" if w.source.startswith("estimate") else w.source)
     declared = source in ("declared", "per-pose")
@@ -282,7 +288,7 @@ def check_quality(
         inliers = np.setdiff1d(np.arange(m), out)  # a robust fit is judged on its inliers
         zi = np.asarray(w.whitened)[inliers]
         chi2 = float(np.sum(zi**2)) / max(zi.size - int(result.identified.sum()), 1)
-    if scalar_instrument and w is None:  # judged against the instrument file's std
+    if scalar_instrument:  # judged against the instrument file's std
         blocks, declared = instrument_chi2(result), True
     else:
         comps = None if measurements is None else tuple(measurements.components)

@@ -3,7 +3,7 @@
 ::
 
     # pincal instrument 1
-    # kind: distance                  distance | sphere | plane | point
+    # kind: distance                  distance | sphere | plane | point | a registered kind
     # frame: effector                 the tool frame (must match the model's)
     # length_unit: mm                 m | mm | um  (value, std, radius, initial)
     # std: 0.001                      1σ noise of one reading, in length_unit
@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from pincal._yaml import shown
-from pincal.errors import ColumnError, MeasurementFormatError, clip
+from pincal.errors import ColumnError, MeasurementError, MeasurementFormatError, clip
 from pincal.io._csv import (
     actuator_columns,
     fmt,
@@ -44,7 +44,7 @@ from pincal.io._units import (
     check_actuator_ranges,
     unit_factor,
 )
-from pincal.measure import INSTRUMENT_KINDS, Instrument, InstrumentData
+from pincal.measure import InstrumentData, instrument_class, instrument_kinds
 from pincal.model import Mechanism
 
 __all__ = ["read_instrument_data", "write_instrument_data"]
@@ -59,8 +59,33 @@ def _vector(text: str, n: int, key: str, name: str) -> np.ndarray:
     return v
 
 
+class _Header:
+    """:class:`pincal.measure.HeaderValues` of one file (lengths in metres)."""
+
+    def __init__(self, header: dict[str, list[str]], lf: float, name: str) -> None:
+        self.header, self.lf, self.name = header, lf, name
+
+    def has(self, key: str) -> bool:
+        return key in self.header
+
+    def length(self, key: str, default: float | None = None) -> float:
+        if default is not None and key not in self.header:
+            return default
+        text = header_value(self.header, key, None, self.name)
+        return positive_value(text, key, self.name) / self.lf
+
+    def vector(self, key: str, n: int, default: str | None = None) -> np.ndarray:
+        return _vector(header_value(self.header, key, default, self.name), n, key, self.name)
+
+    def vectors(self, key: str, n: int) -> list[np.ndarray]:
+        return [_vector(t, n, key, self.name) for t in self.header.get(key, [])]
+
+
 def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
     """Read an instrument file (see the module doc) against ``mech``.
+
+    The kind's class (:func:`pincal.measure.instrument_class`) reads its own header
+    keys and names its id column.
 
     Returns:
         InstrumentData [SI].
@@ -74,10 +99,11 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
     name = Path(path).name
     header, columns, rows = split_file(path, "instrument")
     kind = header_value(header, "kind", None, name)
-    if kind not in INSTRUMENT_KINDS:
+    if kind not in instrument_kinds():
         raise MeasurementFormatError(
-            f"{name}: kind {shown(kind)} unknown; use one of {INSTRUMENT_KINDS}"
+            f"{name}: kind {shown(kind)} unknown; use one of {instrument_kinds()}"
         )
+    cls = instrument_class(kind)
     lf = unit_factor(LENGTH_UNITS, header_value(header, "length_unit", "m", name), "length", name)
     frame = header_value(header, "frame", mech.measured_frame, name)
     if frame != mech.measured_frame:
@@ -86,25 +112,15 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
             f"{mech.measured_frame!r}"
         )
     std = positive_value(header_value(header, "std", None, name), "std", name) / lf
-    radius, direction = 0.0, (0.0, 0.0, 1.0)
-    normals: tuple[tuple[float, ...], ...] = ()
-    if kind == "sphere":
-        radius = positive_value(header_value(header, "radius", None, name), "radius", name) / lf
-    if kind == "point":
-        direction = tuple(
-            _vector(header_value(header, "direction", "0 0 1", name), 3, "direction", name)
-        )
-    if kind == "plane" and "normal" in header:
-        rows_n = sorted(
-            (_vector(t, 4, "normal", name) for t in header["normal"]), key=lambda r: r[0]
-        )
-        if [int(r[0]) for r in rows_n] != list(range(len(rows_n))):
-            raise MeasurementFormatError(f"{name}: normal ids must be 0, 1, … without gaps")
-        normals = tuple(tuple(r[1:]) for r in rows_n)
-    inst = Instrument(kind, std, radius, direction, normals)  # type: ignore[arg-type]
+    try:
+        inst = cls.from_header(std, _Header(header, lf, name))
+    except MeasurementFormatError:
+        raise
+    except MeasurementError as e:
+        raise MeasurementFormatError(f"{name}: {e}") from None
     parsed = [parse_column(c) for c in columns]
     names = [p[0] for p in parsed]
-    need = [*mech.actuated, "value", *(["plane"] if kind == "plane" else [])]
+    need = [*mech.actuated, "value", *([cls.id_column] if cls.id_column else [])]
     missing = [c for c in need if c not in names]
     if missing:
         raise ColumnError(f"{name}: missing columns {missing}", missing=missing)
@@ -116,16 +132,24 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
     q_act = data[:, act] / actuator_read_factors(mech, [parsed[k][1] for k in act], name)
     check_actuator_ranges(mech, q_act, name, [columns[k] for k in act])
     values = data[:, col["value"]] / lf
-    plane = data[:, col["plane"]] if kind == "plane" else None
+    ids = data[:, col[cls.id_column]] if cls.id_column else None
     initial = None
     if "initial" in header:
-        if kind == "plane" and not normals:
-            raise MeasurementFormatError(f"{name}: give the 'normal' lines with 'initial'")
         k = len(inst.parameter_names)
+        if k == 0:
+            raise MeasurementFormatError(
+                f"{name}: 'initial' gives start values of the {kind} parameters, which the "
+                "header does not define yet (a plane file: give the 'normal' lines with it)"
+            )
         raw = _vector(header_value(header, "initial", None, name), k, "initial", name)
         units = np.array([1.0 if u == "rad" else lf for u in inst.parameter_units])
         initial = raw / units
-    return InstrumentData(inst, q_act, values, mech.actuated, frame, plane, initial)
+    try:
+        return InstrumentData(inst, q_act, values, mech.actuated, frame, ids, initial)
+    except MeasurementFormatError:
+        raise
+    except MeasurementError as e:
+        raise MeasurementFormatError(f"{name}: {e}") from None
 
 
 def write_instrument_data(path: str | Path, data: InstrumentData, length_unit: str = "m") -> Path:
@@ -143,26 +167,18 @@ def write_instrument_data(path: str | Path, data: InstrumentData, length_unit: s
         f"kind: {inst.kind}",
         f"frame: {quote_value(data.frame, 'frame')}",
         f"length_unit: {length_unit}",
+        f"std: {fmt(inst.std * lf)}",
+        *inst.header(lambda x: fmt(x * lf), fmt),
     ]
-    lines.append(f"std: {fmt(inst.std * lf)}")
-    if inst.kind == "sphere":
-        lines.append(f"radius: {fmt(inst.radius * lf)}")
-    if inst.kind == "point":
-        lines.append("direction: " + ", ".join(fmt(x) for x in inst.direction))
-    for j, n in enumerate(inst.normals):
-        lines.append(f"normal: {j}, " + ", ".join(fmt(x) for x in n))
     if data.initial is not None:
         units = np.array([1.0 if u == "rad" else lf for u in inst.parameter_units])
         lines.append("initial: " + ", ".join(fmt(x) for x in data.initial * units))
-    columns = [
-        *actuator_columns(data.actuated, None),
-        "value",
-        *(["plane"] if inst.kind == "plane" else []),
-    ]
+    id_col = inst.id_column
+    columns = [*actuator_columns(data.actuated, None), "value", *([id_col] if id_col else [])]
     rows = []
     for i in range(len(data)):
         row = [fmt(v) for v in data.q_act[i]] + [fmt(data.values[i] * lf)]
-        if data.plane is not None:
-            row.append(str(int(data.plane[i])))
+        if data.ids is not None:
+            row.append(str(int(data.ids[i])))
         rows.append(row)
     return write_csv(path, "instrument", lines, columns, rows)

@@ -13,9 +13,15 @@ from pincal.measure._held_out import (
     prediction_caveat,
     validate_held_out,
 )
-from pincal.measure._instruments import (
+from pincal.measure._instrument_kind import HeaderValues, Instrument
+from pincal.measure._instrument_kinds import Distance, Plane, Point, Sphere
+from pincal.measure._instrument_registry import (
     INSTRUMENT_KINDS,
-    Instrument,
+    add_instrument_kind,
+    instrument_class,
+    instrument_kinds,
+)
+from pincal.measure._instruments import (
     InstrumentData,
     initial_instrument_values,
     simulate_instrument,
@@ -77,6 +83,8 @@ __all__ = [
     "ORIENTATION_CONVENTION",
     "PREDICTION_BOUNDS",
     "SCALE_MESSAGE",
+    "Distance",
+    "HeaderValues",
     "HeldOutValidation",
     "Instrument",
     "InstrumentData",
@@ -86,6 +94,8 @@ __all__ = [
     "MarkerSetup",
     "Measurements",
     "NoiseModel",
+    "Plane",
+    "Point",
     "PointAccuracy",
     "PoseCharacteristics",
     "PoseErrors",
@@ -94,10 +104,14 @@ __all__ = [
     "RigidFit",
     "SocketData",
     "SocketPlate",
+    "Sphere",
     "TestCube",
     "TrackerNoise",
+    "add_instrument_kind",
     "fit_rigid_transform",
     "initial_instrument_values",
+    "instrument_class",
+    "instrument_kinds",
     "iso_test_cube",
     "marker_frame",
     "marker_mechanism",

@@ -35,8 +35,9 @@ from pincal.identification import (
     instrument_identifiability,
 )
 from pincal.measure import (
-    Instrument,
+    Distance,
     NoiseModel,
+    Sphere,
     simulate_instrument,
     simulate_measurements,
 )
@@ -74,9 +75,9 @@ def campaign(mech, params, kind, m, seed, scale=1.0):
 
         return make, None
     if kind == "ballbar":
-        inst, theta = Instrument("distance", 1e-6 * scale), np.r_[home - [0.0, 0.0, 0.1], 0.0]
+        inst, theta = Distance(1e-6 * scale), np.r_[home - [0.0, 0.0, 0.1], 0.0]
     else:
-        inst, theta = Instrument("sphere", 1e-6 * scale, radius=0.05), home - [0.0, 0.0, 0.02]
+        inst, theta = Sphere(1e-6 * scale, radius=0.05), home - [0.0, 0.0, 0.02]
     rows = _select(mech, params, inst, theta, m, seed)
 
     def make(actual, rng):

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pincal.identification._covariance import covariance_from_jacobian
+from pincal.identification._covariance import covariance_from_jacobian, fitted_covariance
 
 
 def test_equals_the_inverse_normal_matrix_when_well_posed():
@@ -29,3 +29,16 @@ def test_ill_conditioned_never_gives_negative_variances():
     assert np.all(np.diag(cov) >= 0)
     assert np.all(np.linalg.eigvalsh(0.5 * (cov + cov.T)) > -1e-12 * np.abs(cov).max())
     np.testing.assert_allclose(cov, cov.T, rtol=1e-12, atol=0)
+
+
+def test_fitted_covariance_is_in_index_order_and_marginal():
+    """The shared finishing step: columns given out of order, machine part marginal."""
+    rng = np.random.default_rng(5)
+    J = rng.normal(size=(40, 4))
+    fitted = np.array([6, 2, 0, 5])  # n = 4 machine parameters: 2 and 0 are machine
+    machine, mask, full = fitted_covariance(J, fitted, 4, scale=2.0)
+    inv = np.linalg.inv(J.T @ J) * 2.0
+    order = np.argsort(fitted)  # 0, 2, 5, 6
+    np.testing.assert_allclose(full, inv[np.ix_(order, order)], rtol=1e-10)
+    np.testing.assert_allclose(machine, inv[np.ix_([2, 1], [2, 1])], rtol=1e-10)
+    assert mask.tolist() == [True, False, True, False]

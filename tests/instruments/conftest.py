@@ -3,7 +3,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pincal.measure import Instrument
+from pincal.measure import Distance, Plane, Point, Sphere
 from pincal.model import sample_actuators
 
 
@@ -24,15 +24,15 @@ def setups(P: np.ndarray) -> dict:
     ids = np.arange(len(P)) % 2
     return {
         "distance": (
-            Instrument("distance", 1e-6),
+            Distance(1e-6),
             np.r_[c + np.array([0.01, 0.02, -0.15]), 1e-3],
             None,
         ),
-        "sphere": (Instrument("sphere", 1e-6, radius=0.02), c + np.array([0.0, 0.01, -0.1]), None),
+        "sphere": (Sphere(1e-6, radius=0.02), c + np.array([0.0, 0.01, -0.1]), None),
         "plane": (
-            Instrument("plane", 1e-6, normals=((0, 0, 1), (1, 0, 0.1))),
+            Plane(1e-6, normals=((0, 0, 1), (1, 0, 0.1))),
             np.array([1e-3, -2e-3, 0.3, 2e-3, 1e-3, 0.05]),
             ids,
         ),
-        "point": (Instrument("point", 1e-6, direction=(0.1, 0, 1)), np.array([0.03]), None),
+        "point": (Point(1e-6, direction=(0.1, 0, 1)), np.array([0.03]), None),
     }

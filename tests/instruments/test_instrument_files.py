@@ -31,7 +31,7 @@ def test_files_round_trip_exactly_in_metres(
         None if ids is None else ids[:10],
     )
     data = InstrumentData(
-        inst, data.q_act, data.values, data.actuated, data.frame, data.plane, theta + 1e-4
+        inst, data.q_act, data.values, data.actuated, data.frame, data.ids, theta + 1e-4
     )
     back = read_instrument_data(write_instrument_data(tmp_path / "a.csv", data), stewart)
     assert back.instrument == inst
@@ -39,7 +39,7 @@ def test_files_round_trip_exactly_in_metres(
     np.testing.assert_array_equal(back.values, data.values)
     np.testing.assert_array_equal(back.initial, data.initial)
     if kind == "plane":
-        np.testing.assert_array_equal(back.plane, data.plane)
+        np.testing.assert_array_equal(back.ids, data.ids)
     mm = read_instrument_data(write_instrument_data(tmp_path / "b.csv", data, "mm"), stewart)
     np.testing.assert_allclose(mm.values, data.values, rtol=1e-15, atol=1e-18)
     np.testing.assert_allclose(mm.instrument.std, inst.std, rtol=1e-15)
@@ -100,7 +100,7 @@ def test_cli_simulate_instrument_then_identify(kind, tmp_path, stewart):
     th_true = np.array(list(truth["instrument"].values()))
     rows = data.q_act[:20] * 0.999 + data.q_act[20:40] * 0.001
     ids = None if kind != "plane" else np.arange(20) % 2
-    fresh = simulate_instrument(actual, data.instrument, th_true, rows, plane=ids, noise=False)
+    fresh = simulate_instrument(actual, data.instrument, th_true, rows, ids=ids, noise=False)
     inst_fit = fit.values[len(params) :]
     model = fit.result.calibrated
     P = np.array([model.frame_placement(q).translation for q in model.configurations(rows)])

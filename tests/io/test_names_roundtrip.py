@@ -35,8 +35,7 @@ from pincal.io import (
     write_poses,
     write_target_measurements,
 )
-from pincal.measure import Measurements, NoiseModel, simulate_measurements
-from pincal.measure._instruments import Instrument, InstrumentData
+from pincal.measure import Distance, InstrumentData, Measurements, NoiseModel, simulate_measurements
 from pincal.model import Mechanism, load_mechanism, parameters, sample_actuators
 
 SPECIAL = [*'#,"[] \n\t\\\'.:;=', "é", "\u00a0", "\u3000", "\u2028", "😀"]
@@ -129,7 +128,7 @@ def test_measurement_pose_command_and_instrument_files_round_trip(tmp_path, j1, 
         assert np.array_equal(q_back, q) and list(idx) == [0, 1, 2]
         assert np.array_equal(read_pose_rows(path, mech), q)
 
-    data = InstrumentData(Instrument("distance", 1e-6), q, np.full(3, 0.1), mech.actuated, frame)
+    data = InstrumentData(Distance(1e-6), q, np.full(3, 0.1), mech.actuated, frame)
     path = _writes(lambda: write_instrument_data(tmp_path / "i.csv", data), [j1, j2, frame])
     if path is not None:
         inst = read_instrument_data(path, mech)

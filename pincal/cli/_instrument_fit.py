@@ -1,0 +1,60 @@
+"""``pincal calibrate`` on instrument files: read, unit check, joint fit, the gate."""
+
+from __future__ import annotations
+
+import click
+
+__all__ = ["identify_instrument_files", "is_instrument_file"]
+
+
+def is_instrument_file(path: str) -> bool:
+    """True for an instrument file (``# pincal instrument`` / ``# pincal sockets``)."""
+    from pincal.errors import PincalError
+    from pincal.io import is_instrument_file as starts_as_instrument_file
+
+    try:
+        return starts_as_instrument_file(path)
+    except PincalError:
+        return False  # the measurement reader reports the problem
+
+
+def identify_instrument_files(mech, params, files: list[str], method: str, force: bool, limits,
+                              profile):  # fmt: skip
+    """Machine and instrument parameters from instrument files (ballbar, probe, sockets…).
+
+    The readings' unit check refuses before the fit (unless ``force``); the fit is judged
+    by :func:`pincal.identification.instrument_gate`.
+
+    Returns:
+        (the gate's verdict, the machine part as an IdentificationResult).
+
+    Raises:
+        UnidentifiableError: nothing measured fixes the length scale (sockets without a
+            known distance), unless ``force`` (then a warning on stderr).
+    """
+    from pathlib import Path
+
+    from pincal.cli._gate import apply_gate
+    from pincal.errors import UnidentifiableError
+    from pincal.identification import check_instrument_data, identify_instruments, instrument_gate
+    from pincal.io import read_instrument_file
+
+    datasets = [read_instrument_file(f, mech) for f in files]
+    stems = [Path(f).stem for f in files]
+    labels = stems if len(set(stems)) == len(stems) else None
+    data = check_instrument_data(mech, datasets, stems, limits)
+    apply_gate(data, force, before_fit=True)
+    what = ", ".join(f"{len(d.q_act)} {d.kind}" for d in datasets)
+    click.echo(f"… identifying from {what} readings", err=True)
+    from pincal.cli._progress import iterations
+
+    with iterations("identifying") as step:
+        # a direction placed only beyond the gate's change bound (1σ) is held at nominal
+        bound = (limits.max_length_change, limits.max_angle_change)
+        out = identify_instruments(mech, params, datasets, method=method, labels=labels,
+                                   progress=step, weak_bound=bound)  # fmt: skip
+    for w in out.warnings:
+        if not force:
+            raise UnidentifiableError(f"{w} (--force writes the calibration anyway)")
+        click.echo(f"pincal: warning: {w}", err=True)
+    return instrument_gate(out, data, limits, profile), out.result

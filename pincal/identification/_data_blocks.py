@@ -1,0 +1,177 @@
+"""The datasets of a joint fit, one class per measurement kind, behind one interface.
+
+:class:`pincal.identification.InstrumentProblem` fits machine parameters and the
+instruments' own unknowns to several datasets at once. Each dataset is a
+:class:`DataBlock`: k residuals per pose with their σ, its own unknowns (names, units,
+start values) and ``residuals(...)`` returning ``measured − model`` with its exact
+Jacobian from the tool-point pose and its sensitivities. The kinds:
+
+* :class:`PoseSensorBlock` — a pose sensor (laser tracker, position, component
+  subset): its prediction is the measured frame's pose, residuals exactly as in
+  :class:`pincal.identification.CalibrationProblem`; no own unknowns.
+* :class:`ScalarBlock` — a scalar instrument (:class:`pincal.measure.Instrument`:
+  ballbar, probe, planes, gauge, any registered kind): one reading per pose, ``∂v/∂p ·
+  ∂p/∂x`` and ``∂v/∂θ``.
+* :class:`SocketBlock` — a ball seated in the sockets of a plate: three residuals per
+  pose; the socket centres shared by the plate's files live in
+  :class:`pincal.identification._socket_terms.SocketTerms`.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from pincal.errors import MeasurementError
+from pincal.identification._problem import CalibrationProblem
+from pincal.identification._socket_terms import SocketTerms
+from pincal.measure import InstrumentData, Measurements, SocketData, initial_instrument_values
+from pincal.model import Mechanism, ParameterSet
+from pincal.model.kernels import measurement_residual
+
+__all__ = ["BLOCKS", "DataBlock", "PoseSensorBlock", "ScalarBlock", "SocketBlock", "data_block"]
+
+
+class DataBlock(ABC):
+    """One dataset of a joint fit.
+
+    Attributes:
+        data: the dataset; label: its name (prefix of its own unknowns' names).
+        sigma: (m, k) 1σ of its residuals [m, rad].
+        own_names, own_units: its own unknowns (``"m"`` / ``"rad"``).
+        theta0: (len(own_names),) their start values [SI].
+    """
+
+    data: Any
+    label: str
+    sigma: np.ndarray
+    own_names: tuple[str, ...] = ()
+    own_units: tuple[str, ...] = ()
+    theta0: np.ndarray = np.zeros(0)
+
+    def __len__(self) -> int:
+        return len(self.data)
+
+    @abstractmethod
+    def residuals(self, x: np.ndarray, col: int, n: int, P: np.ndarray, Rs: list[np.ndarray],
+                  sens: list[Any] | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+        """Raw residuals ``measured − model`` (m, k) and their Jacobian (m, k, len(x)).
+
+        Args:
+            x: every unknown of the problem (machine first).
+            col: the column of this block's own unknowns.
+            n: the number of machine parameters.
+            P: (m, 3) tool points [m].
+            Rs: (m, 3, 3) tool orientations.
+            sens: per pose :class:`pincal.sensitivity.PoseSensitivity` (None: no Jacobian;
+                zeros are returned for it).
+        """
+
+    def norms(self, raw: np.ndarray) -> tuple[list[float], list[float]]:
+        """Per pose position-error and rotation-error norms [m], [rad] of ``raw``."""
+        return list(np.linalg.norm(raw, axis=1)), []
+
+    def readings(self, raw: np.ndarray) -> np.ndarray:
+        """(m·k,) the model's scalar readings at ``raw`` (0 for blocks that read none)."""
+        return np.zeros(raw.size)
+
+
+class PoseSensorBlock(DataBlock):
+    """A pose sensor: the prediction is the measured frame's pose (its measured components)."""
+
+    def __init__(self, data: Measurements, label: str, mech: Mechanism, params: ParameterSet,
+                 P0: np.ndarray) -> None:  # fmt: skip
+        self.data, self.label = data, label
+        self.sigma = CalibrationProblem(mech, params, data).sigma
+
+    def residuals(self, x, col, n, P, Rs, sens):
+        d = self.data
+        rows = d.component_indices
+        m = len(d)
+        raw = np.empty((m, rows.size))
+        J = np.zeros((m, rows.size, len(x)))
+        for i in range(m):
+            R_meas = None if d.rotations is None else d.rotations[i]
+            r, D = measurement_residual(P[i], Rs[i], d.positions[i], R_meas)
+            raw[i] = r[rows]
+            if sens is not None:
+                J[i, :, :n] = -(D @ sens[i].jacobian)[rows]
+        return raw, J
+
+    def norms(self, raw):
+        comps = self.data.components
+        ip = [i for i, c in enumerate(comps) if not c.startswith("r")]
+        ir = [i for i, c in enumerate(comps) if c.startswith("r")]
+        pos = list(np.linalg.norm(raw[:, ip], axis=1)) if ip else []
+        return pos, list(np.linalg.norm(raw[:, ir], axis=1)) if ir else []
+
+
+class ScalarBlock(DataBlock):
+    """Readings of a scalar instrument: one per pose, its own unknowns θ."""
+
+    def __init__(self, data: InstrumentData, label: str, mech: Mechanism, params: ParameterSet,
+                 P0: np.ndarray) -> None:  # fmt: skip
+        self.data, self.label = data, label
+        self.instrument, self.theta0 = initial_instrument_values(data, P0)
+        self.sigma = np.full((len(data), 1), self.instrument.std)
+        self.own_names = tuple(f"{label}.{n}" for n in self.instrument.parameter_names)
+        self.own_units = tuple(self.instrument.parameter_units)
+
+    def residuals(self, x, col, n, P, Rs, sens):
+        k, m = len(self.own_names), len(self.data)
+        v, dv_dp, dv_dth = self.instrument.predict(P, x[col : col + k], self.data.ids)
+        J = np.zeros((m, 1, len(x)))
+        if sens is not None:
+            Jp = np.array([s.jacobian[:3] for s in sens])  # (m, 3, n)
+            J[:, 0, :n] = -np.einsum("mi,min->mn", dv_dp, Jp)
+            J[:, 0, col : col + k] = -dv_dth
+        return (self.data.values - v)[:, None], J
+
+    def norms(self, raw):
+        return list(np.abs(raw[:, 0])), []
+
+    def readings(self, raw):
+        return self.data.values - raw[:, 0]
+
+
+class SocketBlock(DataBlock):
+    """A ball seated in the sockets of a plate: ``c_s − b`` per pose (see SocketTerms)."""
+
+    def __init__(self, data: SocketData, label: str, mech: Mechanism, params: ParameterSet,
+                 P0: np.ndarray) -> None:  # fmt: skip
+        self.data, self.label = data, label
+        self.sigma = np.full((len(data), 3), data.plate.std)
+        self.own_names = tuple(f"{label}.{n}" for n in data.parameter_names)
+        self.own_units = ("m",) * len(self.own_names)
+        self.theta0 = np.zeros(len(self.own_names))  # the ball: SocketTerms.start
+        self.terms: SocketTerms | None = None  # set by the problem once every file is known
+
+    def residuals(self, x, col, n, P, Rs, sens):
+        assert self.terms is not None
+        return self.terms.block(self.data, x, col, n, P, Rs, sens)
+
+
+#: dataset type → its block class (constructed as ``cls(data, label, mech, params, P0)``)
+BLOCKS: dict[type, Callable[..., DataBlock]] = {
+    Measurements: PoseSensorBlock,
+    InstrumentData: ScalarBlock,
+    SocketData: SocketBlock,
+}
+
+
+def data_block(d: Any, label: str, mech: Mechanism, params: ParameterSet,
+               P0: np.ndarray) -> DataBlock:  # fmt: skip
+    """The block of dataset ``d`` (``P0``: its nominal tool points (m, 3) [m]).
+
+    Raises:
+        MeasurementError: a dataset of no registered type.
+    """
+    cls = BLOCKS.get(type(d))
+    if cls is None:
+        raise MeasurementError(
+            f"a joint fit takes {[t.__name__ for t in BLOCKS]} datasets, not {type(d).__name__}"
+        )
+    return cls(d, label, mech, params, P0)

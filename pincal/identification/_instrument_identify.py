@@ -1,0 +1,228 @@
+"""Joint machine + instrument identification: solve, then the finishing step.
+
+:func:`identify_instruments` solves an :class:`pincal.identification.InstrumentProblem`
+with a registered local solver (``"gauss-newton"`` or ``"lm"``), fitting the
+identifiable base set (instrument parameters first, so what an instrument absorbs is
+held on the machine side) less the directions the data place only beyond a bound,
+and names what it did not calibrate (:mod:`pincal.identification._gauge`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from pincal.errors import SolverOptionError
+from pincal.identification._covariance import fitted_covariance
+from pincal.identification._data_blocks import DataBlock
+from pincal.identification._gauge import null_motions, reading_scale_std, weak_parameters
+from pincal.identification._instrument_problem import Dataset, InstrumentProblem
+from pincal.identification._result import IdentificationResult, ResidualStats
+from pincal.identification._solvers import solver
+from pincal.model import Mechanism, ParameterSet
+from pincal.sensitivity import Identifiability
+
+__all__ = ["SCALE_STD_LIMIT", "InstrumentIdentification", "identify_instruments"]
+
+#: a reading scale the data tell only beyond this 1σ [1] is named in the gauge
+SCALE_STD_LIMIT = 1e-3
+
+
+@dataclass(frozen=True)
+class InstrumentIdentification:
+    """Outcome of :func:`identify_instruments`.
+
+    Attributes:
+        result: the machine part as an :class:`IdentificationResult` (marginal
+            covariance of the machine base parameters; residual statistics over every
+            dataset, scalar readings counted as position residuals [m]; annotations
+            hold the instrument values).
+        names: all joint parameter names (machine, then ``label.θ`` names).
+        values: (n + Σk,) joint values at the solution [SI]; x0: start values.
+        fitted: indices (into ``names``) of the fitted base set.
+        covariance: covariance of the fitted values (order of ``fitted``).
+        residuals: per dataset, (m_i, k_i) raw residuals at the solution [m, rad].
+        identifiability: joint analysis at the start (instrument parameters first).
+        gauge: what the data do not observe (held at nominal), in words.
+        weak: names of the parameters held because the data place them only beyond
+            20 mm / 0.1 rad (1σ).
+        whitened: (m, k, p) Jacobian of the fitted parameters per pose and (m, k)
+            residuals, both divided by their σ, at the solution — for the quality gate's
+            per-pose tests; None when the poses have residuals of different sizes or a
+            plate's known distances add rows.
+        socket_centres: ``"plate.socket"`` → (3,) identified socket centre [m].
+        warnings: what no measurement fixes, in words (e.g. the length scale of a
+            socket campaign without a known distance).
+    """
+
+    result: IdentificationResult
+    names: tuple[str, ...]
+    values: np.ndarray
+    x0: np.ndarray
+    fitted: np.ndarray
+    covariance: np.ndarray
+    residuals: list[np.ndarray]
+    identifiability: Identifiability
+    gauge: tuple[str, ...] = ()
+    weak: tuple[str, ...] = ()
+    whitened: tuple[np.ndarray, np.ndarray] | None = None
+    socket_centres: dict[str, np.ndarray] = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
+
+    def instrument_values(self) -> dict[str, float]:
+        """Instrument parameter name → identified (or start) value [SI]."""
+        n = len(self.result.names)
+        return {k: float(v) for k, v in zip(self.names[n:], self.values[n:], strict=True)}
+
+
+def _stats(raws: list[np.ndarray], blocks: Sequence[DataBlock]) -> ResidualStats:
+    """Residual statistics over the poses of every block (a plate's distances left out)."""
+    pos: list[float] = []
+    rot: list[float] = []
+    for raw, b in zip(raws, blocks, strict=False):
+        p, r = b.norms(raw)
+        pos += p
+        rot += r
+    out = []
+    for e in (np.array(pos), np.array(rot)):
+        out += [float(np.sqrt(np.mean(e**2))), float(e.max())] if e.size else [np.nan, np.nan]
+    return ResidualStats(*out)
+
+
+def identify_instruments(
+    mech: Mechanism,
+    params: ParameterSet,
+    datasets: Sequence[Dataset],
+    method: str = "gauss-newton",
+    *,
+    options: Any = None,
+    labels: Sequence[str] | None = None,
+    progress: Callable[[int, float], None] | None = None,
+    weak_bound: tuple[float, float] | None = (0.02, 0.1),
+) -> InstrumentIdentification:
+    """Identify machine and instrument parameters jointly from several datasets.
+
+    Args:
+        mech: nominal mechanism.
+        params: the n machine parameters.
+        datasets: :class:`Measurements` and/or :class:`InstrumentData` (any mix).
+        method: ``"gauss-newton"`` or ``"lm"``.
+        options: that solver's options dataclass (``GaussNewtonOptions`` or
+            ``LMOptions``; None = its defaults).
+        labels: names of the datasets (prefix of the instrument parameter names).
+        progress: optional ``(iteration, cost)`` callback passed to the solver.
+        weak_bound: (length [m], angle [rad]): a direction of the base set whose 1σ
+            (at the files' declared noise) exceeds it is held at nominal too, named in
+            the gauge (see :func:`pincal.identification._gauge.weak_parameters`); None
+            fits the whole identifiable base set.
+
+    Returns:
+        InstrumentIdentification (the machine part is an IdentificationResult).
+
+    Raises:
+        SolverOptionError: a method other than the local solvers.
+        MeasurementError: inconsistent datasets.
+    """
+    if method not in ("gauss-newton", "lm"):
+        raise SolverOptionError(
+            f"joint instrument identification runs 'gauss-newton' or 'lm', not {method!r}"
+        )
+    entry = solver(method)
+    opts = entry.check_options(options)
+    model = InstrumentProblem(mech, params, datasets, labels)
+    x0 = model.x0
+    _, J0, raw0 = model.evaluate(x0)
+    ident = model.analyse(x0, J0)
+    free = np.sort(model.order[ident.base])
+    weak = (np.zeros(0, dtype=int) if weak_bound is None
+            else weak_parameters(J0, free, model.units, model.n_machine, weak_bound))  # fmt: skip
+    free = np.setdiff1d(free, weak)
+    P0, Jp0 = model.tool_points(x0)
+    motions = null_motions(J0, Jp0, P0, model.n_machine, ident, model.order,
+                           model.names[model.n_machine :])  # fmt: skip
+    gauge = tuple(motions.lines())
+    if weak.size:
+        assert weak_bound is not None
+        gauge += (f"seen too weakly to place within {weak_bound[0] * 1e3:g} mm / "
+                  f"{weak_bound[1]:g} rad (1σ), held at nominal: "
+                  f"{', '.join(model.names[i] for i in weak)}",)  # fmt: skip
+    out = entry.solve(model, x0, free, opts, progress)
+    r, J, raws = model.evaluate(out.x)
+    Jf = J[:, free]
+    scale_std = reading_scale_std(Jf, model.whitened_readings(raws))
+    if scale_std > SCALE_STD_LIMIT:
+        gauge += (f"the length scale: a scale error of the readings (a bar length, a gain) "
+                  f"passes into the calibrated machine — the data tell it only to "
+                  f"{scale_std * 100:.2g} % (1σ); the scale rests on the instrument's own "
+                  "calibration",)  # fmt: skip
+    success, message = out.success, out.message
+    if not success:
+        # at the noise floor a Gauss–Newton step may promise less than the cost changes
+        # with the kinematic solver's precision (100× its tolerance per reading)
+        step = np.linalg.lstsq(Jf, -r, rcond=None)[0]
+        predicted = 0.5 * float(r @ r - np.sum((r + Jf @ step) ** 2))
+        sig = np.concatenate([s.ravel() for s in model.sigma])
+        jitter = float(np.sum(np.abs(r) * 100 * mech.options.tol / sig))
+        if predicted <= max(jitter, 1e-9 * float(r @ r)):
+            success = True
+            message = (
+                f"converged (noise floor: a further step promises {predicted:.3g}, below the "
+                f"kinematic precision {jitter:.3g} of the cost; solver: {out.message})"
+            )
+    dof = max(model.n_equations - free.size, 1)
+    chi2 = float(r @ r) / dof
+    n = model.n_machine
+    cov_m, mask, cov = fitted_covariance(Jf, free, n)  # free is sorted: cov in its order
+    x = np.asarray(out.x, dtype=float)
+    inst = {k: float(v) for k, v in zip(model.names[n:], x[n:], strict=True)}
+    centres_mm = {k: [float(v) * 1e3 for v in c] for k, c in model.socket_centres(x).items()}
+    result = IdentificationResult(
+        method=method,
+        names=params.names,
+        units=params.units,
+        full_values=x[:n].copy(),
+        identified=mask,
+        std=np.sqrt(np.clip(np.diag(cov_m), 0.0, None)),
+        covariance=cov_m,
+        before=_stats(raw0, model.blocks),
+        after=_stats(raws, model.blocks),
+        reduced_chi2=chi2,
+        iterations=out.iterations,
+        success=success,
+        message=f"joint fit of {free.size} of {len(model.names)} parameters (the others "
+        "held at nominal: see the gauge); "
+        + "".join(f"WARNING: {w}; " for w in model.scale_warnings)
+        + message,
+        cost_history=tuple(out.history),
+        residuals=np.concatenate(  # per pose (a plate's known distances are not poses)
+            [np.linalg.norm(a, axis=1) for a in raws[: len(model.datasets)]]
+        )[:, None],
+        initial_values=np.zeros(n),
+        n_equations=model.n_equations,
+        model=mech.name,
+        preset=params.label,
+        extras=out.extras,
+        parameter_set=params,
+        calibrated_mechanism=model.mechanism(x),
+        annotations={
+            "instruments": inst,
+            "datasets": list(model.labels),
+            "redundancy": dof,
+            "gauge": list(gauge),
+            **({"warnings": list(model.scale_warnings)} if model.scale_warnings else {}),
+            **({"socket_centres_mm": centres_mm} if centres_mm else {}),
+        },
+    )
+    ks = {a.shape[1] for a in raws}
+    whitened = None
+    if len(raws) == len(model.datasets) and len(ks) == 1:
+        k = ks.pop()
+        whitened = (Jf.reshape(-1, k, free.size), r.reshape(-1, k))
+    return InstrumentIdentification(
+        result, model.names, x, x0, free, cov, raws, ident, gauge,
+        tuple(model.names[i] for i in weak), whitened, model.socket_centres(x),
+        model.scale_warnings,
+    )  # fmt: skip

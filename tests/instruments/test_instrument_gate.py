@@ -1,0 +1,98 @@
+"""Instrument files through the quality gate (issue 25): gauge, χ², outliers, units.
+
+`pincal simulate --instrument distance` → `pincal calibrate` on the Stewart platform
+(prismatic legs: the readings fix the length scale) and the planar 3-RRR (revolute
+joints only: the length scale rests on the bar), clean and with known faults.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from pincal.cli import main
+
+RRR3 = str(Path(__file__).resolve().parents[1] / "model" / "machines" / "rrr3")
+
+
+def _simulate(tmp_path, model, *extra):
+    data = tmp_path / "bar.csv"
+    args = ["simulate", model, "--random", "60", "--instrument", "distance", "--seed", "1"]
+    res = CliRunner().invoke(main, [*args, *extra, "--out", str(data)])
+    assert res.exit_code == 0, res.output
+    return data
+
+
+def _edit(src: Path, dst: Path, change) -> Path:
+    """A copy of an instrument file (length_unit m) with its readings changed."""
+    head, rows = [], []
+    for line in src.read_text().splitlines():
+        if line.startswith("#") or (not line[:1].isdigit() and line[:1] != "-"):
+            head.append(line)
+            continue
+        v = line.split(",")
+        v[-1] = repr(change(len(rows), float(v[-1])))
+        rows.append(",".join(v))
+    dst.write_text("\n".join(head + rows) + "\n")
+    return dst
+
+
+def _calibrate(data, out, *extra, model="stewart_6ups"):
+    args = ["calibrate", model, "--data", str(data), "--out", str(out), *extra]
+    return CliRunner().invoke(main, args)
+
+
+@pytest.fixture(scope="module")
+def stewart_bar(tmp_path_factory):
+    return _simulate(tmp_path_factory.mktemp("bar"), "stewart_6ups")
+
+
+def test_a_clean_ballbar_fit_converges_and_names_its_gauge(stewart_bar, tmp_path):
+    res = _calibrate(stewart_bar, tmp_path / "cal", "--json")
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout)
+    assert doc["success"] and doc["quality"]["passed"]
+    assert doc["quality"]["warnings"] == [] and doc["quality"]["refusals"] == []
+    gauge = " ".join(doc["gauge"])
+    assert "not observed: 3 rotation(s) of every tool point" in gauge
+    assert "the absolute tool position: 3 translations" in gauge
+    assert "length scale" not in gauge  # the prismatic legs fix it
+    text = (tmp_path / "cal" / "report.txt").read_text()
+    assert "not calibrated (held at nominal; the data do not observe it):" in text
+
+
+def test_a_bar_scale_error_outlier_and_unit_error_are_refused(stewart_bar, tmp_path):
+    scaled = _edit(stewart_bar, tmp_path / "s.csv", lambda i, v: 1.01 * v)
+    res = _calibrate(scaled, tmp_path / "c1")
+    assert res.exit_code == 1 and "instrument χ²/ν" in res.stderr
+    assert not (tmp_path / "c1").exists()
+    # one reading off by 50σ (std 10 µm) is named as that one pose
+    bad = _edit(stewart_bar, tmp_path / "o.csv", lambda i, v: v + 5e-4 * (i == 17))
+    res = _calibrate(bad, tmp_path / "c2")
+    assert res.exit_code == 1 and "1 of 60 poses are outliers" in res.stderr
+    assert "poses 17)" in res.stderr
+    # real noise 10× the declared one (std 10 µm declared as 1 µm)
+    quiet = tmp_path / "n.csv"
+    quiet.write_text(stewart_bar.read_text().replace("# std: 1e-05", "# std: 1e-06"))
+    res = _calibrate(quiet, tmp_path / "c4")
+    assert res.exit_code == 1 and "instrument χ²/ν" in res.stderr
+    # readings in mm written as m: refused before the fit, the cause named
+    mm = _edit(stewart_bar, tmp_path / "u.csv", lambda i, v: 1e3 * v)
+    res = _calibrate(mm, tmp_path / "c3")
+    assert res.exit_code == 1 and "Likely cause: units" in res.stderr
+    assert "identifying" not in res.stderr
+
+
+def test_planar_ballbar_fit_passes_and_says_the_bar_sets_the_scale(tmp_path):
+    data = _simulate(tmp_path, RRR3, "--params", "base")
+    res = _calibrate(data, tmp_path / "cal", "--params", "base", "--json", model=RRR3)
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout)
+    assert doc["success"] and doc["quality"]["passed"]
+    gauge = " ".join(doc["gauge"])
+    assert "about the axis (+0.000, +0.000, +1.000)" in gauge  # rotations in the plane
+    # revolute joints only: a bar-length error scales the machine, no residual sees it
+    assert "the length scale" in gauge
