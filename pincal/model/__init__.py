@@ -56,6 +56,7 @@ from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
 from pincal.model._named import find_local_sidecar, model_record, srdf_home
 from pincal.model._newton import SolverOptions
+from pincal.model._payload import Payload, with_payload
 from pincal.model._parameters import (
     DOFS,
     Parameter,
@@ -122,6 +123,7 @@ __all__ = [
     "ModelLimits",
     "Parameter",
     "ParameterSet",
+    "Payload",
     "Sidecar",
     "SolverOptions",
     "UrdfJoint",
@@ -173,5 +175,6 @@ __all__ = [
     "validate_sidecar",
     "with_joint_origin",
     "with_joint_terms",
+    "with_payload",
     "wrap_base_tool",
 ]
