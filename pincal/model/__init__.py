@@ -56,7 +56,6 @@ from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
 from pincal.model._named import find_local_sidecar, model_record, srdf_home
 from pincal.model._newton import SolverOptions
-from pincal.model._payload import Payload, with_payload
 from pincal.model._parameters import (
     DOFS,
     Parameter,
@@ -66,6 +65,7 @@ from pincal.model._parameters import (
     parameters,
     register_preset,
 )
+from pincal.model._payload import Payload, with_payload
 from pincal.model._readings import JointReadings
 from pincal.model._robots import example_robot_names, example_robot_urdf
 from pincal.model._serial import (

@@ -63,13 +63,18 @@ def test_payload_is_a_point_mass_on_the_tool(stewart, loaded_stewart):
     q = loaded_stewart.configurations(sample_actuators(stewart, 1, np.random.default_rng(5)))[0]
     T = stewart.frame_placement(q)
     z = (T.act(np.array(SPINDLE.com)))[2]
-    V = [pin.computePotentialEnergy(m.model, m.model.createData(), q) for m in (stewart, loaded_stewart)]
+    V = [
+        pin.computePotentialEnergy(m.model, m.model.createData(), q)
+        for m in (stewart, loaded_stewart)
+    ]
     assert V[1] - V[0] == pytest.approx(SPINDLE.mass * 9.81 * z, rel=1e-9)
     assert np.allclose(loaded_stewart.frame_placement(q).homogeneous, T.homogeneous)
 
 
 def test_jacobian_matches_finite_differences_stewart(loaded_stewart):
-    params = with_joint_terms(loaded_stewart, parameters(loaded_stewart, "stewart42"), ["compliance"])
+    params = with_joint_terms(
+        loaded_stewart, parameters(loaded_stewart, "stewart42"), ["compliance"]
+    )
     assert params.units[params.index("leg3_slide.compliance")] == "m/N"
     err = _fd_errors(loaded_stewart, params, 6, seed=2)
     assert err.max() < 1e-5, params.names[int(np.argmax(err))]
