@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from pincal.cli._calibrate_text import format_report, result_json
+from pincal.cli._joint_terms import TERMS_FILE, payload_option, read_payload, terms_record
 from pincal.cli._limits import NOISE_RANGE, check_data_rows, number_pair, yes_option
 from pincal.cli._markers import marker_options
 from pincal.cli.common import (
@@ -41,8 +42,13 @@ from pincal.identification import METHODS
     default="geometric",
     show_default=True,
     help="Error model: 'geometric' or geometric+TERM[+TERM…] with TERM compliance (joint "
-    "compliance under gravity, serial chains), gain, harmonics: joint-space terms on every "
-    "actuated joint, identified beside the geometric parameters.",
+    "compliance under the static load: gravity + payload; a parallel machine's legs from "
+    "the loop-closure equilibrium), gain, harmonics: joint-space terms on every actuated "
+    "joint, identified beside the geometric parameters.",
+)
+@payload_option(
+    "Payload on the tool during the measurements (kg; centre of mass in m in the tool "
+    "frame), e.g. 20,0,0,0.1: part of the load a compliance term sees."
 )
 @click.option(
     "--method",
@@ -109,8 +115,8 @@ from pincal.identification import METHODS
 @marker_options
 @fail_cleanly
 def calibrate(
-    model, data, preset, error_model, method, out, as_json, noise, loss, force, max_change,
-    significance, instrument, link, instrument_frame, marker_spec, marker_columns,
+    model, data, preset, error_model, payload, method, out, as_json, noise, loss, force,
+    max_change, significance, instrument, link, instrument_frame, marker_spec, marker_columns,
     length_unit, prior_spec,
     yes, model_opts,
 ) -> None:  # fmt: skip
@@ -164,6 +170,7 @@ def calibrate(
             param_hint="--data",
         )
     terms = split_model(error_model)
+    load = read_payload(payload)
 
     if loss != "linear" and method != "lm" and link is None:
         raise click.BadParameter(
@@ -185,10 +192,10 @@ def calibrate(
     if link is not None:
         from pincal.cli._markers import setup_from_options
 
-        if terms:
+        if terms or load is not None:
             raise click.BadParameter(
                 "joint-space terms are not yet fitted from marker tables (--link); use "
-                "--model geometric there",
+                "--model geometric there (and no --payload)",
                 param_hint="--model",
             )
 
@@ -213,6 +220,10 @@ def calibrate(
         raise click.BadParameter("--prior applies to marker calibrations (--link)",
                                  param_hint="--prior")  # fmt: skip
     mech = load_model(model, model_opts)
+    if load is not None:
+        from pincal.model import with_payload
+
+        mech = with_payload(mech, load)
     preset = preset or (next(iter(mech.presets), "full"))
     params = with_joint_terms(mech, parameters(mech, preset), terms)
     for f in files:
@@ -245,6 +256,8 @@ def calibrate(
     record = model_record(model, model_opts)  # the model with --sidecar/--frame/--lock
     if record is not None:
         texts["model.yaml"] = record
+    if terms or load is not None:
+        texts[TERMS_FILE] = terms_record(result, error_model, load)
     source = str(out_dir.resolve() / "model.yaml") if record else model_source(model)
     cal = write_calibration(
         out_dir,
@@ -254,12 +267,13 @@ def calibrate(
         noise=noise_model,
         annotations={"data": ", ".join(map(str, files)), "quality": quality},
         texts=texts,
+        nominal=mech if load is not None else None,  # the payload is part of the model
     )
     if terms:
         click.echo(
-            f"pincal: note: the joint terms ({'+'.join(terms)}) are in identification.json; "
-            f"calibrated.urdf is the geometric part, and compensate, validate and export do "
-            f"not apply the joint terms yet (`pincal select-model` cross-validates with them)",
+            f"pincal: note: the joint terms ({'+'.join(terms)}) are in {TERMS_FILE} and "
+            f"identification.json; calibrated.urdf is the geometric part; compensate applies "
+            f"the terms, validate does not yet (`pincal select-model` cross-validates them)",
             err=True,
         )
     if as_json:

@@ -68,18 +68,32 @@ class Payload:
         return f"payload {self.mass:g} kg at ({x:.1f}, {y:.1f}, {z:.1f}) mm in the tool frame"
 
 
-def with_payload(mech: Mechanism, payload: Payload) -> Mechanism:
+def with_payload(mech: Mechanism, payload: Payload, *, replace: bool = False) -> Mechanism:
     """A new mechanism carrying ``payload`` on its measured frame (the input unchanged).
 
+    Args:
+        mech: the mechanism.
+        payload: the payload.
+        replace: take off a payload this function added before (a calibration's), so
+            that the new one is the only one.
+
     Raises:
-        ParameterError: the model already has a link named ``payload``.
+        ParameterError: the model already has a link named ``payload`` (and not
+            ``replace``).
     """
-    if PAYLOAD_LINK in mech.tree.links:
-        raise ParameterError(
-            f"{mech.name!r} already has a link {PAYLOAD_LINK!r}; give the payload once "
-            f"(in the URDF or as an option, not both)"
-        )
     root = ET.fromstring(mech.urdf_xml)
+    if PAYLOAD_LINK in mech.tree.links:
+        if not replace:
+            raise ParameterError(
+                f"{mech.name!r} already has a link {PAYLOAD_LINK!r}; give the payload once "
+                f"(in the URDF or as an option, not both)"
+            )
+        for e in list(root):
+            child = e.find("child")
+            if (e.tag == "link" and e.get("name") == PAYLOAD_LINK) or (
+                e.tag == "joint" and child is not None and child.get("link") == PAYLOAD_LINK
+            ):
+                root.remove(e)
     link = ET.SubElement(root, "link", name=PAYLOAD_LINK)
     inertial = ET.SubElement(link, "inertial")
     ET.SubElement(inertial, "origin", xyz=" ".join(repr(v) for v in payload.com), rpy="0 0 0")

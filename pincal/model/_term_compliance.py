@@ -103,8 +103,8 @@ def _equilibrium(
     g = pin.computeGeneralizedGravity(model, data, q)
     A = np.hstack([S, mech.closure_jacobian(q).T])
     x, *_ = np.linalg.lstsq(A, g, rcond=None)
-    miss = np.linalg.norm(A @ x - g)
-    if miss > _EQUILIBRIUM_TOL * max(np.linalg.norm(g), 1.0):
+    miss = float(np.linalg.norm(A @ x - g))
+    if miss > _EQUILIBRIUM_TOL * max(float(np.linalg.norm(g)), 1.0):
         raise ParameterError(
             f"{mech.name!r} at pose {k}: the actuators and closures do not hold the load "
             f"(equilibrium residual {miss:.3g} N·m); a passive joint is free to move under "
