@@ -21,7 +21,14 @@ if TYPE_CHECKING:
     from pincal.io import CalibrationDirectory
     from pincal.model import Mechanism, Payload
 
-__all__ = ["TERMS_FILE", "calibration_terms", "payload_option", "read_payload", "terms_record"]
+__all__ = [
+    "TERMS_FILE",
+    "calibration_terms",
+    "compliance_note",
+    "payload_option",
+    "read_payload",
+    "terms_record",
+]
 
 TERMS_FILE = "joint_terms.yaml"
 
@@ -99,3 +106,16 @@ def calibration_terms(
     load = payload.describe() if payload is not None else "the calibration's load"
     kinds = sorted({n.rpartition(".")[2] for n in terms.params.names})
     return terms, f"{len(terms.params)} joint terms ({', '.join(kinds)}) at {load}"
+
+
+def compliance_note(terms: tuple[str, ...], payload: Payload | None) -> str | None:
+    """What a compliance term can and cannot tell apart (None without one)."""
+    if "compliance" not in terms:
+        return None
+    load = "the links' weight" + (f" and the {payload.describe()}" if payload else "")
+    return (
+        f"compliance: δq = c·τ, τ the load the actuators hold ({load}, given); a payload "
+        f"mass and a compliance scale the same load, so they separate only with poses that "
+        f"change the load (e.g. measured with and without the payload): with the payload "
+        f"given, c is identified; a wrong payload mass biases c"
+    )

@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from pincal.cli._joint_terms import compliance_note, payload_option, read_payload
 from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_options
 
 if TYPE_CHECKING:
@@ -79,6 +80,7 @@ def structure_lines(mech: Mechanism, frame_given: bool = False) -> list[str]:
     help="Error model analysed: geometric[+compliance][+gain][+harmonics] (joint-space "
     "terms on every actuated joint, beside each preset's parameters).",
 )
+@payload_option("Payload on the tool (kg; centre of mass in m in the tool frame), e.g. 20,0,0,0.1.")
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON description on stdout.")
 @model_options
 @fail_cleanly
@@ -87,6 +89,7 @@ def info(
     preset: str | None,
     instrument: str | None,
     error_model: str,
+    payload: str | None,
     as_json: bool,
     model_opts: ModelOptions,
 ) -> None:
@@ -118,7 +121,12 @@ def info(
     from pincal.sensitivity import BASE_POSES, base_set, identifiability
 
     terms = split_model(error_model)
+    load = read_payload(payload)
     mech = load_model(model, model_opts, quiet=True)
+    if load is not None:
+        from pincal.model import with_payload
+
+        mech = with_payload(mech, load)
     if not as_json:
         for line in structure_lines(mech, bool(model_opts.frame)):
             click.echo(line)
@@ -181,6 +189,9 @@ def info(
             click.echo(base_line(mech, n_base, n_degenerate, BASE_POSES))
             if found.note():
                 click.echo(f"    {found.note()}")
+    note = compliance_note(terms, load)
+    if note and not as_json:
+        click.echo(f"  note: {note}")
     if as_json:
         doc = {
             "model": mech.name,
@@ -192,7 +203,7 @@ def info(
             "measured_components": list(mech.measured_components),
             "presets": presets,
             "base_preset": base,
-            "notes": list(mech.notes),
+            "notes": list(mech.notes) + ([note] if note else []),
         }
         click.echo(json.dumps(doc))
 

@@ -106,3 +106,12 @@ def test_payload_needs_a_compliance_calibration(tmp_path):
     res = runner.invoke(main, ["calibrate", "ur5", "--data", str(tmp_path / "m.csv"),
                                "--payload", "5,0,0", "--out", str(tmp_path / "cal")])  # fmt: skip
     assert res.exit_code != 0 and "MASS,X,Y,Z" in res.output
+
+
+def test_info_says_payload_and_compliance_separate_only_with_changing_loads():
+    res = CliRunner().invoke(main, ["info", str(STEWART), "--preset", "stewart42", "--model",
+                                    "geometric+compliance", "--payload", SPINDLE, "--json"])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout.strip().splitlines()[-1])
+    assert doc["presets"][0]["identifiable"] == 42 + 6  # every leg's compliance
+    assert any("only with poses that change the load" in n and "20 kg" in n for n in doc["notes"])
