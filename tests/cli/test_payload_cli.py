@@ -109,8 +109,9 @@ def test_payload_needs_a_compliance_calibration(tmp_path):
 
 
 def test_info_says_payload_and_compliance_separate_only_with_changing_loads():
-    res = CliRunner().invoke(main, ["info", str(STEWART), "--preset", "stewart42", "--model",
-                                    "geometric+compliance", "--payload", SPINDLE, "--json"])  # fmt: skip
+    args = ["info", str(STEWART), "--preset", "stewart42", "--model", "geometric+compliance",
+            "--payload", SPINDLE, "--json"]  # fmt: skip
+    res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
     doc = json.loads(res.stdout.strip().splitlines()[-1])
     assert doc["presets"][0]["identifiable"] == 42 + 6  # every leg's compliance
