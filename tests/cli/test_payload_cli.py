@@ -116,3 +116,14 @@ def test_info_says_payload_and_compliance_separate_only_with_changing_loads():
     doc = json.loads(res.stdout.strip().splitlines()[-1])
     assert doc["presets"][0]["identifiable"] == 42 + 6  # every leg's compliance
     assert any("only with poses that change the load" in n and "20 kg" in n for n in doc["notes"])
+
+
+def test_select_model_finds_the_sag(sagging_stewart):
+    """Held-out error: the legs' compliance pays on a platform carrying a spindle."""
+    tmp = sagging_stewart[0]
+    args = ["select-model", str(STEWART), "--data", str(tmp / "meas.csv"), "--models",
+            "geometric,geometric+compliance", "--payload", SPINDLE, "--json"]  # fmt: skip
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout.strip().splitlines()[-1])
+    assert doc["recommended"] == "geometric+compliance", doc
