@@ -104,3 +104,17 @@ def test_bad_payloads_are_specific(stewart, loaded_stewart):
     assert Payload.parse("5,0,0,0.08") == Payload(5.0, (0.0, 0.0, 0.08))
     with pytest.raises(ParameterError, match="already has a link"):
         with_payload(loaded_stewart, SPINDLE)
+
+
+@pytest.mark.parametrize("name", ["hexaslide_6pus", "wedge3"])
+def test_held_forces_on_other_parallel_machines(name):
+    """PUS sliders and the wedge's actuators: the basis is the potential's gradient too."""
+    mech = load_mechanism(Path(__file__).parents[2] / "models" / name)
+    params = parameters(mech, [f"{a}.compliance" for a in mech.actuated])
+    rows = sample_actuators(mech, 2, np.random.default_rng(7))
+    B = joint_term_basis(mech, params, rows)
+    assert {params.units[k] for k in params.joint_terms} <= {"m/N", "rad/(N·m)"}
+    for row, b in zip(rows, B, strict=True):
+        grad = _potential_gradient(mech, row)
+        assert np.max(np.abs(grad)) > 0.1  # [N]: a real load
+        assert np.diag(b) == pytest.approx(grad, rel=1e-6, abs=1e-6)
