@@ -91,6 +91,11 @@ def test_compliance_calibration_compensates_the_sag(sagging_stewart):
         assert "6 joint terms (compliance)" in doc["joint_terms"]["line"]
         assert doc["joint_terms"]["largest_deflection"]["m"] > 1e-4  # [m] the sag undone
         assert "m/N" in (cal / "report.txt").read_text()
+        res = runner.invoke(main, ["report", str(cal), "--out", str(tmp / "rep"), "--json"])
+        assert res.exit_code == 0, res.output
+        md = (tmp / "rep" / "report.md").read_text()
+        row = next(line for line in md.splitlines() if "leg2_slide.compliance" in line)
+        assert "m/N" in row and "e-0" in row, row  # SI with its unit, not scaled as µm
     print(f"RMS miss [µm]: { ({k: round(v * 1e6, 2) for k, v in misses.items()}) }")
     assert misses["geometric+compliance"] < 0.2 * misses["geometric"], misses
     assert misses["geometric+compliance"] < 20e-6, misses  # [m]
