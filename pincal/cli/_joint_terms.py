@@ -24,10 +24,12 @@ if TYPE_CHECKING:
 __all__ = [
     "TERMS_FILE",
     "calibration_terms",
+    "carrying",
     "compliance_note",
     "payload_option",
     "read_payload",
     "terms_record",
+    "terms_texts",
 ]
 
 TERMS_FILE = "joint_terms.yaml"
@@ -49,6 +51,15 @@ def read_payload(text: str | None) -> Payload | None:
         return Payload.parse(text)
     except ParameterError as exc:
         raise click.BadParameter(str(exc), param_hint="--payload") from None
+
+
+def carrying(mech: Mechanism, payload: Payload | None) -> Mechanism:
+    """``mech`` with ``payload`` on its tool (``mech`` itself without one)."""
+    if payload is None:
+        return mech
+    from pincal.model import with_payload
+
+    return with_payload(mech, payload)
 
 
 def terms_record(result: IdentificationResult, model: str, payload: Payload | None) -> str:
@@ -73,6 +84,13 @@ def terms_record(result: IdentificationResult, model: str, payload: Payload | No
     }
     head = "# pincal joint terms (values SI; compensate applies them)\n"
     return head + yaml.safe_dump(doc, sort_keys=False, allow_unicode=True)
+
+
+def terms_texts(
+    result: IdentificationResult, model: str, terms: tuple[str, ...], payload: Payload | None
+) -> dict[str, str]:
+    """``{TERMS_FILE: record}`` for a calibration with joint terms or a payload, else {}."""
+    return {TERMS_FILE: terms_record(result, model, payload)} if terms or payload else {}
 
 
 def calibration_terms(

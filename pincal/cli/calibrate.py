@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from pincal.cli._calibrate_text import format_report, result_json
-from pincal.cli._joint_terms import TERMS_FILE, payload_option, read_payload, terms_record
+from pincal.cli._joint_terms import carrying, payload_option, read_payload, terms_texts
 from pincal.cli._limits import NOISE_RANGE, check_data_rows, number_pair, yes_option
 from pincal.cli._markers import marker_options
 from pincal.cli.common import (
@@ -41,10 +41,9 @@ from pincal.identification import METHODS
     "error_model",
     default="geometric",
     show_default=True,
-    help="Error model: 'geometric' or geometric+TERM[+TERM…] with TERM compliance (joint "
-    "compliance under the static load: gravity + payload; a parallel machine's legs from "
-    "the loop-closure equilibrium), gain, harmonics: joint-space terms on every actuated "
-    "joint, identified beside the geometric parameters.",
+    help="Error model: 'geometric' or geometric+TERM[+TERM…] with TERM compliance (under "
+    "gravity + payload; closed loops by their equilibrium), gain, harmonics: joint-space "
+    "terms on every actuated joint, identified beside the geometric parameters.",
 )
 @payload_option(
     "Payload on the tool during the measurements (kg; centre of mass in m in the tool "
@@ -219,11 +218,7 @@ def calibrate(
     if prior_spec is not None:
         raise click.BadParameter("--prior applies to marker calibrations (--link)",
                                  param_hint="--prior")  # fmt: skip
-    mech = load_model(model, model_opts)
-    if load is not None:
-        from pincal.model import with_payload
-
-        mech = with_payload(mech, load)
+    mech = carrying(load_model(model, model_opts), load)
     preset = preset or (next(iter(mech.presets), "full"))
     params = with_joint_terms(mech, parameters(mech, preset), terms)
     for f in files:
@@ -256,8 +251,7 @@ def calibrate(
     record = model_record(model, model_opts)  # the model with --sidecar/--frame/--lock
     if record is not None:
         texts["model.yaml"] = record
-    if terms or load is not None:
-        texts[TERMS_FILE] = terms_record(result, error_model, load)
+    texts |= terms_texts(result, error_model, terms, load)
     source = str(out_dir.resolve() / "model.yaml") if record else model_source(model)
     cal = write_calibration(
         out_dir,
@@ -270,12 +264,9 @@ def calibrate(
         nominal=mech if load is not None else None,  # the payload is part of the model
     )
     if terms:
-        click.echo(
-            f"pincal: note: the joint terms ({'+'.join(terms)}) are in {TERMS_FILE} and "
-            f"identification.json; calibrated.urdf is the geometric part; compensate applies "
-            f"the terms, validate does not yet (`pincal select-model` cross-validates them)",
-            err=True,
-        )
+        click.echo(f"pincal: note: the joint terms ({'+'.join(terms)}) are in joint_terms.yaml; "
+                   "calibrated.urdf is the geometric part; compensate applies them, validate "
+                   "not yet", err=True)  # fmt: skip
     if as_json:
         click.echo(json.dumps(doc))
     else:

@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from pincal.cli._joint_terms import compliance_note, payload_option, read_payload
+from pincal.cli._joint_terms import carrying, compliance_note, payload_option, read_payload
 from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_options
 
 if TYPE_CHECKING:
@@ -122,11 +122,7 @@ def info(
 
     terms = split_model(error_model)
     load = read_payload(payload)
-    mech = load_model(model, model_opts, quiet=True)
-    if load is not None:
-        from pincal.model import with_payload
-
-        mech = with_payload(mech, load)
+    mech = carrying(load_model(model, model_opts, quiet=True), load)
     if not as_json:
         for line in structure_lines(mech, bool(model_opts.frame)):
             click.echo(line)

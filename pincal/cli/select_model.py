@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from pincal.cli._joint_terms import payload_option, read_payload
+from pincal.cli._joint_terms import carrying, payload_option, read_payload
 from pincal.cli._markers import marker_options
 from pincal.cli.common import fail_cleanly, guard_paths, load_model, model_input, model_options
 
@@ -143,11 +143,7 @@ def select_model_cmd(
     else:
         from pincal.io import read_measurement_file
 
-        mech = load_model(model, model_opts)
-        if load is not None:
-            from pincal.model import with_payload
-
-            mech = with_payload(mech, load)
+        mech = carrying(load_model(model, model_opts), load)
         meas = read_measurement_file(data, mech).measurements
         candidates = _pose_candidates(mech, meas, preset or next(iter(mech.presets), "full"),
                                       specs, method)  # fmt: skip

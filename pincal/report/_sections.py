@@ -52,10 +52,10 @@ def _r(v: float, digits: int = 3) -> float:
     return round(float(v), digits) if math.isfinite(float(v)) else float("nan")
 
 
-def _sig(v: float) -> float:
-    """A joint term's SI value (e.g. 1.2e-5 rad/(N·m)) to 4 significant digits."""
+def _sig(v: float, digits: int = 4) -> float:
+    """A joint term's SI value (e.g. 1.2e-5 rad/(N·m)) to ``digits`` significant digits."""
     v = float(v)
-    return float(f"{v:.4g}") if math.isfinite(v) else float("nan")
+    return float(f"{v:.{digits}g}") if math.isfinite(v) else float("nan")
 
 
 #: the two blocks of a pose: (name, its components, report unit)
