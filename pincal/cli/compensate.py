@@ -72,7 +72,8 @@ def load_calibrated(spec: str, payload=None, with_terms: bool = False):
 )
 @payload_option(
     "Load at the targets for a calibration with a compliance term (kg; centre of mass in m "
-    "in the tool frame), e.g. 5,0,0,0.08; default: the payload it was calibrated with."
+    "in the tool frame), e.g. 5,0,0,0.08. It replaces calibrate's --payload (a payload link "
+    "of the URDF itself stays); default: the load the calibration was fitted with."
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
