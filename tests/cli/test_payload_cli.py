@@ -90,6 +90,14 @@ def test_compliance_calibration_compensates_the_sag(sagging_stewart):
         assert {t["unit"] for t in record["terms"]} == {"m/N"} and len(record["terms"]) == 6
         assert "6 joint terms (compliance)" in doc["joint_terms"]["line"]
         assert doc["joint_terms"]["largest_deflection"]["m"] > 1e-4  # [m] the sag undone
+        res = runner.invoke(main, ["compensate", str(cal), "--targets", str(tmp / "targets.csv"),
+                                   "--out", str(tmp / "empty.csv"), "--payload", "0",
+                                   "--json"])  # fmt: skip
+        assert res.exit_code == 0, res.output
+        empty = json.loads(res.stdout.strip().splitlines()[-1])["joint_terms"]
+        assert "payload 0 kg" in empty["line"]  # the platform alone: a smaller sag
+        loaded = doc["joint_terms"]["largest_deflection"]["m"]
+        assert empty["largest_deflection"]["m"] < 0.3 * loaded
         assert "m/N" in (cal / "report.txt").read_text()
         res = runner.invoke(main, ["report", str(cal), "--out", str(tmp / "rep"), "--json"])
         assert res.exit_code == 0, res.output
