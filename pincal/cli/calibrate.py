@@ -9,7 +9,6 @@ from pathlib import Path
 import click
 
 from pincal.cli._calibrate_text import format_report, result_json
-from pincal.cli._joint_terms import carrying, payload_option, read_payload, terms_texts
 from pincal.cli._limits import NOISE_RANGE, check_data_rows, number_pair, yes_option
 from pincal.cli._markers import marker_options
 from pincal.cli.common import (
@@ -45,9 +44,12 @@ from pincal.identification import METHODS
     "gravity + payload; closed loops by their equilibrium), gain, harmonics: joint-space "
     "terms on every actuated joint, identified beside the geometric parameters.",
 )
-@payload_option(
-    "Payload on the tool during the measurements (kg; centre of mass in m in the tool "
-    "frame), e.g. 20,0,0,0.1: part of the load a compliance term sees."
+@click.option(
+    "--payload",
+    default=None,
+    metavar="MASS[,X,Y,Z]",
+    help="Payload on the tool during the measurements (kg; centre of mass in m in the tool "
+    "frame), e.g. 20,0,0,0.1: part of the load a compliance term sees.",
 )
 @click.option(
     "--method",
@@ -139,6 +141,7 @@ def calibrate(
           --prior auto --out cal/        markers in an unknown instrument frame
     """
     from pincal.cli._gate import apply_gate, gate_limits
+    from pincal.cli._joint_terms import carrying, read_payload, terms_texts
     from pincal.identification import check_quality
     from pincal.io import (
         CALIBRATED_SIDECAR,

@@ -6,7 +6,6 @@ from typing import TYPE_CHECKING
 
 import click
 
-from pincal.cli._joint_terms import carrying, compliance_note, payload_option, read_payload
 from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_options
 
 if TYPE_CHECKING:
@@ -80,7 +79,12 @@ def structure_lines(mech: Mechanism, frame_given: bool = False) -> list[str]:
     help="Error model analysed: geometric[+compliance][+gain][+harmonics] (joint-space "
     "terms on every actuated joint, beside each preset's parameters).",
 )
-@payload_option("Payload on the tool (kg; centre of mass in m in the tool frame), e.g. 20,0,0,0.1.")
+@click.option(
+    "--payload",
+    default=None,
+    metavar="MASS[,X,Y,Z]",
+    help="Payload on the tool (kg; centre of mass in m in the tool frame), e.g. 20,0,0,0.1.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON description on stdout.")
 @model_options
 @fail_cleanly
@@ -109,6 +113,7 @@ def info(
 
     import numpy as np
 
+    from pincal.cli._joint_terms import carrying, compliance_note, read_payload
     from pincal.cli._progress import counted
     from pincal.model import (
         degenerate_translations,
