@@ -173,8 +173,8 @@ class ModelSelection:
             vals = self.delta(key)
             if any(v is not None for v in vals):
                 low = min((v, i) for i, v in enumerate(vals) if v is not None)[1]
-                agree = "agrees" if low == self.recommended else "differs"
-                out.append(f"lowest {key.upper()}: {self.scores[low].name} ({agree} with the "
+                agree = "agrees with" if low == self.recommended else "differs from"
+                out.append(f"lowest {key.upper()}: {self.scores[low].name} ({agree} the "
                            f"cross-validated recommendation)")  # fmt: skip
         return out
 
