@@ -20,7 +20,10 @@ which are measured in the same run, rather than absolute times. Also printed:
 the cost of one generic Stewart evaluation's parts (tree walk, closure residuals and
 Jacobian) against the floor's whole evaluate + Jacobian, identify time and peak memory
 for N = 1 000 … 10 000 poses (fresh subprocess each),
-``pincal demo`` and the 4 096-candidate Stewart pose selection.
+``pincal demo`` and the 4 096-candidate Stewart pose selection, and the cost of a joint
+compliance term: identify geometric vs geometric+compliance at N = 1 000 (a UR5, and
+the Stewart platform carrying a 20 kg payload; ``--compliance-only`` prints that table
+alone).
 """
 
 from __future__ import annotations
@@ -307,6 +310,54 @@ def design_and_demo() -> dict:
 
 
 # ---------------------------------------------------------------------- driver
+def compliance_cost(repeats: int, n: int) -> dict:
+    """Identify time, geometric vs geometric+compliance, on the same N compliant poses."""
+    import dataclasses
+
+    import pincal
+    from pincal.model import Payload, actual_joint_values, with_joint_terms, with_payload
+
+    stewart = pincal.load_mechanism("stewart_6ups")
+    machines = (
+        ("ur5, base", pincal.load_mechanism("ur5"), "base"),
+        ("stewart42 + 20 kg", with_payload(stewart, Payload(20.0, (0.05, -0.02, 0.1))),
+         "stewart42"),
+    )  # fmt: skip
+    out = {}
+    for label, mech, preset in machines:
+        geo = pincal.parameters(mech, preset)
+        full = with_joint_terms(mech, geo, ["compliance"])
+        rng = np.random.default_rng(7)
+        truth = np.zeros(len(full))
+        truth[: len(geo)] = rng.normal(0.0, 2e-4, len(geo))
+        truth[full.joint_terms] = rng.normal(0.0, 1e-5, full.joint_terms.size)
+        rows = pincal.sample_actuators(mech, n, rng)
+        joints = actual_joint_values(mech, full, truth, rows)
+        meas = pincal.simulate_measurements(full.apply(mech, truth), joints,
+                                            pincal.NoiseModel(0.01, 0.01), rng)  # fmt: skip
+        meas = dataclasses.replace(meas, q_act=rows)
+        row = {}
+        for key, params in (("geometric", geo), ("compliance", full)):
+            its = pincal.identify(mech, params, meas).iterations  # also the warm-up
+
+            def fit(m=mech, p=params, d=meas):
+                return pincal.identify(m, p, d)
+
+            row[key] = (median_time(fit, repeats), its, len(params))
+        out[label] = row
+    return out
+
+
+def print_compliance(res: dict, repeats: int, n: int) -> None:
+    print(f"\nidentify with a joint compliance term, N = {n} full poses (same compliant data; "
+          f"CPU time, median of {repeats}, 1 BLAS thread):")  # fmt: skip
+    print(f"  {'machine':20s} {'geometric':>20s} {'geometric+compliance':>24s} {'ratio':>7s}")
+    for label, r in res.items():
+        (tg, ig, ng), (tc, ic, nc) = r["geometric"], r["compliance"]
+        print(f"  {label:20s} {tg:7.3f} s ({ng} p, {ig} it.) {tc:9.3f} s ({nc} p, {ic} it.) "
+              f"{tc / tg:6.2f}×")  # fmt: skip
+
+
 def _run(path: Path, args: list[str]) -> dict:
     env = dict(os.environ, PYTHONPATH=str(path), OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
     out = subprocess.run(
@@ -336,6 +387,9 @@ def main() -> None:
     ap.add_argument("--memory", type=int, default=0, help=argparse.SUPPRESS)
     ap.add_argument("--design", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--sizes", default="300,1000,3000", help="identify sizes")
+    ap.add_argument("--compliance", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--compliance-only", action="store_true",
+                    help="only the geometric vs geometric+compliance table")  # fmt: skip
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
     with threadpool_limits(1):
@@ -348,7 +402,14 @@ def main() -> None:
         if args.design:
             print(json.dumps(design_and_demo()))
             return
+        if args.compliance:
+            print(json.dumps(compliance_cost(args.repeats, args.poses)))
+            return
         blas = sorted({f"{i['internal_api']} {i['num_threads']}" for i in threadpool_info()})
+    if args.compliance_only:
+        cost = _run(ROOT, ["--compliance", f"--repeats={args.repeats}", f"--poses={args.poses}"])
+        print_compliance(cost, args.repeats, args.poses)
+        return
     now = _run(ROOT, ["--worker", f"--repeats={args.repeats}", f"--poses={args.poses}",
                       f"--sizes={args.sizes}"])  # fmt: skip
     old = None
@@ -409,6 +470,8 @@ def main() -> None:
     print(f"\nStewart pose selection, {d['candidates']} grid candidates (FK + Jacobians + "
           f"exchange O1, 18 poses): {d['selection']:.2f} s")  # fmt: skip
     print(f"pincal demo (run_demo, default settings): {d['demo']:.2f} s")
+    cost = _run(ROOT, ["--compliance", f"--repeats={args.repeats}", f"--poses={args.poses}"])
+    print_compliance(cost, args.repeats, args.poses)
 
 
 if __name__ == "__main__":

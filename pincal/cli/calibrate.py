@@ -41,9 +41,16 @@ from pincal.identification import METHODS
     "error_model",
     default="geometric",
     show_default=True,
-    help="Error model: 'geometric' or geometric+TERM[+TERM…] with TERM compliance (joint "
-    "compliance under gravity, serial chains), gain, harmonics: joint-space terms on every "
-    "actuated joint, identified beside the geometric parameters.",
+    help="Error model: 'geometric' or geometric+TERM[+TERM…] with TERM compliance (under "
+    "gravity + payload; closed loops by their equilibrium), gain, harmonics: joint-space "
+    "terms on every actuated joint, identified beside the geometric parameters.",
+)
+@click.option(
+    "--payload",
+    default=None,
+    metavar="MASS[,X,Y,Z]",
+    help="Payload on the tool during the measurements (kg; centre of mass in m in the tool "
+    "frame), e.g. 20,0,0,0.1: part of the load a compliance term sees.",
 )
 @click.option(
     "--method",
@@ -110,8 +117,8 @@ from pincal.identification import METHODS
 @marker_options
 @fail_cleanly
 def calibrate(
-    model, data, preset, error_model, method, out, as_json, noise, loss, force, max_change,
-    significance, instrument, link, instrument_frame, marker_spec, marker_columns,
+    model, data, preset, error_model, payload, method, out, as_json, noise, loss, force,
+    max_change, significance, instrument, link, instrument_frame, marker_spec, marker_columns,
     length_unit, prior_spec,
     yes, model_opts,
 ) -> None:  # fmt: skip
@@ -135,6 +142,7 @@ def calibrate(
           --prior auto --out cal/        markers in an unknown instrument frame
     """
     from pincal.cli._gate import apply_gate, gate_limits
+    from pincal.cli._joint_terms import carrying, read_payload, terms_texts
     from pincal.identification import check_quality
     from pincal.io import (
         CALIBRATED_SIDECAR,
@@ -165,6 +173,7 @@ def calibrate(
             param_hint="--data",
         )
     terms = split_model(error_model)
+    load = read_payload(payload)
 
     if loss != "linear" and method != "lm" and link is None:
         raise click.BadParameter(
@@ -186,10 +195,10 @@ def calibrate(
     if link is not None:
         from pincal.cli._markers import setup_from_options
 
-        if terms:
+        if terms or load is not None:
             raise click.BadParameter(
                 "joint-space terms are not yet fitted from marker tables (--link); use "
-                "--model geometric there",
+                "--model geometric there (and no --payload)",
                 param_hint="--model",
             )
 
@@ -213,7 +222,7 @@ def calibrate(
     if prior_spec is not None:
         raise click.BadParameter("--prior applies to marker calibrations (--link)",
                                  param_hint="--prior")  # fmt: skip
-    mech = load_model(model, model_opts)
+    mech = carrying(load_model(model, model_opts), load)
     preset = preset or (next(iter(mech.presets), "full"))
     params = with_joint_terms(mech, parameters(mech, preset), terms)
     for f in files:
@@ -247,6 +256,7 @@ def calibrate(
     record = model_record(model, model_opts)  # the model with --sidecar/--frame/--lock
     if record is not None:
         texts["model.yaml"] = record
+    texts |= terms_texts(result, error_model, terms, load)
     source = str(out_dir.resolve() / "model.yaml") if record else model_source(model)
     cal = write_calibration(
         out_dir,
@@ -256,14 +266,12 @@ def calibrate(
         noise=noise_model,
         annotations={"data": ", ".join(map(str, files)), "quality": quality},
         texts=texts,
+        nominal=mech if load is not None else None,  # the payload is part of the model
     )
     if terms:
-        click.echo(
-            f"pincal: note: the joint terms ({'+'.join(terms)}) are in identification.json; "
-            f"calibrated.urdf is the geometric part, and compensate, validate and export do "
-            f"not apply the joint terms yet (`pincal select-model` cross-validates with them)",
-            err=True,
-        )
+        click.echo(f"pincal: note: the joint terms ({'+'.join(terms)}) are in joint_terms.yaml; "
+                   "calibrated.urdf is the geometric part; compensate applies them, validate "
+                   "not yet", err=True)  # fmt: skip
     if as_json:
         click.echo(json.dumps(doc))
     else:

@@ -7,15 +7,20 @@ from pathlib import Path
 
 import click
 
+from pincal.cli._joint_terms import calibration_terms, payload_option, read_payload
 from pincal.cli._progress import counted
 from pincal.cli.common import fail_cleanly, guard_paths
 
 
-def load_calibrated(spec: str):
+def load_calibrated(spec: str, payload=None, with_terms: bool = False):
     """The calibrated mechanism of a calibration directory (or a model spec, as in 0.1).
 
+    With ``with_terms``: also the calibration's joint terms (at ``payload``, a
+    :class:`~pincal.model.Payload` replacing the calibration's) and a line on them.
+
     Returns:
-        (mechanism, description of where it came from).
+        (mechanism, description of where it came from), and with ``with_terms`` the
+        joint terms (None for a geometric calibration or a model) and their line.
     """
     from pincal.cli.common import announce
     from pincal.io import read_calibration
@@ -24,7 +29,16 @@ def load_calibrated(spec: str):
     if Path(spec).is_dir() and not Path(spec, f"{Path(spec).name}.urdf").is_file():
         cal = read_calibration(spec)
         announce(cal)
+        if with_terms:
+            return cal.calibrated(), f"calibration {spec}", *calibration_terms(cal, payload)
         return cal.calibrated(), f"calibration {spec}"
+    if payload is not None:
+        raise click.BadParameter(
+            "a payload applies to a calibration directory with a compliance term",
+            param_hint="--payload",
+        )
+    if with_terms:
+        return load_mechanism(spec), f"model {spec}", None, ""
     return load_mechanism(spec), f"model {spec}"
 
 
@@ -56,11 +70,17 @@ def load_calibrated(spec: str):
     "the nominal command, > π rad from another target's, or det of the actuator → pose "
     "Jacobian changing sign); listed. Default: refused.",
 )
+@payload_option(
+    "Load at the targets for a calibration with a compliance term (kg; centre of mass in m "
+    "in the tool frame), e.g. 5,0,0,0.08. It replaces calibrate's --payload (a payload link "
+    "of the URDF itself stays); default: the load the calibration was fitted with."
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
 def compensate(
-    calibration, targets, out, components, skip_unreachable, allow_branch_change, as_json
-) -> None:
+    calibration, targets, out, components, skip_unreachable, allow_branch_change, payload,
+    as_json,
+) -> None:  # fmt: skip
     """Compensated actuator commands: inverse kinematics of the calibrated machine.
 
     CALIBRATION is the directory written by `pincal calibrate` (a model name or URDF
@@ -77,6 +97,10 @@ def compensate(
     singularity crossed) — is refused unless --allow-branch-change. The largest
     |Δq| from the starts is printed (rad for revolute, mm for prismatic actuators).
 
+    A calibration with joint terms (`calibrate --model geometric+compliance`…) gives
+    commands that include them: the deflection at each target's load is undone
+    (--payload changes the load).
+
     \b
     Examples:
       pincal compensate cal/ --targets poses.csv --out commands.csv
@@ -89,7 +113,9 @@ def compensate(
     from pincal.io import read_pose_file, si_actuator_units, write_commands
 
     guard_paths({"CALIBRATION": calibration, "--targets": targets}, {"--out": out})
-    mech, origin = load_calibrated(calibration)
+    mech, origin, terms, terms_note = load_calibrated(
+        calibration, read_payload(payload), with_terms=True
+    )
     comps = compensation_components(mech, components)
     pf = read_pose_file(targets)
     absent = [c for c in comps if c not in pf.components]
@@ -105,7 +131,7 @@ def compensate(
     with counted("compensating", unit="pose") as step:
         result = run(
             mech, poses, progress=step, components=comps,
-            starts=starts, allow_branch_change=allow_branch_change,
+            starts=starts, allow_branch_change=allow_branch_change, joint_terms=terms,
         )  # fmt: skip
     if result.unreachable and not skip_unreachable:
         first = result.unreachable[0]
@@ -130,6 +156,7 @@ def compensate(
         "branch_changes": {str(k): v for k, v in (result.branch_changes or {}).items()},
         "branch_changes_allowed": allow_branch_change,
         "largest_step": _largest_steps(result, mech),
+        "joint_terms": _terms_summary(result, terms, terms_note),
     }
     if as_json:
         click.echo(json.dumps(summary))
@@ -143,6 +170,8 @@ def compensate(
             msg += f"; unreachable: {list(result.unreachable)}"
         click.echo(msg)
         click.echo(f"starts: {start_note}")
+        if summary["joint_terms"]:
+            click.echo(summary["joint_terms"]["line"])
         for line in _step_lines(summary["largest_step"]):
             click.echo(line)
         for k in result.unreachable:
@@ -186,3 +215,22 @@ def _step_lines(steps: dict) -> list[str]:
         f"({s['actuator']}, target {s['target']})"
         for unit, s in steps.items()
     ]
+
+
+def _terms_summary(result, terms, note: str) -> dict | None:
+    """The joint terms the commands include, and the largest deflection they undo."""
+    import numpy as np
+
+    if terms is None or result.deflection is None:
+        return None
+    d = np.abs(result.deflection[result.reachable])
+    units = np.array(result.units)
+    big = {
+        "rad": float(d[:, units == "rad"].max(initial=0.0)) if d.size else 0.0,
+        "m": float(d[:, units == "m"].max(initial=0.0)) if d.size else 0.0,
+    }
+    parts = [f"{big['rad'] * 1e3:.4f} mrad" if "rad" in units else "",
+             f"{big['m'] * 1e3:.4f} mm" if "m" in units else ""]  # fmt: skip
+    line = (f"commands include {note}: largest deflection undone "
+            f"{' / '.join(p for p in parts if p)}")  # fmt: skip
+    return {"line": line, "terms": terms.lines(), "largest_deflection": big}

@@ -80,6 +80,12 @@ def structure_lines(mech: Mechanism, frame_given: bool = False) -> list[str]:
     help="Error model analysed: geometric[+compliance][+gain][+harmonics] (joint-space "
     "terms on every actuated joint, beside each preset's parameters).",
 )
+@click.option(
+    "--payload",
+    default=None,
+    metavar="MASS[,X,Y,Z]",
+    help="Payload on the tool (kg; centre of mass in m in the tool frame), e.g. 20,0,0,0.1.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON description on stdout.")
 @model_options
 @fail_cleanly
@@ -88,6 +94,7 @@ def info(
     preset: str | None,
     instrument: str | None,
     error_model: str,
+    payload: str | None,
     as_json: bool,
     model_opts: ModelOptions,
 ) -> None:
@@ -107,6 +114,7 @@ def info(
 
     import numpy as np
 
+    from pincal.cli._joint_terms import carrying, compliance_note, read_payload
     from pincal.cli._progress import counted
     from pincal.model import (
         degenerate_translations,
@@ -119,7 +127,8 @@ def info(
     from pincal.sensitivity import BASE_POSES, base_set, identifiability
 
     terms = split_model(error_model)
-    mech = load_model(model, model_opts, quiet=True)
+    load = read_payload(payload)
+    mech = carrying(load_model(model, model_opts, quiet=True), load)
     if not as_json:
         for line in structure_lines(mech, bool(model_opts.frame)):
             click.echo(line)
@@ -182,6 +191,9 @@ def info(
             click.echo(base_line(mech, n_base, n_degenerate, BASE_POSES))
             if found.note():
                 click.echo(f"    {found.note()}")
+    note = compliance_note(terms, load)
+    if note and not as_json:
+        click.echo(f"  note: {note}")
     if as_json:
         doc = {
             "model": mech.name,
@@ -193,7 +205,7 @@ def info(
             "measured_components": list(mech.measured_components),
             "presets": presets,
             "base_preset": base,
-            "notes": list(mech.notes),
+            "notes": list(mech.notes) + ([note] if note else []),
         }
         click.echo(json.dumps(doc))
 

@@ -7,6 +7,7 @@ from typing import Any
 
 import click
 
+from pincal.cli._joint_terms import carrying, payload_option, read_payload
 from pincal.cli._markers import marker_options
 from pincal.cli.common import fail_cleanly, guard_paths, load_model, model_input, model_options
 
@@ -86,12 +87,14 @@ def _marker_candidates(mech, setup, preset: str, models: list[str], method: str)
     show_default=True,
     help="Identification solver of every fit.",
 )
+@payload_option("Payload on the tool during the measurements (kg; centre of mass in m in the "
+                "tool frame), e.g. 20,0,0,0.1: part of the load a compliance term sees.")
 @click.option("--json", "as_json", is_flag=True, help="Print the ranking as JSON on stdout.")
 @model_options
 @marker_options
 @fail_cleanly
 def select_model_cmd(
-    model, data, preset, models, k, seed, method, as_json, model_opts,
+    model, data, preset, models, k, seed, method, payload, as_json, model_opts,
     link, instrument_frame, marker_spec, marker_columns, length_unit, prior_spec,
 ) -> None:  # fmt: skip
     """Fit candidate error models and rank them by K-fold held-out position error.
@@ -118,6 +121,10 @@ def select_model_cmd(
         raise click.BadParameter("give at least one model", param_hint="--models")
     for s in specs:
         split_model(s)
+    load = read_payload(payload)
+    if link is not None and load is not None:
+        raise click.BadParameter("a payload is not used with a marker table (--link) yet",
+                                 param_hint="--payload")  # fmt: skip
     if link is not None:
         from pincal.cli._markers import setup_from_options
         from pincal.io import read_marker_table
@@ -136,7 +143,7 @@ def select_model_cmd(
     else:
         from pincal.io import read_measurement_file
 
-        mech = load_model(model, model_opts)
+        mech = carrying(load_model(model, model_opts), load)
         meas = read_measurement_file(data, mech).measurements
         candidates = _pose_candidates(mech, meas, preset or next(iter(mech.presets), "full"),
                                       specs, method)  # fmt: skip

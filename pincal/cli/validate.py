@@ -200,6 +200,13 @@ def validate(
     if not independent:
         click.echo(f"pincal: warning: {data} was used to fit this calibration", err=True)
     result = cal.result
+    if any(u not in ("m", "rad") for u in result.units):
+        click.echo(
+            "pincal: warning: this calibration has joint terms; validate predicts with its "
+            "geometric part only (compensate applies the terms; `pincal select-model` "
+            "cross-validates them)",
+            err=True,
+        )
     validation = validate_held_out(
         nominal,
         cal.calibrated(),

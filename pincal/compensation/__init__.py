@@ -13,11 +13,13 @@ from pincal.compensation._compensate import (
     compensation_components,
     poses_from_array,
 )
+from pincal.compensation._joint_terms import JointTermCorrection
 
 __all__ = [
     "BRANCH_STEP_M",
     "BRANCH_STEP_RAD",
     "Compensation",
+    "JointTermCorrection",
     "branch_change",
     "compensate",
     "compensation_components",

@@ -12,6 +12,11 @@ Only the components the machine controls are imposed: by default the model's
 measured components (``mech.measured_components``, e.g. ``x z ry`` for the 3-DOF
 wedge), or the ``components`` given. A machine of mobility n cannot meet more than
 n independent components, so asking for more is refused with the reason.
+
+A calibration with joint terms (compliance under load, gain, harmonics) passes them as
+``joint_terms`` (:class:`~pincal.compensation._joint_terms.JointTermCorrection`): the
+commands then include the deflection at each target's load (the joint values the
+geometry needs, minus what the terms add at those commands).
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from pincal.compensation._branch import actuator_units, branch_change
+from pincal.compensation._joint_terms import JointTermCorrection
 from pincal.errors import ConvergenceError, MeasurementError, MobilityError, ModelFileError
 from pincal.model import COMPONENTS, Mechanism
 
@@ -50,6 +56,8 @@ class Compensation:
         branch_changes: {index: why} of solutions on another branch than their start
             (refused, i.e. unreachable, unless allowed).
         units: ``"rad"`` or ``"m"`` per actuator.
+        deflection: (m, n_act) joint change the joint terms add at each command (the
+            commands include its opposite) [rad, m]; None without joint terms.
     """
 
     q_act: np.ndarray
@@ -62,6 +70,7 @@ class Compensation:
     start_sources: tuple[str, ...] = ()
     branch_changes: dict[int, str] | None = None
     units: tuple[str, ...] = ()
+    deflection: np.ndarray | None = None
 
     @property
     def commands(self) -> np.ndarray:
@@ -218,6 +227,7 @@ def compensate(
     *,
     starts: ArrayLike | None = None,
     allow_branch_change: bool = False,
+    joint_terms: JointTermCorrection | None = None,
 ) -> Compensation:
     """Actuator commands reaching ``targets`` with the calibrated model's inverse kinematics.
 
@@ -234,6 +244,8 @@ def compensate(
             solved command of the nearest target solved before it (home for the first).
         allow_branch_change: keep solutions on another branch than their start
             (reported in ``branch_changes``); by default they are refused.
+        joint_terms: the calibration's joint terms; the commands then move the joints
+            to the inverse kinematics' values (deflection at the target's load included).
 
     Returns:
         A :class:`Compensation`; unreachable targets (and refused branch changes) are
@@ -276,7 +288,8 @@ def compensate(
         sources.append(source)
         try:
             q = solver.inverse_configuration(T, guess)
-            row = solver.actuators_of(q)
+            joints = solver.actuators_of(q)
+            row = joint_terms.commands(joints[None])[0] if joint_terms else joints
             if check_limits:
                 out = np.nonzero((row < lo - 1e-12) | (row > hi + 1e-12))[0]
                 if out.size:
@@ -286,7 +299,7 @@ def compensate(
                         f"[{lo[k]:.6g}, {hi[k]:.6g}]"
                     )
             why = branch_change(
-                solver, start_rows[i], row, guess, q, units, own_start=source == "nominal"
+                solver, start_rows[i], joints, guess, q, units, own_start=source == "nominal"
             )
             if why:
                 changes[i] = why
@@ -304,7 +317,11 @@ def compensate(
         if progress:
             progress(i + 1, m)
     reachable = np.all(np.isfinite(q_act), axis=1)
+    deflection = None
+    if joint_terms:
+        deflection = np.full_like(q_act, np.nan)
+        deflection[reachable] = joint_terms.deflection(q_act[reachable])
     return Compensation(
         q_act, reachable, tuple(sorted(reasons)), reasons, tuple(calibrated.actuated), comps,
-        start_rows, tuple(sources), changes, units,
+        start_rows, tuple(sources), changes, units, deflection,
     )  # fmt: skip

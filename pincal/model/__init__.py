@@ -66,6 +66,7 @@ from pincal.model._parameters import (
     parameters,
     register_preset,
 )
+from pincal.model._payload import Payload, with_payload
 from pincal.model._readings import JointReadings
 from pincal.model._robots import example_robot_names, example_robot_urdf
 from pincal.model._serial import (
@@ -124,6 +125,7 @@ __all__ = [
     "ModelLimits",
     "Parameter",
     "ParameterSet",
+    "Payload",
     "Sidecar",
     "SolverOptions",
     "UrdfJoint",
@@ -175,5 +177,6 @@ __all__ = [
     "validate_sidecar",
     "with_joint_origin",
     "with_joint_terms",
+    "with_payload",
     "wrap_base_tool",
 ]

@@ -52,6 +52,12 @@ def _r(v: float, digits: int = 3) -> float:
     return round(float(v), digits) if math.isfinite(float(v)) else float("nan")
 
 
+def _sig(v: float, digits: int = 4) -> float:
+    """A joint term's SI value (e.g. 1.2e-5 rad/(N·m)) to ``digits`` significant digits."""
+    v = float(v)
+    return float(f"{v:.{digits}g}") if math.isfinite(v) else float("nan")
+
+
 #: the two blocks of a pose: (name, its components, report unit)
 BLOCKS = (("position", _POS, "µm"), ("orientation", _ORI, "µrad"))
 
@@ -267,12 +273,14 @@ def parameter_section(
     kinds = ["angle" if u == "rad" else "length" for u in units]
     truth = result.annotations.get("truth") or {}
     true = np.array([float(truth[n]) for n in names]) if all(n in truth for n in names) else None
+    geo = [k for k, u in enumerate(units) if u in ("m", "rad")]  # joint terms: SI, own unit
     images = [
         jobs.add(
-            plot_parameters, names, values, std, true, path=plots / "parameters.png",
-            kinds=kinds, length_unit="um", angle_unit="urad",
+            plot_parameters, [names[k] for k in geo], values[geo], std[geo],
+            None if true is None else true[geo], path=plots / "parameters.png",
+            kinds=[kinds[k] for k in geo], length_unit="um", angle_unit="urad",
         )
-    ]  # fmt: skip
+    ] if geo else []  # fmt: skip
     if len(names) > 1:
         images.append(
             jobs.add(plot_correlation, names, result.covariance, path=plots / "correlation.png")
@@ -284,16 +292,20 @@ def parameter_section(
     rows = []
     for k, name in enumerate(names):
         label = "µrad" if units[k] == "rad" else "µm"
-        row: list[object] = [name, _r(values[k] * _U), _r(2 * std[k] * _U), label]
+        f, rnd = _U, _r
+        if units[k] not in ("m", "rad"):  # a joint term (e.g. a compliance): SI, its unit
+            label, f, rnd = units[k], 1.0, _sig
+        row: list[object] = [name, rnd(values[k] * f), rnd(2 * std[k] * f), label]
         if true is not None:
             row += [
-                _r(true[k] * _U),
+                rnd(true[k] * f),
                 _r((values[k] - true[k]) / std[k], 2) if std[k] > 0 else "",
             ]
         row.append("YES" if name in poor else "")
         rows.append(row)
     text = (
-        "Displacements of the URDF joint origins (" + UNITS_NOTE + ")"
+        "Displacements of the URDF joint origins (" + UNITS_NOTE + "; joint terms in SI, "
+        "their unit named)"
         + (", with the simulated true values" if true is not None else "")
         + f". Poorly determined: 2σ > {POOR_LENGTH_2SIGMA * 1e3:g} mm (lengths) or > "
         f"{POOR_ANGLE_2SIGMA * 1e3:g} mrad (angles) — {len(poor)} parameters"

@@ -119,3 +119,6 @@ def test_validate_cv_refuses_joint_terms(compliant_ur5_data, tmp_path):
     res = runner.invoke(main, ["validate", str(out), "--cv", "3"])
     assert res.exit_code != 0
     assert "select-model" in res.output and "Traceback" not in res.output
+    res = runner.invoke(main, ["validate", str(out), "--data", str(compliant_ur5_data)])
+    assert res.exit_code == 0, res.output
+    assert "geometric part only" in res.output  # said, not silently left out

@@ -97,6 +97,36 @@ def test_compliance_is_chosen_when_present_and_not_when_absent(ur5):
     assert d > 5 * se  # the rigid model is clearly worse held-out
     without = select_model(_candidates(ur5), _measurements(ur5, 0.0, seed=3), k=4, seed=0)
     assert [s.name for s in without.scores][without.recommended] == "geometric"
+    # the information criteria beside: both pick the compliance when it is there; BIC's
+    # ln n penalty (6 terms × ln 288 ≈ 34) refuses it when it is not
+    assert with_c.delta("aic")[names.index("geometric+compliance")] == 0.0
+    assert with_c.delta("bic")[names.index("geometric+compliance")] == 0.0
+    assert without.delta("bic")[names.index("geometric")] == 0.0
+
+
+@pytest.mark.parametrize("declared", [True, False])
+def test_information_criteria_are_their_definitions(ur5, declared):
+    """AIC = −2 ln L + 2k, BIC = −2 ln L + k ln n; −2 ln L = χ² (declared noise) or the
+    per-block Gaussian profile Σ n_b ln(RSS_b / n_b) (noise estimated)."""
+    meas = _measurements(ur5, 0.0, seed=6, n=30)
+    if not declared:
+        meas = dataclasses.replace(meas, noise=None)
+    result = identify(ur5, parameters(ur5, "base"), meas)
+    f = fitted(ur5, result)
+    k, n = int(result.identified.sum()), 6 * len(meas)
+    r = result.residuals
+    if declared:
+        sigma = np.array([1e-5] * 3 + [1e-5] * 3)  # [m], [rad]
+        expected = float(np.sum((r / sigma) ** 2))
+    else:
+        expected = sum(r[:, c].size * np.log(np.sum(r[:, c] ** 2) / r[:, c].size)
+                       for c in (slice(0, 3), slice(3, 6)))  # fmt: skip
+    assert f.n_equations == n and f.n_parameters == k
+    assert f.neg2_loglik == pytest.approx(expected, rel=1e-9)
+    sel = select_model({"g": lambda m: fitted(ur5, identify(ur5, parameters(ur5, "base"), m))},
+                       meas, k=3)  # fmt: skip
+    assert sel.scores[0].aic == pytest.approx(expected + 2 * k, rel=1e-9)
+    assert sel.scores[0].bic == pytest.approx(expected + k * np.log(n), rel=1e-9)
 
 
 def test_select_model_cli(ur5, tmp_path):

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -38,3 +39,15 @@ def test_joint_terms_recovered_at_the_bound():
     sd_terms = np.sqrt(2 / out[0].n_terms / len(out))
     assert abs(maha - 1) < 4 * sd, maha
     assert abs(maha_terms - 1) < 4 * sd_terms, maha_terms
+
+
+@pytest.mark.slow
+def test_leg_compliance_under_a_payload_recovered_at_the_bound():
+    """10 seeded Stewart calibrations: 42 geometric parameters and six legs' axial
+    compliance under a 20 kg payload (the loop-closure equilibrium's leg forces)."""
+    out = script.study(10, 60, seed=3, terms=("compliance",), robot="stewart")
+    assert out[0].n == 48 and out[0].n_terms == 6
+    maha = np.mean([d.maha for d in out])
+    maha_terms = np.mean([d.maha_terms for d in out])
+    assert abs(maha - 1) < 4 * np.sqrt(2 / 48 / len(out)), maha
+    assert abs(maha_terms - 1) < 4 * np.sqrt(2 / 6 / len(out)), maha_terms

@@ -1,0 +1,139 @@
+"""Joint terms on the command line: ``--payload``, the calibration's record, compensation.
+
+A calibration with joint terms (``calibrate --model geometric+compliance``…) keeps
+``calibrated.urdf`` as the geometric part and records the terms in ``joint_terms.yaml``
+(name, value, 2σ, unit, and the payload they were fitted under); the values themselves
+are read back from ``identification.json``. A payload given with ``--payload`` becomes
+a link of the nominal model (stored as ``nominal.urdf``), so the compliance's load is
+the same when the calibration is used.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import click
+
+if TYPE_CHECKING:
+    from pincal.compensation import JointTermCorrection
+    from pincal.identification import IdentificationResult
+    from pincal.io import CalibrationDirectory
+    from pincal.model import Mechanism, Payload
+
+__all__ = [
+    "TERMS_FILE",
+    "calibration_terms",
+    "carrying",
+    "compliance_note",
+    "payload_option",
+    "read_payload",
+    "terms_record",
+    "terms_texts",
+]
+
+TERMS_FILE = "joint_terms.yaml"
+
+
+def payload_option(help_text: str) -> Callable:
+    """The ``--payload MASS[,X,Y,Z]`` option (kg; centre of mass in m in the tool frame)."""
+    return click.option("--payload", default=None, metavar="MASS[,X,Y,Z]", help=help_text)
+
+
+def read_payload(text: str | None) -> Payload | None:
+    """The parsed ``--payload`` (None when not given); a bad value is a usage error."""
+    if text is None:
+        return None
+    from pincal.errors import ParameterError
+    from pincal.model import Payload
+
+    try:
+        return Payload.parse(text)
+    except ParameterError as exc:
+        raise click.BadParameter(str(exc), param_hint="--payload") from None
+
+
+def carrying(mech: Mechanism, payload: Payload | None) -> Mechanism:
+    """``mech`` with ``payload`` on its tool (``mech`` itself without one)."""
+    if payload is None:
+        return mech
+    from pincal.model import with_payload
+
+    return with_payload(mech, payload)
+
+
+def terms_record(result: IdentificationResult, model: str, payload: Payload | None) -> str:
+    """``joint_terms.yaml``: the identified joint terms with units (SI) and the payload."""
+    import yaml
+
+    from pincal.model import joint_term_units
+
+    units = joint_term_units()
+    terms: list[dict[str, Any]] = [
+        {"name": name, "value": float(v), "two_sigma": 2 * float(s), "unit": unit}
+        for name, v, s, unit in result.table()
+        if unit in units and unit not in ("m", "rad")
+    ]
+    doc = {
+        "model": model,
+        "payload": None
+        if payload is None
+        else {"mass_kg": payload.mass, "com_m_tool_frame": list(payload.com)},
+        "applies": "joint q = command u + B(u)·θ; calibrated.urdf is the geometric part",
+        "terms": terms,
+    }
+    head = "# pincal joint terms (values SI; compensate applies them)\n"
+    return head + yaml.safe_dump(doc, sort_keys=False, allow_unicode=True)
+
+
+def terms_texts(
+    result: IdentificationResult, model: str, terms: tuple[str, ...], payload: Payload | None
+) -> dict[str, str]:
+    """``{TERMS_FILE: record}`` for a calibration with joint terms or a payload, else {}."""
+    return {TERMS_FILE: terms_record(result, model, payload)} if terms or payload else {}
+
+
+def calibration_terms(
+    cal: CalibrationDirectory, payload: Payload | None
+) -> tuple[JointTermCorrection | None, str]:
+    """The joint terms of a calibration directory, and a line saying what they are.
+
+    Args:
+        cal: the calibration.
+        payload: the load at the targets, replacing the calibration's; None: keep it.
+
+    Returns:
+        (correction, description); (None, "") for a geometric calibration.
+    """
+    from pincal.compensation import JointTermCorrection
+    from pincal.model import joint_term_units, with_payload
+
+    units = joint_term_units() - {"m", "rad"}
+    if not any(u in units for u in cal.result.units):
+        if payload is not None:
+            raise click.BadParameter(
+                f"calibration {str(cal.path)!r} has no joint terms: a payload changes its "
+                f"commands only with a compliance (calibrate --model geometric+compliance)",
+                param_hint="--payload",
+            )
+        return None, ""
+    nominal: Mechanism = cal.nominal()
+    if payload is not None:
+        nominal = with_payload(nominal, payload, replace=True)
+    terms = JointTermCorrection.from_names(nominal, cal.result.names, cal.result.full_values)
+    load = payload.describe() if payload is not None else "the calibration's load"
+    kinds = sorted({n.rpartition(".")[2] for n in terms.params.names})
+    return terms, f"{len(terms.params)} joint terms ({', '.join(kinds)}) at {load}"
+
+
+def compliance_note(terms: tuple[str, ...], payload: Payload | None) -> str | None:
+    """What a compliance term can and cannot tell apart (None without one)."""
+    if "compliance" not in terms:
+        return None
+    load = "the links' weight" + (f" and the {payload.describe()}" if payload else "")
+    return (
+        f"compliance: δq = c·τ, τ the load the actuators hold ({load}, given); a payload "
+        f"mass and a compliance scale the same load, so they separate only with poses that "
+        f"change the load (e.g. measured with and without the payload): with the payload "
+        f"given, c is identified; a wrong payload mass biases c"
+    )
