@@ -34,6 +34,7 @@ RANK = {
     "design": 3,
     "identification": 4,
     "compensation": 5,
+    "validation": 5,
     "io": 6,
     "report": 7,
     "viz": 7,
@@ -44,20 +45,11 @@ RANK = {
 INTERFACES = {"kernels"}
 
 #: (importing file, imported module) → why the upward import is still there.
-ORDER_ALLOWED = {
-    # issue 24 (third bullet): held-out validation lives in `measure` but predicts the
-    # validation RMS with design's Cramér–Rao bound; design imports measure
-    # (NoiseModel), so this import is lazy to dodge the cycle. It goes when validation
-    # becomes its own stage after identification.
-    ("pincal/measure/_held_out.py", "pincal.design"),
-}
+ORDER_ALLOWED: set[tuple[str, str]] = set()
 
 #: (importing file, imported module) → why a library module imports another stage inside
 #: a function. The CLI is exempt: it imports lazily so that ``pincal --help`` stays fast.
-LAZY_ALLOWED = {
-    # issue 24 (third bullet): the cycle-dodging upward import listed in ORDER_ALLOWED.
-    ("pincal/measure/_held_out.py", "pincal.design"),
-}
+LAZY_ALLOWED: set[tuple[str, str]] = set()
 
 #: (registering file, registry function) → why a stage fills a lower stage's registry
 #: when it is imported.

@@ -36,8 +36,6 @@ from pincal.io import MANIFEST, write_calibration
 from pincal.measure import (
     DEFAULT_NOISE,
     NoiseModel,
-    PoseErrors,
-    pose_errors,
     simulate_measurements,
 )
 from pincal.model import (
@@ -49,6 +47,7 @@ from pincal.model import (
     sample_actuators,
 )
 from pincal.sensitivity import identification_jacobian
+from pincal.validation import PoseErrors, pose_errors
 
 
 @dataclass(frozen=True)

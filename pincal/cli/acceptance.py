@@ -161,8 +161,8 @@ def acceptance(
     from pincal.cli._progress import counted
     from pincal.cli.simulate import _parse_errors, _parse_pair
     from pincal.io import atomic_write_text, read_measurements
-    from pincal.measure import iso_test_cube, pose_characteristics, simulate_cycles
     from pincal.model import parameters
+    from pincal.validation import iso_test_cube, pose_characteristics, simulate_cycles
 
     guard_paths(
         {"MODEL": model_input(model), "--calibrated": cal, "--data": data_file},
