@@ -68,11 +68,10 @@ from pincal.model import (
     SolverOptions,
     bundled_models,
     load_mechanism,
-    parameters,
     sample_actuators,
     serial_mechanism,
 )
-from pincal.sensitivity import Identifiability, identifiability, identification_jacobian
+from pincal.sensitivity import Identifiability, identifiability, identification_jacobian, parameters
 from pincal.validation import PoseErrors, pose_errors
 
 #: names served from the plotting / meshcat subpackages, imported on first use

@@ -43,10 +43,9 @@ from pincal.model import (
     Mechanism,
     ParameterSet,
     load_mechanism,
-    parameters,
     sample_actuators,
 )
-from pincal.sensitivity import identification_jacobian
+from pincal.sensitivity import identification_jacobian, parameters
 from pincal.validation import PoseErrors, pose_errors
 
 

@@ -30,7 +30,8 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
     from pincal.errors import ModelFileError, ParameterError, ReportError, clip
     from pincal.identification import IdentificationResult
     from pincal.io import MANIFEST, read_calibration
-    from pincal.model import load_mechanism, parameters
+    from pincal.model import load_mechanism
+    from pincal.sensitivity import parameters
 
     path = Path(spec)
     if (path / MANIFEST).is_file():  # a calibration directory: read (and checked) as one
@@ -161,7 +162,7 @@ def acceptance(
     from pincal.cli._progress import counted
     from pincal.cli.simulate import _parse_errors, _parse_pair
     from pincal.io import atomic_write_text, read_measurements
-    from pincal.model import parameters
+    from pincal.sensitivity import parameters
     from pincal.validation import iso_test_cube, pose_characteristics, simulate_cycles
 
     guard_paths(

@@ -173,7 +173,7 @@ def validate(
             click.echo(json.dumps(only) if as_json else format_cv(cv_doc), nl=as_json)
             return
     assert data is not None
-    from pincal.model import parameters
+    from pincal.sensitivity import parameters
     from pincal.validation import validate_held_out
 
     cal = read_calibration(calibration)

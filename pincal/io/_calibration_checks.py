@@ -31,7 +31,8 @@ from pincal._files import max_bytes, read_text
 from pincal.errors import CalibrationDirectoryError, PincalError, clip
 from pincal.identification import IdentificationResult
 from pincal.measure import NoiseModel
-from pincal.model import parameters, resolve_model_path
+from pincal.model import resolve_model_path
+from pincal.sensitivity import parameters
 
 if TYPE_CHECKING:
     from pincal.model import Mechanism

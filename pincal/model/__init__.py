@@ -63,7 +63,6 @@ from pincal.model._parameters import (
     degenerate_translations,
     full_parameters,
     parameters,
-    register_preset,
 )
 from pincal.model._readings import JointReadings
 from pincal.model._robots import example_robot_names, example_robot_urdf
@@ -159,7 +158,6 @@ __all__ = [
     "parent_direction",
     "parse_components",
     "read_sidecar",
-    "register_preset",
     "register_term",
     "regular_home",
     "resolve_model_path",

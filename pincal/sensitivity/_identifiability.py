@@ -38,7 +38,6 @@ from pincal.model import (
     ParameterSet,
     degenerate_translations,
     full_parameters,
-    register_preset,
     sample_actuators,
 )
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
@@ -424,5 +423,3 @@ def base_parameters(mech: Mechanism, params: ParameterSet | None = None) -> Para
     """
     return base_set(mech, params).params
 
-
-register_preset("base", base_parameters)  # parameters(mech, "base"), without model importing us

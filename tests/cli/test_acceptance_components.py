@@ -175,7 +175,7 @@ def test_measured_cycles_are_judged_on_their_components(tmp_path):
     """--data on rrr3: x y rz measured; AP_p over x y, only AP_c among the angles."""
     from pincal.io import write_measurements
     from pincal.measure import Measurements
-    from pincal.model import parameters
+    from pincal.sensitivity import parameters
     from pincal.validation import iso_test_cube, pose_characteristics, simulate_cycles
 
     nominal = load_mechanism(RRR3)

@@ -14,15 +14,9 @@ import pytest
 from pincal.errors import ConvergenceError
 from pincal.identification import identify
 from pincal.measure import simulate_measurements
-from pincal.model import (
-    Mechanism,
-    degenerate_translations,
-    load_mechanism,
-    parameters,
-    sample_actuators,
-)
+from pincal.model import Mechanism, degenerate_translations, load_mechanism, sample_actuators
 from pincal.model._range_explore import BACK_OFF, DEFAULT_SPAN, STEPS
-from pincal.sensitivity import identifiability
+from pincal.sensitivity import identifiability, parameters
 from tests.open_world import acceptance
 from tests.open_world.machines import ANKLE_MOTOR_RANGE, ankle_2rsu, write_machine
 
