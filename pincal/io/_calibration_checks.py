@@ -107,7 +107,6 @@ def check_listed_file(path: Path) -> int:
 
     Raises:
         CalibrationDirectoryError: missing, a link, not a regular file, or too large.
-        InputLimitError: ``PINCAL_MAX_FILE_MB`` is malformed.
     """
     shown = f"{path.name!r} in {clip(str(path.parent), 200)}"
     try:

@@ -7,6 +7,7 @@ catalogue of bundled models.
 
 from __future__ import annotations
 
+from pincal._limits import Limits, active_limits
 from pincal.model._batch import BatchKinematics, BatchModel
 from pincal.model._catalogue import (
     bundled_models,
@@ -90,7 +91,6 @@ from pincal.model._urdf import (
     UrdfTree,
     se3_from_xyz_rpy,
 )
-from pincal.model._urdf_check import ModelLimits
 from pincal.model._workspace import (
     sample_actuators,
     sample_pose,
@@ -117,8 +117,8 @@ __all__ = [
     "JointReadings",
     "JointTerm",
     "Kinematics",
+    "Limits",
     "Mechanism",
-    "ModelLimits",
     "Parameter",
     "ParameterSet",
     "Sidecar",
@@ -127,6 +127,7 @@ __all__ = [
     "UrdfTree",
     "Workspace",
     "above_floor",
+    "active_limits",
     "actual_joint_values",
     "bundled_models",
     "chain_preset",
