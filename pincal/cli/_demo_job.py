@@ -32,7 +32,7 @@ from pincal.identification import (
     check_quality,
     identify,
 )
-from pincal.io import MANIFEST, write_calibration
+from pincal.io import IDENTIFICATION_FILE, MANIFEST, write_calibration
 from pincal.measure import (
     DEFAULT_NOISE,
     NoiseModel,
@@ -200,7 +200,7 @@ def _run_demo(
             out, result, model_source=settings.model, noise=settings.noise, annotations=notes
         )
         files += [out / MANIFEST, cal.calibrated_urdf, cal.calibrated_urdf.with_suffix(".yaml")]
-        files.append(out / "identification.json")
+        files.append(out / IDENTIFICATION_FILE)
         if settings.report:
             from pincal.report import calibration_report
 
