@@ -15,6 +15,7 @@ cli. The rules checked here (issue 24), without exceptions:
 from __future__ import annotations
 
 import ast
+import functools
 import re
 import sys
 from collections.abc import Iterator
@@ -50,10 +51,16 @@ def _stage(path: Path) -> str | None:
     return parts[0] if len(parts) > 1 else None
 
 
+@functools.cache
+def _parse(path: Path, rel: str, mtime_ns: int) -> ast.Module:
+    """The file's tree, parsed once per version for all the checks (they only read it)."""
+    return ast.parse(path.read_text(encoding="utf-8"), rel)
+
+
 def _files() -> Iterator[tuple[str, str | None, ast.Module]]:
     for path in sorted(PACKAGE.rglob("*.py")):
         rel = path.relative_to(PACKAGE.parent).as_posix()
-        yield rel, _stage(path), ast.parse(path.read_text(encoding="utf-8"), rel)
+        yield rel, _stage(path), _parse(path, rel, path.stat().st_mtime_ns)
 
 
 def _absolute(node: ast.ImportFrom, rel: str) -> str:

@@ -66,6 +66,7 @@ def test_unit_mistakes_are_named_before_fitting(stewart, clean, factor, declared
     assert "--force" in verdict.reason()
 
 
+@pytest.mark.slow  # ~15 s; the unit-mistake verdict itself is checked fast above
 def test_unit_mistake_refused_after_fitting(stewart, stewart42, clean):
     """m declared as mm: the fit ends with parameters moved far beyond the bound."""
     meas = _scaled(clean, 1e-3)
