@@ -60,3 +60,14 @@ def test_the_library_reads_no_environment():
             if name in ("environ", "getenv", "environb"):
                 readers.add(path.relative_to(PACKAGE).as_posix())
     assert readers <= {"cli/_environment.py", "cli/common.py"}, readers
+
+
+def test_parallel_workers_rebuild_under_the_limits_of_the_caller(stewart):
+    """joblib workers start with default limits: the recipe carries the caller's."""
+    from pincal.design._parallel import _rebuild, _recipe
+
+    with Limits(links=3).applied():
+        recipe = _recipe(stewart)
+    with pytest.raises(InputLimitError, match="over the limit of 3"):
+        _rebuild(recipe)
+    assert _rebuild(_recipe(stewart)).name == stewart.name
