@@ -85,7 +85,7 @@ def test_ten_times_too_small_is_refused(stewart, clean):
     assert not verdict.passed and "cm declared as mm" in verdict.reason()
 
 
-@pytest.mark.parametrize("size", [1e-3, 5e-3])
+@pytest.mark.parametrize("size", [1e-3, pytest.param(5e-3, marks=pytest.mark.slow)])
 def test_outliers_refuse_least_squares_and_pass_huber(stewart, stewart42, clean, size):
     bad_poses = [3, 17]  # 5 % of 40
     pos = clean.positions.copy()

@@ -135,6 +135,7 @@ def test_zero_width_limits_batched_and_pose_by_pose_agree(zero):
         assert np.max(np.abs(a - b)) <= 1e-9
 
 
+@pytest.mark.slow  # ~18 s; the 0/0 ankle's identifiability and closing stay fast above
 def test_zero_width_limits_noise_free_recovery(zero):
     """With every row closed on home's assembly mode, the 0/0-limits ankle recovers a
     random error on its base set to 1e-9 over the explored range (cause 2)."""
