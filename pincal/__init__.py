@@ -1,17 +1,20 @@
 """pincal: kinematic calibration of parallel machines and serial chains on Pinocchio.
 
-The subpackages follow the data flow of a calibration:
+The subpackages follow the data flow of a calibration, lowest first; a stage imports
+only the stages above it in this list (``tests/test_stage_boundaries.py`` checks it):
 
-1. :mod:`pincal.model` — load a machine (URDF + sidecar), close its loops, define parameters;
-2. :mod:`pincal.sensitivity` — identification Jacobian and identifiability;
-3. :mod:`pincal.design` — observability indices, candidate poses, pose selection, Cramér–Rao;
-4. :mod:`pincal.measure` — instruments, noise, simulated measurements;
+1. :mod:`pincal.model` — load a machine (URDF + sidecar), close its loops, define parameters
+   (:mod:`pincal.machines`, machine-specific closed forms, sits on the model alone);
+2. :mod:`pincal.sensitivity` — identification Jacobian, identifiability, the ``base`` preset;
+3. :mod:`pincal.measure` — instruments, noise, simulated measurements;
+4. :mod:`pincal.design` — observability indices, candidate poses, pose selection, Cramér–Rao;
 5. :mod:`pincal.identification` — identify the parameters with their covariance;
-6. :mod:`pincal.compensation` — commands that reach targets with the calibrated model;
+6. :mod:`pincal.compensation` — commands that reach targets with the calibrated model, and
+   :mod:`pincal.validation` — held-out checks, pose errors, ISO 9283;
+7. :mod:`pincal.io` — every file kind, read and written in one place;
+8. :mod:`pincal.report`, :mod:`pincal.viz` (loaded on first use), then :mod:`pincal.cli`.
 
-with :mod:`pincal.io` (files), :mod:`pincal.report`, :mod:`pincal.viz` (loaded on first use),
-:mod:`pincal.cli` and :mod:`pincal.machines` (machine-specific closed forms). This module
-exports the vocabulary of a calibration; everything else is in the subpackages.
+This module exports the vocabulary of a calibration; everything else is in the subpackages.
 """
 
 from __future__ import annotations
@@ -56,8 +59,6 @@ from pincal.measure import (
     LaserTracker,
     Measurements,
     NoiseModel,
-    PoseErrors,
-    pose_errors,
     simulate_measurements,
 )
 from pincal.model import (
@@ -67,11 +68,11 @@ from pincal.model import (
     SolverOptions,
     bundled_models,
     load_mechanism,
-    parameters,
     sample_actuators,
     serial_mechanism,
 )
-from pincal.sensitivity import Identifiability, identifiability, identification_jacobian
+from pincal.sensitivity import Identifiability, identifiability, identification_jacobian, parameters
+from pincal.validation import PoseErrors, pose_errors
 
 #: names served from the plotting / meshcat subpackages, imported on first use
 _LAZY = {

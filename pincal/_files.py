@@ -3,43 +3,25 @@
 Every input (URDF, sidecar, MJCF, CSV, JSON, YAML) is read through
 :func:`read_text` or :func:`read_bytes`, which refuse non-regular files (FIFOs,
 devices such as ``/dev/zero``, directories) before opening them and stop reading at a
-size cap instead of exhausting memory. Caps default to :data:`DEFAULT_MAX_BYTES` and
-can be raised per call or for the process with the ``PINCAL_MAX_FILE_MB``
-environment variable.
+size cap instead of exhausting memory. The cap is given per call, else it is the
+``file_bytes`` of the limits in force (:class:`pincal._limits.Limits`: 200 MB unless a
+block raises it; the command line sets it from ``PINCAL_MAX_FILE_MB``).
 """
 
 from __future__ import annotations
 
-import math
 import os
 import stat
 from pathlib import Path
 
+from pincal._limits import DEFAULT_MAX_BYTES, active_limits
 from pincal.errors import InputFileError, InputLimitError, clip
 
 __all__ = ["DEFAULT_MAX_BYTES", "max_bytes", "read_bytes", "read_text"]
 
-#: Default cap on one input file: 200 MB (a 100 000-pose CSV is ~30 MB).
-DEFAULT_MAX_BYTES = 200 * 1024 * 1024
-_MAX_MB = 1e9  # PINCAL_MAX_FILE_MB above one petabyte is a typo
-
-
 def max_bytes() -> int:
-    """Return the size cap in bytes (``PINCAL_MAX_FILE_MB`` overrides the default)."""
-    env = os.environ.get("PINCAL_MAX_FILE_MB")
-    if env:
-        try:
-            mb = float(env)
-        except ValueError:
-            mb = math.nan
-        if not 0 < mb <= _MAX_MB:  # also refuses nan and inf
-            raise InputLimitError(
-                f"PINCAL_MAX_FILE_MB={clip(env)} is not a number of megabytes in (0, "
-                f"{_MAX_MB:.0f}]; set it to e.g. 500 or unset it (default "
-                f"{DEFAULT_MAX_BYTES // 2**20})"
-            )
-        return max(1, int(mb * 1024 * 1024))
-    return DEFAULT_MAX_BYTES
+    """The size cap in bytes of the limits in force (default :data:`DEFAULT_MAX_BYTES`)."""
+    return active_limits().file_bytes
 
 
 def read_bytes(
@@ -124,5 +106,6 @@ def read_text(
 def _too_big(p: Path, what: str, size: int, cap: int) -> str:
     return (
         f"{what} {clip(str(p))} is {size / 1e6:.1f} MB or more, over the {cap / 1e6:.0f} MB "
-        "limit; if the file is right, raise the limit with PINCAL_MAX_FILE_MB"
+        "limit; if the file is right, raise the limit with PINCAL_MAX_FILE_MB (in Python: "
+        "`with Limits(file_bytes=…).applied():`)"
     )

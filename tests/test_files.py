@@ -8,6 +8,7 @@ import threading
 import pytest
 
 from pincal._files import read_bytes, read_text
+from pincal._limits import Limits
 from pincal.errors import InputFileError, InputLimitError, ModelFileError, clip
 
 
@@ -39,15 +40,16 @@ def test_device_fifo_and_directory_are_refused(tmp_path):
         read_text(tmp_path, "URDF")
 
 
-def test_size_cap_and_environment_override(tmp_path, monkeypatch):
+def test_size_cap_per_call_and_from_the_limits_in_force(tmp_path, monkeypatch):
     big = tmp_path / "big.csv"
     big.write_bytes(b"x" * 3000)
     with pytest.raises(InputLimitError, match="PINCAL_MAX_FILE_MB"):
         read_bytes(big, "CSV", limit=1000)
-    monkeypatch.setenv("PINCAL_MAX_FILE_MB", "0.001")
-    with pytest.raises(InputLimitError, match="big.csv"):
+    with Limits(file_bytes=1048).applied(), pytest.raises(InputLimitError, match="big.csv"):
         read_bytes(big, "CSV")
-    monkeypatch.setenv("PINCAL_MAX_FILE_MB", "5")
+    with Limits(file_bytes=1048).applied():
+        assert len(read_bytes(big, "CSV", limit=5000)) == 3000  # the argument wins
+    monkeypatch.setenv("PINCAL_MAX_FILE_MB", "0.001")  # the library reads no environment
     assert len(read_bytes(big, "CSV")) == 3000
 
 

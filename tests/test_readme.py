@@ -81,9 +81,20 @@ def test_pincal_commands(tmp_path):
 
 
 SCRIPTS = [c for c in _commands() if c.startswith("python scripts/") and c.split()[1] not in LONG]
+#: scripts run in the slow lane only (each over ~20 s), with where their claim is tested fast
+SLOW_SCRIPTS = {
+    "scripts/studies/open_world_table.py": "tests/open_world/test_roster.py",
+    "scripts/studies/hexaslide_calibration.py": "tests/studies/test_hexaslide_calibration.py",
+}
 
 
-@pytest.mark.parametrize("cmd", SCRIPTS)
+@pytest.mark.parametrize(
+    "cmd",
+    [
+        pytest.param(c, marks=[pytest.mark.slow] if c.split()[1] in SLOW_SCRIPTS else [])
+        for c in SCRIPTS
+    ],
+)
 def test_script_commands(cmd):
     args = shlex.split(cmd)
     out = subprocess.run(
@@ -97,6 +108,8 @@ def test_long_commands_are_the_only_ones_skipped():
     mentioned = {c.split()[1] for c in _commands() if c.startswith("python scripts/")}
     assert set(LONG) <= mentioned | {"scripts/bench_vs_figaroh.py"}
     assert len(SCRIPTS) >= 4
+    assert set(SLOW_SCRIPTS) <= {c.split()[1] for c in SCRIPTS}
+    assert all((ROOT / test).is_file() for test in SLOW_SCRIPTS.values())
 
 
 def test_python_example(tmp_path, monkeypatch):

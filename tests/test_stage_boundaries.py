@@ -1,22 +1,22 @@
 """Stage boundaries of the package, checked on its source (AST, nothing imported).
 
-A stage is a subpackage of ``pincal/``. DESIGN.md section 1 fixes their order, lowest
-first: model → sensitivity → measure → design → identification → {compensation,
-validation} → io → report / viz → cli. The rules checked here (issue 24):
+A stage is a subpackage of ``pincal/``. DESIGN.md section 1 (and the docstring of
+``pincal/__init__.py``) fixes their order, lowest first: model → {machines, sensitivity}
+→ measure → design → identification → {compensation, validation} → io → report / viz →
+cli. The rules checked here (issue 24), without exceptions:
 
 * another stage is entered only through its ``__init__`` or its declared interface
   module ``kernels`` — never through a private ``_module``, never for a ``_name``;
 * a stage imports only lower stages (at module level, lazily or under
   ``TYPE_CHECKING`` alike) and registers nothing into a lower stage at import time;
 * outside the CLI, other stages are imported at module level, not inside functions.
-
-What could not be removed yet is in the allow-lists below, each entry with its reason;
-an entry that no longer occurs must be deleted, so the lists only shrink.
 """
 
 from __future__ import annotations
 
 import ast
+import functools
+import re
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -34,6 +34,7 @@ RANK = {
     "design": 3,
     "identification": 4,
     "compensation": 5,
+    "validation": 5,
     "io": 6,
     "report": 7,
     "viz": 7,
@@ -43,31 +44,6 @@ RANK = {
 #: Modules a stage offers to later stages besides its ``__init__`` (no underscore).
 INTERFACES = {"kernels"}
 
-#: (importing file, imported module) → why the upward import is still there.
-ORDER_ALLOWED = {
-    # issue 24 (third bullet): held-out validation lives in `measure` but predicts the
-    # validation RMS with design's Cramér–Rao bound; design imports measure
-    # (NoiseModel), so this import is lazy to dodge the cycle. It goes when validation
-    # becomes its own stage after identification.
-    ("pincal/measure/_held_out.py", "pincal.design"),
-}
-
-#: (importing file, imported module) → why a library module imports another stage inside
-#: a function. The CLI is exempt: it imports lazily so that ``pincal --help`` stays fast.
-LAZY_ALLOWED = {
-    # issue 24 (third bullet): the cycle-dodging upward import listed in ORDER_ALLOWED.
-    ("pincal/measure/_held_out.py", "pincal.design"),
-}
-
-#: (registering file, registry function) → why a stage fills a lower stage's registry
-#: when it is imported.
-REGISTRATION_ALLOWED = {
-    # issue 24 (third bullet): the "base" parameter preset needs sensitivity's
-    # identifiability, so sensitivity registers it into model's preset table at import;
-    # parameters(mech, "base") fails unless pincal.sensitivity was imported first.
-    ("pincal/sensitivity/_identifiability.py", "register_preset"),
-}
-
 
 def _stage(path: Path) -> str | None:
     """The stage a file of ``pincal/`` belongs to (None for the top-level modules)."""
@@ -75,10 +51,16 @@ def _stage(path: Path) -> str | None:
     return parts[0] if len(parts) > 1 else None
 
 
+@functools.cache
+def _parse(path: Path, rel: str, mtime_ns: int) -> ast.Module:
+    """The file's tree, parsed once per version for all the checks (they only read it)."""
+    return ast.parse(path.read_text(encoding="utf-8"), rel)
+
+
 def _files() -> Iterator[tuple[str, str | None, ast.Module]]:
     for path in sorted(PACKAGE.rglob("*.py")):
         rel = path.relative_to(PACKAGE.parent).as_posix()
-        yield rel, _stage(path), ast.parse(path.read_text(encoding="utf-8"), rel)
+        yield rel, _stage(path), _parse(path, rel, path.stat().st_mtime_ns)
 
 
 def _absolute(node: ast.ImportFrom, rel: str) -> str:
@@ -185,33 +167,42 @@ def test_no_private_module_or_name_crosses_a_stage():
 
 
 def test_stages_import_only_lower_stages():
+    """A lower stage never imports a higher one: not at module level, not inside a
+    function, not under ``TYPE_CHECKING``."""
     found = order_violations()
-    new = {k: v for k, v in found.items() if k not in ORDER_ALLOWED}
-    assert not new, "imports of a stage that is not lower (DESIGN.md section 1):\n" + "\n".join(
-        f"{rel}:{lines[0]}: {module}" for (rel, module), lines in sorted(new.items())
+    assert not found, "imports of a stage that is not lower (DESIGN.md section 1):\n" + "\n".join(
+        f"{rel}:{lines[0]}: {module}" for (rel, module), lines in sorted(found.items())
     )
-    stale = ORDER_ALLOWED - set(found)
-    assert not stale, f"allowed upward imports that are gone, delete them: {sorted(stale)}"
 
 
 def test_library_imports_other_stages_at_module_level():
+    """Outside the CLI (which imports lazily so that ``pincal --help`` stays fast)."""
     found = lazy_imports()
-    new = {k: v for k, v in found.items() if k not in LAZY_ALLOWED}
-    assert not new, "imports of another stage inside a function (import at the top):\n" + (
-        "\n".join(f"{rel}:{lines[0]}: {module}" for (rel, module), lines in sorted(new.items()))
+    assert not found, "imports of another stage inside a function (import at the top):\n" + (
+        "\n".join(f"{rel}:{lines[0]}: {module}" for (rel, module), lines in sorted(found.items()))
     )
-    stale = LAZY_ALLOWED - set(found)
-    assert not stale, f"allowed lazy imports that are gone, delete them: {sorted(stale)}"
 
 
 def test_no_stage_registers_into_a_lower_one_at_import():
     found = import_time_registrations()
-    new = {k: v for k, v in found.items() if k not in REGISTRATION_ALLOWED}
-    assert not new, "import-time registrations into another stage:\n" + "\n".join(
-        f"{rel}:{line}: {name}(...)" for (rel, name), line in sorted(new.items())
+    assert not found, "import-time registrations into another stage:\n" + "\n".join(
+        f"{rel}:{line}: {name}(...)" for (rel, name), line in sorted(found.items())
     )
-    stale = REGISTRATION_ALLOWED - set(found)
-    assert not stale, f"allowed registrations that are gone, delete them: {sorted(stale)}"
+
+
+def test_the_stage_order_is_the_documented_one():
+    """RANK (checked above) is the order pincal/__init__'s docstring lists, and every
+    subpackage has a rank."""
+    stages = {p.parent.name for p in PACKAGE.glob("*/__init__.py")}
+    assert stages == set(RANK), f"stages without a rank, or ranks of no stage: {stages ^ set(RANK)}"
+    doc = ast.get_docstring(ast.parse((PACKAGE / "__init__.py").read_text(encoding="utf-8")))
+    assert doc is not None
+    listed = [m for m in re.findall(r":mod:`pincal\.(\w+)`", doc) if m in RANK]
+    first = sorted(set(listed), key=listed.index)
+    ranks = [RANK[m] for m in first]
+    assert set(first) == set(RANK) and ranks == sorted(ranks), (
+        f"pincal/__init__ lists the stages as {first}; RANK: {sorted(RANK, key=RANK.get)}"
+    )
 
 
 def test_interface_modules_export_only_what_later_stages_use():

@@ -23,7 +23,7 @@ def _pose_fit(cal):
     """(measurements, fit, baseline fit) of a pose-file calibration."""
     from pincal.identification import identify
     from pincal.io import read_measurement_file
-    from pincal.model import parameters
+    from pincal.sensitivity import parameters
 
     files = cal.manifest.get("data_files") or []
     if not files:

@@ -32,12 +32,10 @@ from pincal.identification import (
     check_quality,
     identify,
 )
-from pincal.io import MANIFEST, write_calibration
+from pincal.io import IDENTIFICATION_FILE, MANIFEST, write_calibration
 from pincal.measure import (
     DEFAULT_NOISE,
     NoiseModel,
-    PoseErrors,
-    pose_errors,
     simulate_measurements,
 )
 from pincal.model import (
@@ -45,10 +43,10 @@ from pincal.model import (
     Mechanism,
     ParameterSet,
     load_mechanism,
-    parameters,
     sample_actuators,
 )
-from pincal.sensitivity import identification_jacobian
+from pincal.sensitivity import identification_jacobian, parameters
+from pincal.validation import PoseErrors, pose_errors
 
 
 @dataclass(frozen=True)
@@ -202,7 +200,7 @@ def _run_demo(
             out, result, model_source=settings.model, noise=settings.noise, annotations=notes
         )
         files += [out / MANIFEST, cal.calibrated_urdf, cal.calibrated_urdf.with_suffix(".yaml")]
-        files.append(out / "identification.json")
+        files.append(out / IDENTIFICATION_FILE)
         if settings.report:
             from pincal.report import calibration_report
 

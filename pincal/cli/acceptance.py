@@ -18,19 +18,17 @@ if TYPE_CHECKING:
 def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
     """The calibrated machine from a calibration directory or an identification.json.
 
-    A directory is read as its ``calibrated.urdf`` (+ ``calibrated.yaml``) when present,
-    else as its single ``.urdf`` + ``.yaml`` pair, else through its
-    ``identification.json`` applied to ``nominal``.
+    A calibration directory is read (and checked) by :func:`pincal.io.read_calibration`;
+    a directory without a manifest, or a file, through its identification.json
+    (:func:`pincal.io.read_identification`) applied to ``nominal``.
 
     Raises:
-        ModelFileError / ReportError: nothing usable at ``spec``.
+        CalibrationDirectoryError / ParameterError: nothing usable at ``spec``.
     """
-    from pincal._files import read_text
     from pincal.cli.common import announce
-    from pincal.errors import ModelFileError, ParameterError, ReportError, clip
-    from pincal.identification import IdentificationResult
-    from pincal.io import MANIFEST, read_calibration
-    from pincal.model import load_mechanism, parameters
+    from pincal.errors import ParameterError
+    from pincal.io import IDENTIFICATION_FILE, MANIFEST, read_calibration, read_identification
+    from pincal.sensitivity import parameters
 
     path = Path(spec)
     if (path / MANIFEST).is_file():  # a calibration directory: read (and checked) as one
@@ -38,24 +36,8 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
         announce(cal)
         return cal.calibrated()
     if path.is_dir():
-        urdfs = sorted(path.glob("*.urdf"))
-        pick = [u for u in urdfs if u.stem == "calibrated"] or urdfs
-        if len(pick) == 1 and pick[0].with_suffix(".yaml").is_file():
-            return load_mechanism(pick[0])
-        path = path / "identification.json"
-        if not path.is_file():
-            raise ModelFileError(
-                f"{spec!r} holds no calibrated.urdf + calibrated.yaml pair (or a single "
-                ".urdf + .yaml pair) and no identification.json; give a calibration "
-                "directory written by 'pincal calibrate' or an identification.json"
-            )
-    try:
-        data = json.loads(read_text(path, "identification.json"))
-    except (ValueError, RecursionError) as exc:
-        raise ReportError(
-            f"cannot read {clip(str(path))} as identification.json: {clip(str(exc))}"
-        ) from None
-    result = IdentificationResult.from_dict(data, str(path))
+        path = path / IDENTIFICATION_FILE
+    result = read_identification(path)
     params = parameters(nominal, result.preset or "full")
     if tuple(params.names) != tuple(result.names):
         raise ParameterError(
@@ -161,8 +143,8 @@ def acceptance(
     from pincal.cli._progress import counted
     from pincal.cli.simulate import _parse_errors, _parse_pair
     from pincal.io import atomic_write_text, read_measurements
-    from pincal.measure import iso_test_cube, pose_characteristics, simulate_cycles
-    from pincal.model import parameters
+    from pincal.sensitivity import parameters
+    from pincal.validation import iso_test_cube, pose_characteristics, simulate_cycles
 
     guard_paths(
         {"MODEL": model_input(model), "--calibrated": cal, "--data": data_file},

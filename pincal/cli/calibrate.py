@@ -153,7 +153,8 @@ def calibrate(
         read_measurement_file,
         write_calibration,
     )
-    from pincal.model import parameters, split_model, with_joint_terms
+    from pincal.model import split_model, with_joint_terms
+    from pincal.sensitivity import parameters
 
     limits = gate_limits(max_change, significance)
     profile = None

@@ -56,6 +56,7 @@ def fail_cleanly(func):
     def wrapper(*args, **kwargs):
         ctx = click.get_current_context()
         try:
+            _apply_environment(ctx)
             out = func(*args, **kwargs)
             sys.stdout.flush()  # a closed pipe is reported here, not at interpreter exit
             return out
@@ -83,6 +84,21 @@ def fail_cleanly(func):
             sys.exit(EXIT_ERROR)
 
     return wrapper
+
+
+def _apply_environment(ctx: click.Context) -> None:
+    """Read the ``PINCAL_MAX_*`` limits once per invocation and run the command under them.
+
+    Raises:
+        InputLimitError: a variable is malformed.
+    """
+    from pincal.cli._environment import limits_from_environment
+
+    root = ctx.find_root()
+    root.ensure_object(dict)
+    if "limits" not in root.obj:
+        root.obj["limits"] = limits_from_environment(os.environ)
+        root.with_resource(root.obj["limits"].applied())
 
 
 def model_source(spec: str) -> str:

@@ -120,11 +120,10 @@ def info(
         degenerate_translations,
         describe_direction,
         direction_record,
-        parameters,
         split_model,
         with_joint_terms,
     )
-    from pincal.sensitivity import BASE_POSES, base_set, identifiability
+    from pincal.sensitivity import BASE_POSES, base_set, identifiability, parameters
 
     terms = split_model(error_model)
     load = read_payload(payload)

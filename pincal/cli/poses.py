@@ -139,8 +139,7 @@ def poses(
     from pincal.errors import OptionValueError, PincalError
     from pincal.io import si_actuator_units, write_pose_design
     from pincal.measure import NoiseModel
-    from pincal.model import parameters
-    from pincal.sensitivity import base_parameters
+    from pincal.sensitivity import base_parameters, parameters
 
     guard_paths(
         {"MODEL": model_input(model)},

@@ -89,9 +89,15 @@ def report(
 
 def _inputs(directory: Path) -> dict[str, Path]:
     """The files of calibration DIRECTORY that the report must not overwrite."""
-    from pincal.io import CALIBRATED_SIDECAR, CALIBRATED_URDF, MANIFEST, read_calibration
+    from pincal.io import (
+        CALIBRATED_SIDECAR,
+        CALIBRATED_URDF,
+        IDENTIFICATION_FILE,
+        MANIFEST,
+        read_calibration,
+    )
 
-    names = {MANIFEST, "identification.json", CALIBRATED_URDF, CALIBRATED_SIDECAR}
+    names = {MANIFEST, IDENTIFICATION_FILE, CALIBRATED_URDF, CALIBRATED_SIDECAR}
     try:
         cal = read_calibration(directory, verify=False)
     except PincalError:

@@ -21,7 +21,8 @@ DEFAULT_MODELS = (
 
 def _pose_candidates(mech, meas, preset: str, models: list[str], method: str):
     from pincal.identification import fitted, identify
-    from pincal.model import parameters, split_model
+    from pincal.model import split_model
+    from pincal.sensitivity import parameters
 
     def make(spec: str):
         params = parameters(mech, "+".join([preset, *split_model(spec)]))

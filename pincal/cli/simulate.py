@@ -145,7 +145,8 @@ def simulate(
         NoiseModel,
         simulate_measurements,
     )
-    from pincal.model import parameters, sample_actuators
+    from pincal.model import sample_actuators
+    from pincal.sensitivity import parameters
 
     if (poses_file is None) == (n_random is None):
         raise click.UsageError("give exactly one of --poses FILE or --random N")

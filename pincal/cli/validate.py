@@ -152,14 +152,21 @@ def validate(
     beats it by more than the standard error.
     """
     from pincal.cli.common import guard_paths
-    from pincal.io import atomic_write_text, read_calibration, read_measurement_file, sha256_file
+    from pincal.io import (
+        IDENTIFICATION_FILE,
+        MANIFEST,
+        atomic_write_text,
+        read_calibration,
+        read_measurement_file,
+        sha256_file,
+    )
 
     if data is None and cv_folds is None:
         raise click.UsageError("give --data (held-out measurements) or --cv K (or both)")
     if out is not None or folds_out is not None:
         inputs: dict = {} if data is None else {"--data": data}
         inputs |= {f"CALIBRATION's {n}": calibration / n
-                   for n in ("identification.json", "calibration.json")}  # fmt: skip
+                   for n in (IDENTIFICATION_FILE, MANIFEST)}  # fmt: skip
         guard_paths(inputs, {"--out": out, "--folds-out": folds_out})
     cv_doc = None
     if cv_folds is not None:
@@ -173,8 +180,8 @@ def validate(
             click.echo(json.dumps(only) if as_json else format_cv(cv_doc), nl=as_json)
             return
     assert data is not None
-    from pincal.measure import validate_held_out
-    from pincal.model import parameters
+    from pincal.sensitivity import parameters
+    from pincal.validation import validate_held_out
 
     cal = read_calibration(calibration)
     announce(cal)

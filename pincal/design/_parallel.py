@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import PincalError
-from pincal.model import Mechanism, ParameterSet
+from pincal.model import Mechanism, ParameterSet, active_limits
 from pincal.sensitivity import sensitivities_batch
 
 __all__ = ["check_n_jobs", "parallel_rows"]
@@ -42,8 +42,9 @@ def check_n_jobs(n_jobs: int) -> int:
 
 
 def _recipe(mech: Mechanism) -> tuple[str, bytes]:
-    """(digest, pickled constructor arguments) that rebuild ``mech`` in another process."""
+    """(digest, pickled limits in force and constructor arguments): ``mech`` elsewhere."""
     args = (
+        active_limits(),
         mech.urdf_xml,
         mech.sidecar,
         mech.name,
@@ -59,18 +60,19 @@ def _recipe(mech: Mechanism) -> tuple[str, bytes]:
 def _rebuild(recipe: tuple[str, bytes]) -> Mechanism:
     digest, blob = recipe
     if digest not in _REBUILT:
-        urdf, sidecar, name, source, frame, options, q_home = pickle.loads(blob)
+        limits, urdf, sidecar, name, source, frame, options, q_home = pickle.loads(blob)
         if len(_REBUILT) > 2:
             _REBUILT.clear()
-        _REBUILT[digest] = Mechanism(
-            urdf,
-            sidecar,
-            name=name,
-            source=source,
-            measured_frame=frame,
-            q_guess=q_home,
-            options=options,
-        )
+        with limits.applied():  # the parent's limits, not the worker's defaults
+            _REBUILT[digest] = Mechanism(
+                urdf,
+                sidecar,
+                name=name,
+                source=source,
+                measured_frame=frame,
+                q_guess=q_home,
+                options=options,
+            )
     return _REBUILT[digest]
 
 

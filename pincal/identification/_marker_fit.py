@@ -34,7 +34,8 @@ from pincal.measure import (
     marker_mechanisms,
     register_markers,
 )
-from pincal.model import BASE_JOINT, TOOL_JOINT, Mechanism, ParameterSet, parameters
+from pincal.model import BASE_JOINT, TOOL_JOINT, Mechanism, ParameterSet
+from pincal.sensitivity import parameters
 
 __all__ = ["REGISTRATION_PRESET", "MarkerFit", "Prior", "fit_markers", "is_registration"]
 

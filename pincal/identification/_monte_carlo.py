@@ -32,7 +32,8 @@ from threadpoolctl import threadpool_limits
 
 from pincal.errors import ParameterError, ShapeError
 from pincal.measure import NoiseModel, simulate_measurements
-from pincal.model import Mechanism, ParameterSet, load_mechanism, parameters
+from pincal.model import Mechanism, ParameterSet, load_mechanism
+from pincal.sensitivity import parameters
 
 __all__ = ["MonteCarloStudy", "monte_carlo"]
 

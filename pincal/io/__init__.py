@@ -12,13 +12,9 @@ from pincal.io._atomic import (
     calibration_lock,
     output_target,
 )
+from pincal.io._calibration_checks import read_identification
 from pincal.io._calibration_dir import (
-    CALIBRATED_SIDECAR,
-    CALIBRATED_URDF,
-    CALIBRATION_FORMAT,
     CALIBRATION_VERSION,
-    IDENTIFICATION_FILE,
-    MANIFEST,
     CalibrationDirectory,
     check_replaceable,
     read_calibration,
@@ -32,6 +28,13 @@ from pincal.io._commands_file import (
 )
 from pincal.io._csv import file_kind
 from pincal.io._delimited import parse_mapping
+from pincal.io._file_names import (
+    CALIBRATED_SIDECAR,
+    CALIBRATED_URDF,
+    CALIBRATION_FORMAT,
+    IDENTIFICATION_FILE,
+    MANIFEST,
+)
 from pincal.io._import_tracker import (
     TrackerImport,
     TrackerImportOptions,
@@ -108,6 +111,7 @@ __all__ = [
     "read_actuator_rows",
     "read_calibration",
     "read_commands",
+    "read_identification",
     "read_instrument_data",
     "read_instrument_file",
     "read_joints",

@@ -31,7 +31,8 @@ from pincal._files import max_bytes, read_text
 from pincal.errors import CalibrationDirectoryError, PincalError, clip
 from pincal.identification import IdentificationResult
 from pincal.measure import NoiseModel
-from pincal.model import parameters, resolve_model_path
+from pincal.model import resolve_model_path
+from pincal.sensitivity import parameters
 
 if TYPE_CHECKING:
     from pincal.model import Mechanism
@@ -45,8 +46,8 @@ __all__ = [
     "hash_bounded",
     "load_json",
     "model_files",
+    "read_identification",
     "read_noise",
-    "read_result",
 ]
 
 _MAX_JSON_BYTES = 50_000_000
@@ -106,7 +107,6 @@ def check_listed_file(path: Path) -> int:
 
     Raises:
         CalibrationDirectoryError: missing, a link, not a regular file, or too large.
-        InputLimitError: ``PINCAL_MAX_FILE_MB`` is malformed.
     """
     shown = f"{path.name!r} in {clip(str(path.parent), 200)}"
     try:
@@ -312,7 +312,7 @@ def check_geometry(
 
 
 def load_json(path: Path) -> dict:
-    text = read_text(path, "JSON file", _MAX_JSON_BYTES, CalibrationDirectoryError)
+    text = read_text(path, path.name, _MAX_JSON_BYTES, CalibrationDirectoryError)
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
@@ -338,8 +338,18 @@ def read_noise(entry: object, where: str) -> NoiseModel | None:
         ) from exc
 
 
-def read_result(path: Path) -> IdentificationResult:
-    """``identification.json`` read, any malformation reported with the file named."""
+def read_identification(path: str | os.PathLike) -> IdentificationResult:
+    """Read an ``identification.json`` (the one reader of the file kind).
+
+    Read bounded (50 MB, no FIFOs or devices) and parsed by
+    :meth:`IdentificationResult.from_dict` (this format or pincal 0.1's); the result has
+    no parameter set or mechanism, its context is in ``annotations``.
+
+    Raises:
+        CalibrationDirectoryError: missing, unreadable, not a JSON object, of a newer
+            format version, or malformed (the message names the file and what is wrong).
+    """
+    path = Path(path)
     try:
         return IdentificationResult.from_dict(load_json(path), source=str(path))
     except CalibrationDirectoryError:

@@ -58,22 +58,24 @@ from pincal.io._calibration_checks import (
     hash_bounded,
     load_json,
     model_files,
+    read_identification,
     read_noise,
-    read_result,
 )
-from pincal.io._calibration_replace import PINCAL_EXTRAS, _check_replaceable, check_replaceable
+from pincal.io._calibration_replace import _check_replaceable, check_replaceable
+from pincal.io._file_names import (
+    CALIBRATED_SIDECAR,
+    CALIBRATED_URDF,
+    CALIBRATION_FORMAT,
+    IDENTIFICATION_FILE,
+    MANIFEST,
+    NOMINAL_URDF,
+)
 from pincal.io._urdf_export import save_urdf
 from pincal.measure import NoiseModel
 from pincal.model import Mechanism, load_mechanism, read_sidecar
 
 __all__ = [
-    "CALIBRATED_SIDECAR",
-    "CALIBRATED_URDF",
-    "CALIBRATION_FORMAT",
     "CALIBRATION_VERSION",
-    "IDENTIFICATION_FILE",
-    "MANIFEST",
-    "PINCAL_EXTRAS",
     "CalibrationDirectory",
     "check_replaceable",
     "read_calibration",
@@ -81,14 +83,7 @@ __all__ = [
     "write_calibration",
 ]
 
-CALIBRATION_FORMAT = "pincal calibration"
 CALIBRATION_VERSION = 1
-MANIFEST = "calibration.json"
-CALIBRATED_URDF = "calibrated.urdf"
-CALIBRATED_SIDECAR = "calibrated.yaml"
-IDENTIFICATION_FILE = "identification.json"
-#: the registered start model of a marker calibration (instrument frame + marker set)
-NOMINAL_URDF = "nominal.urdf"
 
 
 def sha256_file(path: str | Path) -> str:
@@ -408,7 +403,7 @@ def read_calibration(path: str | Path, *, verify: bool = True) -> CalibrationDir
                 f"calibration directory {str(d)!r}: {changed} changed after it was written "
                 f"(SHA-256 mismatch); re-run `pincal calibrate` or restore the files"
             )
-    result = read_result(ident_path)
+    result = read_identification(ident_path)
     check_parameters(manifest, result, where, IDENTIFICATION_FILE)
     check_covariance(result, str(ident_path))
     for key in ("model", "model_source", "preset"):

@@ -14,26 +14,22 @@ from pathlib import Path
 
 from pincal._files import read_text
 from pincal.errors import CalibrationDirectoryError, PincalError, clip
+from pincal.io._file_names import CALIBRATION_FORMAT, MANIFEST, PINCAL_EXTRAS
 
-__all__ = ["PINCAL_EXTRAS", "check_replaceable"]
+__all__ = ["check_replaceable"]
 
-_FORMAT = "pincal calibration"  # pincal.io._calibration_dir._FORMAT
-_MANIFEST = "calibration.json"
 
 
 def _manifest(out: Path) -> dict:
     try:
         doc = json.loads(
-            read_text(out / _MANIFEST, "manifest", 50_000_000, CalibrationDirectoryError)
+            read_text(out / MANIFEST, "manifest", 50_000_000, CalibrationDirectoryError)
         )
     except (PincalError, ValueError, RecursionError):
         return {}
     return doc if isinstance(doc, dict) else {}
 
 
-#: files other pincal commands put into a calibration directory (``pincal report``,
-#: ``pincal run``); stale once the calibration is replaced, so replaced with it
-PINCAL_EXTRAS = frozenset({"campaign.yaml", "report.html", "report.md", "report.json"})
 
 
 def check_replaceable(out: str | Path) -> None:
@@ -61,15 +57,15 @@ def _check_replaceable(out: Path) -> None:
     entries = sorted(p.name for p in out.iterdir())
     if not entries:
         return
-    manifest = _manifest(out) if (out / _MANIFEST).is_file() else {}
+    manifest = _manifest(out) if (out / MANIFEST).is_file() else {}
     files = manifest.get("files")
-    if manifest.get("format") != _FORMAT or not isinstance(files, dict):
+    if manifest.get("format") != CALIBRATION_FORMAT or not isinstance(files, dict):
         raise CalibrationDirectoryError(
             f"--out {str(out)!r} is a non-empty directory ({len(entries)} entries) without "
-            f"a valid {_MANIFEST}, so not a calibration directory pincal wrote; it is never "
+            f"a valid {MANIFEST}, so not a calibration directory pincal wrote; it is never "
             "replaced: choose a new --out directory"
         )
-    foreign = [n for n in entries if n not in files and n != _MANIFEST and n not in PINCAL_EXTRAS]
+    foreign = [n for n in entries if n not in files and n != MANIFEST and n not in PINCAL_EXTRAS]
     if foreign:
         raise CalibrationDirectoryError(
             f"--out {str(out)!r} is a calibration directory that also holds files pincal did "

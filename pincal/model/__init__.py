@@ -7,6 +7,7 @@ catalogue of bundled models.
 
 from __future__ import annotations
 
+from pincal._limits import Limits, active_limits
 from pincal.model._batch import BatchKinematics, BatchModel
 from pincal.model._catalogue import (
     bundled_models,
@@ -64,7 +65,6 @@ from pincal.model._parameters import (
     degenerate_translations,
     full_parameters,
     parameters,
-    register_preset,
 )
 from pincal.model._payload import Payload, with_payload
 from pincal.model._readings import JointReadings
@@ -93,7 +93,6 @@ from pincal.model._urdf import (
     UrdfTree,
     se3_from_xyz_rpy,
 )
-from pincal.model._urdf_check import ModelLimits
 from pincal.model._workspace import (
     sample_actuators,
     sample_pose,
@@ -120,9 +119,9 @@ __all__ = [
     "JointReadings",
     "JointTerm",
     "Kinematics",
+    "Limits",
     "Linearisation",
     "Mechanism",
-    "ModelLimits",
     "Parameter",
     "ParameterSet",
     "Payload",
@@ -132,6 +131,7 @@ __all__ = [
     "UrdfTree",
     "Workspace",
     "above_floor",
+    "active_limits",
     "actual_joint_values",
     "bundled_models",
     "chain_preset",
@@ -163,7 +163,6 @@ __all__ = [
     "parent_direction",
     "parse_components",
     "read_sidecar",
-    "register_preset",
     "register_term",
     "regular_home",
     "resolve_model_path",

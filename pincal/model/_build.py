@@ -30,10 +30,11 @@ import logging
 import numpy as np
 import pinocchio as pin
 
+from pincal._limits import active_limits
 from pincal.errors import ModelFileError, UnknownNameError, clip
 from pincal.model._sidecar import Sidecar
 from pincal.model._urdf import MOVABLE_TYPES, UrdfTree
-from pincal.model._urdf_check import ModelLimits, captured_stderr
+from pincal.model._urdf_check import captured_stderr
 
 __all__ = ["build_model", "lock_joints"]
 
@@ -68,7 +69,7 @@ def build_model(urdf_xml: str, tree: UrdfTree, sidecar: Sidecar) -> tuple[pin.Mo
     notes: list[str] = []
     if any(k != "fixed" for k in sidecar.joint_type):
         model = _replace_joints(model, tree, sidecar)
-        limits = ModelLimits.from_env()
+        limits = active_limits()
         limits.check(
             "degrees of freedom (with the sidecar's spherical joints)",
             model.nv,

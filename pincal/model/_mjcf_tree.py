@@ -15,8 +15,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from pincal._limits import active_limits
 from pincal.errors import ModelFileError, UnknownNameError
-from pincal.model._urdf_check import ModelLimits
 
 __all__ = ["MjcfTree", "euler_xyz", "quat_matrix", "unit", "vec"]
 
@@ -63,10 +63,10 @@ def _check_size(root: ET.Element, where: str) -> None:
     """Refuse documents past the model limits before the recursive conversion.
 
     Raises:
-        InputLimitError: more bodies and sites than ``ModelLimits.links``, or bodies,
-            frames or defaults nested deeper than ``ModelLimits.depth``.
+        InputLimitError: more bodies and sites than ``Limits.links``, or bodies,
+            frames or defaults nested deeper than ``Limits.depth``.
     """
-    limits = ModelLimits.from_env()
+    limits = active_limits()
     count = sum(1 for e in root.iter() if e.tag in ("body", "site"))
     limits.check("bodies and sites", count, limits.links, "PINCAL_MAX_LINKS", where)
     deepest, stack = 0, [(root, 0)]

@@ -5,18 +5,17 @@ the joint-origin frame. All parameters of one joint act together as
 ``origin ← origin · exp6(Σ_k δ_k ξ_k)``. The dof ``offset`` is the twist along a
 movable joint's axis, i.e. exactly an encoder/prismatic zero offset.
 
-Presets: ``"full"`` (every origin twist) and computed presets registered by later
-stages with :func:`register_preset` — the sensitivity stage registers ``"base"``
-(the identifiable base set of ``full`` without its degenerate translations, see
-:func:`degenerate_translations` and ``base_parameters``) when it is imported, which
-``import pincal`` (hence any ``import pincal.model``) always does. This module imports
-nothing from the later stages.
+Presets: ``"full"`` (every origin twist), the sidecar's presets, and computed presets
+the caller passes as ``computed`` — :func:`pincal.sensitivity.parameters` (exported as
+``pincal.parameters``) passes ``"base"`` (the identifiable base set of ``full`` without
+its degenerate translations, see :func:`degenerate_translations`). This module imports
+nothing from the later stages and keeps no registry.
 """
 
 from __future__ import annotations
 
 import fnmatch
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,7 +33,6 @@ __all__ = [
     "degenerate_translations",
     "full_parameters",
     "parameters",
-    "register_preset",
 ]
 
 DOFS: tuple[str, ...] = ("tx", "ty", "tz", "rx", "ry", "rz", "offset")
@@ -44,30 +42,8 @@ _REVOLUTE = ("revolute", "continuous")
 _ZERO_LENGTH = 1e-12
 """Origin translations up to this norm [m] count as a zero-length link."""
 
-_COMPUTED_PRESETS: dict[str, Callable[[Mechanism], ParameterSet]] = {}
-"""Presets computed from the mechanism (name → builder), filled by :func:`register_preset`."""
-
-
-def register_preset(name: str, builder: Callable[[Mechanism], ParameterSet]) -> None:
-    """Make ``parameters(mech, name)`` return ``builder(mech)``.
-
-    Later stages use this to offer presets they compute (``"base"`` is registered by
-    the sensitivity stage) without the model stage importing them. A sidecar
-    preset of the same name takes precedence. Registering a name again replaces it.
-
-    Args:
-        name: preset name (not ``"full"``).
-        builder: ``builder(mech) -> ParameterSet``.
-
-    Raises:
-        ParameterError: ``name`` is ``"full"`` or not a non-empty string.
-    """
-    if not isinstance(name, str) or not name or name == "full":
-        raise ParameterError(
-            f"cannot register a computed preset named {name!r}: give a non-empty name other "
-            f"than 'full'"
-        )
-    _COMPUTED_PRESETS[name] = builder
+_COMPUTED_ELSEWHERE = {"base": "pincal.parameters (pincal.sensitivity.parameters)"}
+"""Computed presets of later stages, named in the error when they are asked for here."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -322,16 +298,19 @@ def degenerate_translations(mech: Mechanism) -> tuple[str, ...]:
     return tuple(out)
 
 
-def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet:
+def parameters(
+    mech: Mechanism,
+    preset: str | Sequence = "full",
+    *,
+    computed: Mapping[str, Callable[[Mechanism], ParameterSet]] | None = None,
+) -> ParameterSet:
     """Build a parameter set from a preset name, or an explicit list of entries.
 
     Args:
         mech: the mechanism.
-        preset: ``"full"``, a computed preset (``"base"``: the identifiable base set,
-            computed from 60 seeded random workspace poses, registered by
-            the sensitivity stage; a sidecar preset of the same name takes
-            precedence), a preset name from the sidecar, ``PRESET+TERM[+TERM…]`` (the
-            preset and joint-space terms on every actuated joint, e.g.
+        preset: ``"full"``, a computed preset named in ``computed`` (a sidecar preset of
+            the same name takes precedence), a preset name from the sidecar,
+            ``PRESET+TERM[+TERM…]`` (the preset and joint-space terms on every actuated joint, e.g.
             ``base+compliance``; see :func:`pincal.model.with_joint_terms`), or a list
             whose entries are ``"<joint>.<dof>"`` strings or ``{"joints": pattern, "dofs":
             [...]}`` mappings (fnmatch patterns over URDF joint names). Instead of ``dofs``,
@@ -340,10 +319,13 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
             joint's translation parallel to it) or ``about_parent`` (its rotation); an
             entry with ``hold: true`` removes what it names from the parameters listed
             before it.
+        computed: presets computed by a later stage (name → ``builder(mech)``); the
+            ``"base"`` preset is passed by :func:`pincal.sensitivity.parameters`.
 
     Raises:
         UnknownNameError: unknown preset, joint or dof (valid names listed).
     """
+    computed = {} if computed is None else computed
     if not isinstance(preset, str | list | tuple):
         raise ParameterError(
             f"preset must be a name or a list of entries, got {type(preset).__name__}"
@@ -353,14 +335,16 @@ def parameters(mech: Mechanism, preset: str | Sequence = "full") -> ParameterSet
         from pincal.model._joint_term_set import with_joint_terms
 
         base, *kinds = preset.split("+")
-        return with_joint_terms(mech, parameters(mech, base), kinds)
+        return with_joint_terms(mech, parameters(mech, base, computed=computed), kinds)
     if isinstance(preset, str):
         if preset == "full":
             return full_parameters(mech)
-        if preset in _COMPUTED_PRESETS and preset not in mech.presets:
-            return _COMPUTED_PRESETS[preset](mech)
+        if preset in computed and preset not in mech.presets:
+            return computed[preset](mech)
         if preset not in mech.presets:
-            raise UnknownNameError("preset", preset, ["full", *_COMPUTED_PRESETS, *mech.presets])
+            where = _COMPUTED_ELSEWHERE.get(preset)
+            hint = f" ('{preset}' is computed: use {where})" if where else ""
+            raise UnknownNameError("preset", preset, ["full", *computed, *mech.presets], hint)
         label, entries = preset, mech.presets[preset]
         if not isinstance(entries, list):
             raise ParameterError(f"preset {preset!r} must be a list of entries")

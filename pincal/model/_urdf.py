@@ -17,10 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from pincal._limits import Limits, active_limits
 from pincal.errors import InputLimitError, ModelFileError, UnknownNameError, clip
 from pincal.model._urdf_check import (
     JOINT_TYPES,
-    ModelLimits,
     check_joint_element,
     check_robot_element,
 )
@@ -85,12 +85,12 @@ class UrdfTree:
 
     The text is checked before anything is built (:mod:`pincal.model._urdf_check`):
     names, joint attributes and numbers (the message names the joint and attribute),
-    and the size limits of :class:`~pincal.model.ModelLimits` (links, degrees of
+    and the size limits of :class:`~pincal.model.Limits` (links, degrees of
     freedom, depth). Building the tree is linear in the number of links.
 
     Args:
         xml: URDF text.
-        limits: size limits (default :meth:`ModelLimits.from_env`).
+        limits: size limits (default: the ones in force, :func:`pincal.model.active_limits`).
         source: the file the text comes from, named in the messages.
 
     Raises:
@@ -100,16 +100,16 @@ class UrdfTree:
     """
 
     def __init__(
-        self, xml: str, limits: ModelLimits | None = None, source: str | os.PathLike | None = None
+        self, xml: str, limits: Limits | None = None, source: str | os.PathLike | None = None
     ):
         try:
-            self._load(xml, limits or ModelLimits.from_env())
+            self._load(xml, limits or active_limits())
         except (ModelFileError, InputLimitError) as exc:
             if source is None:
                 raise
             raise type(exc)(f"{clip(str(source), 200)}: {exc}") from None
 
-    def _load(self, xml: str, limits: ModelLimits) -> None:
+    def _load(self, xml: str, limits: Limits) -> None:
         # an upper bound of the link count, before spending time and memory on parsing
         limits.check("links", len(_LINK_TAG.findall(xml)), limits.links, "PINCAL_MAX_LINKS", "URDF")
         try:
@@ -157,7 +157,7 @@ class UrdfTree:
         self.depth = self._check_depth(limits, where)
         self._ancestors: dict[str, tuple[str, ...]] = {}
 
-    def _check_depth(self, limits: ModelLimits, where: str) -> int:
+    def _check_depth(self, limits: Limits, where: str) -> int:
         """Depth of the tree (joints from the root to the deepest link), in linear time."""
         children: dict[str, list[str]] = {}
         for joint in self.joints.values():

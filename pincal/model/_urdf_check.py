@@ -6,9 +6,9 @@ chain overflows its recursion (the interpreter dies), and ``createData`` allocat
 four nv × nv × nv tensors (second-order derivatives: 6.9 GB at nv = 600). So every URDF
 is checked here first, in pure Python, naming the element and attribute at fault:
 
-* size limits (:class:`ModelLimits`): links, degrees of freedom and tree depth, each
-  raisable with an environment variable (``PINCAL_MAX_LINKS``, ``PINCAL_MAX_DOF``,
-  ``PINCAL_MAX_TREE_DEPTH``);
+* size limits (:class:`pincal.model.Limits`, the ones in force by default): links,
+  degrees of freedom and tree depth (on the command line ``PINCAL_MAX_LINKS``,
+  ``PINCAL_MAX_DOF``, ``PINCAL_MAX_TREE_DEPTH``);
 * the attributes urdfdom requires (robot/link/joint names, joint type, parent/child,
   ``<limit>`` of revolute and prismatic joints with ``effort`` and ``velocity``, the
   ``joint`` of ``<mimic>``) and the numbers of origins, axes, limits, dynamics and
@@ -29,16 +29,14 @@ import tempfile
 import threading
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 from typing import TypeVar
 
-from pincal.errors import InputLimitError, ModelFileError, clip
+from pincal.errors import ModelFileError, clip
 
 __all__ = [
     "JOINT_TYPES",
     "MAX_COORDINATE",
     "MAX_LIMIT",
-    "ModelLimits",
     "captured_stderr",
     "check_joint_element",
     "check_robot_element",
@@ -61,75 +59,6 @@ MAX_LIMIT = 1e16
 _FLOAT_MAX = sys.float_info.max
 
 T = TypeVar("T")
-
-
-@dataclass(frozen=True)
-class ModelLimits:
-    """Size limits checked on a URDF before it is built.
-
-    Defaults leave a margin over real machines (the largest example-robot-data robot,
-    TIAGo dual, has 101 degrees of freedom, 130 links and a depth of 21) while keeping
-    Pinocchio's data (which grows as nv³: 0.6 GB and 1 s at nv = 200, 6.9 GB at 600)
-    and its recursive URDF parser (it overflows the stack beyond ~3 000 levels) safe.
-
-    Attributes:
-        links: most ``<link>`` elements (``PINCAL_MAX_LINKS``, default 1000).
-        dof: most degrees of freedom nv (``PINCAL_MAX_DOF``, default 200).
-        depth: most joints from the root link to any link (``PINCAL_MAX_TREE_DEPTH``,
-            default 256).
-        parameters: most parameters an identifiability analysis takes
-            (``PINCAL_MAX_PARAMETERS``, default 3000: ~4 s; the cost grows with the
-            square of the count).
-    """
-
-    links: int = 1000
-    dof: int = 200
-    depth: int = 256
-    parameters: int = 3000
-
-    @classmethod
-    def from_env(cls) -> ModelLimits:
-        """The limits with the environment variables applied.
-
-        Raises:
-            InputLimitError: a variable is not a positive integer.
-        """
-        return cls(
-            links=_env_int("PINCAL_MAX_LINKS", cls.links),
-            dof=_env_int("PINCAL_MAX_DOF", cls.dof),
-            depth=_env_int("PINCAL_MAX_TREE_DEPTH", cls.depth),
-            parameters=_env_int("PINCAL_MAX_PARAMETERS", cls.parameters),
-        )
-
-    def check(self, what: str, value: int, limit: int, env: str, where: str) -> None:
-        """Raise InputLimitError when ``value > limit`` (the message says how to raise it)."""
-        if value > limit:
-            why = _WHY.get(env, "")
-            raise InputLimitError(
-                f"{where} has {value} {what}, over the limit of {limit}{why}; if the model is "
-                f"right, raise the limit with the environment variable {env}={value}"
-            )
-
-
-#: what each limit protects, for the messages
-_WHY = {
-    "PINCAL_MAX_DOF": " (Pinocchio's data grows as dof³: 0.6 GB at 200, 6.9 GB at 600)",
-    "PINCAL_MAX_TREE_DEPTH": " (Pinocchio's URDF parser crashes beyond ~3000 levels)",
-    "PINCAL_MAX_PARAMETERS": " (the analysis time grows with the square of the count)",
-}
-
-
-def _env_int(name: str, default: int) -> int:
-    text = os.environ.get(name)
-    if not text:
-        return default
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise InputLimitError(f"{name}={clip(text)} must be a positive integer (default {default})")
-    return value
 
 
 def _name(e: ET.Element, what: str) -> str:

@@ -6,11 +6,7 @@ output directory (read from its ``identification.json``).
 
 from __future__ import annotations
 
-from pincal.report._calibration import (
-    IDENTIFICATION_JSON,
-    calibration_report,
-    read_identification,
-)
+from pincal.report._calibration import calibration_report
 from pincal.report._campaign_notes import campaign_notes
 from pincal.report._document import ReportFiles, Section, Table, write_report
 from pincal.report._plots import (
@@ -26,7 +22,6 @@ from pincal.report._plots import (
 from pincal.report._sections import block_label
 
 __all__ = [
-    "IDENTIFICATION_JSON",
     "ErrorStats",
     "ReportFiles",
     "Section",
@@ -41,6 +36,5 @@ __all__ = [
     "plot_index_history",
     "plot_parameters",
     "plot_validation_summary",
-    "read_identification",
     "write_report",
 ]

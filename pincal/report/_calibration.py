@@ -1,8 +1,8 @@
 """The report of a calibration output directory, read from its ``identification.json``.
 
-The file is read with :meth:`pincal.identification.IdentificationResult.from_dict` (the
-one reader of the format; pincal 0.1 files included); this module checks the report's
-own annotations (validation errors, index history) and draws them.
+The file is read by :func:`pincal.io.read_identification` (the one reader of the format;
+pincal 0.1 files included); this module checks the report's own annotations
+(validation errors, index history) and renders the result.
 """
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ from typing import Any, SupportsFloat, cast
 
 import numpy as np
 
-from pincal.errors import ReportError
+from pincal.errors import CalibrationDirectoryError, ReportError
 from pincal.identification import IdentificationResult
-from pincal.report._campaign_notes import read_json_object
+from pincal.io import IDENTIFICATION_FILE, read_identification
 from pincal.report._document import ReportFiles, Section, Table, write_report
 from pincal.report._plots import (
     plot_convergence,
@@ -40,12 +40,8 @@ from pincal.report._sections import (
     residual_section,
 )
 
-__all__ = ["IDENTIFICATION_JSON", "MAX_JSON_BYTES", "calibration_report", "read_identification"]
+__all__ = ["calibration_report"]
 
-#: name of the calibration summary written by a calibration run
-IDENTIFICATION_JSON = "identification.json"
-#: largest identification.json read [bytes]
-MAX_JSON_BYTES = 20_000_000
 _ALL = ("x", "y", "z", "rx", "ry", "rz")
 _SUMMARY_KEYS = (
     ("rms_position_mm", "RMS position [mm]"),
@@ -100,28 +96,22 @@ def _check_annotations(notes: dict) -> None:
             _numbers(values, f"index_history.{key}")
 
 
-def read_identification(path: str | os.PathLike) -> IdentificationResult:
-    """Read and check a calibration summary (``identification.json``).
+def _read(path: Path) -> IdentificationResult:
+    """The result of ``path``, read by :func:`pincal.io.read_identification`.
 
-    The result part is read by :meth:`IdentificationResult.from_dict` (format version 2,
-    or pincal 0.1's files); the report's annotations — ``validation_before`` /
-    ``validation_after`` (``rms_position_mm, max_position_mm, rms_orientation_mrad,
-    max_orientation_mrad``; null for a block not measured), ``validation_components``
-    (the components the validation errors are taken over), ``validation_errors``
-    (``{before|after: {position: [m], orientation: [rad]}}`` per validation pose),
-    ``index_history`` (``{O1: [...], ...}``) and the parameters' ``true`` values (as
-    ``annotations["truth"]``) — are checked here.
-
-    Returns:
-        IdentificationResult (no parameter set or mechanism; context in ``annotations``).
+    The report's annotations are checked: ``validation_before`` / ``validation_after``
+    (``rms_position_mm, max_position_mm, rms_orientation_mrad, max_orientation_mrad``;
+    null for a block not measured), ``validation_components``, ``validation_errors``
+    (``{before|after: {position: [m], orientation: [rad]}}`` per validation pose) and
+    ``index_history`` (``{O1: [...], ...}``).
 
     Raises:
-        ReportError: missing file, invalid JSON, a newer format version or a malformed
-            entry (the message names the entry).
+        ReportError: the file is missing or malformed, or an annotation is (named).
     """
-    path = Path(path)
-    data = read_json_object(path, "identification.json", MAX_JSON_BYTES)
-    result = IdentificationResult.from_dict(data, source=repr(str(path)))
+    try:
+        result = read_identification(path)
+    except CalibrationDirectoryError as exc:
+        raise ReportError(str(exc)) from None
     _check_annotations(dict(result.annotations))
     return result
 
@@ -212,7 +202,7 @@ def calibration_report(
 ) -> ReportFiles:
     """Write the report of a calibration output directory: HTML, Markdown and JSON.
 
-    Reads ``<directory>/identification.json`` (see :func:`read_identification`) and
+    Reads ``<directory>/identification.json`` (:func:`pincal.io.read_identification`) and
     writes ``<out>/<name>.html`` (self-contained: plots embedded), ``<name>.md`` and
     ``<name>.json`` with the same tables (lengths in µm, angles in µrad, 2σ
     uncertainties): data and noise (declared or estimated), residuals before/after,
@@ -238,7 +228,7 @@ def calibration_report(
     src = Path(directory)
     if not src.is_dir():
         raise ReportError(f"calibration directory {str(src)!r} does not exist")
-    result = read_identification(src / IDENTIFICATION_JSON)
+    result = _read(src / IDENTIFICATION_FILE)
     if notes:
         _check_annotations(dict(notes))
         result = dataclasses.replace(result, annotations={**result.annotations, **notes})

@@ -2,7 +2,9 @@
 
 The analytic identification Jacobian, identifiability
 (rank, base set, absorbed combinations, parameters that break loop closure), the one
-numerical-rank rule, and global sensitivity over a workspace.
+numerical-rank rule, global sensitivity over a workspace, and :func:`parameters` — the
+preset resolver with the ``"base"`` preset computed here (later stages resolve preset
+names through it).
 """
 
 from __future__ import annotations
@@ -29,11 +31,13 @@ from pincal.sensitivity._jacobian import (
     identification_jacobian,
     pose_sensitivity,
 )
+from pincal.sensitivity._presets import COMPUTED_PRESETS, parameters
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank, numerical_ranks
 
 __all__ = [
     "BASE_POSES",
     "BASE_RTOL",
+    "COMPUTED_PRESETS",
     "RANK_RTOL",
     "BaseSet",
     "BatchSensitivity",
@@ -51,6 +55,7 @@ __all__ = [
     "identification_jacobian",
     "numerical_rank",
     "numerical_ranks",
+    "parameters",
     "pose_sensitivity",
     "sensitivities_batch",
 ]

@@ -34,11 +34,10 @@ import numpy as np
 from pincal.errors import PincalError, UnidentifiableError
 from pincal.model import (
     Mechanism,
-    ModelLimits,
     ParameterSet,
+    active_limits,
     degenerate_translations,
     full_parameters,
-    register_preset,
     sample_actuators,
 )
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
@@ -313,12 +312,12 @@ def identifiability(
         rtol: relative rank threshold.
 
     Raises:
-        InputLimitError: more parameters than ``ModelLimits.parameters`` (raise it with
-            the environment variable ``PINCAL_MAX_PARAMETERS``).
+        InputLimitError: more parameters than ``Limits.parameters`` of the limits in force
+            (:func:`pincal.model.active_limits`; ``PINCAL_MAX_PARAMETERS`` on the command line).
     """
     from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
 
-    limits = ModelLimits.from_env()
+    limits = active_limits()
     limits.check(
         f"parameters in set {params.label!r} to analyse",
         len(params),
@@ -424,5 +423,3 @@ def base_parameters(mech: Mechanism, params: ParameterSet | None = None) -> Para
     """
     return base_set(mech, params).params
 
-
-register_preset("base", base_parameters)  # parameters(mech, "base"), without model importing us

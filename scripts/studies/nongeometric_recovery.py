@@ -40,12 +40,11 @@ from pincal.model import (
     actual_joint_values,
     joint_term_prior,
     load_mechanism,
-    parameters,
     sample_actuators,
     with_joint_terms,
     with_payload,
 )
-from pincal.sensitivity import identifiability
+from pincal.sensitivity import identifiability, parameters
 
 NOISE = NoiseModel(position=0.01, orientation=0.01)  # [mm], [mrad]
 GEOMETRIC_SIGMA = 2e-4  # [m] or [rad]

@@ -15,8 +15,8 @@ import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
-from pincal.measure import ORIENTATION_CONVENTION
 from pincal.model import load_mechanism
+from pincal.validation import ORIENTATION_CONVENTION
 from tests.cli._checks import assert_clean_failure
 
 MACHINES = Path(__file__).resolve().parents[1] / "model" / "machines"
@@ -174,8 +174,9 @@ def test_validate_uses_the_same_convention_and_components(rrr3_campaign):
 def test_measured_cycles_are_judged_on_their_components(tmp_path):
     """--data on rrr3: x y rz measured; AP_p over x y, only AP_c among the angles."""
     from pincal.io import write_measurements
-    from pincal.measure import Measurements, iso_test_cube, pose_characteristics, simulate_cycles
-    from pincal.model import parameters
+    from pincal.measure import Measurements
+    from pincal.sensitivity import parameters
+    from pincal.validation import iso_test_cube, pose_characteristics, simulate_cycles
 
     nominal = load_mechanism(RRR3)
     cube = iso_test_cube(nominal, rng=1)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
@@ -32,6 +33,7 @@ def _sections(report: Path) -> dict[str, dict]:
     return {s["title"]: s for s in json.loads(report.read_text())["sections"]}
 
 
+@pytest.mark.slow  # ~35 s (a campaign run); report sections are checked fast in tests/report
 def test_campaign_report_has_every_section_of_the_demo_report(tmp_path):
     (tmp_path / "c.yaml").write_text(CAMPAIGN)
     out = tmp_path / "cal"

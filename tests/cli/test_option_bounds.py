@@ -9,8 +9,8 @@ from __future__ import annotations
 import pytest
 from click.testing import CliRunner
 
-from pincal._files import max_bytes
 from pincal.cli import main
+from pincal.cli._environment import limits_from_environment
 from pincal.errors import InputLimitError, MeasurementFormatError
 from pincal.io import read_measurement_file
 from pincal.model import load_mechanism
@@ -27,7 +27,7 @@ def one_line_error(args: list[str], code: int = 1) -> str:
 def test_max_file_mb_must_be_a_finite_positive_number(monkeypatch, value):
     monkeypatch.setenv("PINCAL_MAX_FILE_MB", value)
     with pytest.raises(InputLimitError, match=r"PINCAL_MAX_FILE_MB=.* in \(0, 1000000000\]"):
-        max_bytes()
+        limits_from_environment({"PINCAL_MAX_FILE_MB": value})
     line = one_line_error(["info", "wedge3"])
     assert "PINCAL_MAX_FILE_MB" in line and "unset it" in line
 

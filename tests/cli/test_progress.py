@@ -72,7 +72,9 @@ def _simulated(tmp_path):
     return meas
 
 
-@pytest.mark.parametrize("bars", [True, False], ids=["terminal", "log"])
+@pytest.mark.parametrize(  # the log form (the same command, ~15 s) in the slow lane
+    "bars", [True, pytest.param(False, marks=pytest.mark.slow)], ids=["terminal", "log"]
+)
 def test_json_stdout_stays_valid_with_progress_on(tmp_path, monkeypatch, shown_at_once, bars):
     if bars:
         monkeypatch.setattr(_progress, "interactive", lambda: True)

@@ -123,6 +123,7 @@ def _scaled_readings(path: Path, out: Path, factor: float) -> Path:
     return out
 
 
+@pytest.mark.slow  # ~30 s; the pose-file χ² verdicts of this file stay in the fast lane
 def test_instrument_file_chi2_is_judged(tmp_path):
     """Ballbar readings: the fit is judged against the file's std (issue 25, bar scale)."""
     data = tmp_path / "b.csv"

@@ -51,6 +51,9 @@ CASES = [
     ("stewart-5", "stewart_6ups", "[x, y, z, rx, ry]", "base", ("x", "y", "z", "rx", "ry")),
     ("stewart", "stewart_6ups", None, "stewart42", POS + ORI),
 ]
+#: cases run in the slow lane only (~10 s of calibration each); the fast lane keeps a
+#: mixed planar set (rrr3) and a position-only one (delta)
+SLOW_CASES = {"pkm5", "stewart-5", "stewart"}
 
 
 def _ok(args: list[str]):
@@ -70,7 +73,13 @@ def _table(report: dict, title: str, k: int = 0) -> dict[str, list]:
     return {str(row[0]): row for row in section["tables"][k]["rows"]}
 
 
-@pytest.fixture(scope="module", params=CASES, ids=[c[0] for c in CASES])
+@pytest.fixture(
+    scope="module",
+    params=[
+        pytest.param(c, id=c[0], marks=[pytest.mark.slow] if c[0] in SLOW_CASES else [])
+        for c in CASES
+    ],
+)
 def campaign(request, tmp_path_factory):
     """Runs the campaign once per machine; returns what the CLI printed and wrote."""
     _, model, measured, preset, comps = request.param

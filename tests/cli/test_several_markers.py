@@ -11,6 +11,7 @@ import json
 
 import numpy as np
 import pinocchio as pin
+import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
@@ -142,6 +143,7 @@ def test_marker_option_and_campaign_errors_are_named(tmp_path):
     assert bad.exit_code != 0 and "markers.more_columns[0]" in bad.output
 
 
+@pytest.mark.slow  # ~45 s (TIAGo); two markers are checked fast above
 def test_tiago_file_two_markers_and_its_copies(tmp_path):
     """The real TIAGo export: markers 1 and 2 fitted together; columns 4 found to repeat 3."""
     from pathlib import Path

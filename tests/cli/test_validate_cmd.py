@@ -9,8 +9,9 @@ import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
-from pincal.measure import Measurements, NoiseModel, simulate_measurements, validate_held_out
+from pincal.measure import Measurements, NoiseModel, simulate_measurements
 from pincal.model import load_mechanism, parameters, sample_actuators
+from pincal.validation import validate_held_out
 
 
 def _run(*args):

@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 from pincal.cli import _limits, main
-from pincal.measure import prediction_caveat
+from pincal.validation import prediction_caveat
 
 
 def _run(*args):
@@ -50,7 +50,7 @@ def test_validate_prints_the_reason_not_the_number(wedge, monkeypatch):
     assert doc["predicted"]["withheld"] is None
     assert doc["predicted"]["model_rms_position_mm"] > 0
     # the same calibration judged against a bound its covariance exceeds
-    monkeypatch.setattr("pincal.measure._held_out.PREDICTION_COND_BOUND", 1.0)
+    monkeypatch.setattr("pincal.validation._held_out.PREDICTION_COND_BOUND", 1.0)
     res = _run("validate", wedge / "cal", "--data", wedge / "held.csv", "--json")
     p = json.loads(res.stdout)["predicted"]
     assert p["model_rms_position_mm"] is None and p["observed_rms_position_mm"] is None
@@ -75,8 +75,9 @@ def test_validate_data_rows_are_bounded_unless_yes(wedge, monkeypatch):
 
 
 def test_parameters_held_for_weakness_withhold_the_prediction():
-    from pincal.measure import NoiseModel, simulate_measurements, validate_held_out
+    from pincal.measure import NoiseModel, simulate_measurements
     from pincal.model import load_mechanism, parameters, sample_actuators
+    from pincal.validation import validate_held_out
 
     nominal = load_mechanism("wedge3")
     params = parameters(nominal, "patent")

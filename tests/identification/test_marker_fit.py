@@ -80,6 +80,7 @@ def test_prior_is_the_map_solution_of_the_linear_problem():
         GaussNewtonOptions(prior_std=(1.0,))
 
 
+@pytest.mark.slow  # ~80 s on a loaded 2-core box; the fast lane keeps the other marker fits
 def test_weak_wrist_parameters_are_held_and_named():
     mech, setup, meas = _ur5_case(40, 0.02, 2)
     fit = fit_markers(mech, setup, meas)

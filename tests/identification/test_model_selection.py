@@ -14,13 +14,8 @@ from pincal.errors import MeasurementError
 from pincal.identification import Fitted, fitted, identify, select_model
 from pincal.io import write_measurements
 from pincal.measure import simulate_measurements
-from pincal.model import (
-    actual_joint_values,
-    load_mechanism,
-    parameters,
-    sample_actuators,
-    with_joint_terms,
-)
+from pincal.model import actual_joint_values, load_mechanism, sample_actuators, with_joint_terms
+from pincal.sensitivity import parameters
 
 NOISE = {"position": 0.01, "orientation": 0.01}  # [mm], [mrad]
 

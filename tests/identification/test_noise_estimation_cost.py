@@ -17,7 +17,8 @@ from pincal.identification import identify
 from pincal.identification._noise import RATIO_RTOL
 from pincal.identification._problem import CalibrationProblem
 from pincal.measure import simulate_measurements
-from pincal.model import Mechanism, load_mechanism, parameters, sample_actuators
+from pincal.model import Mechanism, load_mechanism, sample_actuators
+from pincal.sensitivity import parameters
 from tests.open_world.machines import MODEL_MACHINES
 
 BUNDLED = MODEL_MACHINES.parents[2] / "pincal" / "models"

@@ -66,6 +66,7 @@ def test_unit_mistakes_are_named_before_fitting(stewart, clean, factor, declared
     assert "--force" in verdict.reason()
 
 
+@pytest.mark.slow  # ~15 s; the unit-mistake verdict itself is checked fast above
 def test_unit_mistake_refused_after_fitting(stewart, stewart42, clean):
     """m declared as mm: the fit ends with parameters moved far beyond the bound."""
     meas = _scaled(clean, 1e-3)
@@ -84,7 +85,7 @@ def test_ten_times_too_small_is_refused(stewart, clean):
     assert not verdict.passed and "cm declared as mm" in verdict.reason()
 
 
-@pytest.mark.parametrize("size", [1e-3, 5e-3])
+@pytest.mark.parametrize("size", [1e-3, pytest.param(5e-3, marks=pytest.mark.slow)])
 def test_outliers_refuse_least_squares_and_pass_huber(stewart, stewart42, clean, size):
     bad_poses = [3, 17]  # 5 % of 40
     pos = clean.positions.copy()

@@ -12,7 +12,7 @@ from click.testing import CliRunner
 
 from pincal.cli import main
 from pincal.errors import MeasurementError, PincalError
-from pincal.measure import (
+from pincal.validation import (
     iso_test_cube,
     pose_characteristics,
     simulate_cycles,

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from pincal._limits import Limits
 from pincal.cli import main
 from pincal.errors import (
     ActuatorRangeError,
@@ -198,9 +199,12 @@ def test_fifo_without_writer_fails_at_once(tmp_path, hexa):
 def test_size_cap_applies_before_reading(tmp_path, hexa, good_csv, monkeypatch):
     big = tmp_path / "big.csv"
     big.write_bytes(good_csv.read_bytes() + b"#" * (2 * 1024 * 1024))
-    monkeypatch.setenv("PINCAL_MAX_FILE_MB", "1")
-    with pytest.raises(InputLimitError, match="big.csv.*PINCAL_MAX_FILE_MB"):
+    with (
+        Limits(file_bytes=2**20).applied(),
+        pytest.raises(InputLimitError, match="big.csv.*PINCAL_MAX_FILE_MB"),
+    ):
         read_measurement_file(big, hexa)
+    monkeypatch.setenv("PINCAL_MAX_FILE_MB", "1")  # the command line reads it
     _one_line_error(
         _cli("calibrate", "hexaslide_6pus", "--data", str(big), "--out", str(tmp_path / "c")),
         "big.csv",

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from pincal._limits import Limits
 from pincal.cli import main
 from pincal.errors import CalibrationDirectoryError, PincalError
 from pincal.identification import identify
@@ -131,8 +132,10 @@ def test_a_listed_file_over_the_cap_is_refused_without_reading(cal, monkeypatch)
     m = _manifest(cal)
     m["files"]["big.bin"] = "0" * 64
     _save(cal, m, rehash=False)
-    monkeypatch.setenv("PINCAL_MAX_FILE_MB", "1")
-    with pytest.raises(CalibrationDirectoryError, match="over the 1 MB limit.*PINCAL_MAX_FILE_MB"):
+    with (
+        Limits(file_bytes=2**20).applied(),
+        pytest.raises(CalibrationDirectoryError, match="over the 1 MB limit.*PINCAL_MAX_FILE_MB"),
+    ):
         read_calibration(cal)
 
 

@@ -112,6 +112,7 @@ def test_batched_solve_from_the_other_mode_returns_home_branch():
     assert not ok[0]  # the batched Newton alone stays on the guess's mode: rejected
 
 
+@pytest.mark.slow  # ~18 s (256 draws); warm starts are checked fast in test_warm_guesses_and_branch
 def test_every_sampled_pose_closes_whatever_the_warm_start():
     """A warm start never loses a pose the solve from home closes (prs3, 256 draws).
 

@@ -85,7 +85,7 @@ def test_info_shows_each_parameter_in_the_parent_frame():
 
 def test_a_joint_space_term_is_described_without_a_direction():
     mech = load_mechanism("ur5")
-    params = parameters(mech, "base+gain")
+    params = parameters(mech, "full+gain")  # the model resolves full; base is sensitivity's
     p = next(q for q in params.parameters if q.dof == "gain")
     rec = direction_record(mech, p.name, p.joint, p.dof, p.twist)
     assert rec["kind"] == "joint term" and rec["parent_direction"] == [0.0, 0.0, 0.0]

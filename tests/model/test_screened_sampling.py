@@ -51,6 +51,7 @@ def test_too_few_feasible_draws_is_a_clear_error(mech):
         pincal.sample_actuators(mech, 500, np.random.default_rng(0), max_tries_per_pose=1)
 
 
+@pytest.mark.slow  # ~20 s; screened sampling itself is checked fast above
 def test_closable_batch_decides_most_draws_in_batch(monkeypatch):
     """Infeasible draws mostly cost a batched solve, not a failing pose-by-pose continuation,
     and the verdicts are the pose-by-pose solver's."""

@@ -17,8 +17,8 @@ from click.testing import CliRunner
 from pincal.cli import main
 from pincal.errors import InputLimitError, ModelFileError, UnreachablePoseError
 from pincal.model import (
+    Limits,
     Mechanism,
-    ModelLimits,
     UrdfTree,
     load_mechanism,
     parameters,
@@ -117,8 +117,10 @@ def _load_into(path: Path, caught: list[Exception]) -> None:
 def test_mjcf_is_read_bounded(tmp_path, monkeypatch):
     xml = tmp_path / "arm.xml"
     xml.write_text("<mujoco>" + " " * 3_000_000 + "</mujoco>")
-    monkeypatch.setenv("PINCAL_MAX_FILE_MB", "1")
-    with pytest.raises(InputLimitError, match="MJCF file .*arm.xml .*PINCAL_MAX_FILE_MB"):
+    with (
+        Limits(file_bytes=2**20).applied(),
+        pytest.raises(InputLimitError, match="MJCF file .*arm.xml .*PINCAL_MAX_FILE_MB"),
+    ):
         load_mechanism(xml)
 
 
@@ -179,9 +181,12 @@ def test_deep_chain_is_refused_before_pinocchio_parses_it(tmp_path, monkeypatch)
     assert len(xml) > 500_000
     with pytest.raises(InputLimitError, match=r"5001 links, over the limit of 1000"):
         Mechanism(xml)
-    monkeypatch.setenv("PINCAL_MAX_LINKS", "6000")  # then the depth limit still holds
-    with pytest.raises(InputLimitError, match=r"5000 joints in its deepest chain.*limit of 256"):
+    with (  # more links allowed: then the depth limit still holds
+        Limits(links=6000).applied(),
+        pytest.raises(InputLimitError, match=r"5000 joints in its deepest chain.*limit of 256"),
+    ):
         Mechanism(xml)
+    monkeypatch.setenv("PINCAL_MAX_LINKS", "6000")  # the same on the command line
     line = cli_error(["info", str(write_model(tmp_path / "deep", xml))], "InputLimitError")
     assert "deep.urdf" in line and "PINCAL_MAX_TREE_DEPTH=5000" in line
 
@@ -195,18 +200,24 @@ def test_deep_mjcf_is_refused_before_the_recursive_conversion(tmp_path, monkeypa
     path.write_text(f"<mujoco><worldbody>{bodies}{'</body>' * n}</worldbody></mujoco>")
     with pytest.raises(InputLimitError, match=r"3000 bodies and sites.*PINCAL_MAX_LINKS"):
         load_mechanism(path)
-    monkeypatch.setenv("PINCAL_MAX_LINKS", "5000")
-    with pytest.raises(InputLimitError, match=r"'deep' has 3000 nested bodies.*limit of 256"):
+    with (
+        Limits(links=5000).applied(),
+        pytest.raises(InputLimitError, match=r"'deep' has 3000 nested bodies.*limit of 256"),
+    ):
         load_mechanism(path)
+    monkeypatch.setenv("PINCAL_MAX_LINKS", "5000")  # the same on the command line
     assert "PINCAL_MAX_TREE_DEPTH=3000" in cli_error(["info", str(path)], "InputLimitError")
 
 
 def test_depth_limit_can_be_raised(monkeypatch):
-    with pytest.raises(InputLimitError, match="PINCAL_MAX_TREE_DEPTH"):
+    with pytest.raises(InputLimitError, match=r"PINCAL_MAX_TREE_DEPTH.*Limits\(depth=300\)"):
         UrdfTree(chain(300, "fixed", limit=""))
-    monkeypatch.setenv("PINCAL_MAX_TREE_DEPTH", "400")
-    assert UrdfTree(chain(300, "fixed", limit="")).depth == 300
-    assert UrdfTree(chain(300, "fixed", limit=""), ModelLimits(depth=300)).depth == 300
+    with Limits(depth=400).applied():
+        assert UrdfTree(chain(300, "fixed", limit="")).depth == 300
+    assert UrdfTree(chain(300, "fixed", limit=""), Limits(depth=300)).depth == 300
+    monkeypatch.setenv("PINCAL_MAX_TREE_DEPTH", "400")  # the library reads no environment
+    with pytest.raises(InputLimitError, match="300 joints in its deepest chain"):
+        UrdfTree(chain(300, "fixed", limit=""))
 
 
 def _never(*args, **kwargs):
@@ -227,8 +238,10 @@ def test_spherical_joints_from_the_sidecar_count_in_the_dof_limit(monkeypatch):
     xml = (MACHINES / "rssr" / "rssr.urdf").read_text()
     sidecar = read_sidecar(MACHINES / "rssr" / "rssr.yaml")
     nv = Mechanism(xml, sidecar).model.nv
-    monkeypatch.setenv("PINCAL_MAX_DOF", str(nv - 1))
-    with pytest.raises(InputLimitError, match=rf"{nv} degrees of freedom \(with the sidecar"):
+    with (
+        Limits(dof=nv - 1).applied(),
+        pytest.raises(InputLimitError, match=rf"{nv} degrees of freedom \(with the sidecar"),
+    ):
         Mechanism(xml, sidecar)
 
 
@@ -245,9 +258,13 @@ def test_huge_link_count_is_refused_before_parsing(tmp_path, monkeypatch):
 def test_identifiability_parameter_count_is_bounded(monkeypatch):
     mech = Mechanism(chain(4), {"measured_frame": "l4"})
     params = parameters(mech, "full")
-    monkeypatch.setenv("PINCAL_MAX_PARAMETERS", str(len(params) - 1))
-    with pytest.raises(InputLimitError, match=rf"{len(params)} parameters in set 'full'"):
+    with (
+        Limits(parameters=len(params) - 1).applied(),
+        pytest.raises(InputLimitError, match=rf"{len(params)} parameters in set 'full'"),
+    ):
         identifiability(mech, params, rng=np.random.default_rng(0))
+    monkeypatch.setenv("PINCAL_MAX_PARAMETERS", str(len(params) - 1))
+    identifiability(mech, params, rng=np.random.default_rng(0))  # the library ignores it
     res = CliRunner().invoke(main, ["info", "stewart_6ups", "--json"])  # error as JSON
     assert res.exit_code == 1, res.output
     err = json.loads(res.stdout)["error"]
@@ -257,8 +274,9 @@ def test_identifiability_parameter_count_is_bounded(monkeypatch):
 
 def test_limit_variables_must_be_positive_integers(monkeypatch):
     monkeypatch.setenv("PINCAL_MAX_DOF", "lots")
-    with pytest.raises(InputLimitError, match="PINCAL_MAX_DOF='?lots'? must be a positive integer"):
-        Mechanism(chain(2))
+    Mechanism(chain(2))  # the library reads no environment; the command line refuses it
+    line = cli_error(["info", "wedge3"], "InputLimitError")
+    assert "PINCAL_MAX_DOF=lots must be a positive integer (default 200)" in line
 
 
 # ---------------------------------------------------------------- 3. absurd numbers

@@ -23,8 +23,8 @@ from pincal.cli import main
 from pincal.identification import identify
 from pincal.io import read_commands, write_poses
 from pincal.measure import simulate_measurements
-from pincal.model import COMPONENTS, Mechanism, load_mechanism, parameters, sample_actuators
-from pincal.sensitivity import identification_jacobian
+from pincal.model import COMPONENTS, Mechanism, load_mechanism, sample_actuators
+from pincal.sensitivity import identification_jacobian, parameters
 
 ALL = ("x", "y", "z", "rx", "ry", "rz")
 

@@ -19,8 +19,8 @@ import yaml
 from pincal.errors import MobilityError, PincalError, SingularConfigurationError
 from pincal.identification import identify
 from pincal.measure import simulate_measurements
-from pincal.model import Mechanism, load_mechanism, parameters, sample_actuators
-from pincal.sensitivity import identifiability
+from pincal.model import Mechanism, load_mechanism, sample_actuators
+from pincal.sensitivity import identifiability, parameters
 from tests.open_world import machines as m
 
 MODEL_MACHINES = Path(__file__).parents[1] / "model" / "machines"

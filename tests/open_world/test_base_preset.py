@@ -10,8 +10,8 @@ from click.testing import CliRunner
 import pincal
 from pincal.cli import main
 from pincal.errors import UnknownNameError
-from pincal.model import Mechanism, degenerate_translations, load_mechanism, parameters
-from pincal.sensitivity import BASE_POSES, BASE_RTOL, base_parameters, identifiability
+from pincal.model import Mechanism, degenerate_translations, load_mechanism
+from pincal.sensitivity import BASE_POSES, BASE_RTOL, base_parameters, identifiability, parameters
 from tests.open_world.machines import MJCF, rssr_emulated_ball, write_machine
 from tests.sensitivity.five_bar import FIVE_BAR_SIDECAR, FIVE_BAR_URDF
 

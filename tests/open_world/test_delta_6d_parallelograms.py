@@ -12,8 +12,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pincal.model import load_mechanism, parameters, sample_actuators
-from pincal.sensitivity import closure_breaking, identifiability, identification_jacobian
+from pincal.model import load_mechanism, sample_actuators
+from pincal.sensitivity import (
+    closure_breaking,
+    identifiability,
+    identification_jacobian,
+    parameters,
+)
 from tests.open_world import acceptance
 from tests.open_world.machines import delta_4r, write_machine
 

@@ -28,7 +28,8 @@ def mech(model):
 
 
 def test_base_preset_leaves_out_translations_between_coincident_axes(mech):
-    from pincal.model import degenerate_translations, parameters
+    from pincal.model import degenerate_translations
+    from pincal.sensitivity import parameters
 
     degenerate = {f"ball_{a}.t{d}" for a in "yz" for d in "xyz"}
     assert set(degenerate_translations(mech)) == degenerate

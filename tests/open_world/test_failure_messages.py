@@ -9,7 +9,8 @@ from click.testing import CliRunner
 import pincal
 from pincal.cli import main
 from pincal.errors import TooFewPosesError
-from pincal.model import load_mechanism, parameters, sample_actuators
+from pincal.model import load_mechanism, sample_actuators
+from pincal.sensitivity import parameters
 from tests.open_world.machines import MJCF, write_machine
 from tests.sensitivity.five_bar import FIVE_BAR_SIDECAR, FIVE_BAR_URDF
 

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.model import Mechanism, load_mechanism, parameters, sample_actuators
-from pincal.sensitivity import closure_breaking
+from pincal.model import Mechanism, load_mechanism, sample_actuators
+from pincal.sensitivity import closure_breaking, parameters
 from tests.open_world import acceptance
 from tests.open_world.machines import write_machine
 from tests.sensitivity.five_bar import FIVE_BAR_SIDECAR, FIVE_BAR_URDF

@@ -18,7 +18,8 @@ LOADS = [mc for mc in ROSTER if mc.refused is None]
 REFUSED = [mc for mc in ROSTER if mc.refused is not None]
 
 
-@pytest.mark.parametrize("preset", ["base", "full"])
+# every machine with its base set in the fast lane; the full preset in the slow lane
+@pytest.mark.parametrize("preset", ["base", pytest.param("full", marks=pytest.mark.slow)])
 @pytest.mark.parametrize("machine", LOADS, ids=[mc.name for mc in LOADS])
 def test_noise_free_recovery_on_every_machine(machine: Machine, preset: str, tmp_path):
     logging.disable(logging.WARNING)

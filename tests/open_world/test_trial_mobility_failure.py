@@ -17,7 +17,8 @@ from pincal.identification._local import gauss_newton
 from pincal.identification._options import GaussNewtonOptions
 from pincal.identification._problem import CalibrationProblem
 from pincal.measure import simulate_measurements
-from pincal.model import Mechanism, parameters, sample_actuators
+from pincal.model import Mechanism, sample_actuators
+from pincal.sensitivity import parameters
 from tests.open_world.machines import rssr_emulated_ball
 
 

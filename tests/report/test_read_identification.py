@@ -1,4 +1,5 @@
-"""The report reads identification.json through IdentificationResult.from_dict."""
+"""identification.json has one reader (pincal.io.read_identification); the report renders
+the IdentificationResult it returns and checks its own annotations."""
 
 from __future__ import annotations
 
@@ -8,9 +9,10 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.errors import ReportError
+from pincal.errors import CalibrationDirectoryError, ReportError
 from pincal.identification import IdentificationResult, identify
-from pincal.report import calibration_report, read_identification
+from pincal.io import read_identification
+from pincal.report import calibration_report
 
 DEMO_01 = {  # written by `pincal demo` of pincal 0.1
     "model": "stewart_6ups",
@@ -58,8 +60,14 @@ def test_result_written_by_to_dict_is_reported(tmp_path, stewart, stewart42, ste
 def test_bad_annotations_are_refused(tmp_path):
     path = tmp_path / "identification.json"
     path.write_text(json.dumps({**DEMO_01, "validation_errors": {"before": {}}}))
+    read_identification(path)  # a valid result; the annotation is the report's to check
     with pytest.raises(ReportError, match="'before' and 'after'"):
-        read_identification(path)
+        calibration_report(tmp_path)
     path.write_text(json.dumps({**DEMO_01, "version": 99}))
-    with pytest.raises(ReportError, match="version 99"):
+    with pytest.raises(CalibrationDirectoryError, match="version 99"):
         read_identification(path)
+    with pytest.raises(ReportError, match="version 99"):
+        calibration_report(tmp_path)
+    path.unlink()
+    with pytest.raises(ReportError, match="identification.json .* does not exist"):
+        calibration_report(tmp_path)

@@ -29,6 +29,7 @@ def _headings(markdown: str) -> list[str]:
     return re.findall(r"^#+ .*$", markdown, flags=re.MULTILINE)
 
 
+@pytest.mark.slow  # ~25 s (a whole demo twice); in-process drawing is checked fast below
 @forked
 def test_the_demo_report_drawn_in_process_is_the_pooled_one(tmp_path):
     out = tmp_path / "demo"

@@ -15,11 +15,11 @@ from pincal.model import (
     joint_term_basis,
     joint_term_prior,
     load_mechanism,
-    parameters,
     sample_actuators,
     split_model,
     with_joint_terms,
 )
+from pincal.sensitivity import parameters
 
 MACHINES = Path(__file__).parents[1] / "model" / "machines"
 ALL = ("compliance", "gain", "harmonics")

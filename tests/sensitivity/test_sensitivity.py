@@ -32,7 +32,8 @@ def fd_jacobian(mech, params, q_act_rows, values, h=1e-6):
     return np.stack(cols, axis=1)
 
 
-@pytest.mark.parametrize("preset", ["stewart42", "full"])
+# "full" (78 parameters, ~20 s) in the slow lane; the fast lane checks stewart42
+@pytest.mark.parametrize("preset", ["stewart42", pytest.param("full", marks=pytest.mark.slow)])
 @pytest.mark.parametrize("at_zero", [True, False])
 def test_analytic_matches_central_differences(stewart, stewart_poses, preset, at_zero):
     params = parameters(stewart, preset)

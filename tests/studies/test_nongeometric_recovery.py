@@ -23,6 +23,7 @@ def _load(name):
 script = _load("nongeometric_recovery")
 
 
+@pytest.mark.slow  # ~40 s; joint terms recovered fast: tests/identification/test_model_selection
 def test_joint_terms_recovered_at_the_bound():
     """12 seeded UR5 calibrations with compliance, gain and harmonics on every joint.
 

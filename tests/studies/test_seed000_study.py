@@ -76,6 +76,7 @@ def test_readme_table_monte_carlo_agrees_with_the_bound_within_its_standard_erro
             assert abs(mc - crb) <= 3 * se, (index, q, mc, se, crb)
 
 
+@pytest.mark.slow  # ~20 s of Monte Carlo; the README table's check above stays fast
 def test_monte_carlo_ratio_estimates_the_bound_ratio_reduced():
     """Reduced but complete: 3-level grid, O3, 20 paired repetitions at one noise level."""
     nominal, params = study._model()

@@ -15,7 +15,7 @@ actuator values are repeats of one command):
 - AP_a, AP_b, AP_c: ā − a_c etc., ISO 9283's angles a, b, c about the base x, y, z axes
   (R = Rz(c)·Ry(b)·Rx(a)) [rad], for the measured rotation components
   (``ORIENTATION_CONVENTION``, the same as ``pincal acceptance``: both use
-  :func:`~pincal.measure._iso9283.point_accuracy`);
+  :func:`~pincal.validation.point_accuracy`);
 - RP_l = l̄ + 3 S_l with l_i = ‖P_i − P̄‖ and S_l their sample std (n ≥ 2 repeats).
 """
 
@@ -27,10 +27,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pincal.measure._iso9283 import ORIENTATION_CONVENTION, point_accuracy
-from pincal.measure._measurements import Measurements, NoiseModel
+from pincal.design import predicted_validation_rms
+from pincal.measure import Measurements, NoiseModel
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
 from pincal.sensitivity import identification_jacobian
+from pincal.validation._iso9283 import ORIENTATION_CONVENTION, point_accuracy
 
 __all__ = [
     "PREDICTION_BOUNDS",
@@ -233,8 +234,6 @@ def _prediction(
     ``withheld`` is None, or why the prediction is not given (:func:`prediction_caveat`;
     the RMS entries are then None).
     """
-    from pincal.design import predicted_validation_rms
-
     cols = [params.index(n) for n in names]
     units = tuple(params.units[c] for c in cols)
     caveat = prediction_caveat(names, units, covariance)
