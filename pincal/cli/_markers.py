@@ -1,8 +1,9 @@
 """Marker calibrations from the command line: options, the fit, the prior's choice.
 
 ``pincal calibrate MODEL --link LINK --data TABLE`` reads TABLE as a marker table
-(:func:`pincal.io.read_marker_table`: joint columns named as the URDF joints, the
-marker's x, y, z columns chosen by ``--marker-columns``) and runs
+(:func:`pincal.io.read_marker_data`: joint columns named as the URDF joints or
+mapped, scaled and referenced by the model's sidecar; the marker's x, y, z columns
+chosen by ``--marker-columns``; rows where a marker was not seen left out, said) and runs
 :func:`pincal.identification.fit_markers`: closed-form registration of the instrument
 frame and the marker, then the joint fit with its guards. ``--prior`` adds a Gaussian
 prior on the machine's parameters (σ per class: lengths [mm], angles [mrad]); ``auto``
@@ -162,14 +163,16 @@ def marker_calibration(model: str, data: str, setup, preset: str | None, method:
     cross-validation table of ``auto``), the notes.
     """
     from pincal.identification import Prior, fit_markers
-    from pincal.io import distinct_markers, read_marker_sets
+    from pincal.io import distinct_markers, read_marker_data
     from pincal.measure import marker_mechanism
 
     setup, copies = distinct_markers(data, setup)
+    mech = marker_mechanism(model, setup)
+    table = read_marker_data(data, mech, setup)
+    meas = table.sets
+    copies = (*copies, *table.notes)
     for note in copies:
         click.echo(f"pincal: note: {note}", err=True)
-    mech = marker_mechanism(model, setup)
-    meas = read_marker_sets(data, mech, setup)
     preset = preset or "chain"
     if preset not in mech.presets:
         raise click.BadParameter(f"preset {preset!r} unknown; marker calibrations have "
