@@ -32,6 +32,18 @@ __all__ = [
 
 #: prior σ tried by ``--prior auto`` (the same number in mm for lengths and mrad for angles)
 PRIOR_GRID = (0.3, 1.0, 3.0, 10.0)
+#: registration RMS [m] beyond which the table does not describe the nominal robot
+MISFIT_RMS = 0.02
+
+
+def _misfit_note(rms: float) -> str:
+    return (
+        f"the registration leaves {rms * 1e3:.3g} mm RMS, more than {MISFIT_RMS * 1e3:g} mm: "
+        "a nominal robot seen by a capture system fits to millimetres, so the table and the "
+        "model disagree — check the joint columns (mapping, unit, reference pose: columns, "
+        "joint_units, joint_reference), the joints locked and their values, the marker's link "
+        "and the marker columns' unit"
+    )
 
 
 def marker_options(f: Callable[..., Any]) -> Callable[..., Any]:
@@ -191,6 +203,9 @@ def marker_calibration(model: str, data: str, setup, preset: str | None, method:
                    f"identifying from {len(meas[0])} poses", err=True)  # fmt: skip
     fit = fit_markers(mech, setup, meas, preset, method, prior, loss=loss)
     reg = fit.registration
+    if reg.fit.rms > MISFIT_RMS:
+        copies = (*copies, _misfit_note(reg.fit.rms))
+        click.echo(f"pincal: warning: {copies[-1]}", err=True)
     doc = {
         **setup.to_dict(),
         "preset": preset,

@@ -83,8 +83,8 @@ def example_robot_names() -> list[str]:
     A name is the URDF file stem (``panda``, ``ur10_robot``), or
     ``<package>/<stem>`` (``anymal_b_simple/anymal``) when the stem is ambiguous,
     plus the aliases ``ur5``, ``ur10``, ``talos`` (``talos_reduced``), ``talos_arm``
-    and ``talos_full`` (the names of example-robot-data's loader). The qualified form ``<package>/<stem>``
-    is accepted for every robot but only listed for ambiguous stems.
+    and ``talos_full`` (the names of example-robot-data's loader). The qualified form
+    ``<package>/<stem>`` is accepted for every robot but only listed for ambiguous stems.
     """
     return _erd_index()[1]
 

@@ -127,3 +127,45 @@ def test_a_missing_joint_reading_is_named(tmp_path):
              "--length-unit", "mm", "--out", tmp_path / "cal")  # fmt: skip
     assert r.exit_code != 0
     assert "line 4" in r.output and "'q6'" in r.output, r.output
+
+
+def test_a_campaign_locks_a_joint_the_file_does_not_have(tmp_path):
+    """``markers.lock``: wrist 1 stood still at -1.2 rad and was not exported."""
+    mech, actual = _actual()
+    q = sample_actuators(mech, 30, np.random.default_rng(6))
+    q[:, 3] = -1.2
+    _export(tmp_path / "full.csv", mech, actual, q)
+    lines = (tmp_path / "full.csv").read_text().splitlines()
+    k = lines[0].split(",").index("q4")
+    (tmp_path / "mocap.csv").write_text(
+        "".join(",".join(c for j, c in enumerate(ln.split(",")) if j != k) + "\n" for ln in lines)
+    )
+    (tmp_path / "ur5_lab.yaml").write_text(SIDECAR + "joint_units: deg\n")
+    (tmp_path / "campaign.yaml").write_text(
+        "model: ur5_lab.yaml\nmeasurements: {source: file, file: mocap.csv}\n"
+        "markers:\n  link: wrist_3_link\n  columns: [x1, y1, z1]\n  length_unit: mm\n"
+        "  lock: {wrist_1_joint: -1.2}\n"
+        "validation: {source: none, cv: 3}\nreport: false\n"
+    )
+    r = _run("run", tmp_path / "campaign.yaml", "--out", tmp_path / "cal")
+    assert r.exit_code == 0, r.output
+    assert "--lock wrist_1_joint=-1.2" in r.stderr
+    cv = json.loads((tmp_path / "cal" / "validation.json").read_text())["cv"]
+    assert cv["held_out_rms_mm"] < 0.2
+    _check_truth_at(tmp_path / "cal", actual, -1.2)
+    # the locked value is the campaign's: a wrong one leaves centimetres
+    (tmp_path / "bad.yaml").write_text(
+        (tmp_path / "campaign.yaml").read_text().replace("-1.2}", "0.0}")
+    )
+    bad = _run("run", tmp_path / "bad.yaml", "--out", tmp_path / "cal2", "--force")
+    assert "the registration leaves" in bad.output, bad.output
+
+
+def _check_truth_at(cal_dir, actual, wrist_1: float):
+    from pincal.io import read_calibration
+
+    cal = read_calibration(cal_dir).calibrated()
+    q_new = sample_actuators(cal, 20, np.random.default_rng(8))
+    q_full = np.insert(q_new, 3, wrist_1, axis=1)
+    err = np.linalg.norm(_points(cal, q_new) - _points(actual, q_full), axis=1)
+    assert np.sqrt(np.mean(err**2)) < 2e-4, err.max()
