@@ -140,6 +140,7 @@ def distinct_markers(path: str | Path, setup: MarkerSetup) -> tuple[MarkerSetup,
     if not setup.more_columns:
         return setup, ()
     table = read_table(path)
+    _check_titles(table)
     data = _marker_values(table, setup)
     values = [data[:, 3 * k : 3 * k + 3] for k in range(len(setup.marker_sets))]
     keep: list[int] = []
@@ -156,6 +157,16 @@ def distinct_markers(path: str | Path, setup: MarkerSetup) -> tuple[MarkerSetup,
         )
     sets = [setup.marker_sets[k] for k in keep]
     return replace(setup, columns=sets[0], more_columns=tuple(sets[1:])), tuple(notes)
+
+
+def _check_titles(table: Table) -> None:
+    """A first line of numbers is data, not titles: say so before any column is missed."""
+    if table.columns and all(is_decimal(c.replace(",", ".")) for c in table.columns):
+        raise MeasurementFormatError(
+            f"{table.name}: the first line holds numbers, not column titles; add a title line "
+            "naming every column (joints as the URDF joints or mapped by 'columns' in the "
+            "sidecar, the marker columns as given to --marker-columns / markers.columns)"
+        )
 
 
 def _joint_titles(table: Table, mech: Mechanism) -> list[tuple[str, str | None]]:
@@ -194,6 +205,7 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
         ActuatorRangeError: a joint reading outside its URDF range.
     """
     table = read_table(path)
+    _check_titles(table)
     name = table.name
     if not table.rows:
         raise MeasurementFormatError(f"{name}: no data rows")

@@ -169,3 +169,15 @@ def _check_truth_at(cal_dir, actual, wrist_1: float):
     q_full = np.insert(q_new, 3, wrist_1, axis=1)
     err = np.linalg.norm(_points(cal, q_new) - _points(actual, q_full), axis=1)
     assert np.sqrt(np.mean(err**2)) < 2e-4, err.max()
+
+
+def test_a_table_without_titles_is_named(tmp_path):
+    mech, actual = _actual()
+    q = sample_actuators(mech, 5, np.random.default_rng(2))
+    _export(tmp_path / "m.csv", mech, actual, q)
+    lines = (tmp_path / "m.csv").read_text().splitlines()
+    (tmp_path / "m.csv").write_text("\n".join(lines[1:]) + "\n")
+    r = _run("calibrate", "ur5", "--link", "wrist_3_link", "--data", tmp_path / "m.csv",
+             "--marker-columns", "x1,y1,z1", "--out", tmp_path / "cal")  # fmt: skip
+    assert r.exit_code != 0
+    assert "the first line holds numbers, not column titles" in r.output, r.output
