@@ -289,8 +289,13 @@ def marker_lines(doc: dict) -> list[str]:
             f"tool_frame tx ty tz [{nums(ident['marker_2sigma_mm'])}] mm "
             "(–: held, or absorbed by another parameter)",
         ]
-        for k, (v, two) in enumerate(zip(ident.get("more_markers_mm") or [],
-                                         ident.get("more_markers_2sigma_mm") or [], strict=True)):
+        for k, (v, two) in enumerate(
+            zip(
+                ident.get("more_markers_mm") or [],
+                ident.get("more_markers_2sigma_mm") or [],
+                strict=True,
+            )
+        ):
             lines.append(f"identified marker {k + 2} [{nums(v)}] mm in {doc['link']}; 2σ of "
                          f"marker{k + 2}_frame tx ty tz [{nums(two)}] mm")  # fmt: skip
     p = doc.get("prior")
@@ -306,7 +311,9 @@ def marker_lines(doc: dict) -> list[str]:
             for t in doc["prior_cv"]
         )
         lines.append(f"  chosen by 5-fold cross-validation (seed 0), held-out RMS: {tried}")
-    if doc["solver"] != doc["method"]:
+    if doc["solver"] != doc["method"] and doc.get("loss", "linear") != "linear":
+        lines.append(f"solver: {doc['solver']} (the {doc['loss']} loss runs Levenberg–Marquardt)")
+    elif doc["solver"] != doc["method"]:
         lines.append(f"solver: {doc['solver']} (switched from {doc['method']})")
     lines += [f"note: {n}" for n in doc["notes"]]
     return lines

@@ -181,3 +181,15 @@ def test_a_table_without_titles_is_named(tmp_path):
              "--marker-columns", "x1,y1,z1", "--out", tmp_path / "cal")  # fmt: skip
     assert r.exit_code != 0
     assert "the first line holds numbers, not column titles" in r.output, r.output
+
+
+def test_the_solver_line_names_why_lm_ran():
+    from pincal.cli._markers import marker_lines
+
+    doc = {"link": "l", "columns": ["x", "y", "z"], "length_unit": "m",
+           "instrument_frame": "unknown", "identified": None, "prior": None, "notes": [],
+           "registration": {"rms_mm": 1.0, "iterations": 3, "marker_mm": [0, 0, 0]},
+           "method": "gauss-newton", "solver": "lm", "loss": "huber"}  # fmt: skip
+    assert "solver: lm (the huber loss runs Levenberg–Marquardt)" in marker_lines(doc)
+    doc["loss"] = "linear"
+    assert "solver: lm (switched from gauss-newton)" in marker_lines(doc)
