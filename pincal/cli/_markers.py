@@ -180,9 +180,9 @@ def marker_calibration(model: str, data: str, setup, preset: str | None, method:
 
     setup, copies = distinct_markers(data, setup)
     mech = marker_mechanism(model, setup)
-    table = read_marker_data(data, mech, setup)
-    meas = table.sets
-    copies = (*copies, *table.notes)
+    read = read_marker_data(data, mech, setup)
+    meas = read.sets
+    copies = (*copies, *read.notes)
     for note in copies:
         click.echo(f"pincal: note: {note}", err=True)
     preset = preset or "chain"

@@ -221,7 +221,7 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
             "the markers present with the marker columns"
         )
     rows = np.flatnonzero(seen)
-    raw = np.array([[table.number(i, k) for k in joints] for i in rows])
+    raw = np.array([[table.number(int(i), k) for k in joints] for i in rows])
     titles = [table.columns[k] for k in joints]
     units = [parsed[k][1] for k in joints]
     q_act = read_joints(mech, raw, decl, units, titles, name)
