@@ -133,3 +133,22 @@ def test_a_robust_fit_with_a_prior_is_judged_by_its_whole_objective(caplog):
         fit = fit_markers(mech, setup, meas.subset(train), prior=Prior(1e-2, 1e-2), loss="huber")
     assert fit.result.success, fit.result.message
     assert not [r for r in caplog.records if "ended worse" in r.getMessage()]
+
+
+def test_a_robust_refit_from_its_own_solution_is_no_worse():
+    """Re-started at its solution, a Huber fit ends where it began (to 1e-3 of the median)."""
+    from pincal.identification._noise import _robust_progress
+    from pincal.identification._outcome import SolverOutcome
+    from pincal.identification._problem import CalibrationProblem
+
+    mech, setup, meas = _ur5_case(30, None, 2)
+    fit = fit_markers(mech, setup, meas, loss="huber")
+    start = fit.registration.mechanism
+    params = parameters(start, "chain")
+    model = CalibrationProblem(start, params, meas)
+    x = fit.result.full_values
+    jitter = x + 1e-9  # the solver's last-digit wander around its own solution
+    out = SolverOutcome(jitter, 3, (1.0,), True, "converged (xtol)")
+    _, _, raw_j = model.evaluate(jitter)
+    kept = _robust_progress(model, x, jitter, raw_j / model.sigma, "huber", 1.345, out)
+    assert kept.success, kept.message
