@@ -59,11 +59,9 @@ Campaign file keys (YAML; relative paths are relative to the file):
     instrument_frame: unknown  unknown (registered, then identified) | known
     marker: unknown          unknown, or [x, y, z] in LINK's frame [mm]
     marker_std: null         1σ of a given marker [mm] (none: held)
-    lock: {}                 joints on the chain to LINK the file has no column for,
-                             made fixed {JOINT: VALUE} [rad or m]; joints off the chain
-                             are locked at 0. Joint columns named otherwise, in degrees
-                             or relative to a pose: columns / joint_units /
-                             joint_reference in a sidecar given as model (robot: NAME)
+    lock: {}                 {JOINT: VALUE} [rad, m]: joints on the chain without a
+                             column (off the chain: locked at 0). Columns named otherwise,
+                             degrees, a reference pose: a sidecar as model (docs/examples)
   identification:
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
     model: geometric         geometric[+compliance][+gain][+harmonics] (joint terms)
