@@ -58,8 +58,10 @@ Campaign file keys (YAML; relative paths are relative to the file):
     length_unit: m           m | mm | um (marker columns)
     instrument_frame: unknown  unknown (registered, then identified) | known
     marker: unknown          unknown, or [x, y, z] in LINK's frame [mm]
-    marker_std: null         1σ of a given marker [mm] (none: held); joints off the
-                             chain to LINK are locked at 0
+    marker_std: null         1σ of a given marker [mm] (none: held)
+    lock: {}                 {JOINT: VALUE} [rad, m]: joints on the chain without a
+                             column (off the chain: locked at 0). Columns named otherwise,
+                             degrees, a reference pose: a sidecar as model (docs/examples)
   identification:
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
     model: geometric         geometric[+compliance][+gain][+harmonics] (joint terms)
@@ -178,6 +180,7 @@ class Markers:
     marker: tuple[float, float, float] | None = None
     marker_std: float | None = None
     more_columns: tuple[tuple[str, str, str], ...] = ()
+    lock: dict[str, float] = field(default_factory=dict)
 
     def check(self, key: str) -> None:
         _choice(self.length_unit, ("m", "mm", "um"), f"{key}.length_unit")
@@ -190,6 +193,7 @@ class Markers:
         columns = ";".join(",".join(c) for c in (self.columns, *self.more_columns))
         opts = ["--link", self.link, "--marker-columns", columns]
         opts += ["--length-unit", self.length_unit, "--instrument-frame", self.instrument_frame]
+        opts += [x for j, v in self.lock.items() for x in ("--lock", f"{j}={v!r}")]
         if self.marker is not None:
             given = [*self.marker, *([self.marker_std] if self.marker_std else [])]
             opts += ["--marker", ",".join(repr(float(v)) for v in given)]
@@ -293,6 +297,11 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
         return _coerce(value, inner[0], key)
     if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         return _build(tp, value, key)
+    if origin is dict:
+        _, vt = typing.get_args(tp)
+        if not isinstance(value, dict):
+            raise CampaignError(f"{key}: expected a mapping NAME: VALUE, got {shown(value)}")
+        return {str(k): _coerce(v, vt, f"{key}.{k}") for k, v in value.items()}
     if origin is tuple:
         args = typing.get_args(tp)
         if len(args) == 2 and args[1] is Ellipsis:  # any length

@@ -46,8 +46,11 @@ def _pose_fit(cal):
 
 def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> dict[str, Any]:
     """The ``cv`` object of ``validate --json`` (held-out RMS / max in mm, folds, verdict)."""
+    from pincal.cli._socket_cv import is_socket_calibration
     from pincal.identification import compare, cross_validate
 
+    if is_socket_calibration(cal):
+        return _socket_doc(cal, k, seed, folds_out)
     markers = cal.manifest.get("markers")
     if markers:
         from pincal.cli._markers import fold_fitter, rebuild
@@ -63,14 +66,7 @@ def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> dict[str, Any]:
     full = cross_validate(fit, meas, k, seed)
     ref = cross_validate(base, meas, k, seed)
     gain, se, beats = compare(full, ref)
-    fold_of = np.empty(poses, dtype=int)
-    for j, rows in enumerate(full.folds):
-        fold_of[rows] = j
-    if folds_out is not None:
-        from pincal.io import atomic_write_text
-
-        text = "pose,fold\n" + "".join(f"{i},{f}\n" for i, f in enumerate(fold_of))
-        atomic_write_text(folds_out, text)
+    _write_folds(full.folds, poses, folds_out)
     after = cal.result.after
     doc = {
         "k": k,
@@ -85,6 +81,40 @@ def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> dict[str, Any]:
         "beats_baseline": bool(beats),
     }
     doc["verdict"] = _verdict(doc)
+    return doc
+
+
+def _write_folds(folds, poses: int, folds_out: Path | None) -> None:
+    fold_of = np.empty(poses, dtype=int)
+    for j, rows in enumerate(folds):
+        fold_of[rows] = j
+    if folds_out is not None:
+        from pincal.io import atomic_write_text
+
+        text = "pose,fold\n" + "".join(f"{i},{f}\n" for i, f in enumerate(fold_of))
+        atomic_write_text(folds_out, text)
+
+
+def _socket_doc(cal, k: int, seed: int, folds_out: Path | None) -> dict[str, Any]:
+    from pincal.cli._socket_cv import socket_cv
+
+    nums, folds, poses = socket_cv(cal, k, seed)
+    _write_folds(folds, poses, folds_out)
+    full = nums["socket_distance_error_rms_mm"]
+    base = nums["baseline"]["socket_distance_error_rms_mm"]
+    doc = {
+        "k": k,
+        "seed": seed,
+        "poses": poses,
+        "folds": [[int(i) for i in rows] for rows in folds],
+        "fit_rms_mm": float(cal.result.after.rms_position) * 1e3,
+        **nums,
+        "beats_baseline": bool(full < base),
+    }
+    doc["verdict"] = (
+        f"held-out socket-distance error {full:.4f} mm RMS over the folds (the nominal "
+        f"model: {base:.4f} mm); held-out seating error {nums['held_out_rms_mm']:.4f} mm RMS"
+    )
     return doc
 
 
@@ -108,6 +138,7 @@ def _verdict(doc: dict) -> str:
 def format_cv(doc: dict) -> str:
     """The printed cross-validation block (mm)."""
     b = doc["baseline"]
+    socket = "socket_distance_error_rms_mm" in doc
     registration = b["model"] == "registration only"
     lines = [
         "",
@@ -121,6 +152,16 @@ def format_cv(doc: dict) -> str:
         "  (registration only: instrument frame + marker fitted, the robot uncalibrated)"
         if registration
         else "  (nominal model: the model before calibration)",
-        doc["verdict"],
     ]
+    if socket:
+        lines[2] = lines[2].replace("held-out RMS", "seating RMS ")
+        lines += [
+            "  held-out socket-distance error (mean predicted ball centres of each "
+            "socket's held-out seatings, minus the known distance) [mm]:",
+            f"  calibrated model  RMS {doc['socket_distance_error_rms_mm']:.4f}   max "
+            f"{doc['socket_distance_error_max_mm']:.4f}",
+            f"  nominal model     RMS {b['socket_distance_error_rms_mm']:.4f}   max "
+            f"{b['socket_distance_error_max_mm']:.4f}",
+        ]
+    lines.append(doc["verdict"])
     return "\n".join(lines) + "\n"

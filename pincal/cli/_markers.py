@@ -1,8 +1,9 @@
 """Marker calibrations from the command line: options, the fit, the prior's choice.
 
 ``pincal calibrate MODEL --link LINK --data TABLE`` reads TABLE as a marker table
-(:func:`pincal.io.read_marker_table`: joint columns named as the URDF joints, the
-marker's x, y, z columns chosen by ``--marker-columns``) and runs
+(:func:`pincal.io.read_marker_data`: joint columns named as the URDF joints or
+mapped, scaled and referenced by the model's sidecar; the marker's x, y, z columns
+chosen by ``--marker-columns``; rows where a marker was not seen left out, said) and runs
 :func:`pincal.identification.fit_markers`: closed-form registration of the instrument
 frame and the marker, then the joint fit with its guards. ``--prior`` adds a Gaussian
 prior on the machine's parameters (σ per class: lengths [mm], angles [mrad]); ``auto``
@@ -31,6 +32,18 @@ __all__ = [
 
 #: prior σ tried by ``--prior auto`` (the same number in mm for lengths and mrad for angles)
 PRIOR_GRID = (0.3, 1.0, 3.0, 10.0)
+#: registration RMS [m] beyond which the table does not describe the nominal robot
+MISFIT_RMS = 0.02
+
+
+def _misfit_note(rms: float) -> str:
+    return (
+        f"the registration leaves {rms * 1e3:.3g} mm RMS, more than {MISFIT_RMS * 1e3:g} mm: "
+        "a nominal robot seen by a capture system fits to millimetres, so the table and the "
+        "model disagree — check the joint columns (mapping, unit, reference pose: columns, "
+        "joint_units, joint_reference), the joints locked and their values, the marker's link "
+        "and the marker columns' unit"
+    )
 
 
 def marker_options(f: Callable[..., Any]) -> Callable[..., Any]:
@@ -162,14 +175,16 @@ def marker_calibration(model: str, data: str, setup, preset: str | None, method:
     cross-validation table of ``auto``), the notes.
     """
     from pincal.identification import Prior, fit_markers
-    from pincal.io import distinct_markers, read_marker_sets
+    from pincal.io import distinct_markers, read_marker_data
     from pincal.measure import marker_mechanism
 
     setup, copies = distinct_markers(data, setup)
+    mech = marker_mechanism(model, setup)
+    read = read_marker_data(data, mech, setup)
+    meas = read.sets
+    copies = (*copies, *read.notes)
     for note in copies:
         click.echo(f"pincal: note: {note}", err=True)
-    mech = marker_mechanism(model, setup)
-    meas = read_marker_sets(data, mech, setup)
     preset = preset or "chain"
     if preset not in mech.presets:
         raise click.BadParameter(f"preset {preset!r} unknown; marker calibrations have "
@@ -188,6 +203,9 @@ def marker_calibration(model: str, data: str, setup, preset: str | None, method:
                    f"identifying from {len(meas[0])} poses", err=True)  # fmt: skip
     fit = fit_markers(mech, setup, meas, preset, method, prior, loss=loss)
     reg = fit.registration
+    if reg.fit.rms > MISFIT_RMS:
+        copies = (*copies, _misfit_note(reg.fit.rms))
+        click.echo(f"pincal: warning: {copies[-1]}", err=True)
     doc = {
         **setup.to_dict(),
         "preset": preset,
@@ -271,8 +289,13 @@ def marker_lines(doc: dict) -> list[str]:
             f"tool_frame tx ty tz [{nums(ident['marker_2sigma_mm'])}] mm "
             "(–: held, or absorbed by another parameter)",
         ]
-        for k, (v, two) in enumerate(zip(ident.get("more_markers_mm") or [],
-                                         ident.get("more_markers_2sigma_mm") or [], strict=True)):
+        for k, (v, two) in enumerate(
+            zip(
+                ident.get("more_markers_mm") or [],
+                ident.get("more_markers_2sigma_mm") or [],
+                strict=True,
+            )
+        ):
             lines.append(f"identified marker {k + 2} [{nums(v)}] mm in {doc['link']}; 2σ of "
                          f"marker{k + 2}_frame tx ty tz [{nums(two)}] mm")  # fmt: skip
     p = doc.get("prior")
@@ -288,7 +311,9 @@ def marker_lines(doc: dict) -> list[str]:
             for t in doc["prior_cv"]
         )
         lines.append(f"  chosen by 5-fold cross-validation (seed 0), held-out RMS: {tried}")
-    if doc["solver"] != doc["method"]:
+    if doc["solver"] != doc["method"] and doc.get("loss", "linear") != "linear":
+        lines.append(f"solver: {doc['solver']} (the {doc['loss']} loss runs Levenberg–Marquardt)")
+    elif doc["solver"] != doc["method"]:
         lines.append(f"solver: {doc['solver']} (switched from {doc['method']})")
     lines += [f"note: {n}" for n in doc["notes"]]
     return lines

@@ -206,11 +206,15 @@ def _robust_progress(
     loss: str,
     f_scale: float,
     out: SolverOutcome,
+    opts: Any = None,
 ) -> SolverOutcome:
     """``out`` with success False when the robust fit ends worse than its start.
 
     Both ends are scored with the final weights: the robust cost, and — since a robust
     cost can fall by giving up on most poses — the median whitened residual norm per pose.
+    With a Gaussian prior (``prior_std``/``prior_mean`` of the options) the objective is
+    the robust cost plus the prior's ½Σ((x − mean)/σ)², and the median is not asked to
+    fall: the prior pulls the fit away from the data by design.
     """
     try:
         _, _, raw0 = model.evaluate(x0)
@@ -220,7 +224,15 @@ def _robust_progress(
     c0, c1 = robust_cost(loss, r0, f_scale), robust_cost(loss, r_w, f_scale)
     m0 = float(np.median(np.linalg.norm(r0, axis=1)))
     m1 = float(np.median(np.linalg.norm(r_w, axis=1)))
-    if c1 <= c0 * (1 + 1e-9) and m1 <= m0 * (1 + 1e-9):
+    std = getattr(opts, "prior_std", None)
+    if std is not None:
+        mean, sd = np.asarray(opts.prior_mean), np.asarray(std)
+        c0 += 0.5 * float(np.sum(((np.asarray(x0) - mean) / sd) ** 2))
+        c1 += 0.5 * float(np.sum(((np.asarray(x) - mean) / sd) ** 2))
+        m1 = min(m1, m0)
+    # a fit re-started at its own solution ends where it began, to the solver's jitter
+    # (~1e-3 of the median): that is no worse; giving up on poses moves it by far more
+    if c1 <= c0 * (1 + 1e-6) and m1 <= m0 * (1 + 1e-3):
         return out
     msg = (
         f"the {loss} fit ended worse than its start (robust cost {c0:.6g} → {c1:.6g}, median "
@@ -323,7 +335,7 @@ def weighted_fit(
         whitened=r_w,
     )
     if loss != "linear" and out.success:
-        out = _robust_progress(model, x0, x, r_w, loss, f_scale, out)
+        out = _robust_progress(model, x0, x, r_w, loss, f_scale, out, opts)
     if estimating:
         note = (
             f"noise estimated from the residuals in {rounds} re-weighted fits"
@@ -337,4 +349,3 @@ def weighted_fit(
             x, iterations, tuple(history), out.success, note + out.message, extras, out.fitted
         )
     return out, model, weighting
-

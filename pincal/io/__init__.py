@@ -50,7 +50,13 @@ from pincal.io._instrument_registry import (
     read_instrument_file,
 )
 from pincal.io._joint_columns import joint_columns, read_joints
-from pincal.io._marker_file import distinct_markers, read_marker_sets, read_marker_table
+from pincal.io._marker_file import (
+    MarkerData,
+    distinct_markers,
+    read_marker_data,
+    read_marker_sets,
+    read_marker_table,
+)
 from pincal.io._measurement_file import (
     MeasurementFile,
     check_enough_poses,
@@ -91,6 +97,7 @@ __all__ = [
     "LENGTH_UNITS",
     "MANIFEST",
     "CalibrationDirectory",
+    "MarkerData",
     "MeasurementFile",
     "PoseFile",
     "TargetMeasurements",
@@ -115,6 +122,7 @@ __all__ = [
     "read_instrument_data",
     "read_instrument_file",
     "read_joints",
+    "read_marker_data",
     "read_marker_sets",
     "read_marker_table",
     "read_measurement_file",

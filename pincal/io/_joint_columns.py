@@ -5,7 +5,7 @@ The declarations (:class:`pincal.model.Sidecar` ``readings``: ``columns``,
 may give them too and wins key by key::
 
     # columns: torso1=torso_lift_joint armL1=arm_1_joint
-    # joint_units: angle=deg length=mm          (or a joint name: arm_1_joint=deg)
+    # joint_units: angle=deg length=mm          (or deg; or a joint: arm_1_joint=deg)
     # joint_reference: home                     (or arm_1_joint=0.5 …, SI values)
 
 A joint's column is the column mapped to it, else the one named after it. Its unit
@@ -51,9 +51,10 @@ def _pairs(header: Header, key: str, name: str) -> dict[str, str]:
 
 
 def _declared(mech: Mechanism, header: Header, name: str) -> JointReadings:
-    units: dict[str, str] | str = _pairs(header, "joint_units", name)
-    if "joint_units" in header and not units:
-        units = header_value(header, "joint_units", None, name)
+    units: dict[str, str] | str = {}
+    if "joint_units" in header:  # one unit (``deg``: every angle) or NAME=UNIT entries
+        text = header_value(header, "joint_units", None, name).strip()
+        units = text if text and "=" not in text else _pairs(header, "joint_units", name)
     ref: object = {}
     if "joint_reference" in header:
         text = header_value(header, "joint_reference", None, name)

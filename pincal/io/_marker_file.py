@@ -1,14 +1,23 @@
 """Marker tables: motion-capture or tracker exports with joint readings, read as they are.
 
-A foreign delimited table (see :mod:`pincal.io._delimited`: ``,`` ``;`` or tab, ``#``
-lines skipped, one title line) with one row per pose: a column per actuated joint,
-named as the URDF joint (case-insensitive; a bracketed unit ``[deg]`` / ``[mm]`` is
-honoured, else SI) and, among any number of other columns (further markers, time
-stamps), the three position columns of the marker(s) used, named by the
-:class:`pincal.measure.MarkerSetup` (e.g. ``x1, y1, z1``; further markers in its
-``more_columns``) in its ``length_unit``. The positions are in the instrument's frame;
-the rows become position-only :class:`pincal.measure.Measurements` of the marker
-frame ``tool`` (further markers: ``marker2``, ``marker3``, …, one set each).
+A foreign delimited table (see :mod:`pincal.io._delimited`: ``,`` ``;`` or tab, one
+title line) with one row per pose: a column per actuated joint and, among any number
+of other columns (further markers, frame numbers, time stamps), the three position
+columns of the marker(s) used, named by the :class:`pincal.measure.MarkerSetup` (e.g.
+``x1, y1, z1``; further markers in its ``more_columns``) in its ``length_unit``. The
+positions are in the instrument's frame; the rows become position-only
+:class:`pincal.measure.Measurements` of the marker frame ``tool`` (further markers:
+``marker2``, ``marker3``, …, one set each).
+
+Joint columns are read as in measurement files (:mod:`pincal.io._joint_columns`): named
+as the URDF joint (any case) or mapped by ``columns`` in the model's sidecar; units from
+the title's bracket (``[deg]``), else ``joint_units``, else SI; readings relative to a
+reference pose with ``joint_reference`` (``home`` or values). ``#`` lines before the
+title line may give the same declarations (``# joint_units: deg``), and win.
+
+A marker the camera did not see leaves its cells empty (or ``nan``): such a row is left
+out, named in the notes of :func:`read_marker_data` (the joints still have to be
+numbers: a missing joint reading is an error).
 
 Exports often repeat one marker under two names (the same values in two column
 triples); :func:`distinct_markers` finds such copies among the markers chosen and keeps
@@ -17,23 +26,46 @@ one, saying so — a copy fitted as a second marker would count every point twic
 
 from __future__ import annotations
 
-from dataclasses import replace
+import math
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from pincal.errors import ColumnError, MeasurementFormatError
-from pincal.io._delimited import read_table
-from pincal.io._units import (
-    LENGTH_UNITS,
-    actuator_read_factors,
-    check_actuator_ranges,
-    unit_factor,
-)
+from pincal._files import read_text
+from pincal.errors import ColumnError, MeasurementFileError, MeasurementFormatError
+from pincal.io._csv import Header, parse_column
+from pincal.io._delimited import Table, read_table
+from pincal.io._joint_columns import HEADER_KEYS, joint_columns, read_joints
+from pincal.io._names import is_decimal
+from pincal.io._units import LENGTH_UNITS, unit_factor
 from pincal.measure import MarkerSetup, Measurements, marker_frame
 from pincal.model import Mechanism
 
-__all__ = ["distinct_markers", "read_marker_sets", "read_marker_table"]
+__all__ = [
+    "MarkerData",
+    "distinct_markers",
+    "read_marker_data",
+    "read_marker_sets",
+    "read_marker_table",
+]
+
+_MISSING = ("", "nan", "-nan", "na", "n/a", "null", "none")
+
+
+@dataclass(frozen=True)
+class MarkerData:
+    """A marker table read: one measurement set per marker, and what was left out.
+
+    Attributes:
+        sets: per marker of the setup, position-only measurements (same rows).
+        dropped: 1-based file lines of rows left out (a marker cell missing).
+        notes: what the reader did, in words (rows left out, declarations applied).
+    """
+
+    sets: tuple[Measurements, ...]
+    dropped: tuple[int, ...] = ()
+    notes: tuple[str, ...] = ()
 
 
 def read_marker_table(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> Measurements:
@@ -41,8 +73,63 @@ def read_marker_table(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> 
     return read_marker_sets(path, mech, setup)[0]
 
 
+def read_marker_sets(
+    path: str | Path, mech: Mechanism, setup: MarkerSetup
+) -> tuple[Measurements, ...]:
+    """The measurement sets of :func:`read_marker_data` (see there)."""
+    return read_marker_data(path, mech, setup).sets
+
+
+def _comment_header(path: str | Path) -> Header:
+    """``# key: value`` lines before the title line, for the joint declarations only."""
+    header: Header = {}
+    for line in read_text(path, "delimited table", error=MeasurementFileError).splitlines():
+        s = line.strip()
+        if not s:
+            continue
+        if not s.startswith("#"):
+            break
+        key, sep, value = s[1:].partition(":")
+        if sep and key.strip() in HEADER_KEYS:
+            header.setdefault(key.strip(), []).append(value.strip())
+    return header
+
+
+def _cell(table: Table, i: int, k: int) -> float:
+    """A marker cell as a number, NaN when the marker was not seen (empty, ``nan``)."""
+    text = table.rows[i][k].strip()
+    if text.lower() in _MISSING:
+        return math.nan
+    if table.decimal == ",":
+        text = text.replace(",", ".")
+    if not is_decimal(text):
+        return table.number(i, k)  # raises, naming the line and column
+    return float(text)
+
+
+def _marker_columns(table: Table, setup: MarkerSetup) -> list[int]:
+    out = []
+    for c in (c for triple in setup.marker_sets for c in triple):
+        k = table.find(c, [c], {})
+        if k is None:
+            raise ColumnError(
+                f"{table.name}: no marker column {c!r}; columns are {list(table.columns)}",
+                missing=[c],
+            )
+        out.append(k)
+    return out
+
+
+def _marker_values(table: Table, setup: MarkerSetup) -> np.ndarray:
+    """(rows, 3 × markers) marker cells, NaN where the marker was not seen."""
+    idx = _marker_columns(table, setup)
+    return np.array([[_cell(table, i, k) for k in idx] for i in range(len(table.rows))])
+
+
 def distinct_markers(path: str | Path, setup: MarkerSetup) -> tuple[MarkerSetup, tuple[str, ...]]:
     """``setup`` without markers whose columns repeat an earlier marker's, value for value.
+
+    Missing cells (a marker not seen) compare equal to missing cells.
 
     Returns:
         (the setup with its copies left out, a sentence per copy left out).
@@ -53,24 +140,13 @@ def distinct_markers(path: str | Path, setup: MarkerSetup) -> tuple[MarkerSetup,
     if not setup.more_columns:
         return setup, ()
     table = read_table(path)
-    cols = list(table.columns)
-    values = []
-    for triple in setup.marker_sets:
-        idx = []
-        for c in triple:
-            k = table.find(c, [c], {})
-            if k is None:
-                raise ColumnError(
-                    f"{table.name}: no marker column {c!r}; columns are {cols}", missing=[c]
-                )
-            idx.append(k)
-        values.append(
-            np.array([[table.number(i, k) for k in idx] for i in range(len(table.rows))])
-        )
+    _check_titles(table)
+    data = _marker_values(table, setup)
+    values = [data[:, 3 * k : 3 * k + 3] for k in range(len(setup.marker_sets))]
     keep: list[int] = []
     notes = []
     for k, v in enumerate(values):
-        same = next((j for j in keep if np.array_equal(values[j], v)), None)
+        same = next((j for j in keep if np.array_equal(values[j], v, equal_nan=True)), None)
         if same is None:
             keep.append(k)
             continue
@@ -83,54 +159,85 @@ def distinct_markers(path: str | Path, setup: MarkerSetup) -> tuple[MarkerSetup,
     return replace(setup, columns=sets[0], more_columns=tuple(sets[1:])), tuple(notes)
 
 
-def read_marker_sets(
-    path: str | Path, mech: Mechanism, setup: MarkerSetup
-) -> tuple[Measurements, ...]:
+def _check_titles(table: Table) -> None:
+    """A first line of numbers is data, not titles: say so before any column is missed."""
+    if table.columns and all(is_decimal(c.replace(",", ".")) for c in table.columns):
+        raise MeasurementFormatError(
+            f"{table.name}: the first line holds numbers, not column titles; add a title line "
+            "naming every column (joints as the URDF joints or mapped by 'columns' in the "
+            "sidecar, the marker columns as given to --marker-columns / markers.columns)"
+        )
+
+
+def _joint_titles(table: Table, mech: Mechanism) -> list[tuple[str, str | None]]:
+    """(name, bracketed unit) of each title; a joint's name in another case is the joint's."""
+    joints = {j.lower(): j for j in mech.actuated}
+    out = []
+    for title in table.columns:
+        try:
+            name, unit = parse_column(title)
+        except MeasurementFormatError:
+            name, unit = title, None
+        out.append((joints.get(name.lower(), name), unit))
+    return out
+
+
+def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> MarkerData:
     """Marker positions [m] (instrument frame) and joint values [m, rad] of every row.
 
     Args:
         path: the table (never modified).
         mech: the chain of :func:`pincal.measure.marker_mechanism` (its actuated joints
-            name the joint columns).
+            name the joint columns; its sidecar maps, scales and references them).
         setup: the marker columns and their unit.
 
     Returns:
         Per marker of ``setup.marker_sets``, position-only measurements (same rows) of
         its frame (:func:`pincal.measure.marker_frame`: ``mech.measured_frame`` for the
-        first), no declared noise.
+        first), no declared noise; rows where a marker used was not seen left out.
 
     Raises:
         ColumnError: a joint or marker column is missing (the columns found are listed).
-        MeasurementFormatError: no data rows, an unknown unit.
-        BadValueError: a cell that is not a finite number (names the line and column).
+        MeasurementFormatError: no data rows, no complete row, an unknown unit, a
+            malformed declaration.
+        BadValueError: a cell that is not a number, a joint cell empty (names the line
+            and column), a joint reading implausible for its unit.
+        ActuatorRangeError: a joint reading outside its URDF range.
     """
     table = read_table(path)
+    _check_titles(table)
     name = table.name
-    lf = unit_factor(LENGTH_UNITS, setup.length_unit, "length", name)
-    cols = list(table.columns)
-
-    def index(title: str, what: str) -> int:
-        k = table.find(title, [title], {})
-        if k is None:
-            raise ColumnError(
-                f"{name}: no {what} column {title!r}; columns are {cols}", missing=[title]
-            )
-        return k
-
-    joints = [index(j, "joint") for j in mech.actuated]
-    marker = [index(c, "marker") for triple in setup.marker_sets for c in triple]
     if not table.rows:
         raise MeasurementFormatError(f"{name}: no data rows")
-    data = np.array([[table.number(i, k) for k in joints + marker] for i in range(len(table.rows))])
-    n = len(joints)
-    factors = actuator_read_factors(mech, [table.unit(k) for k in joints], name)
-    q_act = data[:, :n] / factors
-    check_actuator_ranges(mech, q_act, name, [cols[k] for k in joints])
+    lf = unit_factor(LENGTH_UNITS, setup.length_unit, "length", name)
+    parsed = _joint_titles(table, mech)
+    joints, decl = joint_columns(mech, _comment_header(path), parsed, name)
+    markers = _marker_values(table, setup)
+    seen = ~np.isnan(markers).any(axis=1)
+    if not seen.any():
+        used = ", ".join(" ".join(c) for c in setup.marker_sets)
+        raise MeasurementFormatError(
+            f"{name}: no row has every marker used ({used}): a marker never seen; choose "
+            "the markers present with the marker columns"
+        )
+    rows = np.flatnonzero(seen)
+    raw = np.array([[table.number(int(i), k) for k in joints] for i in rows])
+    titles = [table.columns[k] for k in joints]
+    units = [parsed[k][1] for k in joints]
+    q_act = read_joints(mech, raw, decl, units, titles, name)
+    dropped = tuple(table.lines[i] for i in np.flatnonzero(~seen))
+    notes = []
+    if dropped:
+        shown_lines = ", ".join(map(str, dropped[:10])) + (" …" if len(dropped) > 10 else "")
+        notes.append(
+            f"{name}: {len(dropped)} of {len(table.rows)} rows left out, a marker used not "
+            f"seen (empty or nan cells): lines {shown_lines}"
+        )
     out = []
     for k in range(len(setup.marker_sets)):
-        positions = data[:, n + 3 * k : n + 3 * k + 3] / lf
+        positions = markers[rows, 3 * k : 3 * k + 3] / lf
         frame = mech.measured_frame if k == 0 else marker_frame(k)[1]
         out.append(
             Measurements(q_act, positions, None, ("x", "y", "z"), frame, tuple(mech.actuated))
         )
-    return tuple(out)
+    return MarkerData(tuple(out), dropped, tuple(notes))

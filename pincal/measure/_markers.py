@@ -36,7 +36,7 @@ from pincal.model import (
     TOOL_JOINT,
     Mechanism,
     UrdfTree,
-    resolve_model_path,
+    resolve_named,
     serial_mechanism,
     with_joint_origin,
 )
@@ -166,7 +166,7 @@ def _off_chain_locks(model: str, link: str, lock: Mapping[str, float]) -> dict[s
     """``lock`` plus every movable joint off the chain to ``link`` at 0."""
     from pincal._files import read_text
 
-    urdf, _ = resolve_model_path(model)
+    urdf = resolve_named(model).urdf  # a name, a path, or a local sidecar with `robot:`
     tree = UrdfTree(read_text(urdf, "URDF", error=ModelFileError))
     if link not in tree.links:
         raise UnknownNameError("link", link, list(tree.links))

@@ -56,7 +56,7 @@ from pincal.model._kinematics import Kinematics
 from pincal.model._linearisation import Linearisation
 from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
-from pincal.model._named import find_local_sidecar, model_record, srdf_home
+from pincal.model._named import find_local_sidecar, model_record, resolve_named, srdf_home
 from pincal.model._newton import SolverOptions
 from pincal.model._parameters import (
     DOFS,
@@ -166,6 +166,7 @@ __all__ = [
     "register_term",
     "regular_home",
     "resolve_model_path",
+    "resolve_named",
     "sample_actuators",
     "sample_pose",
     "se3_from_xyz_rpy",

@@ -11,7 +11,14 @@ from pincal.errors import ModelFileError, UnknownNameError
 __all__ = ["example_robot_names", "example_robot_urdf"]
 
 #: short names for robots whose URDF file stem differs from the usual name.
-_ERD_ALIASES = {"ur10": "ur10_robot", "ur5": "ur5_robot"}
+#: ``talos*``: the names example-robot-data's own loader gives those URDFs.
+_ERD_ALIASES = {
+    "ur10": "ur10_robot",
+    "ur5": "ur5_robot",
+    "talos": "talos_reduced",
+    "talos_arm": "talos_left_arm",
+    "talos_full": "talos_full_v2",
+}
 _ERD_MARKER = "share/example-robot-data/robots/"
 
 
@@ -75,8 +82,9 @@ def example_robot_names() -> list[str]:
 
     A name is the URDF file stem (``panda``, ``ur10_robot``), or
     ``<package>/<stem>`` (``anymal_b_simple/anymal``) when the stem is ambiguous,
-    plus the aliases ``ur5`` and ``ur10``. The qualified form ``<package>/<stem>``
-    is accepted for every robot but only listed for ambiguous stems.
+    plus the aliases ``ur5``, ``ur10``, ``talos`` (``talos_reduced``), ``talos_arm``
+    and ``talos_full`` (the names of example-robot-data's loader). The qualified form
+    ``<package>/<stem>`` is accepted for every robot but only listed for ambiguous stems.
     """
     return _erd_index()[1]
 

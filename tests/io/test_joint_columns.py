@@ -107,6 +107,10 @@ def test_values_outside_the_range_or_implausible_name_column_and_row(tmp_path, h
         read_measurements(tmp_path / "d.csv", _with(pend, **cols))
     back = read_measurements(tmp_path / "d.csv", _with(pend, **cols, joint_units="deg"))
     assert np.allclose(back.q_act, q, rtol=0, atol=1e-12)
+    # one unit in the header, as in the sidecar: every angle column in it
+    (tmp_path / "e.csv").write_text("\n".join([*lines[:1], "# joint_units: deg", *lines[1:]]))
+    back = read_measurements(tmp_path / "e.csv", _with(pend, **cols))
+    assert np.allclose(back.q_act, q, rtol=0, atol=1e-12)
 
 
 def test_bad_declarations_are_refused():

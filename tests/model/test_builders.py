@@ -299,6 +299,9 @@ def test_example_robot_names_and_unknown_name():
     assert "anymal_b_simple/anymal" in names
     # qualified names are accepted for every robot
     assert example_robot_urdf("ur/ur5_robot") == example_robot_urdf("ur5")
+    # example-robot-data's loader names: `talos` is its reduced humanoid
+    assert example_robot_urdf("talos") == example_robot_urdf("talos_reduced")
+    assert example_robot_urdf("talos_arm").stem == "talos_left_arm"
     with pytest.raises(UnknownNameError, match=r"not_a_robot.*robots are: 'TwoDofs'") as info:
         example_robot_urdf("not_a_robot")
     assert info.value.kind == "robot" and info.value.valid == names
