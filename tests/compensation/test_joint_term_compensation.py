@@ -14,11 +14,11 @@ from pincal.model import (
     Payload,
     actual_joint_values,
     load_mechanism,
-    parameters,
     sample_actuators,
     with_joint_terms,
     with_payload,
 )
+from pincal.sensitivity import parameters
 
 NOISE = NoiseModel(position=0.01, orientation=0.01)  # [mm], [mrad]
 

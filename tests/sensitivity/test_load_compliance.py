@@ -13,11 +13,11 @@ from pincal.model import (
     Payload,
     joint_term_basis,
     load_mechanism,
-    parameters,
     sample_actuators,
     with_joint_terms,
     with_payload,
 )
+from pincal.sensitivity import parameters
 
 from .test_joint_terms import _fd_errors
 
