@@ -22,6 +22,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from pincal._version import __version__ as __version__
 from pincal.compensation import Compensation, compensate
 from pincal.design import (
     CramerRaoReport,
@@ -82,7 +83,6 @@ _LAZY = {
     "live": "pincal.viz",
 }
 
-__version__ = "0.1.0"
 
 __all__ = [
     "ClosureError",

@@ -2,19 +2,21 @@
 
 from __future__ import annotations
 
+from pincal.identification import result_to_dict
+
 __all__ = ["format_report", "result_json"]
 
 
 def result_json(result, data_path: str, urdf: str | None = None) -> dict:
     """The identification result as ``identification.json`` (SI values and std).
 
-    Built via :meth:`pincal.identification.IdentificationResult.to_dict` with the data
+    Built via :func:`pincal.identification.result_to_dict` with the data
     file (and the calibrated URDF) as annotations.
     """
     notes = {"data": data_path}
     if urdf is not None:
         notes["calibrated_urdf"] = urdf
-    return result.to_dict(notes)
+    return result_to_dict(result, notes)
 
 
 def format_report(doc: dict) -> str:

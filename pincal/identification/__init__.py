@@ -3,7 +3,8 @@
 One :class:`IdentificationProblem`, solved by a registered solver (``"gauss-newton"``,
 ``"lm"``, ``"qpso"``, ``"qpso-stepwise"``, ``"step-planned"``), gives one
 :class:`IdentificationResult` with covariances at the Cramér–Rao bound;
-``IdentificationResult.to_dict`` / ``from_dict`` write and read ``identification.json``.
+``result_to_dict`` / ``result_from_dict`` turn it into the document of
+``identification.json`` and back.
 """
 
 from __future__ import annotations
@@ -75,7 +76,7 @@ from pincal.identification._result import (
     SolverExtras,
     StepPlanningExtras,
 )
-from pincal.identification._result_io import FORMAT_VERSION
+from pincal.identification._result_io import FORMAT_VERSION, result_from_dict, result_to_dict
 from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
 from pincal.identification._weighting import Weighting
@@ -151,6 +152,8 @@ __all__ = [
     "qpso",
     "qpso_identify",
     "qpso_stepwise",
+    "result_from_dict",
+    "result_to_dict",
     "select_model",
     "solver",
     "stacked_measurements",

@@ -3,9 +3,10 @@
 :class:`IdentificationResult` holds the full parameter vector with a mask of what was
 identified, the covariance of the identified ones, residual statistics, the solver's
 iterations / success / message and its typed extras (:class:`QPSOExtras`,
-:class:`StepPlanningExtras`, :class:`LocalSolverExtras`). Its ``to_dict`` / ``from_dict``
-(:mod:`pincal.identification._result_io`) are the one writer and reader of
-``identification.json``.
+:class:`StepPlanningExtras`, :class:`LocalSolverExtras`).
+:func:`pincal.identification.result_to_dict` / ``result_from_dict``
+(:mod:`pincal.identification._result_io`) turn it into the document of
+``identification.json`` and back.
 """
 
 from __future__ import annotations
@@ -244,23 +245,3 @@ class IdentificationResult:
         """(name, value, std, unit) per identified parameter [SI]."""
         units = [u for u, ok in zip(self.units, self.identified, strict=True) if ok]
         return list(zip(self.identified_names, self.values, self.std, units, strict=True))
-
-    def to_dict(self, annotations: Mapping[str, Any] | None = None) -> dict[str, Any]:
-        """The JSON document of ``identification.json``.
-
-        See :func:`pincal.identification._result_io.result_to_dict`.
-        """
-        from pincal.identification._result_io import result_to_dict
-
-        return result_to_dict(self, annotations)
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any], source: str = "identification.json"):
-        """Read an ``identification.json`` document (this format or pincal 0.1's).
-
-        Raises:
-            ReportError: a malformed document (the message names the entry and ``source``).
-        """
-        from pincal.identification._result_io import result_from_dict
-
-        return result_from_dict(data, source)

@@ -29,7 +29,7 @@ import numpy as np
 
 from pincal._files import max_bytes, read_text
 from pincal.errors import CalibrationDirectoryError, PincalError, clip
-from pincal.identification import IdentificationResult
+from pincal.identification import IdentificationResult, result_from_dict
 from pincal.measure import NoiseModel
 from pincal.model import resolve_model_path
 from pincal.sensitivity import parameters
@@ -342,7 +342,7 @@ def read_identification(path: str | os.PathLike) -> IdentificationResult:
     """Read an ``identification.json`` (the one reader of the file kind).
 
     Read bounded (50 MB, no FIFOs or devices) and parsed by
-    :meth:`IdentificationResult.from_dict` (this format or pincal 0.1's); the result has
+    :func:`pincal.identification.result_from_dict` (this format or pincal 0.1's); the result has
     no parameter set or mechanism, its context is in ``annotations``.
 
     Raises:
@@ -351,7 +351,7 @@ def read_identification(path: str | os.PathLike) -> IdentificationResult:
     """
     path = Path(path)
     try:
-        return IdentificationResult.from_dict(load_json(path), source=str(path))
+        return result_from_dict(load_json(path), source=str(path))
     except CalibrationDirectoryError:
         raise
     except PincalError as exc:

@@ -9,7 +9,7 @@ Every command that uses a calibration reads it (``view``, ``compensate``, ``vali
       calibration.json      manifest (format "pincal calibration", version 1)
       calibrated.urdf       calibrated model (identified geometry at full precision)
       calibrated.yaml       its sidecar (closures, actuation, measured frame, presets)
-      identification.json   IdentificationResult.to_dict (values, std, covariance, ...)
+      identification.json   result_to_dict (values, std, covariance, ...)
       report.txt            optional human-readable report
 
 The manifest holds the format version, the pincal version, the model name and source,
@@ -39,8 +39,9 @@ from pathlib import Path
 from typing import Any
 
 from pincal._files import read_text
+from pincal._version import __version__
 from pincal.errors import CalibrationDirectoryError, PincalError, clip
-from pincal.identification import IdentificationResult
+from pincal.identification import IdentificationResult, result_to_dict
 from pincal.io._atomic import (
     _temp_prefix,
     atomic_write_text,
@@ -224,8 +225,6 @@ def _manifest(
     noise: NoiseModel | None,
     files: dict[str, str],
 ) -> dict[str, Any]:
-    from pincal import __version__
-
     ident = result.identified
     return {
         "format": CALIBRATION_FORMAT,
@@ -321,7 +320,7 @@ def _write_locked(
     tmp = Path(tempfile.mkdtemp(prefix=_temp_prefix(out, "tmp"), dir=out.parent))
     try:
         save_urdf(mech, tmp / CALIBRATED_URDF)
-        doc = result.to_dict(notes)
+        doc = result_to_dict(result, notes)
         atomic_write_text(tmp / IDENTIFICATION_FILE, json.dumps(doc, indent=1) + "\n")
         for name, text in (texts or {}).items():
             atomic_write_text(tmp / name, text)

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
+from pincal._version import __version__
 from pincal.io._atomic import atomic_write_text
 from pincal.io._commands_file import write_commands
 from pincal.io._poses_file import write_poses
@@ -58,8 +59,6 @@ def write_pose_design(
         out.with_suffix(".commands.csv"), c.actuated, c.q_act, actuator_units=actuator_units
     )
     sel = design.selection
-    from pincal import __version__
-
     record = {
         "written_by": f"pincal {__version__}",  # recognised as pincal's when replaced
         "units": "SI (m, rad)",

@@ -9,12 +9,7 @@ from __future__ import annotations
 
 from pincal._limits import Limits, active_limits
 from pincal.model._batch import BatchKinematics, BatchModel
-from pincal.model._catalogue import (
-    bundled_models,
-    load_mechanism,
-    read_sidecar,
-    resolve_model_path,
-)
+from pincal.model._catalogue import load_mechanism
 from pincal.model._closures import (
     COMPONENTS,
     Closure,
@@ -56,6 +51,7 @@ from pincal.model._kinematics import Kinematics
 from pincal.model._linearisation import Linearisation
 from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
+from pincal.model._model_files import bundled_models, read_sidecar, resolve_model_path
 from pincal.model._named import find_local_sidecar, model_record, resolve_named, srdf_home
 from pincal.model._newton import SolverOptions
 from pincal.model._parameters import (
@@ -64,9 +60,9 @@ from pincal.model._parameters import (
     ParameterSet,
     degenerate_translations,
     full_parameters,
-    parameters,
 )
 from pincal.model._payload import Payload, with_payload
+from pincal.model._presets import parameters
 from pincal.model._readings import JointReadings
 from pincal.model._robots import example_robot_names, example_robot_urdf
 from pincal.model._serial import (

@@ -9,7 +9,7 @@ import numpy as np
 from pincal.errors import ParameterError
 from pincal.model._joint_terms import joint_term, term_of_dof
 from pincal.model._mechanism import Mechanism
-from pincal.model._parameters import ParameterSet, parameters
+from pincal.model._parameters import ParameterSet, origin_parameter
 from pincal.model._term_compliance import Compliance
 from pincal.model._term_transmission import Gain, Harmonics
 
@@ -69,9 +69,9 @@ def with_joint_terms(mech: Mechanism, params: ParameterSet, kinds: Sequence[str]
         names += fits
     if len(names) == len(params):
         return params
-    extra = parameters(mech, names[len(params) :])
+    extra = [origin_parameter(mech, *n.rsplit(".", 1)) for n in names[len(params) :]]
     label = "+".join([params.label, *kinds])
-    return ParameterSet([*params.parameters, *extra.parameters], label)
+    return ParameterSet([*params.parameters, *extra], label)
 
 
 def joint_term_basis(mech: Mechanism, params: ParameterSet, q_act: np.ndarray) -> np.ndarray:

@@ -33,18 +33,21 @@ from __future__ import annotations
 import logging
 import xml.etree.ElementTree as ET
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from pincal._files import read_text
 from pincal.errors import ModelFileError, UnknownNameError
+from pincal.model._lock_values import lock_values, lock_values_at_home
+from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf_home import build_with_home
 from pincal.model._mjcf_tree import MjcfTree, euler_xyz, quat_matrix, unit, vec
-
-if TYPE_CHECKING:
-    from pincal.model import Mechanism, SolverOptions
+from pincal.model._model_files import read_sidecar
+from pincal.model._newton import SolverOptions
+from pincal.model._serial import lock_joints
+from pincal.model._urdf import UrdfTree
 
 __all__ = ["load_mjcf", "mjcf_to_urdf"]
 
@@ -261,9 +264,6 @@ def load_mjcf(
         SingularConfigurationError: no home assembles (the message names joints the
         home puts outside their ranges).
     """
-    from pincal.model import Mechanism, read_sidecar
-    from pincal.model._named import _lock_values
-
     path = Path(path)
     urdf, sidecar, conv = _convert(path, None, keyframe)
     source = conv.home_source
@@ -271,7 +271,7 @@ def load_mjcf(
     locks: dict[str, float | str] = {}
     if extra.is_file():
         own = dict(read_sidecar(extra))
-        locks = _lock_values(own.pop("lock", None), f"sidecar {extra}")
+        locks = lock_values(own.pop("lock", None), f"sidecar {extra}")
         source = "sidecar" if "home" in own else source
         sidecar |= own
     locks |= dict(lock or {})
@@ -305,13 +305,9 @@ def _lock(
     Raises:
         UnknownNameError: a locked name is not a movable joint.
     """
-    from pincal.model._catalogue import _lock_values_at_home
-    from pincal.model._serial import lock_joints
-    from pincal.model._urdf import UrdfTree
-
     if not locks:
         return urdf, stiffness, ""
-    values = _lock_values_at_home(locks, sidecar.get("home"))
+    values = lock_values_at_home(locks, sidecar.get("home"))
     urdf = lock_joints(urdf, values)
     gone = set(values) | {n for n, j in UrdfTree(urdf).joints.items() if not j.movable}
     if sidecar.get("name_mot") is not None:

@@ -39,7 +39,8 @@ from typing import Any
 from pincal._files import read_text
 from pincal._yaml import shown
 from pincal.errors import ModelFileError
-from pincal.model._catalogue import bundled_models, read_sidecar, resolve_model_path
+from pincal.model._lock_values import lock_values
+from pincal.model._model_files import bundled_models, read_sidecar, resolve_model_path
 from pincal.model._urdf import UrdfTree
 
 __all__ = [
@@ -99,25 +100,6 @@ def find_local_sidecar(spec: str | Path) -> Path | None:
         if len(found) == 1 and "robot" in read_sidecar(found[0]):
             return found[0]
     return None
-
-
-def _lock_values(v: Any, where: str) -> dict[str, float | str]:
-    if v is None:
-        return {}
-    if not isinstance(v, Mapping):
-        raise ModelFileError(f"{where} 'lock' must map joint names to values [rad, m]: {shown(v)}")
-    out: dict[str, float | str] = {}
-    for name, value in v.items():
-        if value == "home":
-            out[str(name)] = "home"
-            continue
-        number = isinstance(value, int | float) and not isinstance(value, bool)
-        if not number or not math.isfinite(value):
-            raise ModelFileError(
-                f"{where} lock[{shown(name)}] must be a finite number or 'home', got {shown(value)}"
-            )
-        out[str(name)] = float(value)
-    return out
 
 
 def _robot_spec(local: Path, data: Mapping[str, Any]) -> str:
@@ -303,8 +285,8 @@ def resolve_named(
             base[key] = value
             notes.append(f"{note} (example-robot-data default, no sidecar sets it)")
     locks = (
-        _lock_values(base.get("lock"), f"sidecar {own}")
-        | _lock_values(data.get("lock"), f"sidecar {local}")
+        lock_values(base.get("lock"), f"sidecar {own}")
+        | lock_values(data.get("lock"), f"sidecar {local}")
         | dict(lock or {})
     )
     merged = {k: v for k, v in (base | data).items() if k not in LOADER_KEYS}
@@ -336,5 +318,5 @@ def _with_options(
     if frame:
         doc["measured_frame"] = frame
     if lock:
-        doc["lock"] = {**_lock_values(doc.get("lock"), "sidecar"), **dict(lock)}
+        doc["lock"] = {**lock_values(doc.get("lock"), "sidecar"), **dict(lock)}
     return doc

@@ -5,17 +5,17 @@ the joint-origin frame. All parameters of one joint act together as
 ``origin ← origin · exp6(Σ_k δ_k ξ_k)``. The dof ``offset`` is the twist along a
 movable joint's axis, i.e. exactly an encoder/prismatic zero offset.
 
-Presets: ``"full"`` (every origin twist), the sidecar's presets, and computed presets
-the caller passes as ``computed`` — :func:`pincal.sensitivity.parameters` (exported as
-``pincal.parameters``) passes ``"base"`` (the identifiable base set of ``full`` without
-its degenerate translations, see :func:`degenerate_translations`). This module imports
-nothing from the later stages and keeps no registry.
+Sets by preset name or entry list are built by :func:`pincal.model.parameters`
+(:mod:`pincal.model._presets`): ``"full"`` (:func:`full_parameters`, every origin twist),
+the sidecar's presets, and computed presets the caller passes as ``computed`` —
+:func:`pincal.sensitivity.parameters` (exported as ``pincal.parameters``) passes
+``"base"`` (the identifiable base set of ``full`` without its degenerate translations,
+see :func:`degenerate_translations`).
 """
 
 from __future__ import annotations
 
-import fnmatch
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,7 +32,8 @@ __all__ = [
     "ParameterSet",
     "degenerate_translations",
     "full_parameters",
-    "parameters",
+    "origin_dofs",
+    "origin_parameter",
 ]
 
 DOFS: tuple[str, ...] = ("tx", "ty", "tz", "rx", "ry", "rz", "offset")
@@ -41,9 +42,6 @@ _EXCLUDED_TYPES = ("floating", "planar")
 _REVOLUTE = ("revolute", "continuous")
 _ZERO_LENGTH = 1e-12
 """Origin translations up to this norm [m] count as a zero-length link."""
-
-_COMPUTED_ELSEWHERE = {"base": "pincal.parameters (pincal.sensitivity.parameters)"}
-"""Computed presets of later stages, named in the error when they are asked for here."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -218,7 +216,7 @@ class ParameterSet:
         return f"{value:+.4g} {self.units[k]}"
 
 
-def _make(mech: Mechanism, joint: str, dof: str) -> Parameter:
+def origin_parameter(mech: Mechanism, joint: str, dof: str) -> Parameter:
     uj = mech.tree.joints[joint]
     term = term_of_dof(dof)
     if term is not None:
@@ -235,7 +233,7 @@ def _make(mech: Mechanism, joint: str, dof: str) -> Parameter:
     return Parameter(f"{joint}.{dof}", joint, dof, twist, unit)
 
 
-def _full_dofs(mech: Mechanism, joint: str) -> list[str]:
+def origin_dofs(mech: Mechanism, joint: str) -> list[str]:
     uj = mech.tree.joints[joint]
     dofs = list(DOFS[:6])
     if uj.movable:
@@ -253,10 +251,10 @@ def full_parameters(mech: Mechanism) -> ParameterSet:
     For a movable joint the offset replaces the twist along its axis.
     """
     params = [
-        _make(mech, j, d)
+        origin_parameter(mech, j, d)
         for j, uj in mech.tree.joints.items()
         if uj.type not in _EXCLUDED_TYPES
-        for d in _full_dofs(mech, j)
+        for d in origin_dofs(mech, j)
     ]
     return ParameterSet(params, "full")
 
@@ -294,128 +292,5 @@ def degenerate_translations(mech: Mechanism) -> tuple[str, ...]:
             and passive_revolute(parent)
             and float(np.linalg.norm(uj.origin.translation)) <= _ZERO_LENGTH
         ):
-            out += [f"{name}.{d}" for d in _full_dofs(mech, name) if d.startswith("t")]
+            out += [f"{name}.{d}" for d in origin_dofs(mech, name) if d.startswith("t")]
     return tuple(out)
-
-
-def parameters(
-    mech: Mechanism,
-    preset: str | Sequence = "full",
-    *,
-    computed: Mapping[str, Callable[[Mechanism], ParameterSet]] | None = None,
-) -> ParameterSet:
-    """Build a parameter set from a preset name, or an explicit list of entries.
-
-    Args:
-        mech: the mechanism.
-        preset: ``"full"``, a computed preset named in ``computed`` (a sidecar preset of
-            the same name takes precedence), a preset name from the sidecar,
-            ``PRESET+TERM[+TERM…]`` (the preset and joint-space terms on every actuated joint, e.g.
-            ``base+compliance``; see :func:`pincal.model.with_joint_terms`), or a list
-            whose entries are ``"<joint>.<dof>"`` strings or ``{"joints": pattern, "dofs":
-            [...]}`` mappings (fnmatch patterns over URDF joint names). Instead of ``dofs``,
-            an entry may name a direction in the parent link's frame
-            (:mod:`pincal.model._directions`): ``along_parent: x|y|z|[a, b, c]`` (the
-            joint's translation parallel to it) or ``about_parent`` (its rotation); an
-            entry with ``hold: true`` removes what it names from the parameters listed
-            before it.
-        computed: presets computed by a later stage (name → ``builder(mech)``); the
-            ``"base"`` preset is passed by :func:`pincal.sensitivity.parameters`.
-
-    Raises:
-        UnknownNameError: unknown preset, joint or dof (valid names listed).
-    """
-    computed = {} if computed is None else computed
-    if not isinstance(preset, str | list | tuple):
-        raise ParameterError(
-            f"preset must be a name or a list of entries, got {type(preset).__name__}"
-        )
-    if isinstance(preset, str) and "+" in preset and preset not in mech.presets:
-        # PRESET+TERM[+TERM…]: the preset and joint terms (the term modules import this one)
-        from pincal.model._joint_term_set import with_joint_terms
-
-        base, *kinds = preset.split("+")
-        return with_joint_terms(mech, parameters(mech, base, computed=computed), kinds)
-    if isinstance(preset, str):
-        if preset == "full":
-            return full_parameters(mech)
-        if preset in computed and preset not in mech.presets:
-            return computed[preset](mech)
-        if preset not in mech.presets:
-            where = _COMPUTED_ELSEWHERE.get(preset)
-            hint = f" ('{preset}' is computed: use {where})" if where else ""
-            raise UnknownNameError("preset", preset, ["full", *computed, *mech.presets], hint)
-        label, entries = preset, mech.presets[preset]
-        if not isinstance(entries, list):
-            raise ParameterError(f"preset {preset!r} must be a list of entries")
-    else:
-        label, entries = "custom", preset
-    joint_names = list(mech.tree.joints)
-    params: list[Parameter] = []
-    for entry in entries:
-        held = isinstance(entry, dict) and entry.get("hold") is True
-        chosen = [_make(mech, j, d) for j, d in _entry_pairs(mech, entry, joint_names)]
-        if held:  # leave them out of the set built so far
-            out = {p.name for p in chosen}
-            if not out & {p.name for p in params}:
-                raise ParameterError(
-                    f"preset entry {entry!r} holds {sorted(out)}, none of which is listed "
-                    "before it; list the parameters first, then the entries that hold some"
-                )
-            params = [p for p in params if p.name not in out]
-        else:
-            params += chosen
-    return ParameterSet(params, label)
-
-
-_DIRECTION_KEYS = ("along_parent", "about_parent")
-
-
-def _entry_pairs(mech: Mechanism, entry: object, joint_names: list[str]) -> list[tuple[str, str]]:
-    """(joint, dof) pairs of one preset entry (see :func:`parameters`)."""
-    from pincal.model._directions import matching_dofs
-
-    if isinstance(entry, str):
-        joint, _, dof = entry.rpartition(".")
-        pairs = [(joint, [dof])]
-    elif isinstance(entry, dict) and "joints" in entry and (
-        "dofs" in entry or any(k in entry for k in _DIRECTION_KEYS)
-    ):
-        keys = [k for k in ("dofs", *_DIRECTION_KEYS) if k in entry]
-        if len(keys) != 1 or not isinstance(entry["joints"], str):
-            raise ParameterError(
-                f"preset entry {entry!r}: 'joints' must be a name pattern, with one of "
-                f"'dofs' (a list of {', '.join(DOFS)}), 'along_parent' or 'about_parent'"
-            )
-        pattern = entry["joints"]
-        matched = [j for j in joint_names if fnmatch.fnmatchcase(j, pattern)]
-        if not matched:
-            raise UnknownNameError("joint", pattern, joint_names)
-        if keys[0] == "dofs":
-            dofs_ = entry["dofs"]
-            if not isinstance(dofs_, list | str):
-                raise ParameterError(
-                    f"preset entry {entry!r}: 'dofs' must be a list of {', '.join(DOFS)}"
-                )
-            pairs = [(j, [dofs_] if isinstance(dofs_, str) else list(dofs_)) for j in matched]
-        else:
-            key = keys[0]
-            pairs = [
-                (j, matching_dofs(mech, j, [(d, _make(mech, j, d).twist)
-                                            for d in _full_dofs(mech, j)], key, entry[key]))
-                for j in matched
-            ]  # fmt: skip
-    else:
-        raise ParameterError(
-            f"preset entry {entry!r} must be '<joint>.<dof>', {{joints: ..., dofs: [...]}} "
-            "or {joints: ..., along_parent: x|y|z|[a, b, c]} (about_parent for rotations)"
-        )
-    out = []
-    for joint, dofs in pairs:
-        if joint not in mech.tree.joints:
-            raise UnknownNameError("joint", joint, joint_names)
-        for dof in dofs:
-            if not isinstance(dof, str) or (dof not in DOFS and term_of_dof(dof) is None):
-                raise UnknownNameError("dof", str(dof), DOFS)
-            out.append((joint, dof))
-    return out

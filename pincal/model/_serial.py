@@ -40,8 +40,9 @@ import pinocchio as pin
 
 from pincal._files import read_text
 from pincal.errors import ModelFileError, UnknownNameError
-from pincal.model._catalogue import _lock_values_at_home
+from pincal.model._lock_values import lock_values_at_home
 from pincal.model._mechanism import Mechanism
+from pincal.model._named import resolve_named
 from pincal.model._urdf import MOVABLE_TYPES, UrdfTree
 
 __all__ = [
@@ -261,11 +262,9 @@ def serial_mechanism(
     overridden and two presets added: ``chain`` (:func:`chain_preset`) and
     ``base_tool`` (only the 6 + 6 frame parameters).
     """
-    from pincal.model._named import resolve_named
-
     named = resolve_named(spec)
     urdf_path, sidecar = named.urdf, dict(named.sidecar)
-    lock = _lock_values_at_home({**named.lock, **(lock or {})}, sidecar.get("home"))
+    lock = lock_values_at_home({**named.lock, **(lock or {})}, sidecar.get("home"))
     xml = read_text(urdf_path, "URDF", error=ModelFileError)
     if lock:
         xml = lock_joints(xml, lock)

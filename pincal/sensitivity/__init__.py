@@ -9,7 +9,7 @@ names through it).
 
 from __future__ import annotations
 
-from pincal.sensitivity._batch_jacobian import BatchSensitivity, sensitivities_batch
+from pincal.sensitivity._batch_jacobian import sensitivities_batch
 from pincal.sensitivity._global import (
     GlobalSensitivity,
     global_sensitivity,
@@ -25,12 +25,11 @@ from pincal.sensitivity._identifiability import (
     base_set,
     identifiability,
 )
-from pincal.sensitivity._jacobian import (
-    PoseSensitivity,
+from pincal.sensitivity._identification_jacobian import (
     closure_breaking,
     identification_jacobian,
-    pose_sensitivity,
 )
+from pincal.sensitivity._jacobian import BatchSensitivity, PoseSensitivity, pose_sensitivity
 from pincal.sensitivity._presets import COMPUTED_PRESETS, parameters
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank, numerical_ranks
 

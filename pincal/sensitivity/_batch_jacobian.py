@@ -19,8 +19,6 @@ kinematics lacks, a passive closure Jacobian of rank below min(rows, dofs) at ho
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
@@ -41,31 +39,11 @@ from pincal.sensitivity._batch_points import (
     point_path,
 )
 from pincal.sensitivity._batch_serial import _anchors, _columns, _serial_path
-from pincal.sensitivity._jacobian import _Plan, _plan, pose_sensitivity
+from pincal.sensitivity._jacobian import BatchSensitivity, _Plan, _plan, pose_sensitivity
 from pincal.sensitivity._joint_terms import joint_term_sensitivities
 from pincal.sensitivity._rank import RANK_RTOL
 
 __all__ = ["BatchSensitivity", "batch_applies", "sensitivities_batch"]
-
-
-@dataclass(frozen=True)
-class BatchSensitivity:
-    """Sensitivities of N closed configurations.
-
-    Attributes:
-        q: (N, nq) configurations.
-        positions: (N, 3) world positions of the measured frame [m].
-        rotations: (N, 3, 3) its orientations.
-        jacobian: (N, 6, n) derivative of ``[p_world; rotation (local)]`` w.r.t. the
-            n parameters.
-        breaks_closure: (n,) True for parameters that break a loop closure at some pose.
-    """
-
-    q: np.ndarray
-    positions: np.ndarray
-    rotations: np.ndarray
-    jacobian: np.ndarray
-    breaks_closure: np.ndarray
 
 
 def batch_applies(mech: Mechanism) -> bool:

@@ -23,7 +23,7 @@ import numpy as np
 
 from pincal.errors import ParameterError
 from pincal.model import Mechanism, ParameterSet, sample_actuators
-from pincal.sensitivity._jacobian import identification_jacobian
+from pincal.sensitivity._identification_jacobian import identification_jacobian
 
 __all__ = ["GlobalSensitivity", "global_sensitivity", "global_sensitivity_from_jacobians"]
 

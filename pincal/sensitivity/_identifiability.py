@@ -40,6 +40,7 @@ from pincal.model import (
     full_parameters,
     sample_actuators,
 )
+from pincal.sensitivity._identification_jacobian import jacobian_and_closure_breaking
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
 __all__ = [
@@ -315,8 +316,6 @@ def identifiability(
         InputLimitError: more parameters than ``Limits.parameters`` of the limits in force
             (:func:`pincal.model.active_limits`; ``PINCAL_MAX_PARAMETERS`` on the command line).
     """
-    from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
-
     limits = active_limits()
     limits.check(
         f"parameters in set {params.label!r} to analyse",
@@ -382,8 +381,6 @@ def base_set(mech: Mechanism, params: ParameterSet | None = None) -> BaseSet:
     Raises:
         UnidentifiableError: no candidate parameter changes the measured quantity.
     """
-    from pincal.sensitivity._jacobian import jacobian_and_closure_breaking
-
     candidates = params
     if candidates is None:
         full = full_parameters(mech)

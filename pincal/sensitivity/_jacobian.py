@@ -26,11 +26,11 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ParameterError
-from pincal.model import COMPONENTS, Kinematics, Linearisation, Mechanism, ParameterSet
+from pincal.model import Kinematics, Linearisation, Mechanism, ParameterSet
 from pincal.model.kernels import measured_jacobian
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver
 
-__all__ = ["PoseSensitivity", "closure_breaking", "identification_jacobian", "pose_sensitivity"]
+__all__ = ["BatchSensitivity", "PoseSensitivity", "pose_sensitivity"]
 
 
 @dataclass(frozen=True)
@@ -53,6 +53,26 @@ class PoseSensitivity:
     rotation: np.ndarray
     jacobian: np.ndarray
     breaks_closure: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+
+
+@dataclass(frozen=True)
+class BatchSensitivity:
+    """Sensitivities of N closed configurations.
+
+    Attributes:
+        q: (N, nq) configurations.
+        positions: (N, 3) world positions of the measured frame [m].
+        rotations: (N, 3, 3) its orientations.
+        jacobian: (N, 6, n) derivative of ``[p_world; rotation (local)]`` w.r.t. the
+            n parameters.
+        breaks_closure: (n,) True for parameters that break a loop closure at some pose.
+    """
+
+    q: np.ndarray
+    positions: np.ndarray
+    rotations: np.ndarray
+    jacobian: np.ndarray
+    breaks_closure: np.ndarray
 
 
 def _breaking(solver: RangeSolver, Jc_p: np.ndarray) -> np.ndarray:
@@ -175,87 +195,3 @@ def pose_sensitivity(
     else:
         breaks = np.zeros(n, dtype=bool)
     return PoseSensitivity(kin.q.copy(), oMm.translation.copy(), oMm.rotation.copy(), J, breaks)
-
-
-def _sensitivities(
-    mech: Mechanism,
-    params: ParameterSet,
-    q_act_rows: np.ndarray,
-    values: np.ndarray | None,
-):
-    """Batched sensitivities of the measured frame at the rows' closed configurations."""
-    from pincal.sensitivity._batch_jacobian import sensitivities_batch
-
-    lin = params.linearise(values)
-    at = mech if not np.any(lin.values) else params.apply(mech, lin)
-    qs, bk = at.configurations_batch(q_act_rows)
-    return sensitivities_batch(at, params, qs, bk, lin)
-
-
-def _rows(mech: Mechanism, components: tuple[str, ...] | None) -> list[int]:
-    return [COMPONENTS.index(c) for c in (components or mech.measured_components)]
-
-
-def identification_jacobian(
-    mech: Mechanism,
-    params: ParameterSet,
-    q_act_rows: np.ndarray,
-    values: np.ndarray | None = None,
-    components: tuple[str, ...] | None = None,
-) -> np.ndarray:
-    """Stacked identification Jacobian (m·k, n) of the measured quantity.
-
-    Args:
-        mech: nominal mechanism (the one ``params`` was built for).
-        params: parameter set (n parameters).
-        q_act_rows: (m, n_act) actuator values [m, rad].
-        values: (n,) parameter values at which to linearise (default zeros).
-        components: measured components (default: the mechanism's), k of them; rows per
-            pose are in the order ``x y z rx ry rz`` restricted to these.
-
-    Returns:
-        (m·k, n) array: position rows in metres (world frame) and rotation rows in
-        radians (measured frame) per unit of each parameter. Columns of parameters
-        that break loop closure (:func:`closure_breaking`) are least-squares values
-        without a physical meaning.
-    """
-    rows = _rows(mech, components)
-    J = _sensitivities(mech, params, q_act_rows, values).jacobian[:, rows]
-    return J.reshape(-1, len(params))
-
-
-def closure_breaking(
-    mech: Mechanism,
-    params: ParameterSet,
-    q_act_rows: np.ndarray,
-    values: np.ndarray | None = None,
-) -> np.ndarray:
-    """Which parameters cannot change without breaking a loop closure.
-
-    Parameter k keeps every loop closable when its closure-Jacobian column ∂c/∂p_k
-    lies in the range of ∂c/∂q_u (passive joints) at every pose; otherwise (a ``6d``
-    closure of a planar loop and an out-of-plane parameter, say) it breaks closure.
-
-    Args:
-        mech: nominal mechanism.
-        params: the n parameters.
-        q_act_rows: (m, n_act) actuator values [m, rad].
-        values: (n,) parameter values (default zeros).
-
-    Returns:
-        (n,) boolean mask, True where the parameter breaks closure at any pose.
-    """
-    return jacobian_and_closure_breaking(mech, params, q_act_rows, values)[1]
-
-
-def jacobian_and_closure_breaking(
-    mech: Mechanism,
-    params: ParameterSet,
-    q_act_rows: np.ndarray,
-    values: np.ndarray | None = None,
-    components: tuple[str, ...] | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`identification_jacobian` and :func:`closure_breaking` from one pass."""
-    rows = _rows(mech, components)
-    sens = _sensitivities(mech, params, q_act_rows, values)
-    return sens.jacobian[:, rows].reshape(-1, len(params)), sens.breaks_closure.copy()

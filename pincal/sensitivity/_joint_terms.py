@@ -13,6 +13,7 @@ from collections.abc import Callable
 import numpy as np
 
 from pincal.model import Mechanism, ParameterSet, joint_term_basis, parameters
+from pincal.sensitivity._jacobian import BatchSensitivity
 
 __all__ = ["joint_term_sensitivities"]
 
@@ -43,8 +44,6 @@ def joint_term_sensitivities(
     Returns:
         A :class:`BatchSensitivity` with all n columns.
     """
-    from pincal.sensitivity._batch_jacobian import BatchSensitivity
-
     n = len(params)
     offsets = parameters(mech, [f"{a}.offset" for a in mech.actuated])
     s_off = geometric(mech, offsets, qs, bk, None)

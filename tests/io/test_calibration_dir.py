@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from pincal.errors import CalibrationDirectoryError
-from pincal.identification import identify
+from pincal.identification import identify, result_to_dict
 from pincal.io import (
     CALIBRATED_SIDECAR,
     CALIBRATED_URDF,
@@ -123,7 +123,7 @@ def test_a_directory_without_manifest_is_not_a_calibration(wedge_result, tmp_pat
     d = tmp_path / "old"
     d.mkdir()
     save_urdf(result.calibrated, d / "wedge3_calibrated.urdf")
-    (d / "identification.json").write_text(json.dumps(result.to_dict()))
+    (d / "identification.json").write_text(json.dumps(result_to_dict(result)))
     with pytest.raises(CalibrationDirectoryError, match="has no calibration.json, the manifest"):
         read_calibration(d)
 

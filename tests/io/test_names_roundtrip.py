@@ -20,7 +20,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from pincal.errors import MeasurementFormatError, PincalError
-from pincal.identification import IdentificationResult, identify
+from pincal.identification import identify, result_from_dict, result_to_dict
 from pincal.io import (
     TargetMeasurements,
     read_commands,
@@ -169,8 +169,8 @@ def test_identification_json_keeps_parameter_and_model_names(data):
     names = data.draw(st.lists(NAME, min_size=len(result.names), max_size=len(result.names)))
     model = data.draw(NAME)
     changed = dataclasses.replace(result, names=tuple(names), model=model)
-    text = json.dumps(changed.to_dict())
-    back = IdentificationResult.from_dict(json.loads(text))
+    text = json.dumps(result_to_dict(changed))
+    back = result_from_dict(json.loads(text))
     assert back.names == tuple(names) and back.model == model
     assert np.array_equal(back.full_values, result.full_values)
 

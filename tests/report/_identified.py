@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 import pincal
-from pincal.identification import identify
+from pincal.identification import identify, result_to_dict
 
 
 def identified_directory(tmp_path_factory, stewart, stewart42, stewart_poses, seed: int) -> Path:
@@ -29,5 +29,5 @@ def identified_directory(tmp_path_factory, stewart, stewart42, stewart_poses, se
         },
         "index_history": {"O1": [1.0, 2.0, 2.5]},
     }
-    (out / "identification.json").write_text(json.dumps(res.to_dict(notes)))
+    (out / "identification.json").write_text(json.dumps(result_to_dict(res, notes)))
     return out

@@ -10,7 +10,7 @@ import pytest
 
 import pincal
 from pincal.errors import CalibrationDirectoryError, ReportError
-from pincal.identification import IdentificationResult, identify
+from pincal.identification import IdentificationResult, identify, result_to_dict
 from pincal.io import read_identification
 from pincal.report import calibration_report
 
@@ -49,7 +49,7 @@ def test_result_written_by_to_dict_is_reported(tmp_path, stewart, stewart42, ste
     meas = pincal.simulate_measurements(actual, stewart_poses, noise, np.random.default_rng(4))
     res = identify(stewart, stewart42, meas, "lm")
     notes = {"truth": dict(zip(stewart42.names, truth, strict=True))}
-    (tmp_path / "identification.json").write_text(json.dumps(res.to_dict(notes)))
+    (tmp_path / "identification.json").write_text(json.dumps(result_to_dict(res, notes)))
     back = read_identification(tmp_path / "identification.json")
     np.testing.assert_array_equal(back.values, res.values)
     md = calibration_report(tmp_path).markdown.read_text()

@@ -15,7 +15,7 @@ from click.testing import CliRunner
 
 import pincal
 from pincal.cli import main
-from pincal.identification import IdentificationResult, identify
+from pincal.identification import identify, result_from_dict, result_to_dict
 from pincal.report import calibration_report
 from pincal.report._sections import poorly_determined
 
@@ -48,7 +48,7 @@ def calibration(tmp_path_factory, stewart, stewart42, stewart_poses):
     res = identify(stewart, stewart42, meas)
     out = tmp_path_factory.mktemp("cal")
     notes = {"data": "meas.csv", "truth": dict(zip(stewart42.names, truth, strict=True))}
-    (out / "identification.json").write_text(json.dumps(res.to_dict(notes)))
+    (out / "identification.json").write_text(json.dumps(result_to_dict(res, notes)))
     return out, res
 
 
@@ -104,7 +104,7 @@ def test_poorly_determined_parameter_is_flagged(tmp_path):
             {"name": "leg1.ry", "value": 1e-4, "std": 1e-5, "unit": "rad"},
         ],
     }
-    res = IdentificationResult.from_dict(doc)
+    res = result_from_dict(doc)
     assert poorly_determined(res) == ["leg1.tx", "leg1.rx"]
     (tmp_path / "identification.json").write_text(json.dumps(doc))
     files = calibration_report(tmp_path)
