@@ -17,7 +17,7 @@ from pincal.identification._cross_validation import (
     position_errors,
 )
 from pincal.identification._data_check import check_measurements
-from pincal.identification._identify import identify, qpso_identify, step_planned_identify
+from pincal.identification._identify import identify
 from pincal.identification._instrument_design import (
     InstrumentIdentifiability,
     default_instrument,
@@ -81,10 +81,6 @@ from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
 from pincal.identification._weighting import Weighting
 
-#: pincal 0.1 result names: every solver now returns an IdentificationResult
-QPSOIdentification = IdentificationResult
-StepPlanningResult = IdentificationResult
-
 __all__ = [
     "COST_MODELS",
     "FORMAT_VERSION",
@@ -113,7 +109,6 @@ __all__ = [
     "MonteCarloStudy",
     "Prior",
     "QPSOExtras",
-    "QPSOIdentification",
     "QPSOOptions",
     "QPSOResult",
     "QPSOStage",
@@ -126,7 +121,6 @@ __all__ = [
     "StackedProblem",
     "StepPlanningExtras",
     "StepPlanningOptions",
-    "StepPlanningResult",
     "Weighting",
     "check_instrument_data",
     "check_measurements",
@@ -150,12 +144,10 @@ __all__ = [
     "outlier_poses",
     "position_errors",
     "qpso",
-    "qpso_identify",
     "qpso_stepwise",
     "result_from_dict",
     "result_to_dict",
     "select_model",
     "solver",
     "stacked_measurements",
-    "step_planned_identify",
 ]

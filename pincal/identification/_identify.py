@@ -23,7 +23,6 @@ from pincal.identification._noise import initial_weights, weighted_fit
 from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import CalibrationProblem, IdentificationProblem
-from pincal.identification._qpso_identify import QPSOOptions
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import solver
 from pincal.identification._weighting import Weighting
@@ -32,39 +31,9 @@ from pincal.model import Mechanism, ParameterSet, degenerate_translations
 from pincal.sensitivity import Identifiability, analyse_jacobian, closure_breaking
 from pincal.sensitivity.kernels import batch_applies
 
-__all__ = ["identify", "qpso_identify", "step_planned_identify"]
+__all__ = ["identify"]
 
 log = logging.getLogger(__name__)
-#: keywords of pincal 0.1's identify(), mapped onto the options of the methods they apply to
-_LEGACY = {
-    "max_iterations": ("gauss-newton", "lm"),
-    "xtol": ("gauss-newton", "lm"),
-    "regularization": ("gauss-newton",),
-    "loss": ("lm",),
-}
-
-
-def _legacy_options(method: str, options: Any, legacy: dict[str, Any], qpso: Any) -> Any:
-    """Options from pincal 0.1's keywords; as in 0.1, keywords of other methods are ignored."""
-    given = {k: v for k, v in legacy.items() if v is not None and method in _LEGACY[k]}
-    ignored = sorted(k for k, v in legacy.items() if v is not None and k not in given)
-    if qpso is not None and not method.startswith("qpso"):
-        ignored.append("qpso")
-    if ignored:
-        log.info("identify: %s do not apply to method %r (ignored)", ignored, method)
-    if qpso is not None and method.startswith("qpso"):
-        if options is not None:
-            raise SolverOptionError("give the QPSO options once: options= or qpso=")
-        return qpso
-    if not given:
-        return options
-    if options is not None:
-        raise SolverOptionError(
-            f"give {sorted(given)} inside options= ({type(options).__name__}), not beside it"
-        )
-    return solver(method).options_type(**given)
-
-
 def _fit_set(
     problem: IdentificationProblem, J0: np.ndarray, model: CalibrationProblem
 ) -> tuple[np.ndarray, Identifiability]:
@@ -179,11 +148,6 @@ def identify(
     fit: Any = None,
     reduce: bool = True,
     progress: Progress = None,
-    loss: str | None = None,
-    regularization: float | None = None,
-    max_iterations: int | None = None,
-    xtol: float | None = None,
-    qpso: QPSOOptions | None = None,
     noise: Any = None,
 ) -> IdentificationResult:
     """Identify parameter values from measurements.
@@ -194,7 +158,7 @@ def identify(
 
     Args:
         problem: an :class:`IdentificationProblem`, or the nominal mechanism.
-        params: the n parameters (with a mechanism); with a problem, may be the method.
+        params: the n parameters (mechanism form only).
         measurements: m measured poses (with a mechanism).
         method: a registered solver: ``"gauss-newton"``, ``"lm"``, ``"qpso"``,
             ``"qpso-stepwise"`` or ``"step-planned"`` (see ``METHODS``).
@@ -209,16 +173,6 @@ def identify(
             ``{"position": mm, "orientation": mrad}``); without a declared noise, it is
             estimated from the residuals.
         progress: optional callback ``(iteration, cost)``.
-        loss: pincal 0.1 keyword: robust loss of ``"lm"`` (see ``LMOptions.loss``);
-            ignored, as in 0.1, by methods it does not apply to.
-        regularization: pincal 0.1 keyword: Tikhonov weight λ ≥ 0 of ``"gauss-newton"``
-            (whitened units); ignored by other methods.
-        max_iterations: pincal 0.1 keyword: iteration limit of ``"gauss-newton"`` and
-            ``"lm"``; ignored by other methods.
-        xtol: pincal 0.1 keyword: relative step tolerance of ``"gauss-newton"`` and
-            ``"lm"``; ignored by other methods.
-        qpso: pincal 0.1 keyword: the ``QPSOOptions`` of ``"qpso"`` /
-            ``"qpso-stepwise"`` (give it or ``options``, not both).
 
     Returns:
         IdentificationResult.
@@ -232,11 +186,10 @@ def identify(
             estimate it.
     """
     if isinstance(problem, IdentificationProblem):
-        if isinstance(params, str):
-            method = params
-        elif params is not None or measurements is not None:
+        if params is not None or measurements is not None:
             raise SolverOptionError(
-                "with an IdentificationProblem, give only the method (and options)"
+                "with an IdentificationProblem, give only method= and options= "
+                "(e.g. identify(problem, method='lm'))"
             )
         if initial is not None or fit is not None or reduce is not True or noise is not None:
             raise SolverOptionError(
@@ -252,10 +205,8 @@ def identify(
         problem = IdentificationProblem(
             problem, params, measurements, initial, fit, reduce, noise
         )
-    legacy = dict(loss=loss, regularization=regularization, max_iterations=max_iterations)
-    legacy["xtol"] = xtol
     entry = solver(method)
-    opts = entry.check_options(_legacy_options(method, options, legacy, qpso))
+    opts = entry.check_options(options)
     with threadpool_limits(1):  # small dense solves: threaded BLAS only adds contention
         return _run(problem, method, entry, opts, progress)
 
@@ -287,36 +238,3 @@ def _run(problem: IdentificationProblem, method: str, entry: Any, opts: Any, pro
     prior = opts.prior_weights(x0.size) if local else None
     w = None if prior is None else prior[0]
     return _finish(problem, method, out, free, ident, raw0, prefix, model, weighting, w)
-
-
-def qpso_identify(
-    problem: IdentificationProblem,
-    *,
-    stepwise: bool = False,
-    options: QPSOOptions | None = None,
-) -> IdentificationResult:
-    """``identify(problem, "qpso-stepwise" if stepwise else "qpso", options=options)``."""
-    return identify(problem, "qpso-stepwise" if stepwise else "qpso", options=options)
-
-
-def step_planned_identify(
-    mech: Mechanism,
-    params: ParameterSet,
-    measurements: Measurements,
-    *,
-    sensitivity: Any = None,
-    workspace: np.ndarray | int = 200,
-    initial: np.ndarray | None = None,
-    damping: float = 1.0,
-    max_iterations: int = 100,
-    xtol: float = 1e-12,
-) -> IdentificationResult:
-    """``identify(mech, params, measurements, "step-planned", options=StepPlanningOptions(…))``.
-
-    The planned steps are in ``result.extras.steps``; parameters of zero global
-    sensitivity (and unidentifiable ones) are held (``result.fixed``).
-    """
-    from pincal.identification._options import StepPlanningOptions
-
-    opts = StepPlanningOptions(sensitivity, workspace, damping, max_iterations, xtol)
-    return identify(mech, params, measurements, "step-planned", options=opts, initial=initial)

@@ -231,16 +231,6 @@ class IdentificationResult:
             )
         return self.calibrated_mechanism
 
-    @property
-    def converged(self) -> bool:
-        """Alias of ``success`` (the step-planning result of pincal 0.1 called it so)."""
-        return self.success
-
-    @property
-    def held(self) -> tuple[str, ...]:
-        """Alias of ``fixed`` (the step-planning result of pincal 0.1 called it so)."""
-        return self.fixed
-
     def table(self) -> list[tuple[str, float, float, str]]:
         """(name, value, std, unit) per identified parameter [SI]."""
         units = [u for u, ok in zip(self.units, self.identified, strict=True) if ok]

@@ -92,7 +92,7 @@ def main() -> None:
         ("Gauss-Newton", "gauss-newton"),
     ):
         t0 = time.perf_counter()
-        res = pincal.identify(mech, params, meas, method, qpso=opts)
+        res = pincal.identify(mech, params, meas, method, options=opts)
         runs[label] = (res, time.perf_counter() - t0)
 
     # Table 1: given vs identified [mm], % deviation = (identified − given)/given·100
@@ -169,7 +169,7 @@ def summary(mech, params, q_meas, q_val, opts: QPSOOptions, args) -> None:
         o = QPSOOptions(**{**opts.__dict__, "seed": s})
         for m in methods:
             t0 = time.perf_counter()
-            res = pincal.identify(mech, params, meas, m, qpso=o)
+            res = pincal.identify(mech, params, meas, m, options=o)
             times[m] += time.perf_counter() - t0
             errs[m].append(np.abs(res.values - given).max() * 1e3)
             costs[m].append(0.5 * float(np.sum(res.residuals**2)))

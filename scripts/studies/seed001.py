@@ -37,6 +37,7 @@ import pinocchio as pin
 from pincal.compensation import compensate
 from pincal.errors import ConvergenceError
 from pincal.identification import (
+    GaussNewtonOptions,
     IdentificationResult,
     identify,
 )
@@ -221,7 +222,7 @@ def simulation_check(
     )
     rows = np.vstack([paper_rows, extra])
     meas = simulate_measurements(actual, rows, None, rng)
-    result = identify(mech, params, meas, max_iterations=30, xtol=1e-14)
+    result = identify(mech, params, meas, options=GaussNewtonOptions(max_iterations=30, xtol=1e-14))
     ident_legs = leg_geometry(result.calibrated)
     table = []
     for name, fld, k, _ in ASSUMED_ERRORS:

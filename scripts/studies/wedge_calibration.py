@@ -21,7 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 import pincal
-from pincal.identification import step_planned_identify
+from pincal.identification import StepPlanningOptions, identify
 from pincal.machines import (
     PATENT_ERROR_NAMES,
     WedgeGeometry,
@@ -92,7 +92,8 @@ def main() -> None:
         gn = pincal.identify(mech, params, meas, "gauss-newton")
         t_gn = time.perf_counter() - t0
         t0 = time.perf_counter()
-        sp = step_planned_identify(mech, params, meas, sensitivity=gs)
+        planned = StepPlanningOptions(sensitivity=gs)
+        sp = identify(mech, params, meas, "step-planned", options=planned)
         t_sp = time.perf_counter() - t0
         g_gn = wedge_compensation(params.names, gn.values)
         g_sp = wedge_compensation(params.names, sp.values)

@@ -11,7 +11,6 @@ from pincal.identification import (
     QPSOExtras,
     QPSOOptions,
     identify,
-    qpso_identify,
 )
 
 
@@ -30,18 +29,18 @@ def wedge_offsets():
 def test_identify_qpso_recovers_offsets(wedge_offsets) -> None:
     mech, params, meas, given = wedge_offsets
     opts = QPSOOptions(n_particles=30, t_max=150, seed=1)
-    res = pincal.identify(mech, params, meas, "qpso", qpso=opts)
+    res = pincal.identify(mech, params, meas, "qpso", options=opts)
     np.testing.assert_allclose(res.values, given, atol=2e-8)  # box ±50 µm → 0.02 µm
     assert res.method == "qpso" and res.success
     assert res.after.max_position < 1e-3 * res.before.max_position
-    again = pincal.identify(mech, params, meas, "qpso", qpso=opts)
+    again = pincal.identify(mech, params, meas, "qpso", options=opts)
     np.testing.assert_array_equal(res.values, again.values)  # seeded
 
 
 def test_identify_qpso_stepwise(wedge_offsets) -> None:
     mech, params, meas, given = wedge_offsets
     opts = QPSOOptions(n_particles=30, t_max=150, seed=1, fine_t_max=100)
-    res = pincal.identify(mech, params, meas, "qpso-stepwise", qpso=opts)
+    res = pincal.identify(mech, params, meas, "qpso-stepwise", options=opts)
     np.testing.assert_allclose(res.values, given, atol=2e-8)
 
 
@@ -53,8 +52,8 @@ def test_exact_and_linear_cost_models_agree(wedge_offsets) -> None:
     noise = {"position": 0.001, "orientation": 0.001}
     problem = IdentificationProblem(mech, params, meas, noise=noise)
     kw = dict(n_particles=6, t_max=8, seed=4)
-    exact = identify(problem, "qpso", options=QPSOOptions(cost_model="exact", **kw))
-    linear = qpso_identify(problem, options=QPSOOptions(cost_model="linear", **kw))
+    exact = identify(problem, method="qpso", options=QPSOOptions(cost_model="exact", **kw))
+    linear = identify(problem, method="qpso", options=QPSOOptions(cost_model="linear", **kw))
     np.testing.assert_allclose(exact.full_values, linear.full_values, atol=1e-12)
     assert isinstance(exact.extras, QPSOExtras)
     assert exact.extras.nfev == 6 * 9
@@ -103,8 +102,8 @@ def test_pkm5_stepwise_beats_direct_but_not_gauss_newton() -> None:
     given = rng.uniform(-3e-5, 3e-5, len(params))
     meas = pincal.simulate_measurements(params.apply(mech, given), q, None, rng)
     problem = IdentificationProblem(mech, params, meas)
-    direct = identify(problem, "qpso", options=QPSOOptions(seed=3)).extras
-    stepwise = identify(problem, "qpso-stepwise", options=QPSOOptions(seed=3))
+    direct = identify(problem, method="qpso", options=QPSOOptions(seed=3)).extras
+    stepwise = identify(problem, method="qpso-stepwise", options=QPSOOptions(seed=3))
     assert stepwise.extras.cost < direct.cost < 1e-2 * direct.initial_cost
     assert sorted(stepwise.extras.order) == list(range(20))
     gn = np.zeros(len(params))

@@ -15,10 +15,10 @@ from pincal.identification import (
     QPSOExtras,
     QPSOOptions,
     StepPlanningExtras,
+    StepPlanningOptions,
     identify,
     result_from_dict,
     result_to_dict,
-    step_planned_identify,
 )
 
 
@@ -74,7 +74,7 @@ def test_qpso_and_step_planning_extras_roundtrip():
     _, back = _roundtrip(res)
     _same(res, back)
     assert isinstance(back.extras, QPSOExtras) and back.extras == res.extras
-    planned = step_planned_identify(mech, params, meas, workspace=q)
+    planned = identify(mech, params, meas, "step-planned", options=StepPlanningOptions(workspace=q))
     _, back = _roundtrip(planned)
     _same(planned, back)
     assert isinstance(back.extras, StepPlanningExtras)

@@ -144,15 +144,15 @@ def test_registry_and_problem_form(stewart, stewart42, stewart_poses):
     meas = pincal.simulate_measurements(stewart, stewart_poses[:10])
     problem = IdentificationProblem(stewart, stewart42, meas)
     with pytest.raises(SolverOptionError, match="choose from"):
-        identify(problem, "newton")
+        identify(problem, method="newton")
     with pytest.raises(SolverOptionError, match="takes GaussNewtonOptions"):
         identify(problem, options=LMOptions())
-    with pytest.raises(SolverOptionError, match="inside options="):
-        identify(stewart, stewart42, meas, options=GaussNewtonOptions(), xtol=1e-9)
-    # pincal 0.1 keywords of other methods are ignored, as they were
+    with pytest.raises(SolverOptionError, match="give only method= and options="):
+        identify(problem, "lm")  # a positional method would be the parameter set
+    # the problem form and the mechanism form build the same fit
     plain = identify(problem)
-    mixed = identify(stewart, stewart42, meas, loss="huber", qpso=QPSOOptions())
-    np.testing.assert_array_equal(plain.full_values, mixed.full_values)
+    same = identify(stewart, stewart42, meas)
+    np.testing.assert_array_equal(plain.full_values, same.full_values)
     with pytest.raises(pincal.ParameterError, match="unknown"):
         IdentificationProblem(stewart, stewart42, meas, fit=["nope.tx"])
 
@@ -165,7 +165,7 @@ def test_fit_subset_holds_the_others(stewart, stewart42, stewart_poses):
     initial[:10] = 0.0
     meas = pincal.simulate_measurements(stewart42.apply(stewart, true), stewart_poses)
     problem = IdentificationProblem(stewart, stewart42, meas, initial=initial, fit=fit)
-    res = identify(problem, "lm")
+    res = identify(problem, method="lm")
     assert res.identified_names == tuple(fit)
     np.testing.assert_allclose(res.values, true[:10], atol=1e-9)
     np.testing.assert_array_equal(res.full_values[10:], initial[10:])

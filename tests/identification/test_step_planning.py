@@ -11,7 +11,7 @@ import pinocchio as pin
 import pytest
 
 import pincal
-from pincal.identification import step_planned_identify
+from pincal.identification import StepPlanningOptions, identify
 from pincal.machines import (
     PATENT_PRESET_NAMES,
     WedgeGeometry,
@@ -40,7 +40,9 @@ def setup():
     # exact data with a declared σ (1 µm, 1 µrad), so no noise is estimated from ~0 residuals
     meas = dataclasses.replace(meas, noise=NoiseModel(1e-3, 1e-3))
     sens = global_sensitivity(mech, params, q)
-    planned = step_planned_identify(mech, params, meas, sensitivity=sens)
+    planned = identify(
+        mech, params, meas, "step-planned", options=StepPlanningOptions(sensitivity=sens)
+    )
     return mech, params, meas, planned
 
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from pincal.errors import ConvergenceError
-from pincal.identification import identify
+from pincal.identification import GaussNewtonOptions, identify
 from pincal.measure import simulate_measurements
 from pincal.model import Mechanism, degenerate_translations, load_mechanism, sample_actuators
 from pincal.model._range_explore import BACK_OFF, DEFAULT_SPAN, STEPS
@@ -149,5 +149,5 @@ def test_estimation_stops_when_the_fits_do_not_converge(zero):
     rows = sample_actuators(zero, 30, np.random.default_rng(11))
     truth = np.random.default_rng(1).normal(0, 2e-4, len(base))
     meas = simulate_measurements(base.apply(zero, truth), rows)
-    res = identify(zero, base, meas, max_iterations=2)
+    res = identify(zero, base, meas, options=GaussNewtonOptions(max_iterations=2))
     assert not res.success and res.weighting.rounds == 2 and not res.weighting.converged
