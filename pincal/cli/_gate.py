@@ -97,10 +97,14 @@ def quality_lines(quality: dict | None) -> list[str]:
         lines.append("  χ² against the declared noise: " + "; ".join(
             f"{b['block']} χ²/ν {b['chi2'] / b['dof']:.3g} on {b['dof']:.0f} "
             f"(p = {b['p_value']:.2g})" for b in blocks))  # fmt: skip
-    if quality.get("probes"):
+    probes = [p for p in quality.get("probes", []) if not p["name"].startswith("trend:")]
+    trends = [p for p in quality.get("probes", []) if p["name"].startswith("trend:")]
+    if trends:  # one line for the pose-coordinate probes: the strongest trend only
+        probes.append(min(trends, key=lambda p: p["p_value"]))
+    if probes:
         lines.append("  misspecification probes: " + "; ".join(
             f"{p['size']} explains {p['explained']:.0%} (p = {p['p_value']:.2g})"
-            for p in quality["probes"]))  # fmt: skip
+            for p in probes))  # fmt: skip
     if quality.get("outlier_poses"):
         lines.append(
             f"  outlier poses (normalised residual > {quality.get('outlier_limit') or 0:.2f}): "

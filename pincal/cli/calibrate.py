@@ -94,7 +94,8 @@ from pincal.identification import METHODS
     default=None,
     metavar="P",
     help="Quality gate: p-value below which the χ² test (declared noise) and the "
-    "misspecification probes (scale, actuator gains, drift) refuse [default: 1e-3].",
+    "misspecification probes (scale, actuator gains, drift, coordinate trends) refuse "
+    "[default: 1e-3].",
 )
 @click.option(
     "--instrument",
