@@ -2,7 +2,7 @@
 
 Usage:
     python scripts/studies/quality_gate.py [--fits 20] [--poses 50] [--seed 0]
-        [--cells "clean, Stewart;1 % leg gain"]
+        [--cells "clean, Stewart;1 % leg gain"] [--part 0/3]
 
 Each fit: an "actual" machine drawn as ``pincal simulate`` draws it (geometric errors
 uniform in ±1 mm / ±10 mrad on the model's first preset), random workspace poses, noise
@@ -159,11 +159,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--poses", type=int, default=50, help="random poses per fit")
     ap.add_argument("--seed", type=int, default=0, help="first seed")
     ap.add_argument("--cells", default=None, help="';'-separated cell-name substrings")
+    ap.add_argument("--part", default=None, metavar="I/P",
+                    help="run only cells I, I+P, I+2P, … (0-based) of the selection: P "
+                    "processes in parallel, same seeds as one run")  # fmt: skip
     a = ap.parse_args(argv)
     cells = CELLS
     if a.cells:
         keys = [k.strip() for k in a.cells.split(";")]
         cells = tuple(c for c in CELLS if any(k in c.name for k in keys))
+    if a.part:
+        i, p = (int(v) for v in a.part.split("/"))
+        cells = cells[i::p]
     print(f"# quality gate study: {a.fits} fits per cell, {a.poses} poses, seeds "
           f"{a.seed}..{a.seed + a.fits - 1}, noise {NOISE[0]} mm / {NOISE[1]} mrad")  # fmt: skip
     print(f"| {'cell':44s} | {'refused (rate ± s.e.)':24s} | 95 % bound | refusals seen |")
