@@ -134,7 +134,7 @@ def calibrate(
       pincal calibrate tiago --link arm_7_link --data mocap.csv --marker-columns x1,y1,z1 \\
           --prior auto --out cal/        markers in an unknown instrument frame
     """
-    from pincal.cli._gate import apply_gate, gate_limits
+    from pincal.cli._gate import apply_gate, gate_limits, honest_uncertainty
     from pincal.identification import check_quality
     from pincal.io import (
         CALIBRATED_SIDECAR,
@@ -227,6 +227,7 @@ def calibrate(
             )
         result, noise_model = _identify_instrument(mech, params, files, method, force), None
         verdict = check_quality(result, limits=limits, scalar_instrument=True)
+        uncertainty = None
     else:
         mf = read_measurement_file(data, mech)  # its data check is the gate's first look
         meas = mf.measurements
@@ -237,7 +238,11 @@ def calibrate(
         verdict = check_quality(
             result, meas, mech=mech, data=gate, instrument=profile or mf.instrument
         )
+        result, verdict, uncertainty = honest_uncertainty(result, verdict, mech, meas,
+                                                          declared, loss)  # fmt: skip
     quality = apply_gate(verdict, force)
+    if uncertainty is not None:
+        quality["uncertainty"] = uncertainty
     out_dir = Path(out)
     doc = result_json(result, ", ".join(map(str, files)), CALIBRATED_URDF)
     doc["quality"] = quality

@@ -76,6 +76,12 @@ from pincal.identification._result import (
 )
 from pincal.identification._result_io import FORMAT_VERSION
 from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
+from pincal.identification._uncertainty import (
+    UncertaintyCheck,
+    check_uncertainty,
+    pose_residual_model,
+    with_uncertainty,
+)
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
 from pincal.identification._weighting import Weighting
 
@@ -125,9 +131,11 @@ __all__ = [
     "StepPlanningExtras",
     "StepPlanningOptions",
     "StepPlanningResult",
+    "UncertaintyCheck",
     "Weighting",
     "check_measurements",
     "check_quality",
+    "check_uncertainty",
     "compare",
     "cross_validate",
     "default_instrument",
@@ -144,6 +152,7 @@ __all__ = [
     "kfold",
     "monte_carlo",
     "outlier_poses",
+    "pose_residual_model",
     "position_errors",
     "qpso",
     "qpso_identify",
@@ -152,4 +161,5 @@ __all__ = [
     "solver",
     "stacked_measurements",
     "step_planned_identify",
+    "with_uncertainty",
 ]
