@@ -115,7 +115,7 @@ class Linearity:
             v = self.directions[:, bad[0]]
             top = np.argsort(-np.abs(v))[:3]
             text += " (mostly " + ", ".join(names[i] for i in top if abs(v[i]) > 0.2) + ")"
-        return text + "; the linearised σ are too small there"
+        return text
 
 
 def principal_directions(J: np.ndarray, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:

@@ -26,6 +26,9 @@ from pincal.identification._verdict import QualityIssue, QualityVerdict
 from pincal.measure import Measurements, NoiseModel
 from pincal.model import Mechanism
 
+#: bootstrap σ up to this factor of the linearised σ confirm them
+CONFIRMED = 1.1
+
 __all__ = ["UncertaintyCheck", "check_uncertainty", "pose_residual_model", "with_uncertainty"]
 
 
@@ -121,10 +124,15 @@ def check_uncertainty(
     new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
     worst = float(np.max(new.std / np.maximum(result.std, 1e-300)))
     text = lin.describe(names)
-    if boot.draws >= 2:
+    if boot.draws >= 2 and worst <= CONFIRMED:
         text += (
-            f"; the σ reported are widened by a parametric bootstrap ({boot.draws} seeded "
-            f"refits, up to {worst:.3g}× the linearised σ)"
+            f"; a parametric bootstrap ({boot.draws} seeded refits) confirms the linearised "
+            f"σ within {100 * (CONFIRMED - 1):.0f} % (the larger of the two is reported)"
+        )
+    elif boot.draws >= 2:
+        text += (
+            f"; the linearised σ are too small: the σ reported are widened by a parametric "
+            f"bootstrap ({boot.draws} seeded refits, up to {worst:.3g}× the linearised σ)"
         )
         if boot.failed:
             text += (
