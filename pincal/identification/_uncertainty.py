@@ -26,7 +26,8 @@ from pincal.identification._verdict import QualityIssue, QualityVerdict
 from pincal.measure import Measurements, NoiseModel
 from pincal.model import Mechanism
 
-#: bootstrap σ up to this factor of the linearised σ confirm them
+#: bootstrap σ up to (this + 3 relative standard errors of a σ from the draws) × the
+#: linearised σ confirm them
 CONFIRMED = 1.1
 
 __all__ = ["UncertaintyCheck", "check_uncertainty", "pose_residual_model", "with_uncertainty"]
@@ -124,10 +125,11 @@ def check_uncertainty(
     new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
     worst = float(np.max(new.std / np.maximum(result.std, 1e-300)))
     text = lin.describe(names)
-    if boot.draws >= 2 and worst <= CONFIRMED:
+    within = CONFIRMED + 3.0 / math.sqrt(2.0 * max(boot.draws, 1))  # σ̂ s.e. ≈ σ/√(2B)
+    if boot.draws >= 2 and worst <= within:
         text += (
             f"; a parametric bootstrap ({boot.draws} seeded refits) confirms the linearised "
-            f"σ within {100 * (CONFIRMED - 1):.0f} % (the larger of the two is reported)"
+            f"σ within its sampling error (up to {worst:.3g}×; the larger is reported)"
         )
     elif boot.draws >= 2:
         text += (
