@@ -256,23 +256,25 @@ def check_quality(
     if Jw is not None and sigma is not None and w is not None and _inexact(result):
         z = np.asarray(w.whitened, dtype=float)
         out, limit = deletion_outliers(Jw, z, lim.outlier_risk, cap)
+        Ap, zp, sp = Jw, z, sigma  # the probes' linearisation: at the refit without outliers
         if out and len(out) <= cap and measurements is not None and mech is not None:
-            out, limit = confirm_outliers(result, mech, measurements, out, lim.outlier_risk,
-                                          cap) or (out, limit)  # fmt: skip
+            out, limit, Ap, zp, sp = confirm_outliers(result, mech, measurements, out,
+                                                      lim.outlier_risk, cap) or (
+                out, limit, Jw, z, sigma)  # fmt: skip
         if not scalar_instrument and measurements is not None:
             rows = np.setdiff1d(np.arange(m), out) if len(out) <= cap else np.arange(m)
             cols = probe_columns(result, mech, measurements)
             probes = probe_misspecification(
-                Jw[rows].reshape(-1, Jw.shape[2]), z[rows].ravel(),
-                {n: c[rows] for n, c in cols.items()}, sigma[rows], measurements.components,
+                Ap[rows].reshape(-1, Ap.shape[2]), zp[rows].ravel(),
+                {n: c[rows] for n, c in cols.items()}, sp[rows], measurements.components,
             )  # fmt: skip
             alpha = lim.probe_significance / max(len(probes), 1)
             hits = [p for p in probes if p.p_value < alpha and p.explained >= lim.probe_explained]
             named = [p for p in hits if not is_trend(p.name)] or hits  # a named error first
             fired = max(named, key=lambda p: p.explained) if named else None
             if fired is not None:  # judge outliers against the model with the probe's terms
-                extra = cols[fired.name] / sigma[:, :, None]
-                out, limit = deletion_outliers(np.concatenate([Jw, extra], axis=2), z,
+                extra = cols[fired.name] / sp[:, :, None]
+                out, limit = deletion_outliers(np.concatenate([Ap, extra], axis=2), zp,
                                                lim.outlier_risk, cap)  # fmt: skip
     elif Jw is None:
         out, limit = outlier_poses(result, lim.outlier_risk)
