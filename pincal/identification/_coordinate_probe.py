@@ -41,13 +41,20 @@ def _normalised(v: np.ndarray) -> np.ndarray | None:
     return (v - lo) / (hi - lo) - 0.5
 
 
-def coordinate_columns(meas: Measurements, actuators: tuple[str, ...] | None = None
-                       ) -> dict[str, np.ndarray]:  # fmt: skip
+def coordinate_columns(
+    meas: Measurements,
+    actuators: tuple[str, ...] | None = None,
+    positions: np.ndarray | None = None,
+) -> dict[str, np.ndarray]:
     """Raw (m, k, 2k) columns per pose coordinate: ``t`` and ``t² − mean`` per component.
 
     Args:
         meas: the fitted measurements (m poses, k components).
         actuators: names of the actuator columns of ``meas.q_act`` (None: ``q0 q1 …``).
+        positions: (m, 3) the fitted model's tool positions [m] (None: the measured
+            ones). Give them: a measured coordinate carries the noise of the residual it
+            is tested against (a tool z that barely varies is then mostly that noise,
+            and correlates with it).
 
     Returns:
         ``{"trend:<coordinate>": (m, k, 2k) array}`` for every coordinate that varies
@@ -62,7 +69,7 @@ def coordinate_columns(meas: Measurements, actuators: tuple[str, ...] | None = N
     names = list(actuators) if actuators is not None and len(actuators) == q.shape[1] else [
         f"q{i}" for i in range(q.shape[1])]  # fmt: skip
     coords: list[tuple[str, np.ndarray]] = [(f"actuator {n}", q[:, i]) for i, n in enumerate(names)]
-    p = np.asarray(meas.positions, dtype=float)
+    p = np.asarray(meas.positions if positions is None else positions, dtype=float)
     for c in meas.components:
         if c in _POS:
             coords.append((f"tool {c}", p[:, _POS.index(c)]))

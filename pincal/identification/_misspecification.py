@@ -191,7 +191,14 @@ def probe_columns(
         if gains is not None:
             cols["gains"] = gains
     actuators = tuple(cal.actuated) if cal is not None else None
-    cols.update(coordinate_columns(meas, actuators))
+    model_pos = None  # the fitted model's positions: measured − residual
+    raw = np.asarray(result.residuals, dtype=float)
+    if raw.shape == (m, k) and {"x", "y", "z"} <= set(meas.components):
+        model_pos = np.asarray(meas.positions, dtype=float).copy()
+        for j, c in enumerate(meas.components):
+            if c in _POS:
+                model_pos[:, _POS.index(c)] -= raw[:, j]
+    cols.update(coordinate_columns(meas, actuators, model_pos))
     return cols
 
 
