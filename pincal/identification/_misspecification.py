@@ -193,7 +193,7 @@ def probe_columns(
     actuators = tuple(cal.actuated) if cal is not None else None
     model_pos = None  # the fitted model's positions: measured − residual
     raw = np.asarray(result.residuals, dtype=float)
-    if raw.shape == (m, k) and {"x", "y", "z"} <= set(meas.components):
+    if raw.shape == (m, k):
         model_pos = np.asarray(meas.positions, dtype=float).copy()
         for j, c in enumerate(meas.components):
             if c in _POS:

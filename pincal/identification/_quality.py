@@ -253,7 +253,6 @@ def check_quality(
     cap = int(lim.max_downweighted * m)
     probes: list[Probe] = []
     fired: Probe | None = None
-    trend: Probe | None = None
     if Jw is not None and sigma is not None and w is not None and _inexact(result):
         z = np.asarray(w.whitened, dtype=float)
         out, limit = deletion_outliers(Jw, z, lim.outlier_risk, cap)
@@ -271,10 +270,8 @@ def check_quality(
             )  # fmt: skip
             alpha = lim.probe_significance / max(len(probes), 1)
             hits = [p for p in probes if p.p_value < alpha and p.explained >= lim.probe_explained]
-            named = [p for p in hits if not is_trend(p.name)]  # a coordinate trend warns
+            named = [p for p in hits if not is_trend(p.name)] or hits  # a named error first
             fired = max(named, key=lambda p: p.explained) if named else None
-            trends = [p for p in hits if is_trend(p.name)]
-            trend = max(trends, key=lambda p: p.explained) if trends and not named else None
             if fired is not None:  # judge outliers against the model with the probe's terms
                 extra = cols[fired.name] / sp[:, :, None]
                 out, limit = deletion_outliers(np.concatenate([Ap, extra], axis=2), zp,
@@ -309,9 +306,6 @@ def check_quality(
         issues.append(QualityIssue(
             "model", True, f"model or instrument error suspected: {fired.describe()}"
         ))  # fmt: skip
-    if trend is not None:
-        issues.append(QualityIssue("trend", False, "the residuals follow a pose coordinate "
-                                   f"(model error suspected): {trend.describe()}"))  # fmt: skip
     if out:
         shown = ", ".join(map(str, out[:12])) + (" …" if len(out) > 12 else "")
         text = (

@@ -15,7 +15,7 @@ the mechanism and the measurements — the checks ``pincal calibrate`` runs. Fau
   the model does not have);
 - ``bend``: x grows with the square of the tool's z, by 0.1 mm from the middle of the
   campaign's z range to its ends (a bent guide: only the coordinate-trend probe sees
-  it, and it warns without refusing — no cell of the table uses it);
+  it);
 - ``noise10``: the simulated noise is 10× the noise the file declares (or, with the
   noise estimated, 10× the laser-tracker profile's limit check);
 - ``outlier``: one pose of 30 (two of 40 on wedge3) moved by 5 mm along x (rate of
@@ -84,6 +84,8 @@ CELLS = (
     Cell("0.1 % scale, Stewart, declared", "stewart_6ups", "scale", 0.001, True),
     Cell("0.1 % scale, Stewart, estimated", "stewart_6ups", "scale", 0.001, False),
     Cell("clean, wedge3, 40 poses, estimated", "wedge3", "none", 0.0, False, poses=40),
+    Cell("0.1 mm z² bend, Stewart, declared", "stewart_6ups", "bend", 1e-4, True),
+    Cell("0.1 mm z² bend, Stewart, estimated", "stewart_6ups", "bend", 1e-4, False),
     Cell("10x noise, Stewart, declared", "stewart_6ups", "noise10", 10.0, True),
     Cell("10x noise, Stewart, estimated, tracker", "stewart_6ups", "noise10", 10.0, False,
          "laser-tracker"),
