@@ -81,6 +81,27 @@ def apply_gate(verdict, force: bool, *, before_fit: bool = False) -> dict[str, A
     return verdict.to_dict(overridden=force)
 
 
+def honest_uncertainty(result, verdict, mech, meas, noise, loss: str):
+    """Check the fit's linearisation; widen its σ (bootstrap) and warn when it fails.
+
+    Returns ``(result, verdict, summary)``: the result with an honest covariance, the
+    verdict with a ``linearity`` warning when the linearised σ are too small, and the
+    check's JSON summary (None when not run: a robust loss, or a refused fit).
+    """
+    if loss != "linear" or not verdict.passed or not result.identified.any():
+        return result, verdict, None
+    from pincal.cli._progress import counted
+    from pincal.identification import check_uncertainty, pose_residual_model, with_uncertainty
+
+    problem = pose_residual_model(result, mech, meas, noise)
+    if problem is None:
+        return result, verdict, None
+    declared = verdict.noise_source in ("declared", "per-pose")
+    with counted("bootstrap refits (the fit is not linear)") as step:
+        check = check_uncertainty(problem, result, declared=declared, progress=step)
+    return check.result, with_uncertainty(verdict, check), check.to_dict()
+
+
 def quality_lines(quality: dict | None) -> list[str]:
     """Lines of ``report.txt`` for the gate's verdict (``doc['quality']``)."""
     if not quality:
@@ -97,10 +118,26 @@ def quality_lines(quality: dict | None) -> list[str]:
         lines.append("  χ² against the declared noise: " + "; ".join(
             f"{b['block']} χ²/ν {b['chi2'] / b['dof']:.3g} on {b['dof']:.0f} "
             f"(p = {b['p_value']:.2g})" for b in blocks))  # fmt: skip
-    if quality.get("probes"):
+    probes = [p for p in quality.get("probes", []) if not p["name"].startswith("trend:")]
+    trends = [p for p in quality.get("probes", []) if p["name"].startswith("trend:")]
+    if trends:  # one line for the pose-coordinate probes: the strongest trend only
+        probes.append(min(trends, key=lambda p: p["p_value"]))
+    if probes:
         lines.append("  misspecification probes: " + "; ".join(
             f"{p['size']} explains {p['explained']:.0%} (p = {p['p_value']:.2g})"
-            for p in quality["probes"]))  # fmt: skip
+            for p in probes))  # fmt: skip
+    unc = quality.get("uncertainty") or {}
+    if unc.get("linear") is False and unc.get("draws"):
+        lines.append(
+            f"  uncertainties: the σ above are widened by a parametric bootstrap "
+            f"({unc['draws']} refits, seed {unc.get('seed')}): the linearisation does not "
+            "hold over the confidence region"
+        )
+    elif unc.get("linear"):
+        lines.append(
+            f"  uncertainties: linear over one σ along the {unc.get('directions_checked')} "
+            "most uncertain directions (the σ above are the linearised ones)"
+        )
     if quality.get("outlier_poses"):
         lines.append(
             f"  outlier poses (normalised residual > {quality.get('outlier_limit') or 0:.2f}): "

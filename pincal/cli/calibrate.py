@@ -102,7 +102,8 @@ from pincal.identification import METHODS
     default=None,
     metavar="P",
     help="Quality gate: p-value below which the χ² test (declared noise) and the "
-    "misspecification probes (scale, actuator gains, drift) refuse [default: 1e-3].",
+    "misspecification probes (scale, actuator gains, drift, coordinate trends) refuse "
+    "[default: 1e-3].",
 )
 @click.option(
     "--instrument",
@@ -141,7 +142,7 @@ def calibrate(
       pincal calibrate tiago --link arm_7_link --data mocap.csv --marker-columns x1,y1,z1 \\
           --prior auto --out cal/        markers in an unknown instrument frame
     """
-    from pincal.cli._gate import apply_gate, gate_limits
+    from pincal.cli._gate import apply_gate, gate_limits, honest_uncertainty
     from pincal.cli._joint_terms import carrying, read_payload, terms_texts
     from pincal.identification import check_quality
     from pincal.io import (
@@ -237,7 +238,7 @@ def calibrate(
             )
         verdict, result = identify_instrument_files(mech, params, files, method, force,
                                                     limits, profile)  # fmt: skip
-        noise_model = None
+        noise_model, uncertainty = None, None
     else:
         mf = read_measurement_file(data, mech)  # its data check is the gate's first look
         meas = mf.measurements
@@ -248,7 +249,11 @@ def calibrate(
         verdict = check_quality(
             result, meas, mech=mech, data=gate, instrument=profile or mf.instrument
         )
+        result, verdict, uncertainty = honest_uncertainty(result, verdict, mech, meas,
+                                                          declared, loss)  # fmt: skip
     quality = apply_gate(verdict, force)
+    if uncertainty is not None:
+        quality["uncertainty"] = uncertainty
     out_dir = Path(out)
     doc = result_json(result, ", ".join(map(str, files)), CALIBRATED_URDF)
     doc["quality"] = quality

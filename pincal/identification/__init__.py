@@ -78,6 +78,12 @@ from pincal.identification._result import (
 )
 from pincal.identification._result_io import FORMAT_VERSION, result_from_dict, result_to_dict
 from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
+from pincal.identification._uncertainty import (
+    UncertaintyCheck,
+    check_uncertainty,
+    pose_residual_model,
+    with_uncertainty,
+)
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
 from pincal.identification._weighting import Weighting
 
@@ -121,10 +127,12 @@ __all__ = [
     "StackedProblem",
     "StepPlanningExtras",
     "StepPlanningOptions",
+    "UncertaintyCheck",
     "Weighting",
     "check_instrument_data",
     "check_measurements",
     "check_quality",
+    "check_uncertainty",
     "compare",
     "cross_validate",
     "default_instrument",
@@ -142,6 +150,7 @@ __all__ = [
     "kfold",
     "monte_carlo",
     "outlier_poses",
+    "pose_residual_model",
     "position_errors",
     "qpso",
     "qpso_stepwise",
@@ -150,4 +159,5 @@ __all__ = [
     "select_model",
     "solver",
     "stacked_measurements",
+    "with_uncertainty",
 ]

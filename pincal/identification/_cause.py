@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 
+from pincal.identification._coordinate_probe import is_trend
 from pincal.identification._result import IdentificationResult
 from pincal.identification._verdict import QualityVerdict
 
@@ -46,17 +47,21 @@ def likely_cause(v: QualityVerdict, result: IdentificationResult, m: int) -> tup
             "--method lm --loss huber, or remove them."
         )
     if "model" in kinds and v.probes:
-        best = max(v.probes, key=lambda p: p[1])
         alpha = lim.probe_significance / len(v.probes)
-        also = [f"{p[3]} ({p[1]:.0%})" for p in v.probes
-                if p is not best and p[2] < alpha and p[1] >= lim.probe_explained]  # fmt: skip
+        hits = [p for p in v.probes if p[2] < alpha and p[1] >= lim.probe_explained]
+        named = [p for p in hits if not is_trend(p[0])] or hits or list(v.probes)
+        best = max(named, key=lambda p: p[1])  # a named error before a coordinate trend
+        also = [f"{p[3]} ({p[1]:.0%})" for p in named if p is not best]
         return "model or instrument", (
             f"{best[3]} explains {best[1]:.0%} of the residual (F-test p = {best[2]:.2g})"
             + (f"; so do {', '.join(also)}, which these poses cannot tell apart" if also else "")
-            + ": the model misses an error the data show, or the instrument is off. Check the "
-            "instrument's scale and the actuators' scales (encoder / lead-screw gains), "
-            "look for drift, or fit a larger --params preset."
-        )
+            + ": the model misses an error the data show, or the instrument is off. "
+            + ("The residuals follow a pose coordinate: look for an error growing along it "
+               "(guide straightness, encoder non-linearity, a range-dependent instrument "
+               "error), or fit a larger --params preset." if is_trend(best[0]) else
+               "Check the instrument's scale and the actuators' scales (encoder / "
+               "lead-screw gains), look for drift, or fit a larger --params preset.")
+        )  # fmt: skip
     if "breakdown" in kinds or ("outliers" in kinds and not few):
         return "units, frame or model", (
             "most poses disagree with the model: check the units, the measured frame and "

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.errors import PincalError
+from pincal.identification._coordinate_probe import coordinate_columns, is_trend, trend_size
 from pincal.identification._outliers import column_basis
 from pincal.identification._result import IdentificationResult
 from pincal.measure import Measurements
@@ -75,7 +76,7 @@ class Probe:
     """One nuisance term's F-test.
 
     Attributes:
-        name: ``scale``, ``gains`` or ``drift``.
+        name: ``scale``, ``gains``, ``drift`` or ``trend:<coordinate>``.
         dof: number of nuisance columns q (after removing what the model already spans).
         f_stat: the F statistic.
         p_value: P(F(q, ν − q) ≥ f_stat).
@@ -167,7 +168,9 @@ def probe_columns(
     ``scale``: measured positions about their centroid [m per unit scale];
     ``drift``: pose order t ∈ [−½, ½] on each measured position component [m per m];
     ``gains``: −∂pose/∂q_i · q_i per actuator at the calibrated machine [per unit gain]
-    (left out when the actuator offsets cannot be built for the mechanism).
+    (left out when the actuator offsets cannot be built for the mechanism);
+    ``trend:<coordinate>``: low-order functions of each pose coordinate (actuator value,
+    tool x y z) on every component (:mod:`pincal.identification._coordinate_probe`).
     """
     m, k = len(meas), len(meas.components)
     pos = [j for j, c in enumerate(meas.components) if c in _POS]
@@ -187,6 +190,15 @@ def probe_columns(
         gains = _gain_columns(cal, meas)
         if gains is not None:
             cols["gains"] = gains
+    actuators = tuple(cal.actuated) if cal is not None else None
+    model_pos = None  # the fitted model's positions: measured − residual
+    raw = np.asarray(result.residuals, dtype=float)
+    if raw.shape == (m, k):
+        model_pos = np.asarray(meas.positions, dtype=float).copy()
+        for j, c in enumerate(meas.components):
+            if c in _POS:
+                model_pos[:, _POS.index(c)] -= raw[:, j]
+    cols.update(coordinate_columns(meas, actuators, model_pos))
     return cols
 
 
@@ -205,7 +217,11 @@ def _gain_columns(mech: Mechanism, meas: Measurements) -> np.ndarray | None:
 
 
 def probe_misspecification(
-    A: np.ndarray, z: np.ndarray, columns: dict[str, np.ndarray], sigma: np.ndarray
+    A: np.ndarray,
+    z: np.ndarray,
+    columns: dict[str, np.ndarray],
+    sigma: np.ndarray,
+    components: tuple[str, ...] | None = None,
 ) -> list[Probe]:
     """F-test of each probe's nuisance terms added to the linearised fit.
 
@@ -214,6 +230,7 @@ def probe_misspecification(
         z: (N,) whitened residuals at the solution.
         columns: raw (m, k, q) nuisance columns per probe (:func:`probe_columns`).
         sigma: (m, k) σ of each residual [m, rad] (whitens the columns).
+        components: the k measured components (names the trend probes' sizes).
 
     Returns:
         One :class:`Probe` per probe that adds at least one direction, in the order given.
@@ -244,7 +261,12 @@ def probe_misspecification(
         before = float(np.sum(zr[touched] ** 2))
         after = float(np.sum((zr - B @ coef)[touched] ** 2))
         share = min(max(1.0 - after / before, 0.0), 1.0) if before > 0 else 0.0
-        probes.append(Probe(name, q, f, p, share, _size(name, coef)))
+        if is_trend(name):
+            fitted = (B @ coef).reshape(sigma.shape) * sigma  # the part seen in the residual
+            size = trend_size(name, fitted, _components(components, sigma.shape[1]), sigma)
+        else:
+            size = _size(name, coef)
+        probes.append(Probe(name, q, f, p, share, size))
     return probes
 
 

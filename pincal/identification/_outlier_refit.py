@@ -31,7 +31,7 @@ def confirm_outliers(
     named: tuple[int, ...],
     risk: float,
     cap: int,
-) -> tuple[tuple[int, ...], float] | None:
+) -> tuple[tuple[int, ...], float, np.ndarray, np.ndarray, np.ndarray] | None:
     """The deletion test over all poses, linearised at a refit without ``named``.
 
     Args:
@@ -43,8 +43,11 @@ def confirm_outliers(
         cap: most poses named (as in :func:`deletion_outliers`).
 
     Returns:
-        (named poses, bound) of the test at the refit, or None when the refit fails
-        (too few poses left, a solve that does not close…): keep the first answer.
+        (named poses, bound) of the test at the refit and the refit's linearisation over
+        all poses — whitened Jacobian (m, k, p), whitened residuals (m, k) and σ (m, k)
+        [m, rad] — on which the misspecification probes judge the fit without the
+        outliers' smear; or None when the refit fails (too few poses left, a solve that
+        does not close…): keep the first answer.
     """
     from pincal.identification._identify import identify
 
@@ -71,4 +74,5 @@ def confirm_outliers(
         return None
     m, k = len(meas), len(meas.components)
     A = J_w[:, refit.identified].reshape(m, k, -1)
-    return deletion_outliers(A, np.asarray(r_w).reshape(m, k), risk, cap)
+    z = np.asarray(r_w).reshape(m, k)
+    return (*deletion_outliers(A, z, risk, cap), A, z, np.asarray(model.sigma, dtype=float))

@@ -19,8 +19,9 @@ Thresholds (:class:`GateLimits`, defaults):
   below 1e-3 *and* χ²/ν_b > 1.5 refuses (ν_b the block's redundancy), as does a reduced
   χ² > 100 whatever its p-value; a reduced χ² < 0.01 warns (the noise is 10× too large);
 - misspecification probes (any noise): a global scale of the measured positions, a
-  gain per actuator and a linear drift over the pose order are added to the linearised
-  fit; one whose F-test p-value is below 1e-3 / (number of probes) *and* that explains
+  gain per actuator, a linear drift over the pose order and low-order trends along
+  each pose coordinate (``trend:``, :mod:`._coordinate_probe`) are added to the
+  linearised fit; one whose F-test p-value is below 1e-3 / (number of probes) *and* that explains
   ≥ 25 % of the residual of the blocks it acts on refuses ("model or instrument error
   suspected", :mod:`pincal.identification._misspecification`);
 - estimated noise with an instrument profile (``--instrument``, ``# instrument:``):
@@ -53,6 +54,7 @@ import numpy as np
 
 from pincal.errors import PincalError
 from pincal.identification._cause import likely_cause
+from pincal.identification._coordinate_probe import is_trend
 from pincal.identification._data_check import check_measurements
 from pincal.identification._instrument_profiles import InstrumentProfile, instrument_profile
 from pincal.identification._misspecification import (
@@ -260,22 +262,25 @@ def check_quality(
     if Jw is not None and sigma is not None and w is not None and _inexact(result):
         z = np.asarray(w.whitened, dtype=float)
         out, limit = deletion_outliers(Jw, z, lim.outlier_risk, cap)
+        Ap, zp, sp = Jw, z, sigma  # the probes' linearisation: at the refit without outliers
         if out and len(out) <= cap and measurements is not None and mech is not None:
-            out, limit = confirm_outliers(result, mech, measurements, out, lim.outlier_risk,
-                                          cap) or (out, limit)  # fmt: skip
+            out, limit, Ap, zp, sp = confirm_outliers(result, mech, measurements, out,
+                                                      lim.outlier_risk, cap) or (
+                out, limit, Jw, z, sigma)  # fmt: skip
         if not scalar_instrument and measurements is not None:
             rows = np.setdiff1d(np.arange(m), out) if len(out) <= cap else np.arange(m)
             cols = probe_columns(result, mech, measurements)
             probes = probe_misspecification(
-                Jw[rows].reshape(-1, Jw.shape[2]), z[rows].ravel(),
-                {n: c[rows] for n, c in cols.items()}, sigma[rows],
+                Ap[rows].reshape(-1, Ap.shape[2]), zp[rows].ravel(),
+                {n: c[rows] for n, c in cols.items()}, sp[rows], measurements.components,
             )  # fmt: skip
             alpha = lim.probe_significance / max(len(probes), 1)
             hits = [p for p in probes if p.p_value < alpha and p.explained >= lim.probe_explained]
-            fired = max(hits, key=lambda p: p.explained) if hits else None
+            named = [p for p in hits if not is_trend(p.name)] or hits  # a named error first
+            fired = max(named, key=lambda p: p.explained) if named else None
             if fired is not None:  # judge outliers against the model with the probe's terms
-                extra = cols[fired.name] / sigma[:, :, None]
-                out, limit = deletion_outliers(np.concatenate([Jw, extra], axis=2), z,
+                extra = cols[fired.name] / sp[:, :, None]
+                out, limit = deletion_outliers(np.concatenate([Ap, extra], axis=2), zp,
                                                lim.outlier_risk, cap)  # fmt: skip
     elif Jw is None:
         out, limit = outlier_poses(result, lim.outlier_risk)

@@ -27,7 +27,8 @@ class GateLimits:
         min_chi2_ratio: … when its χ²/ν also exceeds this (≥ 1: a 5 % misfit on 10⁵
             equations is significant but harmless).
         probe_significance: family-wise p-value of the misspecification probes (scale,
-            gains, drift; Bonferroni over the probes run) below which a probe fires …
+            gains, drift, coordinate trends; Bonferroni over the probes run) below which
+            a probe fires …
         probe_explained: … when it also explains at least this share of the residual
             sum of squares (0 < · < 1).
         noise_factor: with estimated noise and a named instrument profile, a σ̂ above
