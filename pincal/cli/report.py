@@ -24,7 +24,7 @@ from pincal.errors import PincalError
     "--validation",
     type=click.Path(dir_okay=False, path_type=Path),
     default=None,
-    help="Validation JSON of `pincal validate --out`: adds the Validation section.",
+    help="JSON of `pincal validate --out`: adds the Validation and Cross-validation sections.",
 )
 @click.option(
     "--truth",

@@ -113,7 +113,7 @@ def _report(c: Campaign, p: Paths) -> list[str] | None:
     if not c.report:
         return None
     args = [str(p.out)]
-    if p.validation is not None:
+    if p.validation is not None or c.validation.cv is not None:  # what the validate step wrote
         args += ["--validation", str(p.validation_json)]
     if c.measurements.source == "simulated":
         args += ["--truth", str(p.data.with_suffix(".truth.json"))]

@@ -20,6 +20,7 @@ import numpy as np
 from pincal.errors import CalibrationDirectoryError, ReportError
 from pincal.identification import IdentificationResult
 from pincal.io import IDENTIFICATION_FILE, read_identification
+from pincal.report._cross_validation import check_cross_validation, cross_validation_section
 from pincal.report._document import ReportFiles, Section, Table, write_report
 from pincal.report._plots import (
     plot_convergence,
@@ -88,6 +89,8 @@ def _check_annotations(notes: dict) -> None:
         vc = notes["validation_components"]
         if not isinstance(vc, list) or not vc or not set(vc) <= set(_ALL):
             raise ReportError(f"'validation_components' must list names from {' '.join(_ALL)}")
+    if "cross_validation" in notes:
+        check_cross_validation(notes["cross_validation"])
     if "index_history" in notes:
         ih = notes["index_history"]
         if not isinstance(ih, dict) or not ih:
@@ -102,7 +105,8 @@ def _read(path: Path) -> IdentificationResult:
     The report's annotations are checked: ``validation_before`` / ``validation_after``
     (``rms_position_mm, max_position_mm, rms_orientation_mrad, max_orientation_mrad``;
     null for a block not measured), ``validation_components``, ``validation_errors``
-    (``{before|after: {position: [m], orientation: [rad]}}`` per validation pose) and
+    (``{before|after: {position: [m], orientation: [rad]}}`` per validation pose),
+    ``cross_validation`` (the ``cv`` object of ``pincal validate --cv``) and
     ``index_history`` (``{O1: [...], ...}``).
 
     Raises:
@@ -250,6 +254,8 @@ def calibration_report(
         validation = _validation(notes, plots, jobs)
         if validation is not None:
             sections.append(validation)
+        if "cross_validation" in notes:
+            sections.append(cross_validation_section(notes["cross_validation"]))
         extra_images = []
         if result.cost_history:
             extra_images.append(

@@ -48,7 +48,14 @@ def read_json_object(
 
 
 def _validation(doc: dict[str, Any], path: str) -> dict[str, Any]:
-    """Annotations from ``pincal validate --json`` / ``--out`` (mm, mrad → report keys)."""
+    """Annotations from ``pincal validate --json`` / ``--out`` (mm, mrad → report keys).
+
+    A held-out file gives the ``validation_*`` annotations, ``--cv K`` the
+    ``cross_validation`` one; a file of ``validate --cv`` alone has no ``before``.
+    """
+    cv = {"cross_validation": doc["cv"]} if "cv" in doc else {}
+    if cv and "before" not in doc:
+        return cv
     try:
         before, after = doc["before"], doc["after"]
         per_pose = doc["per_pose"]
@@ -75,6 +82,7 @@ def _validation(doc: dict[str, Any], path: str) -> dict[str, Any]:
         "validation_errors": errors,
         "validation_predicted": doc.get("predicted"),
         "validation_source": source,
+        **cv,
     }
 
 

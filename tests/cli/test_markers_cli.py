@@ -226,3 +226,5 @@ def test_tiago_mocap_example_runs(tmp_path):
     r = _run("run", campaign, "--out", tmp_path / "tiago-cal")
     assert r.exit_code == 0, r.output
     assert "registration only" in r.output and "held-out RMS" in r.output
+    report = (tmp_path / "tiago-cal" / "report.md").read_text(encoding="utf-8")
+    assert "## Cross-validation" in report and "| registration only |" in report
