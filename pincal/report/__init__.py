@@ -1,7 +1,7 @@
 """Reports of a calibration.
 
-Plots, Markdown and HTML, and the report of a calibration
-output directory (read from its ``identification.json``).
+Plots, Markdown and HTML, the report of a calibration output directory (read from its
+``identification.json``) and the plain text `pincal calibrate` prints (``report.txt``).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from pincal.report._plots import (
     plot_validation_summary,
 )
 from pincal.report._sections import block_label
+from pincal.report._text import calibration_text, quality_lines
 
 __all__ = [
     "ErrorStats",
@@ -28,6 +29,7 @@ __all__ = [
     "Table",
     "block_label",
     "calibration_report",
+    "calibration_text",
     "campaign_notes",
     "error_statistics",
     "plot_convergence",
@@ -36,5 +38,6 @@ __all__ = [
     "plot_index_history",
     "plot_parameters",
     "plot_validation_summary",
+    "quality_lines",
     "write_report",
 ]
