@@ -1,7 +1,8 @@
 """Reports of a calibration.
 
 Plots, Markdown and HTML, the report of a calibration output directory (read from its
-``identification.json``) and the plain text `pincal calibrate` prints (``report.txt``).
+``identification.json``) and the plain texts `pincal calibrate` (``report.txt``) and
+`pincal validate` print.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from pincal.report._plots import (
 )
 from pincal.report._sections import block_label
 from pincal.report._text import calibration_text, quality_lines
+from pincal.report._validation_text import validation_text
 
 __all__ = [
     "ErrorStats",
@@ -39,5 +41,6 @@ __all__ = [
     "plot_parameters",
     "plot_validation_summary",
     "quality_lines",
+    "validation_text",
     "write_report",
 ]
