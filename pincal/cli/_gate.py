@@ -1,8 +1,8 @@
 """The quality gate on the command line: options, printing, refusal and override.
 
 The verdict itself is :func:`pincal.identification.check_quality`'s; this module only
-prints it, raises :class:`pincal.errors.QualityGateError` for a refusal without
-``--force`` and formats the lines of ``report.txt``.
+prints it and raises :class:`pincal.errors.QualityGateError` for a refusal without
+``--force``; its lines in ``report.txt`` are :func:`pincal.report.quality_lines`.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import click
 
 from pincal.errors import QualityGateError
 
-__all__ = ["apply_gate", "gate_limits", "quality_lines"]
+__all__ = ["apply_gate", "gate_limits"]
 
 
 def gate_limits(max_change: str | None, significance: float | None = None):
@@ -100,47 +100,3 @@ def honest_uncertainty(result, verdict, mech, meas, noise, loss: str):
     with counted("bootstrap refits (the fit is not linear)") as step:
         check = check_uncertainty(problem, result, declared=declared, progress=step)
     return check.result, with_uncertainty(verdict, check), check.to_dict()
-
-
-def quality_lines(quality: dict | None) -> list[str]:
-    """Lines of ``report.txt`` for the gate's verdict (``doc['quality']``)."""
-    if not quality:
-        return []
-    if quality.get("passed"):
-        lines = ["quality gate: passed"]
-    elif quality.get("overridden"):
-        lines = [f"quality gate: OVERRIDDEN with --force — {quality.get('reason')}"]
-    else:
-        lines = [f"quality gate: refused — {quality.get('reason')}"]
-    lines += [f"  warning: {w['message']}" for w in quality.get("warnings", [])]
-    blocks = [b for b in quality.get("chi2_blocks", []) if b.get("dof")]
-    if blocks:
-        lines.append("  χ² against the declared noise: " + "; ".join(
-            f"{b['block']} χ²/ν {b['chi2'] / b['dof']:.3g} on {b['dof']:.0f} "
-            f"(p = {b['p_value']:.2g})" for b in blocks))  # fmt: skip
-    probes = [p for p in quality.get("probes", []) if not p["name"].startswith("trend:")]
-    trends = [p for p in quality.get("probes", []) if p["name"].startswith("trend:")]
-    if trends:  # one line for the pose-coordinate probes: the strongest trend only
-        probes.append(min(trends, key=lambda p: p["p_value"]))
-    if probes:
-        lines.append("  misspecification probes: " + "; ".join(
-            f"{p['size']} explains {p['explained']:.0%} (p = {p['p_value']:.2g})"
-            for p in probes))  # fmt: skip
-    unc = quality.get("uncertainty") or {}
-    if unc.get("linear") is False and unc.get("draws"):
-        lines.append(
-            f"  uncertainties: the σ above are widened by a parametric bootstrap "
-            f"({unc['draws']} refits, seed {unc.get('seed')}): the linearisation does not "
-            "hold over the confidence region"
-        )
-    elif unc.get("linear"):
-        lines.append(
-            f"  uncertainties: linear over one σ along the {unc.get('directions_checked')} "
-            "most uncertain directions (the σ above are the linearised ones)"
-        )
-    if quality.get("outlier_poses"):
-        lines.append(
-            f"  outlier poses (normalised residual > {quality.get('outlier_limit') or 0:.2f}): "
-            f"{quality['outlier_poses']}; consider --method lm --loss huber"
-        )
-    return lines

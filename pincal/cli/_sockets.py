@@ -9,27 +9,10 @@ import numpy as np
 
 from pincal.model import Mechanism
 
-__all__ = ["SOCKET_SPACING", "simulate_socket_file", "socket_lines"]
+__all__ = ["SOCKET_SPACING", "simulate_socket_file"]
 
 #: the known distance between the two simulated sockets [m]
 SOCKET_SPACING = 0.05
-
-
-def socket_lines(doc: dict) -> list[str]:
-    """Report lines: identified socket centres [mm], distances between them, warnings."""
-    centres = doc.get("socket_centres_mm") or {}
-    lines = [f"pincal: WARNING: {w}" for w in doc.get("warnings") or ()]
-    if not centres:
-        return lines
-    lines.append("socket centres [mm]: " + "; ".join(
-        f"{k} ({', '.join(f'{v:.3f}' for v in c)})" for k, c in centres.items()))  # fmt: skip
-    names = list(centres)[:8]
-    pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1 :]]
-    if pairs:
-        lines.append("distances between them [mm]: " + "; ".join(
-            f"{a}–{b} {np.linalg.norm(np.subtract(centres[a], centres[b])):.4f}"
-            for a, b in pairs))  # fmt: skip
-    return lines
 
 
 def default_sockets(mech: Mechanism) -> dict[str, np.ndarray]:

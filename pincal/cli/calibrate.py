@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli._calibrate_text import format_report, result_json
+from pincal.cli._calibrate_text import result_json
 from pincal.cli._instrument_fit import identify_instrument_files, is_instrument_file
 from pincal.cli._limits import NOISE_RANGE, check_data_rows, number_pair, yes_option
 from pincal.cli._markers import marker_options
@@ -155,6 +155,7 @@ def calibrate(
         write_calibration,
     )
     from pincal.model import split_model, with_joint_terms
+    from pincal.report import calibration_text
     from pincal.sensitivity import parameters
 
     limits = gate_limits(max_change, significance)
@@ -257,7 +258,7 @@ def calibrate(
     out_dir = Path(out)
     doc = result_json(result, ", ".join(map(str, files)), CALIBRATED_URDF)
     doc["quality"] = quality
-    report = format_report(doc)
+    report = calibration_text(result, {"data": ", ".join(map(str, files)), "quality": quality})
     texts = {"report.txt": report}
     record = model_record(model, model_opts)  # the model with --sidecar/--frame/--lock
     if record is not None:
@@ -295,6 +296,7 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
     from pincal.cli._markers import marker_calibration, marker_lines
     from pincal.identification import check_quality
     from pincal.io import CALIBRATED_URDF, write_calibration
+    from pincal.report import calibration_text
 
     fit, meas, markers = marker_calibration(
         model, data, setup, preset, method, prior_spec, loss
@@ -322,7 +324,8 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
     doc = result_json(fit.result, str(data), CALIBRATED_URDF)
     doc["quality"] = quality
     doc["markers"] = markers
-    report = format_report(doc).rstrip("\n") + "\n" + "\n".join(marker_lines(markers)) + "\n"
+    report = calibration_text(fit.result, {"data": str(data), "quality": quality})
+    report += "\n".join(marker_lines(markers)) + "\n"
     cal = write_calibration(
         Path(out),
         fit.result,

@@ -11,73 +11,6 @@ from pincal.cli._limits import check_data_rows, yes_option
 from pincal.cli.common import announce, calibration_summary, fail_cleanly
 
 
-def _fmt(v: float | None, width: int = 9, digits: int = 4) -> str:
-    return f"{'-':>{width}s}" if v is None else f"{v:{width}.{digits}f}"
-
-
-def _iso_components(doc: dict) -> str:
-    """The line naming the components the ISO 9283 table judges and the angle convention."""
-    pos = [c for c in doc["components"] if c in ("x", "y", "z")]
-    rot = ["abc"["xyz".index(c[1])] for c in doc["components"] if c in ("rx", "ry", "rz")]
-    text = f"  AP_p, RP_l over {' '.join(pos) or '(no position measured)'}; "
-    if not rot or not doc.get("orientation_convention"):
-        return text + "orientation not measured (AP_a/b/c '-')"
-    return text + f"AP_{'/'.join(rot)} only (measured): {doc['orientation_convention']}"
-
-
-def format_validation(doc: dict, max_rows: int = 40) -> str:
-    """The printed validation report (mm / mrad), each block over its measured components."""
-    from pincal.report import block_label
-
-    b, a, p = doc["before"], doc["after"], doc["predicted"]
-    comps = tuple(doc["components"])
-    pos = f"{block_label('position', comps)} [mm]"
-    ori = f"{block_label('orientation', comps)} [mrad]"
-    lines = [
-        f"pincal validate {doc['calibration']['directory']} ({doc['calibration']['model']}, "
-        f"preset {doc['calibration']['preset']}) on {doc['data']}: {doc['poses']} poses, "
-        f"{doc['commanded_poses']} commanded, components {' '.join(doc['components'])}",
-    ]
-    if not doc["independent"]:
-        lines.append("  WARNING: this file was used for fitting; the validation is not independent")
-    lines += [
-        f"                        {pos:23s}{ori}",
-        "                        RMS        max         RMS        max",
-        f"  nominal model      {_fmt(b['rms_position_mm'])}  {_fmt(b['max_position_mm'])}"
-        f"   {_fmt(b['rms_orientation_mrad'])}  {_fmt(b['max_orientation_mrad'])}",
-        f"  calibrated model   {_fmt(a['rms_position_mm'])}  {_fmt(a['max_position_mm'])}"
-        f"   {_fmt(a['rms_orientation_mrad'])}  {_fmt(a['max_orientation_mrad'])}",
-    ]
-    if p.get("withheld"):
-        lines.append(f"  Cramér–Rao prediction not given: {p['withheld']}")
-    else:
-        lines += [
-            f"  Cramér–Rao (model) {_fmt(p['model_rms_position_mm'])}  {'':9s}"
-            f"   {_fmt(p['model_rms_orientation_mrad'])}",
-            f"  Cramér–Rao + noise {_fmt(p['observed_rms_position_mm'])}  {'':9s}"
-            f"   {_fmt(p['observed_rms_orientation_mrad'])}",
-        ]
-    lines += [
-        "",
-        "  ISO 9283 pose accuracy per commanded pose (AP: mean attained − commanded;"
-        " RP_l = l̄ + 3 S_l over repeats)",
-        _iso_components(doc),
-        "  pose  n   AP_p nominal  AP_p calibrated   AP_a      AP_b      AP_c    RP_l",
-        "                 [mm]        [mm]         calibrated [mrad]            [mm]",
-    ]
-    for row in doc["iso9283"][:max_rows]:
-        c = row["after"]
-        lines.append(
-            f"  {row['pose']:4d} {row['repeats']:2d} {_fmt(row['before']['AP_p_mm'], 12)}"
-            f"  {_fmt(c['AP_p_mm'], 12)}   {_fmt(c['AP_a_mrad'], 8, 3)}  "
-            f"{_fmt(c['AP_b_mrad'], 8, 3)}  {_fmt(c['AP_c_mrad'], 8, 3)} "
-            f"{_fmt(row['RP_l_mm'], 7)}"
-        )
-    if len(doc["iso9283"]) > max_rows:
-        lines.append(f"  … {len(doc['iso9283']) - max_rows} more (--json gives all)")
-    return "\n".join(lines) + "\n"
-
-
 def _more_markers(nominal, calibrated, more) -> list[dict]:
     """Before / after position errors [mm] of each further marker (its own frame)."""
     import numpy as np
@@ -240,7 +173,9 @@ def validate(
     if as_json:
         click.echo(json.dumps(doc))
     else:
-        click.echo(format_validation(doc), nl=False)
+        from pincal.report import validation_text
+
+        click.echo(validation_text(validation, cal, str(data), independent), nl=False)
         for m in doc.get("more_markers", []):
             click.echo(f"  marker {' '.join(m['columns'])}: position RMS nominal "
                        f"{m['before_rms_position_mm']:.4f} mm, calibrated "

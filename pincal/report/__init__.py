@@ -1,7 +1,8 @@
 """Reports of a calibration.
 
-Plots, Markdown and HTML, and the report of a calibration
-output directory (read from its ``identification.json``).
+Plots, Markdown and HTML, the report of a calibration output directory (read from its
+``identification.json``) and the plain texts `pincal calibrate` (``report.txt``) and
+`pincal validate` print.
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ from pincal.report._plots import (
     plot_validation_summary,
 )
 from pincal.report._sections import block_label
+from pincal.report._text import calibration_text, quality_lines
+from pincal.report._validation_text import validation_text
 
 __all__ = [
     "ErrorStats",
@@ -28,6 +31,7 @@ __all__ = [
     "Table",
     "block_label",
     "calibration_report",
+    "calibration_text",
     "campaign_notes",
     "error_statistics",
     "plot_convergence",
@@ -36,5 +40,7 @@ __all__ = [
     "plot_index_history",
     "plot_parameters",
     "plot_validation_summary",
+    "quality_lines",
+    "validation_text",
     "write_report",
 ]

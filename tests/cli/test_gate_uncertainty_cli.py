@@ -10,9 +10,9 @@ from click.testing import CliRunner
 
 import pincal
 from pincal.cli import main
-from pincal.cli._gate import quality_lines
 from pincal.io import write_measurements
 from pincal.model import sample_actuators
+from pincal.report import quality_lines
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,199 @@
+"""The plain-text report of a calibration (``report.txt``, printed by `pincal calibrate`).
+
+Rendered from an :class:`IdentificationResult` — the live one, or the one read back from
+``identification.json`` by :func:`pincal.io.read_identification`, which give the same
+text — and its context notes (the data file, the quality gate's record, an instrument
+fit's gauge and sockets). Values and 2σ in µm / µrad, residuals in mm / mrad.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from pincal.identification import IdentificationResult, QualityVerdict
+from pincal.report._sections import block_label
+
+__all__ = ["calibration_text", "quality_lines"]
+
+
+def _identifiability(result: IdentificationResult, notes: Mapping[str, Any]) -> tuple | None:
+    """(rank, parameters, explanation lines), from the analysis or its record."""
+    ident = result.identifiability
+    if ident is not None:
+        return ident.rank, len(ident.names), ident.describe()
+    rec = notes.get("identifiability")  # a result read from a file keeps the record
+    if isinstance(rec, Mapping) and rec:
+        return rec["rank"], rec["parameters"], list(rec["explanation"])
+    return None
+
+
+def _finite(v: float) -> bool:
+    return math.isfinite(float(v))
+
+
+def _header(result: IdentificationResult, notes: Mapping[str, Any], comps) -> list[str]:
+    """Model, data, solver, identifiability and noise lines."""
+    measured = f", measured components {' '.join(comps)}" if comps else ""
+    lines = [
+        f"pincal calibration of {result.model} (preset {result.preset}, {result.method})",
+        f"data: {notes.get('data')} ({int(result.residuals.shape[0])} poses{measured})",
+        f"solver: {result.message} after {int(result.iterations)} iterations; "
+        f"reduced chi2 {float(result.reduced_chi2):.4g}",
+    ]
+    ident = _identifiability(result, notes)
+    if ident:
+        rank, n, explanation = ident
+        lines.append(f"identifiable: {rank} of {n} parameters")
+        lines += [f"  {t}" for t in explanation]
+    lines.append("")
+    w = result.weighting
+    if w is None:
+        return lines
+    pos = w.position_std if _finite(w.position_std) else None
+    ori = w.orientation_std if _finite(w.orientation_std) else None
+    if pos is None and ori is None:
+        return lines
+    if comps is not None:  # the σ of a block not measured is not shown
+        pos = pos if not math.isnan(result.after.rms_position) else None
+        ori = ori if not math.isnan(result.after.rms_orientation) else None
+    parts = [f"{block_label('position', comps)} {pos * 1e6:.3f} µm" if pos is not None else "",
+             f"{block_label('orientation', comps)} {ori * 1e6:.3f} µrad"
+             if ori is not None else ""]  # fmt: skip
+    lines.append(f"noise (1σ, {w.source}): " + ", ".join(x for x in parts if x))
+    return lines
+
+
+def _parameter_lines(result: IdentificationResult) -> list[str]:
+    """The identified parameters: value and 2σ in µm / µrad (a joint term in its SI unit)."""
+    header = f"{'parameter':32s} {'value':>14s} {'2σ':>12s}  (µm for lengths, µrad for angles)"
+    lines = ["", header]
+    sel = np.flatnonzero(result.identified)
+    for k, std in zip(sel, result.std, strict=True):
+        name, unit, value = result.names[k], result.units[k], float(result.full_values[k])
+        two_sigma = 2 * float(std)
+        if unit not in ("m", "rad"):  # a joint term: SI, its unit named
+            lines.append(f"{name:32s} {value:+14.4g} {two_sigma:12.4g}  {unit}")
+            continue
+        u = "µm" if unit == "m" else "µrad"
+        lines.append(f"{name:32s} {value * 1e6:+14.3f} {two_sigma * 1e6:12.3f}  {u}")
+    return lines
+
+
+def _residual_lines(result: IdentificationResult, comps) -> list[str]:
+    """RMS and max residual before and after, per measured block [mm, mrad]."""
+    lines = [""]
+    for when, s in (("before", result.before), ("after", result.after)):
+        parts = []
+        if not math.isnan(s.rms_position):
+            parts.append(
+                f"{block_label('position', comps)} RMS {s.rms_position * 1e3:.6f} max "
+                f"{s.max_position * 1e3:.6f} mm"
+            )
+        if not math.isnan(s.rms_orientation):
+            parts.append(
+                f"{block_label('orientation', comps)} RMS {s.rms_orientation * 1e3:.6f} max "
+                f"{s.max_orientation * 1e3:.6f} mrad"
+            )
+        lines.append(f"residuals {when:6s}: " + "; ".join(parts))
+    return lines
+
+
+def _socket_lines(notes: Mapping[str, Any]) -> list[str]:
+    """An instrument fit's warnings, socket centres [mm] and the distances between them."""
+    centres = notes.get("socket_centres_mm") or {}
+    lines = [f"pincal: WARNING: {w}" for w in notes.get("warnings") or ()]
+    if not centres:
+        return lines
+    lines.append("socket centres [mm]: " + "; ".join(
+        f"{k} ({', '.join(f'{v:.3f}' for v in c)})" for k, c in centres.items()))  # fmt: skip
+    names = list(centres)[:8]
+    pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1 :]]
+    if pairs:
+        lines.append("distances between them [mm]: " + "; ".join(
+            f"{a}–{b} {np.linalg.norm(np.subtract(centres[a], centres[b])):.4f}"
+            for a, b in pairs))  # fmt: skip
+    return lines
+
+
+def quality_lines(quality: QualityVerdict | Mapping[str, Any] | None) -> list[str]:
+    """Lines for the quality gate's verdict.
+
+    Args:
+        quality: the verdict, or its record (:meth:`QualityVerdict.to_dict`, with
+            ``overridden`` and the uncertainty check's ``uncertainty``, as written in
+            ``identification.json``'s ``quality``); None: no lines.
+    """
+    if isinstance(quality, QualityVerdict):
+        quality = quality.to_dict()
+    if not quality:
+        return []
+    if quality.get("passed"):
+        lines = ["quality gate: passed"]
+    elif quality.get("overridden"):
+        lines = [f"quality gate: OVERRIDDEN with --force — {quality.get('reason')}"]
+    else:
+        lines = [f"quality gate: refused — {quality.get('reason')}"]
+    lines += [f"  warning: {w['message']}" for w in quality.get("warnings", [])]
+    blocks = [b for b in quality.get("chi2_blocks", []) if b.get("dof")]
+    if blocks:
+        lines.append("  χ² against the declared noise: " + "; ".join(
+            f"{b['block']} χ²/ν {b['chi2'] / b['dof']:.3g} on {b['dof']:.0f} "
+            f"(p = {b['p_value']:.2g})" for b in blocks))  # fmt: skip
+    probes = [p for p in quality.get("probes", []) if not p["name"].startswith("trend:")]
+    trends = [p for p in quality.get("probes", []) if p["name"].startswith("trend:")]
+    if trends:  # one line for the pose-coordinate probes: the strongest trend only
+        probes.append(min(trends, key=lambda p: p["p_value"]))
+    if probes:
+        lines.append("  misspecification probes: " + "; ".join(
+            f"{p['size']} explains {p['explained']:.0%} (p = {p['p_value']:.2g})"
+            for p in probes))  # fmt: skip
+    unc = quality.get("uncertainty") or {}
+    if unc.get("linear") is False and unc.get("draws"):
+        lines.append(
+            f"  uncertainties: the σ above are widened by a parametric bootstrap "
+            f"({unc['draws']} refits, seed {unc.get('seed')}): the linearisation does not "
+            "hold over the confidence region"
+        )
+    elif unc.get("linear"):
+        lines.append(
+            f"  uncertainties: linear over one σ along the {unc.get('directions_checked')} "
+            "most uncertain directions (the σ above are the linearised ones)"
+        )
+    if quality.get("outlier_poses"):
+        lines.append(
+            f"  outlier poses (normalised residual > {quality.get('outlier_limit') or 0:.2f}): "
+            f"{quality['outlier_poses']}; consider --method lm --loss huber"
+        )
+    return lines
+
+
+def calibration_text(result: IdentificationResult, notes: Mapping[str, Any] | None = None) -> str:
+    """The plain-text report of a calibration: values and 2σ in µm / µrad (as report.md).
+
+    Position and orientation are reported apart, each over its measured components
+    (named: ``position (x y)``, ``orientation (rz)``) and in its own unit.
+
+    Args:
+        result: the identification result, live or read from ``identification.json``.
+        notes: context over ``result.annotations``: ``data`` (the data file(s)),
+            ``quality`` (the gate's verdict or its record, see :func:`quality_lines`),
+            an instrument fit's ``gauge``, ``warnings`` and ``socket_centres_mm``.
+
+    Returns:
+        The text, ending with a newline.
+    """
+    ctx: dict[str, Any] = {**result.annotations, **(notes or {})}
+    comps = tuple(result.components) or None
+    lines = _header(result, ctx, comps)
+    lines += _parameter_lines(result)
+    lines += _residual_lines(result, comps)
+    lines += _socket_lines(ctx)
+    gauge = ctx.get("gauge") or ()
+    if gauge:  # what an instrument fit does not observe (held at nominal)
+        lines.append("not calibrated (held at nominal; the data do not observe it):")
+        lines += [f"  {g}" for g in gauge]
+    return "\n".join(lines + quality_lines(ctx.get("quality"))) + "\n"
