@@ -119,13 +119,16 @@ def _socket_lines(notes: Mapping[str, Any]) -> list[str]:
     return lines
 
 
-def quality_lines(quality: QualityVerdict | Mapping[str, Any] | None) -> list[str]:
+def quality_lines(
+    quality: QualityVerdict | Mapping[str, Any] | None, loss: str = "linear"
+) -> list[str]:
     """Lines for the quality gate's verdict.
 
     Args:
         quality: the verdict, or its record (:meth:`QualityVerdict.to_dict`, with
             ``overridden`` and the uncertainty check's ``uncertainty``, as written in
             ``identification.json``'s ``quality``); None: no lines.
+        loss: the fit's loss: a robust one already down-weights the outlier poses.
     """
     if isinstance(quality, QualityVerdict):
         quality = quality.to_dict()
@@ -166,8 +169,10 @@ def quality_lines(quality: QualityVerdict | Mapping[str, Any] | None) -> list[st
     if quality.get("outlier_poses"):
         lines.append(
             f"  outlier poses (normalised residual > {quality.get('outlier_limit') or 0:.2f}): "
-            f"{quality['outlier_poses']}; consider --method lm --loss huber"
-        )
+            f"{quality['outlier_poses']}; "
+            + ("consider --method lm --loss huber" if loss == "linear"
+               else f"down-weighted by the {loss} loss")
+        )  # fmt: skip
     return lines
 
 
@@ -196,4 +201,5 @@ def calibration_text(result: IdentificationResult, notes: Mapping[str, Any] | No
     if gauge:  # what an instrument fit does not observe (held at nominal)
         lines.append("not calibrated (held at nominal; the data do not observe it):")
         lines += [f"  {g}" for g in gauge]
-    return "\n".join(lines + quality_lines(ctx.get("quality"))) + "\n"
+    loss = result.weighting.loss if result.weighting is not None else "linear"
+    return "\n".join(lines + quality_lines(ctx.get("quality"), loss)) + "\n"

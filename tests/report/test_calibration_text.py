@@ -62,3 +62,12 @@ def test_text_of_the_result_read_back_equals_the_live_one(tmp_path, machine, ste
     if machine == "rrr3":  # the planar machine's blocks are named by their components
         assert "measured components x y rz" in lines[1]
         assert "position (x y) RMS" in live and "orientation (rz) RMS" in live
+
+
+def test_outlier_advice_follows_the_loss():
+    from pincal.report import quality_lines
+
+    record = {"passed": True, "outlier_poses": [3], "outlier_limit": 3.0}
+    assert quality_lines(record)[-1].endswith("consider --method lm --loss huber")
+    robust = quality_lines(record, "huber")[-1]
+    assert robust.endswith("down-weighted by the huber loss") and "consider" not in robust
