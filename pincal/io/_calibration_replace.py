@@ -9,27 +9,21 @@ exists at DIR (a file, a non-empty directory without a valid manifest) is refuse
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-from pincal._files import read_text
 from pincal.errors import CalibrationDirectoryError, PincalError, clip
+from pincal.io._calibration_checks import load_json
 from pincal.io._file_names import CALIBRATION_FORMAT, MANIFEST, PINCAL_EXTRAS
 
 __all__ = ["check_replaceable"]
 
 
-
 def _manifest(out: Path) -> dict:
+    """The manifest of ``out`` as :func:`load_json` reads it; {} when it is not valid."""
     try:
-        doc = json.loads(
-            read_text(out / MANIFEST, "manifest", 50_000_000, CalibrationDirectoryError)
-        )
-    except (PincalError, ValueError, RecursionError):
+        return load_json(out / MANIFEST)
+    except PincalError:  # unreadable, too large, not JSON, not an object
         return {}
-    return doc if isinstance(doc, dict) else {}
-
-
 
 
 def check_replaceable(out: str | Path) -> None:
