@@ -36,7 +36,9 @@ def _ball(text: str) -> tuple[float, float, float] | None:
     try:
         x, y, z = (float(v) for v in text.split(","))
     except ValueError:
-        raise click.BadParameter(f"{text!r}: give 'unknown' or X,Y,Z", param_hint="--ball") from None
+        raise click.BadParameter(
+            f"{text!r}: give 'unknown' or X,Y,Z", param_hint="--ball"
+        ) from None
     return (x, y, z)
 
 
@@ -44,7 +46,7 @@ def _ball(text: str) -> tuple[float, float, float] | None:
 @click.argument("table", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--model", required=True, help="Model (name, directory, .urdf or sidecar YAML).")
 @click.option("--socket-column", default="socket", show_default=True,
-              help="Title of the column naming the socket of each row (numbers or names).")  # fmt: skip
+              help="Title of the column naming each row's socket (numbers or names).")  # fmt: skip
 @click.option("--distance", "distances", multiple=True, metavar="A,B,VALUE,STD",
               help="A known distance between sockets A and B and its 1σ [--length-unit] "
               "(repeat). Without one the length scale is unidentifiable.")  # fmt: skip
@@ -53,7 +55,7 @@ def _ball(text: str) -> tuple[float, float, float] | None:
 @click.option("--plate", default="plate", show_default=True,
               help="The plate's name (files of one plate share its socket centres).")  # fmt: skip
 @click.option("--ball", default="0,0,0", show_default=True,
-              help="Ball centre in the flange frame X,Y,Z [--length-unit], or unknown.")  # fmt: skip
+              help="Ball centre in the flange frame X,Y,Z [--length-unit] or unknown.")  # fmt: skip
 @click.option("--length-unit", type=click.Choice(["m", "mm", "um"]), default="mm",
               show_default=True, help="Unit of --std, --distance and --ball.")  # fmt: skip
 @click.option("--columns", default=None, metavar="COLUMN=JOINT,…",
@@ -61,7 +63,7 @@ def _ball(text: str) -> tuple[float, float, float] | None:
 @click.option("--joint-units", default=None,
               help="deg (every angle), or 'angle=deg length=mm' / 'JOINT=UNIT …'.")  # fmt: skip
 @click.option("--joint-reference", default=None,
-              help="home, or 'JOINT=VALUE …' [rad, m]: readings relative to that pose.")  # fmt: skip
+              help="home or 'JOINT=VALUE …' [rad, m]: readings relative to that pose.")  # fmt: skip
 @click.option("--out", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="Sockets file to write ('# pincal sockets 1', SI).")  # fmt: skip
 @model_options
