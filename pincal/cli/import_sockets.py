@@ -105,5 +105,9 @@ def import_sockets(
     path = write_socket_data(out, data)
     counts = ", ".join(f"{s} ×{data.socket.count(s)}" for s in data.sockets)
     known = "; ".join(f"{k.a}–{k.b} {k.value * 1e3:.6g} mm" for k in data.plate.distances)
+    if not data.plate.distances:
+        from pincal.measure import SCALE_MESSAGE
+
+        click.echo(f"pincal: warning: {table.name}: no known distance: {SCALE_MESSAGE}", err=True)
     click.echo(f"{len(data)} seatings in sockets {counts}; known distances: {known or 'none'}")
     click.echo(f"wrote {path}")

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from pincal._yaml import shown
-from pincal.errors import ColumnError, MeasurementError, MeasurementFormatError
+from pincal.errors import ColumnError, MeasurementError, MeasurementFormatError, clip
 from pincal.io._csv import Header
 from pincal.io._delimited import read_table
 from pincal.io._joint_columns import joint_columns, read_joints
@@ -93,6 +93,11 @@ class SocketTable:
         lf = unit_factor(LENGTH_UNITS, self.length_unit, "length", name)
         known = []
         for a, b, value, std in self.distances:
+            if not (np.isfinite(value) and value > 0 and np.isfinite(std) and std > 0):
+                raise MeasurementError(
+                    f"{name}: known distance {a}–{b}: the distance and its std must be finite "
+                    f"and > 0 [{self.length_unit}], got {value:g}, {std:g}"
+                )
             try:
                 known.append(KnownDistance(socket_id(a), socket_id(b), value / lf, std / lf))
             except MeasurementError as exc:
@@ -126,9 +131,14 @@ def read_socket_table(path: str | Path, mech: Mechanism, spec: SocketTable) -> S
     name = table.name
     if not table.rows:
         raise MeasurementFormatError(f"{name}: no data rows")
-    k_socket = table.find("socket", [], {"socket": spec.column})
-    if k_socket is None:  # pragma: no cover - find raises for a mapped title
-        raise ColumnError(f"{name}: no socket column {spec.column!r}", missing=[spec.column])
+    k_socket = table.find("socket", [spec.column], {})
+    if k_socket is None:
+        raise ColumnError(
+            f"{name}: no socket column {shown(spec.column)} (the column naming each row's "
+            f"socket: sockets.column in a campaign file, --socket-column of import-sockets); "
+            f"columns are {clip(', '.join(table.columns), 400)}",
+            missing=[spec.column],
+        )
     sockets = tuple(socket_id(table.text(i, k_socket)) for i in range(len(table.rows)))
     plate = spec.plate_of(name)
     seen = sorted(set(sockets))
@@ -146,7 +156,15 @@ def read_socket_table(path: str | Path, mech: Mechanism, spec: SocketTable) -> S
                 f"row of column {shown(spec.column)} holds; the sockets are {shown(seen)}"
             )
     parsed = _joint_titles(table, mech)
-    joints, decl = joint_columns(mech, spec.header(), parsed, name)
+    try:
+        joints, decl = joint_columns(mech, spec.header(), parsed, name)
+    except ColumnError as exc:
+        raise ColumnError(
+            f"{exc} (for a plain socket table: sockets.columns in a campaign file, "
+            f"--columns of import-sockets); the table's columns are {clip(', '.join(table.columns), 400)}",
+            missing=exc.missing,
+            unknown=exc.unknown,
+        ) from None
     if k_socket in joints:
         raise ColumnError(
             f"{name}: column {shown(table.columns[k_socket])} is both the socket column and "
