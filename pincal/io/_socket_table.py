@@ -159,9 +159,10 @@ def read_socket_table(path: str | Path, mech: Mechanism, spec: SocketTable) -> S
     try:
         joints, decl = joint_columns(mech, spec.header(), parsed, name)
     except ColumnError as exc:
+        found = clip(", ".join(table.columns), 400)
         raise ColumnError(
             f"{exc} (for a plain socket table: sockets.columns in a campaign file, "
-            f"--columns of import-sockets); the table's columns are {clip(', '.join(table.columns), 400)}",
+            f"--columns of import-sockets); the table's columns are {found}",
             missing=exc.missing,
             unknown=exc.unknown,
         ) from None

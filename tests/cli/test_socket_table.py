@@ -111,7 +111,7 @@ def test_import_sockets_bad_declarations(lab, options, words):
 
 
 def test_import_sockets_single_socket(lab, tmp_path):
-    d, table = lab
+    _, table = lab
     one = tmp_path / "one.csv"
     one.write_text("".join(ln for ln in table.read_text().splitlines(True) if ";2;" not in ln))
     cols = ",".join(f"J{k}={j}" for k, j in enumerate(JOINTS, start=1))
