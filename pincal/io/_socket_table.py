@@ -24,7 +24,7 @@ import numpy as np
 from pincal._yaml import shown
 from pincal.errors import ColumnError, MeasurementError, MeasurementFormatError, clip
 from pincal.io._csv import Header
-from pincal.io._delimited import read_table
+from pincal.io._delimited import Table, read_table
 from pincal.io._joint_columns import joint_columns, read_joints
 from pincal.io._marker_file import _check_titles, _joint_titles
 from pincal.io._names import is_decimal
@@ -73,10 +73,12 @@ class SocketTable:
     joint_reference: str | None = None
 
     def header(self) -> Header:
-        """The joint declarations as the header entries of :mod:`pincal.io._joint_columns`."""
+        """Units and reference as header entries of :mod:`pincal.io._joint_columns`.
+
+        ``columns`` is applied to the titles instead (:func:`_mapped_titles`): a title
+        may hold spaces (``Joint 1 [deg]``), which header entries cannot.
+        """
         out: Header = {}
-        if self.columns:
-            out["columns"] = [" ".join(f"{c}={j}" for c, j in self.columns.items())]
         if self.joint_units:
             out["joint_units"] = [self.joint_units]
         if self.joint_reference:
@@ -106,6 +108,40 @@ class SocketTable:
             return SocketPlate(self.plate, self.std / lf, tuple(known))
         except MeasurementError as exc:
             raise MeasurementError(f"{name}: {exc} (std in {self.length_unit})") from None
+
+
+def _mapped_titles(
+    table: Table, mech: Mechanism, columns: Mapping[str, str]
+) -> list[tuple[str, str | None]]:
+    """(name, unit) per title, a title mapped by ``columns`` named as its joint.
+
+    A mapped column matches a title whole or without its bracketed unit, in any case.
+
+    Raises:
+        ColumnError: a mapped column not in the table, or mapped to a joint the model
+            does not actuate.
+    """
+    parsed = _joint_titles(table, mech)
+    out = list(parsed)
+    for column, joint in columns.items():
+        want = column.strip().lower()
+        hits = [k for k, (c, (n, _)) in enumerate(zip(table.columns, parsed, strict=True))
+                if want in (c.lower(), n.lower())]  # fmt: skip
+        if not hits:
+            raise ColumnError(
+                f"{table.name}: columns maps {shown(column)} to {shown(joint)}, but the table "
+                f"has no column {shown(column)}; its columns are "
+                f"{clip(', '.join(table.columns), 400)}",
+                missing=[column],
+            )
+        if joint not in mech.actuated:
+            raise ColumnError(
+                f"{table.name}: columns maps {shown(column)} to {shown(joint)}, which model "
+                f"{mech.name!r} does not actuate (actuated: {list(mech.actuated)})",
+                unknown=[column],
+            )
+        out[hits[0]] = (joint, parsed[hits[0]][1])
+    return out
 
 
 def read_socket_table(path: str | Path, mech: Mechanism, spec: SocketTable) -> SocketData:
@@ -155,7 +191,7 @@ def read_socket_table(path: str | Path, mech: Mechanism, spec: SocketTable) -> S
                 f"{name}: known distance {k.a}–{k.b} names socket(s) {shown(absent)} that no "
                 f"row of column {shown(spec.column)} holds; the sockets are {shown(seen)}"
             )
-    parsed = _joint_titles(table, mech)
+    parsed = _mapped_titles(table, mech, spec.columns)
     try:
         joints, decl = joint_columns(mech, spec.header(), parsed, name)
     except ColumnError as exc:

@@ -2,7 +2,7 @@
 
 A simulated UR5 (seeded errors) seats its ball in two sockets 50 mm apart; the seatings
 are rewritten as a lab would ship them: no pincal header, ``;`` delimiter, joints named
-``J1``…``J6`` in degrees, the socket as a number 1/2, extra columns. A campaign's
+``Joint 1``…``Joint 6`` in degrees, the socket as a number 1/2, extra columns. A campaign's
 ``sockets`` section declares what the table lacks; ``pincal run`` then ``pincal validate
 --cv 5`` must recover the plate's known distance on held-out seatings (≤ 0.2 mm, far
 better than the nominal arm). Without the distance the scale is reported unidentifiable.
@@ -20,7 +20,7 @@ from pincal.cli import main
 
 JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint",
           "wrist_2_joint", "wrist_3_joint")  # fmt: skip
-COLUMNS = "\n".join(f"    J{k}: {j}" for k, j in enumerate(JOINTS, start=1))
+COLUMNS = "\n".join(f"    Joint {k}: {j}" for k, j in enumerate(JOINTS, start=1))
 
 
 def _run(*args):
@@ -37,7 +37,7 @@ def lab(tmp_path_factory):
     assert r.exit_code == 0, r.output
     rows = [ln.split(",") for ln in s.read_text().splitlines() if not ln.startswith("#")]
     assert rows[0] == [*JOINTS, "socket"]
-    out = ["sample;J1;J2;J3;J4;J5;J6;Hole;operator"]
+    out = ["sample;" + ";".join(f"Joint {k}" for k in range(1, 7)) + ";Hole;operator"]
     for i, row in enumerate(rows[1:]):
         deg = [f"{math.degrees(float(v)):.7f}" for v in row[:6]]
         out.append(";".join([str(i), *deg, {"A": "1", "B": "2"}[row[6]], "kim"]))
@@ -97,12 +97,14 @@ def test_plain_table_without_distance_says_the_scale_is_unidentifiable(lab):
         (["--socket-column", "socket"], "no socket column 'socket'"),
         (["--distance", "1,3,50,0.01"], "names socket(s) ['3']"),
         (["--distance", "1,2,-50,0.01"], "must be finite and > 0 [mm]"),
-        (["--columns", "J1=shoulder_pan_joint"], "missing actuator columns"),
+        (["--columns", "Joint 1=shoulder_pan_joint"], "missing actuator columns"),
+        (["--columns", "J1=shoulder_pan_joint"], "has no column 'J1'"),
+        (["--columns", "Joint 1=shoulder_pan"], "does not actuate"),
     ],
 )
 def test_import_sockets_bad_declarations(lab, options, words):
     d, table = lab
-    cols = ",".join(f"J{k}={j}" for k, j in enumerate(JOINTS, start=1))
+    cols = ",".join(f"Joint {k}={j}" for k, j in enumerate(JOINTS, start=1))
     args = ["import-sockets", table, "--model", "ur5", "--socket-column", "hole",
             "--columns", cols, "--joint-units", "deg", "--out", d / "x.csv", *options]  # fmt: skip
     res = CliRunner().invoke(main, [str(a) for a in args])
@@ -114,7 +116,7 @@ def test_import_sockets_single_socket(lab, tmp_path):
     _, table = lab
     one = tmp_path / "one.csv"
     one.write_text("".join(ln for ln in table.read_text().splitlines(True) if ";2;" not in ln))
-    cols = ",".join(f"J{k}={j}" for k, j in enumerate(JOINTS, start=1))
+    cols = ",".join(f"Joint {k}={j}" for k, j in enumerate(JOINTS, start=1))
     res = _run("import-sockets", one, "--model", "ur5", "--socket-column", "Hole",
                "--columns", cols, "--joint-units", "deg", "--out", tmp_path / "x.csv")  # fmt: skip
     assert_clean_failure(res, "every row names socket '1'")
