@@ -65,13 +65,15 @@ def _campaign(d, table, out, extra=""):
     return path
 
 
-def test_plain_table_campaign_recovers_the_known_distance(lab):
+def test_plain_table_campaign_recovers_the_known_distance(lab, tmp_path, monkeypatch):
     d, table = lab
     before = table.read_bytes()
     camp = _campaign(d, table, "cal", "  distances: [[1, 2, 50, 0.01]]\n")
-    r = _run("run", camp)
+    monkeypatch.chdir(d)
+    r = _run("run", camp, "--out", "cal")  # a relative --out
     assert r.exit_code == 0, r.output
     assert table.read_bytes() == before  # the lab's file is only read
+    monkeypatch.chdir(tmp_path)  # validate finds the imported table from anywhere
     v = _run("validate", d / "cal", "--cv", "5", "--json")
     assert v.exit_code == 0, v.output
     cv = json.loads(v.stdout)["cv"]
