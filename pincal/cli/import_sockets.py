@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import click
@@ -66,11 +67,12 @@ def _ball(text: str) -> tuple[float, float, float] | None:
               help="home or 'JOINT=VALUE …' [rad, m]: readings relative to that pose.")  # fmt: skip
 @click.option("--out", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="Sockets file to write ('# pincal sockets 1', SI).")  # fmt: skip
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON summary.")
 @model_options
 @fail_cleanly
 def import_sockets(
     table, model, socket_column, distances, std, plate, ball, length_unit, columns,
-    joint_units, joint_reference, out, model_opts,
+    joint_units, joint_reference, out, as_json, model_opts,
 ) -> None:  # fmt: skip
     """Read a plain CSV of ball-in-socket seatings (no pincal header) into a sockets file.
 
@@ -84,6 +86,7 @@ def import_sockets(
       pincal import-sockets lab.csv --model ur5 --socket-column hole --distance 1,2,50,0.002 \\
           --columns J1=shoulder_pan_joint,J2=shoulder_lift_joint,… --joint-units deg \\
           --out sockets.csv
+      pincal import-sockets lab.csv --model ur5 --distance A,B,50,0.002 --out s.csv --json
       pincal calibrate ur5 --data sockets.csv --out cal/
     """
     from pincal.io import SocketTable, parse_mapping, read_socket_table, write_socket_data
@@ -103,6 +106,14 @@ def import_sockets(
     mech = load_model(model, model_opts)
     data = read_socket_table(table, mech, spec)
     path = write_socket_data(out, data)
+    if as_json:
+        click.echo(json.dumps({
+            "out": str(path), "model": mech.name, "frame": data.frame, "seatings": len(data),
+            "sockets": {s: data.socket.count(s) for s in data.sockets},
+            "distances_mm": [[k.a, k.b, k.value * 1e3, k.std * 1e3]
+                             for k in data.plate.distances],
+        }))  # fmt: skip
+        return
     counts = ", ".join(f"{s} ×{data.socket.count(s)}" for s in data.sockets)
     known = "; ".join(f"{k.a}–{k.b} {k.value * 1e3:.6g} mm" for k in data.plate.distances)
     if not data.plate.distances:

@@ -114,6 +114,19 @@ def test_import_sockets_bad_declarations(lab, options, words):
     assert not (d / "x.csv").exists()
 
 
+def test_import_sockets_json_summary(lab, tmp_path):
+    _, table = lab
+    cols = ",".join(f"Joint {k}={j}" for k, j in enumerate(JOINTS, start=1))
+    res = _run("import-sockets", table, "--model", "ur5", "--socket-column", "hole",
+               "--columns", cols, "--joint-units", "deg", "--distance", "1,2,50,0.01",
+               "--out", tmp_path / "s.csv", "--json")  # fmt: skip
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout)
+    assert doc["seatings"] == 40 and doc["sockets"] == {"1": 20, "2": 20}
+    assert doc["distances_mm"] == [["1", "2", 50.0, 0.01]]
+    assert (tmp_path / "s.csv").read_text().startswith("# pincal sockets 1")
+
+
 def test_import_sockets_single_socket(lab, tmp_path):
     _, table = lab
     one = tmp_path / "one.csv"
