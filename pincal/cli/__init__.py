@@ -79,6 +79,7 @@ from pincal.cli import calibrate as _calibrate  # noqa: E402
 from pincal.cli import compensate as _compensate  # noqa: E402
 from pincal.cli import demo as _demo  # noqa: E402
 from pincal.cli import import_cmd as _import_cmd  # noqa: E402
+from pincal.cli import import_sockets as _import_sockets  # noqa: E402
 from pincal.cli import info as _info  # noqa: E402
 from pincal.cli import poses as _poses  # noqa: E402
 from pincal.cli import report as _report  # noqa: E402
@@ -102,6 +103,7 @@ for _command in (
     _view.view,
     _report.report,
     _import_cmd.import_tracker,
+    _import_sockets.import_sockets,
     _run.run,
     _acceptance.acceptance,
     _select_model.select_model_cmd,

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from pincal._yaml import shown
+from pincal.cli._campaign_sockets import SOCKETS_HELP, Sockets, plain_socket_section
 from pincal.errors import CampaignError, PincalError, clip
 from pincal.measure import DEFAULT_NOISE
 
@@ -62,7 +63,7 @@ Campaign file keys (YAML; relative paths are relative to the file):
     lock: {}                 {JOINT: VALUE} [rad, m]: joints on the chain without a
                              column (off the chain: locked at 0). Columns named otherwise,
                              degrees, a reference pose: a sidecar as model (docs/examples)
-  identification:
+{sockets}  identification:
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
     model: geometric         geometric[+compliance][+gain][+harmonics] (joint terms)
     loss: linear             linear | huber | soft_l1 | cauchy (marker campaigns)
@@ -77,7 +78,7 @@ Campaign file keys (YAML; relative paths are relative to the file):
     cv: null                 K: K-fold cross-validation of the fit (pincal validate --cv)
     cv_seed: 0               seed of the folds
   report: true               write report.html / report.md into the output directory
-"""
+""".replace("{sockets}", SOCKETS_HELP)
 
 
 def _choice(value: str, valid: tuple[str, ...], key: str) -> None:
@@ -231,6 +232,7 @@ class Campaign:
     design: Design | None = None
     measurements: MeasurementSource = field(default_factory=MeasurementSource)
     markers: Markers | None = None
+    sockets: Sockets | None = None
     identification: Identification = field(default_factory=Identification)
     validation: Validation = field(default_factory=Validation)
     report: bool = True
@@ -248,6 +250,11 @@ class Campaign:
             )
         if self.markers is not None and m.source != "file":
             raise CampaignError("markers: needs measurements.source: file (a marker table)")
+        if self.sockets is not None and (m.source != "file" or self.markers is not None):
+            raise CampaignError(
+                "sockets: needs measurements.source: file (the plain CSV of seatings) and "
+                "no markers section"
+            )
         ident = self.identification
         robust = ident.loss != "linear" and ident.method != "lm"
         if self.markers is None and (ident.prior is not None or robust):
@@ -385,6 +392,8 @@ def load_campaign(path: str | Path) -> Campaign:
     mk = data.get("markers") if isinstance(data, dict) else None
     if isinstance(mk, dict) and mk.get("marker") == "unknown":  # the default, spelt out
         data = {**data, "markers": {**mk, "marker": None}}
+    if isinstance(data, dict) and "sockets" in data:
+        data = {**data, "sockets": plain_socket_section(data["sockets"])}
     try:
         camp = _build(Campaign, data, "")
         camp.check()

@@ -106,7 +106,8 @@ def socket_cv(cal, k: int, seed: int) -> tuple[dict[str, Any], tuple[np.ndarray,
         raise PincalError(
             f"{path}: no known distance between sockets: the length scale is unidentifiable, "
             "so held-out socket distances would measure nothing; add '# distance: A, B, "
-            "VALUE, STD' (the plate's calibrated distance) and calibrate again"
+            "VALUE, STD' (the plate's calibrated distance; in a campaign file "
+            "sockets.distances) and calibrate again"
         )
     params = parameters(nominal, cal.preset)
     method = str(cal.manifest.get("method") or "gauss-newton")

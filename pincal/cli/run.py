@@ -84,6 +84,13 @@ def _measure_validation(c: Campaign, p: Paths) -> list[str] | None:
             "--out", str(p.validation)]  # fmt: skip
 
 
+def _import_sockets(c: Campaign, p: Paths) -> list[str] | None:
+    """A plain CSV of socket seatings → the sockets file the calibration reads."""
+    if c.sockets is None or c.measurements.file is None:
+        return None
+    return [c.measurements.file, "--model", c.model, *c.sockets.options(), "--out", str(p.data)]
+
+
 def _calibrate(c: Campaign, p: Paths) -> list[str] | None:
     i = c.identification
     args = [c.model, "--data", str(p.data), "--method", i.method]
@@ -127,6 +134,7 @@ STEPS: tuple[Step, ...] = (
     Step("design", "poses", _design),
     Step("measure", "simulate", _measure),
     Step("measure-validation", "simulate", _measure_validation),
+    Step("import-sockets", "import-sockets", _import_sockets),
     Step("calibrate", "calibrate", _calibrate),
     Step("validate", "validate", _validate),
     Step("report", "report", _report),
@@ -137,6 +145,8 @@ def campaign_paths(c: Campaign, out: Path) -> Paths:
     """The step paths of campaign ``c`` writing into ``out``."""
     inputs = out.parent / f"{out.name}-inputs"  # the calibration directory holds only its own files
     data = Path(c.measurements.file) if c.measurements.file else inputs / "measurements.csv"
+    if c.sockets is not None:  # the plain table, imported; absolute: validate --cv reads it
+        data = (inputs / "sockets.csv").resolve()
     v = c.validation
     val = None if v.source == "none" else Path(v.file) if v.file else inputs / "validation.csv"
     return Paths(out, inputs / "design.csv", data, val, out / "validation.json")
@@ -173,11 +183,13 @@ def check_campaign_outputs(c: Campaign, p: Paths) -> None:
         )
     inputs = p.design.parent
     generated = {"design": p.design if c.design else None}
-    if c.measurements.file is None:
+    if c.measurements.file is None or c.sockets is not None:
         generated["measurements"] = p.data
     if c.validation.source == "simulated" and c.validation.file is None:
         generated["validation"] = p.validation
-    sides = {"design": (".commands.csv", ".json")}
+    sides: dict[str, tuple[str, ...]] = {"design": (".commands.csv", ".json")}
+    if c.sockets is not None:  # the imported sockets file has no side file
+        sides["measurements"] = ()
     implied = {f"the {k} step's {s} file": Path(v).with_suffix(s)
                for k, v in generated.items() if v is not None
                for s in sides.get(k, (".truth.json",))}  # fmt: skip

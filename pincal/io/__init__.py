@@ -73,6 +73,7 @@ from pincal.io._poses_file import (
     write_poses,
 )
 from pincal.io._socket_file import read_socket_data, write_socket_data
+from pincal.io._socket_table import SocketTable, read_socket_table, socket_id
 from pincal.io._tracker_file import (
     TargetMeasurements,
     write_target_measurements,
@@ -100,6 +101,7 @@ __all__ = [
     "MarkerData",
     "MeasurementFile",
     "PoseFile",
+    "SocketTable",
     "TargetMeasurements",
     "TrackerImport",
     "TrackerImportOptions",
@@ -131,9 +133,11 @@ __all__ = [
     "read_pose_rows",
     "read_poses",
     "read_socket_data",
+    "read_socket_table",
     "save_urdf",
     "sha256_file",
     "si_actuator_units",
+    "socket_id",
     "write_calibration",
     "write_commands",
     "write_instrument_data",

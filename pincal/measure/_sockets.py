@@ -33,8 +33,9 @@ __all__ = [
 #: the words for a socket campaign whose length scale no measurement fixes
 SCALE_MESSAGE = (
     "nothing measured fixes the length scale: add the plate's known distance "
-    "('# distance: A, B, 50, 0.002' in the sockets file, length_unit); without it the "
-    "fitted arm shrinks or grows with the socket centres and no residual shows it"
+    "('# distance: A, B, 50, 0.002' in the sockets file, length_unit; in a campaign file "
+    "sockets.distances: [[A, B, 50, 0.002]]; --distance of pincal import-sockets); without "
+    "it the fitted arm shrinks or grows with the socket centres and no residual shows it"
 )
 
 
