@@ -35,7 +35,7 @@ def test_example_campaign_runs_end_to_end(tmp_path):
     assert summary["urdf"] == [str(out / "calibrated.urdf")]
     assert (out / "calibrated.urdf").is_file() and (out / "report.html").is_file()
     assert str(out / "report.md") in summary["report"]
-    assert "pincal run: [4/6] calibrate: pincal calibrate" in res.stderr
+    assert "pincal run: [5/7] calibrate: pincal calibrate" in res.stderr
     # the calibration recovered the seeded actual machine's errors
     doc = json.loads((out / "identification.json").read_text())
     truth = json.loads((out.parent / f"{out.name}-inputs" / "measurements.truth.json").read_text())
