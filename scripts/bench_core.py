@@ -1,13 +1,16 @@
 """Benchmark of the core engine: pincal now, pincal 0.1 and the floors, in one run.
 
 Run: python scripts/bench_core.py [--repeats 5] [--v01 /work/wt/v01] [--quick]
+     python scripts/bench_core.py --quick --baseline /work/wt/base --label d307e66
 
 Every operation is timed per pose (median of repeats) for
 
 * pincal now (this checkout, batched paths),
 * pincal 0.1 (the ``1d5694d`` commit checked out at ``--v01``; create it with
   ``git worktree add /work/wt/v01 1d5694d``), run in a subprocess with PYTHONPATH
-  pointing there (skipped when the directory is missing),
+  pointing there (skipped when the directory is missing); or any other checkout given
+  as ``--baseline DIR`` with its ``--label`` (e.g. main before a change: ``git worktree
+  add /work/wt/base REV``), which runs even with ``--quick``,
 * the floors: a plain-numpy batched Newton/closed-form Stewart (same sizes: 6 legs,
   42 parameters) and, for the UR10, the Pinocchio calls alone
   (``framesForwardKinematics`` + ``computeFrameJacobian`` per pose), each timed in turns
@@ -382,6 +385,8 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--poses", type=int, default=1000, help="poses per timed batch")
     ap.add_argument("--v01", type=Path, default=Path("/work/wt/v01"))
+    ap.add_argument("--baseline", type=Path, help="another checkout to compare (runs with --quick)")
+    ap.add_argument("--label", default="0.1", help="the baseline's column label")
     ap.add_argument("--quick", action="store_true", help="skip N = 10 000 and the 0.1 run")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--memory", type=int, default=0, help=argparse.SUPPRESS)
@@ -413,8 +418,9 @@ def main() -> None:
     now = _run(ROOT, ["--worker", f"--repeats={args.repeats}", f"--poses={args.poses}",
                       f"--sizes={args.sizes}"])  # fmt: skip
     old = None
-    if args.v01.is_dir() and not args.quick:
-        old = _run(args.v01, ["--worker", f"--repeats={args.repeats}", f"--poses={args.poses}",
+    base = args.baseline if args.baseline is not None else args.v01
+    if base.is_dir() and (args.baseline is not None or not args.quick):
+        old = _run(base, ["--worker", f"--repeats={args.repeats}", f"--poses={args.poses}",
                               f"--sizes={args.sizes}"])  # fmt: skip
     libs = ", ".join(blas)
     print(f"pin {pin.__version__}, numpy {np.__version__}; BLAS threads in every process: 1 "
@@ -422,10 +428,11 @@ def main() -> None:
     print(f"CPU time (time.process_time), median of {args.repeats} repeats over {args.poses} "
           f"random workspace poses; shared machine: compare the ratios (same run)\n")  # fmt: skip
     print("per pose; 'floor' = the floor timed in the same process, in turns with the operation")
-    print("(repeat by repeat); the normalised 0.1/now ratio divides each version's time by its")
+    lab = args.label
+    print(f"(repeat by repeat); the normalised {lab}/now ratio divides each version's time by its")
     print("own floor (load drift between the two processes)\n")
     head = f"{'operation':22s} {'now':>11s} {'floor':>10s} {'now/floor':>9s}"
-    print(head + f" {'0.1':>11s} {'floor':>10s} {'0.1/now':>8s} {'normalised':>10s}")
+    print(head + f" {lab:>11s} {'floor':>10s} {lab + '/now':>8s} {'normalised':>10s}")
     for key in ("stewart FK cold", "stewart FK warm", "stewart evaluate+J", "ur10 evaluate+J"):
         f_now = now["floor"][key]
         line = f"{key:22s} {_fmt(now[key]):>11s} {_fmt(f_now):>10s} {now[key] / f_now:8.1f}×"
@@ -451,7 +458,7 @@ def main() -> None:
                 np.abs(o["values"])
             )
             up = o["time"] / r["time"]
-            line += (f"   0.1 {o['time']:7.3f} s ({o['iterations']} it.)   "
+            line += (f"   {lab} {o['time']:7.3f} s ({o['iterations']} it.)   "
                      f"speed-up {up:5.1f}×   max rel. diff {rel:.1e}")  # fmt: skip
         print(line)
     if now.get("noise"):
