@@ -18,14 +18,13 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from pincal.errors import SolverOptionError, TooFewPosesError, UnidentifiableError
-from pincal.identification._covariance import fitted_covariance
+from pincal.identification._finish import finish, settle
 from pincal.identification._noise import initial_weights, weighted_fit
 from pincal.identification._options import GaussNewtonOptions, LMOptions
-from pincal.identification._outcome import Progress, SolverOutcome
+from pincal.identification._outcome import Progress
 from pincal.identification._problem import CalibrationProblem, IdentificationProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import solver
-from pincal.identification._weighting import Weighting
 from pincal.measure import Measurements
 from pincal.model import Mechanism, ParameterSet, degenerate_translations
 from pincal.sensitivity import Identifiability, analyse_jacobian, closure_breaking
@@ -80,61 +79,6 @@ def _fit_set(
             sub.unidentifiable_names,
         )
     return candidates[sub.base], ident
-
-
-def _finish(
-    problem: IdentificationProblem,
-    method: str,
-    out: SolverOutcome,
-    free: np.ndarray,
-    ident: Identifiability,
-    raw0: np.ndarray,
-    prefix: str,
-    model: CalibrationProblem,
-    weighting: Weighting,
-    prior_weights: np.ndarray | None = None,
-) -> IdentificationResult:
-    params = problem.params
-    fitted = free if out.fitted is None else np.asarray(out.fitted, dtype=int)
-    r, J, raw = model.evaluate(out.x)
-    Jf = J[:, fitted]
-    dof = max(model.n_equations - fitted.size, 1)
-    chi2 = float(r @ r) / dof
-    # the posterior information: data plus prior (rank-revealing, from an SVD of Jf),
-    # in name order
-    cov, mask, _ = fitted_covariance(
-        Jf, fitted, len(params), None if prior_weights is None else prior_weights[fitted],
-        1.0 if model.known_noise else chi2,
-    )
-    comps = problem.measurements.components
-    return IdentificationResult(
-        method=method,
-        names=params.names,
-        units=params.units,
-        full_values=np.asarray(out.x, dtype=float),
-        identified=mask,
-        std=np.sqrt(np.diag(cov)),
-        covariance=cov,
-        before=ResidualStats.from_residuals(raw0, comps),
-        after=ResidualStats.from_residuals(raw, comps),
-        reduced_chi2=chi2,
-        iterations=out.iterations,
-        success=out.success,
-        message=prefix + out.message,
-        cost_history=tuple(out.history),
-        residuals=raw,
-        initial_values=problem.x0,
-        n_equations=model.n_equations,
-        model=problem.mech.name,
-        preset=params.label,
-        extras=out.extras,
-        parameter_set=params,
-        calibrated_mechanism=model.mechanism(out.x),
-        identifiability=ident,
-        weighting=weighting,
-        initial_residuals=raw0,
-        components=tuple(comps),
-    )
 
 
 def identify(
@@ -236,5 +180,12 @@ def _run(problem: IdentificationProblem, method: str, entry: Any, opts: Any, pro
     out, model, weighting = weighted_fit(model, entry, x0, free, opts, progress)
     local = isinstance(opts, (GaussNewtonOptions, LMOptions))
     prior = opts.prior_weights(x0.size) if local else None
-    w = None if prior is None else prior[0]
-    return _finish(problem, method, out, free, ident, raw0, prefix, model, weighting, w)
+    settled = settle(model, out, free)
+    comps = tuple(problem.measurements.components)
+    result, _ = finish(
+        model, settled, method=method, params=problem.params, raw0=raw0,
+        stats=lambda raw: ResidualStats.from_residuals(raw, comps), residuals=settled.raw,
+        initial_values=problem.x0, prefix=prefix, prior=None if prior is None else prior[0],
+        identifiability=ident, weighting=weighting, initial_residuals=raw0, components=comps,
+    )  # fmt: skip
+    return result

@@ -129,6 +129,11 @@ class InstrumentProblem:
         return int(sum(s.size for s in self.sigma))
 
     @property
+    def known_noise(self) -> bool:
+        """True: every block is whitened by its file's declared σ (never re-estimated)."""
+        return True
+
+    @property
     def solver_floor_cost(self) -> float:
         """Cost of residuals at 100× the FK tolerance: below it, data are fitted exactly."""
         return 0.5 * float(sum(np.sum((100 * self.mech.options.tol / s) ** 2) for s in self.sigma))
