@@ -17,6 +17,7 @@ from pincal.identification._cross_validation import (
     position_errors,
 )
 from pincal.identification._data_check import check_measurements
+from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._identify import identify
 from pincal.identification._instrument_design import (
     InstrumentIdentifiability,
@@ -63,7 +64,7 @@ from pincal.identification._options import (
     LMOptions,
     StepPlanningOptions,
 )
-from pincal.identification._problem import CalibrationProblem, IdentificationProblem
+from pincal.identification._problem import CalibrationProblem
 from pincal.identification._qpso import QPSOResult, qpso
 from pincal.identification._qpso_identify import COST_MODELS, QPSOOptions
 from pincal.identification._qpso_stepwise import QPSOStage, QPSOStepwiseResult, qpso_stepwise

@@ -25,7 +25,7 @@ from pincal.identification._solvers import solver
 from pincal.model import Mechanism, ParameterSet
 from pincal.sensitivity import Identifiability
 
-__all__ = ["SCALE_STD_LIMIT", "InstrumentIdentification", "identify_instruments"]
+__all__ = ["SCALE_STD_LIMIT", "InstrumentIdentification", "identify_instruments", "joint_fit"]
 
 #: a reading scale the data tell only beyond this 1σ [1] is named in the gauge
 SCALE_STD_LIMIT = 1e-3
@@ -105,10 +105,17 @@ def identify_instruments(
 ) -> InstrumentIdentification:
     """Identify machine and instrument parameters jointly from several datasets.
 
+    The joint fit of ``identify(IdentificationProblem(mech, params, datasets,
+    labels=labels, weak_bound=weak_bound), method, options=options)`` — the same
+    :class:`IdentificationResult`, as ``.result`` — with what only a joint fit has
+    (instrument values, gauge, socket centres, whitened per-pose Jacobian for the
+    gate). It runs the joint fit for any data, a single pose file included.
+
     Args:
         mech: nominal mechanism.
         params: the n machine parameters.
-        datasets: :class:`Measurements` and/or :class:`InstrumentData` (any mix).
+        datasets: :class:`Measurements`, :class:`InstrumentData` and/or
+            :class:`SocketData` (any mix).
         method: ``"gauss-newton"`` or ``"lm"``.
         options: that solver's options dataclass (``GaussNewtonOptions`` or
             ``LMOptions``; None = its defaults).
@@ -126,13 +133,29 @@ def identify_instruments(
         SolverOptionError: a method other than the local solvers.
         MeasurementError: inconsistent datasets.
     """
+    model = InstrumentProblem(mech, params, datasets, labels)
+    return joint_fit(model, method, options, progress, weak_bound)
+
+
+def joint_fit(
+    model: InstrumentProblem,
+    method: str,
+    options: Any,
+    progress: Callable[[int, float], None] | None,
+    weak_bound: tuple[float, float] | None,
+) -> InstrumentIdentification:
+    """Solve a joint residual model and finish it (see :func:`identify_instruments`).
+
+    Raises:
+        SolverOptionError: a method other than the local solvers, or foreign options.
+    """
     if method not in ("gauss-newton", "lm"):
         raise SolverOptionError(
             f"joint instrument identification runs 'gauss-newton' or 'lm', not {method!r}"
         )
     entry = solver(method)
     opts = entry.check_options(options)
-    model = InstrumentProblem(mech, params, datasets, labels)
+    params = model.params
     x0 = model.x0
     _, J0, raw0 = model.evaluate(x0)
     ident = model.analyse(x0, J0)
