@@ -1,8 +1,10 @@
 """Stage 5 — from measurements to parameters.
 
-One :class:`IdentificationProblem`, solved by a registered solver (``"gauss-newton"``,
-``"lm"``, ``"qpso"``, ``"qpso-stepwise"``, ``"step-planned"``), gives one
-:class:`IdentificationResult` with covariances at the Cramér–Rao bound;
+One :class:`IdentificationProblem` — one pose file, or several data sets mixing pose,
+instrument and socket files — solved by a registered solver (``"gauss-newton"``,
+``"lm"``, ``"qpso"``, ``"qpso-stepwise"``, ``"step-planned"``; the joint fit of several
+data sets by the first two), gives one :class:`IdentificationResult` with covariances at
+the Cramér–Rao bound;
 ``result_to_dict`` / ``result_from_dict`` turn it into the document of
 ``identification.json`` and back.
 """

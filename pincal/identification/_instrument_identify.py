@@ -1,10 +1,14 @@
-"""Joint machine + instrument identification: solve, then the finishing step.
+"""Joint machine + instrument identification: choose what to fit, solve, finish.
 
-:func:`identify_instruments` solves an :class:`pincal.identification.InstrumentProblem`
-with a registered local solver (``"gauss-newton"`` or ``"lm"``), fitting the
-identifiable base set (instrument parameters first, so what an instrument absorbs is
-held on the machine side) less the directions the data place only beyond a bound,
-and names what it did not calibrate (:mod:`pincal.identification._gauge`).
+:func:`joint_fit` solves an :class:`pincal.identification.InstrumentProblem` with a
+registered local solver (``"gauss-newton"`` or ``"lm"``), fitting the identifiable base
+set (instrument parameters first, so what an instrument absorbs is held on the machine
+side) less the directions the data place only beyond a bound, names what it did not
+calibrate (:mod:`pincal.identification._gauge`) and ends in the finishing step every
+identification shares (:mod:`pincal.identification._finish`).
+:func:`pincal.identification.identify` runs it for an
+:class:`pincal.identification.IdentificationProblem` of several data sets;
+:func:`identify_instruments` is the convenience that also returns the joint details.
 """
 
 from __future__ import annotations
