@@ -85,6 +85,11 @@ class IdentificationProblem:
     def __post_init__(self) -> None:
         data = self.measurements
         if not isinstance(data, Measurements):
+            if not isinstance(data, (list, tuple)):
+                raise MeasurementError(
+                    "measurements must be a Measurements or a list of data sets "
+                    f"(Measurements, InstrumentData, SocketData), not {type(data).__name__}"
+                )
             data = tuple(data)
             kinds = (Measurements, InstrumentData, SocketData)
             odd = [type(d).__name__ for d in data if not isinstance(d, kinds)]

@@ -100,6 +100,8 @@ def test_a_joint_problem_refuses_what_only_a_pose_file_takes(stewart, stewart42,
         IdentificationProblem(stewart, stewart42, [])
     with pytest.raises(MeasurementError, match="ndarray"):
         IdentificationProblem(stewart, stewart42, [meas, np.zeros(3)])
+    with pytest.raises(MeasurementError, match="a list of data sets"):
+        identify(stewart, stewart42, "lm")
     problem = IdentificationProblem(stewart, stewart42, [meas, bar])
     with pytest.raises(MeasurementError, match="joint_model"):
         _ = problem.model
