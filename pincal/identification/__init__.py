@@ -1,8 +1,10 @@
 """Stage 5 — from measurements to parameters.
 
-One :class:`IdentificationProblem`, solved by a registered solver (``"gauss-newton"``,
-``"lm"``, ``"qpso"``, ``"qpso-stepwise"``, ``"step-planned"``), gives one
-:class:`IdentificationResult` with covariances at the Cramér–Rao bound;
+One :class:`IdentificationProblem` — one pose file, or several data sets mixing pose,
+instrument and socket files — solved by a registered solver (``"gauss-newton"``,
+``"lm"``, ``"qpso"``, ``"qpso-stepwise"``, ``"step-planned"``; the joint fit of several
+data sets by the first two), gives one :class:`IdentificationResult` with covariances at
+the Cramér–Rao bound;
 ``result_to_dict`` / ``result_from_dict`` turn it into the document of
 ``identification.json`` and back.
 """
@@ -17,6 +19,7 @@ from pincal.identification._cross_validation import (
     position_errors,
 )
 from pincal.identification._data_check import check_measurements
+from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._identify import identify
 from pincal.identification._instrument_design import (
     InstrumentIdentifiability,
@@ -63,7 +66,7 @@ from pincal.identification._options import (
     LMOptions,
     StepPlanningOptions,
 )
-from pincal.identification._problem import CalibrationProblem, IdentificationProblem
+from pincal.identification._problem import CalibrationProblem
 from pincal.identification._qpso import QPSOResult, qpso
 from pincal.identification._qpso_identify import COST_MODELS, QPSOOptions
 from pincal.identification._qpso_stepwise import QPSOStage, QPSOStepwiseResult, qpso_stepwise

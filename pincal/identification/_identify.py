@@ -12,20 +12,23 @@ are reported in ``result.weighting``.
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 from pincal.errors import SolverOptionError, TooFewPosesError, UnidentifiableError
-from pincal.identification._covariance import fitted_covariance
+from pincal.identification._finish import finish, settle
+from pincal.identification._identification_problem import IdentificationProblem
+from pincal.identification._instrument_identify import joint_fit
+from pincal.identification._instrument_problem import Dataset
 from pincal.identification._noise import initial_weights, weighted_fit
 from pincal.identification._options import GaussNewtonOptions, LMOptions
-from pincal.identification._outcome import Progress, SolverOutcome
-from pincal.identification._problem import CalibrationProblem, IdentificationProblem
+from pincal.identification._outcome import Progress
+from pincal.identification._problem import CalibrationProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import solver
-from pincal.identification._weighting import Weighting
 from pincal.measure import Measurements
 from pincal.model import Mechanism, ParameterSet, degenerate_translations
 from pincal.sensitivity import Identifiability, analyse_jacobian, closure_breaking
@@ -50,7 +53,7 @@ def _fit_set(
     # (the start evaluation solved every pose there): no second pass is needed
     mech = model.mechanism(problem.x0)
     if mech.closures and (mech.n_closure_rows > mech.closure_rank or not batch_applies(mech)):
-        breaking = closure_breaking(problem.mech, params, problem.measurements.q_act, problem.x0)
+        breaking = closure_breaking(problem.mech, params, problem.pose_file.q_act, problem.x0)
     splitting = np.isin(params.names, degenerate_translations(problem.mech))
     J0 = model.structural_jacobian(problem.x0)  # not the measured deviation's mixing
     ident = analyse_jacobian(J0, params.names, breaks_closure=breaking, splits_joint=splitting)
@@ -67,7 +70,7 @@ def _fit_set(
     if sub.rank < n and sub.rank >= n_eq:
         rows = len(model.rows)
         raise TooFewPosesError(
-            f"{len(problem.measurements)} poses × {rows} components = {n_eq} equations for "
+            f"{len(problem.pose_file)} poses × {rows} components = {n_eq} equations for "
             f"{n} parameters, and all {n_eq} are used up (rank {sub.rank}): the data cannot "
             f"tell which parameters are identifiable; measure at least {-(-n // rows)} poses"
         )
@@ -82,65 +85,10 @@ def _fit_set(
     return candidates[sub.base], ident
 
 
-def _finish(
-    problem: IdentificationProblem,
-    method: str,
-    out: SolverOutcome,
-    free: np.ndarray,
-    ident: Identifiability,
-    raw0: np.ndarray,
-    prefix: str,
-    model: CalibrationProblem,
-    weighting: Weighting,
-    prior_weights: np.ndarray | None = None,
-) -> IdentificationResult:
-    params = problem.params
-    fitted = free if out.fitted is None else np.asarray(out.fitted, dtype=int)
-    r, J, raw = model.evaluate(out.x)
-    Jf = J[:, fitted]
-    dof = max(model.n_equations - fitted.size, 1)
-    chi2 = float(r @ r) / dof
-    # the posterior information: data plus prior (rank-revealing, from an SVD of Jf),
-    # in name order
-    cov, mask, _ = fitted_covariance(
-        Jf, fitted, len(params), None if prior_weights is None else prior_weights[fitted],
-        1.0 if model.known_noise else chi2,
-    )
-    comps = problem.measurements.components
-    return IdentificationResult(
-        method=method,
-        names=params.names,
-        units=params.units,
-        full_values=np.asarray(out.x, dtype=float),
-        identified=mask,
-        std=np.sqrt(np.diag(cov)),
-        covariance=cov,
-        before=ResidualStats.from_residuals(raw0, comps),
-        after=ResidualStats.from_residuals(raw, comps),
-        reduced_chi2=chi2,
-        iterations=out.iterations,
-        success=out.success,
-        message=prefix + out.message,
-        cost_history=tuple(out.history),
-        residuals=raw,
-        initial_values=problem.x0,
-        n_equations=model.n_equations,
-        model=problem.mech.name,
-        preset=params.label,
-        extras=out.extras,
-        parameter_set=params,
-        calibrated_mechanism=model.mechanism(out.x),
-        identifiability=ident,
-        weighting=weighting,
-        initial_residuals=raw0,
-        components=tuple(comps),
-    )
-
-
 def identify(
     problem: IdentificationProblem | Mechanism,
     params: ParameterSet | str | None = None,
-    measurements: Measurements | None = None,
+    measurements: Measurements | Sequence[Dataset] | None = None,
     method: str = "gauss-newton",
     *,
     options: Any = None,
@@ -154,12 +102,19 @@ def identify(
 
     Call it as ``identify(problem, method=..., options=...)`` with an
     :class:`IdentificationProblem`, or as ``identify(mech, params, measurements,
-    method, ...)`` (``initial``, ``fit`` and ``reduce`` then build the problem).
+    method, ...)`` (``initial``, ``fit`` and ``reduce`` then build the problem). One pose
+    file is fitted by its batched residual model, by any registered solver; several
+    data sets or instrument files by the joint model of machine and instrument
+    unknowns (``"gauss-newton"`` or ``"lm"``; the instrument values and the gauge are
+    in ``result.annotations``, see also
+    :func:`pincal.identification.identify_instruments`). Both end in the same
+    finishing step.
 
     Args:
         problem: an :class:`IdentificationProblem`, or the nominal mechanism.
         params: the n parameters (mechanism form only).
-        measurements: m measured poses (with a mechanism).
+        measurements: m measured poses (with a mechanism), or a sequence of data sets
+            (see :class:`IdentificationProblem`).
         method: a registered solver: ``"gauss-newton"``, ``"lm"``, ``"qpso"``,
             ``"qpso-stepwise"`` or ``"step-planned"`` (see ``METHODS``).
         options: the method's options dataclass (``GaussNewtonOptions``, ``LMOptions``,
@@ -180,7 +135,8 @@ def identify(
     Raises:
         TooFewPosesError: fewer equations than the identifiable parameters need.
         UnidentifiableError: rank-deficient and ``reduce`` is False.
-        SolverOptionError: unknown method or options of the wrong type / range.
+        SolverOptionError: unknown method or options of the wrong type / range; a
+            method other than ``"gauss-newton"`` or ``"lm"`` for a joint fit.
         MeasurementError, ParameterError: inconsistent inputs.
         NoiseEstimationError: no noise declared and too few redundant equations to
             estimate it.
@@ -196,15 +152,17 @@ def identify(
                 "initial / fit / reduce / noise belong in the IdentificationProblem"
             )
     else:
-        if not isinstance(params, ParameterSet) or not isinstance(measurements, Measurements):
+        if not isinstance(params, ParameterSet) or measurements is None:
             raise SolverOptionError(
                 "identify(mech, params, measurements, method): params must be a ParameterSet "
-                f"and measurements a Measurements, got {type(params).__name__} and "
-                f"{type(measurements).__name__}"
+                f"and measurements a Measurements (or a list of data sets), got "
+                f"{type(params).__name__} and {type(measurements).__name__}"
             )
         problem = IdentificationProblem(
             problem, params, measurements, initial, fit, reduce, noise
         )
+    if problem.joint:  # several data sets or instrument files: the joint fit
+        return joint_fit(problem.joint_model, method, options, progress, problem.weak_bound).result
     entry = solver(method)
     opts = entry.check_options(options)
     with threadpool_limits(1):  # small dense solves: threaded BLAS only adds contention
@@ -236,5 +194,12 @@ def _run(problem: IdentificationProblem, method: str, entry: Any, opts: Any, pro
     out, model, weighting = weighted_fit(model, entry, x0, free, opts, progress)
     local = isinstance(opts, (GaussNewtonOptions, LMOptions))
     prior = opts.prior_weights(x0.size) if local else None
-    w = None if prior is None else prior[0]
-    return _finish(problem, method, out, free, ident, raw0, prefix, model, weighting, w)
+    settled = settle(model, out, free)
+    comps = tuple(problem.pose_file.components)
+    result, _ = finish(
+        model, settled, method=method, params=problem.params, raw0=raw0,
+        stats=lambda raw: ResidualStats.from_residuals(raw, comps), residuals=settled.raw,
+        initial_values=problem.x0, prefix=prefix, prior=None if prior is None else prior[0],
+        identifiability=ident, weighting=weighting, initial_residuals=raw0, components=comps,
+    )  # fmt: skip
+    return result

@@ -1,10 +1,14 @@
-"""Joint machine + instrument identification: solve, then the finishing step.
+"""Joint machine + instrument identification: choose what to fit, solve, finish.
 
-:func:`identify_instruments` solves an :class:`pincal.identification.InstrumentProblem`
-with a registered local solver (``"gauss-newton"`` or ``"lm"``), fitting the
-identifiable base set (instrument parameters first, so what an instrument absorbs is
-held on the machine side) less the directions the data place only beyond a bound,
-and names what it did not calibrate (:mod:`pincal.identification._gauge`).
+:func:`joint_fit` solves an :class:`pincal.identification.InstrumentProblem` with a
+registered local solver (``"gauss-newton"`` or ``"lm"``), fitting the identifiable base
+set (instrument parameters first, so what an instrument absorbs is held on the machine
+side) less the directions the data place only beyond a bound, names what it did not
+calibrate (:mod:`pincal.identification._gauge`) and ends in the finishing step every
+identification shares (:mod:`pincal.identification._finish`).
+:func:`pincal.identification.identify` runs it for an
+:class:`pincal.identification.IdentificationProblem` of several data sets;
+:func:`identify_instruments` is the convenience that also returns the joint details.
 """
 
 from __future__ import annotations
@@ -16,8 +20,8 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import SolverOptionError
-from pincal.identification._covariance import fitted_covariance
 from pincal.identification._data_blocks import DataBlock
+from pincal.identification._finish import finish, settle
 from pincal.identification._gauge import null_motions, reading_scale_std, weak_parameters
 from pincal.identification._instrument_problem import Dataset, InstrumentProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
@@ -25,7 +29,7 @@ from pincal.identification._solvers import solver
 from pincal.model import Mechanism, ParameterSet
 from pincal.sensitivity import Identifiability
 
-__all__ = ["SCALE_STD_LIMIT", "InstrumentIdentification", "identify_instruments"]
+__all__ = ["SCALE_STD_LIMIT", "InstrumentIdentification", "identify_instruments", "joint_fit"]
 
 #: a reading scale the data tell only beyond this 1σ [1] is named in the gauge
 SCALE_STD_LIMIT = 1e-3
@@ -105,10 +109,17 @@ def identify_instruments(
 ) -> InstrumentIdentification:
     """Identify machine and instrument parameters jointly from several datasets.
 
+    The joint fit of ``identify(IdentificationProblem(mech, params, datasets,
+    labels=labels, weak_bound=weak_bound), method, options=options)`` — the same
+    :class:`IdentificationResult`, as ``.result`` — with what only a joint fit has
+    (instrument values, gauge, socket centres, whitened per-pose Jacobian for the
+    gate). It runs the joint fit for any data, a single pose file included.
+
     Args:
         mech: nominal mechanism.
         params: the n machine parameters.
-        datasets: :class:`Measurements` and/or :class:`InstrumentData` (any mix).
+        datasets: :class:`Measurements`, :class:`InstrumentData` and/or
+            :class:`SocketData` (any mix).
         method: ``"gauss-newton"`` or ``"lm"``.
         options: that solver's options dataclass (``GaussNewtonOptions`` or
             ``LMOptions``; None = its defaults).
@@ -126,13 +137,29 @@ def identify_instruments(
         SolverOptionError: a method other than the local solvers.
         MeasurementError: inconsistent datasets.
     """
+    model = InstrumentProblem(mech, params, datasets, labels)
+    return joint_fit(model, method, options, progress, weak_bound)
+
+
+def joint_fit(
+    model: InstrumentProblem,
+    method: str,
+    options: Any,
+    progress: Callable[[int, float], None] | None,
+    weak_bound: tuple[float, float] | None,
+) -> InstrumentIdentification:
+    """Solve a joint residual model and finish it (see :func:`identify_instruments`).
+
+    Raises:
+        SolverOptionError: a method other than the local solvers, or foreign options.
+    """
     if method not in ("gauss-newton", "lm"):
         raise SolverOptionError(
             f"joint instrument identification runs 'gauss-newton' or 'lm', not {method!r}"
         )
     entry = solver(method)
     opts = entry.check_options(options)
-    model = InstrumentProblem(mech, params, datasets, labels)
+    params = model.params
     x0 = model.x0
     _, J0, raw0 = model.evaluate(x0)
     ident = model.analyse(x0, J0)
@@ -150,72 +177,37 @@ def identify_instruments(
                   f"{weak_bound[1]:g} rad (1σ), held at nominal: "
                   f"{', '.join(model.names[i] for i in weak)}",)  # fmt: skip
     out = entry.solve(model, x0, free, opts, progress)
-    r, J, raws = model.evaluate(out.x)
-    Jf = J[:, free]
+    settled = settle(model, out, free, noise_floor=True)
+    raws, Jf = settled.raw, settled.Jf
     scale_std = reading_scale_std(Jf, model.whitened_readings(raws))
     if scale_std > SCALE_STD_LIMIT:
         gauge += (f"the length scale: a scale error of the readings (a bar length, a gain) "
                   f"passes into the calibrated machine — the data tell it only to "
                   f"{scale_std * 100:.2g} % (1σ); the scale rests on the instrument's own "
                   "calibration",)  # fmt: skip
-    success, message = out.success, out.message
-    if not success:
-        # at the noise floor a Gauss–Newton step may promise less than the cost changes
-        # with the kinematic solver's precision (100× its tolerance per reading)
-        step = np.linalg.lstsq(Jf, -r, rcond=None)[0]
-        predicted = 0.5 * float(r @ r - np.sum((r + Jf @ step) ** 2))
-        sig = np.concatenate([s.ravel() for s in model.sigma])
-        jitter = float(np.sum(np.abs(r) * 100 * mech.options.tol / sig))
-        if predicted <= max(jitter, 1e-9 * float(r @ r)):
-            success = True
-            message = (
-                f"converged (noise floor: a further step promises {predicted:.3g}, below the "
-                f"kinematic precision {jitter:.3g} of the cost; solver: {out.message})"
-            )
-    dof = max(model.n_equations - free.size, 1)
-    chi2 = float(r @ r) / dof
-    n = model.n_machine
-    cov_m, mask, cov = fitted_covariance(Jf, free, n)  # free is sorted: cov in its order
-    x = np.asarray(out.x, dtype=float)
+    n, x = model.n_machine, np.asarray(out.x, dtype=float)
     inst = {k: float(v) for k, v in zip(model.names[n:], x[n:], strict=True)}
     centres_mm = {k: [float(v) * 1e3 for v in c] for k, c in model.socket_centres(x).items()}
-    result = IdentificationResult(
-        method=method,
-        names=params.names,
-        units=params.units,
-        full_values=x[:n].copy(),
-        identified=mask,
-        std=np.sqrt(np.clip(np.diag(cov_m), 0.0, None)),
-        covariance=cov_m,
-        before=_stats(raw0, model.blocks),
-        after=_stats(raws, model.blocks),
-        reduced_chi2=chi2,
-        iterations=out.iterations,
-        success=success,
-        message=f"joint fit of {free.size} of {len(model.names)} parameters (the others "
-        "held at nominal: see the gauge); "
-        + "".join(f"WARNING: {w}; " for w in model.scale_warnings)
-        + message,
-        cost_history=tuple(out.history),
+    result, cov = finish(
+        model, settled, method=method, params=params, raw0=raw0,
+        stats=lambda raws: _stats(raws, model.blocks),
         residuals=np.concatenate(  # per pose (a plate's known distances are not poses)
             [np.linalg.norm(a, axis=1) for a in raws[: len(model.datasets)]]
         )[:, None],
         initial_values=np.zeros(n),
-        n_equations=model.n_equations,
-        model=mech.name,
-        preset=params.label,
-        extras=out.extras,
-        parameter_set=params,
-        calibrated_mechanism=model.mechanism(x),
+        prefix=f"joint fit of {free.size} of {len(model.names)} parameters (the others "
+        "held at nominal: see the gauge); "
+        + "".join(f"WARNING: {w}; " for w in model.scale_warnings),
         annotations={
             "instruments": inst,
             "datasets": list(model.labels),
-            "redundancy": dof,
+            "redundancy": settled.dof,
             "gauge": list(gauge),
             **({"warnings": list(model.scale_warnings)} if model.scale_warnings else {}),
             **({"socket_centres_mm": centres_mm} if centres_mm else {}),
         },
-    )
+    )  # fmt: skip
+    r = settled.r
     ks = {a.shape[1] for a in raws}
     whitened = None
     if len(raws) == len(model.datasets) and len(ks) == 1:

@@ -13,8 +13,9 @@ so several files of different kinds combine in one fit. Each dataset is one
 :class:`pincal.identification._data_blocks.DataBlock` (pose sensor, scalar instrument,
 sockets): one ``evaluate(x, jacobian)`` loops over them. The Jacobian is analytic:
 ``∂v/∂p · ∂p/∂x`` with ``∂p/∂x`` from :func:`pincal.sensitivity.pose_sensitivity`, and
-``∂v/∂θ`` from the instrument. :func:`pincal.identification.identify_instruments`
-solves it.
+``∂v/∂θ`` from the instrument. It is the residual model of an
+:class:`pincal.identification.IdentificationProblem` of several data sets
+(``joint_model``), solved by :func:`pincal.identification.identify`.
 """
 
 from __future__ import annotations
@@ -127,6 +128,11 @@ class InstrumentProblem:
     @property
     def n_equations(self) -> int:
         return int(sum(s.size for s in self.sigma))
+
+    @property
+    def known_noise(self) -> bool:
+        """True: every block is whitened by its file's declared σ (never re-estimated)."""
+        return True
 
     @property
     def solver_floor_cost(self) -> float:

@@ -21,7 +21,8 @@ from functools import cached_property
 import numpy as np
 
 from pincal.errors import MeasurementError
-from pincal.identification._problem import CalibrationProblem, IdentificationProblem
+from pincal.identification._identification_problem import IdentificationProblem
+from pincal.identification._problem import CalibrationProblem
 from pincal.measure import Measurements
 from pincal.model import Mechanism, ParameterSet
 
@@ -129,8 +130,8 @@ class MarkerSetProblem(IdentificationProblem):
                 f"give one measurement set per marker: {len(mechs)} markers, {len(parts)} sets"
             )
         return cls(
-            mechs[0], params, stacked_measurements(parts), initial, fit, True, None,
-            tuple(mechs), tuple(parts),
+            mechs[0], params, stacked_measurements(parts), initial, fit,
+            mechs=tuple(mechs), parts=tuple(parts),
         )  # fmt: skip
 
     @cached_property

@@ -1,11 +1,7 @@
-"""The identification problem: what to fit, and its whitened residual model.
+"""The whitened residual model of one pose file, batched over its poses.
 
-:class:`IdentificationProblem` describes one problem (mechanism, parameter set,
-measurements with their noise, which parameters to fit, start values). Every solver
-of :func:`pincal.identification.identify` takes one and returns one
-:class:`pincal.identification.IdentificationResult`.
-
-:class:`CalibrationProblem` is its residual model: the residual of pose i is
+:class:`CalibrationProblem` is the residual model of an
+:class:`pincal.identification.IdentificationProblem` of one pose file: the residual of pose i is
 ``measured − model`` in the measured components (``[p_meas − p; log3(Rᵀ R_meas)]``),
 whitened by the noise standard deviations, with the analytic identification Jacobian.
 
@@ -21,9 +17,7 @@ silent unit weights.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from functools import cached_property
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -33,7 +27,6 @@ from pincal.errors import (
     MeasurementError,
     MobilityError,
     ModelFileError,
-    ParameterError,
 )
 from pincal.measure import Measurements, NoiseModel
 from pincal.model import (
@@ -47,7 +40,7 @@ from pincal.model.kernels import jlog3_batch, log3_batch
 from pincal.sensitivity import sensitivities_batch
 from pincal.sensitivity.kernels import predict_configurations
 
-__all__ = ["BLOCKS", "TRIAL_FAILURES", "CalibrationProblem", "IdentificationProblem"]
+__all__ = ["BLOCKS", "TRIAL_FAILURES", "CalibrationProblem"]
 
 #: exceptions that make a trial parameter vector unusable: the model cannot be built
 #: (ModelFileError), its mobility changes (MobilityError, e.g. an emulated ball joint
@@ -326,72 +319,3 @@ class CalibrationProblem:
         J = -np.concatenate([Js[:, :3], Js[:, 3:] if D_rot is None else D_rot @ Js[:, 3:]], 1)
         J_w = (J[:, self.rows] * w[:, :, None]).reshape(-1, len(self.params))
         return r_w, J_w, r_raw
-
-
-@dataclass(frozen=True, eq=False)
-class IdentificationProblem:
-    """One identification problem, solved by any registered solver.
-
-    Attributes:
-        mech: nominal mechanism (the one ``params`` was built for).
-        params: the n candidate parameters.
-        measurements: m measured poses; their per-value std / noise model weight the
-            residuals (estimated from the residuals when neither is given).
-        initial: (n,) start values [m, rad] (None = zeros = nominal); parameters that are
-            not fitted stay at these values.
-        fit: names of the parameters to fit (None = all); parameters outside stay at
-            ``initial``.
-        reduce: fit only the identifiable base set of ``fit`` (True), or raise
-            :class:`pincal.UnidentifiableError` when it is rank-deficient (False).
-        noise: declared instrument noise (:class:`pincal.measure.NoiseModel` or
-            ``{"position": mm, "orientation": mrad}``), overriding the measurements'
-            own; None: the measurements' per-value std or noise model, else the noise is
-            estimated from the residuals (variance components per block).
-
-    Raises:
-        ParameterError: ``initial`` of the wrong shape or non-finite; ``fit`` names a
-            parameter outside ``params`` or is empty.
-        MeasurementError: the measurements do not match the mechanism.
-    """
-
-    mech: Mechanism
-    params: ParameterSet
-    measurements: Measurements
-    initial: np.ndarray | None = None
-    fit: Sequence[str] | None = None
-    reduce: bool = True
-    noise: NoiseModel | Mapping[str, float] | None = None
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "noise", NoiseModel.from_spec(self.noise))
-        x0 = self.params.check_values(self.initial).copy()
-        x0.setflags(write=False)
-        object.__setattr__(self, "initial", x0)
-        if self.fit is not None:
-            names = tuple(str(n) for n in self.fit)
-            unknown = [n for n in names if n not in self.params.names]
-            if unknown or not names:
-                raise ParameterError(
-                    f"fit must name parameters of set {self.params.label!r}; unknown: {unknown}"
-                    if unknown
-                    else "fit is empty; name at least one parameter (or None for all)"
-                )
-            object.__setattr__(self, "fit", names)
-        self.model  # noqa: B018 - checks the measurements against the mechanism up front
-
-    @cached_property
-    def model(self) -> CalibrationProblem:
-        """The whitened residual model of this problem."""
-        return CalibrationProblem(self.mech, self.params, self.measurements, self.noise)
-
-    @property
-    def x0(self) -> np.ndarray:
-        """(n,) start values [SI] (a copy)."""
-        return np.array(self.initial, dtype=float)
-
-    @property
-    def fit_indices(self) -> np.ndarray:
-        """Indices (into ``params``) of the parameters to fit, before reduction."""
-        if self.fit is None:
-            return np.arange(len(self.params))
-        return np.array(sorted(self.params.index(n) for n in self.fit), dtype=int)
