@@ -2,9 +2,10 @@
 
 One :class:`IdentificationProblem`, solved by a registered solver (``"gauss-newton"``,
 ``"lm"``, ``"qpso"``, ``"qpso-stepwise"``, ``"step-planned"``), gives one
-:class:`IdentificationResult` with covariances at the Cramér–Rao bound;
-``result_to_dict`` / ``result_from_dict`` turn it into the document of
-``identification.json`` and back.
+:class:`IdentificationResult` with covariances at the Cramér–Rao bound: an
+:class:`IdentificationRecord` (what ``identification.json`` holds) with the live
+calibration. ``result_to_dict`` writes a record as that document, ``result_from_dict``
+reads it back as a record.
 """
 
 from __future__ import annotations
@@ -69,6 +70,8 @@ from pincal.identification._qpso_identify import COST_MODELS, QPSOOptions
 from pincal.identification._qpso_stepwise import QPSOStage, QPSOStepwiseResult, qpso_stepwise
 from pincal.identification._quality import check_quality, outlier_poses
 from pincal.identification._result import (
+    IdentifiabilitySummary,
+    IdentificationRecord,
     IdentificationResult,
     LocalSolverExtras,
     QPSOExtras,
@@ -76,7 +79,8 @@ from pincal.identification._result import (
     SolverExtras,
     StepPlanningExtras,
 )
-from pincal.identification._result_io import FORMAT_VERSION, result_from_dict, result_to_dict
+from pincal.identification._result_io import FORMAT_VERSION, result_to_dict
+from pincal.identification._result_read import result_from_dict
 from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
 from pincal.identification._uncertainty import (
     UncertaintyCheck,
@@ -101,7 +105,9 @@ __all__ = [
     "Fitted",
     "GateLimits",
     "GaussNewtonOptions",
+    "IdentifiabilitySummary",
     "IdentificationProblem",
+    "IdentificationRecord",
     "IdentificationResult",
     "InstrumentIdentifiability",
     "InstrumentIdentification",

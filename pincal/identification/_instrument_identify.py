@@ -207,6 +207,7 @@ def identify_instruments(
         extras=out.extras,
         parameter_set=params,
         calibrated_mechanism=model.mechanism(x),
+        identifiability=ident,
         annotations={
             "instruments": inst,
             "datasets": list(model.labels),

@@ -146,7 +146,7 @@ def _whitened_jacobian(
     sigma: np.ndarray | None,
 ) -> np.ndarray | None:
     """(m, k, p) Jacobian of the identified parameters, whitened by the fit's σ, or None."""
-    if mech is None or meas is None or result.parameter_set is None or sigma is None:
+    if mech is None or meas is None or sigma is None:
         return None
 
     try:

@@ -89,7 +89,7 @@ def test_missing_sidecar_changed_file_and_newer_version_are_named(wedge_result, 
 
 
 def test_write_is_whole_or_absent(wedge_result, tmp_path, monkeypatch):
-    import pincal.io._calibration_dir as mod
+    import pincal.io._calibration_write as mod
 
     _, result, _ = wedge_result
 
