@@ -32,9 +32,8 @@ DEMO_01 = {  # written by `pincal demo` of pincal 0.1
 }
 
 
-V2 = json.loads(
-    (Path(__file__).parents[1] / "identification" / "data" / "rrr3_identification_v2.json").read_text()
-)
+V2_FILE = Path(__file__).parents[1] / "identification" / "data" / "rrr3_identification_v2.json"
+V2 = json.loads(V2_FILE.read_text())
 
 
 def test_pincal_01_demo_file_is_refused_with_what_to_do(tmp_path):
