@@ -71,7 +71,6 @@ class CalibrationDirectory:
             its mechanism is :meth:`calibrated`.
         calibrated_urdf: path of the calibrated URDF (its sidecar ``.yaml`` beside it).
         noise: instrument noise of the fitted data (mm, mrad), if known.
-        legacy: always False (directories without a manifest are no longer read).
     """
 
     path: Path
@@ -79,7 +78,6 @@ class CalibrationDirectory:
     result: IdentificationRecord
     calibrated_urdf: Path
     noise: NoiseModel | None = None
-    legacy: bool = False
     _cache: dict = field(default_factory=dict, repr=False)
 
     @property

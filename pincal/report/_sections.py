@@ -130,7 +130,7 @@ def data_section(result: IdentificationRecord, notes: dict) -> tuple[Section, di
     if isinstance(data, (list, tuple)):
         data = ", ".join(map(str, data)) or None
     rows.append(["measurement file", str(data) if data else "simulated (no file)", ""])
-    noise: dict[str, object] = {"source": "unknown (pincal 0.1 file)"}
+    noise: dict[str, object] = {"source": "unknown (not recorded in this file)"}
     if w is not None:
         how = {
             "declared": "declared (instrument / --noise)",
@@ -236,7 +236,7 @@ def outlier_section(result: IdentificationRecord) -> tuple[Section, list[int], l
     """Poses with |whitened residual| > 3 and poses a robust loss down-weighted."""
     w = result.weighting
     if w is None or w.whitened.size == 0:
-        text = "No weights in this file (pincal 0.1): outliers cannot be flagged."
+        text = "No weights recorded in this file: outliers cannot be flagged."
         return Section(LARGE_RESIDUALS, text), [], []
     comps = components_of(result)
     z = np.asarray(w.whitened)
