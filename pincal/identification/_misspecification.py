@@ -161,7 +161,7 @@ def _components(components: tuple[str, ...] | None, k: int) -> tuple[str, ...]:
 
 
 def probe_columns(
-    result: IdentificationResult, mech: Mechanism | None, meas: Measurements
+    result: IdentificationResult, meas: Measurements
 ) -> dict[str, np.ndarray]:
     """Raw (m, k, q) derivative of the residuals w.r.t. each probe's nuisance terms.
 

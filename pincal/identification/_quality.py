@@ -269,7 +269,7 @@ def check_quality(
                 out, limit, Jw, z, sigma)  # fmt: skip
         if not scalar_instrument and measurements is not None:
             rows = np.setdiff1d(np.arange(m), out) if len(out) <= cap else np.arange(m)
-            cols = probe_columns(result, mech, measurements)
+            cols = probe_columns(result, measurements)
             probes = probe_misspecification(
                 Ap[rows].reshape(-1, Ap.shape[2]), zp[rows].ravel(),
                 {n: c[rows] for n, c in cols.items()}, sp[rows], measurements.components,
