@@ -17,7 +17,7 @@ import click
 
 if TYPE_CHECKING:
     from pincal.compensation import JointTermCorrection
-    from pincal.identification import IdentificationResult
+    from pincal.identification import IdentificationRecord
     from pincal.io import CalibrationDirectory
     from pincal.model import Mechanism, Payload
 
@@ -62,7 +62,7 @@ def carrying(mech: Mechanism, payload: Payload | None) -> Mechanism:
     return with_payload(mech, payload)
 
 
-def terms_record(result: IdentificationResult, model: str, payload: Payload | None) -> str:
+def terms_record(result: IdentificationRecord, model: str, payload: Payload | None) -> str:
     """``joint_terms.yaml``: the identified joint terms with units (SI) and the payload."""
     import yaml
 
@@ -87,7 +87,7 @@ def terms_record(result: IdentificationResult, model: str, payload: Payload | No
 
 
 def terms_texts(
-    result: IdentificationResult, model: str, terms: tuple[str, ...], payload: Payload | None
+    result: IdentificationRecord, model: str, terms: tuple[str, ...], payload: Payload | None
 ) -> dict[str, str]:
     """``{TERMS_FILE: record}`` for a calibration with joint terms or a payload, else {}."""
     return {TERMS_FILE: terms_record(result, model, payload)} if terms or payload else {}

@@ -20,15 +20,15 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
 
     A calibration directory is read (and checked) by :func:`pincal.io.read_calibration`;
     a directory without a manifest, or a file, through its identification.json
-    (:func:`pincal.io.read_identification`) applied to ``nominal``.
+    (:func:`pincal.io.read_identification`): the record's values applied to ``nominal``.
 
     Raises:
-        CalibrationDirectoryError / ParameterError: nothing usable at ``spec``.
+        CalibrationDirectoryError / ParameterError: nothing usable at ``spec``, or a
+            record of another model.
     """
     from pincal.cli.common import announce
     from pincal.errors import ParameterError
     from pincal.io import IDENTIFICATION_FILE, MANIFEST, read_calibration, read_identification
-    from pincal.sensitivity import parameters
 
     path = Path(spec)
     if (path / MANIFEST).is_file():  # a calibration directory: read (and checked) as one
@@ -37,14 +37,11 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
         return cal.calibrated()
     if path.is_dir():
         path = path / IDENTIFICATION_FILE
-    result = read_identification(path)
-    params = parameters(nominal, result.preset or "full")
-    if tuple(params.names) != tuple(result.names):
-        raise ParameterError(
-            f"{str(path)!r} holds parameters of preset {result.preset!r} that do not match "
-            f"model {nominal.name!r}; give the model it was identified for"
-        )
-    return params.apply(nominal, result.full_values)
+    record = read_identification(path)
+    try:
+        return record.applied_to(nominal)
+    except ParameterError as exc:
+        raise ParameterError(f"{str(path)!r}: {exc}") from None
 
 
 def _grouped(meas, controller):

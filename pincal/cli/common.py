@@ -230,7 +230,6 @@ def calibration_summary(cal: CalibrationDirectory) -> dict[str, Any]:
         "model": cal.model,
         "preset": cal.preset,
         "calibrated_urdf": str(cal.calibrated_urdf),
-        "legacy": cal.legacy,
     }
 
 

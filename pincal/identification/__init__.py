@@ -4,9 +4,9 @@ One :class:`IdentificationProblem` — one pose file, or several data sets mixin
 instrument and socket files — solved by a registered solver (``"gauss-newton"``,
 ``"lm"``, ``"qpso"``, ``"qpso-stepwise"``, ``"step-planned"``; the joint fit of several
 data sets by the first two), gives one :class:`IdentificationResult` with covariances at
-the Cramér–Rao bound;
-``result_to_dict`` / ``result_from_dict`` turn it into the document of
-``identification.json`` and back.
+the Cramér–Rao bound: an :class:`IdentificationRecord` (what ``identification.json``
+holds) with the live calibration. ``result_to_dict`` writes a record as that document,
+``result_from_dict`` reads it back as a record.
 """
 
 from __future__ import annotations
@@ -72,6 +72,8 @@ from pincal.identification._qpso_identify import COST_MODELS, QPSOOptions
 from pincal.identification._qpso_stepwise import QPSOStage, QPSOStepwiseResult, qpso_stepwise
 from pincal.identification._quality import check_quality, outlier_poses
 from pincal.identification._result import (
+    IdentifiabilitySummary,
+    IdentificationRecord,
     IdentificationResult,
     LocalSolverExtras,
     QPSOExtras,
@@ -79,7 +81,8 @@ from pincal.identification._result import (
     SolverExtras,
     StepPlanningExtras,
 )
-from pincal.identification._result_io import FORMAT_VERSION, result_from_dict, result_to_dict
+from pincal.identification._result_io import FORMAT_VERSION, result_to_dict
+from pincal.identification._result_read import result_from_dict
 from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
 from pincal.identification._uncertainty import (
     UncertaintyCheck,
@@ -104,7 +107,9 @@ __all__ = [
     "Fitted",
     "GateLimits",
     "GaussNewtonOptions",
+    "IdentifiabilitySummary",
     "IdentificationProblem",
+    "IdentificationRecord",
     "IdentificationResult",
     "InstrumentIdentifiability",
     "InstrumentIdentification",

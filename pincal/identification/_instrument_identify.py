@@ -198,6 +198,7 @@ def joint_fit(
         prefix=f"joint fit of {free.size} of {len(model.names)} parameters (the others "
         "held at nominal: see the gauge); "
         + "".join(f"WARNING: {w}; " for w in model.scale_warnings),
+        identifiability=ident,
         annotations={
             "instruments": inst,
             "datasets": list(model.labels),

@@ -94,9 +94,7 @@ class MarkerFit:
 
     @property
     def calibrated(self) -> Mechanism:
-        mech = self.result.calibrated_mechanism
-        assert mech is not None
-        return mech
+        return self.result.calibrated_mechanism
 
 
 def _prior_std(params: ParameterSet, setup: MarkerSetup, prior: Prior | None) -> np.ndarray:

@@ -161,7 +161,7 @@ def _components(components: tuple[str, ...] | None, k: int) -> tuple[str, ...]:
 
 
 def probe_columns(
-    result: IdentificationResult, mech: Mechanism | None, meas: Measurements
+    result: IdentificationResult, meas: Measurements
 ) -> dict[str, np.ndarray]:
     """Raw (m, k, q) derivative of the residuals w.r.t. each probe's nuisance terms.
 
@@ -185,12 +185,11 @@ def probe_columns(
             scale[:, j, 0] = centred[:, _POS.index(meas.components[j])]
             drift[:, j, n] = t
         cols["scale"], cols["drift"] = scale, drift
-    cal = result.calibrated_mechanism if result.calibrated_mechanism is not None else mech
-    if cal is not None:
-        gains = _gain_columns(cal, meas)
-        if gains is not None:
-            cols["gains"] = gains
-    actuators = tuple(cal.actuated) if cal is not None else None
+    cal = result.calibrated_mechanism
+    gains = _gain_columns(cal, meas)
+    if gains is not None:
+        cols["gains"] = gains
+    actuators = tuple(cal.actuated)
     model_pos = None  # the fitted model's positions: measured − residual
     raw = np.asarray(result.residuals, dtype=float)
     if raw.shape == (m, k):

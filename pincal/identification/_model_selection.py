@@ -61,8 +61,6 @@ def fitted(nominal: Mechanism, result: IdentificationResult) -> Fitted:
         result: the identification.
     """
     mech, params = result.calibrated_mechanism, result.parameter_set
-    if mech is None or params is None:
-        raise MeasurementError("a result read from a file has no mechanism to predict with")
     values = result.full_values
 
     def errors(meas: Measurements) -> np.ndarray:

@@ -52,7 +52,7 @@ def confirm_outliers(
     from pincal.identification._identify import identify
 
     ps, w = result.parameter_set, result.weighting
-    if ps is None or w is None or not named:
+    if w is None or not named:
         return None
     keep = np.setdiff1d(np.arange(len(meas)), np.asarray(named, dtype=int))
     declared = None

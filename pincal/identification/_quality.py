@@ -146,7 +146,7 @@ def _whitened_jacobian(
     sigma: np.ndarray | None,
 ) -> np.ndarray | None:
     """(m, k, p) Jacobian of the identified parameters, whitened by the fit's σ, or None."""
-    if mech is None or meas is None or result.parameter_set is None or sigma is None:
+    if mech is None or meas is None or sigma is None:
         return None
 
     try:
@@ -269,7 +269,7 @@ def check_quality(
                 out, limit, Jw, z, sigma)  # fmt: skip
         if not scalar_instrument and measurements is not None:
             rows = np.setdiff1d(np.arange(m), out) if len(out) <= cap else np.arange(m)
-            cols = probe_columns(result, mech, measurements)
+            cols = probe_columns(result, measurements)
             probes = probe_misspecification(
                 Ap[rows].reshape(-1, Ap.shape[2]), zp[rows].ravel(),
                 {n: c[rows] for n, c in cols.items()}, sp[rows], measurements.components,

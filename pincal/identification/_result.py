@@ -1,12 +1,14 @@
-"""One result shape for every identification solver.
+"""One result shape for every identification solver: a record, and the live calibration.
 
-:class:`IdentificationResult` holds the full parameter vector with a mask of what was
-identified, the covariance of the identified ones, residual statistics, the solver's
-iterations / success / message and its typed extras (:class:`QPSOExtras`,
-:class:`StepPlanningExtras`, :class:`LocalSolverExtras`).
-:func:`pincal.identification.result_to_dict` / ``result_from_dict``
-(:mod:`pincal.identification._result_io`) turn it into the document of
-``identification.json`` and back.
+:class:`IdentificationRecord` is what ``identification.json`` holds: the full parameter
+vector with a mask of what was identified, the covariance of the identified ones,
+residual statistics, the solver's iterations / success / message, its typed extras
+(:class:`QPSOExtras`, :class:`StepPlanningExtras`, :class:`LocalSolverExtras`) and an
+:class:`IdentifiabilitySummary`. :class:`IdentificationResult` (what :func:`pincal.identify`
+returns) is a record that also holds the live calibration: the parameter set, the
+calibrated mechanism and the identifiability analysis.
+:func:`pincal.identification.result_to_dict` writes either as the document of
+``identification.json``; ``result_from_dict`` reads it back as a record.
 """
 
 from __future__ import annotations
@@ -17,12 +19,14 @@ from typing import Any
 
 import numpy as np
 
-from pincal.errors import ParameterError
+from pincal.errors import ParameterError, PincalError
 from pincal.identification._weighting import Weighting
 from pincal.model import Mechanism, ParameterSet
-from pincal.sensitivity import Identifiability
+from pincal.sensitivity import Identifiability, parameters
 
 __all__ = [
+    "IdentifiabilitySummary",
+    "IdentificationRecord",
     "IdentificationResult",
     "LocalSolverExtras",
     "QPSOExtras",
@@ -121,12 +125,41 @@ SolverExtras = LocalSolverExtras | QPSOExtras | StepPlanningExtras
 
 
 @dataclass(frozen=True)
-class IdentificationResult:
-    """Outcome of :func:`pincal.identify` for every solver.
+class IdentifiabilitySummary:
+    """What ``identification.json`` keeps of the identifiability analysis at the start.
+
+    Attributes:
+        parameters: number of parameters analysed.
+        rank: numerical rank (identifiable combinations).
+        unidentifiable: names of the parameters that are not identifiable.
+        explanation: one sentence per parameter that is not (see
+            :meth:`pincal.sensitivity.Identifiability.describe`).
+    """
+
+    parameters: int
+    rank: int
+    unidentifiable: tuple[str, ...] = ()
+    explanation: tuple[str, ...] = ()
+
+    @classmethod
+    def of(cls, ident: Identifiability) -> IdentifiabilitySummary:
+        """The summary of an analysis."""
+        return cls(
+            len(ident.names), int(ident.rank), ident.unidentifiable_names, tuple(ident.describe())
+        )
+
+
+@dataclass(frozen=True)
+class IdentificationRecord:
+    """An identification as ``identification.json`` holds it (no live objects).
+
+    :func:`pincal.identification.result_from_dict` (and :func:`pincal.io.read_identification`)
+    return one; :class:`IdentificationResult` is a record with the live calibration.
 
     Attributes:
         method: solver name (``"gauss-newton"``, ``"lm"``, ``"qpso"``, ...).
-        names: all n parameter names; units: ``"m"``/``"rad"`` per parameter.
+        names: all n parameter names; units: ``"m"``/``"rad"`` per parameter (or a
+            joint term's unit).
         full_values: (n,) values of all parameters [SI]; the ones not identified keep
             their start values.
         identified: (n,) bool mask of the identified parameters (k of them).
@@ -144,19 +177,17 @@ class IdentificationResult:
         n_equations: scalar measurement equations N.
         model: mechanism name; preset: parameter-set label.
         extras: solver-specific extras (see :data:`SolverExtras`), or None.
-        parameter_set: the full parameter set (None when read from a file).
-        calibrated_mechanism: the mechanism with ``full_values`` applied (None when read
-            from a file); use :attr:`calibrated`.
-        identifiability: analysis at the start values (None when read from a file).
         annotations: JSON-ready context written with the result (data file, validation
             errors, simulated truth, index history, ...).
         weighting: the noise σ used (declared or estimated), the robust loss and the
-            poses it down-weighted (:class:`Weighting`); None for pincal 0.1 files.
+            poses it down-weighted (:class:`Weighting`); None when not recorded.
         initial_residuals: (m, c) unweighted residuals at the start values [m, rad]
-            (None when read from a file that lacks them).
+            (None when not recorded).
         components: names of the c residual columns (measured components, e.g.
-            ``("x", "y", "rz")``); empty when unknown (files written before pincal
-            recorded them, or scalar instrument readings).
+            ``("x", "y", "rz")``); empty when unknown (scalar instrument readings, or
+            files written before pincal recorded them).
+        identifiability_summary: the identifiability analysis at the start values as
+            recorded (None when not recorded).
     """
 
     method: str
@@ -179,13 +210,11 @@ class IdentificationResult:
     model: str = ""
     preset: str = ""
     extras: SolverExtras | None = None
-    parameter_set: ParameterSet | None = field(default=None, repr=False)
-    calibrated_mechanism: Mechanism | None = field(default=None, repr=False)
-    identifiability: Identifiability | None = field(default=None, repr=False)
     annotations: Mapping[str, Any] = field(default_factory=dict, repr=False)
     weighting: Weighting | None = field(default=None, repr=False)
     initial_residuals: np.ndarray | None = field(default=None, repr=False)
     components: tuple[str, ...] = ()
+    identifiability_summary: IdentifiabilitySummary | None = field(default=None, repr=False)
 
     @property
     def values(self) -> np.ndarray:
@@ -201,37 +230,72 @@ class IdentificationResult:
         """Names of the parameters held at their start values (not identified)."""
         return tuple(n for n, ok in zip(self.names, self.identified, strict=True) if not ok)
 
-    @property
-    def params(self) -> ParameterSet:
-        """The identified parameters as a set (the base set when reduced).
-
-        Raises:
-            ParameterError: the result was read from a file (no parameter set; use
-                ``identified_names``).
-        """
-        if self.parameter_set is None:
-            raise ParameterError(
-                "this result was read from a file and has no parameter set; use "
-                "result.identified_names / result.values, or identify again"
-            )
-        return self.parameter_set.subset(np.flatnonzero(self.identified))
-
-    @property
-    def calibrated(self) -> Mechanism:
-        """The mechanism with ``full_values`` applied.
-
-        Raises:
-            ParameterError: the result was read from a file (apply the values with
-                ``ParameterSet.apply`` to the nominal mechanism instead).
-        """
-        if self.calibrated_mechanism is None:
-            raise ParameterError(
-                "this result was read from a file and holds no mechanism; load the "
-                "calibrated URDF, or apply result.full_values to the nominal mechanism"
-            )
-        return self.calibrated_mechanism
-
     def table(self) -> list[tuple[str, float, float, str]]:
         """(name, value, std, unit) per identified parameter [SI]."""
         units = [u for u, ok in zip(self.units, self.identified, strict=True) if ok]
         return list(zip(self.identified_names, self.values, self.std, units, strict=True))
+
+    def applied_to(self, nominal: Mechanism) -> Mechanism:
+        """``nominal`` with the recorded values of its preset's parameters applied.
+
+        The parameter set is ``preset`` of ``nominal`` (``"full"`` when none is recorded);
+        each of its parameters takes the recorded value (further recorded names, such as
+        an instrument's unknowns, are not the machine's and are left out).
+
+        Raises:
+            ParameterError: the preset is not a preset of ``nominal``, or the record lacks
+                one of its parameters (it was identified for another model).
+        """
+        preset = self.preset or "full"
+        try:
+            params = parameters(nominal, preset)
+        except PincalError as exc:
+            raise ParameterError(
+                f"the identification of {self.model!r} (preset {preset!r}) does not apply "
+                f"to model {nominal.name!r} ({exc}); give the model it was identified for"
+            ) from None
+        index = {n: k for k, n in enumerate(self.names)}
+        missing = [n for n in params.names if n not in index]
+        if missing:
+            raise ParameterError(
+                f"the identification of {self.model!r} (preset {preset!r}) lacks "
+                f"{len(missing)} parameters of model {nominal.name!r} (e.g. {missing[0]!r}); "
+                "give the model it was identified for"
+            )
+        values = np.array([self.full_values[index[n]] for n in params.names], dtype=float)
+        return params.apply(nominal, values)
+
+
+@dataclass(frozen=True)
+class IdentificationResult(IdentificationRecord):
+    """Outcome of :func:`pincal.identify` for every solver: the record and the live parts.
+
+    Attributes (beyond :class:`IdentificationRecord`'s):
+        parameter_set: the full parameter set (n parameters, in ``names`` order).
+        calibrated_mechanism: the mechanism with ``full_values`` applied (also
+            :attr:`calibrated`).
+        identifiability: analysis at the start values; ``identifiability_summary`` is
+            derived from it.
+    """
+
+    parameter_set: ParameterSet = field(kw_only=True, repr=False)
+    calibrated_mechanism: Mechanism = field(kw_only=True, repr=False)
+    identifiability: Identifiability = field(kw_only=True, repr=False)
+    identifiability_summary: IdentifiabilitySummary | None = field(
+        default=None, init=False, repr=False
+    )
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self, "identifiability_summary", IdentifiabilitySummary.of(self.identifiability)
+        )
+
+    @property
+    def params(self) -> ParameterSet:
+        """The identified parameters as a set (the base set when reduced)."""
+        return self.parameter_set.subset(np.flatnonzero(self.identified))
+
+    @property
+    def calibrated(self) -> Mechanism:
+        """The mechanism with ``full_values`` applied."""
+        return self.calibrated_mechanism

@@ -76,8 +76,6 @@ def pose_residual_model(
 
     With estimated noise it is weighted by the fit's σ̂ per block.
     """
-    if result.parameter_set is None:
-        return None
     try:
         model = CalibrationProblem(mech, result.parameter_set, meas, noise)
         if not model.known_noise:

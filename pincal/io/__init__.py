@@ -12,15 +12,13 @@ from pincal.io._atomic import (
     calibration_lock,
     output_target,
 )
-from pincal.io._calibration_checks import read_identification
 from pincal.io._calibration_dir import (
     CALIBRATION_VERSION,
     CalibrationDirectory,
-    check_replaceable,
     read_calibration,
-    sha256_file,
-    write_calibration,
 )
+from pincal.io._calibration_replace import check_replaceable
+from pincal.io._calibration_write import sha256_file, write_calibration
 from pincal.io._commands_file import (
     read_actuator_rows,
     read_commands,
@@ -35,6 +33,7 @@ from pincal.io._file_names import (
     IDENTIFICATION_FILE,
     MANIFEST,
 )
+from pincal.io._identification_file import read_identification
 from pincal.io._import_tracker import (
     TrackerImport,
     TrackerImportOptions,

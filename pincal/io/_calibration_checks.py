@@ -28,11 +28,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pincal._files import max_bytes, read_text
-from pincal.errors import CalibrationDirectoryError, PincalError, clip
-from pincal.identification import IdentificationResult, result_from_dict
+from pincal.errors import CalibrationDirectoryError, ParameterError, PincalError, clip
+from pincal.identification import IdentificationRecord
 from pincal.measure import NoiseModel
 from pincal.model import resolve_model_path
-from pincal.sensitivity import parameters
 
 if TYPE_CHECKING:
     from pincal.model import Mechanism
@@ -46,7 +45,6 @@ __all__ = [
     "hash_bounded",
     "load_json",
     "model_files",
-    "read_identification",
     "read_noise",
 ]
 
@@ -142,7 +140,7 @@ def hash_bounded(path: Path) -> str:
 
 
 def check_parameters(
-    manifest: Mapping[str, Any], result: IdentificationResult, where: str, ident: str
+    manifest: Mapping[str, Any], result: IdentificationRecord, where: str, ident: str
 ) -> None:
     """The manifest's parameter names and values equal ``identification.json``'s.
 
@@ -179,7 +177,7 @@ def check_parameters(
         )
 
 
-def check_covariance(result: IdentificationResult, ident: str) -> None:
+def check_covariance(result: IdentificationRecord, ident: str) -> None:
     """The covariance is a covariance, and ``std`` the root of its diagonal.
 
     Raises:
@@ -276,7 +274,7 @@ def check_model_files(recorded: object, where: str) -> None:
 
 
 def check_geometry(
-    nominal: Mechanism, calibrated: Mechanism, result: IdentificationResult, urdf: Path
+    nominal: Mechanism, calibrated: Mechanism, result: IdentificationRecord, urdf: Path
 ) -> None:
     """``calibrated`` is ``nominal`` displaced by the identified values.
 
@@ -287,14 +285,9 @@ def check_geometry(
         CalibrationDirectoryError: a joint origin differs (named, with the offset).
     """
     try:
-        params = parameters(nominal, result.preset or "full")
-    except PincalError:
+        expected = result.applied_to(nominal)
+    except ParameterError:
         return
-    index = {n: k for k, n in enumerate(result.names)}
-    if not all(n in index for n in params.names):
-        return
-    values = np.array([result.full_values[index[n]] for n in params.names], dtype=float)
-    expected = params.apply(nominal, values)
     for name, joint in expected.tree.joints.items():
         other = calibrated.tree.joints.get(name)
         if other is None:
@@ -336,28 +329,3 @@ def read_noise(entry: object, where: str) -> NoiseModel | None:
             f"{where}: 'noise' must be {{position_mm, orientation_mrad}} (positive numbers); "
             f"got {clip(repr(entry))}"
         ) from exc
-
-
-def read_identification(path: str | os.PathLike) -> IdentificationResult:
-    """Read an ``identification.json`` (the one reader of the file kind).
-
-    Read bounded (50 MB, no FIFOs or devices) and parsed by
-    :func:`pincal.identification.result_from_dict` (this format or pincal 0.1's); the result has
-    no parameter set or mechanism, its context is in ``annotations``.
-
-    Raises:
-        CalibrationDirectoryError: missing, unreadable, not a JSON object, of a newer
-            format version, or malformed (the message names the file and what is wrong).
-    """
-    path = Path(path)
-    try:
-        return result_from_dict(load_json(path), source=str(path))
-    except CalibrationDirectoryError:
-        raise
-    except PincalError as exc:
-        raise CalibrationDirectoryError(str(exc)) from exc
-    except (TypeError, ValueError, KeyError, AttributeError, IndexError) as exc:
-        raise CalibrationDirectoryError(
-            f"{str(path)!r} is malformed ({type(exc).__name__}: {clip(str(exc), 120)}); "
-            "re-run `pincal calibrate`"
-        ) from None

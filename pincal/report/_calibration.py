@@ -1,8 +1,8 @@
 """The report of a calibration output directory, read from its ``identification.json``.
 
-The file is read by :func:`pincal.io.read_identification` (the one reader of the format;
-pincal 0.1 files included); this module checks the report's own annotations
-(validation errors, index history) and renders the result.
+The file is read by :func:`pincal.io.read_identification` (the one reader of the format)
+as an :class:`pincal.identification.IdentificationRecord`; this module checks the
+report's own annotations (validation errors, index history) and renders the record.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from typing import Any, SupportsFloat, cast
 import numpy as np
 
 from pincal.errors import CalibrationDirectoryError, ReportError
-from pincal.identification import IdentificationResult
+from pincal.identification import IdentificationRecord
 from pincal.io import IDENTIFICATION_FILE, read_identification
 from pincal.report._cross_validation import check_cross_validation, cross_validation_section
 from pincal.report._document import ReportFiles, Section, Table, write_report
@@ -99,7 +99,7 @@ def _check_annotations(notes: dict) -> None:
             _numbers(values, f"index_history.{key}")
 
 
-def _read(path: Path) -> IdentificationResult:
+def _read(path: Path) -> IdentificationRecord:
     """The result of ``path``, read by :func:`pincal.io.read_identification`.
 
     The report's annotations are checked: ``validation_before`` / ``validation_after``
@@ -131,7 +131,7 @@ def _r(value_mm: object) -> float:
     return round(float(cast(SupportsFloat, value_mm)) * 1e3, 3)
 
 
-def _summary(result: IdentificationResult) -> Section:
+def _summary(result: IdentificationRecord) -> Section:
     facts = [f"Model {result.model}"]
     if result.preset:
         facts.append(f"parameter preset {result.preset!r}")

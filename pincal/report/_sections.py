@@ -1,4 +1,4 @@
-"""Sections of a calibration report, built from an :class:`IdentificationResult`.
+"""Sections of a calibration report, built from an :class:`IdentificationRecord`.
 
 One convention everywhere: lengths in µm, angles in µrad, uncertainties as 2σ (≈ 95 %
 for Gaussian errors); every table header names its unit.
@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pincal.identification import IdentificationResult
+from pincal.identification import IdentificationRecord
 from pincal.report._document import Section, Table
 from pincal.report._plots import (
     plot_correlation,
@@ -62,7 +62,7 @@ def _sig(v: float, digits: int = 4) -> float:
 BLOCKS = (("position", _POS, "µm"), ("orientation", _ORI, "µrad"))
 
 
-def components_of(result: IdentificationResult) -> tuple[str, ...]:
+def components_of(result: IdentificationRecord) -> tuple[str, ...]:
     """Names of the residual columns: the recorded measured components.
 
     Files written before pincal recorded them fall back to the residual width (3 =
@@ -100,7 +100,7 @@ def _measured_blocks(comps: tuple[str, ...]) -> list[tuple[str, list[int], str]]
 
 
 
-def poorly_determined(result: IdentificationResult) -> list[str]:
+def poorly_determined(result: IdentificationRecord) -> list[str]:
     """Identified parameters whose 2σ exceeds 0.5 mm (lengths) or 1 mrad (angles)."""
     units = [u for u, ok in zip(result.units, result.identified, strict=True) if ok]
     limit = np.array([POOR_ANGLE_2SIGMA if u == "rad" else POOR_LENGTH_2SIGMA for u in units])
@@ -108,7 +108,7 @@ def poorly_determined(result: IdentificationResult) -> list[str]:
     return [n for n, b in zip(result.identified_names, bad, strict=True) if b]
 
 
-def data_section(result: IdentificationResult, notes: dict) -> tuple[Section, dict]:
+def data_section(result: IdentificationRecord, notes: dict) -> tuple[Section, dict]:
     """Poses, components, instrument and noise (declared or estimated)."""
     comps = components_of(result)
     m = int(result.residuals.shape[0])
@@ -130,7 +130,7 @@ def data_section(result: IdentificationResult, notes: dict) -> tuple[Section, di
     if isinstance(data, (list, tuple)):
         data = ", ".join(map(str, data)) or None
     rows.append(["measurement file", str(data) if data else "simulated (no file)", ""])
-    noise: dict[str, object] = {"source": "unknown (pincal 0.1 file)"}
+    noise: dict[str, object] = {"source": "unknown (not recorded in this file)"}
     if w is not None:
         how = {
             "declared": "declared (instrument / --noise)",
@@ -154,7 +154,7 @@ def data_section(result: IdentificationResult, notes: dict) -> tuple[Section, di
     return Section("Data and noise", text, (), [Table(["item", "value", "unit"], rows)]), noise
 
 
-def residual_section(result: IdentificationResult, plots: Path, jobs: PlotJobs) -> Section:
+def residual_section(result: IdentificationRecord, plots: Path, jobs: PlotJobs) -> Section:
     """Residuals before and after per pose (plots), as histograms, and their statistics.
 
     The plots are recorded in ``jobs`` (files under ``plots``), drawn by the caller.
@@ -232,11 +232,11 @@ def error_images(
 LARGE_RESIDUALS = "Large residuals"
 
 
-def outlier_section(result: IdentificationResult) -> tuple[Section, list[int], list[int]]:
+def outlier_section(result: IdentificationRecord) -> tuple[Section, list[int], list[int]]:
     """Poses with |whitened residual| > 3 and poses a robust loss down-weighted."""
     w = result.weighting
     if w is None or w.whitened.size == 0:
-        text = "No weights in this file (pincal 0.1): outliers cannot be flagged."
+        text = "No weights recorded in this file: outliers cannot be flagged."
         return Section(LARGE_RESIDUALS, text), [], []
     comps = components_of(result)
     z = np.asarray(w.whitened)
@@ -261,7 +261,7 @@ def outlier_section(result: IdentificationResult) -> tuple[Section, list[int], l
 
 
 def parameter_section(
-    result: IdentificationResult, plots: Path, jobs: PlotJobs
+    result: IdentificationRecord, plots: Path, jobs: PlotJobs
 ) -> tuple[Section, list[str]]:
     """Identified values with 2σ, poorly determined flags, plot and correlation map.
 
@@ -316,7 +316,7 @@ def parameter_section(
     return Section("Identified parameters", text, images, [Table(headers, rows)]), sorted(poor)
 
 
-def prediction_section(result: IdentificationResult) -> Section:
+def prediction_section(result: IdentificationRecord) -> Section:
     """Cramér–Rao prediction vs what the calibration achieved."""
     w = result.weighting
     rows: list[list[object]] = []

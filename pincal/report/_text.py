@@ -1,6 +1,7 @@
 """The plain-text report of a calibration (``report.txt``, printed by `pincal calibrate`).
 
-Rendered from an :class:`IdentificationResult` — the live one, or the one read back from
+Rendered from an :class:`IdentificationRecord` — a live
+:class:`pincal.identification.IdentificationResult`, or the record read back from
 ``identification.json`` by :func:`pincal.io.read_identification`, which give the same
 text — and its context notes (the data file, the quality gate's record, an instrument
 fit's gauge and sockets). Values and 2σ in µm / µrad, residuals in mm / mrad.
@@ -14,28 +15,17 @@ from typing import Any
 
 import numpy as np
 
-from pincal.identification import IdentificationResult, QualityVerdict
+from pincal.identification import IdentificationRecord, QualityVerdict
 from pincal.report._sections import block_label
 
 __all__ = ["calibration_text", "quality_lines"]
-
-
-def _identifiability(result: IdentificationResult, notes: Mapping[str, Any]) -> tuple | None:
-    """(rank, parameters, explanation lines), from the analysis or its record."""
-    ident = result.identifiability
-    if ident is not None:
-        return ident.rank, len(ident.names), ident.describe()
-    rec = notes.get("identifiability")  # a result read from a file keeps the record
-    if isinstance(rec, Mapping) and rec:
-        return rec["rank"], rec["parameters"], list(rec["explanation"])
-    return None
 
 
 def _finite(v: float) -> bool:
     return math.isfinite(float(v))
 
 
-def _header(result: IdentificationResult, notes: Mapping[str, Any], comps) -> list[str]:
+def _header(result: IdentificationRecord, notes: Mapping[str, Any], comps) -> list[str]:
     """Model, data, solver, identifiability and noise lines."""
     measured = f", measured components {' '.join(comps)}" if comps else ""
     lines = [
@@ -44,11 +34,10 @@ def _header(result: IdentificationResult, notes: Mapping[str, Any], comps) -> li
         f"solver: {result.message} after {int(result.iterations)} iterations; "
         f"reduced chi2 {float(result.reduced_chi2):.4g}",
     ]
-    ident = _identifiability(result, notes)
-    if ident:
-        rank, n, explanation = ident
-        lines.append(f"identifiable: {rank} of {n} parameters")
-        lines += [f"  {t}" for t in explanation]
+    ident = result.identifiability_summary
+    if ident is not None:
+        lines.append(f"identifiable: {ident.rank} of {ident.parameters} parameters")
+        lines += [f"  {t}" for t in ident.explanation]
     lines.append("")
     w = result.weighting
     if w is None:
@@ -67,7 +56,7 @@ def _header(result: IdentificationResult, notes: Mapping[str, Any], comps) -> li
     return lines
 
 
-def _parameter_lines(result: IdentificationResult) -> list[str]:
+def _parameter_lines(result: IdentificationRecord) -> list[str]:
     """The identified parameters: value and 2σ in µm / µrad (a joint term in its SI unit)."""
     header = f"{'parameter':32s} {'value':>14s} {'2σ':>12s}  (µm for lengths, µrad for angles)"
     lines = ["", header]
@@ -83,7 +72,7 @@ def _parameter_lines(result: IdentificationResult) -> list[str]:
     return lines
 
 
-def _residual_lines(result: IdentificationResult, comps) -> list[str]:
+def _residual_lines(result: IdentificationRecord, comps) -> list[str]:
     """RMS and max residual before and after, per measured block [mm, mrad]."""
     lines = [""]
     for when, s in (("before", result.before), ("after", result.after)):
@@ -176,7 +165,7 @@ def quality_lines(
     return lines
 
 
-def calibration_text(result: IdentificationResult, notes: Mapping[str, Any] | None = None) -> str:
+def calibration_text(result: IdentificationRecord, notes: Mapping[str, Any] | None = None) -> str:
     """The plain-text report of a calibration: values and 2σ in µm / µrad (as report.md).
 
     Position and orientation are reported apart, each over its measured components

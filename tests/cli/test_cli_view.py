@@ -185,11 +185,14 @@ def test_report_assembles_demo_output(demo_dir, tmp_path):
 
 def test_report_uses_optional_histories(tmp_path):
     data = {
+        "version": 2,
         "model": "m",
         "parameters": [
-            {"name": "j.tx", "value": 1e-4, "std": 1e-5, "unit": "m", "true": 1.1e-4},
-            {"name": "j.rx", "value": -2e-4, "std": 3e-5, "unit": "rad", "true": -2e-4},
+            {"name": "j.tx", "value": 1e-4, "std": 1e-5, "unit": "m", "true": 1.1e-4, "initial": 0},
+            {"name": "j.rx", "value": -2e-4, "std": 3e-5, "unit": "rad", "true": -2e-4,
+             "initial": 0},
         ],
+        "covariance": [[1e-10, 0.0], [0.0, 9e-10]],
         "validation_before": {"rms_position_mm": 1.0, "max_position_mm": 2.0},
         "validation_after": {"rms_position_mm": 0.01, "max_position_mm": 0.02},
         "validation_errors": {
@@ -214,10 +217,12 @@ def test_report_uses_optional_histories(tmp_path):
     [
         ("{", "not valid JSON"),
         ("[]", "JSON object"),
-        ('{"model": "m"}', "'parameters'"),
-        ('{"model": "m", "parameters": [{"name": "a", "value": "x", "std": 1}]}', "value"),
+        ('{"model": "m"}', "written by pincal 0.1"),
+        ('{"version": 2, "model": "m"}', "'parameters'"),
+        ('{"version": 2, "model": "m", "parameters": [{"name": "a", "value": "x"}]}', "value"),
         (
-            '{"model": "m", "parameters": [{"name": "a", "value": 1, "std": 1, "unit": "in"}]}',
+            '{"version": 2, "model": "m", "parameters": '
+            '[{"name": "a", "value": 1, "std": 1, "initial": 0, "unit": "in"}]}',
             "unit",
         ),
     ],

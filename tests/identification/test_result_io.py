@@ -1,8 +1,14 @@
-"""identification.json: one writer and one reader (result_to_dict, result_from_dict)."""
+"""identification.json: one writer and one reader (result_to_dict, result_from_dict).
+
+The reader gives an IdentificationRecord (no live parts); a file pincal wrote before the
+record was split off (``data/rrr3_identification_v2.json``, written by ``pincal calibrate``
+of commit d307e66) reads back to the same document, byte for byte, and the same report.
+"""
 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +17,8 @@ import pincal
 from pincal.errors import ReportError
 from pincal.identification import (
     FORMAT_VERSION,
+    IdentifiabilitySummary,
+    IdentificationRecord,
     IdentificationResult,
     QPSOExtras,
     QPSOOptions,
@@ -20,14 +28,18 @@ from pincal.identification import (
     result_from_dict,
     result_to_dict,
 )
+from pincal.io import read_identification
+from pincal.report import calibration_text
+
+DATA = Path(__file__).parent / "data"
 
 
-def _roundtrip(result: IdentificationResult, notes=None) -> tuple[dict, IdentificationResult]:
+def _roundtrip(result: IdentificationResult, notes=None) -> tuple[dict, IdentificationRecord]:
     doc = json.loads(json.dumps(result_to_dict(result, notes)))
     return doc, result_from_dict(doc)
 
 
-def _same(a: IdentificationResult, b: IdentificationResult) -> None:
+def _same(a: IdentificationRecord, b: IdentificationRecord) -> None:
     assert a.names == b.names and a.units == b.units and a.method == b.method
     np.testing.assert_array_equal(a.full_values, b.full_values)
     np.testing.assert_array_equal(a.identified, b.identified)
@@ -59,10 +71,14 @@ def test_gauss_newton_result_roundtrip_with_held_parameters(stewart, stewart_pos
     assert back.fixed == res.fixed and back.extras == res.extras
     assert back.annotations["data"] == "m.csv" and back.annotations["truth"]["leg1_u1.tx"] == 1e-4
     assert result_to_dict(back) == doc  # the reader keeps everything the writer wrote
-    with pytest.raises(pincal.ParameterError, match="read from a file"):
-        _ = back.params
+    assert type(back) is IdentificationRecord and not hasattr(back, "params")
+    assert back.identifiability_summary == res.identifiability_summary
+    assert res.identifiability_summary == IdentifiabilitySummary.of(res.identifiability)
+    assert res.params.names == ("leg1_u1.tx", "leg1_slide.offset")
     with pytest.raises(ReportError, match="overwrite"):
         result_to_dict(res, {"method": "x"})
+    with pytest.raises(ReportError, match="overwrite"):
+        result_to_dict(res, {"identifiability": {}})
 
 
 def test_qpso_and_step_planning_extras_roundtrip():
@@ -82,7 +98,44 @@ def test_qpso_and_step_planning_extras_roundtrip():
     np.testing.assert_array_equal(back.extras.weights, planned.extras.weights)
 
 
-CALIBRATE_01 = {
+def test_a_record_applied_to_its_nominal_model_is_the_calibrated_mechanism(
+    stewart, stewart42, stewart_poses
+):
+    truth = np.random.default_rng(5).normal(0.0, 2e-4, len(stewart42))
+    actual = stewart42.apply(stewart, truth)
+    meas = pincal.simulate_measurements(actual, stewart_poses, pincal.NoiseModel(0.01, 0.02))
+    res = identify(stewart, stewart42, meas)
+    _, back = _roundtrip(res)
+    mech = back.applied_to(stewart)
+    for name, joint in res.calibrated.tree.joints.items():
+        np.testing.assert_allclose(
+            mech.tree.joints[name].origin.homogeneous, joint.origin.homogeneous, atol=1e-15
+        )
+    with pytest.raises(pincal.ParameterError, match="give the model it was identified for"):
+        back.applied_to(pincal.load_mechanism("wedge3"))
+
+
+def test_a_version_2_file_written_before_the_record_reads_and_writes_back_the_same():
+    path = DATA / "rrr3_identification_v2.json"
+    text = path.read_text()
+    rec = read_identification(path)
+    assert type(rec) is IdentificationRecord
+    assert json.dumps(result_to_dict(rec), indent=1) + "\n" == text
+    doc = json.loads(text)
+    assert rec.names == tuple(doc["names"]) and len(rec.names) == 78
+    assert rec.identified_names == tuple(p["name"] for p in doc["parameters"])
+    np.testing.assert_array_equal(rec.values, [p["value"] for p in doc["parameters"]])
+    np.testing.assert_array_equal(rec.covariance, doc["covariance"])
+    assert rec.components == ("x", "y", "rz") and rec.residuals.shape == (15, 3)
+    summary = rec.identifiability_summary
+    assert summary is not None and (summary.rank, summary.parameters) == (21, 78)
+    assert len(summary.explanation) == 57 and rec.weighting is not None
+    # the report read back is the one `pincal calibrate` printed when it wrote the file
+    report = (DATA / "rrr3_report_v2.txt").read_text()
+    assert calibration_text(rec, {"data": "r.csv"}) == report
+
+
+CALIBRATE_01 = {  # written by `pincal calibrate` of pincal 0.1 (no "version")
     "model": "hexaslide_6pus",
     "preset": "kinematic",
     "data": "m.csv",
@@ -97,39 +150,31 @@ CALIBRATE_01 = {
         {"name": "a.rx", "unit": "rad", "value": -2e-4, "std": 3e-6},
     ],
     "fixed": ["a.rz"],
-    "identifiability": {"parameters": 3, "rank": 2, "unidentifiable": ["a.rz"]},
-    "residuals": {
-        "before": {
-            "rms_position_mm": 1.0,
-            "max_position_mm": 2.0,
-            "rms_orientation_mrad": None,
-            "max_orientation_mrad": None,
-        },
-        "after": {"rms_position_mm": 0.001, "max_position_mm": 0.002},
-        "per_pose_SI": [[1e-6, 0.0, -1e-6], [0.0, 2e-6, 0.0]],
-    },
-    "calibrated_urdf": "cal/hexaslide_6pus.urdf",
+    "residuals": {"per_pose_SI": [[1e-6, 0.0, -1e-6], [0.0, 2e-6, 0.0]]},
 }
 
+V2 = json.loads((DATA / "rrr3_identification_v2.json").read_text())
 
-def test_pincal_01_calibrate_file_is_read():
-    res = result_from_dict(CALIBRATE_01)
-    assert res.names == ("a.tx", "a.rx", "a.rz") and res.fixed == ("a.rz",)
-    assert res.units == ("m", "rad", "rad")
-    np.testing.assert_array_equal(res.values, [1e-4, -2e-4])
-    np.testing.assert_allclose(res.covariance, np.diag([1e-12, 9e-12]))
-    assert res.after.max_position == pytest.approx(2e-6) and np.isnan(res.after.rms_orientation)
-    assert res.residuals.shape == (2, 3) and res.iterations == 4 and res.reduced_chi2 == 1.1
-    assert res.annotations["calibrated_urdf"] == "cal/hexaslide_6pus.urdf"
+
+def test_a_pincal_01_file_is_refused_with_what_to_do():
+    with pytest.raises(ReportError, match=r"written by pincal 0\.1 .*re-run `pincal calibrate`"):
+        result_from_dict(CALIBRATE_01)
 
 
 def test_newer_or_malformed_files_are_refused_with_the_reason():
     with pytest.raises(ReportError, match="version 3, written by a newer pincal"):
-        result_from_dict({**CALIBRATE_01, "version": 3})
+        result_from_dict({**V2, "version": 3})
+    with pytest.raises(ReportError, match="no longer reads"):
+        result_from_dict({**V2, "version": 1})
     with pytest.raises(ReportError, match="'model'"):
-        result_from_dict({"parameters": []})
-    bad = {**CALIBRATE_01, "parameters": [{"name": "a.tx", "value": 1.0, "std": "x"}]}
+        result_from_dict({"version": 2, "parameters": []})
+    first = V2["parameters"][0]
+    bad = {**V2, "parameters": [{**first, "std": "x"}, *V2["parameters"][1:]]}
     with pytest.raises(ReportError, match=r"parameters\[0\].std"):
         result_from_dict(bad)
-    with pytest.raises(ReportError, match="covariance must be 2×2"):
-        result_from_dict({**CALIBRATE_01, "covariance": [[1.0]]})
+    with pytest.raises(ReportError, match="covariance must be 21×21"):
+        result_from_dict({**V2, "covariance": [[1.0]]})
+    with pytest.raises(ReportError, match="'covariance'"):
+        result_from_dict({k: v for k, v in V2.items() if k != "covariance"})
+    with pytest.raises(ReportError, match="'identifiability' must be"):
+        result_from_dict({**V2, "identifiability": {"rank": "7"}})

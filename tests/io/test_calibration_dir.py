@@ -52,7 +52,7 @@ def test_round_trip_manifest_and_calibrated_model(wedge_result, tmp_path):
     assert m["noise"] == {"position_mm": 0.005, "orientation_mrad": 0.01}
     assert set(m["files"]) == {CALIBRATED_URDF, CALIBRATED_SIDECAR, "identification.json",
                                "report.txt"}  # fmt: skip
-    assert cal.model == "wedge3" and cal.preset == "patent" and not cal.legacy
+    assert cal.model == "wedge3" and cal.preset == "patent"
     np.testing.assert_array_equal(cal.result.values, result.values)
     np.testing.assert_allclose(cal.result.covariance, result.covariance, rtol=1e-12)
     q = sample_actuators(nominal, 3, np.random.default_rng(0))
@@ -89,7 +89,7 @@ def test_missing_sidecar_changed_file_and_newer_version_are_named(wedge_result, 
 
 
 def test_write_is_whole_or_absent(wedge_result, tmp_path, monkeypatch):
-    import pincal.io._calibration_dir as mod
+    import pincal.io._calibration_write as mod
 
     _, result, _ = wedge_result
 

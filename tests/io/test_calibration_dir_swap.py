@@ -79,7 +79,7 @@ _KILLER = textwrap.dedent(
     """
     import os, sys, json
     import pincal.io._atomic as at
-    import pincal.io._calibration_dir as cd
+    import pincal.io._calibration_write as cd
     from pincal.identification import identify
     from pincal.io import read_measurements, write_calibration
     from pincal.model import load_mechanism, parameters

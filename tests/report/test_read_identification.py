@@ -4,13 +4,14 @@ the IdentificationResult it returns and checks its own annotations."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import pincal
 from pincal.errors import CalibrationDirectoryError, ReportError
-from pincal.identification import IdentificationResult, identify, result_to_dict
+from pincal.identification import IdentificationRecord, identify, result_to_dict
 from pincal.io import read_identification
 from pincal.report import calibration_report
 
@@ -31,14 +32,24 @@ DEMO_01 = {  # written by `pincal demo` of pincal 0.1
 }
 
 
-def test_pincal_01_demo_file_gives_the_same_report(tmp_path):
+V2_FILE = Path(__file__).parents[1] / "identification" / "data" / "rrr3_identification_v2.json"
+V2 = json.loads(V2_FILE.read_text())
+
+
+def test_pincal_01_demo_file_is_refused_with_what_to_do(tmp_path):
     (tmp_path / "identification.json").write_text(json.dumps(DEMO_01))
+    with pytest.raises(CalibrationDirectoryError, match=r"written by pincal 0\.1"):
+        read_identification(tmp_path / "identification.json")
+    with pytest.raises(ReportError, match=r"written by pincal 0\.1.*re-run `pincal calibrate`"):
+        calibration_report(tmp_path)
+
+
+def test_a_version_2_file_gives_its_report(tmp_path):
+    (tmp_path / "identification.json").write_text(json.dumps(V2))
     res = read_identification(tmp_path / "identification.json")
-    assert isinstance(res, IdentificationResult) and res.identified_names == ("leg1.tx", "leg1.rx")
-    assert res.annotations["truth"] == {"leg1.tx": 1.1e-4, "leg1.rx": -2e-4}
+    assert isinstance(res, IdentificationRecord) and len(res.identified_names) == 21
     md = calibration_report(tmp_path).markdown.read_text()
-    assert "| leg1.tx | 100 | 20 | µm | 110 | -1 |" in md
-    assert "reduced χ² = 0.9" in md and "see report.html" in md
+    assert "Model rrr3" in md and "| base1.offset |" in md
     assert '<img src="data:image/png;base64,' in calibration_report(tmp_path).html.read_text()
 
 
@@ -59,11 +70,11 @@ def test_result_written_by_to_dict_is_reported(tmp_path, stewart, stewart42, ste
 
 def test_bad_annotations_are_refused(tmp_path):
     path = tmp_path / "identification.json"
-    path.write_text(json.dumps({**DEMO_01, "validation_errors": {"before": {}}}))
+    path.write_text(json.dumps({**V2, "validation_errors": {"before": {}}}))
     read_identification(path)  # a valid result; the annotation is the report's to check
     with pytest.raises(ReportError, match="'before' and 'after'"):
         calibration_report(tmp_path)
-    path.write_text(json.dumps({**DEMO_01, "version": 99}))
+    path.write_text(json.dumps({**V2, "version": 99}))
     with pytest.raises(CalibrationDirectoryError, match="version 99"):
         read_identification(path)
     with pytest.raises(ReportError, match="version 99"):

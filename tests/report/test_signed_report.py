@@ -95,14 +95,16 @@ def test_report_is_self_contained_and_consistent(calibration, tmp_path):
 
 def test_poorly_determined_parameter_is_flagged(tmp_path):
     """A parameter with 2σ = 3.7 mm (and an angle with 2σ = 2 mrad) is flagged."""
+    names, units = ("leg1.tx", "leg1.ty", "leg1.rx", "leg1.ry"), ("m", "m", "rad", "rad")
+    std = [1.85e-3, 1e-5, 1e-3, 1e-5]
     doc = {
+        "version": 2,
         "model": "stewart_6ups",
         "parameters": [
-            {"name": "leg1.tx", "value": 1e-4, "std": 1.85e-3, "unit": "m"},
-            {"name": "leg1.ty", "value": 1e-4, "std": 1e-5, "unit": "m"},
-            {"name": "leg1.rx", "value": 1e-4, "std": 1e-3, "unit": "rad"},
-            {"name": "leg1.ry", "value": 1e-4, "std": 1e-5, "unit": "rad"},
+            {"name": n, "value": 1e-4, "std": s, "unit": u, "initial": 0.0}
+            for n, s, u in zip(names, std, units, strict=True)
         ],
+        "covariance": np.diag(np.square(std)).tolist(),
     }
     res = result_from_dict(doc)
     assert poorly_determined(res) == ["leg1.tx", "leg1.rx"]

@@ -1,0 +1,189 @@
+"""Writing the calibration directory whole or not at all (:func:`write_calibration`).
+
+:func:`write_calibration` writes the whole directory (see :mod:`pincal.io._calibration_dir`
+for its files) into a temporary sibling (``.NAME.pincal-tmp-*``) and swaps it in with one
+rename, so the directory is at every instant the complete old set or the complete new
+one; a lock file beside it (``.NAME.pincal-lock``) keeps a second writer out.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Mapping, Sequence
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from pincal._version import __version__
+from pincal.errors import CalibrationDirectoryError, clip
+from pincal.identification import IdentificationRecord, IdentificationResult, result_to_dict
+from pincal.io._atomic import (
+    _temp_prefix,
+    atomic_write_text,
+    calibration_lock,
+    remove_stale_temporaries,
+    swap_in_directory,
+)
+from pincal.io._calibration_checks import model_files
+from pincal.io._calibration_dir import CALIBRATION_VERSION, CalibrationDirectory, read_calibration
+from pincal.io._calibration_replace import _check_replaceable
+from pincal.io._file_names import (
+    CALIBRATED_SIDECAR,
+    CALIBRATED_URDF,
+    CALIBRATION_FORMAT,
+    IDENTIFICATION_FILE,
+    MANIFEST,
+    NOMINAL_URDF,
+)
+from pincal.io._urdf_export import save_urdf
+from pincal.measure import NoiseModel
+from pincal.model import Mechanism
+
+__all__ = ["sha256_file", "write_calibration"]
+
+
+def sha256_file(path: str | Path) -> str:
+    """Hex SHA-256 of a file's bytes.
+
+    Raises:
+        CalibrationDirectoryError: the file cannot be read.
+    """
+    h = hashlib.sha256()
+    if not Path(path).is_file():  # a FIFO or device would block or never end
+        raise CalibrationDirectoryError(f"{clip(str(path))} is not a regular file")
+    try:
+        with open(path, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                h.update(block)
+    except OSError as exc:
+        raise CalibrationDirectoryError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
+    return h.hexdigest()
+
+
+def _manifest(
+    result: IdentificationRecord,
+    model_source: str | None,
+    data_files: Sequence[str | Path],
+    noise: NoiseModel | None,
+    files: dict[str, str],
+) -> dict[str, Any]:
+    ident = result.identified
+    return {
+        "format": CALIBRATION_FORMAT,
+        "version": CALIBRATION_VERSION,
+        "pincal_version": __version__,
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+        "model": result.model,
+        "model_source": model_source,
+        "model_files": model_files(model_source) if model_source else {},
+        "preset": result.preset,
+        "method": result.method,
+        "units": {"length": "m", "angle": "rad"},
+        "parameters": [
+            {"name": n, "unit": u, "value": float(v), "std": float(s)}
+            for n, u, v, s in zip(
+                result.identified_names,
+                [u for u, ok in zip(result.units, ident, strict=True) if ok],
+                result.values,
+                result.std,
+                strict=True,
+            )
+        ],
+        "covariance": IDENTIFICATION_FILE,
+        "noise": None
+        if noise is None
+        else {"position_mm": float(noise.position), "orientation_mrad": float(noise.orientation)},
+        "data_files": [
+            {"path": str(p), "name": Path(p).name, "sha256": sha256_file(p)} for p in data_files
+        ],
+        "calibrated_urdf": CALIBRATED_URDF,
+        "calibrated_sidecar": CALIBRATED_SIDECAR,
+        "identification": IDENTIFICATION_FILE,
+        "files": files,
+    }
+
+
+def write_calibration(
+    path: str | Path,
+    result: IdentificationResult,
+    *,
+    model_source: str | None = None,
+    data_files: Sequence[str | Path] = (),
+    noise: NoiseModel | None = None,
+    annotations: Mapping[str, Any] | None = None,
+    texts: Mapping[str, str] | None = None,
+    nominal: Mechanism | None = None,
+) -> CalibrationDirectory:
+    """Write a calibration directory atomically (whole or absent).
+
+    Args:
+        path: the directory; an existing calibration directory (or an empty one) is
+            replaced, any other existing path is refused.
+        result: identification result with its calibrated mechanism.
+        model_source: the nominal model spec (bundled name or path) for later commands.
+        data_files: measurement files the calibration was fitted on (hashed).
+        noise: instrument noise of those data (mm, mrad), if known.
+        annotations: extra entries of ``identification.json`` (validation, truth, ...).
+        texts: further text files to write ``{file name: content}`` (e.g. report.txt).
+        nominal: the nominal mechanism to store as ``nominal.urdf`` (+ sidecar) when it
+            is not ``model_source`` as loaded (a marker calibration's registered chain);
+            ``annotations["markers"]`` then goes into the manifest too.
+
+    Returns:
+        The directory as :func:`read_calibration` reads it.
+
+    Raises:
+        CalibrationDirectoryError: ``path`` exists and is not a calibration directory, or
+            another process is writing it (see :func:`calibration_lock`).
+    """
+    out = Path(path).resolve()  # "." or "cal/" name a directory we can replace by rename
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with calibration_lock(out):
+        _write_locked(out, result, model_source, data_files, noise, annotations, texts, nominal)
+    return read_calibration(out)  # resolved: "." names the old directory after the swap
+
+
+def _write_locked(
+    out: Path,
+    result: IdentificationResult,
+    model_source: str | None,
+    data_files: Sequence[str | Path],
+    noise: NoiseModel | None,
+    annotations: Mapping[str, Any] | None,
+    texts: Mapping[str, str] | None,
+    nominal: Mechanism | None = None,
+) -> None:
+    _check_replaceable(out)
+    remove_stale_temporaries(out)
+    mech = result.calibrated
+    notes = {"data": [str(p) for p in data_files], "calibrated_urdf": CALIBRATED_URDF}
+    notes.update(annotations or {})
+    tmp = Path(tempfile.mkdtemp(prefix=_temp_prefix(out, "tmp"), dir=out.parent))
+    try:
+        save_urdf(mech, tmp / CALIBRATED_URDF)
+        doc = result_to_dict(result, notes)
+        atomic_write_text(tmp / IDENTIFICATION_FILE, json.dumps(doc, indent=1) + "\n")
+        for name, text in (texts or {}).items():
+            atomic_write_text(tmp / name, text)
+        if nominal is not None:
+            save_urdf(nominal, tmp / NOMINAL_URDF)
+        files = {p.name: sha256_file(p) for p in sorted(tmp.iterdir()) if p.is_file()}
+        manifest = _manifest(result, model_source, data_files, noise, files)
+        if annotations and "quality" in annotations:  # the quality gate's verdict / override
+            manifest["quality"] = annotations["quality"]
+        if nominal is not None:
+            manifest["nominal_urdf"] = NOMINAL_URDF
+            manifest["markers"] = (annotations or {}).get("markers")
+        atomic_write_text(tmp / MANIFEST, json.dumps(manifest, indent=1) + "\n")
+        os.chmod(tmp, 0o755)
+        _check_replaceable(out)
+        swap_in_directory(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
