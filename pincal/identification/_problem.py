@@ -41,7 +41,9 @@ from pincal.model import (
     Linearisation,
     Mechanism,
     ParameterSet,
+    check_term_data,
     joint_term_basis,
+    joint_term_shift,
 )
 from pincal.model.kernels import jlog3_batch, log3_batch
 from pincal.sensitivity import sensitivities_batch
@@ -116,10 +118,15 @@ class CalibrationProblem:
         else:
             self.sigma = np.ones((m, k))
             self.noise_source = "estimate"
-        #: joint-term basis (m, n_act, n) at the commanded values (None: geometric only)
-        self._basis = (
-            joint_term_basis(mech, params, measurements.q_act) if params.joint_terms.size else None
-        )
+        #: joint-term basis (m, n_act, n) at the commanded values (None: geometric only),
+        #: and the basis (m, 3, n) of the terms moving the measured frame (None: none do)
+        self._basis: np.ndarray | None = None
+        self._shift: np.ndarray | None = None
+        if params.joint_terms.size:
+            cond = measurements.conditions
+            check_term_data(params, cond)
+            self._basis = joint_term_basis(mech, params, measurements.q_act, cond)
+            self._shift = joint_term_shift(mech, params, measurements.q_act, cond)
         self._qs: np.ndarray | None = None
         self._solved: tuple[Linearisation, Mechanism, BatchKinematics] | None = None
         #: start each solve from the first-order prediction of the parameter change
@@ -308,6 +315,8 @@ class CalibrationProblem:
         else:
             T = [mech.frame_placement(q) for q in qs]
             p, R = np.array([t.translation for t in T]), np.array([t.rotation for t in T])
+        if self._shift is not None:
+            p = p + self._shift @ values
         r = np.zeros((len(meas), 6))
         r[:, :3] = meas.positions - p
         D_rot = None
@@ -322,6 +331,9 @@ class CalibrationProblem:
         if not jacobian:
             return r_w, None, r_raw
         Js = sens.jacobian
+        if self._shift is not None:
+            Js = np.array(Js)
+            Js[:, :3] += self._shift
         self._structural = (values.tobytes(), -np.asarray(Js)[:, self.rows])
         J = -np.concatenate([Js[:, :3], Js[:, 3:] if D_rot is None else D_rot @ Js[:, 3:]], 1)
         J_w = (J[:, self.rows] * w[:, :, None]).reshape(-1, len(self.params))

@@ -35,8 +35,11 @@ from pincal.model._floor import DEFAULT_FLOOR, above_floor
 from pincal.model._home_search import conditioning, regular_home
 from pincal.model._joint_term_set import (
     actual_joint_values,
+    actual_shift,
+    check_term_data,
     joint_term_basis,
     joint_term_prior,
+    joint_term_shift,
     split_model,
     with_joint_terms,
 )
@@ -129,8 +132,10 @@ __all__ = [
     "above_floor",
     "active_limits",
     "actual_joint_values",
+    "actual_shift",
     "bundled_models",
     "chain_preset",
+    "check_term_data",
     "conditioning",
     "degenerate_translations",
     "describe_direction",
@@ -148,6 +153,7 @@ __all__ = [
     "joint_term",
     "joint_term_basis",
     "joint_term_prior",
+    "joint_term_shift",
     "joint_term_units",
     "load_mechanism",
     "load_mjcf",
