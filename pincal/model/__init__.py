@@ -86,6 +86,7 @@ from pincal.model._sidecar import (
     Workspace,
     validate_sidecar,
 )
+from pincal.model._term_temperature import REFERENCE_C as THERMAL_REFERENCE_C
 from pincal.model._urdf import (
     MOVABLE_TYPES,
     UrdfJoint,
@@ -105,6 +106,7 @@ __all__ = [
     "INSTRUMENT_LINK",
     "JOINT_KINDS",
     "MOVABLE_TYPES",
+    "THERMAL_REFERENCE_C",
     "TOOL_JOINT",
     "TOOL_LINK",
     "WORKSPACE_POSE_KEYS",
