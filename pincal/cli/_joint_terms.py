@@ -24,6 +24,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "TERMS_FILE",
+    "THERMAL_SPAN_C",
     "calibration_terms",
     "carrying",
     "compliance_note",
@@ -37,6 +38,8 @@ __all__ = [
 ]
 
 TERMS_FILE = "joint_terms.yaml"
+#: temperatures [°C] `info` spreads its random poses over to analyse a thermal term
+THERMAL_SPAN_C = (18.0, 28.0)
 
 
 def payload_option(help_text: str) -> Callable:
@@ -189,8 +192,9 @@ def temperature_note(terms: tuple[str, ...]) -> str | None:
     return (
         "temperature: lengths scale by 1 + α (T − T0) with the per-pose temperature column "
         "temperature_C (°C, T0 = 20 °C); a coefficient is separable from the length itself "
-        "only when the temperature varies across the poses (a constant column is refused): "
-        "its rank is analysed by calibrate on the data's temperatures, not here"
+        "only when the temperature varies across the poses (a constant column is refused); "
+        f"info analyses random poses at {THERMAL_SPAN_C[0]:g}–{THERMAL_SPAN_C[1]:g} °C, "
+        "calibrate on the data's own temperatures"
     )
 
 

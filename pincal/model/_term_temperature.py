@@ -80,7 +80,7 @@ class Temperature(JointTerm):
 
     def shift(
         self, mech: Mechanism, q_act: np.ndarray, conditions: Mapping[str, np.ndarray | None]
-    ) -> np.ndarray:
+    ) -> np.ndarray | None:
         q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
         m, n_act = q_act.shape
         dT = _delta(conditions, m)
@@ -92,6 +92,8 @@ class Temperature(JointTerm):
             uj = mech.tree.joints[name]
             if uj.type != "prismatic" and model.getJointId(name) in chain:
                 moving.append((a, model.getFrameId(uj.parent), uj.origin.translation))
+        if not any(mech.tree.joints[a].type != "prismatic" for a in mech.actuated):
+            return None  # only strokes: a joint-space term
         if not moving:
             return out
         for k, row in enumerate(q_act):
