@@ -348,7 +348,8 @@ def write_measurements(
     if clash:
         raise MeasurementFormatError(
             f"cannot write {path_text(path)}: actuated joint {shown(clash[0])} would appear "
-            "twice as a measurement column name (x y z rx ry rz r11…r33 std_*); rename the "
+            "twice as a measurement column name (x y z rx ry rz r11…r33 std_* temperature_C); "
+            "rename the "
             "joint"
         )
     lines = [
