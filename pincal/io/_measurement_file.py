@@ -349,8 +349,7 @@ def write_measurements(
         raise MeasurementFormatError(
             f"cannot write {path_text(path)}: actuated joint {shown(clash[0])} would appear "
             "twice as a measurement column name (x y z rx ry rz r11…r33 std_* temperature_C); "
-            "rename the "
-            "joint"
+            "rename the joint"
         )
     lines = [
         f"frame: {quote_value(meas.frame, 'frame')}",
