@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Protocol
 
 import numpy as np
 
@@ -19,6 +20,7 @@ __all__ = [
     "actual_joint_values",
     "actual_shift",
     "check_term_data",
+    "joint_term_bases",
     "joint_term_basis",
     "joint_term_prior",
     "joint_term_shift",
@@ -32,6 +34,16 @@ BUNDLED_TERMS = (Compliance, Gain, Harmonics, Temperature)
 #: per-pose conditions some terms need besides the joint values: {name: (m,) or None},
 #: e.g. ``{"temperature": T}`` [°C] (``Measurements.conditions``)
 Conditions = Mapping[str, "np.ndarray | None"]
+
+
+class _Measured(Protocol):
+    """What :func:`joint_term_bases` reads of a ``Measurements`` (the measure stage's)."""
+
+    @property
+    def q_act(self) -> np.ndarray: ...
+
+    @property
+    def conditions(self) -> Conditions: ...
 
 
 def split_model(spec: str) -> tuple[str, ...]:
@@ -137,6 +149,28 @@ def joint_term_shift(
             S = np.zeros((q_act.shape[0], 3, len(params)))
         S[:, :, k] = part[:, act[p.joint], :, term.dofs.index(p.dof)]
     return S
+
+
+def joint_term_bases(
+    mech: Mechanism, params: ParameterSet, measurements: _Measured
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The bases of an identification: δq (m, n_act, n) and δp (m, 3, n) at the data.
+
+    ``measurements`` gives ``q_act`` (m, n_act) and ``conditions`` (a
+    :class:`pincal.measure.Measurements`). (None, None) without joint terms; δp is None
+    when no term moves the measured frame.
+
+    Raises:
+        ConditionError: data that cannot identify a term (:func:`check_term_data`).
+    """
+    if not params.joint_terms.size:
+        return None, None
+    cond, q_act = measurements.conditions, measurements.q_act
+    check_term_data(params, cond)
+    return (
+        joint_term_basis(mech, params, q_act, cond),
+        joint_term_shift(mech, params, q_act, cond),
+    )
 
 
 def check_term_data(params: ParameterSet, conditions: Conditions) -> None:
