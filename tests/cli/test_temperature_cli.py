@@ -103,3 +103,13 @@ def test_temperature_needs_a_thermal_calibration(warm_arm, tmp_path):
     res = runner.invoke(main, args)
     assert res.exit_code != 0
     assert "ConditionError" in res.output and "varies across poses" in res.output
+
+
+def test_info_analyses_the_term_at_spread_temperatures_and_says_so():
+    args = ["info", "ur5", "--preset", "base", "--model", "geometric+temperature", "--json"]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout.strip().splitlines()[-1])
+    assert doc["presets"][0]["parameters"] == 30 + 6
+    assert doc["presets"][0]["identifiable"] == 30 + 5  # wrist_2's along shoulder_lift's
+    assert any("only when the temperature varies" in n and "18–28 °C" in n for n in doc["notes"])
