@@ -83,21 +83,25 @@ class Temperature(JointTerm):
         self, mech: Mechanism, q_act: np.ndarray, conditions: Mapping[str, np.ndarray | None]
     ) -> np.ndarray | None:
         q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
+        if all(mech.tree.joints[a].type == "prismatic" for a in mech.actuated):
+            return None  # only strokes: a joint-space term
         m, n_act = q_act.shape
         dT = _delta(conditions, m)
         out = np.zeros((m, n_act, 3, 1))
         model, data = mech.model, mech.model.createData()
-        chain = model.supports[model.frames[mech.frame_id(mech.measured_frame)].parentJoint]
-        moving = []
+        chain = set(model.supports[model.frames[mech.frame_id(mech.measured_frame)].parentJoint])
+        moving = []  # (actuator index, parent link frame, origin translation [m])
         for a, name in enumerate(mech.actuated):
             uj = mech.tree.joints[name]
-            if uj.type != "prismatic" and model.getJointId(name) in chain:
-                moving.append((a, model.getFrameId(uj.parent), uj.origin.translation))
-        if not any(mech.tree.joints[a].type != "prismatic" for a in mech.actuated):
-            return None  # only strokes: a joint-space term
-        if not moving:
-            return out
-        for k, row in enumerate(q_act):
+            if uj.type == "prismatic" or model.getJointId(name) not in chain:
+                continue  # a stroke, or a link that does not carry the measured frame
+            if not model.existFrame(uj.parent):
+                raise ParameterError(
+                    f"thermal term of {name!r}: its parent link {uj.parent!r} has no frame "
+                    f"in the model, so the link's direction is unknown"
+                )
+            moving.append((a, model.getFrameId(uj.parent), uj.origin.translation))
+        for k, row in enumerate(q_act if moving else ()):
             pin.framesForwardKinematics(model, data, mech.with_actuators(mech.q_home, row))
             for a, fid, t in moving:
                 out[k, a, :, 0] = dT[k] * (data.oMf[fid].rotation @ t)

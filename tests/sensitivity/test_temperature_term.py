@@ -166,3 +166,4 @@ def test_coefficients_recovered_on_an_arm(ur5):
     maha = float(e @ np.linalg.solve(res.covariance[np.ix_(jt, jt)], e))
     assert maha < chi2.ppf(0.999, 5), (maha, e)
     assert np.all(np.sqrt(np.diag(res.covariance[np.ix_(jt, jt)])) < 2e-5)
+
