@@ -79,6 +79,16 @@ def test_arm_link_lengths_jacobian_matches_finite_differences(ur5):
     assert _fd_check(ur5, params, meas, rng) < 1e-6
 
 
+def test_mixed_chain_jacobian_matches_finite_differences():
+    """TIAGo: a prismatic torso (its stroke) under a revolute arm (its links)."""
+    mech = load_mechanism("tiago", "arm_tool_link")
+    params = with_joint_terms(mech, parameters(mech, "base"), ["temperature"])
+    assert params.names[params.joint_terms[0]] == "torso_lift_joint.thermal"
+    rng = np.random.default_rng(1)
+    meas = _measured(mech, params, np.zeros(len(params)), 8, rng)
+    assert _fd_check(mech, params, meas, rng, params.joint_terms) < 1e-6
+
+
 def test_closed_loop_legs_jacobian_matches_finite_differences():
     """A planar 3-RPR (prismatic legs in a loop, measures x y rz): joint-space terms."""
     mech = load_mechanism(MACHINES / "rpr3")
