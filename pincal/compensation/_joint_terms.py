@@ -134,6 +134,8 @@ class JointTermCorrection:
         Raises:
             ConvergenceError: the inverse kinematics or the iteration does not settle.
         """
+        if self.shift(solver.actuators_of(q)[None]) is None:
+            return q  # no term moves the frame (cheap: no command iteration)
         d_old = np.zeros(3)
         for _ in range(_MAX_ITER):
             u = self.commands(solver.actuators_of(q)[None])
