@@ -18,6 +18,7 @@ __all__ = [
     "CampaignError",
     "ClosureError",
     "ColumnError",
+    "ConditionError",
     "ConvergenceError",
     "FrameMismatchError",
     "ImportMatchError",
@@ -211,6 +212,10 @@ class MeasurementError(PincalError):
 
 class NoiseEstimationError(MeasurementError):
     """The measurement noise is not declared and cannot be estimated from the residuals."""
+
+
+class ConditionError(MeasurementError):
+    """A per-pose condition a term needs (the temperature) is missing, constant or bad."""
 
 
 class VisualizationError(PincalError):

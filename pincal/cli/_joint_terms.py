@@ -5,7 +5,8 @@ A calibration with joint terms (``calibrate --model geometric+compliance``…) k
 (name, value, 2σ, unit, and the payload they were fitted under); the values themselves
 are read back from ``identification.json``. A payload given with ``--payload`` becomes
 a link of the nominal model (stored as ``nominal.urdf``), so the compliance's load is
-the same when the calibration is used.
+the same when the calibration is used. A thermal term (``+temperature``) is applied by
+``compensate --temperature °C`` (without it: at the reference 20 °C, where it vanishes).
 """
 
 from __future__ import annotations
@@ -23,21 +24,34 @@ if TYPE_CHECKING:
 
 __all__ = [
     "TERMS_FILE",
+    "THERMAL_SPAN_C",
     "calibration_terms",
     "carrying",
     "compliance_note",
     "payload_option",
     "read_payload",
+    "temperature_note",
+    "temperature_option",
     "terms_record",
     "terms_texts",
+    "thermal_machine",
 ]
 
 TERMS_FILE = "joint_terms.yaml"
+#: temperatures [°C] `info` spreads its random poses over to analyse a thermal term
+THERMAL_SPAN_C = (18.0, 28.0)
 
 
 def payload_option(help_text: str) -> Callable:
     """The ``--payload MASS[,X,Y,Z]`` option (kg; centre of mass in m in the tool frame)."""
     return click.option("--payload", default=None, metavar="MASS[,X,Y,Z]", help=help_text)
+
+
+def temperature_option(help_text: str) -> Callable:
+    """The ``--temperature °C`` option (the machine temperature at the targets)."""
+    return click.option(
+        "--temperature", type=float, default=None, metavar="CELSIUS", help=help_text
+    )
 
 
 def read_payload(text: str | None) -> Payload | None:
@@ -82,6 +96,14 @@ def terms_record(result: IdentificationRecord, model: str, payload: Payload | No
         "applies": "joint q = command u + B(u)·θ; calibrated.urdf is the geometric part",
         "terms": terms,
     }
+    if any(t["unit"] == "1/K" for t in terms):
+        from pincal.model import THERMAL_REFERENCE_C
+
+        doc["thermal"] = (
+            f"lengths scale by 1 + α (T − T0), T0 = {THERMAL_REFERENCE_C:g} °C: a prismatic "
+            f"joint's stroke (δq = α ΔT q), a revolute joint's URDF origin translation (the "
+            f"link into it); compensate --temperature gives T"
+        )
     head = "# pincal joint terms (values SI; compensate applies them)\n"
     return head + yaml.safe_dump(doc, sort_keys=False, allow_unicode=True)
 
@@ -94,13 +116,15 @@ def terms_texts(
 
 
 def calibration_terms(
-    cal: CalibrationDirectory, payload: Payload | None
+    cal: CalibrationDirectory, payload: Payload | None, temperature: float | None = None
 ) -> tuple[JointTermCorrection | None, str]:
     """The joint terms of a calibration directory, and a line saying what they are.
 
     Args:
         cal: the calibration.
         payload: the load at the targets, replacing the calibration's; None: keep it.
+        temperature: the machine temperature at the targets [°C]; None: the thermal
+            terms' reference (20 °C, where they vanish).
 
     Returns:
         (correction, description); (None, "") for a geometric calibration.
@@ -110,6 +134,12 @@ def calibration_terms(
 
     units = joint_term_units() - {"m", "rad"}
     if not any(u in units for u in cal.result.units):
+        if temperature is not None:
+            raise click.BadParameter(
+                f"calibration {str(cal.path)!r} has no joint terms: a temperature changes its "
+                f"commands only with a thermal term (calibrate --model geometric+temperature)",
+                param_hint="--temperature",
+            )
         if payload is not None:
             raise click.BadParameter(
                 f"calibration {str(cal.path)!r} has no joint terms: a payload changes its "
@@ -121,9 +151,25 @@ def calibration_terms(
     if payload is not None:
         nominal = with_payload(nominal, payload, replace=True)
     terms = JointTermCorrection.from_names(nominal, cal.result.names, cal.result.full_values)
+    terms = terms.at_temperature(temperature)
     load = payload.describe() if payload is not None else "the calibration's load"
     kinds = sorted({n.rpartition(".")[2] for n in terms.params.names})
-    return terms, f"{len(terms.params)} joint terms ({', '.join(kinds)}) at {load}"
+    line = f"{len(terms.params)} joint terms ({', '.join(kinds)}) at {load}"
+    if "1/K" in terms.params.units:
+        from pincal.model import THERMAL_REFERENCE_C
+
+        line += (
+            f", {temperature:g} °C"
+            if temperature is not None
+            else f", {THERMAL_REFERENCE_C:g} °C (the reference: no expansion; --temperature)"
+        )
+    elif temperature is not None:
+        raise click.BadParameter(
+            f"calibration {str(cal.path)!r} has no thermal term (calibrate --model "
+            f"geometric+temperature): --temperature does not change its commands",
+            param_hint="--temperature",
+        )
+    return terms, line
 
 
 def compliance_note(terms: tuple[str, ...], payload: Payload | None) -> str | None:
@@ -137,3 +183,47 @@ def compliance_note(terms: tuple[str, ...], payload: Payload | None) -> str | No
         f"change the load (e.g. measured with and without the payload): with the payload "
         f"given, c is identified; a wrong payload mass biases c"
     )
+
+
+def temperature_note(terms: tuple[str, ...]) -> str | None:
+    """What a thermal term can and cannot tell apart (None without one)."""
+    if "temperature" not in terms:
+        return None
+    return (
+        "temperature: lengths scale by 1 + α (T − T0) with the per-pose temperature column "
+        "temperature_C (°C, T0 = 20 °C); a coefficient is separable from the length itself "
+        "only when the temperature varies across the poses (a constant column is refused); "
+        f"info analyses random poses at {THERMAL_SPAN_C[0]:g}–{THERMAL_SPAN_C[1]:g} °C, "
+        "calibrate on the data's own temperatures"
+    )
+
+
+def thermal_machine(
+    nominal: Mechanism, q_act: Any, span: tuple[float, float], alpha: float, rng: Any
+) -> tuple[Any, Any, Any, dict[str, float]]:
+    """A simulated machine expanding with temperature (``simulate --temperature``).
+
+    Args:
+        nominal: the nominal mechanism.
+        q_act: (m, n_act) commands [rad, m].
+        span: (low, high) temperatures [°C]; each pose's is drawn uniformly in it.
+        alpha: the true expansion coefficient of every actuated joint's length [1/K].
+        rng: the random generator.
+
+    Returns:
+        (joint values (m, n_act) the machine takes, world position change (m, 3) of the
+        measured frame [m], temperatures (m,) [°C], {parameter name: α}).
+    """
+    import numpy as np
+
+    from pincal.model import actual_joint_values, actual_shift, parameters, with_joint_terms
+
+    terms = with_joint_terms(nominal, parameters(nominal, [f"{nominal.actuated[0]}.offset"]),
+                             ("temperature",))  # fmt: skip
+    values = np.zeros(len(terms))
+    values[terms.joint_terms] = alpha
+    T = rng.uniform(span[0], span[1], len(q_act))
+    cond = {"temperature": T}
+    q = actual_joint_values(nominal, terms, values, q_act, cond)
+    shift = actual_shift(nominal, terms, values, q_act, cond)
+    return q, shift, T, {terms.names[k]: alpha for k in terms.joint_terms}

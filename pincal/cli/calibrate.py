@@ -43,7 +43,9 @@ from pincal.identification import METHODS
     show_default=True,
     help="Error model: 'geometric' or geometric+TERM[+TERM…] with TERM compliance (under "
     "gravity + payload; closed loops by their equilibrium), gain, harmonics: joint-space "
-    "terms on every actuated joint, identified beside the geometric parameters.",
+    "terms on every actuated joint, identified beside the geometric parameters; "
+    "temperature: thermal expansion of each actuated joint's length (needs a per-pose "
+    "temperature_C column, °C, that varies).",
 )
 @click.option(
     "--payload",
@@ -369,9 +371,14 @@ def _identify_poses(mech, params, preset: str, meas, method: str, declared, loss
     from pincal.cli.info import reduction_line
     from pincal.identification import LMOptions, identify
     from pincal.io import check_enough_poses
+    from pincal.model import check_term_data
     from pincal.sensitivity import identifiability
 
-    structural = identifiability(mech, params, rng=np.random.default_rng(0))
+    if "1/K" in params.units:  # a thermal term: its rank depends on the data's temperatures
+        check_term_data(params, meas.conditions)
+        structural = identifiability(mech, params, meas.q_act, conditions=meas.conditions)
+    else:
+        structural = identifiability(mech, params, rng=np.random.default_rng(0))
     check_enough_poses(meas, structural.rank)
     if structural.rank < len(params):
         click.echo(reduction_line(preset, structural.rank, len(params)), err=True)

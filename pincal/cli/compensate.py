@@ -7,16 +7,22 @@ from pathlib import Path
 
 import click
 
-from pincal.cli._joint_terms import calibration_terms, payload_option, read_payload
+from pincal.cli._joint_terms import (
+    calibration_terms,
+    payload_option,
+    read_payload,
+    temperature_option,
+)
 from pincal.cli._progress import counted
 from pincal.cli.common import fail_cleanly, guard_paths
 
 
-def load_calibrated(spec: str, payload=None, with_terms: bool = False):
+def load_calibrated(spec: str, payload=None, with_terms: bool = False, temperature=None):
     """The calibrated mechanism of a calibration directory (or a model spec, as in 0.1).
 
     With ``with_terms``: also the calibration's joint terms (at ``payload``, a
-    :class:`~pincal.model.Payload` replacing the calibration's) and a line on them.
+    :class:`~pincal.model.Payload` replacing the calibration's, and at ``temperature``
+    °C for a thermal term) and a line on them.
 
     Returns:
         (mechanism, description of where it came from), and with ``with_terms`` the
@@ -30,12 +36,18 @@ def load_calibrated(spec: str, payload=None, with_terms: bool = False):
         cal = read_calibration(spec)
         announce(cal)
         if with_terms:
-            return cal.calibrated(), f"calibration {spec}", *calibration_terms(cal, payload)
+            terms = calibration_terms(cal, payload, temperature)
+            return cal.calibrated(), f"calibration {spec}", *terms
         return cal.calibrated(), f"calibration {spec}"
     if payload is not None:
         raise click.BadParameter(
             "a payload applies to a calibration directory with a compliance term",
             param_hint="--payload",
+        )
+    if temperature is not None:
+        raise click.BadParameter(
+            "a temperature applies to a calibration directory with a thermal term",
+            param_hint="--temperature",
         )
     if with_terms:
         return load_mechanism(spec), f"model {spec}", None, ""
@@ -75,11 +87,15 @@ def load_calibrated(spec: str, payload=None, with_terms: bool = False):
     "in the tool frame), e.g. 5,0,0,0.08. It replaces calibrate's --payload (a payload link "
     "of the URDF itself stays); default: the load the calibration was fitted with."
 )
+@temperature_option(
+    "Machine temperature at the targets [°C] for a calibration with a thermal term "
+    "(calibrate --model geometric+temperature); default: its reference, 20 °C."
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
 def compensate(
     calibration, targets, out, components, skip_unreachable, allow_branch_change, payload,
-    as_json,
+    temperature, as_json,
 ) -> None:  # fmt: skip
     """Compensated actuator commands: inverse kinematics of the calibrated machine.
 
@@ -99,7 +115,7 @@ def compensate(
 
     A calibration with joint terms (`calibrate --model geometric+compliance`…) gives
     commands that include them: the deflection at each target's load is undone
-    (--payload changes the load).
+    (--payload changes the load); a thermal term's expansion at --temperature °C too.
 
     \b
     Examples:
@@ -114,7 +130,7 @@ def compensate(
 
     guard_paths({"CALIBRATION": calibration, "--targets": targets}, {"--out": out})
     mech, origin, terms, terms_note = load_calibrated(
-        calibration, read_payload(payload), with_terms=True
+        calibration, read_payload(payload), with_terms=True, temperature=temperature
     )
     comps = compensation_components(mech, components)
     pf = read_pose_file(targets)

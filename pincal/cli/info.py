@@ -114,12 +114,19 @@ def info(
 
     import numpy as np
 
-    from pincal.cli._joint_terms import carrying, compliance_note, read_payload
+    from pincal.cli._joint_terms import (
+        THERMAL_SPAN_C,
+        carrying,
+        compliance_note,
+        read_payload,
+        temperature_note,
+    )
     from pincal.cli._progress import counted
     from pincal.model import (
         degenerate_translations,
         describe_direction,
         direction_record,
+        sample_actuators,
         split_model,
         with_joint_terms,
     )
@@ -147,9 +154,14 @@ def info(
     steps = len(names) + with_base
     sets = [with_joint_terms(mech, parameters(mech, name), terms) for name in names]
     idents: list = []
+    rows, cond = None, None
+    if "temperature" in terms:  # random poses at temperatures spread over THERMAL_SPAN_C
+        rows = sample_actuators(mech, 60, np.random.default_rng(0))
+        cond = {"temperature": np.random.default_rng(1).uniform(*THERMAL_SPAN_C, len(rows))}
     with counted("identifiability", unit="set") as step:  # random-pose Jacobian SVDs
         for params in sets:
-            idents.append(identifiability(mech, params, rng=np.random.default_rng(0)))
+            idents.append(identifiability(mech, params, rows, rng=np.random.default_rng(0),
+                                          conditions=cond))  # fmt: skip
             step(len(idents), steps)
         found = base_set(mech) if with_base else None  # = parameters(mech, "base")
         step(steps, steps)
@@ -193,6 +205,8 @@ def info(
     note = compliance_note(terms, load)
     if note and not as_json:
         click.echo(f"  note: {note}")
+    if temperature_note(terms) and not as_json:
+        click.echo(f"  note: {temperature_note(terms)}")
     if as_json:
         doc = {
             "model": mech.name,
@@ -204,7 +218,7 @@ def info(
             "measured_components": list(mech.measured_components),
             "presets": presets,
             "base_preset": base,
-            "notes": list(mech.notes) + ([note] if note else []),
+            "notes": list(mech.notes) + [n for n in (note, temperature_note(terms)) if n],
         }
         click.echo(json.dumps(doc))
 

@@ -110,6 +110,21 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
     "of poses, or (socket) the poses of a ball seated in two sockets 50 mm apart (half "
     "of --random each, the known distance declared); its noise is the position noise.",
 )
+@click.option(
+    "--temperature",
+    default=None,
+    metavar="LOW,HIGH",
+    help="Machine temperature range [°C], e.g. 18,28: each pose gets a uniform draw, "
+    "written as the temperature_C column, and every actuated joint's length expands by "
+    "--thermal (pose files only).",
+)
+@click.option(
+    "--thermal",
+    default=12e-6,
+    show_default=True,
+    type=click.FloatRange(-1e-3, 1e-3),
+    help="True thermal expansion coefficient [1/K] with --temperature (steel: 12e-6).",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @yes_option
 @overwrite_option
@@ -117,7 +132,7 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
 @fail_cleanly
 def simulate(
     model, poses_file, n_random, preset, errors, error_size, noise, seed, length_unit, out,
-    instrument, as_json, yes, overwrite, model_opts,
+    instrument, temperature, thermal, as_json, yes, overwrite, model_opts,
 ) -> None:  # fmt: skip
     """Simulate a measurement campaign of MODEL with random geometric errors.
 
@@ -156,6 +171,12 @@ def simulate(
     err_seed = _parse_errors(errors)
     size_mm, size_mrad = _parse_pair(error_size, "--error-size")
     pos_mm, ori_mrad = _parse_pair(noise, "--noise")
+    span = None
+    if temperature is not None:
+        if instrument is not None:
+            raise click.UsageError("--temperature simulates pose files: drop --instrument")
+        span = number_pair(temperature, "--temperature", form="low_C,high_C",
+                           bounds=(0.0, 200.0))  # fmt: skip
     truth_path = Path(out).with_suffix(".truth.json")
     guard_paths(
         {"MODEL": model_input(model), "--poses": poses_file},
@@ -200,6 +221,20 @@ def simulate(
         path = write_instrument_data(out, readings, length_unit=length_unit)
         meas, components = readings, [readings.kind]
         extra = {"instrument": dict(zip(inst.parameter_names, map(float, theta), strict=True))}
+    elif span is not None:
+        import dataclasses
+
+        from pincal.cli._joint_terms import thermal_machine
+
+        q_true, shift, T, alphas = thermal_machine(nominal, q_act, span, thermal, rng)
+        poses = simulate_measurements(actual, q_true, NoiseModel(pos_mm, ori_mrad), rng)
+        poses = dataclasses.replace(
+            poses, q_act=np.array(q_act, dtype=float), positions=poses.positions + shift,
+            temperature=T,
+        )  # fmt: skip
+        path = write_measurements(out, poses, length_unit=length_unit)
+        meas, components = poses, list(poses.components)
+        extra = {"thermal_1_per_K": alphas}
     else:
         poses = simulate_measurements(actual, q_act, NoiseModel(pos_mm, ori_mrad), rng)
         path = write_measurements(out, poses, length_unit=length_unit)

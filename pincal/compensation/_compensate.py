@@ -288,6 +288,8 @@ def compensate(
         sources.append(source)
         try:
             q = solver.inverse_configuration(T, guess)
+            if joint_terms:
+                q = joint_terms.solve(solver, T, q)
             joints = solver.actuators_of(q)
             row = joint_terms.commands(joints[None])[0] if joint_terms else joints
             if check_limits:

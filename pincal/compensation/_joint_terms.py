@@ -6,17 +6,31 @@ A calibration with joint terms (compliance under load, gain, harmonics; see
 kinematics for the joint values ``q*`` that reach the target, then the command that
 produces them: ``u = q* − B(u) θ``, by fixed-point iteration from ``u = q*`` (the
 terms are small and smooth, so it contracts fast; it stops at 1e-12 rad or m).
+
+A term that moves the measured frame instead of the joints (a link's thermal expansion,
+``δp = S(u) θ`` at the target temperature) is undone in the inverse kinematics: the
+joints are solved for the target moved by ``−δp`` at the command, again by fixed-point
+iteration (:meth:`JointTermCorrection.solve`). Without a target temperature the
+thermal terms act at the reference temperature, 20 °C, where they vanish.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
+import pinocchio as pin
 
 from pincal.errors import ConvergenceError, ParameterError
-from pincal.model import Mechanism, ParameterSet, joint_term_basis, parameters
+from pincal.model import (
+    THERMAL_REFERENCE_C,
+    Mechanism,
+    ParameterSet,
+    joint_term_basis,
+    joint_term_shift,
+    parameters,
+)
 
 __all__ = ["JointTermCorrection"]
 
@@ -33,11 +47,14 @@ class JointTermCorrection:
             start model: a compliance's load comes from its inertias, payload included).
         params: the joint-term parameters (no geometric ones).
         values: (n,) their identified values [their SI units].
+        temperature: the machine temperature at the targets [°C]; None: the thermal
+            terms' reference (20 °C, no expansion).
     """
 
     nominal: Mechanism
     params: ParameterSet
     values: np.ndarray
+    temperature: float | None = None
 
     @classmethod
     def of(
@@ -75,12 +92,64 @@ class JointTermCorrection:
     def __bool__(self) -> bool:
         return bool(self.values.size)
 
+    def at_temperature(self, celsius: float | None) -> JointTermCorrection:
+        """These terms at the machine temperature ``celsius`` [°C] (None: the reference)."""
+        return replace(self, temperature=None if celsius is None else float(celsius))
+
+    def _conditions(self, m: int) -> dict[str, np.ndarray | None]:
+        t = THERMAL_REFERENCE_C if self.temperature is None else self.temperature
+        return {"temperature": np.full(m, t)}
+
     def deflection(self, commands: np.ndarray) -> np.ndarray:
         """Joint changes ``δq = B(u) θ`` (m, n_act) at commands ``u`` (m, n_act) [rad, m]."""
         u = np.atleast_2d(np.asarray(commands, dtype=float))
         if not self:
             return np.zeros_like(u)
-        return joint_term_basis(self.nominal, self.params, u) @ self.values
+        return (
+            joint_term_basis(self.nominal, self.params, u, self._conditions(len(u))) @ self.values
+        )
+
+    def shift(self, commands: np.ndarray) -> np.ndarray | None:
+        """World position change (m, 3) of the measured frame at commands ``u`` [m].
+
+        None when no term moves the frame directly.
+        """
+        u = np.atleast_2d(np.asarray(commands, dtype=float))
+        if not self:
+            return None
+        S = joint_term_shift(self.nominal, self.params, u, self._conditions(len(u)))
+        return None if S is None else S @ self.values
+
+    def solve(self, solver: Mechanism, target: pin.SE3, q: np.ndarray) -> np.ndarray:
+        """The configuration reaching ``target`` with the frame's shift undone.
+
+        Args:
+            solver: the calibrated mechanism solving the inverse kinematics.
+            target: the target pose of the measured frame (world).
+            q: the configuration solved without the shift (the start).
+
+        Returns:
+            (nq,) configuration whose frame is at ``target − δp(u)``, ``u`` its command.
+
+        Raises:
+            ConvergenceError: the inverse kinematics or the iteration does not settle.
+        """
+        if self.shift(solver.actuators_of(q)[None]) is None:
+            return q  # no term moves the frame (cheap: no command iteration)
+        d_old = np.zeros(3)
+        for _ in range(_MAX_ITER):
+            u = self.commands(solver.actuators_of(q)[None])
+            d = self.shift(u)
+            if d is None:
+                return q
+            moved = pin.SE3(target.rotation, target.translation - d[0])
+            q = solver.inverse_configuration(moved, q)
+            if float(np.max(np.abs(d[0] - d_old))) < _TOL:
+                return q
+            d_old = d[0]
+        raise ConvergenceError(
+            f"the pose undoing the thermal shift did not settle in {_MAX_ITER} steps"
+        )
 
     def commands(self, joints: np.ndarray) -> np.ndarray:
         """Commands (m, n_act) that move the joints to ``joints`` (m, n_act) [rad, m].

@@ -30,7 +30,7 @@ from pincal.errors import MeasurementError
 from pincal.identification._cross_validation import kfold, position_errors
 from pincal.identification._result import IdentificationResult
 from pincal.measure import Measurements
-from pincal.model import Mechanism, actual_joint_values
+from pincal.model import Mechanism, actual_joint_values, actual_shift
 
 __all__ = ["CandidateScore", "Fitted", "ModelSelection", "fitted", "select_model"]
 
@@ -64,8 +64,11 @@ def fitted(nominal: Mechanism, result: IdentificationResult) -> Fitted:
     values = result.full_values
 
     def errors(meas: Measurements) -> np.ndarray:
-        q = actual_joint_values(nominal, params, values, meas.q_act)
-        return position_errors(mech, dataclasses.replace(meas, q_act=q))
+        q = actual_joint_values(nominal, params, values, meas.q_act, meas.conditions)
+        shift = actual_shift(nominal, params, values, meas.q_act, meas.conditions)
+        return position_errors(
+            mech, dataclasses.replace(meas, q_act=q, positions=meas.positions - shift)
+        )
 
     return Fitted(errors, int(np.sum(result.identified)), _neg2_loglik(result),
                   int(result.n_equations))  # fmt: skip

@@ -34,7 +34,7 @@ from pincal.model import (
     Linearisation,
     Mechanism,
     ParameterSet,
-    joint_term_basis,
+    joint_term_bases,
 )
 from pincal.model.kernels import jlog3_batch, log3_batch
 from pincal.sensitivity import sensitivities_batch
@@ -109,10 +109,9 @@ class CalibrationProblem:
         else:
             self.sigma = np.ones((m, k))
             self.noise_source = "estimate"
-        #: joint-term basis (m, n_act, n) at the commanded values (None: geometric only)
-        self._basis = (
-            joint_term_basis(mech, params, measurements.q_act) if params.joint_terms.size else None
-        )
+        #: joint-term bases at the commanded values: δq (m, n_act, n) and the measured
+        #: frame's δp (m, 3, n); None when no term acts that way
+        self._basis, self._shift = joint_term_bases(mech, params, measurements)
         self._qs: np.ndarray | None = None
         self._solved: tuple[Linearisation, Mechanism, BatchKinematics] | None = None
         #: start each solve from the first-order prediction of the parameter change
@@ -301,6 +300,8 @@ class CalibrationProblem:
         else:
             T = [mech.frame_placement(q) for q in qs]
             p, R = np.array([t.translation for t in T]), np.array([t.rotation for t in T])
+        if self._shift is not None:
+            p = p + self._shift @ values
         r = np.zeros((len(meas), 6))
         r[:, :3] = meas.positions - p
         D_rot = None
@@ -315,6 +316,8 @@ class CalibrationProblem:
         if not jacobian:
             return r_w, None, r_raw
         Js = sens.jacobian
+        if self._shift is not None:  # terms moving the frame: their position columns
+            Js = np.concatenate([Js[:, :3] + self._shift, Js[:, 3:]], axis=1)
         self._structural = (values.tobytes(), -np.asarray(Js)[:, self.rows])
         J = -np.concatenate([Js[:, :3], Js[:, 3:] if D_rot is None else D_rot @ Js[:, 3:]], 1)
         J_w = (J[:, self.rows] * w[:, :, None]).reshape(-1, len(self.params))

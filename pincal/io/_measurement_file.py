@@ -24,7 +24,9 @@
   (``r11 r12 r13 r21 … r33``, unitless); a position-only file has no rotation
   columns;
 - ``std_<component>`` columns are optional per-pose standard deviations (e.g. a
-  laser tracker's fit covariance), in the file's units.
+  laser tracker's fit covariance), in the file's units;
+- ``temperature_C`` is an optional per-pose machine temperature [°C] (for the
+  thermal-expansion term; see ``_condition_columns``).
 
 A laser-tracker file (``kind: targets``) holds target points instead of poses; see
 :mod:`pincal.io._tracker_file`.
@@ -37,6 +39,7 @@ other units scale by powers of ten and round-trip to one unit in the last place.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -53,16 +56,13 @@ from pincal.errors import (
     MeasurementError,
     MeasurementFormatError,
     TooFewPosesError,
-    UnknownNameError,
 )
 from pincal.identification import (
-    INSTRUMENT_PROFILES,
     QualityVerdict,
     check_measurements,
-    instrument_profile,
 )
+from pincal.io._condition_columns import TEMPERATURE_COLUMN, read_temperature
 from pincal.io._csv import (
-    Header,
     actuator_columns,
     fmt,
     header_value,
@@ -72,7 +72,14 @@ from pincal.io._csv import (
     write_csv,
 )
 from pincal.io._joint_columns import joint_columns, read_joints
-from pincal.io._names import is_decimal, is_non_finite, quote_value
+from pincal.io._measurement_header import (
+    MAX_COORDINATE,
+    NOISE_RANGE,
+    parse_components,
+    parse_instrument,
+    parse_noise,
+)
+from pincal.io._names import quote_value
 from pincal.io._tracker_file import TargetMeasurements, parse_target_limits, parse_targets
 from pincal.io._units import (
     ANGLE_UNITS,
@@ -80,7 +87,7 @@ from pincal.io._units import (
     actuator_write_factors,
     unit_factor,
 )
-from pincal.measure import Measurements, NoiseModel
+from pincal.measure import Measurements
 from pincal.model import COMPONENTS, Mechanism
 
 __all__ = [
@@ -97,7 +104,9 @@ MATRIX_COLUMNS = tuple(f"r{i}{j}" for i in range(1, 4) for j in range(1, 4))
 ORIENTATIONS = ("rotvec", "matrix")
 KINDS = ("pose", "targets")
 #: column names a pose-kind file gives a meaning (an actuated joint may not use them)
-_RESERVED = frozenset([*COMPONENTS, *MATRIX_COLUMNS, *(f"std_{c}" for c in COMPONENTS)])
+_RESERVED = frozenset(
+    [*COMPONENTS, *MATRIX_COLUMNS, *(f"std_{c}" for c in COMPONENTS), TEMPERATURE_COLUMN]
+)
 
 
 @dataclass(frozen=True)
@@ -136,48 +145,6 @@ def _unit_warning(verdict: QualityVerdict) -> str | None:
     """
     found = [i.message for i in verdict.issues if i.kind == "units"]
     return f"{found[0]}; {verdict.cause_text}" if found else None
-
-
-def _components(header: Header, name: str) -> list[str]:
-    comps = header_value(header, "components", "x y z rx ry rz", name).split()
-    bad = [c for c in comps if c not in COMPONENTS]
-    if bad or not comps or len(set(comps)) != len(comps):
-        raise MeasurementFormatError(
-            f"{name}: components {shown(comps)} invalid; choose distinct names from {COMPONENTS}"
-        )
-    return [c for c in COMPONENTS if c in comps]
-
-
-#: largest |measured coordinate| [m]: beyond, a cell is a typo (and spreads overflow)
-MAX_COORDINATE = 1e4
-
-#: a declared noise σ [mm, mrad] is 0 or in this range (1 nm .. 1 m)
-NOISE_RANGE = (1e-6, 1e3)
-
-
-def _parse_noise(header: Header, name: str) -> NoiseModel | None:
-    if "noise" not in header:
-        return None
-    vals = {}
-    for item in header_value(header, "noise", None, name).split():
-        key, _, v = item.partition("=")
-        if key not in ("position_mm", "orientation_mrad"):
-            raise MeasurementFormatError(
-                f"{name}: noise entry {shown(item)}; use position_mm=<σ> orientation_mrad=<σ>"
-            )
-        if not (is_decimal(v) or is_non_finite(v)):
-            raise MeasurementFormatError(
-                f"{name}: noise entry {shown(item)} is not a number; write e.g. position_mm=0.01"
-            )
-        sigma = float(v)
-        lo, hi = NOISE_RANGE
-        if not (sigma == 0 or lo <= sigma <= hi):
-            raise MeasurementFormatError(
-                f"{name}: noise entry {shown(item)} must be 0 or between {lo:g} and {hi:g} "
-                "(mm, mrad); a σ outside makes the weights under- or overflow"
-            )
-        vals[key.split("_")[0]] = sigma
-    return NoiseModel(vals.get("position", 0.0), vals.get("orientation", 0.0))
 
 
 def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
@@ -233,8 +200,8 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
         used.update(col[c] for c in cols)
         return data[:, [col[c] for c in cols]]
 
-    noise = _parse_noise(header, name)
-    instrument = _parse_instrument(header, name)
+    noise = parse_noise(header, name)
+    instrument = parse_instrument(header, name)
     targets = None
     if kind == "targets":
         tnames, local = parse_targets(header, lf, name)
@@ -250,10 +217,10 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
             point_std=point_std,
             max_residual=max_residual,
         )
-        comps = _components(header, name) if "components" in header else COMPONENTS
+        comps = parse_components(header, name) if "components" in header else COMPONENTS
         meas = targets.to_measurements(tuple(comps))
     else:
-        comps = _components(header, name)
+        comps = parse_components(header, name)
         positions = take(["x", "y", "z"], "position") / lf
         far = np.argwhere(np.abs(positions) > MAX_COORDINATE)
         if far.size:
@@ -303,6 +270,9 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
         meas = Measurements(
             q_act, positions, rotations, tuple(comps), frame, tuple(mech.actuated), noise, std
         )
+    if TEMPERATURE_COLUMN in col:
+        temperature = read_temperature(take([TEMPERATURE_COLUMN], "temperature")[:, 0], name)
+        meas = dataclasses.replace(meas, temperature=temperature)
     unknown = [columns[k] for k in range(len(columns)) if k not in used]
     if unknown:
         raise ColumnError(
@@ -317,19 +287,6 @@ def read_measurement_file(path: str | Path, mech: Mechanism) -> MeasurementFile:
     return MeasurementFile(
         meas, targets, lu, au, w is not None, (w,) if w else (), check, instrument
     )
-
-
-def _parse_instrument(header: Header, name: str) -> str | None:
-    if "instrument" not in header:
-        return None
-    value = header_value(header, "instrument", None, name)
-    try:
-        return instrument_profile(value).name
-    except UnknownNameError:
-        raise MeasurementFormatError(
-            f"{name}: instrument {shown(value)} unknown; use one of "
-            f"{', '.join(INSTRUMENT_PROFILES)} (or remove the '# instrument:' line)"
-        ) from None
 
 
 def read_measurements(path: str | Path, mech: Mechanism) -> Measurements:
@@ -391,8 +348,8 @@ def write_measurements(
     if clash:
         raise MeasurementFormatError(
             f"cannot write {path_text(path)}: actuated joint {shown(clash[0])} would appear "
-            "twice as a measurement column name (x y z rx ry rz r11…r33 std_*); rename the "
-            "joint"
+            "twice as a measurement column name (x y z rx ry rz r11…r33 std_* temperature_C); "
+            "rename the joint"
         )
     lines = [
         f"frame: {quote_value(meas.frame, 'frame')}",
@@ -411,7 +368,9 @@ def write_measurements(
     rot_cols = []
     if meas.rotations is not None:
         rot_cols = list(MATRIX_COLUMNS) if orientation == "matrix" else ["rx", "ry", "rz"]
-    std_cols = [] if meas.std is None else [f"std_{c}" for c in meas.components]
+    extra_cols = [] if meas.std is None else [f"std_{c}" for c in meas.components]
+    if meas.temperature is not None:
+        extra_cols.append(TEMPERATURE_COLUMN)
     afac = actuator_write_factors(actuator_units, len(meas.actuated))
     std_fac = np.array([lf if c in "xyz" else af for c in meas.components])
     rows = []
@@ -422,5 +381,7 @@ def write_measurements(
             row += list(R.ravel()) if orientation == "matrix" else list(pin.log3(R) * af)
         if meas.std is not None:
             row += list(meas.std[i] * std_fac)
+        if meas.temperature is not None:
+            row.append(meas.temperature[i])
         rows.append([fmt(v) for v in row])
-    return write_csv(path, "measurements", lines, cols + rot_cols + std_cols, rows)
+    return write_csv(path, "measurements", lines, cols + rot_cols + extra_cols, rows)

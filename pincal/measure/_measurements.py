@@ -102,6 +102,8 @@ class Measurements:
         std: optional (m, k) per-pose standard deviations of the measured components
             [m, rad] (e.g. from a laser tracker's per-pose fit covariance); overrides
             ``noise`` for weighting.
+        temperature: optional (m,) temperature of the machine at each pose [°C] (for
+            the thermal-expansion term, ``--model geometric+temperature``).
     """
 
     q_act: np.ndarray
@@ -112,9 +114,10 @@ class Measurements:
     actuated: tuple[str, ...]
     noise: NoiseModel | None = None
     std: np.ndarray | None = None
+    temperature: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        for name in ("q_act", "positions", "rotations", "std"):
+        for name in ("q_act", "positions", "rotations", "std", "temperature"):
             value = getattr(self, name)
             if value is None or isinstance(value, np.ndarray):
                 continue
@@ -148,6 +151,13 @@ class Measurements:
                 )
             if not np.all(np.isfinite(self.std) & (self.std > 0)):
                 raise MeasurementError("std must be finite and > 0")
+        if self.temperature is not None:
+            if self.temperature.shape != (m,):
+                raise MeasurementError(
+                    f"temperature must be ({m},) [°C], got {self.temperature.shape}"
+                )
+            if not np.all(np.isfinite(self.temperature)):
+                raise MeasurementError("temperature must be finite [°C]")
         for name, arr in (("q_act", self.q_act), ("positions", self.positions)):
             bad = np.nonzero(~np.all(np.isfinite(arr.reshape(m, -1)), axis=1))[0]
             if bad.size:
@@ -161,6 +171,11 @@ class Measurements:
     def component_indices(self) -> np.ndarray:
         """Indices (k,) of ``components`` in ``x y z rx ry rz``."""
         return np.array([COMPONENTS.index(c) for c in self.components])
+
+    @property
+    def conditions(self) -> dict[str, np.ndarray | None]:
+        """Per-pose conditions for the error-model terms: ``{"temperature": (m,) °C or None}``."""
+        return {"temperature": self.temperature}
 
     def subset(self, indices: np.ndarray | list[int] | slice) -> Measurements:
         """Measurements of the poses at ``indices``.
@@ -192,6 +207,7 @@ class Measurements:
             self.actuated,
             self.noise,
             None if self.std is None else self.std[idx],
+            None if self.temperature is None else self.temperature[idx],
         )
 
 

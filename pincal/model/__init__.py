@@ -35,8 +35,12 @@ from pincal.model._floor import DEFAULT_FLOOR, above_floor
 from pincal.model._home_search import conditioning, regular_home
 from pincal.model._joint_term_set import (
     actual_joint_values,
+    actual_shift,
+    check_term_data,
+    joint_term_bases,
     joint_term_basis,
     joint_term_prior,
+    joint_term_shift,
     split_model,
     with_joint_terms,
 )
@@ -83,6 +87,7 @@ from pincal.model._sidecar import (
     Workspace,
     validate_sidecar,
 )
+from pincal.model._term_temperature import REFERENCE_C as THERMAL_REFERENCE_C
 from pincal.model._urdf import (
     MOVABLE_TYPES,
     UrdfJoint,
@@ -102,6 +107,7 @@ __all__ = [
     "INSTRUMENT_LINK",
     "JOINT_KINDS",
     "MOVABLE_TYPES",
+    "THERMAL_REFERENCE_C",
     "TOOL_JOINT",
     "TOOL_LINK",
     "WORKSPACE_POSE_KEYS",
@@ -129,8 +135,10 @@ __all__ = [
     "above_floor",
     "active_limits",
     "actual_joint_values",
+    "actual_shift",
     "bundled_models",
     "chain_preset",
+    "check_term_data",
     "conditioning",
     "degenerate_translations",
     "describe_direction",
@@ -146,8 +154,10 @@ __all__ = [
     "find_local_sidecar",
     "full_parameters",
     "joint_term",
+    "joint_term_bases",
     "joint_term_basis",
     "joint_term_prior",
+    "joint_term_shift",
     "joint_term_units",
     "load_mechanism",
     "load_mjcf",

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Protocol
 
 import numpy as np
 
@@ -11,18 +12,38 @@ from pincal.model._joint_terms import joint_term, term_of_dof
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet, origin_parameter
 from pincal.model._term_compliance import Compliance
+from pincal.model._term_temperature import Temperature
 from pincal.model._term_transmission import Gain, Harmonics
 
 __all__ = [
+    "Conditions",
     "actual_joint_values",
+    "actual_shift",
+    "check_term_data",
+    "joint_term_bases",
     "joint_term_basis",
     "joint_term_prior",
+    "joint_term_shift",
     "split_model",
     "with_joint_terms",
 ]
 
 #: the bundled term kinds (importing their modules registers them)
-BUNDLED_TERMS = (Compliance, Gain, Harmonics)
+BUNDLED_TERMS = (Compliance, Gain, Harmonics, Temperature)
+
+#: per-pose conditions some terms need besides the joint values: {name: (m,) or None},
+#: e.g. ``{"temperature": T}`` [°C] (``Measurements.conditions``)
+Conditions = Mapping[str, "np.ndarray | None"]
+
+
+class _Measured(Protocol):
+    """What :func:`joint_term_bases` reads of a ``Measurements`` (the measure stage's)."""
+
+    @property
+    def q_act(self) -> np.ndarray: ...
+
+    @property
+    def conditions(self) -> Conditions: ...
 
 
 def split_model(spec: str) -> tuple[str, ...]:
@@ -74,11 +95,17 @@ def with_joint_terms(mech: Mechanism, params: ParameterSet, kinds: Sequence[str]
     return ParameterSet([*params.parameters, *extra], label)
 
 
-def joint_term_basis(mech: Mechanism, params: ParameterSet, q_act: np.ndarray) -> np.ndarray:
+def joint_term_basis(
+    mech: Mechanism, params: ParameterSet, q_act: np.ndarray, conditions: Conditions | None = None
+) -> np.ndarray:
     """Basis ``B`` (m, n_act, n) of the joint changes: ``δq = B @ values`` [rad, m].
 
     Columns of geometric parameters are zero. ``q_act`` (m, n_act) are the commanded
-    actuated values; ``mech`` the nominal mechanism the terms are evaluated on.
+    actuated values; ``mech`` the nominal mechanism the terms are evaluated on;
+    ``conditions`` the per-pose conditions a term needs (e.g. the temperature).
+
+    Raises:
+        ConditionError: a term's condition is missing or malformed.
     """
     q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
     B = np.zeros((q_act.shape[0], len(mech.actuated), len(params)))
@@ -91,9 +118,73 @@ def joint_term_basis(mech: Mechanism, params: ParameterSet, q_act: np.ndarray) -
         if p.joint not in act:
             raise ParameterError(f"joint term {p.name!r} is on a joint that is not actuated")
         if term.kind not in cache:
-            cache[term.kind] = term.basis(mech, q_act)
+            cache[term.kind] = term.basis_at(mech, q_act, conditions or {})
         B[:, act[p.joint], k] = cache[term.kind][:, act[p.joint], term.dofs.index(p.dof)]
     return B
+
+
+def joint_term_shift(
+    mech: Mechanism, params: ParameterSet, q_act: np.ndarray, conditions: Conditions | None = None
+) -> np.ndarray | None:
+    """Basis ``S`` (m, 3, n) of the measured frame's world position change ``δp = S @ values``.
+
+    None when no term of ``params`` moves the measured frame directly (the joint-space
+    terms); otherwise geometric and joint-space columns are zero. Arguments as for
+    :func:`joint_term_basis`.
+    """
+    q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
+    act = {a: i for i, a in enumerate(mech.actuated)}
+    cache: dict[str, np.ndarray | None] = {}
+    S: np.ndarray | None = None
+    for k in params.joint_terms:
+        p = params.parameters[k]
+        term = term_of_dof(p.dof)
+        assert term is not None
+        if term.kind not in cache:
+            cache[term.kind] = term.shift(mech, q_act, conditions or {})
+        part = cache[term.kind]
+        if part is None or p.joint not in act:
+            continue
+        if S is None:
+            S = np.zeros((q_act.shape[0], 3, len(params)))
+        S[:, :, k] = part[:, act[p.joint], :, term.dofs.index(p.dof)]
+    return S
+
+
+def joint_term_bases(
+    mech: Mechanism, params: ParameterSet, measurements: _Measured
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The bases of an identification: δq (m, n_act, n) and δp (m, 3, n) at the data.
+
+    ``measurements`` gives ``q_act`` (m, n_act) and ``conditions`` (a
+    :class:`pincal.measure.Measurements`). (None, None) without joint terms; δp is None
+    when no term moves the measured frame.
+
+    Raises:
+        ConditionError: data that cannot identify a term (:func:`check_term_data`).
+    """
+    if not params.joint_terms.size:
+        return None, None
+    cond, q_act = measurements.conditions, measurements.q_act
+    check_term_data(params, cond)
+    return (
+        joint_term_basis(mech, params, q_act, cond),
+        joint_term_shift(mech, params, q_act, cond),
+    )
+
+
+def check_term_data(params: ParameterSet, conditions: Conditions) -> None:
+    """Refuse measured ``conditions`` that cannot identify the joint terms of ``params``.
+
+    Raises:
+        ConditionError: e.g. a temperature term without a temperature that varies.
+    """
+    seen = set()
+    for k in params.joint_terms:
+        term = term_of_dof(params.parameters[k].dof)
+        if term is not None and term.kind not in seen:
+            seen.add(term.kind)
+            term.check_data(conditions)
 
 
 def joint_term_prior(params: ParameterSet) -> np.ndarray:
@@ -107,16 +198,35 @@ def joint_term_prior(params: ParameterSet) -> np.ndarray:
 
 
 def actual_joint_values(
-    mech: Mechanism, params: ParameterSet, values: np.ndarray, q_act: np.ndarray
+    mech: Mechanism,
+    params: ParameterSet,
+    values: np.ndarray,
+    q_act: np.ndarray,
+    conditions: Conditions | None = None,
 ) -> np.ndarray:
     """The joint values the machine actually takes: ``q + δq`` (m, n_act) [rad, m].
 
     ``values`` (n,) of ``params``; only its joint terms act (the geometric ones are
     applied to the mechanism by :meth:`ParameterSet.apply`). Used to simulate a
     machine with joint errors: measure ``params.apply(mech, values)`` at these values
-    and record the commanded ``q_act``.
+    and record the commanded ``q_act`` (and add :func:`actual_shift` to the positions).
     """
     q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
     if not params.joint_terms.size:
         return q_act.copy()
-    return q_act + joint_term_basis(mech, params, q_act) @ params.check_values(values)
+    return q_act + joint_term_basis(mech, params, q_act, conditions) @ params.check_values(values)
+
+
+def actual_shift(
+    mech: Mechanism,
+    params: ParameterSet,
+    values: np.ndarray,
+    q_act: np.ndarray,
+    conditions: Conditions | None = None,
+) -> np.ndarray:
+    """World position change (m, 3) of the measured frame by the terms [m] (zeros if none)."""
+    q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
+    S = joint_term_shift(mech, params, q_act, conditions) if params.joint_terms.size else None
+    if S is None:
+        return np.zeros((q_act.shape[0], 3))
+    return S @ params.check_values(values)

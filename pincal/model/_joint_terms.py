@@ -12,11 +12,17 @@ identification and reports treat them like the geometric parameters.
 The basis ``B`` is evaluated at the commanded joint values on the nominal mechanism
 (e.g. the gravity torque of a compliance term): the standard first-order model of
 elastostatic and transmission calibration, and it makes ``δq`` exactly linear in θ.
+
+A term may also need per-pose conditions besides the joint values (``needs``, e.g.
+the temperature of :mod:`pincal.model._term_temperature`), and may move the measured
+frame directly instead of (or besides) the joints: :meth:`JointTerm.shift`, a world
+position change ``δp = S · θ`` linear in θ, evaluated on the nominal mechanism too.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
@@ -48,6 +54,8 @@ class JointTerm(ABC):
     kind: ClassVar[str]
     dofs: ClassVar[tuple[str, ...]]
     prior: ClassVar[float]
+    #: per-pose conditions the term needs (``Measurements`` fields, e.g. ``"temperature"``)
+    needs: ClassVar[tuple[str, ...]] = ()
 
     @abstractmethod
     def unit(self, joint_type: str) -> str:
@@ -75,6 +83,26 @@ class JointTerm(ABC):
         Returns:
             (m, n_act, len(dofs)): ``δq[:, a] = B[:, a, :] @ θ_a`` [rad, m].
         """
+
+    def basis_at(
+        self, mech: Mechanism, q_act: np.ndarray, conditions: Mapping[str, np.ndarray | None]
+    ) -> np.ndarray:
+        """:meth:`basis` with the per-pose ``conditions`` ({name in ``needs``: (m,)})."""
+        return self.basis(mech, q_act)
+
+    def shift(
+        self, mech: Mechanism, q_act: np.ndarray, conditions: Mapping[str, np.ndarray | None]
+    ) -> np.ndarray | None:
+        """World position change of the measured frame, or None for a joint-space term.
+
+        Returns:
+            (m, n_act, 3, len(dofs)): ``δp = Σ_a S[:, a] @ θ_a`` [m per parameter unit].
+        """
+        return None
+
+    def check_data(self, conditions: Mapping[str, np.ndarray | None]) -> None:
+        """Raise when measured ``conditions`` cannot identify the term (default: fine)."""
+        del conditions  # nothing to check for a term that needs no conditions
 
 
 _TERMS: dict[str, JointTerm] = {}

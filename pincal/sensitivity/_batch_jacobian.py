@@ -19,6 +19,8 @@ kinematics lacks, a passive closure Jacobian of rank below min(rows, dofs) at ho
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
@@ -235,6 +237,7 @@ def sensitivities_batch(
     bk: BatchKinematics | None = None,
     values: np.ndarray | Linearisation | None = None,
     basis: np.ndarray | None = None,
+    conditions: Mapping[str, np.ndarray | None] | None = None,
 ) -> BatchSensitivity:
     """Sensitivity of the measured frame at N closed configurations.
 
@@ -247,6 +250,9 @@ def sensitivities_batch(
         values: (n,) parameter values (default zeros), or their :class:`Linearisation`.
         basis: (N, n_act, n) joint-term basis at the commanded joint values (see
             :mod:`pincal.sensitivity._joint_terms`); None: at the actuated values of qs.
+        conditions: per-pose conditions joint terms need (e.g. the temperature), used
+            when ``basis`` is None; the columns of terms moving the measured frame
+            (:func:`pincal.model.joint_term_shift`) then include that move.
 
     Returns:
         The :class:`BatchSensitivity` (equal to :func:`pose_sensitivity` pose by pose).
@@ -254,7 +260,7 @@ def sensitivities_batch(
     lin = params.linearise(values)
     if params.joint_terms.size:
         return joint_term_sensitivities(
-            sensitivities_batch, mech, params, qs, bk, lin.values, basis
+            sensitivities_batch, mech, params, qs, bk, lin.values, basis, conditions
         )
     qs = np.atleast_2d(np.asarray(qs, dtype=float))
     n = len(params)

@@ -27,6 +27,7 @@ as *breaking loop closure* and are neither base nor absorbed parameters.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -295,6 +296,7 @@ def identifiability(
     n_poses: int = 60,
     rng: np.random.Generator | None = None,
     rtol: float = RANK_RTOL,
+    conditions: Mapping[str, np.ndarray | None] | None = None,
 ) -> Identifiability:
     """Analyse which parameters the measured components can identify.
 
@@ -311,6 +313,8 @@ def identifiability(
         n_poses: number of random workspace poses sampled when ``q_act_rows`` is None.
         rng: random generator for the default poses.
         rtol: relative rank threshold.
+        conditions: per-pose conditions of ``q_act_rows`` that joint terms need (e.g.
+            ``{"temperature": (m,) °C}`` for a thermal term; ``Measurements.conditions``).
 
     Raises:
         InputLimitError: more parameters than ``Limits.parameters`` of the limits in force
@@ -326,7 +330,7 @@ def identifiability(
     )
     if q_act_rows is None:
         q_act_rows = sample_actuators(mech, n_poses, rng or np.random.default_rng(0))
-    J, breaking = jacobian_and_closure_breaking(mech, params, q_act_rows)
+    J, breaking = jacobian_and_closure_breaking(mech, params, q_act_rows, conditions=conditions)
     splitting = np.isin(params.names, degenerate_translations(mech))
     return analyse_jacobian(J, params.names, rtol, breaks_closure=breaking, splits_joint=splitting)
 

@@ -6,6 +6,8 @@ configurations; rows are the measured components (or those given).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
@@ -19,12 +21,17 @@ def _sensitivities(
     params: ParameterSet,
     q_act_rows: np.ndarray,
     values: np.ndarray | None,
+    conditions: Mapping[str, np.ndarray | None] | None = None,
 ):
-    """Batched sensitivities of the measured frame at the rows' closed configurations."""
+    """Batched sensitivities of the measured frame at the rows' closed configurations.
+
+    ``conditions``: per-pose conditions of the rows some joint terms need (e.g.
+    ``{"temperature": (m,) °C}``).
+    """
     lin = params.linearise(values)
     at = mech if not np.any(lin.values) else params.apply(mech, lin)
     qs, bk = at.configurations_batch(q_act_rows)
-    return sensitivities_batch(at, params, qs, bk, lin)
+    return sensitivities_batch(at, params, qs, bk, lin, conditions=conditions)
 
 
 def _rows(mech: Mechanism, components: tuple[str, ...] | None) -> list[int]:
@@ -89,8 +96,9 @@ def jacobian_and_closure_breaking(
     q_act_rows: np.ndarray,
     values: np.ndarray | None = None,
     components: tuple[str, ...] | None = None,
+    conditions: Mapping[str, np.ndarray | None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`identification_jacobian` and :func:`closure_breaking` from one pass."""
     rows = _rows(mech, components)
-    sens = _sensitivities(mech, params, q_act_rows, values)
+    sens = _sensitivities(mech, params, q_act_rows, values, conditions)
     return sens.jacobian[:, rows].reshape(-1, len(params)), sens.breaks_closure.copy()

@@ -4,15 +4,17 @@ A joint term changes the actuated joint values, ``q' = q + B(q) θ``; its column
 pose's derivative with respect to the actuated joints — exactly the column of that
 joint's ``offset`` parameter (the origin turned about the joint's own axis), closure
 corrections included — times the basis: ``∂pose/∂θ_k = Σ_a J_offset[:, :, a] B[:, a, k]``.
+A term moving the measured frame directly (a link's thermal expansion) adds its world
+position change ``S[:, :, k]`` to the position rows when the basis is evaluated here.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from pincal.model import Mechanism, ParameterSet, joint_term_basis, parameters
+from pincal.model import Mechanism, ParameterSet, joint_term_basis, joint_term_shift, parameters
 from pincal.sensitivity._jacobian import BatchSensitivity
 
 __all__ = ["joint_term_sensitivities"]
@@ -26,6 +28,7 @@ def joint_term_sensitivities(
     bk,
     values: np.ndarray,
     basis: np.ndarray | None,
+    conditions: Mapping[str, np.ndarray | None] | None = None,
 ):
     """Sensitivities of a parameter set with joint terms.
 
@@ -39,7 +42,8 @@ def joint_term_sensitivities(
         params: a set whose ``joint_terms`` is not empty.
         basis: (N, n_act, n) basis of δq (:func:`pincal.model.joint_term_basis`) at
             the commanded joint values; None: evaluated on ``mech`` at the actuated
-            values of ``qs``.
+            values of ``qs`` with ``conditions`` (the frame-moving terms included).
+        conditions: per-pose conditions the terms need (e.g. ``{"temperature": T}``).
 
     Returns:
         A :class:`BatchSensitivity` with all n columns.
@@ -47,10 +51,14 @@ def joint_term_sensitivities(
     n = len(params)
     offsets = parameters(mech, [f"{a}.offset" for a in mech.actuated])
     s_off = geometric(mech, offsets, qs, bk, None)
+    shift = None
     if basis is None:
         q_act = np.array([mech.actuators_of(q) for q in np.atleast_2d(qs)])
-        basis = joint_term_basis(mech, params, q_act)
+        basis = joint_term_basis(mech, params, q_act, conditions)
+        shift = joint_term_shift(mech, params, q_act, conditions)
     J = np.einsum("nra,nak->nrk", s_off.jacobian, basis)
+    if shift is not None:
+        J[:, :3] += shift
     breaks = np.zeros(n, dtype=bool)
     geo = np.setdiff1d(np.arange(n), params.joint_terms)
     if geo.size:

@@ -1,4 +1,4 @@
-"""Recovery of joint compliance, gain and harmonic terms at the Cramér–Rao bound.
+"""Recovery of joint compliance, gain, harmonic and thermal terms at the Cramér–Rao bound.
 
 A UR5 (example-robot-data, by name) — or, with ``--machine stewart``, the 6-UPS
 Stewart platform of ``models/stewart_6ups`` carrying a 20 kg payload (centre of mass
@@ -17,8 +17,14 @@ result reports): ≈ 1 when the estimate is efficient and its covariance honest
 (χ²_n / n for a known σ), and the same restricted to the joint terms
 (``Σ_jt`` the sub-block).
 
+With the ``temperature`` term (thermal expansion: the arm's link lengths, the Stewart
+platform's leg strokes; truth ~ N(0, 2e-5 /K)) each pose also gets a temperature drawn
+uniformly in ``--span`` (default 18–28 °C), and the identifiable set is found at those
+temperatures.
+
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py [--draws 100] [--poses 60]
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --machine stewart
+    PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --terms temperature
 """
 
 from __future__ import annotations
@@ -38,6 +44,7 @@ from pincal.model import (
     ParameterSet,
     Payload,
     actual_joint_values,
+    actual_shift,
     joint_term_prior,
     load_mechanism,
     sample_actuators,
@@ -50,6 +57,7 @@ NOISE = NoiseModel(position=0.01, orientation=0.01)  # [mm], [mrad]
 GEOMETRIC_SIGMA = 2e-4  # [m] or [rad]
 STEWART = Path(__file__).parents[2] / "models" / "stewart_6ups"
 SPINDLE = Payload(20.0, (0.05, -0.02, 0.10))  # [kg], [m] in the tool frame
+SPAN = (18.0, 28.0)  # [°C] temperatures of the poses with a thermal term
 
 
 @dataclass(frozen=True)
@@ -71,16 +79,31 @@ def setup(terms: tuple[str, ...], robot: str = "ur5") -> tuple[Mechanism, Parame
     return mech, with_joint_terms(mech, parameters(mech, "base"), terms)
 
 
-def draw(mech: Mechanism, params: ParameterSet, n_poses: int, rng: np.random.Generator) -> Draw:
+def draw(
+    mech: Mechanism,
+    params: ParameterSet,
+    n_poses: int,
+    rng: np.random.Generator,
+    span: tuple[float, float] = SPAN,
+) -> Draw:
     """One seeded calibration of a simulated machine with geometric and joint errors."""
     rows = sample_actuators(mech, n_poses, rng)
-    base = np.asarray(identifiability(mech, params, rows).base)
+    cond = None
+    if "1/K" in params.units:  # a thermal term: one temperature per pose
+        cond = {"temperature": rng.uniform(*span, n_poses)}
+    base = np.asarray(identifiability(mech, params, rows, conditions=cond).base)
     sigma = np.where(np.isnan(joint_term_prior(params)), GEOMETRIC_SIGMA, joint_term_prior(params))
     truth = np.zeros(len(params))
     truth[base] = rng.normal(0.0, sigma[base])
     actual = params.apply(mech, truth)
-    meas = simulate_measurements(actual, actual_joint_values(mech, params, truth, rows), NOISE, rng)
+    q = actual_joint_values(mech, params, truth, rows, cond)
+    meas = simulate_measurements(actual, q, NOISE, rng)
     meas = dataclasses.replace(meas, q_act=rows.copy())
+    if cond is not None:
+        shift = actual_shift(mech, params, truth, rows, cond)
+        meas = dataclasses.replace(
+            meas, positions=meas.positions + shift, temperature=cond["temperature"]
+        )
     res = identify(mech, params, meas, "gauss-newton")
     e = res.values - truth[res.identified]
     jt = np.isin(np.flatnonzero(res.identified), params.joint_terms)
@@ -94,11 +117,16 @@ def draw(mech: Mechanism, params: ParameterSet, n_poses: int, rng: np.random.Gen
 
 
 def study(
-    draws: int, n_poses: int, seed: int, terms: tuple[str, ...], robot: str = "ur5"
+    draws: int,
+    n_poses: int,
+    seed: int,
+    terms: tuple[str, ...],
+    robot: str = "ur5",
+    span: tuple[float, float] = SPAN,
 ) -> list[Draw]:
     mech, params = setup(terms, robot)
     rng = np.random.default_rng(seed)
-    return [draw(mech, params, n_poses, rng) for _ in range(draws)]
+    return [draw(mech, params, n_poses, rng, span) for _ in range(draws)]
 
 
 def mean_se(values: list[float]) -> tuple[float, float]:
@@ -117,17 +145,20 @@ def main() -> None:
         help="arm (--robot) or the Stewart platform with a 20 kg payload",
     )  # fmt: skip
     ap.add_argument("--terms", default=None, help="comma list (default: see above)")
+    ap.add_argument("--span", default="18,28", help="temperatures of the poses [°C] LOW,HIGH")
     args = ap.parse_args()
+    lo, hi = (float(v) for v in args.span.split(","))
     robot = "stewart" if args.machine == "stewart" else args.robot
     default = "compliance" if robot == "stewart" else "compliance,gain,harmonics"
     terms = tuple(t for t in (args.terms or default).split(",") if t)
     t0 = time.perf_counter()
-    out = study(args.draws, args.poses, args.seed, terms, robot)
+    out = study(args.draws, args.poses, args.seed, terms, robot, (lo, hi))
     seconds = time.perf_counter() - t0
     m, s = mean_se([d.maha for d in out])
     mt, st = mean_se([d.maha_terms for d in out])
     print(f"{len(out)} draws, {robot}, {args.poses} full poses, noise 0.01 mm / 0.01 mrad, "
-          f"terms {'+'.join(terms)} ({seconds:.0f} s)")  # fmt: skip
+          f"terms {'+'.join(terms)} ({seconds:.0f} s)"
+          + (f", temperatures {lo:g}–{hi:g} °C" if "temperature" in terms else ""))  # fmt: skip
     print(f"identified parameters: {out[0].n} ({out[0].n_terms} joint terms)")
     print(f"Mahalanobis error / n, all identified   mean {m:.4f} ± {s:.4f} (s.e.)")
     print(f"Mahalanobis error / n, joint terms only mean {mt:.4f} ± {st:.4f} (s.e.)")

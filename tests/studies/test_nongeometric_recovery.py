@@ -52,3 +52,15 @@ def test_leg_compliance_under_a_payload_recovered_at_the_bound():
     maha_terms = np.mean([d.maha_terms for d in out])
     assert abs(maha - 1) < 4 * np.sqrt(2 / 48 / len(out)), maha
     assert abs(maha_terms - 1) < 4 * np.sqrt(2 / 6 / len(out)), maha_terms
+
+
+@pytest.mark.parametrize(("robot", "n", "n_terms"), [("ur5", 35, 5), ("stewart", 48, 6)])
+def test_thermal_coefficients_recovered_at_the_bound(robot, n, n_terms):
+    """10 seeded calibrations at 18–28 °C: the arm's link lengths (wrist_2's absorbed by
+    shoulder_lift's) and the Stewart platform's leg strokes expanding with temperature."""
+    out = script.study(10, 60, seed=5, terms=("temperature",), robot=robot)
+    assert out[0].n == n and out[0].n_terms == n_terms
+    maha = np.mean([d.maha for d in out])
+    maha_terms = np.mean([d.maha_terms for d in out])
+    assert abs(maha - 1) < 4 * np.sqrt(2 / n / len(out)), maha
+    assert abs(maha_terms - 1) < 4 * np.sqrt(2 / n_terms / len(out)), maha_terms

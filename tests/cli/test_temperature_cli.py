@@ -1,0 +1,115 @@
+"""The thermal term on the command line: simulate with a temperature spread, calibrate
+``--model geometric+temperature``, compensate at a target temperature."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import yaml
+from click.testing import CliRunner
+
+from pincal.cli import main
+from pincal.io import read_commands, read_measurements, write_poses
+from pincal.model import actual_shift, load_mechanism, parameters, sample_actuators
+
+HOT = 27.0  # [°C] the machine's temperature at the targets
+
+
+@pytest.fixture(scope="module")
+def warm_arm(tmp_path_factory):
+    """A UR5 with geometric errors and links expanding 2e-5 /K, measured at 18–28 °C."""
+    tmp = tmp_path_factory.mktemp("thermal")
+    runner = CliRunner()
+    res = runner.invoke(main, ["simulate", "ur5", "--random", "60", "--temperature", "18,28",
+                               "--thermal", "2e-5", "--error-size", "0.2,1", "--noise",
+                               "0.005,0.005", "--out", str(tmp / "m.csv")])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    mech = load_mechanism("ur5")
+    rows = sample_actuators(mech, 10, np.random.default_rng(4))
+    poses = [mech.forward(r) for r in rows]
+    write_poses(tmp / "targets.csv", poses, actuated=mech.actuated, q_act=rows)
+    return tmp, mech, poses
+
+
+def _miss(tmp, mech, commands, poses, celsius) -> float:
+    """RMS position error [m] of the simulated machine at ``celsius`` driven by ``commands``."""
+    truth = json.loads((tmp / "m.truth.json").read_text())
+    geo = parameters(mech, [p["name"] for p in truth["parameters"]])
+    actual = geo.apply(mech, np.array([p["value"] for p in truth["parameters"]]))
+    alphas = truth["thermal_1_per_K"]
+    terms = parameters(mech, list(alphas))
+    shift = actual_shift(mech, terms, np.array(list(alphas.values())), commands,
+                         {"temperature": np.full(len(commands), celsius)})  # fmt: skip
+    e = [np.linalg.norm(actual.forward(u).translation + d - T.translation)
+         for u, d, T in zip(commands, shift, poses, strict=True)]  # fmt: skip
+    return float(np.sqrt(np.mean(np.square(e))))
+
+
+def test_simulate_writes_the_temperature_column(warm_arm):
+    tmp, mech, _ = warm_arm
+    meas = read_measurements(tmp / "m.csv", mech)
+    assert meas.temperature is not None and meas.temperature.shape == (60,)
+    assert 18.0 <= meas.temperature.min() and meas.temperature.max() <= 28.0
+    assert np.ptp(meas.temperature) > 5.0
+
+
+def test_thermal_calibration_compensates_at_the_target_temperature(warm_arm):
+    tmp, mech, poses = warm_arm
+    runner = CliRunner()
+    cal = tmp / "cal"
+    res = runner.invoke(main, ["calibrate", "ur5", "--data", str(tmp / "m.csv"), "--model",
+                               "geometric+temperature", "--out", str(cal)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    record = yaml.safe_load((cal / "joint_terms.yaml").read_text())
+    thermal = [t for t in record["terms"] if t["unit"] == "1/K"]
+    assert len(thermal) == 5  # wrist_2's expansion is along shoulder_lift's: absorbed
+    assert "T0 = 20 °C" in record["thermal"]
+    elbow = next(t for t in thermal if t["name"] == "elbow_joint.thermal")
+    assert abs(elbow["value"] - 2e-5) < 2 * elbow["two_sigma"]
+    misses = {}
+    for celsius in (None, HOT):
+        out = tmp / f"c{celsius}.csv"
+        args = ["compensate", str(cal), "--targets", str(tmp / "targets.csv"), "--out",
+                str(out), "--json"]  # fmt: skip
+        if celsius is not None:
+            args += ["--temperature", str(celsius)]
+        res = runner.invoke(main, args)
+        assert res.exit_code == 0, res.output
+        line = json.loads(res.stdout.strip().splitlines()[-1])["joint_terms"]["line"]
+        assert ("27 °C" if celsius else "20 °C (the reference") in line, line
+        _, commands = read_commands(out, mech)
+        misses[celsius] = _miss(tmp, mech, commands, poses, HOT)
+    print(f"RMS miss at {HOT} °C [µm]: {({k: round(v * 1e6, 2) for k, v in misses.items()})}")
+    assert misses[HOT] < 0.3 * misses[None], misses
+    assert misses[HOT] < 15e-6, misses  # [m]
+
+
+def test_temperature_needs_a_thermal_calibration(warm_arm, tmp_path):
+    tmp, _, _ = warm_arm
+    runner = CliRunner()
+    args = ["compensate", "ur5", "--targets", str(tmp / "targets.csv"), "--out",
+            str(tmp_path / "c.csv"), "--temperature", "25"]  # fmt: skip
+    res = runner.invoke(main, args)
+    assert res.exit_code != 0 and "thermal term" in res.output
+    flat = tmp_path / "flat.csv"  # one temperature for every pose: the term is refused
+    text = (tmp / "m.csv").read_text().splitlines()
+    head = next(i for i, line in enumerate(text) if line.startswith("shoulder_pan_joint"))
+    rows = [",".join([*line.split(",")[:-1], "23.5"]) for line in text[head + 1 :]]
+    flat.write_text("\n".join([*text[: head + 1], *rows]) + "\n")
+    args = ["calibrate", "ur5", "--data", str(flat), "--model", "geometric+temperature",
+            "--out", str(tmp_path / "cal")]  # fmt: skip
+    res = runner.invoke(main, args)
+    assert res.exit_code != 0
+    assert "ConditionError" in res.output and "varies across poses" in res.output
+
+
+def test_info_analyses_the_term_at_spread_temperatures_and_says_so():
+    args = ["info", "ur5", "--preset", "base", "--model", "geometric+temperature", "--json"]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout.strip().splitlines()[-1])
+    assert doc["presets"][0]["parameters"] == 30 + 6
+    assert doc["presets"][0]["identifiable"] == 30 + 5  # wrist_2's along shoulder_lift's
+    assert any("only when the temperature varies" in n and "18–28 °C" in n for n in doc["notes"])
