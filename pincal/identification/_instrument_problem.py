@@ -28,9 +28,9 @@ from pincal.identification._data_blocks import ArtefactBlock, DataBlock, data_bl
 from pincal.identification._problem import TRIAL_FAILURES
 from pincal.identification._shared_terms import SharedUnknowns
 from pincal.measure import (
+    Artefact,
     InstrumentData,
     Measurements,
-    SocketData,
 )
 from pincal.model import Mechanism, ParameterSet
 from pincal.sensitivity import Identifiability, analyse_jacobian, pose_sensitivity
@@ -38,7 +38,7 @@ from pincal.sensitivity.kernels import jacobian_plan
 
 __all__ = ["Dataset", "InstrumentProblem"]
 
-Dataset = InstrumentData | Measurements | SocketData
+Dataset = InstrumentData | Measurements | Artefact
 
 
 class InstrumentProblem:
