@@ -101,16 +101,18 @@ def validate(
         inputs |= {f"CALIBRATION's {n}": calibration / n
                    for n in (IDENTIFICATION_FILE, MANIFEST)}  # fmt: skip
         guard_paths(inputs, {"--out": out, "--folds-out": folds_out})
-    cv_doc = None
+    cv = cv_doc = None
     if cv_folds is not None:
-        from pincal.cli._cv import format_cv, run_cv
+        from pincal.cli._cv import run_cv
+        from pincal.report import cross_validation_text
 
-        cv_doc = run_cv(read_calibration(calibration), cv_folds, cv_seed, folds_out)
+        cv = run_cv(read_calibration(calibration), cv_folds, cv_seed, folds_out)
+        cv_doc = cv.to_dict()
         if data is None:
             only = {"calibration": str(calibration), "cv": cv_doc}
             if out is not None:
                 atomic_write_text(out, json.dumps(only, indent=1) + "\n")
-            click.echo(json.dumps(only) if as_json else format_cv(cv_doc), nl=as_json)
+            click.echo(json.dumps(only) if as_json else cross_validation_text(cv), nl=as_json)
             return
     assert data is not None
     from pincal.sensitivity import parameters
@@ -182,7 +184,7 @@ def validate(
                        f"{m['after_rms_position_mm']:.4f} mm (max "
                        f"{m['after_max_position_mm']:.4f} mm); the table above: the first "
                        "marker")  # fmt: skip
-        if cv_doc is not None:
-            from pincal.cli._cv import format_cv
+        if cv is not None:
+            from pincal.report import cross_validation_text
 
-            click.echo(format_cv(cv_doc), nl=False)
+            click.echo(cross_validation_text(cv), nl=False)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from pincal.report._calibration import calibration_report
 from pincal.report._campaign_notes import campaign_notes
+from pincal.report._cv_text import cross_validation_text
 from pincal.report._document import ReportFiles, Section, Table, write_report
 from pincal.report._plots import (
     ErrorStats,
@@ -33,6 +34,7 @@ __all__ = [
     "calibration_report",
     "calibration_text",
     "campaign_notes",
+    "cross_validation_text",
     "error_statistics",
     "plot_convergence",
     "plot_error_histogram",

@@ -10,6 +10,10 @@ later stage).
 
 from __future__ import annotations
 
+from pincal.validation._cv_summary import (
+    CrossValidationBaseline,
+    CrossValidationSummary,
+)
 from pincal.validation._held_out import (
     PREDICTION_BOUNDS,
     HeldOutValidation,
@@ -36,6 +40,8 @@ from pincal.validation._pose_errors import (
 __all__ = [
     "ORIENTATION_CONVENTION",
     "PREDICTION_BOUNDS",
+    "CrossValidationBaseline",
+    "CrossValidationSummary",
     "HeldOutValidation",
     "PointAccuracy",
     "PoseCharacteristics",
