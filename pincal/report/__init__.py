@@ -11,6 +11,7 @@ from pincal.report._calibration import calibration_report
 from pincal.report._campaign_notes import campaign_notes
 from pincal.report._cv_text import cross_validation_text
 from pincal.report._document import ReportFiles, Section, Table, write_report
+from pincal.report._marker_text import marker_lines
 from pincal.report._plots import (
     ErrorStats,
     error_statistics,
@@ -36,6 +37,7 @@ __all__ = [
     "campaign_notes",
     "cross_validation_text",
     "error_statistics",
+    "marker_lines",
     "plot_convergence",
     "plot_error_histogram",
     "plot_errors_before_after",
