@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from pincal.errors import MeasurementError
 from pincal.measure import Artefact, SharedTerms
 from pincal.model import Mechanism
 
@@ -128,6 +129,7 @@ class SharedUnknowns:
         R = np.asarray(Rs)
         cols = self.columns[i]
         raw, dp, dw, dth, dphi = d.residuals(P, R, x[col : col + k], x[cols])
+        _check_shapes(d, (raw, dp, dw, dth, dphi), (m, d.dim), (3, 3, k, cols.size))
         J = np.zeros((m, d.dim, len(x)))
         if sens is not None:
             # a local rotation ω of the frame: ∂/∂x = ∂r/∂p ∂p/∂x + ∂r/∂ω ∂ω/∂x
@@ -151,3 +153,20 @@ class SharedUnknowns:
             raws.append(r)
             rows.append(J)
         return np.concatenate(raws)[:, None], np.vstack(rows)[:, None, :]
+
+
+def _check_shapes(d: Artefact, arrays: tuple[np.ndarray, ...], head: tuple[int, int],
+                  widths: tuple[int, ...]) -> None:  # fmt: skip
+    """Refuse residuals of a kind that are not (m, dim) with derivatives (m, dim, ·).
+
+    Raises:
+        MeasurementError: naming the kind, the item and the shapes expected and got.
+    """
+    names = ("r", "∂r/∂p", "∂r/∂ω", "∂r/∂θ", "∂r/∂φ")
+    wanted = [head, *((*head, w) for w in widths)]
+    for name, a, want in zip(names, arrays, wanted, strict=True):
+        if np.shape(a) != tuple(want):
+            raise MeasurementError(
+                f"artefact kind {d.kind!r}: residuals() returned {name} of shape "
+                f"{np.shape(a)}, expected {tuple(want)} (m poses × dim {d.dim} × columns)"
+            )

@@ -29,6 +29,8 @@ from typing import ClassVar
 
 import numpy as np
 
+from pincal.errors import MeasurementError
+
 __all__ = ["Artefact", "SharedTerms"]
 
 
@@ -132,8 +134,18 @@ class SharedTerms:
         self.sigma: np.ndarray | None = None
 
     def index(self, d: Artefact) -> np.ndarray:
-        """(s,) positions in :attr:`names` of the shared names of dataset ``d``."""
+        """(s,) positions in :attr:`names` of the shared names of dataset ``d``.
+
+        Raises:
+            MeasurementError: ``d`` reads a shared name the terms do not have.
+        """
         where = {n: i for i, n in enumerate(self.names)}
+        missing = [n for n in d.shared_names if n not in where]
+        if missing:
+            raise MeasurementError(
+                f"artefact kind {d.kind!r}: shared unknowns {missing} of a dataset are not "
+                f"among the terms' names {list(self.names)}"
+            )
         return np.array([where[n] for n in d.shared_names], dtype=int)
 
     def start(

@@ -228,3 +228,21 @@ def test_an_unregistered_artefact_is_refused(ur5):
     loose = Loose(d.q_act, d.nest, d.centres, d.actuated, d.frame)
     with pytest.raises(MeasurementError, match="unknown artefact kind 'loose'"):
         InstrumentProblem(mech, params, [loose])
+
+
+def test_residuals_of_the_wrong_shape_are_refused(nest_kind, ur5):
+    mech, params, actual = ur5
+
+    @dataclass(frozen=True, eq=False)
+    class Flat(Nest):
+        kind: ClassVar[str] = "flat_nest"
+
+        def residuals(self, P, Rs, theta, phi):
+            r, dp, dw, dth, dphi = super().residuals(P, Rs, theta, phi)
+            return r.reshape(-1), dp, dw, dth, dphi  # (3m,), not (m, 3)
+
+    add_instrument_kind(Flat)
+    d = _nests(actual, 1, np.random.default_rng(2), None)
+    flat = Flat(d.q_act, d.nest, d.centres, d.actuated, d.frame)
+    with pytest.raises(MeasurementError, match=r"'flat_nest': residuals\(\) returned r of shape"):
+        InstrumentProblem(mech, params, [flat]).evaluate(np.zeros(len(params) + 3))
