@@ -152,7 +152,10 @@ class ArtefactBlock(DataBlock):
     def __init__(self, data: Artefact, label: str, mech: Mechanism, params: ParameterSet,
                  P0: np.ndarray) -> None:  # fmt: skip
         self.data, self.label = data, label
-        self.sigma = np.asarray(data.sigma, dtype=float).reshape(len(data), data.dim)
+        self.sigma = np.asarray(data.sigma, dtype=float)
+        if self.sigma.shape != (len(data), data.dim):
+            raise MeasurementError(f"artefact kind {data.kind!r}: sigma must be (m, dim) = "
+                                   f"{(len(data), data.dim)}, got {self.sigma.shape}")  # fmt: skip
         self.own_names = tuple(f"{label}.{n}" for n in data.parameter_names)
         self.own_units = tuple(data.parameter_units)
         self.theta0 = np.zeros(len(self.own_names))  # Artefact.start, by SharedUnknowns.start
@@ -179,7 +182,13 @@ def data_block(d: Any, label: str, mech: Mechanism, params: ParameterSet,
         return PoseSensorBlock(d, label, mech, params, P0)
     if isinstance(d, InstrumentData):
         return ScalarBlock(d, label, mech, params, P0)
-    if isinstance(d, Artefact) and artefact_class(d.kind) is type(d):
+    if isinstance(d, Artefact):
+        cls = artefact_class(d.kind)
+        if cls is not type(d):
+            raise MeasurementError(
+                f"{type(d).__name__} has the kind name {d.kind!r} of {cls.__name__}; give it "
+                "its own kind name and register it with add_instrument_kind"
+            )
         return ArtefactBlock(d, label, mech, params, P0)
     raise MeasurementError(
         "a joint fit takes pose measurements, scalar instrument readings (InstrumentData) "

@@ -217,7 +217,7 @@ def test_a_nest_file_beside_pose_measurements(nest_kind, ur5):
     assert prob.labels == ["nest0", "pose1"] and len(prob.blocks[0].sigma) == len(nests)
 
 
-def test_an_unregistered_artefact_is_refused(ur5):
+def test_an_unregistered_artefact_is_refused(nest_kind, ur5):
     mech, params, actual = ur5
 
     @dataclass(frozen=True, eq=False)
@@ -228,6 +228,14 @@ def test_an_unregistered_artefact_is_refused(ur5):
     loose = Loose(d.q_act, d.nest, d.centres, d.actuated, d.frame)
     with pytest.raises(MeasurementError, match="unknown artefact kind 'loose'"):
         InstrumentProblem(mech, params, [loose])
+
+    @dataclass(frozen=True, eq=False)
+    class Copy(Nest):  # the kind name of Nest, not its class
+        pass
+
+    copy = Copy(d.q_act, d.nest, d.centres, d.actuated, d.frame)
+    with pytest.raises(MeasurementError, match="has the kind name 'nest' of Nest"):
+        InstrumentProblem(mech, params, [copy])
 
 
 def test_residuals_of_the_wrong_shape_are_refused(nest_kind, ur5):
