@@ -16,7 +16,7 @@ from pincal.identification import MarkerFit, Prior
 from pincal.measure import MarkerSetup, marker_frame
 from pincal.model import BASE_JOINT, TOOL_JOINT
 
-__all__ = ["marker_lines"]
+__all__ = ["marker_lines", "solver_line"]
 
 
 def _nums(v: Sequence[float | None]) -> str:
@@ -96,9 +96,16 @@ def marker_lines(
         tried = "; ".join(("none" if s is None else f"σ {s:g}") + f" → {rms:.3f} mm"
                           for s, rms in prior_cv)  # fmt: skip
         lines.append(f"  chosen by 5-fold cross-validation (seed 0), held-out RMS: {tried}")
-    if fit.method != method and loss != "linear":
-        lines.append(f"solver: {fit.method} (the {loss} loss runs Levenberg–Marquardt)")
-    elif fit.method != method:
-        lines.append(f"solver: {fit.method} (switched from {method})")
+    solver = solver_line(fit.method, method, loss)
+    lines += [solver] if solver else []
     lines += [f"note: {n}" for n in notes]
     return lines
+
+
+def solver_line(used: str, asked: str, loss: str) -> str | None:
+    """Why the solver ``used`` is not the one ``asked`` for (None when it is)."""
+    if used == asked:
+        return None
+    if loss != "linear":
+        return f"solver: {used} (the {loss} loss runs Levenberg–Marquardt)"
+    return f"solver: {used} (switched from {asked})"
