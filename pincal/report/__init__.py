@@ -24,7 +24,7 @@ from pincal.report._plots import (
 )
 from pincal.report._sections import block_label
 from pincal.report._text import calibration_text, quality_lines
-from pincal.report._validation_text import validation_text
+from pincal.report._validation_text import marker_errors_text, validation_text
 
 __all__ = [
     "ErrorStats",
@@ -37,6 +37,7 @@ __all__ = [
     "campaign_notes",
     "cross_validation_text",
     "error_statistics",
+    "marker_errors_text",
     "marker_lines",
     "plot_convergence",
     "plot_error_histogram",

@@ -32,6 +32,10 @@ from pincal.validation._iso_cube import (
     TestCube,
     iso_test_cube,
 )
+from pincal.validation._marker_errors import (
+    MarkerErrors,
+    marker_errors,
+)
 from pincal.validation._pose_errors import (
     PoseErrors,
     pose_errors,
@@ -43,11 +47,13 @@ __all__ = [
     "CrossValidationBaseline",
     "CrossValidationSummary",
     "HeldOutValidation",
+    "MarkerErrors",
     "PointAccuracy",
     "PoseCharacteristics",
     "PoseErrors",
     "TestCube",
     "iso_test_cube",
+    "marker_errors",
     "point_accuracy",
     "pose_characteristics",
     "pose_errors",
