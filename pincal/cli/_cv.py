@@ -4,19 +4,21 @@ Every fold is refitted from scratch on the other folds — for a marker calibrat
 closed-form registration too, and ``--prior auto`` chooses its strength again inside the
 fold — so nothing of a held-out pose reaches its prediction. The baseline is the
 registration-only model (instrument frame + marker: the robot left uncalibrated) for a
-marker calibration, the nominal model otherwise. Units: mm.
+marker calibration, the nominal model otherwise. The outcome is a
+:class:`pincal.validation.CrossValidationSummary`; :func:`pincal.report.cross_validation_text`
+renders it.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from pincal.errors import PincalError
+from pincal.validation import CrossValidationBaseline, CrossValidationSummary
 
-__all__ = ["format_cv", "run_cv"]
+__all__ = ["run_cv"]
 
 
 def _pose_fit(cal):
@@ -44,13 +46,17 @@ def _pose_fit(cal):
     return meas, fit, lambda m: nominal
 
 
-def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> dict[str, Any]:
-    """The ``cv`` object of ``validate --json`` (held-out RMS / max in mm, folds, verdict)."""
+def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> CrossValidationSummary:
+    """The cross-validation of ``validate --cv`` (its ``to_dict()``: the ``cv`` JSON)."""
     from pincal.cli._socket_cv import is_socket_calibration
     from pincal.identification import compare, cross_validate
 
     if is_socket_calibration(cal):
-        return _socket_doc(cal, k, seed, folds_out)
+        from pincal.cli._socket_cv import socket_cv
+
+        summary = socket_cv(cal, k, seed)
+        _write_folds(summary.folds, summary.poses, folds_out)
+        return summary
     markers = cal.manifest.get("markers")
     if markers:
         from pincal.cli._markers import fold_fitter, rebuild
@@ -67,101 +73,25 @@ def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> dict[str, Any]:
     ref = cross_validate(base, meas, k, seed)
     gain, se, beats = compare(full, ref)
     _write_folds(full.folds, poses, folds_out)
-    after = cal.result.after
-    doc = {
-        "k": k,
-        "seed": seed,
-        "poses": poses,
-        "folds": [[int(i) for i in rows] for rows in full.folds],
-        "fit_rms_mm": float(after.rms_position) * 1e3,
-        **full.to_dict(),
-        "baseline": {"model": baseline_name, **ref.to_dict()},
-        "gain_mse_mm2": gain * 1e6,
-        "gain_standard_error_mm2": se * 1e6,
-        "beats_baseline": bool(beats),
-    }
-    doc["verdict"] = _verdict(doc)
-    return doc
+    return CrossValidationSummary(
+        k, seed, poses, tuple(tuple(int(i) for i in rows) for rows in full.folds),
+        float(cal.result.after.rms_position), full.rms, full.max, _fold_fit(full),
+        CrossValidationBaseline(baseline_name, ref.rms, ref.max, _fold_fit(ref)),
+        bool(beats), gain_mse=gain, gain_standard_error=se,
+    )  # fmt: skip
+
+
+def _fold_fit(cv) -> float:
+    """RMS over the folds of each fold fit's RMS on its own poses [m]."""
+    return float(np.sqrt(np.mean(cv.fit_rms**2)))
 
 
 def _write_folds(folds, poses: int, folds_out: Path | None) -> None:
     fold_of = np.empty(poses, dtype=int)
     for j, rows in enumerate(folds):
-        fold_of[rows] = j
+        fold_of[np.asarray(rows, dtype=int)] = j
     if folds_out is not None:
         from pincal.io import atomic_write_text
 
         text = "pose,fold\n" + "".join(f"{i},{f}\n" for i, f in enumerate(fold_of))
         atomic_write_text(folds_out, text)
-
-
-def _socket_doc(cal, k: int, seed: int, folds_out: Path | None) -> dict[str, Any]:
-    from pincal.cli._socket_cv import socket_cv
-
-    nums, folds, poses = socket_cv(cal, k, seed)
-    _write_folds(folds, poses, folds_out)
-    full = nums["socket_distance_error_rms_mm"]
-    base = nums["baseline"]["socket_distance_error_rms_mm"]
-    doc = {
-        "k": k,
-        "seed": seed,
-        "poses": poses,
-        "folds": [[int(i) for i in rows] for rows in folds],
-        "fit_rms_mm": float(cal.result.after.rms_position) * 1e3,
-        **nums,
-        "beats_baseline": bool(full < base),
-    }
-    doc["verdict"] = (
-        f"held-out socket-distance error {full:.4f} mm RMS over the folds (the nominal "
-        f"model: {base:.4f} mm); held-out seating error {nums['held_out_rms_mm']:.4f} mm RMS"
-    )
-    return doc
-
-
-def _verdict(doc: dict) -> str:
-    full, base = doc["held_out_rms_mm"], doc["baseline"]["held_out_rms_mm"]
-    se = doc["gain_standard_error_mm2"]
-    gain = doc["gain_mse_mm2"]
-    name = doc["baseline"]["model"]
-    if doc["beats_baseline"]:
-        return (
-            f"the calibration beats the {name} on held-out poses: {full:.3f} mm against "
-            f"{base:.3f} mm RMS (mean squared error lower by {gain:.3g} ± {se:.2g} mm²)"
-        )
-    return (
-        f"the calibration does NOT beat the {name} by more than its standard error: "
-        f"{full:.3f} mm against {base:.3f} mm RMS held-out (gain {gain:.3g} ± {se:.2g} mm²); "
-        "the data do not support the full model — use the simpler one, or measure more poses"
-    )
-
-
-def format_cv(doc: dict) -> str:
-    """The printed cross-validation block (mm)."""
-    b = doc["baseline"]
-    socket = "socket_distance_error_rms_mm" in doc
-    registration = b["model"] == "registration only"
-    lines = [
-        "",
-        f"cross-validation: {doc['k']} folds over {doc['poses']} poses (seed {doc['seed']}); "
-        "every fold refitted without its poses",
-        "                       fit RMS   fold fit RMS   held-out RMS   held-out max   [mm]",
-        f"  calibrated model  {doc['fit_rms_mm']:10.3f}   {doc['fold_fit_rms_mm']:12.3f}   "
-        f"{doc['held_out_rms_mm']:12.3f}   {doc['held_out_max_mm']:12.3f}",
-        f"  {b['model'][:17]:17s} {'':10s}   {b['fold_fit_rms_mm']:12.3f}   "
-        f"{b['held_out_rms_mm']:12.3f}   {b['held_out_max_mm']:12.3f}",
-        "  (registration only: instrument frame + marker fitted, the robot uncalibrated)"
-        if registration
-        else "  (nominal model: the model before calibration)",
-    ]
-    if socket:
-        lines[2] = lines[2].replace("held-out RMS", "seating RMS ")
-        lines += [
-            "  held-out socket-distance error (mean predicted ball centres of each "
-            "socket's held-out seatings, minus the known distance) [mm]:",
-            f"  calibrated model  RMS {doc['socket_distance_error_rms_mm']:.4f}   max "
-            f"{doc['socket_distance_error_max_mm']:.4f}",
-            f"  nominal model     RMS {b['socket_distance_error_rms_mm']:.4f}   max "
-            f"{b['socket_distance_error_max_mm']:.4f}",
-        ]
-    lines.append(doc["verdict"])
-    return "\n".join(lines) + "\n"

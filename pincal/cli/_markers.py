@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NamedTuple
 
 import click
 
@@ -23,8 +23,8 @@ from pincal.errors import PincalError
 
 __all__ = [
     "PRIOR_GRID",
+    "MarkerCalibration",
     "marker_calibration",
-    "marker_lines",
     "marker_options",
     "parse_prior",
     "setup_from_options",
@@ -164,15 +164,33 @@ def _choose_prior(mech, setup, meas, preset: str, method: str, loss: str = "line
     return best[1], table
 
 
+class MarkerCalibration(NamedTuple):
+    """A marker calibration as :func:`marker_calibration` ran it.
+
+    Attributes:
+        fit: the fit (:class:`pincal.identification.MarkerFit`).
+        meas: one measurement set per marker (copies of one marker left out).
+        setup: the marker set-up fitted (copies left out).
+        prior: the prior on the machine's parameters, or None.
+        prior_cv: ``--prior auto``'s table (σ or None, held-out RMS [mm]), or None.
+        doc: the ``markers`` entry of the manifest / identification.json: the setup,
+            the registration, the prior (and the table of ``auto``), the notes.
+    """
+
+    fit: Any
+    meas: Any
+    setup: Any
+    prior: Any
+    prior_cv: list[tuple[float | None, float]] | None
+    doc: dict
+
+
 def marker_calibration(model: str, data: str, setup, preset: str | None, method: str,
                        prior_spec: str | None, loss: str = "linear",
-                       progress: bool = True):  # fmt: skip
-    """Read the marker table, choose the prior, fit. Returns (fit, measurements, doc).
+                       progress: bool = True) -> MarkerCalibration:  # fmt: skip
+    """Read the marker table, choose the prior, fit (see :class:`MarkerCalibration`).
 
-    ``measurements`` has one set per marker (copies of one marker left out, said on
-    stderr and in the notes). ``doc`` is the ``markers`` entry of the manifest /
-    identification.json: the setup, the registration, the prior (and the
-    cross-validation table of ``auto``), the notes.
+    Copies of one marker are left out, said on stderr and in the notes.
     """
     from pincal.identification import Prior, fit_markers
     from pincal.io import distinct_markers, read_marker_data
@@ -229,7 +247,7 @@ def marker_calibration(model: str, data: str, setup, preset: str | None, method:
         "notes": [*copies, *fit.notes],
         "held_weak": list(fit.held_weak),
     }  # fmt: skip
-    return fit, meas, doc
+    return MarkerCalibration(fit, meas, setup, prior, table, doc)
 
 
 def _identified(fit, markers: int = 1) -> dict:
@@ -260,63 +278,6 @@ def _identified(fit, markers: int = 1) -> dict:
         ],
         "more_markers_2sigma_mm": [sig(marker_frame(k)[0], "tx ty tz") for k in range(1, markers)],
     }
-
-
-def marker_lines(doc: dict) -> list[str]:
-    """The report lines of a marker calibration (registration, prior, guards)."""
-    r = doc["registration"]
-    mk = ", ".join(f"{v:.2f}" for v in r["marker_mm"])
-    more = [" ".join(c) for c in doc.get("more_columns") or []]
-    also = "".join(f"; marker {k + 2}: columns {c}" for k, c in enumerate(more))
-    lines = [
-        "",
-        f"marker on {doc['link']} (columns {' '.join(doc['columns'])}, {doc['length_unit']}"
-        f"{also}); instrument frame {doc['instrument_frame']}",
-        f"registration (closed form, {r['iterations']} alternations): RMS {r['rms_mm']:.3f} mm; "
-        f"marker [{mk}] mm in {doc['link']}",
-    ]
-    ident = doc.get("identified")
-    if ident:
-
-        def nums(v: list) -> str:
-            return ", ".join("–" if a is None else f"{a:.2f}" for a in v)
-
-        lines += [
-            f"identified instrument frame: translation [{nums(ident['instrument_translation_mm'])}]"
-            f" mm, rotation rpy [{nums(ident['instrument_rotation_rpy_mrad'])}] mrad; 2σ of "
-            f"base_frame tx ty tz rx ry rz [{nums(ident['instrument_2sigma_mm_mrad'])}] mm/mrad",
-            f"identified marker [{nums(ident['marker_mm'])}] mm in {doc['link']}; 2σ of "
-            f"tool_frame tx ty tz [{nums(ident['marker_2sigma_mm'])}] mm "
-            "(–: held, or absorbed by another parameter)",
-        ]
-        for k, (v, two) in enumerate(
-            zip(
-                ident.get("more_markers_mm") or [],
-                ident.get("more_markers_2sigma_mm") or [],
-                strict=True,
-            )
-        ):
-            lines.append(f"identified marker {k + 2} [{nums(v)}] mm in {doc['link']}; 2σ of "
-                         f"marker{k + 2}_frame tx ty tz [{nums(two)}] mm")  # fmt: skip
-    p = doc.get("prior")
-    if p is None:
-        lines.append("prior: none")
-    else:
-        lines.append(f"prior on the machine's parameters: σ {p['length_mm']:.3g} mm, "
-                     f"{p['angle_mrad']:.3g} mrad about nominal")  # fmt: skip
-    if doc.get("prior_cv"):
-        tried = "; ".join(
-            ("none" if t["sigma"] is None else f"σ {t['sigma']:g}")
-            + f" → {t['held_out_rms_mm']:.3f} mm"
-            for t in doc["prior_cv"]
-        )
-        lines.append(f"  chosen by 5-fold cross-validation (seed 0), held-out RMS: {tried}")
-    if doc["solver"] != doc["method"] and doc.get("loss", "linear") != "linear":
-        lines.append(f"solver: {doc['solver']} (the {doc['loss']} loss runs Levenberg–Marquardt)")
-    elif doc["solver"] != doc["method"]:
-        lines.append(f"solver: {doc['solver']} (switched from {doc['method']})")
-    lines += [f"note: {n}" for n in doc["notes"]]
-    return lines
 
 
 def rebuild(cal) -> tuple[Any, Any, Any]:

@@ -19,11 +19,11 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from pincal.errors import PincalError
+from pincal.validation import CrossValidationBaseline, CrossValidationSummary
 
 __all__ = ["is_socket_calibration", "socket_cv"]
 
@@ -76,20 +76,24 @@ def _held_out(data, P, R, ball, centres, sockets) -> tuple[np.ndarray, list[floa
     return seat, dist
 
 
-def _summary(seat: list[np.ndarray], dist: list[float], fit_rms: list[float]) -> dict:
+def _summary(
+    model: str, seat: list[np.ndarray], dist: list[float], fit_rms: list[float]
+) -> CrossValidationBaseline:
+    """The held-out errors of the folds [m] (``model``: whose they are)."""
     s = np.concatenate(seat)
     d = np.abs(np.array(dist)) if dist else np.array([np.nan])
-    return {
-        "held_out_rms_mm": float(np.sqrt(np.mean(s**2))) * 1e3,
-        "held_out_max_mm": float(s.max()) * 1e3,
-        "fold_fit_rms_mm": float(np.sqrt(np.mean(np.square(fit_rms)))) * 1e3,
-        "socket_distance_error_rms_mm": float(np.sqrt(np.mean(d**2))) * 1e3,
-        "socket_distance_error_max_mm": float(d.max()) * 1e3,
-    }
+    return CrossValidationBaseline(
+        model,
+        held_out_rms=float(np.sqrt(np.mean(s**2))),
+        held_out_max=float(s.max()),
+        fold_fit_rms=float(np.sqrt(np.mean(np.square(fit_rms)))),
+        socket_distance_rms=float(np.sqrt(np.mean(d**2))),
+        socket_distance_max=float(d.max()),
+    )
 
 
-def socket_cv(cal, k: int, seed: int) -> tuple[dict[str, Any], tuple[np.ndarray, ...], int]:
-    """(the ``cv`` numbers, the folds, the seatings) of a socket calibration.
+def socket_cv(cal, k: int, seed: int) -> CrossValidationSummary:
+    """The cross-validation of a socket calibration (its held-out seatings).
 
     Raises:
         PincalError: the data file is gone, or no known distance fixes the scale (the
@@ -141,7 +145,13 @@ def socket_cv(cal, k: int, seed: int) -> tuple[dict[str, Any], tuple[np.ndarray,
         base["seat"].append(seat0)
         base["dist"] += dist0
         base["fit"].append(float(np.sqrt(np.mean(fit0**2))))
-    doc = _summary(full["seat"], full["dist"], full["fit"])
-    nominal_doc = _summary(base["seat"], base["dist"], base["fit"])
-    doc["baseline"] = {"model": "nominal model", **nominal_doc}
-    return doc, folds, len(sockets)
+    cv = _summary("calibrated model", full["seat"], full["dist"], full["fit"])
+    nominal = _summary("nominal model", base["seat"], base["dist"], base["fit"])
+    assert cv.socket_distance_rms is not None and nominal.socket_distance_rms is not None
+    return CrossValidationSummary(
+        k, seed, len(sockets), tuple(tuple(int(i) for i in rows) for rows in folds),
+        float(cal.result.after.rms_position), cv.held_out_rms, cv.held_out_max,
+        cv.fold_fit_rms, nominal,
+        beats_baseline=bool(cv.socket_distance_rms * 1e3 < nominal.socket_distance_rms * 1e3),
+        socket_distance_rms=cv.socket_distance_rms, socket_distance_max=cv.socket_distance_max,
+    )  # fmt: skip

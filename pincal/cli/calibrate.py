@@ -295,14 +295,13 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
                        prior_spec, loss, profile) -> None:  # fmt: skip
     """``calibrate --link``: registration + joint fit from a marker table."""
     from pincal.cli._gate import apply_gate
-    from pincal.cli._markers import marker_calibration, marker_lines
+    from pincal.cli._markers import marker_calibration
     from pincal.identification import check_quality
     from pincal.io import CALIBRATED_URDF, write_calibration
-    from pincal.report import calibration_text
+    from pincal.report import calibration_text, marker_lines
 
-    fit, meas, markers = marker_calibration(
-        model, data, setup, preset, method, prior_spec, loss
-    )
+    run = marker_calibration(model, data, setup, preset, method, prior_spec, loss)
+    fit, meas, markers = run.fit, run.meas, run.doc
     start = fit.registration.mechanism
     # the gate bounds registration unknowns (instrument frame, marker) apart from the
     # machine's parameters, and judges an estimated noise by the instrument profile
@@ -327,7 +326,8 @@ def _calibrate_markers(model, data, setup, preset, method, out, as_json, force, 
     doc["quality"] = quality
     doc["markers"] = markers
     report = calibration_text(fit.result, {"data": str(data), "quality": quality})
-    report += "\n".join(marker_lines(markers)) + "\n"
+    report += "\n".join(marker_lines(fit, run.setup, run.prior, run.prior_cv, method, loss,
+                                     markers["notes"])) + "\n"  # fmt: skip
     cal = write_calibration(
         Path(out),
         fit.result,

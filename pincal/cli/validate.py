@@ -11,25 +11,6 @@ from pincal.cli._limits import check_data_rows, yes_option
 from pincal.cli.common import announce, calibration_summary, fail_cleanly
 
 
-def _more_markers(nominal, calibrated, more) -> list[dict]:
-    """Before / after position errors [mm] of each further marker (its own frame)."""
-    import numpy as np
-
-    from pincal.identification import position_errors
-
-    out = []
-    for columns, part in more:
-        before = position_errors(nominal, part) * 1e3
-        after = position_errors(calibrated, part) * 1e3
-        out.append({
-            "columns": list(columns),
-            "before_rms_position_mm": float(np.sqrt(np.mean(before**2))),
-            "after_rms_position_mm": float(np.sqrt(np.mean(after**2))),
-            "after_max_position_mm": float(after.max()),
-        })  # fmt: skip
-    return out
-
-
 @click.command()
 @click.argument("calibration", type=click.Path(path_type=Path))
 @click.option(
@@ -101,20 +82,22 @@ def validate(
         inputs |= {f"CALIBRATION's {n}": calibration / n
                    for n in (IDENTIFICATION_FILE, MANIFEST)}  # fmt: skip
         guard_paths(inputs, {"--out": out, "--folds-out": folds_out})
-    cv_doc = None
+    cv = cv_doc = None
     if cv_folds is not None:
-        from pincal.cli._cv import format_cv, run_cv
+        from pincal.cli._cv import run_cv
+        from pincal.report import cross_validation_text
 
-        cv_doc = run_cv(read_calibration(calibration), cv_folds, cv_seed, folds_out)
+        cv = run_cv(read_calibration(calibration), cv_folds, cv_seed, folds_out)
+        cv_doc = cv.to_dict()
         if data is None:
             only = {"calibration": str(calibration), "cv": cv_doc}
             if out is not None:
                 atomic_write_text(out, json.dumps(only, indent=1) + "\n")
-            click.echo(json.dumps(only) if as_json else format_cv(cv_doc), nl=as_json)
+            click.echo(json.dumps(only) if as_json else cross_validation_text(cv), nl=as_json)
             return
     assert data is not None
     from pincal.sensitivity import parameters
-    from pincal.validation import validate_held_out
+    from pincal.validation import marker_errors, validate_held_out
 
     cal = read_calibration(calibration)
     announce(cal)
@@ -164,8 +147,9 @@ def validate(
         "independent": independent,
         **validation.to_dict(),
     }
-    if more:
-        doc["more_markers"] = _more_markers(nominal, cal.calibrated(), more)
+    markers = marker_errors(nominal, cal.calibrated(), more) if more else []
+    if markers:
+        doc["more_markers"] = [m.to_dict() for m in markers]
     if cv_doc is not None:
         doc["cv"] = cv_doc
     if out is not None:
@@ -173,16 +157,11 @@ def validate(
     if as_json:
         click.echo(json.dumps(doc))
     else:
-        from pincal.report import validation_text
+        from pincal.report import marker_errors_text, validation_text
 
         click.echo(validation_text(validation, cal, str(data), independent), nl=False)
-        for m in doc.get("more_markers", []):
-            click.echo(f"  marker {' '.join(m['columns'])}: position RMS nominal "
-                       f"{m['before_rms_position_mm']:.4f} mm, calibrated "
-                       f"{m['after_rms_position_mm']:.4f} mm (max "
-                       f"{m['after_max_position_mm']:.4f} mm); the table above: the first "
-                       "marker")  # fmt: skip
-        if cv_doc is not None:
-            from pincal.cli._cv import format_cv
+        click.echo(marker_errors_text(markers), nl=False)
+        if cv is not None:
+            from pincal.report import cross_validation_text
 
-            click.echo(format_cv(cv_doc), nl=False)
+            click.echo(cross_validation_text(cv), nl=False)

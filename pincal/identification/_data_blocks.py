@@ -12,27 +12,36 @@ Jacobian from the tool-point pose and its sensitivities. The kinds:
 * :class:`ScalarBlock` — a scalar instrument (:class:`pincal.measure.Instrument`:
   ballbar, probe, planes, gauge, any registered kind): one reading per pose, ``∂v/∂p ·
   ∂p/∂x`` and ``∂v/∂θ``.
-* :class:`SocketBlock` — a ball seated in the sockets of a plate: three residuals per
-  pose; the socket centres shared by the plate's files live in
-  :class:`pincal.identification._socket_terms.SocketTerms`.
+* :class:`ArtefactBlock` — an artefact instrument (:class:`pincal.measure.Artefact`:
+  the socket plates, any registered kind): k residuals per pose; the unknowns shared
+  by the datasets of a kind (a plate's socket centres) live in
+  :class:`pincal.identification._shared_terms.SharedUnknowns`.
+
+:func:`data_block` finds the block of a dataset through the kind registry
+(:func:`pincal.measure.add_instrument_kind`): a new kind needs no line here.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from pincal.errors import MeasurementError
 from pincal.identification._problem import CalibrationProblem
-from pincal.identification._socket_terms import SocketTerms
-from pincal.measure import InstrumentData, Measurements, SocketData, initial_instrument_values
+from pincal.identification._shared_terms import SharedUnknowns
+from pincal.measure import (
+    Artefact,
+    InstrumentData,
+    Measurements,
+    artefact_class,
+    initial_instrument_values,
+)
 from pincal.model import Mechanism, ParameterSet
 from pincal.model.kernels import measurement_residual
 
-__all__ = ["BLOCKS", "DataBlock", "PoseSensorBlock", "ScalarBlock", "SocketBlock", "data_block"]
+__all__ = ["ArtefactBlock", "DataBlock", "PoseSensorBlock", "ScalarBlock", "data_block"]
 
 
 class DataBlock(ABC):
@@ -137,41 +146,51 @@ class ScalarBlock(DataBlock):
         return self.data.values - raw[:, 0]
 
 
-class SocketBlock(DataBlock):
-    """A ball seated in the sockets of a plate: ``c_s − b`` per pose (see SocketTerms)."""
+class ArtefactBlock(DataBlock):
+    """An artefact dataset: k residuals per pose, own and shared unknowns (see SharedUnknowns)."""
 
-    def __init__(self, data: SocketData, label: str, mech: Mechanism, params: ParameterSet,
+    def __init__(self, data: Artefact, label: str, mech: Mechanism, params: ParameterSet,
                  P0: np.ndarray) -> None:  # fmt: skip
         self.data, self.label = data, label
-        self.sigma = np.full((len(data), 3), data.plate.std)
+        self.sigma = np.asarray(data.sigma, dtype=float)
+        if self.sigma.shape != (len(data), data.dim):
+            raise MeasurementError(f"artefact kind {data.kind!r}: sigma must be (m, dim) = "
+                                   f"{(len(data), data.dim)}, got {self.sigma.shape}")  # fmt: skip
         self.own_names = tuple(f"{label}.{n}" for n in data.parameter_names)
-        self.own_units = ("m",) * len(self.own_names)
-        self.theta0 = np.zeros(len(self.own_names))  # the ball: SocketTerms.start
-        self.terms: SocketTerms | None = None  # set by the problem once every file is known
+        self.own_units = tuple(data.parameter_units)
+        self.theta0 = np.zeros(len(self.own_names))  # Artefact.start, by SharedUnknowns.start
+        self.shared: SharedUnknowns | None = None  # set by the problem once every file is known
+        self.index = -1  # the dataset's index in the problem, set with ``shared``
 
     def residuals(self, x, col, n, P, Rs, sens):
-        assert self.terms is not None
-        return self.terms.block(self.data, x, col, n, P, Rs, sens)
-
-
-#: dataset type → its block class (constructed as ``cls(data, label, mech, params, P0)``)
-BLOCKS: dict[type, Callable[..., DataBlock]] = {
-    Measurements: PoseSensorBlock,
-    InstrumentData: ScalarBlock,
-    SocketData: SocketBlock,
-}
+        assert self.shared is not None
+        return self.shared.block(self.index, x, col, n, P, Rs, sens)
 
 
 def data_block(d: Any, label: str, mech: Mechanism, params: ParameterSet,
                P0: np.ndarray) -> DataBlock:  # fmt: skip
     """The block of dataset ``d`` (``P0``: its nominal tool points (m, 3) [m]).
 
+    Pose measurements are a :class:`PoseSensorBlock`; any other dataset is of a
+    registered kind (``d.kind``): a scalar kind's :class:`ScalarBlock`, an artefact
+    kind's :class:`ArtefactBlock`.
+
     Raises:
-        MeasurementError: a dataset of no registered type.
+        MeasurementError: a dataset of no registered kind.
     """
-    cls = BLOCKS.get(type(d))
-    if cls is None:
-        raise MeasurementError(
-            f"a joint fit takes {[t.__name__ for t in BLOCKS]} datasets, not {type(d).__name__}"
-        )
-    return cls(d, label, mech, params, P0)
+    if isinstance(d, Measurements):
+        return PoseSensorBlock(d, label, mech, params, P0)
+    if isinstance(d, InstrumentData):
+        return ScalarBlock(d, label, mech, params, P0)
+    if isinstance(d, Artefact):
+        cls = artefact_class(d.kind)
+        if cls is not type(d):
+            raise MeasurementError(
+                f"{type(d).__name__} has the kind name {d.kind!r} of {cls.__name__}; give it "
+                "its own kind name and register it with add_instrument_kind"
+            )
+        return ArtefactBlock(d, label, mech, params, P0)
+    raise MeasurementError(
+        "a joint fit takes pose measurements, scalar instrument readings (InstrumentData) "
+        f"or datasets of a registered artefact kind, not {type(d).__name__}"
+    )

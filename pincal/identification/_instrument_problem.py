@@ -25,13 +25,13 @@ from collections.abc import Sequence
 import numpy as np
 
 from pincal.errors import ConvergenceError, MeasurementError
-from pincal.identification._data_blocks import DataBlock, SocketBlock, data_block
+from pincal.identification._data_blocks import ArtefactBlock, DataBlock, data_block
 from pincal.identification._problem import TRIAL_FAILURES
-from pincal.identification._socket_terms import SocketTerms
+from pincal.identification._shared_terms import SharedUnknowns
 from pincal.measure import (
+    Artefact,
     InstrumentData,
     Measurements,
-    SocketData,
 )
 from pincal.model import Mechanism, ParameterSet
 from pincal.sensitivity import Identifiability, analyse_jacobian, pose_sensitivity
@@ -39,7 +39,7 @@ from pincal.sensitivity.kernels import jacobian_plan
 
 __all__ = ["Dataset", "InstrumentProblem"]
 
-Dataset = InstrumentData | Measurements | SocketData
+Dataset = InstrumentData | Measurements | Artefact
 
 
 class InstrumentProblem:
@@ -84,24 +84,24 @@ class InstrumentProblem:
         self.blocks: list[DataBlock] = []
         names: list[str] = list(params.names)
         units: list[str] = list(params.units)
-        ball_cols: dict[int, int] = {}  # dataset index → column of its ball_x
+        own_cols: dict[int, int] = {}  # artefact dataset index → column of its own unknowns
         for i, (d, label) in enumerate(zip(datasets, self.labels, strict=True)):
             P0 = np.array([mech.frame_placement(q).translation
                            for q in qs[starts[i] : starts[i + 1]]])  # fmt: skip
             block = data_block(d, label, mech, params, P0)
-            if isinstance(block, SocketBlock) and block.own_names:
-                ball_cols[i] = len(names)
+            if isinstance(block, ArtefactBlock):
+                own_cols[i], block.index = len(names), i
             self.blocks.append(block)
             names += block.own_names
             units += block.own_units
         self.sigma: list[np.ndarray] = [b.sigma for b in self.blocks]
         self.n_machine = len(params)
-        self.sockets = SocketTerms(datasets, len(names), ball_cols)
+        self.sockets = SharedUnknowns(datasets, len(names), own_cols)
         for b in self.blocks:
-            if isinstance(b, SocketBlock):
-                b.terms = self.sockets
+            if isinstance(b, ArtefactBlock):
+                b.shared = self.sockets
         names += self.sockets.names
-        units += ["m"] * len(self.sockets.names)
+        units += self.sockets.units
         if self.sockets.sigma is not None:
             self.sigma.append(self.sockets.sigma)
         self.names, self.units = tuple(names), tuple(units)
@@ -118,7 +118,7 @@ class InstrumentProblem:
 
     @property
     def scale_warnings(self) -> tuple[str, ...]:
-        """What no measurement fixes, in words (see :class:`SocketTerms`)."""
+        """What no measurement fixes, in words (see :class:`SharedUnknowns`)."""
         return self.sockets.warnings
 
     def socket_centres(self, x: np.ndarray) -> dict[str, np.ndarray]:
@@ -203,7 +203,7 @@ class InstrumentProblem:
             r_all.append((raw / sig).ravel())
             J_all.append((J / sig[:, :, None]).reshape(-1, len(x)))
         if len(self.sigma) > len(self.datasets):  # the known distances of the plates
-            raw, J = self.sockets.distance_block(x)
+            raw, J = self.sockets.group_block(x)
             sig = self.sigma[-1]
             raws.append(raw)
             r_all.append((raw / sig).ravel())

@@ -1,7 +1,8 @@
 """Stage 3 — what an instrument sees.
 
 Measurements and noise models (SI inside), scalar instruments (ballbar, sphere probe,
-planes, gauge), simulation, the laser tracker, instrument and marker registration.
+planes, gauge) and artefact instruments (socket plates) in one kind registry,
+simulation, the laser tracker, instrument and marker registration.
 Imports only :mod:`pincal.model` and :mod:`pincal.sensitivity`; judging a calibration
 against measurements (held-out checks, pose errors, ISO 9283) is the later
 :mod:`pincal.validation` stage.
@@ -9,11 +10,14 @@ against measurements (held-out checks, pose errors, ISO 9283) is the later
 
 from __future__ import annotations
 
+from pincal.measure._artefact_kind import Artefact, SharedTerms
 from pincal.measure._instrument_kind import HeaderValues, Instrument
 from pincal.measure._instrument_kinds import Distance, Plane, Point, Sphere
 from pincal.measure._instrument_registry import (
     INSTRUMENT_KINDS,
     add_instrument_kind,
+    artefact_class,
+    artefact_kinds,
     instrument_class,
     instrument_kinds,
 )
@@ -61,6 +65,7 @@ __all__ = [
     "DEFAULT_NOISE",
     "INSTRUMENT_KINDS",
     "SCALE_MESSAGE",
+    "Artefact",
     "Distance",
     "HeaderValues",
     "Instrument",
@@ -76,11 +81,14 @@ __all__ = [
     "PoseMeasurement",
     "Registration",
     "RigidFit",
+    "SharedTerms",
     "SocketData",
     "SocketPlate",
     "Sphere",
     "TrackerNoise",
     "add_instrument_kind",
+    "artefact_class",
+    "artefact_kinds",
     "fit_rigid_transform",
     "initial_instrument_values",
     "instrument_class",

@@ -11,15 +11,22 @@ and are shared by every file of the same plate (several tool positions, several 
 Without a known distance nothing measured fixes the length scale: every residual
 ``c_s − b`` scales with the arm, so the fit may shrink it (the sockets come out too
 close) and no residual warns. :data:`SCALE_MESSAGE` says so in words.
+
+:class:`SocketData` is the ``socket`` kind of :class:`pincal.measure.Artefact`
+(registered like any kind); the plates' shared centres and known distances are its
+:class:`pincal.measure._socket_plates.SocketPlates`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from pincal.errors import MeasurementError
+from pincal.measure._artefact_kind import Artefact, SharedTerms
 from pincal.model import Mechanism
 
 __all__ = [
@@ -120,8 +127,12 @@ class SocketPlate:
 
 
 @dataclass(frozen=True, eq=False)
-class SocketData:
+class SocketData(Artefact):
     """Poses of a ball seated in the sockets of one plate (one tool position).
+
+    The ``socket`` artefact kind: three residuals ``c_s − b`` per pose; own unknowns the
+    ball centre when unknown; shared unknowns the centres ``"plate.s_x"`` … of its
+    sockets (shared by every file of the plate).
 
     Attributes:
         plate: the plate (its noise and known distances).
@@ -143,7 +154,9 @@ class SocketData:
     frame: str
     ball: np.ndarray | None = None
 
-    kind = "socket"
+    kind: ClassVar[str] = "socket"
+    description: ClassVar[str] = "a ball on the flange seated in the sockets of a plate"
+    dim: ClassVar[int] = 3
 
     def __post_init__(self) -> None:
         q = np.atleast_2d(np.asarray(self.q_act, dtype=float))
@@ -175,9 +188,64 @@ class SocketData:
         return tuple(dict.fromkeys(self.socket))
 
     @property
+    def sigma(self) -> np.ndarray:
+        """(m, 3) the plate's seating 1σ per axis [m]."""
+        return np.full((len(self), 3), self.plate.std)
+
+    @property
     def parameter_names(self) -> tuple[str, ...]:
         """This file's own unknowns: the ball centre when it is not given."""
         return ("ball_x", "ball_y", "ball_z") if self.ball is None else ()
+
+    @property
+    def shared_names(self) -> tuple[str, ...]:
+        """The centres of its sockets, ``"plate.s_x"`` …, socket by socket."""
+        return tuple(f"{self.plate.name}.{s}_{a}" for s in self.sockets for a in "xyz")
+
+    def start(self, P: np.ndarray, Rs: np.ndarray) -> np.ndarray:
+        """The least-squares ball centre of the nominal poses when unknown (not 0).
+
+        At 0 the flange's rotation would not move the ball and the identifiable set
+        decided there would hold it: ``R_i t − c_s(i) = −p_i``, the socket centres
+        unknown too.
+        """
+        if self.ball is not None:
+            return np.zeros(0)
+        sockets = self.sockets
+        A = np.zeros((3 * len(self), 3 + 3 * len(sockets)))
+        for i, s in enumerate(self.socket):
+            A[3 * i : 3 * i + 3, :3] = Rs[i]
+            k = 3 + 3 * sockets.index(s)
+            A[3 * i : 3 * i + 3, k : k + 3] = -np.eye(3)
+        return np.linalg.lstsq(A, -np.asarray(P).reshape(-1), rcond=None)[0][:3]
+
+    def residuals(self, P, Rs, theta, phi):
+        """``c_s − b`` (m, 3) [m], ``b = p + R t``, and its derivatives (see Artefact).
+
+        ``b`` moves by ``δp − R [t]× ω`` for a move ``δp`` and a local rotation ``ω`` of
+        the flange; ∂r/∂t = −R; ∂r/∂c_s = I.
+        """
+        m, R = len(self), np.asarray(Rs)
+        B, _ = self.ball_centres(P, R, theta)
+        k = np.array([self.sockets.index(s) for s in self.socket])
+        phi = np.asarray(phi, dtype=float)
+        C = phi[3 * k[:, None] + np.arange(3)]
+        t = self.ball if self.ball is not None else np.asarray(theta, dtype=float)[:3]
+        tx = np.array([[0, -t[2], t[1]], [t[2], 0, -t[0]], [-t[1], t[0], 0]])
+        dp = np.tile(-np.eye(3), (m, 1, 1))
+        dw = np.array([R[i] @ tx for i in range(m)]).reshape(m, 3, 3)
+        dth = -R if self.ball is None else np.zeros((m, 3, 0))
+        dphi = np.zeros((m, 3, phi.size))
+        for i in range(m):
+            dphi[i, :, 3 * k[i] : 3 * k[i] + 3] = np.eye(3)
+        return C - B, dp, dw, dth, dphi
+
+    @classmethod
+    def shared_terms(cls, datasets: Sequence[Artefact]) -> SharedTerms:
+        """The plates of the files: shared centres, known distances, the scale warning."""
+        from pincal.measure._socket_plates import SocketPlates
+
+        return SocketPlates(datasets)
 
     def ball_centres(
         self, P: np.ndarray, Rs: np.ndarray, theta: np.ndarray

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 from pincal.report._calibration import calibration_report
 from pincal.report._campaign_notes import campaign_notes
+from pincal.report._cv_text import cross_validation_text
 from pincal.report._document import ReportFiles, Section, Table, write_report
+from pincal.report._marker_text import marker_lines
 from pincal.report._plots import (
     ErrorStats,
     error_statistics,
@@ -22,7 +24,7 @@ from pincal.report._plots import (
 )
 from pincal.report._sections import block_label
 from pincal.report._text import calibration_text, quality_lines
-from pincal.report._validation_text import validation_text
+from pincal.report._validation_text import marker_errors_text, validation_text
 
 __all__ = [
     "ErrorStats",
@@ -33,7 +35,10 @@ __all__ = [
     "calibration_report",
     "calibration_text",
     "campaign_notes",
+    "cross_validation_text",
     "error_statistics",
+    "marker_errors_text",
+    "marker_lines",
     "plot_convergence",
     "plot_error_histogram",
     "plot_errors_before_after",

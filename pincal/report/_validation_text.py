@@ -6,11 +6,13 @@ it checks; errors in mm / mrad, each block over its measured components.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from pincal.io import CalibrationDirectory
 from pincal.report._sections import block_label
-from pincal.validation import ORIENTATION_CONVENTION, HeldOutValidation
+from pincal.validation import ORIENTATION_CONVENTION, HeldOutValidation, MarkerErrors
 
-__all__ = ["validation_text"]
+__all__ = ["marker_errors_text", "validation_text"]
 
 
 def _fmt(v: float | None, width: int = 9, digits: int = 4) -> str:
@@ -102,3 +104,16 @@ def validation_text(
     if len(rows) > max_rows:
         lines.append(f"  … {len(rows) - max_rows} more (--json gives all)")
     return "\n".join(lines) + "\n"
+
+
+def marker_errors_text(errors: Sequence[MarkerErrors]) -> str:
+    """One line per further marker: RMS nominal / calibrated and max calibrated [mm]."""
+    lines = []
+    for e in errors:
+        d = e.to_dict()
+        lines.append(f"  marker {' '.join(e.columns)}: position RMS nominal "
+                     f"{d['before_rms_position_mm']:.4f} mm, calibrated "
+                     f"{d['after_rms_position_mm']:.4f} mm (max "
+                     f"{d['after_max_position_mm']:.4f} mm); the table above: the first "
+                     "marker\n")  # fmt: skip
+    return "".join(lines)

@@ -10,6 +10,10 @@ later stage).
 
 from __future__ import annotations
 
+from pincal.validation._cv_summary import (
+    CrossValidationBaseline,
+    CrossValidationSummary,
+)
 from pincal.validation._held_out import (
     PREDICTION_BOUNDS,
     HeldOutValidation,
@@ -28,6 +32,10 @@ from pincal.validation._iso_cube import (
     TestCube,
     iso_test_cube,
 )
+from pincal.validation._marker_errors import (
+    MarkerErrors,
+    marker_errors,
+)
 from pincal.validation._pose_errors import (
     PoseErrors,
     pose_errors,
@@ -36,12 +44,16 @@ from pincal.validation._pose_errors import (
 __all__ = [
     "ORIENTATION_CONVENTION",
     "PREDICTION_BOUNDS",
+    "CrossValidationBaseline",
+    "CrossValidationSummary",
     "HeldOutValidation",
+    "MarkerErrors",
     "PointAccuracy",
     "PoseCharacteristics",
     "PoseErrors",
     "TestCube",
     "iso_test_cube",
+    "marker_errors",
     "point_accuracy",
     "pose_characteristics",
     "pose_errors",

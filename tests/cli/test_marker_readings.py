@@ -184,12 +184,10 @@ def test_a_table_without_titles_is_named(tmp_path):
 
 
 def test_the_solver_line_names_why_lm_ran():
-    from pincal.cli._markers import marker_lines
+    from pincal.report._marker_text import solver_line
 
-    doc = {"link": "l", "columns": ["x", "y", "z"], "length_unit": "m",
-           "instrument_frame": "unknown", "identified": None, "prior": None, "notes": [],
-           "registration": {"rms_mm": 1.0, "iterations": 3, "marker_mm": [0, 0, 0]},
-           "method": "gauss-newton", "solver": "lm", "loss": "huber"}  # fmt: skip
-    assert "solver: lm (the huber loss runs Levenberg–Marquardt)" in marker_lines(doc)
-    doc["loss"] = "linear"
-    assert "solver: lm (switched from gauss-newton)" in marker_lines(doc)
+    assert solver_line("lm", "gauss-newton", "huber") == (
+        "solver: lm (the huber loss runs Levenberg–Marquardt)"
+    )
+    assert solver_line("lm", "gauss-newton", "linear") == "solver: lm (switched from gauss-newton)"
+    assert solver_line("lm", "lm", "huber") is None

@@ -1,0 +1,111 @@
+"""The marker lines of the plain-text report of a marker calibration (`calibrate --link`).
+
+Rendered from the fit (:class:`pincal.identification.MarkerFit`), its marker set-up
+(:class:`pincal.measure.MarkerSetup`) and the prior chosen: the registration, the
+identified instrument frame and marker(s) with 2σ [mm, mrad], the prior, the solver,
+the notes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import pinocchio as pin
+
+from pincal.identification import MarkerFit, Prior
+from pincal.measure import MarkerSetup, marker_frame
+from pincal.model import BASE_JOINT, TOOL_JOINT
+
+__all__ = ["marker_lines", "solver_line"]
+
+
+def _nums(v: Sequence[float | None]) -> str:
+    return ", ".join("–" if a is None else f"{a:.2f}" for a in v)
+
+
+def _identified(fit: MarkerFit, setup: MarkerSetup) -> list[str]:
+    """The identified instrument frame and marker(s) [mm, mrad] with 2σ where identified."""
+    joints = fit.calibrated.tree.joints
+    two_sigma = dict(zip(fit.result.identified_names, 2 * fit.result.std, strict=True))
+
+    def sig(prefix: str, dofs: str) -> list[float | None]:
+        out = [two_sigma.get(f"{prefix}.{d}") for d in dofs.split()]
+        return [None if v is None else float(v) * 1e3 for v in out]
+
+    def mm(v) -> list[float | None]:
+        return [float(x) * 1e3 for x in v]
+
+    T = joints[BASE_JOINT].origin
+    lines = [
+        f"identified instrument frame: translation [{_nums(mm(T.translation))}] mm, rotation "
+        f"rpy [{_nums(mm(pin.rpy.matrixToRpy(T.rotation)))}] mrad; 2σ of base_frame tx ty tz "
+        f"rx ry rz [{_nums(sig(BASE_JOINT, 'tx ty tz rx ry rz'))}] mm/mrad",
+        f"identified marker [{_nums(mm(joints[TOOL_JOINT].origin.translation))}] mm in "
+        f"{setup.link}; 2σ of tool_frame tx ty tz [{_nums(sig(TOOL_JOINT, 'tx ty tz'))}] mm "
+        "(–: held, or absorbed by another parameter)",
+    ]
+    for k in range(1, 1 + len(setup.more_columns)):
+        joint = marker_frame(k)[0]
+        lines.append(f"identified marker {k + 1} [{_nums(mm(joints[joint].origin.translation))}]"
+                     f" mm in {setup.link}; 2σ of marker{k + 1}_frame tx ty tz "
+                     f"[{_nums(sig(joint, 'tx ty tz'))}] mm")  # fmt: skip
+    return lines
+
+
+def marker_lines(
+    fit: MarkerFit,
+    setup: MarkerSetup,
+    prior: Prior | None,
+    prior_cv: Sequence[tuple[float | None, float]] | None,
+    method: str,
+    loss: str,
+    notes: Sequence[str],
+) -> list[str]:
+    """The report lines of a marker calibration (registration, prior, guards).
+
+    Args:
+        fit: the fit.
+        setup: its marker set-up (copies of one marker left out).
+        prior: the prior on the machine's parameters, or None.
+        prior_cv: ``--prior auto``'s table (σ [mm, mrad] or None, held-out RMS [mm]).
+        method: the solver asked for.
+        loss: the loss (``"linear"``, ``"huber"``, …).
+        notes: the notes of the calibration (the fit's included).
+
+    Returns:
+        The lines, the first one blank.
+    """
+    reg = fit.registration
+    mk = ", ".join(f"{float(v) * 1e3:.2f}" for v in reg.marker)
+    also = "".join(f"; marker {k + 2}: columns {' '.join(c)}"
+                   for k, c in enumerate(setup.more_columns))  # fmt: skip
+    lines = [
+        "",
+        f"marker on {setup.link} (columns {' '.join(setup.columns)}, {setup.length_unit}"
+        f"{also}); instrument frame {setup.instrument_frame}",
+        f"registration (closed form, {reg.iterations} alternations): RMS "
+        f"{reg.fit.rms * 1e3:.3f} mm; marker [{mk}] mm in {setup.link}",
+        *_identified(fit, setup),
+    ]
+    if prior is None:
+        lines.append("prior: none")
+    else:
+        lines.append(f"prior on the machine's parameters: σ {prior.length * 1e3:.3g} mm, "
+                     f"{prior.angle * 1e3:.3g} mrad about nominal")  # fmt: skip
+    if prior_cv:
+        tried = "; ".join(("none" if s is None else f"σ {s:g}") + f" → {rms:.3f} mm"
+                          for s, rms in prior_cv)  # fmt: skip
+        lines.append(f"  chosen by 5-fold cross-validation (seed 0), held-out RMS: {tried}")
+    solver = solver_line(fit.method, method, loss)
+    lines += [solver] if solver else []
+    lines += [f"note: {n}" for n in notes]
+    return lines
+
+
+def solver_line(used: str, asked: str, loss: str) -> str | None:
+    """Why the solver ``used`` is not the one ``asked`` for (None when it is)."""
+    if used == asked:
+        return None
+    if loss != "linear":
+        return f"solver: {used} (the {loss} loss runs Levenberg–Marquardt)"
+    return f"solver: {used} (switched from {asked})"

@@ -1,0 +1,148 @@
+"""The outcome of ``pincal validate --cv K``: held-out errors of a calibration and a baseline.
+
+K-fold refits of the calibration as it was run (:func:`pincal.identification.cross_validate`
+for pose and marker files, held-out seatings for a ball-in-socket file), beside the same
+for a baseline model (the nominal model, or for a marker campaign the registration-only
+model). Lengths in metres inside; :meth:`CrossValidationSummary.to_dict` gives the
+``cv`` record of ``validate --json`` in mm, :func:`pincal.report.cross_validation_text`
+its printed block.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = ["CrossValidationBaseline", "CrossValidationSummary"]
+
+
+@dataclass(frozen=True)
+class CrossValidationBaseline:
+    """The held-out errors of the baseline model over the same folds [m].
+
+    Attributes:
+        model: its name (``"nominal model"`` or ``"registration only"``).
+        held_out_rms, held_out_max: held-out position (seating) error, RMS and max.
+        fold_fit_rms: RMS over the folds of each fold fit's RMS on its own poses.
+        socket_distance_rms, socket_distance_max: held-out socket-distance error (a
+            socket calibration), else None.
+    """
+
+    model: str
+    held_out_rms: float
+    held_out_max: float
+    fold_fit_rms: float
+    socket_distance_rms: float | None = None
+    socket_distance_max: float | None = None
+
+
+@dataclass(frozen=True)
+class CrossValidationSummary:
+    """K-fold cross-validation of a calibration beside a baseline [m, m²].
+
+    Attributes:
+        k, seed: the folds (:func:`pincal.identification.kfold`); poses: rows split.
+        folds: the pose rows of each fold.
+        fit_rms: RMS position residual of the calibration itself.
+        held_out_rms, held_out_max, fold_fit_rms: as :class:`CrossValidationBaseline`,
+            for the calibration refitted per fold.
+        baseline: the baseline's errors.
+        beats_baseline: the calibration predicts held-out poses better.
+        gain_mse, gain_standard_error: the baseline's held-out mean squared error minus
+            the calibration's, and its standard error [m²] (pose files), else None.
+        socket_distance_rms, socket_distance_max: held-out socket-distance error (a
+            socket calibration), else None.
+    """
+
+    k: int
+    seed: int
+    poses: int
+    folds: tuple[tuple[int, ...], ...]
+    fit_rms: float
+    held_out_rms: float
+    held_out_max: float
+    fold_fit_rms: float
+    baseline: CrossValidationBaseline
+    beats_baseline: bool
+    gain_mse: float | None = None
+    gain_standard_error: float | None = None
+    socket_distance_rms: float | None = None
+    socket_distance_max: float | None = None
+
+    @property
+    def sockets(self) -> bool:
+        """True for a ball-in-socket calibration (socket-distance errors, no MSE gain)."""
+        return self.socket_distance_rms is not None
+
+    @property
+    def verdict(self) -> str:
+        """One sentence: does the calibration beat the baseline on held-out poses [mm]."""
+        full, base = self.held_out_rms * 1e3, self.baseline.held_out_rms * 1e3
+        if self.sockets:
+            assert self.socket_distance_rms is not None
+            assert self.baseline.socket_distance_rms is not None
+            return (
+                f"held-out socket-distance error {self.socket_distance_rms * 1e3:.4f} mm RMS "
+                f"over the folds (the nominal model: {self.baseline.socket_distance_rms * 1e3:.4f}"
+                f" mm); held-out seating error {full:.4f} mm RMS"
+            )
+        gain = float("nan") if self.gain_mse is None else self.gain_mse * 1e6
+        se = float("nan") if self.gain_standard_error is None else self.gain_standard_error * 1e6
+        name = self.baseline.model
+        if self.beats_baseline:
+            return (
+                f"the calibration beats the {name} on held-out poses: {full:.3f} mm against "
+                f"{base:.3f} mm RMS (mean squared error lower by {gain:.3g} ± {se:.2g} mm²)"
+            )
+        return (
+            f"the calibration does NOT beat the {name} by more than its standard error: "
+            f"{full:.3f} mm against {base:.3f} mm RMS held-out (gain {gain:.3g} ± {se:.2g} "
+            "mm²); the data do not support the full model — use the simpler one, or measure "
+            "more poses"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``cv`` record of ``validate --json`` (lengths in mm, areas in mm²)."""
+        head = {
+            "k": self.k,
+            "seed": self.seed,
+            "poses": self.poses,
+            "folds": [list(rows) for rows in self.folds],
+            "fit_rms_mm": self.fit_rms * 1e3,
+        }
+        b = self.baseline
+        if self.sockets:
+            assert self.socket_distance_rms is not None and self.socket_distance_max is not None
+            assert b.socket_distance_rms is not None and b.socket_distance_max is not None
+            return {
+                **head,
+                **_errors(self.held_out_rms, self.held_out_max, self.fold_fit_rms),
+                "socket_distance_error_rms_mm": self.socket_distance_rms * 1e3,
+                "socket_distance_error_max_mm": self.socket_distance_max * 1e3,
+                "baseline": {
+                    "model": b.model,
+                    **_errors(b.held_out_rms, b.held_out_max, b.fold_fit_rms),
+                    "socket_distance_error_rms_mm": b.socket_distance_rms * 1e3,
+                    "socket_distance_error_max_mm": b.socket_distance_max * 1e3,
+                },
+                "beats_baseline": self.beats_baseline,
+                "verdict": self.verdict,
+            }
+        assert self.gain_mse is not None and self.gain_standard_error is not None
+        return {
+            **head,
+            **_errors(self.held_out_rms, self.held_out_max, self.fold_fit_rms),
+            "baseline": {
+                "model": b.model,
+                **_errors(b.held_out_rms, b.held_out_max, b.fold_fit_rms),
+            },
+            "gain_mse_mm2": self.gain_mse * 1e6,
+            "gain_standard_error_mm2": self.gain_standard_error * 1e6,
+            "beats_baseline": self.beats_baseline,
+            "verdict": self.verdict,
+        }
+
+
+def _errors(rms: float, mx: float, fold_fit: float) -> dict[str, float]:
+    return {"held_out_rms_mm": rms * 1e3, "held_out_max_mm": mx * 1e3,
+            "fold_fit_rms_mm": fold_fit * 1e3}  # fmt: skip
