@@ -94,7 +94,14 @@ class PoseSensorBlock(DataBlock):
     def __init__(self, data: Measurements, label: str, mech: Mechanism, params: ParameterSet,
                  P0: np.ndarray) -> None:  # fmt: skip
         self.data, self.label = data, label
-        self.sigma = CalibrationProblem(mech, params, data).sigma
+        model = CalibrationProblem(mech, params, data)
+        if not model.known_noise:
+            raise MeasurementError(
+                f"pose data set {label!r} declares no noise; a joint fit weights each file "
+                "by its declared σ: give the file a '# noise:' header (or the Measurements a "
+                "NoiseModel / per-value std), or fit a pose file alone"
+            )
+        self.sigma = model.sigma
 
     def residuals(self, x, col, n, P, Rs, sens):
         d = self.data

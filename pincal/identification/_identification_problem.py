@@ -105,16 +105,6 @@ class IdentificationProblem:
             given = [k for k, v in (("initial", self.initial), ("fit", self.fit),
                                     ("noise", self.noise)) if v is not None]  # fmt: skip
             given += [] if self.reduce else ["reduce=False"]
-            poses = [(i, d) for i, d in enumerate(self.datasets) if isinstance(d, Measurements)]
-            silent = [
-                i for i, d in poses if not CalibrationProblem(self.mech, self.params, d).known_noise
-            ]
-            if silent:
-                raise MeasurementError(
-                    f"pose data set(s) {silent} declare no noise; a joint fit weights each "
-                    "file by its declared σ: give the file a '# noise:' header (or the "
-                    "Measurements a NoiseModel / per-value std), or fit a pose file alone"
-                )
             if given:
                 raise ParameterError(
                     f"{', '.join(given)} apply to one pose file; a joint fit of "

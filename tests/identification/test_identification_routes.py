@@ -97,7 +97,7 @@ def test_a_joint_problem_refuses_what_only_a_pose_file_takes(stewart, stewart42,
         with pytest.raises(ParameterError, match=word):
             IdentificationProblem(stewart, stewart42, [meas, bar], **extra)
     silent = simulate_measurements(stewart, rows[:12])  # exact: no noise declared
-    with pytest.raises(MeasurementError, match=r"pose data set\(s\) \[0\] declare no noise"):
+    with pytest.raises(MeasurementError, match="pose data set 'pose0' declares no noise"):
         IdentificationProblem(stewart, stewart42, [silent, bar])
     with pytest.raises(MeasurementError, match="at least one"):
         IdentificationProblem(stewart, stewart42, [])

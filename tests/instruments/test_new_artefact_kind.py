@@ -20,6 +20,7 @@ from pincal.errors import MeasurementError
 from pincal.identification import InstrumentProblem, identify_instruments
 from pincal.measure import (
     Artefact,
+    NoiseModel,
     SocketPlate,
     add_instrument_kind,
     artefact_class,
@@ -212,8 +213,11 @@ def test_a_nest_file_beside_pose_measurements(nest_kind, ur5):
     mech, params, actual = ur5
     rng = np.random.default_rng(3)
     nests = _nests(actual, 3, rng, np.array([0.0, 0.0, 0.03]))
-    poses = simulate_measurements(actual, sample_actuators(mech, 5, rng), rng=rng)
+    rows = sample_actuators(mech, 5, rng)
+    poses = simulate_measurements(actual, rows, NoiseModel(1e-5, 2e-5), rng)
     prob = InstrumentProblem(mech, params, [nests, poses])
+    with pytest.raises(MeasurementError, match="declares no noise"):  # it would weigh nothing
+        InstrumentProblem(mech, params, [nests, simulate_measurements(actual, rows)])
     assert prob.labels == ["nest0", "pose1"] and len(prob.blocks[0].sigma) == len(nests)
 
 

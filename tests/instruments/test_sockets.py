@@ -11,6 +11,7 @@ from pincal.io import read_instrument_file, read_socket_data, write_socket_data
 from pincal.measure import (
     SCALE_MESSAGE,
     KnownDistance,
+    NoiseModel,
     SocketData,
     SocketPlate,
     simulate_measurements,
@@ -107,7 +108,8 @@ def test_a_measured_pose_file_fixes_the_scale(ur5):
     mech, params, actual = ur5
     rng = np.random.default_rng(3)
     sockets = simulate_sockets(actual, _plate(False), SOCKETS, 3, rng)
-    poses = simulate_measurements(actual, sample_actuators(mech, 5, rng), rng=rng)
+    rows = sample_actuators(mech, 5, rng)
+    poses = simulate_measurements(actual, rows, NoiseModel(1e-5, 2e-5), rng)
     assert not InstrumentProblem(mech, params, [sockets]).fixes_scale
     assert InstrumentProblem(mech, params, [sockets, poses]).fixes_scale
 
