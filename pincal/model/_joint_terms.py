@@ -64,6 +64,13 @@ class JointTerm(ABC):
                 f"{list(mech.actuated)}"
             )
 
+    #: what the term sits on, for messages (a term on other joints overrides it)
+    sits_on: ClassVar[str] = "actuated joint"
+
+    def joints(self, mech: Mechanism) -> tuple[str, ...]:
+        """Joints the term may sit on (default: the actuated ones; :meth:`check` decides)."""
+        return tuple(mech.actuated)
+
     @abstractmethod
     def basis(self, mech: Mechanism, q_act: np.ndarray) -> np.ndarray:
         """Basis of δq at commanded joint values.
@@ -75,6 +82,22 @@ class JointTerm(ABC):
         Returns:
             (m, n_act, len(dofs)): ``δq[:, a] = B[:, a, :] @ θ_a`` [rad, m].
         """
+
+    def columns(self, mech: Mechanism, q_act: np.ndarray) -> dict[str, np.ndarray]:
+        """Basis per joint the term sits on: {joint: (m, n_act, len(dofs))}.
+
+        ``δq += columns[joint] @ θ_joint`` over all actuated joints [rad, m]. The
+        default places :meth:`basis` of each actuated joint on that joint alone; a term
+        on other joints (a strut's length, :mod:`pincal.model._term_strut`) moves every
+        actuator the joint's change acts through.
+        """
+        B = self.basis(mech, q_act)
+        out = {}
+        for i, a in enumerate(mech.actuated):
+            col = np.zeros((B.shape[0], B.shape[1], B.shape[2]))
+            col[:, i, :] = B[:, i, :]
+            out[a] = col
+        return out
 
 
 _TERMS: dict[str, JointTerm] = {}

@@ -1,0 +1,235 @@
+"""Axial compliance of fixed-length struts under static load: ``δL_j = c_j · F_j(q)``.
+
+A hexaslide's struts — fixed-length links between a U-joint on an actuated carriage
+and a ball joint on the platform — are not actuated, so their load is not an actuator
+force (:mod:`pincal.model._term_compliance`): it comes from the loop-closure forces.
+
+* **Strut.** A fixed URDF joint whose origin translation ``t_j`` is the strut (its
+  length ``L_j = |t_j|``, e.g. a hexaslide's ``leg1_tip_joint``): its child link (or a
+  link fixed to it) carries a loop-closure frame, and its parent link hangs from a
+  passive joint that is not a floating base and does not carry the measured frame.
+  The elongation is a placement translation along the strut: ``t_j ← t_j + δL_j t̂_j``.
+* **Force.** ``F_j = dV/dL_j`` [N], the derivative of the potential energy along the
+  closed configurations with the actuators held (virtual work):
+  ``F_j = ∂V/∂L_j − λᵀ ∂c/∂L_j`` with ``λ`` the loop-closure constraint forces of the
+  equilibrium ``g(q) = S τ + J_cᵀ λ`` and ``∂c/∂L_j`` the closure residuals' change
+  under the elongation. ``F_j > 0`` when the load compresses the strut; a strut of
+  axial stiffness ``k`` has ``c_j = −1/k`` [m/N] (the convention of the actuators'
+  compliance). A payload (:func:`pincal.model.with_payload`) is part of the load.
+* **Joints.** The error model of the identification changes the actuated joint
+  values, so the elongation enters as the actuator change that moves the measured
+  frame as the elongation does: ``e_j = ∂q_act/∂L_j`` at the nominal closed
+  configuration of the command (the rigid loops closed, the measured frame's 6-D
+  motion matched), and ``δq = Σ_j e_j F_j c_j``. Both ``F`` and ``e`` are evaluated on
+  the nominal mechanism at the commanded values (the first-order model of every joint
+  term); the omitted second order is ``~δL²/L`` (≈ 1e-11 m for δL = 2 µm on a 0.34 m
+  strut). A strut whose elongation the actuators cannot reproduce (a machine with
+  fewer actuators than the measured frame's 6 dofs) is refused.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.errors import ParameterError
+from pincal.model._joint_terms import JointTerm, register_term
+from pincal.model._term_compliance import _equilibrium, _gravity, _gravity_model, _held_once
+
+if TYPE_CHECKING:
+    from pincal.model._mechanism import Mechanism
+
+__all__ = ["StrutCompliance", "strut_loads", "struts"]
+
+_MIN_LENGTH = 1e-9  # [m]: a shorter origin translation is not a strut
+_CONSISTENT = 1e-6  # relative residual above which the actuators cannot reproduce δL
+_PASSIVE_EXCLUDED = ("floating", "planar")
+
+
+class StrutCompliance(JointTerm):
+    """Axial compliance of a fixed-length strut [m/N] (1σ prior 1e-6 m/N: 50 µm at 50 N)."""
+
+    kind: ClassVar[str] = "strut-compliance"
+    dofs: ClassVar[tuple[str, ...]] = ("strut_compliance",)
+    prior: ClassVar[float] = 1e-6
+    sits_on: ClassVar[str] = "fixed-length strut"
+
+    def unit(self, joint_type: str) -> str:
+        return "m/N"
+
+    def joints(self, mech: Mechanism) -> tuple[str, ...]:
+        return struts(mech)
+
+    def check(self, mech: Mechanism, joint: str) -> None:
+        found = struts(mech)
+        if joint not in found:
+            what = f"its struts are {list(found)}" if found else "it has none"
+            raise ParameterError(
+                f"{self.kind} terms act on fixed-length struts (a fixed joint whose origin "
+                f"is a link between passive joints closing a loop); {joint!r} of "
+                f"{mech.name!r} is not one: {what} (an actuated leg takes 'compliance')"
+            )
+        if sum(i.mass for i in mech.model.inertias) <= 0:
+            raise ParameterError(
+                f"model {mech.name!r} has no link masses: a strut compliance under gravity "
+                f"needs <inertial> elements in the URDF (or a payload: --payload)"
+            )
+        _held_once(mech)
+        _equivalent(mech, mech.q_home, joint, _link_masses(mech), 0)
+
+    def basis(self, mech: Mechanism, q_act: np.ndarray) -> np.ndarray:
+        raise ParameterError(
+            f"{self.kind} sits on struts, not on actuated joints: use columns() or "
+            f"pincal.model.joint_term_basis"
+        )
+
+    def columns(self, mech: Mechanism, q_act: np.ndarray) -> dict[str, np.ndarray]:
+        names = struts(mech)
+        F, E = strut_loads(mech, q_act, names)
+        return {j: (F[:, i, None] * E[:, i])[:, :, None] for i, j in enumerate(names)}
+
+
+def struts(mech: Mechanism) -> tuple[str, ...]:
+    """The fixed-length struts of a closed-loop mechanism (fixed joints), URDF order."""
+    if not mech.closures:
+        return ()
+    tree = mech.tree
+    loop_links = {c.frame_a for c in mech.closures} | {c.frame_b for c in mech.closures}
+    measured = mech.frame_link(mech.measured_frame)
+    actuated = set(mech.actuated)
+    out = []
+    for name, uj in tree.joints.items():
+        if uj.type != "fixed" or np.linalg.norm(uj.origin.translation) <= _MIN_LENGTH:
+            continue
+        rigid = _rigid_links(mech, uj.child)
+        if not rigid & loop_links or measured in rigid | {uj.parent}:
+            continue
+        mover = _moving_joint(mech, uj.parent)
+        if mover is None or mover in actuated or tree.joints[mover].type in _PASSIVE_EXCLUDED:
+            continue
+        out.append(name)
+    return tuple(out)
+
+
+def strut_loads(
+    mech: Mechanism, q_act: np.ndarray, names: tuple[str, ...] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Strut forces and their actuator equivalents at commanded values.
+
+    Args:
+        mech: the nominal mechanism (its link inertias, payload included).
+        q_act: (m, n_act) commanded actuator values [rad, m].
+        names: struts (default :func:`struts`).
+
+    Returns:
+        ``F`` (m, n_struts): ``dV/dL`` [N] (> 0 compressing); ``E`` (m, n_struts, n_act):
+        the actuator change that moves the measured frame as a unit elongation does
+        [rad/m, m/m].
+
+    Raises:
+        ParameterError: a pose the actuators and closures do not hold, or whose strut
+            elongation the actuators cannot reproduce.
+    """
+    names = struts(mech) if names is None else names
+    q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
+    F = np.empty((q_act.shape[0], len(names)))
+    E = np.empty((q_act.shape[0], len(names), len(mech.actuated)))
+    masses = _link_masses(mech)
+    for k, q in enumerate(mech.configurations(q_act)):
+        for i, j in enumerate(names):
+            F[k, i], E[k, i] = _equivalent(mech, q, j, masses, k)
+    return F, E
+
+
+def _equivalent(
+    mech: Mechanism, q: np.ndarray, strut: str, masses: dict[str, float], k: int
+) -> tuple[float, np.ndarray]:
+    """(F [N], e (n_act,)) of one strut at a closed configuration ``q``."""
+    model = _gravity_model(mech)
+    data = model.createData()
+    cols = [model.idx_vs[model.getJointId(a)] for a in mech.actuated]
+    S = np.zeros((model.nv, len(cols)))
+    S[cols, np.arange(len(cols))] = 1.0
+    lam = _equilibrium(mech, model, data, S, q, k)[len(cols) :]
+    pin.framesForwardKinematics(model, data, q)
+    uj = mech.tree.joints[strut]
+    t = uj.origin.translation
+    v = data.oMf[model.getFrameId(uj.parent)].rotation @ (t / np.linalg.norm(t))  # world
+    rigid = _rigid_links(mech, uj.child)
+    dc = _closure_change(mech, model, data, rigid, v)
+    mass = sum(masses.get(link, 0.0) for link in rigid)  # lifted with the elongation
+    force = -mass * float(_gravity(mech) @ v) - float(lam @ dc)
+    Jc = mech.closure_jacobian(q)
+    Jm = pin.computeFrameJacobian(model, data, q, model.getFrameId(mech.measured_frame), pin.LOCAL)
+    # the loops with the strut elongated and the actuators held: J_c δq = −∂c/∂L, Sᵀ δq = 0
+    held = np.linalg.lstsq(np.vstack([Jc, S.T]), np.concatenate([-dc, np.zeros(len(cols))]),
+                           rcond=None)[0]  # fmt: skip
+    dx = Jm @ held
+    # the rigid loops closed with the same measured motion: J_c δq' = 0, J_m δq' = δx
+    A = np.vstack([Jc, Jm])
+    b = np.concatenate([np.zeros(Jc.shape[0]), dx])
+    rigid_dq = np.linalg.lstsq(A, b, rcond=None)[0]
+    miss = float(np.linalg.norm(A @ rigid_dq - b))
+    if miss > _CONSISTENT * max(float(np.linalg.norm(dx)), 1e-12):
+        raise ParameterError(
+            f"{mech.name!r} at pose {k}: the actuators cannot move the measured frame as "
+            f"strut {strut!r} elongating does (miss {miss:.3g}); a strut compliance needs "
+            f"actuators that control the measured frame's 6 dofs"
+        )
+    return force, rigid_dq[cols]
+
+
+def _closure_change(
+    mech: Mechanism, model: pin.Model, data: pin.Data, rigid: set[str], v: np.ndarray
+) -> np.ndarray:
+    """(n_closure_rows,) closure residuals' change per unit elongation (world velocity v)."""
+
+    def local(frame: str, oMf: pin.SE3) -> np.ndarray:
+        moved = np.concatenate([oMf.rotation.T @ v, np.zeros(3)]) if frame in rigid else np.zeros(6)
+        return moved[:, None]
+
+    blocks = []
+    for c in mech.closures:
+        oMa = data.oMf[model.getFrameId(c.frame_a)]
+        oMb = data.oMf[model.getFrameId(c.frame_b)]
+        blocks.append(c.jacobian(oMa, oMb, local(c.frame_a, oMa), local(c.frame_b, oMb))[:, 0])
+    return np.concatenate(blocks)
+
+
+def _link_masses(mech: Mechanism) -> dict[str, float]:
+    """{link: mass [kg]} of the URDF's links with an ``<inertial>``."""
+    out = {}
+    for link in ET.fromstring(mech.urdf_xml).iter("link"):
+        mass = link.find("inertial/mass")
+        if mass is not None:
+            out[link.get("name", "")] = float(mass.get("value", "0"))
+    return out
+
+
+def _rigid_links(mech: Mechanism, link: str) -> set[str]:
+    """``link`` and the links fixed to it below (through fixed joints)."""
+    out, stack = {link}, [link]
+    while stack:
+        parent = stack.pop()
+        for uj in mech.tree.joints.values():
+            if uj.parent == parent and uj.type == "fixed" and uj.child not in out:
+                out.add(uj.child)
+                stack.append(uj.child)
+    return out
+
+
+def _moving_joint(mech: Mechanism, link: str) -> str | None:
+    """The nearest movable joint above ``link`` (None: fixed to the root)."""
+    tree = mech.tree
+    while link in tree.parent_joint:
+        joint = tree.parent_joint[link]
+        if tree.joints[joint].type != "fixed":
+            return joint
+        link = tree.joints[joint].parent
+    return None
+
+
+register_term(StrutCompliance())
