@@ -50,11 +50,11 @@ _PASSIVE_EXCLUDED = ("floating", "planar")
 
 
 class StrutCompliance(JointTerm):
-    """Axial compliance of a fixed-length strut [m/N] (1σ prior 1e-6 m/N: 50 µm at 50 N)."""
+    """Axial compliance of a fixed-length strut [m/N] (1σ prior 1e-7 m/N: 10 µm at 100 N)."""
 
     kind: ClassVar[str] = "strut-compliance"
     dofs: ClassVar[tuple[str, ...]] = ("strut_compliance",)
-    prior: ClassVar[float] = 1e-6
+    prior: ClassVar[float] = 1e-7
     sits_on: ClassVar[str] = "fixed-length strut"
 
     def unit(self, joint_type: str) -> str:

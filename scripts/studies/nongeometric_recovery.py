@@ -17,8 +17,17 @@ result reports): ≈ 1 when the estimate is efficient and its covariance honest
 (χ²_n / n for a known σ), and the same restricted to the joint terms
 (``Σ_jt`` the sub-block).
 
+With ``--machine hexaslide``: the 6-PUS hexaslide of ``models/hexaslide_6pus`` with
+the same 20 kg payload, its ``pus54`` preset plus the axial compliance of its six
+fixed-length struts (``strut-compliance``: ``δL_j = c_j·F_j``, the strut forces from the
+loop-closure equilibrium, true ``c ~ N(0, 1e-7 m/N)``, the default prior). The machine
+is simulated with the physical model — each pose measured on the true geometry with every strut
+lengthened by its ``c_j·F_j`` (the forces of the true, loaded machine) — while the
+identification models the elongation as joint changes (:mod:`pincal.model._term_strut`).
+
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py [--draws 100] [--poses 60]
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --machine stewart
+    PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --machine hexaslide
 """
 
 from __future__ import annotations
@@ -41,6 +50,7 @@ from pincal.model import (
     joint_term_prior,
     load_mechanism,
     sample_actuators,
+    strut_loads,
     with_joint_terms,
     with_payload,
 )
@@ -49,6 +59,8 @@ from pincal.sensitivity import identifiability, parameters
 NOISE = NoiseModel(position=0.01, orientation=0.01)  # [mm], [mrad]
 GEOMETRIC_SIGMA = 2e-4  # [m] or [rad]
 STEWART = Path(__file__).parents[2] / "models" / "stewart_6ups"
+NOMINAL_FORCES = False
+HEXASLIDE = Path(__file__).parents[2] / "models" / "hexaslide_6pus"
 SPINDLE = Payload(20.0, (0.05, -0.02, 0.10))  # [kg], [m] in the tool frame
 
 
@@ -67,6 +79,9 @@ def setup(terms: tuple[str, ...], robot: str = "ur5") -> tuple[Mechanism, Parame
     if robot == "stewart":
         mech = with_payload(load_mechanism(STEWART), SPINDLE)
         return mech, with_joint_terms(mech, parameters(mech, "stewart42"), terms)
+    if robot == "hexaslide":
+        mech = with_payload(load_mechanism(HEXASLIDE), SPINDLE)
+        return mech, with_joint_terms(mech, parameters(mech, "pus54"), terms)
     mech = load_mechanism(robot)
     return mech, with_joint_terms(mech, parameters(mech, "base"), terms)
 
@@ -79,7 +94,7 @@ def draw(mech: Mechanism, params: ParameterSet, n_poses: int, rng: np.random.Gen
     truth = np.zeros(len(params))
     truth[base] = rng.normal(0.0, sigma[base])
     actual = params.apply(mech, truth)
-    meas = simulate_measurements(actual, actual_joint_values(mech, params, truth, rows), NOISE, rng)
+    meas = simulate_measurements(actual, _true_joints(mech, params, truth, rows), NOISE, rng)
     meas = dataclasses.replace(meas, q_act=rows.copy())
     res = identify(mech, params, meas, "gauss-newton")
     e = res.values - truth[res.identified]
@@ -91,6 +106,32 @@ def draw(mech: Mechanism, params: ParameterSet, n_poses: int, rng: np.random.Gen
         int(e.size),
         int(e_t.size),
     )
+
+
+def _true_joints(
+    mech: Mechanism, params: ParameterSet, truth: np.ndarray, rows: np.ndarray
+) -> np.ndarray:
+    """The joint values at which the rigid true geometry is where the true machine is.
+
+    Joint terms on actuated joints: ``q + B θ``. Struts: each pose measured on the true
+    geometry with its struts lengthened by ``c·F`` (``F`` on the true machine), then
+    the joint values that bring the rigid true geometry there (inverse kinematics).
+    """
+    k = [i for i in params.joint_terms if params.parameters[i].dof == "strut_compliance"]
+    if not k:
+        return actual_joint_values(mech, params, truth, rows)
+    on_joints = np.setdiff1d(np.arange(len(params)), k)
+    rest = np.where(np.isin(np.arange(len(params)), on_joints), truth, 0.0)
+    joints = actual_joint_values(mech, params, rest, rows)
+    actual = params.apply(mech, truth)
+    names = tuple(params.parameters[i].joint for i in k)
+    lengths = parameters(actual, [f"{j}.tz" for j in names])  # the hexaslide's struts lie on z
+    forces, _ = strut_loads(mech if NOMINAL_FORCES else actual, joints, names)
+    out = np.empty_like(joints)
+    for i, (q, f) in enumerate(zip(joints, forces, strict=True)):
+        pose = lengths.apply(actual, truth[k] * f).forward(q)
+        out[i] = actual.inverse(pose, actual.configurations(q[None])[0], check_limits=False)
+    return out
 
 
 def study(
@@ -113,13 +154,15 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1, help="seed of poses, errors and noise")
     ap.add_argument("--robot", default="ur5", help="a serial arm by name (default ur5)")
     ap.add_argument(
-        "--machine", choices=("arm", "stewart"), default="arm",
-        help="arm (--robot) or the Stewart platform with a 20 kg payload",
+        "--machine", choices=("arm", "stewart", "hexaslide"), default="arm",
+        help="arm (--robot), or the Stewart platform or hexaslide with a 20 kg payload",
     )  # fmt: skip
     ap.add_argument("--terms", default=None, help="comma list (default: see above)")
     args = ap.parse_args()
-    robot = "stewart" if args.machine == "stewart" else args.robot
-    default = "compliance" if robot == "stewart" else "compliance,gain,harmonics"
+    robot = args.robot if args.machine == "arm" else args.machine
+    default = {"stewart": "compliance", "hexaslide": "strut-compliance"}.get(
+        robot, "compliance,gain,harmonics"
+    )
     terms = tuple(t for t in (args.terms or default).split(",") if t)
     t0 = time.perf_counter()
     out = study(args.draws, args.poses, args.seed, terms, robot)
