@@ -19,12 +19,13 @@ force (:mod:`pincal.model._term_compliance`): it comes from the loop-closure for
 * **Joints.** The error model of the identification changes the actuated joint
   values, so the elongation enters as the actuator change that moves the measured
   frame as the elongation does: ``e_j = ∂q_act/∂L_j`` at the nominal closed
-  configuration of the command (the rigid loops closed, the measured frame's 6-D
-  motion matched), and ``δq = Σ_j e_j F_j c_j``. Both ``F`` and ``e`` are evaluated on
-  the nominal mechanism at the commanded values (the first-order model of every joint
-  term); the omitted second order is ``~δL²/L`` (≈ 1e-11 m for δL = 2 µm on a 0.34 m
-  strut). A strut whose elongation the actuators cannot reproduce (a machine with
-  fewer actuators than the measured frame's 6 dofs) is refused.
+  configuration of the command (the rigid loops closed, the measured frame's motion
+  matched in its measured components), and ``δq = Σ_j e_j F_j c_j``. Both ``F`` and
+  ``e`` are evaluated on the nominal mechanism at the commanded values (the
+  first-order model of every joint term); the omitted second order is ``~δL²/L``
+  (≈ 3e-11 m for δL = 100 µm on a 0.34 m strut). A strut whose elongation the
+  actuators cannot reproduce in the measured components (a parallelogram strut of a
+  delta measured in orientation) is refused.
 """
 
 from __future__ import annotations
@@ -36,8 +37,10 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ParameterError
+from pincal.model._closures import COMPONENTS
 from pincal.model._joint_terms import JointTerm, register_term
 from pincal.model._term_compliance import _equilibrium, _gravity, _gravity_model, _held_once
+from pincal.model._workspace import sample_actuators
 
 if TYPE_CHECKING:
     from pincal.model._mechanism import Mechanism
@@ -78,7 +81,12 @@ class StrutCompliance(JointTerm):
                 f"needs <inertial> elements in the URDF (or a payload: --payload)"
             )
         _held_once(mech)
-        _equivalent(mech, mech.q_home, joint, _link_masses(mech), 0)
+        masses = _link_masses(mech)
+        _equivalent(mech, mech.q_home, joint, masses, 0)
+        if mech.n_closure_rows > mech.closure_rank:  # redundant loops: home may be special
+            rows = sample_actuators(mech, 3, np.random.default_rng(0))
+            for k, q in enumerate(mech.configurations(rows)):
+                _equivalent(mech, q, joint, masses, k + 1)
 
     def basis(self, mech: Mechanism, q_act: np.ndarray) -> np.ndarray:
         raise ParameterError(
@@ -98,15 +106,16 @@ def struts(mech: Mechanism) -> tuple[str, ...]:
         return ()
     tree = mech.tree
     loop_links = {c.frame_a for c in mech.closures} | {c.frame_b for c in mech.closures}
-    measured = mech.frame_link(mech.measured_frame)
+    frames, fid = mech.model.frames, mech.queries.frame_id
+    measured_body = frames[fid(mech.measured_frame)].parentJoint
     actuated = set(mech.actuated)
     out = []
     for name, uj in tree.joints.items():
         if uj.type != "fixed" or np.linalg.norm(uj.origin.translation) <= _MIN_LENGTH:
             continue
         rigid = _rigid_links(mech, uj.child)
-        if not rigid & loop_links or measured in rigid | {uj.parent}:
-            continue
+        if not rigid & loop_links or frames[fid(uj.parent)].parentJoint == measured_body:
+            continue  # no loop through it, or it hangs from the measured body (a platform)
         mover = _moving_joint(mech, uj.parent)
         if mover is None or mover in actuated or tree.joints[mover].type in _PASSIVE_EXCLUDED:
             continue
@@ -157,13 +166,14 @@ def _equivalent(
     pin.framesForwardKinematics(model, data, q)
     uj = mech.tree.joints[strut]
     t = uj.origin.translation
-    v = data.oMf[model.getFrameId(uj.parent)].rotation @ (t / np.linalg.norm(t))  # world
+    v = data.oMf[mech.queries.frame_id(uj.parent)].rotation @ (t / np.linalg.norm(t))  # world
     rigid = _rigid_links(mech, uj.child)
     dc = _closure_change(mech, model, data, rigid, v)
     mass = sum(masses.get(link, 0.0) for link in rigid)  # lifted with the elongation
     force = -mass * float(_gravity(mech) @ v) - float(lam @ dc)
+    _check_determined(mech, model, S, q, dc, strut)
     Jc = mech.closure_jacobian(q)
-    Jm = pin.computeFrameJacobian(model, data, q, model.getFrameId(mech.measured_frame), pin.LOCAL)
+    Jm = _measured_jacobian(mech, model, data, q)
     # the loops with the strut elongated and the actuators held: J_c δq = −∂c/∂L, Sᵀ δq = 0
     held = np.linalg.lstsq(np.vstack([Jc, S.T]), np.concatenate([-dc, np.zeros(len(cols))]),
                            rcond=None)[0]  # fmt: skip
@@ -176,10 +186,45 @@ def _equivalent(
     if miss > _CONSISTENT * max(float(np.linalg.norm(dx)), 1e-12):
         raise ParameterError(
             f"{mech.name!r} at pose {k}: the actuators cannot move the measured frame as "
-            f"strut {strut!r} elongating does (miss {miss:.3g}); a strut compliance needs "
-            f"actuators that control the measured frame's 6 dofs"
+            f"strut {strut!r} elongating does in its measured components "
+            f"{list(mech.measured_components)} (miss {miss:.3g}); a strut compliance needs "
+            f"actuators that control what is measured"
         )
     return force, rigid_dq[cols]
+
+
+def _check_determined(
+    mech: Mechanism, model: pin.Model, S: np.ndarray, q: np.ndarray, dc: np.ndarray, strut: str
+) -> None:
+    """Refuse a strut whose force the statics leave open (an over-constrained loop).
+
+    ``F`` depends on λ through ``∂c/∂L``; λ is free along the null space of
+    ``[S, J_cᵀ]`` (redundant closure rows), and ``F`` is determined only when
+    ``∂c/∂L`` is orthogonal to that freedom.
+    """
+    A = np.hstack([S, mech.closure_jacobian(q).T])
+    _, sv, Vt = np.linalg.svd(A)
+    rank = int(np.sum(sv > 1e-9 * sv[0]))
+    free = Vt[rank:, S.shape[1] :]  # λ directions the equilibrium does not fix
+    if free.size and np.linalg.norm(free @ dc) > 1e-6 * max(float(np.linalg.norm(dc)), 1e-12):
+        raise ParameterError(
+            f"{mech.name!r}: strut {strut!r} closes an over-constrained loop (e.g. a "
+            f"parallelogram bar): the statics do not determine its axial force, so a strut "
+            f"compliance is not defined for it"
+        )
+
+
+def _measured_jacobian(mech: Mechanism, model: pin.Model, data: pin.Data, q: np.ndarray):
+    """(k, nv) Jacobian of the measured components.
+
+    Positions in world axes, rotations in the measured frame: the axes of the
+    measurement residual.
+    """
+    fid = mech.queries.frame_id(mech.measured_frame)
+    world = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
+    local = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
+    rows = [COMPONENTS.index(c) for c in mech.measured_components]
+    return np.vstack([world[:3], local[3:]])[rows]
 
 
 def _closure_change(
@@ -193,8 +238,8 @@ def _closure_change(
 
     blocks = []
     for c in mech.closures:
-        oMa = data.oMf[model.getFrameId(c.frame_a)]
-        oMb = data.oMf[model.getFrameId(c.frame_b)]
+        oMa = data.oMf[mech.queries.frame_id(c.frame_a)]
+        oMb = data.oMf[mech.queries.frame_id(c.frame_b)]
         blocks.append(c.jacobian(oMa, oMb, local(c.frame_a, oMa), local(c.frame_b, oMb))[:, 0])
     return np.concatenate(blocks)
 

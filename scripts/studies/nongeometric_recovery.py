@@ -22,12 +22,16 @@ the same 20 kg payload, its ``pus54`` preset plus the axial compliance of its si
 fixed-length struts (``strut-compliance``: ``δL_j = c_j·F_j``, the strut forces from the
 loop-closure equilibrium, true ``c ~ N(0, 1e-7 m/N)``, the default prior). The machine
 is simulated with the physical model — each pose measured on the true geometry with every strut
-lengthened by its ``c_j·F_j`` (the forces of the true, loaded machine) — while the
-identification models the elongation as joint changes (:mod:`pincal.model._term_strut`).
+lengthened by its ``c_j·F_j`` — while the identification models the elongation as
+joint changes (:mod:`pincal.model._term_strut`). ``F`` is the nominal machine's, as the
+model evaluates it (and as the Stewart study's leg forces are); ``--true-forces`` takes
+the forces of the true (geometrically erroneous) machine instead, which shows what
+evaluating the load on the nominal geometry costs.
 
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py [--draws 100] [--poses 60]
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --machine stewart
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --machine hexaslide
+    PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --machine hexaslide --true-forces
 """
 
 from __future__ import annotations
@@ -59,7 +63,6 @@ from pincal.sensitivity import identifiability, parameters
 NOISE = NoiseModel(position=0.01, orientation=0.01)  # [mm], [mrad]
 GEOMETRIC_SIGMA = 2e-4  # [m] or [rad]
 STEWART = Path(__file__).parents[2] / "models" / "stewart_6ups"
-NOMINAL_FORCES = False
 HEXASLIDE = Path(__file__).parents[2] / "models" / "hexaslide_6pus"
 SPINDLE = Payload(20.0, (0.05, -0.02, 0.10))  # [kg], [m] in the tool frame
 
@@ -86,7 +89,13 @@ def setup(terms: tuple[str, ...], robot: str = "ur5") -> tuple[Mechanism, Parame
     return mech, with_joint_terms(mech, parameters(mech, "base"), terms)
 
 
-def draw(mech: Mechanism, params: ParameterSet, n_poses: int, rng: np.random.Generator) -> Draw:
+def draw(
+    mech: Mechanism,
+    params: ParameterSet,
+    n_poses: int,
+    rng: np.random.Generator,
+    true_forces: bool = False,
+) -> Draw:
     """One seeded calibration of a simulated machine with geometric and joint errors."""
     rows = sample_actuators(mech, n_poses, rng)
     base = np.asarray(identifiability(mech, params, rows).base)
@@ -94,7 +103,8 @@ def draw(mech: Mechanism, params: ParameterSet, n_poses: int, rng: np.random.Gen
     truth = np.zeros(len(params))
     truth[base] = rng.normal(0.0, sigma[base])
     actual = params.apply(mech, truth)
-    meas = simulate_measurements(actual, _true_joints(mech, params, truth, rows), NOISE, rng)
+    joints = _true_joints(mech, params, truth, rows, true_forces)
+    meas = simulate_measurements(actual, joints, NOISE, rng)
     meas = dataclasses.replace(meas, q_act=rows.copy())
     res = identify(mech, params, meas, "gauss-newton")
     e = res.values - truth[res.identified]
@@ -109,13 +119,18 @@ def draw(mech: Mechanism, params: ParameterSet, n_poses: int, rng: np.random.Gen
 
 
 def _true_joints(
-    mech: Mechanism, params: ParameterSet, truth: np.ndarray, rows: np.ndarray
+    mech: Mechanism,
+    params: ParameterSet,
+    truth: np.ndarray,
+    rows: np.ndarray,
+    true_forces: bool = False,
 ) -> np.ndarray:
     """The joint values at which the rigid true geometry is where the true machine is.
 
     Joint terms on actuated joints: ``q + B θ``. Struts: each pose measured on the true
-    geometry with its struts lengthened by ``c·F`` (``F`` on the true machine), then
-    the joint values that bring the rigid true geometry there (inverse kinematics).
+    geometry with its struts lengthened by ``c·F`` (``F`` of the nominal machine, or of
+    the true one with ``true_forces``), then the joint values that bring the rigid true
+    geometry there (inverse kinematics).
     """
     k = [i for i in params.joint_terms if params.parameters[i].dof == "strut_compliance"]
     if not k:
@@ -126,7 +141,7 @@ def _true_joints(
     actual = params.apply(mech, truth)
     names = tuple(params.parameters[i].joint for i in k)
     lengths = parameters(actual, [f"{j}.tz" for j in names])  # the hexaslide's struts lie on z
-    forces, _ = strut_loads(mech if NOMINAL_FORCES else actual, joints, names)
+    forces, _ = strut_loads(actual if true_forces else mech, joints, names)
     out = np.empty_like(joints)
     for i, (q, f) in enumerate(zip(joints, forces, strict=True)):
         pose = lengths.apply(actual, truth[k] * f).forward(q)
@@ -135,11 +150,16 @@ def _true_joints(
 
 
 def study(
-    draws: int, n_poses: int, seed: int, terms: tuple[str, ...], robot: str = "ur5"
+    draws: int,
+    n_poses: int,
+    seed: int,
+    terms: tuple[str, ...],
+    robot: str = "ur5",
+    true_forces: bool = False,
 ) -> list[Draw]:
     mech, params = setup(terms, robot)
     rng = np.random.default_rng(seed)
-    return [draw(mech, params, n_poses, rng) for _ in range(draws)]
+    return [draw(mech, params, n_poses, rng, true_forces) for _ in range(draws)]
 
 
 def mean_se(values: list[float]) -> tuple[float, float]:
@@ -158,6 +178,10 @@ def main() -> None:
         help="arm (--robot), or the Stewart platform or hexaslide with a 20 kg payload",
     )  # fmt: skip
     ap.add_argument("--terms", default=None, help="comma list (default: see above)")
+    ap.add_argument(
+        "--true-forces", action="store_true",
+        help="struts lengthened under the true machine's forces (default: the nominal's)",
+    )  # fmt: skip
     args = ap.parse_args()
     robot = args.robot if args.machine == "arm" else args.machine
     default = {"stewart": "compliance", "hexaslide": "strut-compliance"}.get(
@@ -165,12 +189,13 @@ def main() -> None:
     )
     terms = tuple(t for t in (args.terms or default).split(",") if t)
     t0 = time.perf_counter()
-    out = study(args.draws, args.poses, args.seed, terms, robot)
+    out = study(args.draws, args.poses, args.seed, terms, robot, args.true_forces)
     seconds = time.perf_counter() - t0
     m, s = mean_se([d.maha for d in out])
     mt, st = mean_se([d.maha_terms for d in out])
     print(f"{len(out)} draws, {robot}, {args.poses} full poses, noise 0.01 mm / 0.01 mrad, "
-          f"terms {'+'.join(terms)} ({seconds:.0f} s)")  # fmt: skip
+          f"terms {'+'.join(terms)}{', true forces' if args.true_forces else ''} "
+          f"({seconds:.0f} s)")  # fmt: skip
     print(f"identified parameters: {out[0].n} ({out[0].n_terms} joint terms)")
     print(f"Mahalanobis error / n, all identified   mean {m:.4f} ± {s:.4f} (s.e.)")
     print(f"Mahalanobis error / n, joint terms only mean {mt:.4f} ± {st:.4f} (s.e.)")

@@ -113,3 +113,56 @@ def test_without_link_masses_a_payload_is_needed(hexaslide):
         with_payload(bare, SPINDLE), parameters(bare, "pus54"), ["strut-compliance"]
     )
     assert params.joint_terms.size == 6
+
+
+def _open_world(name: str, folder: Path):
+    from tests.open_world import machines
+
+    urdf, sidecar = getattr(machines, name)()
+    return load_mechanism(machines.write_machine(folder, name, urdf, sidecar))
+
+
+def test_struts_of_an_ankle(tmp_path):
+    """A 2-RSU ankle (two actuators, 6-D measured): forces = virtual work, and the joint
+    change reaches the elongated pose, along each rod's own direction."""
+    mech = _open_world("ankle_2rsu", tmp_path)
+    names = struts(mech)
+    assert names == ("rod_end_l", "rod_end_r")
+    rows = sample_actuators(mech, 2, np.random.default_rng(8))
+    F, E = strut_loads(mech, rows)
+    comps = [("x", "y", "z", "rx", "ry", "rz").index(c) for c in mech.measured_components]
+    h = 1e-6  # [m]
+    for j, strut in enumerate(names):
+        origin = mech.tree.joints[strut].origin
+        t = origin.translation / np.linalg.norm(origin.translation)  # the strut, parent frame
+        shift = parameters(mech, [f"{strut}.{d}" for d in ("tx", "ty", "tz")])
+        step = h * origin.rotation.T @ t  # the translation along t, in the origin's axes
+        longer, shorter = shift.apply(mech, step), shift.apply(mech, -step)
+        for row, f, e in zip(rows, F[:, j], E[:, j], strict=True):
+            fd = (_potential(longer, row) - _potential(shorter, row)) / (2 * h)
+            assert f == pytest.approx(fd, rel=1e-5, abs=1e-6)
+            rigid = mech.forward(row)
+            elongated = longer.forward(row)
+            moved = mech.forward(row + h * e)
+            d_el = np.concatenate(
+                [
+                    elongated.translation - rigid.translation,
+                    pin.log3(rigid.rotation.T @ elongated.rotation),
+                ]
+            )[comps]
+            d_mv = np.concatenate(
+                [moved.translation - rigid.translation, pin.log3(rigid.rotation.T @ moved.rotation)]
+            )[comps]
+            assert np.linalg.norm(d_el) > 1e-3 * h
+            assert np.linalg.norm(d_mv - d_el) < 1e-4 * np.linalg.norm(d_el)
+
+
+def test_parallelogram_bars_are_refused(tmp_path):
+    """A delta's parallelogram bars close over-constrained loops: their force is open."""
+    mech = _open_world("delta_4r", tmp_path)
+    assert "wbar_b1" in struts(mech)
+    with pytest.raises(ParameterError, match="over-constrained loop"):
+        parameters(mech, ["wbar_b1.strut_compliance"])
+    params = with_joint_terms(mech, parameters(mech, ["hinge1.offset"]), ["strut-compliance"])
+    on = {params.parameters[k].joint for k in params.joint_terms}
+    assert on and not on & {"wbar_b1", "wbar_b2", "wbar_b3"}  # the bars are left out
