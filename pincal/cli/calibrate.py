@@ -43,7 +43,9 @@ from pincal.identification import METHODS
     show_default=True,
     help="Error model: 'geometric' or geometric+TERM[+TERM…] with TERM compliance (under "
     "gravity + payload; closed loops by their equilibrium), gain, harmonics: joint-space "
-    "terms on every actuated joint, identified beside the geometric parameters.",
+    "terms on every actuated joint, identified beside the geometric parameters; "
+    "strut-compliance: the axial yield of fixed-length struts (a hexaslide's) under the "
+    "loop-closure forces.",
 )
 @click.option(
     "--payload",
