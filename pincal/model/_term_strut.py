@@ -81,12 +81,12 @@ class StrutCompliance(JointTerm):
                 f"needs <inertial> elements in the URDF (or a payload: --payload)"
             )
         _held_once(mech)
-        masses = _link_masses(mech)
-        _equivalent(mech, mech.q_home, joint, masses, 0)
+        masses, model = _link_masses(mech), _gravity_model(mech)
+        _pose_loads(mech, model, mech.q_home, (joint,), masses, 0)
         if mech.n_closure_rows > mech.closure_rank:  # redundant loops: home may be special
             rows = sample_actuators(mech, 3, np.random.default_rng(0))
             for k, q in enumerate(mech.configurations(rows)):
-                _equivalent(mech, q, joint, masses, k + 1)
+                _pose_loads(mech, model, q, (joint,), masses, k + 1)
 
     def basis(self, mech: Mechanism, q_act: np.ndarray) -> np.ndarray:
         raise ParameterError(
@@ -146,71 +146,84 @@ def strut_loads(
     q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
     F = np.empty((q_act.shape[0], len(names)))
     E = np.empty((q_act.shape[0], len(names), len(mech.actuated)))
-    masses = _link_masses(mech)
+    masses, model = _link_masses(mech), _gravity_model(mech)
     for k, q in enumerate(mech.configurations(q_act)):
-        for i, j in enumerate(names):
-            F[k, i], E[k, i] = _equivalent(mech, q, j, masses, k)
+        F[k], E[k] = _pose_loads(mech, model, q, names, masses, k)
     return F, E
 
 
-def _equivalent(
-    mech: Mechanism, q: np.ndarray, strut: str, masses: dict[str, float], k: int
-) -> tuple[float, np.ndarray]:
-    """(F [N], e (n_act,)) of one strut at a closed configuration ``q``."""
-    model = _gravity_model(mech)
+def _pose_loads(
+    mech: Mechanism,
+    model: pin.Model,
+    q: np.ndarray,
+    names: tuple[str, ...],
+    masses: dict[str, float],
+    k: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(F (n,) [N], E (n, n_act)) of the struts ``names`` at a closed configuration ``q``.
+
+    ``model``: the mechanism's model with gravity (:func:`_gravity_model`).
+    """
     data = model.createData()
     cols = [model.idx_vs[model.getJointId(a)] for a in mech.actuated]
     S = np.zeros((model.nv, len(cols)))
     S[cols, np.arange(len(cols))] = 1.0
     lam = _equilibrium(mech, model, data, S, q, k)[len(cols) :]
     pin.framesForwardKinematics(model, data, q)
-    uj = mech.tree.joints[strut]
-    t = uj.origin.translation
-    v = data.oMf[mech.queries.frame_id(uj.parent)].rotation @ (t / np.linalg.norm(t))  # world
-    rigid = _rigid_links(mech, uj.child)
-    dc = _closure_change(mech, model, data, rigid, v)
-    mass = sum(masses.get(link, 0.0) for link in rigid)  # lifted with the elongation
-    force = -mass * float(_gravity(mech) @ v) - float(lam @ dc)
-    _check_determined(mech, model, S, q, dc, strut)
     Jc = mech.closure_jacobian(q)
     Jm = _measured_jacobian(mech, model, data, q)
-    # the loops with the strut elongated and the actuators held: J_c δq = −∂c/∂L, Sᵀ δq = 0
-    held = np.linalg.lstsq(np.vstack([Jc, S.T]), np.concatenate([-dc, np.zeros(len(cols))]),
-                           rcond=None)[0]  # fmt: skip
+    dc = np.empty((Jc.shape[0], len(names)))  # closure change per unit elongation
+    F = np.empty(len(names))
+    for i, strut in enumerate(names):
+        uj = mech.tree.joints[strut]
+        t = uj.origin.translation
+        v = data.oMf[mech.queries.frame_id(uj.parent)].rotation @ (t / np.linalg.norm(t))
+        rigid = _rigid_links(mech, uj.child)
+        dc[:, i] = _closure_change(mech, model, data, rigid, v)
+        mass = sum(masses.get(link, 0.0) for link in rigid)  # lifted with the elongation
+        F[i] = -mass * float(_gravity(mech) @ v) - float(lam @ dc[:, i])
+    _check_determined(mech, np.hstack([S, Jc.T]), dc, names)
+    # the loops with a strut elongated and the actuators held: J_c δq = −∂c/∂L, Sᵀ δq = 0
+    rhs = np.vstack([-dc, np.zeros((len(cols), len(names)))])
+    held = np.linalg.lstsq(np.vstack([Jc, S.T]), rhs, rcond=None)[0]
     dx = Jm @ held
     # the rigid loops closed with the same measured motion: J_c δq' = 0, J_m δq' = δx
     A = np.vstack([Jc, Jm])
-    b = np.concatenate([np.zeros(Jc.shape[0]), dx])
+    b = np.vstack([np.zeros((Jc.shape[0], len(names))), dx])
     rigid_dq = np.linalg.lstsq(A, b, rcond=None)[0]
-    miss = float(np.linalg.norm(A @ rigid_dq - b))
-    if miss > _CONSISTENT * max(float(np.linalg.norm(dx)), 1e-12):
+    miss = np.linalg.norm(A @ rigid_dq - b, axis=0)
+    bad = np.flatnonzero(miss > _CONSISTENT * np.maximum(np.linalg.norm(dx, axis=0), 1e-12))
+    if bad.size:
         raise ParameterError(
             f"{mech.name!r} at pose {k}: the actuators cannot move the measured frame as "
-            f"strut {strut!r} elongating does in its measured components "
-            f"{list(mech.measured_components)} (miss {miss:.3g}); a strut compliance needs "
-            f"actuators that control what is measured"
+            f"strut {names[bad[0]]!r} elongating does in its measured components "
+            f"{list(mech.measured_components)} (miss {miss[bad[0]]:.3g}); a strut "
+            f"compliance needs actuators that control what is measured"
         )
-    return force, rigid_dq[cols]
+    return F, rigid_dq[cols].T
 
 
 def _check_determined(
-    mech: Mechanism, model: pin.Model, S: np.ndarray, q: np.ndarray, dc: np.ndarray, strut: str
+    mech: Mechanism, A: np.ndarray, dc: np.ndarray, names: tuple[str, ...]
 ) -> None:
     """Refuse a strut whose force the statics leave open (an over-constrained loop).
 
     ``F`` depends on λ through ``∂c/∂L``; λ is free along the null space of
-    ``[S, J_cᵀ]`` (redundant closure rows), and ``F`` is determined only when
+    ``A = [S, J_cᵀ]`` (redundant closure rows), and ``F`` is determined only when
     ``∂c/∂L`` is orthogonal to that freedom.
     """
-    A = np.hstack([S, mech.closure_jacobian(q).T])
     _, sv, Vt = np.linalg.svd(A)
     rank = int(np.sum(sv > 1e-9 * sv[0]))
-    free = Vt[rank:, S.shape[1] :]  # λ directions the equilibrium does not fix
-    if free.size and np.linalg.norm(free @ dc) > 1e-6 * max(float(np.linalg.norm(dc)), 1e-12):
+    free = Vt[rank:, A.shape[1] - dc.shape[0] :]  # λ directions the equilibrium leaves open
+    if not free.size:
+        return
+    open_ = np.linalg.norm(free @ dc, axis=0)
+    bad = np.flatnonzero(open_ > 1e-6 * np.maximum(np.linalg.norm(dc, axis=0), 1e-12))
+    if bad.size:
         raise ParameterError(
-            f"{mech.name!r}: strut {strut!r} closes an over-constrained loop (e.g. a "
-            f"parallelogram bar): the statics do not determine its axial force, so a strut "
-            f"compliance is not defined for it"
+            f"{mech.name!r}: strut {names[bad[0]]!r} closes an over-constrained loop (e.g. "
+            f"a parallelogram bar): the statics do not determine its axial force, so a "
+            f"strut compliance is not defined for it"
         )
 
 
