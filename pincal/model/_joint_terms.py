@@ -2,7 +2,9 @@
 
 A joint term models what a rigid geometry cannot: the actual joint value is
 ``q_i' = q_i + δq_i(q, θ)`` with ``δq_i = B_i(q) · θ_i`` linear in the term's
-parameters θ_i (one small vector per actuated joint). Each kind of term is one
+parameters θ_i (one small vector per actuated joint; a term on other joints — a
+strut's length, :mod:`pincal.model._term_strut` — moves every actuator its change acts
+through, :meth:`JointTerm.columns`). Each kind of term is one
 :class:`JointTerm` subclass in its own module, registered here with
 :func:`register_term`; its parameters are ordinary entries of a
 :class:`pincal.model.ParameterSet` named ``<joint>.<dof>`` (e.g.
