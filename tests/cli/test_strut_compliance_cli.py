@@ -94,6 +94,12 @@ def test_validate_applies_the_joint_terms(soft_struts):
     print(f"held-out RMS position: {with_terms * 1e3:.2f} µm with the terms, "
           f"{geometric * 1e3:.2f} µm with the geometry only")  # fmt: skip
     assert geometric > 3 * with_terms
+    empty = CliRunner().invoke(main, ["validate", str(tmp / "cal"), "--data",
+                                      str(tmp / "held_out.csv"), "--payload", "0", "--json"])
+    assert empty.exit_code == 0, empty.output
+    empty_doc = json.loads(empty.stdout.strip().splitlines()[-1])
+    assert "payload 0 kg" in empty_doc["joint_terms"]  # the load the data were not taken at
+    assert empty_doc["after"]["rms_position_mm"] > 3 * with_terms
     text = CliRunner().invoke(main, ["validate", str(tmp / "cal"), "--data",
                                      str(tmp / "held_out.csv")])  # fmt: skip
     assert text.exit_code == 0 and "geometry and 6 joint terms" in text.output
