@@ -65,7 +65,8 @@ Campaign file keys (YAML; relative paths are relative to the file):
                              degrees, a reference pose: a sidecar as model (docs/examples)
 {sockets}  identification:
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
-    model: geometric         geometric[+compliance][+gain][+harmonics][+temperature] (terms)
+    model: geometric         geometric[+compliance][+gain][+harmonics][+temperature]
+                             [+strut-compliance] (terms)
     loss: linear             linear | huber | soft_l1 | cauchy (marker campaigns)
     prior: null              marker campaigns: "LEN_MM,ANG_MRAD" or auto (by CV)
     instrument: NAME         optional profile judging an estimated noise: laser-tracker |

@@ -174,14 +174,20 @@ def calibration_terms(
 
 def compliance_note(terms: tuple[str, ...], payload: Payload | None) -> str | None:
     """What a compliance term can and cannot tell apart (None without one)."""
-    if "compliance" not in terms:
+    what = {
+        "compliance": "compliance: δq = c·τ, τ the load the actuators hold",
+        "strut-compliance": "strut-compliance: δL = c·F, F the axial load of each "
+        "fixed-length strut (from the loop-closure forces)",
+    }
+    said = [text for kind, text in what.items() if kind in terms]
+    if not said:
         return None
     load = "the links' weight" + (f" and the {payload.describe()}" if payload else "")
     return (
-        f"compliance: δq = c·τ, τ the load the actuators hold ({load}, given); a payload "
-        f"mass and a compliance scale the same load, so they separate only with poses that "
-        f"change the load (e.g. measured with and without the payload): with the payload "
-        f"given, c is identified; a wrong payload mass biases c"
+        f"{'; '.join(said)} ({load}, given); a payload mass and a compliance scale the "
+        f"same load, so they separate only with poses that change the load (e.g. measured "
+        f"with and without the payload): with the payload given, c is identified; a wrong "
+        f"payload mass biases c"
     )
 
 

@@ -45,7 +45,8 @@ from pincal.identification import METHODS
     "gravity + payload; closed loops by their equilibrium), gain, harmonics: joint-space "
     "terms on every actuated joint, identified beside the geometric parameters; "
     "temperature: thermal expansion of each actuated joint's length (needs a per-pose "
-    "temperature_C column, °C, that varies).",
+    "temperature_C column, °C, that varies); strut-compliance: the axial yield of "
+    "fixed-length struts (a hexaslide's) under the loop-closure forces.",
 )
 @click.option(
     "--payload",

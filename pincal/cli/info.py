@@ -77,8 +77,9 @@ def structure_lines(mech: Mechanism, frame_given: bool = False) -> list[str]:
     "error_model",
     default="geometric",
     show_default=True,
-    help="Error model analysed: geometric[+compliance][+gain][+harmonics] (joint-space "
-    "terms on every actuated joint, beside each preset's parameters).",
+    help="Error model analysed: geometric[+compliance][+gain][+harmonics]"
+    "[+strut-compliance] (joint-space terms on every actuated joint, or on every "
+    "fixed-length strut, beside each preset's parameters).",
 )
 @click.option(
     "--payload",

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from pincal.cli._joint_terms import payload_option, read_payload
 from pincal.cli._limits import check_data_rows, yes_option
 from pincal.cli.common import announce, calibration_summary, fail_cleanly
 
@@ -34,10 +35,12 @@ from pincal.cli.common import announce, calibration_summary, fail_cleanly
     default=None,
     help="Also write the full validation JSON to this file (for `pincal report --validation`).",
 )
+@payload_option("The load during the --data measurements (kg; centre of mass in m in the "
+                "tool frame), replacing the calibration's, for its compliance terms.")
 @fail_cleanly
 def validate(
     calibration: Path, data: Path | None, cv_folds: int | None, cv_seed: int,
-    folds_out: Path | None, as_json: bool, yes: bool, out: Path | None,
+    folds_out: Path | None, as_json: bool, yes: bool, out: Path | None, payload: str | None,
 ) -> None:  # fmt: skip
     """Check the calibration in CALIBRATION on measurements not used for fitting.
 
@@ -50,6 +53,11 @@ def validate(
     ill-conditioned, a parameter's 2σ exceeds 20 mm / 0.1 rad, or parameters were held
     for weakness). Warns when --data is a file the calibration was fitted on. A --data
     file of more than 100000 rows is refused (with an estimate) unless --yes.
+
+    A calibration with joint terms (joint_terms.yaml: compliance under the recorded
+    payload, gain, harmonics, struts' compliance) predicts with its geometry and its
+    terms: each command moves the joints by the terms' deflection, as compensate
+    assumes; --payload changes the load the compliance sees.
 
     \b
     Examples:
@@ -123,13 +131,9 @@ def validate(
     if not independent:
         click.echo(f"pincal: warning: {data} was used to fit this calibration", err=True)
     result = cal.result
-    if any(u not in ("m", "rad") for u in result.units):
-        click.echo(
-            "pincal: warning: this calibration has joint terms; validate predicts with its "
-            "geometric part only (compensate applies the terms; `pincal select-model` "
-            "cross-validates them)",
-            err=True,
-        )
+    from pincal.cli._joint_terms import calibration_terms
+
+    terms, terms_line = calibration_terms(cal, read_payload(payload))
     validation = validate_held_out(
         nominal,
         cal.calibrated(),
@@ -139,12 +143,14 @@ def validate(
         result.covariance,
         meas.noise or cal.noise,
         tuple((cal.manifest.get("markers") or {}).get("held_weak") or ()),
+        None if terms is None else meas.q_act + terms.deflection(meas.q_act),
     )
     doc = {
         "calibration": calibration_summary(cal),
         "data": str(data),
         "data_sha256": digest,
         "independent": independent,
+        "joint_terms": terms_line or None,
         **validation.to_dict(),
     }
     markers = marker_errors(nominal, cal.calibrated(), more) if more else []
@@ -159,6 +165,9 @@ def validate(
     else:
         from pincal.report import marker_errors_text, validation_text
 
+        if terms_line:
+            click.echo(f"calibrated model: geometry and {terms_line} (joint = command + "
+                       f"deflection; the nominal: commands)")  # fmt: skip
         click.echo(validation_text(validation, cal, str(data), independent), nl=False)
         click.echo(marker_errors_text(markers), nl=False)
         if cv is not None:

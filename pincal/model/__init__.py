@@ -87,6 +87,7 @@ from pincal.model._sidecar import (
     Workspace,
     validate_sidecar,
 )
+from pincal.model._term_strut import strut_loads, struts
 from pincal.model._term_temperature import REFERENCE_C as THERMAL_REFERENCE_C
 from pincal.model._urdf import (
     MOVABLE_TYPES,
@@ -179,6 +180,8 @@ __all__ = [
     "serial_mechanism",
     "split_model",
     "srdf_home",
+    "strut_loads",
+    "struts",
     "term_kinds",
     "validate_sidecar",
     "with_joint_origin",

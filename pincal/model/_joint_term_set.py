@@ -12,6 +12,7 @@ from pincal.model._joint_terms import joint_term, term_of_dof
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet, origin_parameter
 from pincal.model._term_compliance import Compliance
+from pincal.model._term_strut import StrutCompliance
 from pincal.model._term_temperature import Temperature
 from pincal.model._term_transmission import Gain, Harmonics
 
@@ -29,7 +30,7 @@ __all__ = [
 ]
 
 #: the bundled term kinds (importing their modules registers them)
-BUNDLED_TERMS = (Compliance, Gain, Harmonics, Temperature)
+BUNDLED_TERMS = (Compliance, Gain, Harmonics, Temperature, StrutCompliance)
 
 #: per-pose conditions some terms need besides the joint values: {name: (m,) or None},
 #: e.g. ``{"temperature": T}`` [°C] (``Measurements.conditions``)
@@ -78,7 +79,7 @@ def with_joint_terms(mech: Mechanism, params: ParameterSet, kinds: Sequence[str]
     for kind in kinds:
         term = joint_term(kind)
         fits, why = [], ""
-        for a in mech.actuated:
+        for a in term.joints(mech):
             try:
                 term.check(mech, a)
             except ParameterError as exc:
@@ -86,7 +87,9 @@ def with_joint_terms(mech: Mechanism, params: ParameterSet, kinds: Sequence[str]
                 continue
             fits += [f"{a}.{d}" for d in term.dofs if f"{a}.{d}" not in names]
         if not fits and not any(term_of_dof(n.rpartition(".")[2]) is term for n in names):
-            raise ParameterError(f"no actuated joint of {mech.name!r} takes a {kind} term: {why}")
+            raise ParameterError(
+                f"no {term.sits_on} of {mech.name!r} takes a {kind} term{': ' if why else ''}{why}"
+            )
         names += fits
     if len(names) == len(params):
         return params
@@ -109,17 +112,19 @@ def joint_term_basis(
     """
     q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
     B = np.zeros((q_act.shape[0], len(mech.actuated), len(params)))
-    cache: dict[str, np.ndarray] = {}
-    act = {a: i for i, a in enumerate(mech.actuated)}
+    cache: dict[str, dict[str, np.ndarray]] = {}
     for k in params.joint_terms:
         p = params.parameters[k]
         term = term_of_dof(p.dof)
         assert term is not None
-        if p.joint not in act:
-            raise ParameterError(f"joint term {p.name!r} is on a joint that is not actuated")
         if term.kind not in cache:
-            cache[term.kind] = term.basis_at(mech, q_act, conditions or {})
-        B[:, act[p.joint], k] = cache[term.kind][:, act[p.joint], term.dofs.index(p.dof)]
+            cache[term.kind] = term.columns(mech, q_act, conditions or {})
+        if p.joint not in cache[term.kind]:
+            raise ParameterError(
+                f"joint term {p.name!r} is on a joint that is not a {term.sits_on} of "
+                f"{mech.name!r}"
+            )
+        B[:, :, k] = cache[term.kind][p.joint][:, :, term.dofs.index(p.dof)]
     return B
 
 

@@ -2,7 +2,9 @@
 
 A joint term models what a rigid geometry cannot: the actual joint value is
 ``q_i' = q_i + δq_i(q, θ)`` with ``δq_i = B_i(q) · θ_i`` linear in the term's
-parameters θ_i (one small vector per actuated joint). Each kind of term is one
+parameters θ_i (one small vector per actuated joint; a term on other joints — a
+strut's length, :mod:`pincal.model._term_strut` — moves every actuator its change acts
+through, :meth:`JointTerm.columns`). Each kind of term is one
 :class:`JointTerm` subclass in its own module, registered here with
 :func:`register_term`; its parameters are ordinary entries of a
 :class:`pincal.model.ParameterSet` named ``<joint>.<dof>`` (e.g.
@@ -72,6 +74,13 @@ class JointTerm(ABC):
                 f"{list(mech.actuated)}"
             )
 
+    #: what the term sits on, for messages (a term on other joints overrides it)
+    sits_on: ClassVar[str] = "actuated joint"
+
+    def joints(self, mech: Mechanism) -> tuple[str, ...]:
+        """Joints the term may sit on (default: the actuated ones; :meth:`check` decides)."""
+        return tuple(mech.actuated)
+
     @abstractmethod
     def basis(self, mech: Mechanism, q_act: np.ndarray) -> np.ndarray:
         """Basis of δq at commanded joint values.
@@ -103,6 +112,24 @@ class JointTerm(ABC):
     def check_data(self, conditions: Mapping[str, np.ndarray | None]) -> None:
         """Raise when measured ``conditions`` cannot identify the term (default: fine)."""
         del conditions  # nothing to check for a term that needs no conditions
+
+    def columns(
+        self, mech: Mechanism, q_act: np.ndarray, conditions: Mapping[str, np.ndarray | None]
+    ) -> dict[str, np.ndarray]:
+        """Basis per joint the term sits on: {joint: (m, n_act, len(dofs))}.
+
+        ``δq += columns[joint] @ θ_joint`` over all actuated joints [rad, m]. The
+        default places :meth:`basis_at` of each actuated joint on that joint alone; a
+        term on other joints (a strut's length, :mod:`pincal.model._term_strut`) moves
+        every actuator the joint's change acts through.
+        """
+        B = self.basis_at(mech, q_act, conditions)
+        out = {}
+        for i, a in enumerate(mech.actuated):
+            col = np.zeros(B.shape)
+            col[:, i, :] = B[:, i, :]
+            out[a] = col
+        return out
 
 
 _TERMS: dict[str, JointTerm] = {}

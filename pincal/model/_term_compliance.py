@@ -11,7 +11,7 @@
   ``τ`` and the loop-closure constraint forces ``λ`` (``S`` selects the actuated
   tangent dofs, ``J_c`` the closure Jacobian). On a UPS leg ``τ`` is the leg's axial
   force and ``c`` its axial compliance [m/N]. A fixed-length strut (a hexaslide's) is
-  not an actuated joint and takes no term.
+  not an actuated joint: its compliance is :mod:`pincal.model._term_strut`.
 
 ``c_i`` is the joint's compliance [rad/(N·m)] (revolute) or [m/N] (prismatic). With
 this sign convention a joint that yields to the load it holds (a spring of stiffness
@@ -92,14 +92,18 @@ def actuator_load(mech: Mechanism, q_act: np.ndarray) -> np.ndarray:
     S = np.zeros((model.nv, len(cols)))
     S[cols, np.arange(len(cols))] = 1.0
     for k, q in enumerate(mech.configurations(q_act)):
-        out[k] = _equilibrium(mech, model, data, S, q, k)
+        out[k] = _equilibrium(mech, model, data, S, q, k)[: len(cols)]
     return out
 
 
 def _equilibrium(
     mech: Mechanism, model: pin.Model, data: pin.Data, S: np.ndarray, q: np.ndarray, k: int
 ) -> np.ndarray:
-    """Actuator forces (n_act,) solving ``g(q) = S τ + J_cᵀ λ`` at a closed configuration."""
+    """``[τ; λ]`` solving ``g(q) = S τ + J_cᵀ λ`` at a closed configuration.
+
+    τ (n_act,) the actuator forces [N·m, N], λ (n_closure_rows,) the loop-closure
+    constraint forces, in the rows of :meth:`Mechanism.closure_jacobian`.
+    """
     g = pin.computeGeneralizedGravity(model, data, q)
     A = np.hstack([S, mech.closure_jacobian(q).T])
     x, *_ = np.linalg.lstsq(A, g, rcond=None)
@@ -110,7 +114,7 @@ def _equilibrium(
             f"(equilibrium residual {miss:.3g} N·m); a passive joint is free to move under "
             f"gravity, so a compliance under load is not defined"
         )
-    return x[: S.shape[1]]
+    return x
 
 
 def _held_once(mech: Mechanism) -> None:

@@ -28,6 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.design import predicted_validation_rms
+from pincal.errors import ShapeError
 from pincal.measure import Measurements, NoiseModel
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
 from pincal.sensitivity import identification_jacobian
@@ -187,15 +188,22 @@ def _groups(q_act: np.ndarray) -> list[np.ndarray]:
 
 
 def _model_errors(
-    model: Mechanism, meas: Measurements, groups: list[np.ndarray], pos: list[int], rot: list[int]
+    model: Mechanism,
+    meas: Measurements,
+    groups: list[np.ndarray],
+    pos: list[int],
+    rot: list[int],
+    joints: np.ndarray | None = None,
 ) -> ModelErrors:
+    """Errors of ``model`` evaluated at ``joints`` (m, n_act) (None: the commands)."""
+    joints = meas.q_act if joints is None else joints
     m = len(meas)
     ep = np.zeros((m, 3))
     er = np.zeros((m, 3))
     ap: list[dict[str, Any]] = []
     comps = tuple(COMPONENTS[k] for k in pos) + tuple(COMPONENTS[3 + k] for k in rot)
     for rows in groups:
-        T = model.forward(meas.q_act[rows[0]])
+        T = model.forward(joints[rows[0]])
         R = None if meas.rotations is None else meas.rotations[rows]
         for i in rows:
             ep[i] = meas.positions[i] - T.translation
@@ -268,8 +276,15 @@ def validate_held_out(
     covariance: np.ndarray,
     noise: NoiseModel | None = None,
     held_weak: tuple[str, ...] = (),
+    joints: np.ndarray | None = None,
 ) -> HeldOutValidation:
     """Before (nominal) / after (calibrated) errors on held-out measurements.
+
+    The calibrated model predicts at ``joints`` when given: the joint values the
+    calibration's joint terms (compliance under load, gain, harmonics, struts'
+    compliance) say the commands move the joints to (``u + B(u) θ``,
+    :class:`pincal.compensation.JointTermCorrection`); the nominal predicts at the
+    commands.
 
     Args:
         nominal: the nominal mechanism (the one ``params`` was built for).
@@ -282,6 +297,8 @@ def validate_held_out(
         held_weak: parameters the fit held at nominal because the poses barely
             determined them; their error is not in ``covariance``, so the prediction is
             withheld (it would be optimistic).
+        joints: (m, n_act) joint values of the calibrated model's predictions [rad, m]
+            (None: the commands ``meas.q_act``; a geometric calibration).
 
     Returns:
         The :class:`HeldOutValidation`.
@@ -296,7 +313,14 @@ def validate_held_out(
         rot = []
     groups = _groups(meas.q_act)
     before = _model_errors(nominal, meas, groups, pos, rot)
-    after = _model_errors(calibrated, meas, groups, pos, rot)
+    if joints is not None:
+        joints = np.asarray(joints, dtype=float)
+        if joints.shape != meas.q_act.shape:
+            raise ShapeError(
+                f"joints must have the shape of the commands {meas.q_act.shape}, got "
+                f"{joints.shape}"
+            )
+    after = _model_errors(calibrated, meas, groups, pos, rot, joints)
     rp = [_repeatability(meas, rows, pos) for rows in groups]
     q_rows = np.array([meas.q_act[g[0]] for g in groups])
     cov = np.asarray(covariance, dtype=float)

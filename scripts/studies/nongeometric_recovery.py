@@ -22,9 +22,22 @@ platform's leg strokes; truth ~ N(0, 2e-5 /K)) each pose also gets a temperature
 uniformly in ``--span`` (default 18–28 °C), and the identifiable set is found at those
 temperatures.
 
+With ``--machine hexaslide``: the 6-PUS hexaslide of ``models/hexaslide_6pus`` with
+the same 20 kg payload, its ``pus54`` preset plus the axial compliance of its six
+fixed-length struts (``strut-compliance``: ``δL_j = c_j·F_j``, the strut forces from the
+loop-closure equilibrium, true ``c ~ N(0, 1e-7 m/N)``, the default prior). The machine
+is simulated with the physical model — each pose measured on the true geometry with every
+strut lengthened by its ``c_j·F_j`` — while the identification models the elongation as
+joint changes (:mod:`pincal.model._term_strut`). ``F`` is the nominal machine's, as the
+model evaluates it (and as the Stewart study's leg forces are); ``--true-forces`` takes
+the forces of the true (geometrically erroneous) machine instead, which shows what
+evaluating the load on the nominal geometry costs.
+
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py [--draws 100] [--poses 60]
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --machine stewart
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --terms temperature
+    PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --machine hexaslide
+    PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --machine hexaslide --true-forces
 """
 
 from __future__ import annotations
@@ -48,6 +61,7 @@ from pincal.model import (
     joint_term_prior,
     load_mechanism,
     sample_actuators,
+    strut_loads,
     with_joint_terms,
     with_payload,
 )
@@ -56,6 +70,7 @@ from pincal.sensitivity import identifiability, parameters
 NOISE = NoiseModel(position=0.01, orientation=0.01)  # [mm], [mrad]
 GEOMETRIC_SIGMA = 2e-4  # [m] or [rad]
 STEWART = Path(__file__).parents[2] / "models" / "stewart_6ups"
+HEXASLIDE = Path(__file__).parents[2] / "models" / "hexaslide_6pus"
 SPINDLE = Payload(20.0, (0.05, -0.02, 0.10))  # [kg], [m] in the tool frame
 SPAN = (18.0, 28.0)  # [°C] temperatures of the poses with a thermal term
 
@@ -75,6 +90,9 @@ def setup(terms: tuple[str, ...], robot: str = "ur5") -> tuple[Mechanism, Parame
     if robot == "stewart":
         mech = with_payload(load_mechanism(STEWART), SPINDLE)
         return mech, with_joint_terms(mech, parameters(mech, "stewart42"), terms)
+    if robot == "hexaslide":
+        mech = with_payload(load_mechanism(HEXASLIDE), SPINDLE)
+        return mech, with_joint_terms(mech, parameters(mech, "pus54"), terms)
     mech = load_mechanism(robot)
     return mech, with_joint_terms(mech, parameters(mech, "base"), terms)
 
@@ -85,6 +103,7 @@ def draw(
     n_poses: int,
     rng: np.random.Generator,
     span: tuple[float, float] = SPAN,
+    true_forces: bool = False,
 ) -> Draw:
     """One seeded calibration of a simulated machine with geometric and joint errors."""
     rows = sample_actuators(mech, n_poses, rng)
@@ -96,8 +115,8 @@ def draw(
     truth = np.zeros(len(params))
     truth[base] = rng.normal(0.0, sigma[base])
     actual = params.apply(mech, truth)
-    q = actual_joint_values(mech, params, truth, rows, cond)
-    meas = simulate_measurements(actual, q, NOISE, rng)
+    joints = _true_joints(mech, params, truth, rows, cond, true_forces)
+    meas = simulate_measurements(actual, joints, NOISE, rng)
     meas = dataclasses.replace(meas, q_act=rows.copy())
     if cond is not None:
         shift = actual_shift(mech, params, truth, rows, cond)
@@ -116,6 +135,38 @@ def draw(
     )
 
 
+def _true_joints(
+    mech: Mechanism,
+    params: ParameterSet,
+    truth: np.ndarray,
+    rows: np.ndarray,
+    cond: dict[str, np.ndarray] | None = None,
+    true_forces: bool = False,
+) -> np.ndarray:
+    """The joint values at which the rigid true geometry is where the true machine is.
+
+    Joint terms on actuated joints: ``q + B θ``. Struts: each pose measured on the true
+    geometry with its struts lengthened by ``c·F`` (``F`` of the nominal machine, or of
+    the true one with ``true_forces``), then the joint values that bring the rigid true
+    geometry there (inverse kinematics).
+    """
+    k = [i for i in params.joint_terms if params.parameters[i].dof == "strut_compliance"]
+    if not k:
+        return actual_joint_values(mech, params, truth, rows, cond)
+    on_joints = np.setdiff1d(np.arange(len(params)), k)
+    rest = np.where(np.isin(np.arange(len(params)), on_joints), truth, 0.0)
+    joints = actual_joint_values(mech, params, rest, rows, cond)
+    actual = params.apply(mech, truth)
+    names = tuple(params.parameters[i].joint for i in k)
+    lengths = parameters(actual, [f"{j}.tz" for j in names])  # the hexaslide's struts lie on z
+    forces, _ = strut_loads(actual if true_forces else mech, joints, names)
+    out = np.empty_like(joints)
+    for i, (q, f) in enumerate(zip(joints, forces, strict=True)):
+        pose = lengths.apply(actual, truth[k] * f).forward(q)
+        out[i] = actual.inverse(pose, actual.configurations(q[None])[0], check_limits=False)
+    return out
+
+
 def study(
     draws: int,
     n_poses: int,
@@ -123,10 +174,11 @@ def study(
     terms: tuple[str, ...],
     robot: str = "ur5",
     span: tuple[float, float] = SPAN,
+    true_forces: bool = False,
 ) -> list[Draw]:
     mech, params = setup(terms, robot)
     rng = np.random.default_rng(seed)
-    return [draw(mech, params, n_poses, rng, span) for _ in range(draws)]
+    return [draw(mech, params, n_poses, rng, span, true_forces) for _ in range(draws)]
 
 
 def mean_se(values: list[float]) -> tuple[float, float]:
@@ -141,23 +193,30 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1, help="seed of poses, errors and noise")
     ap.add_argument("--robot", default="ur5", help="a serial arm by name (default ur5)")
     ap.add_argument(
-        "--machine", choices=("arm", "stewart"), default="arm",
-        help="arm (--robot) or the Stewart platform with a 20 kg payload",
+        "--machine", choices=("arm", "stewart", "hexaslide"), default="arm",
+        help="arm (--robot), or the Stewart platform or hexaslide with a 20 kg payload",
     )  # fmt: skip
     ap.add_argument("--terms", default=None, help="comma list (default: see above)")
     ap.add_argument("--span", default="18,28", help="temperatures of the poses [°C] LOW,HIGH")
+    ap.add_argument(
+        "--true-forces", action="store_true",
+        help="struts lengthened under the true machine's forces (default: the nominal's)",
+    )  # fmt: skip
     args = ap.parse_args()
     lo, hi = (float(v) for v in args.span.split(","))
-    robot = "stewart" if args.machine == "stewart" else args.robot
-    default = "compliance" if robot == "stewart" else "compliance,gain,harmonics"
+    robot = args.robot if args.machine == "arm" else args.machine
+    default = {"stewart": "compliance", "hexaslide": "strut-compliance"}.get(
+        robot, "compliance,gain,harmonics"
+    )
     terms = tuple(t for t in (args.terms or default).split(",") if t)
     t0 = time.perf_counter()
-    out = study(args.draws, args.poses, args.seed, terms, robot, (lo, hi))
+    out = study(args.draws, args.poses, args.seed, terms, robot, (lo, hi), args.true_forces)
     seconds = time.perf_counter() - t0
     m, s = mean_se([d.maha for d in out])
     mt, st = mean_se([d.maha_terms for d in out])
     print(f"{len(out)} draws, {robot}, {args.poses} full poses, noise 0.01 mm / 0.01 mrad, "
-          f"terms {'+'.join(terms)} ({seconds:.0f} s)"
+          f"terms {'+'.join(terms)}{', true forces' if args.true_forces else ''} "
+          f"({seconds:.0f} s)"
           + (f", temperatures {lo:g}–{hi:g} °C" if "temperature" in terms else ""))  # fmt: skip
     print(f"identified parameters: {out[0].n} ({out[0].n_terms} joint terms)")
     print(f"Mahalanobis error / n, all identified   mean {m:.4f} ± {s:.4f} (s.e.)")

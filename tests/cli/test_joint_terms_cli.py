@@ -109,7 +109,8 @@ def test_campaign_key(tmp_path):
 
 
 def test_validate_cv_refuses_joint_terms(compliant_ur5_data, tmp_path):
-    """validate --cv predicts with the URDF (no joint terms): it refuses, naming select-model."""
+    """validate --cv predicts with the URDF (no joint terms): it refuses, naming select-model;
+    validate --data predicts with the terms and says so."""
     runner = CliRunner()
     out = tmp_path / "cal"
     res = runner.invoke(main, ["calibrate", "ur5", "--data", str(compliant_ur5_data),
@@ -121,4 +122,5 @@ def test_validate_cv_refuses_joint_terms(compliant_ur5_data, tmp_path):
     assert "select-model" in res.output and "Traceback" not in res.output
     res = runner.invoke(main, ["validate", str(out), "--data", str(compliant_ur5_data)])
     assert res.exit_code == 0, res.output
-    assert "geometric part only" in res.output  # said, not silently left out
+    assert "calibrated model: geometry and 6 joint terms (compliance)" in res.output  # applied
+    assert "geometric part only" not in res.output

@@ -64,3 +64,16 @@ def test_thermal_coefficients_recovered_at_the_bound(robot, n, n_terms):
     maha_terms = np.mean([d.maha_terms for d in out])
     assert abs(maha - 1) < 4 * np.sqrt(2 / n / len(out)), maha
     assert abs(maha_terms - 1) < 4 * np.sqrt(2 / n_terms / len(out)), maha_terms
+
+
+@pytest.mark.slow
+def test_strut_compliance_under_a_payload_recovered_at_the_bound():
+    """10 seeded hexaslide calibrations: 54 geometric parameters and six struts' axial
+    compliance under a 20 kg payload, the struts lengthened pose by pose (physical
+    model) while the fit models the elongation as joint changes."""
+    out = script.study(10, 60, seed=3, terms=("strut-compliance",), robot="hexaslide")
+    assert out[0].n == 60 and out[0].n_terms == 6
+    maha = np.mean([d.maha for d in out])
+    maha_terms = np.mean([d.maha_terms for d in out])
+    assert abs(maha - 1) < 4 * np.sqrt(2 / 60 / len(out)), maha
+    assert abs(maha_terms - 1) < 4 * np.sqrt(2 / 6 / len(out)), maha_terms
