@@ -10,6 +10,7 @@ from __future__ import annotations
 from pincal.report._calibration import calibration_report
 from pincal.report._campaign_notes import campaign_notes
 from pincal.report._document import ReportFiles, Section, Table, write_report
+from pincal.report._parameter_plots import plot_parameters
 from pincal.report._plots import (
     ErrorStats,
     error_statistics,
@@ -17,7 +18,6 @@ from pincal.report._plots import (
     plot_error_histogram,
     plot_errors_before_after,
     plot_index_history,
-    plot_parameters,
     plot_validation_summary,
 )
 from pincal.report._sections import block_label
