@@ -306,6 +306,6 @@ def load_campaign(path: str | Path) -> Campaign:
         model = _resolve(model, base) or model
     for key, f in (("measurements.file", m.file), ("validation.file", v.file)):
         if f is not None and not Path(f).is_file():
-            raise CampaignError(f"{key}: {shown(f)} does not exist")
+            raise CampaignError(f"{key}: {shown(f, 300)} does not exist")
     out = _resolve(camp.out, base) or camp.out
     return dataclasses.replace(camp, model=model, out=out, measurements=m, validation=v)
