@@ -51,19 +51,19 @@ def read_bytes(
     try:
         st = p.stat()
     except FileNotFoundError:
-        raise error(f"{what} {clip(str(p))} does not exist") from None
+        raise error(f"{what} {_shown(p)} does not exist") from None
     except OSError as exc:
-        raise error(f"cannot read {what} {clip(str(p))}: {exc.strerror}") from None
+        raise error(f"cannot read {what} {_shown(p)}: {exc.strerror}") from None
     if not stat.S_ISREG(st.st_mode):
         kind = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file (device, FIFO, …)"
-        raise error(f"{what} {clip(str(p))} is {kind}; give the path of a regular file")
+        raise error(f"{what} {_shown(p)} is {kind}; give the path of a regular file")
     if st.st_size > cap:
         raise InputLimitError(_too_big(p, what, st.st_size, cap))
     try:
         # O_NONBLOCK: a file swapped for a FIFO after the check cannot block the open.
         fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     except OSError as exc:
-        raise error(f"cannot read {what} {clip(str(p))}: {exc.strerror}") from None
+        raise error(f"cannot read {what} {_shown(p)}: {exc.strerror}") from None
     with os.fdopen(fd, "rb") as fh:
         data = fh.read(cap + 1)
     if len(data) > cap:
@@ -98,14 +98,19 @@ def read_text(
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise error(
-            f"{what} {clip(str(path))} is not UTF-8 text (byte 0x{data[exc.start]:02x} at "
+            f"{what} {_shown(path)} is not UTF-8 text (byte 0x{data[exc.start]:02x} at "
             f"offset {exc.start}); save it as UTF-8"
         ) from None
 
 
+def _shown(path: str | Path) -> str:
+    """A path for a message: whole up to 300 characters (the file name is what users need)."""
+    return clip(str(path), 300)
+
+
 def _too_big(p: Path, what: str, size: int, cap: int) -> str:
     return (
-        f"{what} {clip(str(p))} is {size / 1e6:.1f} MB or more, over the {cap / 1e6:.0f} MB "
+        f"{what} {_shown(p)} is {size / 1e6:.1f} MB or more, over the {cap / 1e6:.0f} MB "
         "limit; if the file is right, raise the limit with PINCAL_MAX_FILE_MB (in Python: "
         "`with Limits(file_bytes=…).applied():`)"
     )

@@ -1,10 +1,18 @@
 from __future__ import annotations
 
-import numpy as np
-import pytest
+import os
 
-import pincal
-from pincal.model import load_mechanism, parameters
+# One BLAS thread per test process (before numpy loads; subprocesses inherit it): the
+# suite's matrices are small, where OpenBLAS threads cost more CPU than they save, and
+# `-n auto` (pytest-xdist) already gives each core a worker. Set it to override.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import pincal  # noqa: E402
+from pincal.model import load_mechanism, parameters  # noqa: E402
 
 
 @pytest.fixture(scope="session")

@@ -63,3 +63,15 @@ def test_text_names_the_file_and_offset_and_drops_bom(tmp_path):
     assert read_text(bom) == "a,b\n"
     with pytest.raises(ModelFileError, match="does not exist"):
         read_text(tmp_path / "missing.urdf", "URDF", error=ModelFileError)
+
+
+def test_a_file_deep_in_a_long_path_is_named(tmp_path):
+    """Messages show a path whole up to 300 characters: the file name is what users need."""
+    deep = tmp_path.joinpath(*["campaign-2026-11-measurements"] * 5)
+    deep.mkdir(parents=True)
+    (deep / "robot.urdf").write_bytes(b"<robot \xff/>")
+    assert len(str(deep / "robot.urdf")) > 160
+    with pytest.raises(InputFileError, match=r"poses.csv does not exist"):
+        read_text(deep / "poses.csv", "poses file")
+    with pytest.raises(InputFileError, match=r"robot.urdf is not UTF-8"):
+        read_text(deep / "robot.urdf", "URDF")

@@ -10,15 +10,12 @@ relative to the file's directory. See :data:`KEYS_HELP` (shown by ``pincal run
 from __future__ import annotations
 
 import dataclasses
-import difflib
-import math
-import types
-import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from pincal._yaml import shown
+from pincal.cli._campaign_schema import build, choice
 from pincal.cli._campaign_sockets import SOCKETS_HELP, Sockets, plain_socket_section
 from pincal.errors import CampaignError, PincalError, clip
 from pincal.measure import DEFAULT_NOISE
@@ -82,16 +79,6 @@ Campaign file keys (YAML; relative paths are relative to the file):
 """.replace("{sockets}", SOCKETS_HELP)
 
 
-def _choice(value: str, valid: tuple[str, ...], key: str) -> None:
-    if value not in valid:
-        same = [v for v in valid if v.lower() == str(value).lower()]
-        near = same or difflib.get_close_matches(str(value), valid, n=1)
-        hint = f" (did you mean {near[0]!r}?)" if near else ""
-        raise CampaignError(
-            f"{key}: {shown(value)} is not valid{hint}; use one of {', '.join(valid)}"
-        )
-
-
 @dataclass(frozen=True)
 class Design:
     """Pose design (``pincal poses``)."""
@@ -103,8 +90,8 @@ class Design:
     seed: int = 0
 
     def check(self, key: str) -> None:
-        _choice(self.index, INDICES, f"{key}.index")
-        _choice(self.method, DESIGN_METHODS, f"{key}.method")
+        choice(self.index, INDICES, f"{key}.index")
+        choice(self.method, DESIGN_METHODS, f"{key}.method")
         if self.count < 1:
             raise CampaignError(f"{key}.count must be ≥ 1, got {clip(self.count)}")
         from pincal.design import parse_candidate_spec
@@ -128,7 +115,7 @@ class MeasurementSource:
     seed: int = 1
 
     def check(self, key: str) -> None:
-        _choice(self.source, SOURCES, f"{key}.source")
+        choice(self.source, SOURCES, f"{key}.source")
         if (self.source == "file") != (self.file is not None):
             raise CampaignError(f"{key}.file is required with source: file, and only then")
         if self.poses is not None and self.poses < 1:
@@ -156,8 +143,8 @@ class Identification:
         except PincalError as exc:
             raise CampaignError(f"{key}.model: {exc}") from exc
 
-        _choice(self.method, tuple(METHODS), f"{key}.method")
-        _choice(self.loss, ("linear", "huber", "soft_l1", "cauchy"), f"{key}.loss")
+        choice(self.method, tuple(METHODS), f"{key}.method")
+        choice(self.loss, ("linear", "huber", "soft_l1", "cauchy"), f"{key}.loss")
         if self.prior is not None:
             from pincal.cli._markers import parse_prior
 
@@ -168,7 +155,7 @@ class Identification:
                     f"{key}.prior: {shown(self.prior)} is not 'auto' or 'LEN_MM,ANG_MRAD'"
                 ) from exc
         if self.instrument is not None:
-            _choice(self.instrument, tuple(INSTRUMENT_PROFILES), f"{key}.instrument")
+            choice(self.instrument, tuple(INSTRUMENT_PROFILES), f"{key}.instrument")
 
 
 @dataclass(frozen=True)
@@ -185,8 +172,8 @@ class Markers:
     lock: dict[str, float] = field(default_factory=dict)
 
     def check(self, key: str) -> None:
-        _choice(self.length_unit, ("m", "mm", "um"), f"{key}.length_unit")
-        _choice(self.instrument_frame, ("unknown", "known"), f"{key}.instrument_frame")
+        choice(self.length_unit, ("m", "mm", "um"), f"{key}.length_unit")
+        choice(self.instrument_frame, ("unknown", "known"), f"{key}.instrument_frame")
         if self.marker_std is not None and (self.marker is None or self.marker_std <= 0):
             raise CampaignError(f"{key}.marker_std needs a given marker and must be > 0 [mm]")
 
@@ -216,7 +203,7 @@ class Validation:
     def check(self, key: str) -> None:
         if self.cv is not None and self.cv < 2:
             raise CampaignError(f"{key}.cv must be ≥ 2 folds, got {self.cv}")
-        _choice(self.source, VALIDATION_SOURCES, f"{key}.source")
+        choice(self.source, VALIDATION_SOURCES, f"{key}.source")
         if (self.source == "file") != (self.file is not None):
             raise CampaignError(f"{key}.file is required with source: file, and only then")
         if self.poses < 1:
@@ -284,94 +271,6 @@ class Campaign:
         return plain(dataclasses.asdict(self))
 
 
-def _type_name(tp: Any) -> str:
-    return getattr(tp, "__name__", str(tp))
-
-
-def _looks_numeric(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def _coerce(value: Any, tp: Any, key: str) -> Any:
-    origin = typing.get_origin(tp)
-    if origin in (typing.Union, types.UnionType):
-        inner = [a for a in typing.get_args(tp) if a is not type(None)]
-        if value is None:
-            return None
-        return _coerce(value, inner[0], key)
-    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
-        return _build(tp, value, key)
-    if origin is dict:
-        _, vt = typing.get_args(tp)
-        if not isinstance(value, dict):
-            raise CampaignError(f"{key}: expected a mapping NAME: VALUE, got {shown(value)}")
-        return {str(k): _coerce(v, vt, f"{key}.{k}") for k, v in value.items()}
-    if origin is tuple:
-        args = typing.get_args(tp)
-        if len(args) == 2 and args[1] is Ellipsis:  # any length
-            if not isinstance(value, (list, tuple)):
-                raise CampaignError(f"{key}: expected a list, got {shown(value)}")
-            return tuple(_coerce(v, args[0], f"{key}[{k}]") for k, v in enumerate(value))
-        if not isinstance(value, (list, tuple)) or len(value) != len(args):
-            raise CampaignError(
-                f"{key}: expected a list of {len(args)} numbers, got {shown(value)}"
-            )
-        return tuple(
-            _coerce(v, a, f"{key}[{k}]") for k, (v, a) in enumerate(zip(value, args, strict=True))
-        )
-    ok = {
-        bool: isinstance(value, bool),
-        int: isinstance(value, int) and not isinstance(value, bool),
-        float: isinstance(value, (int, float)) and not isinstance(value, bool),
-        str: isinstance(value, str),
-    }.get(tp, False)
-    if not ok:
-        hint = ""
-        if tp in (int, float) and isinstance(value, str) and _looks_numeric(value):
-            r = repr(float(value))
-            r = r.replace("e", ".0e") if "e" in r and "." not in r else r
-            hint = f" (YAML reads an exponent without '.' or sign as text: write {r})"
-        raise CampaignError(f"{key}: expected {_type_name(tp)}, got {shown(value)}{hint}")
-    if tp is float:
-        try:
-            number = float(value)
-        except OverflowError:
-            number = math.inf
-        if not math.isfinite(number):
-            raise CampaignError(f"{key}: expected a finite number, got {shown(value)}")
-        return number
-    return value
-
-
-def _build(cls: type, data: Any, key: str) -> Any:
-    where = key or "campaign file"
-    if data is None:
-        data = {}
-    if not isinstance(data, dict):
-        raise CampaignError(f"{where}: expected a mapping of keys, got {shown(data)}")
-    hints = typing.get_type_hints(cls)
-    valid = [f.name for f in dataclasses.fields(cls)]
-    for name in data:
-        if name not in valid:
-            near = difflib.get_close_matches(str(name), valid, n=1, cutoff=0.5)
-            hint = f"did you mean {near[0]!r}? " if near else ""
-            raise CampaignError(
-                f"{where}: unknown key {name!r}; {hint}valid keys are {', '.join(valid)}"
-            )
-    kwargs = {}
-    for f in dataclasses.fields(cls):
-        sub = f"{key}.{f.name}" if key else f.name
-        if f.name in data:
-            kwargs[f.name] = _coerce(data[f.name], hints[f.name], sub)
-        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
-            raise CampaignError(f"{where}: key {f.name!r} is required")
-    return cls(**kwargs)
-
-
 def _resolve(path: str | None, base: Path) -> str | None:
     if path is None:
         return None
@@ -396,7 +295,7 @@ def load_campaign(path: str | Path) -> Campaign:
     if isinstance(data, dict) and "sockets" in data:
         data = {**data, "sockets": plain_socket_section(data["sockets"])}
     try:
-        camp = _build(Campaign, data, "")
+        camp = build(Campaign, data, "")
         camp.check()
     except CampaignError as exc:  # the message names the key; say which file holds it
         raise CampaignError(f"{clip(str(path), 200)}: {exc}") from None
@@ -408,6 +307,6 @@ def load_campaign(path: str | Path) -> Campaign:
         model = _resolve(model, base) or model
     for key, f in (("measurements.file", m.file), ("validation.file", v.file)):
         if f is not None and not Path(f).is_file():
-            raise CampaignError(f"{key}: {shown(f)} does not exist")
+            raise CampaignError(f"{key}: {shown(f, 300)} does not exist")
     out = _resolve(camp.out, base) or camp.out
     return dataclasses.replace(camp, model=model, out=out, measurements=m, validation=v)

@@ -78,7 +78,7 @@ def check_data_rows(path: str, option: str, n_params: int, yes: bool) -> int | N
         seconds = rows * n_params * _FIT_S_PER_ROW_PARAM
         gb = rows * 6 * n_params * _FIT_BYTES_PER_ENTRY / 1e9
         raise InputLimitError(
-            f"{option} {clip(path)} has {rows} poses, over the {MAX_POSES} fitted without "
+            f"{option} {clip(path, 300)} has {rows} poses, over the {MAX_POSES} fitted without "
             f"--yes; with {n_params} parameters the fit would take about {seconds:.0f} s and "
             f"{gb:.1f} GB of memory; pass --yes to fit it anyway, or use a subset of the poses"
         )

@@ -262,12 +262,12 @@ def check_model_files(recorded: object, where: str) -> None:
             now = hash_bounded(p)
         except CalibrationDirectoryError as exc:
             raise CalibrationDirectoryError(
-                f"the nominal model file {clip(str(p))} recorded in {where} cannot be read "
+                f"the nominal model file {clip(str(p), 300)} recorded in {where} cannot be read "
                 f"({exc}); restore it or re-run `pincal calibrate`"
             ) from None
         if now != digest:
             raise CalibrationDirectoryError(
-                f"the nominal model file {clip(str(p))} changed after the calibration was "
+                f"the nominal model file {clip(str(p), 300)} changed after the calibration was "
                 f"written (SHA-256 differs from {where}); the calibration is relative to the "
                 "model it was fitted on: restore that file or re-run `pincal calibrate`"
             )

@@ -352,7 +352,7 @@ def write_csv(
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise MeasurementFormatError(
-            f"cannot write {clip(str(path))}: column {clip(twice[0])} would appear twice (a "
+            f"cannot write {clip(str(path), 300)}: column {clip(twice[0])} would appear twice (a "
             "joint or target named like another column); rename it so column names differ"
         )
     buf = io.StringIO()

@@ -49,20 +49,12 @@ from pincal.errors import (
     PoseFitError,
 )
 from pincal.io._delimited import Table, read_table
+from pincal.io._tracker_columns import ALIASES, read_actuators, read_xyz
 from pincal.io._tracker_file import TargetMeasurements
-from pincal.io._units import ANGLE_UNITS, LENGTH_UNITS, check_actuator_ranges, unit_factor
 from pincal.model import Mechanism
 
 __all__ = ["TrackerImport", "TrackerImportOptions", "import_tracker"]
 
-_ALIASES = {
-    "pose": ("pose", "group", "pose_id", "group_id", "pose id", "group id"),
-    "time": ("time", "timestamp", "t", "time_s"),
-    "point": ("point", "name", "target", "point_name", "point name"),
-    "x": ("x",),
-    "y": ("y",),
-    "z": ("z",),
-}
 MATCHES = ("auto", "pose", "time")
 _SHOWN = 12
 
@@ -148,69 +140,6 @@ def _time(table: Table, i: int, k: int) -> float:
     return stamp.timestamp()
 
 
-def _length_factor(table: Table, cols: list[int], unit: str | None) -> float:
-    units = {u for k in cols if (u := table.unit(k)) is not None}
-    if len(units) > 1 or (units and unit is not None and units != {unit}):
-        raise MeasurementError(
-            f"{table.name}: coordinate units disagree ({sorted(units)} in the titles, "
-            f"{shown(unit)} stated); state one unit"
-        )
-    chosen = next(iter(units), unit)
-    if chosen is None:
-        raise MeasurementError(
-            f"{table.name}: the length unit of {[table.columns[k] for k in cols]} is unknown; "
-            f"state it (--unit mm) or write it in the titles ('X [mm]'); units: "
-            f"{', '.join(LENGTH_UNITS)}"
-        )
-    return unit_factor(LENGTH_UNITS, chosen, "length", table.name)
-
-
-def _xyz(table: Table, mapping: Mapping[str, str], unit: str | None, what: str):
-    found = {f: table.find(f, _ALIASES[f], mapping) for f in ("point", "x", "y", "z")}
-    missing = [f for f, k in found.items() if k is None]
-    if missing:
-        raise ColumnError(
-            f"{table.name}: no {missing} column in the {what} (columns "
-            f"{shown(list(table.columns))}); "
-            f"map them, e.g. --columns point=Name,x=X",
-            missing=missing,
-        )
-    cols = {f: k for f, k in found.items() if k is not None}
-    xyz = [cols["x"], cols["y"], cols["z"]]
-    lf = _length_factor(table, xyz, unit)
-    names = [table.text(i, cols["point"]) for i in range(len(table.rows))]
-    pts = np.array([[table.number(i, k) / lf for k in xyz] for i in range(len(table.rows))])
-    return names, pts.reshape(-1, 3), lf
-
-
-def _log_actuators(log: Table, mech: Mechanism, opts: TrackerImportOptions) -> np.ndarray:
-    unknown = set(opts.log_columns) - set(mech.actuated) - {"pose", "time"}
-    if unknown:
-        raise ColumnError(
-            f"{log.name}: mapped fields {sorted(unknown)} are not actuated joints of "
-            f"{mech.name!r} ({list(mech.actuated)}) nor pose/time",
-            unknown=sorted(unknown),
-        )
-    cols, factors = [], []
-    for joint in mech.actuated:
-        k = log.find(joint, (joint,), opts.log_columns)
-        if k is None:
-            raise ColumnError(
-                f"{log.name}: no column for actuated joint {joint!r} (columns "
-                f"{shown(list(log.columns))}); map it, e.g. --log-columns {joint}=Axis1",
-                missing=[joint],
-            )
-        revolute = mech.tree.joints[joint].type in ("revolute", "continuous")
-        table = ANGLE_UNITS if revolute else LENGTH_UNITS
-        unit = log.unit(k) or (opts.log_angle_unit if revolute else opts.log_length_unit)
-        cols.append(k)
-        factors.append(unit_factor(table, unit, "angle" if revolute else "length", log.name))
-    q = np.array([[log.number(i, k) for k in cols] for i in range(len(log.rows))])
-    q = q.reshape(-1, len(cols)) / np.array(factors)
-    check_actuator_ranges(mech, q, log.name, [log.columns[k] for k in cols], log.lines)
-    return q
-
-
 def _listing(items: list) -> str:
     shown = ", ".join(str(v) for v in items[:_SHOWN])
     return shown + (f", … ({len(items) - _SHOWN} more)" if len(items) > _SHOWN else "")
@@ -218,8 +147,8 @@ def _listing(items: list) -> str:
 
 def _assign(points: Table, log: Table, opts: TrackerImportOptions):
     """(mode, log row per point row, pose id per log row, max time offset)."""
-    pk = {f: points.find(f, _ALIASES[f], opts.point_columns) for f in ("pose", "time")}
-    lk = {f: log.find(f, _ALIASES[f], opts.log_columns) for f in ("pose", "time")}
+    pk = {f: points.find(f, ALIASES[f], opts.point_columns) for f in ("pose", "time")}
+    lk = {f: log.find(f, ALIASES[f], opts.log_columns) for f in ("pose", "time")}
     mode = opts.match
     if mode not in MATCHES:
         raise MeasurementError(f"match {shown(mode)} unknown; use one of {MATCHES}")
@@ -324,14 +253,14 @@ def import_tracker(
     points = read_table(points_path, o.delimiter, o.decimal)
     log = read_table(log_path, o.delimiter, o.decimal)
     tgt = read_table(targets_path, o.delimiter, o.decimal)
-    tnames, local, _ = _xyz(tgt, o.target_columns, o.length_unit, "targets file")
+    tnames, local, _ = read_xyz(tgt, o.target_columns, o.length_unit, "targets file")
     dup = sorted({n for n in tnames if tnames.count(n) > 1})
     if dup or len(tnames) < 3:
         raise MeasurementError(
             f"{tgt.name}: needs at least 3 targets with distinct names; got {tnames}"
         )
-    names, pts, lf = _xyz(points, o.point_columns, o.length_unit, "points file")
-    q_act = _log_actuators(log, mech, o)
+    names, pts, lf = read_xyz(points, o.point_columns, o.length_unit, "points file")
+    q_act = read_actuators(log, mech, o.log_columns, o.log_length_unit, o.log_angle_unit)
     stray = sorted({n for n in names if n not in tnames})
     if stray and not o.ignore_unknown_points:
         bad = [points.lines[i] for i, n in enumerate(names) if n not in tnames]

@@ -32,8 +32,8 @@ def read_sidecar(path: Path) -> dict[str, Any]:
         return {}
     if not isinstance(data, dict):
         raise ModelFileError(
-            f"sidecar {clip(str(path))} must be a mapping of keys (closed_loop, name_mot, ...), "
-            f"got a {type(data).__name__}"
+            f"sidecar {clip(str(path), 300)} must be a mapping of keys (closed_loop, name_mot, "
+            f"...), got a {type(data).__name__}"
         )
     return data
 

@@ -12,6 +12,7 @@ from pincal.report._campaign_notes import campaign_notes
 from pincal.report._cv_text import cross_validation_text
 from pincal.report._document import ReportFiles, Section, Table, write_report
 from pincal.report._marker_text import marker_lines
+from pincal.report._parameter_plots import plot_parameters
 from pincal.report._plots import (
     ErrorStats,
     error_statistics,
@@ -19,7 +20,6 @@ from pincal.report._plots import (
     plot_error_histogram,
     plot_errors_before_after,
     plot_index_history,
-    plot_parameters,
     plot_validation_summary,
 )
 from pincal.report._sections import block_label

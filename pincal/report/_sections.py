@@ -13,12 +13,8 @@ import numpy as np
 
 from pincal.identification import IdentificationRecord
 from pincal.report._document import Section, Table
-from pincal.report._plots import (
-    plot_correlation,
-    plot_error_histogram,
-    plot_errors_before_after,
-    plot_parameters,
-)
+from pincal.report._parameter_plots import plot_correlation, plot_parameters
+from pincal.report._plots import plot_error_histogram, plot_errors_before_after
 from pincal.report._render import PlotJobs
 
 __all__ = [

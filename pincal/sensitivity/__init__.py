@@ -9,6 +9,7 @@ names through it).
 
 from __future__ import annotations
 
+from pincal.sensitivity._base_set import BASE_POSES, BaseSet, base_parameters, base_set
 from pincal.sensitivity._batch_jacobian import sensitivities_batch
 from pincal.sensitivity._global import (
     GlobalSensitivity,
@@ -16,13 +17,9 @@ from pincal.sensitivity._global import (
     global_sensitivity_from_jacobians,
 )
 from pincal.sensitivity._identifiability import (
-    BASE_POSES,
     BASE_RTOL,
-    BaseSet,
     Identifiability,
     analyse_jacobian,
-    base_parameters,
-    base_set,
     identifiability,
 )
 from pincal.sensitivity._identification_jacobian import (

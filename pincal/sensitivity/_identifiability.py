@@ -13,16 +13,13 @@ fewer, the remaining members are the columns with the largest part outside the s
 ``J_k = Σ_i β_ki J_i``: its effect is absorbed into those base parameters and it
 cannot be identified.
 
-The ``base`` *preset* (:func:`base_set`) applies the same analysis with the stricter
-threshold :data:`BASE_RTOL` = 100 × RANK_RTOL: directions between the two thresholds
-exist but are too weak to identify in practice (and fall below the rank rule on other
-pose sets); the preset leaves them out and :meth:`BaseSet.note` says so.
-
 Over-constrained loops (e.g. a ``6d`` closure of a planar loop) add a third class:
 parameters whose change would open a loop that no passive-joint motion can close
 (their closure-Jacobian column ∂c/∂p_k lies outside the range of ∂c/∂q_u at some
 pose). They cannot change while the mechanism stays assembled, so they are reported
 as *breaking loop closure* and are neither base nor absorbed parameters.
+
+The ``base`` preset built on this analysis: :mod:`pincal.sensitivity._base_set`.
 """
 
 from __future__ import annotations
@@ -32,31 +29,23 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pincal.errors import PincalError, UnidentifiableError
+from pincal.errors import PincalError
 from pincal.model import (
     Mechanism,
     ParameterSet,
     active_limits,
     degenerate_translations,
-    full_parameters,
     sample_actuators,
 )
 from pincal.sensitivity._identification_jacobian import jacobian_and_closure_breaking
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
 
 __all__ = [
-    "BASE_POSES",
     "BASE_RTOL",
-    "BaseSet",
     "Identifiability",
     "analyse_jacobian",
-    "base_parameters",
-    "base_set",
     "identifiability",
 ]
-
-BASE_POSES = 60
-"""Random workspace poses (seed 0) over which the ``base`` preset is computed."""
 
 BASE_RTOL = 1e-6
 """Relative singular-value threshold of the ``base`` preset: 100 × the rank rule's
@@ -333,94 +322,3 @@ def identifiability(
     J, breaking = jacobian_and_closure_breaking(mech, params, q_act_rows, conditions=conditions)
     splitting = np.isin(params.names, degenerate_translations(mech))
     return analyse_jacobian(J, params.names, rtol, breaks_closure=breaking, splits_joint=splitting)
-
-
-@dataclass(frozen=True)
-class BaseSet:
-    """The identifiable base set and why parameters were left out of it.
-
-    Attributes:
-        params: the base parameters (the ``base`` preset for the default candidates).
-        analysis: identifiability of the candidates at :data:`BASE_RTOL`.
-        weak: directions identifiable under the rank rule (σ > RANK_RTOL·σ1) but too weak
-            for the base set (σ ≤ BASE_RTOL·σ1); one parameter fewer each.
-        weakest: σ/σ1 of the weakest such direction (nan when ``weak`` is 0).
-    """
-
-    params: ParameterSet
-    analysis: Identifiability
-    weak: int
-    weakest: float
-
-    def note(self) -> str | None:
-        """Why the weak directions were left out (None when there are none)."""
-        if not self.weak:
-            return None
-        return (
-            f"{self.weak} weakly identifiable direction(s) left out (singular value down to "
-            f"{self.weakest:.2g} of the largest, below {BASE_RTOL:g}): the measurements "
-            f"hardly change along them, so no instrument resolves them and even noise-free "
-            f"double-precision data fixes them only to ~{1e-16 / self.weakest:.0e} relative"
-        )
-
-
-def base_set(mech: Mechanism, params: ParameterSet | None = None) -> BaseSet:
-    """The identifiable base set with the reasons for what it leaves out.
-
-    The candidates are ``params`` (default: the ``full`` preset without its
-    :func:`pincal.model.degenerate_translations`); over :data:`BASE_POSES` random
-    workspace poses drawn with seed 0 (deterministic), the base parameters of
-    :func:`analyse_jacobian` with the threshold :data:`BASE_RTOL` are kept, in the
-    candidates' order. Parameters that break loop closure, are absorbed by others, or
-    only span directions weaker than :data:`BASE_RTOL` are left out.
-
-    Args:
-        mech: the mechanism.
-        params: candidate parameters (default: ``full`` minus degenerate translations).
-
-    Returns:
-        :class:`BaseSet` whose ``params`` is labelled ``"base"`` (default candidates) or
-        ``"<label> base"``.
-
-    Raises:
-        UnidentifiableError: no candidate parameter changes the measured quantity.
-    """
-    candidates = params
-    if candidates is None:
-        full = full_parameters(mech)
-        skip = set(degenerate_translations(mech))
-        candidates = full.subset([k for k, n in enumerate(full.names) if n not in skip])
-    rows = sample_actuators(mech, BASE_POSES, np.random.default_rng(0))
-    J, breaking = jacobian_and_closure_breaking(mech, candidates, rows)
-    ident = analyse_jacobian(J, candidates.names, BASE_RTOL, breaks_closure=breaking)
-    if numerical_rank(ident.singular_values, RANK_RTOL) == 0:
-        raise UnidentifiableError(
-            f"none of the {len(candidates)} parameters of {mech.name!r} changes the measured "
-            f"components {list(mech.measured_components)}; measure more components",
-            candidates.names,
-        )
-    sv = ident.singular_values
-    weak = numerical_rank(sv, RANK_RTOL) - ident.rank
-    weakest = float(sv[ident.rank + weak - 1] / sv[0]) if weak else float("nan")
-    label = "base" if params is None else f"{params.label} base"
-    return BaseSet(candidates.subset(ident.base, label), ident, weak, weakest)
-
-
-def base_parameters(mech: Mechanism, params: ParameterSet | None = None) -> ParameterSet:
-    """The identifiable base set: the ``base`` preset (``parameters(mech, "base")``).
-
-    ``base_set(mech, params).params``: see :func:`base_set` (the candidates, the poses
-    and the :data:`BASE_RTOL` threshold). Computed when asked (no cache).
-
-    Args:
-        mech: the mechanism.
-        params: candidate parameters (default: ``full`` minus degenerate translations).
-
-    Returns:
-        ParameterSet labelled ``"base"`` (default candidates) or ``"<label> base"``.
-
-    Raises:
-        UnidentifiableError: no candidate parameter changes the measured quantity.
-    """
-    return base_set(mech, params).params
-

@@ -13,7 +13,7 @@ from types import MappingProxyType
 
 from pincal.model import Mechanism, ParameterSet
 from pincal.model import parameters as model_parameters
-from pincal.sensitivity._identifiability import base_parameters
+from pincal.sensitivity._base_set import base_parameters
 
 __all__ = ["COMPUTED_PRESETS", "parameters"]
 

@@ -64,7 +64,8 @@ def test_a_clean_ballbar_fit_converges_and_names_its_gauge(stewart_bar, tmp_path
     assert "not calibrated (held at nominal; the data do not observe it):" in text
 
 
-def test_a_bar_scale_error_outlier_and_unit_error_are_refused(stewart_bar, tmp_path):
+@pytest.mark.slow  # three refused 60-pose fits, each ~8× the time of the clean fit above
+def test_a_bar_scale_error_outlier_and_noise_are_refused(stewart_bar, tmp_path):
     scaled = _edit(stewart_bar, tmp_path / "s.csv", lambda i, v: 1.01 * v)
     res = _calibrate(scaled, tmp_path / "c1")
     assert res.exit_code == 1 and "instrument χ²/ν" in res.stderr
@@ -79,7 +80,9 @@ def test_a_bar_scale_error_outlier_and_unit_error_are_refused(stewart_bar, tmp_p
     quiet.write_text(stewart_bar.read_text().replace("# std: 1e-05", "# std: 1e-06"))
     res = _calibrate(quiet, tmp_path / "c4")
     assert res.exit_code == 1 and "instrument χ²/ν" in res.stderr
-    # readings in mm written as m: refused before the fit, the cause named
+
+
+def test_readings_in_mm_written_as_m_are_refused_before_the_fit(stewart_bar, tmp_path):
     mm = _edit(stewart_bar, tmp_path / "u.csv", lambda i, v: 1e3 * v)
     res = _calibrate(mm, tmp_path / "c3")
     assert res.exit_code == 1 and "Likely cause: units" in res.stderr

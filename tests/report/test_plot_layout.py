@@ -11,7 +11,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import LogLocator
 
-from pincal.report import _plots
+from pincal.report import _parameter_plots, _plots
 from pincal.report._axes import log_scale
 from pincal.report._layout import fit_margins
 
@@ -69,7 +69,7 @@ def _draw_every_plot(tmp_path):
         (_plots.plot_index_history({"O1": [1, 3, 5.0], "O3": [1e-4, 1e-1, 2]}, tmp_path / "c.png"),
          (7.0, 1.2 + 1.6 * 2)),
         (_plots.plot_convergence([1e6, 1e3, 50, 49], tmp_path / "d.png"), (7.0, 4.0)),
-        (_plots.plot_parameters(LONG, std, std, std * 0.5, tmp_path / "e.png",
+        (_parameter_plots.plot_parameters(LONG, std, std, std * 0.5, tmp_path / "e.png",
                                 kinds=["length", "angle"] * 7),
          (7.5, max(3.0, 1.5 + 0.22 * len(LONG) + 0.6 * 2))),
         (_plots.plot_validation_summary(
@@ -77,7 +77,7 @@ def _draw_every_plot(tmp_path):
              "max_orientation_mrad": 13.0},
             {"rms_position_mm": 0.01, "max_position_mm": 0.02, "rms_orientation_mrad": 0.014,
              "max_orientation_mrad": 0.03}, tmp_path / "f.png"), (7.5, 3.6)),
-        (_plots.plot_correlation(LONG, cov, tmp_path / "g.png"),
+        (_parameter_plots.plot_correlation(LONG, cov, tmp_path / "g.png"),
          (3.0 + 0.18 * len(LONG) + 1.2, 3.0 + 0.18 * len(LONG))),
     ]  # fmt: skip
 
@@ -139,5 +139,7 @@ def test_log_minor_ticks_outside_the_view_are_not_made_and_the_plot_is_the_same(
 
 def test_labels_wider_than_the_figure_still_give_a_plot(tmp_path):
     names = ["x" * 300 + str(i) for i in range(3)]
-    path = _plots.plot_parameters(names, [1e-4] * 3, [1e-5] * 3, path=tmp_path / "wide.png")
+    path = _parameter_plots.plot_parameters(
+        names, [1e-4] * 3, [1e-5] * 3, path=tmp_path / "wide.png"
+    )
     assert _png_size(path) == (int(7.5 * 110), int(3.0 * 110))
