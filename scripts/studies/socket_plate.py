@@ -11,7 +11,7 @@ per axis); the plate's known distance (50 mm, 1σ 2 µm) is given or withheld. H
 out: 10 new poses in socket A and 10 in a socket C, 250 mm from A, never in a fit; the
 distance between the mean predicted ball centres of A and C (and of A and B, 10 new
 poses each) is compared with the truth. Without the known distance nothing measured
-fixes the length scale: the fit says so (``warnings``) and the held-out lengths are lost.
+fixes the length scale: the fit holds it at nominal and says so (``warnings``).
 """
 
 from __future__ import annotations
