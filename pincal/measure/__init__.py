@@ -44,8 +44,8 @@ from pincal.measure._registration import (
     Registration,
     register_instrument,
 )
+from pincal.measure._socket_plates import SCALE_MESSAGE
 from pincal.measure._sockets import (
-    SCALE_MESSAGE,
     KnownDistance,
     SocketData,
     SocketPlate,

@@ -1,4 +1,4 @@
-"""The shared terms of socket files: the plates' socket centres and known distances.
+"""Socket plates: their known distances and the centres their files share.
 
 The files of one plate share its socket centres (three unknowns per socket: plates in
 order of first appearance, their sockets in order of first appearance in any file);
@@ -9,14 +9,118 @@ each known distance of a plate gives ``D − ‖c_a − c_b‖``. See
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol, cast
 
 import numpy as np
 
 from pincal.errors import MeasurementError
 from pincal.measure._artefact_kind import Artefact, SharedTerms
-from pincal.measure._sockets import SCALE_MESSAGE, SocketData, SocketPlate
 
-__all__ = ["SocketPlates"]
+__all__ = ["SCALE_MESSAGE", "KnownDistance", "SocketPlate", "SocketPlates"]
+
+#: the warning of a socket campaign whose length scale nothing measured fixes
+SCALE_MESSAGE = (
+    "nothing measured fixes the length scale: add the plate's known distance "
+    "('# distance: A, B, 50, 0.002' in the sockets file, length_unit; in a campaign file "
+    "sockets.distances: [[A, B, 50, 0.002]]; --distance of pincal import-sockets); without "
+    "it the fitted arm shrinks or grows with the socket centres and no residual shows it"
+)
+
+
+@dataclass(frozen=True)
+class KnownDistance:
+    """A calibrated distance between two socket centres.
+
+    Attributes:
+        a, b: socket names; value: the distance [m] (> 0); std: its 1σ [m] (> 0).
+    """
+
+    a: str
+    b: str
+    value: float
+    std: float
+
+    def __post_init__(self) -> None:
+        if self.a == self.b:
+            raise MeasurementError(f"a known distance joins two sockets, got {self.a!r} twice")
+        for what, v in (("distance", self.value), ("distance std", self.std)):
+            if not (np.isfinite(v) and v > 0):
+                raise MeasurementError(f"{what} between {self.a!r} and {self.b!r} must be "
+                                       f"finite and > 0 [m], got {v}")  # fmt: skip
+
+
+@dataclass(frozen=True)
+class SocketPlate:
+    """A plate (or bar) of sockets whose centres are unknown.
+
+    Attributes:
+        name: the plate's name; files naming the same plate share its socket centres.
+        std: 1σ of one seating of the ball centre, per axis [m] (> 0).
+        distances: the known distances between its sockets.
+
+    Raises:
+        MeasurementError: std ≤ 0.
+    """
+
+    name: str = "plate"
+    std: float = 5e-6
+    distances: tuple[KnownDistance, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.std) and self.std > 0):
+            raise MeasurementError(f"socket seating std must be finite and > 0 [m], got {self.std}")
+        object.__setattr__(self, "distances", tuple(self.distances))
+
+    @property
+    def fixes_scale(self) -> bool:
+        """True when a known distance ties the plate (and so the arm) to a length."""
+        return bool(self.distances)
+
+    def distance_residuals(
+        self, centres: dict[str, np.ndarray]
+    ) -> tuple[np.ndarray, list[tuple[str, str, np.ndarray]]]:
+        """``D − ‖c_a − c_b‖`` per known distance [m] and its derivatives.
+
+        Args:
+            centres: socket name → (3,) centre [m].
+
+        Returns:
+            residuals (d,), and per distance (a, b, u) with ∂r/∂c_a = −u, ∂r/∂c_b = +u.
+
+        Raises:
+            MeasurementError: a distance names a socket that was never measured.
+        """
+        r, derivs = np.empty(len(self.distances)), []
+        for i, k in enumerate(self.distances):
+            missing = [s for s in (k.a, k.b) if s not in centres]
+            if missing:
+                raise MeasurementError(
+                    f"plate {self.name!r}: known distance {k.a}–{k.b} names socket(s) "
+                    f"{missing} with no measured pose; measured: {sorted(centres)}"
+                )
+            d = centres[k.a] - centres[k.b]
+            norm = float(np.linalg.norm(d))
+            if norm < 1e-12:
+                raise MeasurementError(f"sockets {k.a!r} and {k.b!r} coincide")
+            r[i] = k.value - norm
+            derivs.append((k.a, k.b, d / norm))
+        return r, derivs
+
+
+class _SocketFile(Protocol):
+    """What the plates read of a socket file (:class:`pincal.measure.SocketData`)."""
+
+    plate: SocketPlate
+    socket: tuple[str, ...]
+    ball: np.ndarray | None
+
+    @property
+    def sockets(self) -> tuple[str, ...]: ...
+
+    def ball_centres(
+        self, P: np.ndarray, Rs: np.ndarray, theta: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]: ...
 
 
 class SocketPlates(SharedTerms):
@@ -32,7 +136,7 @@ class SocketPlates(SharedTerms):
 
     def __init__(self, datasets: Sequence[Artefact]) -> None:
         super().__init__(datasets)
-        data = [d for d in self.datasets if isinstance(d, SocketData)]
+        data = cast("list[_SocketFile]", list(self.datasets))  # one kind per SharedTerms
         self.plates = _plates(data)
         for plate, sockets in self.plates.values():
             for k in plate.distances:
@@ -57,8 +161,8 @@ class SocketPlates(SharedTerms):
     ) -> np.ndarray:
         """Each socket centre at the mean nominal ball centre of its poses (every file)."""
         sums: dict[tuple[str, str], list[np.ndarray]] = {}
-        for d, (P, Rs), t0 in zip(self.datasets, poses, thetas, strict=True):
-            assert isinstance(d, SocketData)
+        files = cast("list[_SocketFile]", list(self.datasets))
+        for d, (P, Rs), t0 in zip(files, poses, thetas, strict=True):
             B, _ = d.ball_centres(P, Rs, t0 if d.ball is None else np.zeros(3))
             for s, b in zip(d.socket, B, strict=True):
                 sums.setdefault((d.plate.name, s), []).append(b)
@@ -101,7 +205,7 @@ class SocketPlates(SharedTerms):
         return {f"{p}.{s}": phi[c : c + 3].copy() for (p, s), c in self.columns.items()}
 
 
-def _plates(data: list[SocketData]) -> dict[str, tuple[SocketPlate, list[str]]]:
+def _plates(data: list[_SocketFile]) -> dict[str, tuple[SocketPlate, list[str]]]:
     """Plate name → (the plate with the known distances of all its files, its sockets).
 
     Raises:

@@ -10,7 +10,7 @@ and are shared by every file of the same plate (several tool positions, several 
 
 Without a known distance nothing measured fixes the length scale: every residual
 ``c_s − b`` scales with the arm, so the fit may shrink it (the sockets come out too
-close) and no residual warns. :data:`SCALE_MESSAGE` says so in words.
+close) and no residual warns. :data:`pincal.measure.SCALE_MESSAGE` says so in words.
 
 :class:`SocketData` is the ``socket`` kind of :class:`pincal.measure.Artefact`
 (registered like any kind); the plates' shared centres and known distances are its
@@ -27,104 +27,15 @@ import numpy as np
 
 from pincal.errors import MeasurementError
 from pincal.measure._artefact_kind import Artefact, SharedTerms
+from pincal.measure._socket_plates import KnownDistance, SocketPlate, SocketPlates
 from pincal.model import Mechanism
 
 __all__ = [
-    "SCALE_MESSAGE",
     "KnownDistance",
     "SocketData",
     "SocketPlate",
     "simulate_sockets",
 ]
-
-#: the words for a socket campaign whose length scale no measurement fixes
-SCALE_MESSAGE = (
-    "nothing measured fixes the length scale: add the plate's known distance "
-    "('# distance: A, B, 50, 0.002' in the sockets file, length_unit; in a campaign file "
-    "sockets.distances: [[A, B, 50, 0.002]]; --distance of pincal import-sockets); without "
-    "it the fitted arm shrinks or grows with the socket centres and no residual shows it"
-)
-
-
-@dataclass(frozen=True)
-class KnownDistance:
-    """A calibrated distance between two socket centres.
-
-    Attributes:
-        a, b: socket names; value: the distance [m] (> 0); std: its 1σ [m] (> 0).
-    """
-
-    a: str
-    b: str
-    value: float
-    std: float
-
-    def __post_init__(self) -> None:
-        if self.a == self.b:
-            raise MeasurementError(f"a known distance joins two sockets, got {self.a!r} twice")
-        for what, v in (("distance", self.value), ("distance std", self.std)):
-            if not (np.isfinite(v) and v > 0):
-                raise MeasurementError(f"{what} between {self.a!r} and {self.b!r} must be "
-                                       f"finite and > 0 [m], got {v}")  # fmt: skip
-
-
-@dataclass(frozen=True)
-class SocketPlate:
-    """A plate (or bar) of sockets whose centres are unknown.
-
-    Attributes:
-        name: the plate's name; files naming the same plate share its socket centres.
-        std: 1σ of one seating of the ball centre, per axis [m] (> 0).
-        distances: the known distances between its sockets.
-
-    Raises:
-        MeasurementError: std ≤ 0.
-    """
-
-    name: str = "plate"
-    std: float = 5e-6
-    distances: tuple[KnownDistance, ...] = ()
-
-    def __post_init__(self) -> None:
-        if not (np.isfinite(self.std) and self.std > 0):
-            raise MeasurementError(f"socket seating std must be finite and > 0 [m], got {self.std}")
-        object.__setattr__(self, "distances", tuple(self.distances))
-
-    @property
-    def fixes_scale(self) -> bool:
-        """True when a known distance ties the plate (and so the arm) to a length."""
-        return bool(self.distances)
-
-    def distance_residuals(
-        self, centres: dict[str, np.ndarray]
-    ) -> tuple[np.ndarray, list[tuple[str, str, np.ndarray]]]:
-        """``D − ‖c_a − c_b‖`` per known distance [m] and its derivatives.
-
-        Args:
-            centres: socket name → (3,) centre [m].
-
-        Returns:
-            residuals (d,), and per distance (a, b, u) with ∂r/∂c_a = −u, ∂r/∂c_b = +u.
-
-        Raises:
-            MeasurementError: a distance names a socket that was never measured.
-        """
-        r, derivs = np.empty(len(self.distances)), []
-        for i, k in enumerate(self.distances):
-            missing = [s for s in (k.a, k.b) if s not in centres]
-            if missing:
-                raise MeasurementError(
-                    f"plate {self.name!r}: known distance {k.a}–{k.b} names socket(s) "
-                    f"{missing} with no measured pose; measured: {sorted(centres)}"
-                )
-            d = centres[k.a] - centres[k.b]
-            norm = float(np.linalg.norm(d))
-            if norm < 1e-12:
-                raise MeasurementError(f"sockets {k.a!r} and {k.b!r} coincide")
-            r[i] = k.value - norm
-            derivs.append((k.a, k.b, d / norm))
-        return r, derivs
-
 
 @dataclass(frozen=True, eq=False)
 class SocketData(Artefact):
@@ -243,8 +154,6 @@ class SocketData(Artefact):
     @classmethod
     def shared_terms(cls, datasets: Sequence[Artefact]) -> SharedTerms:
         """The plates of the files: shared centres, known distances, the scale warning."""
-        from pincal.measure._socket_plates import SocketPlates
-
         return SocketPlates(datasets)
 
     def ball_centres(
