@@ -46,7 +46,9 @@ Thresholds (:class:`GateLimits`, defaults):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
+from functools import partial
 from statistics import NormalDist
 
 import numpy as np
@@ -72,7 +74,13 @@ from pincal.measure import Measurements
 from pincal.model import Mechanism
 from pincal.sensitivity import identification_jacobian
 
-__all__ = ["check_quality", "outlier_poses"]
+__all__ = ["ConfirmOutliers", "check_quality", "outlier_poses"]
+
+#: (named, risk, cap) → (named, bound, whitened A (m, k, p), z (m, k), σ (m, k)) or None
+ConfirmOutliers = Callable[
+    [tuple[int, ...], float, int],
+    tuple[tuple[int, ...], float, np.ndarray, np.ndarray, np.ndarray] | None,
+]
 
 _MAD = 1.4826  # σ of a Gaussian per median absolute deviation
 _MIN_LIMIT = 5.0  # smallest outlier threshold [robust σ]
@@ -179,6 +187,7 @@ def check_quality(
     scalar_instrument: bool = False,
     instrument: str | InstrumentProfile | None = None,
     jacobian: np.ndarray | None = None,
+    confirm: ConfirmOutliers | None = None,
 ) -> QualityVerdict:
     """Judge an identification result; refusals mean: do not write this calibration.
 
@@ -203,6 +212,11 @@ def check_quality(
         jacobian: (m, k, p) whitened Jacobian of the fitted parameters, for fits whose
             Jacobian cannot be built from ``measurements`` (instrument files; see
             :func:`pincal.identification.instrument_gate`).
+        confirm: ``confirm(named, risk, cap)``, the refit that confirms the poses the
+            deletion test named (for fits ``measurements`` cannot refit: instrument
+            files); it returns what :func:`confirm_outliers` returns, or None to keep
+            the first answer. Default: :func:`confirm_outliers` with ``mech`` and
+            ``measurements``.
 
     Returns:
         QualityVerdict with the data issues first, then the result's.
@@ -234,10 +248,11 @@ def check_quality(
         z = np.asarray(w.whitened, dtype=float)
         out, limit = deletion_outliers(Jw, z, lim.outlier_risk, cap)
         Ap, zp, sp = Jw, z, sigma  # the probes' linearisation: at the refit without outliers
-        if out and len(out) <= cap and measurements is not None and mech is not None:
-            out, limit, Ap, zp, sp = confirm_outliers(result, mech, measurements, out,
-                                                      lim.outlier_risk, cap) or (
-                out, limit, Jw, z, sigma)  # fmt: skip
+        if confirm is None and measurements is not None and mech is not None:
+            confirm = partial(confirm_outliers, result, mech, measurements)
+        if out and len(out) <= cap and confirm is not None:
+            again = confirm(out, lim.outlier_risk, cap)
+            out, limit, Ap, zp, sp = again or (out, limit, Jw, z, sigma)
         if not scalar_instrument and measurements is not None:
             rows = np.setdiff1d(np.arange(m), out) if len(out) <= cap else np.arange(m)
             cols = probe_columns(result, mech, measurements)
