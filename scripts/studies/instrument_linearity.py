@@ -17,6 +17,8 @@ fit is the fit's target: what the data identify of the machine, gauge held alike
 - ``d2k_dirs``: the same along the 12 largest-σ principal directions;
 - ``excess``: :func:`pincal.identification._linearity.check_curvature` (10 draws), the
   d²/k the fit's second-order error adds (predicted from the fit alone);
+- ``ratio_max``, ``jacobian_change``: the cost-ratio check of pose fits
+  (:func:`pincal.identification._linearity.check_linearity`);
 - with ``--boot B``: ``d2k_w`` and ``zdiag_w`` with the covariance widened by a B-refit
   parametric bootstrap, as ``pincal calibrate`` widens it.
 
@@ -36,7 +38,7 @@ from pincal.design import select_poses
 from pincal.identification import default_instrument, identify_instruments, instrument_candidates
 from pincal.identification._bootstrap import bootstrap_covariance, widened
 from pincal.identification._instrument_problem import InstrumentProblem
-from pincal.identification._linearity import check_curvature
+from pincal.identification._linearity import check_curvature, check_linearity
 from pincal.measure import simulate_instrument
 from pincal.model import load_mechanism, parameters, sample_actuators
 from pincal.sensitivity import analyse_jacobian
@@ -81,7 +83,9 @@ def draw(a: argparse.Namespace, nom, ps, seed: int) -> dict:
     _, s, Vt = np.linalg.svd(problem.evaluate(fit.values)[1][:, fit.fitted], full_matrices=False)
     top = Vt[np.argsort(s)[:12]]  # the 12 largest-σ directions
     z_top = (top @ delta) * np.sort(s)[:12]
+    lin = check_linearity(problem, fit.values, fit.fitted)
     rec |= {"excess": cu.excess, "excess_se": cu.excess_se,
+            "ratio_max": float(np.nanmax(lin.ratio)), "jacobian_change": lin.worst()[1],
             "d2k": float(delta @ np.linalg.solve(C, delta)) / k,
             "zdiag": float(np.mean(delta**2 / np.diag(C))),
             "d2k_dirs": float(np.mean(z_top**2))}  # fmt: skip
