@@ -47,7 +47,8 @@ from pincal.identification import (
     instrument_gate,
 )
 from pincal.measure import Sphere, simulate_instrument
-from pincal.model import load_mechanism, parameters, sample_actuators
+from pincal.model import load_mechanism, sample_actuators
+from pincal.sensitivity import parameters
 
 STD = 1e-5  # m: `pincal simulate`'s default noise, the file's declared σ
 ERRORS = (1.0, 10.0)  # mm, mrad: `pincal simulate`'s default error bounds
