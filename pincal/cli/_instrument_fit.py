@@ -23,10 +23,13 @@ def identify_instrument_files(mech, params, files: list[str], method: str, force
     """Machine and instrument parameters from instrument files (ballbar, probe, sockets…).
 
     The readings' unit check refuses before the fit (unless ``force``); the fit is judged
-    by :func:`pincal.identification.instrument_gate`.
+    by :func:`pincal.identification.instrument_gate` (outliers confirmed by a refit) and,
+    when it passes, its σ by :func:`pincal.identification.instrument_uncertainty`
+    (widened by a bootstrap when the fit's second-order error is large).
 
     Returns:
-        (the gate's verdict, the machine part as an IdentificationResult).
+        (the gate's verdict, the machine part as an IdentificationResult with an honest
+        covariance, the uncertainty check's JSON summary or None when refused).
 
     Raises:
         UnidentifiableError: nothing measured fixes the length scale (sockets without a
@@ -57,4 +60,13 @@ def identify_instrument_files(mech, params, files: list[str], method: str, force
         if not force:
             raise UnidentifiableError(f"{w} (--force writes the calibration anyway)")
         click.echo(f"pincal: warning: {w}", err=True)
-    return instrument_gate(out, data, limits, profile), out.result
+    verdict = instrument_gate(out, data, limits, profile, mech=mech, datasets=datasets,
+                              labels=labels)  # fmt: skip
+    if not verdict.passed:
+        return verdict, out.result, None
+    from pincal.cli._progress import counted
+    from pincal.identification import instrument_uncertainty, with_uncertainty
+
+    with counted("bootstrap refits (the fit is not linear)") as tick:
+        check = instrument_uncertainty(out, mech, datasets, labels, progress=tick)
+    return with_uncertainty(verdict, check), check.result, check.to_dict()

@@ -240,9 +240,10 @@ def calibrate(
                 "pose measurement files",
                 param_hint="--data",
             )
-        verdict, result = identify_instrument_files(mech, params, files, method, force,
-                                                    limits, profile)  # fmt: skip
-        noise_model, uncertainty = None, None
+        verdict, result, uncertainty = identify_instrument_files(
+            mech, params, files, method, force, limits, profile
+        )
+        noise_model = None
     else:
         mf = read_measurement_file(data, mech)  # its data check is the gate's first look
         meas = mf.measurements

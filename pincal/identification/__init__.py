@@ -87,6 +87,7 @@ from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
 from pincal.identification._uncertainty import (
     UncertaintyCheck,
     check_uncertainty,
+    instrument_uncertainty,
     pose_residual_model,
     with_uncertainty,
 )
@@ -154,6 +155,7 @@ __all__ = [
     "instrument_gate",
     "instrument_identifiability",
     "instrument_profile",
+    "instrument_uncertainty",
     "is_registration",
     "kfold",
     "monte_carlo",

@@ -10,7 +10,8 @@ the file declares (mm written as m). A kind whose readings may change faster set
 
 :func:`instrument_gate` judges the fit with :func:`pincal.identification.check_quality`:
 solver success, χ² of the readings against the files' σ (p-value), parameter changes,
-and the deletion outlier test on the whitened per-pose residuals and Jacobian.
+and the deletion outlier test on the whitened per-pose residuals and Jacobian, the poses
+it names confirmed by a refit without them (:func:`refit_confirmation`).
 """
 
 from __future__ import annotations
@@ -21,8 +22,11 @@ from typing import Any
 
 import numpy as np
 
+from pincal.errors import PincalError
 from pincal.identification._instrument_identify import InstrumentIdentification
-from pincal.identification._quality import check_quality
+from pincal.identification._outliers import deletion_outliers
+from pincal.identification._problem import TRIAL_FAILURES
+from pincal.identification._quality import ConfirmOutliers, check_quality
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
 from pincal.identification._weighting import Weighting
 from pincal.measure import InstrumentData
@@ -84,12 +88,18 @@ def instrument_gate(
     data: QualityVerdict | None = None,
     limits: GateLimits | None = None,
     instrument: str | None = None,
+    *,
+    mech: Mechanism | None = None,
+    datasets: Sequence[Any] | None = None,
+    labels: Sequence[str] | None = None,
 ) -> QualityVerdict:
     """Judge a joint instrument fit as a pose fit is judged.
 
     The per-pose deletion outlier test runs when the fit has uniform per-pose blocks
     (:attr:`InstrumentIdentification.whitened`): every file a scalar instrument, or
-    every file a socket file without known distances.
+    every file a socket file without known distances. With ``mech`` and ``datasets``
+    (all scalar instrument files) the poses it names are confirmed by a refit without
+    them (:func:`refit_confirmation`), as for pose files.
 
     Args:
         fit: the outcome of :func:`pincal.identification.identify_instruments`.
@@ -97,7 +107,14 @@ def instrument_gate(
         limits: thresholds (default ``data``'s, else :class:`GateLimits`).
         instrument: an instrument profile name (judges estimated noise only: unused by
             files that declare their σ, kept for one call signature).
+        mech: the nominal mechanism the fit started from.
+        datasets: the fit's datasets.
+        labels: their labels (as given to the fit).
     """
+    lim = limits or (data.limits if data is not None else GateLimits())
+    confirm = None
+    if mech is not None and datasets is not None:
+        confirm = refit_confirmation(fit, mech, datasets, labels, lim)
     result, jac = fit.result, None
     if fit.whitened is not None:
         jac, z = fit.whitened
@@ -108,5 +125,61 @@ def instrument_gate(
             result = dataclasses.replace(result, weighting=w, residuals=raw)
         else:
             jac = None
-    return check_quality(result, data=data, limits=limits, scalar_instrument=True,
-                         jacobian=jac, instrument=instrument)  # fmt: skip
+    return check_quality(result, data=data, limits=lim, scalar_instrument=True,
+                         jacobian=jac, instrument=instrument, confirm=confirm)  # fmt: skip
+
+
+def refit_confirmation(
+    fit: InstrumentIdentification,
+    mech: Mechanism,
+    datasets: Sequence[Any],
+    labels: Sequence[str] | None,
+    limits: GateLimits,
+) -> ConfirmOutliers | None:
+    """The refit that confirms outlying readings, for :func:`check_quality`'s ``confirm``.
+
+    ``confirm(named, risk, cap)`` leaves the named poses (indices over the datasets in
+    order) out, refits machine and instruments as the fit was made (Gauss–Newton,
+    directions beyond ``limits``' change bound held), and runs the deletion test again
+    over *all* readings linearised at the refit: a fit pulled by a gross reading does
+    not point at good ones. It returns None (keep the first answer) when the refit
+    fails or its unknowns differ (a plane left without contacts). None for datasets
+    other than scalar instrument files.
+    """
+    from pincal.identification._instrument_identify import identify_instruments
+    from pincal.identification._instrument_problem import InstrumentProblem
+
+    if not datasets or not all(isinstance(d, InstrumentData) for d in datasets):
+        return None
+    params = fit.result.parameter_set
+    if params is None:
+        return None
+    starts = np.cumsum([0] + [len(d) for d in datasets])
+    bound = (limits.max_length_change, limits.max_angle_change)
+
+    def confirm(named: tuple[int, ...], risk: float, cap: int):
+        drop = np.asarray(named, dtype=int)
+        kept = []
+        for i, d in enumerate(datasets):
+            own = drop[(drop >= starts[i]) & (drop < starts[i + 1])] - starts[i]
+            keep = np.setdiff1d(np.arange(len(d)), own)
+            ids = None if d.ids is None else d.ids[keep]
+            kept.append(dataclasses.replace(d, q_act=d.q_act[keep], values=d.values[keep], ids=ids))
+        try:
+            refit = identify_instruments(mech, params, kept, method=fit.result.method,
+                                         labels=labels, weak_bound=bound)  # fmt: skip
+            problem = InstrumentProblem(mech, params, datasets, labels)
+            if problem.names != refit.names:
+                return None
+            r, J, _ = problem.evaluate(refit.values)
+        except (PincalError, *TRIAL_FAILURES):
+            return None
+        m = int(starts[-1])
+        if J is None or r.size != m:
+            return None
+        A = J[:, refit.fitted].reshape(m, 1, -1)
+        z = np.asarray(r).reshape(m, 1)
+        sigma = np.concatenate([np.ravel(s) for s in problem.sigma]).reshape(m, 1)
+        return (*deletion_outliers(A, z, risk, cap), A, z, sigma)
+
+    return confirm

@@ -33,7 +33,15 @@ import numpy as np
 
 from pincal.errors import PincalError
 
-__all__ = ["TRIAL_ERRORS", "Linearity", "ResidualModel", "check_linearity", "principal_directions"]
+__all__ = [
+    "TRIAL_ERRORS",
+    "Curvature",
+    "Linearity",
+    "ResidualModel",
+    "check_curvature",
+    "check_linearity",
+    "principal_directions",
+]
 
 #: what an evaluation at a trial vector may raise (the model cannot be built or solved)
 TRIAL_ERRORS = (PincalError, ValueError, ArithmeticError, np.linalg.LinAlgError)
@@ -191,3 +199,81 @@ def check_linearity(
                 change[i] = float(np.linalg.norm(dJ, 2))
     ok = ok and bool(np.all(np.isfinite(ratio))) and bool(np.all(np.isfinite(change)))
     return Linearity(step, sigma, V, ratio, change, tolerance, ok)
+
+
+@dataclass(frozen=True)
+class Curvature:
+    """The second-order error of a fit over its own confidence region.
+
+    At ``δ ~ N(0, s²(JᵀJ)⁻¹)`` the even part of the residual change,
+    ``q(δ) = ½(r(x̂ + δ) + r(x̂ − δ)) − r(x̂)`` (≈ ½ δᵀ∇²r δ), moves the least-squares
+    solution by ``J⁺q``: its Mahalanobis size is ``‖P_J q‖`` (P_J the projection on the
+    whitened Jacobian's columns), and the fit's Mahalanobis error from the truth grows
+    on average from ``k`` to ``k + E‖P_J q‖²`` (the parameter-effects curvature of
+    Bates & Watts, measured over the confidence region instead of from second
+    derivatives). ``excess`` is ``E‖P_J q‖² / k``: 0 for a linear model; the d²/k of
+    the linearised covariance is ≈ 1 + excess. The rest of q (``intrinsic``) bends
+    the model's surface and leaves the solution.
+
+    Attributes:
+        excess: mean ‖P_J q‖² / k over the draws; excess_se: its standard error.
+        intrinsic: mean ‖(I − P_J) q‖² / k.
+        draws: δ drawn (evaluations: 2 each); checked: False when an evaluation failed.
+    """
+
+    excess: float
+    excess_se: float
+    intrinsic: float
+    draws: int
+    checked: bool = True
+
+
+def check_curvature(
+    problem: ResidualModel,
+    x: np.ndarray,
+    free: np.ndarray | None = None,
+    *,
+    scale: float = 1.0,
+    draws: int = 8,
+    seed: int = 0,
+) -> Curvature:
+    """The parameter-effects curvature over the confidence region (see :class:`Curvature`).
+
+    Args:
+        problem: evaluates whitened residuals (and Jacobian) at a full parameter vector.
+        x: (n,) the solution [SI].
+        free: indices of the fitted parameters (None: all).
+        scale: the variance factor s (1 with declared noise).
+        draws: δ drawn from the linearised covariance (seeded).
+        seed: the seed of the draws.
+    """
+    x = np.asarray(x, dtype=float)
+    idx = np.arange(x.size) if free is None else np.asarray(free, dtype=int)
+    r0, J0, *_ = problem.evaluate(x, jacobian=True)
+    r0, Jf = np.asarray(r0, dtype=float), np.asarray(J0, dtype=float)[:, idx]
+    U, s, Vt = np.linalg.svd(Jf, full_matrices=False)
+    keep = s > np.sqrt(max(idx.size, 1) * np.finfo(float).eps) * s[0] if s.size else s > 0
+    U, s, V = U[:, keep], s[keep], Vt[keep].T
+    k = max(int(s.size), 1)
+    rng = np.random.default_rng(seed)
+    pe: list[float] = []
+    it: list[float] = []
+    for _ in range(max(int(draws), 1)):
+        delta = V @ (scale * rng.standard_normal(s.size) / s)
+        rs = []
+        for sign in (1.0, -1.0):
+            xs = x.copy()
+            xs[idx] += sign * delta
+            try:
+                rs.append(np.asarray(problem.evaluate(xs, jacobian=False)[0], dtype=float))
+            except TRIAL_ERRORS:
+                return Curvature(math.nan, math.nan, math.nan, len(pe), False)
+        q = 0.5 * (rs[0] + rs[1]) - r0
+        if not np.all(np.isfinite(q)):
+            return Curvature(math.nan, math.nan, math.nan, len(pe), False)
+        qp = U.T @ q
+        pe.append(float(qp @ qp) / (scale**2 * k))
+        it.append(max(float(q @ q) - float(qp @ qp), 0.0) / (scale**2 * k))
+    e = np.array(pe)
+    se = float(np.std(e, ddof=1) / math.sqrt(e.size)) if e.size > 1 else math.nan
+    return Curvature(float(e.mean()), se, float(np.mean(it)), int(e.size))

@@ -46,8 +46,9 @@ Thresholds (:class:`GateLimits`, defaults):
 
 from __future__ import annotations
 
-import math
+from collections.abc import Callable
 from dataclasses import replace
+from functools import partial
 from statistics import NormalDist
 
 import numpy as np
@@ -56,9 +57,9 @@ from pincal.errors import PincalError
 from pincal.identification._cause import likely_cause
 from pincal.identification._coordinate_probe import is_trend
 from pincal.identification._data_check import check_measurements
+from pincal.identification._fit_issues import changes, chi2_issues, profile_issues
 from pincal.identification._instrument_profiles import InstrumentProfile, instrument_profile
 from pincal.identification._misspecification import (
-    BlockChi2,
     Probe,
     chi2_blocks,
     instrument_chi2,
@@ -69,12 +70,17 @@ from pincal.identification._outlier_refit import confirm_outliers
 from pincal.identification._outliers import deletion_outliers
 from pincal.identification._result import IdentificationResult
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
-from pincal.identification._weighting import Weighting
 from pincal.measure import Measurements
 from pincal.model import Mechanism
 from pincal.sensitivity import identification_jacobian
 
-__all__ = ["check_quality", "outlier_poses"]
+__all__ = ["ConfirmOutliers", "check_quality", "outlier_poses"]
+
+#: (named, risk, cap) → (named, bound, whitened A (m, k, p), z (m, k), σ (m, k)) or None
+ConfirmOutliers = Callable[
+    [tuple[int, ...], float, int],
+    tuple[tuple[int, ...], float, np.ndarray, np.ndarray, np.ndarray] | None,
+]
 
 _MAD = 1.4826  # σ of a Gaussian per median absolute deviation
 _MIN_LIMIT = 5.0  # smallest outlier threshold [robust σ]
@@ -171,33 +177,6 @@ def _singular(Jw: np.ndarray | None, ratio: float) -> tuple[int, ...]:
     return tuple(int(i) for i in np.flatnonzero(size > ratio * med))
 
 
-def _changes(result: IdentificationResult, lim: GateLimits) -> list[QualityIssue]:
-    """Parameters moved beyond their bound: machine parameters, registration unknowns."""
-    d = np.abs(np.asarray(result.full_values) - np.asarray(result.initial_values))
-    units = np.asarray(result.units)
-    reg = np.array([n.rsplit(".", 1)[0] in lim.registration_joints for n in result.names],
-                   dtype=bool)  # fmt: skip
-    issues = []
-    for kind, sel, length, angle, what in (
-        ("change", ~reg, lim.max_length_change, lim.max_angle_change, "parameters"),
-        ("registration", reg, lim.max_registration_length, lim.max_registration_angle,
-         "registration parameters (instrument frame, marker)"),
-    ):  # fmt: skip
-        bound = np.where(units == "rad", angle, length)
-        over = np.flatnonzero(sel & ((d > bound) | ~np.isfinite(d)))
-        if over.size == 0:
-            continue
-        worst = int(over[np.argmax(d[over] / bound[over])])
-        size = f"{d[worst]:.3g} rad" if units[worst] == "rad" else f"{d[worst] * 1e3:.4g} mm"
-        hint = "; change the bound with --max-change" if kind == "change" else ""
-        issues.append(QualityIssue(
-            kind, True,
-            f"{over.size} {what} moved beyond {length * 1e3:g} mm / {angle:g} rad "
-            f"(worst {result.names[worst]}: {size}{hint})",
-        ))  # fmt: skip
-    return issues
-
-
 def check_quality(
     result: IdentificationResult,
     measurements: Measurements | None = None,
@@ -208,6 +187,7 @@ def check_quality(
     scalar_instrument: bool = False,
     instrument: str | InstrumentProfile | None = None,
     jacobian: np.ndarray | None = None,
+    confirm: ConfirmOutliers | None = None,
 ) -> QualityVerdict:
     """Judge an identification result; refusals mean: do not write this calibration.
 
@@ -232,6 +212,11 @@ def check_quality(
         jacobian: (m, k, p) whitened Jacobian of the fitted parameters, for fits whose
             Jacobian cannot be built from ``measurements`` (instrument files; see
             :func:`pincal.identification.instrument_gate`).
+        confirm: ``confirm(named, risk, cap)``, the refit that confirms the poses the
+            deletion test named (for fits ``measurements`` cannot refit: instrument
+            files); it returns what :func:`confirm_outliers` returns, or None to keep
+            the first answer. Default: :func:`confirm_outliers` with ``mech`` and
+            ``measurements``.
 
     Returns:
         QualityVerdict with the data issues first, then the result's.
@@ -263,10 +248,11 @@ def check_quality(
         z = np.asarray(w.whitened, dtype=float)
         out, limit = deletion_outliers(Jw, z, lim.outlier_risk, cap)
         Ap, zp, sp = Jw, z, sigma  # the probes' linearisation: at the refit without outliers
-        if out and len(out) <= cap and measurements is not None and mech is not None:
-            out, limit, Ap, zp, sp = confirm_outliers(result, mech, measurements, out,
-                                                      lim.outlier_risk, cap) or (
-                out, limit, Jw, z, sigma)  # fmt: skip
+        if confirm is None and measurements is not None and mech is not None:
+            confirm = partial(confirm_outliers, result, mech, measurements)
+        if out and len(out) <= cap and confirm is not None:
+            again = confirm(out, lim.outlier_risk, cap)
+            out, limit, Ap, zp, sp = again or (out, limit, Jw, z, sigma)
         if not scalar_instrument and measurements is not None:
             rows = np.setdiff1d(np.arange(m), out) if len(out) <= cap else np.arange(m)
             cols = probe_columns(result, measurements)
@@ -298,7 +284,7 @@ def check_quality(
     else:
         comps = None if measurements is None else tuple(measurements.components)
         blocks = chi2_blocks(result, comps, inliers) if declared else []
-    fit_issues = _chi2_issues(chi2, blocks, declared, lim)
+    fit_issues = chi2_issues(chi2, blocks, declared, lim)
     lenient = scalar_instrument and not any(i.refuse for i in fit_issues)
     if not result.success:
         issues.append(QualityIssue(
@@ -306,8 +292,8 @@ def check_quality(
         ))  # fmt: skip
     issues += fit_issues
     if profile is not None and source == "estimated" and w is not None:
-        issues += _profile_issues(w, profile, lim)
-    issues += [replace(c, refuse=not lenient) for c in _changes(result, lim)]
+        issues += profile_issues(w, profile, lim)
+    issues += [replace(c, refuse=not lenient) for c in changes(result, lim)]
     if fired is not None:
         issues.append(QualityIssue(
             "model", True, f"model or instrument error suspected: {fired.describe()}"
@@ -362,50 +348,3 @@ def _inexact(result: IdentificationResult) -> bool:
     raw = np.asarray(result.residuals, dtype=float)
     return raw.size > 0 and bool(np.all(np.isfinite(raw))) and float(
         np.sqrt(np.mean(raw**2))) > _EXACT_RMS  # fmt: skip
-
-
-def _chi2_issues(
-    chi2: float, blocks: list[BlockChi2], declared: bool, lim: GateLimits
-) -> list[QualityIssue]:
-    """χ² against the declared noise: per block p-value, and the hard χ²/ν limit."""
-    if not declared:
-        return []
-    bad = [b for b in blocks
-           if b.p_value < lim.chi2_significance and b.ratio > lim.min_chi2_ratio]  # fmt: skip
-    if bad or not chi2 <= lim.max_reduced_chi2:
-        parts = [
-            f"{b.block} χ²/ν {b.ratio:.3g} on {b.dof:.0f} degrees of freedom (p = "
-            f"{b.p_value:.2g} < {lim.chi2_significance:g}; residual RMS "
-            f"{math.sqrt(b.ratio):.3g}× σ)"
-            for b in bad
-        ] or [f"reduced χ² {chi2:.3g} > {lim.max_reduced_chi2:g}"]
-        return [QualityIssue(
-            "chi2", True, "residuals larger than the declared noise: " + "; ".join(parts)
-        )]  # fmt: skip
-    if chi2 < 1e-2:
-        return [QualityIssue(
-            "low-chi2", False,
-            f"reduced χ² {chi2:.3g} < 0.01: the declared noise is 10× larger than the "
-            "residuals; the reported σ are pessimistic",
-        )]  # fmt: skip
-    return []
-
-
-def _profile_issues(
-    w: Weighting, profile: InstrumentProfile, lim: GateLimits
-) -> list[QualityIssue]:
-    """Estimated σ against the instrument profile's typical σ."""
-    issues = []
-    for block, est, typ, unit, f in (
-        ("position", w.position_std, profile.position, "mm", 1e3),
-        ("orientation", w.orientation_std, profile.orientation, "mrad", 1e3),
-    ):
-        if math.isfinite(est) and math.isfinite(typ) and est > lim.noise_factor * typ:
-            issues.append(QualityIssue(
-                "noise", True,
-                f"the estimated {block} noise {est * f:.3g} {unit} is {est / typ:.3g}× the "
-                f"typical {typ * f:.3g} {unit} of the {profile.name!r} profile "
-                f"({profile.description}; limit {lim.noise_factor:g}×): model or instrument "
-                "error suspected",
-            ))  # fmt: skip
-    return issues

@@ -12,25 +12,43 @@ parameter vector; :func:`pose_residual_model` builds it for a pose fit.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
 from pincal.errors import PincalError
 from pincal.identification._bootstrap import DRAWS, Bootstrap, bootstrap_covariance, widened
-from pincal.identification._linearity import Linearity, ResidualModel, check_linearity
+from pincal.identification._instrument_identify import InstrumentIdentification
+from pincal.identification._linearity import (
+    Curvature,
+    Linearity,
+    ResidualModel,
+    check_curvature,
+    check_linearity,
+)
 from pincal.identification._problem import CalibrationProblem
 from pincal.identification._result import IdentificationResult
 from pincal.identification._verdict import QualityIssue, QualityVerdict
 from pincal.measure import Measurements, NoiseModel
 from pincal.model import Mechanism
 
+#: the d²/k a fit's second-order error may add before its σ are widened (instrument fits)
+CURVATURE_LIMIT = 1.0
+#: δ drawn by the curvature check (2 evaluations each)
+CURVATURE_DRAWS = 16
 #: bootstrap σ up to (this + 3 relative standard errors of a σ from the draws) × the
 #: linearised σ confirm them
 CONFIRMED = 1.1
 
-__all__ = ["UncertaintyCheck", "check_uncertainty", "pose_residual_model", "with_uncertainty"]
+__all__ = [
+    "UncertaintyCheck",
+    "check_uncertainty",
+    "instrument_uncertainty",
+    "pose_residual_model",
+    "with_uncertainty",
+]
 
 
 @dataclass(frozen=True)
@@ -41,17 +59,23 @@ class UncertaintyCheck:
         result: the result with an honest covariance (the input when linear).
         linearity: the check; bootstrap: the refits (None when linear or not run).
         issue: the gate warning (None when the linearisation holds).
+        curvature: the second-order check of an instrument fit (None for pose fits).
     """
 
     result: IdentificationResult
     linearity: Linearity | None
     bootstrap: Bootstrap | None = None
     issue: QualityIssue | None = None
+    curvature: Curvature | None = None
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready summary (``quality.uncertainty`` of the calibration's record)."""
-        lin = self.linearity
-        out: dict[str, object] = {"linear": lin is None or lin.holds}
+        lin, cu = self.linearity, self.curvature
+        out: dict[str, object] = {"linear": (lin is None or lin.holds) and self.issue is None}
+        if cu is not None:
+            out |= {"curvature_excess": _finite(cu.excess), "curvature_excess_se":
+                    _finite(cu.excess_se), "curvature_draws": cu.draws,
+                    "curvature_limit": CURVATURE_LIMIT}  # fmt: skip
         if lin is not None:
             ratio, jac = lin.worst()
             out |= {"directions_checked": int(lin.sigma.size),
@@ -64,6 +88,10 @@ class UncertaintyCheck:
             out |= {"method": "parametric bootstrap", "draws": b.draws, "failed": b.failed,
                     "seed": b.seed}  # fmt: skip
         return out
+
+
+def _finite(v: float) -> float | None:
+    return v if math.isfinite(v) else None
 
 
 def pose_residual_model(
@@ -122,26 +150,90 @@ def check_uncertainty(
     cov = widened(result.covariance, boot)
     new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
     worst = float(np.max(new.std / np.maximum(result.std, 1e-300)))
-    text = lin.describe(names)
+    text = lin.describe(names) + _bootstrap_text(boot, worst)
+    return UncertaintyCheck(new, lin, boot, QualityIssue("linearity", False, text))
+
+
+def instrument_uncertainty(
+    fit: InstrumentIdentification,
+    mech: Mechanism,
+    datasets: Sequence[Any],
+    labels: Sequence[str] | None = None,
+    *,
+    draws: int = DRAWS,
+    seed: int = 0,
+    progress: Callable[[int, int], None] | None = None,
+) -> UncertaintyCheck:
+    """Check an instrument fit's second-order error; widen its covariance when it is large.
+
+    The linear σ of a ballbar or probe fit on random poses are several times too small
+    (the model bends over the confidence region of its weakly seen directions), while
+    the cost-ratio check of :func:`check_uncertainty` fires on designed poses too,
+    whose linear σ are right. Here the measure is what matters for the intervals: the
+    d²/k the second-order term adds (:func:`check_curvature`); beyond
+    :data:`CURVATURE_LIMIT` the joint covariance is widened by a parametric bootstrap
+    of the joint fit (machine and instrument unknowns) and the machine part reported.
+
+    Args:
+        fit: the outcome of :func:`pincal.identification.identify_instruments`.
+        mech: the nominal mechanism.
+        datasets: the fit's datasets.
+        labels: their labels, as given to the fit.
+        draws: bootstrap refits.
+        seed: the seed of the draws (curvature and bootstrap).
+        progress: ``progress(done, total)`` per bootstrap refit.
+    """
+    from pincal.identification._instrument_problem import InstrumentProblem
+
+    result, free = fit.result, np.asarray(fit.fitted, dtype=int)
+    if free.size == 0 or result.parameter_set is None:
+        return UncertaintyCheck(result, None)
+    try:
+        problem = InstrumentProblem(mech, result.parameter_set, datasets, labels)
+    except PincalError:
+        return UncertaintyCheck(result, None)
+    cu = check_curvature(problem, fit.values, free, draws=CURVATURE_DRAWS, seed=seed)
+    if cu.checked and cu.excess <= CURVATURE_LIMIT:
+        return UncertaintyCheck(result, None, curvature=cu)
+    boot = bootstrap_covariance(problem, fit.values, free, draws=draws, seed=seed,
+                                progress=progress)  # fmt: skip
+    machine = free < len(result.names)
+    cov = widened(fit.covariance, boot)[np.ix_(machine, machine)]
+    if cov.shape != np.shape(result.covariance):
+        return UncertaintyCheck(result, None, curvature=cu)
+    new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
+    worst = float(np.max(new.std / np.maximum(result.std, 1e-300), initial=1.0))
+    text = (
+        "the fit is not linear over its own confidence region: its second-order error "
+        f"adds {cu.excess:.3g} to the d²/k of the linearised σ (0 when they are right; "
+        f"limit {CURVATURE_LIMIT:g})"
+        if cu.checked
+        else "the curvature of the fit could not be checked (an evaluation failed)"
+    )
+    issue = QualityIssue("linearity", False, text + _bootstrap_text(boot, worst))
+    return UncertaintyCheck(new, None, boot, issue, cu)
+
+
+def _bootstrap_text(boot: Bootstrap, worst: float) -> str:
+    """What the bootstrap found, after the sentence that says the fit is not linear."""
     within = CONFIRMED + 3.0 / math.sqrt(2.0 * max(boot.draws, 1))  # σ̂ s.e. ≈ σ/√(2B)
     if boot.draws >= 2 and worst <= within:
-        text += (
+        return (
             f"; a parametric bootstrap ({boot.draws} seeded refits) confirms the linearised "
             f"σ within its sampling error (up to {worst:.3g}×; the larger is reported)"
         )
-    elif boot.draws >= 2:
+    if boot.draws < 2:
+        return "; the bootstrap refits failed: the reported σ are a lower bound"
+    text = (
+        f"; the linearised σ are too small: the σ reported are widened by a parametric "
+        f"bootstrap ({boot.draws} seeded refits, up to {worst:.3g}× the linearised σ)"
+    )
+    if boot.failed:
         text += (
-            f"; the linearised σ are too small: the σ reported are widened by a parametric "
-            f"bootstrap ({boot.draws} seeded refits, up to {worst:.3g}× the linearised σ)"
+            f"; {boot.failed} of {boot.draws + boot.failed} refits did not converge: "
+            "the data may not bound these parameters"
         )
-        if boot.failed:
-            text += (
-                f"; {boot.failed} of {boot.draws + boot.failed} refits did not converge: "
-                "the data may not bound these parameters"
-            )
-    else:
-        text += "; the bootstrap refits failed: the reported σ are a lower bound"
-    return UncertaintyCheck(new, lin, boot, QualityIssue("linearity", False, text))
+    return text
 
 
 def with_uncertainty(verdict: QualityVerdict, check: UncertaintyCheck) -> QualityVerdict:

@@ -150,6 +150,11 @@ def quality_lines(
             f"({unc['draws']} refits, seed {unc.get('seed')}): the linearisation does not "
             "hold over the confidence region"
         )
+    elif unc.get("linear") and unc.get("curvature_excess") is not None:
+        lines.append(
+            f"  uncertainties: the fit's second-order error adds {unc['curvature_excess']:.2g} "
+            f"to d²/k (≤ {unc.get('curvature_limit')}): the σ above are the linearised ones"
+        )
     elif unc.get("linear"):
         lines.append(
             f"  uncertainties: linear over one σ along the {unc.get('directions_checked')} "

@@ -1,0 +1,94 @@
+"""Issues from the size of a fit: its χ², its σ̂, its parameter changes.
+
+χ² against the declared noise, σ̂ against the instrument's profile, parameters moved
+beyond their bound.
+
+Used by :func:`pincal.identification.check_quality`; the thresholds are its
+:class:`GateLimits` (see the :mod:`pincal.identification._quality` module).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pincal.identification._instrument_profiles import InstrumentProfile
+from pincal.identification._misspecification import BlockChi2
+from pincal.identification._result import IdentificationResult
+from pincal.identification._verdict import GateLimits, QualityIssue
+from pincal.identification._weighting import Weighting
+
+__all__ = ["changes", "chi2_issues", "profile_issues"]
+
+
+def changes(result: IdentificationResult, lim: GateLimits) -> list[QualityIssue]:
+    """Parameters moved beyond their bound: machine parameters, registration unknowns."""
+    d = np.abs(np.asarray(result.full_values) - np.asarray(result.initial_values))
+    units = np.asarray(result.units)
+    reg = np.array([n.rsplit(".", 1)[0] in lim.registration_joints for n in result.names],
+                   dtype=bool)  # fmt: skip
+    issues = []
+    for kind, sel, length, angle, what in (
+        ("change", ~reg, lim.max_length_change, lim.max_angle_change, "parameters"),
+        ("registration", reg, lim.max_registration_length, lim.max_registration_angle,
+         "registration parameters (instrument frame, marker)"),
+    ):  # fmt: skip
+        bound = np.where(units == "rad", angle, length)
+        over = np.flatnonzero(sel & ((d > bound) | ~np.isfinite(d)))
+        if over.size == 0:
+            continue
+        worst = int(over[np.argmax(d[over] / bound[over])])
+        size = f"{d[worst]:.3g} rad" if units[worst] == "rad" else f"{d[worst] * 1e3:.4g} mm"
+        hint = "; change the bound with --max-change" if kind == "change" else ""
+        issues.append(QualityIssue(
+            kind, True,
+            f"{over.size} {what} moved beyond {length * 1e3:g} mm / {angle:g} rad "
+            f"(worst {result.names[worst]}: {size}{hint})",
+        ))  # fmt: skip
+    return issues
+
+
+def chi2_issues(
+    chi2: float, blocks: list[BlockChi2], declared: bool, lim: GateLimits
+) -> list[QualityIssue]:
+    """χ² against the declared noise: per block p-value, and the hard χ²/ν limit."""
+    if not declared:
+        return []
+    bad = [b for b in blocks
+           if b.p_value < lim.chi2_significance and b.ratio > lim.min_chi2_ratio]  # fmt: skip
+    if bad or not chi2 <= lim.max_reduced_chi2:
+        parts = [
+            f"{b.block} χ²/ν {b.ratio:.3g} on {b.dof:.0f} degrees of freedom (p = "
+            f"{b.p_value:.2g} < {lim.chi2_significance:g}; residual RMS "
+            f"{math.sqrt(b.ratio):.3g}× σ)"
+            for b in bad
+        ] or [f"reduced χ² {chi2:.3g} > {lim.max_reduced_chi2:g}"]
+        return [QualityIssue(
+            "chi2", True, "residuals larger than the declared noise: " + "; ".join(parts)
+        )]  # fmt: skip
+    if chi2 < 1e-2:
+        return [QualityIssue(
+            "low-chi2", False,
+            f"reduced χ² {chi2:.3g} < 0.01: the declared noise is 10× larger than the "
+            "residuals; the reported σ are pessimistic",
+        )]  # fmt: skip
+    return []
+
+
+def profile_issues(w: Weighting, profile: InstrumentProfile, lim: GateLimits) -> list[QualityIssue]:
+    """Estimated σ against the instrument profile's typical σ."""
+    issues = []
+    for block, est, typ, unit, f in (
+        ("position", w.position_std, profile.position, "mm", 1e3),
+        ("orientation", w.orientation_std, profile.orientation, "mrad", 1e3),
+    ):
+        if math.isfinite(est) and math.isfinite(typ) and est > lim.noise_factor * typ:
+            issues.append(QualityIssue(
+                "noise", True,
+                f"the estimated {block} noise {est * f:.3g} {unit} is {est / typ:.3g}× the "
+                f"typical {typ * f:.3g} {unit} of the {profile.name!r} profile "
+                f"({profile.description}; limit {lim.noise_factor:g}×): model or instrument "
+                "error suspected",
+            ))  # fmt: skip
+    return issues

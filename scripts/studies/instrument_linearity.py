@@ -1,0 +1,123 @@
+"""Study: are the σ of an instrument fit right? d²/k and the curvature check, per draw.
+
+Usage:
+    python scripts/studies/instrument_linearity.py [--poses random|designed] [--std 1e-5]
+        [--size 1,10] [--seeds 0:30] [--boot 0] [--model stewart_6ups] [--kind distance]
+
+Per seed S: an actual machine with errors uniform in ±size (mm, mrad; seed 1000 + S),
+60 poses — random workspace poses (what ``pincal simulate --random 60 --instrument
+KIND`` measures; seed S) or 60 chosen by exchange (O1) from 200 candidates on the
+instrument's sphere — the kind's typical set-up read with σ = --std [m], and two joint
+fits from the nominal model: of the noisy readings and of the same readings without
+noise. Their difference is the error the fit's covariance describes (the noise-free
+fit is the fit's target: what the data identify of the machine, gauge held alike), so
+
+- ``d2k``: (x̂ − x̂₀)ᵀ C⁻¹ (x̂ − x̂₀) / k with C the linearised covariance (≈ 1 when right);
+- ``zdiag``: mean over the parameters of (x̂ − x̂₀)²/σ² (per-parameter σ);
+- ``d2k_dirs``: the same along the 12 largest-σ principal directions;
+- ``excess``: :func:`pincal.identification._linearity.check_curvature` (10 draws), the
+  d²/k the fit's second-order error adds (predicted from the fit alone);
+- ``ratio_max``, ``jacobian_change``: the cost-ratio check of pose fits
+  (:func:`pincal.identification._linearity.check_linearity`);
+- with ``--boot B``: ``d2k_w`` and ``zdiag_w`` with the covariance widened by a B-refit
+  parametric bootstrap, as ``pincal calibrate`` widens it.
+
+One JSON line per seed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import time
+
+import numpy as np
+
+from pincal.design import select_poses
+from pincal.identification import default_instrument, identify_instruments, instrument_candidates
+from pincal.identification._bootstrap import bootstrap_covariance, widened
+from pincal.identification._instrument_problem import InstrumentProblem
+from pincal.identification._linearity import check_curvature, check_linearity
+from pincal.measure import simulate_instrument
+from pincal.model import load_mechanism, parameters, sample_actuators
+from pincal.sensitivity import analyse_jacobian
+
+
+def designed_rows(nom, ps, inst, theta, seed: int, count: int = 60) -> np.ndarray:
+    """``count`` poses chosen by exchange (O1) from 200 candidates on the instrument's sphere."""
+    n = len(ps)
+    cands = instrument_candidates(nom, ps, inst, theta, 200, rng=seed, max_tilt=0.1)
+    J = cands.jacobians[:, 0, :]
+    order = np.r_[np.arange(n, J.shape[1]), np.arange(n)]
+    ident = analyse_jacobian(J[:, order], tuple(cands.param_names[i] for i in order))
+    base = np.sort(order[ident.base])
+    sub = dataclasses.replace(cands, jacobians=cands.jacobians[:, :, base],
+                              param_names=tuple(cands.param_names[i] for i in base))  # fmt: skip
+    return cands.q_act[select_poses(sub, count, "O1", rng=seed).indices]
+
+
+def draw(a: argparse.Namespace, nom, ps, seed: int) -> dict:
+    """One seeded draw (see the module documentation)."""
+    mm, mrad = (float(v) for v in a.size.split(","))
+    bound = np.array([mm * 1e-3 if u == "m" else mrad * 1e-3 for u in ps.units])
+    actual = ps.apply(nom, np.random.default_rng(1000 + seed).uniform(-bound, bound))
+    rng = np.random.default_rng(seed)
+    q = sample_actuators(nom, 60, np.random.default_rng(seed))
+    inst, theta, ids = default_instrument(nom, a.kind, q, std=a.std)
+    if a.poses == "designed":
+        q = designed_rows(nom, ps, inst, theta, seed)
+    data = simulate_instrument(actual, inst, theta, q, rng, ids=ids)
+    exact = simulate_instrument(actual, inst, theta, q, noise=False, ids=ids).values
+    fit = identify_instruments(nom, ps, [data])
+    fit0 = identify_instruments(nom, ps, [dataclasses.replace(data, values=exact)])
+    rec: dict = {"seed": seed, "poses": a.poses, "std": a.std, "k": int(fit.fitted.size),
+                 "ok": bool(fit.result.success and fit0.result.success),
+                 "same_free": bool(np.array_equal(fit.fitted, fit0.fitted))}  # fmt: skip
+    if not rec["same_free"]:
+        return rec
+    problem = InstrumentProblem(nom, ps, [data])
+    cu = check_curvature(problem, fit.values, fit.fitted, draws=10, seed=seed)
+    delta = (fit.values - fit0.values)[fit.fitted]
+    C, k = fit.covariance, delta.size
+    _, s, Vt = np.linalg.svd(problem.evaluate(fit.values)[1][:, fit.fitted], full_matrices=False)
+    top = Vt[np.argsort(s)[:12]]  # the 12 largest-σ directions
+    z_top = (top @ delta) * np.sort(s)[:12]
+    lin = check_linearity(problem, fit.values, fit.fitted)
+    rec |= {"excess": cu.excess, "excess_se": cu.excess_se,
+            "ratio_max": float(np.nanmax(lin.ratio)), "jacobian_change": lin.worst()[1],
+            "d2k": float(delta @ np.linalg.solve(C, delta)) / k,
+            "zdiag": float(np.mean(delta**2 / np.diag(C))),
+            "d2k_dirs": float(np.mean(z_top**2))}  # fmt: skip
+    if a.boot:
+        boot = bootstrap_covariance(problem, fit.values, fit.fitted, draws=a.boot, seed=0)
+        W = widened(C, boot)
+        rec |= {"boot_draws": boot.draws, "boot_failed": boot.failed,
+                "d2k_w": float(delta @ np.linalg.solve(W, delta)) / k,
+                "zdiag_w": float(np.mean(delta**2 / np.diag(W))),
+                "widen_max": float(np.max(np.sqrt(np.diag(W) / np.diag(C))))}  # fmt: skip
+    return rec
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--model", default="stewart_6ups")
+    ap.add_argument("--preset", default=None)
+    ap.add_argument("--kind", default="distance")
+    ap.add_argument("--poses", default="random", choices=("random", "designed"))
+    ap.add_argument("--std", type=float, default=1e-5, help="reading σ [m]")
+    ap.add_argument("--size", default="1,10", help="error bounds 'mm,mrad'")
+    ap.add_argument("--seeds", default="0:30", help="first:last (exclusive)")
+    ap.add_argument("--boot", type=int, default=0, help="bootstrap refits (0: none)")
+    a = ap.parse_args()
+    nom = load_mechanism(a.model)
+    ps = parameters(nom, a.preset or next(iter(nom.presets)))
+    lo, hi = (int(v) for v in a.seeds.split(":"))
+    for seed in range(lo, hi):
+        t0 = time.perf_counter()
+        rec = draw(a, nom, ps, seed)
+        print(json.dumps(rec | {"s": round(time.perf_counter() - t0, 1)}), flush=True)
+
+
+if __name__ == "__main__":
+    main()
