@@ -85,7 +85,6 @@ SCRIPTS = [c for c in _commands() if c.startswith("python scripts/") and c.split
 SLOW_SCRIPTS = {
     "scripts/studies/open_world_table.py": "tests/open_world/test_roster.py",
     "scripts/studies/hexaslide_calibration.py": "tests/studies/test_hexaslide_calibration.py",
-    "scripts/studies/instrument_gate.py": "tests/instruments/test_instrument_gate.py",
 }
 
 

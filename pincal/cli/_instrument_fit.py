@@ -64,9 +64,8 @@ def identify_instrument_files(mech, params, files: list[str], method: str, force
                               labels=labels)  # fmt: skip
     if not verdict.passed:
         return verdict, out.result, None
-    from pincal.cli._progress import counted
     from pincal.identification import instrument_uncertainty, with_uncertainty
 
-    with counted("bootstrap refits (the fit is not linear)") as tick:
-        check = instrument_uncertainty(out, mech, datasets, labels, progress=tick)
+    click.echo("… checking the fit's curvature over its confidence region", err=True)
+    check = instrument_uncertainty(out, mech, datasets, labels)
     return with_uncertainty(verdict, check), check.result, check.to_dict()
