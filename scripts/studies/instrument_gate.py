@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import math
 import sys
 import time
 from collections import Counter
@@ -49,6 +48,9 @@ from pincal.identification import (
 from pincal.measure import Sphere, simulate_instrument
 from pincal.model import load_mechanism, sample_actuators
 from pincal.sensitivity import parameters
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+from scripts.studies.quality_gate import _rate, bound
 
 STD = 1e-5  # m: `pincal simulate`'s default noise, the file's declared σ
 ERRORS = (1.0, 10.0)  # mm, mrad: `pincal simulate`'s default error bounds
@@ -131,21 +133,6 @@ def run_fit(cell: Cell, seed: int, poses: int, refit: bool = True) -> tuple[bool
     kinds = ",".join(sorted({i.kind for i in verdict.refusals}))
     exact = verdict.cause == "outliers" and verdict.outlier_poses == bad
     return not verdict.passed, kinds, exact
-
-
-def _rate(k: int, n: int) -> str:
-    p = k / n if n else float("nan")
-    se = math.sqrt(p * (1 - p) / n) if n else float("nan")
-    return f"{k:3d}/{n:<3d} {100 * p:5.1f} % ± {100 * se:4.1f}"
-
-
-def bound(k: int, n: int, upper: bool, level: float = 0.95) -> float:
-    """Exact one-sided Clopper–Pearson bound of a binomial rate from k of n."""
-    from scipy import stats
-
-    if upper:
-        return 1.0 if k >= n else float(stats.beta.ppf(level, k + 1, n - k))
-    return 0.0 if k <= 0 else float(stats.beta.ppf(1 - level, k, n - k + 1))
 
 
 def main(argv: list[str] | None = None) -> int:
