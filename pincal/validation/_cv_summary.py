@@ -111,36 +111,23 @@ class CrossValidationSummary:
             "fit_rms_mm": self.fit_rms * 1e3,
         }
         b = self.baseline
+        own = _errors(self.held_out_rms, self.held_out_max, self.fold_fit_rms)
+        base = {"model": b.model, **_errors(b.held_out_rms, b.held_out_max, b.fold_fit_rms)}
+        extra: dict[str, float] = {}
         if self.sockets:
-            assert self.socket_distance_rms is not None and self.socket_distance_max is not None
-            assert b.socket_distance_rms is not None and b.socket_distance_max is not None
-            return {
-                **head,
-                **_errors(self.held_out_rms, self.held_out_max, self.fold_fit_rms),
-                "socket_distance_error_rms_mm": self.socket_distance_rms * 1e3,
-                "socket_distance_error_max_mm": self.socket_distance_max * 1e3,
-                "baseline": {
-                    "model": b.model,
-                    **_errors(b.held_out_rms, b.held_out_max, b.fold_fit_rms),
-                    "socket_distance_error_rms_mm": b.socket_distance_rms * 1e3,
-                    "socket_distance_error_max_mm": b.socket_distance_max * 1e3,
-                },
-                "beats_baseline": self.beats_baseline,
-                "verdict": self.verdict,
-            }
-        assert self.gain_mse is not None and self.gain_standard_error is not None
-        return {
-            **head,
-            **_errors(self.held_out_rms, self.held_out_max, self.fold_fit_rms),
-            "baseline": {
-                "model": b.model,
-                **_errors(b.held_out_rms, b.held_out_max, b.fold_fit_rms),
-            },
-            "gain_mse_mm2": self.gain_mse * 1e6,
-            "gain_standard_error_mm2": self.gain_standard_error * 1e6,
-            "beats_baseline": self.beats_baseline,
-            "verdict": self.verdict,
-        }
+            own |= _socket_errors(self.socket_distance_rms, self.socket_distance_max)
+            base |= _socket_errors(b.socket_distance_rms, b.socket_distance_max)
+        else:
+            assert self.gain_mse is not None and self.gain_standard_error is not None
+            extra = {"gain_mse_mm2": self.gain_mse * 1e6,
+                     "gain_standard_error_mm2": self.gain_standard_error * 1e6}  # fmt: skip
+        return {**head, **own, "baseline": base, **extra,
+                "beats_baseline": self.beats_baseline, "verdict": self.verdict}  # fmt: skip
+
+
+def _socket_errors(rms: float | None, mx: float | None) -> dict[str, float]:
+    assert rms is not None and mx is not None
+    return {"socket_distance_error_rms_mm": rms * 1e3, "socket_distance_error_max_mm": mx * 1e3}
 
 
 def _errors(rms: float, mx: float, fold_fit: float) -> dict[str, float]:
