@@ -111,6 +111,13 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
             f"{name} measures frame {shown(frame)} but the model's tool frame is "
             f"{mech.measured_frame!r}"
         )
+    if "std" not in header:
+        raise MeasurementFormatError(
+            f"{name}: header line '# std: …' is required: the 1σ noise of one reading in the "
+            f"file's length unit (e.g. '# std: 0.001' with '# length_unit: mm' for a ballbar "
+            f"read to 1 µm); the fit weights the file by it and the quality gate judges its "
+            f"residuals against it"
+        )
     std = positive_value(header_value(header, "std", None, name), "std", name) / lf
     try:
         inst = cls.from_header(std, _Header(header, lf, name))

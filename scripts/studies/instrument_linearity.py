@@ -19,8 +19,13 @@ fit is the fit's target: what the data identify of the machine, gauge held alike
   d²/k the fit's second-order error adds (predicted from the fit alone);
 - ``ratio_max``, ``jacobian_change``: the cost-ratio check of pose fits
   (:func:`pincal.identification._linearity.check_linearity`);
+- ``factor``, ``d2k_f``, ``zdiag_f``, ``cover_f``: what ``pincal calibrate`` writes —
+  :func:`pincal.identification.instrument_uncertainty` (its own curvature draws) widens
+  the covariance by ``factor`` = 1 + excess past the limit (1 below it); d²/k, the
+  per-parameter z² and whether d² lies inside the joint 95 % region χ²_k(0.95) with that
+  covariance (``cover``: the same with the linear one);
 - with ``--boot B``: ``d2k_w`` and ``zdiag_w`` with the covariance widened by a B-refit
-  parametric bootstrap, as ``pincal calibrate`` widens it.
+  parametric bootstrap (``instrument_uncertainty(..., draws=B)``'s method).
 
 One JSON line per seed.
 """
@@ -35,7 +40,14 @@ import time
 import numpy as np
 
 from pincal.design import select_poses
-from pincal.identification import default_instrument, identify_instruments, instrument_candidates
+from scipy import stats
+
+from pincal.identification import (
+    default_instrument,
+    identify_instruments,
+    instrument_candidates,
+    instrument_uncertainty,
+)
 from pincal.identification._bootstrap import bootstrap_covariance, widened
 from pincal.identification._instrument_problem import InstrumentProblem
 from pincal.identification._linearity import check_curvature, check_linearity
@@ -89,6 +101,12 @@ def draw(a: argparse.Namespace, nom, ps, seed: int) -> dict:
             "d2k": float(delta @ np.linalg.solve(C, delta)) / k,
             "zdiag": float(np.mean(delta**2 / np.diag(C))),
             "d2k_dirs": float(np.mean(z_top**2))}  # fmt: skip
+    written = instrument_uncertainty(fit, nom, [data], seed=seed).result
+    factor = float(written.covariance[0, 0] / fit.result.covariance[0, 0])
+    d2 = rec["d2k"] * k
+    limit = float(stats.chi2.ppf(0.95, k))
+    rec |= {"factor": factor, "d2k_f": rec["d2k"] / factor, "zdiag_f": rec["zdiag"] / factor,
+            "cover": bool(d2 <= limit), "cover_f": bool(d2 / factor <= limit)}  # fmt: skip
     if a.boot:
         boot = bootstrap_covariance(problem, fit.values, fit.fitted, draws=a.boot, seed=0)
         W = widened(C, boot)

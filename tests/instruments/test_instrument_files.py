@@ -49,7 +49,7 @@ def test_bad_files_name_what_is_wrong(tmp_path, stewart):
     act = ",".join(stewart.actuated)
     cases = {
         "kind: laser\nstd: 1": (MeasurementFormatError, "kind 'laser' unknown"),
-        "kind: point": (MeasurementFormatError, "'# std: …' is required"),
+        "kind: point": (MeasurementFormatError, "'# std: …' is required: the 1σ noise"),
         "kind: sphere\nstd: 0.001": (MeasurementFormatError, "'# radius: …' is required"),
         "kind: point\nstd: 1\nframe: tool0": (MeasurementFormatError, "frame 'tool0'"),
     }
