@@ -215,10 +215,19 @@ class Curvature:
     the linearised covariance is ≈ 1 + excess. The rest of q (``intrinsic``) bends
     the model's surface and leaves the solution.
 
+    ``second_moment`` is ``E[J⁺q (J⁺q)ᵀ]`` over the draws: the fit's error is, to second
+    order, the linear term ``J⁺ε`` plus ``J⁺q`` (uncorrelated, odd moments of a Gaussian
+    vanishing), so the linearised covariance plus this matrix is the mean squared error
+    of x̂ about its target. It lies in the directions the curvature moves — the
+    well-determined combinations the curved model shifts by many of their σ — and
+    leaves the others' σ as they were.
+
     Attributes:
         excess: mean ‖P_J q‖² / k over the draws; excess_se: its standard error.
         intrinsic: mean ‖(I − P_J) q‖² / k.
         draws: δ drawn (evaluations: 2 each); checked: False when an evaluation failed.
+        second_moment: (k, k) ``E[J⁺q (J⁺q)ᵀ]`` over the fitted parameters, in their
+            units squared (None when not checked).
     """
 
     excess: float
@@ -226,6 +235,7 @@ class Curvature:
     intrinsic: float
     draws: int
     checked: bool = True
+    second_moment: np.ndarray | None = None
 
 
 def check_curvature(
@@ -258,6 +268,7 @@ def check_curvature(
     rng = np.random.default_rng(seed)
     pe: list[float] = []
     it: list[float] = []
+    moment = np.zeros((s.size, s.size))
     for _ in range(max(int(draws), 1)):
         delta = V @ (scale * rng.standard_normal(s.size) / s)
         rs = []
@@ -272,8 +283,11 @@ def check_curvature(
         if not np.all(np.isfinite(q)):
             return Curvature(math.nan, math.nan, math.nan, len(pe), False)
         qp = U.T @ q
+        moment += np.outer(qp, qp)
         pe.append(float(qp @ qp) / (scale**2 * k))
         it.append(max(float(q @ q) - float(qp @ qp), 0.0) / (scale**2 * k))
     e = np.array(pe)
     se = float(np.std(e, ddof=1) / math.sqrt(e.size)) if e.size > 1 else math.nan
-    return Curvature(float(e.mean()), se, float(np.mean(it)), int(e.size))
+    T = V / s  # J⁺ = V·diag(1/s)·Uᵀ
+    return Curvature(float(e.mean()), se, float(np.mean(it)), int(e.size),
+                     second_moment=T @ (moment / e.size) @ T.T)  # fmt: skip

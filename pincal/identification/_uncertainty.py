@@ -37,7 +37,7 @@ from pincal.model import Mechanism
 #: the d²/k a fit's second-order error may add before its σ are widened (instrument fits)
 CURVATURE_LIMIT = 1.0
 #: δ drawn by the curvature check (2 evaluations each)
-CURVATURE_DRAWS = 16
+CURVATURE_DRAWS = 64
 #: bootstrap σ up to (this + 3 relative standard errors of a σ from the draws) × the
 #: linearised σ confirm them
 CONFIRMED = 1.1
@@ -60,6 +60,9 @@ class UncertaintyCheck:
         linearity: the check; bootstrap: the refits (None when linear or not run).
         issue: the gate warning (None when the linearisation holds).
         curvature: the second-order check of an instrument fit (None for pose fits).
+        widened: the largest ratio, over all combinations of the fitted unknowns, of the
+            reported σ to the linearised one (second-order term of an instrument fit;
+            1 otherwise).
     """
 
     result: IdentificationResult
@@ -67,6 +70,7 @@ class UncertaintyCheck:
     bootstrap: Bootstrap | None = None
     issue: QualityIssue | None = None
     curvature: Curvature | None = None
+    widened: float = 1.0
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready summary (``quality.uncertainty`` of the calibration's record)."""
@@ -87,8 +91,8 @@ class UncertaintyCheck:
             b = self.bootstrap
             out |= {"method": "parametric bootstrap", "draws": b.draws, "failed": b.failed,
                     "seed": b.seed}  # fmt: skip
-        elif cu is not None and self.issue is not None and cu.checked:
-            out |= {"method": "curvature factor", "factor": _finite(1.0 + cu.excess)}
+        elif cu is not None and cu.checked:
+            out |= {"method": "second-order", "widened_max": _finite(self.widened)}
         return out
 
 
@@ -166,16 +170,19 @@ def instrument_uncertainty(
     seed: int = 0,
     progress: Callable[[int, int], None] | None = None,
 ) -> UncertaintyCheck:
-    """Check an instrument fit's second-order error; widen its covariance when it is large.
+    """Check an instrument fit's second-order error and add it to the covariance.
 
     The linear σ of a ballbar or probe fit on random poses are several times too small
-    (the model bends over the confidence region of its weakly seen directions), while
-    the cost-ratio check of :func:`check_uncertainty` fires on designed poses too,
-    whose linear σ are right. Here the measure is what matters for the intervals: the
-    d²/k the second-order term adds (:func:`check_curvature`); beyond
-    :data:`CURVATURE_LIMIT` the covariance is widened: by the factor ``1 + excess``
-    (the d²/k it measured, so that the widened σ hold on average), or, with ``draws``
-    > 0, by a parametric bootstrap of the joint fit (machine and instrument unknowns;
+    in their well-determined combinations (the model bends over the confidence region
+    of its weakly seen directions), while the cost-ratio check of
+    :func:`check_uncertainty` fires on designed poses too, whose linear σ are right.
+    Here the measure is what matters for the intervals (:func:`check_curvature`): the
+    second-order error ``J⁺q`` over draws from the confidence region. Its second moment
+    is added to the linearised covariance — to second order, the mean squared error of
+    the fit about its target, larger only in the directions the curvature moves — and
+    its d²/k (``excess``) beyond :data:`CURVATURE_LIMIT` is a warning: the linearised σ
+    alone would have been wrong. With ``draws`` > 0 a fit past the limit is widened by
+    a parametric bootstrap of the joint fit instead (machine and instrument unknowns;
     each refit solves every pose again: minutes on a few hundred readings).
 
     Args:
@@ -183,7 +190,7 @@ def instrument_uncertainty(
         mech: the nominal mechanism.
         datasets: the fit's datasets.
         labels: their labels, as given to the fit.
-        draws: bootstrap refits (0: widen by the measured factor; e.g. 100 to bootstrap).
+        draws: bootstrap refits past the limit (0: add the second-order term; e.g. 100).
         seed: the seed of the draws (curvature and bootstrap).
         progress: ``progress(done, total)`` per bootstrap refit.
     """
@@ -197,8 +204,8 @@ def instrument_uncertainty(
     except PincalError:
         return UncertaintyCheck(result, None)
     cu = check_curvature(problem, fit.values, free, draws=CURVATURE_DRAWS, seed=seed)
-    if cu.checked and cu.excess <= CURVATURE_LIMIT:
-        return UncertaintyCheck(result, None, curvature=cu)
+    machine = free < len(result.names)
+    linear = cu.checked and cu.excess <= CURVATURE_LIMIT
     text = (
         "the fit is not linear over its own confidence region: its second-order error "
         f"adds {cu.excess:.3g} to the d²/k of the linearised σ (0 when they are right; "
@@ -206,16 +213,22 @@ def instrument_uncertainty(
         if cu.checked
         else "the curvature of the fit could not be checked (an evaluation failed)"
     )
-    machine = free < len(result.names)
-    if draws <= 0 and cu.checked:
-        factor = 1.0 + cu.excess
-        cov = np.asarray(result.covariance) * factor
+    if cu.checked and (linear or draws <= 0):
+        assert cu.second_moment is not None
+        cov = (np.asarray(fit.covariance) + cu.second_moment)[np.ix_(machine, machine)]
+        if cov.shape != np.shape(result.covariance):
+            return UncertaintyCheck(result, None, curvature=cu)
         new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
-        text += (f"; the σ reported are widened by {np.sqrt(factor):.3g}× (√(1 + excess)) so "
-                 "that the joint region holds on average (conservative per parameter); a "
-                 "parametric bootstrap measures them per direction "
-                 "(pincal.identification.instrument_uncertainty(..., draws=100))")
-        return UncertaintyCheck(new, None, None, QualityIssue("linearity", False, text), cu)
+        worst = _widest_combination(np.asarray(fit.covariance), cu.second_moment)
+        if linear:
+            return UncertaintyCheck(new, None, curvature=cu, widened=worst)
+        each = float(np.max(new.std / np.maximum(result.std, 1e-300), initial=1.0))
+        text += (f"; the σ reported add that second-order error (its second moment over "
+                 f"{cu.draws} draws from the confidence region): the σ of the combination "
+                 f"it moves most is {worst:.3g}× the linearised one, the parameters' own σ "
+                 f"up to {each:.3g}×; a parametric bootstrap measures them by refits "
+                 "(pincal.identification.instrument_uncertainty(..., draws=100))")  # fmt: skip
+        return UncertaintyCheck(new, None, None, QualityIssue("linearity", False, text), cu, worst)
     boot = bootstrap_covariance(problem, fit.values, free, draws=draws,
                                 seed=seed, progress=progress)  # fmt: skip
     cov = widened(fit.covariance, boot)[np.ix_(machine, machine)]
@@ -225,6 +238,19 @@ def instrument_uncertainty(
     worst = float(np.max(new.std / np.maximum(result.std, 1e-300), initial=1.0))
     issue = QualityIssue("linearity", False, text + _bootstrap_text(boot, worst))
     return UncertaintyCheck(new, None, boot, issue, cu)
+
+
+def _widest_combination(C: np.ndarray, M: np.ndarray) -> float:
+    """Largest σ ratio over all combinations a·x of the covariance C + M to C.
+
+    √(1 + λ_max) with λ the generalised eigenvalues of (M, C); 1 when M vanishes.
+    """
+    from scipy.linalg import eigh
+
+    if C.size == 0:
+        return 1.0
+    lam = eigh(M, C, eigvals_only=True)
+    return math.sqrt(1.0 + max(float(lam[-1]), 0.0))
 
 
 def _bootstrap_text(boot: Bootstrap, worst: float) -> str:

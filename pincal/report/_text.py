@@ -153,7 +153,8 @@ def quality_lines(
     elif unc.get("linear") and unc.get("curvature_excess") is not None:
         lines.append(
             f"  uncertainties: the fit's second-order error adds {unc['curvature_excess']:.2g} "
-            f"to d²/k (≤ {unc.get('curvature_limit')}): the σ above are the linearised ones"
+            f"to d²/k (≤ {unc.get('curvature_limit')}); the σ above include it (the combination "
+            f"it moves most: {unc.get('widened_max') or 1.0:.3g}× the linearised σ)"
         )
     elif unc.get("linear"):
         lines.append(

@@ -19,11 +19,11 @@ fit is the fit's target: what the data identify of the machine, gauge held alike
   d²/k the fit's second-order error adds (predicted from the fit alone);
 - ``ratio_max``, ``jacobian_change``: the cost-ratio check of pose fits
   (:func:`pincal.identification._linearity.check_linearity`);
-- ``factor``, ``d2k_f``, ``zdiag_f``, ``cover_f``: what ``pincal calibrate`` writes —
-  :func:`pincal.identification.instrument_uncertainty` (its own curvature draws) widens
-  the covariance by ``factor`` = 1 + excess past the limit (1 below it); d²/k, the
-  per-parameter z² and whether d² lies inside the joint 95 % region χ²_k(0.95) with that
-  covariance (``cover``: the same with the linear one);
+- ``widened``, ``d2k_s``, ``zdiag_s``, ``cover_s``: what ``pincal calibrate`` writes —
+  :func:`pincal.identification.instrument_uncertainty` adds the second moment of the
+  fit's second-order error (its own curvature draws) to the covariance: the largest σ
+  ratio over combinations, d²/k, the per-parameter z², and whether d² lies inside the
+  joint 95 % region χ²_k(0.95) (``cover``: the same with the linear covariance);
 - with ``--boot B``: ``d2k_w`` and ``zdiag_w`` with the covariance widened by a B-refit
   parametric bootstrap (``instrument_uncertainty(..., draws=B)``'s method).
 
@@ -38,10 +38,9 @@ import json
 import time
 
 import numpy as np
-
-from pincal.design import select_poses
 from scipy import stats
 
+from pincal.design import select_poses
 from pincal.identification import (
     default_instrument,
     identify_instruments,
@@ -101,12 +100,13 @@ def draw(a: argparse.Namespace, nom, ps, seed: int) -> dict:
             "d2k": float(delta @ np.linalg.solve(C, delta)) / k,
             "zdiag": float(np.mean(delta**2 / np.diag(C))),
             "d2k_dirs": float(np.mean(z_top**2))}  # fmt: skip
-    written = instrument_uncertainty(fit, nom, [data], seed=seed).result
-    factor = float(written.covariance[0, 0] / fit.result.covariance[0, 0])
-    d2 = rec["d2k"] * k
-    limit = float(stats.chi2.ppf(0.95, k))
-    rec |= {"factor": factor, "d2k_f": rec["d2k"] / factor, "zdiag_f": rec["zdiag"] / factor,
-            "cover": bool(d2 <= limit), "cover_f": bool(d2 / factor <= limit)}  # fmt: skip
+    check = instrument_uncertainty(fit, nom, [data], seed=seed)
+    assert check.curvature is not None and check.curvature.second_moment is not None
+    W = C + check.curvature.second_moment  # what pincal calibrate writes (all unknowns)
+    d2w, limit = float(delta @ np.linalg.solve(W, delta)), float(stats.chi2.ppf(0.95, k))
+    rec |= {"widened": check.widened, "d2k_s": d2w / k,
+            "zdiag_s": float(np.mean(delta**2 / np.diag(W))),
+            "cover": bool(rec["d2k"] * k <= limit), "cover_s": bool(d2w <= limit)}  # fmt: skip
     if a.boot:
         boot = bootstrap_covariance(problem, fit.values, fit.fitted, draws=a.boot, seed=0)
         W = widened(C, boot)

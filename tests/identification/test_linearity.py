@@ -232,6 +232,11 @@ def test_curvature_is_zero_for_a_linear_model_and_analytic_for_a_quadratic_one()
     expected = 3 * 4.0 / float(t @ t)
     assert abs(cu.excess - expected) < 4 * cu.excess_se, (cu.excess, cu.excess_se, expected)
     assert cu.intrinsic == pytest.approx(0.0, abs=1e-12)
+    # J⁺q = b δ² with δ ~ N(0, 1/‖t‖²): E[(J⁺q)²] = 3 b² / ‖t‖⁴, estimated from 2000
+    # draws to within 4 standard errors (b²δ⁴ has mean 3b²σ⁴ and s.d. √96·b²σ⁴)
+    moment = 3 * 4.0 / float(t @ t) ** 2
+    assert cu.second_moment is not None and cu.second_moment.shape == (1, 1)
+    assert abs(cu.second_moment[0, 0] - moment) < 4 * np.sqrt(96 / 2000) * moment / 3
 
 
 def test_curvature_is_small_on_a_well_excited_fit_and_misses_a_changing_covariance():
