@@ -215,12 +215,18 @@ class Curvature:
     the linearised covariance is ≈ 1 + excess. The rest of q (``intrinsic``) bends
     the model's surface and leaves the solution.
 
-    ``second_moment`` is ``E[J⁺q (J⁺q)ᵀ]`` over the draws: the fit's error is, to second
-    order, the linear term ``J⁺ε`` plus ``J⁺q`` (uncorrelated, odd moments of a Gaussian
-    vanishing), so the linearised covariance plus this matrix is the mean squared error
-    of x̂ about its target. It lies in the directions the curvature moves — the
-    well-determined combinations the curved model shifts by many of their σ — and
-    leaves the others' σ as they were.
+    ``second_moment`` is ``E[J⁺q (J⁺q)ᵀ]`` over the draws: the fit's error is the linear
+    term ``J⁺ε`` plus ``J⁺q`` plus higher orders; the first two are uncorrelated (odd
+    moments of a Gaussian vanish), so this matrix is what the second-order error adds
+    to the mean squared error of x̂ on its own. It lies in the directions the curvature
+    moves — the well-determined combinations A that the curved model shifts by
+    quadratic terms in the weakly seen directions B — and leaves the other σ as they
+    were. Not included is the cross term of the linear and the third-order error, of
+    the same order in ε: relative to the σ² of A it is ~ (third derivative)·σ_B², like
+    the Jacobian's change over the confidence region, while the term included grows as
+    σ_B⁴/σ_A² — it dominates when σ_B ≫ σ_A (a ballbar on random poses; measured in
+    ``docs/quality_gate.md``), not in a one-parameter model (for ``x + b x²`` the cross
+    term is 12 b²σ⁴ against the 3 b²σ⁴ included).
 
     Attributes:
         excess: mean ‖P_J q‖² / k over the draws; excess_se: its standard error.
