@@ -258,7 +258,7 @@ def constant_std(Jf: np.ndarray, column: np.ndarray) -> float:
 
 
 def _sig2(x: float) -> str:
-    """A positive number with two significant digits, never in exponent form."""
+    """A positive number with at least two significant digits, never in exponent form."""
     if not np.isfinite(x) or x <= 0:
         return f"{x:g}"
     return f"{x:.{max(0, 1 - int(np.floor(np.log10(x))))}f}"
@@ -276,6 +276,7 @@ def constant_line(c: DeclaredConstant, std: float, label: str | None = None) -> 
         told = f"{std * 100:.2g} % (1σ)"
     else:
         told = f"±{_sig2(std * 1e6)} µm (1σ) of its declared {c.value * 1e3:g} mm"
+    told = f"tell it only to {told}" if np.isfinite(std) else "do not tell it at all"
     where = f" of {label}" if label else ""
-    return (f"{c.name}{where}: {c.error} passes into the calibrated machine — the data tell it "
-            f"only to {told}; {c.rests_on}")  # fmt: skip
+    return (f"{c.name}{where}: {c.error} passes into the calibrated machine — the data "
+            f"{told}; {c.rests_on}")  # fmt: skip
