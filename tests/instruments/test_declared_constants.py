@@ -10,6 +10,7 @@ residuals can refuse.
 from __future__ import annotations
 
 import dataclasses
+import json
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -181,3 +182,27 @@ def test_a_constant_the_fit_absorbs_wholly_is_said_not_told():
         "the gauge's gain: a gain error of the readings passes into the calibrated machine — "
         "the data do not tell it at all; the scale rests on the instrument's own calibration"
     ]
+
+
+@pytest.mark.slow  # a 45-unknown joint fit and its curvature check, as the ballbar's CLI test
+def test_calibrate_on_a_sphere_file_says_the_radius_rests_on_its_declared_value(tmp_path):
+    """`pincal simulate --instrument sphere` → `pincal calibrate`: the line is on stdout
+    (JSON ``gauge``), in report.txt under "not calibrated" and in identification.json."""
+    from click.testing import CliRunner
+
+    from pincal.cli import main
+
+    data, out = tmp_path / "sphere.csv", tmp_path / "cal"
+    args = ["simulate", "stewart_6ups", "--random", "60", "--instrument", "sphere", "--seed", "1"]
+    res = CliRunner().invoke(main, [*args, "--out", str(data)])
+    assert res.exit_code == 0, res.output
+    res = CliRunner().invoke(
+        main, ["calibrate", "stewart_6ups", "--data", str(data), "--out", str(out), "--json"]
+    )
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout)
+    (line,) = [g for g in doc["gauge"] if g.startswith("the sphere radius: a radius error")]
+    assert "of its declared 20 mm; the radius rests on its declared value" in line
+    report = (out / "report.txt").read_text()
+    assert f"  {line}" in report.split("not calibrated (held at nominal")[1]
+    assert line in json.loads((out / "identification.json").read_text())["gauge"]
