@@ -97,6 +97,13 @@ class DeclaredConstant:
     error: str
     rests_on: str
 
+    def __post_init__(self) -> None:
+        if self.unit not in ("m", "1") or not (np.isfinite(self.value) and self.value != 0):
+            raise MeasurementError(
+                f"declared constant {self.name!r}: unit must be 'm' or '1' (a relative "
+                f"scale) and its value finite and ≠ 0, got {self.value!r} {self.unit!r}"
+            )
+
 
 class Instrument(ABC):
     """A scalar instrument: one reading ``v(p, θ)`` [m] per pose of the tool point p.

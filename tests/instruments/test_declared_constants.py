@@ -206,3 +206,12 @@ def test_calibrate_on_a_sphere_file_says_the_radius_rests_on_its_declared_value(
     report = (out / "report.txt").read_text()
     assert f"  {line}" in report.split("not calibrated (held at nominal")[1]
     assert line in json.loads((out / "identification.json").read_text())["gauge"]
+
+
+def test_a_declared_constant_of_an_unjudgeable_unit_or_value_is_refused():
+    from pincal.errors import MeasurementError
+    from pincal.measure import DeclaredConstant
+
+    for value, unit in ((0.01, "rad"), (0.0, "m"), (float("nan"), "1")):
+        with pytest.raises(MeasurementError, match="unit must be 'm' or '1'"):
+            DeclaredConstant("a tilt", value, unit, np.ones(3), "a tilt error", "it rests")
