@@ -57,7 +57,8 @@ class InstrumentIdentification:
         covariance: covariance of the fitted values (order of ``fitted``).
         residuals: per dataset, (m_i, k_i) raw residuals at the solution [m, rad].
         identifiability: joint analysis at the start (instrument parameters first).
-        gauge: what the data do not observe (held at nominal), in words.
+        gauge: what the data do not observe (held at nominal), and the constants the files
+            declare that the data tell only beyond 1e-3 of their value, in words.
         weak: names of the parameters held because the data place them only beyond
             20 mm / 0.1 rad (1σ).
         whitened: (m, k, p) Jacobian of the fitted parameters per pose and (m, k)
