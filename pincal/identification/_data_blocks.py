@@ -33,6 +33,7 @@ from pincal.identification._problem import CalibrationProblem
 from pincal.identification._shared_terms import SharedUnknowns
 from pincal.measure import (
     Artefact,
+    DeclaredConstant,
     InstrumentData,
     Measurements,
     artefact_class,
@@ -83,9 +84,16 @@ class DataBlock(ABC):
         """Per pose position-error and rotation-error norms [m], [rad] of ``raw``."""
         return list(np.linalg.norm(raw, axis=1)), []
 
-    def readings(self, raw: np.ndarray) -> np.ndarray:
-        """(m·k,) the model's scalar readings at ``raw`` (0 for blocks that read none)."""
-        return np.zeros(raw.size)
+    def declared_constants(self, theta: np.ndarray, P: np.ndarray) -> tuple[DeclaredConstant, ...]:
+        """The constants its file declares and the fit trusts; none by default.
+
+        See :meth:`pincal.measure.Instrument.declared_constants`.
+
+        Args:
+            theta: its own unknowns at the solution.
+            P: (m, 3) its tool points [m].
+        """
+        return ()
 
 
 class PoseSensorBlock(DataBlock):
@@ -149,8 +157,8 @@ class ScalarBlock(DataBlock):
     def norms(self, raw):
         return list(np.abs(raw[:, 0])), []
 
-    def readings(self, raw):
-        return self.data.values - raw[:, 0]
+    def declared_constants(self, theta, P):
+        return self.instrument.declared_constants(P, theta, self.data.ids)
 
 
 class ArtefactBlock(DataBlock):

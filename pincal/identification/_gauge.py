@@ -24,9 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from pincal.measure import DeclaredConstant
 from pincal.sensitivity import Identifiability
 
-__all__ = ["NullMotions", "null_motions", "reading_scale_std", "weak_parameters"]
+__all__ = ["NullMotions", "constant_line", "constant_std", "null_motions", "weak_parameters"]
 
 
 @dataclass(frozen=True)
@@ -225,21 +226,27 @@ def weak_parameters(
     return np.array(sorted(held), dtype=int)
 
 
-def reading_scale_std(Jf: np.ndarray, readings: np.ndarray) -> float:
-    """1σ of a relative scale error of the readings, as the fit can tell it apart [1].
+def constant_std(Jf: np.ndarray, column: np.ndarray) -> float:
+    """1σ of a trusted constant, as the fit can tell it apart from its parameters [unit].
 
-    A scale error k of an instrument's readings (a bar length, a probe's gain) adds
-    ``k · v`` to them; the fit absorbs the part of ``v/σ`` in the span of its whitened
-    Jacobian ``Jf`` (N, p). What is left, ``‖(I − Π_J) v/σ‖``, is the information on k:
-    its inverse is k's 1σ. Large (e.g. 1 % on an all-revolute machine, whose length
-    scale only the instrument sets) means a scale error of the instrument passes into
-    the calibrated machine unseen.
+    An error δ of a constant the fit does not fit (a bar's length scale, a sphere's
+    radius) adds ``δ · c`` to the whitened readings, ``c`` its whitened Jacobian column;
+    the fit absorbs the part of ``c`` in the span of its whitened Jacobian ``Jf`` (N, p).
+    What is left, ``‖(I − Π_J) c‖``, is the information on δ: its inverse is δ's 1σ.
+    Large (e.g. a 1 % bar scale on an all-revolute machine, whose length scale only the
+    instrument sets) means an error of the constant passes into the calibrated machine
+    unseen.
 
     Args:
         Jf: (N, p) whitened Jacobian of the fitted parameters.
-        readings: (N,) whitened readings ``v/σ`` (0 on rows of other measurements).
+        column: (N,) whitened derivative of the residual rows with respect to the
+            constant (0 on rows of other measurements); for a relative scale of the
+            readings, the readings ``v/σ``.
+
+    Returns:
+        The 1σ (0 for a zero column, inf when the fit absorbs it wholly).
     """
-    y = np.asarray(readings, dtype=float)
+    y = np.asarray(column, dtype=float)
     if not np.any(y):
         return 0.0
     Q = np.zeros((y.size, 0))
@@ -248,3 +255,28 @@ def reading_scale_std(Jf: np.ndarray, readings: np.ndarray) -> float:
         Q = u[:, sv > 1e-10 * sv[0]] if sv[0] > 0 else Q
     rest = float(np.linalg.norm(y - Q @ (Q.T @ y)))
     return float("inf") if rest <= 1e-12 * float(np.linalg.norm(y)) else 1.0 / rest
+
+
+def _sig2(x: float) -> str:
+    """A positive number with at least two significant digits, never in exponent form."""
+    if not np.isfinite(x) or x <= 0:
+        return f"{x:g}"
+    return f"{x:.{max(0, 1 - int(np.floor(np.log10(x))))}f}"
+
+
+def constant_line(c: DeclaredConstant, std: float, label: str | None = None) -> str:
+    """The gauge line of a trusted constant the data tell only to ``std`` (1σ) [unit].
+
+    Args:
+        c: the constant.
+        std: its 1σ from :func:`constant_std` [its unit].
+        label: its dataset's name, said when a fit has several instrument datasets.
+    """
+    if c.unit == "1":
+        told = f"{std * 100:.2g} % (1σ)"
+    else:
+        told = f"±{_sig2(std * 1e6)} µm (1σ) of its declared {c.value * 1e3:g} mm"
+    told = f"tell it only to {told}" if np.isfinite(std) else "do not tell it at all"
+    where = f" of {label}" if label else ""
+    return (f"{c.name}{where}: {c.error} passes into the calibrated machine — the data "
+            f"{told}; {c.rests_on}")  # fmt: skip

@@ -22,7 +22,12 @@ import numpy as np
 from pincal.errors import SolverOptionError
 from pincal.identification._data_blocks import DataBlock
 from pincal.identification._finish import finish, settle
-from pincal.identification._gauge import null_motions, reading_scale_std, weak_parameters
+from pincal.identification._gauge import (
+    constant_line,
+    constant_std,
+    null_motions,
+    weak_parameters,
+)
 from pincal.identification._instrument_problem import Dataset, InstrumentProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import solver
@@ -31,7 +36,9 @@ from pincal.sensitivity import Identifiability
 
 __all__ = ["SCALE_STD_LIMIT", "InstrumentIdentification", "identify_instruments", "joint_fit"]
 
-#: a reading scale the data tell only beyond this 1σ [1] is named in the gauge
+#: a constant an instrument file declares and the fit trusts (a reading scale, a sphere
+#: radius) is named in the gauge when the data tell it only beyond this 1σ relative to
+#: its value [1] (see docs/quality_gate.md, "Instrument files")
 SCALE_STD_LIMIT = 1e-3
 
 
@@ -50,7 +57,8 @@ class InstrumentIdentification:
         covariance: covariance of the fitted values (order of ``fitted``).
         residuals: per dataset, (m_i, k_i) raw residuals at the solution [m, rad].
         identifiability: joint analysis at the start (instrument parameters first).
-        gauge: what the data do not observe (held at nominal), in words.
+        gauge: what the data do not observe (held at nominal), and the constants the files
+            declare that the data tell only beyond 1e-3 of their value, in words.
         weak: names of the parameters held because the data place them only beyond
             20 mm / 0.1 rad (1σ).
         whitened: (m, k, p) Jacobian of the fitted parameters per pose and (m, k)
@@ -179,12 +187,12 @@ def joint_fit(
     out = entry.solve(model, x0, free, opts, progress)
     settled = settle(model, out, free, noise_floor=True)
     raws, Jf = settled.raw, settled.Jf
-    scale_std = reading_scale_std(Jf, model.whitened_readings(raws))
-    if scale_std > SCALE_STD_LIMIT:
-        gauge += (f"the length scale: a scale error of the readings (a bar length, a gain) "
-                  f"passes into the calibrated machine — the data tell it only to "
-                  f"{scale_std * 100:.2g} % (1σ); the scale rests on the instrument's own "
-                  "calibration",)  # fmt: skip
+    constants = model.declared_constants(np.asarray(out.x, dtype=float))
+    several = len({label for label, _, _ in constants}) > 1
+    for label, c, column in constants:
+        std = constant_std(Jf, column)
+        if std > SCALE_STD_LIMIT * abs(c.value):
+            gauge += (constant_line(c, std, label if several else None),)
     n, x = model.n_machine, np.asarray(out.x, dtype=float)
     inst = {k: float(v) for k, v in zip(model.names[n:], x[n:], strict=True)}
     centres_mm = {k: [float(v) * 1e3 for v in c] for k, c in model.socket_centres(x).items()}

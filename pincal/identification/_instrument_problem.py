@@ -30,6 +30,7 @@ from pincal.identification._problem import TRIAL_FAILURES
 from pincal.identification._shared_terms import SharedUnknowns
 from pincal.measure import (
     Artefact,
+    DeclaredConstant,
     InstrumentData,
     Measurements,
 )
@@ -211,15 +212,26 @@ class InstrumentProblem:
         r_w = np.concatenate(r_all)
         return r_w, (np.vstack(J_all) if jacobian else None), raws
 
-    def whitened_readings(self, raws: list[np.ndarray]) -> np.ndarray:
-        """(N,) the model's scalar readings / σ at the residuals ``raws`` of :meth:`evaluate`.
+    def declared_constants(self, x: np.ndarray) -> list[tuple[str, DeclaredConstant, np.ndarray]]:
+        """Every constant the datasets declare and the fit trusts, at ``x``.
 
-        0 on the rows of poses and sockets: the Jacobian column of a relative scale
-        error of the readings.
+        Returns:
+            Per constant (its dataset's label, the constant, its (N,) whitened Jacobian
+            column: ∂(readings)/∂constant / σ on its dataset's rows, 0 elsewhere).
         """
-        out = [b.readings(raw) / b.sigma.ravel() for b, raw in zip(self.blocks, raws, strict=False)]
-        out += [np.zeros(s.size) for s in self.sigma[len(self.datasets) :]]
-        return np.concatenate(out)
+        mech = self.mechanism(x)
+        P = np.array([mech.frame_placement(q).translation for q in self._configurations(mech)])
+        out, row, pose, col = [], 0, 0, self.n_machine
+        for b in self.blocks:
+            m, k = len(b), len(b.own_names)
+            for c in b.declared_constants(np.asarray(x[col : col + k], dtype=float),
+                                          P[pose : pose + m]):  # fmt: skip
+                column = np.zeros(self.n_equations)
+                column[row : row + b.sigma.size] = (np.asarray(c.derivative, dtype=float)[:, None]
+                                                    / b.sigma).ravel()  # fmt: skip
+                out.append((b.label, c, column))
+            row, pose, col = row + b.sigma.size, pose + m, col + k
+        return out
 
     @property
     def order(self) -> np.ndarray:

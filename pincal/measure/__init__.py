@@ -11,7 +11,7 @@ against measurements (held-out checks, pose errors, ISO 9283) is the later
 from __future__ import annotations
 
 from pincal.measure._artefact_kind import Artefact, SharedTerms
-from pincal.measure._instrument_kind import HeaderValues, Instrument
+from pincal.measure._instrument_kind import DeclaredConstant, HeaderValues, Instrument
 from pincal.measure._instrument_kinds import Distance, Plane, Point, Sphere
 from pincal.measure._instrument_registry import (
     INSTRUMENT_KINDS,
@@ -66,6 +66,7 @@ __all__ = [
     "INSTRUMENT_KINDS",
     "SCALE_MESSAGE",
     "Artefact",
+    "DeclaredConstant",
     "Distance",
     "HeaderValues",
     "Instrument",

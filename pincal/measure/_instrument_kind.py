@@ -15,20 +15,24 @@ kind's name. A kind declares:
   an optional integer column of ids (``id_column``, e.g. the plane of each contact);
 * :meth:`Instrument.typical` (a typical set-up beside a workspace, for simulation and
   analysis), ``default_std`` [m], and :meth:`Instrument.candidate_sphere` (the sphere on
-  which its candidate poses lie, if it has one).
+  which its candidate poses lie, if it has one);
+* :meth:`Instrument.declared_constants`: the constants its file declares and the fit
+  trusts (a sphere's radius, a bar's length scale) with the readings' derivatives, so
+  the fit's gauge can say which of them the data cannot check (default: none).
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import ClassVar, Protocol
 
 import numpy as np
 
 from pincal.errors import MeasurementError
 
-__all__ = ["HeaderValues", "Instrument", "unit_vector"]
+__all__ = ["DeclaredConstant", "HeaderValues", "Instrument", "unit_vector"]
 
 
 class HeaderValues(Protocol):
@@ -66,6 +70,39 @@ def unit_vector(v: object, what: str) -> tuple[float, float, float]:
     if arr.size != 3 or not np.all(np.isfinite(arr)) or norm < 1e-12:
         raise MeasurementError(f"{what} must be a non-zero 3-vector, got {v!r}")
     return tuple(float(x) for x in arr / norm)  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class DeclaredConstant:
+    """A constant an instrument file declares and the joint fit trusts (does not fit).
+
+    An error δ of it changes the readings by ``derivative · δ``; what the fitted
+    machine cannot absorb of that is the data's information on it, and the gauge names
+    it when its 1σ exceeds a share of ``value``
+    (:data:`pincal.identification.SCALE_STD_LIMIT`).
+
+    Attributes:
+        name: what it is, in words, as the gauge line starts (``"the sphere radius"``).
+        value: its declared value [unit], ≠ 0 (1 for a relative scale).
+        unit: ``"m"`` or ``"1"`` (a relative scale of the readings: a 1σ in %).
+        derivative: (m,) ∂v/∂constant per reading [m / unit].
+        error: what an error of it is, in words (``"a radius error"``).
+        rests_on: what the calibrated machine then rests on, in words.
+    """
+
+    name: str
+    value: float
+    unit: str
+    derivative: np.ndarray
+    error: str
+    rests_on: str
+
+    def __post_init__(self) -> None:
+        if self.unit not in ("m", "1") or not (np.isfinite(self.value) and self.value != 0):
+            raise MeasurementError(
+                f"declared constant {self.name!r}: unit must be 'm' or '1' (a relative "
+                f"scale) and its value finite and ≠ 0, got {self.value!r} {self.unit!r}"
+            )
 
 
 class Instrument(ABC):
@@ -193,6 +230,22 @@ class Instrument(ABC):
         Returns:
             (instrument, true θ (k,), ids (m,) or None).
         """
+
+    def declared_constants(
+        self, P: np.ndarray, theta: np.ndarray, ids: np.ndarray | None = None
+    ) -> tuple[DeclaredConstant, ...]:
+        """The constants its file declares and the fit trusts, at tool positions P.
+
+        Args:
+            P: (m, 3) tool positions [m].
+            theta: (k,) its parameters.
+            ids: (m,) ids of its :attr:`id_column`, as :meth:`predict`.
+
+        Returns:
+            One :class:`DeclaredConstant` per constant (default: none), each with the
+            (m,) derivative of the readings.
+        """
+        return ()
 
     def candidate_sphere(
         self, theta: np.ndarray, home: np.ndarray

@@ -14,6 +14,12 @@ own unknown parameters θ, identified jointly with the machine's:
   per plane.
 * :class:`Point` (``point``) — one dial-gauge / Z-probe axis along a fixed unit
   direction u: ``v = u · p − o``; θ = (offset o) [m].
+
+What each trusts (:meth:`Instrument.declared_constants`): the ballbar its length scale
+(a bar-length or transducer-gain error k adds ``k v``), the sphere probe its declared
+radius (an error δr adds ``−δr``), planes and dial gauge their gain (``k v``). A
+plane's tilt is fitted, not trusted; the dial gauge's declared axis direction is not
+offered (an angle about a zero value has no relative bound to judge it against).
 """
 
 from __future__ import annotations
@@ -25,12 +31,25 @@ from typing import ClassVar
 import numpy as np
 
 from pincal.errors import MeasurementError
-from pincal.measure._instrument_kind import HeaderValues, Instrument, unit_vector
+from pincal.measure._instrument_kind import (
+    DeclaredConstant,
+    HeaderValues,
+    Instrument,
+    unit_vector,
+)
 
 __all__ = ["Distance", "Plane", "Point", "Sphere"]
 
 #: typical set-ups: pivot / sphere centre this far below the centre of the tool points [m]
 _BELOW = np.array([0.0, 0.0, 0.1])
+
+
+def _gain(inst: Instrument, P: np.ndarray, theta: np.ndarray, ids: np.ndarray | None,
+          name: str, error: str) -> tuple[DeclaredConstant, ...]:  # fmt: skip
+    """A relative scale k of the readings (``∂v/∂k = v``), trusted from the instrument."""
+    v = inst.predict(P, theta, ids)[0]
+    rests = "the scale rests on the instrument's own calibration"
+    return (DeclaredConstant(name, 1.0, "1", v, error, rests),)
 
 
 def _radial(P: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -108,6 +127,10 @@ class Distance(Instrument):
         c = np.asarray(theta[:3], dtype=float)
         return c, float(np.linalg.norm(np.asarray(home) - c))
 
+    def declared_constants(self, P, theta, ids=None):
+        return _gain(self, P, theta, ids, "the length scale",
+                     "a scale error of the readings (a bar length, a gain)")  # fmt: skip
+
 
 @dataclass(frozen=True)
 class Sphere(Instrument):
@@ -154,6 +177,12 @@ class Sphere(Instrument):
     def candidate_sphere(self, theta, home):
         return np.asarray(theta[:3], dtype=float), float(self.radius)
 
+    def declared_constants(self, P, theta, ids=None):
+        ones = np.ones(len(np.atleast_2d(P)))
+        rests = "the radius rests on its declared value"
+        return (DeclaredConstant("the sphere radius", float(self.radius), "m", -ones,
+                                 "a radius error", rests),)  # fmt: skip
+
 
 @dataclass(frozen=True)
 class Point(Instrument):
@@ -189,6 +218,9 @@ class Point(Instrument):
     @classmethod
     def typical(cls, P, std=None):
         return cls(cls.default_std if std is None else std), np.zeros(1), None
+
+    def declared_constants(self, P, theta, ids=None):
+        return _gain(self, P, theta, ids, "the gauge's gain", "a gain error of the readings")
 
 
 def _tangents(n0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -300,3 +332,6 @@ class Plane(Instrument):
                    normals=((0.0, 0.0, 1.0), (1.0, 0.0, 0.0)))  # fmt: skip
         theta = np.array([0.0, 0.0, P[:, 2].min(), 0.0, 0.0, P[:, 0].min()])
         return inst, theta, np.arange(len(P)) % 2
+
+    def declared_constants(self, P, theta, ids=None):
+        return _gain(self, P, theta, ids, "the probe's gain", "a gain error of the readings")

@@ -21,6 +21,11 @@ Faults (what the file says against what was measured):
 - ``outlier``: one reading (two) off by 0.5 mm = 50 σ (rate of *exact* naming: refused
   with cause ``outliers`` and exactly those poses named).
 
+Clean, bar-scale and radius cells also count how often the fit's gauge names a constant
+the file declares and the fit trusts (the bar's length scale, the sphere's radius: its
+1σ from the data beyond 1e-3 of its value), refused or not: what the gauge says of a
+fault no test of the residuals can see.
+
 Rates as in ``scripts/studies/quality_gate.py``: share refused ± binomial s.e., exact
 one-sided 95 % Clopper–Pearson bound; fit i of every cell uses seed ``seed + i``.
 """
@@ -29,9 +34,10 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import re
 import sys
 import time
-from collections import Counter
+from collections import Counter, defaultdict
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -98,8 +104,11 @@ def _model(name: str, preset: str | None) -> tuple[pincal.Mechanism, pincal.Para
     return _MECHS[name, preset]
 
 
-def run_fit(cell: Cell, seed: int, poses: int, refit: bool = True) -> tuple[bool, str, bool]:
-    """One fit: (refused, the refusals' kinds, the outliers named exactly).
+def run_fit(
+    cell: Cell, seed: int, poses: int, refit: bool = True
+) -> tuple[bool, str, bool, tuple[str, ...]]:
+    """One fit: (refused, the refusals' kinds, the outliers named exactly, the gauge's
+    lines of the declared constants it names, e.g. ``("the sphere radius: … ±239 µm …",)``).
 
     ``refit`` False judges outliers without the confirming refit (as before it existed).
     """
@@ -132,7 +141,8 @@ def run_fit(cell: Cell, seed: int, poses: int, refit: bool = True) -> tuple[bool
     verdict = instrument_gate(fit, checked, limits, **more)
     kinds = ",".join(sorted({i.kind for i in verdict.refusals}))
     exact = verdict.cause == "outliers" and verdict.outlier_poses == bad
-    return not verdict.passed, kinds, exact
+    named = tuple(g for g in fit.gauge if "passes into the calibrated machine" in g)
+    return not verdict.passed, kinds, exact, named
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -162,8 +172,12 @@ def main(argv: list[str] | None = None) -> int:
     pooled = [0, 0]
     for cell in cells:
         refused, exact, seen, odd = 0, 0, Counter(), []
+        named: dict[str, list[str]] = defaultdict(list)  # constant → its 1σ per fit naming it
         for i in range(a.fits):
-            r, kinds, ex = run_fit(cell, a.seed + i, a.poses, not a.without_refit)
+            r, kinds, ex, constants = run_fit(cell, a.seed + i, a.poses, not a.without_refit)
+            for line in constants:
+                told = re.search(r"only to ±?([\d.]+) (µm|%)", line)
+                named[line.split(":")[0]].append(f"{told[1]} {told[2]}" if told else "not told")
             refused += r
             exact += ex
             if kinds:
@@ -178,6 +192,12 @@ def main(argv: list[str] | None = None) -> int:
             note += f"; {'refused' if cell.clean else 'missed'}: seeds {odd[:10]}"
         if cell.fault == "outlier":
             note += f"; named exactly: {_rate(exact, a.fits)}"
+        if cell.fault in ("none", "bar", "radius"):
+            for k, told in named.items():
+                vals = sorted(float(t.split()[0]) for t in told if t != "not told")
+                span = f" (1σ {vals[0]:g}–{vals[-1]:g} {told[0].split()[1]})" if vals else ""
+                note += f"; gauge names {k}: {_rate(len(told), a.fits)}{span}"
+            note += "" if named else "; gauge names no declared constant"
         if cell.clean:
             pooled[0] += refused
             pooled[1] += a.fits
