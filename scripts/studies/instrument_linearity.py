@@ -15,8 +15,9 @@ fit is the fit's target: what the data identify of the machine, gauge held alike
 - ``d2k``: (x̂ − x̂₀)ᵀ C⁻¹ (x̂ − x̂₀) / k with C the linearised covariance (≈ 1 when right);
 - ``zdiag``: mean over the parameters of (x̂ − x̂₀)²/σ² (per-parameter σ);
 - ``d2k_dirs``: the same along the 12 largest-σ principal directions;
-- ``excess``: :func:`pincal.identification._linearity.check_curvature` (10 draws), the
-  d²/k the fit's second-order error adds (predicted from the fit alone);
+- ``excess``: the curvature check of ``pincal calibrate``
+  (:func:`pincal.identification._linearity.check_curvature`, 64 draws), the d²/k the
+  fit's second-order error adds (predicted from the fit alone);
 - ``ratio_max``, ``jacobian_change``: the cost-ratio check of pose fits
   (:func:`pincal.identification._linearity.check_linearity`);
 - ``widened``, ``d2k_s``, ``zdiag_s``, ``cover_s``: what ``pincal calibrate`` writes —
@@ -49,7 +50,7 @@ from pincal.identification import (
 )
 from pincal.identification._bootstrap import bootstrap_covariance, widened
 from pincal.identification._instrument_problem import InstrumentProblem
-from pincal.identification._linearity import check_curvature, check_linearity
+from pincal.identification._linearity import check_linearity
 from pincal.measure import simulate_instrument
 from pincal.model import load_mechanism, parameters, sample_actuators
 from pincal.sensitivity import analyse_jacobian
@@ -88,7 +89,9 @@ def draw(a: argparse.Namespace, nom, ps, seed: int) -> dict:
     if not rec["same_free"]:
         return rec
     problem = InstrumentProblem(nom, ps, [data])
-    cu = check_curvature(problem, fit.values, fit.fitted, draws=10, seed=seed)
+    check = instrument_uncertainty(fit, nom, [data], seed=seed)  # what calibrate runs
+    cu = check.curvature
+    assert cu is not None and cu.second_moment is not None
     delta = (fit.values - fit0.values)[fit.fitted]
     C, k = fit.covariance, delta.size
     _, s, Vt = np.linalg.svd(problem.evaluate(fit.values)[1][:, fit.fitted], full_matrices=False)
@@ -100,9 +103,7 @@ def draw(a: argparse.Namespace, nom, ps, seed: int) -> dict:
             "d2k": float(delta @ np.linalg.solve(C, delta)) / k,
             "zdiag": float(np.mean(delta**2 / np.diag(C))),
             "d2k_dirs": float(np.mean(z_top**2))}  # fmt: skip
-    check = instrument_uncertainty(fit, nom, [data], seed=seed)
-    assert check.curvature is not None and check.curvature.second_moment is not None
-    W = C + check.curvature.second_moment  # what pincal calibrate writes (all unknowns)
+    W = C + cu.second_moment  # what pincal calibrate writes (over all the unknowns)
     d2w, limit = float(delta @ np.linalg.solve(W, delta)), float(stats.chi2.ppf(0.95, k))
     rec |= {"widened": check.widened, "d2k_s": d2w / k,
             "zdiag_s": float(np.mean(delta**2 / np.diag(W))),
