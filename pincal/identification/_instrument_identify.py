@@ -179,13 +179,21 @@ def joint_fit(
     motions = null_motions(J0, Jp0, P0, model.n_machine, ident, model.order,
                            model.names[model.n_machine :])  # fmt: skip
     gauge = tuple(motions.lines())
+    out = entry.solve(model, x0, free, opts, progress)
+    settled = settle(model, out, free, noise_floor=True)
+    if weak_bound is not None:  # the solution's Jacobian may see a direction weaker still
+        f = settled.fitted
+        more = f[weak_parameters(settled.Jf, np.arange(f.size), tuple(model.units[i] for i in f),
+                                 int(np.sum(f < model.n_machine)), weak_bound)]  # fmt: skip
+        if more.size:
+            weak, free = np.union1d(weak, more), np.setdiff1d(free, more)
+            out = entry.solve(model, x0, free, opts, progress)
+            settled = settle(model, out, free, noise_floor=True)
     if weak.size:
         assert weak_bound is not None
         gauge += (f"seen too weakly to place within {weak_bound[0] * 1e3:g} mm / "
                   f"{weak_bound[1]:g} rad (1σ), held at nominal: "
                   f"{', '.join(model.names[i] for i in weak)}",)  # fmt: skip
-    out = entry.solve(model, x0, free, opts, progress)
-    settled = settle(model, out, free, noise_floor=True)
     raws, Jf = settled.raw, settled.Jf
     constants = model.declared_constants(np.asarray(out.x, dtype=float))
     several = len({label for label, _, _ in constants}) > 1
