@@ -3,6 +3,7 @@
 Usage:
     python scripts/studies/instrument_linearity.py [--poses random|designed] [--std 1e-5]
         [--size 1,10] [--seeds 0:30] [--boot 0] [--model stewart_6ups] [--kind distance]
+    python scripts/studies/instrument_linearity.py --summarise random.jsonl ...
 
 Per seed S: an actual machine with errors uniform in ±size (mm, mrad; seed 1000 + S),
 60 poses — random workspace poses (what ``pincal simulate --random 60 --instrument
@@ -28,7 +29,8 @@ fit is the fit's target: what the data identify of the machine, gauge held alike
 - with ``--boot B``: ``d2k_w`` and ``zdiag_w`` with the covariance widened by a B-refit
   parametric bootstrap (``instrument_uncertainty(..., draws=B)``'s method).
 
-One JSON line per seed.
+One JSON line per seed; ``--summarise FILE...`` turns such files into table rows
+(:func:`summarise`).
 """
 
 from __future__ import annotations
@@ -118,8 +120,44 @@ def draw(a: argparse.Namespace, nom, ps, seed: int) -> dict:
     return rec
 
 
+def summarise(path: str) -> str:
+    """One table row from a file of the JSON lines above (draws whose gauge differed left out).
+
+    Mean ± standard error (median) of d²/k and of the per-parameter z²; the share of
+    draws whose error lies inside the joint 95 % region, ± its binomial standard error;
+    for the linear covariance, the one ``pincal calibrate`` writes (second-order term
+    added) and a uniform factor 1 + excess on every σ² (for comparison).
+    """
+    recs = [json.loads(line) for line in open(path, encoding="utf-8")]
+    rows = [r for r in recs if "d2k" in r]
+    n = len(rows)
+    keys = ("d2k", "d2k_s", "zdiag", "zdiag_s", "cover", "cover_s", "excess", "k")
+    v = {key: np.array([r[key] for r in rows], dtype=float) for key in keys}
+    f = 1.0 + np.where(v["excess"] > 1.0, v["excess"], 0.0)
+    v |= {"d2k_f": v["d2k"] / f, "zdiag_f": v["zdiag"] / f,
+          "cover_f": v["d2k"] * v["k"] / f <= stats.chi2.ppf(0.95, v["k"])}  # fmt: skip
+
+    def mean(x: np.ndarray) -> str:
+        return f"{x.mean():.3g} ± {x.std(ddof=1) / np.sqrt(n):.2g} ({np.median(x):.3g})"
+
+    def share(x: np.ndarray) -> str:
+        p = float(np.mean(x))
+        return f"{100 * p:.0f} ± {100 * np.sqrt(p * (1 - p) / n):.0f} %"
+
+    e = v["excess"]
+    return " | ".join([
+        f"{path}: {n} of {len(recs)} draws", f"excess {e.min():.2g}–{e.max():.2g} "
+        f"({np.median(e):.2g})",
+        *(f"{name}: d²/k {mean(v['d2k' + s])}, z² {mean(v['zdiag' + s])}, covers "
+          f"{share(v['cover' + s])}"
+          for name, s in (("linear", ""), ("written", "_s"), ("factor", "_f"))),
+    ])  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--summarise", nargs="+", metavar="FILE",
+                    help="print one row per file of this script's output instead")  # fmt: skip
     ap.add_argument("--model", default="stewart_6ups")
     ap.add_argument("--preset", default=None)
     ap.add_argument("--kind", default="distance")
@@ -129,6 +167,9 @@ def main() -> None:
     ap.add_argument("--seeds", default="0:30", help="first:last (exclusive)")
     ap.add_argument("--boot", type=int, default=0, help="bootstrap refits (0: none)")
     a = ap.parse_args()
+    if a.summarise:
+        print("\n".join(summarise(path) for path in a.summarise))
+        return
     nom = load_mechanism(a.model)
     ps = parameters(nom, a.preset or next(iter(nom.presets)))
     lo, hi = (int(v) for v in a.seeds.split(":"))
