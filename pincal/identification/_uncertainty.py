@@ -226,7 +226,7 @@ def instrument_uncertainty(
         text += (f"; the σ reported add that second-order error (its second moment over "
                  f"{cu.draws} draws from the confidence region): the σ of the combination "
                  f"it moves most is {worst:.3g}× the linearised one, the parameters' own σ "
-                 f"up to {each:.3g}×; a parametric bootstrap measures them by refits "
+                 f"up to {each:.2f}×; a parametric bootstrap measures them by refits "
                  "(pincal.identification.instrument_uncertainty(..., draws=100))")  # fmt: skip
         return UncertaintyCheck(new, None, None, QualityIssue("linearity", False, text), cu, worst)
     boot = bootstrap_covariance(problem, fit.values, free, draws=draws,
