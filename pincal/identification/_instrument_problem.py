@@ -158,9 +158,16 @@ class InstrumentProblem:
         return 0.5 * float(r @ r)
 
     def _configurations(self, mech: Mechanism) -> np.ndarray:
+        """Closed configurations (m, nq) of every pose, started from the last ones.
+
+        In batch; the rows the batched Newton does not accept (other branch, no
+        convergence) pose by pose.
+        """
         rows = np.vstack([d.q_act for d in self.datasets])
-        qs = np.empty((len(rows), mech.model.nq))
-        for i, q_act in enumerate(rows):
+        qs, accepted, _ = mech.try_configurations_batch(rows, self._qs)
+        qs = np.array(qs, dtype=float)
+        for i in np.flatnonzero(~accepted):
+            q_act = rows[i]
             guess = None if self._qs is None else self._qs[i]
             try:
                 qs[i] = mech.configuration(q_act, guess, pose_index=i)
