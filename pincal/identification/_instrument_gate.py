@@ -24,7 +24,7 @@ import numpy as np
 
 from pincal.errors import PincalError
 from pincal.identification._instrument_identify import InstrumentIdentification
-from pincal.identification._outliers import deletion_outliers
+from pincal.identification._outliers import refit_outliers
 from pincal.identification._problem import TRIAL_FAILURES
 from pincal.identification._quality import ConfirmOutliers, check_quality
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
@@ -180,6 +180,6 @@ def refit_confirmation(
         A = J[:, refit.fitted].reshape(m, 1, -1)
         z = np.asarray(r).reshape(m, 1)
         sigma = np.concatenate([np.ravel(s) for s in problem.sigma]).reshape(m, 1)
-        return (*deletion_outliers(A, z, risk, cap), A, z, sigma)
+        return (*refit_outliers(A, z, named, risk, cap), A, z, sigma)
 
     return confirm

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from pincal.errors import PincalError
-from pincal.identification._outliers import deletion_outliers
+from pincal.identification._outliers import refit_outliers
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import IdentificationResult
 from pincal.measure import Measurements
@@ -75,4 +75,4 @@ def confirm_outliers(
     m, k = len(meas), len(meas.components)
     A = J_w[:, refit.identified].reshape(m, k, -1)
     z = np.asarray(r_w).reshape(m, k)
-    return (*deletion_outliers(A, z, risk, cap), A, z, np.asarray(model.sigma, dtype=float))
+    return (*refit_outliers(A, z, named, risk, cap), A, z, np.asarray(model.sigma, dtype=float))

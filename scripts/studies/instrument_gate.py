@@ -19,7 +19,8 @@ Faults (what the file says against what was measured):
 - ``radius``: the file declares the sphere radius 1 % larger than the sphere's;
 - ``noise10``: the readings' noise is 10× the σ the file declares;
 - ``outlier``: one reading (two) off by 0.5 mm = 50 σ (rate of *exact* naming: refused
-  with cause ``outliers`` and exactly those poses named).
+  with cause ``outliers`` and exactly those poses named; and the seeds where the gate
+  named a good reading, in any cell).
 
 Rates as in ``scripts/studies/quality_gate.py``: share refused ± binomial s.e., exact
 one-sided 95 % Clopper–Pearson bound; fit i of every cell uses seed ``seed + i``.
@@ -98,8 +99,8 @@ def _model(name: str, preset: str | None) -> tuple[pincal.Mechanism, pincal.Para
     return _MECHS[name, preset]
 
 
-def run_fit(cell: Cell, seed: int, poses: int, refit: bool = True) -> tuple[bool, str, bool]:
-    """One fit: (refused, the refusals' kinds, the outliers named exactly).
+def run_fit(cell: Cell, seed: int, poses: int, refit: bool = True) -> tuple[bool, str, bool, bool]:
+    """One fit: (refused, the refusals' kinds, the outliers named exactly, a good reading named).
 
     ``refit`` False judges outliers without the confirming refit (as before it existed).
     """
@@ -132,7 +133,7 @@ def run_fit(cell: Cell, seed: int, poses: int, refit: bool = True) -> tuple[bool
     verdict = instrument_gate(fit, checked, limits, **more)
     kinds = ",".join(sorted({i.kind for i in verdict.refusals}))
     exact = verdict.cause == "outliers" and verdict.outlier_poses == bad
-    return not verdict.passed, kinds, exact
+    return not verdict.passed, kinds, exact, bool(set(verdict.outlier_poses) - set(bad))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -161,11 +162,13 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     pooled = [0, 0]
     for cell in cells:
-        refused, exact, seen, odd = 0, 0, Counter(), []
+        refused, exact, seen, odd, good = 0, 0, Counter(), [], []
         for i in range(a.fits):
-            r, kinds, ex = run_fit(cell, a.seed + i, a.poses, not a.without_refit)
+            r, kinds, ex, g = run_fit(cell, a.seed + i, a.poses, not a.without_refit)
             refused += r
             exact += ex
+            if g:
+                good.append(a.seed + i)
             if kinds:
                 seen[kinds] += 1
             if r == cell.clean:  # a false alarm, or a miss
@@ -178,6 +181,7 @@ def main(argv: list[str] | None = None) -> int:
             note += f"; {'refused' if cell.clean else 'missed'}: seeds {odd[:10]}"
         if cell.fault == "outlier":
             note += f"; named exactly: {_rate(exact, a.fits)}"
+        note += f"; good reading named: {f'seeds {good[:10]}' if good else 'none'}"
         if cell.clean:
             pooled[0] += refused
             pooled[1] += a.fits
