@@ -56,7 +56,8 @@ def test_the_pair_statistic_is_the_refit_without_the_pair():
     z = rng.normal(size=(m, k))
     z[[3, 8]] += 4.0
     U, r, nu = _outliers._linearised(A, z, np.arange(m))
-    i, j, FS = _outliers._worst_pair(U, r, np.zeros(m), nu)
+    d1 = np.zeros(m)  # the member condition off: the argmax over all pairs
+    i, j, FS = _outliers._worst_pair(U, r, d1, nu, -np.inf)
     X, y = A.reshape(m * k, p), z.ravel()
     best = -1.0
     for a in range(m):
