@@ -141,10 +141,12 @@ def refit_confirmation(
     ``confirm(named, risk, cap)`` leaves the named poses (indices over the datasets in
     order) out, refits machine and instruments as the fit was made (Gauss–Newton,
     directions beyond ``limits``' change bound held), and runs the deletion test again
-    over *all* readings linearised at the refit: a fit pulled by a gross reading does
-    not point at good ones. It returns None (keep the first answer) when the refit
-    fails or its unknowns differ (a plane left without contacts). None for datasets
-    other than scalar instrument files.
+    over *all* readings linearised at the refit, the named ones also judged against the
+    scale of the others (:func:`pincal.identification._outliers.refit_outliers`): a fit
+    pulled by a gross reading does not point at good ones, and two bad readings that
+    mask each other at the refit are still confirmed. It returns None (keep the first
+    answer) when the refit fails or its unknowns differ (a plane left without contacts).
+    None for datasets other than scalar instrument files.
     """
     from pincal.identification._instrument_identify import identify_instruments
     from pincal.identification._instrument_problem import InstrumentProblem
