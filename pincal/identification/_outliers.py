@@ -38,8 +38,8 @@ risk 0.052–0.058; ``tests/identification/test_outlier_pairs.py``). All pairs a
 of largest single d_i is paired with every other pose (the bound stays the one over all
 pairs). That restriction finds a masked pair when one of its poses ranks among those
 candidates — masking inflates the *scale*, not a bad pose's own deleted residual d_i
-— but not two bad poses that hide behind each
-other (near-duplicate poses with the same error, whose single d_i are both small).
+— but not two bad poses that hide behind each other (near-duplicate poses with the same
+error, whose single d_i are both small).
 """
 
 from __future__ import annotations
@@ -51,7 +51,8 @@ import numpy as np
 __all__ = ["column_basis", "deletion_outliers", "refit_outliers"]
 
 _MIN_EIG = 0.05  # (I − H_ii) eigenvalues floored: a pose that alone fixes a direction
-_PAIR_BUDGET = 50_000  # pairs judged at once at most (memory ≈ budget · (2k)² · 24 bytes)
+_PAIR_BUDGET = 50_000  # pairs judged at most (all pairs up to ≈ 316 poses)
+_CHUNK = 4096  # pairs judged at once (memory ≈ _CHUNK · (2k)² · 40 bytes + 2 · _CHUNK · k · p · 8)
 
 
 def _f_isf(q: float, d1: float, d2: float) -> float:
@@ -97,20 +98,26 @@ def _worst_pair(
     n, k = r.shape
     if n * (n - 1) // 2 <= _PAIR_BUDGET:
         i, j = np.triu_indices(n, 1)
-    else:  # the poses of largest single F, each with every other pose
+    else:  # the poses of largest single d_i, each with every other pose
         cand = np.argsort(-d1)[: max(1, _PAIR_BUDGET // n)]
         a, b = np.repeat(cand, n), np.tile(np.arange(n), cand.size)
         key = np.unique(np.minimum(a, b)[a != b] * n + np.maximum(a, b)[a != b])
         i, j = key // n, key % n
-    G = np.einsum("iaq,jbq->ijab", Ui, Ui)  # (n, n, k, k) blocks of the hat matrix
-    H = np.concatenate([np.concatenate([G[i, i], G[i, j]], axis=2),
-                        np.concatenate([G[j, i], G[j, j]], axis=2)], axis=1)  # fmt: skip
-    d = _deleted(np.eye(2 * k)[None] - H, np.concatenate([r[i], r[j]], axis=1))
-    s2 = np.maximum(float(np.sum(r**2)) - d, 1e-300) / (nu - 2 * k)
-    FS = d / (2 * k * s2)
-    FS[np.minimum(d - d1[j], d - d1[i]) / (k * s2) <= member] = -np.inf
-    w = int(np.argmax(FS))
-    return int(i[w]), int(j[w]), float(FS[w])
+    Gd = Ui @ np.swapaxes(Ui, 1, 2)  # (n, k, k) diagonal blocks of the hat matrix
+    rss, best = float(np.sum(r**2)), (-np.inf, 0, 0)
+    for c in range(0, i.size, _CHUNK):
+        a, b = i[c : c + _CHUNK], j[c : c + _CHUNK]
+        X = np.einsum("paq,pbq->pab", Ui[a], Ui[b])  # H_ij
+        top = np.concatenate([Gd[a], X], axis=2)
+        H = np.concatenate([top, np.concatenate([np.swapaxes(X, 1, 2), Gd[b]], axis=2)], axis=1)
+        d = _deleted(np.eye(2 * k)[None] - H, np.concatenate([r[a], r[b]], axis=1))
+        s2 = np.maximum(rss - d, 1e-300) / (nu - 2 * k)
+        FS = d / (2 * k * s2)
+        FS[np.minimum(d - d1[b], d - d1[a]) / (k * s2) <= member] = -np.inf
+        w = int(np.argmax(FS))
+        if FS[w] > best[0]:
+            best = (float(FS[w]), int(a[w]), int(b[w]))
+    return best[1], best[2], best[0]
 
 
 def deletion_outliers(

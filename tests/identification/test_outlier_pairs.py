@@ -109,3 +109,13 @@ def test_the_refit_confirms_masked_readings_and_drops_a_good_one():
         clean = rng.normal(size=z.shape)
         assert refit_outliers(A, clean, (good,), 1e-3)[0] == ()
     assert hidden >= 10
+
+
+def test_pairs_judged_in_chunks_give_the_same_pair(monkeypatch):
+    rng = np.random.default_rng(4)
+    A, z, bad = _masked(rng)
+    U, r, nu = _outliers._linearised(A, z, np.arange(60))
+    d1 = _outliers._deleted(np.eye(1)[None] - U @ np.swapaxes(U, 1, 2), r)
+    whole = _outliers._worst_pair(U, r, d1, nu, 10.0)
+    monkeypatch.setattr(_outliers, "_CHUNK", 7)
+    assert _outliers._worst_pair(U, r, d1, nu, 10.0) == whole and whole[:2] == bad
