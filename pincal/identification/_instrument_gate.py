@@ -24,7 +24,7 @@ import numpy as np
 
 from pincal.errors import PincalError
 from pincal.identification._instrument_identify import InstrumentIdentification
-from pincal.identification._outliers import deletion_outliers
+from pincal.identification._outliers import refit_outliers
 from pincal.identification._problem import TRIAL_FAILURES
 from pincal.identification._quality import ConfirmOutliers, check_quality
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
@@ -141,10 +141,12 @@ def refit_confirmation(
     ``confirm(named, risk, cap)`` leaves the named poses (indices over the datasets in
     order) out, refits machine and instruments as the fit was made (Gauss–Newton,
     directions beyond ``limits``' change bound held), and runs the deletion test again
-    over *all* readings linearised at the refit: a fit pulled by a gross reading does
-    not point at good ones. It returns None (keep the first answer) when the refit
-    fails or its unknowns differ (a plane left without contacts). None for datasets
-    other than scalar instrument files.
+    over *all* readings linearised at the refit, the named ones also judged against the
+    scale of the others (:func:`pincal.identification._outliers.refit_outliers`): a fit
+    pulled by a gross reading does not point at good ones, and two bad readings that
+    mask each other at the refit are still confirmed. It returns None (keep the first
+    answer) when the refit fails or its unknowns differ (a plane left without contacts).
+    None for datasets other than scalar instrument files.
     """
     from pincal.identification._instrument_identify import identify_instruments
     from pincal.identification._instrument_problem import InstrumentProblem
@@ -180,6 +182,6 @@ def refit_confirmation(
         A = J[:, refit.fitted].reshape(m, 1, -1)
         z = np.asarray(r).reshape(m, 1)
         sigma = np.concatenate([np.ravel(s) for s in problem.sigma]).reshape(m, 1)
-        return (*deletion_outliers(A, z, risk, cap), A, z, sigma)
+        return (*refit_outliers(A, z, named, risk, cap), A, z, sigma)
 
     return confirm

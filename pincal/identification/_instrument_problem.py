@@ -166,7 +166,7 @@ class InstrumentProblem:
         rows = np.vstack([d.q_act for d in self.datasets])
         qs, accepted, _ = mech.try_configurations_batch(rows, self._qs)
         qs = np.array(qs, dtype=float)
-        for i in np.flatnonzero(~accepted):
+        for i in map(int, np.flatnonzero(~accepted)):
             q_act = rows[i]
             guess = None if self._qs is None else self._qs[i]
             try:

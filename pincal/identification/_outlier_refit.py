@@ -6,8 +6,10 @@ linearisation is poor there and a good pose can look bad once the outliers are d
 linearly. Here the poses it named are left out and the model refitted (Gauss–Newton,
 the same parameters, the noise as the fit had it); the deletion test is then run again
 over *all* poses, linearised at the refit — a point near the outlier-free solution,
-where deleting the true outliers is exact to first order. Only the poses named there
-are reported.
+where deleting the true outliers is exact to first order — and the poses it named are
+judged against the scale of the poses outside them
+(:func:`pincal.identification._outliers.refit_outliers`: outliers that mask each other
+there are still confirmed). Only the poses named there are reported.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from pincal.errors import PincalError
-from pincal.identification._outliers import deletion_outliers
+from pincal.identification._outliers import refit_outliers
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import IdentificationResult
 from pincal.measure import Measurements
@@ -75,4 +77,4 @@ def confirm_outliers(
     m, k = len(meas), len(meas.components)
     A = J_w[:, refit.identified].reshape(m, k, -1)
     z = np.asarray(r_w).reshape(m, k)
-    return (*deletion_outliers(A, z, risk, cap), A, z, np.asarray(model.sigma, dtype=float))
+    return (*refit_outliers(A, z, named, risk, cap), A, z, np.asarray(model.sigma, dtype=float))

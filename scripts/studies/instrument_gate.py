@@ -19,7 +19,8 @@ Faults (what the file says against what was measured):
 - ``radius``: the file declares the sphere radius 1 % larger than the sphere's;
 - ``noise10``: the readings' noise is 10× the σ the file declares;
 - ``outlier``: one reading (two) off by 0.5 mm = 50 σ (rate of *exact* naming: refused
-  with cause ``outliers`` and exactly those poses named).
+  with cause ``outliers`` and exactly those poses named; and the seeds where the gate
+  named a good reading, in any cell).
 
 Clean, bar-scale and radius cells also count how often the fit's gauge names a constant
 the file declares and the fit trusts (the bar's length scale, the sphere's radius: its
@@ -106,9 +107,10 @@ def _model(name: str, preset: str | None) -> tuple[pincal.Mechanism, pincal.Para
 
 def run_fit(
     cell: Cell, seed: int, poses: int, refit: bool = True
-) -> tuple[bool, str, bool, tuple[str, ...]]:
-    """One fit: (refused, the refusals' kinds, the outliers named exactly, the gauge's
-    lines of the declared constants it names, e.g. ``("the sphere radius: … ±239 µm …",)``).
+) -> tuple[bool, str, bool, bool, tuple[str, ...]]:
+    """One fit: (refused, the refusals' kinds, the outliers named exactly, a good reading
+    named, the gauge's lines of the declared constants it names, e.g.
+    ``("the sphere radius: … ±239 µm …",)``).
 
     ``refit`` False judges outliers without the confirming refit (as before it existed).
     """
@@ -142,7 +144,7 @@ def run_fit(
     kinds = ",".join(sorted({i.kind for i in verdict.refusals}))
     exact = verdict.cause == "outliers" and verdict.outlier_poses == bad
     named = tuple(g for g in fit.gauge if "passes into the calibrated machine" in g)
-    return not verdict.passed, kinds, exact, named
+    return not verdict.passed, kinds, exact, bool(set(verdict.outlier_poses) - set(bad)), named
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -171,15 +173,17 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     pooled = [0, 0]
     for cell in cells:
-        refused, exact, seen, odd = 0, 0, Counter(), []
+        refused, exact, seen, odd, good = 0, 0, Counter(), [], []
         named: dict[str, list[str]] = defaultdict(list)  # constant → its 1σ per fit naming it
         for i in range(a.fits):
-            r, kinds, ex, constants = run_fit(cell, a.seed + i, a.poses, not a.without_refit)
+            r, kinds, ex, g, constants = run_fit(cell, a.seed + i, a.poses, not a.without_refit)
             for line in constants:
                 told = re.search(r"only to ±?([\d.]+) (µm|%)", line)
                 named[line.split(":")[0]].append(f"{told[1]} {told[2]}" if told else "not told")
             refused += r
             exact += ex
+            if g:
+                good.append(a.seed + i)
             if kinds:
                 seen[kinds] += 1
             if r == cell.clean:  # a false alarm, or a miss
@@ -198,6 +202,7 @@ def main(argv: list[str] | None = None) -> int:
                 span = f" (1σ {vals[0]:g}–{vals[-1]:g} {told[0].split()[1]})" if vals else ""
                 note += f"; gauge names {k}: {_rate(len(told), a.fits)}{span}"
             note += "" if named else "; gauge names no declared constant"
+        note += f"; good reading named: {f'seeds {good[:10]}' if good else 'none'}"
         if cell.clean:
             pooled[0] += refused
             pooled[1] += a.fits
