@@ -19,7 +19,7 @@ from pincal.identification._result import IdentificationResult
 from pincal.identification._verdict import GateLimits, QualityIssue
 from pincal.identification._weighting import Weighting
 
-__all__ = ["changes", "chi2_issues", "profile_issues"]
+__all__ = ["changes", "chi2_issues", "left_misfit", "profile_issues"]
 
 
 def changes(result: IdentificationResult, lim: GateLimits) -> list[QualityIssue]:
@@ -92,3 +92,34 @@ def profile_issues(w: Weighting, profile: InstrumentProfile, lim: GateLimits) ->
                 "error suspected",
             ))  # fmt: skip
     return issues
+
+
+def left_misfit(A: np.ndarray, z: np.ndarray, named: tuple[int, ...], lim: GateLimits) -> str:
+    """What a refit without the named poses leaves unexplained, in words ('' if nothing).
+
+    With declared noise, a few bad poses explain a misfit only when the fit without them
+    passes the χ² test: ``χ² = Σ z²`` over the other poses against χ²(ν), ν their
+    redundancy, refused as :func:`chi2_issues` refuses (p below ``chi2_significance``
+    and χ²/ν above ``min_chi2_ratio``). A scaled bar or a wrong model leaves every
+    reading off; the poses that stand out most are then no outliers.
+
+    Args:
+        A: (m, k, p) whitened Jacobian at the refit without the named poses.
+        z: (m, k) whitened residuals there (declared σ).
+        named: the pose indices named outliers.
+        lim: the gate's thresholds.
+    """
+    from scipy import stats
+
+    from pincal.identification._outliers import column_basis
+
+    keep = np.setdiff1d(np.arange(z.shape[0]), np.asarray(named, dtype=int))
+    nu = keep.size * z.shape[1] - column_basis(A[keep].reshape(-1, A.shape[2])).shape[1]
+    if nu < 1:
+        return ""
+    chi2 = float(np.sum(z[keep] ** 2))
+    p = float(stats.chi2.sf(chi2, nu))
+    if p < lim.chi2_significance and chi2 / nu > lim.min_chi2_ratio:
+        return (f"without them the residuals are still χ²/ν {chi2 / nu:.3g} on {nu} (p = "
+                f"{p:.2g}): the misfit is not a few bad poses")  # fmt: skip
+    return ""

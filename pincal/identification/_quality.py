@@ -57,7 +57,7 @@ from pincal.errors import PincalError
 from pincal.identification._cause import likely_cause
 from pincal.identification._coordinate_probe import is_trend
 from pincal.identification._data_check import check_measurements
-from pincal.identification._fit_issues import changes, chi2_issues, profile_issues
+from pincal.identification._fit_issues import changes, chi2_issues, left_misfit, profile_issues
 from pincal.identification._instrument_profiles import InstrumentProfile, instrument_profile
 from pincal.identification._misspecification import (
     Probe,
@@ -244,6 +244,8 @@ def check_quality(
     cap = int(lim.max_downweighted * m)
     probes: list[Probe] = []
     fired: Probe | None = None
+    unexplained = ""  # the misfit a refit without the named poses leaves, in words
+    stand_out: tuple[int, ...] = ()  # those poses, then not named outliers
     if Jw is not None and sigma is not None and w is not None and _inexact(result):
         z = np.asarray(w.whitened, dtype=float)
         out, limit = deletion_outliers(Jw, z, lim.outlier_risk, cap)
@@ -253,6 +255,9 @@ def check_quality(
         if out and len(out) <= cap and confirm is not None:
             again = confirm(out, lim.outlier_risk, cap)
             out, limit, Ap, zp, sp = again or (out, limit, Jw, z, sigma)
+            unexplained = left_misfit(Ap, zp, out, lim) if again and out and declared else ""
+            if unexplained:  # they stand out of a misfit, they do not cause it
+                stand_out, out = tuple(out), ()
         if not scalar_instrument and measurements is not None:
             rows = np.setdiff1d(np.arange(m), out) if len(out) <= cap else np.arange(m)
             cols = probe_columns(result, measurements)
@@ -315,6 +320,10 @@ def check_quality(
         else:
             issues.append(QualityIssue("outliers", True, text + "; refit with --method lm "
                                        "--loss huber or remove them"))  # fmt: skip
+    if unexplained:
+        shown = ", ".join(map(str, stand_out[:12])) + (" …" if len(stand_out) > 12 else "")
+        issues.append(QualityIssue("outliers", False, f"poses {shown} stand out, but "
+                                   f"{unexplained}"))  # fmt: skip
     if robust and m and len(down) > lim.max_downweighted * m:
         issues.append(QualityIssue(
             "breakdown", True,
