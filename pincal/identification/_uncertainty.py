@@ -178,8 +178,9 @@ def instrument_uncertainty(
     :func:`check_uncertainty` fires on designed poses too, whose linear σ are right.
     Here the measure is what matters for the intervals (:func:`check_curvature`): the
     second-order error ``J⁺q`` over draws from the confidence region. Its second moment
-    is added to the linearised covariance — to second order, the mean squared error of
-    the fit about its target, larger only in the directions the curvature moves — and
+    is added to the linearised covariance — what that error adds to the mean squared
+    error of the fit about its target (see :class:`Curvature` for the term it leaves
+    out), larger only in the directions the curvature moves — and
     its d²/k (``excess``) beyond :data:`CURVATURE_LIMIT` is a warning: the linearised σ
     alone would have been wrong. With ``draws`` > 0 a fit past the limit is widened by
     a parametric bootstrap of the joint fit instead (machine and instrument unknowns;
@@ -243,13 +244,15 @@ def instrument_uncertainty(
 def _widest_combination(C: np.ndarray, M: np.ndarray) -> float:
     """Largest σ ratio over all combinations a·x of the covariance C + M to C.
 
-    √(1 + λ_max) with λ the generalised eigenvalues of (M, C); 1 when M vanishes.
+    √(1 + λ_max) with λ the eigenvalues of M in the coordinates where C is the identity
+    (directions C does not span left out); 1 when M vanishes.
     """
-    from scipy.linalg import eigh
-
     if C.size == 0:
         return 1.0
-    lam = eigh(M, C, eigvals_only=True)
+    s, U = np.linalg.eigh(C)
+    keep = s > 1e-12 * max(float(s.max()), 1e-300)
+    W = U[:, keep] / np.sqrt(s[keep])
+    lam = np.linalg.eigvalsh(W.T @ M @ W) if keep.any() else np.zeros(1)
     return math.sqrt(1.0 + max(float(lam[-1]), 0.0))
 
 

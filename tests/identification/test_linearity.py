@@ -251,3 +251,17 @@ def test_curvature_is_small_on_a_well_excited_fit_and_misses_a_changing_covarian
                                                          for s in range(20))]  # fmt: skip
     assert max(well) < CURVATURE_LIMIT / 10, max(well)
     assert max(poor) < CURVATURE_LIMIT and np.mean(poor) > 10 * np.mean(well), (poor, well)
+
+
+def test_the_widest_combination_is_the_generalised_eigenvalue_and_survives_a_singular_covariance():
+    from scipy.linalg import eigh
+
+    from pincal.identification._uncertainty import _widest_combination
+
+    rng = np.random.default_rng(0)
+    A, B = rng.standard_normal((8, 8)), rng.standard_normal((8, 3))
+    C, M = A @ A.T, B @ B.T
+    assert _widest_combination(C, M) == pytest.approx(np.sqrt(1 + eigh(M, C)[0][-1]), rel=1e-9)
+    assert _widest_combination(C, np.zeros_like(C)) == pytest.approx(1.0)
+    S = np.diag([1.0, 4.0, 0.0])  # a direction the covariance does not span is left out
+    assert _widest_combination(S, np.diag([3.0, 0.0, 5.0])) == pytest.approx(2.0)
