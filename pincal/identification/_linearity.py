@@ -231,9 +231,13 @@ class Curvature:
     Attributes:
         excess: mean ‖P_J q‖² / k over the draws; excess_se: its standard error.
         intrinsic: mean ‖(I − P_J) q‖² / k.
-        draws: δ drawn (evaluations: 2 each); checked: False when an evaluation failed.
+        draws: δ used (evaluations: 2 each); checked: False when fewer than half the
+            draws could be evaluated.
         second_moment: (k, k) ``E[J⁺q (J⁺q)ᵀ]`` over the fitted parameters, in their
             units squared (None when not checked).
+        failed: draws left out because the model could not be evaluated there (a
+            machine that does not assemble at x̂ ± δ): the curvature reaches beyond
+            them, so the measure is then a lower bound.
     """
 
     excess: float
@@ -242,6 +246,7 @@ class Curvature:
     draws: int
     checked: bool = True
     second_moment: np.ndarray | None = None
+    failed: int = 0
 
 
 def check_curvature(
@@ -275,25 +280,34 @@ def check_curvature(
     pe: list[float] = []
     it: list[float] = []
     moment = np.zeros((s.size, s.size))
-    for _ in range(max(int(draws), 1)):
+    n = max(int(draws), 1)
+    for _ in range(n):
         delta = V @ (scale * rng.standard_normal(s.size) / s)
-        rs = []
-        for sign in (1.0, -1.0):
-            xs = x.copy()
-            xs[idx] += sign * delta
-            try:
-                rs.append(np.asarray(problem.evaluate(xs, jacobian=False)[0], dtype=float))
-            except TRIAL_ERRORS:
-                return Curvature(math.nan, math.nan, math.nan, len(pe), False)
+        try:
+            rs = [np.asarray(problem.evaluate(x + sign * _on(idx, delta, x.size),
+                                              jacobian=False)[0], dtype=float)
+                  for sign in (1.0, -1.0)]  # fmt: skip
+        except TRIAL_ERRORS:  # the machine does not assemble there: counted, not used
+            continue
         q = 0.5 * (rs[0] + rs[1]) - r0
         if not np.all(np.isfinite(q)):
-            return Curvature(math.nan, math.nan, math.nan, len(pe), False)
+            continue
         qp = U.T @ q
         moment += np.outer(qp, qp)
         pe.append(float(qp @ qp) / (scale**2 * k))
         it.append(max(float(q @ q) - float(qp @ qp), 0.0) / (scale**2 * k))
+    failed = n - len(pe)
+    if len(pe) < max(2, (n + 1) // 2):
+        return Curvature(math.nan, math.nan, math.nan, len(pe), False, failed=failed)
     e = np.array(pe)
-    se = float(np.std(e, ddof=1) / math.sqrt(e.size)) if e.size > 1 else math.nan
+    se = float(np.std(e, ddof=1) / math.sqrt(e.size))
     T = V / s  # J⁺ = V·diag(1/s)·Uᵀ
     return Curvature(float(e.mean()), se, float(np.mean(it)), int(e.size),
-                     second_moment=T @ (moment / e.size) @ T.T)  # fmt: skip
+                     second_moment=T @ (moment / e.size) @ T.T, failed=failed)  # fmt: skip
+
+
+def _on(idx: np.ndarray, delta: np.ndarray, n: int) -> np.ndarray:
+    """(n,) the step ``delta`` on the parameters ``idx``, 0 elsewhere."""
+    out = np.zeros(n)
+    out[idx] = delta
+    return out

@@ -79,7 +79,7 @@ class UncertaintyCheck:
         if cu is not None:
             out |= {"curvature_excess": _finite(cu.excess), "curvature_excess_se":
                     _finite(cu.excess_se), "curvature_draws": cu.draws,
-                    "curvature_limit": CURVATURE_LIMIT}  # fmt: skip
+                    "curvature_failed": cu.failed, "curvature_limit": CURVATURE_LIMIT}  # fmt: skip
         if lin is not None:
             ratio, jac = lin.worst()
             out |= {"directions_checked": int(lin.sigma.size),
@@ -207,13 +207,22 @@ def instrument_uncertainty(
     cu = check_curvature(problem, fit.values, free, draws=CURVATURE_DRAWS, seed=seed)
     machine = free < len(result.names)
     linear = cu.checked and cu.excess <= CURVATURE_LIMIT
+    drawn = cu.draws + cu.failed
+    beyond = (f"{cu.failed} of {drawn} points drawn from its confidence region do not "
+              "assemble (the machine does not close there)")  # fmt: skip
+    if not cu.checked and draws <= 0:
+        text = (f"the curvature of the fit could not be checked: {beyond}; the σ reported "
+                "are the linearised ones and may be too small (a parametric bootstrap: "
+                "pincal.identification.instrument_uncertainty(..., draws=100))")  # fmt: skip
+        return UncertaintyCheck(result, None, None, QualityIssue("linearity", False, text), cu)
     text = (
         "the fit is not linear over its own confidence region: its second-order error "
         f"adds {cu.excess:.3g} to the d²/k of the linearised σ (0 when they are right; "
         f"limit {CURVATURE_LIMIT:g})"
         if cu.checked
-        else "the curvature of the fit could not be checked (an evaluation failed)"
+        else f"the curvature of the fit could not be checked: {beyond}"
     )
+    lower = f"; {beyond}: the σ may still be too small" if cu.failed else ""
     if cu.checked and (linear or draws <= 0):
         assert cu.second_moment is not None
         cov = (np.asarray(fit.covariance) + cu.second_moment)[np.ix_(machine, machine)]
@@ -221,13 +230,18 @@ def instrument_uncertainty(
             return UncertaintyCheck(result, None, curvature=cu)
         new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
         worst = _widest_combination(np.asarray(fit.covariance), cu.second_moment)
-        if linear:
+        if linear and not cu.failed:
             return UncertaintyCheck(new, None, curvature=cu, widened=worst)
+        if linear:
+            text = ("the σ reported include the fit's second-order error (it adds "
+                    f"{cu.excess:.3g} to d²/k, below the limit){lower}")  # fmt: skip
+            return UncertaintyCheck(new, None, None, QualityIssue("linearity", False, text),
+                                    cu, worst)  # fmt: skip
         each = float(np.max(new.std / np.maximum(result.std, 1e-300), initial=1.0))
         text += (f"; the σ reported add that second-order error (its second moment over "
                  f"{cu.draws} draws from the confidence region): the σ of the combination "
                  f"it moves most is {worst:.3g}× the linearised one, the parameters' own σ "
-                 f"up to {each:.2f}×; a parametric bootstrap measures them by refits "
+                 f"up to {each:.2f}×{lower}; a parametric bootstrap measures them by refits "
                  "(pincal.identification.instrument_uncertainty(..., draws=100))")  # fmt: skip
         return UncertaintyCheck(new, None, None, QualityIssue("linearity", False, text), cu, worst)
     boot = bootstrap_covariance(problem, fit.values, free, draws=draws,

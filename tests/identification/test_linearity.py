@@ -16,6 +16,7 @@ import pytest
 from scipy import stats
 
 import pincal
+from pincal.errors import ConvergenceError
 from pincal.identification import identify
 from pincal.identification._bootstrap import bootstrap_covariance, widened
 from pincal.identification._covariance import covariance_from_jacobian
@@ -265,3 +266,28 @@ def test_the_widest_combination_is_the_generalised_eigenvalue_and_survives_a_sin
     assert _widest_combination(C, np.zeros_like(C)) == pytest.approx(1.0)
     S = np.diag([1.0, 4.0, 0.0])  # a direction the covariance does not span is left out
     assert _widest_combination(S, np.diag([3.0, 0.0, 5.0])) == pytest.approx(2.0)
+
+
+class Unassembled(Quadratic):
+    """The quadratic model, not evaluable beyond |x| > reach (a machine that does not close)."""
+
+    def __init__(self, t: np.ndarray, b: float, reach: float):
+        super().__init__(t, b)
+        self.reach = reach
+
+    def evaluate(self, x, jacobian=True):
+        if abs(x[0]) > self.reach:
+            raise ConvergenceError("the loops do not close")
+        return super().evaluate(x, jacobian)
+
+
+def test_draws_where_the_model_cannot_be_evaluated_are_counted_not_fatal():
+    """σ = 1/‖t‖ ≈ 0.21: beyond 2σ (≈ 5 % of the draws) they are left out and counted;
+    beyond 0.1σ (≈ 92 %) too few remain and the check says it could not be made."""
+    t = np.linspace(1.0, 2.0, 10)
+    sigma = 1.0 / float(np.linalg.norm(t))
+    some = check_curvature(Unassembled(t, 2.0, 2 * sigma), np.zeros(1), draws=200, seed=1)
+    assert some.checked and 0 < some.failed < 30 and some.draws + some.failed == 200
+    assert some.second_moment is not None
+    most = check_curvature(Unassembled(t, 2.0, 0.1 * sigma), np.zeros(1), draws=200, seed=1)
+    assert not most.checked and most.failed > 100 and most.second_moment is None
