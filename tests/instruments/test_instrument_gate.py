@@ -42,6 +42,23 @@ def _edit(src: Path, dst: Path, change) -> Path:
     return dst
 
 
+def _stewart_campaign(kind: str, seed: int):
+    """(mechanism, parameters, readings): the kind's typical set-up on the Stewart platform,
+    errors uniform in ±1 mm / ±10 mrad, 60 random poses, σ 10 µm, one generator ``seed``."""
+    from pincal.identification import default_instrument
+    from pincal.measure import simulate_instrument
+    from pincal.model import load_mechanism, parameters, sample_actuators
+
+    mech = load_mechanism("stewart_6ups")
+    params = parameters(mech, next(iter(mech.presets)))
+    rng = np.random.default_rng(seed)
+    bound = np.array([1e-3 if u == "m" else 1e-2 for u in params.units])
+    actual = params.apply(mech, rng.uniform(-bound, bound))
+    q = sample_actuators(mech, 60, rng)
+    inst, theta, _ = default_instrument(mech, kind, q, std=1e-5)
+    return mech, params, simulate_instrument(actual, inst, theta, q, rng)
+
+
 def _calibrate(data, out, *extra, model="stewart_6ups"):
     args = ["calibrate", model, "--data", str(data), "--out", str(out), *extra]
     return CliRunner().invoke(main, args)
@@ -125,18 +142,11 @@ def test_a_sphere_radius_error_is_absorbed_by_the_machine_and_cannot_be_refused(
     """
     from scipy import stats
 
-    from pincal.identification import default_instrument, identify_instruments
-    from pincal.measure import simulate_instrument
-    from pincal.model import load_mechanism, parameters, sample_actuators
+    from pincal.identification import identify_instruments
 
-    mech = load_mechanism("stewart_6ups")
-    params = parameters(mech, next(iter(mech.presets)))
-    rng = np.random.default_rng(0)
-    bound = np.array([1e-3 if u == "m" else 1e-2 for u in params.units])
-    actual = params.apply(mech, rng.uniform(-bound, bound))
-    q = sample_actuators(mech, 60, rng)
-    inst, theta, _ = default_instrument(mech, "sphere", q, std=1e-5)
-    fit = identify_instruments(mech, params, [simulate_instrument(actual, inst, theta, q, rng)])
+    mech, params, data = _stewart_campaign("sphere", seed=0)
+    inst = data.instrument
+    fit = identify_instruments(mech, params, [data])
     assert fit.whitened is not None
     A, z = fit.whitened
     J = A.reshape(len(z), -1)
@@ -150,18 +160,9 @@ def test_a_sphere_radius_error_is_absorbed_by_the_machine_and_cannot_be_refused(
 def test_two_bad_readings_are_named_as_two_after_the_confirming_refit():
     """Two readings 0.5 mm (50 σ) off among 60: the gate refits without the readings the
     deletion test named and names exactly those (the study's outlier cells: 60 / 60)."""
-    from pincal.identification import default_instrument, identify_instruments, instrument_gate
-    from pincal.measure import simulate_instrument
-    from pincal.model import load_mechanism, parameters, sample_actuators
+    from pincal.identification import identify_instruments, instrument_gate
 
-    mech = load_mechanism("stewart_6ups")
-    params = parameters(mech, next(iter(mech.presets)))
-    rng = np.random.default_rng(3)
-    bound = np.array([1e-3 if u == "m" else 1e-2 for u in params.units])
-    actual = params.apply(mech, rng.uniform(-bound, bound))
-    q = sample_actuators(mech, 60, rng)
-    inst, theta, _ = default_instrument(mech, "distance", q, std=1e-5)
-    data = simulate_instrument(actual, inst, theta, q, rng)
+    mech, params, data = _stewart_campaign("distance", seed=3)
     v = data.values.copy()
     v[[11, 42]] += 5e-4
     data = dataclasses.replace(data, values=v)
