@@ -21,22 +21,12 @@ import argparse
 import json
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
+from bench_core import median_time  # scripts/ is on the path of a script run from it
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def median_time(fn, repeats: int) -> float:
-    """Median CPU time of ``fn()`` over ``repeats`` calls [s]."""
-    times = []
-    for _ in range(repeats):
-        t0 = time.process_time()
-        fn()
-        times.append(time.process_time() - t0)
-    return float(np.median(times))
 
 
 def worker(repeats: int) -> dict[str, float]:

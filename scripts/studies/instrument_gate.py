@@ -57,7 +57,7 @@ from pincal.model import load_mechanism, sample_actuators
 from pincal.sensitivity import parameters
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-from scripts.studies.quality_gate import _rate, bound
+from scripts.studies.quality_gate import TABLE_HEAD, _rate, bound, selected
 
 STD = 1e-5  # m: `pincal simulate`'s default noise, the file's declared σ
 ERRORS = (1.0, 10.0)  # mm, mrad: `pincal simulate`'s default error bounds
@@ -159,17 +159,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--without-refit", action="store_true",
                     help="judge outliers without the confirming refit (the gate before it)")
     a = ap.parse_args(argv)
-    cells = CELLS
-    if a.cells:
-        keys = [k.strip() for k in a.cells.split(";")]
-        cells = tuple(c for c in CELLS if any(k in c.name for k in keys))
-    if a.part:
-        i, p = (int(v) for v in a.part.split("/"))
-        cells = cells[i::p]
+    cells = selected(CELLS, a.cells, a.part)
     print(f"# instrument gate study: {a.fits} fits per cell, {a.poses} random poses, seeds "
           f"{a.seed}..{a.seed + a.fits - 1}, σ {STD * 1e3} mm")  # fmt: skip
-    print(f"| {'cell':44s} | {'refused (rate ± s.e.)':24s} | 95 % bound | refusals seen |")
-    print(f"|{'-' * 46}|{'-' * 26}|------------|---|")
+    print(TABLE_HEAD)
     t0 = time.perf_counter()
     pooled = [0, 0]
     for cell in cells:

@@ -155,6 +155,22 @@ def bound(k: int, n: int, upper: bool, level: float = 0.95) -> float:
     return 0.0 if k <= 0 else float(stats.beta.ppf(1 - level, k, n - k + 1))
 
 
+def selected(cells: tuple, keys: str | None, part: str | None) -> tuple:
+    """The cells whose name contains one of the ';'-separated ``keys``, then part I/P."""
+    if keys:
+        words = [k.strip() for k in keys.split(";")]
+        cells = tuple(c for c in cells if any(k in c.name for k in words))
+    if part:
+        i, p = (int(v) for v in part.split("/"))
+        cells = cells[i::p]
+    return cells
+
+
+#: the header of the studies' tables (cell, rate, bound, what was seen)
+TABLE_HEAD = (f"| {'cell':44s} | {'refused (rate ± s.e.)':24s} | 95 % bound | refusals seen |\n"
+              f"|{'-' * 46}|{'-' * 26}|------------|---|")  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fits", type=int, default=60, help="fits per cell (≥ 59 to show ≥ 95 %%)")
@@ -165,17 +181,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="run only cells I, I+P, I+2P, … (0-based) of the selection: P "
                     "processes in parallel, same seeds as one run")  # fmt: skip
     a = ap.parse_args(argv)
-    cells = CELLS
-    if a.cells:
-        keys = [k.strip() for k in a.cells.split(";")]
-        cells = tuple(c for c in CELLS if any(k in c.name for k in keys))
-    if a.part:
-        i, p = (int(v) for v in a.part.split("/"))
-        cells = cells[i::p]
+    cells = selected(CELLS, a.cells, a.part)
     print(f"# quality gate study: {a.fits} fits per cell, {a.poses} poses, seeds "
           f"{a.seed}..{a.seed + a.fits - 1}, noise {NOISE[0]} mm / {NOISE[1]} mrad")  # fmt: skip
-    print(f"| {'cell':44s} | {'refused (rate ± s.e.)':24s} | 95 % bound | refusals seen |")
-    print(f"|{'-' * 46}|{'-' * 26}|------------|---|")
+    print(TABLE_HEAD)
     t0 = time.perf_counter()
     pooled = [0, 0]
     for cell in cells:
