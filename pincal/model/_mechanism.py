@@ -1,7 +1,8 @@
 """Mechanism: a URDF spanning tree, its loop closures, actuation and measured frame.
 
-A :class:`Mechanism` is immutable: applying parameter values or calibrating returns a
-new one (:meth:`Mechanism.with_joint_origins`). Configuration vectors ``q`` are
+Applying parameter values or calibrating returns a new mechanism derived from this one
+(:meth:`Mechanism.with_joint_origins`: the origins written into a copy of the Pinocchio
+model, the description shared); a mechanism is not modified after it is made. Configuration vectors ``q`` are
 Pinocchio configurations (size ``nq``; quaternions are x, y, z, w); actuator vectors
 ``q_act`` hold one value per actuated joint in the order of :attr:`Mechanism.actuated`
 [m or rad].
@@ -13,6 +14,7 @@ solver, each built from explicit arguments, and delegates to them.
 
 from __future__ import annotations
 
+import copy
 import logging
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -42,6 +44,7 @@ from pincal.model._frames import measured_frame_candidates
 from pincal.model._inverse import inverse_configuration
 from pincal.model._kinematics import KinematicQueries, Kinematics
 from pincal.model._newton import SolverOptions
+from pincal.model._placements import moved_model
 from pincal.model._sidecar import WORKSPACE_POSE_KEYS, Sidecar, Workspace
 from pincal.model._urdf import UrdfTree
 
@@ -97,16 +100,14 @@ class Mechanism:
         tree: UrdfTree | None = None,
     ):
         self.sidecar: Sidecar = Sidecar.from_dict(sidecar)
-        self.urdf_xml, self.tree = lock_joints(
+        urdf_xml, self.tree = lock_joints(
             urdf_xml, UrdfTree(urdf_xml) if tree is None else tree, self.sidecar
         )
+        self._urdf_xml: str | None = urdf_xml
         self.name = name or self.tree.name
         self.source = source
         self.options = options or SolverOptions()
-        model, notes = build_model(self.urdf_xml, self.tree, self.sidecar)
-        self.model = model
-        #: remarks about the model (joint kinds from the sidecar, ranges), for `pincal info`
-        self.notes: tuple[str, ...] = tuple(notes)
+        model, notes = build_model(urdf_xml, self.tree, self.sidecar)
         frame_ids = {f.name: i for i, f in enumerate(model.frames)}
         self.closures = parse_closures(self.sidecar, frame_ids, self.tree)
         self.measured_frame = resolve_measured_frame(
@@ -115,7 +116,18 @@ class Mechanism:
         self.actuated, chain_notes = parse_actuated(
             model, self.sidecar, self.closures, frame_ids, self.measured_frame
         )
-        self.notes += chain_notes
+        self._model_notes = (*notes, *chain_notes)
+        self.measured_components = tuple(
+            COMPONENTS[i] for i in parse_components(self.sidecar.measured, "sidecar 'measured'")
+        )
+        self.presets: dict[str, Any] = dict(self.sidecar.presets)
+        self.workspace = parse_workspace(self.sidecar, self.actuated)
+        self._close(model, frame_ids, q_guess)
+        self.actuator_limits = actuator_limits(model, self.queries)  # (n_act, 2)
+
+    def _close(self, model: pin.Model, frame_ids: dict[str, int], q_guess: np.ndarray | None):
+        """Take ``model`` as this mechanism's model: its queries, home, mobility, solvers."""
+        self.model = model
         self.queries = KinematicQueries(
             model, self.tree, self.name, frame_ids, self.closures, self.actuated,
             self.measured_frame,
@@ -123,12 +135,6 @@ class Mechanism:
         #: the frames a sensitivity needs: the measured frame and every closure frame
         self.key_frames = self.queries.key_frames
         self.n_closure_rows = self.queries.n_closure_rows
-        self.actuator_limits = actuator_limits(model, self.queries)  # (n_act, 2)
-        self.measured_components = tuple(
-            COMPONENTS[i] for i in parse_components(self.sidecar.measured, "sidecar 'measured'")
-        )
-        self.presets: dict[str, Any] = dict(self.sidecar.presets)
-        self.workspace = parse_workspace(self.sidecar, self.actuated)
         assembly = Assembly(self.queries, self.options)
         if q_guess is None:
             keep = any(n in self.sidecar.home for n in self.actuated)
@@ -136,7 +142,8 @@ class Mechanism:
             self.q_home = assembly.assemble(guess, keep_actuators=keep)
         else:
             self.q_home = assembly.assemble(np.asarray(q_guess, dtype=float))
-        self.notes += tuple(assembly.notes)
+        #: remarks about the model (joint kinds from the sidecar, ranges), for `pincal info`
+        self.notes: tuple[str, ...] = (*self._model_notes, *assembly.notes)
         mobility = assembly.mobility(self.q_home)
         self.mobility, self.closure_rank = mobility.mobility, mobility.closure_rank
         self.idle_joints = mobility.idle_joints
@@ -150,29 +157,36 @@ class Mechanism:
         kernels = BatchNewton(self.queries, self.options, self.loop_solver.branch_block)
         self.batch_solver = BatchLoopSolver(kernels, self.loop_solver)
 
+    @property
+    def urdf_xml(self) -> str:
+        """The URDF text of this mechanism (written on first use for a derived one)."""
+        if self._urdf_xml is None:
+            self._urdf_xml = self.tree.text()
+        return self._urdf_xml
+
     def with_joint_origins(self, origins: Mapping[str, pin.SE3]) -> Mechanism:
         """A new mechanism with URDF joint origins replaced (this one is not modified).
 
-        Everything else is kept: sidecar, name, source, measured frame, solver options;
-        the loops are closed from this mechanism's home (on its assembly mode).
+        Derived, not rebuilt: the origins are written into a copy of the Pinocchio model
+        (:mod:`~pincal.model._placements`) and the tree; the description (sidecar, name,
+        source, measured frame, actuation, closures, workspace, solver options) is
+        shared; the loops are closed from this mechanism's home (on its assembly mode)
+        and the mobility checked there. The URDF text is written only when asked for.
 
         Args:
             origins: joint name → new origin placement (parent link → joint frame) [m].
 
         Raises:
             UnknownNameError: an origin names a joint the URDF does not have.
+            ClosureError, MobilityError, SingularConfigurationError: the moved geometry
+                does not assemble, or not with this mobility.
         """
-        urdf_xml, tree = self.tree.displaced(dict(origins))
-        return Mechanism(
-            urdf_xml,
-            self.sidecar,
-            name=self.name,
-            source=self.source,
-            measured_frame=self.measured_frame,
-            q_guess=self.q_home,
-            options=self.options,
-            tree=tree,
-        )
+        tree = self.tree.moved(origins)
+        moves = {j: self.tree.joints[j].origin.actInv(tree.joints[j].origin) for j in origins}
+        new = copy.copy(self)
+        new.tree, new._urdf_xml = tree, None
+        new._close(moved_model(self.model, moves), self.queries.frame_ids, self.q_home)
+        return new
 
     @property
     def measured_frame_candidates(self) -> list[str]:

@@ -1,8 +1,9 @@
 """Minimal URDF tree: joint origins, axes, topology, and origin rewriting.
 
-pincal treats the URDF text as the source of truth of a mechanism's geometry:
-parameters displace joint origins in the XML, and the Pinocchio model is rebuilt
-from the text. This keeps the exported URDF exactly the identified model.
+The URDF text is the source of a mechanism's geometry and what a calibration exports.
+Parameters move joint origins in the tree (:meth:`UrdfTree.moved`) and in a copy of the
+Pinocchio model (:mod:`pincal.model._placements`); the text with the moved origins is
+written only when asked for (:meth:`UrdfTree.text`), and parses to the same model.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import dataclasses
 import os
 import re
 import xml.etree.ElementTree as ET
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -156,6 +158,8 @@ class UrdfTree:
         self.root_link = roots[0]
         self.depth = self._check_depth(limits, where)
         self._ancestors: dict[str, tuple[str, ...]] = {}
+        #: joint origins moved since ``root`` was written (:meth:`moved`): name → (xyz, rpy)
+        self._pending: dict[str, tuple[list[float], list[float]]] = {}
 
     def _check_depth(self, limits: Limits, where: str) -> int:
         """Depth of the tree (joints from the root to the deepest link), in linear time."""
@@ -239,6 +243,8 @@ class UrdfTree:
             ModelFileError: a joint that is neither fixed nor a one-dof joint (revolute,
                 continuous, prismatic).
         """
+        if self._pending:
+            return self.displaced({})[1].locked(names)
         root = copy.deepcopy(self.root)
         by_name = {str(e.get("name")): e for e in root.findall("joint")}
         joints = dict(self.joints)
@@ -269,6 +275,31 @@ class UrdfTree:
         """Return the URDF text with the given joint origins replaced (full precision)."""
         return self.displaced(origins)[0]
 
+    def moved(self, origins: Mapping[str, pin.SE3]) -> UrdfTree:
+        """This tree with the given joint origins replaced, without writing any text.
+
+        The origins are stored as the text would hold them (xyz and rpy in full
+        precision, read back), so that :meth:`text` of the moved tree parses to exactly
+        these origins. The text is written only when asked for.
+
+        Raises:
+            UnknownNameError: an origin names a joint the URDF does not have.
+        """
+        joints = dict(self.joints)
+        pending = dict(self._pending)
+        for name, M in origins.items():
+            if name not in joints:
+                raise UnknownNameError("joint", name, list(joints))
+            pending[name] = xyz, rpy = _xyz_rpy(M)
+            joints[name] = dataclasses.replace(joints[name], origin=se3_from_xyz_rpy(xyz, rpy))
+        tree = copy.copy(self)
+        tree.joints, tree._pending = joints, pending
+        return tree
+
+    def text(self) -> str:
+        """The URDF text of this tree (its moved origins written in)."""
+        return self.displaced({})[0]
+
     def displaced(self, origins: dict[str, pin.SE3]) -> tuple[str, UrdfTree]:
         """The URDF text with the given joint origins replaced, and its parsed tree.
 
@@ -279,25 +310,30 @@ class UrdfTree:
         Raises:
             UnknownNameError: an origin names a joint the URDF does not have.
         """
+        written = dict(self._pending)
+        written.update((name, _xyz_rpy(M)) for name, M in origins.items())
         root = copy.deepcopy(self.root)
         by_name = {str(e.get("name")): e for e in root.findall("joint")}
         joints = dict(self.joints)
-        for name, M in origins.items():
+        for name, (xyz, rpy) in written.items():
             if name not in by_name:
                 raise UnknownNameError("joint", name, list(by_name))
             e = by_name[name]
             origin = e.find("origin")
             if origin is None:
                 origin = ET.SubElement(e, "origin")
-            xyz = [float(v) for v in M.translation]
-            rpy = [float(v) for v in pin.rpy.matrixToRpy(M.rotation)]
             origin.set("xyz", " ".join(repr(v) for v in xyz))
             origin.set("rpy", " ".join(repr(v) for v in rpy))
             joints[name] = dataclasses.replace(
-                self.joints[name], origin=se3_from_xyz_rpy(np.array(xyz), np.array(rpy))
+                joints[name], origin=se3_from_xyz_rpy(np.array(xyz), np.array(rpy))
             )
         ET.indent(root)
         tree = copy.copy(self)
-        tree.root, tree.joints, tree._elements = root, joints, by_name
+        tree.root, tree.joints, tree._elements, tree._pending = root, joints, by_name, {}
         tree._ancestors = dict(self._ancestors)
         return ET.tostring(root, encoding="unicode"), tree
+
+
+def _xyz_rpy(M: pin.SE3) -> tuple[list[float], list[float]]:
+    """The URDF ``xyz`` [m] and ``rpy`` [rad] of a placement (full-precision floats)."""
+    return [float(v) for v in M.translation], [float(v) for v in pin.rpy.matrixToRpy(M.rotation)]
