@@ -14,6 +14,8 @@ pose by pose. Pinocchio stays the reference: the tests compare both to 1e-12.
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -154,23 +156,41 @@ class BatchModel:
             if kind is None:
                 ok = False
                 break
-            M = model.jointPlacements[j]
-            joints.append(
-                _Joint(
-                    kind[0],
-                    int(model.parents[j]),
-                    jm.idx_q,
-                    jm.idx_v,
-                    kind[1],
-                    kind[2],
-                    _skew(kind[1]),
-                    M.rotation.copy(),
-                    M.translation.copy(),
-                )
-            )
+            joints.append(  # the placements R0, p0 are taken by _place
+                _Joint(kind[0], int(model.parents[j]), jm.idx_q, jm.idx_v, kind[1], kind[2],
+                       _skew(kind[1]), np.eye(3), np.zeros(3))
+            )  # fmt: skip
         #: False when the model has a joint type this module does not implement
         self.supported = ok
         self._joints = tuple(joints) if ok else ()
+        self._place(model)
+        # vector-space joints (q and v coordinates alike): R, P and the two angles of U
+        linear = [
+            (jt.iq + k, jt.iv + k)
+            for jt in self._joints
+            for k in range(2 if jt.kind == "U" else 1)
+            if jt.kind in ("R", "P", "U")
+        ]
+        self._linear_q = np.array([i for i, _ in linear], dtype=int)
+        self._linear_v = np.array([i for _, i in linear], dtype=int)
+        support = np.zeros((model.njoints, model.nv), dtype=bool)
+        for j in range(1, model.njoints):
+            support[j] = support[model.parents[j]]
+            support[j, model.idx_vs[j] : model.idx_vs[j] + model.nvs[j]] = True
+        self._support = support
+
+    def _place(self, model: pin.Model) -> None:
+        """Take the joint and frame placements of ``model`` (same structure as built)."""
+        if self._joints:
+            self._joints = tuple(
+                dataclasses.replace(
+                    jt,
+                    R0=model.jointPlacements[j].rotation.copy(),
+                    p0=model.jointPlacements[j].translation.copy(),
+                )
+                for j, jt in enumerate(self._joints, start=1)
+            )
+        joints = self._joints
         self._groups = (
             group_joints(
                 [jt.kind for jt in joints],
@@ -182,18 +202,9 @@ class BatchModel:
                 np.array([jt.p0 for jt in joints]).reshape(-1, 3),
                 np.array([jt.axis2 for jt in joints]).reshape(-1, 3),
             )
-            if ok
+            if self.supported
             else ()
         )
-        # vector-space joints (q and v coordinates alike): R, P and the two angles of U
-        linear = [
-            (jt.iq + k, jt.iv + k)
-            for jt in self._joints
-            for k in range(2 if jt.kind == "U" else 1)
-            if jt.kind in ("R", "P", "U")
-        ]
-        self._linear_q = np.array([i for i, _ in linear], dtype=int)
-        self._linear_v = np.array([i for _, i in linear], dtype=int)
         self._frames = [
             (int(f.parentJoint), f.placement.rotation.copy(), f.placement.translation.copy())
             for f in model.frames
@@ -201,11 +212,14 @@ class BatchModel:
         self._frame_parent = np.array([f[0] for f in self._frames], dtype=int)
         self._frame_R = np.array([f[1] for f in self._frames]).reshape(-1, 3, 3)
         self._frame_p = np.array([f[2] for f in self._frames]).reshape(-1, 3)
-        support = np.zeros((model.njoints, model.nv), dtype=bool)
-        for j in range(1, model.njoints):
-            support[j] = support[model.parents[j]]
-            support[j, model.idx_vs[j] : model.idx_vs[j] + model.nvs[j]] = True
-        self._support = support
+
+    def with_placements(self, model: pin.Model) -> BatchModel:
+        """This batched model with the placements of ``model``: a copy of this one's
+        ``pin.Model`` whose joint and frame placements were moved
+        (:mod:`pincal.model._placements`); the joint kinds and the tree are kept."""
+        new = copy.copy(self)
+        new._place(model)
+        return new
 
     # ------------------------------------------------------------------ kinematics
     def kinematics(self, Q: np.ndarray) -> BatchKinematics:

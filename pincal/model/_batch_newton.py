@@ -68,15 +68,23 @@ class BatchNewton:
         queries: KinematicQueries,
         options: SolverOptions,
         branch_block: tuple[np.ndarray, np.ndarray] | None,
+        structure: BatchModel | None = None,
     ):
         self.queries, self.options, self.branch_block = queries, options, branch_block
+        self._structure = structure
         self.model, self.name, self.closures = queries.model, queries.name, queries.closures
         self._free_v = queries.free_v
         self._point_closures_cache: dict[bytes, PointClosures] = {}
 
     @cached_property
     def batch_model(self) -> BatchModel:
-        """The batched numpy kinematics of :attr:`model` (built once)."""
+        """The batched numpy kinematics of :attr:`model` (built once).
+
+        With a ``structure`` (the batched model of the mechanism this one's model was
+        moved from) only the placements are taken from :attr:`model`.
+        """
+        if self._structure is not None:
+            return self._structure.with_placements(self.model)
         return BatchModel(self.model)
 
     def kinematics_batch(self, qs: np.ndarray) -> BatchKinematics:

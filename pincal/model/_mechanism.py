@@ -125,8 +125,17 @@ class Mechanism:
         self._close(model, frame_ids, q_guess)
         self.actuator_limits = actuator_limits(model, self.queries)  # (n_act, 2)
 
-    def _close(self, model: pin.Model, frame_ids: dict[str, int], q_guess: np.ndarray | None):
-        """Take ``model`` as this mechanism's model: its queries, home, mobility, solvers."""
+    def _close(
+        self,
+        model: pin.Model,
+        frame_ids: dict[str, int],
+        q_guess: np.ndarray | None,
+        structure: BatchModel | None = None,
+    ) -> None:
+        """Take ``model`` as this mechanism's model: its queries, home, mobility, solvers.
+
+        ``structure``: the batched kinematics of a model ``model`` was moved from.
+        """
         self.model = model
         self.queries = KinematicQueries(
             model, self.tree, self.name, frame_ids, self.closures, self.actuated,
@@ -154,7 +163,9 @@ class Mechanism:
         #: the branch sign of the square block of rank rows and non-idle columns
         #: (= home_branch when the passive closure Jacobian is square; 0: no branch)
         self.idle_branch = self.loop_solver.idle_branch
-        kernels = BatchNewton(self.queries, self.options, self.loop_solver.branch_block)
+        kernels = BatchNewton(
+            self.queries, self.options, self.loop_solver.branch_block, structure
+        )
         self.batch_solver = BatchLoopSolver(kernels, self.loop_solver)
 
     @property
@@ -185,7 +196,9 @@ class Mechanism:
         moves = {j: self.tree.joints[j].origin.actInv(tree.joints[j].origin) for j in origins}
         new = copy.copy(self)
         new.tree, new._urdf_xml = tree, None
-        new._close(moved_model(self.model, moves), self.queries.frame_ids, self.q_home)
+        new._close(
+            moved_model(self.model, moves), self.queries.frame_ids, self.q_home, self.batch_model
+        )
         return new
 
     @property
