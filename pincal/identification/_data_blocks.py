@@ -66,8 +66,8 @@ class DataBlock(ABC):
         return len(self.data)
 
     @abstractmethod
-    def residuals(self, x: np.ndarray, col: int, n: int, P: np.ndarray, Rs: list[np.ndarray],
-                  sens: list[Any] | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    def residuals(self, x: np.ndarray, col: int, n: int, P: np.ndarray, Rs: np.ndarray,
+                  Jm: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
         """Raw residuals ``measured − model`` (m, k) and their Jacobian (m, k, len(x)).
 
         Args:
@@ -76,8 +76,9 @@ class DataBlock(ABC):
             n: the number of machine parameters.
             P: (m, 3) tool points [m].
             Rs: (m, 3, 3) tool orientations.
-            sens: per pose :class:`pincal.sensitivity.PoseSensitivity` (None: no Jacobian;
-                zeros are returned for it).
+            Jm: (m, 6, n) derivative of ``[p_world; rotation (local)]`` of the tool
+                w.r.t. the machine parameters (:class:`pincal.sensitivity.BatchSensitivity`
+                ``jacobian``); None: no Jacobian (zeros are returned for it).
         """
 
     def norms(self, raw: np.ndarray) -> tuple[list[float], list[float]]:
@@ -111,7 +112,7 @@ class PoseSensorBlock(DataBlock):
             )
         self.sigma = model.sigma
 
-    def residuals(self, x, col, n, P, Rs, sens):
+    def residuals(self, x, col, n, P, Rs, Jm):
         d = self.data
         rows = d.component_indices
         m = len(d)
@@ -121,8 +122,8 @@ class PoseSensorBlock(DataBlock):
             R_meas = None if d.rotations is None else d.rotations[i]
             r, D = measurement_residual(P[i], Rs[i], d.positions[i], R_meas)
             raw[i] = r[rows]
-            if sens is not None:
-                J[i, :, :n] = -(D @ sens[i].jacobian)[rows]
+            if Jm is not None:
+                J[i, :, :n] = -(D @ Jm[i])[rows]
         return raw, J
 
     def norms(self, raw):
@@ -144,13 +145,12 @@ class ScalarBlock(DataBlock):
         self.own_names = tuple(f"{label}.{n}" for n in self.instrument.parameter_names)
         self.own_units = tuple(self.instrument.parameter_units)
 
-    def residuals(self, x, col, n, P, Rs, sens):
+    def residuals(self, x, col, n, P, Rs, Jm):
         k, m = len(self.own_names), len(self.data)
         v, dv_dp, dv_dth = self.instrument.predict(P, x[col : col + k], self.data.ids)
         J = np.zeros((m, 1, len(x)))
-        if sens is not None:
-            Jp = np.array([s.jacobian[:3] for s in sens])  # (m, 3, n)
-            J[:, 0, :n] = -np.einsum("mi,min->mn", dv_dp, Jp)
+        if Jm is not None:
+            J[:, 0, :n] = -np.einsum("mi,min->mn", dv_dp, Jm[:, :3])
             J[:, 0, col : col + k] = -dv_dth
         return (self.data.values - v)[:, None], J
 

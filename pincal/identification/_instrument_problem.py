@@ -12,7 +12,8 @@ unknowns, one residual per known distance); every block is whitened by its own n
 so several files of different kinds combine in one fit. Each dataset is one
 :class:`pincal.identification._data_blocks.DataBlock` (pose sensor, scalar instrument,
 sockets): one ``evaluate(x, jacobian)`` loops over them. The Jacobian is analytic:
-``∂v/∂p · ∂p/∂x`` with ``∂p/∂x`` from :func:`pincal.sensitivity.pose_sensitivity`, and
+``∂v/∂p · ∂p/∂x`` with ``∂p/∂x`` of every pose at once from
+:func:`pincal.sensitivity.sensitivities_batch` (the pose route's kernels), and
 ``∂v/∂θ`` from the instrument. It is the residual model of an
 :class:`pincal.identification.IdentificationProblem` of several data sets
 (``joint_model``), solved by :func:`pincal.identification.identify`.
@@ -34,9 +35,8 @@ from pincal.measure import (
     InstrumentData,
     Measurements,
 )
-from pincal.model import Mechanism, ParameterSet
-from pincal.sensitivity import Identifiability, analyse_jacobian, pose_sensitivity
-from pincal.sensitivity.kernels import jacobian_plan
+from pincal.model import BatchKinematics, Mechanism, ParameterSet
+from pincal.sensitivity import Identifiability, analyse_jacobian, sensitivities_batch
 
 __all__ = ["Dataset", "InstrumentProblem"]
 
@@ -157,14 +157,15 @@ class InstrumentProblem:
             return float("inf")
         return 0.5 * float(r @ r)
 
-    def _configurations(self, mech: Mechanism) -> np.ndarray:
+    def _configurations(self, mech: Mechanism) -> tuple[np.ndarray, BatchKinematics | None]:
         """Closed configurations (m, nq) of every pose, started from the last ones.
 
         In batch; the rows the batched Newton does not accept (other branch, no
-        convergence) pose by pose.
+        convergence) pose by pose. Returns the batched kinematics too when every row was
+        accepted (else None).
         """
         rows = np.vstack([d.q_act for d in self.datasets])
-        qs, accepted, _ = mech.try_configurations_batch(rows, self._qs)
+        qs, accepted, bk = mech.try_configurations_batch(rows, self._qs)
         qs = np.array(qs, dtype=float)
         for i in map(int, np.flatnonzero(~accepted)):
             q_act = rows[i]
@@ -176,7 +177,26 @@ class InstrumentProblem:
                     raise
                 qs[i] = mech.configuration(q_act, None, pose_index=i)
         self._qs = qs
-        return qs
+        return qs, (bk if bool(np.all(accepted)) else None)
+
+    def _tool(self, x: np.ndarray, jacobian: bool):
+        """Tool positions (m, 3) [m], orientations (m, 3, 3) and Jacobian (m, 6, n) or None.
+
+        The batched sensitivities of :func:`pincal.sensitivity.sensitivities_batch`
+        (the kernels of the pose route) over every pose of every dataset.
+        """
+        mech = self.mechanism(x)
+        qs, bk = self._configurations(mech)
+        if jacobian:
+            values = np.asarray(x, dtype=float)[: self.n_machine]
+            sens = sensitivities_batch(mech, self.params, qs, bk, values)
+            return sens.positions, sens.rotations, sens.jacobian
+        if bk is not None and mech.batch_model.supported:
+            R, P = mech.batch_model.frame_placement(bk, mech.frame_id(mech.measured_frame))
+            return P, R, None
+        placements = [mech.frame_placement(q) for q in qs]
+        P = np.array([T.translation for T in placements]).reshape(-1, 3)
+        return P, np.array([T.rotation for T in placements]).reshape(-1, 3, 3), None
 
     def evaluate(self, x: np.ndarray, jacobian: bool = True):
         """Whitened residual (N,), its Jacobian (N, n + Σk) or None, raw residuals per dataset.
@@ -185,26 +205,15 @@ class InstrumentProblem:
         (m_i, k_i) arrays, one per dataset.
         """
         x = np.asarray(x, dtype=float)
-        n, values = self.n_machine, x[: self.n_machine]
-        mech = self.mechanism(x)
-        qs = self._configurations(mech)
-        plan = jacobian_plan(mech, self.params) if jacobian else None
-        lin = self.params.linearise(values) if jacobian else None  # once for all poses
+        n = self.n_machine
+        P_all, R_all, J_all6 = self._tool(x, jacobian)
         r_all, J_all, raws = [], [], []
         start, col = 0, n
         for block in self.blocks:
-            m = len(block)
-            q_block = qs[start : start + m]
-            start += m
-            if jacobian:
-                sens = [pose_sensitivity(mech, self.params, q, lin, plan) for q in q_block]
-                P = np.array([s.position for s in sens])
-                Rs = [s.rotation for s in sens]
-            else:
-                placements = [mech.frame_placement(q) for q in q_block]
-                P = np.array([T.translation for T in placements])
-                Rs = [T.rotation for T in placements]
-            raw, J = block.residuals(x, col, n, P, Rs, sens if jacobian else None)
+            rows = slice(start, start + len(block))
+            start = rows.stop
+            Jm = None if J_all6 is None else J_all6[rows]
+            raw, J = block.residuals(x, col, n, P_all[rows], R_all[rows], Jm)
             col += len(block.own_names)
             sig = block.sigma
             raws.append(raw)
@@ -226,8 +235,7 @@ class InstrumentProblem:
             Per constant (its dataset's label, the constant, its (N,) whitened Jacobian
             column: ∂(readings)/∂constant / σ on its dataset's rows, 0 elsewhere).
         """
-        mech = self.mechanism(x)
-        P = np.array([mech.frame_placement(q).translation for q in self._configurations(mech)])
+        P = self._tool(np.asarray(x, dtype=float), False)[0]
         out, row, pose, col = [], 0, 0, self.n_machine
         for b in self.blocks:
             m, k = len(b), len(b.own_names)
@@ -257,9 +265,6 @@ class InstrumentProblem:
 
     def tool_points(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Tool points (m, 3) [m] of every pose at ``x`` and their sensitivities (m, 3, n)."""
-        x = np.asarray(x, dtype=float)
-        mech, values = self.mechanism(x), x[: self.n_machine]
-        plan = jacobian_plan(mech, self.params)
-        sens = [pose_sensitivity(mech, self.params, q, values, plan)
-                for q in self._configurations(mech)]  # fmt: skip
-        return np.array([s.position for s in sens]), np.array([s.jacobian[:3] for s in sens])
+        P, _, Jm = self._tool(np.asarray(x, dtype=float), True)
+        assert Jm is not None
+        return P, Jm[:, :3]

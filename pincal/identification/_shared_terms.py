@@ -111,7 +111,7 @@ class SharedUnknowns:
         return out
 
     def block(self, i: int, x: np.ndarray, col: int, n: int, P: np.ndarray,
-              Rs: list[np.ndarray], sens: list[Any] | None):  # fmt: skip
+              Rs: np.ndarray, Jm: np.ndarray | None):  # fmt: skip
         """Raw residuals (m, k) of artefact dataset ``i`` and their Jacobian (m, k, len(x)).
 
         Args:
@@ -121,7 +121,7 @@ class SharedUnknowns:
             n: the number of machine parameters (the first columns).
             P: (m, 3) positions of the measured frame [m].
             Rs: (m, 3, 3) its orientations.
-            sens: per pose :class:`pincal.sensitivity.PoseSensitivity` (None: no
+            Jm: (m, 6, n) tool Jacobian w.r.t. the machine parameters (None: no
                 Jacobian, zeros returned).
         """
         d = self.datasets[i]
@@ -131,10 +131,9 @@ class SharedUnknowns:
         raw, dp, dw, dth, dphi = d.residuals(P, R, x[col : col + k], x[cols])
         _check_shapes(d, (raw, dp, dw, dth, dphi), (m, d.dim), (3, 3, k, cols.size))
         J = np.zeros((m, d.dim, len(x)))
-        if sens is not None:
+        if Jm is not None:
             # a local rotation ω of the frame: ∂/∂x = ∂r/∂p ∂p/∂x + ∂r/∂ω ∂ω/∂x
-            for j, s in enumerate(sens):
-                J[j, :, :n] = dp[j] @ s.jacobian[:3] + dw[j] @ s.jacobian[3:6]
+            J[:, :, :n] = dp @ Jm[:, :3] + dw @ Jm[:, 3:6]
             if k:
                 J[:, :, col : col + k] = dth
             J[:, :, cols] = dphi
