@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from pincal.identification._distributions import chi2_sf
 from pincal.identification._instrument_profiles import InstrumentProfile
 from pincal.identification._misspecification import BlockChi2
 from pincal.identification._result import IdentificationResult
@@ -109,8 +110,6 @@ def left_misfit(A: np.ndarray, z: np.ndarray, named: tuple[int, ...], lim: GateL
         named: the pose indices named outliers.
         lim: the gate's thresholds.
     """
-    from scipy import stats
-
     from pincal.identification._outliers import column_basis
 
     keep = np.setdiff1d(np.arange(z.shape[0]), np.asarray(named, dtype=int))
@@ -118,7 +117,7 @@ def left_misfit(A: np.ndarray, z: np.ndarray, named: tuple[int, ...], lim: GateL
     if nu < 1:
         return ""
     chi2 = float(np.sum(z[keep] ** 2))
-    p = float(stats.chi2.sf(chi2, nu))
+    p = chi2_sf(chi2, nu)
     if p < lim.chi2_significance and chi2 / nu > lim.min_chi2_ratio:
         return (f"without them the residuals are still χ²/ν {chi2 / nu:.3g} on {nu} (p = "
                 f"{p:.2g}): the misfit is not a few bad poses")  # fmt: skip

@@ -30,6 +30,7 @@ import numpy as np
 
 from pincal.errors import PincalError
 from pincal.identification._coordinate_probe import coordinate_columns, is_trend, trend_size
+from pincal.identification._distributions import chi2_sf, f_sf
 from pincal.identification._outliers import column_basis
 from pincal.identification._result import IdentificationResult
 from pincal.measure import Measurements
@@ -102,10 +103,8 @@ class Probe:
 
 
 def _sf(dist: str, x: float, *df: float) -> float:
-    """P(X > x) for scipy.stats' ``chi2`` or ``f`` (imported here: it costs ~0.3 s)."""
-    from scipy import stats
-
-    return float(getattr(stats, dist).sf(x, *df))
+    """P(X > x) for the ``chi2`` or ``f`` distribution (degrees of freedom ``df``)."""
+    return chi2_sf(x, *df) if dist == "chi2" else f_sf(x, *df)
 
 def chi2_blocks(
     result: IdentificationResult,

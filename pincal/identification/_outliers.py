@@ -48,6 +48,8 @@ import math
 
 import numpy as np
 
+from pincal.identification._distributions import f_isf
+
 __all__ = ["column_basis", "deletion_outliers", "refit_outliers"]
 
 _MIN_EIG = 0.05  # (I − H_ii) eigenvalues floored: a pose that alone fixes a direction
@@ -56,10 +58,8 @@ _CHUNK = 4096  # pairs judged at once (memory ≈ _CHUNK · (2k)² · 40 bytes +
 
 
 def _f_isf(q: float, d1: float, d2: float) -> float:
-    """The F(d1, d2) quantile exceeded with probability q (scipy.stats: imported here)."""
-    from scipy import stats
-
-    return float(stats.f.isf(q, d1, d2))
+    """The F(d1, d2) quantile exceeded with probability q."""
+    return f_isf(q, d1, d2)
 
 
 def _deleted(M: np.ndarray, r: np.ndarray) -> np.ndarray:
