@@ -73,6 +73,10 @@ class KinematicQueries:
         closures: the loop closures (their frames exist in ``frame_ids``).
         actuated: actuated joint names (1-dof joints of ``model``).
         measured_frame: the measured frame.
+        same_tree: queries of a model of the same tree (a model moved from it, see
+            :mod:`~pincal.model._placements`): their per-thread scratch data is shared
+            (a ``pin.Data`` depends on the tree only, and is filled and read within one
+            call).
 
     Attributes (besides the arguments):
         key_frames: the measured frame and every closure frame, in that order.
@@ -92,11 +96,13 @@ class KinematicQueries:
         closures: tuple[Closure, ...],
         actuated: tuple[str, ...],
         measured_frame: str,
+        same_tree: KinematicQueries | None = None,
     ):
         self.model, self.tree, self.name = model, tree, name
         self.frame_ids = dict(frame_ids)
         self.closures, self.actuated, self.measured_frame = closures, actuated, measured_frame
-        self._scratch = threading.local()  # per-thread pin.Data, never read across calls
+        # per-thread pin.Data, never read across calls
+        self._scratch = threading.local() if same_tree is None else same_tree._scratch
         self.key_frames = tuple(
             dict.fromkeys([measured_frame] + [f for c in closures for f in (c.frame_a, c.frame_b)])
         )

@@ -44,7 +44,7 @@ from pincal.model._frames import measured_frame_candidates
 from pincal.model._inverse import inverse_configuration
 from pincal.model._kinematics import KinematicQueries, Kinematics
 from pincal.model._newton import SolverOptions
-from pincal.model._placements import moved_model
+from pincal.model._placements import PlacementTree
 from pincal.model._sidecar import WORKSPACE_POSE_KEYS, Sidecar, Workspace
 from pincal.model._urdf import UrdfTree
 
@@ -122,6 +122,7 @@ class Mechanism:
         )
         self.presets: dict[str, Any] = dict(self.sidecar.presets)
         self.workspace = parse_workspace(self.sidecar, self.actuated)
+        self._placements = PlacementTree(model)
         self._close(model, frame_ids, q_guess)
         self.actuator_limits = actuator_limits(model, self.queries)  # (n_act, 2)
 
@@ -130,16 +131,17 @@ class Mechanism:
         model: pin.Model,
         frame_ids: dict[str, int],
         q_guess: np.ndarray | None,
-        structure: BatchModel | None = None,
+        moved_from: Mechanism | None = None,
     ) -> None:
         """Take ``model`` as this mechanism's model: its queries, home, mobility, solvers.
 
-        ``structure``: the batched kinematics of a model ``model`` was moved from.
+        ``moved_from``: the mechanism whose model ``model`` was moved from (same tree):
+        its batched kinematics and scratch data serve as templates.
         """
         self.model = model
         self.queries = KinematicQueries(
             model, self.tree, self.name, frame_ids, self.closures, self.actuated,
-            self.measured_frame,
+            self.measured_frame, None if moved_from is None else moved_from.queries,
         )  # fmt: skip
         #: the frames a sensitivity needs: the measured frame and every closure frame
         self.key_frames = self.queries.key_frames
@@ -164,7 +166,10 @@ class Mechanism:
         #: (= home_branch when the passive closure Jacobian is square; 0: no branch)
         self.idle_branch = self.loop_solver.idle_branch
         kernels = BatchNewton(
-            self.queries, self.options, self.loop_solver.branch_block, structure
+            self.queries,
+            self.options,
+            self.loop_solver.branch_block,
+            None if moved_from is None else moved_from.batch_model,
         )
         self.batch_solver = BatchLoopSolver(kernels, self.loop_solver)
 
@@ -179,7 +184,7 @@ class Mechanism:
         """A new mechanism with URDF joint origins replaced (this one is not modified).
 
         Derived, not rebuilt: the origins are written into a copy of the Pinocchio model
-        (:mod:`~pincal.model._placements`) and the tree; the description (sidecar, name,
+        (:class:`~pincal.model._placements.PlacementTree`) and the tree; the description (sidecar, name,
         source, measured frame, actuation, closures, workspace, solver options) is
         shared; the loops are closed from this mechanism's home (on its assembly mode)
         and the mobility checked there. The URDF text is written only when asked for.
@@ -197,7 +202,10 @@ class Mechanism:
         new = copy.copy(self)
         new.tree, new._urdf_xml = tree, None
         new._close(
-            moved_model(self.model, moves), self.queries.frame_ids, self.q_home, self.batch_model
+            self._placements.moved(self.model, moves),
+            self.queries.frame_ids,
+            self.q_home,
+            self,
         )
         return new
 

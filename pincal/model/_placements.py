@@ -16,8 +16,10 @@ frames hang from the joint and do not move relative to it), and moving a fixed j
 j (frame placement ``F_j``) left-multiplies every placement below it inside its body by
 ``L = F_j · D · F_j⁻¹`` (``A O_j B → A O_j D B``), the inertia it carries included.
 ``F_j`` is read when j is moved, so the order of the moves does not matter (a move
-above j has already moved ``F_j`` with everything below it). The result equals the model built from the URDF text with
-the moved origins (checked for every bundled and test machine in
+above j has already moved ``F_j`` with everything below it). Which placements lie
+below each fixed joint depends on the tree only: :class:`PlacementTree` finds them once
+per model and serves every model moved from it. The result equals the model built from
+the URDF text with the moved origins (checked for every bundled and test machine in
 ``tests/model/test_placements.py``).
 """
 
@@ -29,73 +31,84 @@ import pinocchio as pin
 
 from pincal.errors import ModelFileError
 
-__all__ = ["moved_model"]
+__all__ = ["PlacementTree"]
 
 
-def moved_model(model: pin.Model, moves: Mapping[str, pin.SE3]) -> pin.Model:
-    """A copy of ``model`` with URDF joint origins moved: ``origin ← origin · D``.
+class PlacementTree:
+    """The placements each URDF joint origin enters, in a model built from a URDF.
 
     Args:
-        model: the Pinocchio model built from a URDF (not modified).
-        moves: URDF joint name → ``D``, the displacement of its origin expressed in the
-            joint's own (unmoved) frame [m].
-
-    Returns:
-        The moved copy (joint placements, frame placements, body inertias).
-
-    Raises:
-        ModelFileError: a name that is neither a joint nor a fixed-joint frame of the
-            model (e.g. a floating joint, which has no origin parameter).
+        model: the Pinocchio model (read once; models moved from it share its tree).
     """
-    new = model.copy()
-    frames = new.frames
-    children: dict[int, list[int]] = {}
-    for i in range(1, len(frames)):
-        children.setdefault(int(frames[i].parentFrame), []).append(i)
-    fixed = {frames[i].name: i for i in range(len(frames)) if frames[i].type == pin.FIXED_JOINT}
-    joint_frame = {
-        int(frames[i].parentJoint): i for i in range(len(frames)) if frames[i].type == pin.JOINT
-    }
-    for name in moves:
-        D = moves[name]
-        if new.existJointName(name):
-            k = new.getJointId(name)
-            new.jointPlacements[k] = new.jointPlacements[k] * D
-            continue
-        if name not in fixed:
-            raise ModelFileError(
-                f"joint {name!r} is neither a joint nor a fixed-joint frame of the Pinocchio "
-                "model: its origin cannot be moved"
-            )
-        _move_fixed(new, fixed[name], D, children, joint_frame)
-    return new
 
+    def __init__(self, model: pin.Model):
+        frames = model.frames
+        children: dict[int, list[int]] = {}
+        for i in range(1, len(frames)):
+            children.setdefault(int(frames[i].parentFrame), []).append(i)
+        joint_frame = {int(f.parentJoint): i for i, f in enumerate(frames) if f.type == pin.JOINT}
+        #: movable URDF joint → Pinocchio joint id
+        self.joints = {str(model.names[k]): k for k in range(1, model.njoints)}
+        #: fixed URDF joint → (its frame, its body's joint, frames below it in the body
+        #: (itself first), joints whose placement passes through it)
+        self.fixed: dict[str, tuple[int, int, tuple[int, ...], tuple[int, ...]]] = {}
+        for index, f in enumerate(frames):
+            if f.type != pin.FIXED_JOINT or index == 0:
+                continue
+            below, stack = [], [index]
+            while stack:
+                i = stack.pop()
+                below.append(i)
+                stack += [c for c in children.get(i, ()) if frames[c].type != pin.JOINT]
+            body, inside = int(f.parentJoint), set(below)
+            joints = tuple(
+                k for k in range(1, model.njoints)
+                if int(model.parents[k]) == body and int(frames[joint_frame[k]].parentFrame) in inside
+            )  # fmt: skip
+            self.fixed[str(f.name)] = (index, body, tuple(below), joints)
 
-def _move_fixed(
-    model: pin.Model,
-    index: int,
-    D: pin.SE3,
-    children: Mapping[int, list[int]],
-    joint_frame: Mapping[int, int],
-) -> None:
-    """Left-multiply every placement below fixed-joint frame ``index`` in its body."""
-    frames = model.frames
-    body = int(frames[index].parentJoint)
-    F = frames[index].placement
-    L = F * D * F.inverse()
-    below, stack = [], [index]
-    while stack:
-        i = stack.pop()
-        below.append(i)
-        stack += [c for c in children.get(i, ()) if frames[c].type != pin.JOINT]
-    inertia = model.inertias[body]
-    for i in below:
-        f = frames[i]
-        if f.inertia.mass > 0:
-            placed = f.placement.act(f.inertia)
-            inertia = inertia - placed + (L * f.placement).act(f.inertia)
-        f.placement = L * f.placement
-    model.inertias[body] = inertia
-    for k in range(1, model.njoints):
-        if int(model.parents[k]) == body and int(frames[joint_frame[k]].parentFrame) in below:
+    def moved(self, model: pin.Model, moves: Mapping[str, pin.SE3]) -> pin.Model:
+        """A copy of ``model`` with URDF joint origins moved: ``origin ← origin · D``.
+
+        Args:
+            model: a model with this tree (the one it was made from, or moved from it).
+            moves: URDF joint name → ``D``, the displacement of its origin expressed in
+                the joint's own (unmoved) frame [m].
+
+        Returns:
+            The moved copy (joint placements, frame placements, body inertias).
+
+        Raises:
+            ModelFileError: a name that is neither a joint nor a fixed-joint frame of the
+                model (e.g. a floating joint, which has no origin parameter).
+        """
+        new = model.copy()
+        for name, D in moves.items():
+            if name in self.joints:
+                k = self.joints[name]
+                new.jointPlacements[k] = new.jointPlacements[k] * D
+            elif name in self.fixed:
+                self._move_fixed(new, *self.fixed[name], D)
+            else:
+                raise ModelFileError(
+                    f"joint {name!r} is neither a joint nor a fixed-joint frame of the "
+                    "Pinocchio model: its origin cannot be moved"
+                )
+        return new
+
+    @staticmethod
+    def _move_fixed(model: pin.Model, index: int, body: int, below: tuple[int, ...],
+                    joints: tuple[int, ...], D: pin.SE3) -> None:  # fmt: skip
+        """Left-multiply every placement below fixed-joint frame ``index`` in its body."""
+        frames = model.frames
+        F = frames[index].placement
+        L = F * D * F.inverse()
+        inertia = model.inertias[body]
+        for i in below:
+            f = frames[i]
+            if f.inertia.mass > 0:
+                inertia = inertia - f.placement.act(f.inertia) + (L * f.placement).act(f.inertia)
+            f.placement = L * f.placement
+        model.inertias[body] = inertia
+        for k in joints:
             model.jointPlacements[k] = L * model.jointPlacements[k]
