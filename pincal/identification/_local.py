@@ -215,6 +215,13 @@ def _f_scale(opts: LMOptions) -> float:
     return float(ROBUST_F_SCALE[opts.loss] if opts.f_scale is None else opts.f_scale)
 
 
+_FTOL = 1e-10
+"""Levenberg–Marquardt stops when an accepted step lowers the cost by less than this
+share of it (scipy's ``ftol``). At the solution the cost is about ν/2, so the step left
+moves the parameters by ~1e-5 σ; the TIAGo example's fit took 70 iterations at 1e-15
+and 30 at 1e-10, its values equal to 7e-8 σ."""
+
+
 def levenberg_marquardt(
     problem: CalibrationProblem,
     x0: np.ndarray,
@@ -286,7 +293,7 @@ def levenberg_marquardt(
         f_scale=1.0 if opts.loss == "linear" else _f_scale(opts),
         x_scale="jac",
         xtol=max(opts.xtol, 1e-15),
-        ftol=1e-15,
+        ftol=_FTOL,
         gtol=1e-15,
         max_nfev=max_nfev,
     )
@@ -303,7 +310,7 @@ def levenberg_marquardt(
         message = (
             f"converged: cost {cost:.3g} is at the kinematic solver's precision (exact data "
             f"fitted); scipy stopped at its evaluation limit ({max_nfev}) before its own "
-            "1e-15 tolerances"
+            "tolerances"
         )
     elif promised <= 1e-9 * cost:
         success = True
