@@ -214,9 +214,11 @@ class BatchModel:
         self._frame_p = np.array([f[2] for f in self._frames]).reshape(-1, 3)
 
     def with_placements(self, model: pin.Model) -> BatchModel:
-        """This batched model with the placements of ``model``: a copy of this one's
-        ``pin.Model`` whose joint and frame placements were moved
-        (:mod:`pincal.model._placements`); the joint kinds and the tree are kept."""
+        """This batched model with the joint and frame placements of ``model``.
+
+        ``model``: a copy of this one's ``pin.Model`` whose placements were moved
+        (:mod:`pincal.model._placements`); the joint kinds and the tree are kept.
+        """
         new = copy.copy(self)
         new._place(model)
         return new

@@ -102,7 +102,9 @@ class KinematicQueries:
         self.frame_ids = dict(frame_ids)
         self.closures, self.actuated, self.measured_frame = closures, actuated, measured_frame
         # per-thread pin.Data, never read across calls
-        self._scratch = threading.local() if same_tree is None else same_tree._scratch
+        self._scratch: threading.local = (
+            threading.local() if same_tree is None else same_tree._scratch
+        )
         self.key_frames = tuple(
             dict.fromkeys([measured_frame] + [f for c in closures for f in (c.frame_a, c.frame_b)])
         )

@@ -2,10 +2,10 @@
 
 Applying parameter values or calibrating returns a new mechanism derived from this one
 (:meth:`Mechanism.with_joint_origins`: the origins written into a copy of the Pinocchio
-model, the description shared); a mechanism is not modified after it is made. Configuration vectors ``q`` are
-Pinocchio configurations (size ``nq``; quaternions are x, y, z, w); actuator vectors
-``q_act`` hold one value per actuated joint in the order of :attr:`Mechanism.actuated`
-[m or rad].
+model, the description shared); a mechanism is not modified after it is made.
+Configuration vectors ``q`` are Pinocchio configurations (size ``nq``; quaternions are
+x, y, z, w); actuator vectors ``q_act`` hold one value per actuated joint in the order of
+:attr:`Mechanism.actuated` [m or rad].
 
 The mechanism is the description (model, frames, actuation, closures, workspace); it
 owns its single-pose kinematic queries, a pose-by-pose loop solver and a batched loop
@@ -139,7 +139,7 @@ class Mechanism:
         its batched kinematics and scratch data serve as templates.
         """
         self.model = model
-        self.queries = KinematicQueries(
+        self.queries: KinematicQueries = KinematicQueries(
             model, self.tree, self.name, frame_ids, self.closures, self.actuated,
             self.measured_frame, None if moved_from is None else moved_from.queries,
         )  # fmt: skip
@@ -184,10 +184,10 @@ class Mechanism:
         """A new mechanism with URDF joint origins replaced (this one is not modified).
 
         Derived, not rebuilt: the origins are written into a copy of the Pinocchio model
-        (:class:`~pincal.model._placements.PlacementTree`) and the tree; the description (sidecar, name,
-        source, measured frame, actuation, closures, workspace, solver options) is
-        shared; the loops are closed from this mechanism's home (on its assembly mode)
-        and the mobility checked there. The URDF text is written only when asked for.
+        (:class:`~pincal.model._placements.PlacementTree`) and the tree; the
+        description (sidecar, name, source, measured frame, actuation, closures,
+        workspace, solver options) is shared; the loops are closed from this mechanism's
+        home (on its assembly mode) and the mobility checked there. The URDF text is written only when asked for.
 
         Args:
             origins: joint name → new origin placement (parent link → joint frame) [m].

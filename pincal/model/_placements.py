@@ -62,9 +62,11 @@ class PlacementTree:
                 stack += [c for c in children.get(i, ()) if frames[c].type != pin.JOINT]
             body, inside = int(f.parentJoint), set(below)
             joints = tuple(
-                k for k in range(1, model.njoints)
-                if int(model.parents[k]) == body and int(frames[joint_frame[k]].parentFrame) in inside
-            )  # fmt: skip
+                k
+                for k in range(1, model.njoints)
+                if int(model.parents[k]) == body
+                and int(frames[joint_frame[k]].parentFrame) in inside
+            )
             self.fixed[str(f.name)] = (index, body, tuple(below), joints)
 
     def moved(self, model: pin.Model, moves: Mapping[str, pin.SE3]) -> pin.Model:

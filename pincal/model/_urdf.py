@@ -291,7 +291,8 @@ class UrdfTree:
             if name not in joints:
                 raise UnknownNameError("joint", name, list(joints))
             pending[name] = xyz, rpy = _xyz_rpy(M)
-            joints[name] = dataclasses.replace(joints[name], origin=se3_from_xyz_rpy(xyz, rpy))
+            origin = se3_from_xyz_rpy(np.array(xyz), np.array(rpy))
+            joints[name] = dataclasses.replace(joints[name], origin=origin)
         tree = copy.copy(self)
         tree.joints, tree._pending = joints, pending
         return tree
