@@ -187,7 +187,8 @@ class Mechanism:
         (:class:`~pincal.model._placements.PlacementTree`) and the tree; the
         description (sidecar, name, source, measured frame, actuation, closures,
         workspace, solver options) is shared; the loops are closed from this mechanism's
-        home (on its assembly mode) and the mobility checked there. The URDF text is written only when asked for.
+        home (on its assembly mode) and the mobility checked there. The URDF text is
+        written only when asked for.
 
         Args:
             origins: joint name → new origin placement (parent link → joint frame) [m].
