@@ -92,6 +92,9 @@ TIMED_OUT = -1.0
 SKIPPED = -2.0
 """A row's time when its input is absent (the shared real data)."""
 
+FAILED = -3.0
+"""A row's time when a command of it failed (its error is printed on stderr)."""
+
 
 # ------------------------------------------------------------------ the child processes
 def _child_env(pycache: Path) -> dict[str, str]:
@@ -272,7 +275,11 @@ def worker(rows: list[str], repeats: int, timeout: float | None) -> dict[str, fl
                 if row not in out:
                     out |= {k: v for k, v in _stewart_rows(repeats).items() if k in rows}
                 continue
-            out[row] = _cli_row(row, cli, repeats)
+            try:
+                out[row] = _cli_row(row, cli, repeats)
+            except RuntimeError as e:
+                print(e, file=sys.stderr)
+                out[row] = FAILED
             print(f"  {row}: {out[row]:.2f}", file=sys.stderr, flush=True)
     return out
 
@@ -332,6 +339,8 @@ def _cell(t: float | None, timeout: float | None) -> str:
         return f"> {timeout:g} s"
     if t == SKIPPED:
         return "skipped"
+    if t == FAILED:
+        return "failed"
     return f"{t:.2f} s"
 
 
