@@ -49,7 +49,8 @@ baseline / now. Compiled bytecode goes to the temporary directory
 
 ``--profile ROW`` runs one CLI row (``tiago-run``, ``cv``, ``select-model``,
 ``prior-auto``, ``delta``, ``ur5-socket``) once under cProfile in the checkout of
-``--baseline`` (else this one) and prints the ``--top`` functions by cumulative time;
+``--baseline`` (else this one) and prints the ``--top`` functions by cumulative time (all,
+then pincal's library outside ``pincal/cli``) and by own time;
 at ``--timeout`` the child is interrupted and the profile so far is printed.
 """
 
@@ -310,7 +311,13 @@ def profile(checkout: Path, row: str, timeout: float | None, top: int) -> None:
             note = f"interrupted at {timeout:g} s wall"
         print(f"pincal {' '.join(args)}  ({note}, {_children_cpu() - t0:.1f} s CPU "
               "under cProfile)")  # fmt: skip
-        pstats.Stats(str(stats)).sort_stats("cumulative").print_stats(top)
+        st = pstats.Stats(str(stats))
+        print(f"\n== top {top} by cumulative time")
+        st.sort_stats("cumulative").print_stats(top)
+        print(f"== top {top} pincal library functions (outside pincal/cli) by cumulative time")
+        st.print_stats(r"pincal/(?!cli/)", top)
+        print(f"== top {top} by own time")
+        st.sort_stats("tottime").print_stats(top)
 
 
 # ------------------------------------------------------------------ driver
