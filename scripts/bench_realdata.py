@@ -329,11 +329,15 @@ def profile(checkout: Path, row: str, timeout: float | None, top: int) -> None:
         args = tuple(str(cli.fresh(row)) if a == "{out}" else a for a in args)
         cmd = [sys.executable, "-m", "cProfile", "-o", str(stats), "-m", "pincal.cli", *args]
         t0 = _children_cpu()
-        proc = subprocess.Popen(cmd, env=cli.env, cwd=cli.src, stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL)  # fmt: skip
+        err = Path(tmp) / "stderr.txt"
+        with err.open("w") as sink:
+            proc = subprocess.Popen(cmd, env=cli.env, cwd=cli.src, stdout=subprocess.DEVNULL,
+                                    stderr=sink)  # fmt: skip
         try:
             proc.wait(timeout=timeout)
-            note = f"exit {proc.returncode}"
+            # cProfile swallows SystemExit: the command's own outcome is on its stderr
+            errors = [ln for ln in err.read_text().splitlines() if ln.startswith("pincal: error")]
+            note = errors[-1][:100] if errors else "finished"
         except subprocess.TimeoutExpired:
             proc.send_signal(signal.SIGINT)  # cProfile writes its file on the way out
             proc.wait()
