@@ -21,13 +21,14 @@ and are counted in ``unmeasured`` (their σ are then a lower bound).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from pincal.identification._linearity import Linearity
 
-__all__ = ["Inflation", "inflated_covariance"]
+__all__ = ["Inflation", "inflated_covariance", "widest_combination"]
 
 
 @dataclass(frozen=True)
@@ -84,3 +85,18 @@ def inflated_covariance(covariance: np.ndarray, lin: Linearity) -> Inflation:
         inflated = np.zeros(0, dtype=int)
         factors = np.ones(d)
     return Inflation(0.5 * (out + out.T), factors, inflated, np.array(unmeasured, dtype=int))
+
+
+def widest_combination(C: np.ndarray, M: np.ndarray) -> float:
+    """Largest σ ratio over all combinations a·x of the covariance C + M to C.
+
+    √(1 + λ_max) with λ the eigenvalues of M in the coordinates where C is the identity
+    (directions C does not span left out); 1 when M vanishes.
+    """
+    if C.size == 0:
+        return 1.0
+    s, U = np.linalg.eigh(C)
+    keep = s > 1e-12 * max(float(s.max()), 1e-300)
+    W = U[:, keep] / np.sqrt(s[keep])
+    lam = np.linalg.eigvalsh(W.T @ M @ W) if keep.any() else np.zeros(1)
+    return math.sqrt(1.0 + max(float(lam[-1]), 0.0))

@@ -10,7 +10,6 @@ joint fit runs only on request (``draws=N``) and is reported beside it.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any
@@ -19,18 +18,20 @@ import numpy as np
 
 from pincal.errors import PincalError
 from pincal.identification._bootstrap import bootstrap_covariance
+from pincal.identification._inflation import widest_combination
 from pincal.identification._instrument_identify import InstrumentIdentification
 from pincal.identification._intervals import interval_quantiles
 from pincal.identification._linearity import check_curvature
 from pincal.identification._recipes import InstrumentRecipe, mechanism_blob
-from pincal.identification._uncertainty import CURVATURE_LIMIT, UncertaintyCheck
+from pincal.identification._uncertainty import (
+    CURVATURE_DRAWS,
+    CURVATURE_LIMIT,
+    UncertaintyCheck,
+)
 from pincal.identification._verdict import QualityIssue
 from pincal.model import Mechanism
 
-#: δ drawn by the curvature check (2 evaluations each)
-CURVATURE_DRAWS = 64
-
-__all__ = ["CURVATURE_DRAWS", "instrument_uncertainty"]
+__all__ = ["instrument_uncertainty"]
 
 
 def instrument_uncertainty(
@@ -107,7 +108,7 @@ def instrument_uncertainty(
     if cov.shape != np.shape(result.covariance):
         return base
     new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
-    worst = _widest_combination(np.asarray(fit.covariance), cu.second_moment)
+    worst = widest_combination(np.asarray(fit.covariance), cu.second_moment)
     base = replace(base, result=new, method="second-order", widened=worst)
     lower = f"; {beyond}: the σ may still be too small" if cu.failed else ""
     if linear and not cu.failed:
@@ -125,18 +126,3 @@ def instrument_uncertainty(
             f"σ up to {each:.2f}×{lower}; a parametric bootstrap, reported beside them: "
             "pincal calibrate --bootstrap 100")  # fmt: skip
     return replace(base, issue=QualityIssue("linearity", False, text))
-
-
-def _widest_combination(C: np.ndarray, M: np.ndarray) -> float:
-    """Largest σ ratio over all combinations a·x of the covariance C + M to C.
-
-    √(1 + λ_max) with λ the eigenvalues of M in the coordinates where C is the identity
-    (directions C does not span left out); 1 when M vanishes.
-    """
-    if C.size == 0:
-        return 1.0
-    s, U = np.linalg.eigh(C)
-    keep = s > 1e-12 * max(float(s.max()), 1e-300)
-    W = U[:, keep] / np.sqrt(s[keep])
-    lam = np.linalg.eigvalsh(W.T @ M @ W) if keep.any() else np.zeros(1)
-    return math.sqrt(1.0 + max(float(lam[-1]), 0.0))

@@ -25,9 +25,15 @@ import numpy as np
 
 from pincal.errors import PincalError
 from pincal.identification._bootstrap import Bootstrap, bootstrap_covariance
-from pincal.identification._inflation import Inflation, inflated_covariance
+from pincal.identification._inflation import Inflation, inflated_covariance, widest_combination
 from pincal.identification._intervals import Intervals, interval_quantiles
-from pincal.identification._linearity import Curvature, Linearity, ResidualModel, check_linearity
+from pincal.identification._linearity import (
+    Curvature,
+    Linearity,
+    ResidualModel,
+    check_curvature,
+    check_linearity,
+)
 from pincal.identification._problem import CalibrationProblem
 from pincal.identification._recipes import PoseRecipe, mechanism_blob
 from pincal.identification._result import IdentificationResult
@@ -37,17 +43,21 @@ from pincal.model import Mechanism
 
 #: the d²/k a fit's second-order error may add before it is a warning (instrument fits)
 CURVATURE_LIMIT = 1.0
+#: δ drawn by the curvature check (2 evaluations each)
+CURVATURE_DRAWS = 64
 
 #: ``method`` of a check: how the written covariance was made
 METHODS = {
     "linear": "the linear covariance s²(JᵀWJ)⁻¹ at the solution",
-    "linear-inflated": "the linear covariance, inflated along the principal directions the "
-                       "linearity check finds non-linear (each by its measured spread)",
+    "inflated": "the linear covariance, inflated along the principal directions the "
+                "linearity check finds non-linear (each by its measured spread), plus the "
+                "second moment of the fit's second-order error over its confidence region",
     "second-order": "the linear covariance plus the second moment of the fit's "
                     "second-order error over its confidence region",
 }  # fmt: skip
 
 __all__ = [
+    "CURVATURE_DRAWS",
     "CURVATURE_LIMIT",
     "METHODS",
     "UncertaintyCheck",
@@ -120,7 +130,7 @@ class UncertaintyCheck:
         b = self.bootstrap
         if b is None:
             return {}
-        names = self.result.identified_names
+        names = tuple(np.asarray(self.result.names)[np.asarray(self.result.identified)])
         lin = self.linear_std if self.linear_std is not None else self.result.std
         sb = b.std
         ok = b.draws >= 2 and sb.shape == lin.shape
@@ -185,7 +195,7 @@ def pose_recipe(
 
 def result_intervals(result: IdentificationResult, declared: bool) -> Intervals:
     """The quantiles of ``result``'s intervals (Student-t / F when its noise is estimated)."""
-    w = result.weighting
+    w = getattr(result, "weighting", None)
     redundancy = None if w is None else w.redundancy
     return interval_quantiles(int(np.sum(result.identified)), redundancy, estimated=not declared)
 
@@ -234,23 +244,25 @@ def check_uncertainty(
     if not lin.checked:
         return replace(base, issue=QualityIssue("linearity", False, text + (
             "; the σ reported are the linear ones and may be too small")))
-    new = replace(result, covariance=inf.covariance,
-                  std=np.sqrt(np.clip(np.diag(inf.covariance), 0.0, None)))  # fmt: skip
-    if inf.inflated.size:
-        text += (f"; the covariance reported is the linear one inflated along the "
-                 f"{inf.inflated.size} directions whose cost rises less than predicted, each "
-                 f"σ by 1/√(measured rise / predicted) (up to {inf.largest:.3g}×), every other "
-                 "direction as the linearisation gives it")  # fmt: skip
-    else:
-        text += "; the covariance reported is the linear one"
-    if inf.unmeasured.size:
-        text += (f"; along {inf.unmeasured.size} directions the cost did not rise or could "
-                 "not be evaluated: the σ there are a lower bound")  # fmt: skip
+    cu = check_curvature(problem, result.full_values, free, scale=scale,
+                         draws=CURVATURE_DRAWS, seed=seed)  # fmt: skip
+    C = np.asarray(result.covariance, dtype=float)
+    cov = inf.covariance + (cu.second_moment if cu.second_moment is not None else 0.0)
+    new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
+    worst = widest_combination(C, cov - C)
+    text += (f"; the covariance reported is the linear one inflated along the "
+             f"{inf.inflated.size} directions whose cost rises less than predicted (each σ by "
+             "1/√(measured rise / predicted)), plus the second moment of the fit's "
+             f"second-order error over {cu.draws} draws from its confidence region (it adds "
+             f"{cu.excess:.2g} to d²/k); every other direction as the linearisation gives "
+             f"it: the combination it moves most has {worst:.3g}× the linear σ")  # fmt: skip
+    if inf.unmeasured.size or cu.failed or not cu.checked:
+        text += ("; along some directions the cost did not rise or the model could not be "
+                 "evaluated: the σ there are a lower bound")  # fmt: skip
     if boot is not None:
         text += _bootstrap_text(boot, result.std)
-    method = "linear-inflated" if inf.inflated.size else "linear"
     return replace(base, result=new, issue=QualityIssue("linearity", False, text),
-                   widened=inf.largest, method=method, inflation=inf)  # fmt: skip
+                   widened=worst, method="inflated", inflation=inf, curvature=cu)  # fmt: skip
 
 
 def _bootstrap_text(boot: Bootstrap, linear_std: np.ndarray) -> str:
