@@ -89,11 +89,15 @@ from pincal.identification._result_io import FORMAT_VERSION, result_to_dict
 from pincal.identification._result_read import result_from_dict
 from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
 from pincal.identification._uncertainty import (
+    KINDS as COVARIANCE_KINDS,
+)
+from pincal.identification._uncertainty import (
     METHODS as COVARIANCE_METHODS,
 )
 from pincal.identification._uncertainty import (
     UncertaintyCheck,
     check_uncertainty,
+    covariance_kind,
     pose_recipe,
     pose_residual_model,
     result_intervals,
@@ -104,6 +108,7 @@ from pincal.identification._weighting import Weighting
 
 __all__ = [
     "COST_MODELS",
+    "COVARIANCE_KINDS",
     "COVARIANCE_METHODS",
     "FORMAT_VERSION",
     "INSTRUMENT_PROFILES",
@@ -156,6 +161,7 @@ __all__ = [
     "check_quality",
     "check_uncertainty",
     "compare",
+    "covariance_kind",
     "cross_validate",
     "default_instrument",
     "fit_markers",

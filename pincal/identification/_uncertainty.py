@@ -18,8 +18,9 @@ pose fit and :func:`pose_recipe` what rebuilds it in a worker process.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -56,12 +57,25 @@ METHODS = {
                     "second-order error over its confidence region",
 }  # fmt: skip
 
+#: what a written covariance is called, by :func:`covariance_kind`
+KINDS = {
+    "cramer-rao": "Cramér–Rao bound (Jᵀ Σ⁻¹ J)⁻¹ at the solution for the declared noise",
+    "linear": "linear covariance s²(JᵀWJ)⁻¹ at the solution, with the noise estimated from "
+              "the residuals (not a Cramér–Rao bound: the noise is not known)",
+    "inflated": METHODS["inflated"],
+    "second-order": METHODS["second-order"],
+    "bootstrap-widened": "linear σ widened by a parametric bootstrap (written by an older "
+                         "pincal: its inverse is not a covariance to rely on)",
+}  # fmt: skip
+
 __all__ = [
     "CURVATURE_DRAWS",
     "CURVATURE_LIMIT",
+    "KINDS",
     "METHODS",
     "UncertaintyCheck",
     "check_uncertainty",
+    "covariance_kind",
     "pose_recipe",
     "pose_residual_model",
     "with_uncertainty",
@@ -277,6 +291,26 @@ def _bootstrap_text(boot: Bootstrap, linear_std: np.ndarray) -> str:
         text += (f"; {boot.failed} of {boot.draws + boot.failed} refits did not converge: "
                  "the data may not bound these parameters")  # fmt: skip
     return text
+
+
+def covariance_kind(annotations: Mapping[str, Any], noise_source: str | None) -> str:
+    """Which covariance a calibration wrote: a key of :data:`KINDS`.
+
+    ``cramer-rao`` only for the linear covariance at a declared noise.
+
+    Args:
+        annotations: the record's annotations (``quality.uncertainty.method``).
+        noise_source: its weighting's source (``declared``, ``per-pose``, ``estimated``).
+    """
+    quality = annotations.get("quality")
+    unc = quality.get("uncertainty") if isinstance(quality, Mapping) else None
+    unc = unc if isinstance(unc, Mapping) else {}
+    method = unc.get("method")
+    if method is None and unc.get("draws"):  # an older pincal's bootstrap widening
+        return "bootstrap-widened"
+    if method in ("inflated", "second-order"):
+        return str(method)
+    return "cramer-rao" if noise_source in ("declared", "per-pose") else "linear"
 
 
 def with_uncertainty(verdict: QualityVerdict, check: UncertaintyCheck) -> QualityVerdict:
