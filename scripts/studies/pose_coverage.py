@@ -17,7 +17,8 @@ covariance, inflated along the directions the linearity check finds non-linear).
 With e the error of the identified parameters from the truth:
 
 - ``d2k``, ``d2k_lin``: eᵀC⁻¹e / k with C the written / the linear covariance (≈ 1 when
-  right; with estimated noise its expectation is ν/(ν − 2) for ν residual dof);
+  right; with estimated noise its expectation is ν/(ν − 2) for ν residual dof, the
+  ``E[d²/k]`` of the summary);
 - ``in2``: the share of parameters with |e| ≤ 2σ (nominal 95.4 %); ``in_t``: within
   ±t·σ, the interval the calibration states (t = z = 1.96 with declared noise);
 - ``joint``: d² inside the stated joint 95 % region (χ²_k, or k·F_{k,ν} with estimated
@@ -103,8 +104,11 @@ def summarise(path: str) -> str:
 
     dof = [r["dof"] for r in rows if r["dof"] is not None]
     flagged = sum(r["flagged"] for r in rows)
+    # E[d²/k] = E[F_{k,ν}] = ν/(ν − 2) with an estimated scale on ν dof (∞ for ν ≤ 2)
+    expect = float(np.mean([v / (v - 2) if v > 2 else np.inf for v in dof])) if dof else 1.0
     return " | ".join([
         path, f"{n} draws", f"ν {np.median(dof):.3g}" if dof else "ν —",
+        f"E[d²/k] {expect:.3g}",
         f"flagged {flagged}", f"d²/k {mean('d2k')}", f"linear {mean('d2k_lin')}",
         f"±2σ {100 * np.mean([r['in2'] for r in rows]):.1f} %",
         f"±t·σ {100 * np.mean([r['in_t'] for r in rows]):.1f} %",
