@@ -104,10 +104,12 @@ def summarise(path: str) -> str:
 
     dof = [r["dof"] for r in rows if r["dof"] is not None]
     flagged = sum(r["flagged"] for r in rows)
-    # E[d²/k] = E[F_{k,ν}] = ν/(ν − 2) with an estimated scale on ν dof (∞ for ν ≤ 2)
-    expect = float(np.mean([v / (v - 2) if v > 2 else np.inf for v in dof])) if dof else 1.0
+    # E[d²/k] = E[F_{k,ν}] = ν/(ν − 2) with an estimated scale on ν dof, at the median ν
+    nu = float(np.median(dof)) if dof else np.inf
+    expect = nu / (nu - 2) if nu > 2 else np.inf
     return " | ".join([
-        path, f"{n} draws", f"ν {np.median(dof):.3g}" if dof else "ν —",
+        path, f"{n} draws",
+        f"ν {nu:.3g} ({min(dof):.2g}–{max(dof):.2g})" if dof else "ν —",
         f"E[d²/k] {expect:.3g}",
         f"flagged {flagged}", f"d²/k {mean('d2k')}", f"linear {mean('d2k_lin')}",
         f"±2σ {100 * np.mean([r['in2'] for r in rows]):.1f} %",
