@@ -106,7 +106,7 @@ def summarise(path: str) -> str:
     flagged = sum(r["flagged"] for r in rows)
     # E[d²/k] = E[F_{k,ν}] = ν/(ν − 2) with an estimated scale on ν dof, at the median ν
     nu = float(np.median(dof)) if dof else np.inf
-    expect = nu / (nu - 2) if nu > 2 else np.inf
+    expect = 1.0 if not dof else nu / (nu - 2) if nu > 2 else np.inf
     return " | ".join([
         path, f"{n} draws",
         f"ν {nu:.3g} ({min(dof):.2g}–{max(dof):.2g})" if dof else "ν —",
