@@ -104,3 +104,28 @@ def test_no_refit_runs_without_bootstrap_and_twenty_beside_with_it(tmp_path, cam
     np.testing.assert_allclose([written[n] for n in boot["std"]], lin, rtol=1e-9)
     assert "parametric bootstrap (20 seeded refits" in res.stdout
     assert "bootstrap: 20 parametric refits" in (tmp_path / "b" / "report.txt").read_text()
+
+
+def test_campaign_bootstrap_key_is_passed_to_calibrate(tmp_path):
+    from pincal.cli._campaign import load_campaign
+    from pincal.cli.run import _calibrate
+    from pincal.errors import CampaignError
+
+    f = tmp_path / "c.yaml"
+    f.write_text("model: stewart_6ups\nmeasurements: {poses: 10}\n"
+                 "identification: {bootstrap: 20}\n")  # fmt: skip
+    camp = load_campaign(f)
+    assert camp.identification.bootstrap == 20
+
+    class _Paths:
+        data, out = tmp_path / "m.csv", tmp_path / "cal"
+
+    args = _calibrate(camp, _Paths())  # type: ignore[arg-type]
+    assert args is not None and args[args.index("--bootstrap") + 1] == "20"
+    f.write_text("model: stewart_6ups\nmeasurements: {poses: 10}\n")
+    args = _calibrate(load_campaign(f), _Paths())  # type: ignore[arg-type]
+    assert args is not None and "--bootstrap" not in args  # none unless asked for
+    f.write_text("model: stewart_6ups\nmeasurements: {poses: 10}\n"
+                 "identification: {bootstrap: 1}\n")  # fmt: skip
+    with pytest.raises(CampaignError, match="identification.bootstrap"):
+        load_campaign(f)
