@@ -82,7 +82,7 @@ def apply_gate(verdict, force: bool, *, before_fit: bool = False) -> dict[str, A
 
 
 def honest_uncertainty(result, verdict, mech, meas, noise, loss: str, bootstrap: int = 0,
-                       n_jobs: int = -1):  # fmt: skip
+                       n_jobs: int = 1):  # fmt: skip
     """Check the fit's linearisation; inflate its σ where it fails; bootstrap on request.
 
     Returns ``(result, verdict, summary)``: the result with the covariance written (the

@@ -19,7 +19,7 @@ def is_instrument_file(path: str) -> bool:
 
 
 def identify_instrument_files(mech, params, files: list[str], method: str, force: bool, limits,
-                              profile, bootstrap: int = 0, n_jobs: int = -1):  # fmt: skip
+                              profile, bootstrap: int = 0, n_jobs: int = 1):  # fmt: skip
     """Machine and instrument parameters from instrument files (ballbar, probe, sockets…).
 
     The readings' unit check refuses before the fit (unless ``force``); the fit is judged

@@ -131,9 +131,10 @@ from pincal.identification import METHODS
     "--jobs",
     "n_jobs",
     type=click.IntRange(min=-1),
-    default=-1,
+    default=1,
     show_default=True,
-    help="Processes of the --bootstrap refits (-1: every CPU); same σ for any value.",
+    help="Processes of the --bootstrap refits (-1: every CPU); same σ for any value. Each "
+    "worker loads pincal and rebuilds the model (seconds): worth it for long refits.",
 )
 @yes_option
 @model_options
