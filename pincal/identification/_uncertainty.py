@@ -4,11 +4,11 @@
 on a fitted result. The covariance it returns is always the linear one — the SVD of the
 whitened Jacobian at the solution, ``s²(JᵀJ)⁻¹`` — and, where the check finds the fit
 not linear along some principal directions, that covariance inflated along exactly
-those directions by the measured spread (:func:`inflated_covariance`, method
-``linear-inflated``), with a gate warning that says so in words. No written covariance
-is a sample covariance of refits: a parametric bootstrap
-(:func:`bootstrap_covariance`) runs only when asked for (``bootstrap=N``) and is
-reported beside the linear σ (``to_dict()["bootstrap"]``).
+those directions by the measured spread (:func:`inflated_covariance`) plus the measured
+second-order term (:func:`check_curvature`; method ``inflated``), with a gate warning
+that says so in words. No written covariance is a sample covariance of refits: a
+parametric bootstrap (:func:`bootstrap_covariance`) runs only when asked for
+(``bootstrap=N``) and is reported beside the linear σ (``to_dict()["bootstrap"]``).
 
 The problem is any object with ``evaluate(x, jacobian=True) -> (whitened r, J, ...)``
 over the result's full parameter vector; :func:`pose_residual_model` builds it for a
