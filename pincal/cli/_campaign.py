@@ -68,6 +68,8 @@ Campaign file keys (YAML; relative paths are relative to the file):
     prior: null              marker campaigns: "LEN_MM,ANG_MRAD" or auto (by CV)
     instrument: NAME         optional profile judging an estimated noise: laser-tracker |
                              motion-capture | ballbar | touch-probe | cmm
+    bootstrap: 0             N > 0: N parametric-bootstrap refits, their σ reported beside
+                             the linear σ (never written as the covariance)
   validation:                held-out poses, measured on the same actual machine
     source: simulated        simulated | file | none
     file: PATH               source file: a pincal measurement file
@@ -133,6 +135,7 @@ class Identification:
     prior: str | None = None
     instrument: str | None = None
     model: str = "geometric"
+    bootstrap: int = 0
 
     def check(self, key: str) -> None:
         from pincal.identification import INSTRUMENT_PROFILES, METHODS
@@ -156,6 +159,9 @@ class Identification:
                 ) from exc
         if self.instrument is not None:
             choice(self.instrument, tuple(INSTRUMENT_PROFILES), f"{key}.instrument")
+        if self.bootstrap < 0 or self.bootstrap == 1:
+            raise CampaignError(f"{key}.bootstrap must be 0 (none) or a number of refits ≥ 2, "
+                                f"e.g. 100; got {self.bootstrap}")  # fmt: skip
 
 
 @dataclass(frozen=True)

@@ -81,22 +81,63 @@ def apply_gate(verdict, force: bool, *, before_fit: bool = False) -> dict[str, A
     return verdict.to_dict(overridden=force)
 
 
-def honest_uncertainty(result, verdict, mech, meas, noise, loss: str):
-    """Check the fit's linearisation; widen its σ (bootstrap) and warn when it fails.
+def honest_uncertainty(result, verdict, mech, meas, noise, loss: str, bootstrap: int = 0,
+                       n_jobs: int = 1):  # fmt: skip
+    """Check the fit's linearisation; inflate its σ where it fails; bootstrap on request.
 
-    Returns ``(result, verdict, summary)``: the result with an honest covariance, the
-    verdict with a ``linearity`` warning when the linearised σ are too small, and the
-    check's JSON summary (None when not run: a robust loss, or a refused fit).
+    Returns ``(result, verdict, summary)``: the result with the covariance written (the
+    linear one, inflated along the directions the check finds non-linear), the verdict
+    with a ``linearity`` warning when the linearisation fails, and the check's JSON
+    summary (None when not run: a robust loss, or a refused fit). ``bootstrap`` > 0 runs
+    that many parametric-bootstrap refits (``n_jobs`` processes) reported beside the σ;
+    without it no refit runs after the fit.
     """
     if loss != "linear" or not verdict.passed or not result.identified.any():
+        if bootstrap:
+            click.echo("pincal: note: --bootstrap runs on a passed least-squares fit only "
+                       "(not with a robust --loss or a refused fit); no refits ran",
+                       err=True)  # fmt: skip
         return result, verdict, None
     from pincal.cli._progress import counted
-    from pincal.identification import check_uncertainty, pose_residual_model, with_uncertainty
+    from pincal.identification import (
+        check_uncertainty,
+        pose_recipe,
+        pose_residual_model,
+        with_uncertainty,
+    )
 
     problem = pose_residual_model(result, mech, meas, noise)
     if problem is None:
         return result, verdict, None
     declared = verdict.noise_source in ("declared", "per-pose")
-    with counted("bootstrap refits (the fit is not linear)") as step:
-        check = check_uncertainty(problem, result, declared=declared, progress=step)
+    factory = pose_recipe(result, mech, meas, noise) if bootstrap else None
+    with counted("bootstrap refits") as step:
+        check = check_uncertainty(problem, result, declared=declared, bootstrap=bootstrap,
+                                  progress=step, n_jobs=n_jobs, factory=factory)  # fmt: skip
     return check.result, with_uncertainty(verdict, check), check.to_dict()
+
+
+def bootstrap_lines(uncertainty: dict | None, top: int = 8) -> list[str]:
+    """The printed bootstrap summary: per-parameter bootstrap σ beside the written σ.
+
+    Lists the ``top`` parameters whose bootstrap σ differs most from the linear σ
+    (lengths in µm, angles in µrad); empty without a bootstrap.
+    """
+    import math
+
+    boot = (uncertainty or {}).get("bootstrap")
+    if not boot:
+        return []
+    lin, sb = boot["linear_std"], boot["std"]
+    lines = [f"parametric bootstrap ({boot['draws']} seeded refits, {boot['failed']} failed; "
+             "beside, not written): σ [µm | µrad]"]  # fmt: skip
+    if boot["draws"] < 2:
+        return [*lines, "  the refits failed: no bootstrap σ"]
+    rows = [(n, lin[n], sb.get(n)) for n in lin if sb.get(n) is not None and lin[n] > 0]
+    rows.sort(key=lambda r: -abs(math.log(r[2] / r[1])) if r[2] > 0 else 0.0)
+    lines.append(f"  {'parameter':32s} {'linear σ':>12s} {'bootstrap σ':>12s} {'ratio':>7s}")
+    lines += [f"  {n:32s} {1e6 * a:12.4g} {1e6 * b:12.4g} {b / a:7.3f}" for n, a, b in rows[:top]]
+    if len(rows) > top:
+        lines.append(f"  … {len(rows) - top} more in calibration.json (quality.uncertainty."
+                     "bootstrap)")  # fmt: skip
+    return lines

@@ -19,13 +19,14 @@ def is_instrument_file(path: str) -> bool:
 
 
 def identify_instrument_files(mech, params, files: list[str], method: str, force: bool, limits,
-                              profile):  # fmt: skip
+                              profile, bootstrap: int = 0, n_jobs: int = 1):  # fmt: skip
     """Machine and instrument parameters from instrument files (ballbar, probe, sockets…).
 
     The readings' unit check refuses before the fit (unless ``force``); the fit is judged
     by :func:`pincal.identification.instrument_gate` (outliers confirmed by a refit) and,
     when it passes, its σ by :func:`pincal.identification.instrument_uncertainty`
-    (widened by a bootstrap when the fit's second-order error is large).
+    (the linear covariance plus the fit's measured second-order term); ``bootstrap`` > 0
+    refits reported beside them (``n_jobs`` processes).
 
     Returns:
         (the gate's verdict, the machine part as an IdentificationResult with an honest
@@ -63,9 +64,16 @@ def identify_instrument_files(mech, params, files: list[str], method: str, force
     verdict = instrument_gate(out, data, limits, profile, mech=mech, datasets=datasets,
                               labels=labels)  # fmt: skip
     if not verdict.passed:
+        if bootstrap:
+            click.echo("pincal: note: --bootstrap runs on a passed fit only; no refits ran",
+                       err=True)  # fmt: skip
         return verdict, out.result, None
     from pincal.identification import instrument_uncertainty, with_uncertainty
 
     click.echo("… checking the fit's curvature over its confidence region", err=True)
-    check = instrument_uncertainty(out, mech, datasets, labels)
+    from pincal.cli._progress import counted
+
+    with counted("bootstrap refits") as step:
+        check = instrument_uncertainty(out, mech, datasets, labels, draws=bootstrap,
+                                       progress=step, n_jobs=n_jobs)  # fmt: skip
     return with_uncertainty(verdict, check), check.result, check.to_dict()

@@ -117,6 +117,25 @@ from pincal.identification import METHODS
     help="Instrument profile judging an estimated noise: laser-tracker, motion-capture, "
     "ballbar, touch-probe, cmm (overrides the file's '# instrument:').",
 )
+@click.option(
+    "--bootstrap",
+    "bootstrap",
+    type=click.IntRange(min=0),
+    default=0,
+    metavar="N",
+    help="Also run N parametric-bootstrap refits (e.g. 100) and report their σ beside the "
+    "linear σ (calibration.json quality.uncertainty.bootstrap); never written as the "
+    "covariance. Default: none (no refit runs after the fit).",
+)
+@click.option(
+    "--jobs",
+    "n_jobs",
+    type=click.IntRange(min=-1),
+    default=1,
+    show_default=True,
+    help="Processes of the --bootstrap refits (-1: every CPU); same σ for any value. Each "
+    "worker loads pincal and rebuilds the model (seconds): worth it for long refits.",
+)
 @yes_option
 @model_options
 @marker_options
@@ -124,7 +143,7 @@ from pincal.identification import METHODS
 def calibrate(
     model, data, preset, error_model, payload, method, out, as_json, noise, loss, force,
     max_change, significance, instrument, link, instrument_frame, marker_spec, marker_columns,
-    length_unit, prior_spec,
+    length_unit, prior_spec, bootstrap, n_jobs,
     yes, model_opts,
 ) -> None:  # fmt: skip
     """Identify MODEL's geometric parameters from measured poses (--data).
@@ -146,7 +165,7 @@ def calibrate(
       pincal calibrate tiago --link arm_7_link --data mocap.csv --marker-columns x1,y1,z1 \\
           --prior auto --out cal/        markers in an unknown instrument frame
     """
-    from pincal.cli._gate import apply_gate, gate_limits, honest_uncertainty
+    from pincal.cli._gate import apply_gate, bootstrap_lines, gate_limits, honest_uncertainty
     from pincal.cli._joint_terms import carrying, read_payload, terms_texts
     from pincal.identification import check_quality
     from pincal.io import (
@@ -163,6 +182,9 @@ def calibrate(
     from pincal.sensitivity import parameters
 
     limits = gate_limits(max_change, significance)
+    if bootstrap == 1:
+        raise click.BadParameter("give 0 (none) or a number of refits ≥ 2, e.g. 100",
+                                 param_hint="--bootstrap")  # fmt: skip
     profile = None
     if instrument is not None:
         from pincal.identification import instrument_profile
@@ -215,6 +237,10 @@ def calibrate(
                 "apply; give a sidecar file with `robot:` as MODEL instead",
                 param_hint="--link",
             )
+        if bootstrap:
+            raise click.BadParameter(
+                "a marker calibration (--link) is not bootstrapped yet; its σ are the linear "
+                "ones (prior rows included)", param_hint="--bootstrap")
         if "home" in model_opts.lock.values():
             raise click.BadParameter(
                 "with --link, lock joints at a value (JOINT=VALUE [rad or m]), not at home",
@@ -242,7 +268,7 @@ def calibrate(
                 param_hint="--data",
             )
         verdict, result, uncertainty = identify_instrument_files(
-            mech, params, files, method, force, limits, profile
+            mech, params, files, method, force, limits, profile, bootstrap, n_jobs
         )
         noise_model = None
     else:
@@ -256,7 +282,8 @@ def calibrate(
             result, meas, mech=mech, data=gate, instrument=profile or mf.instrument
         )
         result, verdict, uncertainty = honest_uncertainty(result, verdict, mech, meas,
-                                                          declared, loss)  # fmt: skip
+                                                          declared, loss, bootstrap,
+                                                          n_jobs)  # fmt: skip
     quality = apply_gate(verdict, force)
     if uncertainty is not None:
         quality["uncertainty"] = uncertainty
@@ -288,6 +315,8 @@ def calibrate(
         click.echo(json.dumps(doc))
     else:
         click.echo(report, nl=False)
+        for line in bootstrap_lines(uncertainty):
+            click.echo(line)
         click.echo(
             f"wrote calibration directory {cal.path}/ ({MANIFEST}, {CALIBRATED_URDF} + "
             f"{CALIBRATED_SIDECAR}, identification.json, report.txt)"

@@ -103,6 +103,7 @@ def _calibrate(c: Campaign, p: Paths) -> list[str] | None:
     args += ["--force"] if ctx is not None and ctx.params.get("force") else []
     inst = c.identification.instrument
     args += ["--instrument", inst] if inst is not None else []
+    args += ["--bootstrap", str(i.bootstrap)] if i.bootstrap else []
     return args + (["--params", c.preset] if c.preset else []) + ["--out", str(p.out)]
 
 

@@ -132,6 +132,7 @@ def validate(
         click.echo(f"pincal: warning: {data} was used to fit this calibration", err=True)
     result = cal.result
     from pincal.cli._joint_terms import calibration_terms
+    from pincal.identification import covariance_kind
 
     terms, terms_line = calibration_terms(cal, read_payload(payload))
     validation = validate_held_out(
@@ -144,6 +145,8 @@ def validate(
         meas.noise or cal.noise,
         tuple((cal.manifest.get("markers") or {}).get("held_weak") or ()),
         None if terms is None else meas.q_act + terms.deflection(meas.q_act),
+        covariance_kind(result.annotations,
+                        None if result.weighting is None else result.weighting.source),
     )
     doc = {
         "calibration": calibration_summary(cal),

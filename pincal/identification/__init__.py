@@ -11,6 +11,7 @@ holds) with the live calibration. ``result_to_dict`` writes a record as that doc
 
 from __future__ import annotations
 
+from pincal.identification._bootstrap import Bootstrap, bootstrap_covariance
 from pincal.identification._cross_validation import (
     CrossValidation,
     compare,
@@ -21,6 +22,7 @@ from pincal.identification._cross_validation import (
 from pincal.identification._data_check import check_measurements
 from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._identify import identify
+from pincal.identification._inflation import Inflation, inflated_covariance
 from pincal.identification._instrument_design import (
     InstrumentIdentifiability,
     default_instrument,
@@ -40,6 +42,8 @@ from pincal.identification._instrument_profiles import (
     InstrumentProfile,
     instrument_profile,
 )
+from pincal.identification._instrument_uncertainty import instrument_uncertainty
+from pincal.identification._intervals import Intervals, interval_quantiles
 from pincal.identification._marker_fit import (
     REGISTRATION_PRESET,
     MarkerFit,
@@ -85,10 +89,18 @@ from pincal.identification._result_io import FORMAT_VERSION, result_to_dict
 from pincal.identification._result_read import result_from_dict
 from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
 from pincal.identification._uncertainty import (
+    KINDS as COVARIANCE_KINDS,
+)
+from pincal.identification._uncertainty import (
+    METHODS as COVARIANCE_METHODS,
+)
+from pincal.identification._uncertainty import (
     UncertaintyCheck,
     check_uncertainty,
-    instrument_uncertainty,
+    covariance_kind,
+    pose_recipe,
     pose_residual_model,
+    result_intervals,
     with_uncertainty,
 )
 from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
@@ -96,12 +108,15 @@ from pincal.identification._weighting import Weighting
 
 __all__ = [
     "COST_MODELS",
+    "COVARIANCE_KINDS",
+    "COVARIANCE_METHODS",
     "FORMAT_VERSION",
     "INSTRUMENT_PROFILES",
     "LOSSES",
     "METHODS",
     "REGISTRATION_PRESET",
     "SOLVERS",
+    "Bootstrap",
     "CalibrationProblem",
     "CandidateScore",
     "CrossValidation",
@@ -112,10 +127,12 @@ __all__ = [
     "IdentificationProblem",
     "IdentificationRecord",
     "IdentificationResult",
+    "Inflation",
     "InstrumentIdentifiability",
     "InstrumentIdentification",
     "InstrumentProblem",
     "InstrumentProfile",
+    "Intervals",
     "LMOptions",
     "LocalSolverExtras",
     "MarkerFit",
@@ -138,17 +155,20 @@ __all__ = [
     "StepPlanningOptions",
     "UncertaintyCheck",
     "Weighting",
+    "bootstrap_covariance",
     "check_instrument_data",
     "check_measurements",
     "check_quality",
     "check_uncertainty",
     "compare",
+    "covariance_kind",
     "cross_validate",
     "default_instrument",
     "fit_markers",
     "fitted",
     "identify",
     "identify_instruments",
+    "inflated_covariance",
     "instrument_blocks",
     "instrument_candidates",
     "instrument_cramer_rao",
@@ -156,15 +176,18 @@ __all__ = [
     "instrument_identifiability",
     "instrument_profile",
     "instrument_uncertainty",
+    "interval_quantiles",
     "is_registration",
     "kfold",
     "monte_carlo",
     "outlier_poses",
+    "pose_recipe",
     "pose_residual_model",
     "position_errors",
     "qpso",
     "qpso_stepwise",
     "result_from_dict",
+    "result_intervals",
     "result_to_dict",
     "select_model",
     "solver",

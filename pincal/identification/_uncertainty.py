@@ -1,26 +1,33 @@
-"""Uncertainties that hold: check the linearisation at the solution, widen when it fails.
+"""Uncertainties that hold: the linear covariance, checked, and a bootstrap on request.
 
 :func:`check_uncertainty` runs :func:`pincal.identification._linearity.check_linearity`
-on a fitted result; when the linearisation does not hold it replaces the result's
-covariance by :func:`pincal.identification._bootstrap.widened` (each σ the larger of
-the linear and the parametric-bootstrap one) and returns a gate warning that says so in
-words — a covariance known to be wrong is never reported. The problem is any object
-with ``evaluate(x, jacobian=True) -> (whitened r, J, ...)`` over the result's full
-parameter vector; :func:`pose_residual_model` builds it for a pose fit.
+on a fitted result. The covariance it returns is always the linear one — the SVD of the
+whitened Jacobian at the solution, ``s²(JᵀJ)⁻¹`` — and, where the check finds the fit
+not linear along some principal directions, that covariance inflated along exactly
+those directions by the measured spread (:func:`inflated_covariance`) plus the measured
+second-order term (:func:`check_curvature`; method ``inflated``), with a gate warning
+that says so in words. No written covariance is a sample covariance of refits: a
+parametric bootstrap (:func:`bootstrap_covariance`) runs only when asked for
+(``bootstrap=N``) and is reported beside the linear σ (``to_dict()["bootstrap"]``).
+
+The problem is any object with ``evaluate(x, jacobian=True) -> (whitened r, J, ...)``
+over the result's full parameter vector; :func:`pose_residual_model` builds it for a
+pose fit and :func:`pose_recipe` what rebuilds it in a worker process.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from pincal.errors import PincalError
-from pincal.identification._bootstrap import DRAWS, Bootstrap, bootstrap_covariance, widened
-from pincal.identification._instrument_identify import InstrumentIdentification
+from pincal.identification._bootstrap import Bootstrap, bootstrap_covariance
+from pincal.identification._inflation import Inflation, inflated_covariance, widest_combination
+from pincal.identification._intervals import Intervals, interval_quantiles
 from pincal.identification._linearity import (
     Curvature,
     Linearity,
@@ -29,23 +36,47 @@ from pincal.identification._linearity import (
     check_linearity,
 )
 from pincal.identification._problem import CalibrationProblem
+from pincal.identification._recipes import PoseRecipe, mechanism_blob
 from pincal.identification._result import IdentificationResult
 from pincal.identification._verdict import QualityIssue, QualityVerdict
 from pincal.measure import Measurements, NoiseModel
 from pincal.model import Mechanism
 
-#: the d²/k a fit's second-order error may add before its σ are widened (instrument fits)
+#: the d²/k a fit's second-order error may add before it is a warning (instrument fits)
 CURVATURE_LIMIT = 1.0
 #: δ drawn by the curvature check (2 evaluations each)
 CURVATURE_DRAWS = 64
-#: bootstrap σ up to (this + 3 relative standard errors of a σ from the draws) × the
-#: linearised σ confirm them
-CONFIRMED = 1.1
+
+#: ``method`` of a check: how the written covariance was made
+METHODS = {
+    "linear": "the linear covariance s²(JᵀWJ)⁻¹ at the solution",
+    "inflated": "the linear covariance, inflated along the principal directions the "
+                "linearity check finds non-linear (each by its measured spread), plus the "
+                "second moment of the fit's second-order error over its confidence region",
+    "second-order": "the linear covariance plus the second moment of the fit's "
+                    "second-order error over its confidence region",
+}  # fmt: skip
+
+#: what a written covariance is called, by :func:`covariance_kind`
+KINDS = {
+    "cramer-rao": "Cramér–Rao bound (Jᵀ Σ⁻¹ J)⁻¹ at the solution for the declared noise",
+    "linear": "linear covariance s²(JᵀWJ)⁻¹ at the solution, with the noise estimated from "
+              "the residuals (not a Cramér–Rao bound: the noise is not known)",
+    "inflated": METHODS["inflated"],
+    "second-order": METHODS["second-order"],
+    "bootstrap-widened": "linear σ widened by a parametric bootstrap (written by an older "
+                         "pincal: its inverse is not a covariance to rely on)",
+}  # fmt: skip
 
 __all__ = [
+    "CURVATURE_DRAWS",
+    "CURVATURE_LIMIT",
+    "KINDS",
+    "METHODS",
     "UncertaintyCheck",
     "check_uncertainty",
-    "instrument_uncertainty",
+    "covariance_kind",
+    "pose_recipe",
     "pose_residual_model",
     "with_uncertainty",
 ]
@@ -53,16 +84,21 @@ __all__ = [
 
 @dataclass(frozen=True)
 class UncertaintyCheck:
-    """The linearity check of a fit and, when it failed, the widened result.
+    """The linearity check of a fit, the covariance written, a bootstrap beside it.
 
     Attributes:
-        result: the result with an honest covariance (the input when linear).
-        linearity: the check; bootstrap: the refits (None when linear or not run).
+        result: the result with the covariance written (the input when linear).
+        linearity: the check (None when not run: an instrument fit, nothing fitted).
+        bootstrap: the refits run on request (None without ``bootstrap=N``); reported
+            beside the written σ, never written.
         issue: the gate warning (None when the linearisation holds).
         curvature: the second-order check of an instrument fit (None for pose fits).
         widened: the largest ratio, over all combinations of the fitted unknowns, of the
-            reported σ to the linearised one (second-order term of an instrument fit;
-            1 otherwise).
+            written σ to the linear one (inflation or second-order term; 1 otherwise).
+        method: how the written covariance was made (a key of :data:`METHODS`).
+        linear_std: (k,) the linear σ of the identified parameters [SI].
+        inflation: the per-direction inflation (None when not inflated).
+        intervals: the quantiles of the intervals and joint region (None: not computed).
     """
 
     result: IdentificationResult
@@ -71,11 +107,16 @@ class UncertaintyCheck:
     issue: QualityIssue | None = None
     curvature: Curvature | None = None
     widened: float = 1.0
+    method: str = "linear"
+    linear_std: np.ndarray | None = None
+    inflation: Inflation | None = None
+    intervals: Intervals | None = None
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready summary (``quality.uncertainty`` of the calibration's record)."""
         lin, cu = self.linearity, self.curvature
-        out: dict[str, object] = {"linear": (lin is None or lin.holds) and self.issue is None}
+        out: dict[str, object] = {"linear": (lin is None or lin.holds) and self.issue is None,
+                                  "method": self.method}  # fmt: skip
         if cu is not None:
             out |= {"curvature_excess": _finite(cu.excess), "curvature_excess_se":
                     _finite(cu.excess_se), "curvature_draws": cu.draws,
@@ -87,13 +128,32 @@ class UncertaintyCheck:
                     "worst_cost_ratio": ratio if math.isfinite(ratio) else None,
                     "worst_jacobian_change": jac if math.isfinite(jac) else None,
                     "step_sigma": lin.step}  # fmt: skip
+        if self.inflation is not None:
+            out |= {"directions_inflated": int(self.inflation.inflated.size),
+                    "directions_unmeasured": int(self.inflation.unmeasured.size)}  # fmt: skip
+        if self.method != "linear":
+            out["widened_max"] = _finite(self.widened)
+        if self.intervals is not None:
+            out["intervals"] = self.intervals.to_dict()
         if self.bootstrap is not None:
-            b = self.bootstrap
-            out |= {"method": "parametric bootstrap", "draws": b.draws, "failed": b.failed,
-                    "seed": b.seed}  # fmt: skip
-        elif cu is not None and cu.checked:
-            out |= {"method": "second-order", "widened_max": _finite(self.widened)}
+            out["bootstrap"] = self.bootstrap_dict()
         return out
+
+    def bootstrap_dict(self) -> dict[str, object]:
+        """The bootstrap beside the written σ: per-parameter σ [SI] of both, by name."""
+        b = self.bootstrap
+        if b is None:
+            return {}
+        names = tuple(np.asarray(self.result.names)[np.asarray(self.result.identified)])
+        lin = self.linear_std if self.linear_std is not None else self.result.std
+        sb = b.std
+        ok = b.draws >= 2 and sb.shape == lin.shape
+        ratio = sb / np.maximum(lin, 1e-300) if ok else np.full(len(names), np.nan)
+        return {"draws": b.draws, "failed": b.failed, "seed": b.seed,
+                "std": {n: _finite(float(v)) for n, v in zip(names, sb, strict=False)},
+                "linear_std": {n: float(v) for n, v in zip(names, lin, strict=False)},
+                "largest_ratio": _finite(float(np.max(ratio))) if ok and ratio.size else None,
+                "written": False}  # fmt: skip
 
 
 def _finite(v: float) -> float | None:
@@ -113,14 +173,45 @@ def pose_residual_model(
     try:
         model = CalibrationProblem(mech, result.parameter_set, meas, noise)
         if not model.known_noise:
-            w = result.weighting
-            if w is None:
+            std = _block_std(result, model)
+            if std is None:
                 return None
-            std = {"position": w.position_std, "orientation": w.orientation_std}
-            model = model.with_block_std({b: std[b] for b in model.blocks})
+            model = model.with_block_std(std)
     except PincalError:
         return None
     return model
+
+
+def _block_std(result: IdentificationResult, model: CalibrationProblem) -> dict[str, float] | None:
+    w = result.weighting
+    if w is None:
+        return None
+    std = {"position": w.position_std, "orientation": w.orientation_std}
+    return {b: std[b] for b in model.blocks}
+
+
+def pose_recipe(
+    result: IdentificationResult,
+    mech: Mechanism,
+    meas: Measurements,
+    noise: NoiseModel | dict[str, float] | None = None,
+) -> PoseRecipe | None:
+    """What rebuilds :func:`pose_residual_model` in a worker process (None if it cannot)."""
+    model = pose_residual_model(result, mech, meas, noise)
+    if model is None or result.parameter_set is None:
+        return None
+    std = None if model.noise_source != "estimated" else _block_std(result, model)
+    try:
+        return PoseRecipe(mechanism_blob(mech), result.parameter_set, meas, noise, std)
+    except (AttributeError, TypeError):  # a mechanism without a recipe: refit in the caller
+        return None
+
+
+def result_intervals(result: IdentificationResult, declared: bool) -> Intervals:
+    """The quantiles of ``result``'s intervals (Student-t / F when its noise is estimated)."""
+    w = getattr(result, "weighting", None)
+    redundancy = None if w is None else w.redundancy
+    return interval_quantiles(int(np.sum(result.identified)), redundancy, estimated=not declared)
 
 
 def check_uncertainty(
@@ -128,168 +219,98 @@ def check_uncertainty(
     result: IdentificationResult,
     *,
     declared: bool = True,
-    draws: int = DRAWS,
+    bootstrap: int = 0,
     seed: int = 0,
     progress: Callable[[int, int], None] | None = None,
+    n_jobs: int = 1,
+    factory: Callable[[], ResidualModel] | None = None,
 ) -> UncertaintyCheck:
-    """Check the linearisation of ``result``; widen its covariance when it fails.
+    """Check the linearisation of ``result``; inflate along the directions where it fails.
 
     Args:
         problem: whitened residuals over ``result.full_values`` (see module doc).
         result: the fitted result (its covariance in the order of ``identified``).
         declared: the noise was declared (variance factor 1); otherwise the covariance
-            was scaled by the reduced χ².
-        draws: bootstrap refits when the linearisation fails.
+            was scaled by the reduced χ² and the intervals use Student-t / F quantiles.
+        bootstrap: parametric-bootstrap refits to report beside the σ (0: none run).
         seed: the seed of the bootstrap's noise draws.
         progress: ``progress(done, total)`` per bootstrap refit.
+        n_jobs: bootstrap worker processes (joblib; -1 = every CPU; needs ``factory``).
+        factory: picklable, rebuilds ``problem`` in a worker (:func:`pose_recipe`).
     """
     free = np.flatnonzero(result.identified)
     if free.size == 0:
         return UncertaintyCheck(result, None)
+    intervals = result_intervals(result, declared)
     scale = 1.0 if declared else math.sqrt(max(float(result.reduced_chi2), 0.0))
+    boot = None
+    if bootstrap:
+        boot = bootstrap_covariance(problem, result.full_values, free, scale=scale,
+                                    draws=bootstrap, seed=seed, progress=progress,
+                                    n_jobs=n_jobs, factory=factory)  # fmt: skip
     lin = check_linearity(problem, result.full_values, free, scale=scale)
+    base = UncertaintyCheck(result, lin, boot, linear_std=result.std, intervals=intervals)
     if lin.holds:
-        return UncertaintyCheck(result, lin)
+        return base
     names = tuple(result.names[i] for i in free)
-    boot = bootstrap_covariance(problem, result.full_values, free, scale=scale, draws=draws,
-                                seed=seed, progress=progress)  # fmt: skip
-    cov = widened(result.covariance, boot)
+    inf = inflated_covariance(result.covariance, lin)
+    text = lin.describe(names)
+    if not lin.checked:
+        return replace(base, issue=QualityIssue("linearity", False, text + (
+            "; the σ reported are the linear ones and may be too small")))
+    cu = check_curvature(problem, result.full_values, free, scale=scale,
+                         draws=CURVATURE_DRAWS, seed=seed)  # fmt: skip
+    C = np.asarray(result.covariance, dtype=float)
+    cov = inf.covariance + (cu.second_moment if cu.second_moment is not None else 0.0)
     new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
-    worst = float(np.max(new.std / np.maximum(result.std, 1e-300)))
-    text = lin.describe(names) + _bootstrap_text(boot, worst)
-    return UncertaintyCheck(new, lin, boot, QualityIssue("linearity", False, text))
+    worst = widest_combination(C, cov - C)
+    text += (f"; the covariance reported is the linear one inflated along the "
+             f"{inf.inflated.size} directions whose cost rises less than predicted (each σ by "
+             "1/√(measured rise / predicted)), plus the second moment of the fit's "
+             f"second-order error over {cu.draws} draws from its confidence region (it adds "
+             f"{cu.excess:.2g} to d²/k); every other direction as the linearisation gives "
+             f"it: the combination it moves most has {worst:.3g}× the linear σ")  # fmt: skip
+    if inf.unmeasured.size or cu.failed or not cu.checked:
+        text += ("; along some directions the cost did not rise or the model could not be "
+                 "evaluated: the σ there are a lower bound")  # fmt: skip
+    if boot is not None:
+        text += _bootstrap_text(boot, result.std)
+    return replace(base, result=new, issue=QualityIssue("linearity", False, text),
+                   widened=worst, method="inflated", inflation=inf, curvature=cu)  # fmt: skip
 
 
-def instrument_uncertainty(
-    fit: InstrumentIdentification,
-    mech: Mechanism,
-    datasets: Sequence[Any],
-    labels: Sequence[str] | None = None,
-    *,
-    draws: int = 0,
-    seed: int = 0,
-    progress: Callable[[int, int], None] | None = None,
-) -> UncertaintyCheck:
-    """Check an instrument fit's second-order error and add it to the covariance.
+def _bootstrap_text(boot: Bootstrap, linear_std: np.ndarray) -> str:
+    """What the bootstrap found, beside the linear σ (it never replaces them)."""
+    if boot.draws < 2:
+        return "; the bootstrap refits failed"
+    ratio = boot.std / np.maximum(linear_std, 1e-300)
+    text = (f"; a parametric bootstrap ({boot.draws} seeded refits, reported beside, not "
+            f"written) gives σ from {np.min(ratio):.3g}× to {np.max(ratio):.3g}× the linear ones "
+            f"(its sampling error ≈ {100 / math.sqrt(2 * boot.draws):.0f} % of a σ)")  # fmt: skip
+    if boot.failed:
+        text += (f"; {boot.failed} of {boot.draws + boot.failed} refits did not converge: "
+                 "the data may not bound these parameters")  # fmt: skip
+    return text
 
-    The linear σ of a ballbar or probe fit on random poses are several times too small
-    in their well-determined combinations (the model bends over the confidence region
-    of its weakly seen directions), while the cost-ratio check of
-    :func:`check_uncertainty` fires on designed poses too, whose linear σ are right.
-    Here the measure is what matters for the intervals (:func:`check_curvature`): the
-    second-order error ``J⁺q`` over draws from the confidence region. Its second moment
-    is added to the linearised covariance — what that error adds to the mean squared
-    error of the fit about its target (see :class:`Curvature` for the term it leaves
-    out), larger only in the directions the curvature moves — and
-    its d²/k (``excess``) beyond :data:`CURVATURE_LIMIT` is a warning: the linearised σ
-    alone would have been wrong. With ``draws`` > 0 a fit past the limit is widened by
-    a parametric bootstrap of the joint fit instead (machine and instrument unknowns;
-    each refit solves every pose again: minutes on a few hundred readings).
+
+def covariance_kind(annotations: Mapping[str, Any], noise_source: str | None) -> str:
+    """Which covariance a calibration wrote: a key of :data:`KINDS`.
+
+    ``cramer-rao`` only for the linear covariance at a declared noise.
 
     Args:
-        fit: the outcome of :func:`pincal.identification.identify_instruments`.
-        mech: the nominal mechanism.
-        datasets: the fit's datasets.
-        labels: their labels, as given to the fit.
-        draws: bootstrap refits past the limit (0: add the second-order term; e.g. 100).
-        seed: the seed of the draws (curvature and bootstrap).
-        progress: ``progress(done, total)`` per bootstrap refit.
+        annotations: the record's annotations (``quality.uncertainty.method``).
+        noise_source: its weighting's source (``declared``, ``per-pose``, ``estimated``).
     """
-    from pincal.identification._instrument_problem import InstrumentProblem
-
-    result, free = fit.result, np.asarray(fit.fitted, dtype=int)
-    if free.size == 0 or result.parameter_set is None:
-        return UncertaintyCheck(result, None)
-    try:
-        problem = InstrumentProblem(mech, result.parameter_set, datasets, labels)
-    except PincalError:
-        return UncertaintyCheck(result, None)
-    cu = check_curvature(problem, fit.values, free, draws=CURVATURE_DRAWS, seed=seed)
-    machine = free < len(result.names)
-    linear = cu.checked and cu.excess <= CURVATURE_LIMIT
-    drawn = cu.draws + cu.failed
-    beyond = (f"{cu.failed} of {drawn} points drawn from its confidence region do not "
-              "assemble (the machine does not close there)")  # fmt: skip
-    if not cu.checked and draws <= 0:
-        text = (f"the curvature of the fit could not be checked: {beyond}; the σ reported "
-                "are the linearised ones and may be too small (a parametric bootstrap: "
-                "pincal.identification.instrument_uncertainty(..., draws=100))")  # fmt: skip
-        return UncertaintyCheck(result, None, None, QualityIssue("linearity", False, text), cu)
-    text = (
-        "the fit is not linear over its own confidence region: its second-order error "
-        f"adds {cu.excess:.3g} to the d²/k of the linearised σ (0 when they are right; "
-        f"limit {CURVATURE_LIMIT:g})"
-        if cu.checked
-        else f"the curvature of the fit could not be checked: {beyond}"
-    )
-    lower = f"; {beyond}: the σ may still be too small" if cu.failed else ""
-    if cu.checked and (linear or draws <= 0):
-        assert cu.second_moment is not None
-        cov = (np.asarray(fit.covariance) + cu.second_moment)[np.ix_(machine, machine)]
-        if cov.shape != np.shape(result.covariance):
-            return UncertaintyCheck(result, None, curvature=cu)
-        new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
-        worst = _widest_combination(np.asarray(fit.covariance), cu.second_moment)
-        if linear and not cu.failed:
-            return UncertaintyCheck(new, None, curvature=cu, widened=worst)
-        if linear:
-            text = ("the σ reported include the fit's second-order error (it adds "
-                    f"{cu.excess:.3g} to d²/k, below the limit){lower}")  # fmt: skip
-            return UncertaintyCheck(new, None, None, QualityIssue("linearity", False, text),
-                                    cu, worst)  # fmt: skip
-        each = float(np.max(new.std / np.maximum(result.std, 1e-300), initial=1.0))
-        text += (f"; the σ reported add that second-order error (its second moment over "
-                 f"{cu.draws} draws from the confidence region): the σ of the combination "
-                 f"it moves most is {worst:.3g}× the linearised one, the parameters' own σ "
-                 f"up to {each:.2f}×{lower}; a parametric bootstrap measures them by refits "
-                 "(pincal.identification.instrument_uncertainty(..., draws=100))")  # fmt: skip
-        return UncertaintyCheck(new, None, None, QualityIssue("linearity", False, text), cu, worst)
-    boot = bootstrap_covariance(problem, fit.values, free, draws=draws,
-                                seed=seed, progress=progress)  # fmt: skip
-    cov = widened(fit.covariance, boot)[np.ix_(machine, machine)]
-    if cov.shape != np.shape(result.covariance):
-        return UncertaintyCheck(result, None, curvature=cu)
-    new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
-    worst = float(np.max(new.std / np.maximum(result.std, 1e-300), initial=1.0))
-    issue = QualityIssue("linearity", False, text + _bootstrap_text(boot, worst))
-    return UncertaintyCheck(new, None, boot, issue, cu)
-
-
-def _widest_combination(C: np.ndarray, M: np.ndarray) -> float:
-    """Largest σ ratio over all combinations a·x of the covariance C + M to C.
-
-    √(1 + λ_max) with λ the eigenvalues of M in the coordinates where C is the identity
-    (directions C does not span left out); 1 when M vanishes.
-    """
-    if C.size == 0:
-        return 1.0
-    s, U = np.linalg.eigh(C)
-    keep = s > 1e-12 * max(float(s.max()), 1e-300)
-    W = U[:, keep] / np.sqrt(s[keep])
-    lam = np.linalg.eigvalsh(W.T @ M @ W) if keep.any() else np.zeros(1)
-    return math.sqrt(1.0 + max(float(lam[-1]), 0.0))
-
-
-def _bootstrap_text(boot: Bootstrap, worst: float) -> str:
-    """What the bootstrap found, after the sentence that says the fit is not linear."""
-    within = CONFIRMED + 3.0 / math.sqrt(2.0 * max(boot.draws, 1))  # σ̂ s.e. ≈ σ/√(2B)
-    if boot.draws >= 2 and worst <= within:
-        return (
-            f"; a parametric bootstrap ({boot.draws} seeded refits) confirms the linearised "
-            f"σ within its sampling error (up to {worst:.3g}×; the larger is reported)"
-        )
-    if boot.draws < 2:
-        return "; the bootstrap refits failed: the reported σ are a lower bound"
-    text = (
-        f"; the linearised σ are too small: the σ reported are widened by a parametric "
-        f"bootstrap ({boot.draws} seeded refits, up to {worst:.3g}× the linearised σ)"
-    )
-    if boot.failed:
-        text += (
-            f"; {boot.failed} of {boot.draws + boot.failed} refits did not converge: "
-            "the data may not bound these parameters"
-        )
-    return text
+    quality = annotations.get("quality")
+    unc = quality.get("uncertainty") if isinstance(quality, Mapping) else None
+    unc = unc if isinstance(unc, Mapping) else {}
+    method = unc.get("method")
+    if method is None and unc.get("draws"):  # an older pincal's bootstrap widening
+        return "bootstrap-widened"
+    if method in ("inflated", "second-order"):
+        return str(method)
+    return "cramer-rao" if noise_source in ("declared", "per-pose") else "linear"
 
 
 def with_uncertainty(verdict: QualityVerdict, check: UncertaintyCheck) -> QualityVerdict:

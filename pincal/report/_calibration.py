@@ -191,7 +191,10 @@ def _validation(notes: dict, plots: Path, jobs: PlotJobs) -> Section | None:
                 if v is not None:
                     prows.append([f"RMS {block_label(block, comps)}, {what}", u, _r(v)])
         if prows:
-            tables.append(Table(["Cramér–Rao prediction", "unit", "value"], prows))
+            kind = predicted.get("covariance") or "cramer-rao"
+            head = ("Cramér–Rao prediction" if kind == "cramer-rao"
+                    else f"prediction ({kind} covariance)")  # fmt: skip
+            tables.append(Table([head, "unit", "value"], prows))
     return Section("Validation", text, images, tables)
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pincal.identification import IdentificationRecord
+from pincal.identification import COVARIANCE_KINDS, IdentificationRecord, covariance_kind
 from pincal.report._document import Section, Table
 from pincal.report._parameter_plots import plot_correlation, plot_parameters
 from pincal.report._plots import plot_error_histogram, plot_errors_before_after
@@ -338,13 +338,15 @@ def prediction_section(result: IdentificationRecord) -> Section:
                      _r(float(np.sqrt(np.mean((e / result.std) ** 2))), 3)])  # fmt: skip
         maha = float(e @ np.linalg.pinv(result.covariance) @ e) / e.size
         rows.append(["Mahalanobis error / n", "", 1.0, _r(maha, 3)])
+    kind = covariance_kind(result.annotations, None if w is None else w.source)
     text = (
-        "The parameter covariance is the Cramér–Rao bound (Jᵀ Σ⁻¹ J)⁻¹ at the solution for "
-        "the stated noise. Predicted: residual RMS σ·√(redundancy / n) and χ² = 1 when the "
-        "model and noise are right; achieved: what this calibration gave."
+        f"The parameter covariance is the {COVARIANCE_KINDS[kind]}. Predicted: residual RMS "
+        "σ·√(redundancy / n) and χ² = 1 when the model and noise are right; achieved: what "
+        "this calibration gave."
     )
     return Section(
-        "Prediction (Cramér–Rao) vs achievement",
+        "Prediction (Cramér–Rao) vs achievement" if kind == "cramer-rao"
+        else "Prediction vs achievement",
         text,
         (),
         [Table(["quantity", "unit", "predicted", "achieved"], rows)],

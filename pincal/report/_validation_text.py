@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from pincal.identification import COVARIANCE_KINDS
 from pincal.io import CalibrationDirectory
 from pincal.report._sections import block_label
 from pincal.validation import ORIENTATION_CONVENTION, HeldOutValidation, MarkerErrors
@@ -75,14 +76,17 @@ def validation_text(
         value = p[key]
         return None if value is None else float(value)
 
+    kind = str(p.get("covariance") or "cramer-rao")
+    name = "Cramér–Rao" if kind == "cramer-rao" else "predicted"
     if p.get("withheld"):
-        lines.append(f"  Cramér–Rao prediction not given: {p['withheld']}")
+        lines.append(f"  {name} prediction not given: {p['withheld']}")
     else:
         lines += [
-            f"  Cramér–Rao (model) {_fmt(num('model_rms_position_mm'))}  {'':9s}"
+            f"  {name + ' (model)':18s} {_fmt(num('model_rms_position_mm'))}  {'':9s}"
             f"   {_fmt(num('model_rms_orientation_mrad'))}",
-            f"  Cramér–Rao + noise {_fmt(num('observed_rms_position_mm'))}  {'':9s}"
+            f"  {name + ' + noise':18s} {_fmt(num('observed_rms_position_mm'))}  {'':9s}"
             f"   {_fmt(num('observed_rms_orientation_mrad'))}",
+            f"  (predicted from the {COVARIANCE_KINDS.get(kind, kind)})",
         ]
     lines += [
         "",

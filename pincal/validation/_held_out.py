@@ -277,6 +277,7 @@ def validate_held_out(
     noise: NoiseModel | None = None,
     held_weak: tuple[str, ...] = (),
     joints: np.ndarray | None = None,
+    covariance_kind: str = "cramer-rao",
 ) -> HeldOutValidation:
     """Before (nominal) / after (calibrated) errors on held-out measurements.
 
@@ -299,6 +300,9 @@ def validate_held_out(
             withheld (it would be optimistic).
         joints: (m, n_act) joint values of the calibrated model's predictions [rad, m]
             (None: the commands ``meas.q_act``; a geometric calibration).
+        covariance_kind: which covariance ``covariance`` is (a key of
+            :data:`pincal.identification.COVARIANCE_KINDS`: ``cramer-rao`` only for the
+            linear one at a declared noise); recorded as the prediction's ``covariance``.
 
     Returns:
         The :class:`HeldOutValidation`.
@@ -333,4 +337,5 @@ def validate_held_out(
             f"barely determine them ({', '.join(held_weak[:5])}{more}); their error is not "
             "in the covariance, so the prediction would be optimistic"
         }
+    predicted = {**predicted, "covariance": covariance_kind}
     return HeldOutValidation(comps, groups, before, after, rp, predicted)

@@ -26,8 +26,9 @@ fit is the fit's target: what the data identify of the machine, gauge held alike
   fit's second-order error (its own curvature draws) to the covariance: the largest σ
   ratio over combinations, d²/k, the per-parameter z², and whether d² lies inside the
   joint 95 % region χ²_k(0.95) (``cover``: the same with the linear covariance);
-- with ``--boot B``: ``d2k_w`` and ``zdiag_w`` with the covariance widened by a B-refit
-  parametric bootstrap (``instrument_uncertainty(..., draws=B)``'s method).
+- with ``--boot B``: ``zdiag_b``, the per-parameter z² with the σ of a B-refit parametric
+  bootstrap (what ``pincal calibrate --bootstrap B`` reports beside the σ; its sample
+  covariance is not inverted), and ``boot_ratio_max``, its largest σ over the linear σ.
 
 One JSON line per seed; ``--summarise FILE...`` turns such files into table rows
 (:func:`summarise`).
@@ -50,7 +51,7 @@ from pincal.identification import (
     instrument_candidates,
     instrument_uncertainty,
 )
-from pincal.identification._bootstrap import bootstrap_covariance, widened
+from pincal.identification._bootstrap import bootstrap_covariance
 from pincal.identification._instrument_problem import InstrumentProblem
 from pincal.identification._linearity import check_linearity
 from pincal.measure import simulate_instrument
@@ -112,11 +113,10 @@ def draw(a: argparse.Namespace, nom, ps, seed: int) -> dict:
             "cover": bool(rec["d2k"] * k <= limit), "cover_s": bool(d2w <= limit)}  # fmt: skip
     if a.boot:
         boot = bootstrap_covariance(problem, fit.values, fit.fitted, draws=a.boot, seed=0)
-        W = widened(C, boot)
+        sb2 = np.diag(boot.covariance)
         rec |= {"boot_draws": boot.draws, "boot_failed": boot.failed,
-                "d2k_w": float(delta @ np.linalg.solve(W, delta)) / k,
-                "zdiag_w": float(np.mean(delta**2 / np.diag(W))),
-                "widen_max": float(np.max(np.sqrt(np.diag(W) / np.diag(C))))}  # fmt: skip
+                "zdiag_b": float(np.mean(delta**2 / sb2)),
+                "boot_ratio_max": float(np.max(np.sqrt(sb2 / np.diag(C))))}  # fmt: skip
     return rec
 
 

@@ -90,7 +90,9 @@ def test_report_is_self_contained_and_consistent(calibration, tmp_path):
     # the displaced pose is an outlier in all three
     assert 7 in doc["flags"]["outlier_poses"]
     assert "| 7 | " in md and "<td>7</td>" in page
-    assert "Prediction (Cramér–Rao) vs achievement" in md
+    # the noise is estimated: the linear covariance is not called a Cramér–Rao bound
+    assert "## Prediction vs achievement" in md and "Prediction (Cramér–Rao)" not in md
+    assert "not a Cramér–Rao bound: the noise is not known" in md
 
 
 def test_poorly_determined_parameter_is_flagged(tmp_path):
