@@ -8,7 +8,7 @@ formulas.
 
 from __future__ import annotations
 
-__all__ = ["chi2_sf", "f_isf", "f_sf", "t_ppf"]
+__all__ = ["chi2_isf", "chi2_sf", "f_isf", "f_sf", "norm_ppf", "t_ppf"]
 
 
 def chi2_sf(x: float, nu: float) -> float:
@@ -42,3 +42,17 @@ def t_ppf(p: float, nu: float) -> float:
     from scipy import special
 
     return float(special.stdtrit(nu, p))
+
+
+def chi2_isf(q: float, nu: float) -> float:
+    """The x with P(X > x) = q for X ~ χ²(ν)."""
+    from scipy import special
+
+    return float(special.chdtri(nu, q))
+
+
+def norm_ppf(p: float) -> float:
+    """The x with P(Z ≤ x) = p for Z ~ N(0, 1)."""
+    from scipy import special
+
+    return float(special.ndtri(p))

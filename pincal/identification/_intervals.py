@@ -17,6 +17,8 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from pincal.identification._distributions import chi2_isf, f_isf, norm_ppf, t_ppf
+
 __all__ = ["APPROXIMATE_DOF", "Intervals", "interval_quantiles"]
 
 #: below this residual dof the Student-t / F quantiles of an estimated noise are approximate
@@ -89,12 +91,10 @@ def interval_quantiles(
         estimated: the noise scale was estimated from the residuals.
         level: confidence level in (0, 1).
     """
-    from scipy import stats  # here: scipy.stats costs ~0.5 s to import
-
     k = max(int(k), 1)
     dof = min(redundancy.values()) if estimated and redundancy else None
     if dof is None or not math.isfinite(dof) or dof <= 0:
-        each = float(stats.norm.ppf(0.5 + level / 2))
-        return Intervals(level, k, None, each, float(stats.chi2.ppf(level, k)))
-    each = float(stats.t.ppf(0.5 + level / 2, dof))
-    return Intervals(level, k, float(dof), each, float(k * stats.f.ppf(level, k, dof)))
+        each = norm_ppf(0.5 + level / 2)
+        return Intervals(level, k, None, each, chi2_isf(1.0 - level, k))
+    each = t_ppf(0.5 + level / 2, dof)
+    return Intervals(level, k, float(dof), each, k * f_isf(1.0 - level, k, dof))

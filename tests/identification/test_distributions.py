@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from scipy import stats
 
-from pincal.identification._distributions import chi2_sf, f_isf, f_sf, t_ppf
+from pincal.identification._distributions import chi2_isf, chi2_sf, f_isf, f_sf, norm_ppf, t_ppf
 
 
 @pytest.mark.parametrize("nu", [1, 3, 40, 2000])
@@ -30,3 +30,10 @@ def test_f_tail_and_quantile_equal_scipy_stats(q: float, d1: int, d2: int) -> No
 @pytest.mark.parametrize("p", [0.5, 0.975, 0.999])
 def test_t_quantile_equals_scipy_stats(p: float, nu: float) -> None:
     assert t_ppf(p, nu) == pytest.approx(stats.t.ppf(p, nu), rel=1e-10, abs=1e-14)
+
+
+@pytest.mark.parametrize("nu", [1, 7, 300])
+@pytest.mark.parametrize("q", [0.5, 0.05, 1e-6])
+def test_chi2_and_normal_quantiles_equal_scipy_stats(q: float, nu: int) -> None:
+    assert chi2_isf(q, nu) == pytest.approx(stats.chi2.isf(q, nu), rel=1e-10)
+    assert norm_ppf(1 - q) == pytest.approx(stats.norm.ppf(1 - q), rel=1e-10, abs=1e-14)
