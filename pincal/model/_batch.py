@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+from collections.abc import Collection
 from dataclasses import dataclass
 
 import numpy as np
@@ -179,48 +180,66 @@ class BatchModel:
             support[j, model.idx_vs[j] : model.idx_vs[j] + model.nvs[j]] = True
         self._support = support
 
-    def _place(self, model: pin.Model) -> None:
-        """Take the joint and frame placements of ``model`` (same structure as built)."""
+    def _place(
+        self,
+        model: pin.Model,
+        joints: Collection[int] | None = None,
+        frames: Collection[int] | None = None,
+    ) -> None:
+        """Take the joint and frame placements of ``model`` (same structure as built).
+
+        ``joints`` / ``frames``: the joint ids and frame indices whose placements
+        changed since the last call (None: all).
+        """
         if self._joints:
-            self._joints = tuple(
-                dataclasses.replace(
-                    jt,
-                    R0=model.jointPlacements[j].rotation.copy(),
-                    p0=model.jointPlacements[j].translation.copy(),
+            moved = list(self._joints)
+            for j in range(1, model.njoints) if joints is None else joints:
+                M = model.jointPlacements[j]
+                moved[j - 1] = dataclasses.replace(
+                    moved[j - 1], R0=M.rotation.copy(), p0=M.translation.copy()
                 )
-                for j, jt in enumerate(self._joints, start=1)
-            )
-        joints = self._joints
+            self._joints = tuple(moved)
+        placed = self._joints
         self._groups = (
             group_joints(
-                [jt.kind for jt in joints],
-                [jt.parent for jt in joints],
-                [jt.iq for jt in joints],
-                [jt.iv for jt in joints],
-                np.array([jt.axis for jt in joints]).reshape(-1, 3),
-                np.array([jt.R0 for jt in joints]).reshape(-1, 3, 3),
-                np.array([jt.p0 for jt in joints]).reshape(-1, 3),
-                np.array([jt.axis2 for jt in joints]).reshape(-1, 3),
+                [jt.kind for jt in placed],
+                [jt.parent for jt in placed],
+                [jt.iq for jt in placed],
+                [jt.iv for jt in placed],
+                np.array([jt.axis for jt in placed]).reshape(-1, 3),
+                np.array([jt.R0 for jt in placed]).reshape(-1, 3, 3),
+                np.array([jt.p0 for jt in placed]).reshape(-1, 3),
+                np.array([jt.axis2 for jt in placed]).reshape(-1, 3),
             )
             if self.supported
             else ()
         )
-        self._frames = [
-            (int(f.parentJoint), f.placement.rotation.copy(), f.placement.translation.copy())
-            for f in model.frames
-        ]
-        self._frame_parent = np.array([f[0] for f in self._frames], dtype=int)
-        self._frame_R = np.array([f[1] for f in self._frames]).reshape(-1, 3, 3)
-        self._frame_p = np.array([f[2] for f in self._frames]).reshape(-1, 3)
+        if frames is None:
+            self._frame_parent = np.array([f.parentJoint for f in model.frames], dtype=int)
+            self._frame_R = np.empty((model.nframes, 3, 3))
+            self._frame_p = np.empty((model.nframes, 3))
+        else:
+            self._frame_R, self._frame_p = self._frame_R.copy(), self._frame_p.copy()
+        for i in range(model.nframes) if frames is None else frames:
+            M = model.frames[i].placement
+            self._frame_R[i], self._frame_p[i] = M.rotation, M.translation
 
-    def with_placements(self, model: pin.Model) -> BatchModel:
+    def with_placements(
+        self,
+        model: pin.Model,
+        joints: Collection[int] | None = None,
+        frames: Collection[int] | None = None,
+    ) -> BatchModel:
         """This batched model with the joint and frame placements of ``model``.
 
-        ``model``: a copy of this one's ``pin.Model`` whose placements were moved
-        (:mod:`pincal.model._placements`); the joint kinds and the tree are kept.
+        Args:
+            model: a copy of this one's ``pin.Model`` whose placements were moved
+                (:mod:`pincal.model._placements`); the joint kinds and the tree are kept.
+            joints: the joint ids whose placements moved (None: all).
+            frames: the frame indices whose placements moved (None: all).
         """
         new = copy.copy(self)
-        new._place(model)
+        new._place(model, joints, frames)
         return new
 
     # ------------------------------------------------------------------ kinematics
@@ -232,7 +251,7 @@ class BatchModel:
 
     def frame_placement(self, bk: BatchKinematics, fid: int) -> tuple[np.ndarray, np.ndarray]:
         """World rotation (N, 3, 3) and position (N, 3) of frame ``fid``."""
-        parent, R0, p0 = self._frames[fid]
+        parent, R0, p0 = self._frame_parent[fid], self._frame_R[fid], self._frame_p[fid]
         Rp, pp = bk.rotations[:, parent], bk.translations[:, parent]
         return mm(Rp, R0), pp + mv(Rp, p0)
 
@@ -251,14 +270,14 @@ class BatchModel:
 
     def support_of_frame(self, fid: int) -> np.ndarray:
         """(nv,) True for the tangent dofs that move frame ``fid`` (its supporting joints)."""
-        return self._support[self._frames[fid][0]]
+        return self._support[self._frame_parent[fid]]
 
     def frame_jacobian(
         self, bk: BatchKinematics, fid: int, local_world_aligned: bool = False
     ) -> np.ndarray:
         """(N, 6, nv) LOCAL (or LOCAL_WORLD_ALIGNED) Jacobian ``[v; ω]`` of frame ``fid``."""
         R, p = self.frame_placement(bk, fid)
-        cols = self._support[self._frames[fid][0]]
+        cols = self._support[self._frame_parent[fid]]
         J = np.zeros_like(bk.jacobian)
         Jv, Jw = bk.jacobian[:, :3, cols], bk.jacobian[:, 3:, cols]
         v = Jv + cross_cols(Jw, p[:, :, None])  # velocity of the frame origin

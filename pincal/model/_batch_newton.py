@@ -12,6 +12,7 @@ kinematics on it.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from functools import cached_property
 from typing import Literal, overload
 
@@ -68,10 +69,10 @@ class BatchNewton:
         queries: KinematicQueries,
         options: SolverOptions,
         branch_block: tuple[np.ndarray, np.ndarray] | None,
-        structure: BatchModel | None = None,
+        template: tuple[BatchModel, Collection[int], Collection[int]] | None = None,
     ):
         self.queries, self.options, self.branch_block = queries, options, branch_block
-        self._structure = structure
+        self._template = template
         self.model, self.name, self.closures = queries.model, queries.name, queries.closures
         self._free_v = queries.free_v
         self._point_closures_cache: dict[bytes, PointClosures] = {}
@@ -80,11 +81,13 @@ class BatchNewton:
     def batch_model(self) -> BatchModel:
         """The batched numpy kinematics of :attr:`model` (built once).
 
-        With a ``structure`` (the batched model of the mechanism this one's model was
-        moved from) only the placements are taken from :attr:`model`.
+        With a ``template`` (the batched model of the mechanism this one's model was
+        moved from, the joint ids and the frame indices that moved) only the moved
+        placements are taken from :attr:`model`.
         """
-        if self._structure is not None:
-            return self._structure.with_placements(self.model)
+        if self._template is not None:
+            batch, joints, frames = self._template
+            return batch.with_placements(self.model, joints, frames)
         return BatchModel(self.model)
 
     def kinematics_batch(self, qs: np.ndarray) -> BatchKinematics:

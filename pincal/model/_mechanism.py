@@ -131,17 +131,18 @@ class Mechanism:
         model: pin.Model,
         frame_ids: dict[str, int],
         q_guess: np.ndarray | None,
-        moved_from: Mechanism | None = None,
+        moved_from: tuple[Mechanism, set[int], set[int]] | None = None,
     ) -> None:
         """Take ``model`` as this mechanism's model: its queries, home, mobility, solvers.
 
-        ``moved_from``: the mechanism whose model ``model`` was moved from (same tree):
-        its batched kinematics and scratch data serve as templates.
+        ``moved_from``: the mechanism whose model ``model`` was moved from (same tree),
+        the ids of the joints and the indices of the frames that moved: its batched
+        kinematics and scratch data serve as templates.
         """
         self.model = model
         self.queries: KinematicQueries = KinematicQueries(
             model, self.tree, self.name, frame_ids, self.closures, self.actuated,
-            self.measured_frame, None if moved_from is None else moved_from.queries,
+            self.measured_frame, None if moved_from is None else moved_from[0].queries,
         )  # fmt: skip
         #: the frames a sensitivity needs: the measured frame and every closure frame
         self.key_frames = self.queries.key_frames
@@ -169,7 +170,7 @@ class Mechanism:
             self.queries,
             self.options,
             self.loop_solver.branch_block,
-            None if moved_from is None else moved_from.batch_model,
+            None if moved_from is None else (moved_from[0].batch_model, *moved_from[1:]),
         )
         self.batch_solver = BatchLoopSolver(kernels, self.loop_solver)
 
@@ -202,12 +203,8 @@ class Mechanism:
         moves = {j: self.tree.joints[j].origin.actInv(tree.joints[j].origin) for j in origins}
         new = copy.copy(self)
         new.tree, new._urdf_xml = tree, None
-        new._close(
-            self._placements.moved(self.model, moves),
-            self.queries.frame_ids,
-            self.q_home,
-            self,
-        )
+        model, joints, frames = self._placements.moved(self.model, moves)
+        new._close(model, self.queries.frame_ids, self.q_home, (self, joints, frames))
         return new
 
     @property

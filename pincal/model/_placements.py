@@ -69,7 +69,9 @@ class PlacementTree:
             )
             self.fixed[str(f.name)] = (index, body, tuple(below), joints)
 
-    def moved(self, model: pin.Model, moves: Mapping[str, pin.SE3]) -> pin.Model:
+    def moved(
+        self, model: pin.Model, moves: Mapping[str, pin.SE3]
+    ) -> tuple[pin.Model, set[int], set[int]]:
         """A copy of ``model`` with URDF joint origins moved: ``origin ← origin · D``.
 
         Args:
@@ -78,25 +80,32 @@ class PlacementTree:
                 the joint's own (unmoved) frame [m].
 
         Returns:
-            The moved copy (joint placements, frame placements, body inertias).
+            The moved copy (joint placements, frame placements, body inertias), the ids
+            of the joints and the indices of the frames whose placements moved.
 
         Raises:
             ModelFileError: a name that is neither a joint nor a fixed-joint frame of the
                 model (e.g. a floating joint, which has no origin parameter).
         """
         new = model.copy()
+        joints: set[int] = set()
+        frames: set[int] = set()
         for name, D in moves.items():
             if name in self.joints:
                 k = self.joints[name]
                 new.jointPlacements[k] = new.jointPlacements[k] * D
+                joints.add(k)
             elif name in self.fixed:
-                self._move_fixed(new, *self.fixed[name], D)
+                index, body, below, inside = self.fixed[name]
+                self._move_fixed(new, index, body, below, inside, D)
+                joints.update(inside)
+                frames.update(below)
             else:
                 raise ModelFileError(
                     f"joint {name!r} is neither a joint nor a fixed-joint frame of the "
                     "Pinocchio model: its origin cannot be moved"
                 )
-        return new
+        return new, joints, frames
 
     @staticmethod
     def _move_fixed(model: pin.Model, index: int, body: int, below: tuple[int, ...],
