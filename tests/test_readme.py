@@ -32,6 +32,7 @@ LONG = {
     "scripts/bench_design.py": "benchmark (timings, no assertion)",
     "scripts/bench_instruments.py": "benchmark (timings, no assertion)",
     "scripts/bench_open_world.py": "benchmark; equality in tests/model/test_batch_nonsquare.py",
+    "scripts/bench_realdata.py": "benchmark (timings, no assertion; minutes per column)",
     "scripts/bench_vs_figaroh.py": "needs the optional [bench] extra",
     "scripts/studies/stewart_pose_selection.py": "Monte-Carlo; core claim in test_seed000_study.py",
     "scripts/studies/pkm5_qpso.py": "QPSO study; core claim in test_identify_qpso.py",
