@@ -32,7 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ConvergenceError, SingularConfigurationError
-from pincal.model._assembly import Extra, closure_newton
+from pincal.model._assembly import Extra, closure_newton, say_length
 from pincal.model._kinematics import KinematicQueries
 from pincal.model._newton import Solution, SolverOptions
 
@@ -270,7 +270,7 @@ class LoopSolver:
             raise ConvergenceError(
                 f"forward kinematics failed at {where} (q_act = {np.round(q_act, 6).tolist()}): "
                 f"the loops do not close on the assembly branch of home (residual "
-                f"{exc.residual * 1e3:.3g} mm); {exc}",
+                f"{say_length(exc.residual)}); {exc}",
                 pose_index=pose_index,
                 residual=exc.residual,
             ) from exc
