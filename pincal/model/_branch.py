@@ -13,7 +13,11 @@ them. Here a solution is accepted only when it is on the branch of ``q_home``:
   when those carrying most of the idle motion at home are dropped (column-pivoted QR
   of the home nullspace). Its sign is ``idle_branch``; ``home_branch`` stays 0 for
   such mechanisms;
-* a direct solve from the start configuration that fails this test is followed by a
+* a direct solve is a predictor-corrector step over the whole path (first-order
+  passive motion, then Newton) kept only on home's branch *and* near its prediction
+  (correction ≤ a quarter of the predicted motion): a bare Newton from a far start can
+  land on another assembly mode with the same sign (a Delta with two legs flipped);
+* a direct solve from the start configuration that fails these tests is followed by a
   direct solve from home (a warm start never loses a pose the solve from home closes),
   then by a continuation: a straight path in actuator space from the start (then from home),
   in steps that halve until each step converges, keeps the sign and moves the passive
@@ -165,8 +169,8 @@ class LoopSolver:
         starts = [start] if start is self.q_home else [start, self.q_home]
         for q0 in starts:
             try:
-                sol = self.newton(self.queries.with_actuators(q0, q_act), self._free_v)
-                if self.on_branch(sol):
+                sol, ok = self._step(q0, q_act, self.options)
+                if ok:
                     return sol
             except ConvergenceError:
                 pass
@@ -191,15 +195,7 @@ class LoopSolver:
             a = a0 + (t + h) * (q_act - a0)
             ok = False
             try:
-                pred = self._predict(q, a - self.queries.actuators_of(q))
-                cand = self.newton(
-                    self.queries.with_actuators(pred, a), self._free_v, options=corrector
-                )
-                correction = pin.difference(self.model, pred, cand.q)[self._free_v]
-                moved = pin.difference(self.model, q, pred)[self._free_v]
-                ok = self.on_branch(cand) and (
-                    np.linalg.norm(correction) <= 0.25 * np.linalg.norm(moved) + 1e-7
-                )
+                cand, ok = self._step(q, a, corrector)
             except ConvergenceError as exc:
                 residual = exc.residual
             if ok:
@@ -215,6 +211,26 @@ class LoopSolver:
                     )
         assert sol is not None
         return sol
+
+    def _step(self, q: np.ndarray, a: np.ndarray, options: SolverOptions) -> tuple[Solution, bool]:
+        """One predictor-corrector step from the closed ``q`` to actuator values ``a``.
+
+        The passive joints move as the first-order predictor says, then Newton corrects.
+        The step is kept (True) when the solution is on home's branch and near the
+        prediction: its correction is at most a quarter of the predicted passive motion
+        (a solve that lands on another assembly mode — e.g. two legs of a Delta flipped,
+        which keeps the sign of the branch determinant — moves far from it). A direct
+        solve is this step over the whole path: never a bare Newton from a far start.
+
+        Raises:
+            ConvergenceError: the corrector does not converge.
+        """
+        pred = self._predict(q, a - self.queries.actuators_of(q))
+        cand = self.newton(self.queries.with_actuators(pred, a), self._free_v, options=options)
+        correction = pin.difference(self.model, pred, cand.q)[self._free_v]
+        moved = pin.difference(self.model, q, pred)[self._free_v]
+        near = np.linalg.norm(correction) <= 0.25 * np.linalg.norm(moved) + 1e-7
+        return cand, bool(near and self.on_branch(cand))
 
     def _predict(self, q: np.ndarray, da: np.ndarray) -> np.ndarray:
         """First-order passive motion for an actuator step ``da`` (configuration)."""
