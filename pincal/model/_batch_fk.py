@@ -146,9 +146,9 @@ class BatchLoopSolver:
             numpy.linalg.LinAlgError: a passive system is exactly singular.
         """
         nv, free, act = self.model.nv, self._free_v, self.queries.act_v_arr
-        Jc = self.kernels.closure_terms_batch(bk, columns=np.arange(nv))[1]
+        r, Jc = self.kernels.closure_terms_batch(bk, columns=np.arange(nv))
         da = a - self.queries.actuator_values_batch(bk.q)
-        rate = (Jc[:, :, act] @ da[..., None])[..., 0]
+        rate = (Jc[:, :, act] @ da[..., None])[..., 0] + r  # closing unclosed starts too
         step = self.kernels.passive_steps(Jc[:, :, free], rate)
         DV = np.zeros((a.shape[0], nv))
         DV[:, free] = step
@@ -249,7 +249,9 @@ class BatchLoopSolver:
         done = self.close_chunks(Q, R, p, J, Jf, travel)
         # a direct solve is a continuation step over the whole path: it must stay near
         # its prediction (else it may have landed on another mode with the same sign)
-        done &= travel <= 0.25 * moved + 1e-7
+        near = travel <= 0.25 * moved + 1e-7
+        signed = self.accept(Jf.copy(), done)[1]  # the sign alone: the last resort
+        done &= near
         factor, ok, risky = self.accept(Jf, done)
         # not closed or on another branch (not merely near a singularity): continuation
         retry = np.nonzero(~ok & ~(done & risky))[0]
@@ -258,6 +260,7 @@ class BatchLoopSolver:
             home = np.tile(self.q_home, (retry.size, 1))
             Qc, reached, gave_up = self._continue_batch(A[retry], home)
             hopeless[retry[gave_up]] = True
+            hopeless &= ~signed  # the pose-by-pose solver falls back on those
             idx = retry[reached]
             if idx.size:
                 Rc, pc, Jc, Jfc = R[idx], p[idx], J[idx], Jf[idx]

@@ -167,11 +167,14 @@ class LoopSolver:
         # direct solves first, from the start then from home (so a guess never makes a
         # pose fail that the solve from home closes), then the continuations
         starts = [start] if start is self.q_home else [start, self.q_home]
+        far: Solution | None = None  # on the branch, but far from its prediction
         for q0 in starts:
             try:
                 sol, ok = self._step(q0, q_act, self.options)
                 if ok:
                     return sol
+                if far is None and self.on_branch(sol):
+                    far = sol
             except ConvergenceError:
                 pass
         last: ConvergenceError | None = None
@@ -180,6 +183,8 @@ class LoopSolver:
                 return self._continue(q0, q_act)
             except ConvergenceError as exc:
                 last = exc
+        if far is not None:  # no path gets there (e.g. next to a singularity): the sign
+            return far  # is all there is to go by
         assert last is not None
         raise last
 
@@ -233,11 +238,16 @@ class LoopSolver:
         return cand, bool(near and self.on_branch(cand))
 
     def _predict(self, q: np.ndarray, da: np.ndarray) -> np.ndarray:
-        """First-order passive motion for an actuator step ``da`` (configuration)."""
-        J = self.queries.closure_jacobian(q)
+        """First-order passive motion for an actuator step ``da`` (configuration).
+
+        It also closes the residual at q to first order (a warm start from a neighbouring
+        geometry: its step is the Newton step, not a far jump).
+        """
+        data = self.queries.compute(q)
+        J, r = self.queries.jacobian_of(data), self.queries.residual_of(data)
         dv = np.zeros(self.model.nv)
         dv[self.queries.act_v_arr] = da
-        rhs = -(J[:, self.queries.act_v_arr] @ da)
+        rhs = -(J[:, self.queries.act_v_arr] @ da) - r  # closing an unclosed start too
         dv[self._free_v] = np.linalg.lstsq(J[:, self._free_v], rhs, rcond=None)[0]
         q_act_part = self.queries.with_actuators(q, self.queries.actuators_of(q) + da)
         dv_free = np.zeros(self.model.nv)
