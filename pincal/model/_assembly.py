@@ -8,6 +8,7 @@ diagnoses why loops stay open and measures the mobility there (:class:`Mobility`
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -25,10 +26,28 @@ from pincal.errors import (
 from pincal.model._kinematics import KinematicQueries
 from pincal.model._newton import Solution, SolverOptions, damped_newton
 
-__all__ = ["Assembly", "Mobility", "closure_newton"]
+__all__ = ["Assembly", "Mobility", "closure_newton", "model_size", "say_length"]
 
 #: extra residual rows of a Newton solve: ``extra(data) -> (r (k,), J (k, nv))``
 Extra = Callable[[pin.Data], tuple[np.ndarray, np.ndarray]]
+
+
+def say_length(value: float) -> str:
+    """A length [m] (or angle [rad]) in readable units: nm, µm, mm or m, 3 digits."""
+    a = abs(value)
+    if not np.isfinite(a):
+        return f"{value} m"
+    for unit, scale, below in (("nm", 1e9, 1e-6), ("µm", 1e6, 1e-3), ("mm", 1e3, 1.0)):
+        if a < below:
+            return f"{value * scale:.3g} {unit}"
+    return f"{value:.3g} m"
+
+
+def model_size(model: pin.Model) -> float:
+    """The size of a model [m]: its longest joint or frame offset (at least 1 mm)."""
+    offsets: list[float] = [float(np.linalg.norm(M.translation)) for M in model.jointPlacements]
+    offsets += [float(np.linalg.norm(f.placement.translation)) for f in model.frames]
+    return max([1e-3, *offsets])
 
 
 def closure_newton(
@@ -40,8 +59,12 @@ def closure_newton(
 ) -> Solution:
     """Damped Newton on the closure (+ optional extra) residual over tangent dofs ``free``.
 
-    ``extra`` is a callable of the computed data returning ``(r (k,), J (k, nv))``.
+    ``extra`` is a callable of the computed data returning ``(r (k,), J (k, nv))``;
+    with extra rows (inverse kinematics) the solve must close exactly: a target the
+    mechanism cannot reach is no redundant closure (``redundant_tol`` 0).
     """
+    if extra is not None and options.redundant_tol:
+        options = dataclasses.replace(options, redundant_tol=0.0)
     data = queries.data()
     extra_jacobian = [np.zeros((0, queries.model.nv))]
 
@@ -133,7 +156,29 @@ class Assembly:
             sol = self._newton(guess, all_v)
         except ConvergenceError as exc:
             raise ClosureError(self._open_closure_diagnosis(guess, exc.residual)) from exc
+        if sol.remainder > 0.0:
+            self.notes.append(self._least_squares_note(sol))
         return sol.q
+
+    def _redundant_loops(self, q: np.ndarray, tol: float) -> list[str]:
+        """The closures (``a ↔ b``) with a residual row above ``tol`` at q."""
+        r = np.abs(self.queries.closure_residual(q))
+        sizes = np.cumsum([0] + [c.size for c in self.closures])
+        return [
+            f"{c.frame_a} ↔ {c.frame_b}"
+            for c, (a, b) in zip(self.closures, itertools.pairwise(sizes), strict=True)
+            if np.max(r[a:b], initial=0.0) > tol
+        ]
+
+    def _least_squares_note(self, sol: Solution) -> str:
+        loops = self._redundant_loops(sol.q, self.options.tol)
+        return (
+            f"loop{'s' if len(loops) > 1 else ''} {', '.join(loops)} "
+            f"{'are' if len(loops) > 1 else 'is'} over-constrained: closed to "
+            f"{sol.residual:.2g} m in the least-squares sense (redundant closure rows the "
+            f"geometry cannot close exactly, e.g. numbers rounded by a CAD export; accepted "
+            f"up to {self.options.redundant_tol:.2g} m, 1e-6 of the model size)"
+        )
 
     def _open_closure_diagnosis(self, guess: np.ndarray, residual: float) -> str:
         """Why the loops stay open: frame names, the home guess, or the geometry."""
@@ -144,9 +189,21 @@ class Assembly:
         rows = self.queries.closure_jacobian(guess)[k0 : k0 + c.size]
         head = (
             f"mechanism {self.name!r} cannot be assembled: closure {c.frame_a} ↔ {c.frame_b} "
-            f"stays open (residual {residual * 1e3:.3f} mm/mrad after Newton; "
-            f"{np.max(np.abs(r)) * 1e3:.3f} at the home guess). "
+            f"stays open (residual {say_length(residual)} (or rad) after Newton; "
+            f"{say_length(float(np.max(np.abs(r))))} at the home guess). "
         )
+        rank = int(
+            np.linalg.matrix_rank(rows, tol=self.options.rcond * max(np.abs(rows).max(), 1e-300))
+        )
+        if 0 < rank < c.size and residual <= 1e3 * (self.options.redundant_tol or 0.0):
+            return head + (
+                f"The closure is over-constrained (its {c.size} rows have rank {rank}): it "
+                f"closes only in the least-squares sense, and the redundant rows miss by "
+                f"more than the {say_length(self.options.redundant_tol or 0.0)} accepted "
+                f"(1e-6 of the model size). Make the redundant geometry consistent (e.g. "
+                f"parallel axes, anchors in one plane, numbers not rounded), or declare the "
+                f"closure with fewer components ('3d', or pincal's 'planar'/'revolute' kinds)."
+            )
         if self._same_body(c.frame_a, c.frame_b) or np.max(np.abs(rows), initial=0.0) < 1e-12:
             return head + (
                 "No joint moves these two frames relative to each other: the frame names are "

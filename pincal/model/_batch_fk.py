@@ -3,7 +3,11 @@
 :class:`BatchLoopSolver` closes the loops for N actuator rows together, on
 :class:`~pincal.model._batch_newton.BatchNewton`
 (closure terms, passive factors, Newton iterations in chunks of :data:`CHUNK` poses).
-A pose is accepted when its residual is below ``options.tol`` and it is on home's
+Each direct solve starts at the first-order prediction from its start (home) and, as
+a continuation step over the whole path, must stay near it (the sum of its Newton
+steps at most a quarter of the predicted passive motion: a bare Newton from a far
+start can land on another assembly mode of the same sign). A pose is accepted when
+its residual is below ``options.tol`` and it is on home's
 assembly branch (sign of det of the passive closure Jacobian or of its branch block,
 from the same factors). Poses whose residual does not decrease, that leave the
 branch, or whose condition bound comes near ``options.max_condition`` are handed to
@@ -89,8 +93,7 @@ class BatchLoopSolver:
             rows that reached it, and the mask (n,) of the rows given up on (step below
             1/4096 of the path: the pose-by-pose continuation's own failure).
         """
-        n, nv = A.shape[0], self.model.nv
-        free, act = self._free_v, self.queries.act_v_arr
+        n, free = A.shape[0], self._free_v
         a0 = self.queries.actuator_values_batch(Q0)
         t, h = np.zeros(n), np.full(n, 0.25)
         Q = np.array(Q0)
@@ -105,18 +108,11 @@ class BatchLoopSolver:
                 break
             h[i] = np.minimum(h[i], 1.0 - t[i])
             a = a0[i] + (t[i] + h[i])[:, None] * (A[i] - a0[i])
-            bk = BatchKinematics(Q[i], R[i], p[i], J[i])
-            Jc = self.kernels.closure_terms_batch(bk, columns=np.arange(nv))[1]
-            da = a - self.queries.actuator_values_batch(Q[i])
-            rate = (Jc[:, :, act] @ da[..., None])[..., 0]
             try:
-                step = self.kernels.passive_steps(Jc[:, :, free], rate)
+                cand, moved = self._predict_batch(BatchKinematics(Q[i], R[i], p[i], J[i]), a)
             except np.linalg.LinAlgError:  # an exactly singular row: all to the fallback
                 alive[i] = False
                 break
-            DV = np.zeros((i.size, nv))
-            DV[:, free] = step
-            cand = self.queries.actuators_batch(self.kernels.batch_model.integrate(Q[i], DV), a)
             travel = np.zeros(i.size)
             Rc, pc, Jjc = np.empty_like(R[i]), np.empty_like(p[i]), np.empty_like(J[i])
             Jf = np.empty((i.size, self.queries.n_closure_rows, free.size))
@@ -132,7 +128,7 @@ class BatchLoopSolver:
             )
             Jf[~conv] = np.eye(*Jf.shape[1:])
             ok = conv & (self.kernels.passive_factor(Jf).sign() == self.idle_branch)
-            ok &= travel <= 0.25 * np.linalg.norm(step, axis=1) + 1e-7
+            ok &= travel <= 0.25 * moved + 1e-7
             Q[i[ok]], t[i[ok]] = cand[ok], t[i[ok]] + h[i[ok]]
             R[i[ok]], p[i[ok]], J[i[ok]] = Rc[ok], pc[ok], Jjc[ok]
             h[i] = np.where(ok, 2.0 * h[i], 0.5 * h[i])
@@ -141,14 +137,75 @@ class BatchLoopSolver:
         reached = alive & (t >= 1.0)
         return self.queries.actuators_batch(Q[reached], A[reached]), reached, gave_up
 
+    def _predict_batch(self, bk: BatchKinematics, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """First-order predictions (n, nq) and their passive motion norms (n,).
+
+        From the configurations of ``bk`` to the actuator rows ``a`` (n, n_act).
+
+        Raises:
+            numpy.linalg.LinAlgError: a passive system is exactly singular.
+        """
+        nv, free, act = self.model.nv, self._free_v, self.queries.act_v_arr
+        r, Jc = self.kernels.closure_terms_batch(bk, columns=np.arange(nv))
+        da = a - self.queries.actuator_values_batch(bk.q)
+        rate = (Jc[:, :, act] @ da[..., None])[..., 0] + r  # closing unclosed starts too
+        step = self.kernels.passive_steps(Jc[:, :, free], rate)
+        DV = np.zeros((a.shape[0], nv))
+        DV[:, free] = step
+        cand = self.queries.actuators_batch(self.kernels.batch_model.integrate(bk.q, DV), a)
+        return cand, np.linalg.norm(step, axis=1)
+
+    def _predicted_starts(self, G: np.ndarray, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Start configurations (N, nq) of the direct solves from ``G`` (N, nq) to ``A``.
+
+        The first-order prediction from each row of G (a continuation step over the
+        whole path; G's rows equal to home share one kinematics), with the norms (N,)
+        of the predicted passive motions; rows whose prediction is singular start at G
+        with the actuators set (and motion 0: they must close right there).
+        """
+        N = A.shape[0]
+        if np.array_equal(G, np.broadcast_to(self.q_home, G.shape)):
+            kin = self.kernels.batch_model.kinematics(self.q_home[None])
+            bk = BatchKinematics(
+                G,
+                np.broadcast_to(kin.rotations, (N, *kin.rotations.shape[1:])),
+                np.broadcast_to(kin.translations, (N, *kin.translations.shape[1:])),
+                np.broadcast_to(kin.jacobian, (N, *kin.jacobian.shape[1:])),
+            )
+        else:
+            bk = self.kernels.batch_model.kinematics(G)
+        try:
+            cand, moved = self._predict_batch(bk, A)
+        except np.linalg.LinAlgError:
+            return self.queries.actuators_batch(G, A), np.zeros(N)
+        bad = ~np.all(np.isfinite(cand), axis=1) | ~np.isfinite(moved)
+        cand[bad], moved[bad] = self.queries.actuators_batch(G[bad], A[bad]), 0.0
+        return cand, moved
+
     def close_chunks(
-        self, Q: np.ndarray, R: np.ndarray, p: np.ndarray, J: np.ndarray, Jf: np.ndarray
+        self,
+        Q: np.ndarray,
+        R: np.ndarray,
+        p: np.ndarray,
+        J: np.ndarray,
+        Jf: np.ndarray,
+        travel: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Batched Newton in chunks of :data:`CHUNK` rows, in place: converged mask (N,)."""
+        """Batched Newton in chunks of :data:`CHUNK` rows, in place: converged mask (N,).
+
+        ``travel`` (N,), when given, receives the sum of each row's step norms.
+        """
         done = np.zeros(Q.shape[0], dtype=bool)
         for s in range(0, Q.shape[0], CHUNK):
             rows = slice(s, s + CHUNK)
-            done[rows] = self.kernels.newton_chunk(Q[rows], R[rows], p[rows], J[rows], Jf[rows])
+            done[rows] = self.kernels.newton_chunk(
+                Q[rows],
+                R[rows],
+                p[rows],
+                J[rows],
+                Jf[rows],
+                travel=None if travel is None else travel[rows],
+            )
         return done
 
     def accept(
@@ -183,12 +240,18 @@ class BatchLoopSolver:
         """
         N, nj, k = A.shape[0], self.model.njoints, self._free_v.size
         m = self.queries.n_closure_rows
-        Q = self.queries.actuators_batch(Q0, A)
+        Q, moved = self._predicted_starts(Q0, A)
         R = np.empty((N, nj, 3, 3))
         p = np.empty((N, nj, 3))
         J = np.empty((N, 6, self.model.nv))
         Jf = np.empty((N, m, k))
-        done = self.close_chunks(Q, R, p, J, Jf)
+        travel = np.zeros(N)
+        done = self.close_chunks(Q, R, p, J, Jf, travel)
+        # a direct solve is a continuation step over the whole path: it must stay near
+        # its prediction (else it may have landed on another mode with the same sign)
+        near = travel <= 0.25 * moved + 1e-7
+        signed = self.accept(Jf.copy(), done)[1]  # the sign alone: the last resort
+        done &= near
         factor, ok, risky = self.accept(Jf, done)
         # not closed or on another branch (not merely near a singularity): continuation
         retry = np.nonzero(~ok & ~(done & risky))[0]
@@ -197,6 +260,7 @@ class BatchLoopSolver:
             home = np.tile(self.q_home, (retry.size, 1))
             Qc, reached, gave_up = self._continue_batch(A[retry], home)
             hopeless[retry[gave_up]] = True
+            hopeless &= ~signed  # the pose-by-pose solver falls back on those
             idx = retry[reached]
             if idx.size:
                 Rc, pc, Jc, Jfc = R[idx], p[idx], J[idx], Jf[idx]

@@ -207,6 +207,13 @@ class BatchNewton:
                 J[:, rows] = closure_jacobian_batch(c, Ra, pa, Rb, pb, Ja, Jb)[:, :, cols]
         return r, J
 
+    def _least_squares_steps(self, Jf: np.ndarray, r: np.ndarray) -> np.ndarray | None:
+        """Newton steps (N, k) of redundant systems, None where one is exactly singular."""
+        try:
+            return self.passive_steps(Jf, r)
+        except np.linalg.LinAlgError:
+            return None
+
     def newton_chunk(
         self,
         Q: np.ndarray,
@@ -229,6 +236,9 @@ class BatchNewton:
         ``max_iterations`` bounds the Newton iterations; ``travel`` (N,), when given,
         receives the sum of the step norms of each row (≥ its distance moved);
         ``polish=False`` stops at convergence (intermediate points of a continuation).
+        With more closure rows than passive dofs and ``options.redundant_tol`` > 0 a row
+        also converges as a least-squares closure (``_newton``): the part of its
+        residual a step removes is ≤ ``tol`` and the remainder ≤ ``redundant_tol``.
         """
         bm, opt, free = self.batch_model, self.options, self._free_v
         N = Q.shape[0]
@@ -239,6 +249,8 @@ class BatchNewton:
         prev = np.full(N, np.inf)
         Q_done = np.empty_like(Q)
         polish_steps = opt.polish_steps if polish else 0
+        k = free.size
+        least_squares = bool(opt.redundant_tol) and self.queries.n_closure_rows > k
         for _ in range(max_iterations + polish_steps + 1):
             ia = np.nonzero(active)[0]
             if ia.size == 0:
@@ -248,6 +260,11 @@ class BatchNewton:
             rmax = np.max(np.abs(r), axis=1)
             norm = np.linalg.norm(r, axis=1)
             had = done[ia]  # polishing: a solution is recorded
+            steps = self._least_squares_steps(Jf, r) if least_squares else None
+            if steps is not None:  # least-squares closures: the removable part decides
+                removable = np.max(np.abs((Jf @ steps[..., None])[..., 0]), axis=1)
+                remainder = np.max(np.abs(r + (Jf @ steps[..., None])[..., 0]), axis=1)
+                rmax = np.where(remainder <= (opt.redundant_tol or 0.0), removable, rmax)
             better = (rmax <= opt.tol) & (rmax < 0.5 * best[ia])
             ic = ia[better]
             done[ic], best[ic], Q_done[ic] = True, rmax[better], Q[ic]
@@ -269,7 +286,7 @@ class BatchNewton:
             polished[ia[polish]] += 1
             prev[ig] = norm[go]
             try:
-                step = self.passive_steps(Jf[go], r[go])
+                step = self.passive_steps(Jf[go], r[go]) if steps is None else steps[go]
             except np.linalg.LinAlgError:
                 active[ig] = False
                 Q[ig[done[ig]]] = Q_done[ig[done[ig]]]

@@ -13,7 +13,11 @@ them. Here a solution is accepted only when it is on the branch of ``q_home``:
   when those carrying most of the idle motion at home are dropped (column-pivoted QR
   of the home nullspace). Its sign is ``idle_branch``; ``home_branch`` stays 0 for
   such mechanisms;
-* a direct solve from the start configuration that fails this test is followed by a
+* a direct solve is a predictor-corrector step over the whole path (first-order
+  passive motion, then Newton) kept only on home's branch *and* near its prediction
+  (correction ≤ a quarter of the predicted motion): a bare Newton from a far start can
+  land on another assembly mode with the same sign (a Delta with two legs flipped);
+* a direct solve from the start configuration that fails these tests is followed by a
   direct solve from home (a warm start never loses a pose the solve from home closes),
   then by a continuation: a straight path in actuator space from the start (then from home),
   in steps that halve until each step converges, keeps the sign and moves the passive
@@ -32,7 +36,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ConvergenceError, SingularConfigurationError
-from pincal.model._assembly import Extra, closure_newton
+from pincal.model._assembly import Extra, closure_newton, say_length
 from pincal.model._kinematics import KinematicQueries
 from pincal.model._newton import Solution, SolverOptions
 
@@ -163,11 +167,14 @@ class LoopSolver:
         # direct solves first, from the start then from home (so a guess never makes a
         # pose fail that the solve from home closes), then the continuations
         starts = [start] if start is self.q_home else [start, self.q_home]
+        far: Solution | None = None  # on the branch, but far from its prediction
         for q0 in starts:
             try:
-                sol = self.newton(self.queries.with_actuators(q0, q_act), self._free_v)
-                if self.on_branch(sol):
+                sol, ok = self._step(q0, q_act, self.options)
+                if ok:
                     return sol
+                if far is None and self.on_branch(sol):
+                    far = sol
             except ConvergenceError:
                 pass
         last: ConvergenceError | None = None
@@ -176,6 +183,8 @@ class LoopSolver:
                 return self._continue(q0, q_act)
             except ConvergenceError as exc:
                 last = exc
+        if far is not None:  # no path gets there (e.g. next to a singularity): the sign
+            return far  # is all there is to go by
         assert last is not None
         raise last
 
@@ -191,15 +200,7 @@ class LoopSolver:
             a = a0 + (t + h) * (q_act - a0)
             ok = False
             try:
-                pred = self._predict(q, a - self.queries.actuators_of(q))
-                cand = self.newton(
-                    self.queries.with_actuators(pred, a), self._free_v, options=corrector
-                )
-                correction = pin.difference(self.model, pred, cand.q)[self._free_v]
-                moved = pin.difference(self.model, q, pred)[self._free_v]
-                ok = self.on_branch(cand) and (
-                    np.linalg.norm(correction) <= 0.25 * np.linalg.norm(moved) + 1e-7
-                )
+                cand, ok = self._step(q, a, corrector)
             except ConvergenceError as exc:
                 residual = exc.residual
             if ok:
@@ -216,12 +217,37 @@ class LoopSolver:
         assert sol is not None
         return sol
 
+    def _step(self, q: np.ndarray, a: np.ndarray, options: SolverOptions) -> tuple[Solution, bool]:
+        """One predictor-corrector step from the closed ``q`` to actuator values ``a``.
+
+        The passive joints move as the first-order predictor says, then Newton corrects.
+        The step is kept (True) when the solution is on home's branch and near the
+        prediction: its correction is at most a quarter of the predicted passive motion
+        (a solve that lands on another assembly mode — e.g. two legs of a Delta flipped,
+        which keeps the sign of the branch determinant — moves far from it). A direct
+        solve is this step over the whole path: never a bare Newton from a far start.
+
+        Raises:
+            ConvergenceError: the corrector does not converge.
+        """
+        pred = self._predict(q, a - self.queries.actuators_of(q))
+        cand = self.newton(self.queries.with_actuators(pred, a), self._free_v, options=options)
+        correction = pin.difference(self.model, pred, cand.q)[self._free_v]
+        moved = pin.difference(self.model, q, pred)[self._free_v]
+        near = np.linalg.norm(correction) <= 0.25 * np.linalg.norm(moved) + 1e-7
+        return cand, bool(near and self.on_branch(cand))
+
     def _predict(self, q: np.ndarray, da: np.ndarray) -> np.ndarray:
-        """First-order passive motion for an actuator step ``da`` (configuration)."""
-        J = self.queries.closure_jacobian(q)
+        """First-order passive motion for an actuator step ``da`` (configuration).
+
+        It also closes the residual at q to first order (a warm start from a neighbouring
+        geometry: its step is the Newton step, not a far jump).
+        """
+        data = self.queries.compute(q)
+        J, r = self.queries.jacobian_of(data), self.queries.residual_of(data)
         dv = np.zeros(self.model.nv)
         dv[self.queries.act_v_arr] = da
-        rhs = -(J[:, self.queries.act_v_arr] @ da)
+        rhs = -(J[:, self.queries.act_v_arr] @ da) - r  # closing an unclosed start too
         dv[self._free_v] = np.linalg.lstsq(J[:, self._free_v], rhs, rcond=None)[0]
         q_act_part = self.queries.with_actuators(q, self.queries.actuators_of(q) + da)
         dv_free = np.zeros(self.model.nv)
@@ -270,7 +296,7 @@ class LoopSolver:
             raise ConvergenceError(
                 f"forward kinematics failed at {where} (q_act = {np.round(q_act, 6).tolist()}): "
                 f"the loops do not close on the assembly branch of home (residual "
-                f"{exc.residual * 1e3:.3g} mm); {exc}",
+                f"{say_length(exc.residual)}); {exc}",
                 pose_index=pose_index,
                 residual=exc.residual,
             ) from exc

@@ -15,6 +15,7 @@ solver, each built from explicit arguments, and delegates to them.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import logging
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -24,7 +25,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import UnreachablePoseError
-from pincal.model._assembly import Assembly
+from pincal.model._assembly import Assembly, model_size
 from pincal.model._batch import BatchKinematics, BatchModel
 from pincal.model._batch_fk import BatchLoopSolver
 from pincal.model._batch_newton import BatchNewton
@@ -43,7 +44,7 @@ from pincal.model._description import (
 from pincal.model._frames import measured_frame_candidates
 from pincal.model._inverse import inverse_configuration
 from pincal.model._kinematics import KinematicQueries, Kinematics
-from pincal.model._newton import SolverOptions
+from pincal.model._newton import REDUNDANT_RTOL, SolverOptions
 from pincal.model._placements import PlacementTree
 from pincal.model._sidecar import WORKSPACE_POSE_KEYS, Sidecar, Workspace
 from pincal.model._urdf import UrdfTree
@@ -108,6 +109,10 @@ class Mechanism:
         self.source = source
         self.options = options or SolverOptions()
         model, notes = build_model(urdf_xml, self.tree, self.sidecar)
+        if self.options.redundant_tol is None:  # least-squares closures: scaled to the model
+            self.options = dataclasses.replace(
+                self.options, redundant_tol=REDUNDANT_RTOL * model_size(model)
+            )
         frame_ids = {f.name: i for i, f in enumerate(model.frames)}
         self.closures = parse_closures(self.sidecar, frame_ids, self.tree)
         self.measured_frame = resolve_measured_frame(

@@ -319,7 +319,8 @@ def _lock(
             a: j for a, j in sidecar["actuator_names"].items() if j not in gone
         }
     said = [
-        f"{k} = {v:.6g}" + (f" (a spring, MJCF stiffness {stiffness[k]:g})" * (k in stiffness))
+        f"{k} = {v:.6g}"
+        + (f" (a spring, MJCF stiffness {stiffness[k]:g})" if k in stiffness else "")
         for k, v in values.items()
     ]
     kept = {j: k for j, k in stiffness.items() if j not in gone}

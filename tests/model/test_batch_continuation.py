@@ -38,14 +38,17 @@ def rows(mech):
 
 
 def _direct_only(mech, rows):
-    """Rows a batched Newton from home alone accepts (no continuation)."""
-    Q = np.tile(mech.q_home, (len(rows), 1))
-    Q = mech.queries.actuators_batch(Q, rows)  # the Newton layer alone, for the check
+    """Rows a direct batched solve from home alone accepts (no continuation): Newton from
+    the first-order prediction, kept near it (a continuation step over the whole path)."""
+    home = np.tile(mech.q_home, (len(rows), 1))
+    Q, moved = mech.batch_solver._predicted_starts(home, rows)  # the direct layer alone
     R = np.empty((len(rows), mech.model.njoints, 3, 3))
     p = np.empty((len(rows), mech.model.njoints, 3))
     J = np.empty((len(rows), 6, mech.model.nv))
     Jf = np.empty((len(rows), mech.n_closure_rows, mech.free_dofs.size))
-    done = mech.batch_solver.close_chunks(Q, R, p, J, Jf)
+    travel = np.zeros(len(rows))
+    done = mech.batch_solver.close_chunks(Q, R, p, J, Jf, travel)
+    done &= travel <= 0.25 * moved + 1e-7
     return mech.batch_solver.accept(Jf, done)[1]
 
 
