@@ -16,6 +16,7 @@ from pincal.report._document import Section, Table
 from pincal.report._parameter_plots import plot_correlation, plot_parameters
 from pincal.report._plots import plot_error_histogram, plot_errors_before_after
 from pincal.report._render import PlotJobs
+from pincal.report._uncertainty_text import uncertainty_lines
 
 __all__ = [
     "BLOCKS",
@@ -378,5 +379,9 @@ def quality_section(notes: dict) -> Section | None:
         )
     if q.get("duplicate_rows"):
         text += f"\n\nDuplicate rows (copy, original): {q['duplicate_rows']}."
+    said = [line.strip().replace("the σ above", "the σ below")
+            for line in uncertainty_lines(q.get("uncertainty") or {})]  # fmt: skip
+    if said:  # how the σ were made: method, Student-t / F intervals, a bootstrap beside
+        text += "\n\n" + "\n\n".join(s[0].upper() + s[1:] + "." for s in said)
     tables = [Table(["verdict", "check", "finding"], rows)] if rows else []
     return Section("Quality gate", text, (), tables)
