@@ -35,7 +35,7 @@ from pincal.measure import (
     InstrumentData,
     Measurements,
 )
-from pincal.model import BatchKinematics, Mechanism, ParameterSet
+from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
 from pincal.sensitivity import Identifiability, analyse_jacobian, sensitivities_batch
 
 __all__ = ["Dataset", "InstrumentProblem"]
@@ -110,7 +110,7 @@ class InstrumentProblem:
                                   np.zeros(len(self.sockets.names))])  # fmt: skip
         self.sockets.start(mech, qs, self.x0)
         self._qs: np.ndarray | None = None
-        self._cache: tuple[bytes, Mechanism] | None = None
+        self._cache: tuple[bytes, Linearisation, Mechanism] | None = None
 
     @property
     def fixes_scale(self) -> bool:
@@ -142,12 +142,17 @@ class InstrumentProblem:
 
     def mechanism(self, x: np.ndarray) -> Mechanism:
         """The mechanism with the machine part of ``x`` applied (cached for the last one)."""
+        return self._applied(x)[1]
+
+    def _applied(self, x: np.ndarray) -> tuple[Linearisation, Mechanism]:
+        """The parameters linearised at the machine part of ``x`` and their mechanism."""
         values = np.asarray(x, dtype=float)[: self.n_machine]
         key = values.tobytes()
         if self._cache is None or self._cache[0] != key:
-            mech = self.mech if not np.any(values) else self.params.apply(self.mech, values)
-            self._cache = (key, mech)
-        return self._cache[1]
+            lin = self.params.linearise(values)
+            mech = self.mech if not np.any(values) else self.params.apply(self.mech, lin)
+            self._cache = (key, lin, mech)
+        return self._cache[1], self._cache[2]
 
     def cost(self, x: np.ndarray) -> float:
         """0.5·‖whitened residual‖²; +inf when the model cannot be assembled."""
@@ -185,11 +190,10 @@ class InstrumentProblem:
         The batched sensitivities of :func:`pincal.sensitivity.sensitivities_batch`
         (the kernels of the pose route) over every pose of every dataset.
         """
-        mech = self.mechanism(x)
+        lin, mech = self._applied(x)
         qs, bk = self._configurations(mech)
         if jacobian:
-            values = np.asarray(x, dtype=float)[: self.n_machine]
-            sens = sensitivities_batch(mech, self.params, qs, bk, values)
+            sens = sensitivities_batch(mech, self.params, qs, bk, lin)
             return sens.positions, sens.rotations, sens.jacobian
         if bk is not None and mech.batch_model.supported:
             R, P = mech.batch_model.frame_placement(bk, mech.frame_id(mech.measured_frame))

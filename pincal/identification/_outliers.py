@@ -57,11 +57,6 @@ _PAIR_BUDGET = 50_000  # pairs judged at most (all pairs up to ≈ 316 poses)
 _CHUNK = 4096  # pairs judged at once (memory ≈ _CHUNK · (2k)² · 40 bytes + 2 · _CHUNK · k · p · 8)
 
 
-def _f_isf(q: float, d1: float, d2: float) -> float:
-    """The F(d1, d2) quantile exceeded with probability q."""
-    return f_isf(q, d1, d2)
-
-
 def _deleted(M: np.ndarray, r: np.ndarray) -> np.ndarray:
     """rᵀ M⁻¹ r per batch, M (…, n, n) = I − H_SS with its eigenvalues floored at _MIN_EIG."""
     vals, vecs = np.linalg.eigh(M)
@@ -152,16 +147,16 @@ def deletion_outliers(
         d = _deleted(np.eye(k)[None] - Ui @ np.swapaxes(Ui, 1, 2), r)
         s2 = np.maximum(float(np.sum(r**2)) - d, 1e-300) / (nu - k)
         F = d / (k * s2)
-        crit = _f_isf(risk / (2 * m), k, nu - k)
+        crit = f_isf(risk / (2 * m), k, nu - k)
         if math.isnan(bound):
             bound = math.sqrt(k * crit)
         worst = int(np.argmax(F))
         if F[worst] > crit:
             out = [worst]
         elif nu - 2 * k >= 1 and rows.size >= 2:
-            member = _f_isf(risk / (2 * m), k, nu - 2 * k)
+            member = f_isf(risk / (2 * m), k, nu - 2 * k)
             i, j, FS = _worst_pair(Ui, r, d, nu, member)
-            if not FS > _f_isf(risk / (m * (m - 1)), 2 * k, nu - 2 * k):
+            if not FS > f_isf(risk / (m * (m - 1)), 2 * k, nu - 2 * k):
                 break
             out = [i, j]
         else:
@@ -221,7 +216,7 @@ def refit_outliers(
         F = [(dS - (d(S[:n] + S[n + 1:]) if len(S) > 1 else 0.0)) / (k * s2)
              for n in range(len(S))]  # fmt: skip
         weakest = int(np.argmin(F))
-        if F[weakest] > _f_isf(risk / (2 * m), k, dof):
+        if F[weakest] > f_isf(risk / (2 * m), k, dof):
             break
         S.pop(weakest)
     else:
