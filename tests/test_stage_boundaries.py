@@ -2,7 +2,7 @@
 
 A stage is a subpackage of ``pincal/``. DESIGN.md section 1 (and the docstring of
 ``pincal/__init__.py``) fixes their order, lowest first: model → {machines, sensitivity}
-→ measure → design → identification → {compensation, validation} → io → report / viz →
+→ measure → design → identification → {compensation, validation} → io → workflow → report / viz →
 cli. The rules checked here (issue 24), without exceptions:
 
 * another stage is entered only through its ``__init__`` or its declared interface
@@ -36,9 +36,10 @@ RANK = {
     "compensation": 5,
     "validation": 5,
     "io": 6,
-    "report": 7,
-    "viz": 7,
-    "cli": 8,
+    "workflow": 7,
+    "report": 8,
+    "viz": 8,
+    "cli": 9,
 }
 
 #: Modules a stage offers to later stages besides its ``__init__`` (no underscore).

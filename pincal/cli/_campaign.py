@@ -64,8 +64,10 @@ Campaign file keys (YAML; relative paths are relative to the file):
     method: gauss-newton     gauss-newton | lm | qpso | qpso-stepwise | step-planned
     model: geometric         geometric[+compliance][+gain][+harmonics][+temperature]
                              [+strut-compliance] (terms)
-    loss: linear             linear | huber | soft_l1 | cauchy (marker campaigns)
-    prior: null              marker campaigns: "LEN_MM,ANG_MRAD" or auto (by CV)
+    loss: null               linear | huber | soft_l1 | cauchy; marker campaigns also auto
+                             (their default: huber when the outlier test names poses)
+    prior: null              marker campaigns: auto (default: σ by CV) | none |
+                             "LEN_MM,ANG_MRAD"
     instrument: NAME         optional profile judging an estimated noise: laser-tracker |
                              motion-capture | ballbar | touch-probe | cmm
     bootstrap: 0             N > 0: N parametric-bootstrap refits, their σ reported beside
@@ -131,7 +133,7 @@ class Identification:
     """Identification options (``pincal calibrate``)."""
 
     method: str = "gauss-newton"
-    loss: str = "linear"
+    loss: str | None = None
     prior: str | None = None
     instrument: str | None = None
     model: str = "geometric"
@@ -147,15 +149,17 @@ class Identification:
             raise CampaignError(f"{key}.model: {exc}") from exc
 
         choice(self.method, tuple(METHODS), f"{key}.method")
-        choice(self.loss, ("linear", "huber", "soft_l1", "cauchy"), f"{key}.loss")
+        if self.loss is not None:
+            choice(self.loss, ("auto", "linear", "huber", "soft_l1", "cauchy"), f"{key}.loss")
         if self.prior is not None:
-            from pincal.cli._markers import parse_prior
+            from pincal.workflow import parse_prior
 
             try:
                 parse_prior(self.prior)
-            except Exception as exc:  # click.BadParameter
+            except PincalError as exc:
                 raise CampaignError(
-                    f"{key}.prior: {shown(self.prior)} is not 'auto' or 'LEN_MM,ANG_MRAD'"
+                    f"{key}.prior: {shown(self.prior)} is not 'auto', 'none' or "
+                    "'LEN_MM,ANG_MRAD'"
                 ) from exc
         if self.instrument is not None:
             choice(self.instrument, tuple(INSTRUMENT_PROFILES), f"{key}.instrument")
@@ -250,11 +254,12 @@ class Campaign:
                 "no markers section"
             )
         ident = self.identification
-        robust = ident.loss != "linear" and ident.method != "lm"
+        robust = ident.loss not in (None, "linear") and ident.method != "lm"
+        robust = robust or ident.loss == "auto"
         if self.markers is None and (ident.prior is not None or robust):
             raise CampaignError(
-                "identification.prior (and a robust loss without method: lm) apply to "
-                "marker campaigns (a 'markers' section)"
+                "identification.prior (and loss: auto, or a robust loss without method: lm) "
+                "apply to marker campaigns (a 'markers' section)"
             )
         if m.source == "file" and m.poses is not None:
             raise CampaignError("measurements.poses applies to source: simulated only")

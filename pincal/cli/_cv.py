@@ -59,11 +59,11 @@ def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> CrossValidationSum
         return summary
     markers = cal.manifest.get("markers")
     if markers:
-        from pincal.cli._markers import fold_fitter, rebuild
+        from pincal.workflow import rebuild, replay_procedure
 
         setup, mech, meas = rebuild(cal)
-        fit = fold_fitter(mech, setup, markers, registration_only=False)
-        base = fold_fitter(mech, setup, markers, registration_only=True)
+        fit = replay_procedure(mech, setup, markers, registration_only=False)
+        base = replay_procedure(mech, setup, markers, registration_only=True)
         baseline_name = "registration only"
     else:
         meas, fit, base = _pose_fit(cal)

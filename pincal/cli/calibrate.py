@@ -84,10 +84,10 @@ from pincal.identification import METHODS
 )
 @click.option(
     "--loss",
-    type=click.Choice(["linear", "huber", "soft_l1", "cauchy"]),
-    default="linear",
-    show_default=True,
-    help="Robust loss (needs --method lm); poses it down-weights are reported.",
+    type=click.Choice(["auto", "linear", "huber", "soft_l1", "cauchy"]),
+    default=None,
+    help="Robust loss (needs --method lm); poses it down-weights are reported. Default: "
+    "linear; with --link auto (least squares, then huber when the outlier test names poses).",
 )
 @click.option(
     "--force",
@@ -163,7 +163,7 @@ def calibrate(
       pincal calibrate hexaslide_6pus --data m.csv --noise 0.01,0.02 --out cal/
       pincal calibrate wedge3 --data m.csv --params patent --method lm --loss huber --out cal/
       pincal calibrate tiago --link arm_7_link --data mocap.csv --marker-columns x1,y1,z1 \\
-          --prior auto --out cal/        markers in an unknown instrument frame
+          --out cal/        markers in an unknown instrument frame (prior, loss: auto)
     """
     from pincal.cli._gate import apply_gate, bootstrap_lines, gate_limits, honest_uncertainty
     from pincal.cli._joint_terms import carrying, read_payload, terms_texts
@@ -204,6 +204,10 @@ def calibrate(
     terms = split_model(error_model)
     load = read_payload(payload)
 
+    if link is None and loss == "auto":
+        raise click.BadParameter("auto applies to marker tables (--link); give linear or a "
+                                 "robust loss with --method lm", param_hint="--loss")  # fmt: skip
+    loss = loss or ("auto" if link is not None else "linear")
     if loss != "linear" and method != "lm" and link is None:
         raise click.BadParameter(
             f"a robust loss needs --method lm, not {method}", param_hint="--loss"
@@ -222,7 +226,7 @@ def calibrate(
         )
         declared = {"position": pos_mm, "orientation": ori_mrad}
     if link is not None:
-        from pincal.cli._markers import setup_from_options
+        from pincal.cli._markers import marker_settings, setup_from_options
 
         if terms or load is not None:
             raise click.BadParameter(
@@ -249,8 +253,8 @@ def calibrate(
         lock_spec = ",".join(f"{k}={v!r}" for k, v in model_opts.lock.items()) or None
         setup = setup_from_options(link, instrument_frame, marker_spec, marker_columns,
                                    length_unit, lock_spec)  # fmt: skip
-        calibrate_markers(model, data, setup, preset, method, out, as_json, force, limits,
-                           prior_spec, loss, profile)  # fmt: skip
+        settings = marker_settings(preset, method, prior_spec, loss, limits, profile)
+        calibrate_markers(model, data, setup, settings, out, as_json, force)
         return
     if prior_spec is not None:
         raise click.BadParameter("--prior applies to marker calibrations (--link)",

@@ -97,7 +97,7 @@ def _calibrate(c: Campaign, p: Paths) -> list[str] | None:
     if c.markers is not None:
         args += c.markers.options()
         args += ["--prior", i.prior] if i.prior else []
-    args += ["--loss", i.loss] if i.loss != "linear" else []
+    args += ["--loss", i.loss] if i.loss is not None else []
     args += ["--model", i.model] if i.model != "geometric" else []
     ctx = click.get_current_context(silent=True)  # `pincal run --force` passes it on
     args += ["--force"] if ctx is not None and ctx.params.get("force") else []

@@ -20,6 +20,7 @@ from pincal.identification._cross_validation import (
     position_errors,
 )
 from pincal.identification._data_check import check_measurements
+from pincal.identification._held_out_gate import HeldOutEvidence, held_out_verdict
 from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._identify import identify
 from pincal.identification._inflation import Inflation, inflated_covariance
@@ -123,6 +124,7 @@ __all__ = [
     "Fitted",
     "GateLimits",
     "GaussNewtonOptions",
+    "HeldOutEvidence",
     "IdentifiabilitySummary",
     "IdentificationProblem",
     "IdentificationRecord",
@@ -166,6 +168,7 @@ __all__ = [
     "default_instrument",
     "fit_markers",
     "fitted",
+    "held_out_verdict",
     "identify",
     "identify_instruments",
     "inflated_covariance",

@@ -127,6 +127,8 @@ class QualityVerdict:
         chi2_blocks: per block ``(name, χ², ν, p-value)`` (declared noise only).
         probes: per misspecification probe ``(name, explained share, p-value, size)``.
         profile: the instrument profile the estimated noise was compared with ("").
+        held_out: the held-out evidence that judged a fit with estimated noise
+            (:meth:`HeldOutEvidence.to_dict`), or None.
     """
 
     issues: tuple[QualityIssue, ...] = ()
@@ -145,6 +147,7 @@ class QualityVerdict:
     chi2_blocks: tuple[tuple[str, float, float, float], ...] = ()
     probes: tuple[tuple[str, float, float, str], ...] = ()
     profile: str = ""
+    held_out: dict[str, Any] | None = None
 
     @property
     def passed(self) -> bool:
@@ -203,6 +206,7 @@ class QualityVerdict:
                 for n, e, p, t in self.probes
             ],
             "instrument_profile": self.profile or None,
+            "held_out": self.held_out,
             "limits": {
                 "max_reduced_chi2": lim.max_reduced_chi2,
                 "max_length_change_m": lim.max_length_change,

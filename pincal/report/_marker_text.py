@@ -1,9 +1,9 @@
 """The marker lines of the plain-text report of a marker calibration (`calibrate --link`).
 
-Rendered from the fit (:class:`pincal.identification.MarkerFit`), its marker set-up
-(:class:`pincal.measure.MarkerSetup`) and the prior chosen: the registration, the
-identified instrument frame and marker(s) with 2σ [mm, mrad], the prior, the solver,
-the notes.
+Rendered from the run (:class:`pincal.workflow.MarkerRun`): the registration, the
+identified instrument frame and marker(s) with 2σ [mm, mrad], the prior (and its
+cross-validation table), the loss, the held-out comparison with the registration
+alone, the solver, the notes.
 """
 
 from __future__ import annotations
@@ -12,9 +12,10 @@ from collections.abc import Sequence
 
 import pinocchio as pin
 
-from pincal.identification import MarkerFit, Prior
+from pincal.identification import MarkerFit
 from pincal.measure import MarkerSetup, marker_frame
 from pincal.model import BASE_JOINT, TOOL_JOINT
+from pincal.workflow import MarkerRun
 
 __all__ = ["marker_lines", "solver_line"]
 
@@ -52,29 +53,16 @@ def _identified(fit: MarkerFit, setup: MarkerSetup) -> list[str]:
     return lines
 
 
-def marker_lines(
-    fit: MarkerFit,
-    setup: MarkerSetup,
-    prior: Prior | None,
-    prior_cv: Sequence[tuple[float | None, float]] | None,
-    method: str,
-    loss: str,
-    notes: Sequence[str],
-) -> list[str]:
-    """The report lines of a marker calibration (registration, prior, guards).
+def marker_lines(run: MarkerRun) -> list[str]:
+    """The report lines of a marker calibration: registration, prior, loss, held-out, notes.
 
     Args:
-        fit: the fit.
-        setup: its marker set-up (copies of one marker left out).
-        prior: the prior on the machine's parameters, or None.
-        prior_cv: ``--prior auto``'s table (σ [mm, mrad] or None, held-out RMS [mm]).
-        method: the solver asked for.
-        loss: the loss (``"linear"``, ``"huber"``, …).
-        notes: the notes of the calibration (the fit's included).
+        run: the calibration (:class:`pincal.workflow.MarkerRun`).
 
     Returns:
         The lines, the first one blank.
     """
+    fit, setup, prior = run.fit, run.setup, run.prior
     reg = fit.registration
     mk = ", ".join(f"{float(v) * 1e3:.2f}" for v in reg.marker)
     also = "".join(f"; marker {k + 2}: columns {' '.join(c)}"
@@ -92,13 +80,27 @@ def marker_lines(
     else:
         lines.append(f"prior on the machine's parameters: σ {prior.length * 1e3:.3g} mm, "
                      f"{prior.angle * 1e3:.3g} mrad about nominal")  # fmt: skip
-    if prior_cv:
-        tried = "; ".join(("none" if s is None else f"σ {s:g}") + f" → {rms:.3f} mm"
-                          for s, rms in prior_cv)  # fmt: skip
-        lines.append(f"  chosen by 5-fold cross-validation (seed 0), held-out RMS: {tried}")
-    solver = solver_line(fit.method, method, loss)
+    k, seed = run.settings.folds, run.settings.seed
+    if run.choice.chosen:
+        tried = "; ".join(f"σ {s:g} → {rms:.3f} mm" for s, rms in run.choice.table)
+        lines.append(f"  chosen by {k}-fold cross-validation (seed {seed}), held-out RMS: {tried}")
+    if run.settings.loss == "auto":
+        lines.append(f"loss: {run.loss} (auto: least squares unless the outlier test names "
+                     "poses)")  # fmt: skip
+    held = run.verdict.held_out
+    if held is not None:
+        cal, base = held["calibrated"], held["baseline"]
+        chosen = (
+            " (the prior chosen on these folds)" if held["settings_chosen_on_these_folds"] else ""
+        )
+        lines.append(
+            f"held-out ({k}-fold, seed {seed}){chosen}: RMS {cal['held_out_rms_mm']:.3f} mm "
+            f"calibrated, {base['held_out_rms_mm']:.3f} mm {base['name']}; `pincal validate "
+            "--cv` refits every fold from scratch"
+        )
+    solver = solver_line(fit.method, run.settings.method, run.loss)
     lines += [solver] if solver else []
-    lines += [f"note: {n}" for n in notes]
+    lines += [f"note: {n}" for n in (*run.notes, *run.warnings)]
     return lines
 
 

@@ -20,6 +20,7 @@ from pincal.cli import main
 from pincal.identification import kfold
 from pincal.measure import MarkerSetup, marker_mechanism
 from pincal.model import BASE_JOINT, TOOL_JOINT, parameters, sample_actuators, with_joint_origin
+from pincal.workflow import PRIOR_GRID
 
 ROOT = Path(__file__).resolve().parents[2]
 T_TRUE = pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.2, 0.7), np.array([1.2, -0.4, 0.3]))
@@ -119,13 +120,19 @@ def test_full_calibration_recovers_the_arm_and_validates_by_cv(tmp_path):
 
 
 def test_no_gain_is_said_plainly(tmp_path):
-    """A robot without errors: the full model cannot beat registration only."""
+    """A robot without errors: the full model cannot beat registration only.
+
+    calibrate refuses it, naming both held-out RMS; forced, validate --cv says it too.
+    """
     mech, actual = _truth(0.0)
     q = sample_actuators(mech, 30, np.random.default_rng(11))
     _table(tmp_path / "m.csv", actual, q, 1e-4, 12)
-    r = _run("calibrate", "ur5", "--link", "wrist_3_link", "--data", tmp_path / "m.csv",
-             "--marker-columns", "mx,my,mz", "--length-unit", "mm",
-             "--out", tmp_path / "cal")  # fmt: skip
+    args = ("calibrate", "ur5", "--link", "wrist_3_link", "--data", tmp_path / "m.csv",
+            "--marker-columns", "mx,my,mz", "--length-unit", "mm", "--out", tmp_path / "cal")
+    r = _run(*args)
+    assert r.exit_code != 0 and "no held-out benefit" in r.output, r.output
+    assert "registration only" in r.output and not (tmp_path / "cal").exists()
+    r = _run(*args, "--force")
     assert r.exit_code == 0, r.output
     out = _run("validate", tmp_path / "cal", "--cv", 3)
     assert out.exit_code == 0, out.output
@@ -200,12 +207,14 @@ def test_prior_auto_is_chosen_by_cv_and_recorded(tmp_path):
     assert r.exit_code == 0, r.output
     markers = json.loads(r.output.splitlines()[-1])["markers"]
     table = markers["prior_cv"]
-    assert [t["sigma"] for t in table] == [None, 0.3, 1.0, 3.0, 10.0]
+    assert [t["sigma"] for t in table] == list(PRIOR_GRID)
     best = min(table, key=lambda t: t["held_out_rms_mm"])
     chosen = markers["prior"]
-    assert (chosen is None) == (best["sigma"] is None)
-    if chosen is not None:
-        assert chosen["length_mm"] == pytest.approx(best["sigma"])
+    assert chosen["length_mm"] == pytest.approx(best["sigma"])
+    quality = json.loads(r.output.splitlines()[-1])["quality"]
+    held = quality["held_out"]
+    assert held["calibrated"]["held_out_rms_mm"] == pytest.approx(best["held_out_rms_mm"])
+    assert held["settings_chosen_on_these_folds"] is True
     bad = _run("calibrate", "ur5", "--data", tmp_path / "m.csv", "--prior", "1,1",
                "--out", tmp_path / "c2")  # fmt: skip
     assert bad.exit_code != 0 and "--prior applies to marker calibrations" in bad.output

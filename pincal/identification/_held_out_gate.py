@@ -1,0 +1,114 @@
+"""The gate of real data: held-out prediction decides, the probes describe.
+
+With the noise estimated from the residuals (real measurements of unknown quality) the
+misspecification probes test "is there structure beyond white noise?", which real
+data always answer yes (joint elasticity, backlash, a capture system's distortion): a
+probe's p-value is then no reason to refuse. What decides whether a calibration helps
+is whether it predicts poses it did not see better than its baseline (the registration
+alone for a marker table: instrument frame and marker fitted, the robot left nominal).
+:func:`held_out_verdict` turns the probes' refusals into diagnostics (their size and
+p-value stay in the verdict) and refuses only when cross-validation says the
+calibration predicts worse than the baseline.
+
+With declared noise (an instrument's σ known) the gate of :func:`check_quality` is
+unchanged: there a probe's significance is measured against the instrument itself.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from pincal.identification._cause import likely_cause
+from pincal.identification._cross_validation import CrossValidation, compare
+from pincal.identification._result import IdentificationResult
+from pincal.identification._verdict import QualityIssue, QualityVerdict
+
+__all__ = ["HeldOutEvidence", "held_out_verdict"]
+
+
+@dataclass(frozen=True)
+class HeldOutEvidence:
+    """K-fold held-out errors of a calibration and of its baseline, on the same folds.
+
+    Attributes:
+        calibrated: the calibration procedure's cross-validation.
+        baseline: the baseline procedure's (same folds).
+        baseline_name: what the baseline is, in words (``registration only``).
+        selected: the calibration's settings were chosen on these folds (its held-out
+            RMS is then the lowest of several, slightly optimistic).
+    """
+
+    calibrated: CrossValidation
+    baseline: CrossValidation
+    baseline_name: str
+    selected: bool = False
+
+    @property
+    def gain(self) -> tuple[float, float]:
+        """(baseline − calibrated held-out mean squared error [m²], its standard error)."""
+        gain, se, _ = compare(self.calibrated, self.baseline)
+        return gain, se
+
+    def describe(self) -> str:
+        """One line: both held-out RMS [mm] and the gain with its standard error."""
+        gain, se = self.gain
+        k = len(self.calibrated.folds)
+        return (
+            f"{k}-fold held-out RMS {self.calibrated.rms * 1e3:.3f} mm calibrated, "
+            f"{self.baseline.rms * 1e3:.3f} mm {self.baseline_name} (mean squared error "
+            f"{'lower' if gain >= 0 else 'higher'} by {abs(gain) * 1e6:.3g} ± "
+            f"{se * 1e6:.2g} mm²)"
+        )
+
+    def to_dict(self) -> dict:
+        """JSON: both procedures' held-out figures [mm], the gain [mm²], the folds' seed use."""
+        gain, se = self.gain
+        return {
+            "folds": len(self.calibrated.folds),
+            "calibrated": self.calibrated.to_dict(),
+            "baseline": {"name": self.baseline_name, **self.baseline.to_dict()},
+            "gain_mse_mm2": gain * 1e6,
+            "gain_standard_error_mm2": se * 1e6 if np.isfinite(se) else None,
+            "settings_chosen_on_these_folds": self.selected,
+        }
+
+
+def held_out_verdict(
+    verdict: QualityVerdict, evidence: HeldOutEvidence, result: IdentificationResult
+) -> QualityVerdict:
+    """The verdict of a fit with estimated noise, judged by its held-out prediction.
+
+    Probe refusals (``model``) become warnings; a calibration whose held-out mean
+    squared error is not below the baseline's refuses (``held-out``); one whose gain is
+    within its standard error is written with a warning. Other refusals (solver,
+    parameter changes, breakdown, singular poses, units) stand.
+    """
+    issues = [
+        replace(i, refuse=False, message=i.message + " (a diagnostic: with the noise "
+                "estimated, held-out prediction decides)") if i.kind == "model" else i
+        for i in verdict.issues
+    ]  # fmt: skip
+    gain, se = evidence.gain
+    if gain <= 0:
+        issues.append(QualityIssue(
+            "held-out", True, f"the calibration predicts poses it did not see no better than "
+            f"the {evidence.baseline_name}: {evidence.describe()}",
+        ))  # fmt: skip
+    elif gain <= se:
+        issues.append(QualityIssue(
+            "held-out", False, f"the calibration beats the {evidence.baseline_name} on "
+            f"held-out poses by less than its standard error: {evidence.describe()}",
+        ))  # fmt: skip
+    out = replace(verdict, issues=tuple(issues), held_out=evidence.to_dict())
+    if out.passed:
+        return replace(out, cause="", cause_text="")
+    if {i.kind for i in out.refusals} == {"held-out"}:
+        return replace(out, cause="no held-out benefit", cause_text=(
+            f"the data do not support calibrating the machine's geometry beyond the "
+            f"{evidence.baseline_name}; more poses spread over the workspace, or a smaller "
+            "preset (--params), may help."
+        ))  # fmt: skip
+    cause, text = likely_cause(out, result, len(evidence.calibrated.held_out))
+    return replace(out, cause=cause, cause_text=text)

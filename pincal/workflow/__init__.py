@@ -1,0 +1,40 @@
+"""Stage 8 — a calibration as the commands run it, callable from Python.
+
+The orchestration of a calibration — read the data, settle the settings the data
+decide, fit, judge, cross-validate — is here, under the command line; a command parses
+its options, calls one function of this stage and prints what it returns. Nothing here
+prints or writes files.
+
+- :func:`calibrate_markers` (``pincal calibrate --link``): a marker table in an
+  unknown instrument frame, with the defaults of real data (:class:`MarkerSettings`);
+  :func:`rebuild` and :func:`replay_procedure` run it again for ``validate --cv``.
+"""
+
+from __future__ import annotations
+
+from pincal.workflow._marker_replay import rebuild, replay_procedure
+from pincal.workflow._marker_run import (
+    MISFIT_RMS,
+    ROBUST_LOSS,
+    MarkerRun,
+    calibrate_markers,
+    marker_procedure,
+)
+from pincal.workflow._marker_settings import PRIOR_GRID, MarkerSettings, parse_prior
+from pincal.workflow._prior_choice import PriorChoice, choose_prior, cross_validated
+
+__all__ = [
+    "MISFIT_RMS",
+    "PRIOR_GRID",
+    "ROBUST_LOSS",
+    "MarkerRun",
+    "MarkerSettings",
+    "PriorChoice",
+    "calibrate_markers",
+    "choose_prior",
+    "cross_validated",
+    "marker_procedure",
+    "parse_prior",
+    "rebuild",
+    "replay_procedure",
+]

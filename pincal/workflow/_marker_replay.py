@@ -1,0 +1,77 @@
+"""A marker calibration run again on other poses: what ``validate --cv`` refits.
+
+:func:`rebuild` reads back what a marker calibration fitted (its set-up, the marker
+mechanism, the data file, checked unchanged by its SHA-256);
+:func:`replay_procedure` is the fit it ran — preset, method, the loss used, the prior
+(``auto`` chosen again inside the poses given, so a held-out fold never chooses it) —
+as measurements → calibrated mechanism.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from pincal.errors import PincalError
+from pincal.identification import Prior, fit_markers
+from pincal.io import read_marker_sets, sha256_file
+from pincal.measure import MarkerSetup, Measurements, marker_mechanism
+from pincal.model import Mechanism
+from pincal.workflow._marker_run import marker_procedure
+from pincal.workflow._prior_choice import choose_prior
+
+__all__ = ["rebuild", "replay_procedure"]
+
+
+def rebuild(cal: Any) -> tuple[MarkerSetup, Mechanism, tuple[Measurements, ...]]:
+    """(setup, mechanism, one measurement set per marker) of a marker calibration.
+
+    Args:
+        cal: a :class:`pincal.io.CalibrationDirectory` of a marker calibration.
+
+    Raises:
+        PincalError: the calibration records no data file, or the file is gone or changed.
+    """
+    doc = cal.manifest.get("markers") or {}
+    setup = MarkerSetup.from_dict(doc)
+    files = cal.manifest.get("data_files") or []
+    if not files:
+        raise PincalError(f"{cal.path}: the calibration records no data file")
+    path = files[0]["path"]
+    try:
+        changed = sha256_file(path) != files[0]["sha256"]
+    except PincalError as exc:
+        raise PincalError(f"cross-validation needs the fitted data file: {exc}") from exc
+    if changed:
+        raise PincalError(f"{path} changed since the calibration was written; re-run calibrate")
+    mech = marker_mechanism(cal.model_source or cal.model, setup)
+    return setup, mech, tuple(read_marker_sets(path, mech, setup))
+
+
+def _recorded_prior(doc: dict[str, Any]) -> Prior | None:
+    p = doc.get("prior")
+    return None if p is None else Prior(p["length_mm"] * 1e-3, p["angle_mrad"] * 1e-3)
+
+
+def replay_procedure(
+    mech: Mechanism, setup: MarkerSetup, doc: dict[str, Any], registration_only: bool
+) -> Callable[[Any], Mechanism]:
+    """Measurements → calibrated mechanism, as the calibration of ``doc`` ran.
+
+    ``doc`` is the calibration's ``markers`` record; ``registration_only`` gives the
+    baseline (instrument frame + marker fitted, the robot nominal). The loss is the one
+    the calibration used (``auto`` settled on all its poses); a prior chosen by ``auto``
+    is chosen again on the poses given, with the calibration's K.
+    """
+    if registration_only:
+        return lambda meas: fit_markers(mech, setup, meas, registration_only=True).calibrated
+    preset, method = doc.get("preset", "chain"), doc.get("method", "gauss-newton")
+    procedure = marker_procedure(mech, setup, preset, method, doc.get("loss", "linear"))
+    if doc.get("prior_spec") != "auto":
+        return procedure(_recorded_prior(doc))
+    k, seed = int(doc.get("cv_folds", 5)), int(doc.get("cv_seed", 0))
+
+    def nested(meas: Any) -> Mechanism:
+        return procedure(choose_prior(procedure, meas, k, seed).prior)(meas)
+
+    return nested

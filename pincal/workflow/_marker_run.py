@@ -1,0 +1,193 @@
+"""A marker table calibrated as ``pincal calibrate --link`` does it, without the CLI.
+
+:func:`calibrate_markers` reads the table, registers the instrument frame and the
+marker(s) in closed form, settles the prior and the loss (:class:`MarkerSettings`),
+fits the machine with them, judges the fit (:func:`pincal.identification.check_quality`,
+then :func:`pincal.identification.held_out_verdict`: with the noise estimated, K-fold
+held-out prediction against the registration alone decides) and returns everything a
+report or a calibration directory needs as one :class:`MarkerRun`. Nothing is written.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pincal.errors import UnknownNameError
+from pincal.identification import (
+    HeldOutEvidence,
+    MarkerFit,
+    Prior,
+    QualityIssue,
+    QualityVerdict,
+    check_quality,
+    cross_validate,
+    fit_markers,
+    held_out_verdict,
+    is_registration,
+    stacked_measurements,
+)
+from pincal.io import distinct_markers, read_marker_data
+from pincal.measure import MarkerSetup, Measurements, marker_mechanism
+from pincal.model import Mechanism
+from pincal.sensitivity import parameters
+from pincal.workflow._marker_doc import marker_doc
+from pincal.workflow._marker_settings import MarkerSettings, parse_prior
+from pincal.workflow._prior_choice import PriorChoice, choose_prior, cross_validated
+
+__all__ = ["MISFIT_RMS", "ROBUST_LOSS", "MarkerRun", "calibrate_markers", "marker_procedure"]
+
+#: registration RMS [m] beyond which the table does not describe the nominal robot
+MISFIT_RMS = 0.02
+#: the loss ``loss="auto"`` refits with when the outlier test names poses
+ROBUST_LOSS = "huber"
+
+Progress = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class MarkerRun:
+    """A marker calibration as :func:`calibrate_markers` ran it.
+
+    Attributes:
+        fit: the fit (:class:`pincal.identification.MarkerFit`).
+        meas: one measurement set per marker (copies of one marker left out).
+        setup: the marker set-up fitted (copies left out).
+        settings: the settings asked for.
+        loss: the loss used (``settings.loss`` settled).
+        choice: the prior used, with the held-out error of the procedure.
+        verdict: the quality gate's verdict (judged by held-out prediction).
+        notes: what was left out or decided, in words.
+        warnings: findings worth a warning that the verdict does not hold.
+    """
+
+    fit: MarkerFit
+    meas: tuple[Measurements, ...]
+    setup: MarkerSetup
+    settings: MarkerSettings
+    loss: str
+    choice: PriorChoice
+    verdict: QualityVerdict
+    notes: tuple[str, ...]
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def prior(self) -> Prior | None:
+        return self.choice.prior
+
+    def doc(self) -> dict[str, Any]:
+        """The ``markers`` entry of the manifest / identification.json."""
+        return marker_doc(self)
+
+
+def marker_procedure(
+    mech: Mechanism, setup: MarkerSetup, preset: str, method: str, loss: str
+) -> Callable[[Prior | None], Callable[[Any], Mechanism]]:
+    """Prior → (measurements → calibrated mechanism): the fit that is cross-validated."""
+
+    def with_prior(prior: Prior | None) -> Callable[[Any], Mechanism]:
+        def fit(meas: Any) -> Mechanism:
+            return fit_markers(mech, setup, meas, preset, method, prior, loss=loss).calibrated
+
+        return fit
+
+    return with_prior
+
+
+def _misfit_note(rms: float) -> str:
+    return (
+        f"the registration leaves {rms * 1e3:.3g} mm RMS, more than {MISFIT_RMS * 1e3:g} mm: "
+        "a nominal robot seen by a capture system fits to millimetres, so the table and the "
+        "model disagree — check the joint columns (mapping, unit, reference pose: columns, "
+        "joint_units, joint_reference), the joints locked and their values, the marker's link "
+        "and the marker columns' unit"
+    )
+
+
+def _gate(fit: MarkerFit, meas: tuple[Measurements, ...], settings: MarkerSettings):
+    """The gate's verdict on a marker fit (before the held-out judgement)."""
+    if len(meas) == 1:
+        return check_quality(fit.result, meas[0], mech=fit.registration.mechanism,
+                             limits=settings.limits, instrument=settings.instrument)  # fmt: skip
+    # the gate's per-pose tests assume one measured frame: judged without them
+    verdict = check_quality(fit.result, stacked_measurements(meas), limits=settings.limits,
+                            instrument=settings.instrument)  # fmt: skip
+    issues = tuple(
+        QualityIssue(i.kind, False, i.message + " (a warning: not confirmed by a refit)")
+        if i.kind == "outliers" and i.refuse
+        else i
+        for i in verdict.issues
+    )
+    return dataclasses.replace(verdict, issues=issues)
+
+
+def calibrate_markers(
+    model: str,
+    data: str | Path,
+    setup: MarkerSetup,
+    settings: MarkerSettings | None = None,
+    progress: Progress | None = None,
+) -> MarkerRun:
+    """Read the marker table, settle prior and loss, fit, judge (see :class:`MarkerRun`).
+
+    Args:
+        model: model name or file (as :func:`pincal.measure.marker_mechanism` takes it).
+        data: the marker table.
+        setup: what is measured and known (link, columns, instrument frame, marker).
+        settings: prior, loss, preset, gate (default :class:`MarkerSettings`).
+        progress: called with a line before each long step.
+
+    Raises:
+        UnknownNameError: the preset is not one of the marker model's.
+        PincalError subclasses of reading the table and of the fit.
+    """
+    settings = settings or MarkerSettings()
+    say = progress or (lambda line: None)
+    setup, copies = distinct_markers(data, setup)
+    mech = marker_mechanism(model, setup)
+    read = read_marker_data(data, mech, setup)
+    meas = tuple(read.sets)
+    notes = [*copies, *read.notes]
+    if settings.preset not in mech.presets:
+        raise UnknownNameError("preset", settings.preset, sorted(mech.presets),
+                               " (the presets of a marker calibration, --params)")  # fmt: skip
+    k, seed = settings.folds, settings.seed
+    say(f"registering the instrument frame and {len(meas)} marker(s), then identifying from "
+        f"{len(meas[0])} poses; {k}-fold cross-validation judges the fit")  # fmt: skip
+    baseline = cross_validate(
+        lambda m: fit_markers(mech, setup, m, registration_only=True).calibrated, meas, k, seed
+    )
+    asked = parse_prior(settings.prior)
+    if not any(not is_registration(n) for n in parameters(mech, settings.preset).names):
+        asked = None  # only the registration is fitted: no prior, no baseline to beat
+
+    def settle(loss: str) -> tuple[PriorChoice, MarkerFit, QualityVerdict]:
+        procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss)
+        if asked == "auto":
+            say(f"choosing the prior's strength by {k}-fold cross-validation ({loss} loss)")
+            choice = choose_prior(procedure, meas, k, seed)
+        else:
+            choice = cross_validated(procedure, asked, meas, k, seed)  # type: ignore[arg-type]
+        fit = fit_markers(mech, setup, meas, settings.preset, settings.method, choice.prior,
+                          loss=loss)  # fmt: skip
+        return choice, fit, _gate(fit, meas, settings)
+
+    loss = "linear" if settings.loss == "auto" else settings.loss
+    choice, fit, verdict = settle(loss)
+    if settings.loss == "auto" and verdict.outlier_poses:
+        named = ", ".join(map(str, verdict.outlier_poses[:12]))
+        notes.append(f"loss auto: the least-squares fit has outlying poses ({named}); refitted "
+                     f"with the {ROBUST_LOSS} loss (least squares within 1.345σ, linear "
+                     "beyond)")  # fmt: skip
+        loss = ROBUST_LOSS
+        choice, fit, verdict = settle(loss)
+    if asked is not None or any(not is_registration(n) for n in fit.result.identified_names):
+        evidence = HeldOutEvidence(choice.cv, baseline, "registration only", choice.chosen)
+        verdict = held_out_verdict(verdict, evidence, fit.result)
+    rms = fit.registration.fit.rms
+    warnings = (_misfit_note(rms),) if rms > MISFIT_RMS else ()
+    return MarkerRun(fit, meas, setup, settings, loss, choice, verdict,
+                     (*notes, *fit.notes), warnings)  # fmt: skip
