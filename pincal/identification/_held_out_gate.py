@@ -36,14 +36,11 @@ class HeldOutEvidence:
         calibrated: the calibration procedure's cross-validation.
         baseline: the baseline procedure's (same folds).
         baseline_name: what the baseline is, in words (``registration only``).
-        selected: the calibration's settings were chosen on these folds (its held-out
-            RMS is then the lowest of several, slightly optimistic).
     """
 
     calibrated: CrossValidation
     baseline: CrossValidation
     baseline_name: str
-    selected: bool = False
 
     @property
     def gain(self) -> tuple[float, float]:
@@ -63,7 +60,7 @@ class HeldOutEvidence:
         )
 
     def to_dict(self) -> dict:
-        """JSON: both procedures' held-out figures [mm], the gain [mm²], the folds' seed use."""
+        """JSON: both procedures' held-out figures [mm], the gain and its s.e. [mm²]."""
         gain, se = self.gain
         return {
             "folds": len(self.calibrated.folds),
@@ -71,7 +68,6 @@ class HeldOutEvidence:
             "baseline": {"name": self.baseline_name, **self.baseline.to_dict()},
             "gain_mse_mm2": gain * 1e6,
             "gain_standard_error_mm2": se * 1e6 if np.isfinite(se) else None,
-            "settings_chosen_on_these_folds": self.selected,
         }
 
 

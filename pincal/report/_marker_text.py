@@ -90,13 +90,11 @@ def marker_lines(run: MarkerRun) -> list[str]:
     held = run.verdict.held_out
     if held is not None:
         cal, base = held["calibrated"], held["baseline"]
-        chosen = (
-            " (the prior chosen on these folds)" if held["settings_chosen_on_these_folds"] else ""
-        )
+        nested = "; the prior chosen again in each fold" if run.choice.chosen else ""
         lines.append(
-            f"held-out ({k}-fold, seed {seed}){chosen}: RMS {cal['held_out_rms_mm']:.3f} mm "
-            f"calibrated, {base['held_out_rms_mm']:.3f} mm {base['name']}; `pincal validate "
-            "--cv` refits every fold from scratch"
+            f"held-out ({k}-fold, seed {seed}, every fold refitted{nested}): RMS "
+            f"{cal['held_out_rms_mm']:.3f} mm calibrated, {base['held_out_rms_mm']:.3f} mm "
+            f"{base['name']}"
         )
     solver = solver_line(fit.method, run.settings.method, run.loss)
     lines += [solver] if solver else []

@@ -21,7 +21,12 @@ from pincal.workflow._marker_run import (
     marker_procedure,
 )
 from pincal.workflow._marker_settings import PRIOR_GRID, MarkerSettings, parse_prior
-from pincal.workflow._prior_choice import PriorChoice, choose_prior, cross_validated
+from pincal.workflow._prior_choice import (
+    PriorChoice,
+    choose_prior,
+    cross_validated,
+    nested_choice,
+)
 
 __all__ = [
     "MISFIT_RMS",
@@ -34,6 +39,7 @@ __all__ = [
     "choose_prior",
     "cross_validated",
     "marker_procedure",
+    "nested_choice",
     "parse_prior",
     "rebuild",
     "replay_procedure",

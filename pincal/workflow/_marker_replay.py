@@ -18,7 +18,7 @@ from pincal.io import read_marker_sets, sha256_file
 from pincal.measure import MarkerSetup, Measurements, marker_mechanism
 from pincal.model import Mechanism
 from pincal.workflow._marker_run import marker_procedure
-from pincal.workflow._prior_choice import choose_prior
+from pincal.workflow._prior_choice import nested_choice
 
 __all__ = ["rebuild", "replay_procedure"]
 
@@ -69,9 +69,4 @@ def replay_procedure(
     procedure = marker_procedure(mech, setup, preset, method, doc.get("loss", "linear"))
     if doc.get("prior_spec") != "auto":
         return procedure(_recorded_prior(doc))
-    k, seed = int(doc.get("cv_folds", 5)), int(doc.get("cv_seed", 0))
-
-    def nested(meas: Any) -> Mechanism:
-        return procedure(choose_prior(procedure, meas, k, seed).prior)(meas)
-
-    return nested
+    return nested_choice(procedure, int(doc.get("cv_folds", 5)), int(doc.get("cv_seed", 0)))

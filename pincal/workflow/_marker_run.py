@@ -4,7 +4,8 @@
 marker(s) in closed form, settles the prior and the loss (:class:`MarkerSettings`),
 fits the machine with them, judges the fit (:func:`pincal.identification.check_quality`,
 then :func:`pincal.identification.held_out_verdict`: with the noise estimated, K-fold
-held-out prediction against the registration alone decides) and returns everything a
+held-out prediction against the registration alone decides, the prior's choice redone
+inside every fold when it was chosen) and returns everything a
 report or a calibration directory needs as one :class:`MarkerRun`. Nothing is written.
 """
 
@@ -36,7 +37,12 @@ from pincal.model import Mechanism
 from pincal.sensitivity import parameters
 from pincal.workflow._marker_doc import marker_doc
 from pincal.workflow._marker_settings import MarkerSettings, parse_prior
-from pincal.workflow._prior_choice import PriorChoice, choose_prior, cross_validated
+from pincal.workflow._prior_choice import (
+    PriorChoice,
+    choose_prior,
+    cross_validated,
+    nested_choice,
+)
 
 __all__ = ["MISFIT_RMS", "ROBUST_LOSS", "MarkerRun", "calibrate_markers", "marker_procedure"]
 
@@ -185,7 +191,12 @@ def calibrate_markers(
         loss = ROBUST_LOSS
         choice, fit, verdict = settle(loss)
     if asked is not None or any(not is_registration(n) for n in fit.result.identified_names):
-        evidence = HeldOutEvidence(choice.cv, baseline, "registration only", choice.chosen)
+        cv = choice.cv
+        if choice.chosen:  # the choice is part of the procedure: nested CV
+            say("cross-validating the calibration, the prior chosen again in each fold")
+            procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss)
+            cv = cross_validate(nested_choice(procedure, k, seed), meas, k, seed)
+        evidence = HeldOutEvidence(cv, baseline, "registration only")
         verdict = held_out_verdict(verdict, evidence, fit.result)
     rms = fit.registration.fit.rms
     warnings = (_misfit_note(rms),) if rms > MISFIT_RMS else ()

@@ -2,8 +2,10 @@
 
 A fitting procedure ``procedure(prior)`` (measurements → calibrated mechanism) is
 cross-validated for each prior of the grid on the same folds; the prior of the lowest
-held-out RMS is chosen. A fixed prior is cross-validated alone, so that every marker
-calibration carries the held-out error of the procedure that produced it.
+held-out RMS is chosen (:func:`choose_prior`). The held-out error of a calibration whose
+prior was chosen so is that of the whole procedure, choice included
+(:func:`nested_choice`, cross-validated: nested CV); a fixed prior is cross-validated
+alone (:func:`cross_validated`).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from pincal.measure import Measurements
 from pincal.model import Mechanism
 from pincal.workflow._marker_settings import PRIOR_GRID
 
-__all__ = ["PriorChoice", "choose_prior", "cross_validated"]
+__all__ = ["PriorChoice", "choose_prior", "cross_validated", "nested_choice"]
 
 #: measurements → calibrated mechanism, for one prior
 Procedure = Callable[[Prior | None], Callable[[Any], Mechanism]]
@@ -30,7 +32,8 @@ class PriorChoice:
 
     Attributes:
         prior: the prior (None: no prior).
-        cv: the cross-validation of the procedure with ``prior``.
+        cv: the cross-validation of the procedure with ``prior`` (for a chosen prior,
+            on the folds that chose it: the lowest of the table, optimistic).
         table: when chosen, every candidate's (σ [mm, mrad], held-out RMS [mm]), in the
             order tried; empty for a prior that was given.
     """
@@ -75,3 +78,18 @@ def choose_prior(
             best = (cv.rms, PriorChoice(prior, cv))
     assert best[1] is not None, "an empty prior grid"
     return PriorChoice(best[1].prior, best[1].cv, tuple(table))
+
+
+def nested_choice(procedure: Procedure, k: int, seed: int) -> Callable[[Any], Mechanism]:
+    """Measurements → calibrated mechanism with the prior chosen on those measurements.
+
+    Cross-validating this procedure is nested cross-validation: each outer fold chooses
+    its prior by an inner K-fold CV of its own training poses, so no held-out pose
+    takes part in choosing the prior that predicts it.
+    """
+
+    def fit(meas: Any) -> Mechanism:
+        parts = (meas,) if isinstance(meas, Measurements) else tuple(meas)
+        return procedure(choose_prior(procedure, parts, k, seed).prior)(meas)
+
+    return fit

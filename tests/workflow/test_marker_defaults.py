@@ -71,7 +71,6 @@ def test_defaults_choose_the_prior_and_stay_least_squares_on_clean_data(tmp_path
     best = min(run.choice.table, key=lambda t: t[1])
     assert run.prior is not None and run.prior.length == pytest.approx(best[0] * 1e-3)
     held = run.verdict.held_out
-    assert held["calibrated"]["held_out_rms_mm"] == pytest.approx(best[1])
     # 1 mm of errors against 20 µm of noise: the calibration predicts 10× better
     assert held["calibrated"]["held_out_rms_mm"] < 0.1 * held["baseline"]["held_out_rms_mm"]
     doc = run.doc()
