@@ -28,7 +28,10 @@ from pincal.cli.common import (
 from pincal.measure import DEFAULT_NOISE
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from pincal.measure import InstrumentData, Measurements
+    from pincal.model import Mechanism
 
 
 def _parse_errors(spec: str) -> int | None:
@@ -199,6 +202,9 @@ def simulate(
     else:
         click.echo(f"… sampling {n_random} random poses", err=True)
         q_act = sample_actuators(nominal, n_random, rng)
+    skipped: list[int] = []
+    if instrument != SOCKET:
+        q_act, skipped = _reachable(actual, q_act)
     click.echo(f"… measuring {len(q_act)} poses of the actual machine", err=True)
     extra = {}
     meas: Measurements | InstrumentData
@@ -249,6 +255,7 @@ def simulate(
             for n, u, v in zip(params.names, params.units, values, strict=True)
         ],
         **extra,
+        "skipped_rows": skipped,
     }
     atomic_write_text(truth_path, json.dumps(truth, indent=1) + "\n")
     if as_json:
@@ -260,9 +267,46 @@ def simulate(
                     "model": nominal.name,
                     "preset": preset,
                     "poses": len(meas),
+                    "skipped_rows": skipped,
                     "components": components,
                 }
             )
         )
     else:
         click.echo(f"wrote {path} ({len(meas)} poses) and {truth_path}")
+
+
+def _reachable(actual: Mechanism, q_act: np.ndarray) -> tuple[np.ndarray, list[int]]:
+    """The rows (m, n_act) the actual machine reaches and the others' 1-based numbers.
+
+    Says on stderr how many were skipped, which and why.
+
+    A pose the erroneous machine cannot close on its home assembly branch (its loops
+    open near the workspace's edge) is left out of the campaign, as a measurement
+    campaign skips a pose the machine refuses.
+
+    Raises:
+        ConvergenceError: the actual machine reaches none of the rows.
+    """
+    import numpy as np
+
+    from pincal.errors import ConvergenceError
+
+    ok = actual.closable_batch(q_act)
+    skipped = [int(i) + 1 for i in np.flatnonzero(~ok)]
+    if not ok.any():
+        raise ConvergenceError(
+            f"the actual machine (the model with the simulated errors) reaches none of the "
+            f"{len(q_act)} poses: its loops do not close on home's assembly branch there; "
+            "choose poses away from the workspace's edges or smaller --error-size"
+        )
+    if skipped:
+        shown = ", ".join(map(str, skipped[:20])) + (", …" if len(skipped) > 20 else "")
+        click.echo(
+            f"skipped {len(skipped)} of {len(q_act)} poses the actual machine cannot reach "
+            f"(its loops do not close on home's assembly branch with the simulated errors, "
+            f"at the workspace's edge): rows {shown}; the file lists the {int(ok.sum())} "
+            "reached",
+            err=True,
+        )
+    return np.asarray(q_act)[ok], skipped

@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from pincal.design._indices import _as_stacked
 from pincal.errors import PincalError, UnidentifiableError
-from pincal.sensitivity import numerical_rank
+from pincal.sensitivity import jacobian_rank, unit_columns
 
 __all__ = ["crb_covariance", "predicted_std", "predicted_validation_rms"]
 
@@ -36,7 +36,8 @@ def crb_covariance(
         J_weighted: whitened Jacobian (rows, n) or (m, k, n).
         allow_rank_deficient: if True a rank-deficient J gives the pseudo-inverse
             (the bound for the estimable combinations only); else it is an error. The
-            rank is the rule σi > 1e-8·σ1 (:func:`pincal.sensitivity._rank.numerical_rank`).
+            rank is :func:`pincal.sensitivity.jacobian_rank` (unit columns, then
+            σi > 1e-8·σ1), the one rank decision of every command.
         names: parameter names (n,) for the error message.
 
     Returns:
@@ -47,22 +48,26 @@ def crb_covariance(
     """
     arr = _as_stacked(J_weighted, "J_weighted")
     n = arr.shape[1]
+    scaled, scale = unit_columns(arr)
+    rank = jacobian_rank(arr)  # the one rank decision (unit columns, σ > 1e-8·σ1)
+    if rank == n:
+        # (JᵀJ)⁻¹ = D⁻¹ (JsᵀJs)⁻¹ D⁻¹ with Js = J D⁻¹: the unit columns keep a Jacobian
+        # of mixed units (m, rad) and lever arms well conditioned
+        _, s, vt = np.linalg.svd(scaled, full_matrices=False)
+        v = vt.T / scale[:, None]
+        return (v / s**2) @ v.T
     _, s, vt = np.linalg.svd(arr, full_matrices=True)
     s_full = np.concatenate([s, np.zeros(n - s.size)]) if s.size < n else s
-    rank = numerical_rank(s_full)
-    if rank < n:
-        null = vt[rank:]
-        involved = np.flatnonzero(np.max(np.abs(null), axis=0) > 1e-8)
-        labels = (
-            [names[int(i)] for i in involved] if names is not None else [str(i) for i in involved]
+    null = vt[rank:]
+    involved = np.flatnonzero(np.max(np.abs(null), axis=0) > 1e-8)
+    labels = [names[int(i)] for i in involved] if names is not None else [str(i) for i in involved]
+    if not allow_rank_deficient:
+        raise UnidentifiableError(
+            f"Jacobian has rank {rank} < {n} parameters; the unobservable directions involve "
+            f"parameters {', '.join(labels)}",
+            names=labels,
         )
-        if not allow_rank_deficient:
-            raise UnidentifiableError(
-                f"Jacobian has rank {rank} < {n} parameters; the unobservable directions involve "
-                f"parameters {', '.join(labels)}",
-                names=labels,
-            )
-        _log.warning("CRB of a rank-deficient Jacobian (rank %d < %d): pseudo-inverse", rank, n)
+    _log.warning("CRB of a rank-deficient Jacobian (rank %d < %d): pseudo-inverse", rank, n)
     v = vt[:rank].T
     return (v / s_full[:rank] ** 2) @ v.T
 

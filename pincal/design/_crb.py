@@ -39,7 +39,7 @@ from pincal.design._scaling import weight_rows
 from pincal.errors import PincalError
 from pincal.measure import NoiseModel
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
-from pincal.sensitivity import identification_jacobian
+from pincal.sensitivity import identification_jacobian, jacobian_rank
 
 __all__ = [
     "CramerRaoReport",
@@ -140,7 +140,7 @@ def cramer_rao_from_jacobian(
         )
     Jw = weight_rows(J, sigma).J
     cov = crb_covariance(Jw, names=names)
-    rank = int(np.linalg.matrix_rank(Jw.reshape(-1, n)))
+    rank = jacobian_rank(Jw.reshape(-1, n))
     pos_rms = rot_rms = float("nan")
     if J_validation is not None:
         Jv = np.asarray(J_validation, dtype=float)

@@ -99,9 +99,14 @@ def likely_cause(v: QualityVerdict, result: IdentificationResult, m: int) -> tup
             if estimated
             else f"at reduced χ² {chi2:.3g} against the declared noise"
         )
+        # gauss-newton re-runs lm itself when it stops unconverged: suggest lm only
+        # where it has not run
+        tried = result.method == "lm" or "levenberg-marquardt from the start" in result.message
+        try_lm = "" if tried else "try --method lm, or "
         return "solver", (
-            f"the solver stopped before converging, {judged}: try --method lm, or a "
-            "smaller --params preset (parameters the poses barely excite converge slowly)."
+            f"the solver stopped before converging, {judged}: {try_lm}a smaller --params "
+            "preset (parameters the poses barely excite converge slowly), or poses away "
+            "from the workspace's edges and singularities."
         )
     return "data or model", "check the data, the measured frame and the model (--params)."
 

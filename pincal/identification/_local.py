@@ -1,5 +1,11 @@
 """Local solvers: damped Gauss–Newton and scipy's Levenberg–Marquardt.
 
+Gauss–Newton that stops unconverged is re-run by Levenberg–Marquardt from its start
+(:attr:`GaussNewtonOptions.fallback`): after a rejected full step its damped path can
+lead a closed-loop model (a four-bar, a two-loop ankle, errors of 1 mm / 10 mrad) into
+a curved valley where both crawl, where scipy's trust region, scaled by the Jacobian's
+columns, goes around it from the start (measured on tests/open_world/roster.py).
+
 Both minimise ``0.5·‖r_w(x)‖²`` of :class:`pincal.identification.CalibrationProblem`
 over the free parameters. A trial vector whose model cannot be built or assembled
 (:class:`pincal.ModelFileError`, :class:`pincal.MobilityError`,
@@ -47,7 +53,7 @@ def gauss_newton(
     opts: GaussNewtonOptions,
     progress: Progress = None,
 ) -> SolverOutcome:
-    """Gauss–Newton with Levenberg damping when the full step fails.
+    """Gauss–Newton with Levenberg damping when the full step fails, then ``lm``.
 
     The undamped Gauss–Newton step is taken whenever it decreases the cost (so a
     well-behaved problem converges quadratically as before). When it does not (or the
@@ -57,6 +63,8 @@ def gauss_newton(
     ``opts.damping`` False the full step is instead halved up to ``max_halvings`` times.
     The closed-loop solves of a :class:`CalibrationProblem` start from the first-order
     prediction of each parameter step (:attr:`CalibrationProblem.predict_starts`).
+    When it stops unconverged and ``opts.fallback`` is on, :func:`levenberg_marquardt`
+    re-runs from ``x0`` and its outcome is returned (the message says so).
 
     Args:
         problem: residual model (n parameters).
@@ -69,12 +77,58 @@ def gauss_newton(
         SolverOutcome with :class:`LocalSolverExtras`.
     """
     if not isinstance(problem, CalibrationProblem):  # instrument models: no predictions
-        return _gauss_newton(problem, x0, free, opts, progress)
-    predicting, problem.predict_starts = problem.predict_starts, True
-    try:
-        return _gauss_newton(problem, x0, free, opts, progress)
-    finally:
-        problem.predict_starts = predicting
+        out = _gauss_newton(problem, x0, free, opts, progress)
+    else:
+        predicting, problem.predict_starts = problem.predict_starts, True
+        try:
+            out = _gauss_newton(problem, x0, free, opts, progress)
+        finally:
+            problem.predict_starts = predicting
+    if out.success or not opts.fallback:
+        return out
+    return _continue_with_lm(problem, x0, free, opts, progress, out)
+
+
+def _continue_with_lm(
+    problem: CalibrationProblem,
+    x0: np.ndarray,
+    free: np.ndarray,
+    opts: GaussNewtonOptions,
+    progress: Progress,
+    gn: SolverOutcome,
+) -> SolverOutcome:
+    """Levenberg–Marquardt from ``x0`` after Gauss–Newton stopped unconverged (``gn``).
+
+    The same cost: the prior of ``opts``, or its Tikhonov term ``½λ‖x − x0‖²`` as a
+    prior of σ = 1/√λ about ``x0``. The outcome is Levenberg–Marquardt's; its
+    iterations, history and evaluations count both runs and its message says what
+    Gauss–Newton stopped at.
+    """
+    std = mean = None
+    if opts.prior_std is not None:
+        std, mean = opts.prior_std, opts.prior_mean
+    elif opts.regularization > 0:
+        sigma = np.full(x0.size, np.inf)
+        sigma[free] = 1.0 / np.sqrt(opts.regularization)
+        std, mean = tuple(sigma), tuple(float(v) for v in x0)
+    lm_opts = LMOptions(
+        max_iterations=opts.max_iterations, xtol=opts.xtol, prior_std=std, prior_mean=mean
+    )
+    log.info("gauss-newton stopped (%s); re-running lm from the start", gn.message)
+    on = None if progress is None else (lambda i, c: progress(gn.iterations + i, c))
+    lm = levenberg_marquardt(problem, x0, free, lm_opts, on)
+    assert isinstance(gn.extras, LocalSolverExtras) and isinstance(lm.extras, LocalSolverExtras)
+    extras = LocalSolverExtras(
+        evaluations=gn.extras.evaluations + lm.extras.evaluations,
+        rejected_steps=gn.extras.rejected_steps,
+    )  # the damping ends inside scipy: NaN
+    message = (
+        f"gauss-newton stopped after {gn.iterations} iterations ({gn.message}); "
+        f"levenberg-marquardt from the start: {lm.message}"
+    )
+    return SolverOutcome(
+        lm.x, gn.iterations + lm.iterations, gn.history + lm.history, lm.success, message, extras
+    )
 
 
 def _gauss_newton(

@@ -123,7 +123,8 @@ def _fit(
         prior = {"prior_std": tuple(std), "prior_mean": tuple(np.zeros(len(std)))}
     opts: GaussNewtonOptions | LMOptions | None = None
     if method == "gauss-newton":
-        opts = GaussNewtonOptions(max_iterations=max_iterations, **prior)
+        # fit_markers switches to lm itself (and keeps the method it used): no fallback
+        opts = GaussNewtonOptions(max_iterations=max_iterations, fallback=False, **prior)
     elif method == "lm":
         opts = LMOptions(max_iterations=max_iterations, loss=loss, **prior)
     if isinstance(mech, tuple):  # several markers: one problem over their stacked rows

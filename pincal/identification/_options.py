@@ -99,12 +99,13 @@ class GaussNewtonOptions:
         max_halvings: trial lengths 1, ½, ¼, … of the line search used when
             ``damping`` is False (1–60).
         damping: damp rejected steps (True) or halve them (False).
-        damping_start: first μ of the fallback (> 0, ≤ 1).
+        damping_start: first μ of the damping (> 0, ≤ 1).
         prior_std: a Gaussian prior: per parameter (all n, in the parameter set's
             order) its 1σ [m or rad] about ``prior_mean``; ``inf`` = no prior on that
             parameter. The cost becomes ``½‖r‖² + ½ Σ ((x_i − mean_i)/σ_i)²`` with ``r``
             the whitened residual (a maximum a posteriori fit); None = no prior.
         prior_mean: (n,) the prior's centre [m, rad] (required with ``prior_std``).
+        fallback: continue with ``lm`` from where Gauss–Newton stopped unconverged.
     """
 
     max_iterations: int = 50
@@ -115,12 +116,15 @@ class GaussNewtonOptions:
     damping_start: float = 1.0
     prior_std: tuple[float, ...] | None = None
     prior_mean: tuple[float, ...] | None = None
+    fallback: bool = True
 
     def __post_init__(self) -> None:
         o = type(self).__name__
         check_int(o, "max_iterations", self.max_iterations, 1)
         check_real(o, "xtol", self.xtol, 0.0, open_low=True)
         check_real(o, "regularization", self.regularization, 0.0)
+        if not isinstance(self.fallback, bool):
+            raise SolverOptionError(f"{o}.fallback must be True or False, got {self.fallback!r}")
         check_int(o, "max_halvings", self.max_halvings, 1, 60)
         check_real(o, "damping_start", self.damping_start, 0.0, 1.0, open_low=True)
         if not isinstance(self.damping, bool):

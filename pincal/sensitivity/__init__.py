@@ -28,7 +28,14 @@ from pincal.sensitivity._identification_jacobian import (
 )
 from pincal.sensitivity._jacobian import BatchSensitivity, PoseSensitivity, pose_sensitivity
 from pincal.sensitivity._presets import COMPUTED_PRESETS, parameters
-from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank, numerical_ranks
+from pincal.sensitivity._rank import (
+    RANK_RTOL,
+    RangeSolver,
+    jacobian_rank,
+    numerical_rank,
+    numerical_ranks,
+    unit_columns,
+)
 
 __all__ = [
     "BASE_POSES",
@@ -49,9 +56,11 @@ __all__ = [
     "global_sensitivity_from_jacobians",
     "identifiability",
     "identification_jacobian",
+    "jacobian_rank",
     "numerical_rank",
     "numerical_ranks",
     "parameters",
     "pose_sensitivity",
     "sensitivities_batch",
+    "unit_columns",
 ]

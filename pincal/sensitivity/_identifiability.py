@@ -38,7 +38,7 @@ from pincal.model import (
     sample_actuators,
 )
 from pincal.sensitivity._identification_jacobian import jacobian_and_closure_breaking
-from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank
+from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank, unit_columns
 
 __all__ = [
     "BASE_RTOL",
@@ -228,11 +228,8 @@ def analyse_jacobian(
         _mask(breaks_closure, n),
         _mask(splits_joint, n) & ~_mask(breaks_closure, n),
     )
-    scale = np.linalg.norm(J, axis=0)
-    scale[scale <= 1e-12 * max(float(scale.max(initial=0.0)), 1e-300)] = 0.0  # no effect
+    Js, scale = unit_columns(J)  # the one scaling of jacobian_rank
     safe = np.where(scale > 0, scale, 1.0)
-    Js = J / safe
-    Js[:, scale == 0] = 0.0
     closable = np.flatnonzero(~breaking & ~splitting)
     Jc = Js[:, closable]
     sv = np.linalg.svd(Jc, compute_uv=False) if Jc.size else np.zeros(0)

@@ -9,6 +9,13 @@ in :mod:`pincal.sensitivity` and :mod:`pincal.design` (identifiability, base
 selection, observability indices, Cramér–Rao bounds, the closure solve of the
 identification Jacobian) uses this rule; only the tolerance may be passed
 explicitly (the closure solve uses the mechanism's own ``options.rcond``).
+
+The rank of an *identification Jacobian* (columns = parameters in m and rad) is
+decided by :func:`jacobian_rank` alone: its columns scaled to unit norm first
+(:func:`unit_columns`), so the units and lever arms of the parameters do not bias it,
+then the rule above. ``info``, the presets, pose selection and its Cramér–Rao bound,
+and identification all call it, so one command cannot call unidentifiable what
+another calls identifiable on the same rows.
 """
 
 from __future__ import annotations
@@ -20,7 +27,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from pincal.errors import PincalError
 
-__all__ = ["RANK_RTOL", "RangeSolver", "numerical_rank", "numerical_ranks"]
+__all__ = [
+    "RANK_RTOL",
+    "RangeSolver",
+    "jacobian_rank",
+    "numerical_rank",
+    "numerical_ranks",
+    "unit_columns",
+]
 
 RANK_RTOL: float = 1e-8
 """Default relative singular-value threshold of :func:`numerical_rank`."""
@@ -72,6 +86,32 @@ def numerical_rank(sigma: ArrayLike, rtol: float = RANK_RTOL) -> int:
         PincalError: ``rtol`` is not in [0, 1).
     """
     return int(numerical_ranks(np.asarray(sigma, dtype=float).reshape(1, -1), rtol)[0])
+
+
+def unit_columns(J: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Columns of J (rows, n) scaled to unit Euclidean norm, and the norms (n,).
+
+    A column whose norm is at most 1e-12 of the largest counts as zero (the parameter
+    has no effect): it is zeroed and its norm reported as 0.
+    """
+    a = np.asarray(J, dtype=float)
+    scale = np.linalg.norm(a, axis=0)
+    scale[scale <= 1e-12 * max(float(scale.max(initial=0.0)), 1e-300)] = 0.0
+    scaled = a / np.where(scale > 0, scale, 1.0)
+    scaled[:, scale == 0] = 0.0
+    return scaled, scale
+
+
+def jacobian_rank(J: ArrayLike, rtol: float = RANK_RTOL) -> int:
+    """The numerical rank of an identification Jacobian J (rows, n).
+
+    The rank rule (:func:`numerical_rank`, σi > ``rtol``·σ1) on its unit-norm columns
+    (:func:`unit_columns`): the units (m, rad) and lever arms do not bias it.
+    """
+    scaled, _ = unit_columns(J)
+    if scaled.size == 0:
+        return 0
+    return numerical_rank(np.linalg.svd(scaled, compute_uv=False), rtol)
 
 
 @dataclass(frozen=True, eq=False)

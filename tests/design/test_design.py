@@ -176,6 +176,23 @@ def test_crb_rank_deficient():
     np.testing.assert_allclose(cov, np.linalg.pinv(J.T @ J), atol=1e-12)
 
 
+def test_crb_rank_is_the_rank_identifiability_decides():
+    """A Jacobian whose columns differ in scale by 1e9 (a length of a small machine and an
+    angle at a long lever arm) is full rank for identifiability (unit columns) and so for
+    the CRB: one rank decision (issue 36, item 4: pose selection called unidentifiable
+    what ``info`` called identifiable)."""
+    from pincal.sensitivity import analyse_jacobian, jacobian_rank
+
+    rng = np.random.default_rng(8)
+    Q, _ = np.linalg.qr(rng.standard_normal((30, 3)))
+    d = np.array([1e5, 1.0, 1e-4])
+    J = Q * d
+    assert analyse_jacobian(J, ["a", "b", "c"]).rank == 3 == jacobian_rank(J)
+    cov = crb_covariance(J, names=["a", "b", "c"])
+    # (QᵀQ)⁻¹ = I in the parameters' own scales: D·cov·D = I
+    np.testing.assert_allclose(d[:, None] * cov * d, np.eye(3), atol=1e-9)
+
+
 # ----------------------------------------------------------------------------- arrays
 
 
