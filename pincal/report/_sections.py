@@ -13,6 +13,7 @@ import numpy as np
 
 from pincal.identification import COVARIANCE_KINDS, IdentificationRecord, covariance_kind
 from pincal.report._document import Section, Table
+from pincal.report._gate_text import gate_sentences
 from pincal.report._parameter_plots import plot_correlation, plot_parameters
 from pincal.report._plots import plot_error_histogram, plot_errors_before_after
 from pincal.report._render import PlotJobs
@@ -359,7 +360,9 @@ def quality_section(notes: dict) -> Section | None:
     q = notes.get("quality")
     if not isinstance(q, dict):
         return None
-    if q.get("passed"):
+    if q.get("passed") and q.get("held_out"):
+        text = "The quality gate passed: the calibration predicts unseen poses better."
+    elif q.get("passed"):
         text = "The quality gate passed: the fit is consistent with the data and the noise."
     elif q.get("overridden"):
         text = (
@@ -381,6 +384,7 @@ def quality_section(notes: dict) -> Section | None:
         text += f"\n\nDuplicate rows (copy, original): {q['duplicate_rows']}."
     said = [line.strip().replace("the σ above", "the σ below")
             for line in uncertainty_lines(q.get("uncertainty") or {})]  # fmt: skip
+    said += gate_sentences(q)
     if said:  # how the σ were made: method, Student-t / F intervals, a bootstrap beside
         text += "\n\n" + "\n\n".join(s[0].upper() + s[1:] + "." for s in said)
     tables = [Table(["verdict", "check", "finding"], rows)] if rows else []
