@@ -159,6 +159,12 @@ def validate(
     markers = marker_errors(nominal, cal.calibrated(), more) if more else []
     if markers:
         doc["more_markers"] = [m.to_dict() for m in markers]
+    transfer = None
+    if (cal.manifest.get("markers") or {}).get("instrument_frame") == "unknown":
+        from pincal.workflow import transfer_markers
+
+        transfer = transfer_markers(cal, data, 5, cv_seed)
+        doc["transfer"] = transfer.to_dict()
     if cv_doc is not None:
         doc["cv"] = cv_doc
     if out is not None:
@@ -173,6 +179,12 @@ def validate(
                        f"deflection; the nominal: commands)")  # fmt: skip
         click.echo(validation_text(validation, cal, str(data), independent), nl=False)
         click.echo(marker_errors_text(markers), nl=False)
+        if transfer is not None:
+            from pincal.report import transfer_text
+
+            click.echo("(above: the instrument frame and marker as calibrated — the same "
+                       "capture set-up only)")  # fmt: skip
+            click.echo(transfer_text(transfer, str(data)), nl=False)
         if cv is not None:
             from pincal.report import cross_validation_text
 

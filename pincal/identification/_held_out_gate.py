@@ -48,6 +48,11 @@ class HeldOutEvidence:
         gain, se, _ = compare(self.calibrated, self.baseline)
         return gain, se
 
+    @property
+    def ratio(self) -> float:
+        """Held-out RMS of the calibration / of the baseline (< 1: the calibration helps)."""
+        return self.calibrated.rms / self.baseline.rms if self.baseline.rms > 0 else float("nan")
+
     def describe(self) -> str:
         """One line: both held-out RMS [mm] and the gain with its standard error."""
         gain, se = self.gain
@@ -66,6 +71,7 @@ class HeldOutEvidence:
             "folds": len(self.calibrated.folds),
             "calibrated": self.calibrated.to_dict(),
             "baseline": {"name": self.baseline_name, **self.baseline.to_dict()},
+            "ratio": self.ratio,
             "gain_mse_mm2": gain * 1e6,
             "gain_standard_error_mm2": se * 1e6 if np.isfinite(se) else None,
         }

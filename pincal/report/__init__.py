@@ -24,6 +24,7 @@ from pincal.report._plots import (
 )
 from pincal.report._sections import block_label
 from pincal.report._text import calibration_text, quality_lines
+from pincal.report._transfer_text import transfer_text
 from pincal.report._validation_text import marker_errors_text, validation_text
 
 __all__ = [
@@ -46,6 +47,7 @@ __all__ = [
     "plot_parameters",
     "plot_validation_summary",
     "quality_lines",
+    "transfer_text",
     "validation_text",
     "write_report",
 ]

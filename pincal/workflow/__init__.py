@@ -7,7 +7,8 @@ prints or writes files.
 
 - :func:`calibrate_markers` (``pincal calibrate --link``): a marker table in an
   unknown instrument frame, with the defaults of real data (:class:`MarkerSettings`);
-  :func:`rebuild` and :func:`replay_procedure` run it again for ``validate --cv``.
+  :func:`rebuild` and :func:`replay_procedure` run it again for ``validate --cv``;
+  :func:`transfer_markers` carries it to another session (``validate --data``).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from pincal.workflow._prior_choice import (
     cross_validated,
     nested_choice,
 )
+from pincal.workflow._transfer import transfer_markers
 
 __all__ = [
     "MISFIT_RMS",
@@ -43,4 +45,5 @@ __all__ = [
     "parse_prior",
     "rebuild",
     "replay_procedure",
+    "transfer_markers",
 ]
