@@ -56,7 +56,8 @@ def _fit_set(
         breaking = closure_breaking(problem.mech, params, problem.pose_file.q_act, problem.x0)
     splitting = np.isin(params.names, degenerate_translations(problem.mech))
     J0 = model.structural_jacobian(problem.x0)  # not the measured deviation's mixing
-    ident = analyse_jacobian(J0, params.names, breaks_closure=breaking, splits_joint=splitting)
+    ident = analyse_jacobian(J0, params.names, breaks_closure=breaking, splits_joint=splitting,
+                             units=params.units)  # fmt: skip
     if np.array_equal(candidates, np.arange(len(params))):
         sub = ident  # fitting every parameter: the same analysis
     else:

@@ -86,6 +86,8 @@ class Identifiability:
             emulated ball or universal joint, an error the physical joint cannot have
             (and the mechanism it gives may not be buildable); not counted as
             identifiable, never fitted.
+        units: each parameter's SI unit (``m``, ``rad``, …), or () when not given: the
+            sentences of :meth:`describe` then state amounts in mm and mrad.
     """
 
     names: tuple[str, ...]
@@ -97,6 +99,7 @@ class Identifiability:
     column_scale: np.ndarray
     breaks_closure: np.ndarray = field(default_factory=_empty)
     splits_joint: np.ndarray = field(default_factory=_empty)
+    units: tuple[str, ...] = ()
 
     @property
     def full_rank(self) -> bool:
@@ -121,12 +124,18 @@ class Identifiability:
     def describe(self, max_terms: int = 4) -> list[str]:
         """One sentence per parameter that is not identifiable.
 
-        For example ``"leg3_u1.rx is not identifiable (absorbed by +1.000·leg3_u2.rx)"``.
+        For example ``"leg3_u1.rx is not identifiable (absorbed by +1.000·leg3_u2.rx)"``;
+        with :attr:`units`, in amounts a user can picture: ``"tool_frame.ty is not
+        identifiable: 1 mm of it moves the measurements as +689 mrad of
+        arm_7_joint.offset, +47.1 mm of tool_frame.tx do"``.
         """
         lines = []
         for k in self.unidentifiable:
             combo = self.combinations.get(int(k), {})
             terms = sorted(combo.items(), key=lambda kv: -abs(kv[1]))
+            if self.units and terms:
+                lines.append(self._in_units(int(k), terms, max_terms))
+                continue
             shown = [f"{b:+.3f}·{self.names[i]}" for i, b in terms[:max_terms]]
             if len(terms) > max_terms:
                 shown.append(f"… ({len(terms) - max_terms} more)")
@@ -144,6 +153,24 @@ class Identifiability:
                 "translation between revolute axes that meet at one point; not fitted)"
             )
         return lines
+
+    def _in_units(self, k: int, terms: list[tuple[int, float]], max_terms: int) -> str:
+        """The sentence of parameter k, its combination in mm / mrad (else SI) amounts."""
+
+        def shown(i: int) -> tuple[float, str]:
+            unit = self.units[i]
+            return (1e-3, {"m": "mm", "rad": "mrad"}[unit]) if unit in ("m", "rad") else (1.0, unit)
+
+        step, unit = shown(k)
+        parts = []
+        for i, b in terms[:max_terms]:
+            scale, u = shown(i)
+            parts.append(f"{b * step / scale:+.3g} {u} of {self.names[i]}")
+        if len(terms) > max_terms:
+            parts.append(f"… ({len(terms) - max_terms} more)")
+        verb = "does" if len(parts) == 1 else "do"
+        return (f"{self.names[k]} is not identifiable: 1 {unit} of it moves the measurements "
+                f"as {', '.join(parts)} {verb}")  # fmt: skip
 
     def summary(self) -> str:
         head = f"{self.rank} of {len(self.names)} parameters identifiable"
@@ -195,6 +222,7 @@ def analyse_jacobian(
     rtol: float = RANK_RTOL,
     breaks_closure: np.ndarray | None = None,
     splits_joint: np.ndarray | None = None,
+    units: tuple[str, ...] = (),
 ) -> Identifiability:
     """Identifiability of the parameters whose identification Jacobian is ``J`` (N, n).
 
@@ -211,6 +239,7 @@ def analyse_jacobian(
             closure; they are reported apart and left out of the rank.
         splits_joint: indices (or an (n,) boolean mask) of translations inside emulated
             ball or universal joints; reported apart and left out of the rank likewise.
+        units: the n parameters' SI units, for :meth:`Identifiability.describe` (or ()).
 
     Raises:
         PincalError: J is not 2-D with one column per name, or contains NaN/inf.
@@ -260,6 +289,7 @@ def analyse_jacobian(
         scale[:n],
         np.flatnonzero(breaking),
         np.flatnonzero(splitting),
+        tuple(units) if len(units) == n else (),
     )
 
 
@@ -318,4 +348,5 @@ def identifiability(
         q_act_rows = sample_actuators(mech, n_poses, rng or np.random.default_rng(0))
     J, breaking = jacobian_and_closure_breaking(mech, params, q_act_rows, conditions=conditions)
     splitting = np.isin(params.names, degenerate_translations(mech))
-    return analyse_jacobian(J, params.names, rtol, breaks_closure=breaking, splits_joint=splitting)
+    return analyse_jacobian(J, params.names, rtol, breaks_closure=breaking,
+                            splits_joint=splitting, units=params.units)  # fmt: skip
