@@ -22,8 +22,12 @@ __all__ = ["run_cv"]
 
 
 def _pose_fit(cal):
-    """(measurements, fit, baseline fit) of a pose-file calibration."""
-    from pincal.identification import identify
+    """(measurements, fit, baseline fit) of a pose-file calibration, as calibrate ran it.
+
+    Replayed: the preset, the method, the robust loss and a declared noise (from the
+    calibration's weighting record).
+    """
+    from pincal.identification import LMOptions, identify
     from pincal.io import read_measurement_file
     from pincal.sensitivity import parameters
 
@@ -39,9 +43,17 @@ def _pose_fit(cal):
             f"the joint terms of {cal.preset!r}; cross-validate them with `pincal select-model`"
         )
     method = str(cal.manifest.get("method") or "gauss-newton")
+    w = cal.result.weighting
+    loss = "linear" if w is None else w.loss
+    options = LMOptions(loss=loss) if loss != "linear" else None
+    noise = None
+    if w is not None and w.source == "declared":  # --noise or the file's header
+        noise = {"position": w.position_std * 1e3, "orientation": w.orientation_std * 1e3}
 
     def fit(m):
-        return identify(nominal, params, m, method).calibrated_mechanism
+        return identify(
+            nominal, params, m, method, noise=noise, options=options
+        ).calibrated_mechanism
 
     return meas, fit, lambda m: nominal
 
