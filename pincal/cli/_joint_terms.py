@@ -116,7 +116,10 @@ def terms_texts(
 
 
 def calibration_terms(
-    cal: CalibrationDirectory, payload: Payload | None, temperature: float | None = None
+    cal: CalibrationDirectory,
+    payload: Payload | None,
+    temperature: float | None = None,
+    per_pose: bool = False,
 ) -> tuple[JointTermCorrection | None, str]:
     """The joint terms of a calibration directory, and a line saying what they are.
 
@@ -125,6 +128,8 @@ def calibration_terms(
         payload: the load at the targets, replacing the calibration's; None: keep it.
         temperature: the machine temperature at the targets [°C]; None: the thermal
             terms' reference (20 °C, where they vanish).
+        per_pose: the thermal terms are evaluated at each pose's temperature (a
+            ``temperature_C`` column); said in the line.
 
     Returns:
         (correction, description); (None, "") for a geometric calibration.
@@ -158,11 +163,12 @@ def calibration_terms(
     if "1/K" in terms.params.units:
         from pincal.model import THERMAL_REFERENCE_C
 
-        line += (
-            f", {temperature:g} °C"
-            if temperature is not None
-            else f", {THERMAL_REFERENCE_C:g} °C (the reference: no expansion; --temperature)"
-        )
+        if per_pose:
+            line += ", at each pose's temperature_C"
+        elif temperature is not None:
+            line += f", {temperature:g} °C"
+        else:
+            line += f", {THERMAL_REFERENCE_C:g} °C (the reference: no expansion; --temperature)"
     elif temperature is not None:
         raise click.BadParameter(
             f"calibration {str(cal.path)!r} has no thermal term (calibrate --model "

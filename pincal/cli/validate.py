@@ -134,7 +134,8 @@ def validate(
     from pincal.cli._joint_terms import calibration_terms
     from pincal.identification import covariance_kind
 
-    terms, terms_line = calibration_terms(cal, read_payload(payload))
+    terms, terms_line = calibration_terms(cal, read_payload(payload),
+                                          per_pose=meas.temperature is not None)  # fmt: skip
     validation = validate_held_out(
         nominal,
         cal.calibrated(),
@@ -144,9 +145,10 @@ def validate(
         result.covariance,
         meas.noise or cal.noise,
         tuple((cal.manifest.get("markers") or {}).get("held_weak") or ()),
-        None if terms is None else meas.q_act + terms.deflection(meas.q_act),
+        None if terms is None else meas.q_act + terms.deflection(meas.q_act, meas.conditions),
         covariance_kind(result.annotations,
                         None if result.weighting is None else result.weighting.source),
+        None if terms is None else terms.shift(meas.q_act, meas.conditions),
     )
     doc = {
         "calibration": calibration_summary(cal),

@@ -16,7 +16,7 @@ thermal terms act at the reference temperature, 20 °C, where they vanish.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -100,24 +100,33 @@ class JointTermCorrection:
         t = THERMAL_REFERENCE_C if self.temperature is None else self.temperature
         return {"temperature": np.full(m, t)}
 
-    def deflection(self, commands: np.ndarray) -> np.ndarray:
-        """Joint changes ``δq = B(u) θ`` (m, n_act) at commands ``u`` (m, n_act) [rad, m]."""
+    def deflection(
+        self, commands: np.ndarray, conditions: Mapping[str, np.ndarray | None] | None = None
+    ) -> np.ndarray:
+        """Joint changes ``δq = B(u) θ`` (m, n_act) at commands ``u`` (m, n_act) [rad, m].
+
+        ``conditions``: per-pose conditions (``{"temperature": (m,) °C}``, e.g. a held-out
+        file's) instead of :attr:`temperature` for every pose.
+        """
         u = np.atleast_2d(np.asarray(commands, dtype=float))
         if not self:
             return np.zeros_like(u)
-        return (
-            joint_term_basis(self.nominal, self.params, u, self._conditions(len(u))) @ self.values
-        )
+        at = conditions if conditions is not None else self._conditions(len(u))
+        return joint_term_basis(self.nominal, self.params, u, at) @ self.values
 
-    def shift(self, commands: np.ndarray) -> np.ndarray | None:
+    def shift(
+        self, commands: np.ndarray, conditions: Mapping[str, np.ndarray | None] | None = None
+    ) -> np.ndarray | None:
         """World position change (m, 3) of the measured frame at commands ``u`` [m].
 
-        None when no term moves the frame directly.
+        None when no term moves the frame directly. ``conditions`` as for
+        :meth:`deflection`.
         """
         u = np.atleast_2d(np.asarray(commands, dtype=float))
         if not self:
             return None
-        S = joint_term_shift(self.nominal, self.params, u, self._conditions(len(u)))
+        at = conditions if conditions is not None else self._conditions(len(u))
+        S = joint_term_shift(self.nominal, self.params, u, at)
         return None if S is None else S @ self.values
 
     def solve(self, solver: Mechanism, target: pin.SE3, q: np.ndarray) -> np.ndarray:

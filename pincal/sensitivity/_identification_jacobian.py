@@ -44,6 +44,7 @@ def identification_jacobian(
     q_act_rows: np.ndarray,
     values: np.ndarray | None = None,
     components: tuple[str, ...] | None = None,
+    conditions: Mapping[str, np.ndarray | None] | None = None,
 ) -> np.ndarray:
     """Stacked identification Jacobian (m·k, n) of the measured quantity.
 
@@ -54,6 +55,7 @@ def identification_jacobian(
         values: (n,) parameter values at which to linearise (default zeros).
         components: measured components (default: the mechanism's), k of them; rows per
             pose are in the order ``x y z rx ry rz`` restricted to these.
+        conditions: per-pose conditions joint terms need (``{"temperature": (m,) °C}``).
 
     Returns:
         (m·k, n) array: position rows in metres (world frame) and rotation rows in
@@ -62,7 +64,7 @@ def identification_jacobian(
         without a physical meaning.
     """
     rows = _rows(mech, components)
-    J = _sensitivities(mech, params, q_act_rows, values).jacobian[:, rows]
+    J = _sensitivities(mech, params, q_act_rows, values, conditions).jacobian[:, rows]
     return J.reshape(-1, len(params))
 
 

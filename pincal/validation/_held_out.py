@@ -194,8 +194,12 @@ def _model_errors(
     pos: list[int],
     rot: list[int],
     joints: np.ndarray | None = None,
+    shift: np.ndarray | None = None,
 ) -> ModelErrors:
-    """Errors of ``model`` evaluated at ``joints`` (m, n_act) (None: the commands)."""
+    """Errors of ``model`` at ``joints`` (m, n_act) (None: the commands).
+
+    The measured frame is moved by ``shift`` (m, 3) [m] (None: not moved).
+    """
     joints = meas.q_act if joints is None else joints
     m = len(meas)
     ep = np.zeros((m, 3))
@@ -206,7 +210,7 @@ def _model_errors(
         T = model.forward(joints[rows[0]])
         R = None if meas.rotations is None else meas.rotations[rows]
         for i in rows:
-            ep[i] = meas.positions[i] - T.translation
+            ep[i] = meas.positions[i] - T.translation - (0.0 if shift is None else shift[i])
             if meas.rotations is not None:
                 er[i] = pin.log3(T.rotation.T @ meas.rotations[i])
         pa = point_accuracy(T, meas.positions[rows], R, comps)
@@ -236,6 +240,7 @@ def _prediction(
     pos: list[int],
     rot: list[int],
     noise: NoiseModel | None,
+    conditions: dict[str, np.ndarray | None] | None = None,
 ) -> dict[str, float | str | None]:
     """Cramér–Rao prediction of the calibrated model's validation RMS (mm, mrad).
 
@@ -249,7 +254,8 @@ def _prediction(
         none = {f"{w}_rms_{k}": None for w in ("model", "observed")
                 for k in ("position_mm", "orientation_mrad")}  # fmt: skip
         return {**none, "withheld": caveat}
-    J = identification_jacobian(nominal, params, q_rows, components=COMPONENTS)
+    J = identification_jacobian(nominal, params, q_rows, components=COMPONENTS,
+                                conditions=conditions)  # fmt: skip
     J = J.reshape(len(q_rows), 6, len(params))[:, :, cols]
     out: dict[str, float | str | None] = {"withheld": None}
     for key, idx, sigma in (
@@ -278,6 +284,7 @@ def validate_held_out(
     held_weak: tuple[str, ...] = (),
     joints: np.ndarray | None = None,
     covariance_kind: str = "cramer-rao",
+    shift: np.ndarray | None = None,
 ) -> HeldOutValidation:
     """Before (nominal) / after (calibrated) errors on held-out measurements.
 
@@ -300,6 +307,8 @@ def validate_held_out(
             withheld (it would be optimistic).
         joints: (m, n_act) joint values of the calibrated model's predictions [rad, m]
             (None: the commands ``meas.q_act``; a geometric calibration).
+        shift: (m, 3) world position change of the measured frame the joint terms add
+            to the calibrated predictions [m] (a thermal expansion of the links), or None.
         covariance_kind: which covariance ``covariance`` is (a key of
             :data:`pincal.identification.COVARIANCE_KINDS`: ``cramer-rao`` only for the
             linear one at a declared noise); recorded as the prediction's ``covariance``.
@@ -321,14 +330,19 @@ def validate_held_out(
         joints = np.asarray(joints, dtype=float)
         if joints.shape != meas.q_act.shape:
             raise ShapeError(
-                f"joints must have the shape of the commands {meas.q_act.shape}, got "
-                f"{joints.shape}"
+                f"joints must have the shape of the commands {meas.q_act.shape}, got {joints.shape}"
             )
-    after = _model_errors(calibrated, meas, groups, pos, rot, joints)
+    if shift is not None and np.shape(shift) != (len(meas), 3):
+        raise ShapeError(f"shift must have shape ({len(meas)}, 3), got {np.shape(shift)}")
+    after = _model_errors(calibrated, meas, groups, pos, rot, joints, shift)
     rp = [_repeatability(meas, rows, pos) for rows in groups]
-    q_rows = np.array([meas.q_act[g[0]] for g in groups])
+    first = [g[0] for g in groups]
+    q_rows = meas.q_act[first]
+    conditions = {k: None if v is None else np.asarray(v)[first]
+                  for k, v in (meas.conditions or {}).items()}  # fmt: skip
     cov = np.asarray(covariance, dtype=float)
-    predicted = _prediction(nominal, params, names, cov, q_rows, pos, [3 + k for k in rot], noise)
+    predicted = _prediction(nominal, params, names, cov, q_rows, pos, [3 + k for k in rot], noise,
+                            conditions)  # fmt: skip
     if held_weak and predicted["withheld"] is None:
         more = " …" if len(held_weak) > 5 else ""
         predicted = {k: None for k in predicted}
