@@ -145,39 +145,64 @@ class BatchLoopSolver:
         Raises:
             numpy.linalg.LinAlgError: a passive system is exactly singular.
         """
-        nv, free, act = self.model.nv, self._free_v, self.queries.act_v_arr
-        r, Jc = self.kernels.closure_terms_batch(bk, columns=np.arange(nv))
+        free, act = self._free_v, self.queries.act_v_arr
+        # two calls: the closure Jacobian's cost grows with the columns each closure's
+        # frames depend on, which the passive and the actuated ones together make more
+        r, Jf = self.kernels.closure_terms_batch(bk, columns=free)
+        Ja = self.kernels.closure_terms_batch(bk, columns=act)[1]
         da = a - self.queries.actuator_values_batch(bk.q)
-        rate = (Jc[:, :, act] @ da[..., None])[..., 0] + r  # closing unclosed starts too
-        step = self.kernels.passive_steps(Jc[:, :, free], rate)
-        DV = np.zeros((a.shape[0], nv))
-        DV[:, free] = step
-        cand = self.queries.actuators_batch(self.kernels.batch_model.integrate(bk.q, DV), a)
+        rate = (Ja @ da[..., None])[..., 0] + r  # closing unclosed starts too
+        return self._predicted(bk.q, a, self.kernels.passive_steps(Jf, rate))
+
+    def _predicted(
+        self, G: np.ndarray, A: np.ndarray, step: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Configurations G (n, nq) moved by passive steps (n, k), actuators A; norms (n,)."""
+        DV = np.zeros((A.shape[0], self.model.nv))
+        DV[:, self._free_v] = step
+        cand = self.queries.actuators_batch(self.kernels.batch_model.integrate(G, DV), A)
         return cand, np.linalg.norm(step, axis=1)
+
+    def _home_predictions(self, G: np.ndarray, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_predict_batch` from home (rows of G) to every row of A (N, n_act).
+
+        The step ``−Jf⁺ (Ja Δa + r)`` is linear in Δa: home's system is solved once for
+        the n_act columns of ``Ja`` and for ``r``, and each row combines them.
+
+        Raises:
+            numpy.linalg.LinAlgError: home's passive system is exactly singular.
+        """
+        free, act = self._free_v, self.queries.act_v_arr
+        kin = self.kernels.batch_model.kinematics(self.q_home[None])
+        r, Jf = self.kernels.closure_terms_batch(kin, columns=free)
+        Ja = self.kernels.closure_terms_batch(kin, columns=act)[1]
+        rhs = np.vstack([Ja[0].T, r])  # (n_act + 1, rows)
+        unit = self.kernels.passive_steps(np.broadcast_to(Jf, (len(rhs), *Jf.shape[1:])), rhs)
+        da = A - self.queries.actuator_values_batch(self.q_home[None])
+        return self._predicted(G, A, da @ unit[: act.size] + unit[act.size])
 
     def _predicted_starts(self, G: np.ndarray, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Start configurations (N, nq) of the direct solves from ``G`` (N, nq) to ``A``.
 
         The first-order prediction from each row of G (a continuation step over the
-        whole path; G's rows equal to home share one kinematics), with the norms (N,)
-        of the predicted passive motions; rows whose prediction is singular start at G
-        with the actuators set (and motion 0: they must close right there).
+        whole path; rows all equal to home share one solve), with the norms (N,)
+        of the predicted passive motions, in chunks of :data:`CHUNK` rows (as the
+        Newton iterations: temporaries that stay in cache); rows whose prediction is
+        singular (all of a chunk, for an exactly singular system) start at G with the
+        actuators set (and motion 0: they must close right there).
         """
         N = A.shape[0]
-        if np.array_equal(G, np.broadcast_to(self.q_home, G.shape)):
-            kin = self.kernels.batch_model.kinematics(self.q_home[None])
-            bk = BatchKinematics(
-                G,
-                np.broadcast_to(kin.rotations, (N, *kin.rotations.shape[1:])),
-                np.broadcast_to(kin.translations, (N, *kin.translations.shape[1:])),
-                np.broadcast_to(kin.jacobian, (N, *kin.jacobian.shape[1:])),
-            )
-        else:
-            bk = self.kernels.batch_model.kinematics(G)
-        try:
-            cand, moved = self._predict_batch(bk, A)
-        except np.linalg.LinAlgError:
-            return self.queries.actuators_batch(G, A), np.zeros(N)
+        cand, moved = np.empty((N, self.model.nq)), np.empty(N)
+        home = np.array_equal(G, np.broadcast_to(self.q_home, G.shape))
+        for rows in [slice(None)] if home else [slice(s, s + CHUNK) for s in range(0, N, CHUNK)]:
+            try:
+                if home:
+                    cand[rows], moved[rows] = self._home_predictions(G, A)
+                else:
+                    bk = self.kernels.batch_model.kinematics(G[rows])
+                    cand[rows], moved[rows] = self._predict_batch(bk, A[rows])
+            except np.linalg.LinAlgError:
+                cand[rows], moved[rows] = self.queries.actuators_batch(G[rows], A[rows]), 0.0
         bad = ~np.all(np.isfinite(cand), axis=1) | ~np.isfinite(moved)
         cand[bad], moved[bad] = self.queries.actuators_batch(G[bad], A[bad]), 0.0
         return cand, moved
@@ -250,9 +275,9 @@ class BatchLoopSolver:
         # a direct solve is a continuation step over the whole path: it must stay near
         # its prediction (else it may have landed on another mode with the same sign)
         near = travel <= 0.25 * moved + 1e-7
-        signed = self.accept(Jf.copy(), done)[1]  # the sign alone: the last resort
+        factor, signed, risky = self.accept(Jf, done)  # signed: the last resort
         done &= near
-        factor, ok, risky = self.accept(Jf, done)
+        ok = signed & near
         # not closed or on another branch (not merely near a singularity): continuation
         retry = np.nonzero(~ok & ~(done & risky))[0]
         hopeless = np.zeros(N, dtype=bool)

@@ -74,3 +74,24 @@ def test_rows_do_not_depend_on_the_batch(mech, rows):
         got, want = mech.frame_placement(Q_part[i]), mech.frame_placement(Q_all[j])
         np.testing.assert_allclose(got.translation, want.translation, atol=1e-12)
         np.testing.assert_allclose(got.rotation, want.rotation, atol=1e-12)
+
+
+def test_home_predictions_are_each_rows_own(mech, rows):
+    """From home, one solve serves every row: the same starts as each row's prediction
+    from home's kinematics, and rows of a warm start are predicted chunk by chunk."""
+    from pincal.model._batch import BatchKinematics
+
+    solver = mech.batch_solver
+    home = np.tile(mech.q_home, (len(rows), 1))
+    got, moved = solver._predicted_starts(home, rows)
+    kin = mech.batch_model.kinematics(home)
+    want, want_moved = solver._predict_batch(
+        BatchKinematics(home, kin.rotations, kin.translations, kin.jacobian), rows
+    )
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(moved, want_moved, rtol=1e-12)
+    Q = mech.configurations_batch(rows)[0]
+    Q, target = np.vstack([Q, Q]), np.vstack([rows[::-1], rows])  # two chunks
+    warm, _ = solver._predicted_starts(Q, target)
+    want = solver._predict_batch(mech.batch_model.kinematics(Q), target)[0]
+    np.testing.assert_allclose(warm, want, rtol=0, atol=1e-12)
