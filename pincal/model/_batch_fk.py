@@ -3,10 +3,13 @@
 :class:`BatchLoopSolver` closes the loops for N actuator rows together, on
 :class:`~pincal.model._batch_newton.BatchNewton`
 (closure terms, passive factors, Newton iterations in chunks of :data:`CHUNK` poses).
-Each direct solve starts at the first-order prediction from its start (home) and, as
-a continuation step over the whole path, must stay near it (the sum of its Newton
-steps at most a quarter of the predicted passive motion: a bare Newton from a far
-start can land on another assembly mode of the same sign). A pose is accepted when
+A direct solve is a continuation step over the whole path and must stay near its
+prediction (a bare Newton from a far start can land on another assembly mode of the
+same sign): from home it starts at the first-order (tangent) prediction and its Newton
+steps add up to at most a quarter of the predicted passive motion; from warm starts
+(guesses) the Newton's own first step, at the guess with the actuators set, is the
+prediction, and the steps after it add up to at most a quarter of it (a contraction
+test, free: it needs no Jacobian at the guess). A pose is accepted when
 its residual is below ``options.tol`` and it is on home's
 assembly branch (sign of det of the passive closure Jacobian or of its branch block,
 from the same factors). Poses whose residual does not decrease, that leave the
@@ -163,46 +166,27 @@ class BatchLoopSolver:
         cand = self.queries.actuators_batch(self.kernels.batch_model.integrate(G, DV), A)
         return cand, np.linalg.norm(step, axis=1)
 
-    def _home_predictions(self, G: np.ndarray, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`_predict_batch` from home (rows of G) to every row of A (N, n_act).
+    def _predicted_starts(self, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Start configurations (N, nq) of the direct solves from home to ``A`` (N, n_act).
 
-        The step ``−Jf⁺ (Ja Δa + r)`` is linear in Δa: home's system is solved once for
-        the n_act columns of ``Ja`` and for ``r``, and each row combines them.
-
-        Raises:
-            numpy.linalg.LinAlgError: home's passive system is exactly singular.
+        The first-order prediction from home (a continuation step over the whole path),
+        with the norms (N,) of the predicted passive motions. Its step ``−Jf⁺ (Ja Δa +
+        r)`` is linear in Δa: home's system is solved once, for the n_act columns of
+        ``Ja`` and for ``r``. Where it is singular the rows start at home with the
+        actuators set (and motion 0: they must close right there).
         """
         free, act = self._free_v, self.queries.act_v_arr
+        G = np.broadcast_to(self.q_home, (A.shape[0], self.model.nq))
         kin = self.kernels.batch_model.kinematics(self.q_home[None])
         r, Jf = self.kernels.closure_terms_batch(kin, columns=free)
         Ja = self.kernels.closure_terms_batch(kin, columns=act)[1]
         rhs = np.vstack([Ja[0].T, r])  # (n_act + 1, rows)
-        unit = self.kernels.passive_steps(np.broadcast_to(Jf, (len(rhs), *Jf.shape[1:])), rhs)
+        try:
+            unit = self.kernels.passive_steps(np.broadcast_to(Jf, (len(rhs), *Jf.shape[1:])), rhs)
+        except np.linalg.LinAlgError:
+            return self.queries.actuators_batch(G, A), np.zeros(A.shape[0])
         da = A - self.queries.actuator_values_batch(self.q_home[None])
-        return self._predicted(G, A, da @ unit[: act.size] + unit[act.size])
-
-    def _predicted_starts(self, G: np.ndarray, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Start configurations (N, nq) of the direct solves from ``G`` (N, nq) to ``A``.
-
-        The first-order prediction from each row of G (a continuation step over the
-        whole path; rows all equal to home share one solve), with the norms (N,)
-        of the predicted passive motions, in chunks of :data:`CHUNK` rows (as the
-        Newton iterations: temporaries that stay in cache); rows whose prediction is
-        singular (all of a chunk, for an exactly singular system) start at G with the
-        actuators set (and motion 0: they must close right there).
-        """
-        N = A.shape[0]
-        cand, moved = np.empty((N, self.model.nq)), np.empty(N)
-        home = np.array_equal(G, np.broadcast_to(self.q_home, G.shape))
-        for rows in [slice(None)] if home else [slice(s, s + CHUNK) for s in range(0, N, CHUNK)]:
-            try:
-                if home:
-                    cand[rows], moved[rows] = self._home_predictions(G, A)
-                else:
-                    bk = self.kernels.batch_model.kinematics(G[rows])
-                    cand[rows], moved[rows] = self._predict_batch(bk, A[rows])
-            except np.linalg.LinAlgError:
-                cand[rows], moved[rows] = self.queries.actuators_batch(G[rows], A[rows]), 0.0
+        cand, moved = self._predicted(G, A, da @ unit[: act.size] + unit[act.size])
         bad = ~np.all(np.isfinite(cand), axis=1) | ~np.isfinite(moved)
         cand[bad], moved[bad] = self.queries.actuators_batch(G[bad], A[bad]), 0.0
         return cand, moved
@@ -215,10 +199,12 @@ class BatchLoopSolver:
         J: np.ndarray,
         Jf: np.ndarray,
         travel: np.ndarray | None = None,
+        first: np.ndarray | None = None,
     ) -> np.ndarray:
         """Batched Newton in chunks of :data:`CHUNK` rows, in place: converged mask (N,).
 
-        ``travel`` (N,), when given, receives the sum of each row's step norms.
+        ``travel`` (N,), when given, receives the sum of each row's step norms, and
+        ``first`` (N,) the norm of its first step.
         """
         done = np.zeros(Q.shape[0], dtype=bool)
         for s in range(0, Q.shape[0], CHUNK):
@@ -230,6 +216,7 @@ class BatchLoopSolver:
                 J[rows],
                 Jf[rows],
                 travel=None if travel is None else travel[rows],
+                first=None if first is None else first[rows],
             )
         return done
 
@@ -265,16 +252,23 @@ class BatchLoopSolver:
         """
         N, nj, k = A.shape[0], self.model.njoints, self._free_v.size
         m = self.queries.n_closure_rows
-        Q, moved = self._predicted_starts(Q0, A)
+        moved = None  # from guesses: the Newton's first step there is the prediction
+        if np.array_equal(Q0, np.broadcast_to(self.q_home, Q0.shape)):
+            Q, moved = self._predicted_starts(A)
+        else:
+            Q = self.queries.actuators_batch(Q0, A)
         R = np.empty((N, nj, 3, 3))
         p = np.empty((N, nj, 3))
         J = np.empty((N, 6, self.model.nv))
         Jf = np.empty((N, m, k))
-        travel = np.zeros(N)
-        done = self.close_chunks(Q, R, p, J, Jf, travel)
+        travel, first = np.zeros(N), np.zeros(N)
+        done = self.close_chunks(Q, R, p, J, Jf, travel, first)
         # a direct solve is a continuation step over the whole path: it must stay near
         # its prediction (else it may have landed on another mode with the same sign)
-        near = travel <= 0.25 * moved + 1e-7
+        if moved is None:
+            near = travel - first <= 0.25 * first + 1e-7
+        else:
+            near = travel <= 0.25 * moved + 1e-7
         factor, signed, risky = self.accept(Jf, done)  # signed: the last resort
         done &= near
         ok = signed & near
