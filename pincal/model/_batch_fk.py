@@ -3,10 +3,13 @@
 :class:`BatchLoopSolver` closes the loops for N actuator rows together, on
 :class:`~pincal.model._batch_newton.BatchNewton`
 (closure terms, passive factors, Newton iterations in chunks of :data:`CHUNK` poses).
-Each direct solve starts at the first-order prediction from its start (home) and, as
-a continuation step over the whole path, must stay near it (the sum of its Newton
-steps at most a quarter of the predicted passive motion: a bare Newton from a far
-start can land on another assembly mode of the same sign). A pose is accepted when
+A direct solve is a continuation step over the whole path and must stay near its
+prediction (a bare Newton from a far start can land on another assembly mode of the
+same sign): from home it starts at the first-order (tangent) prediction and its Newton
+steps add up to at most a quarter of the predicted passive motion; from warm starts
+(guesses) the Newton's own first step, at the guess with the actuators set, is the
+prediction, and the steps after it add up to at most a quarter of it (a contraction
+test, free: it needs no Jacobian at the guess). A pose is accepted when
 its residual is below ``options.tol`` and it is on home's
 assembly branch (sign of det of the passive closure Jacobian or of its branch block,
 from the same factors). Poses whose residual does not decrease, that leave the
@@ -145,39 +148,45 @@ class BatchLoopSolver:
         Raises:
             numpy.linalg.LinAlgError: a passive system is exactly singular.
         """
-        nv, free, act = self.model.nv, self._free_v, self.queries.act_v_arr
-        r, Jc = self.kernels.closure_terms_batch(bk, columns=np.arange(nv))
+        free, act = self._free_v, self.queries.act_v_arr
+        # two calls: the closure Jacobian's cost grows with the columns each closure's
+        # frames depend on, which the passive and the actuated ones together make more
+        r, Jf = self.kernels.closure_terms_batch(bk, columns=free)
+        Ja = self.kernels.closure_terms_batch(bk, columns=act)[1]
         da = a - self.queries.actuator_values_batch(bk.q)
-        rate = (Jc[:, :, act] @ da[..., None])[..., 0] + r  # closing unclosed starts too
-        step = self.kernels.passive_steps(Jc[:, :, free], rate)
-        DV = np.zeros((a.shape[0], nv))
-        DV[:, free] = step
-        cand = self.queries.actuators_batch(self.kernels.batch_model.integrate(bk.q, DV), a)
+        rate = (Ja @ da[..., None])[..., 0] + r  # closing unclosed starts too
+        return self._predicted(bk.q, a, self.kernels.passive_steps(Jf, rate))
+
+    def _predicted(
+        self, G: np.ndarray, A: np.ndarray, step: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Configurations G (n, nq) moved by passive steps (n, k), actuators A; norms (n,)."""
+        DV = np.zeros((A.shape[0], self.model.nv))
+        DV[:, self._free_v] = step
+        cand = self.queries.actuators_batch(self.kernels.batch_model.integrate(G, DV), A)
         return cand, np.linalg.norm(step, axis=1)
 
-    def _predicted_starts(self, G: np.ndarray, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Start configurations (N, nq) of the direct solves from ``G`` (N, nq) to ``A``.
+    def _predicted_starts(self, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Start configurations (N, nq) of the direct solves from home to ``A`` (N, n_act).
 
-        The first-order prediction from each row of G (a continuation step over the
-        whole path; G's rows equal to home share one kinematics), with the norms (N,)
-        of the predicted passive motions; rows whose prediction is singular start at G
-        with the actuators set (and motion 0: they must close right there).
+        The first-order prediction from home (a continuation step over the whole path),
+        with the norms (N,) of the predicted passive motions. Its step ``−Jf⁺ (Ja Δa +
+        r)`` is linear in Δa: home's system is solved once, for the n_act columns of
+        ``Ja`` and for ``r``. Where it is singular the rows start at home with the
+        actuators set (and motion 0: they must close right there).
         """
-        N = A.shape[0]
-        if np.array_equal(G, np.broadcast_to(self.q_home, G.shape)):
-            kin = self.kernels.batch_model.kinematics(self.q_home[None])
-            bk = BatchKinematics(
-                G,
-                np.broadcast_to(kin.rotations, (N, *kin.rotations.shape[1:])),
-                np.broadcast_to(kin.translations, (N, *kin.translations.shape[1:])),
-                np.broadcast_to(kin.jacobian, (N, *kin.jacobian.shape[1:])),
-            )
-        else:
-            bk = self.kernels.batch_model.kinematics(G)
+        free, act = self._free_v, self.queries.act_v_arr
+        G = np.broadcast_to(self.q_home, (A.shape[0], self.model.nq))
+        kin = self.kernels.batch_model.kinematics(self.q_home[None])
+        r, Jf = self.kernels.closure_terms_batch(kin, columns=free)
+        Ja = self.kernels.closure_terms_batch(kin, columns=act)[1]
+        rhs = np.vstack([Ja[0].T, r])  # (n_act + 1, rows)
         try:
-            cand, moved = self._predict_batch(bk, A)
+            unit = self.kernels.passive_steps(np.broadcast_to(Jf, (len(rhs), *Jf.shape[1:])), rhs)
         except np.linalg.LinAlgError:
-            return self.queries.actuators_batch(G, A), np.zeros(N)
+            return self.queries.actuators_batch(G, A), np.zeros(A.shape[0])
+        da = A - self.queries.actuator_values_batch(self.q_home[None])
+        cand, moved = self._predicted(G, A, da @ unit[: act.size] + unit[act.size])
         bad = ~np.all(np.isfinite(cand), axis=1) | ~np.isfinite(moved)
         cand[bad], moved[bad] = self.queries.actuators_batch(G[bad], A[bad]), 0.0
         return cand, moved
@@ -190,10 +199,12 @@ class BatchLoopSolver:
         J: np.ndarray,
         Jf: np.ndarray,
         travel: np.ndarray | None = None,
+        first: np.ndarray | None = None,
     ) -> np.ndarray:
         """Batched Newton in chunks of :data:`CHUNK` rows, in place: converged mask (N,).
 
-        ``travel`` (N,), when given, receives the sum of each row's step norms.
+        ``travel`` (N,), when given, receives the sum of each row's step norms, and
+        ``first`` (N,) the norm of its first step.
         """
         done = np.zeros(Q.shape[0], dtype=bool)
         for s in range(0, Q.shape[0], CHUNK):
@@ -205,6 +216,7 @@ class BatchLoopSolver:
                 J[rows],
                 Jf[rows],
                 travel=None if travel is None else travel[rows],
+                first=None if first is None else first[rows],
             )
         return done
 
@@ -240,19 +252,26 @@ class BatchLoopSolver:
         """
         N, nj, k = A.shape[0], self.model.njoints, self._free_v.size
         m = self.queries.n_closure_rows
-        Q, moved = self._predicted_starts(Q0, A)
+        moved = None  # from guesses: the Newton's first step there is the prediction
+        if np.array_equal(Q0, np.broadcast_to(self.q_home, Q0.shape)):
+            Q, moved = self._predicted_starts(A)
+        else:
+            Q = self.queries.actuators_batch(Q0, A)
         R = np.empty((N, nj, 3, 3))
         p = np.empty((N, nj, 3))
         J = np.empty((N, 6, self.model.nv))
         Jf = np.empty((N, m, k))
-        travel = np.zeros(N)
-        done = self.close_chunks(Q, R, p, J, Jf, travel)
+        travel, first = np.zeros(N), np.zeros(N)
+        done = self.close_chunks(Q, R, p, J, Jf, travel, first)
         # a direct solve is a continuation step over the whole path: it must stay near
         # its prediction (else it may have landed on another mode with the same sign)
-        near = travel <= 0.25 * moved + 1e-7
-        signed = self.accept(Jf.copy(), done)[1]  # the sign alone: the last resort
+        if moved is None:
+            near = travel - first <= 0.25 * first + 1e-7
+        else:
+            near = travel <= 0.25 * moved + 1e-7
+        factor, signed, risky = self.accept(Jf, done)  # signed: the last resort
         done &= near
-        factor, ok, risky = self.accept(Jf, done)
+        ok = signed & near
         # not closed or on another branch (not merely near a singularity): continuation
         retry = np.nonzero(~ok & ~(done & risky))[0]
         hopeless = np.zeros(N, dtype=bool)

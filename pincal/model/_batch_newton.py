@@ -224,6 +224,7 @@ class BatchNewton:
         max_iterations: int = MAX_BATCH_ITERATIONS,
         travel: np.ndarray | None = None,
         polish: bool = True,
+        first: np.ndarray | None = None,
     ) -> np.ndarray:
         """Newton iterations of one chunk, in place: converged mask (N,).
 
@@ -234,7 +235,9 @@ class BatchNewton:
         to ``options.polish_steps`` more full steps, each kept only when it halves the
         largest residual (rows already at round-off, ≤ :data:`_ROUND_OFF`, stop).
         ``max_iterations`` bounds the Newton iterations; ``travel`` (N,), when given,
-        receives the sum of the step norms of each row (≥ its distance moved);
+        receives the sum of the step norms of each row (≥ its distance moved), and
+        ``first`` (N,), when given, the norm of its first step (the part of ``travel``
+        a linearisation at the start predicts);
         ``polish=False`` stops at convergence (intermediate points of a continuation).
         With more closure rows than passive dofs and ``options.redundant_tol`` > 0 a row
         also converges as a least-squares closure (``_newton``): the part of its
@@ -251,7 +254,7 @@ class BatchNewton:
         polish_steps = opt.polish_steps if polish else 0
         k = free.size
         least_squares = bool(opt.redundant_tol) and self.queries.n_closure_rows > k
-        for _ in range(max_iterations + polish_steps + 1):
+        for it in range(max_iterations + polish_steps + 1):
             ia = np.nonzero(active)[0]
             if ia.size == 0:
                 break
@@ -300,5 +303,7 @@ class BatchNewton:
             Q[ig[~bad]] = bm.integrate(Q[ig[~bad]], DV[~bad])
             if travel is not None:
                 travel[ig[~bad]] += np.minimum(sn, opt.max_step)[~bad]
+            if first is not None and it == 0:
+                first[ig[~bad]] = np.minimum(sn, opt.max_step)[~bad]
         Q[done] = Q_done[done]  # rows stopped after a polishing step: their solution
         return done

@@ -2,14 +2,16 @@
 
 Usage:
     python scripts/studies/pose_coverage.py [--model stewart_6ups] [--poses random|designed]
-        [--count 10] [--noise declared|estimated] [--seeds 0:40] [--jobs 2]
+        [--count 10] [--box 1] [--noise declared|estimated] [--seeds 0:40] [--jobs 2]
     python scripts/studies/pose_coverage.py --summarise FILE.jsonl ...
 
 Per seed S (truths simulated by pincal's simulate path, as ``pincal simulate`` draws
 them): an actual machine with the preset's errors uniform in ±1 mm / ±10 mrad (seed
 1000 + S), measured at ``--count`` poses — random workspace poses (seed S) or one
-design chosen by O1 from 300 random candidates (seed 0, the same for every draw) —
-with a laser-tracker noise of 0.01 mm / 0.02 mrad; the noise is declared to the fit or
+design chosen by O1 from 300 random candidates (seed 0, the same for every draw); with
+``--box F`` each command's offset from home's is scaled by F (a workspace F times as
+wide around home: ill-conditioned for F ≪ 1) — with a laser-tracker noise of 0.01 mm /
+0.02 mrad; the noise is declared to the fit or
 estimated from its residuals (the file without its ``# noise:`` header). The fit is
 ``pincal.identify``; the covariance written is what ``pincal calibrate`` writes
 (:func:`pincal.identification.check_uncertainty` without a bootstrap: the linear
@@ -64,6 +66,9 @@ def draw(a: argparse.Namespace, seed: int, q_design: np.ndarray | None) -> dict:
     actual = ps.apply(nom, truth)
     rng = np.random.default_rng(seed)
     q = q_design if q_design is not None else pincal.sample_actuators(nom, a.count, rng)
+    if a.box != 1.0:  # a small workspace: the commands' offsets from home scaled
+        home = nom.actuators_of(nom.q_home)
+        q = home + a.box * (q - home)
     t0 = time.perf_counter()
     meas = pincal.simulate_measurements(actual, q, NOISE, rng)
     declared = a.noise == "declared"
@@ -127,6 +132,9 @@ def main() -> None:
     ap.add_argument("--preset", default=None)
     ap.add_argument("--poses", default="random", choices=("random", "designed"))
     ap.add_argument("--count", type=int, default=10)
+    ap.add_argument("--box", type=float, default=1.0,
+                    help="scale of the commands' offsets from home (< 1: a small, "
+                         "ill-conditioned workspace)")  # fmt: skip
     ap.add_argument("--noise", default="declared", choices=("declared", "estimated"))
     ap.add_argument("--seeds", default="0:40", help="first:last (exclusive)")
     ap.add_argument("--jobs", type=int, default=1, help="processes (joblib)")

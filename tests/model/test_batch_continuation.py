@@ -40,8 +40,7 @@ def rows(mech):
 def _direct_only(mech, rows):
     """Rows a direct batched solve from home alone accepts (no continuation): Newton from
     the first-order prediction, kept near it (a continuation step over the whole path)."""
-    home = np.tile(mech.q_home, (len(rows), 1))
-    Q, moved = mech.batch_solver._predicted_starts(home, rows)  # the direct layer alone
+    Q, moved = mech.batch_solver._predicted_starts(rows)  # the direct layer alone
     R = np.empty((len(rows), mech.model.njoints, 3, 3))
     p = np.empty((len(rows), mech.model.njoints, 3))
     J = np.empty((len(rows), 6, mech.model.nv))
@@ -74,3 +73,19 @@ def test_rows_do_not_depend_on_the_batch(mech, rows):
         got, want = mech.frame_placement(Q_part[i]), mech.frame_placement(Q_all[j])
         np.testing.assert_allclose(got.translation, want.translation, atol=1e-12)
         np.testing.assert_allclose(got.rotation, want.rotation, atol=1e-12)
+
+
+def test_home_predictions_are_each_rows_own(mech, rows):
+    """From home, one solve serves every row: the same starts as each row's prediction
+    from home's kinematics."""
+    from pincal.model._batch import BatchKinematics
+
+    solver = mech.batch_solver
+    home = np.tile(mech.q_home, (len(rows), 1))
+    got, moved = solver._predicted_starts(rows)
+    kin = mech.batch_model.kinematics(home)
+    want, want_moved = solver._predict_batch(
+        BatchKinematics(home, kin.rotations, kin.translations, kin.jacobian), rows
+    )
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(moved, want_moved, rtol=1e-12)

@@ -79,3 +79,23 @@ def test_batched_rows_follow_the_path_from_home(mech, truth):
         assert _same(mech.frame_placement(Q[len(rows) - 3 + i]), want)
     for q, a in zip(Q[3:-3], rows[3:-3], strict=True):
         assert _same(mech.frame_placement(q), mech.forward(a))
+
+
+def test_batched_warm_guesses_on_the_path_give_the_same_pose(mech, truth):
+    """Guesses at 0–90 % of each far command's path (home perturbed by 1e-9 for 0 %, so
+    a warm start): a bare Newton from some of them lands on another mode (row 2 from
+    25 %; rows 0 and 2 from home); batched with ≥ 16 rows, every result is the path's."""
+    fractions = (0.0, 0.25, 0.5, 0.75, 0.9)
+    guesses, rows, want = [], [], []
+    for a, pose in zip(FAR, truth, strict=True):
+        for f in fractions:
+            g = mech.q_home + 1e-9 if f == 0.0 else _follow(mech, f * a, steps=60)
+            guesses.append(g)
+            rows.append(a)
+            want.append(pose)
+    rows_arr, guesses_arr = np.array(rows), np.array(guesses)
+    assert len(rows_arr) >= 15
+    Q = mech.configurations_batch(np.vstack([rows_arr, rows_arr[:1]]),
+                                  np.vstack([guesses_arr, guesses_arr[:1]]))[0]  # fmt: skip
+    for i, pose in enumerate(want):
+        assert _same(mech.frame_placement(Q[i]), pose), (i // 5, fractions[i % 5])
