@@ -85,11 +85,24 @@ class CramerRaoReport:
         return float(np.sqrt(np.mean(self.std**2)))
 
     def summary(self) -> str:
-        """Two lines: predicted parameter and validation accuracy (mm, mrad)."""
-        lines = [
-            f"Cramér–Rao bound for {self.m} poses: RMS parameter std "
-            f"{self.rms_std * 1e3:.4g} mm (max {self.std.max() * 1e3:.4g})"
-        ]
+        """Two lines: predicted parameter and validation accuracy (mm, mrad).
+
+        The parameter σ are summarised per unit class (lengths in mm, angles in mrad,
+        any other unit in SI), never mixed in one figure.
+        """
+        parts = []
+        for unit, kind, shown in (("m", "lengths", "mm"), ("rad", "angles", "mrad")):
+            s = self.std[np.asarray(self.units) == unit] * 1e3
+            if s.size:
+                parts.append(f"{kind} {_rms(s):.4g} {shown} (max {s.max():.4g})")
+        other = [(n, u, v) for n, u, v in zip(self.names, self.units, self.std, strict=True)
+                 if u not in ("m", "rad")]  # fmt: skip
+        if other:
+            n, u, v = max(other, key=lambda t: t[2])
+            parts.append(f"{len(other)} other terms (largest {n}: {v:.3g} {u})")
+        if not parts:  # no units given: SI, as it is
+            parts.append(f"{_rms(self.std):.4g} (SI, max {self.std.max():.4g})")
+        lines = [f"Cramér–Rao bound for {self.m} poses: RMS parameter std " + "; ".join(parts)]
         if np.isfinite(self.validation_position_rms) or np.isfinite(
             self.validation_orientation_rms
         ):
@@ -98,6 +111,10 @@ class CramerRaoReport:
                 f" mm, orientation RMS {self.validation_orientation_rms * 1e3:.4g} mrad"
             )
         return "\n".join(lines)
+
+
+def _rms(v: NDArray[np.float64]) -> float:
+    return float(np.sqrt(np.mean(v**2)))
 
 
 def cramer_rao_from_jacobian(
