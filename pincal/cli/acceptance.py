@@ -44,6 +44,48 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
         raise ParameterError(f"{str(path)!r}: {exc}") from None
 
 
+def _other_machine(cal: str, params, values) -> list[str]:
+    """Warnings when the simulated machine is not the one the calibration was fitted on.
+
+    A calibration of simulated data records its data file; ``pincal simulate`` wrote the
+    truth beside it (``<data>.truth.json``). When the errors simulated here differ from
+    that truth, the "after" figures test the calibration on another machine.
+    """
+    import json as _json
+
+    import numpy as np
+
+    from pincal.io import MANIFEST
+
+    manifest = Path(cal) / MANIFEST
+    if not manifest.is_file():
+        return []
+    try:
+        files = _json.loads(manifest.read_text(encoding="utf-8")).get("data_files") or []
+    except (OSError, ValueError):
+        return []
+    out = []
+    for entry in files:
+        truth_path = Path(str(entry.get("path", ""))).with_suffix(".truth.json")
+        if not truth_path.is_file():
+            continue
+        try:
+            truth = _json.loads(truth_path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+        true = {p["name"]: p["value"] for p in truth.get("parameters", [])}
+        here = dict(zip(params.names, np.asarray(values, dtype=float), strict=True))
+        same = set(true) == set(here) and all(abs(true[n] - here[n]) <= 1e-12 for n in true)
+        if not same:
+            size = truth.get("error_size_mm_mrad")
+            hint = f"--errors {truth.get('errors')} --params {truth.get('preset')}"
+            hint += f" --error-size {size[0]:g},{size[1]:g}" if size else ""
+            out.append(f"the machine simulated here is not the one the calibration was fitted "
+                       f"on ({truth_path} differs): the 'after' figures test the calibration on "
+                       f"another machine; to test it on its own, pass {hint}")  # fmt: skip
+    return out
+
+
 def _grouped(meas, controller):
     """Commands (forward kinematics of the distinct actuator rows) and the poses per row."""
     import numpy as np
@@ -187,6 +229,9 @@ def acceptance(
             )
             values = er.uniform(-bound, bound)
         actual = params.apply(nominal, values)
+        if cal:
+            for line in _other_machine(cal, params, values):
+                click.echo(f"pincal: warning: {line}", err=True)
         runs = [("before", nominal)] + ([("after", calibrated)] if calibrated else [])
         for label, controller in runs:
             with counted(f"{label}: cycles", unit="cycle") as step:

@@ -250,6 +250,7 @@ def simulate(
         "model": nominal.name,
         "preset": preset,
         "errors": errors,
+        "error_size_mm_mrad": [size_mm, size_mrad],
         "parameters": [
             {"name": n, "unit": u, "value": float(v)}
             for n, u, v in zip(params.names, params.units, values, strict=True)
