@@ -24,6 +24,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from pincal.errors import CalibrationDirectoryError, OutputPathError, clip
+from pincal.io._file_names import MANIFEST
 
 __all__ = [
     "atomic_write_bytes",
@@ -63,7 +64,9 @@ def output_target(path: str | Path, what: str = "output") -> Path:
 
     An absent path or a regular file is written as named. A symbolic link is never
     replaced: the file it points to is written instead (so ``--out link.csv`` updates
-    the linked file and keeps the link). Devices, FIFOs, sockets, directories, links to
+    the linked file and keeps the link) — except inside a calibration directory (one
+    holding a manifest), where a link is refused: a received directory could point
+    ``report.md`` at any file of the user's. Devices, FIFOs, sockets, directories, links to
     them and dangling links are refused: replacing them would turn ``/dev/null`` or
     ``/dev/stdout`` into a regular file. Nothing under ``/dev`` or ``/proc`` is written.
 
@@ -79,6 +82,12 @@ def output_target(path: str | Path, what: str = "output") -> Path:
     fix = "outputs are written only to regular files: give the path of a file"
     if Path(os.path.abspath(p)).parts[1:2] in (("dev",), ("proc",)):
         raise OutputPathError(f"{what} {clip(str(p), 300)} is under /dev or /proc; {fix}")
+    if p.is_symlink() and (p.parent / MANIFEST).is_file():
+        raise OutputPathError(
+            f"{what} {clip(str(p), 300)} is a symbolic link inside the calibration directory "
+            f"{clip(str(p.parent), 200)}; pincal never writes through a link there (it could "
+            "point anywhere): remove the link, or write elsewhere"
+        )
     if p.is_symlink():
         try:
             target = p.resolve(strict=True)

@@ -1,0 +1,55 @@
+"""A link planted inside a calibration directory is never written through.
+
+A received calibration directory whose report.md (or report.html, validation.json)
+is a symbolic link to one of the user's files: `pincal report` and `pincal validate
+--out` refuse it, and the user's file keeps its bytes.
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+from click.testing import CliRunner
+
+from pincal.cli import main
+
+
+@pytest.fixture(scope="module")
+def calibration(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("planted")
+    run = CliRunner().invoke
+    assert run(main, ["simulate", "wedge3", "--random", "24", "--out", str(tmp / "m.csv")]
+               ).exit_code == 0  # fmt: skip
+    r = run(main, ["calibrate", "wedge3", "--data", str(tmp / "m.csv"), "--out", str(tmp / "cal")])
+    assert r.exit_code == 0, r.output
+    return tmp
+
+
+@pytest.mark.parametrize("name", ["report.md", "report.html", "report.json"])
+def test_report_refuses_a_planted_link(calibration, tmp_path, name):
+    victim = tmp_path / "bashrc"
+    victim.write_text("export KEEP=1\n")
+    link = calibration / "cal" / name
+    link.unlink(missing_ok=True)
+    os.symlink(victim, link)
+    try:
+        r = CliRunner().invoke(main, ["report", str(calibration / "cal")])
+        assert r.exit_code != 0 and "symbolic link inside the calibration directory" in r.output
+        assert victim.read_text() == "export KEEP=1\n"
+    finally:
+        link.unlink()
+
+
+def test_validate_out_refuses_a_planted_link(calibration, tmp_path):
+    victim = tmp_path / "profile"
+    victim.write_text("keep\n")
+    link = calibration / "cal" / "validation.json"
+    os.symlink(victim, link)
+    try:
+        r = CliRunner().invoke(main, ["validate", str(calibration / "cal"), "--data",
+                                      str(calibration / "m.csv"), "--out", str(link)])  # fmt: skip
+        assert r.exit_code != 0 and "symbolic link inside the calibration directory" in r.output
+        assert victim.read_text() == "keep\n"
+    finally:
+        link.unlink()
