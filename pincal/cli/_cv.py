@@ -31,11 +31,8 @@ def _pose_fit(cal):
     from pincal.io import read_measurement_file
     from pincal.sensitivity import parameters
 
-    files = cal.manifest.get("data_files") or []
-    if not files:
-        raise PincalError(f"{cal.path}: the calibration records no data file to cross-validate")
     nominal = cal.nominal()
-    meas = read_measurement_file(files[0]["path"], nominal).measurements
+    meas = read_measurement_file(cal.data_file(), nominal).measurements
     params = parameters(nominal, cal.preset)
     if params.joint_terms.size:
         raise PincalError(

@@ -30,15 +30,11 @@ __all__ = ["is_socket_calibration", "socket_cv"]
 
 def is_socket_calibration(cal) -> bool:
     """True when the calibration's first data file is a ball-in-socket file."""
-    files = cal.manifest.get("data_files") or []
-    if not files:
+    from pincal.io import file_kind
+
+    if not cal.manifest.get("data_files"):
         return False
-    try:
-        with open(files[0]["path"], encoding="utf-8") as fh:
-            first = fh.readline()
-    except OSError:
-        return False
-    return first.strip().startswith("# pincal sockets")
+    return file_kind(cal.data_file()) == "sockets"
 
 
 def _flange(mech, data, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -103,7 +99,7 @@ def socket_cv(cal, k: int, seed: int) -> CrossValidationSummary:
     from pincal.io import read_instrument_file
     from pincal.model import parameters
 
-    path = cal.manifest["data_files"][0]["path"]
+    path = cal.data_file()
     nominal = cal.nominal()
     data = read_instrument_file(path, nominal)
     if not data.plate.distances:

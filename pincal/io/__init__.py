@@ -18,7 +18,7 @@ from pincal.io._calibration_dir import (
     read_calibration,
 )
 from pincal.io._calibration_replace import check_replaceable
-from pincal.io._calibration_write import sha256_file, write_calibration
+from pincal.io._calibration_write import write_calibration
 from pincal.io._commands_file import (
     read_actuator_rows,
     read_commands,
@@ -26,6 +26,7 @@ from pincal.io._commands_file import (
 )
 from pincal.io._csv import file_kind
 from pincal.io._delimited import parse_mapping
+from pincal.io._digest import sha256_file
 from pincal.io._file_names import (
     CALIBRATED_SIDECAR,
     CALIBRATED_URDF,

@@ -44,6 +44,7 @@ from pincal.io._calibration_checks import (
     load_json,
     read_noise,
 )
+from pincal.io._digest import sha256_file
 from pincal.io._file_names import (
     CALIBRATED_URDF,
     CALIBRATION_FORMAT,
@@ -107,6 +108,43 @@ class CalibrationDirectory:
         if not why:
             return None
         return f"calibration {str(self.path)!r} was " + " and ".join(why)
+
+    def data_file(self, index: int = 0) -> Path:
+        """The data file the calibration was fitted on, found and checked by its SHA-256.
+
+        Looked for where it was given (``path`` as typed, relative to the working
+        directory), at its absolute path when calibrate ran, and beside the calibration
+        directory; the first regular file whose hash matches the record is returned.
+
+        Raises:
+            CalibrationDirectoryError: no file recorded, none found, or every file found
+                differs from the one fitted (changed since).
+        """
+        files = self.manifest.get("data_files") or []
+        if len(files) <= index:
+            raise CalibrationDirectoryError(f"{clip(str(self.path))}: the calibration records no "
+                                            "data file")  # fmt: skip
+        entry = files[index]
+        typed = Path(str(entry.get("path", "")))
+        places = [typed, Path(str(entry.get("absolute_path") or typed)),
+                  self.path.parent / typed.name, self.path / typed.name]  # fmt: skip
+        found = []
+        for p in dict.fromkeys(places):  # in order, once each
+            if p.is_file():
+                if sha256_file(p) == entry.get("sha256"):
+                    return p
+                found.append(str(p))
+        if found:
+            raise CalibrationDirectoryError(
+                f"the data file the calibration {clip(str(self.path))} was fitted on changed "
+                f"since ({', '.join(clip(f) for f in found)} differ from its SHA-256); re-run "
+                "calibrate, or restore the file"
+            )
+        raise CalibrationDirectoryError(
+            f"the data file the calibration {clip(str(self.path))} was fitted on "
+            f"({clip(str(typed))}) is not found where it was given, at its absolute path, nor "
+            "beside the calibration directory; run from calibrate's directory or copy it there"
+        )
 
     @property
     def preset(self) -> str:

@@ -8,7 +8,6 @@ one; a lock file beside it (``.NAME.pincal-lock``) keeps a second writer out.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import shutil
@@ -19,7 +18,6 @@ from pathlib import Path
 from typing import Any
 
 from pincal._version import __version__
-from pincal.errors import CalibrationDirectoryError, clip
 from pincal.identification import IdentificationRecord, IdentificationResult, result_to_dict
 from pincal.io._atomic import (
     _temp_prefix,
@@ -31,6 +29,7 @@ from pincal.io._atomic import (
 from pincal.io._calibration_checks import model_files
 from pincal.io._calibration_dir import CALIBRATION_VERSION, CalibrationDirectory, read_calibration
 from pincal.io._calibration_replace import _check_replaceable
+from pincal.io._digest import sha256_file
 from pincal.io._file_names import (
     CALIBRATED_SIDECAR,
     CALIBRATED_URDF,
@@ -44,24 +43,6 @@ from pincal.measure import NoiseModel
 from pincal.model import Mechanism
 
 __all__ = ["sha256_file", "write_calibration"]
-
-
-def sha256_file(path: str | Path) -> str:
-    """Hex SHA-256 of a file's bytes.
-
-    Raises:
-        CalibrationDirectoryError: the file cannot be read.
-    """
-    h = hashlib.sha256()
-    if not Path(path).is_file():  # a FIFO or device would block or never end
-        raise CalibrationDirectoryError(f"{clip(str(path))} is not a regular file")
-    try:
-        with open(path, "rb") as fh:
-            for block in iter(lambda: fh.read(1 << 20), b""):
-                h.update(block)
-    except OSError as exc:
-        raise CalibrationDirectoryError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
-    return h.hexdigest()
 
 
 def _manifest(
@@ -98,7 +79,9 @@ def _manifest(
         if noise is None
         else {"position_mm": float(noise.position), "orientation_mrad": float(noise.orientation)},
         "data_files": [
-            {"path": str(p), "name": Path(p).name, "sha256": sha256_file(p)} for p in data_files
+            {"path": str(p), "absolute_path": str(Path(p).resolve()), "name": Path(p).name,
+             "sha256": sha256_file(p)}
+            for p in data_files
         ],
         "calibrated_urdf": CALIBRATED_URDF,
         "calibrated_sidecar": CALIBRATED_SIDECAR,

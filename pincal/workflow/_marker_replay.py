@@ -12,9 +12,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from pincal.errors import PincalError
 from pincal.identification import Prior, fit_markers
-from pincal.io import read_marker_sets, sha256_file
+from pincal.io import read_marker_sets
 from pincal.measure import MarkerSetup, Measurements, marker_mechanism
 from pincal.model import Mechanism
 from pincal.workflow._marker_run import marker_procedure
@@ -30,20 +29,12 @@ def rebuild(cal: Any) -> tuple[MarkerSetup, Mechanism, tuple[Measurements, ...]]
         cal: a :class:`pincal.io.CalibrationDirectory` of a marker calibration.
 
     Raises:
-        PincalError: the calibration records no data file, or the file is gone or changed.
+        CalibrationDirectoryError: the calibration records no data file, or the file is
+            gone or changed (:meth:`pincal.io.CalibrationDirectory.data_file`).
     """
     doc = cal.manifest.get("markers") or {}
     setup = MarkerSetup.from_dict(doc)
-    files = cal.manifest.get("data_files") or []
-    if not files:
-        raise PincalError(f"{cal.path}: the calibration records no data file")
-    path = files[0]["path"]
-    try:
-        changed = sha256_file(path) != files[0]["sha256"]
-    except PincalError as exc:
-        raise PincalError(f"cross-validation needs the fitted data file: {exc}") from exc
-    if changed:
-        raise PincalError(f"{path} changed since the calibration was written; re-run calibrate")
+    path = cal.data_file()
     mech = marker_mechanism(cal.model_source or cal.model, setup)
     return setup, mech, tuple(read_marker_sets(path, mech, setup))
 

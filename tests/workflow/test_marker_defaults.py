@@ -12,6 +12,7 @@ import logging
 import numpy as np
 import pytest
 
+from pincal.errors import CalibrationDirectoryError
 from pincal.identification import (
     CrossValidation,
     HeldOutEvidence,
@@ -128,5 +129,5 @@ def test_the_calibration_can_be_rebuilt_for_replay(tmp_path):
     setup, _, meas = rebuild(read_calibration(tmp_path / "cal"))
     assert setup.columns == ("mx", "my", "mz") and len(meas[0]) == 20
     (tmp_path / "m.csv").write_text((tmp_path / "m.csv").read_text() + "\n")
-    with pytest.raises(Exception, match="changed since the calibration"):
+    with pytest.raises(CalibrationDirectoryError, match="changed since"):
         rebuild(read_calibration(tmp_path / "cal"))

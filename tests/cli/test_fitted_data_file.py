@@ -1,0 +1,36 @@
+"""`validate --cv` finds the file a calibration was fitted on by its hash, from anywhere.
+
+The manifest records the path as typed (relative to calibrate's directory) and the
+absolute path; a different file of the same name in the current directory is not
+cross-validated in its place, and a device named there is never read.
+"""
+
+from __future__ import annotations
+
+import json
+
+from click.testing import CliRunner
+
+from pincal.cli import main
+
+
+def test_cv_from_another_directory_uses_the_fitted_file(tmp_path, monkeypatch):
+    run = CliRunner().invoke
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    monkeypatch.chdir(tmp_path / "a")
+    assert run(main, ["simulate", "wedge3", "--random", "24", "--out", "m.csv"]).exit_code == 0
+    assert run(main, ["calibrate", "wedge3", "--data", "m.csv", "--out", "cal"]).exit_code == 0
+    monkeypatch.chdir(tmp_path / "b")  # another m.csv here: 20 other poses
+    assert run(main, ["simulate", "wedge3", "--random", "20", "--seed", "3",
+                      "--out", "m.csv"]).exit_code == 0  # fmt: skip
+    out = run(main, ["validate", str(tmp_path / "a" / "cal"), "--cv", "3", "--json"])
+    assert out.exit_code == 0, out.output
+    assert json.loads(out.output)["cv"]["poses"] == 24
+    (tmp_path / "a" / "m.csv").write_text("x\n")  # the fitted file changed
+    out = run(main, ["validate", str(tmp_path / "a" / "cal"), "--cv", "3"])
+    assert out.exit_code != 0 and "changed since" in out.output
+    (tmp_path / "a" / "m.csv").unlink()
+    (tmp_path / "b" / "m.csv").unlink()
+    out = run(main, ["validate", str(tmp_path / "a" / "cal"), "--cv", "3"])
+    assert out.exit_code != 0 and "is not found" in out.output
