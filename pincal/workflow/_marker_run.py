@@ -211,7 +211,7 @@ def calibrate_markers(
         evidence = HeldOutEvidence(cv, baseline, "registration only")
         verdict = held_out_verdict(verdict, evidence, fit.result)
     rms = fit.registration.fit.rms
-    warnings = (_misfit_note(rms),) if rms > MISFIT_RMS else ()
+    warnings: tuple[str, ...] = (_misfit_note(rms),) if rms > MISFIT_RMS else ()
     angle = fit.registration.orientation_rms
     if angle is not None and angle > MISFIT_ANGLE:
         warnings += (_angle_note(angle),)
