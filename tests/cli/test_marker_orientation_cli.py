@@ -130,3 +130,25 @@ def test_a_quaternion_table_calibrates_like_the_rpy_one(tmp_path, table):
     c = _run("calibrate", "ur5", "--data", path, *BODY[:4], *wrong, "--prior", "none",
              "--out", tmp_path / "w")  # fmt: skip
     assert "rotation angle RMS" in c.output and "--orientation" in c.output
+
+
+def test_a_campaign_declares_the_orientation(tmp_path, table):
+    text = (
+        "model: ur5\npreset: chain\nout: cal\n"
+        f"measurements: {{source: file, file: {table}}}\n"
+        "markers: {link: wrist_3_link, length_unit: mm, orientation_columns: [roll, pitch, "
+        "yaw], orientation: rpy-deg}\n"
+        "validation: {source: none}\nreport: false\n"
+    )
+    (tmp_path / "c.yaml").write_text(text)
+    r = _run("run", tmp_path / "c.yaml", "--dry-run")
+    assert r.exit_code == 0, r.output
+    assert "--orientation-columns roll,pitch,yaw --orientation rpy-deg" in r.output
+    for old, new, said in (
+        ("orientation: rpy-deg", "orientation: rpy-grad", "markers.orientation"),
+        (", orientation: rpy-deg", "", "go together"),
+        ("yaw]", "yaw, w]", "needs 3 orientation_columns"),
+    ):
+        (tmp_path / "bad.yaml").write_text(text.replace(old, new))
+        bad = _run("run", tmp_path / "bad.yaml", "--dry-run")
+        assert bad.exit_code != 0 and said in bad.output, bad.output
