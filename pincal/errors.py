@@ -34,6 +34,7 @@ __all__ = [
     "NoiseEstimationError",
     "NonFiniteValueError",
     "OptionValueError",
+    "OrientationValueError",
     "OutputPathError",
     "ParameterError",
     "PincalError",
@@ -277,6 +278,10 @@ class BadValueError(MeasurementError):
 
 class NonFiniteValueError(BadValueError):
     """A cell is NaN or infinite."""
+
+
+class OrientationValueError(BadValueError):
+    """An orientation cell is not of its declared convention (quaternion norm, angle range)."""
 
 
 class ActuatorRangeError(BadValueError):

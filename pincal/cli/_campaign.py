@@ -54,6 +54,11 @@ Campaign file keys (YAML; relative paths are relative to the file):
     more_columns: []         further markers on LINK, fitted together (an unknown
                              offset each), e.g. [[x2, y2, z2]]; copies are used once
     length_unit: m           m | mm | um (marker columns)
+    orientation_columns: []  a 6-D marker body's orientation columns, e.g.
+                             [roll, pitch, yaw]: its pose on LINK is fitted
+    orientation: null        their convention: rpy-deg | rpy-rad (R = Rz(yaw)·Ry(pitch)·
+                             Rx(roll)) | xyz-deg | xyz-rad | rotvec-deg | rotvec-rad |
+                             quat-wxyz | quat-xyzw
     instrument_frame: unknown  unknown (registered, then identified) | known
     marker: unknown          unknown, or [x, y, z] in LINK's frame [mm]
     marker_std: null         1σ of a given marker [mm] (none: held)
@@ -180,9 +185,25 @@ class Markers:
     marker_std: float | None = None
     more_columns: tuple[tuple[str, str, str], ...] = ()
     lock: dict[str, float] = field(default_factory=dict)
+    orientation_columns: tuple[str, ...] = ()
+    orientation: str | None = None
 
     def check(self, key: str) -> None:
+        from pincal.measure import ORIENTATIONS
+
         choice(self.length_unit, ("m", "mm", "um"), f"{key}.length_unit")
+        if bool(self.orientation_columns) != (self.orientation is not None):
+            raise CampaignError(f"{key}.orientation_columns and {key}.orientation go together "
+                                "(e.g. [roll, pitch, yaw] and rpy-deg)")  # fmt: skip
+        if self.orientation is not None:
+            choice(self.orientation, tuple(ORIENTATIONS), f"{key}.orientation")
+            if len(self.orientation_columns) != ORIENTATIONS[self.orientation]:
+                raise CampaignError(f"{key}.orientation {self.orientation} needs "
+                                    f"{ORIENTATIONS[self.orientation]} orientation_columns, got "
+                                    f"{list(self.orientation_columns)}")  # fmt: skip
+            if self.more_columns:
+                raise CampaignError(f"{key}.orientation_columns describe one marker body: "
+                                    "leave more_columns empty")  # fmt: skip
         choice(self.instrument_frame, ("unknown", "known"), f"{key}.instrument_frame")
         if self.marker_std is not None and (self.marker is None or self.marker_std <= 0):
             raise CampaignError(f"{key}.marker_std needs a given marker and must be > 0 [mm]")
@@ -196,6 +217,9 @@ class Markers:
         if self.marker is not None:
             given = [*self.marker, *([self.marker_std] if self.marker_std else [])]
             opts += ["--marker", ",".join(repr(float(v)) for v in given)]
+        if self.orientation is not None:
+            opts += ["--orientation-columns", ",".join(self.orientation_columns),
+                     "--orientation", self.orientation]  # fmt: skip
         return opts
 
 

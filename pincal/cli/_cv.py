@@ -4,7 +4,9 @@ Every fold is refitted from scratch on the other folds — for a marker calibrat
 closed-form registration too, and ``--prior auto`` chooses its strength again inside the
 fold — so nothing of a held-out pose reaches its prediction. The baseline is the
 registration-only model (instrument frame + marker: the robot left uncalibrated) for a
-marker calibration, the nominal model otherwise. The outcome is a
+marker calibration, the nominal model otherwise. With orientation measured (a 6-D
+marker body, a pose file) the held-out rotation error angles are reported beside the
+positions (the verdict stays on positions). The outcome is a
 :class:`pincal.validation.CrossValidationSummary`; :func:`pincal.report.cross_validation_text`
 renders it.
 """
@@ -16,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from pincal.errors import PincalError
-from pincal.validation import CrossValidationBaseline, CrossValidationSummary
+from pincal.validation import CrossValidationBaseline, CrossValidationSummary, OrientationErrors
 
 __all__ = ["run_cv"]
 
@@ -82,12 +84,23 @@ def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> CrossValidationSum
     ref = cross_validate(base, meas, k, seed)
     gain, se, beats = compare(full, ref)
     _write_folds(full.folds, poses, folds_out)
+    fit_angle = float(cal.result.after.rms_orientation)
     return CrossValidationSummary(
         k, seed, poses, tuple(tuple(int(i) for i in rows) for rows in full.folds),
         float(cal.result.after.rms_position), full.rms, full.max, _fold_fit(full),
-        CrossValidationBaseline(baseline_name, ref.rms, ref.max, _fold_fit(ref)),
+        CrossValidationBaseline(baseline_name, ref.rms, ref.max, _fold_fit(ref),
+                                orientation=_angles(ref)),
         bool(beats), gain_mse=gain, gain_standard_error=se,
+        orientation=_angles(full, fit_angle),
     )  # fmt: skip
+
+
+def _angles(cv, fit_rms: float | None = None) -> OrientationErrors | None:
+    """The rotation errors of a cross-validation [rad], None without orientation."""
+    if cv.held_out_orientation is None:
+        return None
+    fold_fit = float(np.sqrt(np.mean(cv.fit_orientation_rms**2)))
+    return OrientationErrors(cv.orientation_rms, cv.orientation_max, fold_fit, fit_rms)
 
 
 def _fold_fit(cv) -> float:

@@ -16,6 +16,10 @@ import click
 
 __all__ = ["marker_options", "marker_settings", "setup_from_options"]
 
+#: the --orientation conventions (pincal.measure.ORIENTATIONS, listed without importing it)
+ORIENTATION_CHOICES = ("rpy-deg", "rpy-rad", "xyz-deg", "xyz-rad", "rotvec-deg", "rotvec-rad",
+                       "quat-wxyz", "quat-xyzw")  # fmt: skip
+
 
 def marker_options(f: Callable[..., Any]) -> Callable[..., Any]:
     """The marker-calibration options of ``pincal calibrate``."""
@@ -38,6 +42,16 @@ def marker_options(f: Callable[..., Any]) -> Callable[..., Any]:
                      "unknown offset each; a marker exported twice is used once."),
         click.option("--length-unit", type=click.Choice(["m", "mm", "um"]), default="m",
                      show_default=True, help="Unit of the marker columns."),
+        click.option("--orientation-columns", default=None, metavar="A,B,C[,D]",
+                     help="A 6-D marker body: its orientation columns (e.g. roll,pitch,yaw, "
+                     "or qw,qx,qy,qz): the body's pose on LINK is fitted, orientation "
+                     "weighted by its own estimated noise. Needs --orientation."),
+        click.option("--orientation", "orientation", default=None,
+                     type=click.Choice(list(ORIENTATION_CHOICES)),
+                     help="Convention of --orientation-columns: rpy = roll,pitch,yaw with "
+                     "R = Rz(yaw)·Ry(pitch)·Rx(roll); xyz = Euler about moving x,y',z'' "
+                     "(R = Rx·Ry·Rz); rotvec = axis×angle; in deg or rad; quat-wxyz / "
+                     "quat-xyzw = unit quaternion, scalar first / last."),
         click.option("--prior", "prior_spec", default=None,
                      metavar="auto|none|LEN_MM,ANG_MRAD",
                      help="Gaussian prior on the machine's parameters about nominal (1σ) "
@@ -60,11 +74,14 @@ def _numbers(text: str, what: str, n: tuple[int, ...]) -> list[float]:
 
 
 def setup_from_options(link: str, frame: str, marker_spec: str, columns: str | tuple[str, ...],
-                       unit: str, lock_spec: str | None = None):  # fmt: skip
+                       unit: str, lock_spec: str | None = None,
+                       orientation_columns: str | None = None,
+                       orientation: str | None = None):  # fmt: skip
     """The :class:`pincal.measure.MarkerSetup` of the command-line options.
 
     ``columns``: ``--marker-columns`` (a text, or the texts of a repeated option), each
-    ``X,Y,Z`` or several joined by ``;``.
+    ``X,Y,Z`` or several joined by ``;``. ``orientation_columns`` (``A,B,C[,D]``) and
+    ``orientation``: a 6-D marker body's orientation columns and their convention.
 
     ``lock_spec`` (``JOINT=VALUE,…`` [m, rad]) is for the model options' ``--lock`` of
     the main line (h-arms); joints off the chain to ``link`` are locked at 0 anyway.
@@ -101,8 +118,25 @@ def setup_from_options(link: str, frame: str, marker_spec: str, columns: str | t
         raise click.BadParameter("a given --marker applies to one marker; with several "
                                  "--marker-columns every offset is unknown: use "
                                  "--marker unknown", param_hint="--marker")  # fmt: skip
-    return MarkerSetup(link, frame, marker, std, lock, sets[0], unit,  # type: ignore[arg-type]
-                       tuple(sets[1:]))  # fmt: skip
+    turned = tuple(c.strip() for c in (orientation_columns or "").split(",") if c.strip())
+    if bool(turned) != (orientation is not None):
+        raise click.BadParameter("give --orientation-columns and --orientation together (e.g. "
+                                 "--orientation-columns roll,pitch,yaw --orientation rpy-deg)",
+                                 param_hint="--orientation-columns")  # fmt: skip
+    if turned and len(sets) > 1:
+        raise click.BadParameter("orientation columns describe one marker body: give one set "
+                                 "of --marker-columns with them",
+                                 param_hint="--orientation-columns")  # fmt: skip
+    if not turned:
+        return MarkerSetup(link, frame, marker, std, lock, sets[0], unit,  # type: ignore[arg-type]
+                           tuple(sets[1:]))  # fmt: skip
+    from pincal.errors import MeasurementError
+
+    try:
+        return MarkerSetup(link, frame, marker, std, lock, sets[0], unit,  # type: ignore[arg-type]
+                           (), turned, orientation)  # fmt: skip
+    except MeasurementError as exc:
+        raise click.BadParameter(str(exc), param_hint="--orientation-columns") from None
 
 
 def marker_settings(preset: str | None, method: str, prior_spec: str | None, loss: str,

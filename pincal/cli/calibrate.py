@@ -143,7 +143,7 @@ from pincal.identification import METHODS
 def calibrate(
     model, data, preset, error_model, payload, method, out, as_json, noise, loss, force,
     max_change, significance, instrument, link, instrument_frame, marker_spec, marker_columns,
-    length_unit, prior_spec, bootstrap, n_jobs,
+    length_unit, orientation_columns, orientation, prior_spec, bootstrap, n_jobs,
     yes, model_opts,
 ) -> None:  # fmt: skip
     """Identify MODEL's geometric parameters from measured poses (--data).
@@ -252,13 +252,18 @@ def calibrate(
             )
         lock_spec = ",".join(f"{k}={v!r}" for k, v in model_opts.lock.items()) or None
         setup = setup_from_options(link, instrument_frame, marker_spec, marker_columns,
-                                   length_unit, lock_spec)  # fmt: skip
+                                   length_unit, lock_spec, orientation_columns,
+                                   orientation)  # fmt: skip
         settings = marker_settings(preset, method, prior_spec, loss, limits, profile)
         calibrate_markers(model, data, setup, settings, out, as_json, force)
         return
     if prior_spec is not None:
         raise click.BadParameter("--prior applies to marker calibrations (--link)",
                                  param_hint="--prior")  # fmt: skip
+    if orientation_columns is not None or orientation is not None:
+        raise click.BadParameter("--orientation-columns and --orientation apply to marker "
+                                 "tables (--link); a pose file names its orientation columns "
+                                 "itself", param_hint="--orientation-columns")  # fmt: skip
     mech = carrying(load_model(model, model_opts), load)
     preset = preset or (next(iter(mech.presets), "full"))
     params = with_joint_terms(mech, parameters(mech, preset), terms)

@@ -96,7 +96,8 @@ def _marker_candidates(mech, setup, preset: str, models: list[str], method: str)
 @fail_cleanly
 def select_model_cmd(
     model, data, preset, models, k, seed, method, payload, as_json, model_opts,
-    link, instrument_frame, marker_spec, marker_columns, length_unit, prior_spec,
+    link, instrument_frame, marker_spec, marker_columns, length_unit, orientation_columns,
+    orientation, prior_spec,
 ) -> None:  # fmt: skip
     """Fit candidate error models and rank them by K-fold held-out position error.
 
@@ -134,6 +135,11 @@ def select_model_cmd(
         if prior_spec is not None:
             raise click.BadParameter("a prior is not used in model selection (not yet)",
                                      param_hint="--prior")  # fmt: skip
+        if orientation_columns is not None or orientation is not None:
+            raise click.BadParameter("model selection ranks by held-out positions; a marker "
+                                     "body's orientation is not used there (not yet): leave "
+                                     "out --orientation-columns",
+                                     param_hint="--orientation-columns")  # fmt: skip
         lock_spec = ",".join(f"{a}={v!r}" for a, v in model_opts.lock.items()) or None
         setup = setup_from_options(link, instrument_frame, marker_spec, marker_columns,
                                    length_unit, lock_spec)  # fmt: skip

@@ -17,6 +17,7 @@ from pincal.identification._cross_validation import (
     compare,
     cross_validate,
     kfold,
+    orientation_errors,
     position_errors,
 )
 from pincal.identification._data_check import check_measurements
@@ -183,6 +184,7 @@ __all__ = [
     "is_registration",
     "kfold",
     "monte_carlo",
+    "orientation_errors",
     "outlier_poses",
     "pose_recipe",
     "pose_residual_model",

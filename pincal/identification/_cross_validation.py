@@ -5,7 +5,9 @@
 seed gives the same folds on every machine. :func:`cross_validate` fits on K − 1 folds
 and predicts the held-out one, for each fold; every pose is held out exactly once.
 With several markers per pose (one measurement set each, same rows) a pose's error is
-the RMS over its markers.
+the RMS over its markers. When the first set measures the whole orientation (a 6-D
+marker body, a pose file with ``rx ry rz``), each held-out pose's rotation error angle is kept too
+(:func:`orientation_errors`); the comparison of procedures stays on positions.
 :func:`compare` states whether one procedure beats another by more than the standard
 error of the paired difference of their per-pose squared errors.
 """
@@ -17,12 +19,20 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from pincal.errors import MeasurementError
 from pincal.measure import Measurements
 from pincal.model import Mechanism
 
-__all__ = ["CrossValidation", "compare", "cross_validate", "kfold", "position_errors"]
+__all__ = [
+    "CrossValidation",
+    "compare",
+    "cross_validate",
+    "kfold",
+    "orientation_errors",
+    "position_errors",
+]
 
 
 def kfold(m: int, k: int, seed: int) -> tuple[np.ndarray, ...]:
@@ -55,19 +65,53 @@ def position_errors(mech: Mechanism, meas: Measurements) -> np.ndarray:
     return np.linalg.norm((pred - meas.positions)[:, cols], axis=1)
 
 
+def orientation_errors(mech: Mechanism, meas: Measurements) -> np.ndarray:
+    """(m,) rotation error angles ‖log3(R_predictedᵀ R_measured)‖ [rad] of the measured frame.
+
+    Raises:
+        MeasurementError: no orientation is measured.
+    """
+    if meas.rotations is None:
+        raise MeasurementError("no orientation is measured: no orientation error")
+    qs = mech.configurations(meas.q_act)
+    frame = None if meas.frame == mech.measured_frame else meas.frame
+    pred = [mech.frame_placement(q, frame).rotation for q in qs]
+    return np.array(
+        [np.linalg.norm(pin.log3(a.T @ b)) for a, b in zip(pred, meas.rotations, strict=True)]
+    )
+
+
 @dataclass(frozen=True)
 class CrossValidation:
-    """Held-out position errors of one fitting procedure.
+    """Held-out position (and orientation) errors of one fitting procedure.
 
     Attributes:
         folds: the K folds (pose indices, 0-based rows of the data file).
         held_out: (m,) each pose's error [m] predicted by the fit that did not see it.
         fit_rms: (K,) RMS position error [m] of each fold's fit on its own poses.
+        held_out_orientation: (m,) each pose's held-out rotation error angle [rad], or
+            None (no orientation measured).
+        fit_orientation_rms: (K,) RMS rotation error angle [rad] of each fold's fit on
+            its own poses, or None.
     """
 
     folds: tuple[np.ndarray, ...]
     held_out: np.ndarray
     fit_rms: np.ndarray
+    held_out_orientation: np.ndarray | None = None
+    fit_orientation_rms: np.ndarray | None = None
+
+    @property
+    def orientation_rms(self) -> float | None:
+        """Held-out RMS rotation error angle [rad], or None."""
+        h = self.held_out_orientation
+        return None if h is None else float(np.sqrt(np.mean(h**2)))
+
+    @property
+    def orientation_max(self) -> float | None:
+        """Largest held-out rotation error angle [rad], or None."""
+        h = self.held_out_orientation
+        return None if h is None else float(h.max())
 
     @property
     def rms(self) -> float:
@@ -78,12 +122,22 @@ class CrossValidation:
         return float(self.held_out.max())
 
     def to_dict(self) -> dict:
-        """Held-out RMS / max and the folds' fit RMS [mm], for JSON."""
-        return {
+        """Held-out RMS / max and the folds' fit RMS [mm] (orientation [mrad]), for JSON."""
+        out = {
             "held_out_rms_mm": self.rms * 1e3,
             "held_out_max_mm": self.max * 1e3,
             "fold_fit_rms_mm": float(np.sqrt(np.mean(self.fit_rms**2))) * 1e3,
         }
+        if self.held_out_orientation is not None and self.fit_orientation_rms is not None:
+            out |= {
+                "held_out_orientation_rms_mrad": float(self.orientation_rms or 0.0) * 1e3,
+                "held_out_orientation_max_mrad": float(self.orientation_max or 0.0) * 1e3,
+                "fold_fit_orientation_rms_mrad": float(
+                    np.sqrt(np.mean(self.fit_orientation_rms**2))
+                )
+                * 1e3,
+            }
+        return out
 
 
 def _errors(mech: Mechanism, parts: tuple[Measurements, ...], rows: np.ndarray) -> np.ndarray:
@@ -114,13 +168,18 @@ def cross_validate(
     folds = kfold(m, k, seed)
     held = np.empty(m)
     fit_rms = np.empty(k)
+    turned = parts[0].rotations is not None and {"rx", "ry", "rz"} <= set(parts[0].components)
+    held_r, fit_r = (np.empty(m), np.empty(k)) if turned else (None, None)
     for j, rows in enumerate(folds):
         train = np.setdiff1d(np.arange(m), rows)
         sets = tuple(p.subset(train) for p in parts)
         mech = fit(sets[0] if isinstance(meas, Measurements) else sets)
         held[rows] = _errors(mech, parts, rows)
         fit_rms[j] = float(np.sqrt(np.mean(_errors(mech, parts, train) ** 2)))
-    return CrossValidation(folds, held, fit_rms)
+        if held_r is not None and fit_r is not None:
+            held_r[rows] = orientation_errors(mech, parts[0].subset(rows))
+            fit_r[j] = float(np.sqrt(np.mean(orientation_errors(mech, sets[0]) ** 2)))
+    return CrossValidation(folds, held, fit_rms, held_r, fit_r)
 
 
 def compare(model: CrossValidation, baseline: CrossValidation) -> tuple[float, float, bool]:

@@ -100,7 +100,7 @@ class MarkerFit:
 def _prior_std(params: ParameterSet, setup: MarkerSetup, prior: Prior | None) -> np.ndarray:
     std = np.full(len(params), np.inf)
     for i, (name, unit) in enumerate(zip(params.names, params.units, strict=True)):
-        if name.startswith(f"{TOOL_JOINT}.") and setup.marker_std is not None:
+        if name.startswith(f"{TOOL_JOINT}.t") and setup.marker_std is not None:
             std[i] = setup.marker_std
         elif prior is not None and not is_registration(name):
             std[i] = prior.length if unit == "m" else prior.angle

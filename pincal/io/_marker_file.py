@@ -9,6 +9,12 @@ positions are in the instrument's frame; the rows become position-only
 :class:`pincal.measure.Measurements` of the marker frame ``tool`` (further markers:
 ``marker2``, ``marker3``, …, one set each).
 
+A 6-D marker body adds orientation columns in a declared convention (the setup's
+``orientation_columns`` and ``orientation``: roll-pitch-yaw, xyz-Euler, rotation
+vector in degrees or radians, or a quaternion; read by
+:mod:`pincal.io._marker_orientation`): its rows become pose measurements (``x y z rx
+ry rz``) of the frame ``tool``.
+
 Joint columns are read as in measurement files (:mod:`pincal.io._joint_columns`): named
 as the URDF joint (any case) or mapped by ``columns`` in the model's sidecar; units from
 the title's bracket (``[deg]``), else ``joint_units``, else SI; readings relative to a
@@ -37,10 +43,11 @@ from pincal.errors import ColumnError, MeasurementFileError, MeasurementFormatEr
 from pincal.io._csv import Header, parse_column
 from pincal.io._delimited import Table, read_table
 from pincal.io._joint_columns import HEADER_KEYS, joint_columns, read_joints
+from pincal.io._marker_orientation import orientation_values, read_rotations
 from pincal.io._names import is_decimal
 from pincal.io._units import LENGTH_UNITS, unit_factor
 from pincal.measure import MarkerSetup, Measurements, marker_frame
-from pincal.model import Mechanism
+from pincal.model import COMPONENTS, Mechanism
 
 __all__ = [
     "MarkerData",
@@ -50,6 +57,7 @@ __all__ = [
     "read_marker_table",
 ]
 
+XYZ = ("x", "y", "z")
 _MISSING = ("", "nan", "-nan", "na", "n/a", "null", "none")
 
 
@@ -58,7 +66,8 @@ class MarkerData:
     """A marker table read: one measurement set per marker, and what was left out.
 
     Attributes:
-        sets: per marker of the setup, position-only measurements (same rows).
+        sets: per marker of the setup, position-only measurements (same rows); a
+            marker body with orientation columns: pose measurements.
         dropped: 1-based file lines of rows left out (a marker cell missing).
         notes: what the reader did, in words (rows left out, declarations applied).
     """
@@ -183,7 +192,7 @@ def _joint_titles(table: Table, mech: Mechanism) -> list[tuple[str, str | None]]
 
 
 def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> MarkerData:
-    """Marker positions [m] (instrument frame) and joint values [m, rad] of every row.
+    """Marker positions [m] (and a body's orientations) and joint values [m, rad] of every row.
 
     Args:
         path: the table (never modified).
@@ -195,14 +204,20 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
         Per marker of ``setup.marker_sets``, position-only measurements (same rows) of
         its frame (:func:`pincal.measure.marker_frame`: ``mech.measured_frame`` for the
         first), no declared noise; rows where a marker used was not seen left out.
+        With orientation columns, the body's rotations (instrument frame) too and the
+        components ``x y z rx ry rz``.
 
     Raises:
-        ColumnError: a joint or marker column is missing (the columns found are listed).
+        ColumnError: a joint, marker or orientation column is missing (the columns
+            found are listed).
         MeasurementFormatError: no data rows, no complete row, an unknown unit, a
             malformed declaration.
         BadValueError: a cell that is not a number, a joint cell empty (names the line
             and column), a joint reading implausible for its unit.
         ActuatorRangeError: a joint reading outside its URDF range.
+        NonFiniteValueError: an infinite orientation cell.
+        OrientationValueError: an orientation value not of the declared convention (a
+            quaternion not of unit norm, an angle beyond a turn).
     """
     table = read_table(path)
     _check_titles(table)
@@ -214,6 +229,9 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
     joints, decl = joint_columns(mech, _comment_header(path), parsed, name)
     markers = _marker_values(table, setup)
     seen = ~np.isnan(markers).any(axis=1)
+    angles = orientation_values(table, setup, _cell) if setup.measures_orientation else None
+    if angles is not None:
+        seen &= ~np.isnan(angles).any(axis=1)
     if not seen.any():
         used = ", ".join(" ".join(c) for c in setup.marker_sets)
         raise MeasurementFormatError(
@@ -233,11 +251,14 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
             f"{name}: {len(dropped)} of {len(table.rows)} rows left out, a marker used not "
             f"seen (empty or nan cells): lines {shown_lines}"
         )
+    rotations = None
+    if angles is not None:
+        rotations, said = read_rotations(table, setup, angles, rows)
+        notes += said
     out = []
     for k in range(len(setup.marker_sets)):
         positions = markers[rows, 3 * k : 3 * k + 3] / lf
         frame = mech.measured_frame if k == 0 else marker_frame(k)[1]
-        out.append(
-            Measurements(q_act, positions, None, ("x", "y", "z"), frame, tuple(mech.actuated))
-        )
+        R, comps = (rotations, COMPONENTS) if k == 0 and rotations is not None else (None, XYZ)
+        out.append(Measurements(q_act, positions, R, comps, frame, tuple(mech.actuated)))
     return MarkerData(tuple(out), dropped, tuple(notes))

@@ -26,19 +26,24 @@ from pincal.measure._instruments import (
     initial_instrument_values,
     simulate_instrument,
 )
+from pincal.measure._marker_registration import MarkerRegistration, register_markers
 from pincal.measure._markers import (
-    MarkerRegistration,
     MarkerSetup,
     marker_frame,
     marker_mechanism,
     marker_mechanisms,
-    register_markers,
 )
 from pincal.measure._measurements import (
     DEFAULT_NOISE,
     Measurements,
     NoiseModel,
     simulate_measurements,
+)
+from pincal.measure._orientation import (
+    ORIENTATIONS,
+    QUATERNION_TOLERANCE,
+    orientation_problems,
+    rotation_matrices,
 )
 from pincal.measure._registration import (
     Registration,
@@ -64,6 +69,8 @@ from pincal.measure._tracker import (
 __all__ = [
     "DEFAULT_NOISE",
     "INSTRUMENT_KINDS",
+    "ORIENTATIONS",
+    "QUATERNION_TOLERANCE",
     "SCALE_MESSAGE",
     "Artefact",
     "DeclaredConstant",
@@ -97,10 +104,12 @@ __all__ = [
     "marker_frame",
     "marker_mechanism",
     "marker_mechanisms",
+    "orientation_problems",
     "pose_from_target_points",
     "register_instrument",
     "register_markers",
     "rigid_fit_covariance",
+    "rotation_matrices",
     "simulate_instrument",
     "simulate_measurements",
     "simulate_sockets",

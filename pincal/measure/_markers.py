@@ -8,14 +8,15 @@ calibration:
   joint origin of :func:`pincal.model.serial_mechanism` (6 parameters);
 * the **marker offset** — the marker in the measured link's frame, the translation of
   the ``tool_frame`` joint origin (3 parameters ``tool_frame.tx/ty/tz``; a point has no
-  orientation).
+  orientation). A *marker body* whose orientation is measured too (orientation
+  columns, :mod:`pincal.measure._orientation`) is a full frame on the link: the whole
+  ``tool_frame`` origin (6 parameters) is unknown, and the marker mechanism measures
+  the pose.
 
 :class:`MarkerSetup` declares them (and the locked joints); :func:`marker_mechanism`
-builds the chain; :func:`register_markers` solves both in closed form before any
-identification: with the marker fixed, the base is a best-fit rigid transform
-(Kabsch); with the base fixed, the marker is linear least squares; the two alternate
-until the marker moves less than 1 nm. Identification then refines both jointly with
-the robot's own parameters.
+builds the chain; :func:`pincal.measure.register_markers`
+(:mod:`pincal.measure._marker_registration`) solves both in closed form before any
+identification, which then refines both jointly with the robot's own parameters.
 """
 
 from __future__ import annotations
@@ -28,8 +29,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import MeasurementError, ModelFileError, UnknownNameError
-from pincal.measure._measurements import Measurements
-from pincal.measure._tracker import RigidFit, fit_rigid_transform
+from pincal.measure._orientation import check_orientation
 from pincal.model import (
     BASE_JOINT,
     MOVABLE_TYPES,
@@ -38,17 +38,9 @@ from pincal.model import (
     UrdfTree,
     resolve_named,
     serial_mechanism,
-    with_joint_origin,
 )
 
-__all__ = [
-    "MarkerRegistration",
-    "MarkerSetup",
-    "marker_frame",
-    "marker_mechanism",
-    "marker_mechanisms",
-    "register_markers",
-]
+__all__ = ["MarkerSetup", "marker_frame", "marker_mechanism", "marker_mechanisms"]
 
 FRAME_CHOICES = ("unknown", "known")
 
@@ -71,6 +63,10 @@ class MarkerSetup:
         more_columns: the columns of further distinct markers on the same link, each
             with its own unknown offset (joint ``marker<k>_frame``, k = 2, 3, …) and the
             same instrument frame; fitted together with the first.
+        orientation_columns: the columns of the body's orientation (a single marker
+            body: no ``more_columns``), or () for a point.
+        orientation: their convention (:data:`pincal.measure.ORIENTATIONS`, e.g.
+            ``rpy-deg``), with ``orientation_columns`` only.
     """
 
     link: str
@@ -81,6 +77,8 @@ class MarkerSetup:
     columns: tuple[str, str, str] = ("x", "y", "z")
     length_unit: str = "m"
     more_columns: tuple[tuple[str, str, str], ...] = ()
+    orientation_columns: tuple[str, ...] = ()
+    orientation: str | None = None
 
     def __post_init__(self) -> None:
         if self.instrument_frame not in FRAME_CHOICES:
@@ -120,6 +118,36 @@ class MarkerSetup:
                 "a given marker offset applies to a single marker; with several markers "
                 "every offset is unknown (registered, then identified)"
             )
+        self._check_orientation()
+
+    def _check_orientation(self) -> None:
+        cols = tuple(str(c) for c in self.orientation_columns)
+        object.__setattr__(self, "orientation_columns", cols)
+        if not cols and self.orientation is None:
+            return
+        if not cols or self.orientation is None:
+            raise MeasurementError(
+                "give the orientation columns together with their convention (e.g. "
+                "columns r,p,y with orientation rpy-deg)"
+            )
+        check_orientation(self.orientation, cols)
+        if self.more_columns:
+            raise MeasurementError(
+                "orientation columns describe one marker body; give a single set of "
+                "marker columns with them"
+            )
+        shared = sorted(set(cols) & set(self.columns))
+        if shared:
+            raise MeasurementError(
+                f"columns {shared} are named as position and as orientation columns; name "
+                "each column once, as titled in the table (e.g. position x,y,z and "
+                "orientation roll,pitch,yaw)"
+            )
+
+    @property
+    def measures_orientation(self) -> bool:
+        """True for a marker body whose orientation is read (a 6-D marker)."""
+        return bool(self.orientation_columns)
 
     @property
     def marker_sets(self) -> tuple[tuple[str, str, str], ...]:
@@ -145,7 +173,12 @@ class MarkerSetup:
             "columns": list(self.columns),
             "length_unit": self.length_unit,
             "more_columns": [list(c) for c in self.more_columns],
-        }
+            **(
+                {"orientation_columns": list(self.orientation_columns),
+                 "orientation": self.orientation}
+                if self.measures_orientation else {}
+            ),
+        }  # fmt: skip
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> MarkerSetup:
@@ -159,6 +192,8 @@ class MarkerSetup:
             columns=tuple(d.get("columns") or ("x", "y", "z")),  # type: ignore[arg-type]
             length_unit=str(d.get("length_unit", "m")),
             more_columns=tuple(tuple(c) for c in d.get("more_columns") or ()),  # type: ignore[misc]
+            orientation_columns=tuple(d.get("orientation_columns") or ()),
+            orientation=d.get("orientation"),
         )
 
 
@@ -186,6 +221,9 @@ def marker_frame(k: int) -> tuple[str, str]:
 def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
     """The chain from the instrument to the marker: ``serial_mechanism`` measuring a point.
 
+    A marker body with orientation columns measures the pose (the ``tool_frame``
+    origin's six parameters join the presets).
+
     Joints off the chain to ``setup.link`` (a mobile base's wheels, a head, a hand) are
     locked, and so are ``setup.lock``. The measured frame is ``tool`` (the marker);
     ``base_frame`` and ``tool_frame`` start at identity, or at the given marker. With
@@ -198,8 +236,9 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
     """
     lock = _off_chain_locks(model, setup.link, setup.lock)
     marker = pin.SE3(np.eye(3), np.asarray(setup.marker)) if setup.marker is not None else None
+    measured = "pose" if setup.measures_orientation else "position"
     mech = serial_mechanism(
-        model, flange=setup.link, lock=lock, measured="position", T_flange_tool=marker
+        model, flange=setup.link, lock=lock, measured=measured, T_flange_tool=marker
     )
     if not setup.more_columns:
         return mech
@@ -243,93 +282,3 @@ def marker_mechanisms(mech: Mechanism, setup: MarkerSetup) -> tuple[Mechanism, .
             )
         )
     return tuple(out)
-
-
-@dataclass(frozen=True)
-class MarkerRegistration:
-    """Closed-form registration of the instrument frame and the marker offset.
-
-    Attributes:
-        T_instrument_base: robot base in the instrument frame.
-        marker: marker in the measured link's frame [m].
-        fit: the final rigid fit (``fit.rms`` [m] is what identification starts from).
-        iterations: alternations used.
-        mechanism: the input mechanism with ``base_frame`` and ``tool_frame`` set (and
-            ``marker<k>_frame`` of further markers).
-        more_markers: further markers in the link's frame [m] (k = 2, 3, …).
-    """
-
-    T_instrument_base: pin.SE3
-    marker: np.ndarray
-    fit: RigidFit
-    iterations: int
-    mechanism: Mechanism
-    more_markers: tuple[np.ndarray, ...] = ()
-
-
-def register_markers(
-    mech: Mechanism,
-    measurements: Measurements,
-    marker_known: bool = False,
-    frame_known: bool = False,
-    max_iterations: int = 500,
-    more: tuple[Measurements, ...] = (),
-) -> MarkerRegistration:
-    """Instrument frame and marker offset in closed form (alternating Kabsch / least squares).
-
-    Args:
-        mech: from :func:`marker_mechanism` (``base_frame`` and ``tool_frame`` joints).
-        measurements: marker positions [m] in the instrument frame, ≥ 3 poses.
-        marker_known: keep the mechanism's ``tool_frame`` translation.
-        frame_known: keep the mechanism's ``base_frame``.
-        max_iterations: alternation limit.
-        more: positions of further markers on the same link, rows as ``measurements``
-            (their offsets are unknown; all markers share the rigid fit).
-
-    Raises:
-        MeasurementError: too few poses, or collinear predicted points.
-    """
-    joints = [BASE_JOINT, TOOL_JOINT] + [marker_frame(k)[0] for k in range(1, len(more) + 1)]
-    for j in joints:
-        if j not in mech.tree.joints:
-            raise ModelFileError(f"marker registration needs the {j!r} joint (marker_mechanism)")
-    if len(measurements) < 3:
-        raise MeasurementError(f"registration needs at least 3 poses, got {len(measurements)}")
-    T_base = mech.tree.joints[BASE_JOINT].origin
-    T_tool = mech.tree.joints[TOOL_JOINT].origin
-    bare = with_joint_origin(
-        with_joint_origin(mech, BASE_JOINT, pin.SE3.Identity()), TOOL_JOINT, pin.SE3.Identity()
-    )
-    flange = [bare.frame_placement(q) for q in bare.configurations(measurements.q_act)]
-    R_f = np.array([T.rotation for T in flange])  # (m, 3, 3) link in robot base
-    t_f = np.array([T.translation for T in flange])
-    P = [measurements.positions, *(m.positions for m in more)]
-    mk = [np.asarray(T_tool.translation, dtype=float).copy()]
-    mk += [np.zeros(3) for _ in more]
-    T = T_base
-    it = 0
-    while it < max_iterations:
-        it += 1
-        pred = [t_f + np.einsum("mij,j->mi", R_f, v) for v in mk]
-        fit = None if frame_known else fit_rigid_transform(np.vstack(pred), np.vstack(P))
-        T = T_base if fit is None else fit.T
-        A = np.einsum("ij,mjk->mik", T.rotation, R_f).reshape(-1, 3)
-        moved = 0.0
-        for k, Pk in enumerate(P):
-            if k == 0 and marker_known:
-                continue
-            b = (Pk - t_f @ T.rotation.T - T.translation).reshape(-1)
-            new = np.linalg.lstsq(A, b, rcond=None)[0]
-            moved = max(moved, float(np.linalg.norm(new - mk[k])))
-            mk[k] = new
-        if moved < 1e-9 or frame_known or (marker_known and not more):
-            break
-    stacked = np.vstack([t_f + np.einsum("mij,j->mi", R_f, v) for v in mk])
-    res = np.vstack(P) - (stacked @ T.rotation.T + T.translation)  # every marker's rows
-    dist = np.linalg.norm(res, axis=1)
-    fit = RigidFit(T, res, dist, float(np.sqrt(np.mean(dist**2))))
-    out = with_joint_origin(mech, BASE_JOINT, T)
-    out = with_joint_origin(out, TOOL_JOINT, pin.SE3(T_tool.rotation, mk[0]))
-    for k in range(1, len(mk)):
-        out = with_joint_origin(out, marker_frame(k)[0], pin.SE3(np.eye(3), mk[k]))
-    return MarkerRegistration(T, mk[0], fit, it, out, tuple(mk[1:]))

@@ -1,8 +1,9 @@
 """The plain-text block of a cross-validation (printed by `pincal validate --cv K`).
 
 Rendered from :class:`pincal.validation.CrossValidationSummary`: fit, fold-fit and
-held-out RMS / max of the calibration and its baseline [mm]; for a ball-in-socket
-calibration the held-out seating and socket-distance errors.
+held-out RMS / max of the calibration and its baseline [mm]; with orientation measured
+the same for the rotation error angle [mrad]; for a ball-in-socket calibration the
+held-out seating and socket-distance errors.
 """
 
 from __future__ import annotations
@@ -40,6 +41,16 @@ def cross_validation_text(cv: CrossValidationSummary) -> str:
             f"{cv.socket_distance_max * 1e3:.4f}",
             f"  nominal model     RMS {b.socket_distance_rms * 1e3:.4f}   max "
             f"{b.socket_distance_max * 1e3:.4f}",
+        ]
+    o, bo = cv.orientation, b.orientation
+    if o is not None and bo is not None:
+        fit = "" if o.fit_rms is None else f"{o.fit_rms * 1e3:10.3f}"
+        lines += [
+            "  rotation angle [mrad] fit RMS   fold fit RMS   held-out RMS   held-out max",
+            f"  calibrated model  {fit:>10s}   {o.fold_fit_rms * 1e3:12.3f}   "
+            f"{o.held_out_rms * 1e3:12.3f}   {o.held_out_max * 1e3:12.3f}",
+            f"  {b.model[:17]:17s} {'':10s}   {bo.fold_fit_rms * 1e3:12.3f}   "
+            f"{bo.held_out_rms * 1e3:12.3f}   {bo.held_out_max * 1e3:12.3f}",
         ]
     lines.append(cv.verdict)
     return "\n".join(lines) + "\n"

@@ -45,6 +45,11 @@ def _identified(fit: MarkerFit, setup: MarkerSetup) -> list[str]:
         f"{setup.link}; 2σ of tool_frame tx ty tz [{_nums(sig(TOOL_JOINT, 'tx ty tz'))}] mm "
         "(–: held, or absorbed by another parameter)",
     ]
+    if setup.measures_orientation:
+        R = joints[TOOL_JOINT].origin.rotation
+        lines.append(f"identified body rotation rpy [{_nums(mm(pin.rpy.matrixToRpy(R)))}] mrad "
+                     f"in {setup.link}; 2σ of tool_frame rx ry rz "
+                     f"[{_nums(sig(TOOL_JOINT, 'rx ry rz'))}] mrad")  # fmt: skip
     for k in range(1, 1 + len(setup.more_columns)):
         joint = marker_frame(k)[0]
         lines.append(f"identified marker {k + 1} [{_nums(mm(joints[joint].origin.translation))}]"
@@ -67,12 +72,19 @@ def marker_lines(run: MarkerRun) -> list[str]:
     mk = ", ".join(f"{float(v) * 1e3:.2f}" for v in reg.marker)
     also = "".join(f"; marker {k + 2}: columns {' '.join(c)}"
                    for k, c in enumerate(setup.more_columns))  # fmt: skip
+    body = ""
+    if setup.measures_orientation:
+        body = f"; orientation {' '.join(setup.orientation_columns)}, {setup.orientation}"
+        also += body
+    turned = "" if reg.orientation_rms is None else (
+        f", rotation angle RMS {reg.orientation_rms * 1e3:.3f} mrad")  # fmt: skip
     lines = [
         "",
-        f"marker on {setup.link} (columns {' '.join(setup.columns)}, {setup.length_unit}"
-        f"{also}); instrument frame {setup.instrument_frame}",
+        f"{'marker body' if body else 'marker'} on {setup.link} (columns "
+        f"{' '.join(setup.columns)}, {setup.length_unit}{also}); instrument frame "
+        f"{setup.instrument_frame}",
         f"registration (closed form, {reg.iterations} alternations): RMS "
-        f"{reg.fit.rms * 1e3:.3f} mm; marker [{mk}] mm in {setup.link}",
+        f"{reg.fit.rms * 1e3:.3f} mm{turned}; marker [{mk}] mm in {setup.link}",
         *_identified(fit, setup),
     ]
     if prior is None:
@@ -96,6 +108,10 @@ def marker_lines(run: MarkerRun) -> list[str]:
             f"{cal['held_out_rms_mm']:.3f} mm calibrated, {base['held_out_rms_mm']:.3f} mm "
             f"{base['name']}"
         )
+        if "held_out_orientation_rms_mrad" in cal and "held_out_orientation_rms_mrad" in base:
+            lines.append(f"  rotation angle held-out RMS {cal['held_out_orientation_rms_mrad']:.3f}"
+                         f" mrad calibrated, {base['held_out_orientation_rms_mrad']:.3f} mrad "
+                         f"{base['name']}")  # fmt: skip
     solver = solver_line(fit.method, run.settings.method, run.loss)
     lines += [solver] if solver else []
     lines += [f"note: {n}" for n in (*run.notes, *run.warnings)]

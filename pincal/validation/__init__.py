@@ -13,6 +13,7 @@ from __future__ import annotations
 from pincal.validation._cv_summary import (
     CrossValidationBaseline,
     CrossValidationSummary,
+    OrientationErrors,
 )
 from pincal.validation._held_out import (
     PREDICTION_BOUNDS,
@@ -48,6 +49,7 @@ __all__ = [
     "CrossValidationSummary",
     "HeldOutValidation",
     "MarkerErrors",
+    "OrientationErrors",
     "PointAccuracy",
     "PoseCharacteristics",
     "PoseErrors",

@@ -3,9 +3,10 @@
 K-fold refits of the calibration as it was run (:func:`pincal.identification.cross_validate`
 for pose and marker files, held-out seatings for a ball-in-socket file), beside the same
 for a baseline model (the nominal model, or for a marker campaign the registration-only
-model). Lengths in metres inside; :meth:`CrossValidationSummary.to_dict` gives the
-``cv`` record of ``validate --json`` in mm, :func:`pincal.report.cross_validation_text`
-its printed block.
+model). Lengths in metres and angles in radians inside; with orientation measured (a
+6-D marker body, a pose file) the held-out rotation error angles too.
+:meth:`CrossValidationSummary.to_dict` gives the ``cv`` record of ``validate --json``
+in mm (and mrad), :func:`pincal.report.cross_validation_text` its printed block.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["CrossValidationBaseline", "CrossValidationSummary"]
+__all__ = ["CrossValidationBaseline", "CrossValidationSummary", "OrientationErrors"]
 
 
 @dataclass(frozen=True)
@@ -26,6 +27,8 @@ class CrossValidationBaseline:
         fold_fit_rms: RMS over the folds of each fold fit's RMS on its own poses.
         socket_distance_rms, socket_distance_max: held-out socket-distance error (a
             socket calibration), else None.
+        orientation: held-out rotation error angle [rad] (RMS, max, fold fit RMS),
+            or None (no orientation measured).
     """
 
     model: str
@@ -34,6 +37,33 @@ class CrossValidationBaseline:
     fold_fit_rms: float
     socket_distance_rms: float | None = None
     socket_distance_max: float | None = None
+    orientation: OrientationErrors | None = None
+
+
+@dataclass(frozen=True)
+class OrientationErrors:
+    """Rotation error angles ‖log3(R_predictedᵀ R_measured)‖ of a cross-validation [rad].
+
+    Attributes:
+        held_out_rms, held_out_max: over the poses, each predicted by the fold fit that
+            did not see it.
+        fold_fit_rms: RMS over the folds of each fold fit's RMS on its own poses.
+        fit_rms: of the calibration itself on every pose (None for a baseline).
+    """
+
+    held_out_rms: float
+    held_out_max: float
+    fold_fit_rms: float
+    fit_rms: float | None = None
+
+    def to_dict(self) -> dict[str, float]:
+        """The orientation keys of the ``cv`` record [mrad]."""
+        out = {"held_out_orientation_rms_mrad": self.held_out_rms * 1e3,
+               "held_out_orientation_max_mrad": self.held_out_max * 1e3,
+               "fold_fit_orientation_rms_mrad": self.fold_fit_rms * 1e3}  # fmt: skip
+        if self.fit_rms is not None:
+            out["fit_orientation_rms_mrad"] = self.fit_rms * 1e3
+        return out
 
 
 @dataclass(frozen=True)
@@ -52,6 +82,9 @@ class CrossValidationSummary:
             the calibration's, and its standard error [m²] (pose files), else None.
         socket_distance_rms, socket_distance_max: held-out socket-distance error (a
             socket calibration), else None.
+        orientation: the calibration's rotation errors (its ``baseline.orientation``
+            the baseline's), or None (no orientation measured). The verdict and the
+            gain stay on positions.
     """
 
     k: int
@@ -68,6 +101,7 @@ class CrossValidationSummary:
     gain_standard_error: float | None = None
     socket_distance_rms: float | None = None
     socket_distance_max: float | None = None
+    orientation: OrientationErrors | None = None
 
     @property
     def sockets(self) -> bool:
@@ -114,6 +148,9 @@ class CrossValidationSummary:
         own = _errors(self.held_out_rms, self.held_out_max, self.fold_fit_rms)
         base = {"model": b.model, **_errors(b.held_out_rms, b.held_out_max, b.fold_fit_rms)}
         extra: dict[str, float] = {}
+        if self.orientation is not None and b.orientation is not None:
+            own |= self.orientation.to_dict()
+            base |= b.orientation.to_dict()
         if self.sockets:
             own |= _socket_errors(self.socket_distance_rms, self.socket_distance_max)
             base |= _socket_errors(b.socket_distance_rms, b.socket_distance_max)

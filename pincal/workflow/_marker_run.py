@@ -48,6 +48,8 @@ __all__ = ["MISFIT_RMS", "ROBUST_LOSS", "MarkerRun", "calibrate_markers", "marke
 
 #: registration RMS [m] beyond which the table does not describe the nominal robot
 MISFIT_RMS = 0.02
+#: registration RMS rotation angle [rad] of a marker body beyond which likewise (3°)
+MISFIT_ANGLE = 0.05
 #: the loss ``loss="auto"`` refits with when the outlier test names poses
 ROBUST_LOSS = "huber"
 
@@ -110,6 +112,16 @@ def _misfit_note(rms: float) -> str:
         "model disagree — check the joint columns (mapping, unit, reference pose: columns, "
         "joint_units, joint_reference), the joints locked and their values, the marker's link "
         "and the marker columns' unit"
+    )
+
+
+def _angle_note(rms: float) -> str:
+    return (
+        f"the registration leaves a rotation angle RMS of {rms * 1e3:.3g} mrad, more than "
+        f"{MISFIT_ANGLE * 1e3:g} mrad: a nominal robot seen by a capture system fits to "
+        "milliradians, so the orientation columns and the model disagree — check their "
+        "convention, order and unit (--orientation: rpy-deg, quat-wxyz, …) and that the body "
+        "is on the marker's link"
     )
 
 
@@ -199,6 +211,9 @@ def calibrate_markers(
         evidence = HeldOutEvidence(cv, baseline, "registration only")
         verdict = held_out_verdict(verdict, evidence, fit.result)
     rms = fit.registration.fit.rms
-    warnings = (_misfit_note(rms),) if rms > MISFIT_RMS else ()
+    warnings: tuple[str, ...] = (_misfit_note(rms),) if rms > MISFIT_RMS else ()
+    angle = fit.registration.orientation_rms
+    if angle is not None and angle > MISFIT_ANGLE:
+        warnings += (_angle_note(angle),)
     return MarkerRun(fit, meas, setup, settings, loss, choice, verdict,
                      (*notes, *fit.notes), warnings)  # fmt: skip
