@@ -111,6 +111,68 @@ def _fmt3(v: np.ndarray) -> str:
     return " ".join(f"{0.0 if abs(x) < 1e-15 else x:.17g}" for x in v)
 
 
+SPM_CENTRE = (0.0, 0.0, 0.3)
+"""Centre [m] of the spherical 3-RRR: every joint axis passes through it."""
+
+SPM_RANGE = (-0.3, 0.3)
+"""Actuator range [rad] of the spherical 3-RRR around its home (q = 0)."""
+
+
+def _spm_axes(phi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit axes (base u, elbow w, platform v) of the leg at azimuth ``phi`` [rad], home."""
+
+    def spread(azimuth: float, polar: float) -> np.ndarray:
+        return np.array(
+            [np.sin(polar) * np.cos(azimuth), np.sin(polar) * np.sin(azimuth), np.cos(polar)]
+        )
+
+    u = spread(phi, np.radians(125.0))  # down and out, under the centre
+    w = spread(phi + np.radians(55.0), np.radians(85.0))  # about horizontal, turned
+    v = spread(phi + np.radians(20.0), np.radians(40.0))  # up and out, the platform's
+    return u, w, v
+
+
 def spherical_3rrr() -> tuple[str, dict]:
-    """Placeholder (written below)."""
-    raise NotImplementedError
+    """A spherical parallel manipulator (3-RRR wrist), every axis through ``SPM_CENTRE``.
+
+    Leg i (azimuth 120°·(i−1)): ``base<i>`` (actuated, ±0.3 rad), ``elbow<i>``,
+    ``wrist<i>``, their joint origins 0.15 m from the centre along their axes (URDF axis
+    z of each joint frame). The platform (frame at the centre, world axes at home) hangs
+    from leg 1's ``wrist1``; legs 2 and 3 end in ``end2``/``end3`` at the same place,
+    welded (``6d``) to it: closures whose translation rows are redundant. Measured: the
+    pose of ``tool`` 0.1 m above the centre on the platform.
+    """
+    centre = np.array(SPM_CENTRE)
+    links, joints, closures = [_link("base_link")], [], []
+    for i in (1, 2, 3):
+        axes = _spm_axes(np.radians(120.0 * (i - 1)))
+        parent, parent_w = "base_link", pin.SE3.Identity()
+        for name, axis in zip((f"base{i}", f"elbow{i}", f"wrist{i}"), axes, strict=True):
+            frame_w = pin.SE3(_frame_z(axis), centre + 0.15 * axis)
+            link = f"{name}_link"
+            limit = SPM_RANGE if name.startswith("base") else None
+            links.append(_link(link))
+            joints.append(
+                _joint(name, "revolute", parent, link, parent_w.inverse() * frame_w, limit=limit)
+            )
+            parent, parent_w = link, frame_w
+        at_centre = parent_w.inverse() * pin.SE3(np.eye(3), centre)
+        if i == 1:
+            links += [_link("platform"), _link("tool")]
+            joints.append(_joint("platform_mount", "fixed", parent, "platform", at_centre))
+            joints.append(_joint("tool_mount", "fixed", "platform", "tool", _se3(p=(0, 0, 0.1))))
+        else:
+            links.append(_link(f"end{i}"))
+            joints.append(_joint(f"end{i}_mount", "fixed", parent, f"end{i}", at_centre))
+            closures.append([f"end{i}", "platform"])
+    urdf = (
+        '<?xml version="1.0"?>\n<robot name="spm3rrr">\n' + "".join(links + joints) + "</robot>\n"
+    )
+    sidecar = {
+        "closed_loop": closures,
+        "type": ["6d"] * len(closures),
+        "name_mot": ["base1", "base2", "base3"],
+        "measured_frame": "tool",
+        "workspace": {"joints": {f"base{i}": list(SPM_RANGE) for i in (1, 2, 3)}},
+    }
+    return urdf, sidecar
