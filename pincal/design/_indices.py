@@ -100,13 +100,13 @@ def batch_indices(
         raise PincalError(f"number of poses m must be >= 1; got {m}")
     L = s.shape[1]
     if full is None:
-        full = (numerical_ranks(s, rtol) == L) & (L > 0)
+        ok: NDArray[np.bool_] = (numerical_ranks(s, rtol) == L) & (L > 0)
     else:
-        full = np.asarray(full, dtype=bool) & (L > 0) & np.all(s > 0.0, axis=1)
+        ok = np.asarray(full, dtype=bool) & (L > 0) & np.all(s > 0.0, axis=1)
     out = {_check_index_name(name): np.zeros(s.shape[0]) for name in names}
-    if not np.any(full):
+    if not np.any(ok):
         return out
-    sf = s[full]
+    sf = s[ok]
     s1, sL = sf[:, 0], sf[:, -1]
     formulas = {
         "O1": lambda: np.exp(np.mean(np.log(sf), axis=1)) / np.sqrt(m),
@@ -117,7 +117,7 @@ def batch_indices(
         "A": lambda: 1.0 / np.sum(sf**-2, axis=1),
     }
     for name, values in out.items():
-        values[full] = formulas[name]()
+        values[ok] = formulas[name]()
     return out
 
 
