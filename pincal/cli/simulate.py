@@ -68,8 +68,7 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
     "n_random",
     type=click.IntRange(min=1),
     default=None,
-    help="Number of random workspace poses instead of --poses (drawn 5 % of each "
-    "actuator or pose range away from either end, off the edge of the workspace).",
+    help="Number of random workspace poses instead of --poses.",
 )
 @click.option("--params", "preset", default=None, help="Parameter preset (default: first preset).")
 @click.option(

@@ -96,7 +96,6 @@ from pincal.model._urdf import (
     se3_from_xyz_rpy,
 )
 from pincal.model._workspace import (
-    SAMPLE_MARGIN,
     sample_actuators,
     sample_pose,
 )
@@ -109,7 +108,6 @@ __all__ = [
     "INSTRUMENT_LINK",
     "JOINT_KINDS",
     "MOVABLE_TYPES",
-    "SAMPLE_MARGIN",
     "THERMAL_REFERENCE_C",
     "TOOL_JOINT",
     "TOOL_LINK",

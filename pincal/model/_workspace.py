@@ -17,17 +17,7 @@ from pincal.model._floor import above_floor, moving_points
 from pincal.model._mechanism import Mechanism
 from pincal.model._range_explore import explored_ranges
 
-__all__ = ["SAMPLE_MARGIN", "sample_actuators", "sample_pose"]
-
-SAMPLE_MARGIN = 0.05
-"""Fraction of each sampling range [–] kept free at either end by random poses.
-
-Random actuator values (and random pose-workspace factors) are drawn in
-``[lo + f·(hi − lo), hi − f·(hi − lo)]``: a pose right at an actuator limit, or at the
-edge of the reachable set (where closures turn singular and forward kinematics from
-home stops), is a pose a calibrated model may push just outside, where ``simulate`` or
-``compensate`` then refuses it.
-"""
+__all__ = ["sample_actuators", "sample_pose"]
 
 
 #: a pose whose forward kinematics misses the drawn target by more [m, rad] is refused
@@ -39,8 +29,7 @@ def _joint_ranges(mech: Mechanism) -> np.ndarray:
 
     The sidecar workspace, else the URDF limits, else (no range declared) the range
     explored from home (:mod:`pincal.model._range_explore`); a mechanism without loops
-    falls back to ±π for what is still unlimited. Each range is then shrunk by
-    :data:`SAMPLE_MARGIN` of its width at either end.
+    falls back to ±π for what is still unlimited.
     """
     ranges = np.array(mech.actuator_limits, dtype=float)
     for k, name in enumerate(mech.actuated):
@@ -61,13 +50,7 @@ def _joint_ranges(mech: Mechanism) -> np.ndarray:
             f"[{ranges[k, 0]:.6g}, {ranges[k, 1]:.6g}] to sample in; give finite limits with "
             f"lower <= upper (URDF <limit> or the sidecar workspace 'joints')"
         )
-    return _shrunk(ranges)
-
-
-def _shrunk(ranges: np.ndarray) -> np.ndarray:
-    """(k, 2) ranges with :data:`SAMPLE_MARGIN` of their width removed at either end."""
-    width = ranges[:, 1] - ranges[:, 0]
-    return ranges + SAMPLE_MARGIN * np.stack([width, -width], axis=1)
+    return ranges
 
 
 def _off_branch(mech: Mechanism, q_act: np.ndarray, target: pin.SE3) -> bool:
@@ -81,15 +64,9 @@ def _off_branch(mech: Mechanism, q_act: np.ndarray, target: pin.SE3) -> bool:
 
 
 def sample_pose(mech: Mechanism, rng: np.random.Generator) -> pin.SE3:
-    """A random measured-frame pose within ``mech.workspace.pose`` (home for missing keys).
-
-    Each factor is drawn with :data:`SAMPLE_MARGIN` of its range kept free at either end.
-    """
+    """A random measured-frame pose within ``mech.workspace.pose`` (home for missing keys)."""
     home = mech.frame_placement(mech.q_home)
-    lim = {
-        k: tuple(_shrunk(np.array([bounds], dtype=float))[0])
-        for k, bounds in mech.workspace.pose.items()
-    }
+    lim = mech.workspace.pose
     p = home.translation.copy()
     for i, key in enumerate("xyz"):
         if key in lim:
@@ -104,8 +81,7 @@ def sample_actuators(
     """``n`` random feasible actuator rows (n, n_act).
 
     With a pose workspace, poses are drawn uniformly in it and solved by inverse
-    kinematics; otherwise actuator values are drawn in their ranges (both kept
-    :data:`SAMPLE_MARGIN` = 5 % of each range away from either end) and kept when the
+    kinematics; otherwise actuator values are drawn in their ranges and kept when the
     forward kinematics converges away from singularities (in blocks closed by the
     batched solve where the mechanism allows it, else one by one). Infeasible draws
     are rejected, and so are poses reached only in another assembly mode than home's
