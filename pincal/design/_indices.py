@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from pincal.errors import PincalError, UnknownNameError
-from pincal.sensitivity import RANK_RTOL, numerical_rank, numerical_ranks
+from pincal.sensitivity import RANK_RTOL, jacobian_rank, numerical_rank, numerical_ranks
 
 __all__ = [
     "INDEX_NAMES",
@@ -68,7 +68,11 @@ def _as_stacked(J: ArrayLike, what: str = "J") -> NDArray[np.float64]:
 
 
 def batch_indices(
-    sigma: ArrayLike, m: int, names: Sequence[str] = INDEX_NAMES, rtol: float = RANK_RTOL
+    sigma: ArrayLike,
+    m: int,
+    names: Sequence[str] = INDEX_NAMES,
+    rtol: float = RANK_RTOL,
+    full: ArrayLike | None = None,
 ) -> dict[str, NDArray[np.float64]]:
     """The index formulas, once, for a batch of designs (every caller uses this).
 
@@ -82,6 +86,9 @@ def batch_indices(
         m: number of poses of every design (enters O1 only), ≥ 1.
         names: the indices wanted, from :data:`INDEX_NAMES`.
         rtol: relative rank threshold.
+        full: (B,) whether each design has full rank, decided by the caller (pose
+            selection passes :func:`pincal.sensitivity.full_jacobian_ranks`, the rank
+            rule of every command); None: the rule above on ``sigma``.
 
     Returns:
         ``{name: values (B,)}``.
@@ -92,11 +99,14 @@ def batch_indices(
     if m < 1:
         raise PincalError(f"number of poses m must be >= 1; got {m}")
     L = s.shape[1]
-    full = (numerical_ranks(s, rtol) == L) & (L > 0)
+    if full is None:
+        ok: NDArray[np.bool_] = (numerical_ranks(s, rtol) == L) & (L > 0)
+    else:
+        ok = np.asarray(full, dtype=bool) & (L > 0) & np.all(s > 0.0, axis=1)
     out = {_check_index_name(name): np.zeros(s.shape[0]) for name in names}
-    if not np.any(full):
+    if not np.any(ok):
         return out
-    sf = s[full]
+    sf = s[ok]
     s1, sL = sf[:, 0], sf[:, -1]
     formulas = {
         "O1": lambda: np.exp(np.mean(np.log(sf), axis=1)) / np.sqrt(m),
@@ -107,7 +117,7 @@ def batch_indices(
         "A": lambda: 1.0 / np.sum(sf**-2, axis=1),
     }
     for name, values in out.items():
-        values[full] = formulas[name]()
+        values[ok] = formulas[name]()
     return out
 
 
@@ -214,4 +224,4 @@ def observability(J: ArrayLike, m: int | None = None) -> ObservabilityIndices:
     s = np.linalg.svd(arr, compute_uv=False)
     if s.size < n:
         s = np.concatenate([s, np.zeros(n - s.size)])
-    return indices_from_singular_values(s, int(m), numerical_rank(s))
+    return indices_from_singular_values(s, int(m), jacobian_rank(arr))

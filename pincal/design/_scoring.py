@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from pincal.design._indices import _check_index_name, batch_indices
 from pincal.errors import PincalError, TooFewPosesError
+from pincal.sensitivity import full_jacobian_ranks
 
 __all__: list[str] = []
 
@@ -90,13 +91,22 @@ class _Problem:
             return 0.0
         Js = self.J[np.asarray(members)].reshape(-1, self.n)
         s = np.linalg.svd(Js, compute_uv=False)
-        return float(self._index_from_sv(s[None, :], len(members))[0])
+        return float(self._index_from_sv(s[None, :], len(members), Js[None])[0])
 
-    def _index_from_sv(self, s: NDArray[np.float64], m: int) -> NDArray[np.float64]:
-        """Exact index of each design from its singular values s (B, min(rows, n)) → (B,)."""
+    def _index_from_sv(
+        self, s: NDArray[np.float64], m: int, Js: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """Exact index of each design from its singular values s (B, min(rows, n)) → (B,).
+
+        ``Js`` (B, rows, n): the designs' stacked Jacobians (or any with the same column
+        norms and singular values, e.g. [R; U] of a QR); whether a design has full rank
+        is :func:`pincal.sensitivity.full_jacobian_ranks` (unit columns), the rule of
+        ``info``, the presets and identification, whatever the row scaling.
+        """
         if s.shape[1] < self.n:  # fewer rows than parameters: rank-deficient
             return np.zeros(s.shape[0])
-        return batch_indices(s, m, (self.index,))[self.index]
+        full = full_jacobian_ranks(Js, s)
+        return batch_indices(s, m, (self.index,), full=full)[self.index]
 
     def scratch_keys(
         self, sets: NDArray[np.int_], chunk: int = 256
@@ -110,7 +120,7 @@ class _Problem:
         for lo in range(0, B, chunk):
             Js = self.J[sets[lo : lo + chunk]].reshape(-1, rows, self.n)
             s = np.linalg.svd(Js, compute_uv=False)
-            exact[lo : lo + chunk] = self._index_from_sv(s, size)
+            exact[lo : lo + chunk] = self._index_from_sv(s, size, Js)
             G = np.matmul(Js.transpose(0, 2, 1), Js) + eye
             sign, ld = np.linalg.slogdet(G)
             logdet[lo : lo + chunk] = np.where(sign > 0, ld, -np.inf)
@@ -162,7 +172,7 @@ class _Problem:
             R = np.zeros((0, self.n))
         stacked = np.concatenate([np.broadcast_to(R, (cand.size, *R.shape)), self.J[cand]], 1)
         s = np.linalg.svd(stacked, compute_uv=False)
-        exact = self._index_from_sv(s, size)
+        exact = self._index_from_sv(s, size, stacked)
         return int(cand[np.lexsort((ld_all, exact))[-1]])
 
     def best_remove(self, state: _State, removable: Sequence[int]) -> int:

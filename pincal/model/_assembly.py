@@ -23,6 +23,7 @@ from pincal.errors import (
     ModelFileError,
     SingularConfigurationError,
 )
+from pincal.model._kind_hint import spherical_hint
 from pincal.model._kinematics import KinematicQueries
 from pincal.model._newton import Solution, SolverOptions, damped_newton
 
@@ -312,7 +313,7 @@ class Assembly:
                     f"{list(self.queries.actuated)} and move the measured frame; free passive "
                     f"joints: "
                     f"{list(dict.fromkeys(free))}. Actuate one of them (sidecar 'name_mot') or "
-                    f"add closures"
+                    f"add closures." + spherical_hint(self.queries, q_home, self.options.rcond)
                 )
                 err.free_joints = tuple(dict.fromkeys(free))  # type: ignore[attr-defined]
                 raise err
@@ -322,7 +323,8 @@ class Assembly:
             raise MobilityError(
                 f"mechanism {self.name!r} has mobility {mobility} (nv {self.model.nv} − closure "
                 f"rank {rank} − idle {idle}) but {n_act} actuated joints are declared "
-                f"{list(self.queries.actuated)}"
+                f"{list(self.queries.actuated)}."
+                + spherical_hint(self.queries, q_home, self.options.rcond)
             )
         idle_joints = (
             tuple(

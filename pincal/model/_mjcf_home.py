@@ -104,7 +104,7 @@ def build_with_home(
                     f"to hold it, 'lock: {{{springs[0]}: home}}' (or a value [rad, m]) in a "
                     "sidecar <stem>.yaml beside the MJCF."
                 )
-            raise type(exc)(f"{exc}{extra}.{hint}") from exc
+            raise type(exc)(f"{str(exc).rstrip('.')}{extra}.{hint}") from exc
         notes.append(mech._mjcf_home_note)  # type: ignore[attr-defined]
     outside = _outside(_home_values(mech, ranges), ranges)
     if outside:

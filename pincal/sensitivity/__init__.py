@@ -31,6 +31,7 @@ from pincal.sensitivity._presets import COMPUTED_PRESETS, parameters
 from pincal.sensitivity._rank import (
     RANK_RTOL,
     RangeSolver,
+    full_jacobian_ranks,
     jacobian_rank,
     numerical_rank,
     numerical_ranks,
@@ -52,6 +53,7 @@ __all__ = [
     "base_parameters",
     "base_set",
     "closure_breaking",
+    "full_jacobian_ranks",
     "global_sensitivity",
     "global_sensitivity_from_jacobians",
     "identifiability",

@@ -30,6 +30,7 @@ from pincal.errors import PincalError
 __all__ = [
     "RANK_RTOL",
     "RangeSolver",
+    "full_jacobian_ranks",
     "jacobian_rank",
     "numerical_rank",
     "numerical_ranks",
@@ -112,6 +113,47 @@ def jacobian_rank(J: ArrayLike, rtol: float = RANK_RTOL) -> int:
     if scaled.size == 0:
         return 0
     return numerical_rank(np.linalg.svd(scaled, compute_uv=False), rtol)
+
+
+def full_jacobian_ranks(
+    J: ArrayLike, sigma: ArrayLike, rtol: float = RANK_RTOL
+) -> NDArray[np.bool_]:
+    """Whether each Jacobian of a batch has full column rank by :func:`jacobian_rank`.
+
+    Exactly ``jacobian_rank(J[b], rtol) == n`` for each b, without the SVD of the
+    unit-column matrix where the singular values of the unscaled one already decide:
+    with column norms c, σn(J)/c_max ≤ σn(JD) ≤ σn(J)/c_min and σ1(J)/c_max ≤ σ1(JD) ≤
+    σ1(J)/c_min (D = diag(1/c)), so only designs inside that band are decomposed again.
+
+    Args:
+        J: Jacobians (B, rows, n) (any row scaling; the columns are normalised here).
+        sigma: singular values (B, min(rows, n)) of the unscaled J, descending.
+        rtol: relative threshold (default :data:`RANK_RTOL`).
+
+    Returns:
+        (B,) booleans.
+    """
+    a = np.asarray(J, dtype=float)
+    s = np.asarray(sigma, dtype=float)
+    rtol = _check_rtol(rtol)
+    B, rows, n = a.shape
+    if rows < n or n == 0:
+        return np.zeros(B, dtype=bool)
+    c = np.linalg.norm(a, axis=1)  # (B, n) column norms
+    c_max = c.max(axis=1)
+    c_min = c.min(axis=1)
+    alive = (c_min > 1e-12 * np.maximum(c_max, 1e-300)) & (s[:, 0] > 0.0)
+    out = np.zeros(B, dtype=bool)
+    safety = 1.0 + 1e-6  # rounding of the two decompositions
+    with np.errstate(divide="ignore", invalid="ignore"):
+        low = s[:, n - 1] / c_max / (s[:, 0] / c_min)  # a lower bound of σn(JD)/σ1(JD)
+        high = s[:, n - 1] / c_min / (s[:, 0] / c_max)  # an upper bound
+    sure = alive & (low > rtol * safety)
+    out[sure] = True
+    band = np.flatnonzero(alive & ~sure & (high * safety > rtol))
+    for b in band:
+        out[b] = jacobian_rank(a[b], rtol) == n
+    return out
 
 
 @dataclass(frozen=True, eq=False)

@@ -50,13 +50,19 @@ def test_indices_follow_the_definitions_everywhere():
 
 
 def test_one_rank_rule_for_the_indices():
-    """σL/σ1 = 1e-9 is below the rank rule's 1e-8: rank-deficient, every index 0."""
+    """The rank is :func:`pincal.sensitivity.jacobian_rank` (unit columns, σ > 1e-8·σ1):
+    a column dependent on the others to 1e-9 is rank-deficient, every index 0; a column
+    merely 1e-9 as long as the others (a unit choice) is not."""
     u, _ = np.linalg.qr(np.random.default_rng(1).standard_normal((12, 3)))
-    J = u * [1.0, 0.5, 1e-9]
+    a, b, w = u.T
+    J = np.column_stack([a, 0.5 * b, (a + b) / np.sqrt(2.0) + 1e-9 * w])
     obs = observability(J, m=4)
     assert obs.rank == 2 and not obs.full_rank
     assert all(v == 0.0 for v in obs.as_dict().values())
-    assert observability(u * [1.0, 0.5, 1e-7], m=4).rank == 3
+    near = np.column_stack([a, 0.5 * b, (a + b) / np.sqrt(2.0) + 1e-7 * w])
+    assert observability(near, m=4).rank == 3
+    tiny = observability(u * [1.0, 0.5, 1e-9], m=4)
+    assert tiny.rank == 3 and tiny.O3 == pytest.approx(1e-9, rel=1e-6)
 
 
 def test_design_scaling_is_the_row_and_column_functions():
