@@ -75,7 +75,9 @@ def test_genhexkins_inverse_matches_the_calibrated_model(stewart_cal, tmp_path):
     base, plat, off = read_hal(text)
     cal = read_calibration(stewart_cal)
     q, poses = _model_poses(cal)
-    err = np.array([genhexkins_inverse(base, plat, off, T) - r for T, r in zip(poses, q)])
+    err = np.array(
+        [genhexkins_inverse(base, plat, off, T) - r for T, r in zip(poses, q, strict=True)]
+    )
     assert np.abs(err).max() <= 1e-6
     # the check can fail: the nominal machine's strut ends miss the calibrated one by far more
     nom = cal.nominal()
@@ -83,7 +85,9 @@ def test_genhexkins_inverse_matches_the_calibrated_model(stewart_cal, tmp_path):
     nominal_base = np.array(
         [nom.frame_placement(qn, f"leg{i + 1}_u2").translation for i in range(6)]
     )
-    err_nominal = [genhexkins_inverse(nominal_base, plat, off, T) - r for T, r in zip(poses, q)]
+    err_nominal = [
+        genhexkins_inverse(nominal_base, plat, off, T) - r for T, r in zip(poses, q, strict=True)
+    ]
     assert np.abs(err_nominal).max() > 1e-4
     # the header's figures: the controller's forward kinematics (Newton) vs the model
     pos = next(line for line in text.splitlines() if line.startswith("#   position"))
@@ -102,7 +106,9 @@ def test_actuator_scale_is_named_and_its_residual_reported_honestly(tmp_path):
     assert any("actuator scale" in s for s in proj.not_expressed)
     base, plat, off = read_hal(done.text)
     poses = machine.reference(proj.q_act)
-    err = np.array([genhexkins_inverse(base, plat, off, T) - r for T, r in zip(poses, proj.q_act)])
+    err = np.array(
+        [genhexkins_inverse(base, plat, off, T) - r for T, r in zip(poses, proj.q_act, strict=True)]
+    )
     assert proj.joint_max == pytest.approx(np.abs(err).max(), rel=1e-6, abs=1e-12)
     assert proj.joint_rms == pytest.approx(np.sqrt(np.mean(err**2)), rel=1e-6, abs=1e-12)
 
