@@ -12,7 +12,8 @@ only the stages above it in this list (``tests/test_stage_boundaries.py`` checks
 6. :mod:`pincal.compensation` — commands that reach targets with the calibrated model, and
    :mod:`pincal.validation` — held-out checks, pose errors, ISO 9283;
 7. :mod:`pincal.io` — every file kind, read and written in one place;
-8. :mod:`pincal.workflow` — a calibration as the commands run it, callable from Python;
+8. :mod:`pincal.workflow` — a calibration as the commands run it, callable from Python, and
+   :mod:`pincal.export` — a calibration as a controller's own kinematic parameters;
 9. :mod:`pincal.report`, :mod:`pincal.viz` (loaded on first use), then :mod:`pincal.cli`.
 
 This module exports the vocabulary of a calibration; everything else is in the subpackages.

@@ -20,6 +20,7 @@ __all__ = [
     "ColumnError",
     "ConditionError",
     "ConvergenceError",
+    "ExportError",
     "FrameMismatchError",
     "ImportMatchError",
     "InputFileError",
@@ -229,6 +230,10 @@ class ReportError(PincalError):
 
 class OutputPathError(PincalError):
     """An output path would overwrite an input (or another output) of the same command."""
+
+
+class ExportError(PincalError):
+    """A calibration cannot be written in the asked controller format (machine kind)."""
 
 
 class OptionValueError(PincalError, ValueError):

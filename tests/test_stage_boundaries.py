@@ -2,8 +2,8 @@
 
 A stage is a subpackage of ``pincal/``. DESIGN.md section 1 (and the docstring of
 ``pincal/__init__.py``) fixes their order, lowest first: model → {machines, sensitivity}
-→ measure → design → identification → {compensation, validation} → io → workflow → report / viz →
-cli. The rules checked here (issue 24), without exceptions:
+→ measure → design → identification → {compensation, validation} → io → {workflow,
+export} → report / viz → cli. The rules checked here (issue 24), without exceptions:
 
 * another stage is entered only through its ``__init__`` or its declared interface
   module ``kernels`` — never through a private ``_module``, never for a ``_name``;
@@ -37,6 +37,7 @@ RANK = {
     "validation": 5,
     "io": 6,
     "workflow": 7,
+    "export": 7,
     "report": 8,
     "viz": 8,
     "cli": 9,

@@ -56,6 +56,7 @@ def main(ctx: click.Context, debug: bool) -> None:
       pincal compensate cal/ --targets poses.csv --out commands.csv
       pincal validate cal/ --data held_out.csv  errors on data not used for fitting
       pincal report cal/                       HTML + Markdown report of a calibration
+      pincal export cal/ --format generic-table --out machine.yaml   controller parameters
       pincal --debug info my_robot.urdf        full traceback on errors
 
     \b
@@ -78,6 +79,7 @@ from pincal.cli import acceptance as _acceptance  # noqa: E402
 from pincal.cli import calibrate as _calibrate  # noqa: E402
 from pincal.cli import compensate as _compensate  # noqa: E402
 from pincal.cli import demo as _demo  # noqa: E402
+from pincal.cli import export as _export  # noqa: E402
 from pincal.cli import import_cmd as _import_cmd  # noqa: E402
 from pincal.cli import import_sockets as _import_sockets  # noqa: E402
 from pincal.cli import info as _info  # noqa: E402
@@ -102,6 +104,7 @@ for _command in (
     _validate.validate,
     _view.view,
     _report.report,
+    _export.export,
     _import_cmd.import_tracker,
     _import_sockets.import_sockets,
     _run.run,
