@@ -30,6 +30,7 @@ from pincal.model._dh_model import (
     dh_urdf,
     parameters_to_dh_errors,
 )
+from pincal.model._deflection import deflected_joints, deflection_jacobian, loaded_terms
 from pincal.model._directions import describe_direction, direction_record, parent_direction
 from pincal.model._floor import DEFAULT_FLOOR, above_floor
 from pincal.model._home_search import conditioning, regular_home
@@ -136,6 +137,8 @@ __all__ = [
     "above_floor",
     "active_limits",
     "actual_joint_values",
+    "deflected_joints",
+    "deflection_jacobian",
     "actual_shift",
     "bundled_models",
     "chain_preset",
@@ -156,6 +159,7 @@ __all__ = [
     "full_parameters",
     "joint_term",
     "joint_term_bases",
+    "loaded_terms",
     "joint_term_basis",
     "joint_term_prior",
     "joint_term_shift",
