@@ -15,6 +15,7 @@ from pincal.model._closures import (
     Closure,
     parse_components,
 )
+from pincal.model._deflection import deflected_joints, deflection_jacobian, loaded_terms
 from pincal.model._dh import (
     DHError,
     DHLayout,
@@ -30,7 +31,6 @@ from pincal.model._dh_model import (
     dh_urdf,
     parameters_to_dh_errors,
 )
-from pincal.model._deflection import deflected_joints, deflection_jacobian, loaded_terms
 from pincal.model._directions import describe_direction, direction_record, parent_direction
 from pincal.model._floor import DEFAULT_FLOOR, above_floor
 from pincal.model._home_search import conditioning, regular_home
@@ -137,13 +137,13 @@ __all__ = [
     "above_floor",
     "active_limits",
     "actual_joint_values",
-    "deflected_joints",
-    "deflection_jacobian",
     "actual_shift",
     "bundled_models",
     "chain_preset",
     "check_term_data",
     "conditioning",
+    "deflected_joints",
+    "deflection_jacobian",
     "degenerate_translations",
     "describe_direction",
     "dh_apply_errors",
@@ -159,13 +159,13 @@ __all__ = [
     "full_parameters",
     "joint_term",
     "joint_term_bases",
-    "loaded_terms",
     "joint_term_basis",
     "joint_term_prior",
     "joint_term_shift",
     "joint_term_units",
     "load_mechanism",
     "load_mjcf",
+    "loaded_terms",
     "lock_joints",
     "mjcf_to_urdf",
     "model_record",

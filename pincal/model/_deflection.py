@@ -17,7 +17,7 @@ to the parameter values follows from the implicit-function theorem,
     dq/dθ = (I − T_q)⁻¹ [B₀ + L(q; g) (loaded columns) + T_g (geometric columns)],
 
 ``T_q = ∂(L θ_L)/∂q`` (n_act × n_act per pose) and ``T_g = ∂(L θ_L)/∂g`` (per geometric
-parameter) by forward differences of the statics (steps :data:`STEP` [m, rad]): the
+parameter) by central differences of the statics (steps :data:`STEP` [m, rad]): the
 forces have no analytic derivative in the geometry here. Both vanish when ``θ_L = 0``
 (the start of a fit from nominal), and are skipped then.
 """
@@ -36,7 +36,7 @@ from pincal.model._parameters import ParameterSet
 
 __all__ = ["STEP", "deflected_joints", "deflection_jacobian", "loaded_terms"]
 
-#: forward-difference step of the statics' derivatives [m, rad]
+#: central-difference step of the statics' derivatives [m, rad]
 STEP = 1e-6
 #: most fixed-point iterations before the deflection is declared divergent
 MAX_ITERATIONS = 60
@@ -71,7 +71,8 @@ def deflected_joints(
 
     Args:
         mech: the machine at the current parameter values (its geometry bears the load).
-        params: the parameter set (n); values: (n,) its values [SI].
+        params: the parameter set (n).
+        values: (n,) its values [SI].
         u: (m, n_act) the command moved by the terms that are not loaded.
         conditions: per-pose conditions of the terms.
         tol: convergence of the iteration, largest joint change [rad, m].
@@ -115,7 +116,9 @@ def deflection_jacobian(
     """``dq/dθ`` (m, n_act, n) of the deflected joint values at the fixed point ``q``.
 
     Args:
-        mech: the machine at ``values``; params, values: the n parameters and values.
+        mech: the machine at ``values``.
+        params: the n parameters.
+        values: (n,) their values [SI].
         q: (m, n_act) the fixed point (:func:`deflected_joints`).
         basis0: (m, n_act, n) basis of the terms that are not loaded (at the command;
             zero in the loaded and geometric columns).
@@ -137,16 +140,17 @@ def deflection_jacobian(
     theta = values[idx]
     if not np.any(theta):
         return out
-    d0 = _loaded_change(mech, sub, theta, q, cond)
     n_act = q.shape[1]
     Tq = np.empty((q.shape[0], n_act, n_act))
     for j in range(n_act):
-        qj = q.copy()
-        qj[:, j] += STEP
-        Tq[:, :, j] = (_loaded_change(mech, sub, theta, qj, cond) - d0) / STEP
+        dq = np.zeros_like(q)
+        dq[:, j] = STEP
+        hi = _loaded_change(mech, sub, theta, q + dq, cond)
+        Tq[:, :, j] = (hi - _loaded_change(mech, sub, theta, q - dq, cond)) / (2 * STEP)
     for k in np.setdiff1d(np.arange(len(params)), params.joint_terms):
-        v = values.copy()
-        v[k] += STEP
-        out[:, :, k] = (_loaded_change(at(v), sub, theta, q, cond) - d0) / STEP
+        dv = np.zeros_like(values)
+        dv[k] = STEP
+        hi = _loaded_change(at(values + dv), sub, theta, q, cond)
+        out[:, :, k] = (hi - _loaded_change(at(values - dv), sub, theta, q, cond)) / (2 * STEP)
     M = np.eye(n_act)[None] - Tq
     return np.linalg.solve(M, out)
