@@ -24,7 +24,7 @@ wrong file:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -32,6 +32,7 @@ from pincal.errors import PincalError
 from pincal.identification._coordinate_probe import coordinate_columns, is_trend, trend_size
 from pincal.identification._distributions import chi2_sf, f_sf
 from pincal.identification._outliers import column_basis
+from pincal.identification._probe_floor import detection_floor
 from pincal.identification._result import IdentificationResult
 from pincal.measure import Measurements
 from pincal.model import Mechanism, parameters
@@ -85,6 +86,10 @@ class Probe:
             it acts on (position only for scale and drift; estimated noise scales each
             block's sum to its redundancy, so the share of the total would be diluted).
         size: its size in words (e.g. ``a 1.00 % scale of the measured positions``).
+        floor: the smallest error of this kind the probe catches with 90 % power at the
+            gate's significance on this design and noise, in the coefficient's unit
+            (a scale or gain as a fraction, a drift over the pose order in m, a trend
+            in m: positions), NaN when not computed (:mod:`._probe_floor`).
     """
 
     name: str
@@ -93,6 +98,19 @@ class Probe:
     p_value: float
     explained: float
     size: str
+    floor: float = float("nan")
+
+    def floor_text(self) -> str:
+        """The floor in words (e.g. ``a scale error below 0.02 %``), "" when unknown."""
+        if not math.isfinite(self.floor):
+            return ""
+        if self.name in ("scale", "gains"):
+            what = "a scale error" if self.name == "scale" else "an actuator gain error"
+            return f"{what} below {self.floor * 100:.2g} %"
+        if self.name == "drift":
+            return f"a drift below {self.floor * 1e6:.2g} µm over the pose order"
+        where = self.name.removeprefix("trend:")
+        return f"a trend below {self.floor * 1e6:.2g} µm along the {where}"
 
     def describe(self) -> str:
         return (
@@ -220,6 +238,8 @@ def probe_misspecification(
     columns: dict[str, np.ndarray],
     sigma: np.ndarray,
     components: tuple[str, ...] | None = None,
+    significance: float | None = None,
+    min_share: float = 0.25,
 ) -> list[Probe]:
     """F-test of each probe's nuisance terms added to the linearised fit.
 
@@ -229,6 +249,12 @@ def probe_misspecification(
         columns: raw (m, k, q) nuisance columns per probe (:func:`probe_columns`).
         sigma: (m, k) σ of each residual [m, rad] (whitens the columns).
         components: the k measured components (names the trend probes' sizes).
+        significance: the gate's family-wise significance of the probes (Bonferroni
+            over the probes run): with it, each probe's detection floor at 90 % power
+            (:func:`pincal.identification._probe_floor.detection_floor`, with ``min_share``
+            the share of the residual a probe must explain) — of the position columns
+            only for a trend.
+        min_share: the share of its blocks' residual a probe must explain to fire.
 
     Returns:
         One :class:`Probe` per probe that adds at least one direction, in the order given.
@@ -238,8 +264,10 @@ def probe_misspecification(
     rss = float(zr @ zr)
     nu = z.size - U.shape[1]
     probes: list[Probe] = []
+    seen: list[tuple[np.ndarray, int, float]] = []  # per probe: its columns, q, ν_t
     if not rss > 0:
         return probes
+    comps = _components(components, sigma.shape[1])
     for name, raw in columns.items():
         B0 = (raw / sigma[:, :, None]).reshape(z.size, -1)
         B = B0 - U @ (U.T @ B0)
@@ -265,7 +293,24 @@ def probe_misspecification(
         else:
             size = _size(name, coef)
         probes.append(Probe(name, q, f, p, share, size))
-    return probes
+        keep = outside & _position_columns(name, raw, comps)
+        nu_t = nu * float(np.mean(touched))  # the touched blocks' share of the redundancy
+        seen.append((B0[:, keep] - U @ (U.T @ B0[:, keep]), q, nu_t))
+    if significance is None or not probes:
+        return probes
+    alpha = significance / len(probes)
+    return [
+        replace(pr, floor=detection_floor(b, q, nu - q, alpha, min_share, nu_t))
+        for pr, (b, q, nu_t) in zip(probes, seen, strict=True)
+    ]
+
+
+def _position_columns(name: str, raw: np.ndarray, comps: tuple[str, ...]) -> np.ndarray:
+    """(c,) the columns whose floor is stated: all, or a trend's on position components."""
+    if not is_trend(name):
+        return np.ones(raw.shape[2], dtype=bool)
+    pos = np.array([c in _POS for c in comps])
+    return np.any((raw != 0) & pos[None, :, None], axis=(0, 1))
 
 
 def _size(name: str, coef: np.ndarray) -> str:

@@ -34,7 +34,10 @@ from pincal.model import (
     Linearisation,
     Mechanism,
     ParameterSet,
+    deflected_joints,
+    deflection_jacobian,
     joint_term_bases,
+    loaded_terms,
 )
 from pincal.model.kernels import jlog3_batch, log3_batch
 from pincal.sensitivity import sensitivities_batch
@@ -112,6 +115,14 @@ class CalibrationProblem:
         #: joint-term bases at the commanded values: δq (m, n_act, n) and the measured
         #: frame's δp (m, 3, n); None when no term acts that way
         self._basis, self._shift = joint_term_bases(mech, params, measurements)
+        #: load-dependent terms (compliance): evaluated on the estimate's geometry at the
+        #: deflected joint values (:mod:`pincal.model._deflection`), so their columns of
+        #: the command's basis are zeroed; (values key, actual joint values) of the last
+        self._loaded = loaded_terms(params)
+        if self._basis is not None and self._loaded.size:
+            self._basis = self._basis.copy()
+            self._basis[:, :, self._loaded] = 0.0
+        self._deflected: tuple[bytes, np.ndarray] | None = None
         self._qs: np.ndarray | None = None
         self._solved: tuple[Linearisation, Mechanism, BatchKinematics] | None = None
         #: start each solve from the first-order prediction of the parameter change
@@ -163,6 +174,7 @@ class CalibrationProblem:
         new = CalibrationProblem(self.mech, self.params, self.meas)
         new.sigma, new.noise_source = sigma, "estimated"
         new._qs, new._solved, new._cache = self._qs, self._solved, self._cache
+        new._deflected = self._deflected
         new._linearised = self._linearised
         new._structural = self._structural
         scale = (self.sigma / sigma).reshape(-1)
@@ -272,7 +284,7 @@ class CalibrationProblem:
     def _configurations(self, mech: Mechanism, values: np.ndarray):
         """Closed configurations (m, nq) of the measured poses (warm-started), kinematics."""
         meas = self.meas
-        q_act = meas.q_act if self._basis is None else meas.q_act + self._basis @ values
+        q_act = self._joint_values(mech, values)
         try:
             qs, bk = mech.configurations_batch(q_act, self._guesses(values))
         except ConvergenceError:
@@ -289,11 +301,39 @@ class CalibrationProblem:
         self._solved = None if bk is None else (self.linearisation(values), mech, bk)
         return qs, bk
 
+    def _joint_values(self, mech: Mechanism, values: np.ndarray) -> np.ndarray:
+        """(m, n_act) actual joint values at ``values``: command, terms, deflection."""
+        meas = self.meas
+        u = meas.q_act if self._basis is None else meas.q_act + self._basis @ values
+        if not self._loaded.size:
+            return u
+        key = values.tobytes()
+        if self._deflected is None or self._deflected[0] != key:
+            q = deflected_joints(mech, self.params, values, u, meas.conditions)
+            self._deflected = (key, q)
+        return self._deflected[1]
+
+    def _term_basis(self, mech: Mechanism, values: np.ndarray) -> np.ndarray | None:
+        """(m, n_act, n) joint changes per parameter at ``values`` (None: no terms)."""
+        if self._basis is None or not self._loaded.size:
+            return self._basis
+        q = self._joint_values(mech, values)
+        return deflection_jacobian(
+            mech,
+            self.params,
+            values,
+            q,
+            self._basis,
+            lambda v: self.params.apply(self.mech, self.params.linearise(v)),
+            self.meas.conditions,
+        )
+
     def _residuals(self, mech: Mechanism, values: np.ndarray, qs, bk, jacobian: bool):
         meas = self.meas
         if jacobian:
             lin = self.linearisation(values)
-            sens = sensitivities_batch(mech, self.params, qs, bk, lin, self._basis)
+            basis = self._term_basis(mech, values)
+            sens = sensitivities_batch(mech, self.params, qs, bk, lin, basis)
             p, R = sens.positions, sens.rotations
         elif bk is not None:
             R, p = mech.batch_model.frame_placement(bk, mech.frame_id(mech.measured_frame))

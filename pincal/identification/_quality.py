@@ -54,6 +54,7 @@ from statistics import NormalDist
 import numpy as np
 
 from pincal.errors import PincalError
+from pincal.identification._autocorrelation import SerialCorrelation, serial_correlation
 from pincal.identification._cause import likely_cause
 from pincal.identification._coordinate_probe import is_trend
 from pincal.identification._data_check import check_measurements
@@ -246,6 +247,7 @@ def check_quality(
     fired: Probe | None = None
     unexplained = ""  # the misfit a refit without the named poses leaves, in words
     stand_out: tuple[int, ...] = ()  # those poses, then not named outliers
+    serial: SerialCorrelation | None = None  # correlation left once a drift is fitted
     if Jw is not None and sigma is not None and w is not None and _inexact(result):
         z = np.asarray(w.whitened, dtype=float)
         out, limit = deletion_outliers(Jw, z, lim.outlier_risk, cap)
@@ -264,11 +266,16 @@ def check_quality(
             probes = probe_misspecification(
                 Ap[rows].reshape(-1, Ap.shape[2]), zp[rows].ravel(),
                 {n: c[rows] for n, c in cols.items()}, sp[rows], measurements.components,
+                lim.probe_significance, lim.probe_explained,
             )  # fmt: skip
             alpha = lim.probe_significance / max(len(probes), 1)
             hits = [p for p in probes if p.p_value < alpha and p.explained >= lim.probe_explained]
             named = [p for p in hits if not is_trend(p.name)] or hits  # a named error first
             fired = max(named, key=lambda p: p.explained) if named else None
+            if "drift" in cols:  # AR(1) residuals are not a drift: what a drift leaves
+                drift = cols["drift"][rows] / sp[rows][:, :, None]
+                serial = serial_correlation(Ap[rows], zp[rows], drift)
+                serial = serial if serial and serial.p_value < alpha else None
             if fired is not None:  # judge outliers against the model with the probe's terms
                 extra = cols[fired.name] / sp[:, :, None]
                 out, limit = deletion_outliers(np.concatenate([Ap, extra], axis=2), zp,
@@ -299,7 +306,9 @@ def check_quality(
     if profile is not None and source == "estimated" and w is not None:
         issues += profile_issues(w, profile, lim)
     issues += [replace(c, refuse=not lenient) for c in changes(result, lim)]
-    if fired is not None:
+    if serial is not None:  # refuses when a probe fired on it, warns otherwise
+        issues.append(QualityIssue("model", fired is not None, serial.describe()))
+    if fired is not None and (serial is None or fired.name != "drift"):
         issues.append(QualityIssue(
             "model", True, f"model or instrument error suspected: {fired.describe()}"
         ))  # fmt: skip
@@ -342,6 +351,7 @@ def check_quality(
         singular_poses=singular, limits=lim, noise_source=source,
         chi2_blocks=tuple((b.block, b.chi2, b.dof, b.p_value) for b in blocks),
         probes=tuple((p.name, p.explained, p.p_value, p.size) for p in probes),
+        floors=tuple((p.name, p.floor, p.floor_text()) for p in probes if p.floor_text()),
         profile=profile.name if profile is not None else "",
     )  # fmt: skip
     if verdict.passed:

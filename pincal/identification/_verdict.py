@@ -126,6 +126,9 @@ class QualityVerdict:
         noise_source: ``declared``, ``per-pose`` or ``estimated`` ("" when unknown).
         chi2_blocks: per block ``(name, χ², ν, p-value)`` (declared noise only).
         probes: per misspecification probe ``(name, explained share, p-value, size)``.
+        floors: per probe ``(name, floor, in words)``: the smallest error of its kind it
+            catches with 90 % power on this design and noise (a scale or gain as a
+            fraction, a drift or trend in m; :mod:`._probe_floor`).
         profile: the instrument profile the estimated noise was compared with ("").
         held_out: the held-out evidence that judged a fit with estimated noise
             (:meth:`HeldOutEvidence.to_dict`), or None.
@@ -146,6 +149,7 @@ class QualityVerdict:
     noise_source: str = ""
     chi2_blocks: tuple[tuple[str, float, float, float], ...] = ()
     probes: tuple[tuple[str, float, float, str], ...] = ()
+    floors: tuple[tuple[str, float, str], ...] = ()
     profile: str = ""
     held_out: dict[str, Any] | None = None
 
@@ -161,6 +165,27 @@ class QualityVerdict:
     @property
     def warnings(self) -> tuple[QualityIssue, ...]:
         return tuple(i for i in self.issues if not i.refuse)
+
+    def blind_spot(self) -> str:
+        """With estimated noise, the smooth errors the probes would not see ("" otherwise).
+
+        σ̂ absorbs a model error the probes miss, so the fit cannot be judged below
+        their floors; the sentence names the scale, drift and the largest gain and
+        trend floors, and what to do.
+        """
+        if self.noise_source != "estimated" or not self.floors:
+            return ""
+        by = {n: (f, t) for n, f, t in self.floors}
+        named = [by[n][1] for n in ("scale", "gains", "drift") if n in by]
+        trends = [(f, t) for n, (f, t) in by.items() if n.startswith("trend:")]
+        if trends:
+            named.append(max(trends)[1])
+        return (
+            f"with the noise estimated, {', '.join(named[:-1])}"
+            f"{' or ' if len(named) > 1 else ''}{named[-1]} would pass unseen (90 % "
+            f"detection): declare the instrument noise (--noise, # noise:) to judge the "
+            f"fit against it"
+        )
 
     def reason(self, override_hint: bool = True) -> str:
         """One line: why the calibration is refused, the likely cause, how to override."""
@@ -205,6 +230,11 @@ class QualityVerdict:
                 {"name": n, "explained": num(e), "p_value": num(p), "size": t}
                 for n, e, p, t in self.probes
             ],
+            "detection_floor": {
+                "power": 0.9,
+                "probes": [{"name": n, "floor": num(f), "text": t} for n, f, t in self.floors],
+                "blind_spot": self.blind_spot() or None,
+            },
             "instrument_profile": self.profile or None,
             "held_out": self.held_out,
             "limits": {

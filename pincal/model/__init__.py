@@ -15,6 +15,7 @@ from pincal.model._closures import (
     Closure,
     parse_components,
 )
+from pincal.model._deflection import deflected_joints, deflection_jacobian, loaded_terms
 from pincal.model._dh import (
     DHError,
     DHLayout,
@@ -141,6 +142,8 @@ __all__ = [
     "chain_preset",
     "check_term_data",
     "conditioning",
+    "deflected_joints",
+    "deflection_jacobian",
     "degenerate_translations",
     "describe_direction",
     "dh_apply_errors",
@@ -162,6 +165,7 @@ __all__ = [
     "joint_term_units",
     "load_mechanism",
     "load_mjcf",
+    "loaded_terms",
     "lock_joints",
     "mjcf_to_urdf",
     "model_record",

@@ -12,8 +12,9 @@ through, :meth:`JointTerm.columns`). Each kind of term is one
 identification and reports treat them like the geometric parameters.
 
 The basis ``B`` is evaluated at the commanded joint values on the nominal mechanism
-(e.g. the gravity torque of a compliance term): the standard first-order model of
-elastostatic and transmission calibration, and it makes ``δq`` exactly linear in θ.
+(e.g. an encoder gain's), which makes ``δq`` exactly linear in θ. A load-dependent term
+(``loaded``: a compliance) is evaluated by the identification on the current estimate's
+geometry at the deflected joint values instead (:mod:`pincal.model._deflection`).
 
 A term may also need per-pose conditions besides the joint values (``needs``, e.g.
 the temperature of :mod:`pincal.model._term_temperature`), and may move the measured
@@ -58,6 +59,10 @@ class JointTerm(ABC):
     prior: ClassVar[float]
     #: per-pose conditions the term needs (``Measurements`` fields, e.g. ``"temperature"``)
     needs: ClassVar[tuple[str, ...]] = ()
+    #: a load-dependent term (compliance): the identification evaluates its basis on the
+    #: current estimate's geometry at the deflected joint values
+    #: (:mod:`pincal.model._deflection`), not on the nominal one at the command
+    loaded: ClassVar[bool] = False
 
     @abstractmethod
     def unit(self, joint_type: str) -> str:

@@ -47,6 +47,7 @@ class Compliance(JointTerm):
 
     kind: ClassVar[str] = "compliance"
     dofs: ClassVar[tuple[str, ...]] = ("compliance",)
+    loaded: ClassVar[bool] = True
     prior: ClassVar[float] = 1e-5
 
     def unit(self, joint_type: str) -> str:

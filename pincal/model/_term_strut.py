@@ -58,6 +58,7 @@ class StrutCompliance(JointTerm):
 
     kind: ClassVar[str] = "strut-compliance"
     dofs: ClassVar[tuple[str, ...]] = ("strut_compliance",)
+    loaded: ClassVar[bool] = True
     prior: ClassVar[float] = 1e-7
     sits_on: ClassVar[str] = "fixed-length strut"
 

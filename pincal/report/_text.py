@@ -144,6 +144,9 @@ def quality_lines(
         lines.append("  misspecification probes: " + "; ".join(
             f"{p['size']} explains {p['explained']:.0%} (p = {p['p_value']:.2g})"
             for p in probes))  # fmt: skip
+    blind = (quality.get("detection_floor") or {}).get("blind_spot")
+    if blind:
+        lines.append(f"  what the gate cannot see: {blind}")
     lines += uncertainty_lines(quality.get("uncertainty") or {})
     if quality.get("outlier_poses"):
         lines.append(

@@ -40,9 +40,12 @@ def joint_term_sensitivities(
         bk: their batched kinematics, or None.
         values: (n,) parameter values [SI].
         params: a set whose ``joint_terms`` is not empty.
-        basis: (N, n_act, n) basis of δq (:func:`pincal.model.joint_term_basis`) at
-            the commanded joint values; None: evaluated on ``mech`` at the actuated
-            values of ``qs`` with ``conditions`` (the frame-moving terms included).
+        basis: (N, n_act, n) joint changes per parameter (:func:`pincal.model.joint_term_basis`
+            at the commanded joint values; with loaded terms
+            :func:`pincal.model.deflection_jacobian`, whose geometric columns — the
+            load's change with the geometry — add to the geometric sensitivities);
+            None: evaluated on ``mech`` at the actuated values of ``qs`` with
+            ``conditions`` (the frame-moving terms included).
         conditions: per-pose conditions the terms need (e.g. ``{"temperature": T}``).
 
     Returns:
@@ -63,6 +66,6 @@ def joint_term_sensitivities(
     geo = np.setdiff1d(np.arange(n), params.joint_terms)
     if geo.size:
         s_geo = geometric(mech, params.subset(geo), qs, bk, values[geo])
-        J[:, :, geo] = s_geo.jacobian
+        J[:, :, geo] += s_geo.jacobian  # basis columns of a geometric parameter: a load's change
         breaks[geo] = s_geo.breaks_closure
     return BatchSensitivity(s_off.q, s_off.positions, s_off.rotations, J, breaks)
