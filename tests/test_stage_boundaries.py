@@ -1,9 +1,10 @@
 """Stage boundaries of the package, checked on its source (AST, nothing imported).
 
-A stage is a subpackage of ``pincal/``. DESIGN.md section 1 (and the docstring of
-``pincal/__init__.py``) fixes their order, lowest first: model → {machines, sensitivity}
-→ measure → design → identification → {compensation, validation} → io → {workflow,
-export} → report / viz → cli. The rules checked here (issue 24), without exceptions:
+A stage is a subpackage of ``pincal/``. docs/design.md, section "Stages and the import
+rule" (and the docstring of ``pincal/__init__.py``) fixes their order, lowest first:
+model → {machines, sensitivity} → measure → design → identification → {compensation,
+validation} → io → {workflow, export} → report / viz → cli. The rules checked here
+(issue 24), without exceptions:
 
 * another stage is entered only through its ``__init__`` or its declared interface
   module ``kernels`` — never through a private ``_module``, never for a ``_name``;
@@ -23,7 +24,8 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "pincal"
 
-#: DESIGN.md section 1, lowest first; a stage may import only stages of lower rank.
+#: docs/design.md, "Stages and the import rule", lowest first; a stage may import only
+#: stages of lower rank.
 #: ``machines`` (machine-specific closed forms) sits on the model alone. The modules at
 #: the top of the package (``errors``, ``_files``, ``_yaml``) are below every stage.
 RANK = {
@@ -172,7 +174,8 @@ def test_stages_import_only_lower_stages():
     """A lower stage never imports a higher one: not at module level, not inside a
     function, not under ``TYPE_CHECKING``."""
     found = order_violations()
-    assert not found, "imports of a stage that is not lower (DESIGN.md section 1):\n" + "\n".join(
+    where = "docs/design.md, 'Stages and the import rule'"
+    assert not found, f"imports of a stage that is not lower ({where}):\n" + "\n".join(
         f"{rel}:{lines[0]}: {module}" for (rel, module), lines in sorted(found.items())
     )
 

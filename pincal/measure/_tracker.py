@@ -8,8 +8,8 @@ the measured points (Kabsch / Umeyama without scale). The base is measured once
 ("registration") so that platform poses can be expressed in the machine's base
 frame.
 
-Frames and conventions (see DESIGN.md): ``T_a_b`` is the pose of frame ``b`` in
-frame ``a``; it maps ``b`` coordinates to ``a`` coordinates,
+Frames and conventions (see docs/design.md, "Units, frames and names"): ``T_a_b`` is
+the pose of frame ``b`` in frame ``a``; it maps ``b`` coordinates to ``a`` coordinates,
 ``p_a = R_a_b @ p_b + t_a_b``. Pose errors are local twists
 ``xi = log6(T_true^-1 * T_estimated)`` (linear part first, pinocchio order), the
 same convention as the pose residuals of the identification.

@@ -34,7 +34,7 @@ def load_mechanism(
     a local sidecar for it (see :mod:`pincal.model._named`).
 
     A sidecar ``<name>.yaml`` beside the URDF declares closures, actuation, measured
-    frame and presets (see models/README.md). A bare serial URDF needs none: its 1-dof
+    frame and presets (see docs/sidecar.md). A bare serial URDF needs none: its 1-dof
     joints that move the measured frame are actuated and the measured frame is chosen
     by name (effector, ee, tcp, tool, flange, platform...) or as the deepest leaf link
     without a closure. An example-robot-data robot without a sidecar takes its home
