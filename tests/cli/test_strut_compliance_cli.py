@@ -62,6 +62,7 @@ def soft_struts(tmp_path_factory):
     return tmp, mech, params, truth
 
 
+@pytest.mark.slow  # the fixture's fit: the loads' derivative in 54 geometric parameters
 def test_struts_compliance_is_recovered(soft_struts):
     tmp, _, params, truth = soft_struts
     cal = read_calibration(tmp / "cal")
@@ -73,6 +74,7 @@ def test_struts_compliance_is_recovered(soft_struts):
     assert "strut_compliance" in (tmp / "cal" / "joint_terms.yaml").read_text()
 
 
+@pytest.mark.slow  # the fixture's fit: the loads' derivative in 54 geometric parameters
 def test_validate_applies_the_joint_terms(soft_struts):
     """At the noise level with the struts' compliance, visibly worse with the geometry only."""
     tmp = soft_struts[0]
@@ -106,6 +108,7 @@ def test_validate_applies_the_joint_terms(soft_struts):
     assert "geometric part only" not in text.output
 
 
+@pytest.mark.slow  # the fixture's fit: the loads' derivative in 54 geometric parameters
 def test_compensate_undoes_the_struts_yield(soft_struts, tmp_path):
     """Commands reach targets on the true machine, its struts' yield included."""
     tmp, mech, params, truth = soft_struts
