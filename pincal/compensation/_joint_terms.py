@@ -7,6 +7,12 @@ kinematics for the joint values ``q*`` that reach the target, then the command t
 produces them: ``u = q* − B(u) θ``, by fixed-point iteration from ``u = q*`` (the
 terms are small and smooth, so it contracts fast; it stops at 1e-12 rad or m).
 
+A compliance (a load-dependent term) deflects the calibrated machine under its own loads
+at the configuration it deflects to, as the identification models it
+(:func:`pincal.model.deflected_joints`): forward, the fixed point ``q = u' + L(q) θ_L``
+(``u'`` the command moved by the other terms); inverse, the load is known at the joints
+to reach, ``u' = q* − L(q*) θ_L``.
+
 A term that moves the measured frame instead of the joints (a link's thermal expansion,
 ``δp = S(u) θ`` at the target temperature) is undone in the inverse kinematics: the
 joints are solved for the target moved by ``−δp`` at the command, again by fixed-point
@@ -27,8 +33,10 @@ from pincal.model import (
     THERMAL_REFERENCE_C,
     Mechanism,
     ParameterSet,
+    deflected_joints,
     joint_term_basis,
     joint_term_shift,
+    loaded_terms,
     parameters,
 )
 
@@ -49,12 +57,17 @@ class JointTermCorrection:
         values: (n,) their identified values [their SI units].
         temperature: the machine temperature at the targets [°C]; None: the thermal
             terms' reference (20 °C, no expansion).
+        loaded_on: the calibrated machine whose geometry bears the loads of the
+            compliances (None: ``nominal``); a compliance deflects it under its own
+            loads at the configuration it deflects to (:func:`pincal.model.deflected_joints`),
+            as the identification models it.
     """
 
     nominal: Mechanism
     params: ParameterSet
     values: np.ndarray
     temperature: float | None = None
+    loaded_on: Mechanism | None = None
 
     @classmethod
     def of(
@@ -69,7 +82,12 @@ class JointTermCorrection:
         if values.shape != (len(params),):
             raise ParameterError(f"values must have shape ({len(params)},), got {values.shape}")
         k = params.joint_terms
-        return cls(nominal, params.subset(k), values[k].copy())
+        sub = params.subset(k)
+        loaded = loaded_terms(sub)
+        geometry = None
+        if loaded.size and np.any(values[k][loaded]):
+            geometry = params.apply(nominal, params.linearise(values))
+        return cls(nominal, sub, values[k].copy(), loaded_on=geometry)
 
     @classmethod
     def from_names(
@@ -112,7 +130,14 @@ class JointTermCorrection:
         if not self:
             return np.zeros_like(u)
         at = conditions if conditions is not None else self._conditions(len(u))
-        return joint_term_basis(self.nominal, self.params, u, at) @ self.values
+        basis = joint_term_basis(self.nominal, self.params, u, at)
+        loaded = loaded_terms(self.params)
+        if self.loaded_on is None or not loaded.size:
+            return basis @ self.values
+        basis[:, :, loaded] = 0.0  # the compliances: on the calibrated machine, deflected
+        q = deflected_joints(self.loaded_on, self.params, self.values, u + basis @ self.values,
+                             at)  # fmt: skip
+        return q - u
 
     def shift(
         self, commands: np.ndarray, conditions: Mapping[str, np.ndarray | None] | None = None
@@ -167,9 +192,21 @@ class JointTermCorrection:
             ConvergenceError: the iteration does not settle (terms too large to invert).
         """
         q = np.atleast_2d(np.asarray(joints, dtype=float))
+        terms: JointTermCorrection = self
+        loaded = loaded_terms(self.params)
+        if self.loaded_on is not None and loaded.size:
+            # the compliances' deflection at the joints reached, on the calibrated machine
+            sub, theta = self.params.subset(loaded), self.values[loaded]
+            q = q - joint_term_basis(self.loaded_on, sub, q, self._conditions(len(q))) @ theta
+            keep = np.setdiff1d(np.arange(len(self.params)), loaded)
+            if not keep.size:  # compliances only: the command is found
+                return q
+            terms = replace(self, params=self.params.subset(keep), values=self.values[keep],
+                            loaded_on=None)  # fmt: skip
         u = q.copy()
+        step = 0.0
         for _ in range(_MAX_ITER):
-            new = q - self.deflection(u)
+            new = q - terms.deflection(u)
             step = float(np.max(np.abs(new - u), initial=0.0))
             u = new
             if step < _TOL:

@@ -15,7 +15,12 @@ from pincal.model._closures import (
     Closure,
     parse_components,
 )
-from pincal.model._deflection import deflected_joints, deflection_jacobian, loaded_terms
+from pincal.model._deflection import (
+    actual_joint_values,
+    deflected_joints,
+    deflection_jacobian,
+    loaded_terms,
+)
 from pincal.model._dh import (
     DHError,
     DHLayout,
@@ -35,7 +40,6 @@ from pincal.model._directions import describe_direction, direction_record, paren
 from pincal.model._floor import DEFAULT_FLOOR, above_floor
 from pincal.model._home_search import conditioning, regular_home
 from pincal.model._joint_term_set import (
-    actual_joint_values,
     actual_shift,
     check_term_data,
     joint_term_bases,

@@ -34,7 +34,13 @@ from pincal.model._joint_terms import term_of_dof
 from pincal.model._mechanism import Mechanism
 from pincal.model._parameters import ParameterSet
 
-__all__ = ["STEP", "deflected_joints", "deflection_jacobian", "loaded_terms"]
+__all__ = [
+    "STEP",
+    "actual_joint_values",
+    "deflected_joints",
+    "deflection_jacobian",
+    "loaded_terms",
+]
 
 #: central-difference step of the statics' derivatives [m, rad]
 STEP = 1e-6
@@ -154,3 +160,32 @@ def deflection_jacobian(
         out[:, :, k] = (hi - _loaded_change(at(values - dv), sub, theta, q, cond)) / (2 * STEP)
     M = np.eye(n_act)[None] - Tq
     return np.linalg.solve(M, out)
+
+
+def actual_joint_values(
+    mech: Mechanism,
+    params: ParameterSet,
+    values: np.ndarray,
+    q_act: np.ndarray,
+    conditions: Mapping[str, np.ndarray | None] | None = None,
+) -> np.ndarray:
+    """The joint values the machine actually takes (m, n_act) [rad, m].
+
+    ``values`` (n,) of ``params`` on the nominal ``mech``: the terms that are not loaded
+    (gain, harmonics, temperature) move the commands ``q_act``; the loaded ones
+    (compliances) deflect the machine of ``values``' geometry under its own loads, at the
+    configuration it deflects to (:func:`deflected_joints`), as the fit models it. Used
+    to simulate a machine with joint errors: measure ``params.apply(mech, values)`` at
+    these values and record the commands (and add ``actual_shift`` to the positions).
+    """
+    q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
+    if not params.joint_terms.size:
+        return q_act.copy()
+    values = params.check_values(values)
+    basis = joint_term_basis(mech, params, q_act, conditions)
+    loaded = loaded_terms(params)
+    if not loaded.size or not np.any(values[loaded]):
+        return q_act + basis @ values
+    basis[:, :, loaded] = 0.0
+    actual = params.apply(mech, params.linearise(values))
+    return deflected_joints(actual, params, values, q_act + basis @ values, conditions)

@@ -18,7 +18,6 @@ from pincal.model._term_transmission import Gain, Harmonics
 
 __all__ = [
     "Conditions",
-    "actual_joint_values",
     "actual_shift",
     "check_term_data",
     "joint_term_bases",
@@ -200,26 +199,6 @@ def joint_term_prior(params: ParameterSet) -> np.ndarray:
         assert term is not None
         out[k] = term.prior
     return out
-
-
-def actual_joint_values(
-    mech: Mechanism,
-    params: ParameterSet,
-    values: np.ndarray,
-    q_act: np.ndarray,
-    conditions: Conditions | None = None,
-) -> np.ndarray:
-    """The joint values the machine actually takes: ``q + δq`` (m, n_act) [rad, m].
-
-    ``values`` (n,) of ``params``; only its joint terms act (the geometric ones are
-    applied to the mechanism by :meth:`ParameterSet.apply`). Used to simulate a
-    machine with joint errors: measure ``params.apply(mech, values)`` at these values
-    and record the commanded ``q_act`` (and add :func:`actual_shift` to the positions).
-    """
-    q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
-    if not params.joint_terms.size:
-        return q_act.copy()
-    return q_act + joint_term_basis(mech, params, q_act, conditions) @ params.check_values(values)
 
 
 def actual_shift(
