@@ -43,9 +43,8 @@ from pincal.measure import DEFAULT_NOISE
     "spec",
     default="grid:4",
     show_default=True,
-    help="grid:LEVELS (joint grid), random:COUNT (random poses off the workspace edge, "
-    "the rejected draws counted) or oa:LEVELS (orthogonal array); more than 200000 "
-    "candidate poses or ~2 GB need --yes.",
+    help="grid:LEVELS (joint grid), random:COUNT or oa:LEVELS (orthogonal array); "
+    "more than 200000 candidate poses or ~2 GB need --yes.",
 )
 @click.option("--preset", default=None, help="Parameter preset (default: first, else full).")
 @click.option(

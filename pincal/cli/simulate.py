@@ -68,9 +68,7 @@ def _parse_pair(spec: str, option: str) -> tuple[float, float]:
     "n_random",
     type=click.IntRange(min=1),
     default=None,
-    help="Number of random workspace poses instead of --poses (off the workspace edge: "
-    "5 % of each range free at either end, reached from home along the command path, "
-    "closure conditioned at most 5x worse than home's; the rejected draws are counted).",
+    help="Number of random workspace poses instead of --poses.",
 )
 @click.option("--params", "preset", default=None, help="Parameter preset (default: first preset).")
 @click.option(
@@ -165,7 +163,7 @@ def simulate(
         NoiseModel,
         simulate_measurements,
     )
-    from pincal.model import draw_actuators
+    from pincal.model import sample_actuators
     from pincal.sensitivity import parameters
 
     if (poses_file is None) == (n_random is None):
@@ -203,8 +201,7 @@ def simulate(
         q_act = read_pose_rows(poses_file, nominal)
     else:
         click.echo(f"… sampling {n_random} random poses", err=True)
-        q_act, drawn = draw_actuators(nominal, n_random, rng)
-        click.echo(f"… {drawn.describe()}", err=True)
+        q_act = sample_actuators(nominal, n_random, rng)
     skipped: list[int] = []
     if instrument != SOCKET:
         q_act, skipped = _reachable(actual, q_act)

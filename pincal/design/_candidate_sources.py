@@ -8,7 +8,6 @@ Each pushes actuator rows through :func:`pincal.design._candidates.evaluate_cand
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import math
 
@@ -27,7 +26,7 @@ from pincal.design._candidates import (
     evaluate_candidates,
 )
 from pincal.errors import ConvergenceError, OptionValueError, PincalError, clip
-from pincal.model import WORKSPACE_POSE_KEYS, Mechanism, ParameterSet, draw_actuators
+from pincal.model import WORKSPACE_POSE_KEYS, Mechanism, ParameterSet, sample_actuators
 from pincal.model.kernels import joint_ranges
 
 __all__ = [
@@ -147,11 +146,7 @@ def random_candidates(
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
     n_jobs: int = 1,
 ) -> CandidateSet:
-    """``count`` random feasible workspace poses (:func:`pincal.model.draw_actuators`).
-
-    Drawn off the workspace edge (5 % of each range free at either end, reached from
-    home along the command path, a well-conditioned closure); the draws rejected on
-    the way are counted in ``tried`` and ``rejected``.
+    """``count`` random feasible workspace poses (:func:`pincal.sample_actuators`).
 
     ``n_jobs``: processes evaluating the rows (see :func:`evaluate_candidates`).
 
@@ -163,8 +158,8 @@ def random_candidates(
         raise OptionValueError(f"count must be an integer >= 1; got {count!r}")
     _cost(mech, params, "random", int(count)).check(f"random:{count}", max_candidates, max_bytes)
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    rows, drawn = draw_actuators(mech, int(count), gen)
-    cands = evaluate_candidates(
+    rows = sample_actuators(mech, int(count), gen)
+    return evaluate_candidates(
         mech,
         params,
         rows,
@@ -173,11 +168,6 @@ def random_candidates(
         progress=progress,
         n_jobs=n_jobs,
     )
-    # the draws sampling rejected (infeasible, unreached, at the workspace edge) count too
-    rejected = dict(cands.rejected)
-    for reason, n in drawn.as_dict().items():
-        rejected[reason] = rejected.get(reason, 0) + n
-    return dataclasses.replace(cands, tried=cands.tried + drawn.total, rejected=rejected)
 
 
 def orthogonal_candidates(

@@ -71,7 +71,6 @@ from pincal.model._parameters import (
     full_parameters,
 )
 from pincal.model._payload import Payload, with_payload
-from pincal.model._pose_screen import MIN_SIGMA_RATIO, SAMPLE_MARGIN, Rejections
 from pincal.model._presets import parameters
 from pincal.model._readings import JointReadings
 from pincal.model._robots import example_robot_names, example_robot_urdf
@@ -102,7 +101,6 @@ from pincal.model._urdf import (
     se3_from_xyz_rpy,
 )
 from pincal.model._workspace import (
-    draw_actuators,
     sample_actuators,
     sample_pose,
 )
@@ -114,9 +112,7 @@ __all__ = [
     "DOFS",
     "INSTRUMENT_LINK",
     "JOINT_KINDS",
-    "MIN_SIGMA_RATIO",
     "MOVABLE_TYPES",
-    "SAMPLE_MARGIN",
     "THERMAL_REFERENCE_C",
     "TOOL_JOINT",
     "TOOL_LINK",
@@ -137,7 +133,6 @@ __all__ = [
     "Parameter",
     "ParameterSet",
     "Payload",
-    "Rejections",
     "Sidecar",
     "SolverOptions",
     "UrdfJoint",
@@ -162,7 +157,6 @@ __all__ = [
     "dh_preset",
     "dh_urdf",
     "direction_record",
-    "draw_actuators",
     "example_robot_names",
     "example_robot_urdf",
     "find_local_sidecar",

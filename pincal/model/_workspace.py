@@ -4,10 +4,6 @@ A pose drawn in a ``pose`` workspace is kept only when the forward kinematics of
 inverse-kinematics solution (on home's assembly branch, what every later step uses)
 returns it: a pose reached only on another assembly mode (a mirrored platform, the
 other elbow of a five-bar) would otherwise give data for a different pose.
-
-Random draws keep off the edge of the workspace (:mod:`pincal.model._pose_screen`): a
-margin of every range, reached from home along the command path, a closure conditioned
-no worse than a stated fraction of home's.
 """
 
 from __future__ import annotations
@@ -19,10 +15,9 @@ from pincal.errors import ConvergenceError, ModelFileError, UnreachablePoseError
 from pincal.model._closures import COMPONENTS
 from pincal.model._floor import above_floor, moving_points
 from pincal.model._mechanism import Mechanism
-from pincal.model._pose_screen import Rejections, screen, shrunk
 from pincal.model._range_explore import explored_ranges
 
-__all__ = ["draw_actuators", "sample_actuators", "sample_pose"]
+__all__ = ["sample_actuators", "sample_pose"]
 
 
 #: a pose whose forward kinematics misses the drawn target by more [m, rad] is refused
@@ -69,13 +64,9 @@ def _off_branch(mech: Mechanism, q_act: np.ndarray, target: pin.SE3) -> bool:
 
 
 def sample_pose(mech: Mechanism, rng: np.random.Generator) -> pin.SE3:
-    """A random measured-frame pose within ``mech.workspace.pose`` (home for missing keys).
-
-    Each factor [m, rad] is drawn with :data:`~pincal.model._pose_screen.SAMPLE_MARGIN`
-    of its range kept free at either end.
-    """
+    """A random measured-frame pose within ``mech.workspace.pose`` (home for missing keys)."""
     home = mech.frame_placement(mech.q_home)
-    lim = {k: tuple(shrunk(np.array([b], dtype=float))[0]) for k, b in mech.workspace.pose.items()}
+    lim = mech.workspace.pose
     p = home.translation.copy()
     for i, key in enumerate("xyz"):
         if key in lim:
@@ -87,55 +78,38 @@ def sample_pose(mech: Mechanism, rng: np.random.Generator) -> pin.SE3:
 def sample_actuators(
     mech: Mechanism, n: int, rng: np.random.Generator, max_tries_per_pose: int = 50
 ) -> np.ndarray:
-    """``n`` random feasible actuator rows (n, n_act) [m, rad], off the workspace edge.
-
-    The rows of :func:`draw_actuators` (see there), without the rejection counts.
-    """
-    return draw_actuators(mech, n, rng, max_tries_per_pose)[0]
-
-
-def draw_actuators(
-    mech: Mechanism, n: int, rng: np.random.Generator, max_tries_per_pose: int = 50
-) -> tuple[np.ndarray, Rejections]:
-    """``n`` random feasible actuator rows (n, n_act) [m, rad] and the draws rejected.
+    """``n`` random feasible actuator rows (n, n_act).
 
     With a pose workspace, poses are drawn uniformly in it and solved by inverse
     kinematics; otherwise actuator values are drawn in their ranges and kept when the
     forward kinematics converges away from singularities (in blocks closed by the
-    batched solve where the mechanism allows it, else one by one). Both keep
-    :data:`~pincal.model._pose_screen.SAMPLE_MARGIN` (5 %) of each range free at
-    either end. Infeasible draws are rejected, and so are poses reached only in
-    another assembly mode than home's and, for an open chain with a
-    ``workspace.floor``, poses with a moving link frame below the floor
-    (:mod:`pincal.model._floor`). Of a mechanism with loops, a draw is kept only when
-    reached from home along the command path with a well-conditioned closure
-    (:func:`~pincal.model._pose_screen.screen`): not at the edge of the workspace.
+    batched solve where the mechanism allows it, else one by one). Infeasible draws
+    are rejected, and so are poses reached only in another assembly mode than home's
+    and, for an open chain with a ``workspace.floor``, poses with a moving link frame
+    below the floor (:mod:`pincal.model._floor`).
 
     Raises:
         ModelFileError: fewer than ``n`` feasible poses in ``max_tries_per_pose · n``
             draws (the message says when the workspace lies on another assembly mode),
             or an actuator range that is not finite or inverted.
     """
-    ranges = shrunk(_joint_ranges(mech))
+    ranges = _joint_ranges(mech)
     use_pose = bool(mech.workspace.pose)
-    rejected = Rejections()
     if not use_pose and mech.batch_solvable:
-        rows_b = _screened_draws(mech, n, rng, ranges, max_tries_per_pose * n, rejected)
-        return rows_b, rejected
+        return _screened_draws(mech, n, rng, ranges, max_tries_per_pose * n)
     rows: list[np.ndarray] = []
     tries = mirrored = 0
     points = moving_points(mech) if mech.workspace.floor is not None else None
     while len(rows) < n:
         tries += 1
         if tries > max_tries_per_pose * n:
-            raise ModelFileError(_infeasible(mech, len(rows), n, mirrored, tries - 1, rejected))
+            raise ModelFileError(_infeasible(mech, len(rows), n, mirrored, tries - 1))
         try:
             if use_pose:
                 target = sample_pose(mech, rng)
                 q_act = mech.inverse(target)
                 if _off_branch(mech, q_act, target):
                     mirrored += 1
-                    rejected.infeasible += 1
                     continue
             else:
                 q_act = rng.uniform(ranges[:, 0], ranges[:, 1])
@@ -143,29 +117,17 @@ def draw_actuators(
         except UnreachablePoseError as exc:
             # residual 0: IK converged, but only in another assembly mode than home's
             mirrored += exc.residual == 0.0
-            rejected.infeasible += 1
             continue
         except ConvergenceError:
-            rejected.infeasible += 1
             continue
         if points is not None and not above_floor(mech, q_act, points)[0]:
-            rejected.infeasible += 1
             continue  # a link through the floor (workspace.floor)
-        kept, unreached, edge = screen(mech, q_act[None])
-        rejected.unreached += unreached
-        rejected.near_edge += edge
-        if kept[0]:
-            rows.append(q_act)
-    return np.array(rows), rejected
+        rows.append(q_act)
+    return np.array(rows)
 
 
 def _screened_draws(
-    mech: Mechanism,
-    n: int,
-    rng: np.random.Generator,
-    ranges: np.ndarray,
-    max_draws: int,
-    rejected: Rejections,
+    mech: Mechanism, n: int, rng: np.random.Generator, ranges: np.ndarray, max_draws: int
 ) -> np.ndarray:
     """``n`` feasible actuator rows drawn in their ranges, screened in blocks.
 
@@ -173,34 +135,27 @@ def _screened_draws(
     kinematics on home's branch away from singularities, as one by one). Infeasible
     draws (actuator values no assembly reaches) then mostly cost one batched solve
     together, instead of a pose-by-pose continuation each that fails only after
-    halving its step 12 times. The closable rows are then screened off the workspace
-    edge (:func:`~pincal.model._pose_screen.screen`); ``rejected`` counts the rest.
+    halving its step 12 times.
     """
     rows: list[np.ndarray] = []
     draws = 0
     while len(rows) < n:
         if draws >= max_draws:
-            raise ModelFileError(_infeasible(mech, len(rows), n, 0, draws, rejected))
+            raise ModelFileError(_infeasible(mech, len(rows), n, 0, draws))
         rate = (len(rows) + 1) / (draws + 1)  # share of feasible draws so far
         size = min(max_draws - draws, 4096, max(32, int(1.5 * (n - len(rows)) / rate)))
         block = rng.uniform(ranges[:, 0], ranges[:, 1], size=(size, len(ranges)))
         draws += size
         ok = mech.closable_batch(block)
-        rejected.infeasible += int((~ok).sum())
-        kept, unreached, edge = screen(mech, block[ok])
-        rejected.unreached += unreached
-        rejected.near_edge += edge
-        rows.extend(block[ok][kept][: n - len(rows)])
+        rows.extend(block[ok][: n - len(rows)])
     return np.array(rows)
 
 
-def _infeasible(
-    mech: Mechanism, got: int, n: int, mirrored: int, tries: int, rejected: Rejections
-) -> str:
+def _infeasible(mech: Mechanism, got: int, n: int, mirrored: int, tries: int) -> str:
     floor = mech.workspace.floor
     text = (
-        f"only {got} of {n} random poses were feasible for {mech.name!r} ({tries} draws; "
-        f"{rejected.describe()}); check the sidecar workspace limits"
+        f"only {got} of {n} random poses were feasible for {mech.name!r} ({tries} draws); "
+        "check the sidecar workspace limits"
     )
     if floor is not None:
         text += f" and its floor ({floor:.3g} m above the base plane; 'floor: false' drops it)"
