@@ -155,7 +155,10 @@ def calibrate(
     fit are implausible (unit mistake, outliers, failed solve, a χ² beyond the declared
     noise at p < 1e-3, a parameter moving > 20 mm / 0.1 rad, a misspecification probe —
     scale, actuator gains, drift — explaining the residual, an estimated noise beyond
-    the --instrument profile); --force writes it anyway.
+    the --instrument profile); --force writes it anyway. A marker table (--link) is
+    judged by 5-fold held-out prediction against the registration alone instead (the
+    probes are then diagnostics), with a prior and loss the data choose (--prior auto,
+    --loss auto).
 
     \b
     Examples:
