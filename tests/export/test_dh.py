@@ -70,21 +70,11 @@ def test_dh_forward_kinematics_matches_the_calibrated_ur5(ur5, fmt):
     assert lengths == pytest.approx(sorted(expected), abs=1e-9)
 
 
-def test_a_tilt_of_parallel_axes_is_named_and_its_residual_reported(tmp_path):
+def test_a_tilt_of_parallel_axes_is_named_and_its_residual_reported(tmp_path, ur5_calibration):
     """A full calibration tilts the parallel 2-3-4 axes: DH (parallel convention) cannot
     hold it; the reported residual is what the table's own kinematics gives."""
     runner = CliRunner()
-    meas, cal = tmp_path / "m.csv", tmp_path / "cal"
-    assert (
-        runner.invoke(
-            main, ["simulate", "ur5", "--random", "30", "--noise", "0,0", "--out", str(meas)]
-        ).exit_code
-        == 0
-    )
-    assert (
-        runner.invoke(main, ["calibrate", "ur5", "--data", str(meas), "--out", str(cal)]).exit_code
-        == 0
-    )
+    cal = ur5_calibration
     out = tmp_path / "ur5_dh.yaml"
     res = runner.invoke(
         main,

@@ -113,19 +113,9 @@ def test_actuator_scale_is_named_and_its_residual_reported_honestly(tmp_path):
     assert proj.joint_rms == pytest.approx(np.sqrt(np.mean(err**2)), rel=1e-6, abs=1e-12)
 
 
-def test_genhexkins_refuses_a_serial_arm(tmp_path):
+def test_genhexkins_refuses_a_serial_arm(tmp_path, ur5_calibration):
     runner = CliRunner()
-    meas, cal = tmp_path / "m.csv", tmp_path / "cal"
-    assert (
-        runner.invoke(
-            main, ["simulate", "ur5", "--random", "30", "--noise", "0,0", "--out", str(meas)]
-        ).exit_code
-        == 0
-    )
-    assert (
-        runner.invoke(main, ["calibrate", "ur5", "--data", str(meas), "--out", str(cal)]).exit_code
-        == 0
-    )
+    cal = ur5_calibration
     out = tmp_path / "x.hal"
     res = runner.invoke(
         main, ["export", str(cal), "--format", "linuxcnc-genhexkins", "--out", str(out)]

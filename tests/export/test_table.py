@@ -29,19 +29,9 @@ def _check(machine: CalibratedMachine, done) -> None:
     assert done.projection.position_max <= 1e-6
 
 
-def test_table_of_a_ur5_calibration(tmp_path):
+def test_table_of_a_ur5_calibration(tmp_path, ur5_calibration):
     runner = CliRunner()
-    meas, cal = tmp_path / "m.csv", tmp_path / "cal"
-    assert (
-        runner.invoke(
-            main, ["simulate", "ur5", "--random", "30", "--noise", "0,0", "--out", str(meas)]
-        ).exit_code
-        == 0
-    )
-    assert (
-        runner.invoke(main, ["calibrate", "ur5", "--data", str(meas), "--out", str(cal)]).exit_code
-        == 0
-    )
+    cal = ur5_calibration
     out = tmp_path / "ur5.yaml"
     res = runner.invoke(
         main,
