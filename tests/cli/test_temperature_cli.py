@@ -55,13 +55,21 @@ def test_simulate_writes_the_temperature_column(warm_arm):
     assert np.ptp(meas.temperature) > 5.0
 
 
-def test_thermal_calibration_compensates_at_the_target_temperature(warm_arm):
+@pytest.fixture(scope="module")
+def thermal_cal(warm_arm):
+    """``calibrate --model geometric+temperature`` of the warm arm's measurements."""
+    tmp = warm_arm[0]
+    cal = tmp / "cal"
+    res = CliRunner().invoke(main, ["calibrate", "ur5", "--data", str(tmp / "m.csv"), "--model",
+                                    "geometric+temperature", "--out", str(cal)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    return cal
+
+
+def test_thermal_calibration_compensates_at_the_target_temperature(warm_arm, thermal_cal):
     tmp, mech, poses = warm_arm
     runner = CliRunner()
-    cal = tmp / "cal"
-    res = runner.invoke(main, ["calibrate", "ur5", "--data", str(tmp / "m.csv"), "--model",
-                               "geometric+temperature", "--out", str(cal)])  # fmt: skip
-    assert res.exit_code == 0, res.output
+    cal = thermal_cal
     record = yaml.safe_load((cal / "joint_terms.yaml").read_text())
     thermal = [t for t in record["terms"] if t["unit"] == "1/K"]
     assert len(thermal) == 5  # wrist_2's expansion is along shoulder_lift's: absorbed
@@ -115,7 +123,7 @@ def test_info_analyses_the_term_at_spread_temperatures_and_says_so():
     assert any("only when the temperature varies" in n and "18–28 °C" in n for n in doc["notes"])
 
 
-def test_thermal_calibration_validates_at_the_held_out_temperatures(warm_arm):
+def test_thermal_calibration_validates_at_the_held_out_temperatures(warm_arm, thermal_cal):
     """Held out at 24–30 °C (the fit saw 18–28 °C): predicted within the noise.
 
     The same seeded machine measured again (``simulate``'s default seed); the calibrated
@@ -125,10 +133,7 @@ def test_thermal_calibration_validates_at_the_held_out_temperatures(warm_arm):
     """
     tmp, _, _ = warm_arm
     runner = CliRunner()
-    cal = tmp / "cal-validate"
-    res = runner.invoke(main, ["calibrate", "ur5", "--data", str(tmp / "m.csv"), "--model",
-                               "geometric+temperature", "--out", str(cal)])  # fmt: skip
-    assert res.exit_code == 0, res.output
+    cal = thermal_cal
     res = runner.invoke(main, ["simulate", "ur5", "--random", "30", "--temperature", "24,30",
                                "--thermal", "2e-5", "--error-size", "0.2,1", "--noise",
                                "0.005,0.005", "--out", str(tmp / "hot.csv")])  # fmt: skip
