@@ -55,18 +55,18 @@ def _other_machine(cal: str, params, values) -> list[str]:
 
     import numpy as np
 
-    from pincal.io import MANIFEST
+    from pincal.errors import CalibrationDirectoryError
+    from pincal.io import MANIFEST, read_calibration
 
-    manifest = Path(cal) / MANIFEST
-    if not manifest.is_file():
+    if not (Path(cal) / MANIFEST).is_file():
         return []
-    try:
-        files = _json.loads(manifest.read_text(encoding="utf-8")).get("data_files") or []
-    except (OSError, ValueError):
-        return []
+    directory = read_calibration(cal)
     out = []
-    for entry in files:
-        truth_path = Path(str(entry.get("path", ""))).with_suffix(".truth.json")
+    for k in range(len(directory.manifest.get("data_files") or [])):
+        try:  # found by its hash, wherever calibrate ran
+            truth_path = directory.data_file(k).with_suffix(".truth.json")
+        except CalibrationDirectoryError:
+            continue
         if not truth_path.is_file():
             continue
         try:
