@@ -179,7 +179,8 @@ def calibrate_markers(
         lambda m: fit_markers(mech, setup, m, registration_only=True).calibrated, meas, k, seed
     )
     asked = parse_prior(settings.prior)
-    if not any(not is_registration(n) for n in parameters(mech, settings.preset).names):
+    machine = any(not is_registration(n) for n in parameters(mech, settings.preset).names)
+    if not machine:
         asked = None  # only the registration is fitted: no prior, no baseline to beat
 
     def settle(loss: str) -> tuple[PriorChoice, MarkerFit, QualityVerdict]:
@@ -202,7 +203,7 @@ def calibrate_markers(
                      "beyond)")  # fmt: skip
         loss = ROBUST_LOSS
         choice, fit, verdict = settle(loss)
-    if asked is not None or any(not is_registration(n) for n in fit.result.identified_names):
+    if machine:
         cv = choice.cv
         if choice.chosen:  # the choice is part of the procedure: nested CV
             say("cross-validating the calibration, the prior chosen again in each fold")
