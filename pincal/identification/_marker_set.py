@@ -22,8 +22,10 @@ import numpy as np
 
 from pincal.errors import MeasurementError
 from pincal.identification._identification_problem import IdentificationProblem
+from pincal.identification._instrument_problem import Dataset as Dataset  # the inherited
 from pincal.identification._problem import CalibrationProblem
 from pincal.measure import Measurements
+from pincal.measure import NoiseModel as NoiseModel  # __init__'s annotations resolve here
 from pincal.model import Mechanism, ParameterSet
 
 __all__ = ["MarkerSetProblem", "StackedProblem", "stacked_measurements"]
