@@ -99,6 +99,7 @@ class Design:
     seed: int = 0
 
     def check(self, key: str) -> None:
+        """Raise CampaignError naming ``key.field`` for the first invalid entry of this section."""
         choice(self.index, INDICES, f"{key}.index")
         choice(self.method, DESIGN_METHODS, f"{key}.method")
         if self.count < 1:
@@ -124,6 +125,7 @@ class MeasurementSource:
     seed: int = 1
 
     def check(self, key: str) -> None:
+        """Raise CampaignError naming ``key.field`` for the first invalid entry of this section."""
         choice(self.source, SOURCES, f"{key}.source")
         if (self.source == "file") != (self.file is not None):
             raise CampaignError(f"{key}.file is required with source: file, and only then")
@@ -145,6 +147,7 @@ class Identification:
     bootstrap: int = 0
 
     def check(self, key: str) -> None:
+        """Raise CampaignError naming ``key.field`` for the first invalid entry of this section."""
         from pincal.identification import INSTRUMENT_PROFILES, METHODS
         from pincal.model import split_model
 
@@ -189,6 +192,7 @@ class Markers:
     orientation: str | None = None
 
     def check(self, key: str) -> None:
+        """Raise CampaignError naming ``key.field`` for the first invalid entry of this section."""
         from pincal.measure import ORIENTATIONS
 
         choice(self.length_unit, ("m", "mm", "um"), f"{key}.length_unit")
@@ -235,6 +239,7 @@ class Validation:
     cv_seed: int = 0
 
     def check(self, key: str) -> None:
+        """Raise CampaignError naming ``key.field`` for the first invalid entry of this section."""
         if self.cv is not None and self.cv < 2:
             raise CampaignError(f"{key}.cv must be ≥ 2 folds, got {self.cv}")
         choice(self.source, VALIDATION_SOURCES, f"{key}.source")
@@ -260,6 +265,7 @@ class Campaign:
     report: bool = True
 
     def check(self, key: str = "") -> None:
+        """Check every section, then what the sections must agree on (CampaignError)."""
         for f in dataclasses.fields(self):
             sub: Any = getattr(self, f.name)
             if hasattr(sub, "check"):

@@ -46,6 +46,7 @@ class Sockets:
     joint_reference: str | None = None
 
     def check(self, key: str) -> None:
+        """Raise CampaignError naming ``key.field`` for the first invalid entry of this section."""
         if self.length_unit not in ("m", "mm", "um"):
             raise CampaignError(
                 f"{key}.length_unit: {shown(self.length_unit)} is not valid; use m, mm or um"

@@ -33,6 +33,7 @@ class InstrumentChoice(click.Choice):
 
     @property  # type: ignore[override]
     def choices(self) -> Sequence[str]:
+        """The registered instrument kinds (and ``socket`` where sockets are accepted)."""
         from pincal.measure import instrument_kinds
 
         return (*instrument_kinds(), *([SOCKET] if self._socket else []))

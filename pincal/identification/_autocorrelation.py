@@ -45,6 +45,7 @@ class SerialCorrelation:
     p_value: float
 
     def describe(self) -> str:
+        """One sentence for the report: the lag-1 autocorrelation, its test, and what to do."""
         return (
             f"residuals correlated along the pose order: lag-1 autocorrelation "
             f"{self.rho:.2f} (Durbin–Watson {self.durbin_watson:.2f}, p = {self.p_value:.2g}), "

@@ -115,10 +115,12 @@ class CrossValidation:
 
     @property
     def rms(self) -> float:
+        """RMS of the held-out pose errors [m]."""
         return float(np.sqrt(np.mean(self.held_out**2)))
 
     @property
     def max(self) -> float:
+        """Largest held-out pose error [m]."""
         return float(self.held_out.max())
 
     def to_dict(self) -> dict:

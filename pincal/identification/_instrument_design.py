@@ -120,6 +120,7 @@ class InstrumentIdentifiability:
 
     @property
     def rank(self) -> int:
+        """Rank of the joint Jacobian (machine and instrument unknowns together)."""
         return self.identifiability.rank
 
     def lines(self) -> list[str]:

@@ -128,6 +128,7 @@ class InstrumentProblem:
 
     @property
     def n_equations(self) -> int:
+        """Number of scalar equations over all data blocks."""
         return int(sum(s.size for s in self.sigma))
 
     @property

@@ -67,9 +67,11 @@ class Prior:
     angle: float
 
     def scaled(self, s: float) -> Prior:
+        """The prior with both σ multiplied by ``s``."""
         return Prior(self.length * s, self.angle * s)
 
     def describe(self) -> str:
+        """The σ in words, e.g. ``σ 10 mm / 10 mrad``."""
         return f"σ {self.length * 1e3:.3g} mm / {self.angle * 1e3:.3g} mrad"
 
 
@@ -94,6 +96,7 @@ class MarkerFit:
 
     @property
     def calibrated(self) -> Mechanism:
+        """The calibrated mechanism (instrument frame and marker included)."""
         return self.result.calibrated_mechanism
 
 

@@ -62,6 +62,7 @@ class StackedProblem(CalibrationProblem):
 
     @property
     def sigma(self) -> np.ndarray:  # type: ignore[override]
+        """(Σ m_k, k) σ of every marker's rows, stacked (read-only: see ``with_block_std``)."""
         return np.vstack([p.sigma for p in self.parts])
 
     @sigma.setter
@@ -70,6 +71,7 @@ class StackedProblem(CalibrationProblem):
 
     @property
     def predict_starts(self) -> bool:  # type: ignore[override]
+        """Whether the parts start each pose's loop solve from a first-order prediction."""
         return self.parts[0].predict_starts
 
     @predict_starts.setter

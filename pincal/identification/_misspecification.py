@@ -113,6 +113,7 @@ class Probe:
         return f"a trend below {self.floor * 1e6:.2g} µm along the {where}"
 
     def describe(self) -> str:
+        """One sentence: the effect's size, the share of the residual it explains, its p-value."""
         return (
             f"{self.size} explains {self.explained:.0%} of the residual "
             f"(F-test p = {self.p_value:.2g})"

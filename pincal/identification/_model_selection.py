@@ -115,10 +115,12 @@ class CandidateScore:
 
     @property
     def mse(self) -> float:
+        """Mean squared held-out error [m²]."""
         return float(np.mean(self.held_out**2))
 
     @property
     def rms(self) -> float:
+        """RMS held-out error [m]."""
         return float(np.sqrt(self.mse))
 
 

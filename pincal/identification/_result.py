@@ -223,6 +223,7 @@ class IdentificationRecord:
 
     @property
     def identified_names(self) -> tuple[str, ...]:
+        """Names of the parameters that were fitted (the others held at their initial values)."""
         return tuple(n for n, ok in zip(self.names, self.identified, strict=True) if ok)
 
     @property

@@ -160,10 +160,12 @@ class QualityVerdict:
 
     @property
     def refusals(self) -> tuple[QualityIssue, ...]:
+        """The issues that refuse the calibration."""
         return tuple(i for i in self.issues if i.refuse)
 
     @property
     def warnings(self) -> tuple[QualityIssue, ...]:
+        """The issues that only warn."""
         return tuple(i for i in self.issues if not i.refuse)
 
     def blind_spot(self) -> str:

@@ -305,6 +305,7 @@ def check_geometry(
 
 
 def load_json(path: Path) -> dict:
+    """A calibration directory's JSON file as a dict (size-capped; refused if not JSON)."""
     text = read_text(path, path.name, _MAX_JSON_BYTES, CalibrationDirectoryError)
     try:
         data = json.loads(text)
@@ -320,6 +321,7 @@ def load_json(path: Path) -> dict:
 
 
 def read_noise(entry: object, where: str) -> NoiseModel | None:
+    """A stored ``{position_mm, orientation_mrad}`` entry as a NoiseModel (None stays None)."""
     if entry is None:
         return None
     try:

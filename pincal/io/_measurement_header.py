@@ -18,6 +18,7 @@ __all__ = ["MAX_COORDINATE", "NOISE_RANGE", "parse_components", "parse_instrumen
 
 
 def parse_components(header: Header, name: str) -> list[str]:
+    """The header's ``components`` in canonical order (default all six)."""
     comps = header_value(header, "components", "x y z rx ry rz", name).split()
     bad = [c for c in comps if c not in COMPONENTS]
     if bad or not comps or len(set(comps)) != len(comps):
@@ -35,6 +36,7 @@ NOISE_RANGE = (1e-6, 1e3)
 
 
 def parse_noise(header: Header, name: str) -> NoiseModel | None:
+    """The header's ``noise position_mm=σ orientation_mrad=σ`` as a NoiseModel, or None."""
     if "noise" not in header:
         return None
     vals = {}
@@ -60,6 +62,7 @@ def parse_noise(header: Header, name: str) -> NoiseModel | None:
 
 
 def parse_instrument(header: Header, name: str) -> str | None:
+    """The header's ``instrument`` as a registered profile name, or None."""
     if "instrument" not in header:
         return None
     value = header_value(header, "instrument", None, name)

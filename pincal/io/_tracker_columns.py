@@ -31,6 +31,7 @@ ALIASES = {
 
 
 def length_factor(table: Table, cols: list[int], unit: str | None) -> float:
+    """Factor from the table's coordinate unit to metres (titles' ``[unit]`` or the stated one)."""
     units = {u for k in cols if (u := table.unit(k)) is not None}
     if len(units) > 1 or (units and unit is not None and units != {unit}):
         raise MeasurementError(

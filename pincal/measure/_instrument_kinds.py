@@ -252,6 +252,7 @@ class Plane(Instrument):
 
     @property
     def n_planes(self) -> int:
+        """Number of planes touched."""
         return len(self.normals)
 
     @property

@@ -71,6 +71,7 @@ class InstrumentData:
 
     @property
     def kind(self) -> str:
+        """The kind of instrument that took these readings (see ``instrument_kinds()``)."""
         return self.instrument.kind
 
 

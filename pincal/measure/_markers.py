@@ -182,6 +182,7 @@ class MarkerSetup:
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> MarkerSetup:
+        """The setup from its JSON form (as written by ``to_dict``)."""
         m = d.get("marker")
         return cls(
             link=str(d["link"]),

@@ -84,6 +84,7 @@ class Closure:
 
     @property
     def size(self) -> int:
+        """Number of constrained components of this closure."""
         return len(self.components)
 
     @property

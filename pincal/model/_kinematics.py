@@ -127,6 +127,7 @@ class KinematicQueries:
         return frame_index(self.frame_ids, self.tree, name)
 
     def joint_id(self, name: str) -> int:
+        """Pinocchio id of the joint called ``name`` (UnknownNameError lists the joints)."""
         if not self.model.existJointName(name):
             raise UnknownNameError("joint", name, list(self.model.names)[1:])
         return self.model.getJointId(name)
@@ -146,6 +147,7 @@ class KinematicQueries:
         return data
 
     def residual_of(self, data: pin.Data) -> np.ndarray:
+        """(c,) stacked closure residuals [m, rad] at the frames already placed in ``data``."""
         if not self.closures:
             return np.zeros(0)
         oMf = data.oMf
@@ -157,6 +159,7 @@ class KinematicQueries:
         )
 
     def jacobian_of(self, data: pin.Data) -> np.ndarray:
+        """(c, nv) Jacobian of the closure residuals at the frames already placed in ``data``."""
         if not self.closures:
             return np.zeros((0, self.model.nv))
         oMf = data.oMf
@@ -176,6 +179,7 @@ class KinematicQueries:
     def snapshot(
         self, q: np.ndarray, data: pin.Data, frames: Sequence[str], jacobian_frames: Sequence[str]
     ) -> Kinematics:
+        """A :class:`Kinematics` copy of frame placements and Jacobians at q."""
         model = self.model
         return Kinematics(
             q=np.array(q, dtype=float),
@@ -235,6 +239,7 @@ class KinematicQueries:
         return self.jacobian_of(self.compute(self.check_q(q)))
 
     def check_q(self, q: np.ndarray) -> np.ndarray:
+        """The configuration as a float (nq,) array; ShapeError on another shape."""
         q = _as_floats(q, "q")
         if q.shape != (self.model.nq,):
             raise ShapeError(
@@ -273,6 +278,7 @@ class KinematicQueries:
         return out
 
     def check_q_act(self, q_act: np.ndarray) -> np.ndarray:
+        """q_act as a float (n_act,) array in the order of ``actuated``; ShapeError otherwise."""
         q_act = _as_floats(q_act, "q_act")
         if q_act.shape != (len(self.actuated),):
             raise ShapeError(

@@ -145,6 +145,7 @@ class MjcfTree:
             self._read_default(child, mine)
 
     def attrs(self, elem: ET.Element, cls: str, tag: str | None = None) -> dict[str, str]:
+        """An element's attributes over its default class's (its own orientation wins)."""
         name = elem.get("class", cls)
         if name not in self.defaults and name != "main":
             raise UnknownNameError("MJCF default class", name, list(self.defaults))
@@ -190,6 +191,7 @@ class MjcfTree:
 
     # ------------------------------------------------------------------ URDF pieces
     def fresh(self, name: str, used: set[str]) -> str:
+        """``name``, or ``name_2``, ``name_3``… when taken; recorded as used."""
         out, k = name, 2
         while out in used:
             out, k = f"{name}_{k}", k + 1
@@ -223,10 +225,12 @@ class MjcfTree:
         )
 
     def fixed(self, parent: str, child: str, origin: pin.SE3) -> None:
+        """Add a fixed joint placing ``child`` at ``origin`` in ``parent``."""
         self._add(self.fresh(f"{child}_frame", self.used_joints), "fixed", parent, child, origin)
 
     # ------------------------------------------------------------------ tree
     def convert_tree(self) -> None:
+        """Convert the ``<worldbody>`` into links and joints (ModelFileError without a body)."""
         world = self.root.find("worldbody")
         if world is None or world.find(".//body") is None:
             raise ModelFileError("MJCF has no <worldbody> with a <body>")
@@ -341,6 +345,7 @@ class MjcfTree:
         self._children(elem, name, pin.SE3.Identity(), cls)
 
     def urdf(self) -> str:
+        """The converted tree as URDF text."""
         robot = ET.Element("robot", name=self.name)
         for link in self.links:
             ET.SubElement(robot, "link", name=link)

@@ -133,6 +133,7 @@ class ParameterSet:
         return hash(self.parameters)
 
     def index(self, name: str) -> int:
+        """Position of the parameter called ``name`` (UnknownNameError lists the names)."""
         if name not in self.names:
             raise UnknownNameError("parameter", name, self.names)
         return self.names.index(name)
@@ -150,6 +151,7 @@ class ParameterSet:
         return ParameterSet([self.parameters[i] for i in picked], label or self.label)
 
     def check_values(self, values: np.ndarray | None) -> np.ndarray:
+        """Values as a finite float (n,) array (None → zeros), else ParameterError."""
         if values is None:
             return np.zeros(len(self))
         try:
@@ -217,6 +219,7 @@ class ParameterSet:
 
 
 def origin_parameter(mech: Mechanism, joint: str, dof: str) -> Parameter:
+    """The parameter ``joint.dof`` (placement twist, joint offset or non-geometric term)."""
     uj = mech.tree.joints[joint]
     term = term_of_dof(dof)
     if term is not None:
@@ -234,6 +237,7 @@ def origin_parameter(mech: Mechanism, joint: str, dof: str) -> Parameter:
 
 
 def origin_dofs(mech: Mechanism, joint: str) -> list[str]:
+    """The placement DOF names of ``joint`` (a movable joint's own axis: its ``offset``)."""
     uj = mech.tree.joints[joint]
     dofs = list(DOFS[:6])
     if uj.movable:

@@ -55,6 +55,7 @@ class UrdfJoint:
 
     @property
     def movable(self) -> bool:
+        """True for a joint that moves (revolute, continuous, prismatic…)."""
         return self.type in MOVABLE_TYPES
 
     def offset_twist(self) -> np.ndarray:
@@ -79,6 +80,7 @@ def _floats(text: str | None, n: int, default: float, where: str) -> np.ndarray:
 
 
 def se3_from_xyz_rpy(xyz: np.ndarray, rpy: np.ndarray) -> pin.SE3:
+    """The placement of a URDF ``<origin xyz rpy>`` [m, rad]."""
     return pin.SE3(pin.rpy.rpyToMatrix(*rpy), np.asarray(xyz, dtype=float))
 
 

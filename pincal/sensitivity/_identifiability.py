@@ -103,22 +103,27 @@ class Identifiability:
 
     @property
     def full_rank(self) -> bool:
+        """True when every parameter is identifiable."""
         return self.rank == len(self.names)
 
     @property
     def base_names(self) -> tuple[str, ...]:
+        """Names of the identifiable base set."""
         return tuple(self.names[i] for i in self.base)
 
     @property
     def unidentifiable_names(self) -> tuple[str, ...]:
+        """Names of the parameters outside the base set."""
         return tuple(self.names[i] for i in self.unidentifiable)
 
     @property
     def breaks_closure_names(self) -> tuple[str, ...]:
+        """Names of the parameters that would open a loop closure."""
         return tuple(self.names[i] for i in self.breaks_closure)
 
     @property
     def splits_joint_names(self) -> tuple[str, ...]:
+        """Names of the translations inside an emulated ball or universal joint."""
         return tuple(self.names[i] for i in self.splits_joint)
 
     def describe(self, max_terms: int = 4) -> list[str]:
@@ -173,6 +178,7 @@ class Identifiability:
                 f"as {', '.join(parts)} {verb}")  # fmt: skip
 
     def summary(self) -> str:
+        """A headline (rank and counts) and one line per unidentifiable parameter."""
         head = f"{self.rank} of {len(self.names)} parameters identifiable"
         if self.breaks_closure.size:
             head += f"; {self.breaks_closure.size} break loop closure"

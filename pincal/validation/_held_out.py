@@ -117,6 +117,7 @@ class ModelErrors:
     ap: list[dict[str, Any]]
 
     def summary(self, has_pos: bool, has_rot: bool) -> dict[str, float | None]:
+        """RMS and max position [mm] and orientation [mrad] errors (None: not measured)."""
         p, o = self.position * 1e3, self.orientation * 1e3
         return {
             "rms_position_mm": float(np.sqrt(np.mean(p**2))) if has_pos else None,
@@ -139,10 +140,12 @@ class HeldOutValidation:
 
     @property
     def has_position(self) -> bool:
+        """True when the held-out data measure a position component."""
         return any(c in ("x", "y", "z") for c in self.components)
 
     @property
     def has_orientation(self) -> bool:
+        """True when the held-out data measure an orientation component."""
         return any(c in ("rx", "ry", "rz") for c in self.components)
 
     def to_dict(self) -> dict[str, Any]:

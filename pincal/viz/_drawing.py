@@ -30,18 +30,21 @@ _AXIS_RGBA = ((0.85, 0.1, 0.1, 1.0), (0.1, 0.7, 0.1, 1.0), (0.1, 0.25, 0.9, 1.0)
 
 
 def part_poses(model: pin.Model, parts: list[Part], q: np.ndarray) -> list[np.ndarray]:
+    """(4, 4) world placement of each visual part at configuration q."""
     data = model.createData()
     pin.forwardKinematics(model, data, q)
     return [homogeneous(data.oMi[p.joint]) @ p.T_joint_part for p in parts]
 
 
 def frame_pose(model: pin.Model, frame_id: int, q: np.ndarray) -> np.ndarray:
+    """(4, 4) world placement of frame ``frame_id`` at configuration q."""
     data = model.createData()
     pin.framesForwardKinematics(model, data, q)
     return homogeneous(data.oMf[frame_id])
 
 
 def ghost_colour(k: int, n: int) -> tuple[float, float, float]:
+    """RGB of ghost k of n, from blue (first) to red (last)."""
     hue = 0.62 - 0.62 * (k / max(1, n - 1))  # blue → red through green
     return colorsys.hsv_to_rgb(hue, 0.75, 0.9)
 
@@ -59,6 +62,7 @@ def draw_parts(
     rgb: Sequence[float] | None,
     opacity: float,
 ) -> None:
+    """Draw each part at its pose, in its own colour or ``rgb``, at ``opacity``."""
     for part, T in zip(parts, poses, strict=True):
         colour = part.rgba[:3] if (rgb is None or part.keep_colour) else rgb
         vis[part.name].set_transform(T)
@@ -67,6 +71,7 @@ def draw_parts(
 
 
 def draw_triad(vis: meshcat.Visualizer, T: np.ndarray, length: float, opacity: float) -> None:
+    """Draw x/y/z axes (red/green/blue) of ``length`` [m] at placement T."""
     radius = 0.04 * length
     vis.set_transform(T)
     directions = np.eye(3)
@@ -86,6 +91,7 @@ def _arrow_material(rgb: Sequence[float]) -> mg.MeshPhongMaterial:
 def draw_arrow(
     vis: meshcat.Visualizer, start: np.ndarray, end: np.ndarray, rgb: Sequence[float], width: float
 ) -> None:
+    """Draw an arrow from ``start`` to ``end`` [m] (a dot when they coincide)."""
     length = float(np.linalg.norm(end - start))
     if length < 1e-12:
         vis["dot"].set_object(mg.Sphere(1.5 * width), _arrow_material(rgb))

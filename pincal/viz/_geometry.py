@@ -62,6 +62,7 @@ class Part:
 
 
 def homogeneous(M: pin.SE3) -> np.ndarray:
+    """(4, 4) homogeneous matrix of a placement."""
     return np.array(M.homogeneous, dtype=float)
 
 

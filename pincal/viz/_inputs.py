@@ -76,6 +76,7 @@ def up_rotation(up: str) -> np.ndarray:
 
 
 def parse_colour(colour: Any) -> tuple[float, float, float]:
+    """RGB in [0, 1] from ``#rrggbb``, a 0xRRGGBB integer or three floats (ValueError otherwise)."""
     if isinstance(colour, str) and re.fullmatch(r"#?[0-9a-fA-F]{6}", colour):
         h = colour.lstrip("#")
         return tuple(int(h[i : i + 2], 16) / 255.0 for i in (0, 2, 4))  # type: ignore[return-value]
@@ -94,6 +95,7 @@ def parse_colour(colour: Any) -> tuple[float, float, float]:
 
 
 def hex_colour(rgb: Sequence[float]) -> int:
+    """The 0xRRGGBB integer of an RGB triple in [0, 1]."""
     r, g, b = (min(255, max(0, round(255 * x))) for x in rgb[:3])
     return (r << 16) | (g << 8) | b
 

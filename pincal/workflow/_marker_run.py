@@ -84,6 +84,7 @@ class MarkerRun:
 
     @property
     def prior(self) -> Prior | None:
+        """The prior the fit used (None: none)."""
         return self.choice.prior
 
     def doc(self) -> dict[str, Any]:

@@ -44,6 +44,7 @@ class PriorChoice:
 
     @property
     def chosen(self) -> bool:
+        """True when the prior was chosen by cross-validation (a table of candidates exists)."""
         return bool(self.table)
 
 
