@@ -10,7 +10,10 @@ validation} → io → {workflow, export} → report / viz → cli. The rules ch
   module ``kernels`` — never through a private ``_module``, never for a ``_name``;
 * a stage imports only lower stages (at module level, lazily or under
   ``TYPE_CHECKING`` alike) and registers nothing into a lower stage at import time;
-* outside the CLI, other stages are imported at module level, not inside functions.
+* outside the CLI, other stages are imported at module level, not inside functions;
+* inside a stage too, a ``_name`` never crosses a module boundary: what another module
+  uses is public in the module that defines it (the size of a module is a matter of its
+  concept, not of a line count).
 """
 
 from __future__ import annotations
@@ -110,6 +113,17 @@ def private_module_imports() -> list[str]:
     return found
 
 
+def private_name_imports() -> list[str]:
+    """Imports of a ``_name`` (not a dunder) from any other module of the package."""
+    found = []
+    for rel, _, tree in _files():
+        for line, module, names in _imports(tree, rel):
+            hidden = [n for n in names if n.startswith("_") and not n.startswith("__")]
+            if module.split(".")[0] == "pincal" and hidden:
+                found.append(f"{rel}:{line}: {module} {hidden}")
+    return found
+
+
 def order_violations() -> dict[tuple[str, str], list[int]]:
     """Imports of a stage that is not lower: (file, module) → lines."""
     found: dict[tuple[str, str], list[int]] = {}
@@ -167,6 +181,14 @@ def test_no_private_module_or_name_crosses_a_stage():
     assert not offenders, (
         "import another stage through its __init__ (or its declared `kernels` module), "
         "never a private module or name:\n" + "\n".join(offenders)
+    )
+
+
+def test_no_private_name_crosses_a_module():
+    offenders = private_name_imports()
+    assert not offenders, (
+        "a name another module imports is public where it is defined (drop the leading "
+        "underscore there):\n" + "\n".join(offenders)
     )
 
 
@@ -257,6 +279,11 @@ def test_the_checks_see_violations(tmp_path, monkeypatch):
     assert private_module_imports() == [
         "pincal/model/_bad.py:1: pincal.sensitivity._jacobian ['_plan']",
         "pincal/model/_bad.py:2: pincal.sensitivity.extra",
+    ]
+    (stage / "_other.py").write_text("from pincal.model._bad import _helper, f\n", encoding="utf-8")
+    assert private_name_imports() == [
+        "pincal/model/_bad.py:1: pincal.sensitivity._jacobian ['_plan']",
+        "pincal/model/_other.py:1: pincal.model._bad ['_helper']",
     ]
     assert set(order_violations()) == {
         ("pincal/model/_bad.py", "pincal.sensitivity"),

@@ -180,7 +180,7 @@ def acceptance(
     import numpy as np
 
     from pincal.cli._progress import counted
-    from pincal.cli.simulate import _parse_errors, _parse_pair
+    from pincal.cli.simulate import parse_errors, parse_pair
     from pincal.io import atomic_write_text, read_measurements
     from pincal.sensitivity import parameters
     from pincal.validation import iso_test_cube, pose_characteristics, simulate_cycles
@@ -191,7 +191,7 @@ def acceptance(
     )
     check_count(cycles, "--cycles", MAX_POSES // 5, yes, least=2, what="cycles of 5 poses")
     check_number(repeatability, "--repeatability")
-    _parse_pair(error_size, "--error-size")
+    parse_pair(error_size, "--error-size")
     say = (lambda _line: None) if as_json else click.echo
     nominal = load_model(model, model_opts)
     calibrated = load_calibrated(cal, nominal) if cal else None
@@ -218,8 +218,8 @@ def acceptance(
             "edge": cube.edge,
             "points": cube.points.tolist(),
         }
-        err_seed = _parse_errors(errors)
-        size_mm, size_mrad = _parse_pair(error_size, "--error-size")
+        err_seed = parse_errors(errors)
+        size_mm, size_mrad = parse_pair(error_size, "--error-size")
         params = parameters(nominal, preset or next(iter(nominal.presets), "full"))
         values = np.zeros(len(params))
         if err_seed is not None:

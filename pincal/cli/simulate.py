@@ -34,7 +34,8 @@ if TYPE_CHECKING:
     from pincal.model import Mechanism
 
 
-def _parse_errors(spec: str) -> int | None:
+def parse_errors(spec: str) -> int | None:
+    """The seed of ``--errors seed:N``, or None for ``none`` (click.BadParameter otherwise)."""
     if spec == "none":
         return None
     kind, _, seed = spec.partition(":")
@@ -45,7 +46,7 @@ def _parse_errors(spec: str) -> int | None:
     return int(seed)
 
 
-def _parse_pair(spec: str, option: str) -> tuple[float, float]:
+def parse_pair(spec: str, option: str) -> tuple[float, float]:
     """Two finite numbers ≥ 0 (:func:`pincal.cli._limits.number_pair`)."""
     if option == "--error-size":
         return number_pair(spec, option, form="length_mm,angle_mrad", bounds=ERROR_SIZE_RANGE)
@@ -171,9 +172,9 @@ def simulate(
     if instrument == SOCKET and n_random is None:
         raise click.UsageError("--instrument socket seats the ball itself: give --random N")
     check_count(n_random, "--random", MAX_POSES, yes)
-    err_seed = _parse_errors(errors)
-    size_mm, size_mrad = _parse_pair(error_size, "--error-size")
-    pos_mm, ori_mrad = _parse_pair(noise, "--noise")
+    err_seed = parse_errors(errors)
+    size_mm, size_mrad = parse_pair(error_size, "--error-size")
+    pos_mm, ori_mrad = parse_pair(noise, "--noise")
     span = None
     if temperature is not None:
         if instrument is not None:

@@ -15,7 +15,8 @@ from pincal.errors import PincalError
 __all__ = ["bose_array", "map_to_ranges", "orthogonal_array"]
 
 
-def _is_prime(p: int) -> bool:
+def is_prime(p: int) -> bool:
+    """True when p is a prime number."""
     if p < 2:
         return False
     return all(p % d for d in range(2, int(p**0.5) + 1))
@@ -35,7 +36,7 @@ def bose_array(p: int) -> NDArray[np.int_]:
     Returns:
         Array (p², p + 1) of levels 0..p−1.
     """
-    if not isinstance(p, (int, np.integer)) or not _is_prime(int(p)):
+    if not isinstance(p, (int, np.integer)) or not is_prime(int(p)):
         raise PincalError(f"Bose construction needs a prime number of levels; got {p!r}")
     p = int(p)
     i = np.repeat(np.arange(p), p)
@@ -64,7 +65,7 @@ def orthogonal_array(levels: int, factors: int) -> NDArray[np.int_]:
             f"need levels >= 2 and factors >= 1; got levels={levels}, factors={factors}"
         )
     p = max(int(levels), int(factors) - 1, 2)
-    while not _is_prime(p):
+    while not is_prime(p):
         p += 1
     return bose_array(p)[:, :factors]
 

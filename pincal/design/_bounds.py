@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from pincal.design._indices import _as_stacked
+from pincal.design._indices import as_stacked
 from pincal.errors import PincalError, UnidentifiableError
 from pincal.sensitivity import jacobian_rank, unit_columns
 
@@ -46,7 +46,7 @@ def crb_covariance(
     Raises:
         UnidentifiableError: J has rank < n and ``allow_rank_deficient`` is False.
     """
-    arr = _as_stacked(J_weighted, "J_weighted")
+    arr = as_stacked(J_weighted, "J_weighted")
     n = arr.shape[1]
     scaled, scale = unit_columns(arr)
     rank = jacobian_rank(arr)  # the one rank decision (unit columns, σ > 1e-8·σ1)
@@ -92,7 +92,7 @@ def predicted_validation_rms(J_val: ArrayLike, cov: ArrayLike) -> float:
         J_val: validation Jacobian (rows, n) or (m, k, n), unweighted.
         cov: parameter covariance (n, n).
     """
-    jv = _as_stacked(J_val, "J_val")
+    jv = as_stacked(J_val, "J_val")
     c = np.asarray(cov, dtype=float)
     if c.shape != (jv.shape[1], jv.shape[1]):
         raise PincalError(f"cov must be ({jv.shape[1]}, {jv.shape[1]}); got {c.shape}")

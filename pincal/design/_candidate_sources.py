@@ -21,9 +21,9 @@ from pincal.design._candidates import (
     MAX_CANDIDATES,
     CandidateSet,
     Progress,
-    _home_pose,
     candidate_cost,
     evaluate_candidates,
+    home_pose,
 )
 from pincal.errors import ConvergenceError, OptionValueError, PincalError, clip
 from pincal.model import WORKSPACE_POSE_KEYS, Mechanism, ParameterSet, sample_actuators
@@ -54,7 +54,7 @@ def default_grid_ranges(mech: Mechanism) -> NDArray[np.float64]:
     limits = np.asarray(mech.actuator_limits, dtype=float)
     pose = mech.workspace.pose
     if pose:
-        home = _home_pose(mech)
+        home = home_pose(mech)
         seen = [mech.actuators_of(mech.q_home)]
         for key, ends in pose.items():
             for value in ends:
@@ -200,7 +200,7 @@ def orthogonal_candidates(
             "orthogonal-array candidates need pose ranges"
         )
     table = orthogonal_array(int(levels), len(WORKSPACE_POSE_KEYS))
-    home = _home_pose(mech)
+    home = home_pose(mech)
     rvec_home = np.zeros(3)
     centre = np.concatenate([home.translation, rvec_home])
     lo = np.array(

@@ -181,10 +181,10 @@ def candidate_cost(
     if kind == "grid":
         rows = int(value) ** n_act
     elif kind == "oa":
-        from pincal.design._arrays import _is_prime
+        from pincal.design._arrays import is_prime
 
         p = max(int(value), len(WORKSPACE_POSE_KEYS) - 1, 2)
-        while p < 10**6 and not _is_prime(p):  # past that, p ≥ value is bound enough
+        while p < 10**6 and not is_prime(p):  # past that, p ≥ value is bound enough
             p += 1
         rows = p * p
         table = 8 * rows * (p + 1)  # the full Bose array before its first six columns
@@ -196,7 +196,8 @@ def candidate_cost(
 # ----------------------------------------------------------------------------- helpers
 
 
-def _home_pose(mech: Mechanism) -> pin.SE3:
+def home_pose(mech: Mechanism) -> pin.SE3:
+    """The measured frame's placement at home."""
     return mech.frame_placement(mech.q_home)
 
 
@@ -267,7 +268,7 @@ def evaluate_candidates(
     comps = tuple(mech.measured_components)
     comp_rows = [COMPONENTS.index(c) for c in comps]
     lo, hi = np.asarray(mech.actuator_limits, dtype=float).T
-    home = _home_pose(mech)
+    home = home_pose(mech)
     counts = {"no FK": 0, "singular": 0, "outside limits": 0, "outside workspace": 0}
     for k, v in (rejected or {}).items():
         counts[k] = counts.get(k, 0) + v

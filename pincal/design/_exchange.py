@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from pincal.design._arrays import bose_array, map_to_ranges, orthogonal_array
-from pincal.design._scoring import _Problem, _State
+from pincal.design._scoring import ScoringProblem, ScoringState
 from pincal.errors import PincalError
 
 __all__ = [
@@ -89,8 +89,8 @@ def _rng(rng: np.random.Generator | int | None) -> np.random.Generator:
 
 
 def _result(
-    problem: _Problem, state: _State, value: float, history: list[float], iterations: int,
-    method: str, converged: bool,
+    problem: ScoringProblem, state: ScoringState, value: float, history: list[float],
+    iterations: int, method: str, converged: bool,
 ) -> PoseSelection:  # fmt: skip
     return PoseSelection(
         indices=np.sort(np.asarray(state.members, dtype=int)),
@@ -156,7 +156,7 @@ def exchange(
     Raises:
         TooFewPosesError: m·k < n.
     """
-    problem = _Problem(J_cand, index, fast, prune, ridge)
+    problem = ScoringProblem(J_cand, index, fast, prune, ridge)
     m = problem.check_m(m)
     if m >= problem.N:
         raise PincalError(f"exchange needs more candidates ({problem.N}) than poses ({m})")
@@ -164,7 +164,7 @@ def exchange(
         members = [int(i) for i in _rng(rng).choice(problem.N, size=m, replace=False)]
     else:
         members = problem.check_start(start, m, exact_len=True)
-    state = _State(problem, members)
+    state = ScoringState(problem, members)
     value = problem.exact(state.members)
     history = [value]
     best_state, best_value = state.copy(), value
@@ -238,10 +238,10 @@ def greedy(
             D-criterion evaluated exactly (None: all).
         ridge: relative ridge δ for the D-criterion (see module docstring).
     """
-    problem = _Problem(J_cand, index, fast, prune, ridge)
+    problem = ScoringProblem(J_cand, index, fast, prune, ridge)
     m = problem.check_m(m)
     members = [] if start is None else problem.check_start(start, m, exact_len=False)
-    state = _State(problem, members)
+    state = ScoringState(problem, members)
     history: list[float] = []
     additions = 0
     while len(state.members) < m:
@@ -290,7 +290,7 @@ def detmax(
             D-criterion evaluated exactly (None: all).
         ridge: relative ridge δ for the D-criterion (see module docstring).
     """
-    problem = _Problem(J_cand, index, fast, prune, ridge)
+    problem = ScoringProblem(J_cand, index, fast, prune, ridge)
     m = problem.check_m(m)
     if max_depth < 1:
         raise PincalError(f"max_depth must be >= 1; got {max_depth}")
@@ -298,7 +298,7 @@ def detmax(
         members = [int(i) for i in _rng(rng).choice(problem.N, size=m, replace=False)]
     else:
         members = problem.check_start(start, m, exact_len=True)
-    best = _State(problem, members)
+    best = ScoringState(problem, members)
     best_value = problem.exact(best.members)
     history = [best_value]
     rounds = 0

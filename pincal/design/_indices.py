@@ -47,13 +47,14 @@ INDEX_NAMES: tuple[str, ...] = ("O1", "O2", "O3", "O4", "O5", "A")
 """Names accepted by :meth:`ObservabilityIndices.get` and the selection functions."""
 
 
-def _check_index_name(name: str) -> str:
+def check_index_name(name: str) -> str:
+    """``name`` if it is an observability index (O1–O5), else UnknownNameError."""
     if name not in INDEX_NAMES:
         raise UnknownNameError("observability index name", name, INDEX_NAMES)
     return name
 
 
-def _as_stacked(J: ArrayLike, what: str = "J") -> NDArray[np.float64]:
+def as_stacked(J: ArrayLike, what: str = "J") -> NDArray[np.float64]:
     """Return J as a finite 2-D float array (rows, n); (m, k, n) blocks are stacked."""
     arr = np.asarray(J, dtype=float)
     if arr.ndim == 3:
@@ -103,7 +104,7 @@ def batch_indices(
         ok: NDArray[np.bool_] = (numerical_ranks(s, rtol) == L) & (L > 0)
     else:
         ok = np.asarray(full, dtype=bool) & (L > 0) & np.all(s > 0.0, axis=1)
-    out = {_check_index_name(name): np.zeros(s.shape[0]) for name in names}
+    out = {check_index_name(name): np.zeros(s.shape[0]) for name in names}
     if not np.any(ok):
         return out
     sf = s[ok]
@@ -160,7 +161,7 @@ class ObservabilityIndices:
 
     def get(self, name: str) -> float:
         """Index by name: one of "O1".."O5", "A"."""
-        _check_index_name(name)
+        check_index_name(name)
         return self.a_optimality if name == "A" else float(getattr(self, name))
 
     def as_dict(self) -> dict[str, float]:
@@ -219,7 +220,7 @@ def observability(J: ArrayLike, m: int | None = None) -> ObservabilityIndices:
     arr_in = np.asarray(J, dtype=float)
     if m is None:
         m = arr_in.shape[0] if arr_in.ndim >= 2 else 1
-    arr = _as_stacked(arr_in)
+    arr = as_stacked(arr_in)
     n = arr.shape[1]
     s = np.linalg.svd(arr, compute_uv=False)
     if s.size < n:

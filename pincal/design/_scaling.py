@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from pincal.design._indices import _as_stacked
+from pincal.design._indices import as_stacked
 from pincal.errors import PincalError, UnknownNameError
 from pincal.model import COMPONENTS
 
@@ -172,7 +172,7 @@ def scale_columns(J: ArrayLike, std: ArrayLike | None = None) -> JacobianScaling
         Scaled Jacobian with ``col_scale`` (n,) such that x = col_scale · x_scaled.
     """
     arr = np.asarray(J, dtype=float)
-    col = _column_factors(_as_stacked(arr), std)
+    col = _column_factors(as_stacked(arr), std)
     return JacobianScaling(J=arr * col, row_scale=np.ones(arr.shape[:-1]), col_scale=col)
 
 
@@ -188,7 +188,7 @@ def weight_rows(J: ArrayLike, noise_std: ArrayLike) -> JacobianScaling:
         Whitened Jacobian (rows divided by σ), ``row_scale = 1/σ``.
     """
     arr = np.asarray(J, dtype=float)
-    _as_stacked(arr)
+    as_stacked(arr)
     sigma = np.asarray(noise_std, dtype=float)
     try:
         sigma_rows = np.broadcast_to(sigma, arr.shape[:-1])

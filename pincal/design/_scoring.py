@@ -1,9 +1,9 @@
 """Scoring machinery of the pose-selection algorithms (:mod:`pincal.design._exchange`).
 
-:class:`_Problem` holds the candidate blocks (N, k, n) and scores candidate designs:
+:class:`ScoringProblem` holds the candidate blocks (N, k, n) and scores candidate designs:
 exactly (singular values → :func:`pincal.design._indices.batch_indices`, the one
 implementation of the index formulas) and by the ridge D-criterion
-log det(δI + JᵀJ) with rank-k determinant-lemma updates. :class:`_State` is one
+log det(δI + JᵀJ) with rank-k determinant-lemma updates. :class:`ScoringState` is one
 design with A = δI + Σ UᵀU, A⁻¹ kept by Woodbury updates and the candidate products
 U_c A⁻¹ U_cᵀ kept by rank-k updates.
 """
@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from pincal.design._indices import _check_index_name, batch_indices
+from pincal.design._indices import batch_indices, check_index_name
 from pincal.errors import PincalError, TooFewPosesError
 from pincal.sensitivity import full_jacobian_ranks
 
@@ -25,7 +25,7 @@ _REFRESH_EVERY = 16  # Woodbury updates between exact refactorisations of A
 _M_REFRESH_EVERY = 64  # rank-k updates between exact recomputations of U_c A⁻¹ U_cᵀ
 
 
-class _Problem:
+class ScoringProblem:
     """Candidate blocks, criterion and scoring (fast rank-k or from scratch)."""
 
     def __init__(
@@ -40,7 +40,7 @@ class _Problem:
             raise PincalError("J_cand contains NaN or infinite entries")
         self.J = J
         self.N, self.k, self.n = J.shape
-        self.index = _check_index_name(index)
+        self.index = check_index_name(index)
         self.fast = bool(fast)
         if prune is not None and prune < 1:
             raise PincalError(f"prune must be None or >= 1; got {prune}")
@@ -55,6 +55,7 @@ class _Problem:
         self.JT = np.ascontiguousarray(J.transpose(0, 2, 1))
 
     def check_m(self, m: int, min_m: int = 1) -> int:
+        """``m`` if it is a number of poses this problem can select, else a PincalError."""
         if not isinstance(m, (int, np.integer)) or not min_m <= m <= self.N:
             raise PincalError(
                 f"the number of poses to select must be an integer in [{min_m}, {self.N}] "
@@ -68,6 +69,7 @@ class _Problem:
         return int(m)
 
     def check_start(self, start: ArrayLike, max_len: int, exact_len: bool) -> list[int]:
+        """The start selection as candidate indices, checked (distinct, in range, length)."""
         s = np.asarray(start).reshape(-1)
         ok = s.size == 0 or (
             np.issubdtype(s.dtype, np.integer) and s.min() >= 0 and s.max() < self.N
@@ -128,7 +130,7 @@ class _Problem:
 
     # --- rank-k scoring -------------------------------------------------------------
 
-    def add_logdets(self, state: _State) -> NDArray[np.float64]:
+    def add_logdets(self, state: ScoringState) -> NDArray[np.float64]:
         """Log det(A + UᵀU) for every candidate U by the determinant lemma, (N,).
 
         Uses M_c = U_c A⁻¹ U_cᵀ (N, k, k), which the state keeps up to date with
@@ -140,7 +142,7 @@ class _Problem:
         sign, ld = np.linalg.slogdet(state.M + np.eye(self.k))
         return np.where(sign > 0, state.logdet + ld, -np.inf)
 
-    def remove_logdets(self, state: _State, members: NDArray[np.int_]) -> NDArray[np.float64]:
+    def remove_logdets(self, state: ScoringState, members: NDArray[np.int_]) -> NDArray[np.float64]:
         """Log det(A − UᵀU) for removing each of ``members``, (len(members),)."""
         U = self.J[members]
         W = np.matmul(U, state.Ainv)
@@ -150,7 +152,7 @@ class _Problem:
 
     # --- choices ---------------------------------------------------------------------
 
-    def best_add(self, state: _State, allowed: NDArray[np.bool_]) -> int:
+    def best_add(self, state: ScoringState, allowed: NDArray[np.bool_]) -> int:
         """Candidate (among ``allowed``) whose addition maximises the index."""
         cand = np.flatnonzero(allowed)
         if not self.fast:
@@ -175,7 +177,7 @@ class _Problem:
         exact = self._index_from_sv(s, size, stacked)
         return int(cand[np.lexsort((ld_all, exact))[-1]])
 
-    def best_remove(self, state: _State, removable: Sequence[int]) -> int:
+    def best_remove(self, state: ScoringState, removable: Sequence[int]) -> int:
         """Member (among ``removable``) whose removal keeps the index highest."""
         rem = np.asarray(removable, dtype=int)
         members = np.asarray(state.members, dtype=int)
@@ -190,7 +192,7 @@ class _Problem:
         return int(rem[np.argmax(self.remove_logdets(state, rem))])
 
 
-class _State:
+class ScoringState:
     """A design: members, A = δI + Σ UᵀU, A⁻¹ (Woodbury-updated), log det A.
 
     ``M`` (N, k, k), when not None, holds U_c A⁻¹ U_cᵀ for every candidate c and is
@@ -198,15 +200,16 @@ class _State:
     M_c ← M_c ∓ (U_c Wᵀ) C⁻¹ (U_c Wᵀ)ᵀ.
     """
 
-    def __init__(self, problem: _Problem, members: Sequence[int]) -> None:
+    def __init__(self, problem: ScoringProblem, members: Sequence[int]) -> None:
         self.p = problem
         self.members: list[int] = list(members)
         self.mask = np.zeros(problem.N, dtype=bool)
         self.mask[self.members] = True
         self.refresh()
 
-    def copy(self) -> _State:
-        new = object.__new__(_State)
+    def copy(self) -> ScoringState:
+        """An independent copy (information matrix and inverse included)."""
+        new = object.__new__(ScoringState)
         new.p = self.p
         new.members = list(self.members)
         new.mask = self.mask.copy()
@@ -260,11 +263,13 @@ class _State:
             self.refresh(reset_m=self._m_updates >= _M_REFRESH_EVERY)
 
     def add(self, c: int) -> None:
+        """Add candidate ``c`` (rank-k update of the information matrix and its inverse)."""
         self.members.append(int(c))
         self.mask[c] = True
         self._update(c, +1.0)
 
     def remove(self, c: int) -> None:
+        """Remove candidate ``c`` (rank-k downdate)."""
         self.members.remove(int(c))
         self.mask[c] = False
         self._update(c, -1.0)

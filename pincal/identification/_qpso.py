@@ -63,7 +63,8 @@ class QPSOResult:
 # --------------------------------------------------------------------------- helpers
 
 
-def _bounds(lower, upper) -> tuple[np.ndarray, np.ndarray]:
+def search_bounds(lower, upper) -> tuple[np.ndarray, np.ndarray]:
+    """The box (lower, upper) as float (n,) vectors, checked finite and ordered."""
     lo = np.atleast_1d(np.asarray(lower, dtype=float))
     hi = np.atleast_1d(np.asarray(upper, dtype=float))
     if lo.ndim != 1 or lo.shape != hi.shape:
@@ -80,7 +81,8 @@ def _bounds(lower, upper) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def _alpha_pair(alpha) -> tuple[float, float]:
+def alpha_pair(alpha) -> tuple[float, float]:
+    """The contraction–expansion coefficient as (start, end) (a scalar stays constant)."""
     a = np.asarray(alpha, dtype=float).ravel()
     if a.size == 1:
         a = np.array([a[0], a[0]])
@@ -89,7 +91,7 @@ def _alpha_pair(alpha) -> tuple[float, float]:
     return float(a[0]), float(a[1])
 
 
-def _evaluator(fun: Objective, vectorized: bool, d: int) -> Callable[[np.ndarray], np.ndarray]:
+def swarm_evaluator(fun: Objective, vectorized: bool, d: int) -> Callable[[np.ndarray], np.ndarray]:
     """Wrap ``fun`` to map (N, d) positions to (N,) values; non-finite → +inf."""
 
     def evaluate(X: np.ndarray) -> np.ndarray:
@@ -114,7 +116,7 @@ def _evaluator(fun: Objective, vectorized: bool, d: int) -> Callable[[np.ndarray
     return evaluate
 
 
-def _initial_positions(
+def initial_positions(
     rng: np.random.Generator,
     n: int,
     lo: np.ndarray,
@@ -131,7 +133,7 @@ def _initial_positions(
     return X
 
 
-class _Swarm:
+class Swarm:
     """Mutable swarm state; one :meth:`step` is one QPSO iteration."""
 
     def __init__(self, evaluate, X: np.ndarray, lo: np.ndarray, hi: np.ndarray, rng):
@@ -145,13 +147,16 @@ class _Swarm:
 
     @property
     def best_x(self) -> np.ndarray:
+        """Position of the best particle so far."""
         return self.P[self.g].copy()
 
     @property
     def best_f(self) -> float:
+        """Cost of the best particle so far."""
         return float(self.fP[self.g])
 
     def step(self, alpha: float) -> None:
+        """Move every particle once (quantum-behaved update about its attractor), in the box."""
         n, d = self.X.shape
         rng = self.rng
         C = self.P.mean(axis=0)
@@ -169,11 +174,13 @@ class _Swarm:
         self.g = int(np.argmin(self.fP))
 
 
-def _alpha_at(t: int, t_max: int, a0: float, a1: float) -> float:
+def alpha_at(t: int, t_max: int, a0: float, a1: float) -> float:
+    """Coefficient at iteration t, linear from a0 to a1 over t_max iterations."""
     return a0 + (a1 - a0) * t / max(t_max - 1, 1)
 
 
-def _check_counts(n_particles: int, t_max: int) -> None:
+def check_counts(n_particles: int, t_max: int) -> None:
+    """ParameterError unless at least 2 particles and t_max ≥ 0."""
     if int(n_particles) < 2:
         raise ParameterError(f"n_particles must be at least 2, got {n_particles}")
     if int(t_max) < 0:
@@ -224,17 +231,17 @@ def qpso(
     Raises:
         ParameterError: malformed bounds, x0, swarm size or objective output.
     """
-    lo, hi = _bounds(lower, upper)
-    _check_counts(n_particles, t_max)
-    a0, a1 = _alpha_pair(alpha)
+    lo, hi = search_bounds(lower, upper)
+    check_counts(n_particles, t_max)
+    a0, a1 = alpha_pair(alpha)
     gen = np.random.default_rng(rng)
     start = _start_vector(x0, lo, hi)
     if not init_spread > 0:
         raise ParameterError(f"init_spread must be positive, got {init_spread}")
-    evaluate = _evaluator(fun, vectorized, lo.size)
-    swarm = _Swarm(
+    evaluate = swarm_evaluator(fun, vectorized, lo.size)
+    swarm = Swarm(
         evaluate,
-        _initial_positions(gen, int(n_particles), lo, hi, start, init_spread),
+        initial_positions(gen, int(n_particles), lo, hi, start, init_spread),
         lo,
         hi,
         gen,
@@ -243,7 +250,7 @@ def qpso(
     stopped = False
     t = 0
     while t < t_max:
-        swarm.step(_alpha_at(t, t_max, a0, a1))
+        swarm.step(alpha_at(t, t_max, a0, a1))
         t += 1
         history.append(swarm.best_f)
         if callback is not None and callback(t, swarm.best_x, swarm.best_f):

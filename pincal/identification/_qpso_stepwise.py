@@ -17,14 +17,14 @@ from pincal.errors import ParameterError
 from pincal.identification._qpso import (
     Objective,
     QPSOResult,
-    _alpha_at,
-    _alpha_pair,
-    _bounds,
-    _check_counts,
-    _evaluator,
-    _initial_positions,
-    _Swarm,
+    Swarm,
+    alpha_at,
+    alpha_pair,
+    check_counts,
+    initial_positions,
     qpso,
+    search_bounds,
+    swarm_evaluator,
 )
 
 __all__ = ["QPSOStage", "QPSOStepwiseResult", "qpso_stepwise"]
@@ -137,14 +137,14 @@ def qpso_stepwise(
     Raises:
         ParameterError: malformed bounds, tolerances or objective output.
     """
-    lo, hi = _bounds(lower, upper)
-    _check_counts(n_particles, t_max)
-    a0, a1 = _alpha_pair(alpha)
+    lo, hi = search_bounds(lower, upper)
+    check_counts(n_particles, t_max)
+    a0, a1 = alpha_pair(alpha)
     if not spread_tol > 0 or int(patience) < 1 or not fine_spread > 0:
         raise ParameterError("spread_tol and fine_spread must be positive and patience ≥ 1")
     gen = np.random.default_rng(rng)
     d = lo.size
-    evaluate_full = _evaluator(fun, vectorized, d)
+    evaluate_full = swarm_evaluator(fun, vectorized, d)
     x_fixed = 0.5 * (lo + hi)  # values of free entries are overwritten before every call
     free = list(range(d))
     stages: list[QPSOStage] = []
@@ -159,9 +159,9 @@ def qpso_stepwise(
             X[:, idx] = Z
             return evaluate_full(X)
 
-        swarm = _Swarm(
+        swarm = Swarm(
             evaluate,
-            _initial_positions(gen, int(n_particles), lo[idx], hi[idx], None, 1.0),
+            initial_positions(gen, int(n_particles), lo[idx], hi[idx], None, 1.0),
             lo[idx],
             hi[idx],
             gen,
@@ -170,7 +170,7 @@ def qpso_stepwise(
         tol = spread_tol * width[idx]
         chosen, converged, t = -1, False, 0
         while t < t_max:
-            swarm.step(_alpha_at(t, t_max, a0, a1))
+            swarm.step(alpha_at(t, t_max, a0, a1))
             t += 1
             recent.append(swarm.best_x)
             if len(recent) > patience + 1:

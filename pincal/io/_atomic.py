@@ -150,7 +150,7 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
     return atomic_write_bytes(path, text.encode("utf-8"))
 
 
-def _temp_prefix(out: Path, kind: str) -> str:
+def temp_prefix(out: Path, kind: str) -> str:
     """Name prefix of the temporaries of directory ``out`` ("tmp" or "old")."""
     return f".{out.name}.pincal-{kind}-"
 
@@ -193,7 +193,7 @@ def swap_in_directory(tmp: Path, out: Path) -> None:
     if exchange_paths(tmp, out):
         shutil.rmtree(tmp, ignore_errors=True)
         return
-    old = Path(tempfile.mkdtemp(prefix=_temp_prefix(out, "old"), dir=out.parent))
+    old = Path(tempfile.mkdtemp(prefix=temp_prefix(out, "old"), dir=out.parent))
     os.replace(out, old / out.name)
     try:
         os.replace(tmp, out)
@@ -213,7 +213,7 @@ def remove_stale_temporaries(out: Path) -> list[Path]:
     """
     removed = []
     for kind in ("tmp", "old"):
-        for stale in out.parent.glob(_temp_prefix(out, kind) + "*"):
+        for stale in out.parent.glob(temp_prefix(out, kind) + "*"):
             if stale.is_dir() and not stale.is_symlink():
                 shutil.rmtree(stale, ignore_errors=True)
             else:

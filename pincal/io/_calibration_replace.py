@@ -33,10 +33,10 @@ def check_replaceable(out: str | Path) -> None:
         CalibrationDirectoryError: ``out`` is a file, a non-empty directory without a valid
             manifest, or a calibration directory holding files pincal did not write.
     """
-    _check_replaceable(Path(out).resolve())
+    check_resolved_replaceable(Path(out).resolve())
 
 
-def _check_replaceable(out: Path) -> None:
+def check_resolved_replaceable(out: Path) -> None:
     """Refuse to replace anything but a calibration directory pincal wrote, or an empty one.
 
     The manifest proves pincal wrote the directory; any entry it does not list (other

@@ -20,15 +20,15 @@ from typing import Any
 from pincal._version import __version__
 from pincal.identification import IdentificationRecord, IdentificationResult, result_to_dict
 from pincal.io._atomic import (
-    _temp_prefix,
     atomic_write_text,
     calibration_lock,
     remove_stale_temporaries,
     swap_in_directory,
+    temp_prefix,
 )
 from pincal.io._calibration_checks import model_files
 from pincal.io._calibration_dir import CALIBRATION_VERSION, CalibrationDirectory, read_calibration
-from pincal.io._calibration_replace import _check_replaceable
+from pincal.io._calibration_replace import check_resolved_replaceable
 from pincal.io._digest import sha256_file
 from pincal.io._file_names import (
     CALIBRATED_SIDECAR,
@@ -140,12 +140,12 @@ def _write_locked(
     texts: Mapping[str, str] | None,
     nominal: Mechanism | None = None,
 ) -> None:
-    _check_replaceable(out)
+    check_resolved_replaceable(out)
     remove_stale_temporaries(out)
     mech = result.calibrated
     notes = {"data": [str(p) for p in data_files], "calibrated_urdf": CALIBRATED_URDF}
     notes.update(annotations or {})
-    tmp = Path(tempfile.mkdtemp(prefix=_temp_prefix(out, "tmp"), dir=out.parent))
+    tmp = Path(tempfile.mkdtemp(prefix=temp_prefix(out, "tmp"), dir=out.parent))
     try:
         save_urdf(mech, tmp / CALIBRATED_URDF)
         doc = result_to_dict(result, notes)
@@ -163,7 +163,7 @@ def _write_locked(
             manifest["markers"] = (annotations or {}).get("markers")
         atomic_write_text(tmp / MANIFEST, json.dumps(manifest, indent=1) + "\n")
         os.chmod(tmp, 0o755)
-        _check_replaceable(out)
+        check_resolved_replaceable(out)
         swap_in_directory(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)

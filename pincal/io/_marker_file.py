@@ -149,7 +149,7 @@ def distinct_markers(path: str | Path, setup: MarkerSetup) -> tuple[MarkerSetup,
     if not setup.more_columns:
         return setup, ()
     table = read_table(path)
-    _check_titles(table)
+    check_titles(table)
     data = _marker_values(table, setup)
     values = [data[:, 3 * k : 3 * k + 3] for k in range(len(setup.marker_sets))]
     keep: list[int] = []
@@ -168,7 +168,7 @@ def distinct_markers(path: str | Path, setup: MarkerSetup) -> tuple[MarkerSetup,
     return replace(setup, columns=sets[0], more_columns=tuple(sets[1:])), tuple(notes)
 
 
-def _check_titles(table: Table) -> None:
+def check_titles(table: Table) -> None:
     """A first line of numbers is data, not titles: say so before any column is missed."""
     if table.columns and all(is_decimal(c.replace(",", ".")) for c in table.columns):
         raise MeasurementFormatError(
@@ -178,7 +178,7 @@ def _check_titles(table: Table) -> None:
         )
 
 
-def _joint_titles(table: Table, mech: Mechanism) -> list[tuple[str, str | None]]:
+def joint_titles(table: Table, mech: Mechanism) -> list[tuple[str, str | None]]:
     """(name, bracketed unit) of each title; a joint's name in another case is the joint's."""
     joints = {j.lower(): j for j in mech.actuated}
     out = []
@@ -220,12 +220,12 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
             quaternion not of unit norm, an angle beyond a turn).
     """
     table = read_table(path)
-    _check_titles(table)
+    check_titles(table)
     name = table.name
     if not table.rows:
         raise MeasurementFormatError(f"{name}: no data rows")
     lf = unit_factor(LENGTH_UNITS, setup.length_unit, "length", name)
-    parsed = _joint_titles(table, mech)
+    parsed = joint_titles(table, mech)
     joints, decl = joint_columns(mech, _comment_header(path), parsed, name)
     markers = _marker_values(table, setup)
     seen = ~np.isnan(markers).any(axis=1)

@@ -26,7 +26,7 @@ from pincal.errors import ColumnError, MeasurementError, MeasurementFormatError,
 from pincal.io._csv import Header
 from pincal.io._delimited import Table, read_table
 from pincal.io._joint_columns import joint_columns, read_joints
-from pincal.io._marker_file import _check_titles, _joint_titles
+from pincal.io._marker_file import check_titles, joint_titles
 from pincal.io._names import is_decimal
 from pincal.io._units import LENGTH_UNITS, unit_factor
 from pincal.measure import KnownDistance, SocketData, SocketPlate
@@ -121,7 +121,7 @@ def _mapped_titles(
         ColumnError: a mapped column not in the table, or mapped to a joint the model
             does not actuate.
     """
-    parsed = _joint_titles(table, mech)
+    parsed = joint_titles(table, mech)
     out = list(parsed)
     for column, joint in columns.items():
         want = column.strip().lower()
@@ -163,7 +163,7 @@ def read_socket_table(path: str | Path, mech: Mechanism, spec: SocketTable) -> S
             reading implausible for its unit; ActuatorRangeError: outside its URDF range.
     """
     table = read_table(path)
-    _check_titles(table)
+    check_titles(table)
     name = table.name
     if not table.rows:
         raise MeasurementFormatError(f"{name}: no data rows")

@@ -30,7 +30,7 @@ from pincal.model._batch import BatchKinematics
 from pincal.model._batch_closures import closure_jacobian_batch, closure_residual_batch
 from pincal.model._batch_newton import BatchNewton, check_rows
 from pincal.model._block_solve import PassiveFactor
-from pincal.model._branch import _CORRECTOR_ITERATIONS, _MIN_STEP, LoopSolver
+from pincal.model._branch import CORRECTOR_ITERATIONS, MIN_STEP, LoopSolver
 
 __all__ = ["BatchLoopSolver", "closure_jacobian_batch", "closure_residual_batch"]
 
@@ -125,7 +125,7 @@ class BatchLoopSolver:
                 pc,
                 Jjc,
                 Jf,
-                max_iterations=_CORRECTOR_ITERATIONS,
+                max_iterations=CORRECTOR_ITERATIONS,
                 travel=travel,
                 polish=False,
             )
@@ -135,7 +135,7 @@ class BatchLoopSolver:
             Q[i[ok]], t[i[ok]] = cand[ok], t[i[ok]] + h[i[ok]]
             R[i[ok]], p[i[ok]], J[i[ok]] = Rc[ok], pc[ok], Jjc[ok]
             h[i] = np.where(ok, 2.0 * h[i], 0.5 * h[i])
-            gave_up[i[h[i] < _MIN_STEP]] = True
+            gave_up[i[h[i] < MIN_STEP]] = True
             alive &= ~gave_up
         reached = alive & (t >= 1.0)
         return self.queries.actuators_batch(Q[reached], A[reached]), reached, gave_up

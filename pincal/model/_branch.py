@@ -42,10 +42,10 @@ from pincal.model._newton import Solution, SolverOptions
 
 __all__ = ["LoopSolver", "corrector_options"]
 
-_MIN_STEP = 1.0 / 4096  # smallest continuation step, as a fraction of the path
+MIN_STEP = 1.0 / 4096  # smallest continuation step, as a fraction of the path
 #: corrector budget of one continuation step: converging correctors take <= 9 iterations
 #: and (almost) never backtrack on the bundled machines
-_CORRECTOR_ITERATIONS = 12
+CORRECTOR_ITERATIONS = 12
 _CORRECTOR_BACKTRACKS = 4
 
 
@@ -53,7 +53,7 @@ def corrector_options(options: SolverOptions) -> SolverOptions:
     """The short-budget Newton settings of a continuation corrector (same tolerances)."""
     return dataclasses.replace(
         options,
-        max_iterations=min(options.max_iterations, _CORRECTOR_ITERATIONS),
+        max_iterations=min(options.max_iterations, CORRECTOR_ITERATIONS),
         max_backtracks=min(options.max_backtracks, _CORRECTOR_BACKTRACKS),
     )
 
@@ -208,7 +208,7 @@ class LoopSolver:
                 h *= 2.0
             else:
                 h /= 2.0
-                if h < _MIN_STEP:
+                if h < MIN_STEP:
                     raise ConvergenceError(
                         f"no solution on the home assembly branch along the path from "
                         f"q_act = {np.round(a0, 6).tolist()} (stopped at {t:.0%} of the path)",

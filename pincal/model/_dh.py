@@ -66,7 +66,7 @@ DHQuantity = Literal["a", "d", "alpha", "theta"]
 
 _CONVENTIONS = ("standard", "modified")
 _JOINT_TYPES = ("revolute", "prismatic", "fixed")
-_QUANTITIES: tuple[DHQuantity, ...] = ("a", "d", "alpha", "theta")
+DH_QUANTITIES: tuple[DHQuantity, ...] = ("a", "d", "alpha", "theta")
 
 
 # --------------------------------------------------------------------------- data
@@ -136,7 +136,7 @@ class DHNames:
         if quantity == "theta":
             dof = "offset" if self.joint_type == "revolute" else "rz"
             return f"{self.joint}.{dof}"
-        raise UnknownNameError("DH quantity", str(quantity), _QUANTITIES)
+        raise UnknownNameError("DH quantity", str(quantity), DH_QUANTITIES)
 
 
 @dataclass(frozen=True)
@@ -234,7 +234,8 @@ def dh_layout(
     )
 
 
-def _probe_transform(probe: Sequence[float] | np.ndarray) -> np.ndarray:
+def probe_transform(probe: Sequence[float] | np.ndarray) -> np.ndarray:
+    """(4, 4) probe transform from a (3,) offset [m] or a (4, 4) matrix."""
     try:
         arr = np.asarray(probe, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -302,7 +303,7 @@ def dh_fk(
     n_movable = sum(r.joint_type != "fixed" for r in rows)
     if q.shape != (n_movable,):
         raise ParameterError(f"q must have shape ({n_movable},), got {q.shape}")
-    errs = _check_errors(errors, len(rows))
+    errs = check_dh_errors(errors, len(rows))
     T = np.eye(4)
     k = 0
     for row, e in zip(rows, errs, strict=True):
@@ -314,11 +315,12 @@ def dh_fk(
         k += row.joint_type != "fixed"
         T = T @ _dh_matrix(theta, d, row.a + e.da, row.alpha + e.dalpha, convention)
     if probe is not None:
-        T = T @ _probe_transform(probe)
+        T = T @ probe_transform(probe)
     return T
 
 
-def _check_errors(errors: Sequence[DHError] | None, n: int) -> tuple[DHError, ...]:
+def check_dh_errors(errors: Sequence[DHError] | None, n: int) -> tuple[DHError, ...]:
+    """One DHError per row (None → zeros); ParameterError on a wrong count."""
     if errors is None:
         return (DHError(),) * n
     errs = tuple(errors)
@@ -330,7 +332,7 @@ def _check_errors(errors: Sequence[DHError] | None, n: int) -> tuple[DHError, ..
 def dh_apply_errors(rows: Sequence[DHRow], errors: Sequence[DHError]) -> list[DHRow]:
     """New DH rows with the errors added to a, d, α and θ-offset (inputs unchanged)."""
     rows = _check_rows(rows)
-    errs = _check_errors(errors, len(rows))
+    errs = check_dh_errors(errors, len(rows))
     return [
         DHRow(
             a=r.a + e.da,

@@ -12,14 +12,14 @@ import numpy as np
 
 from pincal.errors import ModelFileError, ParameterError, UnknownNameError
 from pincal.model._dh import (
-    _QUANTITIES,
+    DH_QUANTITIES,
     Convention,
     DHError,
     DHQuantity,
     DHRow,
-    _check_errors,
-    _probe_transform,
+    check_dh_errors,
     dh_layout,
+    probe_transform,
 )
 
 __all__ = ["dh_errors_to_parameters", "dh_preset", "dh_urdf", "parameters_to_dh_errors"]
@@ -178,7 +178,7 @@ def dh_urdf(
             parts.append(_joint(jname, jtype, parent, child, origin, limits))
             parent = child
     if probe is not None:
-        T = _probe_transform(probe)
+        T = probe_transform(probe)
         parts.append(_link("probe"))
         parts.append(
             _joint(
@@ -201,7 +201,7 @@ def dh_preset(
     convention: Convention = "standard",
     joint_names: Sequence[str] | None = None,
     link_names: Sequence[str] | None = None,
-    quantities: Sequence[DHQuantity] = _QUANTITIES,
+    quantities: Sequence[DHQuantity] = DH_QUANTITIES,
     links: Sequence[int] | None = None,
 ) -> list[dict[str, object]]:
     """Preset entries (``{"joints": name, "dofs": [...]}``) for DH errors.
@@ -213,8 +213,8 @@ def dh_preset(
     """
     layout = dh_layout(rows, convention, joint_names, link_names)
     for qn in quantities:
-        if qn not in _QUANTITIES:
-            raise UnknownNameError("DH quantity", str(qn), _QUANTITIES)
+        if qn not in DH_QUANTITIES:
+            raise UnknownNameError("DH quantity", str(qn), DH_QUANTITIES)
     selected = range(len(layout.rows)) if links is None else links
     entries: list[dict[str, object]] = []
     for i in selected:
@@ -222,7 +222,7 @@ def dh_preset(
             raise ParameterError(f"DH row index {i} out of range 0..{len(layout.names) - 1}")
         nm = layout.names[i]
         by_joint: dict[str, list[str]] = {}
-        for qn in _QUANTITIES:
+        for qn in DH_QUANTITIES:
             if qn in quantities:
                 joint, dof = nm.parameter(qn).split(".")
                 by_joint.setdefault(joint, []).append(dof)
@@ -244,7 +244,7 @@ def dh_errors_to_parameters(
     Δd ↦ ``<joint>.tz`` / ``.offset``, Δθ ↦ ``<joint>.offset`` / ``.rz``).
     """
     layout = dh_layout(rows, convention, joint_names, link_names)
-    errs = _check_errors(errors, len(layout.rows))
+    errs = check_dh_errors(errors, len(layout.rows))
     values: dict[str, float] = {}
     for nm, e in zip(layout.names, errs, strict=True):
         values[nm.parameter("a")] = float(e.da)
@@ -267,7 +267,7 @@ def parameters_to_dh_errors(
         UnknownNameError: a parameter name is not one of the DH parameters.
     """
     layout = dh_layout(rows, convention, joint_names, link_names)
-    valid = [nm.parameter(qn) for nm in layout.names for qn in _QUANTITIES]
+    valid = [nm.parameter(qn) for nm in layout.names for qn in DH_QUANTITIES]
     for key in values:
         if key not in valid:
             raise UnknownNameError("DH parameter", key, valid)

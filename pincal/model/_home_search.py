@@ -135,7 +135,7 @@ def by_name_defaults(
         apply, the notes saying so).
     """
     from pincal.model._floor import DEFAULT_FLOOR, stands_on_base
-    from pincal.model._workspace import _joint_ranges
+    from pincal.model._workspace import joint_ranges
 
     if mech.closures:
         return side, []
@@ -152,7 +152,7 @@ def by_name_defaults(
         )
     if "home" in side:
         return side, notes
-    found = regular_home(mech, _joint_ranges(mech), floor)
+    found = regular_home(mech, joint_ranges(mech), floor)
     start = mech.actuators_of(mech.q_home)
     if np.array_equal(found.q_act, start):
         return side, notes

@@ -61,7 +61,7 @@ class Compliance(JointTerm):
                 f"<inertial> elements in the URDF (or a payload: pincal.model.with_payload)"
             )
         if mech.closures:
-            _held_once(mech)
+            held_once(mech)
 
     def basis(self, mech: Mechanism, q_act: np.ndarray) -> np.ndarray:
         return actuator_load(mech, q_act)[:, :, None]
@@ -81,7 +81,7 @@ def actuator_load(mech: Mechanism, q_act: np.ndarray) -> np.ndarray:
             not unique (redundant actuation).
     """
     q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
-    model = _gravity_model(mech)
+    model = gravity_model(mech)
     data = model.createData()
     cols = [model.idx_vs[model.getJointId(a)] for a in mech.actuated]
     out = np.empty((q_act.shape[0], len(cols)))
@@ -93,11 +93,11 @@ def actuator_load(mech: Mechanism, q_act: np.ndarray) -> np.ndarray:
     S = np.zeros((model.nv, len(cols)))
     S[cols, np.arange(len(cols))] = 1.0
     for k, q in enumerate(mech.configurations(q_act)):
-        out[k] = _equilibrium(mech, model, data, S, q, k)[: len(cols)]
+        out[k] = equilibrium(mech, model, data, S, q, k)[: len(cols)]
     return out
 
 
-def _equilibrium(
+def equilibrium(
     mech: Mechanism, model: pin.Model, data: pin.Data, S: np.ndarray, q: np.ndarray, k: int
 ) -> np.ndarray:
     """``[τ; λ]`` solving ``g(q) = S τ + J_cᵀ λ`` at a closed configuration.
@@ -118,9 +118,9 @@ def _equilibrium(
     return x
 
 
-def _held_once(mech: Mechanism) -> None:
+def held_once(mech: Mechanism) -> None:
     """Refuse a closed loop whose actuator forces are not unique or not in equilibrium."""
-    model = _gravity_model(mech)
+    model = gravity_model(mech)
     cols = [model.idx_vs[model.getJointId(a)] for a in mech.actuated]
     S = np.zeros((model.nv, len(cols)))
     S[cols, np.arange(len(cols))] = 1.0
@@ -132,17 +132,17 @@ def _held_once(mech: Mechanism) -> None:
             f"{mech.name!r}: its actuator forces under load are not unique (redundant "
             f"actuation), so a compliance per actuator is not defined"
         )
-    _equilibrium(mech, model, model.createData(), S, mech.q_home, 0)
+    equilibrium(mech, model, model.createData(), S, mech.q_home, 0)
 
 
-def _gravity_model(mech: Mechanism) -> pin.Model:
+def gravity_model(mech: Mechanism) -> pin.Model:
     """A copy of the mechanism's model with gravity along its robot base's −z."""
     model = pin.Model(mech.model)
-    model.gravity = pin.Motion(np.concatenate([_gravity(mech), np.zeros(3)]))
+    model.gravity = pin.Motion(np.concatenate([gravity_wrench(mech), np.zeros(3)]))
     return model
 
 
-def _gravity(mech: Mechanism) -> np.ndarray:
+def gravity_wrench(mech: Mechanism) -> np.ndarray:
     """(3,) gravity in the model's world frame [m/s²]: −9.81 along the robot base's z."""
     g = np.array([0.0, 0.0, -9.81])
     if BASE_JOINT not in mech.tree.joints or not mech.model.existFrame(BASE_JOINT):

@@ -40,7 +40,7 @@ import pinocchio as pin
 from pincal.errors import ParameterError
 from pincal.model._closures import COMPONENTS
 from pincal.model._joint_terms import JointTerm, register_term
-from pincal.model._term_compliance import _equilibrium, _gravity, _gravity_model, _held_once
+from pincal.model._term_compliance import equilibrium, gravity_model, gravity_wrench, held_once
 from pincal.model._workspace import sample_actuators
 
 if TYPE_CHECKING:
@@ -82,8 +82,8 @@ class StrutCompliance(JointTerm):
                 f"model {mech.name!r} has no link masses: a strut compliance under gravity "
                 f"needs <inertial> elements in the URDF (or a payload: --payload)"
             )
-        _held_once(mech)
-        masses, model = _link_masses(mech), _gravity_model(mech)
+        held_once(mech)
+        masses, model = _link_masses(mech), gravity_model(mech)
         _pose_loads(mech, model, mech.q_home, (joint,), masses, 0)
         if mech.n_closure_rows > mech.closure_rank:  # redundant loops: home may be special
             rows = sample_actuators(mech, 3, np.random.default_rng(0))
@@ -150,7 +150,7 @@ def strut_loads(
     q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
     F = np.empty((q_act.shape[0], len(names)))
     E = np.empty((q_act.shape[0], len(names), len(mech.actuated)))
-    masses, model = _link_masses(mech), _gravity_model(mech)
+    masses, model = _link_masses(mech), gravity_model(mech)
     for k, q in enumerate(mech.configurations(q_act)):
         F[k], E[k] = _pose_loads(mech, model, q, names, masses, k)
     return F, E
@@ -166,13 +166,13 @@ def _pose_loads(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(F (n,) [N], E (n, n_act)) of the struts ``names`` at a closed configuration ``q``.
 
-    ``model``: the mechanism's model with gravity (:func:`_gravity_model`).
+    ``model``: the mechanism's model with gravity (:func:`gravity_model`).
     """
     data = model.createData()
     cols = [model.idx_vs[model.getJointId(a)] for a in mech.actuated]
     S = np.zeros((model.nv, len(cols)))
     S[cols, np.arange(len(cols))] = 1.0
-    lam = _equilibrium(mech, model, data, S, q, k)[len(cols) :]
+    lam = equilibrium(mech, model, data, S, q, k)[len(cols) :]
     pin.framesForwardKinematics(model, data, q)
     Jc = mech.closure_jacobian(q)
     Jm = _measured_jacobian(mech, model, data, q)
@@ -185,7 +185,7 @@ def _pose_loads(
         rigid = _rigid_links(mech, uj.child)
         dc[:, i] = _closure_change(mech, model, data, rigid, v)
         mass = sum(masses.get(link, 0.0) for link in rigid)  # lifted with the elongation
-        F[i] = -mass * float(_gravity(mech) @ v) - float(lam @ dc[:, i])
+        F[i] = -mass * float(gravity_wrench(mech) @ v) - float(lam @ dc[:, i])
     _check_determined(mech, np.hstack([S, Jc.T]), dc, names)
     # the loops with a strut elongated and the actuators held: J_c δq = −∂c/∂L, Sᵀ δq = 0
     rhs = np.vstack([-dc, np.zeros((len(cols), len(names)))])

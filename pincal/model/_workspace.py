@@ -24,7 +24,7 @@ __all__ = ["sample_actuators", "sample_pose"]
 _ROUND_TRIP_TOL = 1e-6
 
 
-def _joint_ranges(mech: Mechanism) -> np.ndarray:
+def joint_ranges(mech: Mechanism) -> np.ndarray:
     """(n_act, 2) sampling ranges [m, rad].
 
     The sidecar workspace, else the URDF limits, else (no range declared) the range
@@ -93,7 +93,7 @@ def sample_actuators(
             draws (the message says when the workspace lies on another assembly mode),
             or an actuator range that is not finite or inverted.
     """
-    ranges = _joint_ranges(mech)
+    ranges = joint_ranges(mech)
     use_pose = bool(mech.workspace.pose)
     if not use_pose and mech.batch_solvable:
         return _screened_draws(mech, n, rng, ranges, max_tries_per_pose * n)

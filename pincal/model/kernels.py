@@ -19,7 +19,7 @@ from pincal.model._block_solve import PassiveFactor
 from pincal.model._closures import measured_jacobian, measurement_residual
 from pincal.model._range_factor import RangeFactor
 from pincal.model._urdf_check import captured_stderr
-from pincal.model._workspace import _joint_ranges as joint_ranges
+from pincal.model._workspace import joint_ranges
 
 __all__ = [
     "CHUNK",

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from pincal.errors import ReportError
-from pincal.report._plots import _AFTER, _TRUE, _figure, _save, _unit, _vector
+from pincal.report._plots import AFTER, TRUE, checked_vector, new_figure, save_figure, unit_of
 
 __all__ = ["plot_correlation", "plot_parameters"]
 
@@ -54,9 +54,9 @@ def plot_parameters(
     if path is None:
         raise ReportError("path is required")
     names = [str(n) for n in names]
-    v = _vector(values, "values")
-    s = _vector(std, "std")
-    t = None if true is None else _vector(true, "true")
+    v = checked_vector(values, "values")
+    s = checked_vector(std, "std")
+    t = None if true is None else checked_vector(true, "true")
     for what, arr in (("values", v), ("std", s), ("true", t)):
         if arr is not None and arr.size != len(names):
             raise ReportError(f"{what} has {arr.size} entries but there are {len(names)} names")
@@ -71,26 +71,26 @@ def plot_parameters(
     ]
     groups = [g for g in groups if g[2]]
     height = 1.5 + 0.22 * len(names) + 0.6 * len(groups)
-    fig = _figure(7.5, max(3.0, height))
+    fig = new_figure(7.5, max(3.0, height))
     axes = fig.subplots(
         len(groups), 1, squeeze=False, height_ratios=[len(g[2]) + 2 for g in groups]
     )[:, 0]
     for ax, (kind, unit, idx) in zip(axes, groups, strict=True):
-        factor, label = _unit(unit)
+        factor, label = unit_of(unit)
         y = np.arange(len(idx))[::-1]
         ax.errorbar(
             v[idx] * factor,
             y,
             xerr=2 * s[idx] * factor,
             fmt="o",
-            color=_AFTER,
-            ecolor=_AFTER,
+            color=AFTER,
+            ecolor=AFTER,
             capsize=3,
             ms=4,
             label="identified ±2σ",
         )
         if t is not None:
-            ax.plot(t[idx] * factor, y, "x", color=_TRUE, ms=7, mew=2, label="true")
+            ax.plot(t[idx] * factor, y, "x", color=TRUE, ms=7, mew=2, label="true")
         ax.axvline(0.0, color="0.6", lw=0.8)
         ax.set_yticks(y)
         ax.set_yticklabels([names[i] for i in idx], fontsize=8)
@@ -98,7 +98,7 @@ def plot_parameters(
         ax.grid(axis="x", alpha=0.3)
         ax.legend(fontsize=8, loc="best")
     axes[0].set_title(title)
-    return _save(fig, path, axes)
+    return save_figure(fig, path, axes)
 
 
 def plot_correlation(
@@ -112,7 +112,7 @@ def plot_correlation(
     with np.errstate(invalid="ignore", divide="ignore"):
         R = np.nan_to_num(C / np.outer(s, s), nan=0.0)
     size = min(12.0, 3.0 + 0.18 * len(names))
-    fig = _figure(size + 1.2, size)
+    fig = new_figure(size + 1.2, size)
     ax = fig.add_subplot()
     im = ax.imshow(R, vmin=-1.0, vmax=1.0, cmap="RdBu_r")
     ticks = np.arange(len(names))
@@ -121,4 +121,4 @@ def plot_correlation(
     ax.set_yticks(ticks, [str(n) for n in names], fontsize=font)
     fig.colorbar(im, ax=ax, shrink=0.8, fraction=0.05, pad=0.02, label="correlation")
     ax.set_title("Parameter correlations")
-    return _save(fig, path, [ax])
+    return save_figure(fig, path, [ax])

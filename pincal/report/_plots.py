@@ -51,7 +51,7 @@ _UNITS: dict[str, tuple[float, str]] = {
     "µrad": (1e6, "µrad"),
     "deg": (180.0 / math.pi, "deg"),
 }
-_BEFORE, _AFTER, _TRUE = "#d62728", "#1f77b4", "#2ca02c"
+_BEFORE, AFTER, TRUE = "#d62728", "#1f77b4", "#2ca02c"
 _DPI = 110  # PNG pixels per figure inch (the HTML shows them at this size)
 _PNG_LEVEL = 1  # zlib level: flat plot colours compress about as well at 1 as at 6, faster
 
@@ -76,14 +76,16 @@ class ErrorStats:
 # --------------------------------------------------------------------------- helpers
 
 
-def _unit(unit: str) -> tuple[float, str]:
+def unit_of(unit: str) -> tuple[float, str]:
+    """(scale from metres, label) of a plot unit such as ``um`` or ``mm``."""
     try:
         return _UNITS[unit]
     except KeyError:
         raise ReportError(f"unit {unit!r} not known; units are: {', '.join(_UNITS)}") from None
 
 
-def _vector(values: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
+def checked_vector(values: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
+    """``values`` as a finite non-empty 1-D float array, else ReportError naming ``what``."""
     arr = np.asarray(values, dtype=float)
     if arr.ndim != 1 or arr.size == 0:
         raise ReportError(f"{what} must be a non-empty 1-D array (m,), got shape {arr.shape}")
@@ -92,7 +94,9 @@ def _vector(values: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
     return arr
 
 
-def _save(fig: Figure, path: str | os.PathLike, grid: Any, suptitle: Text | None = None) -> Path:
+def save_figure(
+    fig: Figure, path: str | os.PathLike, grid: Any, suptitle: Text | None = None
+) -> Path:
     """Lay out ``grid`` (the figure's axes, (rows, cols)) and write the PNG in one draw."""
     fit_margins(fig, grid, suptitle)
     buffer = io.BytesIO()
@@ -100,7 +104,7 @@ def _save(fig: Figure, path: str | os.PathLike, grid: Any, suptitle: Text | None
     return write_png(Path(path), buffer.getvalue())
 
 
-def _figure(width: float = 7.0, height: float = 4.0) -> Figure:
+def new_figure(width: float = 7.0, height: float = 4.0) -> Figure:
     """A figure with an Agg canvas and no layout engine (margins: :func:`fit_margins`)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -112,7 +116,7 @@ def _figure(width: float = 7.0, height: float = 4.0) -> Figure:
 
 def error_statistics(values: Sequence[float] | np.ndarray) -> ErrorStats:
     """RMS, max and mean of ``|values|`` (shape (m,))."""
-    arr = np.abs(_vector(values, "values"))
+    arr = np.abs(checked_vector(values, "values"))
     return ErrorStats(
         rms=float(np.sqrt(np.mean(arr**2))),
         max=float(arr.max()),
@@ -141,13 +145,13 @@ def plot_errors_before_after(
         path: PNG file to write.
         title: chart title.
     """
-    b = _vector(before, "before")
-    a = _vector(after, "after")
+    b = checked_vector(before, "before")
+    a = checked_vector(after, "after")
     if a.shape != b.shape:
         raise ReportError(f"before has {b.size} poses but after has {a.size}")
-    factor, label = _unit(unit)
+    factor, label = unit_of(unit)
     sb, sa = error_statistics(b * factor), error_statistics(a * factor)
-    fig = _figure()
+    fig = new_figure()
     ax = fig.add_subplot()
     x = np.arange(b.size)
     _bars(
@@ -155,7 +159,7 @@ def plot_errors_before_after(
         label=f"before: RMS {sb.rms:.4g}, max {sb.max:.4g} {label}",
     )  # fmt: skip
     _bars(
-        ax, x, x + 0.4, np.abs(a) * factor, color=_AFTER,
+        ax, x, x + 0.4, np.abs(a) * factor, color=AFTER,
         label=f"after: RMS {sa.rms:.4g}, max {sa.max:.4g} {label}",
     )  # fmt: skip
     ax.set_xlabel("pose")
@@ -169,7 +173,7 @@ def plot_errors_before_after(
         ax.set_xticks(x)
     fig.legend(loc="lower center", ncol=2, fontsize=8)  # below the axes, not on the bars
     ax.grid(axis="y", alpha=0.3)
-    return _save(fig, path, [ax])
+    return save_figure(fig, path, [ax])
 
 
 def plot_error_histogram(
@@ -182,18 +186,18 @@ def plot_error_histogram(
     bins: int = 20,
 ) -> Path:
     """Overlaid histograms of error magnitudes before and after, shape (m,) each [m or rad]."""
-    b = np.abs(_vector(before, "before"))
-    a = np.abs(_vector(after, "after"))
-    factor, label = _unit(unit)
+    b = np.abs(checked_vector(before, "before"))
+    a = np.abs(checked_vector(after, "after"))
+    factor, label = unit_of(unit)
     top = max(b.max(), a.max()) * factor * 1.0001 or 1.0
     low = min(b[b > 0].min(initial=top), a[a > 0].min(initial=top)) * factor
     log_x = top > 50 * low > 0  # before and after decades apart: log bins show both
     edges = np.geomspace(low / 1.0001, top, bins + 1) if log_x else np.linspace(0, top, bins + 1)
-    fig = _figure()
+    fig = new_figure()
     ax = fig.add_subplot()
     if log_x:
         _log_scale(ax, "x")
-    for values, color, side in ((b, _BEFORE, "before"), (a, _AFTER, "after")):
+    for values, color, side in ((b, _BEFORE, "before"), (a, AFTER, "after")):
         counts, _ = np.histogram(values * factor, edges)
         _bars(
             ax, edges[:-1], edges[1:], counts, color=color, alpha=0.6,
@@ -203,7 +207,7 @@ def plot_error_histogram(
     ax.set_ylabel("count")
     ax.set_title(title)
     ax.legend()
-    return _save(fig, path, [ax])
+    return save_figure(fig, path, [ax])
 
 
 def plot_index_history(
@@ -223,8 +227,8 @@ def plot_index_history(
     series = dict(history) if isinstance(history, Mapping) else {"index": history}
     if not series:
         raise ReportError("history is empty; expected {name: values per iteration}")
-    arrays = {name: _vector(v, f"history[{name!r}]") for name, v in series.items()}
-    fig = _figure(7.0, 1.2 + 1.6 * len(arrays))
+    arrays = {name: checked_vector(v, f"history[{name!r}]") for name, v in series.items()}
+    fig = new_figure(7.0, 1.2 + 1.6 * len(arrays))
     axes = fig.subplots(len(arrays), 1, sharex=True, squeeze=False)[:, 0]
     for ax, (name, values) in zip(axes, arrays.items(), strict=True):
         ax.plot(np.arange(values.size), values, "o-", ms=3)
@@ -235,7 +239,7 @@ def plot_index_history(
             _log_scale(ax, "y")
     axes[-1].set_xlabel("iteration")
     axes[0].set_title(title)
-    return _save(fig, path, axes)
+    return save_figure(fig, path, axes)
 
 
 def plot_convergence(
@@ -246,8 +250,8 @@ def plot_convergence(
     ylabel: str = "cost",
 ) -> Path:
     """Cost (e.g. ½‖r‖² or residual RMS) per iteration, shape (iterations,), log scale."""
-    cost = _vector(cost_per_iter, "cost_per_iter")
-    fig = _figure()
+    cost = checked_vector(cost_per_iter, "cost_per_iter")
+    fig = new_figure()
     ax = fig.add_subplot()
     ax.plot(np.arange(cost.size), cost, "o-", ms=4)
     if np.all(cost > 0):
@@ -256,7 +260,7 @@ def plot_convergence(
     ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.grid(alpha=0.3, which="both")
-    return _save(fig, path, [ax])
+    return save_figure(fig, path, [ax])
 
 
 def plot_validation_summary(
@@ -273,7 +277,7 @@ def plot_validation_summary(
     """
     blocks = [(q, u) for q, u in (("position", "mm"), ("orientation", "mrad"))
               if before.get(f"rms_{q}_{u}") is not None] or [("position", "mm")]  # fmt: skip
-    fig = _figure(3.75 * len(blocks) if len(blocks) > 1 else 4.5, 3.6)
+    fig = new_figure(3.75 * len(blocks) if len(blocks) > 1 else 4.5, 3.6)
     axes = np.atleast_1d(fig.subplots(1, len(blocks)))
     for ax, (quantity, unit) in zip(axes, blocks, strict=True):
         keys = [f"rms_{quantity}_{unit}", f"max_{quantity}_{unit}"]
@@ -281,7 +285,7 @@ def plot_validation_summary(
         a = [float(v) if (v := after.get(k)) is not None else math.nan for k in keys]
         x = np.arange(2)
         bars_b = ax.bar(x - 0.2, b, 0.4, color=_BEFORE, label="nominal model")
-        bars_a = ax.bar(x + 0.2, a, 0.4, color=_AFTER, label="calibrated model")
+        bars_a = ax.bar(x + 0.2, a, 0.4, color=AFTER, label="calibrated model")
         ax.bar_label(bars_b, fmt="%.3g", fontsize=8)
         ax.bar_label(bars_a, fmt="%.3g", fontsize=8)
         ax.set_xticks(x)
@@ -293,4 +297,4 @@ def plot_validation_summary(
         ax.grid(axis="y", alpha=0.3)
     axes[0].legend(fontsize=8)
     suptitle = fig.suptitle("Validation: predicted vs actual measured-frame pose")
-    return _save(fig, path, [axes], suptitle)
+    return save_figure(fig, path, [axes], suptitle)

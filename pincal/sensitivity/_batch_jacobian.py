@@ -35,13 +35,18 @@ from pincal.model.kernels import (
     slice_kinematics,
 )
 from pincal.sensitivity._batch_points import (
-    _adjoint,
-    _factor,
-    _measured_free_jacobian,
+    adjoint,
+    measured_free_jacobian,
+    point_factor,
     point_path,
 )
-from pincal.sensitivity._batch_serial import _anchors, _columns, _serial_path
-from pincal.sensitivity._jacobian import BatchSensitivity, _Plan, _plan, pose_sensitivity
+from pincal.sensitivity._batch_serial import anchors, serial_columns, serial_path
+from pincal.sensitivity._jacobian import (
+    BatchSensitivity,
+    JacobianPlan,
+    jacobian_plan,
+    pose_sensitivity,
+)
 from pincal.sensitivity._joint_terms import joint_term_sensitivities
 from pincal.sensitivity._rank import RANK_RTOL
 
@@ -53,12 +58,12 @@ def batch_applies(mech: Mechanism) -> bool:
     return mech.batch_model.supported and (not mech.closures or mech.batch_solvable)
 
 
-def _param_twists(
+def param_twists(
     mech: Mechanism,
     params: ParameterSet,
     bk: BatchKinematics,
     values: np.ndarray | Linearisation,
-    plan: _Plan,
+    plan: JacobianPlan,
     direction: np.ndarray | None = None,
 ) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], dict[str, np.ndarray]]:
     """Placements of the plan's frames and their (N, 6, n) local parameter twists.
@@ -100,14 +105,14 @@ def _param_twists(
 
 
 def _origins(
-    mech: Mechanism, bk: BatchKinematics, plan: _Plan
+    mech: Mechanism, bk: BatchKinematics, plan: JacobianPlan
 ) -> tuple[list[str], np.ndarray, np.ndarray]:
     """Parameterised joints and their origins' world placements.
 
     Returns:
         The J joint names, rotations (N, J, 3, 3) and positions (N, J, 3) [m].
     """
-    names, parents, R0, p0 = _anchors(mech, plan)
+    names, parents, R0, p0 = anchors(mech, plan)
     Rp = bk.rotations[:, parents]
     return names, Rp @ R0, bk.translations[:, parents] + mv(Rp, p0)
 
@@ -121,7 +126,7 @@ def _cross_rows(d: np.ndarray, R: np.ndarray) -> np.ndarray:
 
 def _closure_maps(
     mech: Mechanism,
-    plan: _Plan,
+    plan: JacobianPlan,
     names: list[str],
     Ro: np.ndarray,
     po: np.ndarray,
@@ -176,7 +181,7 @@ def _world_path(
     params: ParameterSet,
     bk: BatchKinematics,
     values: np.ndarray | Linearisation,
-    plan: _Plan,
+    plan: JacobianPlan,
     out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Measured rotation, position and Jacobian (N, 6, n) when every closure is positional.
@@ -190,7 +195,7 @@ def _world_path(
     not n).
     """
     if not mech.closures:
-        return _serial_path(mech, params, bk, values, plan, out)
+        return serial_path(mech, params, bk, values, plan, out)
     if all(c.is_point for c in mech.closures):
         return point_path(mech, params, bk, values, plan, out)
     N, n = bk.q.shape[0], len(params)
@@ -211,7 +216,7 @@ def _world_path(
         Cm[:, :, :3, 3:] = _cross_rows(po[:, mj] - pm[:, None], R)
         Cm[:, :, 3:, 3:] = np.swapaxes(Rm, 1, 2)[:, None] @ R
     if mech.closures:
-        Y = _adjoint(mech, bk, _measured_free_jacobian(mech, bk, Rm, pm))
+        Y = adjoint(mech, bk, measured_free_jacobian(mech, bk, Rm, pm))
         C = np.zeros((N, len(names), 6, 6))
         _closure_maps(mech, plan, names, Ro, po, place, Y, C)
     twists = params.linearise(values).joint_twists
@@ -226,7 +231,7 @@ def _world_path(
         else:
             continue
         cols, _, eff = twists[j]
-        J[:, :, _columns(cols)] = (Ci.reshape(-1, 6) @ eff).reshape(N, 6, -1)
+        J[:, :, serial_columns(cols)] = (Ci.reshape(-1, 6) @ eff).reshape(N, 6, -1)
     return Rm, pm, J
 
 
@@ -264,7 +269,7 @@ def sensitivities_batch(
         )
     qs = np.atleast_2d(np.asarray(qs, dtype=float))
     n = len(params)
-    plan = _plan(mech, params)
+    plan = jacobian_plan(mech, params)
     if not batch_applies(mech):
         sens = [pose_sensitivity(mech, params, q, lin, plan) for q in qs]
         breaks = np.zeros(n, dtype=bool)
@@ -280,7 +285,7 @@ def sensitivities_batch(
     bk = bk if bk is not None else mech.kinematics_batch(qs)
     N = bk.q.shape[0]
     if not mech.closures:  # a serial chain: one call, blocked inside for the cache
-        Rm, pm, J = _serial_path(mech, params, bk, lin, plan, None)
+        Rm, pm, J = serial_path(mech, params, bk, lin, plan, None)
         return BatchSensitivity(bk.q.copy(), pm, Rm, J, np.zeros(n, dtype=bool))
     redundant = mech.n_closure_rows > mech.closure_rank  # rows some parameters can break
     if redundant or any(c.components[-1] >= 3 for c in mech.closures):
@@ -305,7 +310,7 @@ def _local_path(
     params: ParameterSet,
     bk: BatchKinematics,
     values: np.ndarray | Linearisation,
-    plan: _Plan,
+    plan: JacobianPlan,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Measured rotation, position, Jacobian (N, 6, n) and closure breaking (n,).
 
@@ -314,7 +319,7 @@ def _local_path(
     solve. A parameter breaks closure when its closure column has a part outside the
     range of the passive closure Jacobian (the rule of :func:`pose_sensitivity`).
     """
-    placements, P = _param_twists(mech, params, bk, values, plan)
+    placements, P = param_twists(mech, params, bk, values, plan)
     Rm, pm = placements[mech.measured_frame]
     Pm = P[mech.measured_frame]
     J = np.concatenate([mm(Rm, Pm[:, :3]), Pm[:, 3:]], axis=1)
@@ -327,9 +332,9 @@ def _local_path(
         ],
         axis=1,
     )
-    factor = _factor(mech, bk)
+    factor = point_factor(mech, bk)
     # Jm_u · dq_u/dp = −((Jfᵀ)⁺ Jm_uᵀ)ᵀ Jc_p: one solve with 6 right-hand sides
-    Y = factor.solve_transposed(np.swapaxes(_measured_free_jacobian(mech, bk, Rm, pm), 1, 2))
+    Y = factor.solve_transposed(np.swapaxes(measured_free_jacobian(mech, bk, Rm, pm), 1, 2))
     breaks = np.zeros(len(params), dtype=bool)
     if isinstance(factor, RangeFactor):
         out = factor.out_of_range(Jc_p)  # (N, n)

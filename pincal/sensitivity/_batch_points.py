@@ -24,13 +24,13 @@ import numpy as np
 
 from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
 from pincal.model.kernels import PassiveFactor, cross_cols
-from pincal.sensitivity._batch_serial import _anchors
-from pincal.sensitivity._jacobian import _Plan
+from pincal.sensitivity._batch_serial import anchors
+from pincal.sensitivity._jacobian import JacobianPlan
 
 __all__ = ["point_path"]
 
 
-def _measured_free_jacobian(
+def measured_free_jacobian(
     mech: Mechanism, bk: BatchKinematics, Rm: np.ndarray, pm: np.ndarray
 ) -> np.ndarray:
     """(N, 6, k) derivative of ``[p_world; rotation (local)]`` w.r.t. the free dofs."""
@@ -41,7 +41,7 @@ def _measured_free_jacobian(
     return np.concatenate([v, np.swapaxes(Rm, 1, 2) @ Jw], axis=1) * sup
 
 
-def _factor(mech: Mechanism, bk: BatchKinematics) -> PassiveFactor:
+def point_factor(mech: Mechanism, bk: BatchKinematics) -> PassiveFactor:
     """The passive closure factorisation of ``bk``: the solve's, or computed here."""
     if bk.closure_factor is not None:
         return bk.closure_factor
@@ -51,9 +51,9 @@ def _factor(mech: Mechanism, bk: BatchKinematics) -> PassiveFactor:
     return mech.passive_factor(Jf)
 
 
-def _adjoint(mech: Mechanism, bk: BatchKinematics, Jm_u: np.ndarray) -> np.ndarray:
+def adjoint(mech: Mechanism, bk: BatchKinematics, Jm_u: np.ndarray) -> np.ndarray:
     """``Y = (Jfᵀ)⁺ Jm_uᵀ`` (N, rows, 6) (``Jf⁻ᵀ Jm_uᵀ`` where Jf is square)."""
-    return _factor(mech, bk).solve_transposed(np.swapaxes(Jm_u, 1, 2))
+    return point_factor(mech, bk).solve_transposed(np.swapaxes(Jm_u, 1, 2))
 
 
 def _cross_t(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -68,7 +68,7 @@ def _world_twists(
     params: ParameterSet,
     bk: BatchKinematics,
     values: np.ndarray | Linearisation,
-    plan: _Plan,
+    plan: JacobianPlan,
 ) -> tuple[np.ndarray, np.ndarray]:
     """World twists ``V`` and ``W`` (n, 3, N) of every parameter column (see module doc).
 
@@ -78,7 +78,7 @@ def _world_twists(
     rotations in one product per joint, for all poses. Poses are the last axis, so that
     per-column factors broadcast over long contiguous rows.
     """
-    names, parents, R0, p0 = _anchors(mech, plan)
+    names, parents, R0, p0 = anchors(mech, plan)
     N, n = bk.q.shape[0], len(params)
     twists = params.linearise(values).joint_twists
     V, W = np.zeros((n, 3, N)), np.zeros((n, 3, N))
@@ -101,14 +101,16 @@ def _world_twists(
     return V, W
 
 
-def _column_masks(mech: Mechanism, params: ParameterSet, plan: _Plan, frame: str) -> np.ndarray:
+def _column_masks(
+    mech: Mechanism, params: ParameterSet, plan: JacobianPlan, frame: str
+) -> np.ndarray:
     """(n,) 1.0 on the columns of the parameterised joints below ``frame``."""
     below = set(plan.moves[frame])
     return np.array([float(p.joint in below) for p in params.parameters])
 
 
 def _closure_columns(
-    mech: Mechanism, params: ParameterSet, plan: _Plan
+    mech: Mechanism, params: ParameterSet, plan: JacobianPlan
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per point closure, the parameter columns that move its frames (padded to w).
 
@@ -135,7 +137,7 @@ def point_path(
     params: ParameterSet,
     bk: BatchKinematics,
     values: np.ndarray | Linearisation,
-    plan: _Plan,
+    plan: JacobianPlan,
     out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Measured rotation (N, 3, 3), position (N, 3) and Jacobian (N, 6, n), point closures.
@@ -162,6 +164,6 @@ def point_path(
     rate = V[cols] * (sb - sa) + _cross_t(W[cols], pb * sb - pa * sa)
     dc = np.zeros((N, 3 * len(mech.closures), n))
     dc.reshape(N, -1)[:, flat] = np.transpose(rate, (3, 2, 0, 1))
-    Y = _adjoint(mech, bk, _measured_free_jacobian(mech, bk, Rm, pm))
+    Y = adjoint(mech, bk, measured_free_jacobian(mech, bk, Rm, pm))
     J -= np.swapaxes(Y, 1, 2) @ dc
     return Rm, pm, J

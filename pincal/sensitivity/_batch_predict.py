@@ -14,9 +14,9 @@ import numpy as np
 
 from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
 from pincal.model.kernels import closure_jacobian_batch, cross3, mv
-from pincal.sensitivity._batch_jacobian import _param_twists, batch_applies
-from pincal.sensitivity._batch_serial import _anchors
-from pincal.sensitivity._jacobian import _Plan, _plan
+from pincal.sensitivity._batch_jacobian import batch_applies, param_twists
+from pincal.sensitivity._batch_serial import anchors
+from pincal.sensitivity._jacobian import JacobianPlan, jacobian_plan
 
 __all__ = ["predict_configurations"]
 
@@ -52,13 +52,13 @@ def predict_configurations(
     Jf = bk.closure_jacobian
     if not mech.closures or Jf is None or not batch_applies(mech):
         return None
-    plan = _plan(mech, params)
+    plan = jacobian_plan(mech, params)
     values = params.linearise(values)
     delta = np.asarray(delta, dtype=float)
     if all(c.is_point for c in mech.closures):
         Jc = _point_closure_rates(mech, params, bk, values, plan, delta)
     else:
-        place, P = _param_twists(mech, params, bk, values, plan, delta)
+        place, P = param_twists(mech, params, bk, values, plan, delta)
         Jc = np.concatenate(
             [
                 closure_jacobian_batch(
@@ -88,7 +88,7 @@ def _point_closure_rates(
     params: ParameterSet,
     bk: BatchKinematics,
     values: np.ndarray | Linearisation,
-    plan: _Plan,
+    plan: JacobianPlan,
     delta: np.ndarray,
 ) -> np.ndarray:
     """(N, n_closure_rows) derivative of point-closure residuals along ``delta`` at fixed q.
@@ -97,7 +97,7 @@ def _point_closure_rates(
     by ``V_j + W_j × (x − o_j)`` (V, W: v, ω in world axes; o_j: origin position); a
     residual ``p_b − p_a`` by the sum over the joints that move b minus those that move a.
     """
-    names, parents, R0, p0 = _anchors(mech, plan)
+    names, parents, R0, p0 = anchors(mech, plan)
     twists = params.linearise(values).joint_twists
     T = np.array([twists[j][2] @ delta[twists[j][0]] for j in names])  # (J, 6)
     Rp = bk.rotations[:, parents]

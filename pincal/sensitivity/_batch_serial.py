@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
-from pincal.sensitivity._jacobian import _Plan
+from pincal.sensitivity._jacobian import JacobianPlan
 
 __all__: list[str] = []
 
@@ -50,7 +50,7 @@ def _scratch_maps(K: int, M: int) -> np.ndarray:
     return buf
 
 
-def _columns(cols: np.ndarray) -> slice | np.ndarray:
+def serial_columns(cols: np.ndarray) -> slice | np.ndarray:
     """A slice for contiguous parameter columns (faster to write), else the indices."""
     ks = cols.tolist()  # plain Python: a handful of columns, called per joint and call
     if ks and ks == list(range(ks[0], ks[0] + len(ks))):
@@ -58,7 +58,9 @@ def _columns(cols: np.ndarray) -> slice | np.ndarray:
     return cols
 
 
-def _anchors(mech: Mechanism, plan: _Plan) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
+def anchors(
+    mech: Mechanism, plan: JacobianPlan
+) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
     """Parameterised joints, their origins' parent joints (J,) and constant placements.
 
     Origin j = ``oMi[parent_j] · (R0_j, p0_j)`` with R0 (J, 3, 3), p0 (J, 3) [m].
@@ -93,7 +95,7 @@ class _Layout:
 
 
 def _layout(
-    mech: Mechanism, params: ParameterSet, values: np.ndarray | Linearisation, plan: _Plan
+    mech: Mechanism, params: ParameterSet, values: np.ndarray | Linearisation, plan: JacobianPlan
 ) -> _Layout:
     """The :class:`_Layout` of the measured frame at parameter ``values``."""
     model = mech.model
@@ -106,7 +108,7 @@ def _layout(
         else:
             body, C = int(parent), model.jointPlacements[jid]
         cols, _, eff = twists[j]
-        found.append((body, _columns(cols), np.ascontiguousarray(C.action @ eff)))
+        found.append((body, serial_columns(cols), np.ascontiguousarray(C.action @ eff)))
     ids = sorted({f[0] for f in found})
     where = {b: k for k, b in enumerate(ids)}
     runs = tuple((where[b], c, G) for b, c, G in found)
@@ -170,12 +172,12 @@ def _measured_placement(mech: Mechanism, bk: BatchKinematics) -> tuple[np.ndarra
     return Rm, pm
 
 
-def _serial_path(
+def serial_path(
     mech: Mechanism,
     params: ParameterSet,
     bk: BatchKinematics,
     values: np.ndarray | Linearisation,
-    plan: _Plan,
+    plan: JacobianPlan,
     out: np.ndarray | None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Measured rotations (N, 3, 3), positions (N, 3) and Jacobian (N, 6, n) of a chain.

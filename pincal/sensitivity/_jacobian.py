@@ -90,7 +90,7 @@ def _breaking(solver: RangeSolver, Jc_p: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class _Plan:
+class JacobianPlan:
     """What the sensitivity of one (mechanism, parameter set) pair needs, computed once.
 
     Attributes:
@@ -106,7 +106,7 @@ class _Plan:
     origins: dict[str, tuple[int, int, int]]
 
 
-def _plan(mech: Mechanism, params: ParameterSet) -> _Plan:
+def jacobian_plan(mech: Mechanism, params: ParameterSet) -> JacobianPlan:
     """Which parameterised joints move each key frame, and where their origins hang."""
     joints = set(params.joints)
     moves = {
@@ -121,7 +121,7 @@ def _plan(mech: Mechanism, params: ParameterSet) -> _Plan:
             jid = mech.model.getJointId(j)
             origins[j] = (-1, jid, mech.model.parents[jid])
     fixed = [j for j, (fid, _, _) in origins.items() if fid >= 0]
-    return _Plan(tuple(dict.fromkeys([*mech.key_frames, *fixed])), moves, origins)
+    return JacobianPlan(tuple(dict.fromkeys([*mech.key_frames, *fixed])), moves, origins)
 
 
 def pose_sensitivity(
@@ -129,7 +129,7 @@ def pose_sensitivity(
     params: ParameterSet,
     q: np.ndarray | Kinematics,
     values: np.ndarray | Linearisation | None = None,
-    plan: _Plan | None = None,
+    plan: JacobianPlan | None = None,
 ) -> PoseSensitivity:
     """Sensitivity of the measured frame at a closed configuration.
 
@@ -149,7 +149,7 @@ def pose_sensitivity(
             f"sensitivities_batch, not pose by pose (instrument calibrations do not take them yet)"
         )
     twists = lin.joint_twists
-    plan = plan or _plan(mech, params)
+    plan = plan or jacobian_plan(mech, params)
     kin = q if isinstance(q, Kinematics) else mech.kinematics(q, plan.frames)
     placements, joints = kin.placements, kin.joint_placements
     model = mech.model

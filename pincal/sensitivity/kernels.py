@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pincal.sensitivity._batch_jacobian import batch_applies
 from pincal.sensitivity._batch_predict import predict_configurations
-from pincal.sensitivity._jacobian import _plan as jacobian_plan
+from pincal.sensitivity._jacobian import jacobian_plan
 
 __all__ = [
     "batch_applies",

@@ -23,10 +23,7 @@ from pincal.design import (
     scale_columns,
     weight_rows,
 )
-from pincal.design._exchange import (
-    _Problem,
-    _State,
-)
+from pincal.design._scoring import ScoringProblem, ScoringState
 from pincal.errors import (
     PincalError,
     TooFewPosesError,
@@ -237,9 +234,9 @@ def test_map_to_ranges():
 def test_rank_k_update_equals_recomputation(steps):
     """12 steps: pure Woodbury/rank-k updates; 45: across periodic refreshes of A⁻¹."""
     J = _random_candidates(8, N=50, k=6, n=9)
-    prob = _Problem(J, "O1", fast=True, prune=None, ridge=1e-9)
+    prob = ScoringProblem(J, "O1", fast=True, prune=None, ridge=1e-9)
     rng = np.random.default_rng(8)
-    state = _State(prob, list(rng.choice(50, 3, replace=False)))
+    state = ScoringState(prob, list(rng.choice(50, 3, replace=False)))
     prob.add_logdets(state)  # materialise M so that later updates are rank-k
     for step in range(steps):
         if step % 2 == 1 and len(state.members) > 3:

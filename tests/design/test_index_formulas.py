@@ -15,7 +15,7 @@ from pincal.design import (
     scale_columns,
     weight_rows,
 )
-from pincal.design._exchange import _Problem
+from pincal.design._scoring import ScoringProblem
 from pincal.model import COMPONENTS
 
 
@@ -43,7 +43,7 @@ def test_indices_follow_the_definitions_everywhere():
         assert obs.get(name) == pytest.approx(want[name], rel=1e-12)
         assert batch[name][0] == pytest.approx(want[name], rel=1e-12)
         # the exchange algorithms score designs with the same formula
-        problem = _Problem(J, name, True, 64, 1e-9)
+        problem = ScoringProblem(J, name, True, 64, 1e-9)
         assert problem.exact(members) == pytest.approx(want[name], rel=1e-12)
     sel = exchange(J, 5, "A", rng=1)
     assert sel.value == pytest.approx(observability(J[sel.indices]).get("A"), rel=1e-12)

@@ -16,9 +16,9 @@ from pincal.identification import _problem
 from pincal.identification._problem import CalibrationProblem
 from pincal.model import Mechanism
 from pincal.sensitivity import _batch_predict
-from pincal.sensitivity._batch_jacobian import _param_twists
+from pincal.sensitivity._batch_jacobian import param_twists
 from pincal.sensitivity._batch_predict import predict_configurations
-from pincal.sensitivity._jacobian import _plan
+from pincal.sensitivity._jacobian import jacobian_plan
 
 MODELS = [
     ("stewart_6ups", "stewart42"),
@@ -69,9 +69,9 @@ def test_point_closure_rates_equal_the_generic_twists(name, preset):
     m = params.apply(mech, values)
     _, bk = m.configurations_batch(rows)
     delta = np.random.default_rng(8).standard_normal(len(params))
-    plan = _plan(m, params)
+    plan = jacobian_plan(m, params)
     fast = _batch_predict._point_closure_rates(m, params, bk, values, plan, delta)
-    place, P = _param_twists(m, params, bk, values, plan, delta)
+    place, P = param_twists(m, params, bk, values, plan, delta)
     generic = np.concatenate(
         [
             _batch_predict.closure_jacobian_batch(

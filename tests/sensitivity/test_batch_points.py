@@ -18,7 +18,7 @@ import pytest
 import pincal
 from pincal.sensitivity import pose_sensitivity
 from pincal.sensitivity._batch_jacobian import sensitivities_batch
-from pincal.sensitivity._jacobian import _plan
+from pincal.sensitivity._jacobian import jacobian_plan
 
 RPR3 = Path(__file__).parents[1] / "model" / "machines" / "rpr3"
 
@@ -45,7 +45,7 @@ def mounted(tmp_path_factory) -> pincal.Mechanism:
 
 def test_mount_moves_both_frames_of_every_closure(mounted):
     params = pincal.parameters(mounted, "full")
-    plan = _plan(mounted, params)
+    plan = jacobian_plan(mounted, params)
     for c in mounted.closures:
         assert "mount" in plan.moves[c.frame_a] and "mount" in plan.moves[c.frame_b]
     assert all(c.is_point for c in mounted.closures)

@@ -17,7 +17,7 @@ import pincal
 from pincal.model import Mechanism
 from pincal.sensitivity import _batch_serial, pose_sensitivity
 from pincal.sensitivity._batch_jacobian import sensitivities_batch
-from pincal.sensitivity._jacobian import _plan
+from pincal.sensitivity._jacobian import jacobian_plan
 
 LIMIT = '<limit lower="-2" upper="2" effort="1" velocity="1"/>'
 CHAIN_URDF = f"""<?xml version="1.0"?>
@@ -93,10 +93,10 @@ def test_chain_layout_covers_the_index_paths(chain):
     """The subset has non-contiguous columns; 'two bodies' non-consecutive bodies."""
     values = np.zeros(len(SUBSET))
     params = pincal.parameters(chain, SUBSET)
-    lay = _batch_serial._layout(chain, params, values, _plan(chain, params))
+    lay = _batch_serial._layout(chain, params, values, jacobian_plan(chain, params))
     assert any(isinstance(cols, np.ndarray) for _, cols, _ in lay.runs)
     two = pincal.parameters(chain, ["mount.tx", "j3.ty"])
-    lay2 = _batch_serial._layout(chain, two, np.zeros(2), _plan(chain, two))
+    lay2 = _batch_serial._layout(chain, two, np.zeros(2), jacobian_plan(chain, two))
     assert isinstance(lay2.bodies, np.ndarray)
     assert lay2.bodies.tolist() == [0, 2]  # world (mount) and j2's body (j3's origin)
 
@@ -135,7 +135,7 @@ def test_chain_blocks_and_out(chain):
     params = pincal.parameters(chain, "full")
     values = 1e-3 * np.random.default_rng(15).standard_normal(len(params))
     at = params.apply(chain, values)
-    lay = _batch_serial._layout(at, params, values, _plan(at, params))
+    lay = _batch_serial._layout(at, params, values, jacobian_plan(at, params))
     block = max(32, _batch_serial.BLOCK // lay.size)
     qs, bk = at.configurations_batch(_rows(at, 2 * block + 7, 16))
     batch = sensitivities_batch(at, params, qs, bk, values)
@@ -144,7 +144,7 @@ def test_chain_blocks_and_out(chain):
     sub = type(batch)(*(getattr(batch, f)[picks] for f in fields), batch.breaks_closure)
     _assert_matches_pose_sensitivity(at, params, values, qs[picks], sub)
     out = np.zeros((len(qs), 6, len(params)))
-    Rm, pm, J = _batch_serial._serial_path(at, params, bk, values, _plan(at, params), out)
+    Rm, pm, J = _batch_serial.serial_path(at, params, bk, values, jacobian_plan(at, params), out)
     assert J is out
     np.testing.assert_array_equal(out, batch.jacobian)
     np.testing.assert_array_equal(pm, batch.positions)

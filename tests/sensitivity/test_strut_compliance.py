@@ -19,7 +19,7 @@ from pincal.model import (
     with_joint_terms,
     with_payload,
 )
-from pincal.model._term_compliance import _gravity_model
+from pincal.model._term_compliance import gravity_model
 from pincal.sensitivity import parameters
 
 from .test_joint_terms import _fd_errors
@@ -40,7 +40,7 @@ def loaded(hexaslide):
 
 
 def _potential(mech, row: np.ndarray) -> float:
-    model = _gravity_model(mech)
+    model = gravity_model(mech)
     return pin.computePotentialEnergy(model, model.createData(), mech.configurations(row[None])[0])
 
 
