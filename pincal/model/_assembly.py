@@ -156,10 +156,39 @@ class Assembly:
         try:
             sol = self._newton(guess, all_v)
         except ConvergenceError as exc:
-            raise ClosureError(self._open_closure_diagnosis(guess, exc.residual)) from exc
+            near = self._nearby_assembly(guess, all_v)
+            if near is None:
+                raise ClosureError(self._open_closure_diagnosis(guess, exc.residual)) from exc
+            sol = near
+            self.notes.append(
+                "Newton stalls at the home guess (a singular configuration, e.g. a dead "
+                "point): home was assembled from a start 0.01–0.1 rad (or m) beside it"
+            )
         if sol.remainder > 0.0:
             self.notes.append(self._least_squares_note(sol))
         return sol.q
+
+    def _nearby_assembly(self, guess: np.ndarray, free: np.ndarray) -> Solution | None:
+        """The closed configuration nearest ``guess`` among Newton solves started 0.01
+        and 0.1 (rad or m, each tangent dof) beside it, or None.
+
+        At a singular guess (a four-bar's dead point) the Newton step has no component
+        along the motion that would close a slightly perturbed loop, and Newton stalls
+        where a start a little off the singularity converges.
+        """
+        rng = np.random.default_rng(0)
+        found: list[tuple[float, Solution]] = []
+        for size in (1e-2, 1e-1):
+            for _ in range(4):
+                start = pin.integrate(self.model, guess, size * rng.standard_normal(self.model.nv))
+                try:
+                    sol = self._newton(start, free)
+                except ConvergenceError:
+                    continue
+                found.append((float(np.linalg.norm(pin.difference(self.model, guess, sol.q))), sol))
+            if found:
+                return min(found, key=lambda pair: pair[0])[1]
+        return None
 
     def _redundant_loops(self, q: np.ndarray, tol: float) -> list[str]:
         """The closures (``a ↔ b``) with a residual row above ``tol`` at q."""
