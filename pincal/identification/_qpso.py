@@ -27,6 +27,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pincal.errors import ParameterError
 
@@ -63,7 +64,7 @@ class QPSOResult:
 # --------------------------------------------------------------------------- helpers
 
 
-def _bounds(lower, upper) -> tuple[np.ndarray, np.ndarray]:
+def _bounds(lower: ArrayLike, upper: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     lo = np.atleast_1d(np.asarray(lower, dtype=float))
     hi = np.atleast_1d(np.asarray(upper, dtype=float))
     if lo.ndim != 1 or lo.shape != hi.shape:
@@ -80,7 +81,7 @@ def _bounds(lower, upper) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def _alpha_pair(alpha) -> tuple[float, float]:
+def _alpha_pair(alpha: float | tuple[float, float]) -> tuple[float, float]:
     a = np.asarray(alpha, dtype=float).ravel()
     if a.size == 1:
         a = np.array([a[0], a[0]])
@@ -134,7 +135,14 @@ def _initial_positions(
 class _Swarm:
     """Mutable swarm state; one :meth:`step` is one QPSO iteration."""
 
-    def __init__(self, evaluate, X: np.ndarray, lo: np.ndarray, hi: np.ndarray, rng):
+    def __init__(
+        self,
+        evaluate: Callable[[np.ndarray], np.ndarray],
+        X: np.ndarray,
+        lo: np.ndarray,
+        hi: np.ndarray,
+        rng: np.random.Generator,
+    ) -> None:
         self.evaluate = evaluate
         self.lo, self.hi, self.rng = lo, hi, rng
         self.X = X
@@ -185,13 +193,13 @@ def _check_counts(n_particles: int, t_max: int) -> None:
 
 def qpso(
     fun: Objective,
-    lower,
-    upper,
+    lower: ArrayLike,
+    upper: ArrayLike,
     n_particles: int = 80,
     t_max: int = 300,
     rng: np.random.Generator | int | None = None,
     alpha: tuple[float, float] = (1.0, 0.5),
-    x0=None,
+    x0: ArrayLike | None = None,
     callback: Callback | None = None,
     *,
     vectorized: bool = False,
@@ -260,7 +268,7 @@ def qpso(
     )
 
 
-def _start_vector(x0, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
+def _start_vector(x0: ArrayLike | None, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
     if x0 is None:
         return None
     x = np.atleast_1d(np.asarray(x0, dtype=float))
