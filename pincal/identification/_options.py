@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import SolverOptionError
+from pincal.sensitivity import GlobalSensitivity
 
 __all__ = [
     "LOSSES",
@@ -189,8 +190,8 @@ class StepPlanningOptions:
         xtol: stop when ``max_i |w_i Δ_i| ≤ xtol·(1 + max_i |w_i x_i|)`` (> 0).
     """
 
-    sensitivity: Any = None
-    workspace: Any = 200
+    sensitivity: GlobalSensitivity | None = None
+    workspace: np.ndarray | int = 200
     damping: float = 1.0
     max_iterations: int = 100
     xtol: float = 1e-12
