@@ -55,7 +55,14 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
-def _normal(o, z, p, w, size, x_prev):
+def _normal(
+    o: np.ndarray,
+    z: np.ndarray,
+    p: np.ndarray,
+    w: np.ndarray,
+    size: float,
+    x_prev: np.ndarray,
+) -> tuple[float, np.ndarray, float, np.ndarray, np.ndarray, float]:
     """Common normal from line (o, z) to line (p, w).
 
     Returns ``(s, x, a, foot2, w2, tilt)``: foot on the first line ``o + s z``, unit
@@ -84,13 +91,13 @@ def _normal(o, z, p, w, size, x_prev):
     return 0.0, x, a if a > 1e-12 * size else 0.0, o + a * x, w2, tilt
 
 
-def _frame(o, x, z) -> np.ndarray:
+def _frame(o: np.ndarray, x: np.ndarray, z: np.ndarray) -> np.ndarray:
     T = np.eye(4)
     T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = x, np.cross(z, x), z, o
     return T
 
 
-def _angle(u, v, axis) -> float:
+def _angle(u: np.ndarray, v: np.ndarray, axis: np.ndarray) -> float:
     """Angle from u to v about ``axis`` [rad]."""
     return float(np.arctan2(np.cross(u, v) @ axis, u @ v))
 

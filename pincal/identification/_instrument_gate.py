@@ -159,7 +159,9 @@ def refit_confirmation(
     starts = np.cumsum([0] + [len(d) for d in datasets])
     bound = (limits.max_length_change, limits.max_angle_change)
 
-    def confirm(named: tuple[int, ...], risk: float, cap: int):
+    def confirm(
+        named: tuple[int, ...], risk: float, cap: int
+    ) -> tuple[tuple[int, ...], float, np.ndarray, np.ndarray, np.ndarray] | None:
         drop = np.asarray(named, dtype=int)
         kept = []
         for i, d in enumerate(datasets):

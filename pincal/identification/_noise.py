@@ -174,7 +174,7 @@ def _settle_linearised(
     return std
 
 
-def _loss(opts: Any) -> tuple[str, float]:
+def _loss(opts: object) -> tuple[str, float]:
     loss = str(getattr(opts, "loss", "linear"))
     if loss == "linear":
         return loss, float("nan")

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import SolverOptionError
+from pincal.sensitivity import GlobalSensitivity
 
 __all__ = [
     "LOSSES",
@@ -39,7 +40,7 @@ def check_int(owner: str, name: str, value: Any, low: int, high: int | None = No
 
 
 def check_real(
-    owner: str, name: str, value: Any, low: float, high: float = math.inf, *, open_low=False
+    owner: str, name: str, value: Any, low: float, high: float = math.inf, *, open_low: bool = False
 ) -> None:
     """Raise SolverOptionError unless ``value`` is a finite real in [low, high].
 
@@ -56,7 +57,7 @@ def check_real(
         )
 
 
-def _check_prior(opts: Any, owner: str) -> None:
+def _check_prior(opts: GaussNewtonOptions | LMOptions, owner: str) -> None:
     """Validate and normalise ``opts.prior_std`` / ``opts.prior_mean`` (tuples of floats)."""
     if (opts.prior_std is None) != (opts.prior_mean is None):
         raise SolverOptionError(f"{owner}: give prior_std and prior_mean together")
@@ -71,7 +72,9 @@ def _check_prior(opts: Any, owner: str) -> None:
         object.__setattr__(opts, "prior_mean", mean)
 
 
-def _prior_weights(opts: Any, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+def _prior_weights(
+    opts: GaussNewtonOptions | LMOptions, n: int
+) -> tuple[np.ndarray, np.ndarray] | None:
     if opts.prior_std is None or opts.prior_mean is None:
         return None
     if len(opts.prior_std) != n:
@@ -187,8 +190,8 @@ class StepPlanningOptions:
         xtol: stop when ``max_i |w_i Δ_i| ≤ xtol·(1 + max_i |w_i x_i|)`` (> 0).
     """
 
-    sensitivity: Any = None
-    workspace: Any = 200
+    sensitivity: GlobalSensitivity | None = None
+    workspace: np.ndarray | int = 200
     damping: float = 1.0
     max_iterations: int = 100
     xtol: float = 1e-12

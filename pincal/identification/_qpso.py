@@ -27,6 +27,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pincal.errors import ParameterError
 
@@ -63,7 +64,7 @@ class QPSOResult:
 # --------------------------------------------------------------------------- helpers
 
 
-def search_bounds(lower, upper) -> tuple[np.ndarray, np.ndarray]:
+def search_bounds(lower: ArrayLike, upper: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """The box (lower, upper) as float (n,) vectors, checked finite and ordered."""
     lo = np.atleast_1d(np.asarray(lower, dtype=float))
     hi = np.atleast_1d(np.asarray(upper, dtype=float))
@@ -81,7 +82,7 @@ def search_bounds(lower, upper) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def alpha_pair(alpha) -> tuple[float, float]:
+def alpha_pair(alpha: float | tuple[float, float]) -> tuple[float, float]:
     """The contraction–expansion coefficient as (start, end) (a scalar stays constant)."""
     a = np.asarray(alpha, dtype=float).ravel()
     if a.size == 1:
@@ -136,7 +137,14 @@ def initial_positions(
 class Swarm:
     """Mutable swarm state; one :meth:`step` is one QPSO iteration."""
 
-    def __init__(self, evaluate, X: np.ndarray, lo: np.ndarray, hi: np.ndarray, rng):
+    def __init__(
+        self,
+        evaluate: Callable[[np.ndarray], np.ndarray],
+        X: np.ndarray,
+        lo: np.ndarray,
+        hi: np.ndarray,
+        rng: np.random.Generator,
+    ) -> None:
         self.evaluate = evaluate
         self.lo, self.hi, self.rng = lo, hi, rng
         self.X = X
@@ -192,13 +200,13 @@ def check_counts(n_particles: int, t_max: int) -> None:
 
 def qpso(
     fun: Objective,
-    lower,
-    upper,
+    lower: ArrayLike,
+    upper: ArrayLike,
     n_particles: int = 80,
     t_max: int = 300,
     rng: np.random.Generator | int | None = None,
     alpha: tuple[float, float] = (1.0, 0.5),
-    x0=None,
+    x0: ArrayLike | None = None,
     callback: Callback | None = None,
     *,
     vectorized: bool = False,
@@ -267,7 +275,7 @@ def qpso(
     )
 
 
-def _start_vector(x0, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
+def _start_vector(x0: ArrayLike | None, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
     if x0 is None:
         return None
     x = np.atleast_1d(np.asarray(x0, dtype=float))

@@ -39,7 +39,7 @@ from pincal.errors import SolverOptionError
 from pincal.identification._options import check_int, check_real
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import CalibrationProblem
-from pincal.identification._qpso import qpso
+from pincal.identification._qpso import Objective, qpso
 from pincal.identification._qpso_stepwise import qpso_stepwise
 from pincal.identification._result import QPSOExtras
 
@@ -140,7 +140,9 @@ def qpso_search(
     start = time.perf_counter()
     initial_cost = problem.cost(x0)
 
-    def run(cost, vectorized: bool):
+    def run(
+        cost: Objective, vectorized: bool
+    ) -> tuple[np.ndarray, np.ndarray, int, int, tuple[int, ...]]:
         if stepwise:
             res = qpso_stepwise(
                 cost,
@@ -181,7 +183,12 @@ def qpso_search(
             J_f = J_c[:, free]
             z_c = centre[free]
 
-            def linear(Z: np.ndarray, r_c=r_c, J_f=J_f, z_c=z_c) -> np.ndarray:
+            def linear(
+                Z: np.ndarray,
+                r_c: np.ndarray = r_c,
+                J_f: np.ndarray = J_f,
+                z_c: np.ndarray = z_c,
+            ) -> np.ndarray:
                 R = r_c[None, :] + (Z - z_c) @ J_f.T
                 return 0.5 * np.einsum("ij,ij->i", R, R)
 

@@ -12,6 +12,7 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pincal.errors import ParameterError
 from pincal.identification._qpso import (
@@ -79,8 +80,8 @@ class QPSOStepwiseResult:
 
 def qpso_stepwise(
     fun: Objective,
-    lower,
-    upper,
+    lower: ArrayLike,
+    upper: ArrayLike,
     n_particles: int = 80,
     t_max: int = 300,
     rng: np.random.Generator | int | None = None,
@@ -154,7 +155,7 @@ def qpso_stepwise(
     while free:
         idx = np.asarray(free)
 
-        def evaluate(Z: np.ndarray, idx=idx) -> np.ndarray:
+        def evaluate(Z: np.ndarray, idx: np.ndarray = idx) -> np.ndarray:
             X = np.tile(x_fixed, (Z.shape[0], 1))
             X[:, idx] = Z
             return evaluate_full(X)

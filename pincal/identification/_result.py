@@ -22,7 +22,7 @@ import numpy as np
 from pincal.errors import ParameterError, PincalError
 from pincal.identification._weighting import Weighting
 from pincal.model import Mechanism, ParameterSet
-from pincal.sensitivity import Identifiability, parameters
+from pincal.sensitivity import GlobalSensitivity, Identifiability, parameters
 
 __all__ = [
     "IdentifiabilitySummary",
@@ -118,7 +118,7 @@ class StepPlanningExtras:
 
     steps: np.ndarray
     weights: np.ndarray
-    sensitivity: Any = None
+    sensitivity: GlobalSensitivity | None = None
 
 
 SolverExtras = LocalSolverExtras | QPSOExtras | StepPlanningExtras

@@ -39,6 +39,7 @@ from pincal.identification._result import (
     LocalSolverExtras,
     QPSOExtras,
     ResidualStats,
+    SolverExtras,
     StepPlanningExtras,
 )
 
@@ -90,7 +91,7 @@ def _stats_dict(s: ResidualStats) -> dict[str, float | None]:
     return out
 
 
-def _extras_dict(e) -> dict[str, Any] | None:
+def _extras_dict(e: SolverExtras | None) -> dict[str, Any] | None:
     if isinstance(e, LocalSolverExtras):
         return {
             "type": "local",

@@ -111,7 +111,7 @@ class SharedUnknowns:
         return out
 
     def block(self, i: int, x: np.ndarray, col: int, n: int, P: np.ndarray,
-              Rs: np.ndarray, Jm: np.ndarray | None):  # fmt: skip
+              Rs: np.ndarray, Jm: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
         """Raw residuals (m, k) of artefact dataset ``i`` and their Jacobian (m, k, len(x)).
 
         Args:

@@ -145,7 +145,9 @@ def _listing(items: list) -> str:
     return shown + (f", … ({len(items) - _SHOWN} more)" if len(items) > _SHOWN else "")
 
 
-def _assign(points: Table, log: Table, opts: TrackerImportOptions):
+def _assign(
+    points: Table, log: Table, opts: TrackerImportOptions
+) -> tuple[str, np.ndarray, list[str], float | None]:
     """(mode, log row per point row, pose id per log row, max time offset)."""
     pk = {f: points.find(f, ALIASES[f], opts.point_columns) for f in ("pose", "time")}
     lk = {f: log.find(f, ALIASES[f], opts.log_columns) for f in ("pose", "time")}

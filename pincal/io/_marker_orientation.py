@@ -10,6 +10,8 @@ convention: a quaternion of unit norm (within
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from pincal.errors import ColumnError, NonFiniteValueError, OrientationValueError
@@ -19,7 +21,9 @@ from pincal.measure import MarkerSetup, orientation_problems, rotation_matrices
 __all__ = ["orientation_values", "read_rotations"]
 
 
-def orientation_values(table: Table, setup: MarkerSetup, cell) -> np.ndarray:
+def orientation_values(
+    table: Table, setup: MarkerSetup, cell: Callable[[Table, int, int], float]
+) -> np.ndarray:
     """(rows, k) orientation cells in the declared unit, NaN where the body was not seen.
 
     Args:

@@ -48,7 +48,9 @@ def length_factor(table: Table, cols: list[int], unit: str | None) -> float:
     return unit_factor(LENGTH_UNITS, chosen, "length", table.name)
 
 
-def read_xyz(table: Table, mapping: Mapping[str, str], unit: str | None, what: str):
+def read_xyz(
+    table: Table, mapping: Mapping[str, str], unit: str | None, what: str
+) -> tuple[list[str], np.ndarray, float]:
     """(point names, (rows, 3) points [m], the unit's factor from metres) of a points table."""
     found = {f: table.find(f, ALIASES[f], mapping) for f in ("point", "x", "y", "z")}
     missing = [f for f, k in found.items() if k is None]

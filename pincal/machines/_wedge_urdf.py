@@ -37,7 +37,11 @@ def wedge_urdf(geom: WedgeGeometry, name: str = "wedge3") -> str:
     half = 0.5 * (l1 + l2)
     w = 0.02  # visual thickness [m]
 
-    def box(size: tuple[float, float, float], xyz=(0.0, 0.0, 0.0), rgba="0.6 0.6 0.6 1") -> str:
+    def box(
+        size: tuple[float, float, float],
+        xyz: tuple[float, float, float] = (0.0, 0.0, 0.0),
+        rgba: str = "0.6 0.6 0.6 1",
+    ) -> str:
         sx, sy, sz = (_fmt(v) for v in size)
         ox, oy, oz = (_fmt(v) for v in xyz)
         return (
@@ -65,10 +69,10 @@ def wedge_urdf(geom: WedgeGeometry, name: str = "wedge3") -> str:
         jtype: str,
         parent: str,
         child: str,
-        xyz=(0.0, 0.0, 0.0),
-        rpy=(0.0, 0.0, 0.0),
-        axis=None,
-        limit=None,
+        xyz: tuple[float, float, float] = (0.0, 0.0, 0.0),
+        rpy: tuple[float, float, float] = (0.0, 0.0, 0.0),
+        axis: tuple[float, float, float] | None = None,
+        limit: tuple[float, float] | None = None,
     ) -> str:
         s = (
             f'  <joint name="{jname}" type="{jtype}"><parent link="{parent}"/>'

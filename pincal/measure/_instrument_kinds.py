@@ -104,12 +104,16 @@ class Distance(Instrument):
     def parameter_names(self) -> tuple[str, ...]:
         return ("pivot_x", "pivot_y", "pivot_z", "length_offset")
 
-    def _predict(self, P, theta, ids):
+    def _predict(
+        self, P: np.ndarray, theta: np.ndarray, ids: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         r, u = _radial(P, theta[:3])
         dth = np.column_stack([-u, np.ones(len(P))])
         return r + theta[3], u, dth
 
-    def start(self, P, v, ids):
+    def start(
+        self, P: np.ndarray, v: np.ndarray, ids: np.ndarray | None
+    ) -> tuple[Instrument, np.ndarray]:
         n = _coplanar(P)
         if n is not None:  # a planar machine: the bar offset starts at 0
             return self, np.r_[_centre_in_plane(P, v, n), 0.0]
@@ -119,15 +123,21 @@ class Distance(Instrument):
         return self, sol[:4]
 
     @classmethod
-    def typical(cls, P, std=None):
+    def typical(
+        cls, P: np.ndarray, std: float | None = None
+    ) -> tuple[Instrument, np.ndarray, np.ndarray | None]:
         c = np.asarray(P, dtype=float).mean(axis=0) - _BELOW
         return cls(cls.default_std if std is None else std), np.r_[c, 0.0], None
 
-    def candidate_sphere(self, theta, home):
+    def candidate_sphere(
+        self, theta: np.ndarray, home: np.ndarray
+    ) -> tuple[np.ndarray, float] | None:
         c = np.asarray(theta[:3], dtype=float)
         return c, float(np.linalg.norm(np.asarray(home) - c))
 
-    def declared_constants(self, P, theta, ids=None):
+    def declared_constants(
+        self, P: np.ndarray, theta: np.ndarray, ids: np.ndarray | None = None
+    ) -> tuple[DeclaredConstant, ...]:
         return _gain(self, P, theta, ids, "the length scale",
                      "a scale error of the readings (a bar length, a gain)")  # fmt: skip
 
@@ -150,11 +160,15 @@ class Sphere(Instrument):
     def parameter_names(self) -> tuple[str, ...]:
         return ("centre_x", "centre_y", "centre_z")
 
-    def _predict(self, P, theta, ids):
+    def _predict(
+        self, P: np.ndarray, theta: np.ndarray, ids: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         r, u = _radial(P, theta[:3])
         return r - self.radius, u, -u
 
-    def start(self, P, v, ids):
+    def start(
+        self, P: np.ndarray, v: np.ndarray, ids: np.ndarray | None
+    ) -> tuple[Instrument, np.ndarray]:
         n = _coplanar(P)
         if n is not None:
             return self, _centre_in_plane(P, self.radius + v, n)
@@ -166,18 +180,24 @@ class Sphere(Instrument):
     def from_header(cls, std: float, header: HeaderValues) -> Sphere:
         return cls(std, header.length("radius"))
 
-    def header(self, length, number):
+    def header(self, length: Callable[[float], str], number: Callable[[float], str]) -> list[str]:
         return [f"radius: {length(self.radius)}"]
 
     @classmethod
-    def typical(cls, P, std=None):
+    def typical(
+        cls, P: np.ndarray, std: float | None = None
+    ) -> tuple[Instrument, np.ndarray, np.ndarray | None]:
         c = np.asarray(P, dtype=float).mean(axis=0) - _BELOW
         return cls(cls.default_std if std is None else std, radius=0.02), c, None
 
-    def candidate_sphere(self, theta, home):
+    def candidate_sphere(
+        self, theta: np.ndarray, home: np.ndarray
+    ) -> tuple[np.ndarray, float] | None:
         return np.asarray(theta[:3], dtype=float), float(self.radius)
 
-    def declared_constants(self, P, theta, ids=None):
+    def declared_constants(
+        self, P: np.ndarray, theta: np.ndarray, ids: np.ndarray | None = None
+    ) -> tuple[DeclaredConstant, ...]:
         ones = np.ones(len(np.atleast_2d(P)))
         rests = "the radius rests on its declared value"
         return (DeclaredConstant("the sphere radius", float(self.radius), "m", -ones,
@@ -201,25 +221,33 @@ class Point(Instrument):
     def parameter_names(self) -> tuple[str, ...]:
         return ("offset",)
 
-    def _predict(self, P, theta, ids):
+    def _predict(
+        self, P: np.ndarray, theta: np.ndarray, ids: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         u = np.asarray(self.direction)
         return P @ u - theta[0], np.tile(u, (len(P), 1)), -np.ones((len(P), 1))
 
-    def start(self, P, v, ids):
+    def start(
+        self, P: np.ndarray, v: np.ndarray, ids: np.ndarray | None
+    ) -> tuple[Instrument, np.ndarray]:
         return self, np.array([float(np.mean(P @ np.asarray(self.direction) - v))])
 
     @classmethod
     def from_header(cls, std: float, header: HeaderValues) -> Point:
         return cls(std, tuple(header.vector("direction", 3, "0 0 1")))  # type: ignore[arg-type]
 
-    def header(self, length, number):
+    def header(self, length: Callable[[float], str], number: Callable[[float], str]) -> list[str]:
         return ["direction: " + ", ".join(number(x) for x in self.direction)]
 
     @classmethod
-    def typical(cls, P, std=None):
+    def typical(
+        cls, P: np.ndarray, std: float | None = None
+    ) -> tuple[Instrument, np.ndarray, np.ndarray | None]:
         return cls(cls.default_std if std is None else std), np.zeros(1), None
 
-    def declared_constants(self, P, theta, ids=None):
+    def declared_constants(
+        self, P: np.ndarray, theta: np.ndarray, ids: np.ndarray | None = None
+    ) -> tuple[DeclaredConstant, ...]:
         return _gain(self, P, theta, ids, "the gauge's gain", "a gain error of the readings")
 
 
@@ -267,7 +295,9 @@ class Plane(Instrument):
     def parameter_units(self) -> tuple[str, ...]:
         return ("rad", "rad", "m") * self.n_planes
 
-    def _predict(self, P, theta, ids):
+    def _predict(
+        self, P: np.ndarray, theta: np.ndarray, ids: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         assert ids is not None
         if ids.size and ids.max() >= self.n_planes:
             raise MeasurementError(
@@ -294,7 +324,9 @@ class Plane(Instrument):
             dth[rows, 3 * j + 2] = -1.0
         return v, dp, dth
 
-    def start(self, P, v, ids):
+    def start(
+        self, P: np.ndarray, v: np.ndarray, ids: np.ndarray | None
+    ) -> tuple[Instrument, np.ndarray]:
         assert ids is not None
         inst = self
         if self.n_planes == 0:
@@ -327,12 +359,16 @@ class Plane(Instrument):
                 for j, n in enumerate(self.normals)]  # fmt: skip
 
     @classmethod
-    def typical(cls, P, std=None):
+    def typical(
+        cls, P: np.ndarray, std: float | None = None
+    ) -> tuple[Instrument, np.ndarray, np.ndarray | None]:
         P = np.asarray(P, dtype=float)
         inst = cls(cls.default_std if std is None else std,
                    normals=((0.0, 0.0, 1.0), (1.0, 0.0, 0.0)))  # fmt: skip
         theta = np.array([0.0, 0.0, P[:, 2].min(), 0.0, 0.0, P[:, 0].min()])
         return inst, theta, np.arange(len(P)) % 2
 
-    def declared_constants(self, P, theta, ids=None):
+    def declared_constants(
+        self, P: np.ndarray, theta: np.ndarray, ids: np.ndarray | None = None
+    ) -> tuple[DeclaredConstant, ...]:
         return _gain(self, P, theta, ids, "the probe's gain", "a gain error of the readings")

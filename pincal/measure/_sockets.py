@@ -130,7 +130,9 @@ class SocketData(Artefact):
             A[3 * i : 3 * i + 3, k : k + 3] = -np.eye(3)
         return np.linalg.lstsq(A, -np.asarray(P).reshape(-1), rcond=None)[0][:3]
 
-    def residuals(self, P, Rs, theta, phi):
+    def residuals(
+        self, P: np.ndarray, Rs: np.ndarray, theta: np.ndarray, phi: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``c_s − b`` (m, 3) [m], ``b = p + R t``, and its derivatives (see Artefact).
 
         ``b`` moves by ``δp − R [t]× ω`` for a move ``δp`` and a local rotation ``ω`` of

@@ -169,8 +169,9 @@ class Assembly:
         return sol.q
 
     def _nearby_assembly(self, guess: np.ndarray, free: np.ndarray) -> Solution | None:
-        """The closed configuration nearest ``guess`` among Newton solves started 0.01
-        and 0.1 (rad or m, each tangent dof) beside it, or None.
+        """The closed configuration nearest ``guess`` from starts beside it, or None.
+
+        Newton starts 0.01, then 0.1 (rad or m, each tangent dof) off ``guess``.
 
         At a singular guess (a four-bar's dead point) the Newton step has no component
         along the motion that would close a slightly perturbed loop, and Newton stalls

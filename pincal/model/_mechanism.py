@@ -88,6 +88,12 @@ class Mechanism:
     again; it must be the tree of exactly that text.
     """
 
+    #: caches other model modules set on an instance (absent until then): the explored
+    #: actuator ranges (``_range_explore``) and the note on an MJCF home found nearby
+    #: (``_mjcf_home``)
+    _explored_ranges: dict[int, tuple[float, float]]
+    _mjcf_home_note: str
+
     def __init__(
         self,
         urdf_xml: str,

@@ -16,6 +16,7 @@ range is named (note, and in the error when nothing assembles). Joints with a sp
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -44,7 +45,7 @@ def _outside(home: dict[str, Any], ranges: dict[str, tuple[float, float]]) -> li
     return out
 
 
-def _home_values(mech: Mechanism, joints) -> dict[str, float]:
+def _home_values(mech: Mechanism, joints: Iterable[str]) -> dict[str, float]:
     """The assembled home value of each named 1-dof joint [rad, m]."""
     model = mech.model
     return {
@@ -62,7 +63,7 @@ def _regular(mech: Mechanism) -> bool:
 
 
 def build_with_home(
-    build,
+    build: Callable[[dict[str, Any]], Mechanism],
     sidecar: dict[str, Any],
     home_source: str,
     ranges: dict[str, tuple[float, float]],
@@ -86,6 +87,7 @@ def build_with_home(
     home = dict(sidecar.get("home", {}))
     outside = _outside(home, ranges)
     notes: list[str] = []
+    mech: Mechanism | None
     try:
         mech = build(sidecar)
     except _FAILURES as exc:
@@ -105,7 +107,7 @@ def build_with_home(
                     "sidecar <stem>.yaml beside the MJCF."
                 )
             raise type(exc)(f"{str(exc).rstrip('.')}{extra}.{hint}") from exc
-        notes.append(mech._mjcf_home_note)  # type: ignore[attr-defined]
+        notes.append(mech._mjcf_home_note)
     outside = _outside(_home_values(mech, ranges), ranges)
     if outside:
         notes.append("at the home, " + "; ".join(outside))
@@ -122,7 +124,12 @@ def build_with_home(
     return mech
 
 
-def _nearby(build, sidecar, home, ranges) -> Mechanism | None:
+def _nearby(
+    build: Callable[[dict[str, Any]], Mechanism],
+    sidecar: dict[str, Any],
+    home: dict[str, Any],
+    ranges: dict[str, tuple[float, float]],
+) -> Mechanism | None:
     """The first regular assembly with one actuator moved from ``qpos0``, or None."""
     actuated = [j for j in sidecar.get("name_mot") or [] if isinstance(home.get(j), float)]
     for step in SEARCH_STEPS:
@@ -140,7 +147,7 @@ def _nearby(build, sidecar, home, ranges) -> Mechanism | None:
                 kept = abs(_home_values(mech, [j]).get(j, value) - value) <= 1e-9
                 if not (kept and _regular(mech)):
                     continue  # the assembly moved the actuator (back to qpos0) or is singular
-                mech._mjcf_home_note = (  # type: ignore[attr-defined]
+                mech._mjcf_home_note = (
                     f"qpos0 is singular or does not close; home is the nearest regular "
                     f"configuration found: {j!r} = {value:.6g} (qpos0 {sign * step:+g}), the "
                     "passive joints solved from qpos0. Give a <keyframe> or a sidecar "

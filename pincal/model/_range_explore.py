@@ -20,10 +20,14 @@ close. A warning says the range was found, not declared, and how to declare one.
 from __future__ import annotations
 
 import logging
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pincal.errors import ConvergenceError, ModelFileError
+
+if TYPE_CHECKING:
+    from pincal.model._mechanism import Mechanism
 
 __all__ = ["BACK_OFF", "DEFAULT_SPAN", "STEPS", "explored_ranges"]
 
@@ -37,7 +41,9 @@ STEPS = 24
 BACK_OFF = 2
 
 
-def _side(mech, k: int, q_home: np.ndarray, q_act0: np.ndarray, sign: float, span: float):
+def _side(
+    mech: Mechanism, k: int, q_home: np.ndarray, q_act0: np.ndarray, sign: float, span: float
+) -> tuple[float, bool]:
     """Walk actuator k from home towards ``sign``·span.
 
     Returns the end of the range on that side and whether the walk stopped early
@@ -58,7 +64,7 @@ def _side(mech, k: int, q_home: np.ndarray, q_act0: np.ndarray, sign: float, spa
     return float(q_act0[k] + sign * span), False
 
 
-def explored_ranges(mech) -> dict[int, tuple[float, float]]:
+def explored_ranges(mech: Mechanism) -> dict[int, tuple[float, float]]:
     """{actuator index: (lower, upper)} for the actuators without a declared range.
 
     Cached on the mechanism. An actuator with one declared bound is explored on the

@@ -231,7 +231,9 @@ def _check_determined(
         )
 
 
-def _measured_jacobian(mech: Mechanism, model: pin.Model, data: pin.Data, q: np.ndarray):
+def _measured_jacobian(
+    mech: Mechanism, model: pin.Model, data: pin.Data, q: np.ndarray
+) -> np.ndarray:
     """(k, nv) Jacobian of the measured components.
 
     Positions in world axes, rotations in the measured frame: the axes of the

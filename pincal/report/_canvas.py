@@ -7,7 +7,7 @@ they draw, so a process that writes no plot never imports it.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from pathlib import Path
@@ -77,7 +77,11 @@ def log_scale(ax: Axes, which: str) -> None:
     scale(ax, which)
 
 
-def fit_margins(fig: Figure, axes: np.ndarray | list[Axes], suptitle: Text | None = None) -> None:
+def fit_margins(
+    fig: Figure,
+    axes: np.ndarray | Sequence[Axes] | Sequence[np.ndarray],
+    suptitle: Text | None = None,
+) -> None:
     """:func:`pincal.report._layout.fit_margins` (margins sized to the labels)."""
     from pincal.report._layout import fit_margins as fit
 

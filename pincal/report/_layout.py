@@ -12,12 +12,13 @@ the PNG's pixel size) does not change.
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Sequence
 
 import matplotlib as mpl
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.axis import Axis
+from matplotlib.backend_bases import RendererBase
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.text import Text
@@ -48,7 +49,7 @@ def _tick_labels(axis: Axis) -> list[tuple[Text, int]]:
     return [(label, k) for label, k in labels if label.get_visible() and label.get_text()]
 
 
-def _text_size(fig: Figure, renderer: Any, text: Text) -> tuple[float, float]:
+def _text_size(fig: Figure, renderer: RendererBase, text: Text) -> tuple[float, float]:
     """Width and height [in] of a Text artist as drawn (rotation included)."""
     if not text.get_visible() or not text.get_text():
         return 0.0, 0.0
@@ -65,7 +66,7 @@ def _tick_room(which: str) -> float:
     return float(size) / 72.0
 
 
-def _decorations(fig: Figure, renderer: Any, ax: Axes) -> dict[str, float]:
+def _decorations(fig: Figure, renderer: RendererBase, ax: Axes) -> dict[str, float]:
     """Inches that ``ax``'s labels need outside the axes box on each side."""
     need = dict.fromkeys(("left", "right", "bottom", "top"), 0.0)
     for axis, which in ((ax.xaxis, "x"), (ax.yaxis, "y")):
@@ -92,7 +93,11 @@ def _decorations(fig: Figure, renderer: Any, ax: Axes) -> dict[str, float]:
     return need
 
 
-def fit_margins(fig: Figure, axes: np.ndarray | list[Axes], suptitle: Text | None = None) -> None:
+def fit_margins(
+    fig: Figure,
+    axes: np.ndarray | Sequence[Axes] | Sequence[np.ndarray],
+    suptitle: Text | None = None,
+) -> None:
     """Place the grid of ``axes`` (shape (rows, cols)) with margins sized to its labels.
 
     Extra axes attached to a grid cell (a colorbar) count on the side where they sit.

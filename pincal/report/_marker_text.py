@@ -8,7 +8,7 @@ alone, the solver, the notes.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 import pinocchio as pin
 
@@ -33,7 +33,7 @@ def _identified(fit: MarkerFit, setup: MarkerSetup) -> list[str]:
         out = [two_sigma.get(f"{prefix}.{d}") for d in dofs.split()]
         return [None if v is None else float(v) * 1e3 for v in out]
 
-    def mm(v) -> list[float | None]:
+    def mm(v: Iterable[float]) -> list[float | None]:
         return [float(x) * 1e3 for x in v]
 
     T = joints[BASE_JOINT].origin

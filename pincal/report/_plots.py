@@ -16,7 +16,7 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,6 +26,7 @@ from pincal.report._canvas import fit_margins, write_png
 from pincal.report._canvas import log_scale as _log_scale
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
     from matplotlib.text import Text
 
@@ -95,7 +96,10 @@ def checked_vector(values: Sequence[float] | np.ndarray, what: str) -> np.ndarra
 
 
 def save_figure(
-    fig: Figure, path: str | os.PathLike, grid: Any, suptitle: Text | None = None
+    fig: Figure,
+    path: str | os.PathLike,
+    grid: np.ndarray | Sequence[Axes] | Sequence[np.ndarray],
+    suptitle: Text | None = None,
 ) -> Path:
     """Lay out ``grid`` (the figure's axes, (rows, cols)) and write the PNG in one draw."""
     fit_margins(fig, grid, suptitle)

@@ -26,7 +26,9 @@ def _finite(v: float) -> bool:
     return math.isfinite(float(v))
 
 
-def _header(result: IdentificationRecord, notes: Mapping[str, Any], comps) -> list[str]:
+def _header(
+    result: IdentificationRecord, notes: Mapping[str, Any], comps: tuple[str, ...] | None
+) -> list[str]:
     """Model, data, solver, identifiability and noise lines."""
     measured = f", measured components {' '.join(comps)}" if comps else ""
     lines = [
@@ -73,7 +75,7 @@ def _parameter_lines(result: IdentificationRecord) -> list[str]:
     return lines
 
 
-def _residual_lines(result: IdentificationRecord, comps) -> list[str]:
+def _residual_lines(result: IdentificationRecord, comps: tuple[str, ...] | None) -> list[str]:
     """RMS and max residual before and after, per measured block [mm, mrad]."""
     lines = [""]
     for when, s in (("before", result.before), ("after", result.after)):

@@ -12,6 +12,7 @@ import numpy as np
 
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
 from pincal.sensitivity._batch_jacobian import sensitivities_batch
+from pincal.sensitivity._jacobian import BatchSensitivity
 
 __all__ = ["closure_breaking", "identification_jacobian", "jacobian_and_closure_breaking"]
 
@@ -22,7 +23,7 @@ def _sensitivities(
     q_act_rows: np.ndarray,
     values: np.ndarray | None,
     conditions: Mapping[str, np.ndarray | None] | None = None,
-):
+) -> BatchSensitivity:
     """Batched sensitivities of the measured frame at the rows' closed configurations.
 
     ``conditions``: per-pose conditions of the rows some joint terms need (e.g.

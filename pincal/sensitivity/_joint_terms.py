@@ -14,22 +14,36 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from pincal.model import Mechanism, ParameterSet, joint_term_basis, joint_term_shift, parameters
+from pincal.model import (
+    BatchKinematics,
+    Mechanism,
+    ParameterSet,
+    joint_term_basis,
+    joint_term_shift,
+    parameters,
+)
 from pincal.sensitivity._jacobian import BatchSensitivity
 
 __all__ = ["joint_term_sensitivities"]
 
+#: ``geometric(mech, params, qs, bk, values)``: the sensitivities of a set without joint
+#: terms (``sensitivities_batch``)
+GeometricSensitivity = Callable[
+    [Mechanism, ParameterSet, np.ndarray, BatchKinematics | None, np.ndarray | None],
+    BatchSensitivity,
+]
+
 
 def joint_term_sensitivities(
-    geometric: Callable,
+    geometric: GeometricSensitivity,
     mech: Mechanism,
     params: ParameterSet,
     qs: np.ndarray,
-    bk,
+    bk: BatchKinematics | None,
     values: np.ndarray,
     basis: np.ndarray | None,
     conditions: Mapping[str, np.ndarray | None] | None = None,
-):
+) -> BatchSensitivity:
     """Sensitivities of a parameter set with joint terms.
 
     Args:

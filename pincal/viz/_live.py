@@ -58,7 +58,7 @@ bridge.run()
 """
 
 
-def _die_with(parent: int):
+def _die_with(parent: int) -> Callable[[], None]:
     """``preexec_fn`` of the server: killed with its parent (Linux), gone if already."""
 
     def arm() -> None:
