@@ -6,7 +6,9 @@ result: covariance ``(Jᵀ W J)⁻¹`` at the solution (the Cramér–Rao bound 
 noise), residual statistics and the calibrated mechanism. When the data declare no
 noise, the σ of each block (position, orientation) is estimated from the residuals by
 variance-component estimation (:mod:`pincal.identification._noise`); the weights used
-are reported in ``result.weighting``.
+are reported in ``result.weighting``. The sequence is the one fit driver's
+(:func:`pincal.identification._driver.drive`) with the pose file's set rule
+(:class:`pincal.identification._fit_set.StructuralBase`).
 """
 
 from __future__ import annotations
@@ -78,9 +80,9 @@ def identify(
     file is fitted by its batched residual model, by any registered solver; several
     data sets or instrument files by the joint model of machine and instrument
     unknowns (``"gauss-newton"`` or ``"lm"``; the instrument values and the gauge are
-    in ``result.annotations``, see also
-    :func:`pincal.identification.identify_instruments`). Both end in the same
-    finishing step.
+    in ``result.joint``, see also :func:`pincal.identification.identify_instruments`).
+    Both run the one fit driver (:mod:`pincal.identification._driver`) and end in the
+    same finishing step.
 
     Args:
         problem: an :class:`IdentificationProblem`, or the nominal mechanism.

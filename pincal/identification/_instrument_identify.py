@@ -5,7 +5,10 @@ registered local solver (``"gauss-newton"`` or ``"lm"``), fitting the identifiab
 set (instrument parameters first, so what an instrument absorbs is held on the machine
 side) less the directions the data place only beyond a bound, names what it did not
 calibrate (:mod:`pincal.identification._gauge`) and ends in the finishing step every
-identification shares (:mod:`pincal.identification._finish`).
+identification shares (:mod:`pincal.identification._finish`). The sequence is the one
+fit driver's (:func:`pincal.identification._driver.drive`) with the joint set rule and a
+1σ :class:`pincal.identification._fit_set.WeakBound`; the joint details are typed
+(:class:`pincal.identification.JointDetails` on ``result.joint``).
 :func:`pincal.identification.identify` runs it for an
 :class:`pincal.identification.IdentificationProblem` of several data sets;
 :func:`identify_instruments` is the convenience that also returns the joint details.
