@@ -46,6 +46,7 @@ from pincal.identification._instrument_profiles import (
 )
 from pincal.identification._instrument_uncertainty import instrument_uncertainty
 from pincal.identification._intervals import Intervals, interval_quantiles
+from pincal.identification._joint_details import JointDetails
 from pincal.identification._marker_fit import (
     REGISTRATION_PRESET,
     MarkerFit,
@@ -136,6 +137,7 @@ __all__ = [
     "InstrumentProblem",
     "InstrumentProfile",
     "Intervals",
+    "JointDetails",
     "LMOptions",
     "LocalSolverExtras",
     "MarkerFit",

@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.errors import PincalError
-from pincal.identification._linearity import TRIAL_ERRORS, ResidualModel
+from pincal.identification._linearity import TRIAL_ERRORS
+from pincal.identification._residual_model import ResidualModel
 
 __all__ = ["Bootstrap", "bootstrap_covariance", "check_draws"]
 

@@ -11,26 +11,22 @@ residual statistics before and after, the message and the calibrated mechanism.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from pincal.identification._covariance import fitted_covariance
-from pincal.identification._instrument_problem import InstrumentProblem
+from pincal.identification._joint_details import JointDetails
 from pincal.identification._outcome import SolverOutcome
-from pincal.identification._problem import CalibrationProblem
+from pincal.identification._residual_model import ResidualModel
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._weighting import Weighting
 from pincal.model import ParameterSet
 from pincal.sensitivity import Identifiability
 
 __all__ = ["ResidualModel", "Settled", "finish", "settle"]
-
-#: the residual models a solver runs on: ``evaluate(x) -> (r_w (N,), J_w (N, n_x), raw)``
-ResidualModel = CalibrationProblem | InstrumentProblem
-
 
 @dataclass(frozen=True)
 class Settled:
@@ -115,7 +111,7 @@ def finish(
     weighting: Weighting | None = None,
     initial_residuals: np.ndarray | None = None,
     components: tuple[str, ...] = (),
-    annotations: Mapping[str, Any] | None = None,
+    joint: JointDetails | None = None,
 ) -> tuple[IdentificationResult, np.ndarray]:
     """The :class:`IdentificationResult` of a settled fit.
 
@@ -138,7 +134,7 @@ def finish(
         weighting: the noise σ used (recorded as given).
         initial_residuals: (m, k) raw residuals at the start (recorded as given).
         components: names of the residual columns (recorded as given).
-        annotations: JSON-ready context (recorded as given).
+        joint: a joint fit's own outcome (recorded as given).
 
     Returns:
         The result and the covariance (f, f) of every fitted unknown, in index order.
@@ -174,7 +170,7 @@ def finish(
         parameter_set=params,
         calibrated_mechanism=model.mechanism(x),
         identifiability=identifiability,
-        annotations={} if annotations is None else annotations,
+        joint=joint,
         weighting=weighting,
         initial_residuals=initial_residuals,
         components=components,

@@ -6,24 +6,26 @@ result: covariance ``(Jᵀ W J)⁻¹`` at the solution (the Cramér–Rao bound 
 noise), residual statistics and the calibrated mechanism. When the data declare no
 noise, the σ of each block (position, orientation) is estimated from the residuals by
 variance-component estimation (:mod:`pincal.identification._noise`); the weights used
-are reported in ``result.weighting``.
+are reported in ``result.weighting``. The sequence is the one fit driver's
+(:func:`pincal.identification._driver.drive`) with the pose file's set rule
+(:class:`pincal.identification._fit_set.StructuralBase`).
 """
 
 from __future__ import annotations
 
-import logging
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from pincal.errors import SolverOptionError, TooFewPosesError, UnidentifiableError
-from pincal.identification._finish import finish, settle
+from pincal.errors import SolverOptionError
+from pincal.identification._driver import FitPolicy, drive
+from pincal.identification._finish import finish
+from pincal.identification._fit_set import StructuralBase
 from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._instrument_identify import joint_fit
 from pincal.identification._instrument_problem import Dataset
-from pincal.identification._noise import initial_weights, weighted_fit
 from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._outcome import Progress
 from pincal.identification._problem import CalibrationProblem
@@ -31,23 +33,20 @@ from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import solver
 from pincal.measure import Measurements
 from pincal.model import Mechanism, ParameterSet, degenerate_translations
-from pincal.sensitivity import Identifiability, analyse_jacobian, closure_breaking
+from pincal.sensitivity import closure_breaking
 from pincal.sensitivity.kernels import batch_applies
 
 __all__ = ["identify"]
 
-log = logging.getLogger(__name__)
-def _fit_set(
-    problem: IdentificationProblem, J0: np.ndarray, model: CalibrationProblem
-) -> tuple[np.ndarray, Identifiability]:
-    """Indices fitted and the analysis at the start.
 
-    The fitted set is the identifiable base set of ``problem.fit`` without the parameters
-    that break loop closure and without the translations inside emulated ball or
-    universal joints (:func:`pincal.model.degenerate_translations`), both reported apart.
+def _base_rule(problem: IdentificationProblem, model: CalibrationProblem) -> StructuralBase:
+    """The base-set rule of a pose file: candidates ``problem.fit``, closure and joints held.
+
+    The parameters that break loop closure and the translations inside emulated ball or
+    universal joints (:func:`pincal.model.degenerate_translations`) are held and
+    reported apart.
     """
     params = problem.params
-    candidates = problem.fit_indices
     breaking = np.zeros(len(params), dtype=bool)
     # closures without redundant rows break nothing where the batched Jacobian applies
     # (the start evaluation solved every pose there): no second pass is needed
@@ -55,35 +54,9 @@ def _fit_set(
     if mech.closures and (mech.n_closure_rows > mech.closure_rank or not batch_applies(mech)):
         breaking = closure_breaking(problem.mech, params, problem.pose_file.q_act, problem.x0)
     splitting = np.isin(params.names, degenerate_translations(problem.mech))
-    J0 = model.structural_jacobian(problem.x0)  # not the measured deviation's mixing
-    ident = analyse_jacobian(J0, params.names, breaks_closure=breaking, splits_joint=splitting,
-                             units=params.units)  # fmt: skip
-    if np.array_equal(candidates, np.arange(len(params))):
-        sub = ident  # fitting every parameter: the same analysis
-    else:
-        sub = analyse_jacobian(
-            J0[:, candidates],
-            tuple(params.names[i] for i in candidates),
-            breaks_closure=breaking[candidates],
-            splits_joint=splitting[candidates],
-        )
-    n, n_eq = candidates.size, model.n_equations
-    if sub.rank < n and sub.rank >= n_eq:
-        rows = len(model.rows)
-        raise TooFewPosesError(
-            f"{len(problem.pose_file)} poses × {rows} components = {n_eq} equations for "
-            f"{n} parameters, and all {n_eq} are used up (rank {sub.rank}): the data cannot "
-            f"tell which parameters are identifiable; measure at least {-(-n // rows)} poses"
-        )
-    if sub.full_rank:
-        return candidates, ident
-    if not problem.reduce:
-        raise UnidentifiableError(
-            f"only {sub.rank} of {n} parameters are identifiable from these poses:\n"
-            + "\n".join(sub.describe()),
-            sub.unidentifiable_names,
-        )
-    return candidates[sub.base], ident
+    return StructuralBase(
+        problem.fit_indices, breaking, splitting, problem.reduce, len(problem.pose_file)
+    )
 
 
 def identify(
@@ -107,9 +80,9 @@ def identify(
     file is fitted by its batched residual model, by any registered solver; several
     data sets or instrument files by the joint model of machine and instrument
     unknowns (``"gauss-newton"`` or ``"lm"``; the instrument values and the gauge are
-    in ``result.annotations``, see also
-    :func:`pincal.identification.identify_instruments`). Both end in the same
-    finishing step.
+    in ``result.joint``, see also :func:`pincal.identification.identify_instruments`).
+    Both run the one fit driver (:mod:`pincal.identification._driver`) and end in the
+    same finishing step.
 
     Args:
         problem: an :class:`IdentificationProblem`, or the nominal mechanism.
@@ -172,35 +145,17 @@ def identify(
 
 def _run(problem: IdentificationProblem, method: str, entry: Any, opts: Any, progress: Progress):
     """The body of :func:`identify` (checked arguments), one BLAS thread."""
-    model = problem.model
-    x0 = problem.x0
-    _, J0, raw0 = model.evaluate(x0)
-    model, J0 = initial_weights(model, J0, raw0)
-    free, ident = _fit_set(problem, J0, model)
-    n_fit = problem.fit_indices.size
-    prefix = ""
-    if free.size < n_fit:
-        held = np.setdiff1d(problem.fit_indices, free)
-        n_break = int(np.isin(held, ident.breaks_closure).sum())
-        n_split = int(np.isin(held, ident.splits_joint).sum())
-        why = [f"{n_break} break loop closure"] if n_break else []
-        why += [f"{n_split} would split an emulated ball or universal joint"] if n_split else []
-        prefix = (
-            f"identified the {free.size} base parameters; held {n_fit - free.size} "
-            f"unidentifiable ones at their initial values"
-            + (f" ({'; '.join(why)})" if why else "")
-            + ". "
-        )
-        log.info(prefix)
-    out, model, weighting = weighted_fit(model, entry, x0, free, opts, progress)
+    model, x0 = problem.model, problem.x0
+    policy = FitPolicy(_base_rule(problem, model), weighting=True)
+    d = drive(model, x0, entry, opts, policy, progress)
     local = isinstance(opts, (GaussNewtonOptions, LMOptions))
     prior = opts.prior_weights(x0.size) if local else None
-    settled = settle(model, out, free)
     comps = tuple(problem.pose_file.components)
     result, _ = finish(
-        model, settled, method=method, params=problem.params, raw0=raw0,
-        stats=lambda raw: ResidualStats.from_residuals(raw, comps), residuals=settled.raw,
-        initial_values=problem.x0, prefix=prefix, prior=None if prior is None else prior[0],
-        identifiability=ident, weighting=weighting, initial_residuals=raw0, components=comps,
+        d.model, d.settled, method=method, params=problem.params, raw0=d.raw0,
+        stats=lambda raw: ResidualStats.from_residuals(raw, comps), residuals=d.settled.raw,
+        initial_values=x0, prefix=d.fit_set.note, prior=None if prior is None else prior[0],
+        identifiability=d.fit_set.identifiability, weighting=d.weighting,
+        initial_residuals=d.raw0, components=comps,
     )  # fmt: skip
     return result

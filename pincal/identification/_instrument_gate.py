@@ -121,7 +121,7 @@ def instrument_gate(
         raw = np.concatenate(fit.residuals[: len(z)]) if fit.residuals else np.zeros((0, 1))
         if raw.shape == z.shape:
             w = Weighting("declared", whitened=z, redundancy={
-                "instrument": float((result.annotations or {}).get("redundancy", 0.0))})
+                "instrument": 0.0 if result.joint is None else float(result.joint.redundancy)})
             result = dataclasses.replace(result, weighting=w, residuals=raw)
         else:
             jac = None

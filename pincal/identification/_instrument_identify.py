@@ -5,7 +5,10 @@ registered local solver (``"gauss-newton"`` or ``"lm"``), fitting the identifiab
 set (instrument parameters first, so what an instrument absorbs is held on the machine
 side) less the directions the data place only beyond a bound, names what it did not
 calibrate (:mod:`pincal.identification._gauge`) and ends in the finishing step every
-identification shares (:mod:`pincal.identification._finish`).
+identification shares (:mod:`pincal.identification._finish`). The sequence is the one
+fit driver's (:func:`pincal.identification._driver.drive`) with the joint set rule and a
+1σ :class:`pincal.identification._fit_set.WeakBound`; the joint details are typed
+(:class:`pincal.identification.JointDetails` on ``result.joint``).
 :func:`pincal.identification.identify` runs it for an
 :class:`pincal.identification.IdentificationProblem` of several data sets;
 :func:`identify_instruments` is the convenience that also returns the joint details.
@@ -21,14 +24,12 @@ import numpy as np
 
 from pincal.errors import SolverOptionError
 from pincal.identification._data_blocks import DataBlock
-from pincal.identification._finish import finish, settle
-from pincal.identification._gauge import (
-    constant_line,
-    constant_std,
-    null_motions,
-    weak_parameters,
-)
+from pincal.identification._driver import FitPolicy, drive
+from pincal.identification._finish import finish
+from pincal.identification._fit_set import JointBase, WeakBound
+from pincal.identification._gauge import constant_line, constant_std
 from pincal.identification._instrument_problem import Dataset, InstrumentProblem
+from pincal.identification._joint_details import JointDetails
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import solver
 from pincal.model import Mechanism, ParameterSet
@@ -49,8 +50,8 @@ class InstrumentIdentification:
     Attributes:
         result: the machine part as an :class:`IdentificationResult` (marginal
             covariance of the machine base parameters; residual statistics over every
-            dataset, scalar readings counted as position residuals [m]; annotations
-            hold the instrument values).
+            dataset, scalar readings counted as position residuals [m]; ``result.joint``
+            holds the instrument values, gauge and redundancy).
         names: all joint parameter names (machine, then ``label.θ`` names).
         values: (n + Σk,) joint values at the solution [SI]; x0: start values.
         fitted: indices (into ``names``) of the fitted base set.
@@ -169,30 +170,14 @@ def joint_fit(
     opts = entry.check_options(options)
     params = model.params
     x0 = model.x0
-    _, J0, raw0 = model.evaluate(x0)
-    ident = model.analyse(x0, J0)
-    free = np.sort(model.order[ident.base])
-    weak = (np.zeros(0, dtype=int) if weak_bound is None
-            else weak_parameters(J0, free, model.units, model.n_machine, weak_bound))  # fmt: skip
-    free = np.setdiff1d(free, weak)
-    P0, Jp0 = model.tool_points(x0)
-    motions = null_motions(J0, Jp0, P0, model.n_machine, ident, model.order,
-                           model.names[model.n_machine :])  # fmt: skip
-    gauge = tuple(motions.lines())
-    out = entry.solve(model, x0, free, opts, progress)
-    settled = settle(model, out, free, noise_floor=True)
-    if weak_bound is not None:  # the solution's Jacobian may see a direction weaker still
-        f = settled.fitted
-        more = f[weak_parameters(settled.Jf, np.arange(f.size), tuple(model.units[i] for i in f),
-                                 int(np.sum(f < model.n_machine)), weak_bound)]  # fmt: skip
-        if more.size:
-            weak, free = np.union1d(weak, more), np.setdiff1d(free, more)
-            out = entry.solve(model, x0, free, opts, progress)
-            settled = settle(model, out, free, noise_floor=True)
+    weak_rule = None if weak_bound is None else WeakBound(*weak_bound)
+    policy = FitPolicy(JointBase(), weak_rule, noise_floor=True)
+    d = drive(model, x0, entry, opts, policy, progress)
+    ident, settled, free, weak = d.fit_set.identifiability, d.settled, d.free, d.weak
+    out, raw0, gauge = settled.out, d.raw0, d.fit_set.gauge
     if weak.size:
-        assert weak_bound is not None
-        gauge += (f"seen too weakly to place within {weak_bound[0] * 1e3:g} mm / "
-                  f"{weak_bound[1]:g} rad (1σ), held at nominal: "
+        assert weak_rule is not None
+        gauge += (f"seen too weakly to place within {weak_rule.describe()}, held at nominal: "
                   f"{', '.join(model.names[i] for i in weak)}",)  # fmt: skip
     raws, Jf = settled.raw, settled.Jf
     constants = model.declared_constants(np.asarray(out.x, dtype=float))
@@ -202,8 +187,7 @@ def joint_fit(
         if std > SCALE_STD_LIMIT * abs(c.value):
             gauge += (constant_line(c, std, label if several else None),)
     n, x = model.n_machine, np.asarray(out.x, dtype=float)
-    inst = {k: float(v) for k, v in zip(model.names[n:], x[n:], strict=True)}
-    centres_mm = {k: [float(v) * 1e3 for v in c] for k, c in model.socket_centres(x).items()}
+    centres = model.socket_centres(x)
     result, cov = finish(
         model, settled, method=method, params=params, raw0=raw0,
         stats=lambda raws: _stats(raws, model.blocks),
@@ -215,14 +199,11 @@ def joint_fit(
         "held at nominal: see the gauge); "
         + "".join(f"WARNING: {w}; " for w in model.scale_warnings),
         identifiability=ident,
-        annotations={
-            "instruments": inst,
-            "datasets": list(model.labels),
-            "redundancy": settled.dof,
-            "gauge": list(gauge),
-            **({"warnings": list(model.scale_warnings)} if model.scale_warnings else {}),
-            **({"socket_centres_mm": centres_mm} if centres_mm else {}),
-        },
+        joint=JointDetails(
+            {k: float(v) for k, v in zip(model.names[n:], x[n:], strict=True)},
+            tuple(model.labels), settled.dof, gauge, model.scale_warnings,
+            {k: tuple(float(v) * 1e3 for v in c) for k, c in centres.items()},
+        ),
     )  # fmt: skip
     r = settled.r
     ks = {a.shape[1] for a in raws}
@@ -232,6 +213,5 @@ def joint_fit(
         whitened = (Jf.reshape(-1, k, free.size), r.reshape(-1, k))
     return InstrumentIdentification(
         result, model.names, x, x0, free, cov, raws, ident, gauge,
-        tuple(model.names[i] for i in weak), whitened, model.socket_centres(x),
-        model.scale_warnings,
+        tuple(model.names[i] for i in weak), whitened, centres, model.scale_warnings,
     )  # fmt: skip

@@ -27,17 +27,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Protocol
 
 import numpy as np
 
 from pincal.errors import PincalError
+from pincal.identification._residual_model import ResidualModel
 
 __all__ = [
     "TRIAL_ERRORS",
     "Curvature",
     "Linearity",
-    "ResidualModel",
     "check_curvature",
     "check_linearity",
     "principal_directions",
@@ -48,14 +47,6 @@ TRIAL_ERRORS = (PincalError, ValueError, ArithmeticError, np.linalg.LinAlgError)
 TOLERANCE = 0.25  # relative departure from the linear prediction that flags
 STEP = 1.0  # the step along each direction, in σ
 MAX_DIRECTIONS = 12  # directions checked, largest σ first (2 evaluations each)
-
-
-class ResidualModel(Protocol):
-    """What :func:`check_linearity` and the bootstrap need of a problem."""
-
-    def evaluate(self, x: np.ndarray, jacobian: bool = True) -> tuple[Any, ...]:
-        """(whitened residuals (N,), whitened Jacobian (N, n) or None, …) at x."""
-        ...
 
 
 @dataclass(frozen=True)

@@ -8,11 +8,15 @@
    with the optional Gaussian prior of :class:`Prior` on the machine's parameters);
    when Gauss–Newton does not converge, Levenberg–Marquardt takes over from the same
    start, and the switch is noted;
-3. the identifiable set decided again *at the solution* (the start can hide
+3. machine parameters whose 2σ exceeds a physical bound (``bounds``) held at their
+   nominal values and the fit repeated;
+4. the identifiable set decided again *at the solution* (the start can hide
    parameters, e.g. a marker guessed on the last joint axis), and the fit repeated
-   from there when it differs;
-4. machine parameters whose 2σ exceeds a physical bound (``bounds``) held at their
-   nominal values and the fit repeated — each said in words in :attr:`MarkerFit.notes`.
+   from there when it differs — each said in words in :attr:`MarkerFit.notes`.
+
+Steps 2–4 are the fit driver's (:func:`pincal.identification._driver.drive_holding`
+over :func:`pincal.identification._driver.drive`); this module registers and states
+the policies.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pincal.identification._driver import MarginalBound, drive_holding
 from pincal.identification._identify import identify
 from pincal.identification._marker_set import MarkerSetProblem
 from pincal.identification._options import GaussNewtonOptions, LMOptions
@@ -138,23 +143,6 @@ def _fit(
     return identify(mech, params, meas, method, options=opts, fit=names, initial=initial)
 
 
-def _amount(value: float, unit: str) -> str:
-    return f"{value * 1e3:.3g} {'mm' if unit == 'm' else 'mrad'}"
-
-
-def _weak(
-    result: IdentificationResult, params: ParameterSet, bounds: tuple[float, float]
-) -> list[tuple[str, str]]:
-    """Machine parameters whose 2σ exceeds the bound (NaN counts), with their 2σ in words."""
-    weak = []
-    for k, i in enumerate(np.flatnonzero(result.identified)):  # std: identified ones only
-        name, unit = params.names[i], params.units[i]
-        two_sigma = 2 * float(result.std[k])
-        if not is_registration(name) and not two_sigma <= bounds[0 if unit == "m" else 1]:
-            weak.append((name, f"2σ {_amount(two_sigma, unit)}"))
-    return weak
-
-
 def fit_markers(
     mech: Mechanism,
     setup: MarkerSetup,
@@ -204,7 +192,6 @@ def fit_markers(
     params = parameters(reg.mechanism, REGISTRATION_PRESET if registration_only else preset)
     names = [n for n in params.names if n not in setup.held]
     std = _prior_std(params, setup, None if registration_only else prior)
-    notes: list[str] = []
     if registration_only:
         result = _fit(start, params, meas, names, "gauss-newton", std)
         return MarkerFit(result, reg, (), "gauss-newton")
@@ -213,34 +200,11 @@ def fit_markers(
     if method not in ("gauss-newton", "lm"):
         result = _fit(start, params, meas, names, method, std)
         return MarkerFit(result, reg, (), method)
-    used = method
-    held_weak: list[str] = []
-    for _ in range(6):  # each round holds at least one more parameter, or stops
-        result = _fit(start, params, meas, names, used, std, loss, None, max_iterations)
-        if not result.success and used == "gauss-newton":
-            notes.append(
-                f"Gauss–Newton did not converge ({result.message.strip()}); switched to "
-                "Levenberg–Marquardt from the same start"
-            )
-            used = "lm"
-            result = _fit(start, params, meas, names, used, std, loss, None, max_iterations)
-        weak = _weak(result, params, bounds)
-        if not weak:
-            break
-        notes.append(
-            f"held {len(weak)} machine parameters at their nominal values, their 2σ "
-            f"exceeding {_amount(bounds[0], 'm')} / {_amount(bounds[1], 'rad')} (the poses "
-            "barely move those directions): " + ", ".join(f"{n} ({v})" for n, v in weak)
-        )
-        held = {n for n, _ in weak}
-        held_weak += [n for n, _ in weak]
-        names = [n for n in names if n not in held]
-    again = _fit(start, params, meas, names, used, std, loss, result.full_values)
-    n0, n1 = int(result.identified.sum()), int(again.identified.sum())
-    if n1 != n0 and (again.success or not result.success):
-        notes.append(
-            f"the identifiable set decided again at the solution has {n1} parameters "
-            f"(at the start {n0}); the fit was refined from the solution with that set"
-        )
-        result = again
-    return MarkerFit(result, reg, tuple(notes), used, tuple(held_weak))
+
+    def one(names: list[str], used: str, initial: np.ndarray | None) -> IdentificationResult:
+        # the refinement from a solution runs with the default iteration limit
+        limit = max_iterations if initial is None else 100
+        return _fit(start, params, meas, names, used, std, loss, initial, limit)
+
+    out = drive_holding(one, names, method, MarginalBound(*bounds), is_registration)
+    return MarkerFit(out.result, reg, out.notes, out.method, out.held)

@@ -162,10 +162,10 @@ def instrument_chi2(result: IdentificationResult) -> list[BlockChi2]:
     """χ² of a scalar-instrument fit (ballbar, sphere, plane, gauge) against its file's σ.
 
     Its residuals are whitened by the instrument file's ``std``; the redundancy (readings
-    minus fitted machine and instrument parameters) is the result's ``redundancy``
-    annotation. Empty when it is missing or below 1.
+    minus fitted machine and instrument parameters) is the joint fit's
+    ``result.joint.redundancy``. Empty when it is missing or below 1.
     """
-    dof = float((result.annotations or {}).get("redundancy", 0.0))
+    dof = 0.0 if result.joint is None else float(result.joint.redundancy)
     c2 = float(result.reduced_chi2) * dof
     if dof < 1.0 or not math.isfinite(c2):
         return []

@@ -193,6 +193,19 @@ class CalibrationProblem:
         return 0.5 * float(np.sum((100 * self.mech.options.tol / self.sigma) ** 2))
 
     @property
+    def names(self) -> tuple[str, ...]:
+        """The unknowns: the machine's parameters (a pose file has no own unknowns)."""
+        return self.params.names
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        return self.params.units
+
+    @property
+    def n_machine(self) -> int:
+        return len(self.params)
+
+    @property
     def n_equations(self) -> int:
         """Scalar measurement equations: poses × measured components."""
         return len(self.meas) * len(self.rows)

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import ParameterError, PincalError
+from pincal.identification._joint_details import JointDetails
 from pincal.identification._weighting import Weighting
 from pincal.model import Mechanism, ParameterSet
 from pincal.sensitivity import GlobalSensitivity, Identifiability, parameters
@@ -188,6 +189,8 @@ class IdentificationRecord:
             files written before pincal recorded them).
         identifiability_summary: the identifiability analysis at the start values as
             recorded (None when not recorded).
+        joint: a joint fit's instrument values, gauge, redundancy, warnings and socket
+            centres (:class:`JointDetails`); None for other fits.
     """
 
     method: str
@@ -215,6 +218,7 @@ class IdentificationRecord:
     initial_residuals: np.ndarray | None = field(default=None, repr=False)
     components: tuple[str, ...] = ()
     identifiability_summary: IdentifiabilitySummary | None = field(default=None, repr=False)
+    joint: JointDetails | None = field(default=None, repr=False)
 
     @property
     def values(self) -> np.ndarray:

@@ -142,7 +142,8 @@ def result_to_dict(
     Raises:
         ReportError: an annotation would overwrite a key of the result.
     """
-    notes = dict(result.annotations)
+    notes = {} if result.joint is None else result.joint.to_dict()
+    notes.update(result.annotations)
     notes.update(annotations or {})
     clash = sorted(set(notes) & OWNED)
     if clash:

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import ReportError
+from pincal.identification._joint_details import JOINT_KEYS, JointDetails
 from pincal.identification._result import (
     IdentifiabilitySummary,
     IdentificationRecord,
@@ -248,6 +249,12 @@ def result_from_dict(
         except (KeyError, TypeError, ValueError) as exc:
             raise ReportError(f"{src}: malformed 'weighting' ({exc})") from None
     notes = {k: v for k, v in data.items() if k not in OWNED}
+    try:
+        joint = JointDetails.from_dict(notes)
+    except (AttributeError, TypeError, ValueError) as exc:
+        raise ReportError(f"{src}: malformed joint-fit entries ({exc})") from None
+    if joint is not None:
+        notes = {k: v for k, v in notes.items() if k not in JOINT_KEYS}
     truth = {p["name"]: float(p["true"]) for p in every if "true" in p}
     if truth:
         notes["truth"] = truth
@@ -278,4 +285,5 @@ def result_from_dict(
         initial_residuals=initial_residuals,
         components=_read_components(data.get("components"), residuals, src),
         identifiability_summary=_read_identifiability(data.get("identifiability"), src),
+        joint=joint,
     )

@@ -31,12 +31,12 @@ from pincal.identification._intervals import Intervals, interval_quantiles
 from pincal.identification._linearity import (
     Curvature,
     Linearity,
-    ResidualModel,
     check_curvature,
     check_linearity,
 )
 from pincal.identification._problem import CalibrationProblem
 from pincal.identification._recipes import PoseRecipe, mechanism_blob
+from pincal.identification._residual_model import ResidualModel
 from pincal.identification._result import IdentificationResult
 from pincal.identification._verdict import QualityIssue, QualityVerdict
 from pincal.measure import Measurements, NoiseModel

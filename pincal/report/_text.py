@@ -169,13 +169,15 @@ def calibration_text(result: IdentificationRecord, notes: Mapping[str, Any] | No
     Args:
         result: the identification result, live or read from ``identification.json``.
         notes: context over ``result.annotations``: ``data`` (the data file(s)),
-            ``quality`` (the gate's verdict or its record, see :func:`quality_lines`),
-            an instrument fit's ``gauge``, ``warnings`` and ``socket_centres_mm``.
+            ``quality`` (the gate's verdict or its record, see :func:`quality_lines`);
+            a joint fit's ``gauge``, ``warnings`` and ``socket_centres_mm`` are read
+            from ``result.joint``.
 
     Returns:
         The text, ending with a newline.
     """
-    ctx: dict[str, Any] = {**result.annotations, **(notes or {})}
+    joint = {} if result.joint is None else result.joint.to_dict()
+    ctx: dict[str, Any] = {**joint, **result.annotations, **(notes or {})}
     comps = tuple(result.components) or None
     lines = _header(result, ctx, comps)
     lines += _parameter_lines(result)

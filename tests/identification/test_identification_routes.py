@@ -75,8 +75,8 @@ def test_a_mixed_list_is_identified_through_identify(stewart, stewart42, truth, 
     res = identify(problem)
     assert res.success, res.message
     assert 0.3 < res.reduced_chi2 < 2.0  # each file whitened by its own σ
-    assert res.annotations["datasets"] == labels
-    assert "bar.pivot_x" in res.annotations["instruments"]
+    assert res.joint is not None and res.joint.datasets == tuple(labels)
+    assert "bar.pivot_x" in res.joint.instruments
     # the same fit as the convenience that also returns the instrument details
     same = identify_instruments(stewart, stewart42, [pos, bar, gauge], labels=labels).result
     assert np.abs(res.full_values - same.full_values).max() < 1e-12

@@ -92,7 +92,7 @@ def test_without_a_known_distance_the_scale_is_reported(ur5):
     out = identify_instruments(mech, params, [data])
     assert out.warnings == (SCALE_MESSAGE,)
     assert "nothing measured fixes the length scale" in out.result.message
-    assert out.result.annotations["warnings"] == [SCALE_MESSAGE]
+    assert out.result.joint is not None and out.result.joint.warnings == (SCALE_MESSAGE,)
     # the scale no reading places is held at nominal and named in the gauge ...
     assert any("held at nominal" in g for g in out.gauge)
     kept = _held_out_distance_error(out.result.calibrated_mechanism, actual,

@@ -1,0 +1,74 @@
+"""The residual model every fit runs on, declared as a protocol.
+
+A residual model maps the vector x of its unknowns to whitened residuals and their
+analytic Jacobian. Its first :attr:`ResidualModel.n_machine` unknowns are the machine's
+parameters, shared by every data set; the others are the data sets' own unknowns
+(an instrument's pivot, a socket centre). Three classes satisfy it: the batched
+:class:`pincal.identification.CalibrationProblem` of one pose file (no own unknowns),
+its stacked form for several markers, and the joint
+:class:`pincal.identification.InstrumentProblem` of several data sets. The solvers, the
+driver (:mod:`pincal.identification._driver`) and the finishing step
+(:mod:`pincal.identification._finish`) use only what is declared here.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+import numpy as np
+
+from pincal.model import Mechanism
+
+__all__ = ["ResidualModel"]
+
+
+class ResidualModel(Protocol):
+    """Whitened residuals of measurements in a vector of unknowns.
+
+    Attributes:
+        mech: the nominal mechanism the unknowns displace.
+        names: the unknowns' names, machine parameters first.
+        units: per unknown ``"m"`` or ``"rad"``.
+        n_machine: the number of machine parameters (the shared unknowns, first in x).
+        n_equations: N, the number of whitened residuals.
+        known_noise: True when the whitening is the declared (or settled) noise, so the
+            covariance is not scaled by χ²/ν.
+        solver_floor_cost: cost ½‖r‖² of residuals at the kinematic solver's precision
+            (below it, the data are fitted exactly).
+        sigma: the σ whitening the residuals [m, rad] (an array, or one per data set).
+    """
+
+    mech: Mechanism
+
+    @property
+    def names(self) -> tuple[str, ...]: ...
+
+    @property
+    def units(self) -> tuple[str, ...]: ...
+
+    @property
+    def n_machine(self) -> int: ...
+
+    @property
+    def n_equations(self) -> int: ...
+
+    @property
+    def known_noise(self) -> bool: ...
+
+    @property
+    def solver_floor_cost(self) -> float: ...
+
+    @property
+    def sigma(self) -> Any: ...
+
+    def evaluate(self, values: np.ndarray, jacobian: bool = True) -> tuple[np.ndarray, Any, Any]:
+        """(N,) whitened residuals, (N, n_x) their Jacobian (None if not asked), raw residuals."""
+        ...
+
+    def cost(self, values: np.ndarray) -> float:
+        """½‖r‖² at ``values``."""
+        ...
+
+    def mechanism(self, values: np.ndarray) -> Mechanism:
+        """The mechanism with the machine part of ``values`` applied."""
+        ...
