@@ -199,10 +199,12 @@ class CalibrationProblem:
 
     @property
     def units(self) -> tuple[str, ...]:
+        """The parameters' units ('m' or 'rad')."""
         return self.params.units
 
     @property
     def n_machine(self) -> int:
+        """Machine parameters: all of the unknowns."""
         return len(self.params)
 
     @property

@@ -41,25 +41,39 @@ class ResidualModel(Protocol):
     mech: Mechanism
 
     @property
-    def names(self) -> tuple[str, ...]: ...
+    def names(self) -> tuple[str, ...]:
+        """The unknowns' names (n_x,): machine parameters first, then own unknowns."""
+        ...
 
     @property
-    def units(self) -> tuple[str, ...]: ...
+    def units(self) -> tuple[str, ...]:
+        """The unknowns' units (n_x,): 'm', 'rad' or the term's own unit."""
+        ...
 
     @property
-    def n_machine(self) -> int: ...
+    def n_machine(self) -> int:
+        """How many of the unknowns are machine parameters (the leading ones)."""
+        ...
 
     @property
-    def n_equations(self) -> int: ...
+    def n_equations(self) -> int:
+        """Scalar measurement equations N (the residual vector's length)."""
+        ...
 
     @property
-    def known_noise(self) -> bool: ...
+    def known_noise(self) -> bool:
+        """Whether ``sigma`` holds the noise (declared or per-pose), not an estimate."""
+        ...
 
     @property
-    def solver_floor_cost(self) -> float: ...
+    def solver_floor_cost(self) -> float:
+        """Cost of residuals at the kinematic solver's floor: below it, data fit exactly."""
+        ...
 
     @property
-    def sigma(self) -> Any: ...
+    def sigma(self) -> Any:
+        """The residuals' standard deviations [m, rad]: scalar or (N,)."""
+        ...
 
     def evaluate(self, values: np.ndarray, jacobian: bool = True) -> tuple[np.ndarray, Any, Any]:
         """(N,) whitened residuals, (N, n_x) their Jacobian (None if not asked), raw residuals."""
