@@ -70,6 +70,9 @@ class MarkerRun:
         verdict: the quality gate's verdict (judged by held-out prediction).
         notes: what was left out or decided, in words.
         warnings: findings worth a warning that the verdict does not hold.
+        held_out: the cross-validation that judged the fit (the procedure's and the
+            registration's, same folds), None when only the registration is fitted;
+            recorded whole so that ``validate --cv`` with the same folds reuses it.
     """
 
     fit: MarkerFit
@@ -81,6 +84,7 @@ class MarkerRun:
     verdict: QualityVerdict
     notes: tuple[str, ...]
     warnings: tuple[str, ...] = ()
+    held_out: HeldOutEvidence | None = None
 
     @property
     def prior(self) -> Prior | None:
@@ -203,13 +207,16 @@ def calibrate_markers(
                      "beyond)")  # fmt: skip
         loss = ROBUST_LOSS
         choice, fit, verdict = settle(loss)
+    evidence = None
     if machine:
         cv = choice.cv
         if choice.chosen:  # the choice is part of the procedure: nested CV
             say("cross-validating the calibration, the prior chosen again in each fold")
             procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss)
             cv = cross_validate(nested_choice(procedure, k, seed), meas, k, seed)
-        evidence = HeldOutEvidence(cv, baseline, "registration only")
+        # with orientation measured, both blocks count, each whitened by the noise σ
+        # the procedure's fold fits leave (the same σ for both procedures)
+        evidence = HeldOutEvidence(cv, baseline, "registration only", cv.fit_scales())
         verdict = held_out_verdict(verdict, evidence, fit.result)
     rms = fit.registration.fit.rms
     warnings: tuple[str, ...] = (_misfit_note(rms),) if rms > MISFIT_RMS else ()
@@ -217,4 +224,4 @@ def calibrate_markers(
     if angle is not None and angle > MISFIT_ANGLE:
         warnings += (_angle_note(angle),)
     return MarkerRun(fit, meas, setup, settings, loss, choice, verdict,
-                     (*notes, *fit.notes), warnings)  # fmt: skip
+                     (*notes, *fit.notes), warnings, evidence if machine else None)  # fmt: skip
