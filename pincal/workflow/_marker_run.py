@@ -43,8 +43,16 @@ from pincal.workflow._prior_choice import (
     cross_validated,
     nested_choice,
 )
+from pincal.workflow._registrations import Registrations
 
-__all__ = ["MISFIT_RMS", "ROBUST_LOSS", "MarkerRun", "calibrate_markers", "marker_procedure"]
+__all__ = [
+    "MISFIT_RMS",
+    "ROBUST_LOSS",
+    "MarkerRun",
+    "calibrate_markers",
+    "marker_procedure",
+    "registration_procedure",
+]
 
 #: registration RMS [m] beyond which the table does not describe the nominal robot
 MISFIT_RMS = 0.02
@@ -96,17 +104,41 @@ class MarkerRun:
 
 
 def marker_procedure(
-    mech: Mechanism, setup: MarkerSetup, preset: str, method: str, loss: str
+    mech: Mechanism,
+    setup: MarkerSetup,
+    preset: str,
+    method: str,
+    loss: str,
+    registrations: Registrations | None = None,
 ) -> Callable[[Prior | None], Callable[[Any], Mechanism]]:
-    """Prior → (measurements → calibrated mechanism): the fit that is cross-validated."""
+    """Prior → (measurements → calibrated mechanism): the fit that is cross-validated.
+
+    ``registrations``: the registrations shared with other procedures of the same
+    calibration (a new one when None): each set of poses is registered once.
+    """
+    reg = registrations or Registrations(mech, setup)
 
     def with_prior(prior: Prior | None) -> Callable[[Any], Mechanism]:
         def fit(meas: Any) -> Mechanism:
-            return fit_markers(mech, setup, meas, preset, method, prior, loss=loss).calibrated
+            return fit_markers(mech, setup, meas, preset, method, prior, loss=loss,
+                               registration=reg(meas)).calibrated  # fmt: skip
 
         return fit
 
     return with_prior
+
+
+def registration_procedure(
+    mech: Mechanism, setup: MarkerSetup, registrations: Registrations | None = None
+) -> Callable[[Any], Mechanism]:
+    """Measurements → the registration-only model (the baseline of a marker calibration)."""
+    reg = registrations or Registrations(mech, setup)
+
+    def fit(meas: Any) -> Mechanism:
+        return fit_markers(mech, setup, meas, registration_only=True,
+                           registration=reg(meas)).calibrated  # fmt: skip
+
+    return fit
 
 
 def _misfit_note(rms: float) -> str:
@@ -179,23 +211,23 @@ def calibrate_markers(
     k, seed = settings.folds, settings.seed
     say(f"registering the instrument frame and {len(meas)} marker(s), then identifying from "
         f"{len(meas[0])} poses; {k}-fold cross-validation judges the fit")  # fmt: skip
-    baseline = cross_validate(
-        lambda m: fit_markers(mech, setup, m, registration_only=True).calibrated, meas, k, seed
-    )
+    registrations = Registrations(mech, setup)  # each set of poses registered once
+    baseline = cross_validate(registration_procedure(mech, setup, registrations), meas, k, seed)
     asked = parse_prior(settings.prior)
     machine = any(not is_registration(n) for n in parameters(mech, settings.preset).names)
     if not machine:
         asked = None  # only the registration is fitted: no prior, no baseline to beat
 
     def settle(loss: str) -> tuple[PriorChoice, MarkerFit, QualityVerdict]:
-        procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss)
+        procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss,
+                                     registrations)  # fmt: skip
         if asked == "auto":
             say(f"choosing the prior's strength by {k}-fold cross-validation ({loss} loss)")
             choice = choose_prior(procedure, meas, k, seed)
         else:
             choice = cross_validated(procedure, asked, meas, k, seed)  # type: ignore[arg-type]
         fit = fit_markers(mech, setup, meas, settings.preset, settings.method, choice.prior,
-                          loss=loss)  # fmt: skip
+                          loss=loss, registration=registrations(meas))  # fmt: skip
         return choice, fit, _gate(fit, meas, settings)
 
     loss = "linear" if settings.loss == "auto" else settings.loss
@@ -212,7 +244,8 @@ def calibrate_markers(
         cv = choice.cv
         if choice.chosen:  # the choice is part of the procedure: nested CV
             say("cross-validating the calibration, the prior chosen again in each fold")
-            procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss)
+            procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss,
+                                         registrations)  # fmt: skip
             cv = cross_validate(nested_choice(procedure, k, seed), meas, k, seed)
         # with orientation measured, both blocks count, each whitened by the noise σ
         # the procedure's fold fits leave (the same σ for both procedures)
