@@ -6,7 +6,9 @@ fold — so nothing of a held-out pose reaches its prediction. The baseline is t
 registration-only model (instrument frame + marker: the robot left uncalibrated) for a
 marker calibration, the nominal model otherwise. With orientation measured (a 6-D
 marker body, a pose file) the held-out rotation error angles are reported beside the
-positions (the verdict stays on positions). The outcome is a
+positions; for a marker body the verdict weighs both, each whitened by its noise σ. A marker
+calibration's own cross-validation (recorded by calibrate) is reused for the same K and
+seed unless ``refit``. The outcome is a
 :class:`pincal.validation.CrossValidationSummary`; :func:`pincal.report.cross_validation_text`
 renders it.
 """
@@ -107,7 +109,8 @@ def run_cv(
         full = cross_validate(fit, meas, k, seed)
         ref = cross_validate(base, meas, k, seed)
     gain, se, beats = compare(full, ref)
-    scales = full.fit_scales()  # orientation measured: both blocks, whitened
+    # a 6-D marker body: both blocks, whitened (pose files: positions, as before)
+    scales = full.fit_scales() if markers else None
     whitened = None
     if scales is not None:
         wg, wse, beats = compare(full, ref, scales)
