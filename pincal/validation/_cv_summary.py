@@ -169,7 +169,7 @@ class CrossValidationSummary:
         b = self.baseline
         own = _errors(self.held_out_rms, self.held_out_max, self.fold_fit_rms)
         base = {"model": b.model, **_errors(b.held_out_rms, b.held_out_max, b.fold_fit_rms)}
-        extra: dict[str, float] = {}
+        extra: dict[str, Any] = {}
         if self.orientation is not None and b.orientation is not None:
             own |= self.orientation.to_dict()
             base |= b.orientation.to_dict()
@@ -183,7 +183,8 @@ class CrossValidationSummary:
         if self.whitened_gain is not None:
             extra |= {"gain_whitened": self.whitened_gain[0],
                       "gain_whitened_standard_error": self.whitened_gain[1]}  # fmt: skip
-        head["recorded_by_calibrate"] = self.recorded
+        if self.recorded:  # figures calibrate computed on these folds, not refitted
+            extra["recorded_by_calibrate"] = True
         return {**head, **own, "baseline": base, **extra,
                 "beats_baseline": self.beats_baseline, "verdict": self.verdict}  # fmt: skip
 
