@@ -6,7 +6,9 @@ fold — so nothing of a held-out pose reaches its prediction. The baseline is t
 registration-only model (instrument frame + marker: the robot left uncalibrated) for a
 marker calibration, the nominal model otherwise. With orientation measured (a 6-D
 marker body, a pose file) the held-out rotation error angles are reported beside the
-positions (the verdict stays on positions). The outcome is a
+positions; for a marker body the verdict weighs both, each whitened by its noise σ. A marker
+calibration's own cross-validation (recorded by calibrate) is reused for the same K and
+seed unless ``refit``. The outcome is a
 :class:`pincal.validation.CrossValidationSummary`; :func:`pincal.report.cross_validation_text`
 renders it.
 """
@@ -57,8 +59,27 @@ def _pose_fit(cal):
     return meas, fit, lambda m: nominal
 
 
-def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> CrossValidationSummary:
-    """The cross-validation of ``validate --cv`` (its ``to_dict()``: the ``cv`` JSON)."""
+def _recorded(markers: dict, k: int, seed: int):
+    """(calibrated, baseline) cross-validations calibrate recorded on these folds, or None."""
+    from pincal.identification import CrossValidation
+
+    rec = markers.get("cross_validation")
+    if not rec or rec.get("folds") != k or rec.get("seed") != seed:
+        return None
+    return CrossValidation.from_record(rec["calibrated"]), CrossValidation.from_record(
+        rec["baseline"]
+    )
+
+
+def run_cv(
+    cal, k: int, seed: int, folds_out: Path | None, refit: bool = False
+) -> CrossValidationSummary:
+    """The cross-validation of ``validate --cv`` (its ``to_dict()``: the ``cv`` JSON).
+
+    A marker calibration records the cross-validation its gate ran (the same procedure,
+    folds from the same K and seed): that one is reused unless ``refit``, after
+    :func:`pincal.workflow.rebuild` has checked the data file unchanged.
+    """
     from pincal.cli._socket_cv import is_socket_calibration
     from pincal.identification import compare, cross_validate
 
@@ -69,6 +90,7 @@ def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> CrossValidationSum
         _write_folds(summary.folds, summary.poses, folds_out)
         return summary
     markers = cal.manifest.get("markers")
+    recorded = None
     if markers:
         from pincal.workflow import rebuild, replay_procedure
 
@@ -76,13 +98,23 @@ def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> CrossValidationSum
         fit = replay_procedure(mech, setup, markers, registration_only=False)
         base = replay_procedure(mech, setup, markers, registration_only=True)
         baseline_name = "registration only"
+        recorded = None if refit else _recorded(markers, k, seed)
     else:
         meas, fit, base = _pose_fit(cal)
         baseline_name = "nominal model"
     poses = len(meas[0]) if isinstance(meas, tuple) else len(meas)  # one set per marker
-    full = cross_validate(fit, meas, k, seed)
-    ref = cross_validate(base, meas, k, seed)
+    if recorded is not None:
+        full, ref = recorded
+    else:
+        full = cross_validate(fit, meas, k, seed)
+        ref = cross_validate(base, meas, k, seed)
     gain, se, beats = compare(full, ref)
+    # a 6-D marker body: both blocks, whitened (pose files: positions, as before)
+    scales = full.fit_scales() if markers else None
+    whitened = None
+    if scales is not None:
+        wg, wse, beats = compare(full, ref, scales)
+        whitened = (wg, wse)
     _write_folds(full.folds, poses, folds_out)
     fit_angle = float(cal.result.after.rms_orientation)
     return CrossValidationSummary(
@@ -91,7 +123,8 @@ def run_cv(cal, k: int, seed: int, folds_out: Path | None) -> CrossValidationSum
         CrossValidationBaseline(baseline_name, ref.rms, ref.max, _fold_fit(ref),
                                 orientation=_angles(ref)),
         bool(beats), gain_mse=gain, gain_standard_error=se,
-        orientation=_angles(full, fit_angle),
+        orientation=_angles(full, fit_angle), whitened_gain=whitened,
+        recorded=recorded is not None,
     )  # fmt: skip
 
 

@@ -25,6 +25,9 @@ from pincal.cli.common import announce, calibration_summary, fail_cleanly
               "as calibrate ran, held-out RMS/max beside the registration-only model.")
 @click.option("--seed", "cv_seed", type=int, default=0, show_default=True,
               help="Seed of the --cv folds.")
+@click.option("--refit", is_flag=True,
+              help="With --cv: fit the folds again even when the calibration recorded "
+              "this cross-validation (a marker calibration's gate, same K and seed).")
 @click.option("--folds-out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write the --cv folds (pose row, fold) as CSV.")
 @click.option("--json", "as_json", is_flag=True, help="Print the full validation as JSON.")
@@ -39,7 +42,7 @@ from pincal.cli.common import announce, calibration_summary, fail_cleanly
                 "tool frame), replacing the calibration's, for its compliance terms.")
 @fail_cleanly
 def validate(
-    calibration: Path, data: Path | None, cv_folds: int | None, cv_seed: int,
+    calibration: Path, data: Path | None, cv_folds: int | None, cv_seed: int, refit: bool,
     folds_out: Path | None, as_json: bool, yes: bool, out: Path | None, payload: str | None,
 ) -> None:  # fmt: skip
     """Check the calibration in CALIBRATION on measurements not used for fitting.
@@ -71,7 +74,10 @@ def validate(
     folds. Printed: held-out RMS / max [mm] beside the fit RMS, and beside the same for
     the registration-only model (instrument frame + marker, the uncalibrated robot) for
     a marker calibration, or the nominal model otherwise; and whether the calibration
-    beats it by more than the standard error.
+    beats it by more than the standard error. A marker calibration records the
+    cross-validation its gate ran; the same K and seed reuse it (said in the output),
+    --refit fits the folds again. With orientation measured (a 6-D marker body) the
+    verdict weighs position and orientation, each whitened by its noise σ.
     """
     from pincal.cli.common import guard_paths
     from pincal.io import (
@@ -95,7 +101,7 @@ def validate(
         from pincal.cli._cv import run_cv
         from pincal.report import cross_validation_text
 
-        cv = run_cv(read_calibration(calibration), cv_folds, cv_seed, folds_out)
+        cv = run_cv(read_calibration(calibration), cv_folds, cv_seed, folds_out, refit)
         cv_doc = cv.to_dict()
         if data is None:
             only = {"calibration": str(calibration), "cv": cv_doc}

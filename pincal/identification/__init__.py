@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from pincal.identification._bootstrap import Bootstrap, bootstrap_covariance
 from pincal.identification._cross_validation import (
+    BlockScales,
     CrossValidation,
     compare,
     cross_validate,
@@ -119,6 +120,7 @@ __all__ = [
     "METHODS",
     "REGISTRATION_PRESET",
     "SOLVERS",
+    "BlockScales",
     "Bootstrap",
     "CalibrationProblem",
     "CandidateScore",

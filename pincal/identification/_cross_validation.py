@@ -7,9 +7,14 @@ and predicts the held-out one, for each fold; every pose is held out exactly onc
 With several markers per pose (one measurement set each, same rows) a pose's error is
 the RMS over its markers. When the first set measures the whole orientation (a 6-D
 marker body, a pose file with ``rx ry rz``), each held-out pose's rotation error angle is kept too
-(:func:`orientation_errors`); the comparison of procedures stays on positions.
-:func:`compare` states whether one procedure beats another by more than the standard
-error of the paired difference of their per-pose squared errors.
+(:func:`orientation_errors`). :func:`compare` states whether one procedure beats
+another by more than the standard error of the paired difference of their per-pose
+squared errors: position errors [m²], or, given each block's noise σ
+(:class:`BlockScales`) and orientation measured, the whitened sum
+``|Δp|²/σ_p² + θ²/σ_r²`` of each pose (dimensionless; see
+:meth:`CrossValidation.squared_errors`). A :class:`CrossValidation` is stored and read
+back exactly (:meth:`CrossValidation.to_record`, :meth:`CrossValidation.from_record`),
+so the figure a calibration computed is reused rather than refitted.
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ from pincal.measure import Measurements
 from pincal.model import Mechanism
 
 __all__ = [
+    "BlockScales",
     "CrossValidation",
     "compare",
     "cross_validate",
@@ -82,6 +88,26 @@ def orientation_errors(mech: Mechanism, meas: Measurements) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class BlockScales:
+    """The noise σ that whitens each block of a held-out error (6-D poses).
+
+    Attributes:
+        position: σ per position coordinate [m].
+        orientation: σ per rotation component [rad].
+    """
+
+    position: float
+    orientation: float
+
+    def to_dict(self) -> dict:
+        return {"position_mm": self.position * 1e3, "orientation_mrad": self.orientation * 1e3}
+
+
+def _floats(v: Any) -> np.ndarray | None:
+    return None if v is None else np.asarray(v, dtype=float)
+
+
+@dataclass(frozen=True)
 class CrossValidation:
     """Held-out position (and orientation) errors of one fitting procedure.
 
@@ -122,6 +148,58 @@ class CrossValidation:
     def max(self) -> float:
         """Largest held-out pose error [m]."""
         return float(self.held_out.max())
+
+    def squared_errors(self, scales: BlockScales | None = None) -> np.ndarray:
+        """(m,) each pose's held-out squared error: [m²], or whitened by ``scales``.
+
+        With ``scales`` and orientation measured: ``|Δp|²/σ_p² + θ²/σ_r²``
+        (dimensionless, ≈ 3 + 3 per pose for errors at the noise level), so position
+        and orientation count by how far each is outside its own noise. Without
+        orientation, ``scales`` leaves the position errors [m²] unchanged.
+        """
+        if scales is None or self.held_out_orientation is None:
+            return self.held_out**2
+        return (self.held_out / scales.position) ** 2 + (
+            self.held_out_orientation / scales.orientation
+        ) ** 2
+
+    def fit_scales(self) -> BlockScales | None:
+        """Each block's noise σ as the folds' own fits leave it, or None (no orientation).
+
+        σ_p = fold-fit RMS distance / √3, σ_r = fold-fit RMS angle / √3 (per
+        coordinate, over the training poses of every fold); None as well when either is
+        zero (exact data).
+        """
+        if self.fit_orientation_rms is None:
+            return None
+        p = float(np.sqrt(np.mean(self.fit_rms**2) / 3))
+        r = float(np.sqrt(np.mean(self.fit_orientation_rms**2) / 3))
+        return BlockScales(p, r) if p > 0 and r > 0 else None
+
+    def to_record(self) -> dict:
+        """Every array as a JSON list (floats round-trip exactly): :meth:`from_record`."""
+
+        def out(v: np.ndarray | None) -> list | None:
+            return None if v is None else [float(x) for x in v]
+
+        return {
+            "folds": [[int(i) for i in f] for f in self.folds],
+            "held_out_m": out(self.held_out),
+            "fit_rms_m": out(self.fit_rms),
+            "held_out_orientation_rad": out(self.held_out_orientation),
+            "fit_orientation_rms_rad": out(self.fit_orientation_rms),
+        }
+
+    @classmethod
+    def from_record(cls, d: dict) -> CrossValidation:
+        """The cross-validation :meth:`to_record` wrote."""
+        return cls(
+            tuple(np.asarray(f, dtype=int) for f in d["folds"]),
+            np.asarray(d["held_out_m"], dtype=float),
+            np.asarray(d["fit_rms_m"], dtype=float),
+            _floats(d.get("held_out_orientation_rad")),
+            _floats(d.get("fit_orientation_rms_rad")),
+        )
 
     def to_dict(self) -> dict:
         """Held-out RMS / max and the folds' fit RMS [mm] (orientation [mrad]), for JSON."""
@@ -184,14 +262,18 @@ def cross_validate(
     return CrossValidation(folds, held, fit_rms, held_r, fit_r)
 
 
-def compare(model: CrossValidation, baseline: CrossValidation) -> tuple[float, float, bool]:
+def compare(
+    model: CrossValidation, baseline: CrossValidation, scales: BlockScales | None = None
+) -> tuple[float, float, bool]:
     """(gain, its standard error, beats) of ``model`` over ``baseline`` on the same folds.
 
-    ``gain`` is the baseline's held-out mean squared error minus the model's [m²], its
-    standard error that of the mean of the paired per-pose differences; ``beats`` is
-    True when the gain exceeds its standard error.
+    ``gain`` is the baseline's held-out mean squared error minus the model's [m²] —
+    with ``scales`` and orientation measured, of the whitened squared errors
+    (:meth:`CrossValidation.squared_errors`, dimensionless) — its standard error that
+    of the mean of the paired per-pose differences; ``beats`` is True when the gain
+    exceeds its standard error.
     """
-    d = baseline.held_out**2 - model.held_out**2
+    d = baseline.squared_errors(scales) - model.squared_errors(scales)
     se = float(np.std(d, ddof=1) / np.sqrt(d.size)) if d.size > 1 else float("inf")
     gain = float(np.mean(d))
     return gain, se, gain > se

@@ -12,6 +12,11 @@ calibration predicts worse than the baseline.
 
 With declared noise (an instrument's σ known) the gate of :func:`check_quality` is
 unchanged: there a probe's significance is measured against the instrument itself.
+
+With orientation measured (a 6-D marker body) the evidence carries each block's noise
+σ (:class:`BlockScales`) and the gain is that of the whitened per-pose squared error
+``|Δp|²/σ_p² + θ²/σ_r²``: a calibration that predicts positions better but
+orientations worse by more (each in units of its own noise) does not pass.
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from pincal.identification._cause import likely_cause
-from pincal.identification._cross_validation import CrossValidation, compare
+from pincal.identification._cross_validation import BlockScales, CrossValidation, compare
 from pincal.identification._result import IdentificationResult
 from pincal.identification._verdict import QualityIssue, QualityVerdict
 
@@ -36,17 +41,41 @@ class HeldOutEvidence:
         calibrated: the calibration procedure's cross-validation.
         baseline: the baseline procedure's (same folds).
         baseline_name: what the baseline is, in words (``registration only``).
+        scales: each block's noise σ when orientation is measured (the gain is then
+            of whitened squared errors, dimensionless), else None (positions, m²).
     """
 
     calibrated: CrossValidation
     baseline: CrossValidation
     baseline_name: str
+    scales: BlockScales | None = None
+
+    @property
+    def whitened(self) -> bool:
+        """True when the gain combines position and orientation (whitened)."""
+        return self.scales is not None and self.calibrated.held_out_orientation is not None
 
     @property
     def gain(self) -> tuple[float, float]:
-        """(baseline − calibrated held-out mean squared error [m²], its standard error)."""
-        gain, se, _ = compare(self.calibrated, self.baseline)
+        """(baseline − calibrated held-out mean squared error, its standard error).
+
+        [m²], or whitened (dimensionless) when :attr:`whitened`.
+        """
+        gain, se, _ = compare(self.calibrated, self.baseline, self.scales)
         return gain, se
+
+    def _gain_words(self) -> str:
+        gain, se = self.gain
+        word = "lower" if gain >= 0 else "higher"
+        if not self.whitened:
+            return f"mean squared error {word} by {abs(gain) * 1e6:.3g} ± {se * 1e6:.2g} mm²"
+        assert self.scales is not None
+        c, b = self.calibrated.orientation_rms or 0.0, self.baseline.orientation_rms or 0.0
+        return (
+            f"orientation {c * 1e3:.3f} against {b * 1e3:.3f} mrad; the whitened squared "
+            f"error (position / {self.scales.position * 1e3:.3g} mm, orientation / "
+            f"{self.scales.orientation * 1e3:.3g} mrad) {word} by {abs(gain):.3g} ± {se:.2g}"
+        )
 
     @property
     def ratio(self) -> float:
@@ -55,19 +84,20 @@ class HeldOutEvidence:
 
     def describe(self) -> str:
         """One line: both held-out RMS [mm] and the gain with its standard error."""
-        gain, se = self.gain
         k = len(self.calibrated.folds)
         return (
             f"{k}-fold held-out RMS {self.calibrated.rms * 1e3:.3f} mm calibrated, "
-            f"{self.baseline.rms * 1e3:.3f} mm {self.baseline_name} (mean squared error "
-            f"{'lower' if gain >= 0 else 'higher'} by {abs(gain) * 1e6:.3g} ± "
-            f"{se * 1e6:.2g} mm²)"
+            f"{self.baseline.rms * 1e3:.3f} mm {self.baseline_name} ({self._gain_words()})"
         )
 
     def to_dict(self) -> dict:
-        """JSON: both procedures' held-out figures [mm], the gain and its s.e. [mm²]."""
-        gain, se = self.gain
-        return {
+        """JSON: both procedures' held-out figures [mm], the gain and its s.e.
+
+        [mm²]; with :attr:`whitened`, ``gain_whitened`` and its s.e. (dimensionless),
+        the σ used in ``whitened_by``, and the position-only gain beside them.
+        """
+        gain, se, _ = compare(self.calibrated, self.baseline)
+        out = {
             "folds": len(self.calibrated.folds),
             "calibrated": self.calibrated.to_dict(),
             "baseline": {"name": self.baseline_name, **self.baseline.to_dict()},
@@ -75,6 +105,12 @@ class HeldOutEvidence:
             "gain_mse_mm2": gain * 1e6,
             "gain_standard_error_mm2": se * 1e6 if np.isfinite(se) else None,
         }
+        if self.whitened:
+            assert self.scales is not None
+            w, wse = self.gain
+            out |= {"whitened_by": self.scales.to_dict(), "gain_whitened": w,
+                    "gain_whitened_standard_error": wse if np.isfinite(wse) else None}  # fmt: skip
+        return out
 
 
 def held_out_verdict(

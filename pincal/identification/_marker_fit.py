@@ -154,6 +154,7 @@ def fit_markers(
     registration_only: bool = False,
     loss: str = "linear",
     max_iterations: int = 100,
+    registration: MarkerRegistration | None = None,
 ) -> MarkerFit:
     """Register, then identify the machine with the instrument frame and marker.
 
@@ -173,12 +174,15 @@ def fit_markers(
             of an uncalibrated robot).
         loss: robust loss of ``lm`` (a robust loss runs ``lm``; see ``LMOptions.loss``).
         max_iterations: iteration limit of each solve (``lm``: 10 × evaluations).
+        registration: the closed-form registration of these measurements (from
+            :func:`pincal.measure.register_markers` with this set-up), when the caller
+            already has it; None registers them here.
 
     Raises:
         PincalError subclasses of :func:`identify` and :func:`register_markers`.
     """
     parts = (measurements,) if isinstance(measurements, Measurements) else tuple(measurements)
-    reg = register_markers(
+    reg = registration or register_markers(
         mech,
         parts[0],
         marker_known=setup.marker is not None,

@@ -19,7 +19,7 @@ import pinocchio as pin
 from pincal.errors import MeasurementError, ModelFileError
 from pincal.measure._markers import marker_frame
 from pincal.measure._measurements import Measurements
-from pincal.measure._tracker import RigidFit, fit_rigid_transform
+from pincal.measure._tracker import RigidFit, fit_rigid_transform, kabsch
 from pincal.model import BASE_JOINT, TOOL_JOINT, Mechanism, with_joint_origin
 
 __all__ = ["MarkerRegistration", "register_markers"]
@@ -114,11 +114,16 @@ def register_markers(
     mk += [np.zeros(3) for _ in more]
     T = T_base
     it = 0
+    measured, ones = np.vstack(P), np.ones(sum(len(Pk) for Pk in P))
     while it < max_iterations:
         it += 1
-        pred = [t_f + np.einsum("mij,j->mi", R_f, v) for v in mk]
-        fit = None if frame_known else fit_rigid_transform(np.vstack(pred), np.vstack(P))
-        T = T_base if fit is None else fit.T
+        pred = np.vstack([t_f + np.einsum("mij,j->mi", R_f, v) for v in mk])
+        if frame_known:
+            T = T_base
+        elif it == 1:  # checked once: shapes, NaN, collinear predicted points
+            T = fit_rigid_transform(pred, measured).T
+        else:  # the same closed form on the same (moved) points, unchecked
+            T = pin.SE3(*kabsch(pred, measured, ones))
         A = np.einsum("ij,mjk->mik", T.rotation, R_f).reshape(-1, 3)
         moved = 0.0
         for k, Pk in enumerate(P):

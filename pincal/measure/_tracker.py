@@ -105,6 +105,23 @@ def _check_not_collinear(points: np.ndarray, weights: np.ndarray, name: str) -> 
         )
 
 
+def kabsch(p: np.ndarray, q: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(R (3, 3), t (3,)) minimising ``Σ w_k |R p_k + t - q_k|²``, unchecked.
+
+    The closed form of :func:`fit_rigid_transform` without its checks, for callers
+    that iterate on points already checked (shapes (n, 3), weights (n,) > 0).
+    """
+    w_sum = w.sum()
+    p_mean = w @ p / w_sum
+    q_mean = w @ q / w_sum
+    H = (p - p_mean).T @ ((q - q_mean) * w[:, None])  # Σ w p̃ q̃ᵀ, (3, 3)
+    U, _, Vt = np.linalg.svd(H)
+    d = np.sign(np.linalg.det(Vt.T @ U.T))
+    D = np.diag([1.0, 1.0, d if d != 0.0 else 1.0])
+    R = Vt.T @ D @ U.T
+    return R, q_mean - R @ p_mean
+
+
 def fit_rigid_transform(
     points_local: np.ndarray,
     points_measured: np.ndarray,
@@ -142,16 +159,7 @@ def fit_rigid_transform(
         raise MeasurementError(f"a rigid fit needs at least 3 targets, got {n}")
     w = _as_weights(weights, n)
     _check_not_collinear(p, w, "points_local")
-
-    w_sum = w.sum()
-    p_mean = w @ p / w_sum
-    q_mean = w @ q / w_sum
-    H = (p - p_mean).T @ ((q - q_mean) * w[:, None])  # Σ w p̃ q̃ᵀ, (3, 3)
-    U, _, Vt = np.linalg.svd(H)
-    d = np.sign(np.linalg.det(Vt.T @ U.T))
-    D = np.diag([1.0, 1.0, d if d != 0.0 else 1.0])
-    R = Vt.T @ D @ U.T
-    t = q_mean - R @ p_mean
+    R, t = kabsch(p, q, w)
     T = pin.SE3(R, t)
 
     res_vec = q - (p @ R.T + t)

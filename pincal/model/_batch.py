@@ -27,6 +27,7 @@ from pincal.model._batch_ops import (
     cross_cols,
     exp3_batch,
     group_joints,
+    joint_layout,
     mm,
     mv,
     quat_to_matrix,
@@ -200,6 +201,12 @@ class BatchModel:
                 )
             self._joints = tuple(moved)
         placed = self._joints
+        if self.supported and getattr(self, "_layout", None) is None:
+            # the tree's grouping, kept by every copy: only placements move
+            self._layout = joint_layout(
+                [jt.kind for jt in placed], [jt.parent for jt in placed],
+                [jt.iq for jt in placed], [jt.iv for jt in placed],
+            )  # fmt: skip
         self._groups = (
             group_joints(
                 [jt.kind for jt in placed],
@@ -210,6 +217,7 @@ class BatchModel:
                 np.array([jt.R0 for jt in placed]).reshape(-1, 3, 3),
                 np.array([jt.p0 for jt in placed]).reshape(-1, 3),
                 np.array([jt.axis2 for jt in placed]).reshape(-1, 3),
+                self._layout,
             )
             if self.supported
             else ()

@@ -25,6 +25,7 @@ __all__ = [
     "exp3_batch",
     "group_joints",
     "jlog3_batch",
+    "joint_layout",
     "log3_batch",
     "mm",
     "mv",
@@ -136,31 +137,30 @@ def group_joints(
     R0: np.ndarray,
     p0: np.ndarray,
     axes2: np.ndarray | None = None,
+    layout: Layout | None = None,
 ) -> tuple[JointGroup, ...]:
     """Groups of joints 1 … njoints−1 (given per joint, in id order) by depth and type.
 
     ``axes`` (njoints−1, 3) are the joints' (first) axes, ``axes2`` the second axes of
     universal joints (rows of other joints are ignored; needed when there is one).
+    ``layout``: :func:`joint_layout` of these kinds and parents, when the caller keeps
+    it (the tree does not change when only placements move).
     """
-    depth = [0]
-    keys: dict[tuple[int, str], list[int]] = {}
-    for j, (kind, parent) in enumerate(zip(kinds, parents, strict=True), start=1):
-        depth.append(depth[parent] + 1)
-        keys.setdefault((depth[j], kind), []).append(j)
+    if layout is None:
+        layout = joint_layout(kinds, parents, iq, iv)
     groups = []
-    for (_, kind), ids in sorted(keys.items()):
-        k = np.array(ids) - 1
+    for kind, ids, par, gq, gv in layout:
+        k = ids - 1
         K = skew(axes[k])
         R, a, p = R0[k], axes[k], p0[k]
         C = np.concatenate([R, R @ K, R @ K @ K, mv(R, a)[..., None], p[..., None]], axis=2)
-        par = np.array([parents[i] for i in k])
         groups.append(
             JointGroup(
                 kind,
-                np.array(ids),
+                ids,
                 par,
-                np.array([iq[i] for i in k]),
-                np.array([iv[i] for i in k]),
+                gq,
+                gv,
                 R,
                 p,
                 C,
@@ -171,6 +171,27 @@ def group_joints(
             )
         )
     return tuple(groups)
+
+
+#: per group: (kind, joint ids, parent ids, first q index, first v index)
+Layout = tuple[tuple[str, np.ndarray, np.ndarray, np.ndarray, np.ndarray], ...]
+
+
+def joint_layout(
+    kinds: Sequence[str], parents: Sequence[int], iq: Sequence[int], iv: Sequence[int]
+) -> Layout:
+    """The groups of :func:`group_joints` (by depth and type) without their placements."""
+    depth = [0]
+    keys: dict[tuple[int, str], list[int]] = {}
+    for j, (kind, parent) in enumerate(zip(kinds, parents, strict=True), start=1):
+        depth.append(depth[parent] + 1)
+        keys.setdefault((depth[j], kind), []).append(j)
+    out = []
+    for (_, kind), ids in sorted(keys.items()):
+        k = np.array(ids) - 1
+        out.append((kind, np.array(ids), np.array([parents[i] for i in k]),
+                    np.array([iq[i] for i in k]), np.array([iv[i] for i in k])))  # fmt: skip
+    return tuple(out)
 
 
 def _step(

@@ -20,7 +20,8 @@ def cross_validation_text(cv: CrossValidationSummary) -> str:
     lines = [
         "",
         f"cross-validation: {cv.k} folds over {cv.poses} poses (seed {cv.seed}); "
-        "every fold refitted without its poses",
+        "every fold refitted without its poses"
+        + (" (by calibrate, recorded; --refit fits them again)" if cv.recorded else ""),
         "                       fit RMS   fold fit RMS   held-out RMS   held-out max   [mm]",
         f"  calibrated model  {cv.fit_rms * 1e3:10.3f}   {cv.fold_fit_rms * 1e3:12.3f}   "
         f"{cv.held_out_rms * 1e3:12.3f}   {cv.held_out_max * 1e3:12.3f}",

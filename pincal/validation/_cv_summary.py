@@ -83,8 +83,13 @@ class CrossValidationSummary:
         socket_distance_rms, socket_distance_max: held-out socket-distance error (a
             socket calibration), else None.
         orientation: the calibration's rotation errors (its ``baseline.orientation``
-            the baseline's), or None (no orientation measured). The verdict and the
-            gain stay on positions.
+            the baseline's), or None (no orientation measured).
+        whitened_gain: with orientation measured, the gain of the per-pose squared
+            errors whitened by each block's noise σ and its standard error
+            (dimensionless, :func:`pincal.identification.compare`); the verdict is then
+            on it (``gain_mse`` stays the positions' gain), else None.
+        recorded: the figures are those calibrate computed and recorded on these folds
+            (the same procedure), not refitted here.
     """
 
     k: int
@@ -102,6 +107,8 @@ class CrossValidationSummary:
     socket_distance_rms: float | None = None
     socket_distance_max: float | None = None
     orientation: OrientationErrors | None = None
+    whitened_gain: tuple[float, float] | None = None
+    recorded: bool = False
 
     @property
     def sockets(self) -> bool:
@@ -123,6 +130,21 @@ class CrossValidationSummary:
         gain = float("nan") if self.gain_mse is None else self.gain_mse * 1e6
         se = float("nan") if self.gain_standard_error is None else self.gain_standard_error * 1e6
         name = self.baseline.model
+        if self.whitened_gain is not None:
+            g, e = self.whitened_gain
+            o, bo = self.orientation, self.baseline.orientation
+            angles = (
+                ""
+                if o is None or bo is None
+                else (f", {o.held_out_rms * 1e3:.3f} against {bo.held_out_rms * 1e3:.3f} mrad")
+            )
+            word = "beats" if self.beats_baseline else "does NOT beat"
+            return (
+                f"position and orientation together (each whitened by its noise σ), the "
+                f"calibration {word} the {name} on held-out poses: {full:.3f} against "
+                f"{base:.3f} mm{angles} RMS (whitened squared error lower by {g:.3g} ± "
+                f"{e:.2g})"
+            )  # fmt: skip
         if self.beats_baseline:
             return (
                 f"the calibration beats the {name} on held-out poses: {full:.3f} mm against "
@@ -147,7 +169,7 @@ class CrossValidationSummary:
         b = self.baseline
         own = _errors(self.held_out_rms, self.held_out_max, self.fold_fit_rms)
         base = {"model": b.model, **_errors(b.held_out_rms, b.held_out_max, b.fold_fit_rms)}
-        extra: dict[str, float] = {}
+        extra: dict[str, Any] = {}
         if self.orientation is not None and b.orientation is not None:
             own |= self.orientation.to_dict()
             base |= b.orientation.to_dict()
@@ -158,6 +180,11 @@ class CrossValidationSummary:
             assert self.gain_mse is not None and self.gain_standard_error is not None
             extra = {"gain_mse_mm2": self.gain_mse * 1e6,
                      "gain_standard_error_mm2": self.gain_standard_error * 1e6}  # fmt: skip
+        if self.whitened_gain is not None:
+            extra |= {"gain_whitened": self.whitened_gain[0],
+                      "gain_whitened_standard_error": self.whitened_gain[1]}  # fmt: skip
+        if self.recorded:  # figures calibrate computed on these folds, not refitted
+            extra["recorded_by_calibrate"] = True
         return {**head, **own, "baseline": base, **extra,
                 "beats_baseline": self.beats_baseline, "verdict": self.verdict}  # fmt: skip
 

@@ -4,7 +4,8 @@ It holds what :func:`pincal.workflow.replay_procedure` needs to run the calibrat
 again on other poses (set-up, preset, method, the loss used and asked, the prior used
 and asked) and what a reader wants to see: the registration, the refined instrument
 frame and marker(s) with 2σ [mm, mrad], the prior's cross-validation table, the
-held-out evidence, the notes.
+held-out evidence, the notes; the cross-validation that judged the fit, per pose
+(``cross_validation``: ``validate --cv`` with the same folds and seed reuses it).
 """
 
 from __future__ import annotations
@@ -51,6 +52,15 @@ def _identified(fit: MarkerFit, markers: int) -> dict[str, Any]:
     }
 
 
+def _prior_table(run: MarkerRun) -> list[dict[str, float]]:
+    """The prior's candidates: σ, held-out RMS [mm] (and rotation angle [mrad])."""
+    c = run.choice
+    rows: list[dict[str, float]] = [{"sigma": sg, "held_out_rms_mm": r} for sg, r in c.table]
+    for row, angle in zip(rows, c.orientation, strict=False):
+        row["held_out_orientation_rms_mrad"] = angle
+    return rows
+
+
 def marker_doc(run: MarkerRun) -> dict[str, Any]:
     """The ``markers`` entry of a :class:`pincal.workflow.MarkerRun` (JSON-ready)."""
     reg, prior, s = run.fit.registration, run.prior, run.settings
@@ -63,9 +73,15 @@ def marker_doc(run: MarkerRun) -> dict[str, Any]:
         "prior_spec": s.prior,
         "prior": None if prior is None else {"length_mm": prior.length * 1e3,
                                              "angle_mrad": prior.angle * 1e3},
-        "prior_cv": [{"sigma": sg, "held_out_rms_mm": r} for sg, r in run.choice.table] or None,
+        "prior_cv": _prior_table(run) or None,
+        "prior_cv_whitened_by": None if run.choice.scales is None else run.choice.scales.to_dict(),
         "cv_folds": s.folds,
         "cv_seed": s.seed,
+        "cross_validation": None if run.held_out is None else {
+            "folds": s.folds, "seed": s.seed,
+            "calibrated": run.held_out.calibrated.to_record(),
+            "baseline": run.held_out.baseline.to_record(),
+        },
         "registration": {
             "rms_mm": reg.fit.rms * 1e3,
             "iterations": reg.iterations,

@@ -12,11 +12,11 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from pincal.identification import Prior, fit_markers
+from pincal.identification import Prior
 from pincal.io import read_marker_sets
 from pincal.measure import MarkerSetup, Measurements, marker_mechanism
 from pincal.model import Mechanism
-from pincal.workflow._marker_run import marker_procedure
+from pincal.workflow._marker_run import marker_procedure, registration_procedure
 from pincal.workflow._prior_choice import nested_choice
 
 __all__ = ["rebuild", "replay_procedure"]
@@ -55,7 +55,7 @@ def replay_procedure(
     is chosen again on the poses given, with the calibration's K.
     """
     if registration_only:
-        return lambda meas: fit_markers(mech, setup, meas, registration_only=True).calibrated
+        return registration_procedure(mech, setup)
     preset, method = doc.get("preset", "chain"), doc.get("method", "gauss-newton")
     procedure = marker_procedure(mech, setup, preset, method, doc.get("loss", "linear"))
     if doc.get("prior_spec") != "auto":

@@ -43,8 +43,16 @@ from pincal.workflow._prior_choice import (
     cross_validated,
     nested_choice,
 )
+from pincal.workflow._registrations import Registrations
 
-__all__ = ["MISFIT_RMS", "ROBUST_LOSS", "MarkerRun", "calibrate_markers", "marker_procedure"]
+__all__ = [
+    "MISFIT_RMS",
+    "ROBUST_LOSS",
+    "MarkerRun",
+    "calibrate_markers",
+    "marker_procedure",
+    "registration_procedure",
+]
 
 #: registration RMS [m] beyond which the table does not describe the nominal robot
 MISFIT_RMS = 0.02
@@ -70,6 +78,9 @@ class MarkerRun:
         verdict: the quality gate's verdict (judged by held-out prediction).
         notes: what was left out or decided, in words.
         warnings: findings worth a warning that the verdict does not hold.
+        held_out: the cross-validation that judged the fit (the procedure's and the
+            registration's, same folds), None when only the registration is fitted;
+            recorded whole so that ``validate --cv`` with the same folds reuses it.
     """
 
     fit: MarkerFit
@@ -81,6 +92,7 @@ class MarkerRun:
     verdict: QualityVerdict
     notes: tuple[str, ...]
     warnings: tuple[str, ...] = ()
+    held_out: HeldOutEvidence | None = None
 
     @property
     def prior(self) -> Prior | None:
@@ -93,17 +105,41 @@ class MarkerRun:
 
 
 def marker_procedure(
-    mech: Mechanism, setup: MarkerSetup, preset: str, method: str, loss: str
+    mech: Mechanism,
+    setup: MarkerSetup,
+    preset: str,
+    method: str,
+    loss: str,
+    registrations: Registrations | None = None,
 ) -> Callable[[Prior | None], Callable[[Any], Mechanism]]:
-    """Prior → (measurements → calibrated mechanism): the fit that is cross-validated."""
+    """Prior → (measurements → calibrated mechanism): the fit that is cross-validated.
+
+    ``registrations``: the registrations shared with other procedures of the same
+    calibration (a new one when None): each set of poses is registered once.
+    """
+    reg = registrations or Registrations(mech, setup)
 
     def with_prior(prior: Prior | None) -> Callable[[Any], Mechanism]:
         def fit(meas: Any) -> Mechanism:
-            return fit_markers(mech, setup, meas, preset, method, prior, loss=loss).calibrated
+            return fit_markers(mech, setup, meas, preset, method, prior, loss=loss,
+                               registration=reg(meas)).calibrated  # fmt: skip
 
         return fit
 
     return with_prior
+
+
+def registration_procedure(
+    mech: Mechanism, setup: MarkerSetup, registrations: Registrations | None = None
+) -> Callable[[Any], Mechanism]:
+    """Measurements → the registration-only model (the baseline of a marker calibration)."""
+    reg = registrations or Registrations(mech, setup)
+
+    def fit(meas: Any) -> Mechanism:
+        return fit_markers(mech, setup, meas, registration_only=True,
+                           registration=reg(meas)).calibrated  # fmt: skip
+
+    return fit
 
 
 def _misfit_note(rms: float) -> str:
@@ -176,23 +212,23 @@ def calibrate_markers(
     k, seed = settings.folds, settings.seed
     say(f"registering the instrument frame and {len(meas)} marker(s), then identifying from "
         f"{len(meas[0])} poses; {k}-fold cross-validation judges the fit")  # fmt: skip
-    baseline = cross_validate(
-        lambda m: fit_markers(mech, setup, m, registration_only=True).calibrated, meas, k, seed
-    )
+    registrations = Registrations(mech, setup)  # each set of poses registered once
+    baseline = cross_validate(registration_procedure(mech, setup, registrations), meas, k, seed)
     asked = parse_prior(settings.prior)
     machine = any(not is_registration(n) for n in parameters(mech, settings.preset).names)
     if not machine:
         asked = None  # only the registration is fitted: no prior, no baseline to beat
 
     def settle(loss: str) -> tuple[PriorChoice, MarkerFit, QualityVerdict]:
-        procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss)
+        procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss,
+                                     registrations)  # fmt: skip
         if asked == "auto":
             say(f"choosing the prior's strength by {k}-fold cross-validation ({loss} loss)")
             choice = choose_prior(procedure, meas, k, seed)
         else:
             choice = cross_validated(procedure, asked, meas, k, seed)  # type: ignore[arg-type]
         fit = fit_markers(mech, setup, meas, settings.preset, settings.method, choice.prior,
-                          loss=loss)  # fmt: skip
+                          loss=loss, registration=registrations(meas))  # fmt: skip
         return choice, fit, _gate(fit, meas, settings)
 
     loss = "linear" if settings.loss == "auto" else settings.loss
@@ -204,13 +240,17 @@ def calibrate_markers(
                      "beyond)")  # fmt: skip
         loss = ROBUST_LOSS
         choice, fit, verdict = settle(loss)
+    evidence = None
     if machine:
         cv = choice.cv
         if choice.chosen:  # the choice is part of the procedure: nested CV
             say("cross-validating the calibration, the prior chosen again in each fold")
-            procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss)
+            procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss,
+                                         registrations)  # fmt: skip
             cv = cross_validate(nested_choice(procedure, k, seed), meas, k, seed)
-        evidence = HeldOutEvidence(cv, baseline, "registration only")
+        # with orientation measured, both blocks count, each whitened by the noise σ
+        # the procedure's fold fits leave (the same σ for both procedures)
+        evidence = HeldOutEvidence(cv, baseline, "registration only", cv.fit_scales())
         verdict = held_out_verdict(verdict, evidence, fit.result)
     rms = fit.registration.fit.rms
     warnings: tuple[str, ...] = (_misfit_note(rms),) if rms > MISFIT_RMS else ()
@@ -218,4 +258,4 @@ def calibrate_markers(
     if angle is not None and angle > MISFIT_ANGLE:
         warnings += (_angle_note(angle),)
     return MarkerRun(fit, meas, setup, settings, loss, choice, verdict,
-                     (*notes, *fit.notes), warnings)  # fmt: skip
+                     (*notes, *fit.notes), warnings, evidence if machine else None)  # fmt: skip

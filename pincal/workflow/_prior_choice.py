@@ -6,16 +6,24 @@ held-out RMS is chosen (:func:`choose_prior`). The held-out error of a calibrati
 prior was chosen so is that of the whole procedure, choice included
 (:func:`nested_choice`, cross-validated: nested CV); a fixed prior is cross-validated
 alone (:func:`cross_validated`).
+
+With orientation measured (a 6-D marker body) the candidates are compared by their
+held-out squared errors whitened by each block's noise σ
+(:meth:`pincal.identification.CrossValidation.squared_errors`), the σ those of the
+weakest prior's fold fits (:meth:`pincal.identification.CrossValidation.fit_scales`:
+what the poses given leave when the prior barely acts), so a prior that helps the
+positions and harms the orientation by more is not chosen.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from pincal.identification import CrossValidation, Prior, cross_validate
+import numpy as np
+
+from pincal.identification import BlockScales, CrossValidation, Prior, cross_validate
 from pincal.measure import Measurements
 from pincal.model import Mechanism
 from pincal.workflow._marker_settings import PRIOR_GRID
@@ -36,11 +44,16 @@ class PriorChoice:
             on the folds that chose it: the lowest of the table, optimistic).
         table: when chosen, every candidate's (σ [mm, mrad], held-out RMS [mm]), in the
             order tried; empty for a prior that was given.
+        orientation: when chosen with orientation measured, every candidate's held-out
+            RMS rotation angle [mrad] (the order of ``table``), else empty.
+        scales: the σ that whitened the choice (orientation measured), else None.
     """
 
     prior: Prior | None
     cv: CrossValidation
     table: tuple[tuple[float, float], ...] = ()
+    orientation: tuple[float, ...] = ()
+    scales: BlockScales | None = None
 
     @property
     def chosen(self) -> bool:
@@ -63,22 +76,28 @@ def choose_prior(
     grid: Sequence[float] = PRIOR_GRID,
     progress: Callable[[str], None] | None = None,
 ) -> PriorChoice:
-    """The prior of ``grid`` (σ in mm and mrad) of the lowest K-fold held-out RMS.
+    """The prior of ``grid`` (σ in mm and mrad) of the lowest K-fold held-out error.
 
-    Ties keep the stronger prior (the one tried first).
+    The error is the RMS position error, or with orientation measured the mean
+    whitened squared error (see the module). Ties keep the stronger prior (the one
+    tried first).
     """
-    best: tuple[float, PriorChoice | None] = (math.inf, None)
-    table: list[tuple[float, float]] = []
-    for s in grid:
-        prior = Prior(s * 1e-3, s * 1e-3)
-        cv = cross_validate(procedure(prior), meas, k, seed)
-        table.append((float(s), cv.rms * 1e3))
+    priors = [Prior(s * 1e-3, s * 1e-3) for s in grid]
+    cvs = []
+    for s, prior in zip(grid, priors, strict=True):
+        cvs.append(cross_validate(procedure(prior), meas, k, seed))
         if progress is not None:
-            progress(f"prior σ {s:g} mm / {s:g} mrad: held-out RMS {cv.rms * 1e3:.3f} mm")
-        if cv.rms < best[0]:
-            best = (cv.rms, PriorChoice(prior, cv))
-    assert best[1] is not None, "an empty prior grid"
-    return PriorChoice(best[1].prior, best[1].cv, tuple(table))
+            progress(f"prior σ {s:g} mm / {s:g} mrad: held-out RMS {cvs[-1].rms * 1e3:.3f} mm")
+    assert cvs, "an empty prior grid"
+    scales = cvs[-1].fit_scales()
+    if scales is None:
+        score = [cv.rms for cv in cvs]
+    else:
+        score = [float(np.mean(cv.squared_errors(scales))) for cv in cvs]
+    best = min(range(len(cvs)), key=lambda i: (score[i], i))
+    table = tuple((float(s), cv.rms * 1e3) for s, cv in zip(grid, cvs, strict=True))
+    turned = tuple(float(cv.orientation_rms) * 1e3 for cv in cvs if cv.orientation_rms is not None)
+    return PriorChoice(priors[best], cvs[best], table, turned, scales)
 
 
 def nested_choice(procedure: Procedure, k: int, seed: int) -> Callable[[Any], Mechanism]:

@@ -152,3 +152,26 @@ def test_a_campaign_declares_the_orientation(tmp_path, table):
         (tmp_path / "bad.yaml").write_text(text.replace(old, new))
         bad = _run("run", tmp_path / "bad.yaml", "--dry-run")
         assert bad.exit_code != 0 and said in bad.output, bad.output
+
+
+def test_validate_reuses_the_gates_cross_validation_and_weighs_both_blocks(tmp_path, table):
+    """calibrate records its gate's CV; validate --cv reuses it, --refit gives the same."""
+    r = _run("calibrate", "ur5", "--data", table, *BODY, "--json", "--out", tmp_path / "cal")
+    assert r.exit_code == 0, r.output
+    held = json.loads(r.output.splitlines()[-1])["quality"]["held_out"]
+    reused = json.loads(_run("validate", tmp_path / "cal", "--cv", 5, "--json").output)["cv"]
+    again = json.loads(
+        _run("validate", tmp_path / "cal", "--cv", 5, "--refit", "--json").output
+    )["cv"]
+    assert reused["recorded_by_calibrate"] and "recorded_by_calibrate" not in again
+    for key in ("held_out_rms_mm", "held_out_orientation_rms_mrad", "gain_whitened"):
+        assert reused[key] == pytest.approx(again[key], rel=1e-9, abs=1e-12)
+    assert reused["baseline"]["held_out_rms_mm"] == pytest.approx(
+        again["baseline"]["held_out_rms_mm"], rel=1e-9
+    )
+    # the gate judged the same whitened gain, position and orientation together
+    assert held["gain_whitened"] == pytest.approx(reused["gain_whitened"], rel=1e-12)
+    assert set(held["whitened_by"]) == {"position_mm", "orientation_mrad"}
+    assert reused["beats_baseline"] and "whitened" in reused["verdict"]
+    other = json.loads(_run("validate", tmp_path / "cal", "--cv", 4, "--json").output)["cv"]
+    assert "recorded_by_calibrate" not in other  # other folds: refitted
