@@ -100,6 +100,7 @@ class BlockScales:
     orientation: float
 
     def to_dict(self) -> dict:
+        """The two scales for JSON: position [mm], orientation [mrad]."""
         return {"position_mm": self.position * 1e3, "orientation_mrad": self.orientation * 1e3}
 
 
