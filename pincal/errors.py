@@ -43,10 +43,12 @@ __all__ = [
     "QualityGateError",
     "ReportError",
     "ShapeError",
+    "ShiftedHeaderError",
     "SingularConfigurationError",
     "SolverOptionError",
     "TooFewPosesError",
     "UnidentifiableError",
+    "UnitMismatchError",
     "UnknownNameError",
     "UnreachablePoseError",
     "VisualizationError",
@@ -253,6 +255,14 @@ class MeasurementFormatError(MeasurementError):
 
 class MeasurementFileError(MeasurementFormatError, InputFileError):
     """A data file (measurements, poses, commands…) is missing, unreadable or not text."""
+
+
+class UnitMismatchError(MeasurementError):
+    """The values' size says their declared unit is wrong (millimetres read as metres)."""
+
+
+class ShiftedHeaderError(MeasurementFormatError):
+    """A table's title line does not sit above its columns (more or fewer cells per row)."""
 
 
 class FrameMismatchError(MeasurementError):
