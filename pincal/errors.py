@@ -20,6 +20,7 @@ __all__ = [
     "ColumnError",
     "ConditionError",
     "ConvergenceError",
+    "DuplicateDataError",
     "ExportError",
     "FrameMismatchError",
     "ImportMatchError",
@@ -259,6 +260,10 @@ class MeasurementFileError(MeasurementFormatError, InputFileError):
 
 class UnitMismatchError(MeasurementError):
     """The values' size says their declared unit is wrong (millimetres read as metres)."""
+
+
+class DuplicateDataError(MeasurementError):
+    """The same measurements are given twice (one file twice, or a byte copy)."""
 
 
 class ShiftedHeaderError(MeasurementFormatError):

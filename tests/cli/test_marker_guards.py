@@ -81,7 +81,7 @@ def test_two_columns_with_one_title_are_refused_naming_both(tmp_path, table):
 
 
 def test_an_unused_repeated_title_is_not_a_problem(tmp_path, table):
-    title, rows, q, P = table
+    title, rows, _q, P = table
     path = _write(tmp_path / "m.csv", title + ",frame,frame", [r + ",1,2" for r in rows])
     setup = MarkerSetup(LINK, length_unit="mm")
     read = read_marker_data(path, marker_mechanism("ur5", setup), setup)
@@ -95,7 +95,7 @@ def test_noise_is_refused_on_the_marker_route(tmp_path, table):
 
 
 def test_the_title_unit_is_read(tmp_path, table):
-    title, rows, q, P = table
+    title, rows, _q, P = table
     titled = title.replace("x,y,z", "x [mm],y [mm],z [mm]", 1)
     path = _write(tmp_path / "m.csv", titled, rows)
     setup = MarkerSetup(LINK)  # declared m: the titles say mm, and win
@@ -151,7 +151,7 @@ def test_more_rows_than_the_pose_route_fits_are_refused_without_yes(tmp_path, ta
 def test_readings_relative_to_home_use_the_home_info_prints(tmp_path, table):
     """UR5 has no SRDF pose: `pincal info ur5 --frame wrist_3_link` searches a home
     (elbow −45°, wrist 2 +15°); the marker route reads 'joint_reference: home' from it."""
-    title, rows, q, P = table
+    title, rows, q, _P = table
     home = load_mechanism("ur5", LINK)
     h = home.actuators_of(home.q_home)
     assert np.abs(h).max() > 0.1  # a searched home, not q = 0
