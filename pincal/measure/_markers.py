@@ -253,7 +253,8 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
             f"{setup.link!r} (locked: {', '.join(sorted(setup.lock)) or 'none'}); give the "
             "link the marker is on, further along the chain, or lock fewer joints"
         )
-    mech = _with_model_home(model, setup.link, lock, mech)
+    off_chain = {k: v for k, v in lock.items() if k not in setup.lock}
+    mech = _with_model_home(model, setup.link, off_chain, mech)
     if not setup.more_columns:
         return mech
     import xml.etree.ElementTree as ET
@@ -288,11 +289,11 @@ def _with_model_home(model: str, link: str, lock: Mapping[str, float],
     when loaded (regular for the measured frame: here ``link``, as ``pincal info MODEL
     --frame LINK`` prints it); the marker chain is built without that search, so it
     takes the loaded model's values of its own joints. The model is loaded with the
-    chain's locks (the joints off the chain do not move the link: the same home, found
-    ten times faster on a 50-joint TIAGo).
+    joints off the chain locked (``lock``: they do not move the link, so the home is the
+    same, found ten times faster on a 50-joint TIAGo); joints the user locks on the
+    chain stay free there, so a lock does not move the home of the others.
     """
-    named = resolve_named(model)
-    if not named.erd_defaults or "home" in named.sidecar:
+    if mech.sidecar.to_dict().get("home"):  # the sidecar's or the SRDF's: no search
         return mech
     from pincal.model import load_mechanism
 
