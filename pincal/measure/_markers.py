@@ -36,6 +36,7 @@ from pincal.model import (
     TOOL_JOINT,
     Mechanism,
     UrdfTree,
+    load_mechanism,
     resolve_named,
     serial_mechanism,
 )
@@ -295,8 +296,6 @@ def _with_model_home(model: str, link: str, lock: Mapping[str, float],
     """
     if mech.sidecar.to_dict().get("home"):  # the sidecar's or the SRDF's: no search
         return mech
-    from pincal.model import load_mechanism
-
     full = load_mechanism(model, link, lock=lock)
     side = full.sidecar.to_dict().get("home")
     if not isinstance(side, Mapping):
