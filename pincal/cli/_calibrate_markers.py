@@ -12,6 +12,10 @@ from pincal.cli.common import model_source
 
 __all__ = ["calibrate_markers", "check_marker_rows"]
 
+#: the marker route's answer to the probes' blind spot (it takes no declared noise)
+MARKER_REMEDY = ("the held-out prediction (printed below) judges a marker calibration; "
+                 "validate it on another session (validate CAL --data OTHER)")  # fmt: skip
+
 
 def check_marker_rows(model, data, setup, preset: str, yes: bool) -> None:
     """Refuse a marker table of more rows than the pose route fits without ``--yes``.
@@ -54,6 +58,9 @@ def calibrate_markers(model, data, setup, settings, out, as_json, force, *,
     for warning in run.warnings:
         click.echo(f"pincal: warning: {warning}", err=True)
     quality = apply_gate(run.verdict, force)
+    floor = quality.get("detection_floor")
+    if isinstance(floor, dict) and floor.get("blind_spot"):  # the marker route has no --noise
+        floor["blind_spot"] = run.verdict.blind_spot(MARKER_REMEDY)
     markers = run.doc()
     doc = result_json(run.fit.result, str(data), CALIBRATED_URDF)
     doc["quality"] = quality
