@@ -20,6 +20,7 @@ __all__ = [
     "ColumnError",
     "ConditionError",
     "ConvergenceError",
+    "DuplicateDataError",
     "ExportError",
     "FrameMismatchError",
     "ImportMatchError",
@@ -43,10 +44,12 @@ __all__ = [
     "QualityGateError",
     "ReportError",
     "ShapeError",
+    "ShiftedHeaderError",
     "SingularConfigurationError",
     "SolverOptionError",
     "TooFewPosesError",
     "UnidentifiableError",
+    "UnitMismatchError",
     "UnknownNameError",
     "UnreachablePoseError",
     "VisualizationError",
@@ -253,6 +256,18 @@ class MeasurementFormatError(MeasurementError):
 
 class MeasurementFileError(MeasurementFormatError, InputFileError):
     """A data file (measurements, poses, commands…) is missing, unreadable or not text."""
+
+
+class UnitMismatchError(MeasurementError):
+    """The values' size says their declared unit is wrong (millimetres read as metres)."""
+
+
+class DuplicateDataError(MeasurementError):
+    """The same measurements are given twice (one file twice, or a byte copy)."""
+
+
+class ShiftedHeaderError(MeasurementFormatError):
+    """A table's title line does not sit above its columns (more or fewer cells per row)."""
 
 
 class FrameMismatchError(MeasurementError):

@@ -10,11 +10,43 @@ import click
 from pincal.cli._calibrate_text import result_json
 from pincal.cli.common import model_source
 
-__all__ = ["calibrate_markers"]
+__all__ = ["calibrate_markers", "check_marker_rows"]
+
+#: the marker route's answer to the probes' blind spot (it takes no declared noise)
+MARKER_REMEDY = ("the held-out prediction (printed below) judges a marker calibration; "
+                 "validate it on another session (validate CAL --data OTHER)")  # fmt: skip
 
 
-def calibrate_markers(model, data, setup, settings, out, as_json, force) -> None:
-    """``calibrate --link``: run :func:`pincal.workflow.calibrate_markers`, gate, write."""
+def check_marker_rows(model, data, setup, preset: str, yes: bool) -> None:
+    """Refuse a marker table of more rows than the pose route fits without ``--yes``.
+
+    The rows are counted before the table is read; the chain is built (for the
+    parameter count of the message's estimate) only for a table over the bound.
+
+    Raises:
+        InputLimitError: more than :data:`pincal.cli._limits.MAX_POSES` rows, no ``yes``.
+    """
+    from pincal.cli._limits import MAX_POSES, check_data_rows
+
+    rows = check_data_rows(str(data), "--data", 0, True)
+    if rows is None or rows <= MAX_POSES or yes:
+        return
+    from pincal.measure import marker_mechanism
+    from pincal.sensitivity import parameters
+
+    mech = marker_mechanism(model, setup)
+    n = len(parameters(mech, preset)) if preset in mech.presets else len(mech.actuated) * 6
+    check_data_rows(str(data), "--data", n, yes)
+
+
+def calibrate_markers(model, data, setup, settings, out, as_json, force, *,
+                      yes: bool = False) -> None:  # fmt: skip
+    """``calibrate --link``: run :func:`pincal.workflow.calibrate_markers`, gate, write.
+
+    A table of more than :data:`pincal.cli._limits.MAX_POSES` rows is refused without
+    ``yes`` (``--yes``), as on the pose route.
+    """
+    check_marker_rows(model, data, setup, settings.preset, yes)
     from pincal.cli._gate import apply_gate
     from pincal.io import CALIBRATED_URDF, write_calibration
     from pincal.report import calibration_text, marker_lines
@@ -26,6 +58,9 @@ def calibrate_markers(model, data, setup, settings, out, as_json, force) -> None
     for warning in run.warnings:
         click.echo(f"pincal: warning: {warning}", err=True)
     quality = apply_gate(run.verdict, force)
+    floor = quality.get("detection_floor")
+    if isinstance(floor, dict) and floor.get("blind_spot"):  # the marker route has no --noise
+        floor["blind_spot"] = run.verdict.blind_spot(MARKER_REMEDY)
     markers = run.doc()
     doc = result_json(run.fit.result, str(data), CALIBRATED_URDF)
     doc["quality"] = quality

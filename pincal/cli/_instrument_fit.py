@@ -18,6 +18,29 @@ def is_instrument_file(path: str) -> bool:
         return False  # the measurement reader reports the problem
 
 
+def _once_each(files: list[str]) -> None:
+    """Refuse one file's readings given twice (the same path, or a byte-for-byte copy).
+
+    Fitted twice, every reading would count double: the σ understated by √2.
+
+    Raises:
+        DuplicateDataError: naming both --data files.
+    """
+    from pincal.errors import DuplicateDataError
+    from pincal.io import sha256_file
+
+    seen: dict[str, str] = {}
+    for f in files:
+        digest = sha256_file(f)
+        if digest in seen:
+            same = "is given twice" if seen[digest] == f else f"holds the same bytes as {f!r}"
+            raise DuplicateDataError(
+                f"--data {seen[digest]!r} {same}: its readings would be fitted twice, each "
+                "counted double (the σ understated by √2); give each measurement file once"
+            )
+        seen[digest] = f
+
+
 def identify_instrument_files(mech, params, files: list[str], method: str, force: bool, limits,
                               profile, bootstrap: int = 0, n_jobs: int = 1):  # fmt: skip
     """Machine and instrument parameters from instrument files (ballbar, probe, sockets…).
@@ -43,7 +66,8 @@ def identify_instrument_files(mech, params, files: list[str], method: str, force
     from pincal.identification import check_instrument_data, identify_instruments, instrument_gate
     from pincal.io import read_instrument_file
 
-    datasets = [read_instrument_file(f, mech) for f in files]
+    datasets = [read_instrument_file(f, mech) for f in files]  # each read bounded first
+    _once_each(files)
     stems = [Path(f).stem for f in files]
     labels = stems if len(set(stems)) == len(stems) else None
     data = check_instrument_data(mech, datasets, stems, limits)

@@ -244,6 +244,11 @@ def calibrate(
                 "apply; give a sidecar file with `robot:` as MODEL instead",
                 param_hint="--link",
             )
+        if noise is not None:
+            raise click.BadParameter(
+                "a marker calibration (--link) estimates the noise from the residuals and is "
+                "judged by held-out prediction; a declared noise applies to pose measurement "
+                "files: drop --noise", param_hint="--noise")
         if bootstrap:
             raise click.BadParameter(
                 "a marker calibration (--link) is not bootstrapped yet; its σ are the linear "
@@ -258,7 +263,7 @@ def calibrate(
                                    length_unit, lock_spec, orientation_columns,
                                    orientation)  # fmt: skip
         settings = marker_settings(preset, method, prior_spec, loss, limits, profile)
-        calibrate_markers(model, data, setup, settings, out, as_json, force)
+        calibrate_markers(model, data, setup, settings, out, as_json, force, yes=yes)
         return
     if prior_spec is not None:
         raise click.BadParameter("--prior applies to marker calibrations (--link)",

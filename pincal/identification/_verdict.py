@@ -102,6 +102,10 @@ class QualityIssue:
     message: str
 
 
+#: what a pose file can do about the probes' blind spot
+NOISE_REMEDY = "declare the instrument noise (--noise, # noise:) to judge the fit against it"
+
+
 @dataclass(frozen=True)
 class QualityVerdict:
     """What the gate found; :attr:`passed` is False when a calibration must not be written.
@@ -168,12 +172,12 @@ class QualityVerdict:
         """The issues that only warn."""
         return tuple(i for i in self.issues if not i.refuse)
 
-    def blind_spot(self) -> str:
+    def blind_spot(self, remedy: str = NOISE_REMEDY) -> str:
         """With estimated noise, the smooth errors the probes would not see ("" otherwise).
 
         σ̂ absorbs a model error the probes miss, so the fit cannot be judged below
         their floors; the sentence names the scale, drift and the largest gain and
-        trend floors, and what to do.
+        trend floors, and what to do (``remedy``: the route's way to see them).
         """
         if self.noise_source != "estimated" or not self.floors:
             return ""
@@ -185,8 +189,7 @@ class QualityVerdict:
         return (
             f"with the noise estimated, {', '.join(named[:-1])}"
             f"{' or ' if len(named) > 1 else ''}{named[-1]} would pass unseen (90 % "
-            f"detection): declare the instrument noise (--noise, # noise:) to judge the "
-            f"fit against it"
+            f"detection): {remedy}"
         )
 
     def reason(self, override_hint: bool = True) -> str:

@@ -163,7 +163,8 @@ def _write_locked(
             manifest["markers"] = (annotations or {}).get("markers")
         atomic_write_text(tmp / MANIFEST, json.dumps(manifest, indent=1) + "\n")
         os.chmod(tmp, 0o755)
-        check_resolved_replaceable(out)
+        read_calibration(tmp)  # read back before it replaces anything: never a directory
+        check_resolved_replaceable(out)  # its own reader refuses in place of a good one
         swap_in_directory(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)

@@ -1,12 +1,14 @@
 """Foreign delimited text tables (instrument and controller exports), read-only.
 
-Not a pincal file: no magic line. Leading blank lines and lines starting with ``#``
-are skipped; the first other line holds the column titles, every following
-non-blank line is a data row. The delimiter is a comma, semicolon or tab (``auto``
-picks, in that order of preference, tab, then semicolon, then comma as found in the
-title line); the decimal mark is ``.`` or ``,`` (``auto``: ``,`` when the delimiter
-is not a comma and some cell holds a number written with a decimal comma). Every
-message names the file and its 1-based line number.
+Not a pincal file: no magic line. Leading blank lines and lines starting with ``#`` are
+skipped; the first other line holds the column titles, every following non-blank line is
+a data row. A reader that knows titles the table must have (``titles``) takes the first
+line holding them all as the title line instead: the lines before it (an export's
+preamble: take name, frame rate…) are skipped and counted. The delimiter is a comma,
+semicolon or tab (``auto`` picks, in that order of preference, tab, then semicolon, then
+comma as found in the title line); the decimal mark is ``.`` or ``,`` (``auto``: ``,``
+when the delimiter is not a comma and some cell holds a number written with a decimal
+comma). Every message names the file and its 1-based line number.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from pincal.errors import (
     MeasurementError,
     MeasurementFileError,
     MeasurementFormatError,
+    ShiftedHeaderError,
     clip,
 )
 from pincal.io._csv import parse_column
@@ -49,6 +52,9 @@ class Table:
         lines: 1-based file line number of each data row.
         delimiter: the delimiter used.
         decimal: the decimal mark used (``.`` or ``,``).
+        preamble: 1-based file lines skipped before the title line (``titles``).
+        hints: messages name the ``--delimiter`` / ``--decimal`` options (a command
+            that has them).
     """
 
     name: str
@@ -57,6 +63,8 @@ class Table:
     lines: tuple[int, ...]
     delimiter: str
     decimal: str
+    preamble: tuple[int, ...] = ()
+    hints: bool = True
 
     def find(self, field: str, aliases: Sequence[str], mapping: Mapping[str, str]) -> int | None:
         """Index of the column holding ``field``: the mapped title, else an alias.
@@ -66,7 +74,7 @@ class Table:
         Raises:
             ColumnError: a mapped title that is not in the table.
         """
-        bare = [parse_column(c)[0].lower() if _parsable(c) else c.lower() for c in self.columns]
+        bare = [parse_column(c)[0].lower() if parsable_title(c) else c.lower() for c in self.columns]
         if field in mapping:
             want = mapping[field].strip().lower()
             for k, (c, b) in enumerate(zip(self.columns, bare, strict=True)):
@@ -84,7 +92,7 @@ class Table:
 
     def unit(self, k: int) -> str | None:
         """The bracketed unit of column ``k`` (``X [mm]`` → ``mm``), or None."""
-        return parse_column(self.columns[k])[1] if _parsable(self.columns[k]) else None
+        return parse_column(self.columns[k])[1] if parsable_title(self.columns[k]) else None
 
     def number(self, i: int, k: int) -> float:
         """Cell (row ``i``, column ``k``) as a finite float.
@@ -96,10 +104,10 @@ class Table:
         text = cell.replace(",", ".") if self.decimal == "," else cell
         v = float(text) if is_decimal(text) else math.nan
         if not math.isfinite(v):
+            how = "; set it with --decimal" if self.hints else ""
             raise BadValueError(
                 f"{self.name} line {self.lines[i]}, column {shown(self.columns[k])}: "
-                f"{shown(cell)} is not "
-                f"a finite number (decimal mark {self.decimal!r}; set it with --decimal)",
+                f"{shown(cell)} is not a finite number (decimal mark {self.decimal!r}{how})",
                 i + 1,
                 self.columns[k],
             )
@@ -121,7 +129,8 @@ class Table:
         return cell
 
 
-def _parsable(title: str) -> bool:
+def parsable_title(title: str) -> bool:
+    """Whether a column title parses as ``name [unit]`` (or a bare name)."""
     try:
         parse_column(title)
     except MeasurementFormatError:
@@ -136,13 +145,24 @@ def _pick_delimiter(title_line: str) -> str:
     return ","
 
 
-def read_table(path: str | Path, delimiter: str = "auto", decimal: str = "auto") -> Table:
+def read_table(
+    path: str | Path,
+    delimiter: str = "auto",
+    decimal: str = "auto",
+    *,
+    titles: Sequence[str] | None = None,
+) -> Table:
     """Read a delimited export (see the module doc).
 
     Args:
         path: the file (never modified).
         delimiter: ``auto``, ``,``, ``;`` or ``tab``.
         decimal: ``auto``, ``.`` or ``,``.
+        titles: titles the title line holds (any case, a bracketed unit aside): the
+            title line is the first line (of the first :data:`PREAMBLE_LINES` + 1) that
+            holds them all, else the first line. With ``titles`` the messages name no
+            option (the command reading the table has no ``--delimiter``); a row whose
+            cell count differs from the title line's is named as a shifted title line.
 
     Returns:
         The table as text cells with their file line numbers.
@@ -165,12 +185,17 @@ def read_table(path: str | Path, delimiter: str = "auto", decimal: str = "auto")
         numbered.pop(0)
     if not numbered:
         raise MeasurementFormatError(f"{name}: no column title line")
+    first = _title_line(numbered, titles, delimiter)
+    preamble = tuple(n for n, _ in numbered[:first])
+    numbered = numbered[first:]
     delim = DELIMITERS[delimiter] or _pick_delimiter(numbered[0][1])
     parsed = _split(numbered, delim, name)
     columns = tuple(c.strip() for c in parsed[0])
     rows, lines = [], []
     for (n, _), cells in zip(numbered[1:], parsed[1:], strict=True):
         if len(cells) != len(columns):
+            if titles is not None:
+                raise _shifted(name, numbered[0][0], n, len(columns), len(cells), delim)
             raise MeasurementFormatError(
                 f"{name} line {n}: {len(cells)} fields, the title line has {len(columns)} "
                 f"(delimiter {delim!r}; set it with --delimiter)"
@@ -183,7 +208,49 @@ def read_table(path: str | Path, delimiter: str = "auto", decimal: str = "auto")
             decimal = ","
     elif decimal == "," and delim == ",":
         raise MeasurementFormatError(f"{name}: a decimal comma needs a ';' or tab delimiter")
-    return Table(name, columns, tuple(rows), tuple(lines), delim, decimal)
+    return Table(name, columns, tuple(rows), tuple(lines), delim, decimal, preamble,
+                 hints=titles is None)  # fmt: skip
+
+
+#: most lines before the title line that a reader given ``titles`` skips
+PREAMBLE_LINES = 50
+
+
+def _title_line(numbered: list[tuple[int, str]], titles: Sequence[str] | None,
+                delimiter: str) -> int:  # fmt: skip
+    """Index in ``numbered`` of the first line holding every one of ``titles`` (else 0)."""
+    if not titles:
+        return 0
+    want = {t.strip().lower() for t in titles}
+    for k, (_, line) in enumerate(numbered[: PREAMBLE_LINES + 1]):
+        delim = DELIMITERS[delimiter] or _pick_delimiter(line)
+        try:
+            cells = next(csv.reader([line], delimiter=delim), [])
+        except csv.Error:
+            continue
+        bare = {(parse_column(c.strip())[0] if parsable_title(c.strip()) else c.strip()).lower()
+                for c in cells}  # fmt: skip
+        if want <= bare:
+            return k
+    return 0
+
+
+def _shifted(name: str, title_at: int, n: int, titles: int, cells: int,
+             delim: str) -> ShiftedHeaderError:  # fmt: skip
+    """The error of a row whose cell count is not the title line's."""
+    more = cells - titles
+    if more > 0:
+        fix = (f"the title line is shifted against the data, {more} column(s) without a "
+               f"title: give every column a title (an untitled column an empty one, e.g. "
+               f"{more} extra {delim!r} where the untitled columns are), so that each title "
+               "sits above its values")  # fmt: skip
+    else:
+        fix = (f"{-more} title(s) without values: the title line is shifted against the data, "
+               "or the row is cut short; one title per column")  # fmt: skip
+    return ShiftedHeaderError(
+        f"{name} line {n}: {cells} cells under the {titles} titles of line {title_at} "
+        f"(delimiter {delim!r}); {fix}"
+    )
 
 
 def _split(numbered: list[tuple[int, str]], delim: str, name: str) -> list[list[str]]:

@@ -37,6 +37,7 @@ from pincal.io._csv import (
     split_file,
     write_csv,
 )
+from pincal.io._measurement_header import length_sigma
 from pincal.io._names import quote_value
 from pincal.io._units import (
     LENGTH_UNITS,
@@ -118,7 +119,8 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
             f"read to 1 µm); the fit weights the file by it and the quality gate judges its "
             f"residuals against it"
         )
-    std = positive_value(header_value(header, "std", None, name), "std", name) / lf
+    std = positive_value(header_value(header, "std", None, name), "std", name)
+    std = length_sigma(std, "header 'std'", lf, name)
     try:
         inst = cls.from_header(std, _Header(header, lf, name))
     except MeasurementFormatError:

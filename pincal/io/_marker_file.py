@@ -1,13 +1,15 @@
 """Marker tables: motion-capture or tracker exports with joint readings, read as they are.
 
 A foreign delimited table (see :mod:`pincal.io._delimited`: ``,`` ``;`` or tab, one
-title line) with one row per pose: a column per actuated joint and, among any number
-of other columns (further markers, frame numbers, time stamps), the three position
-columns of the marker(s) used, named by the :class:`pincal.measure.MarkerSetup` (e.g.
-``x1, y1, z1``; further markers in its ``more_columns``) in its ``length_unit``. The
-positions are in the instrument's frame; the rows become position-only
-:class:`pincal.measure.Measurements` of the marker frame ``tool`` (further markers:
-``marker2``, ``marker3``, …, one set each).
+title line — the first line holding the marker columns' titles, an export's preamble
+lines before it skipped and said) with one row per pose: a column per actuated joint
+and, among any number of other columns (further markers, frame numbers, time stamps),
+the three position columns of the marker(s) used, named by the
+:class:`pincal.measure.MarkerSetup` (e.g. ``x1, y1, z1``; further markers in its
+``more_columns``) in its ``length_unit``, or in the unit of the column's title (``x1
+[mm]``: the title wins, said in a note). The positions are in the instrument's frame;
+the rows become position-only :class:`pincal.measure.Measurements` of the marker frame
+``tool`` (further markers: ``marker2``, ``marker3``, …, one set each).
 
 A 6-D marker body adds orientation columns in a declared convention (the setup's
 ``orientation_columns`` and ``orientation``: roll-pitch-yaw, xyz-Euler, rotation
@@ -24,6 +26,10 @@ title line may give the same declarations (``# joint_units: deg``), and win.
 A marker the camera did not see leaves its cells empty (or ``nan``): such a row is left
 out, named in the notes of :func:`read_marker_data` (the joints still have to be
 numbers: a missing joint reading is an error).
+
+The bounds of :mod:`pincal.io._marker_checks` hold: a column used has a title no other
+column has, coordinates within 10 km, positions of the nominal link's size (a unit
+ratio away: the unit is named).
 
 Exports often repeat one marker under two names (the same values in two column
 triples); :func:`distinct_markers` finds such copies among the markers chosen and keeps
@@ -43,6 +49,11 @@ from pincal.errors import ColumnError, MeasurementFileError, MeasurementFormatEr
 from pincal.io._csv import Header, parse_column
 from pincal.io._delimited import Table, read_table
 from pincal.io._joint_columns import HEADER_KEYS, joint_columns, read_joints
+from pincal.io._marker_checks import (
+    check_coordinates,
+    check_scale,
+    check_unique_titles,
+)
 from pincal.io._marker_orientation import orientation_values, read_rotations
 from pincal.io._names import is_decimal
 from pincal.io._units import LENGTH_UNITS, unit_factor
@@ -130,9 +141,34 @@ def _marker_columns(table: Table, setup: MarkerSetup) -> list[int]:
 
 
 def _marker_values(table: Table, setup: MarkerSetup) -> np.ndarray:
-    """(rows, 3 × markers) marker cells, NaN where the marker was not seen."""
+    """(rows, 3 × markers) marker cells as written, NaN where the marker was not seen."""
     idx = _marker_columns(table, setup)
     return np.array([[_cell(table, i, k) for k in idx] for i in range(len(table.rows))])
+
+
+def _length_factors(table: Table, setup: MarkerSetup) -> tuple[np.ndarray, list[str]]:
+    """Units per metre of each marker column (the title's unit, else the setup's), notes."""
+    declared = unit_factor(LENGTH_UNITS, setup.length_unit, "length", table.name)
+    factors, other = [], []
+    for k in _marker_columns(table, setup):
+        unit = table.unit(k)
+        if unit is None:
+            factors.append(declared)
+            continue
+        factors.append(unit_factor(LENGTH_UNITS, unit, "length",
+                                   f"{table.name} column {table.columns[k]!r}"))  # fmt: skip
+        if unit != setup.length_unit:
+            other.append(repr(table.columns[k]))
+    notes = [f"{table.name}: column(s) {', '.join(other)} read in their title's unit, not "
+             f"{setup.length_unit} (the declared length unit)"] if other else []  # fmt: skip
+    return np.array(factors), notes
+
+
+def _table(path: str | Path, setup: MarkerSetup) -> Table:
+    """The table, its title line the first line holding the marker columns' titles."""
+    table = read_table(path, titles=[c for triple in setup.marker_sets for c in triple])
+    check_titles(table)
+    return table
 
 
 def distinct_markers(path: str | Path, setup: MarkerSetup) -> tuple[MarkerSetup, tuple[str, ...]]:
@@ -148,8 +184,7 @@ def distinct_markers(path: str | Path, setup: MarkerSetup) -> tuple[MarkerSetup,
     """
     if not setup.more_columns:
         return setup, ()
-    table = read_table(path)
-    check_titles(table)
+    table = _table(path, setup)
     data = _marker_values(table, setup)
     values = [data[:, 3 * k : 3 * k + 3] for k in range(len(setup.marker_sets))]
     keep: list[int] = []
@@ -219,15 +254,20 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
         OrientationValueError: an orientation value not of the declared convention (a
             quaternion not of unit norm, an angle beyond a turn).
     """
-    table = read_table(path)
-    check_titles(table)
+    table = _table(path, setup)
     name = table.name
     if not table.rows:
         raise MeasurementFormatError(f"{name}: no data rows")
-    lf = unit_factor(LENGTH_UNITS, setup.length_unit, "length", name)
+    factors, unit_notes = _length_factors(table, setup)
     parsed = joint_titles(table, mech)
     joints, decl = joint_columns(mech, _comment_header(path), parsed, name)
+    read_columns = [*_marker_columns(table, setup), *joints]
+    if setup.measures_orientation:
+        found = (table.find(c, [c], {}) for c in setup.orientation_columns)
+        read_columns += [k for k in found if k is not None]
+    check_unique_titles(table, read_columns)
     markers = _marker_values(table, setup)
+    check_coordinates(table, markers, _marker_columns(table, setup), factors)
     seen = ~np.isnan(markers).any(axis=1)
     angles = orientation_values(table, setup, _cell) if setup.measures_orientation else None
     if angles is not None:
@@ -244,7 +284,7 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
     units = [parsed[k][1] for k in joints]
     q_act = read_joints(mech, raw, decl, units, titles, name)
     dropped = tuple(table.lines[i] for i in np.flatnonzero(~seen))
-    notes = []
+    notes = [*_preamble_note(table), *unit_notes, *_home_note(mech, decl)]
     if dropped:
         shown_lines = ", ".join(map(str, dropped[:10])) + (" …" if len(dropped) > 10 else "")
         notes.append(
@@ -255,10 +295,36 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
     if angles is not None:
         rotations, said = read_rotations(table, setup, angles, rows)
         notes += said
+    positions = markers[rows] / factors
+    check_scale(mech, q_act, positions[:, :3], _unit_read(table, setup), name)
     out = []
     for k in range(len(setup.marker_sets)):
-        positions = markers[rows, 3 * k : 3 * k + 3] / lf
         frame = mech.measured_frame if k == 0 else marker_frame(k)[1]
         R, comps = (rotations, COMPONENTS) if k == 0 and rotations is not None else (None, XYZ)
-        out.append(Measurements(q_act, positions, R, comps, frame, tuple(mech.actuated)))
+        out.append(Measurements(q_act, positions[:, 3 * k : 3 * k + 3], R, comps, frame,
+                                tuple(mech.actuated)))  # fmt: skip
     return MarkerData(tuple(out), dropped, tuple(notes))
+
+
+def _unit_read(table: Table, setup: MarkerSetup) -> str:
+    """The unit the first marker's x column was read in."""
+    return table.unit(_marker_columns(table, setup)[0]) or setup.length_unit
+
+
+def _preamble_note(table: Table) -> list[str]:
+    if not table.preamble:
+        return []
+    first, last = table.preamble[0], table.preamble[-1]
+    shown_lines = f"{first}–{last}" if last != first else str(first)
+    return [f"{table.name}: line(s) {shown_lines} before the title line skipped (an export's "
+            "preamble: the title line is the first holding the marker columns)"]  # fmt: skip
+
+
+def _home_note(mech: Mechanism, decl) -> list[str]:
+    """What ``joint_reference: home`` meant, in values (one home everywhere)."""
+    if decl.reference != "home":
+        return []
+    home = mech.actuators_of(mech.q_home)
+    values = ", ".join(f"{j} = {v:.6g}" for j, v in zip(mech.actuated, home, strict=True))
+    return [f"joint readings relative to home (joint_reference: home), the model's home as "
+            f"`pincal info MODEL --frame LINK` prints it [rad or m]: {values}"]  # fmt: skip

@@ -14,7 +14,14 @@ from pincal.io._names import is_decimal, is_non_finite
 from pincal.measure import NoiseModel
 from pincal.model import COMPONENTS
 
-__all__ = ["MAX_COORDINATE", "NOISE_RANGE", "parse_components", "parse_instrument", "parse_noise"]
+__all__ = [
+    "MAX_COORDINATE",
+    "NOISE_RANGE",
+    "length_sigma",
+    "parse_components",
+    "parse_instrument",
+    "parse_noise",
+]
 
 
 def parse_components(header: Header, name: str) -> list[str]:
@@ -33,6 +40,30 @@ MAX_COORDINATE = 1e4
 
 #: a declared noise σ [mm, mrad] is 0 or in this range (1 nm .. 1 m)
 NOISE_RANGE = (1e-6, 1e3)
+
+
+def length_sigma(value: float, what: str, lf: float, name: str) -> float:
+    """A declared 1σ length [m] of a file header, within :data:`NOISE_RANGE`.
+
+    Args:
+        value: the σ as written (> 0, finite), in the file's length unit.
+        what: where the σ was given, for the message (``header 'std'``, ``--std``).
+        lf: the file's length unit per metre.
+        name: file name.
+
+    Raises:
+        MeasurementFormatError: outside 1 nm … 1 m (the weights would under- or
+            overflow: a σ of 1e300 leaves nothing fitted).
+    """
+    lo, hi = NOISE_RANGE
+    sigma = value / lf
+    if not lo <= sigma * 1e3 <= hi:
+        raise MeasurementFormatError(
+            f"{name}: {what} is {value:g} in its length unit, {sigma * 1e3:g} mm; a 1σ must be "
+            f"between {lo:g} and {hi:g} mm (a σ outside makes the weights under- or "
+            "overflow); check the value and the length unit"
+        )
+    return sigma
 
 
 def parse_noise(header: Header, name: str) -> NoiseModel | None:

@@ -16,6 +16,8 @@
 The actuator columns come first (optional bracketed units), then ``socket`` (the name
 of the socket the ball sits in). Without a known distance nothing measured fixes the
 length scale (see :mod:`pincal.measure._sockets`). In metres the file round-trips exactly.
+Bounds, as on the pose route: every σ between 1 nm and 1 m, a known distance within
+10 km, a given ball within :data:`MAX_BALL` of the flange.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from pincal.io._csv import (
     split_file,
     write_csv,
 )
+from pincal.io._measurement_header import MAX_COORDINATE, length_sigma
 from pincal.io._names import quote_value
 from pincal.io._units import (
     LENGTH_UNITS,
@@ -46,7 +49,10 @@ from pincal.io._units import (
 from pincal.measure import KnownDistance, SocketData, SocketPlate
 from pincal.model import Mechanism
 
-__all__ = ["read_socket_data", "write_socket_data"]
+__all__ = ["MAX_BALL", "read_socket_data", "write_socket_data"]
+
+#: farthest a given ball centre is from the flange [m]: a seated ball is on the tool
+MAX_BALL = 2.0
 
 
 def _distance(text: str, lf: float, name: str) -> KnownDistance:
@@ -61,7 +67,13 @@ def _distance(text: str, lf: float, name: str) -> KnownDistance:
         raise MeasurementFormatError(
             f"{name}: header 'distance' is {clip(text)}; distance and std must be > 0"
         )
-    return KnownDistance(parts[0], parts[1], value / lf, std / lf)
+    if value / lf > MAX_COORDINATE:
+        raise MeasurementFormatError(
+            f"{name}: header 'distance' is {clip(text)}: more than {MAX_COORDINATE / 1e3:g} km "
+            "between two sockets; check the value and '# length_unit'"
+        )
+    sigma = length_sigma(std, "header 'distance' std", lf, name)
+    return KnownDistance(parts[0], parts[1], value / lf, sigma)
 
 
 def read_socket_data(path: str | Path, mech: Mechanism) -> SocketData:
@@ -83,7 +95,8 @@ def read_socket_data(path: str | Path, mech: Mechanism) -> SocketData:
         raise MeasurementFormatError(
             f"{name} measures frame {frame!r} but the model's tool frame is {mech.measured_frame!r}"
         )
-    std = positive_value(header_value(header, "std", None, name), "std", name) / lf
+    std = length_sigma(positive_value(header_value(header, "std", None, name), "std", name),
+                       "header 'std'", lf, name)  # fmt: skip
     distances = tuple(_distance(t, lf, name) for t in header.get("distance", []))
     plate = SocketPlate(header_value(header, "plate", "plate", name), std, distances)
     ball_text = header_value(header, "ball", "0, 0, 0", name)
@@ -94,6 +107,12 @@ def read_socket_data(path: str | Path, mech: Mechanism) -> SocketData:
         if ball.size != 3 or not np.all(np.isfinite(ball)):
             raise MeasurementFormatError(
                 f"{name}: header 'ball' is {clip(ball_text)}; give 'unknown' or x, y, z"
+            )
+        if np.linalg.norm(ball) > MAX_BALL:
+            raise MeasurementFormatError(
+                f"{name}: header 'ball' is {clip(ball_text)}, {np.linalg.norm(ball):.3g} m from "
+                f"the flange; a ball the robot seats sits on its tool, within {MAX_BALL:g} m: "
+                "check the value and '# length_unit' (or give 'unknown')"
             )
     parsed = [parse_column(c) for c in columns]
     names = [p[0] for p in parsed]

@@ -27,7 +27,9 @@ from pincal.io._csv import Header
 from pincal.io._delimited import Table, read_table
 from pincal.io._joint_columns import joint_columns, read_joints
 from pincal.io._marker_file import check_titles, joint_titles
+from pincal.io._measurement_header import length_sigma
 from pincal.io._names import is_decimal
+from pincal.io._socket_file import MAX_BALL
 from pincal.io._units import LENGTH_UNITS, unit_factor
 from pincal.measure import KnownDistance, SocketData, SocketPlate
 from pincal.model import Mechanism
@@ -101,11 +103,13 @@ class SocketTable:
                     f"and > 0 [{self.length_unit}], got {value:g}, {std:g}"
                 )
             try:
-                known.append(KnownDistance(socket_id(a), socket_id(b), value / lf, std / lf))
+                sigma = length_sigma(std, f"the std of distance {a}–{b}", lf, name)
+                known.append(KnownDistance(socket_id(a), socket_id(b), value / lf, sigma))
             except MeasurementError as exc:
                 raise MeasurementError(f"{name}: {exc} (distances in {self.length_unit})") from None
         try:
-            return SocketPlate(self.plate, self.std / lf, tuple(known))
+            std = length_sigma(self.std, "the seating std (--std)", lf, name)
+            return SocketPlate(self.plate, std, tuple(known))
         except MeasurementError as exc:
             raise MeasurementError(f"{name}: {exc} (std in {self.length_unit})") from None
 
@@ -216,4 +220,10 @@ def read_socket_table(path: str | Path, mech: Mechanism, spec: SocketTable) -> S
         ball = np.asarray(spec.ball, dtype=float) / unit_factor(
             LENGTH_UNITS, spec.length_unit, "length", name
         )
+        if not np.linalg.norm(ball) <= MAX_BALL:
+            raise MeasurementError(
+                f"{name}: the ball (--ball) is {np.linalg.norm(ball):.3g} m from the flange; a "
+                f"ball the robot seats sits on its tool, within {MAX_BALL:g} m: check the value "
+                "and --length-unit (or give 'unknown')"
+            )
     return SocketData(plate, q_act, sockets, mech.actuated, mech.measured_frame, ball)

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import MeasurementError, ModelFileError, UnknownNameError
+from pincal.errors import MeasurementError, MobilityError, ModelFileError, UnknownNameError
 from pincal.measure._orientation import check_orientation
 from pincal.model import (
     BASE_JOINT,
@@ -36,6 +36,7 @@ from pincal.model import (
     TOOL_JOINT,
     Mechanism,
     UrdfTree,
+    load_mechanism,
     resolve_named,
     serial_mechanism,
 )
@@ -232,8 +233,15 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
     link to links ``marker<k>`` (start: identity) are added, and their ``tx ty tz``
     join the ``chain`` and ``base_tool`` presets.
 
+    Home is the model's home as :func:`pincal.model.load_mechanism` (and ``pincal info
+    MODEL --frame LINK``) has it: the sidecar's, the SRDF's, else the searched regular
+    one — one home for every route (a table's ``joint_reference: home`` is relative to
+    it).
+
     Raises:
-        UnknownNameError: unknown link or locked joint; ModelFileError: the URDF.
+        UnknownNameError: unknown link or locked joint; ModelFileError: the URDF;
+        MobilityError: no joint moves the marker (the link is the root or every joint
+            on the way is locked).
     """
     lock = _off_chain_locks(model, setup.link, setup.lock)
     marker = pin.SE3(np.eye(3), np.asarray(setup.marker)) if setup.marker is not None else None
@@ -241,6 +249,14 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
     mech = serial_mechanism(
         model, flange=setup.link, lock=lock, measured=measured, T_flange_tool=marker
     )
+    if not mech.actuated:
+        raise MobilityError(
+            f"nothing moves the marker: no unlocked joint between the robot's root and link "
+            f"{setup.link!r} (locked: {', '.join(sorted(setup.lock)) or 'none'}); give the "
+            "link the marker is on, further along the chain, or lock fewer joints"
+        )
+    off_chain = {k: v for k, v in lock.items() if k not in setup.lock}
+    mech = _with_model_home(model, setup.link, off_chain, mech)
     if not setup.more_columns:
         return mech
     import xml.etree.ElementTree as ET
@@ -265,6 +281,32 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
     return Mechanism(
         ET.tostring(root, encoding="unicode"), sidecar, name=mech.name, source=mech.source
     )
+
+
+def _with_model_home(model: str, link: str, lock: Mapping[str, float],
+                     mech: Mechanism) -> Mechanism:  # fmt: skip
+    """``mech`` with the home :func:`pincal.model.load_mechanism` searches (if it does).
+
+    A robot by name without SRDF pose or sidecar ``home`` gets a searched regular home
+    when loaded (regular for the measured frame: here ``link``, as ``pincal info MODEL
+    --frame LINK`` prints it); the marker chain is built without that search, so it
+    takes the loaded model's values of its own joints. The model is loaded with the
+    joints off the chain locked (``lock``: they do not move the link, so the home is the
+    same, found ten times faster on a 50-joint TIAGo); joints the user locks on the
+    chain stay free there, so a lock does not move the home of the others.
+    """
+    if mech.sidecar.to_dict().get("home"):  # the sidecar's or the SRDF's: no search
+        return mech
+    full = load_mechanism(model, link, lock=lock)
+    side = full.sidecar.to_dict().get("home")
+    if not isinstance(side, Mapping):
+        return mech
+    home = {j: float(side[j]) for j in mech.actuated if j in side}
+    if not home:
+        return mech
+    sidecar = mech.sidecar.to_dict()
+    sidecar["home"] = home
+    return Mechanism(mech.urdf_xml, sidecar, name=mech.name, source=mech.source)
 
 
 def marker_mechanisms(mech: Mechanism, setup: MarkerSetup) -> tuple[Mechanism, ...]:

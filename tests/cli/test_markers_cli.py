@@ -99,6 +99,8 @@ def test_full_calibration_recovers_the_arm_and_validates_by_cv(tmp_path):
              "--out", tmp_path / "cal")  # fmt: skip
     assert r.exit_code == 0, r.output
     assert "registration (closed form" in r.output
+    # the probes' blind spot names what this route has, not --noise (refused here)
+    assert "what the gate cannot see" in r.output and "--noise" not in r.output
     from pincal.io import read_calibration
 
     calibrated = read_calibration(tmp_path / "cal").calibrated()

@@ -243,3 +243,24 @@ def test_single_file_temporaries_of_a_killed_writer_are_removed(tmp_path):
     atomic_write_text(tmp_path / "m.csv", "data\n")
     assert not stale.exists() and mine.exists() and other.exists()
     assert (tmp_path / "m.csv").read_text() == "data\n"
+
+
+def test_a_directory_its_reader_refuses_never_replaces_a_good_one(tmp_path, data_file, result,
+                                                                   monkeypatch):  # fmt: skip
+    """Read back before the swap: a written set the reader refuses (here: no parameters, as
+    a σ of 1e300 once produced) leaves the good calibration in place, and no temporaries."""
+    import pincal.io._calibration_write as cw
+
+    out = tmp_path / "cal"
+    write_calibration(out, result, model_source="wedge3", data_files=[data_file])
+    before = consistent_set(out)
+    real = cw.result_to_dict
+
+    def emptied(res, notes):
+        return {**real(res, notes), "parameters": []}
+
+    monkeypatch.setattr(cw, "result_to_dict", emptied)
+    with pytest.raises(CalibrationDirectoryError, match="'parameters' must be a non-empty list"):
+        write_calibration(out, result, model_source="wedge3", data_files=[data_file])
+    assert consistent_set(out) == before
+    assert strays(tmp_path) == []

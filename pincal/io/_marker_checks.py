@@ -1,0 +1,142 @@
+"""The marker route's bounds: column titles used once, positions of a plausible size.
+
+The checks a marker table passes after it is read and before any fit, as a pose file
+does (:mod:`pincal.io._measurement_file`):
+
+- a column the calibration uses (marker, orientation or joint column) has a title no
+  other column has: with two ``x`` columns, which one is the marker is a guess;
+- every marker coordinate is within :data:`pincal.io._measurement_header.MAX_COORDINATE`
+  of the instrument's origin (a ``1e300`` cell overflows the closed-form registration);
+- the positions spread about as much as the nominal marker link over the same joint
+  readings: a spread a unit ratio away (millimetres read as metres) names the unit.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from pincal.errors import BadValueError, ColumnError, UnitMismatchError
+from pincal.io._delimited import Table
+from pincal.io._measurement_header import MAX_COORDINATE
+from pincal.io._units import LENGTH_UNITS
+from pincal.model import Mechanism
+
+__all__ = ["check_coordinates", "check_scale", "check_unique_titles", "title_key"]
+
+#: positions spread more than this factor away from the nominal link's: a unit is wrong
+SCALE_FACTOR = 20.0
+#: a unit ratio explains a spread ratio within this factor
+UNIT_MATCH = 3.0
+#: the nominal link must move at least this much [m] for the comparison to mean anything
+MIN_SPREAD = 0.02
+#: rows compared at most (evenly spaced): the spread of a table needs no more
+SCALE_ROWS = 500
+
+
+def title_key(title: str) -> str:
+    """A title as columns are matched: any case, without a bracketed unit."""
+    from pincal.io._csv import parse_column
+    from pincal.io._delimited import parsable_title
+
+    return (parse_column(title)[0] if parsable_title(title) else title).strip().lower()
+
+
+def check_unique_titles(table: Table, used: Sequence[int]) -> None:
+    """Refuse a used column whose title another column has too.
+
+    Raises:
+        ColumnError: naming the title and both columns (1-based positions).
+    """
+    keys = [title_key(c) for c in table.columns]
+    for k in used:
+        others = [j for j, key in enumerate(keys) if key == keys[k] and j != k]
+        if others:
+            a, b = sorted((k, others[0]))
+            raise ColumnError(
+                f"{table.name}: columns {a + 1} ({table.columns[a]!r}) and {b + 1} "
+                f"({table.columns[b]!r}) have the same title, and the calibration reads one "
+                "of them: which one is meant is a guess; rename one (e.g. add the marker's "
+                "name) and give that title to the marker or joint columns",
+                unknown=[table.columns[b]],
+            )
+
+
+def check_coordinates(table: Table, values: np.ndarray, columns: Sequence[int],
+                      factors: np.ndarray) -> None:  # fmt: skip
+    """Refuse a marker coordinate farther than MAX_COORDINATE from the instrument's origin.
+
+    Args:
+        table: the table (names, lines).
+        values: (rows, c) marker cells as written (NaN: not seen).
+        columns: the table column of each of the c values.
+        factors: (c,) units per metre of each value.
+
+    Raises:
+        BadValueError: naming the line, the column and the value.
+    """
+    far = np.argwhere(np.abs(values) > MAX_COORDINATE * factors)
+    if far.size:
+        i, j = (int(v) for v in far[0])
+        title = table.columns[columns[j]]
+        raise BadValueError(
+            f"{table.name} line {table.lines[i]}, column {title!r}: {values[i, j]:g} is more "
+            f"than {MAX_COORDINATE / 1e3:g} km from the instrument's origin; check the value "
+            "and the length unit",
+            i + 1,
+            title,
+        )
+
+
+def _spread(points: np.ndarray) -> float:
+    """RMS distance of points (n, 3) from their centroid."""
+    return float(np.sqrt(np.mean(np.sum((points - points.mean(axis=0)) ** 2, axis=1))))
+
+
+def check_scale(mech: Mechanism, q_act: np.ndarray, positions: np.ndarray, unit: str,
+                name: str) -> None:  # fmt: skip
+    """Refuse positions whose spread is a length-unit ratio away from the nominal link's.
+
+    The marker's spread about its centroid is compared with that of the nominal
+    measured frame over the same joint readings (rotation and translation of the
+    instrument do not change a spread; an unknown marker offset changes it by far less
+    than :data:`SCALE_FACTOR`).
+
+    Args:
+        mech: the marker chain (nominal).
+        q_act: (n, n_act) joint readings [m, rad].
+        positions: (n, 3) the first marker's positions [m], as read.
+        unit: the unit the positions were read in (for the message).
+        name: file name.
+
+    Raises:
+        UnitMismatchError: the ratio is beyond :data:`SCALE_FACTOR` and a ratio of two
+            length units explains it within :data:`UNIT_MATCH` (the message names the
+            unit to declare).
+    """
+    rows = np.unique(np.linspace(0, len(q_act) - 1, min(len(q_act), SCALE_ROWS)).astype(int))
+    if len(rows) < 3:
+        return
+    nominal = np.array([mech.frame_placement(q).translation
+                        for q in mech.configurations(q_act[rows])])  # fmt: skip
+    s_nom, s_meas = _spread(nominal), _spread(positions[rows])
+    if s_nom < MIN_SPREAD or s_meas == 0 or not math.isfinite(s_meas):
+        return
+    ratio = s_meas / s_nom
+    if 1 / SCALE_FACTOR <= ratio <= SCALE_FACTOR:
+        return
+    per_m = LENGTH_UNITS[unit] if unit in LENGTH_UNITS else 1.0
+    for other, f in LENGTH_UNITS.items():
+        if other == unit:
+            continue
+        expected = f / per_m  # the values are in `other`, read as `unit`
+        if abs(math.log(ratio / expected)) <= math.log(UNIT_MATCH):
+            raise UnitMismatchError(
+                f"{name}: the marker positions spread {ratio:.3g}× as far as the nominal "
+                f"marker link over the same joint readings ({s_meas:.3g} m against "
+                f"{s_nom:.3g} m RMS about their centre): the marker columns look like {other} "
+                f"read as {unit}; declare --length-unit {other} (markers.length_unit in a "
+                f"campaign, or title the columns 'x [{other}]')"
+            )
