@@ -48,3 +48,53 @@ def marker_points(model: pin.Model, root: str, link: str, names: tuple[str, ...]
         T = T_INSTRUMENT_ROOT * data.oMf[f_root].inverse() * data.oMf[f_link]
         out[i] = T.act(MARKER) + rng.normal(0, sigma, 3)
     return out
+
+
+def _relative(model: pin.Model, data: pin.Data, root: int, face: int, full: np.ndarray) -> pin.SE3:
+    pin.framesForwardKinematics(model, data, full)
+    return data.oMf[root].inverse() * data.oMf[face]
+
+
+def flush_poses(model: pin.Model, root: str, link: str, T_link_face: pin.SE3,
+                names: tuple[str, ...], q_start: np.ndarray, axis: np.ndarray,
+                normal: np.ndarray, offset: float, std: tuple[float, float],
+                seed: int, within_limits: bool = True) -> np.ndarray:  # fmt: skip
+    """Joint values (k, len(names)) at which the face touches the plane, from Pinocchio alone.
+
+    Each start of ``q_start`` is moved by damped Gauss–Newton (finite-difference
+    Jacobian of the truth model) until the face frame ``oMf(root)⁻¹ · oMf(link) ·
+    T_link_face`` has ``normal·p − offset = ε_h`` and its axis ``R·axis`` tilted off
+    ``normal`` by ``(ε_1, ε_2)`` (drawn with σ ``std`` = (height [m], tilt [rad]); tilts
+    along the basis of :func:`pincal.measure._flush_contact.plane_basis` of ``normal``),
+    so the flush residuals at the truth are exactly ``−ε``. Starts that do not converge
+    (or, with ``within_limits``, end outside the joint limits) are dropped.
+    """
+    from pincal.measure._flush_contact import plane_basis
+
+    data = model.createData()
+    f_root, f_link = model.getFrameId(root), model.getFrameId(link)
+    idx = [model.idx_qs[model.getJointId(n)] for n in names]
+    lo, hi = model.lowerPositionLimit[idx], model.upperPositionLimit[idx]
+    E = np.vstack(plane_basis(normal))
+    rng = np.random.default_rng(seed)
+    out = []
+    for q0 in q_start:
+        eps = np.array([rng.normal(0, std[0]), *rng.normal(0, std[1], 2)])
+
+        def g(q: np.ndarray, eps: np.ndarray = eps) -> np.ndarray:
+            full = pin.neutral(model)
+            full[idx] = q
+            T = _relative(model, data, f_root, f_link, full) * T_link_face
+            return np.concatenate([[normal @ T.translation - offset],
+                                   E @ (T.rotation @ axis)]) - eps  # fmt: skip
+
+        q = np.array(q0, dtype=float)
+        for _ in range(60):
+            r = g(q)
+            if np.abs(r).max() < 1e-13:
+                break
+            J = np.column_stack([(g(q + h) - r) / 1e-7 for h in np.eye(len(q)) * 1e-7])
+            q = q - J.T @ np.linalg.solve(J @ J.T + 1e-9 * np.eye(3), r)
+        if np.abs(g(q)).max() < 1e-12 and (not within_limits or np.all((q >= lo) & (q <= hi))):
+            out.append(q)
+    return np.array(out)
