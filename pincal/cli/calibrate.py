@@ -12,6 +12,7 @@ from pincal.cli._calibrate_markers import calibrate_markers
 from pincal.cli._calibrate_text import result_json
 from pincal.cli._instrument_fit import identify_instrument_files, is_instrument_file
 from pincal.cli._limits import NOISE_RANGE, check_data_rows, number_pair, yes_option
+from pincal.cli._marker_root import root_option, with_root
 from pincal.cli._markers import marker_options
 from pincal.cli.common import (
     fail_cleanly,
@@ -139,11 +140,12 @@ from pincal.identification import METHODS
 @yes_option
 @model_options
 @marker_options
+@root_option
 @fail_cleanly
 def calibrate(
     model, data, preset, error_model, payload, method, out, as_json, noise, loss, force,
     max_change, significance, instrument, link, instrument_frame, marker_spec, marker_columns,
-    length_unit, orientation_columns, orientation, prior_spec, bootstrap, n_jobs,
+    length_unit, orientation_columns, orientation, prior_spec, root, bootstrap, n_jobs,
     yes, model_opts,
 ) -> None:  # fmt: skip
     """Identify MODEL's geometric parameters from measured poses (--data).
@@ -262,9 +264,11 @@ def calibrate(
         setup = setup_from_options(link, instrument_frame, marker_spec, marker_columns,
                                    length_unit, lock_spec, orientation_columns,
                                    orientation)  # fmt: skip
+        setup = with_root(setup, root, link)
         settings = marker_settings(preset, method, prior_spec, loss, limits, profile)
         calibrate_markers(model, data, setup, settings, out, as_json, force, yes=yes)
         return
+    with_root(None, root, link)  # --root without --link: refused
     if prior_spec is not None:
         raise click.BadParameter("--prior applies to marker calibrations (--link)",
                                  param_hint="--prior")  # fmt: skip

@@ -74,7 +74,9 @@ class Table:
         Raises:
             ColumnError: a mapped title that is not in the table.
         """
-        bare = [parse_column(c)[0].lower() if parsable_title(c) else c.lower() for c in self.columns]
+        bare = [
+            parse_column(c)[0].lower() if parsable_title(c) else c.lower() for c in self.columns
+        ]
         if field in mapping:
             want = mapping[field].strip().lower()
             for k, (c, b) in enumerate(zip(self.columns, bare, strict=True)):

@@ -1,8 +1,8 @@
 """Stage 3 — what an instrument sees.
 
 Measurements and noise models (SI inside), scalar instruments (ballbar, sphere probe,
-planes, gauge) and artefact instruments (socket plates) in one kind registry,
-simulation, the laser tracker, instrument and marker registration.
+planes, gauge) and artefact instruments (socket plates, flush contacts) in one kind
+registry, simulation, the laser tracker, instrument and marker registration.
 Imports only :mod:`pincal.model` and :mod:`pincal.sensitivity`; judging a calibration
 against measurements (held-out checks, pose errors, ISO 9283) is the later
 :mod:`pincal.validation` stage.
@@ -11,6 +11,7 @@ against measurements (held-out checks, pose errors, ISO 9283) is the later
 from __future__ import annotations
 
 from pincal.measure._artefact_kind import Artefact, SharedTerms
+from pincal.measure._flush_contact import FlushContact
 from pincal.measure._instrument_kind import DeclaredConstant, HeaderValues, Instrument
 from pincal.measure._instrument_kinds import Distance, Plane, Point, Sphere
 from pincal.measure._instrument_registry import (
@@ -75,6 +76,7 @@ __all__ = [
     "Artefact",
     "DeclaredConstant",
     "Distance",
+    "FlushContact",
     "HeaderValues",
     "Instrument",
     "InstrumentData",

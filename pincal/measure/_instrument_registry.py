@@ -6,8 +6,8 @@ A new kind is one class plus one call ``add_instrument_kind(MyKind)``:
   subclass: files (``# kind: …``), ``pincal simulate --instrument``, the joint
   identification and the instrument analysis find it here;
 * an artefact kind (k residuals per pose, unknowns shared by its datasets, e.g. the
-  ``socket`` plates) is a :class:`pincal.measure.Artefact` subclass (its dataset
-  class): the joint identification finds its residuals and shared terms here.
+  ``socket`` plates, the ``flush`` contacts) is a :class:`pincal.measure.Artefact`
+  subclass (its dataset class): the joint identification finds its residuals and shared terms here.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from typing import TypeVar
 
 from pincal.errors import MeasurementError
 from pincal.measure._artefact_kind import Artefact
+from pincal.measure._flush_contact import FlushContact
 from pincal.measure._instrument_kind import Instrument
 from pincal.measure._instrument_kinds import Distance, Plane, Point, Sphere
 from pincal.measure._sockets import SocketData
@@ -100,6 +101,7 @@ def artefact_class(kind: str) -> type[Artefact]:
 for _cls in (Distance, Sphere, Plane, Point):
     add_instrument_kind(_cls)
 add_instrument_kind(SocketData)
+add_instrument_kind(FlushContact)
 
 #: the built-in scalar instrument kinds (:func:`instrument_kinds` lists registered ones)
 INSTRUMENT_KINDS = instrument_kinds()

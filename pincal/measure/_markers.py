@@ -36,6 +36,7 @@ from pincal.model import (
     TOOL_JOINT,
     Mechanism,
     UrdfTree,
+    chain_joints,
     load_mechanism,
     resolve_named,
     serial_mechanism,
@@ -68,6 +69,10 @@ class MarkerSetup:
             body: no ``more_columns``), or () for a point.
         orientation: their convention (:data:`pincal.measure.ORIENTATIONS`, e.g.
             ``rpy-deg``), with ``orientation_columns`` only.
+        root: the link the measured chain starts from (fixed to the instrument: a
+            humanoid's sole, a mobile manipulator's torso), or None for the URDF's root;
+            the tree is re-rooted there (:func:`pincal.model.reroot_urdf`) and the joints
+            between ``root`` and ``link`` are the chain.
     """
 
     link: str
@@ -80,6 +85,7 @@ class MarkerSetup:
     more_columns: tuple[tuple[str, str, str], ...] = ()
     orientation_columns: tuple[str, ...] = ()
     orientation: str | None = None
+    root: str | None = None
 
     def __post_init__(self) -> None:
         if self.instrument_frame not in FRAME_CHOICES:
@@ -179,6 +185,7 @@ class MarkerSetup:
                  "orientation": self.orientation}
                 if self.measures_orientation else {}
             ),
+            **({"root": self.root} if self.root is not None else {}),
         }  # fmt: skip
 
     @classmethod
@@ -196,18 +203,22 @@ class MarkerSetup:
             more_columns=tuple(tuple(c) for c in d.get("more_columns") or ()),  # type: ignore[misc]
             orientation_columns=tuple(d.get("orientation_columns") or ()),
             orientation=d.get("orientation"),
+            root=d.get("root"),
         )
 
 
-def _off_chain_locks(model: str, link: str, lock: Mapping[str, float]) -> dict[str, float]:
-    """``lock`` plus every movable joint off the chain to ``link`` at 0."""
+def _off_chain_locks(
+    model: str, link: str, lock: Mapping[str, float], root: str | None = None
+) -> dict[str, float]:
+    """``lock`` plus every movable joint off the chain from ``root`` to ``link`` at 0."""
     from pincal._files import read_text
 
     urdf = resolve_named(model).urdf  # a name, a path, or a local sidecar with `robot:`
     tree = UrdfTree(read_text(urdf, "URDF", error=ModelFileError))
-    if link not in tree.links:
-        raise UnknownNameError("link", link, list(tree.links))
-    chain = set(tree.ancestors(link))
+    for name in (link, root or tree.root_link):
+        if name not in tree.links:
+            raise UnknownNameError("link", name, list(tree.links))
+    chain = set(chain_joints(tree, root or tree.root_link, link))
     out = {n: 0.0 for n, j in tree.joints.items() if j.type in MOVABLE_TYPES and n not in chain}
     bad = sorted(set(lock) - set(tree.joints))
     if bad:
@@ -227,11 +238,12 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
     origin's six parameters join the presets).
 
     Joints off the chain to ``setup.link`` (a mobile base's wheels, a head, a hand) are
-    locked, and so are ``setup.lock``. The measured frame is ``tool`` (the marker);
-    ``base_frame`` and ``tool_frame`` start at identity, or at the given marker. With
-    further markers (``setup.more_columns``), fixed joints ``marker<k>_frame`` from the
-    link to links ``marker<k>`` (start: identity) are added, and their ``tx ty tz``
-    join the ``chain`` and ``base_tool`` presets.
+    locked, and so are ``setup.lock``. With ``setup.root`` the chain starts at that link
+    (the tree re-rooted there, :func:`pincal.model.reroot_urdf`). The measured frame is
+    ``tool`` (the marker); ``base_frame`` and ``tool_frame`` start at identity, or at the
+    given marker. With further markers (``setup.more_columns``), fixed joints
+    ``marker<k>_frame`` from the link to links ``marker<k>`` (start: identity) are added,
+    and their ``tx ty tz`` join the ``chain`` and ``base_tool`` presets.
 
     Home is the model's home as :func:`pincal.model.load_mechanism` (and ``pincal info
     MODEL --frame LINK``) has it: the sidecar's, the SRDF's, else the searched regular
@@ -243,11 +255,12 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
         MobilityError: no joint moves the marker (the link is the root or every joint
             on the way is locked).
     """
-    lock = _off_chain_locks(model, setup.link, setup.lock)
+    lock = _off_chain_locks(model, setup.link, setup.lock, setup.root)
     marker = pin.SE3(np.eye(3), np.asarray(setup.marker)) if setup.marker is not None else None
     measured = "pose" if setup.measures_orientation else "position"
     mech = serial_mechanism(
-        model, flange=setup.link, lock=lock, measured=measured, T_flange_tool=marker
+        model, flange=setup.link, lock=lock, measured=measured, T_flange_tool=marker,
+        root=setup.root,
     )
     if not mech.actuated:
         raise MobilityError(

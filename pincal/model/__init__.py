@@ -73,6 +73,7 @@ from pincal.model._parameters import (
 from pincal.model._payload import Payload, with_payload
 from pincal.model._presets import parameters
 from pincal.model._readings import JointReadings
+from pincal.model._reroot import chain_joints, reroot_urdf
 from pincal.model._robots import example_robot_names, example_robot_urdf
 from pincal.model._serial import (
     BASE_JOINT,
@@ -143,6 +144,7 @@ __all__ = [
     "actual_joint_values",
     "actual_shift",
     "bundled_models",
+    "chain_joints",
     "chain_preset",
     "check_term_data",
     "conditioning",
@@ -180,6 +182,7 @@ __all__ = [
     "read_sidecar",
     "register_term",
     "regular_home",
+    "reroot_urdf",
     "resolve_model_path",
     "resolve_named",
     "sample_actuators",

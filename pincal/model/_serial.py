@@ -43,6 +43,7 @@ from pincal.errors import ModelFileError, UnknownNameError
 from pincal.model._lock_values import lock_values_at_home
 from pincal.model._mechanism import Mechanism
 from pincal.model._named import resolve_named
+from pincal.model._reroot import reroot_urdf
 from pincal.model._urdf import MOVABLE_TYPES, UrdfTree
 
 __all__ = [
@@ -238,6 +239,7 @@ def serial_mechanism(
     T_instrument_base: pin.SE3 | None = None,
     T_flange_tool: pin.SE3 | None = None,
     measured: str | Sequence[str] | None = None,
+    root: str | None = None,
 ) -> Mechanism:
     """Load a serial robot with base and tool frames (and locked joints).
 
@@ -257,6 +259,9 @@ def serial_mechanism(
             ``tool_frame`` joint origin [m] (default identity).
         measured: measured components (``"pose"``, ``"position"`` or a list);
             default the sidecar's, else pose.
+        root: the link the chain starts from (the instrument is fixed to it), if not the
+            URDF's root: the tree is re-rooted there (:func:`reroot_urdf`; joints keep
+            their names and values, ``base_frame`` joins the instrument to ``root``).
 
     The model's sidecar (if any) is kept, with ``measured_frame`` and ``measured``
     overridden and two presets added: ``chain`` (:func:`chain_preset`) and
@@ -271,6 +276,8 @@ def serial_mechanism(
         gone = {n for n, j in UrdfTree(xml).joints.items() if not j.movable}
         if isinstance(sidecar.get("home"), Mapping):
             sidecar["home"] = {k: v for k, v in sidecar["home"].items() if k not in gone}
+    if root is not None:
+        xml = reroot_urdf(xml, root)
     xml = wrap_base_tool(xml, flange, T_instrument_base, T_flange_tool, base=base)
     if flange is not None:
         sidecar["measured_frame"] = TOOL_LINK
