@@ -15,6 +15,7 @@ from pincal.cli._limits import (
     naming_option,
     yes_option,
 )
+from pincal.cli._pose_screens import screen_options
 from pincal.cli.common import (
     ModelOptions,
     fail_cleanly,
@@ -83,6 +84,7 @@ from pincal.measure import DEFAULT_NOISE
     help="Processes evaluating the candidates (-1: every CPU); same poses for any value.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
+@screen_options
 @yes_option
 @overwrite_option
 @model_options
@@ -102,6 +104,11 @@ def poses(
     out: str,
     n_jobs: int,
     as_json: bool,
+    joint_margin: float,
+    singular_margin: float,
+    obstacles: tuple[str, ...],
+    no_collisions: bool,
+    reach_errors: str,
     yes: bool,
     overwrite: bool,
     model_opts: ModelOptions,
@@ -124,6 +131,7 @@ def poses(
 
     import numpy as np
 
+    from pincal.cli._pose_screens import compensation_test, parse_reach_errors, screen_settings
     from pincal.cli._progress import counted
     from pincal.cli.info import reduction_line
     from pincal.design import (
@@ -134,6 +142,7 @@ def poses(
         characteristic_length,
         cramer_rao_from_jacobian,
         parse_candidate_spec,
+        screen_candidates,
         select_poses,
     )
     from pincal.errors import OptionValueError, PincalError
@@ -161,6 +170,8 @@ def poses(
             )
     with naming_option("--candidates"):
         parse_candidate_spec(spec)  # a malformed spec fails before the model loads
+    settings = screen_settings(joint_margin, singular_margin, obstacles, no_collisions)
+    errors = parse_reach_errors(reach_errors)
     mech = load_model(model, model_opts)
     preset = preset or (next(iter(mech.presets)) if mech.presets else "full")
     params = parameters(mech, preset)
@@ -176,12 +187,17 @@ def poses(
                 max_candidates=None if yes else MAX_CANDIDATES,
                 max_bytes=None if yes else MAX_CANDIDATE_BYTES, n_jobs=n_jobs,
             )  # fmt: skip
+    compensable = None if errors is None else compensation_test(mech, params, errors, seed)
+    cands, screens = screen_candidates(mech, cands, settings, compensable=compensable)
     click.echo(cands.summary(), err=True)
+    for note in screens.notes:
+        click.echo(f"  {note}", err=True)
     if count > len(cands):
         raise OptionValueError(
             f"--count {count} is more than the {len(cands)} feasible candidate poses of "
-            f"--candidates {spec}; ask for at most {len(cands)} poses or generate more "
-            "candidates (e.g. --candidates random:2000 or a finer grid:LEVELS)"
+            f"--candidates {spec} ({screens.summary()}); ask for at most {len(cands)} poses, "
+            "generate more candidates (e.g. --candidates random:2000 or a finer "
+            "grid:LEVELS) or relax the screens (--joint-margin, --singular-margin)"
         )
     noise_model = NoiseModel(*noise)
     if scaling == "K":
@@ -212,7 +228,9 @@ def poses(
     extra = {
         "noise": {"position_mm": noise[0], "orientation_mrad": noise[1]},
         "predicted_std": dict(zip(params.names, map(float, crb.std), strict=True)),
-    }
+        "screens": {"removed": screens.removed, "notes": list(screens.notes),
+                    "reach_errors_mm_mrad": None if errors is None else list(errors)},
+    }  # fmt: skip
     csv_path, cmd_path, json_path = write_pose_design(
         design, out, extra, actuator_units=si_actuator_units(mech)
     )
@@ -231,6 +249,7 @@ def poses(
                     "value": float(sel.value),
                     "converged": bool(sel.converged),
                     "predicted_rms_std": float(crb.rms_std),
+                    "screens_removed": screens.removed,
                 }
             )
         )
