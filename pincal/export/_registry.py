@@ -19,6 +19,7 @@ from pincal.export._format import ControllerFormat, Projection, projection
 from pincal.export._genhexkins import GenHexKins
 from pincal.export._linear_delta import KlipperDelta, LinuxCncLinearDelta
 from pincal.export._machine import CalibratedMachine
+from pincal.export._rotary_delta import RotaryDelta
 from pincal.export._table import GenericTable
 from pincal.io import atomic_write_text
 from pincal.model import sample_actuators
@@ -35,6 +36,7 @@ FORMATS: dict[str, ControllerFormat] = {
         ModifiedDH(),
         KlipperDelta(),
         LinuxCncLinearDelta(),
+        RotaryDelta(),
     )
 }
 

@@ -82,3 +82,29 @@ def lineardeltakins_forward(R: float, L: float, joints_mm: np.ndarray) -> np.nda
     ang = np.radians([90.0, 90.0 - 120.0, 90.0 - 240.0])  # 120° steps clockwise
     towers = np.column_stack([R * np.cos(ang), R * np.sin(ang)])
     return spheres_forward(towers, np.asarray(joints_mm, float), np.full(3, L))
+
+
+def rotary_delta_forward(doc: dict, readings: np.ndarray) -> np.ndarray:
+    """Controlled point (3,) [mm] of a rotary delta table for readings [rad].
+
+    Knee of arm i: shoulder at radius r in direction (cos φ, sin φ, 0), height z; upper
+    arm a at angle t = sign·reading + zero below the horizontal (outward); lower arm b.
+    """
+    centres, arms = [], []
+    for arm, q in zip(doc["arms"], readings, strict=True):
+        phi = np.radians(arm["angle_deg"])
+        t = arm["sign"] * q + np.radians(arm["zero_deg"])
+        reach = arm["radius_mm"] + arm["upper_arm_mm"] * np.cos(t)
+        centres.append([reach * np.cos(phi), reach * np.sin(phi),
+                        arm["height_mm"] - arm["upper_arm_mm"] * np.sin(t)])  # fmt: skip
+        arms.append(arm["lower_arm_mm"])
+    c = np.array(centres)
+    L = np.array(arms)
+    p = np.array([*c[:, :2].mean(axis=0), c[:, 2].min() - L.min()])
+    for _ in range(60):
+        d = p - c
+        step = np.linalg.solve(2 * d, -(np.einsum("ij,ij->i", d, d) - L**2))
+        p = p + step
+        if np.abs(step).max() < 1e-13:
+            break
+    return p
