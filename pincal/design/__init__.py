@@ -58,7 +58,6 @@ from pincal.design._screens import (
     SCREENS,
     ScreenReport,
     ScreenSettings,
-    actuator_jacobians,
     actuator_sigma_min,
     screen_candidates,
 )
@@ -85,7 +84,6 @@ __all__ = [
     "PoseSelection",
     "ScreenReport",
     "ScreenSettings",
-    "actuator_jacobians",
     "actuator_sigma_min",
     "batch_indices",
     "bose_array",

@@ -31,19 +31,17 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 from numpy.typing import NDArray
 
 from pincal.design._candidates import CandidateSet
 from pincal.design._collisions import Box, CollisionChecker
 from pincal.errors import ConvergenceError, OptionValueError
-from pincal.model import COMPONENTS, Mechanism
+from pincal.model import Mechanism, actuator_jacobians
 
 __all__ = [
     "SCREENS",
     "ScreenReport",
     "ScreenSettings",
-    "actuator_jacobians",
     "actuator_sigma_min",
     "screen_candidates",
 ]
@@ -141,40 +139,6 @@ def actuator_sigma_min(
         if np.all(np.isfinite(G[i])):
             sigma[i] = np.linalg.svd(G[i], compute_uv=False)[-1]
     return sigma, float(length)
-
-
-def actuator_jacobians(mech: Mechanism, q_act: NDArray[np.float64]) -> NDArray[np.float64]:
-    """G = ∂(measured components)/∂q_act per row (N, k, n_act) [m or rad per m or rad].
-
-    Position rows are the measured frame's origin velocity and rotation rows its angular
-    velocity, both in the measured frame (Pinocchio's ``LOCAL`` frame Jacobian J_m). On a
-    closed chain the passive velocities follow from the closure: J_c,free·v_free =
-    −J_c,act·v_act (least squares: idle passive joints take the minimum-norm share,
-    they do not move the measured frame), so G = J_m,act + J_m,free·(−J_c,free⁺ J_c,act).
-    Rows whose loops do not close are NaN.
-    """
-    rows = np.atleast_2d(np.asarray(q_act, dtype=float))
-    cols = [COMPONENTS.index(c) for c in mech.measured_components]
-    model, data = mech.model, mech.model.createData()
-    fid = mech.frame_id(mech.measured_frame)
-    act = np.array([model.joints[mech.joint_id(j)].idx_v for j in mech.actuated])
-    free = mech.free_dofs
-    G = np.full((len(rows), len(cols), len(act)), np.nan)
-    q = mech.q_home
-    for i, row in enumerate(rows):
-        try:
-            q = mech.configuration(row, q)
-        except ConvergenceError:
-            q = mech.q_home
-            continue
-        Jm = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)[cols]
-        g = Jm[:, act]
-        if mech.n_closure_rows and free.size:
-            Jc = mech.closure_jacobian(q)
-            X = np.linalg.lstsq(Jc[:, free], -Jc[:, act], rcond=None)[0]
-            g = g + Jm[:, free] @ X
-        G[i] = g
-    return G
 
 
 def screen_candidates(

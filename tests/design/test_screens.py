@@ -18,14 +18,13 @@ from pincal.design import (
     CollisionChecker,
     DesignScaling,
     ScreenSettings,
-    actuator_jacobians,
     actuator_sigma_min,
     candidate_set,
     screen_candidates,
     select_poses,
 )
 from pincal.errors import OptionValueError
-from pincal.model import Mechanism, load_mechanism, parameters
+from pincal.model import Mechanism, actuator_jacobians, load_mechanism, parameters
 
 ELBOW = 2  # column of elbow_joint among the UR5's actuators
 
