@@ -4,9 +4,11 @@ The screens themselves are :func:`pincal.design.screen_candidates`; this module 
 the options into :class:`pincal.design.ScreenSettings` and supplies the compensation
 test, which needs stage 6 (compensation) and so cannot live in the design stage: every
 surviving candidate's nominal pose is compensated on the nominal model displaced by
-random parameter errors (uniform within ±``--reach-errors`` mm / mrad, seeded by
+random errors of the preset's parameters (uniform within ±``--reach-errors`` mm / mrad,
+as ``pincal simulate --error-size`` draws them; :data:`DRAWS` draws seeded by
 ``--seed``), from the candidate's own command, limits checked, branch changes refused
-— what ``pincal compensate`` does with a calibration of that size.
+— what ``pincal compensate`` does with a calibration of that size. A candidate is kept
+when it compensates on every draw.
 """
 
 from __future__ import annotations
@@ -20,7 +22,10 @@ import pinocchio as pin
 
 from pincal.errors import OptionValueError
 
-__all__ = ["compensation_test", "parse_reach_errors", "screen_options", "screen_settings"]
+__all__ = ["DRAWS", "compensation_test", "parse_reach_errors", "screen_options", "screen_settings"]
+
+#: error draws each candidate must compensate on
+DRAWS = 3
 
 
 def screen_options(func: Callable[..., Any]) -> Callable[..., Any]:
@@ -80,7 +85,8 @@ def compensation_test(
 
     Args:
         mech: the nominal mechanism.
-        params: the design's parameter set (the errors are drawn on it).
+        params: the preset's parameter set (the errors are drawn on it, before any
+            reduction to a base set, as ``pincal simulate`` draws them).
         errors: uniform error bounds (mm for lengths, mrad for angles).
         seed: random seed of the errors.
     """
@@ -88,13 +94,17 @@ def compensation_test(
 
     rng = np.random.default_rng([seed, 37])
     bound = np.array([errors[0] * 1e-3 if u == "m" else errors[1] * 1e-3 for u in params.units])
-    displaced = params.apply(mech, rng.uniform(-bound, bound))
+    displaced = [params.apply(mech, rng.uniform(-bound, bound)) for _ in range(DRAWS)]
 
     def test(cands: Any) -> np.ndarray:
-        if len(cands) == 0:
-            return np.zeros(0, dtype=bool)
+        ok = np.ones(len(cands), dtype=bool)
         targets = [pin.SE3(R, p) for R, p in zip(cands.rotations, cands.positions, strict=True)]
-        result = compensate(displaced, targets, starts=cands.q_act)
-        return np.asarray(result.reachable, dtype=bool)
+        for model in displaced:
+            if not ok.any():
+                break
+            idx = np.flatnonzero(ok)
+            result = compensate(model, [targets[i] for i in idx], starts=cands.q_act[idx])
+            ok[idx] = np.asarray(result.reachable, dtype=bool)
+        return ok
 
     return test

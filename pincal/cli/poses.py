@@ -175,6 +175,7 @@ def poses(
     mech = load_model(model, model_opts)
     preset = preset or (next(iter(mech.presets)) if mech.presets else "full")
     params = parameters(mech, preset)
+    preset_params = params  # the reach screen draws its errors on these
     reduced = base_parameters(mech, params)
     if len(reduced) < len(params):
         click.echo(reduction_line(preset, len(reduced), len(params)), err=True)
@@ -187,7 +188,7 @@ def poses(
                 max_candidates=None if yes else MAX_CANDIDATES,
                 max_bytes=None if yes else MAX_CANDIDATE_BYTES, n_jobs=n_jobs,
             )  # fmt: skip
-    compensable = None if errors is None else compensation_test(mech, params, errors, seed)
+    compensable = None if errors is None else compensation_test(mech, preset_params, errors, seed)
     cands, screens = screen_candidates(mech, cands, settings, compensable=compensable)
     click.echo(cands.summary(), err=True)
     for note in screens.notes:

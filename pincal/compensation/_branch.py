@@ -79,7 +79,8 @@ def det_sign(mech: Mechanism, q_act: np.ndarray, q: np.ndarray | None = None) ->
         and float(np.linalg.norm(mech.closure_residual(q))) < 1e-10
     )
     try:
-        G = actuator_jacobian(mech, q if closed else mech.configuration(q_act, q))
+        q_closed = q if closed and q is not None else mech.configuration(q_act, q)
+        G = actuator_jacobian(mech, q_closed)
     except ConvergenceError:
         return 0
     det = float(np.linalg.det(G))
