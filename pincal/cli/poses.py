@@ -66,6 +66,14 @@ from pincal.measure import DEFAULT_NOISE
     default="exchange",
     show_default=True,
 )
+@click.option(
+    "--order",
+    type=click.Choice(["travel", "selection"]),
+    default="travel",
+    show_default=True,
+    help="Order of the poses in OUT: a short joint-space tour from home (nearest neighbour "
+    "+ 2-opt; 1 rad/s, 0.1 m/s) or the selection's order.",
+)
 @click.option("--restarts", default=3, show_default=True, help="Random starts (best kept).")
 @click.option("--seed", default=0, type=click.IntRange(min=0), show_default=True,
               help="Random seed.")  # fmt: skip
@@ -99,6 +107,7 @@ def poses(
     K_mm: float | None,
     noise: tuple[float, float],
     method: str,
+    order: str,
     restarts: int,
     seed: int,
     out: str,
@@ -127,6 +136,7 @@ def poses(
       pincal poses hexaslide_6pus --count 40 --candidates random:300 --out poses.csv
       pincal poses stewart_6ups --count 18 --index O3 --scaling K --out p.csv --json
     """
+    import dataclasses
     from pathlib import Path
 
     import numpy as np
@@ -144,6 +154,7 @@ def poses(
         parse_candidate_spec,
         screen_candidates,
         select_poses,
+        travel_order,
     )
     from pincal.errors import OptionValueError, PincalError
     from pincal.io import si_actuator_units, write_pose_design
@@ -191,6 +202,7 @@ def poses(
     compensable = None if errors is None else compensation_test(mech, preset_params, errors, seed)
     cands, screens = screen_candidates(mech, cands, settings, compensable=compensable)
     click.echo(cands.summary(), err=True)
+    click.echo(f"  {screens.summary()}", err=True)
     for note in screens.notes:
         click.echo(f"  {note}", err=True)
     if count > len(cands):
@@ -222,6 +234,15 @@ def poses(
         cands, count, index_name, design_scaling, method, rng=np.random.default_rng(seed),
         restarts=restarts,
     )  # fmt: skip
+    if order == "travel":
+        speeds = [0.1 if mech.tree.joints[j].type == "prismatic" else 1.0 for j in mech.actuated]
+        tour = travel_order(design.q_act, mech.actuators_of(mech.q_home), speeds)
+        design = dataclasses.replace(
+            design,
+            candidates=design.candidates.subset(tour.order),
+            indices=design.indices[tour.order],
+        )
+        click.echo(tour.summary(), err=True)
     crb = cramer_rao_from_jacobian(
         design.candidates.jacobians, cands.components, noise_model, None,
         params.names, params.units,

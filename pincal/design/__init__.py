@@ -44,6 +44,7 @@ from pincal.design._indices import (
     numerical_rank,
     observability,
 )
+from pincal.design._ordering import PoseOrder, travel_order
 from pincal.design._scaling import (
     COLUMN_SCALINGS,
     ROW_SCALINGS,
@@ -81,6 +82,7 @@ __all__ = [
     "JacobianScaling",
     "ObservabilityIndices",
     "PoseDesign",
+    "PoseOrder",
     "PoseSelection",
     "ScreenReport",
     "ScreenSettings",
@@ -115,5 +117,6 @@ __all__ = [
     "scale_columns",
     "screen_candidates",
     "select_poses",
+    "travel_order",
     "weight_rows",
 ]
