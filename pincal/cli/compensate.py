@@ -58,12 +58,22 @@ def load_calibrated(spec: str, payload=None, with_terms: bool = False, temperatu
 @click.argument("calibration")
 @click.option(
     "--targets",
-    required=True,
+    default=None,
     type=click.Path(dir_okay=False),
     help="Target poses file (pincal pose file, e.g. written by `pincal poses`).",
 )
 @click.option(
-    "--out", required=True, type=click.Path(dir_okay=False), help="Commands CSV to write."
+    "--program",
+    default=None,
+    type=click.Path(dir_okay=False),
+    help="A G-code program of G0/G1 moves (X Y Z [A B C]) to rewrite into --out instead: "
+    "each move's target compensated, every other line kept byte for byte.",
+)
+@click.option(
+    "--out",
+    required=True,
+    type=click.Path(dir_okay=False),
+    help="Commands CSV to write (with --program: the compensated program).",
 )
 @click.option(
     "--components",
@@ -94,7 +104,7 @@ def load_calibrated(spec: str, payload=None, with_terms: bool = False, temperatu
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
 def compensate(
-    calibration, targets, out, components, skip_unreachable, allow_branch_change, payload,
+    calibration, targets, program, out, components, skip_unreachable, allow_branch_change, payload,
     temperature, as_json,
 ) -> None:  # fmt: skip
     """Compensated actuator commands: inverse kinematics of the calibrated machine.
@@ -122,12 +132,26 @@ def compensate(
       pincal compensate cal/ --targets poses.csv --out commands.csv
       pincal compensate cal/ --targets targets.csv --components x,z,ry --out c.csv --json
       pincal compensate cal/ --targets big.csv --skip-unreachable --out c.csv
+      pincal compensate cal/ --program part.ngc --out part_compensated.ngc
+
+    A program (--program) is read as the controller reads it, through its nominal
+    kinematics: each move's target T becomes T' = FK_nominal(IK_calibrated(T)), so that
+    the controller's command for T' brings the calibrated machine to T. A B C [deg]
+    rotate the measured frame from its home orientation (R_home·Rz(C)·Ry(B)·Rx(A)).
+    Arcs, G91, G92, G10, G53, G28/G30 are refused with the line; a target that cannot be
+    reached, or only on another branch, refuses the program (nothing written).
     """
     from pincal.compensation import compensate as run
     from pincal.compensation import compensation_components
-    from pincal.errors import ColumnError, UnreachablePoseError
+    from pincal.errors import ColumnError, OptionValueError, UnreachablePoseError
     from pincal.io import read_pose_file, si_actuator_units, write_commands
 
+    if (targets is None) == (program is None):
+        raise OptionValueError("give exactly one of --targets (pose file) or --program (G-code)")
+    if program is not None:
+        _program(calibration, program, out, components, skip_unreachable, payload,
+                 temperature, allow_branch_change, as_json)  # fmt: skip
+        return
     guard_paths({"CALIBRATION": calibration, "--targets": targets}, {"--out": out})
     mech, origin, terms, terms_note = load_calibrated(
         calibration, read_payload(payload), with_terms=True, temperature=temperature
@@ -196,6 +220,32 @@ def compensate(
             click.echo(f"BRANCH CHANGES (allowed): targets {sorted(result.branch_changes)}")
             for k, why in sorted(result.branch_changes.items()):
                 click.echo(f"  target {k}: {why}")
+
+
+def _program(calibration, program, out, components, skip, payload, temperature, allow, as_json):
+    """`--program`: the compensated G-code program (see :mod:`pincal.cli._program`)."""
+    from pincal.cli._program import compensate_program
+    from pincal.errors import OptionValueError
+
+    given = {"--components": components, "--skip-unreachable": skip or None,
+             "--payload": payload, "--temperature": temperature}  # fmt: skip
+    extra = [k for k, v in given.items() if v is not None]
+    if extra:
+        raise OptionValueError(
+            f"{', '.join(extra)} do not apply to --program (the machine's own components, "
+            "every move kept, the calibration's load and temperature)"
+        )
+    guard_paths({"CALIBRATION": calibration, "--program": program}, {"--out": out})
+    summary = compensate_program(calibration, program, out, allow)
+    if as_json:
+        click.echo(json.dumps(summary))
+        return
+    click.echo(
+        f"wrote {summary['written']}: {summary['moves']} moves ({summary['targets']} distinct "
+        f"targets, {' '.join(summary['components'])}) compensated of {summary['lines']} lines; "
+        f"largest correction {summary['largest_correction_mm']:.4g} mm / "
+        f"{summary['largest_correction_mrad']:.4g} mrad; {summary['seconds']:.3g} s"
+    )
 
 
 def _starts(pf, mech):

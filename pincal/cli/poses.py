@@ -15,6 +15,7 @@ from pincal.cli._limits import (
     naming_option,
     yes_option,
 )
+from pincal.cli._pose_screens import screen_options
 from pincal.cli.common import (
     ModelOptions,
     fail_cleanly,
@@ -65,6 +66,14 @@ from pincal.measure import DEFAULT_NOISE
     default="exchange",
     show_default=True,
 )
+@click.option(
+    "--order",
+    type=click.Choice(["travel", "selection"]),
+    default="travel",
+    show_default=True,
+    help="Order of the poses in OUT: a short joint-space tour from home (nearest neighbour "
+    "+ 2-opt; 1 rad/s, 0.1 m/s) or the selection's order.",
+)
 @click.option("--restarts", default=3, show_default=True, help="Random starts (best kept).")
 @click.option("--seed", default=0, type=click.IntRange(min=0), show_default=True,
               help="Random seed.")  # fmt: skip
@@ -83,6 +92,7 @@ from pincal.measure import DEFAULT_NOISE
     help="Processes evaluating the candidates (-1: every CPU); same poses for any value.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
+@screen_options
 @yes_option
 @overwrite_option
 @model_options
@@ -97,11 +107,17 @@ def poses(
     K_mm: float | None,
     noise: tuple[float, float],
     method: str,
+    order: str,
     restarts: int,
     seed: int,
     out: str,
     n_jobs: int,
     as_json: bool,
+    joint_margin: float,
+    singular_margin: float,
+    obstacles: tuple[str, ...],
+    no_collisions: bool,
+    reach_errors: str,
     yes: bool,
     overwrite: bool,
     model_opts: ModelOptions,
@@ -120,10 +136,12 @@ def poses(
       pincal poses hexaslide_6pus --count 40 --candidates random:300 --out poses.csv
       pincal poses stewart_6ups --count 18 --index O3 --scaling K --out p.csv --json
     """
+    import dataclasses
     from pathlib import Path
 
     import numpy as np
 
+    from pincal.cli._pose_screens import compensation_test, parse_reach_errors, screen_settings
     from pincal.cli._progress import counted
     from pincal.cli.info import reduction_line
     from pincal.design import (
@@ -134,7 +152,9 @@ def poses(
         characteristic_length,
         cramer_rao_from_jacobian,
         parse_candidate_spec,
+        screen_candidates,
         select_poses,
+        travel_order,
     )
     from pincal.errors import OptionValueError, PincalError
     from pincal.io import si_actuator_units, write_pose_design
@@ -161,9 +181,12 @@ def poses(
             )
     with naming_option("--candidates"):
         parse_candidate_spec(spec)  # a malformed spec fails before the model loads
+    settings = screen_settings(joint_margin, singular_margin, obstacles, no_collisions)
+    errors = parse_reach_errors(reach_errors)
     mech = load_model(model, model_opts)
     preset = preset or (next(iter(mech.presets)) if mech.presets else "full")
     params = parameters(mech, preset)
+    preset_params = params  # the reach screen draws its errors on these
     reduced = base_parameters(mech, params)
     if len(reduced) < len(params):
         click.echo(reduction_line(preset, len(reduced), len(params)), err=True)
@@ -176,12 +199,18 @@ def poses(
                 max_candidates=None if yes else MAX_CANDIDATES,
                 max_bytes=None if yes else MAX_CANDIDATE_BYTES, n_jobs=n_jobs,
             )  # fmt: skip
+    compensable = None if errors is None else compensation_test(mech, preset_params, errors, seed)
+    cands, screens = screen_candidates(mech, cands, settings, compensable=compensable)
     click.echo(cands.summary(), err=True)
+    click.echo(f"  {screens.summary()}", err=True)
+    for note in screens.notes:
+        click.echo(f"  {note}", err=True)
     if count > len(cands):
         raise OptionValueError(
             f"--count {count} is more than the {len(cands)} feasible candidate poses of "
-            f"--candidates {spec}; ask for at most {len(cands)} poses or generate more "
-            "candidates (e.g. --candidates random:2000 or a finer grid:LEVELS)"
+            f"--candidates {spec} ({screens.summary()}); ask for at most {len(cands)} poses, "
+            "generate more candidates (e.g. --candidates random:2000 or a finer "
+            "grid:LEVELS) or relax the screens (--joint-margin, --singular-margin)"
         )
     noise_model = NoiseModel(*noise)
     if scaling == "K":
@@ -205,6 +234,15 @@ def poses(
         cands, count, index_name, design_scaling, method, rng=np.random.default_rng(seed),
         restarts=restarts,
     )  # fmt: skip
+    if order == "travel":
+        speeds = [0.1 if mech.tree.joints[j].type == "prismatic" else 1.0 for j in mech.actuated]
+        tour = travel_order(design.q_act, mech.actuators_of(mech.q_home), speeds)
+        design = dataclasses.replace(
+            design,
+            candidates=design.candidates.subset(tour.order),
+            indices=design.indices[tour.order],
+        )
+        click.echo(tour.summary(), err=True)
     crb = cramer_rao_from_jacobian(
         design.candidates.jacobians, cands.components, noise_model, None,
         params.names, params.units,
@@ -212,7 +250,9 @@ def poses(
     extra = {
         "noise": {"position_mm": noise[0], "orientation_mrad": noise[1]},
         "predicted_std": dict(zip(params.names, map(float, crb.std), strict=True)),
-    }
+        "screens": {"removed": screens.removed, "notes": list(screens.notes),
+                    "reach_errors_mm_mrad": None if errors is None else list(errors)},
+    }  # fmt: skip
     csv_path, cmd_path, json_path = write_pose_design(
         design, out, extra, actuator_units=si_actuator_units(mech)
     )
@@ -231,6 +271,7 @@ def poses(
                     "value": float(sel.value),
                     "converged": bool(sel.converged),
                     "predicted_rms_std": float(crb.rms_std),
+                    "screens_removed": screens.removed,
                 }
             )
         )

@@ -15,18 +15,17 @@ its start. It is said to be on **another branch** when either
 2. the actuator → imposed-components Jacobian G = ∂(pose components)/∂q_act is square
    and det G changes sign between start and solution: the solution lies across a
    singularity (another elbow / shoulder / wrist configuration of an arm, another
-   working mode of a parallel machine). det G is taken by central differences of the
-   forward kinematics; a sign is only trusted when |det G| exceeds 1e-6 of the product
-   of G's column norms (else "unknown", not a change).
+   working mode of a parallel machine). G is the analytic actuator Jacobian through the
+   loop closure (:func:`pincal.model.actuator_jacobian`); a sign is only trusted when
+   |det G| exceeds 1e-6 of the product of G's column norms (else "unknown", not a change).
 """
 
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 
 from pincal.errors import ConvergenceError
-from pincal.model import COMPONENTS, Mechanism
+from pincal.model import Mechanism, actuator_jacobian
 
 __all__ = [
     "BRANCH_STEP_M",
@@ -43,7 +42,6 @@ BRANCH_STEP_RAD = 0.5
 BRANCH_STEP_M = 0.05
 #: largest revolute |Δq| from another target's command that stays on its branch [rad]
 FAR_STEP_RAD = np.pi
-_FD_STEP = 1e-6  # central-difference step [m or rad]
 _SIGN_FLOOR = 1e-6  # |det G| / Π‖G_j‖ below this: sign unknown
 
 
@@ -55,35 +53,34 @@ def actuator_units(mech: Mechanism) -> tuple[str, ...]:
     )
 
 
-def _components(T: pin.SE3, ref: pin.SE3, cols: list[int]) -> np.ndarray:
-    r = np.concatenate([T.translation - ref.translation, pin.log3(ref.rotation.T @ T.rotation)])
-    return r[cols]
-
-
 def det_sign(mech: Mechanism, q_act: np.ndarray, q: np.ndarray | None = None) -> int:
     """Sign of det G at ``q_act`` (G: actuators → ``mech``'s measured components).
+
+    G is :func:`pincal.model.actuator_jacobian` at the closed configuration (the loops
+    closed from ``q``); its rows are in the measured frame, which leaves det G's sign
+    as it is in the world frame.
 
     Args:
         mech: the mechanism whose measured components are imposed.
         q_act: (n_act,) actuator values [m, rad].
-        q: full configuration at ``q_act`` (guess for the loop closure), or None.
+        q: full configuration at ``q_act`` (used as it is when its loops are closed,
+            else the guess of the closure), or None.
 
     Returns:
         +1 or -1; 0 when G is not square, (nearly) singular, or a closure fails.
     """
-    cols = [COMPONENTS.index(c) for c in mech.measured_components]
     n = len(q_act)
-    if len(cols) != n:
+    if len(mech.measured_components) != n:
         return 0
+    q_act = np.asarray(q_act, dtype=float)
+    closed = (
+        q is not None
+        and np.allclose(mech.actuators_of(q), q_act, rtol=0.0, atol=1e-12)
+        and float(np.linalg.norm(mech.closure_residual(q))) < 1e-10
+    )
     try:
-        ref = mech.forward(q_act, q)
-        G = np.empty((n, n))
-        for k in range(n):
-            step = np.zeros(n)
-            step[k] = _FD_STEP
-            plus = _components(mech.forward(q_act + step, q), ref, cols)
-            minus = _components(mech.forward(q_act - step, q), ref, cols)
-            G[:, k] = (plus - minus) / (2 * _FD_STEP)
+        q_closed = q if closed and q is not None else mech.configuration(q_act, q)
+        G = actuator_jacobian(mech, q_closed)
     except ConvergenceError:
         return 0
     det = float(np.linalg.det(G))

@@ -1,7 +1,8 @@
 """Stage 4 — where to measure.
 
 Observability indices and Jacobian scalings, candidate
-poses, exchange / DETMAX / greedy selection, Cramér–Rao predictions.
+poses, screens for poses a machine can execute (limits, singularities, collisions),
+exchange / DETMAX / greedy selection, Cramér–Rao predictions.
 
 The files of a selection are written by :func:`pincal.io.write_pose_design`.
 """
@@ -26,6 +27,7 @@ from pincal.design._candidates import (
     candidate_cost,
     evaluate_candidates,
 )
+from pincal.design._collisions import Box, CollisionChecker, parse_box
 from pincal.design._crb import (
     CramerRaoReport,
     Efficiency,
@@ -42,6 +44,7 @@ from pincal.design._indices import (
     numerical_rank,
     observability,
 )
+from pincal.design._ordering import PoseOrder, travel_order
 from pincal.design._scaling import (
     COLUMN_SCALINGS,
     ROW_SCALINGS,
@@ -52,6 +55,13 @@ from pincal.design._scaling import (
     scale_columns,
     weight_rows,
 )
+from pincal.design._screens import (
+    SCREENS,
+    ScreenReport,
+    ScreenSettings,
+    actuator_sigma_min,
+    screen_candidates,
+)
 from pincal.design._selection import SELECTION_METHODS, PoseDesign, select_poses
 
 __all__ = [
@@ -60,16 +70,23 @@ __all__ = [
     "MAX_CANDIDATES",
     "MAX_CANDIDATE_BYTES",
     "ROW_SCALINGS",
+    "SCREENS",
     "SELECTION_METHODS",
+    "Box",
     "CandidateCost",
     "CandidateSet",
+    "CollisionChecker",
     "CramerRaoReport",
     "DesignScaling",
     "Efficiency",
     "JacobianScaling",
     "ObservabilityIndices",
     "PoseDesign",
+    "PoseOrder",
     "PoseSelection",
+    "ScreenReport",
+    "ScreenSettings",
+    "actuator_sigma_min",
     "batch_indices",
     "bose_array",
     "candidate_cost",
@@ -92,11 +109,14 @@ __all__ = [
     "observability",
     "orthogonal_array",
     "orthogonal_candidates",
+    "parse_box",
     "parse_candidate_spec",
     "predicted_std",
     "predicted_validation_rms",
     "random_candidates",
     "scale_columns",
+    "screen_candidates",
     "select_poses",
+    "travel_order",
     "weight_rows",
 ]

@@ -3,8 +3,10 @@
 A registry of controller formats (one class each, with the equations it assumes):
 ``linuxcnc-genhexkins`` (hexapod strut ends), ``generic-table`` (every joint
 placement and zero offset, any machine), ``dh-standard`` / ``dh-modified`` (a DH table
-fitted to a serial arm's joint axes). Each export is a projection, reported with the
-RMS and max pose difference over the workspace and what the format cannot express.
+fitted to a serial arm's joint axes), ``klipper-delta`` / ``linuxcnc-lineardeltakins``
+(linear deltas) and ``rotary-delta`` (a per-arm table of a rotary delta). Each export is
+a projection, reported with the RMS and max pose difference over the workspace and what
+the format cannot express.
 """
 
 from __future__ import annotations

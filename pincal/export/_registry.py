@@ -17,7 +17,9 @@ from pincal.errors import ExportError
 from pincal.export._dh_table import ModifiedDH, StandardDH
 from pincal.export._format import ControllerFormat, Projection, projection
 from pincal.export._genhexkins import GenHexKins
+from pincal.export._linear_delta import KlipperDelta, LinuxCncLinearDelta
 from pincal.export._machine import CalibratedMachine
+from pincal.export._rotary_delta import RotaryDelta
 from pincal.export._table import GenericTable
 from pincal.io import atomic_write_text
 from pincal.model import sample_actuators
@@ -26,7 +28,16 @@ __all__ = ["FORMATS", "Export", "export_calibration", "write_export"]
 
 #: format name → format (one class each)
 FORMATS: dict[str, ControllerFormat] = {
-    f.name: f for f in (GenHexKins(), GenericTable(), StandardDH(), ModifiedDH())
+    f.name: f
+    for f in (
+        GenHexKins(),
+        GenericTable(),
+        StandardDH(),
+        ModifiedDH(),
+        KlipperDelta(),
+        LinuxCncLinearDelta(),
+        RotaryDelta(),
+    )
 }
 
 

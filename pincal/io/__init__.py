@@ -34,6 +34,7 @@ from pincal.io._file_names import (
     IDENTIFICATION_FILE,
     MANIFEST,
 )
+from pincal.io._gcode import GcodeMove, GcodeProgram, read_gcode, write_gcode
 from pincal.io._identification_file import read_identification
 from pincal.io._import_tracker import (
     TrackerImport,
@@ -98,6 +99,8 @@ __all__ = [
     "LENGTH_UNITS",
     "MANIFEST",
     "CalibrationDirectory",
+    "GcodeMove",
+    "GcodeProgram",
     "MarkerData",
     "MeasurementFile",
     "PoseFile",
@@ -120,6 +123,7 @@ __all__ = [
     "read_actuator_rows",
     "read_calibration",
     "read_commands",
+    "read_gcode",
     "read_identification",
     "read_instrument_data",
     "read_instrument_file",
@@ -140,6 +144,7 @@ __all__ = [
     "socket_id",
     "write_calibration",
     "write_commands",
+    "write_gcode",
     "write_instrument_data",
     "write_measurements",
     "write_pose_design",

@@ -8,6 +8,7 @@ catalogue of bundled models.
 from __future__ import annotations
 
 from pincal._limits import Limits, active_limits
+from pincal.model._actuator_jacobian import actuator_jacobian, actuator_jacobians
 from pincal.model._batch import BatchKinematics, BatchModel
 from pincal.model._catalogue import load_mechanism
 from pincal.model._closures import (
@@ -143,6 +144,8 @@ __all__ = [
     "active_limits",
     "actual_joint_values",
     "actual_shift",
+    "actuator_jacobian",
+    "actuator_jacobians",
     "bundled_models",
     "chain_joints",
     "chain_preset",

@@ -1,0 +1,54 @@
+"""The actuator → measured-components Jacobian G of a (closed) configuration.
+
+G = ∂(measured components)/∂q_act (k, n_act): position rows are the measured frame's
+origin velocity and rotation rows its angular velocity, both in the measured frame
+(Pinocchio's ``LOCAL`` frame Jacobian J_m). On a closed chain the passive velocities
+follow from the closure: J_c,free·v_free = −J_c,act·v_act (least squares: idle passive
+joints take the minimum-norm share; they do not move the measured frame), so
+G = J_m,act + J_m,free·(−J_c,free⁺ J_c,act).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from pincal.errors import ConvergenceError
+from pincal.model._closures import COMPONENTS
+from pincal.model._mechanism import Mechanism
+
+__all__ = ["actuator_jacobian", "actuator_jacobians"]
+
+
+def actuator_jacobian(mech: Mechanism, q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """G (k, n_act) at the closed configuration q (nq,) [m or rad per m or rad]."""
+    model = mech.model
+    cols = [COMPONENTS.index(c) for c in mech.measured_components]
+    act = np.array([model.joints[mech.joint_id(j)].idx_v for j in mech.actuated])
+    fid = mech.frame_id(mech.measured_frame)
+    Jm = pin.computeFrameJacobian(model, model.createData(), q, fid, pin.LOCAL)[cols]
+    G = Jm[:, act]
+    free = mech.free_dofs
+    if mech.n_closure_rows and free.size:
+        Jc = mech.closure_jacobian(q)
+        G = G + Jm[:, free] @ np.linalg.lstsq(Jc[:, free], -Jc[:, act], rcond=None)[0]
+    return G
+
+
+def actuator_jacobians(mech: Mechanism, q_act: NDArray[np.float64]) -> NDArray[np.float64]:
+    """G per actuator row (N, k, n_act); rows whose loops do not close are NaN.
+
+    Each row's loops are closed from the previous row's configuration (home first).
+    """
+    rows = np.atleast_2d(np.asarray(q_act, dtype=float))
+    G = np.full((len(rows), len(mech.measured_components), len(mech.actuated)), np.nan)
+    q = mech.q_home
+    for i, row in enumerate(rows):
+        try:
+            q = mech.configuration(row, q)
+        except ConvergenceError:
+            q = mech.q_home
+            continue
+        G[i] = actuator_jacobian(mech, q)
+    return G
