@@ -136,11 +136,16 @@ class Assembly:
             q[qi : qi + nq] = vals
         return q
 
-    def assemble(self, guess: np.ndarray, keep_actuators: bool = False) -> np.ndarray:
+    def assemble(
+        self, guess: np.ndarray, keep_actuators: bool = False, beside: bool = False
+    ) -> np.ndarray:
         """Close the loops from ``guess``.
 
         With ``keep_actuators`` only passive joints move (the actuator values of a
-        user-given home are kept), else every joint may move.
+        user-given home are kept), else every joint may move. With ``beside`` (``guess``
+        is the home of a slightly different geometry, e.g. the nominal machine's) a
+        Newton that stalls at ``guess`` is restarted beside it; a user's home guess where
+        Newton stalls is refused instead (near a singularity it names no assembly mode).
         """
         if not self.closures:
             return guess
@@ -156,12 +161,12 @@ class Assembly:
         try:
             sol = self._newton(guess, all_v)
         except ConvergenceError as exc:
-            near = self._nearby_assembly(guess, all_v)
+            near = self._nearby_assembly(guess, all_v) if beside else None
             if near is None:
                 raise ClosureError(self._open_closure_diagnosis(guess, exc.residual)) from exc
             sol = near
             self.notes.append(
-                "Newton stalls at the home guess (a singular configuration, e.g. a dead "
+                "Newton stalls at the nominal home (a singular configuration, e.g. a dead "
                 "point): home was assembled from a start 0.01–0.1 rad (or m) beside it"
             )
         if sol.remainder > 0.0:

@@ -164,7 +164,7 @@ class Mechanism:
             guess = assembly.home_guess(self.sidecar.home)
             self.q_home = assembly.assemble(guess, keep_actuators=keep)
         else:
-            self.q_home = assembly.assemble(np.asarray(q_guess, dtype=float))
+            self.q_home = assembly.assemble(np.asarray(q_guess, dtype=float), beside=True)
         #: remarks about the model (joint kinds from the sidecar, ranges), for `pincal info`
         self.notes: tuple[str, ...] = (*self._model_notes, *assembly.notes)
         mobility = assembly.mobility(self.q_home)
