@@ -20,10 +20,20 @@ The measured pose is that deflected platform pose with noise 0.01 mm / 0.01 mrad
 ``stewart42`` set, compliances ``c_i = −s/τ_rms · U(0.5, 1.5)`` for a sag ``s`` (τ_rms the
 nominal RMS leg force at home), identified by Gauss–Newton from nominal with
 ``stewart42+compliance``. Recorded: the Mahalanobis error ``(x̂ − x)ᵀ Σ⁻¹ (x̂ − x) / n``
-over the 48 parameters (≈ 1 when the model matches the physics).
+over the 48 parameters (≈ 1 when the model matches the physics), and over the 6
+compliances alone.
+
+With ``--cells`` the sag of each draw is drawn log-uniformly in a range per cell (e.g.
+``stiff:0.01:0.15,soft:0.2:2`` [mm]) and each draw also compensates 10 random targets:
+the commands of ``pincal.compensation.compensate`` with the calibration's joint terms
+(and, for comparison, of a geometric-only calibration on the same data) are played on
+the independent statics, and the RMS position miss [µm] of the deflected platform is
+recorded. ``--out FILE`` appends one JSON line per draw (partial runs keep their draws).
 
     PYTHONPATH=. python scripts/studies/stewart_deflection.py --draws 40
     PYTHONPATH=. python scripts/studies/stewart_deflection.py --sags 0.01,0.1 --draws 10
+    PYTHONPATH=. python scripts/studies/stewart_deflection.py \
+        --cells stiff:0.01:0.15,soft:0.2:2 --draws 20
 
 Running it with another pincal on ``PYTHONPATH`` (e.g. one extracted with
 ``git archive``) measures that version against the same truths.
@@ -33,6 +43,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -40,6 +51,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from pincal.compensation import JointTermCorrection, compensate
 from pincal.identification import identify
 from pincal.measure import NoiseModel, simulate_measurements
 from pincal.model import Payload, load_mechanism, sample_actuators, with_joint_terms, with_payload
@@ -127,25 +139,61 @@ class Platform:
         return self.pose(new, t, R), tau
 
 
-def draw(mech, params, sag: float, rng: np.random.Generator, n_poses: int, tau_rms: float):
-    """One calibration against the independent statics: Mahalanobis error / n."""
+def draw(
+    mech,
+    params,
+    sag: float,
+    rng: np.random.Generator,
+    n_poses: int,
+    tau_rms: float,
+    targets: int = 0,
+) -> dict:
+    """One calibration against the independent statics.
+
+    Returns ``{"maha": Mahalanobis/n over all, "maha_c": over the compliances}`` and, with
+    ``targets``, the RMS position misses [µm] of compensated commands: ``"comp"`` with the
+    compliance calibration, ``"geom"`` with a geometric-only one, ``"none"`` the nominal
+    machine's inverse kinematics.
+    """
     m_plat, m_rod = masses()
     rows = sample_actuators(mech, n_poses, rng)
     truth = np.zeros(len(params))
     truth[:42] = rng.normal(0.0, GEOMETRIC_SIGMA, 42)
     truth[42:] = -sag / tau_rms * rng.uniform(0.5, 1.5, 6)
     plat = Platform.of(params.apply(mech, truth))
+
+    def play(commands: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Deflected platform positions (m, 3) and rotations of the true machine [m]."""
+        pos, rot = np.empty((len(commands), 3)), np.empty((len(commands), 3, 3))
+        t, R = np.array([0.0, 0.0, 0.45]), np.eye(3)
+        for i, q in enumerate(commands):
+            (t, R), _ = plat.deflected(q + plat.offset, truth[42:], t, R, m_plat, m_rod)
+            pos[i], rot[i] = t, R
+        return pos, rot
+
     meas = simulate_measurements(mech, rows, NOISE, rng)  # layout; poses replaced below
-    pos, rot = np.empty((n_poses, 3)), np.empty((n_poses, 3, 3))
-    t, R = np.array([0.0, 0.0, 0.45]), np.eye(3)
-    for i, q in enumerate(rows):
-        (t, R), _ = plat.deflected(q + plat.offset, truth[42:], t, R, m_plat, m_rod)
-        pos[i] = t + rng.normal(0.0, 1e-5, 3)
-        rot[i] = R @ pin.exp3(rng.normal(0.0, 1e-5, 3))
+    pos, rot = play(rows)
+    pos = pos + rng.normal(0.0, 1e-5, pos.shape)
+    rot = np.array([R @ pin.exp3(rng.normal(0.0, 1e-5, 3)) for R in rot])
     meas = dataclasses.replace(meas, positions=pos, rotations=rot, q_act=rows.copy())
     res = identify(mech, params, meas, "gauss-newton")
     e = res.values - truth[res.identified]
-    return float(e @ np.linalg.solve(res.covariance, e)) / e.size
+    out = {"sag_mm": sag * 1e3, "maha": float(e @ np.linalg.solve(res.covariance, e)) / e.size}
+    c = np.isin(np.flatnonzero(res.identified), params.joint_terms)
+    e_c = e[c]
+    out["maha_c"] = float(e_c @ np.linalg.solve(res.covariance[np.ix_(c, c)], e_c)) / e_c.size
+    if targets:
+        goal = [mech.forward(q) for q in sample_actuators(mech, targets, rng)]
+        want = np.array([T.translation for T in goal])
+        terms = JointTermCorrection.of(mech, res.parameter_set, res.full_values)
+        geo = identify(mech, parameters(mech, "stewart42"), meas, "gauss-newton")
+        for key, cal, jt in (("comp", res.calibrated, terms), ("geom", geo.calibrated, None),
+                             ("none", mech, None)):  # fmt: skip
+            sol = compensate(cal, goal, check_limits=False, joint_terms=jt)
+            ok = sol.reachable
+            miss = play(sol.q_act[ok])[0] - want[ok]
+            out[key] = float(np.sqrt(np.mean(np.sum(miss**2, axis=1)))) * 1e6
+    return out
 
 
 def nominal_force_rms(mech) -> float:
@@ -156,28 +204,56 @@ def nominal_force_rms(mech) -> float:
     return float(np.sqrt(np.mean(plat.forces(t, R, *masses()) ** 2)))
 
 
+def _mean_se(v) -> str:
+    v = np.asarray(v, dtype=float)
+    se = v.std(ddof=1) / np.sqrt(v.size) if v.size > 1 else float("nan")
+    return f"{v.mean():.3f} ± {se:.3f}"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--draws", type=int, default=40, help="independent draws per sag")
     ap.add_argument("--poses", type=int, default=60)
     ap.add_argument("--sags", default="0.01,0.1,0.5,2", help="leg sags s [mm], comma list")
+    ap.add_argument("--cells", default=None,
+                    help="NAME:LOW:HIGH,... sag ranges [mm] (log-uniform per draw), with "
+                         "compensation; replaces --sags")  # fmt: skip
+    ap.add_argument("--targets", type=int, default=10, help="compensated targets (--cells)")
+    ap.add_argument("--out", default=None, help="append one JSON line per draw")
     ap.add_argument("--seed", type=int, default=1)
     args = ap.parse_args()
     mech = with_payload(load_mechanism(STEWART), Payload(PAYLOAD[0], tuple(PAYLOAD[1])))
     params = with_joint_terms(mech, parameters(mech, "stewart42"), ("compliance",))
     tau_rms = nominal_force_rms(mech)
     print(f"nominal RMS leg force at home {tau_rms:.2f} N; {args.poses} full poses, "
-          f"noise 0.01 mm / 0.01 mrad, {args.draws} draws per sag")  # fmt: skip
-    print("sag [mm]   Mahalanobis/n  mean ± s.e.   (draws, seconds)")
-    for k, sag in enumerate(float(s) for s in args.sags.split(",")):
+          f"noise 0.01 mm / 0.01 mrad, {args.draws} draws per cell")  # fmt: skip
+    if args.cells:
+        cells = [(n, float(lo), float(hi)) for n, lo, hi in
+                 (c.split(":") for c in args.cells.split(","))]  # fmt: skip
+    else:
+        cells = [(s, float(s), float(s)) for s in args.sags.split(",")]
+    n_targets = args.targets if args.cells else 0
+    print("cell (sag [mm])   Mahalanobis/n all | compliances   "
+          + ("| RMS miss [µm] compliance cal | geometric cal | nominal   " if n_targets else "")
+          + "(draws, seconds)")  # fmt: skip
+    for k, (name, lo, hi) in enumerate(cells):
         rng = np.random.default_rng([args.seed, k])
         t0 = time.perf_counter()
-        out = np.array(
-            [draw(mech, params, 1e-3 * sag, rng, args.poses, tau_rms) for _ in range(args.draws)]
-        )
-        se = out.std(ddof=1) / np.sqrt(out.size) if out.size > 1 else float("nan")
-        print(f"{sag:8g}   {out.mean():10.3f} ± {se:.3f}   ({out.size}, "
-              f"{time.perf_counter() - t0:.0f} s)", flush=True)  # fmt: skip
+        rows = []
+        for _ in range(args.draws):
+            sag = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+            row = draw(mech, params, 1e-3 * sag, rng, args.poses, tau_rms, n_targets)
+            rows.append(row)
+            if args.out:
+                with open(args.out, "a") as f:
+                    f.write(json.dumps({"cell": name, **row}) + "\n")
+        line = f"{name} ({lo:g}–{hi:g})   {_mean_se([r['maha'] for r in rows])} | "
+        line += _mean_se([r["maha_c"] for r in rows])
+        if n_targets:
+            line += "   | " + " | ".join(
+                _mean_se([r[k] for r in rows]) for k in ("comp", "geom", "none")
+            )
+        print(f"{line}   ({len(rows)}, {time.perf_counter() - t0:.0f} s)", flush=True)
 
 
 if __name__ == "__main__":
