@@ -23,7 +23,7 @@ from pincal.errors import (
     ModelFileError,
     SingularConfigurationError,
 )
-from pincal.model._kind_hint import spherical_hint
+from pincal.model._kind_hint import open_loop_hint, spherical_hint
 from pincal.model._kinematics import KinematicQueries
 from pincal.model._newton import Solution, SolverOptions, damped_newton
 
@@ -217,7 +217,16 @@ class Assembly:
         )
 
     def _open_closure_diagnosis(self, guess: np.ndarray, residual: float) -> str:
-        """Why the loops stay open: frame names, the home guess, or the geometry."""
+        """Why the loops stay open: frame names, the home guess, or the geometry.
+
+        A geometric refusal ends with the joint-kind hint
+        (:func:`~pincal.model._kind_hint.open_loop_hint`) when ball ends would close it.
+        """
+        return self._open_closure_cause(guess, residual) + open_loop_hint(
+            self.queries, guess, self.options.rcond
+        )
+
+    def _open_closure_cause(self, guess: np.ndarray, residual: float) -> str:
         r = self.queries.closure_residual(guess)
         k = self._worst_closure_index(r)
         c = self.closures[k]

@@ -16,7 +16,7 @@ import pinocchio as pin
 
 from pincal.model._kinematics import KinematicQueries
 
-__all__ = ["spherical_hint"]
+__all__ = ["open_loop_hint", "spherical_hint"]
 
 
 def _rank(J: np.ndarray, rcond: float) -> int:
@@ -114,4 +114,42 @@ def spherical_hint(queries: KinematicQueries, q: np.ndarray, rcond: float) -> st
         f"declare {'them' if len(names) > 1 else 'it'} in the sidecar with "
         f"'joint_name: [{', '.join(names)}]' and 'joint_type: SPHERICAL' (MJCF: "
         f'type="ball"); the mobility is then {mobility}, the {n_act} actuated joints.'
+    )
+
+
+def open_loop_hint(queries: KinematicQueries, q: np.ndarray, rcond: float) -> str:
+    """A sentence for a closure that stays open at configuration ``q`` (nq,), or ``""``.
+
+    Non-empty when the point closures' loops hold passive revolute joints, the closure
+    residual at ``q`` is not removable to first order by the joints as declared (what
+    is left after its least-squares projection on the closure Jacobian's range is more
+    than 10× what is left with them), but is with ball ends at those joints (less than
+    1e-3 of it left): rods drawn in a direction their revolute elbow cannot turn to.
+    """
+    joints = _loop_revolutes(queries)
+    if not joints:
+        return ""
+    data = queries.compute(q)
+    r = queries.residual_of(data)
+    size = float(np.linalg.norm(r))
+    if size == 0.0:
+        return ""
+    Jc = queries.jacobian_of(data)
+    extra, _ = _extra_columns(queries, data, joints)
+
+    def left(J: np.ndarray) -> float:
+        step = np.linalg.lstsq(J, r, rcond=rcond)[0]
+        return float(np.linalg.norm(r - J @ step))
+
+    plain, balls = left(Jc), left(np.hstack([Jc, extra]))
+    if balls > 1e-3 * size or plain <= 10.0 * balls:
+        return ""
+    names = [queries.model.names[j] for j in joints]
+    return (
+        f" The revolute joints on the point ('3d') closures' loops cannot turn the rods "
+        f"onto their anchors ({plain / size:.0%} of the residual left to first order), ball "
+        f"ends can: if {', '.join(names)} {'are' if len(names) > 1 else 'is'} meant to be "
+        f"spherical, declare {'them' if len(names) > 1 else 'it'} in the sidecar with "
+        f"'joint_name: [{', '.join(names)}]' and 'joint_type: SPHERICAL' (MJCF: "
+        f'type="ball").'
     )

@@ -42,7 +42,7 @@ def _frame_z(direction: np.ndarray) -> np.ndarray:
     return np.column_stack([np.cross(y, z), y, z])
 
 
-def delta_elbows(kind: str = "revolute") -> tuple[str, dict]:
+def delta_elbows(kind: str = "revolute", rod_tilt: float = 0.0) -> tuple[str, dict]:
     """Delta robot with rods on ``elbow<i>a``/``elbow<i>b`` joints and a floating platform.
 
     Leg i (φ = 120°·(i−1)): ``hinge<i>`` (actuated, axis y of the leg, ±0.3 rad), arm
@@ -51,7 +51,9 @@ def delta_elbows(kind: str = "revolute") -> tuple[str, dict]:
     are closed (``3D``) to the platform anchors ``anchor<i>a``/``anchor<i>b``. ``kind``:
     ``"revolute"`` leaves the elbows plain revolutes (the mistake), ``"spherical"`` adds
     the sidecar ``joint_name``/``joint_type: SPHERICAL`` for them. Measured: the position
-    of ``tcp`` 0.02 m below the platform centre.
+    of ``tcp`` 0.02 m below the platform centre. ``rod_tilt`` [rad] turns rod ``1a`` out
+    of its arm's plane (about the leg's radial axis) in the file, as a CAD export drawn
+    with the rod off its anchor: a revolute elbow cannot turn it back, a ball end can.
     """
     h = L_ARM * np.sin(THETA) + np.sqrt(L_ROD**2 - (R_BASE + L_ARM * np.cos(THETA) - R_PLAT) ** 2)
     platform = _se3(p=(0, 0, -h))
@@ -73,6 +75,10 @@ def delta_elbows(kind: str = "revolute") -> tuple[str, dict]:
             elbow_w = arm_w.act(np.array([L_ARM, dy, 0.0]))
             anchor_w = platform.translation + leg @ np.array([R_PLAT, dy, 0.0])
             rod_w = pin.SE3(_frame_z(anchor_w - elbow_w), elbow_w)
+            if (i, side) == (1, "a") and rod_tilt:
+                rod_w.rotation = pin.exp3(rod_tilt * (leg @ np.array([1.0, 0.0, 0.0]))) @ (
+                    rod_w.rotation
+                )
             in_arm = arm_w.inverse() * rod_w
             axis = _fmt3(in_arm.rotation.T @ np.array([0.0, 1.0, 0.0]))  # the hinge axis
             rod, tip, anchor = f"rod{i}{side}", f"tip{i}{side}", f"anchor{i}{side}"

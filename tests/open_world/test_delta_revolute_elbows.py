@@ -11,7 +11,7 @@ import re
 import pytest
 import yaml
 
-from pincal.errors import MobilityError
+from pincal.errors import ClosureError, MobilityError
 from pincal.model import load_mechanism
 from tests.open_world.first_machines import delta_elbows
 from tests.open_world.machines import ankle_2rsu, write_machine
@@ -47,3 +47,21 @@ def test_no_hint_when_joint_kinds_are_not_the_cause(tmp_path):
     with pytest.raises(MobilityError) as info:
         load_mechanism(write_machine(tmp_path, "ankle", urdf, {**sidecar, "name_mot": ["mot_l"]}))
     assert "SPHERICAL" not in str(info.value)
+
+
+@pytest.mark.parametrize("tilt, said", [(0.05, "16.9 mm"), (1e-5, "1.79 µm")])
+def test_open_loop_names_the_residual_and_the_ball_ends(tmp_path, tilt, said):
+    """Rod 1a drawn off its anchor: the revolute elbows cannot close the loop (before:
+    "stays open … the geometry probably cannot close this loop", no joint kind named);
+    the refusal names the residual in readable units and the ball ends, and the quoted
+    sidecar text loads."""
+    urdf, sidecar = delta_elbows("revolute", rod_tilt=tilt)
+    with pytest.raises(ClosureError) as info:
+        load_mechanism(write_machine(tmp_path / "bad", "delta", urdf, sidecar))
+    text = str(info.value)
+    assert f"stays open (residual {said}" in text and "\n" not in text
+    assert "ball ends can" in text
+    quoted = re.findall(r"'(joint_(?:name|type): [^']*)'", text)
+    assert yaml.safe_load(quoted[0])["joint_name"] == ELBOWS
+    sidecar.update(yaml.safe_load("\n".join(quoted)))
+    assert load_mechanism(write_machine(tmp_path / "good", "delta", urdf, sidecar)).mobility == 3
