@@ -57,8 +57,8 @@ def det_sign(mech: Mechanism, q_act: np.ndarray, q: np.ndarray | None = None) ->
     """Sign of det G at ``q_act`` (G: actuators → ``mech``'s measured components).
 
     G is :func:`pincal.model.actuator_jacobian` at the closed configuration (the loops
-    closed from ``q``); its rows are in the measured frame, which leaves det G's sign
-    as it is in the world frame.
+    closed from ``q``), in the measurement residual's components (positions in world
+    axes, rotations in the measured frame).
 
     Args:
         mech: the mechanism whose measured components are imposed.

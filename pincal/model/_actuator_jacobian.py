@@ -1,8 +1,11 @@
 """The actuator → measured-components Jacobian G of a (closed) configuration.
 
-G = ∂(measured components)/∂q_act (k, n_act): position rows are the measured frame's
-origin velocity and rotation rows its angular velocity, both in the measured frame
-(Pinocchio's ``LOCAL`` frame Jacobian J_m). On a closed chain the passive velocities
+G = ∂(measured components)/∂q_act (k, n_act), in the components a measurement residual
+uses (``p_meas − p_model`` in world axes, ``log3(R_modelᵀ R_meas)`` in the measured
+frame): position rows are the measured frame's origin velocity in world axes, rotation
+rows its angular velocity in the measured frame (J_m). A subset of components (a planar
+[x, y, rz], a single x) therefore keeps its world meaning: the local axes of a rotating
+frame would mix world x and y. On a closed chain the passive velocities
 follow from the closure: J_c,free·v_free = −J_c,act·v_act (least squares: idle passive
 joints take the minimum-norm share; they do not move the measured frame), so
 G = J_m,act + J_m,free·(−J_c,free⁺ J_c,act).
@@ -27,7 +30,10 @@ def actuator_jacobian(mech: Mechanism, q: NDArray[np.float64]) -> NDArray[np.flo
     cols = [COMPONENTS.index(c) for c in mech.measured_components]
     act = np.array([model.joints[mech.joint_id(j)].idx_v for j in mech.actuated])
     fid = mech.frame_id(mech.measured_frame)
-    Jm = pin.computeFrameJacobian(model, model.createData(), q, fid, pin.LOCAL)[cols]
+    data = model.createData()
+    J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
+    J[:3] = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)[:3]
+    Jm = J[cols]
     G = Jm[:, act]
     free = mech.free_dofs
     if mech.n_closure_rows and free.size:

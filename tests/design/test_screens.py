@@ -98,6 +98,8 @@ def test_sigma_min_matches_the_analytic_jacobian(ur5, ur5_candidates):
 
 
 def test_closed_chain_actuator_jacobian_matches_finite_differences(stewart, stewart_poses):
+    """Position rows in world axes, rotation rows in the measured frame: the components
+    of a measurement residual (a rotating frame's local axes would mix world x and y)."""
     G = actuator_jacobians(stewart, stewart_poses[:4])
     h = 1e-6
     for row, g in zip(stewart_poses[:4], G, strict=True):
@@ -106,7 +108,7 @@ def test_closed_chain_actuator_jacobian_matches_finite_differences(stewart, stew
         for k in range(len(row)):
             step = np.eye(len(row))[k] * h
             plus, minus = stewart.forward(row + step), stewart.forward(row - step)
-            fd[:3, k] = ref.rotation.T @ (plus.translation - minus.translation) / (2 * h)
+            fd[:3, k] = (plus.translation - minus.translation) / (2 * h)
             fd[3:, k] = (
                 pin.log3(ref.rotation.T @ plus.rotation) - pin.log3(ref.rotation.T @ minus.rotation)
             ) / (2 * h)
