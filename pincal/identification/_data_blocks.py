@@ -24,7 +24,6 @@ Jacobian from the tool-point pose and its sensitivities. The kinds:
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import Any
 
 import numpy as np
 
@@ -55,7 +54,7 @@ class DataBlock(ABC):
         theta0: (len(own_names),) their start values [SI].
     """
 
-    data: Any
+    data: Measurements | InstrumentData | Artefact
     label: str
     sigma: np.ndarray
     own_names: tuple[str, ...] = ()
@@ -100,6 +99,8 @@ class DataBlock(ABC):
 class PoseSensorBlock(DataBlock):
     """A pose sensor: the prediction is the measured frame's pose (its measured components)."""
 
+    data: Measurements
+
     def __init__(self, data: Measurements, label: str, mech: Mechanism, params: ParameterSet,
                  P0: np.ndarray) -> None:  # fmt: skip
         self.data, self.label = data, label
@@ -112,7 +113,8 @@ class PoseSensorBlock(DataBlock):
             )
         self.sigma = model.sigma
 
-    def residuals(self, x, col, n, P, Rs, Jm):
+    def residuals(self, x: np.ndarray, col: int, n: int, P: np.ndarray, Rs: np.ndarray,
+                  Jm: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
         d = self.data
         rows = d.component_indices
         m = len(d)
@@ -126,7 +128,7 @@ class PoseSensorBlock(DataBlock):
                 J[i, :, :n] = -(D @ Jm[i])[rows]
         return raw, J
 
-    def norms(self, raw):
+    def norms(self, raw: np.ndarray) -> tuple[list[float], list[float]]:
         comps = self.data.components
         ip = [i for i, c in enumerate(comps) if not c.startswith("r")]
         ir = [i for i, c in enumerate(comps) if c.startswith("r")]
@@ -137,6 +139,8 @@ class PoseSensorBlock(DataBlock):
 class ScalarBlock(DataBlock):
     """Readings of a scalar instrument: one per pose, its own unknowns θ."""
 
+    data: InstrumentData
+
     def __init__(self, data: InstrumentData, label: str, mech: Mechanism, params: ParameterSet,
                  P0: np.ndarray) -> None:  # fmt: skip
         self.data, self.label = data, label
@@ -145,7 +149,8 @@ class ScalarBlock(DataBlock):
         self.own_names = tuple(f"{label}.{n}" for n in self.instrument.parameter_names)
         self.own_units = tuple(self.instrument.parameter_units)
 
-    def residuals(self, x, col, n, P, Rs, Jm):
+    def residuals(self, x: np.ndarray, col: int, n: int, P: np.ndarray, Rs: np.ndarray,
+                  Jm: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
         k, m = len(self.own_names), len(self.data)
         v, dv_dp, dv_dth = self.instrument.predict(P, x[col : col + k], self.data.ids)
         J = np.zeros((m, 1, len(x)))
@@ -154,15 +159,17 @@ class ScalarBlock(DataBlock):
             J[:, 0, col : col + k] = -dv_dth
         return (self.data.values - v)[:, None], J
 
-    def norms(self, raw):
+    def norms(self, raw: np.ndarray) -> tuple[list[float], list[float]]:
         return list(np.abs(raw[:, 0])), []
 
-    def declared_constants(self, theta, P):
+    def declared_constants(self, theta: np.ndarray, P: np.ndarray) -> tuple[DeclaredConstant, ...]:
         return self.instrument.declared_constants(P, theta, self.data.ids)
 
 
 class ArtefactBlock(DataBlock):
     """An artefact dataset: k residuals per pose, own and shared unknowns (see SharedUnknowns)."""
+
+    data: Artefact
 
     def __init__(self, data: Artefact, label: str, mech: Mechanism, params: ParameterSet,
                  P0: np.ndarray) -> None:  # fmt: skip
@@ -177,12 +184,13 @@ class ArtefactBlock(DataBlock):
         self.shared: SharedUnknowns | None = None  # set by the problem once every file is known
         self.index = -1  # the dataset's index in the problem, set with ``shared``
 
-    def residuals(self, x, col, n, P, Rs, sens):
+    def residuals(self, x: np.ndarray, col: int, n: int, P: np.ndarray, Rs: np.ndarray,
+                  sens: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
         assert self.shared is not None
         return self.shared.block(self.index, x, col, n, P, Rs, sens)
 
 
-def data_block(d: Any, label: str, mech: Mechanism, params: ParameterSet,
+def data_block(d: object, label: str, mech: Mechanism, params: ParameterSet,
                P0: np.ndarray) -> DataBlock:  # fmt: skip
     """The block of dataset ``d`` (``P0``: its nominal tool points (m, 3) [m]).
 

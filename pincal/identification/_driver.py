@@ -25,7 +25,6 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -34,8 +33,9 @@ from pincal.identification._fit_set import BaseRule, FitSet, WeakBound
 from pincal.identification._noise import initial_weights, weighted_fit
 from pincal.identification._outcome import Progress
 from pincal.identification._problem import CalibrationProblem
-from pincal.identification._residual_model import ResidualModel
+from pincal.identification._residual_model import RawResiduals, ResidualModel
 from pincal.identification._result import IdentificationResult
+from pincal.identification._solvers import Solver, SolverOptions
 from pincal.identification._weighting import Weighting
 
 __all__ = ["Driven", "FitPolicy", "MarginalBound", "Refitted", "drive", "drive_holding"]
@@ -82,16 +82,16 @@ class Driven:
     fit_set: FitSet
     free: np.ndarray
     weak: np.ndarray
-    raw0: Any
+    raw0: RawResiduals
     weighting: Weighting | None
 
 
 def _solve(
     model: ResidualModel,
-    entry: Any,
+    entry: Solver,
     x0: np.ndarray,
     free: np.ndarray,
-    opts: Any,
+    opts: SolverOptions,
     progress: Progress,
     policy: FitPolicy,
 ) -> tuple[ResidualModel, Settled, Weighting | None]:
@@ -107,8 +107,8 @@ def _solve(
 def drive(
     model: ResidualModel,
     x0: np.ndarray,
-    entry: Any,
-    opts: Any,
+    entry: Solver,
+    opts: SolverOptions,
     policy: FitPolicy,
     progress: Progress = None,
 ) -> Driven:
@@ -128,7 +128,7 @@ def drive(
     """
     _, J0, raw0 = model.evaluate(x0)
     if policy.weighting:
-        assert isinstance(model, CalibrationProblem)
+        assert isinstance(model, CalibrationProblem) and isinstance(raw0, np.ndarray)
         model, J0 = initial_weights(model, J0, raw0)
     fit_set = policy.base.decide(model, x0, J0)
     if fit_set.note:

@@ -13,8 +13,7 @@ are reported in ``result.weighting``. The sequence is the one fit driver's
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -30,8 +29,8 @@ from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._outcome import Progress
 from pincal.identification._problem import CalibrationProblem
 from pincal.identification._result import IdentificationResult, ResidualStats
-from pincal.identification._solvers import solver
-from pincal.measure import Measurements
+from pincal.identification._solvers import Solver, SolverOptions, solver
+from pincal.measure import Measurements, NoiseModel
 from pincal.model import Mechanism, ParameterSet, degenerate_translations
 from pincal.sensitivity import closure_breaking
 from pincal.sensitivity.kernels import batch_applies
@@ -65,12 +64,12 @@ def identify(
     measurements: Measurements | Sequence[Dataset] | None = None,
     method: str = "gauss-newton",
     *,
-    options: Any = None,
+    options: SolverOptions | None = None,
     initial: np.ndarray | None = None,
-    fit: Any = None,
+    fit: Sequence[str] | None = None,
     reduce: bool = True,
     progress: Progress = None,
-    noise: Any = None,
+    noise: NoiseModel | Mapping[str, float] | None = None,
 ) -> IdentificationResult:
     """Identify parameter values from measurements.
 
@@ -143,19 +142,27 @@ def identify(
         return _run(problem, method, entry, opts, progress)
 
 
-def _run(problem: IdentificationProblem, method: str, entry: Any, opts: Any, progress: Progress):
+def _run(
+    problem: IdentificationProblem,
+    method: str,
+    entry: Solver,
+    opts: SolverOptions,
+    progress: Progress,
+) -> IdentificationResult:
     """The body of :func:`identify` (checked arguments), one BLAS thread."""
     model, x0 = problem.model, problem.x0
     policy = FitPolicy(_base_rule(problem, model), weighting=True)
     d = drive(model, x0, entry, opts, policy, progress)
-    local = isinstance(opts, (GaussNewtonOptions, LMOptions))
-    prior = opts.prior_weights(x0.size) if local else None
+    raw0 = d.raw0
+    assert isinstance(raw0, np.ndarray)  # one pose file: (m, k)
+    local = opts if isinstance(opts, (GaussNewtonOptions, LMOptions)) else None
+    prior = local.prior_weights(x0.size) if local is not None else None
     comps = tuple(problem.pose_file.components)
     result, _ = finish(
-        d.model, d.settled, method=method, params=problem.params, raw0=d.raw0,
+        d.model, d.settled, method=method, params=problem.params, raw0=raw0,
         stats=lambda raw: ResidualStats.from_residuals(raw, comps), residuals=d.settled.raw,
         initial_values=x0, prefix=d.fit_set.note, prior=None if prior is None else prior[0],
         identifiability=d.fit_set.identifiability, weighting=d.weighting,
-        initial_residuals=d.raw0, components=comps,
+        initial_residuals=raw0, components=comps,
     )  # fmt: skip
     return result

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -31,7 +30,7 @@ from pincal.identification._gauge import constant_line, constant_std
 from pincal.identification._instrument_problem import Dataset, InstrumentProblem
 from pincal.identification._joint_details import JointDetails
 from pincal.identification._result import IdentificationResult, ResidualStats
-from pincal.identification._solvers import solver
+from pincal.identification._solvers import SolverOptions, solver
 from pincal.model import Mechanism, ParameterSet
 from pincal.sensitivity import Identifiability
 
@@ -111,7 +110,7 @@ def identify_instruments(
     datasets: Sequence[Dataset],
     method: str = "gauss-newton",
     *,
-    options: Any = None,
+    options: SolverOptions | None = None,
     labels: Sequence[str] | None = None,
     progress: Callable[[int, float], None] | None = None,
     weak_bound: tuple[float, float] | None = (0.02, 0.1),
@@ -153,7 +152,7 @@ def identify_instruments(
 def joint_fit(
     model: InstrumentProblem,
     method: str,
-    options: Any,
+    options: SolverOptions | None,
     progress: Callable[[int, float], None] | None,
     weak_bound: tuple[float, float] | None,
 ) -> InstrumentIdentification:

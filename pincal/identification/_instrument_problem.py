@@ -22,6 +22,7 @@ sockets): one ``evaluate(x, jacobian)`` loops over them. The Jacobian is analyti
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Literal, overload
 
 import numpy as np
 
@@ -185,7 +186,9 @@ class InstrumentProblem:
         self._qs = qs
         return qs, (bk if bool(np.all(accepted)) else None)
 
-    def _tool(self, x: np.ndarray, jacobian: bool):
+    def _tool(
+        self, x: np.ndarray, jacobian: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """Tool positions (m, 3) [m], orientations (m, 3, 3) and Jacobian (m, 6, n) or None.
 
         The batched sensitivities of :func:`pincal.sensitivity.sensitivities_batch`
@@ -203,7 +206,24 @@ class InstrumentProblem:
         P = np.array([T.translation for T in placements]).reshape(-1, 3)
         return P, np.array([T.rotation for T in placements]).reshape(-1, 3, 3), None
 
-    def evaluate(self, x: np.ndarray, jacobian: bool = True):
+    @overload
+    def evaluate(
+        self, x: np.ndarray, jacobian: Literal[True] = True
+    ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]: ...
+
+    @overload
+    def evaluate(
+        self, x: np.ndarray, jacobian: Literal[False]
+    ) -> tuple[np.ndarray, None, list[np.ndarray]]: ...
+
+    @overload
+    def evaluate(
+        self, x: np.ndarray, jacobian: bool
+    ) -> tuple[np.ndarray, np.ndarray | None, list[np.ndarray]]: ...
+
+    def evaluate(
+        self, x: np.ndarray, jacobian: bool = True
+    ) -> tuple[np.ndarray, np.ndarray | None, list[np.ndarray]]:
         """Whitened residual (N,), its Jacobian (N, n + Σk) or None, raw residuals per dataset.
 
         Residuals are ``measured − model`` [m, rad]; the third item is a list of

@@ -301,7 +301,7 @@ def levenberg_marquardt(
     history: list[float] = []
     cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
 
-    def full(z):
+    def full(z: np.ndarray) -> np.ndarray:
         x = x0.copy()
         x[free] = z
         return x
@@ -311,7 +311,7 @@ def levenberg_marquardt(
     prior = opts.prior_weights(x0.size)
     wf, mean = (prior[0][free], prior[1][free]) if prior is not None else (None, None)
 
-    def both(z):
+    def both(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         key = z.tobytes()
         if key not in cache:
             cache.clear()

@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Literal, overload
 
 import numpy as np
 
@@ -95,11 +96,28 @@ class StackedProblem(CalibrationProblem):
     def mechanism(self, values: np.ndarray) -> Mechanism:
         return self.parts[0].mechanism(values)
 
-    def evaluate(self, values: np.ndarray, jacobian: bool = True):
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: Literal[True] = True
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: Literal[False]
+    ) -> tuple[np.ndarray, None, np.ndarray]: ...
+
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: bool
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]: ...
+
+    def evaluate(
+        self, values: np.ndarray, jacobian: bool = True
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         """Stacked whitened residual, its Jacobian (or None) and raw residuals (Σm_k, 3)."""
         outs = [p.evaluate(values, jacobian) for p in self.parts]
         r = np.concatenate([o[0] for o in outs])
-        J = np.vstack([o[1] for o in outs]) if jacobian else None
+        J = np.vstack([o[1] for o in outs if o[1] is not None]) if jacobian else None
         raw = np.vstack([o[2] for o in outs])
         return r, J, raw
 

@@ -28,14 +28,15 @@ no block's σ moved by more than :data:`RTOL` (0.1 %).
 from __future__ import annotations
 
 import logging
-from typing import Any
 
 import numpy as np
 
 from pincal.errors import NoiseEstimationError
+from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import LocalSolverExtras
+from pincal.identification._solvers import Solver, SolverOptions
 from pincal.identification._weighting import (
     INLIER_LIMIT,
     ROBUST_F_SCALE,
@@ -206,7 +207,7 @@ def _robust_progress(
     loss: str,
     f_scale: float,
     out: SolverOutcome,
-    opts: Any = None,
+    opts: SolverOptions | None = None,
 ) -> SolverOutcome:
     """``out`` with success False when the robust fit ends worse than its start.
 
@@ -224,9 +225,8 @@ def _robust_progress(
     c0, c1 = robust_cost(loss, r0, f_scale), robust_cost(loss, r_w, f_scale)
     m0 = float(np.median(np.linalg.norm(r0, axis=1)))
     m1 = float(np.median(np.linalg.norm(r_w, axis=1)))
-    std = getattr(opts, "prior_std", None)
-    if std is not None:
-        mean, sd = np.asarray(opts.prior_mean), np.asarray(std)
+    if isinstance(opts, (GaussNewtonOptions, LMOptions)) and opts.prior_std is not None:
+        mean, sd = np.asarray(opts.prior_mean), np.asarray(opts.prior_std)
         c0 += 0.5 * float(np.sum(((np.asarray(x0) - mean) / sd) ** 2))
         c1 += 0.5 * float(np.sum(((np.asarray(x) - mean) / sd) ** 2))
         m1 = min(m1, m0)
@@ -245,10 +245,10 @@ def _robust_progress(
 
 def weighted_fit(
     model: CalibrationProblem,
-    entry: Any,
+    entry: Solver,
     x0: np.ndarray,
     free: np.ndarray,
-    opts: Any,
+    opts: SolverOptions,
     progress: Progress = None,
 ) -> tuple[SolverOutcome, CalibrationProblem, Weighting]:
     """Run the solver; when the noise is estimated, re-weight and re-fit until it settles.

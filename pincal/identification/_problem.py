@@ -18,6 +18,7 @@ silent unit weights.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Literal, overload
 
 import numpy as np
 
@@ -239,7 +240,24 @@ class CalibrationProblem:
             return float("inf")
         return 0.5 * float(r @ r)
 
-    def evaluate(self, values: np.ndarray, jacobian: bool = True):
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: Literal[True] = True
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: Literal[False]
+    ) -> tuple[np.ndarray, None, np.ndarray]: ...
+
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: bool
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]: ...
+
+    def evaluate(
+        self, values: np.ndarray, jacobian: bool = True
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         """Whitened residual (N,), its Jacobian (N, n) or None, and raw residuals (m, k).
 
         Evaluations are memoised per parameter vector (the returned arrays are
@@ -296,7 +314,9 @@ class CalibrationProblem:
         pred = predict_configurations(mech0, self.params, bk0, lin0, values - lin0.values)
         return self._qs if pred is None else pred
 
-    def _configurations(self, mech: Mechanism, values: np.ndarray):
+    def _configurations(
+        self, mech: Mechanism, values: np.ndarray
+    ) -> tuple[np.ndarray, BatchKinematics | None]:
         """Closed configurations (m, nq) of the measured poses (warm-started), kinematics."""
         meas = self.meas
         q_act = self._joint_values(mech, values)
@@ -343,7 +363,14 @@ class CalibrationProblem:
             self.meas.conditions,
         )
 
-    def _residuals(self, mech: Mechanism, values: np.ndarray, qs, bk, jacobian: bool):
+    def _residuals(
+        self,
+        mech: Mechanism,
+        values: np.ndarray,
+        qs: np.ndarray,
+        bk: BatchKinematics | None,
+        jacobian: bool,
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         meas = self.meas
         if jacobian:
             lin = self.linearisation(values)

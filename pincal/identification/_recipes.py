@@ -15,12 +15,16 @@ from __future__ import annotations
 import pickle
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pincal.measure import Measurements
+from pincal.measure import Measurements, NoiseModel
 from pincal.model import Mechanism, ParameterSet, active_limits
+
+if TYPE_CHECKING:  # imported in the call: the problems import this module's users
+    from pincal.identification._instrument_problem import Dataset, InstrumentProblem
+    from pincal.identification._problem import CalibrationProblem
 
 __all__ = ["InstrumentRecipe", "PoseRecipe", "mechanism_blob"]
 
@@ -53,10 +57,10 @@ class PoseRecipe:
     blob: bytes
     params: ParameterSet
     meas: Measurements
-    noise: Any = None
+    noise: NoiseModel | Mapping[str, float] | None = None
     block_std: Mapping[str, float] | None = None
 
-    def __call__(self) -> Any:
+    def __call__(self) -> CalibrationProblem:
         from pincal.identification._problem import CalibrationProblem
 
         model = CalibrationProblem(_rebuild(self.blob), self.params, self.meas, self.noise)
@@ -69,10 +73,10 @@ class InstrumentRecipe:
 
     blob: bytes
     params: ParameterSet
-    datasets: Sequence[Any]
+    datasets: Sequence[Dataset]
     labels: Sequence[str] | None = None
 
-    def __call__(self) -> Any:
+    def __call__(self) -> InstrumentProblem:
         from pincal.identification._instrument_problem import InstrumentProblem
 
         return InstrumentProblem(_rebuild(self.blob), self.params, self.datasets, self.labels)

@@ -13,13 +13,17 @@ driver (:mod:`pincal.identification._driver`) and the finishing step
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from typing import Literal, Protocol, overload
 
 import numpy as np
 
 from pincal.model import Mechanism
 
-__all__ = ["ResidualModel"]
+__all__ = ["RawResiduals", "ResidualModel"]
+
+#: raw (unwhitened) residuals ``measured − model`` [m, rad]: (m, k) for one data set, or
+#: one (m_i, k_i) array per data set of a joint fit
+RawResiduals = np.ndarray | list[np.ndarray]
 
 
 class ResidualModel(Protocol):
@@ -71,11 +75,28 @@ class ResidualModel(Protocol):
         ...
 
     @property
-    def sigma(self) -> Any:
-        """The residuals' standard deviations [m, rad]: scalar or (N,)."""
+    def sigma(self) -> np.ndarray | list[np.ndarray]:
+        """The residuals' standard deviations [m, rad]: (m, k), or one (m_i, k_i) per data set."""
         ...
 
-    def evaluate(self, values: np.ndarray, jacobian: bool = True) -> tuple[np.ndarray, Any, Any]:
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: Literal[True] = True
+    ) -> tuple[np.ndarray, np.ndarray, RawResiduals]: ...
+
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: Literal[False]
+    ) -> tuple[np.ndarray, None, RawResiduals]: ...
+
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: bool
+    ) -> tuple[np.ndarray, np.ndarray | None, RawResiduals]: ...
+
+    def evaluate(
+        self, values: np.ndarray, jacobian: bool = True
+    ) -> tuple[np.ndarray, np.ndarray | None, RawResiduals]:
         """(N,) whitened residuals, (N, n_x) their Jacobian (None if not asked), raw residuals."""
         ...
 

@@ -11,15 +11,18 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
-from typing import Any
 
 from pincal.errors import SolverOptionError
 from pincal.identification._local import gauss_newton, levenberg_marquardt
 from pincal.identification._options import GaussNewtonOptions, LMOptions, StepPlanningOptions
+from pincal.identification._outcome import SolverOutcome
 from pincal.identification._qpso_identify import QPSOOptions, qpso_search
 from pincal.identification._step_planning import step_planning
 
-__all__ = ["METHODS", "SOLVERS", "Solver", "solver"]
+__all__ = ["METHODS", "SOLVERS", "Solver", "SolverOptions", "solver"]
+
+#: the options dataclass of a registered solver
+SolverOptions = GaussNewtonOptions | LMOptions | QPSOOptions | StepPlanningOptions
 
 
 @dataclass(frozen=True)
@@ -34,11 +37,11 @@ class Solver:
     """
 
     name: str
-    options_type: type
-    solve: Callable[..., Any]
+    options_type: type[SolverOptions]
+    solve: Callable[..., SolverOutcome]
     summary: str
 
-    def check_options(self, options: object | None) -> Any:
+    def check_options(self, options: object | None) -> SolverOptions:
         """The options to use: defaults for None; a foreign type is refused.
 
         Raises:
