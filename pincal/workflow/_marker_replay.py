@@ -9,20 +9,20 @@ as measurements → calibrated mechanism.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 from pincal.identification import Prior
-from pincal.io import read_marker_sets
+from pincal.io import CalibrationDirectory, read_marker_sets
 from pincal.measure import MarkerSetup, Measurements, marker_mechanism
 from pincal.model import Mechanism
 from pincal.workflow._marker_run import marker_procedure, registration_procedure
 from pincal.workflow._prior_choice import nested_choice
+from pincal.workflow._registrations import MarkerProcedure
 
 __all__ = ["rebuild", "replay_procedure"]
 
 
-def rebuild(cal: Any) -> tuple[MarkerSetup, Mechanism, tuple[Measurements, ...]]:
+def rebuild(cal: CalibrationDirectory) -> tuple[MarkerSetup, Mechanism, tuple[Measurements, ...]]:
     """(setup, mechanism, one measurement set per marker) of a marker calibration.
 
     Args:
@@ -46,7 +46,7 @@ def _recorded_prior(doc: dict[str, Any]) -> Prior | None:
 
 def replay_procedure(
     mech: Mechanism, setup: MarkerSetup, doc: dict[str, Any], registration_only: bool
-) -> Callable[[Any], Mechanism]:
+) -> MarkerProcedure:
     """Measurements → calibrated mechanism, as the calibration of ``doc`` ran.
 
     ``doc`` is the calibration's ``markers`` record; ``registration_only`` gives the

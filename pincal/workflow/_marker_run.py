@@ -43,7 +43,7 @@ from pincal.workflow._prior_choice import (
     cross_validated,
     nested_choice,
 )
-from pincal.workflow._registrations import Registrations
+from pincal.workflow._registrations import MarkerData, MarkerProcedure, Registrations
 
 __all__ = [
     "MISFIT_RMS",
@@ -111,7 +111,7 @@ def marker_procedure(
     method: str,
     loss: str,
     registrations: Registrations | None = None,
-) -> Callable[[Prior | None], Callable[[Any], Mechanism]]:
+) -> Callable[[Prior | None], MarkerProcedure]:
     """Prior → (measurements → calibrated mechanism): the fit that is cross-validated.
 
     ``registrations``: the registrations shared with other procedures of the same
@@ -119,8 +119,8 @@ def marker_procedure(
     """
     reg = registrations or Registrations(mech, setup)
 
-    def with_prior(prior: Prior | None) -> Callable[[Any], Mechanism]:
-        def fit(meas: Any) -> Mechanism:
+    def with_prior(prior: Prior | None) -> MarkerProcedure:
+        def fit(meas: MarkerData) -> Mechanism:
             return fit_markers(mech, setup, meas, preset, method, prior, loss=loss,
                                registration=reg(meas)).calibrated  # fmt: skip
 
@@ -131,11 +131,11 @@ def marker_procedure(
 
 def registration_procedure(
     mech: Mechanism, setup: MarkerSetup, registrations: Registrations | None = None
-) -> Callable[[Any], Mechanism]:
+) -> MarkerProcedure:
     """Measurements → the registration-only model (the baseline of a marker calibration)."""
     reg = registrations or Registrations(mech, setup)
 
-    def fit(meas: Any) -> Mechanism:
+    def fit(meas: MarkerData) -> Mechanism:
         return fit_markers(mech, setup, meas, registration_only=True,
                            registration=reg(meas)).calibrated  # fmt: skip
 
@@ -162,7 +162,9 @@ def _angle_note(rms: float) -> str:
     )
 
 
-def _gate(fit: MarkerFit, meas: tuple[Measurements, ...], settings: MarkerSettings):
+def _gate(
+    fit: MarkerFit, meas: tuple[Measurements, ...], settings: MarkerSettings
+) -> QualityVerdict:
     """The gate's verdict on a marker fit (before the held-out judgement)."""
     if len(meas) == 1:
         return check_quality(fit.result, meas[0], mech=fit.registration.mechanism,

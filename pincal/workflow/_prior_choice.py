@@ -19,7 +19,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -27,11 +26,12 @@ from pincal.identification import BlockScales, CrossValidation, Prior, cross_val
 from pincal.measure import Measurements
 from pincal.model import Mechanism
 from pincal.workflow._marker_settings import PRIOR_GRID
+from pincal.workflow._registrations import MarkerData, MarkerProcedure
 
 __all__ = ["PriorChoice", "choose_prior", "cross_validated", "nested_choice"]
 
 #: measurements → calibrated mechanism, for one prior
-Procedure = Callable[[Prior | None], Callable[[Any], Mechanism]]
+Procedure = Callable[[Prior | None], MarkerProcedure]
 
 
 @dataclass(frozen=True)
@@ -100,7 +100,7 @@ def choose_prior(
     return PriorChoice(priors[best], cvs[best], table, turned, scales)
 
 
-def nested_choice(procedure: Procedure, k: int, seed: int) -> Callable[[Any], Mechanism]:
+def nested_choice(procedure: Procedure, k: int, seed: int) -> MarkerProcedure:
     """Measurements → calibrated mechanism with the prior chosen on those measurements.
 
     Cross-validating this procedure is nested cross-validation: each outer fold chooses
@@ -108,7 +108,7 @@ def nested_choice(procedure: Procedure, k: int, seed: int) -> Callable[[Any], Me
     takes part in choosing the prior that predicts it.
     """
 
-    def fit(meas: Any) -> Mechanism:
+    def fit(meas: MarkerData) -> Mechanism:
         parts = (meas,) if isinstance(meas, Measurements) else tuple(meas)
         return procedure(choose_prior(procedure, parts, k, seed).prior)(meas)
 

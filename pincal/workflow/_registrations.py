@@ -12,11 +12,17 @@ that of its own training poses: sharing never lets a held-out pose in.
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Callable
 
 from pincal.measure import MarkerRegistration, MarkerSetup, Measurements, register_markers
 from pincal.model import Mechanism
 
-__all__ = ["Registrations"]
+__all__ = ["MarkerData", "MarkerProcedure", "Registrations"]
+
+#: the poses of a marker fit: one measurement set, or one per marker (same rows)
+MarkerData = Measurements | tuple[Measurements, ...]
+#: a fitting procedure: marker data → calibrated mechanism
+MarkerProcedure = Callable[[MarkerData], Mechanism]
 
 
 class Registrations:
@@ -26,7 +32,7 @@ class Registrations:
         self._mech, self._setup = mech, setup
         self._done: dict[bytes, MarkerRegistration] = {}
 
-    def __call__(self, meas: Measurements | tuple[Measurements, ...]) -> MarkerRegistration:
+    def __call__(self, meas: MarkerData) -> MarkerRegistration:
         """The registration of ``meas`` (one set, or one per marker), as fit_markers runs it."""
         parts = (meas,) if isinstance(meas, Measurements) else tuple(meas)
         h = hashlib.sha256()

@@ -14,25 +14,27 @@ ratio of held-out RMS is the calibration's benefit carried to the new session.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 from pincal.errors import PincalError
 from pincal.identification import HeldOutEvidence, cross_validate, fit_markers
-from pincal.io import read_marker_sets
+from pincal.io import CalibrationDirectory, read_marker_sets
 from pincal.measure import MarkerSetup, Measurements
 from pincal.model import Mechanism
+from pincal.workflow._registrations import MarkerData, MarkerProcedure
 
 __all__ = ["transfer_markers"]
 
 
-def _registered(mech: Mechanism, setup: MarkerSetup):
-    def fit(meas: Any) -> Mechanism:
+def _registered(mech: Mechanism, setup: MarkerSetup) -> MarkerProcedure:
+    def fit(meas: MarkerData) -> Mechanism:
         return fit_markers(mech, setup, meas, registration_only=True).calibrated
 
     return fit
 
 
-def transfer_markers(cal: Any, data: str | Path, k: int = 5, seed: int = 0) -> HeldOutEvidence:
+def transfer_markers(
+    cal: CalibrationDirectory, data: str | Path, k: int = 5, seed: int = 0
+) -> HeldOutEvidence:
     """Held-out errors on another session's table, the registration refitted there.
 
     Args:
