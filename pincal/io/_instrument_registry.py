@@ -9,18 +9,18 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 from pincal.errors import MeasurementFormatError
 from pincal.io._csv import file_kind
 from pincal.io._instrument_file import read_instrument_data
 from pincal.io._socket_file import read_socket_data
+from pincal.measure import Artefact, InstrumentData
 from pincal.model import Mechanism
 
 __all__ = ["INSTRUMENT_FILES", "is_instrument_file", "read_instrument_file"]
 
 #: header magic → reader(path, mech) of that instrument's dataset
-INSTRUMENT_FILES: dict[str, Callable[[str | Path, Mechanism], Any]] = {
+INSTRUMENT_FILES: dict[str, Callable[[str | Path, Mechanism], InstrumentData | Artefact]] = {
     "instrument": read_instrument_data,
     "sockets": read_socket_data,
 }
@@ -31,7 +31,7 @@ def is_instrument_file(path: str | Path) -> bool:
     return file_kind(path) in INSTRUMENT_FILES
 
 
-def read_instrument_file(path: str | Path, mech: Mechanism) -> Any:
+def read_instrument_file(path: str | Path, mech: Mechanism) -> InstrumentData | Artefact:
     """The dataset of an instrument file of any registered kind.
 
     Raises:

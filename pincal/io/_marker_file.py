@@ -58,7 +58,7 @@ from pincal.io._marker_orientation import orientation_values, read_rotations
 from pincal.io._names import is_decimal
 from pincal.io._units import LENGTH_UNITS, unit_factor
 from pincal.measure import MarkerSetup, Measurements, marker_frame
-from pincal.model import COMPONENTS, Mechanism
+from pincal.model import COMPONENTS, JointReadings, Mechanism
 
 __all__ = [
     "MarkerData",
@@ -320,7 +320,7 @@ def _preamble_note(table: Table) -> list[str]:
             "preamble: the title line is the first holding the marker columns)"]  # fmt: skip
 
 
-def _home_note(mech: Mechanism, decl) -> list[str]:
+def _home_note(mech: Mechanism, decl: JointReadings) -> list[str]:
     """What ``joint_reference: home`` meant, in values (one home everywhere)."""
     if decl.reference != "home":
         return []
