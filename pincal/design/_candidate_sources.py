@@ -19,6 +19,7 @@ from pincal.design._arrays import map_to_ranges, orthogonal_array
 from pincal.design._candidates import (
     MAX_CANDIDATE_BYTES,
     MAX_CANDIDATES,
+    CandidateCost,
     CandidateSet,
     Progress,
     candidate_cost,
@@ -308,6 +309,6 @@ def candidate_set(
     return result
 
 
-def _cost(mech: Mechanism, params: ParameterSet, kind: str, value: int):
+def _cost(mech: Mechanism, params: ParameterSet, kind: str, value: int) -> CandidateCost:
     k = len(mech.measured_components)
     return candidate_cost(kind, value, len(mech.actuated), k, len(params))

@@ -33,6 +33,7 @@ model is from (1) at all; the projection measures the format's own numbers.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import ClassVar
 
 import numpy as np
@@ -109,7 +110,9 @@ class _LinearDelta(ControllerFormat):
         return end
 
     @staticmethod
-    def controller(s: Array, c: Array, tx: Array, ty: Array, L: Array, R_home: Array):
+    def controller(
+        s: Array, c: Array, tx: Array, ty: Array, L: Array, R_home: Array
+    ) -> Callable[[Array], Array]:
         """Readings (m, 3) → poses (m, 4, 4) by (1) (constant orientation R_home)."""
 
         def forward(q_act: Array) -> Array:

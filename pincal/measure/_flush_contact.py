@@ -164,7 +164,9 @@ class FlushContact(Artefact):
     def shared_names(self) -> tuple[str, ...]:
         return (f"{self.plane}.n1", f"{self.plane}.n2", f"{self.plane}.d")
 
-    def residuals(self, P, Rs, theta, phi):
+    def residuals(
+        self, P: np.ndarray, Rs: np.ndarray, theta: np.ndarray, phi: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         r, dp, dw, dphi = flush_residuals(
             np.asarray(P), np.asarray(Rs), self.axis, self.normal, np.asarray(phi)
         )
@@ -191,7 +193,9 @@ class _Planes(SharedTerms):
                     f"{list(seen)} and {list(d.normal)}; give the plane one normal"
                 )
 
-    def start(self, poses, thetas):
+    def start(
+        self, poses: Sequence[tuple[np.ndarray, np.ndarray]], thetas: Sequence[np.ndarray]
+    ) -> np.ndarray:
         """Tilts from the mean face normal, offset from the mean height (nominal poses)."""
         phi = np.zeros(len(self.names))
         where = {n: i for i, n in enumerate(self.names)}
