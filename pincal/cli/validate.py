@@ -142,6 +142,16 @@ def validate(
 
     terms, terms_line = calibration_terms(cal, read_payload(payload),
                                           per_pose=meas.temperature is not None)  # fmt: skip
+    if terms is not None and "1/K" in terms.params.units and meas.temperature is None:
+        from pincal.errors import ConditionError
+
+        raise ConditionError(
+            f"{data} has no 'temperature_C' column, but calibration {str(cal.path)!r} has a "
+            f"thermal term (calibrate --model geometric+temperature): it predicts each pose at "
+            f"its own temperature, and at the reference 20 °C it would predict a machine at "
+            f"20 °C, not the measured one; add the per-pose machine temperature [°C] as a "
+            f"temperature_C column (as the calibration data had)"
+        )
     validation = validate_held_out(
         nominal,
         cal.calibrated(),
