@@ -92,9 +92,13 @@ def validate(
     if data is None and cv_folds is None:
         raise click.UsageError("give --data (held-out measurements) or --cv K (or both)")
     if out is not None or folds_out is not None:
+        from pincal.cli._implicit_inputs import calibration_inputs
+
         inputs: dict = {} if data is None else {"--data": data}
         inputs |= {f"CALIBRATION's {n}": calibration / n
                    for n in (IDENTIFICATION_FILE, MANIFEST)}  # fmt: skip
+        # its files, its nominal model's and (--cv) the data file the folds are read from
+        inputs |= calibration_inputs(calibration, data_files=cv_folds is not None)
         guard_paths(inputs, {"--out": out, "--folds-out": folds_out})
     cv = cv_doc = None
     if cv_folds is not None:
