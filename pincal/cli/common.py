@@ -347,7 +347,7 @@ def guard_paths(
             implicit |= model_inputs(label, v)
             if _is_calibration_dir(Path(v)):
                 implicit |= calibration_inputs(v, label)
-    ins = given({**implicit, **inputs})
+    ins = given({**inputs, **implicit})
     dirs, sides = given(out_dirs), given(implied)
     outs = given(outputs) + sides
     fix = "inputs are never modified; choose another output path"
