@@ -34,6 +34,7 @@ from pincal.io._file_names import (
     IDENTIFICATION_FILE,
     MANIFEST,
     MODEL_RECORD,
+    VALIDATION_FILE,
 )
 from pincal.io._gcode import GcodeMove, GcodeProgram, read_gcode, write_gcode
 from pincal.io._identification_file import read_identification
@@ -100,6 +101,7 @@ __all__ = [
     "LENGTH_UNITS",
     "MANIFEST",
     "MODEL_RECORD",
+    "VALIDATION_FILE",
     "CalibrationDirectory",
     "GcodeMove",
     "GcodeProgram",

@@ -17,6 +17,7 @@ __all__ = [
     "MODEL_RECORD",
     "NOMINAL_URDF",
     "PINCAL_EXTRAS",
+    "VALIDATION_FILE",
 ]
 
 #: the manifest's ``format`` entry
@@ -35,3 +36,6 @@ MODEL_RECORD = "model.yaml"
 #: files other pincal commands put into a calibration directory (``pincal report``,
 #: ``pincal run``); stale once the calibration is replaced, so replaced with it
 PINCAL_EXTRAS = frozenset({"campaign.yaml", "report.html", "report.md", "report.json"})
+#: `pincal validate --out` in a calibration directory (`pincal run`, the README): an
+#: extra too when its content is validate's (a user's file of that name is not)
+VALIDATION_FILE = "validation.json"
