@@ -169,3 +169,20 @@ def test_estimated_noise_says_the_gate_is_blind_to_an_unmodelled_smooth_error(
     assert res.exit_code == 1 and "χ²" in res.stderr
     res = _calibrate(_file(tmp_path, meas), tmp_path / "cal3", "--instrument", "laser-tracker")
     assert res.exit_code == 1 and "laser-tracker" in res.stderr
+
+
+def test_one_block_declared_far_too_noisy_is_warned(tmp_path):
+    """σ declared 100× too large in the position block only (issue 38, item 10): the
+    block is named with its factor; before, only a whole-fit χ²/ν < 0.01 warned (and
+    called any such factor "10×")."""
+    res = CliRunner().invoke(main, ["simulate", "ur5", "--random", "48", "--noise",
+                                    "0.01,0.02", "--out", str(tmp_path / "m.csv")])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    res = _calibrate(tmp_path / "m.csv", tmp_path / "cal", "--noise", "1,0.02", model="ur5")
+    assert res.exit_code == 0, res.output
+    said = " ".join(res.output.split())
+    warned = [ln for ln in res.output.splitlines() if "warning" in ln and "position" in ln]
+    assert warned, said
+    factor = float(warned[0].split("declared position noise is ")[1].split("×")[0])
+    assert 60 < factor < 160, warned[0]  # 1 mm declared against 0.01 mm true: ≈ 100×
+    assert not any("orientation" in ln for ln in warned)
