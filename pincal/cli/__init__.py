@@ -69,7 +69,9 @@ def main(ctx: click.Context, debug: bool) -> None:
 
     ctx.ensure_object(dict)
     ctx.obj["debug"] = debug
-    logging.basicConfig(level=logging.DEBUG if debug else logging.WARNING)
+    # a library warning reads like pincal's other warning lines; --debug names the logger
+    fmt = "%(levelname)s:%(name)s:%(message)s" if debug else "pincal: warning: %(message)s"
+    logging.basicConfig(level=logging.DEBUG if debug else logging.WARNING, format=fmt)
     # pincal's dense solves are small (≤ a few thousand rows × ~100 columns): one BLAS
     # thread is fastest, and threaded BLAS on a busy machine was 12–48× slower.
     ctx.with_resource(threadpool_limits(1))

@@ -177,6 +177,7 @@ def calibrate(
         CALIBRATED_SIDECAR,
         CALIBRATED_URDF,
         MANIFEST,
+        MODEL_RECORD,
         calibration_lock,
         check_replaceable,
         read_measurement_file,
@@ -315,9 +316,9 @@ def calibrate(
     texts = {"report.txt": report}
     record = model_record(model, model_opts)  # the model with --sidecar/--frame/--lock
     if record is not None:
-        texts["model.yaml"] = record
+        texts[MODEL_RECORD] = record
     texts |= terms_texts(result, error_model, terms, load)
-    source = str(out_dir.resolve() / "model.yaml") if record else model_source(model)
+    source = str(out_dir.resolve() / MODEL_RECORD) if record else model_source(model)
     cal = write_calibration(
         out_dir,
         result,

@@ -303,7 +303,10 @@ def guard_paths(
     """Refuse, before any work, outputs that would overwrite an input or each other.
 
     Every command calls this with its inputs and outputs. Paths are compared resolved
-    (symbolic links followed, hard links by ``samefile``). An output directory that is
+    (symbolic links followed, hard links by ``samefile``). An input model directory or
+    URDF stands for its URDF and sidecar too, an input calibration directory for its
+    files and the nominal model files it records
+    (:mod:`pincal.cli._implicit_inputs`). An output directory that is
     replaced as a whole (``calibrate --out``) may not contain an input; no output may lie
     inside an input calibration directory. Outputs must be regular files or absent
     (devices, FIFOs, directories and links to them are refused; a file path ending
@@ -336,7 +339,16 @@ def guard_paths(
     def given(m: Mapping[str, PathLike]) -> list[tuple[str, Path, str]]:
         return [(k, resolved(k, v), os.fspath(v)) for k, v in m.items() if v is not None]
 
-    ins, dirs, sides = given(inputs), given(out_dirs), given(implied)
+    from pincal.cli._implicit_inputs import calibration_inputs, model_inputs
+
+    implicit: dict[str, Path] = {}
+    for label, v in inputs.items():  # what a model or calibration directory stands for
+        if v is not None:
+            implicit |= model_inputs(label, v)
+            if _is_calibration_dir(Path(v)):
+                implicit |= calibration_inputs(v, label)
+    ins = given({**inputs, **implicit})
+    dirs, sides = given(out_dirs), given(implied)
     outs = given(outputs) + sides
     fix = "inputs are never modified; choose another output path"
     for o_label, _o_path, o_text in outs:

@@ -144,13 +144,15 @@ STEPS: tuple[Step, ...] = (
 
 def campaign_paths(c: Campaign, out: Path) -> Paths:
     """The step paths of campaign ``c`` writing into ``out``."""
+    from pincal.io import VALIDATION_FILE
+
     inputs = out.parent / f"{out.name}-inputs"  # the calibration directory holds only its own files
     data = Path(c.measurements.file) if c.measurements.file else inputs / "measurements.csv"
     if c.sockets is not None:  # the plain table, imported; absolute: validate --cv reads it
         data = (inputs / "sockets.csv").resolve()
     v = c.validation
     val = None if v.source == "none" else Path(v.file) if v.file else inputs / "validation.csv"
-    return Paths(out, inputs / "design.csv", data, val, out / "validation.json")
+    return Paths(out, inputs / "design.csv", data, val, out / VALIDATION_FILE)
 
 
 def _writable_ancestor(path: Path) -> Path:

@@ -92,9 +92,13 @@ def validate(
     if data is None and cv_folds is None:
         raise click.UsageError("give --data (held-out measurements) or --cv K (or both)")
     if out is not None or folds_out is not None:
+        from pincal.cli._implicit_inputs import calibration_inputs
+
         inputs: dict = {} if data is None else {"--data": data}
         inputs |= {f"CALIBRATION's {n}": calibration / n
                    for n in (IDENTIFICATION_FILE, MANIFEST)}  # fmt: skip
+        # its files, its nominal model's and (--cv) the data file the folds are read from
+        inputs |= calibration_inputs(calibration, data_files=cv_folds is not None)
         guard_paths(inputs, {"--out": out, "--folds-out": folds_out})
     cv = cv_doc = None
     if cv_folds is not None:
@@ -142,6 +146,16 @@ def validate(
 
     terms, terms_line = calibration_terms(cal, read_payload(payload),
                                           per_pose=meas.temperature is not None)  # fmt: skip
+    if terms is not None and "1/K" in terms.params.units and meas.temperature is None:
+        from pincal.errors import ConditionError
+
+        raise ConditionError(
+            f"{data} has no 'temperature_C' column, but calibration {str(cal.path)!r} has a "
+            f"thermal term (calibrate --model geometric+temperature): it predicts each pose at "
+            f"its own temperature, and at the reference 20 °C it would predict a machine at "
+            f"20 °C, not the measured one; add the per-pose machine temperature [°C] as a "
+            f"temperature_C column (as the calibration data had)"
+        )
     validation = validate_held_out(
         nominal,
         cal.calibrated(),

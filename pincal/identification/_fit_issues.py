@@ -68,13 +68,26 @@ def chi2_issues(
         return [QualityIssue(
             "chi2", True, "residuals larger than the declared noise: " + "; ".join(parts)
         )]  # fmt: skip
+    low = [b for b in blocks if b.dof > 0 and b.ratio < 1e-2]
+    if low:  # each block whose declared σ is ≥ 10× its residuals, with its factor
+        return [QualityIssue(
+            "low-chi2", False,
+            f"{b.block} χ²/ν {b.ratio:.3g} < 0.01: the declared {b.block} noise is "
+            f"{_factor(b.ratio)}× larger than its residuals; its σ and the parameters it "
+            f"weighs are pessimistic (declare the instrument's {b.block} noise)",
+        ) for b in low]  # fmt: skip
     if chi2 < 1e-2:
         return [QualityIssue(
             "low-chi2", False,
-            f"reduced χ² {chi2:.3g} < 0.01: the declared noise is 10× larger than the "
-            "residuals; the reported σ are pessimistic",
+            f"reduced χ² {chi2:.3g} < 0.01: the declared noise is {_factor(chi2)}× larger "
+            "than the residuals; the reported σ are pessimistic",
         )]  # fmt: skip
     return []
+
+
+def _factor(ratio: float) -> str:
+    """How many times the declared σ exceeds the residuals' for a χ²/ν ``ratio``."""
+    return f"{1 / math.sqrt(ratio):.3g}" if ratio > 0 else "∞"
 
 
 def profile_issues(w: Weighting, profile: InstrumentProfile, lim: GateLimits) -> list[QualityIssue]:

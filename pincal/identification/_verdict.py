@@ -103,7 +103,13 @@ class QualityIssue:
 
 
 #: what a pose file can do about the probes' blind spot
-NOISE_REMEDY = "declare the instrument noise (--noise, # noise:) to judge the fit against it"
+NOISE_REMEDY = (
+    "declare the instrument noise (--noise, # noise:) so that the χ² test and the probes "
+    "judge the fit against it, or name the instrument (--instrument, # instrument:) so that "
+    "σ̂ is held to its typical σ"
+)
+#: the same when an instrument profile is named (σ̂ already bounded by it)
+PROFILE_REMEDY = "declare the instrument noise (--noise, # noise:) to judge the fit against it"
 
 
 @dataclass(frozen=True)
@@ -175,19 +181,32 @@ class QualityVerdict:
     def blind_spot(self, remedy: str = NOISE_REMEDY) -> str:
         """With estimated noise, the smooth errors the probes would not see ("" otherwise).
 
-        σ̂ absorbs a model error the probes miss, so the fit cannot be judged below
-        their floors; the sentence names the scale, drift and the largest gain and
-        trend floors, and what to do (``remedy``: the route's way to see them).
+        σ̂ absorbs a model error the probes miss: one that none of them spans (an axis
+        tilt, backlash, a periodic screw error) at any size — it only raises σ̂ — and
+        those they span below their floors. The sentence says so, names the scale, drift
+        and the largest gain and trend floors, and what to do (``remedy``: the route's
+        way to see them; with a named instrument profile σ̂ is bounded by it, said).
         """
         if self.noise_source != "estimated" or not self.floors:
             return ""
+        if self.profile:
+            if remedy == NOISE_REMEDY:
+                remedy = PROFILE_REMEDY
+            passes = (
+                f"while it keeps σ̂ within {self.limits.noise_factor:g}× the "
+                f"{self.profile!r} profile's typical σ"
+            )
+        else:
+            passes = "whatever its size (it only raises σ̂)"
         by = {n: (f, t) for n, f, t in self.floors}
         named = [by[n][1] for n in ("scale", "gains", "drift") if n in by]
         trends = [(f, t) for n, (f, t) in by.items() if n.startswith("trend:")]
         if trends:
             named.append(max(trends)[1])
         return (
-            f"with the noise estimated, {', '.join(named[:-1])}"
+            f"with the noise estimated, a smooth model error none of the probes spans (an "
+            f"axis tilt, backlash, a periodic screw error) can pass {passes}, and of those "
+            f"they span {', '.join(named[:-1])}"
             f"{' or ' if len(named) > 1 else ''}{named[-1]} would pass unseen (90 % "
             f"detection): {remedy}"
         )

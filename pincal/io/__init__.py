@@ -33,6 +33,8 @@ from pincal.io._file_names import (
     CALIBRATION_FORMAT,
     IDENTIFICATION_FILE,
     MANIFEST,
+    MODEL_RECORD,
+    VALIDATION_FILE,
 )
 from pincal.io._gcode import GcodeMove, GcodeProgram, read_gcode, write_gcode
 from pincal.io._identification_file import read_identification
@@ -98,6 +100,8 @@ __all__ = [
     "INSTRUMENT_FILES",
     "LENGTH_UNITS",
     "MANIFEST",
+    "MODEL_RECORD",
+    "VALIDATION_FILE",
     "CalibrationDirectory",
     "GcodeMove",
     "GcodeProgram",

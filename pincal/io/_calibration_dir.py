@@ -50,6 +50,7 @@ from pincal.io._file_names import (
     CALIBRATION_FORMAT,
     IDENTIFICATION_FILE,
     MANIFEST,
+    MODEL_RECORD,
     NOMINAL_URDF,
 )
 from pincal.io._identification_file import read_identification
@@ -88,7 +89,14 @@ class CalibrationDirectory:
 
     @property
     def model_source(self) -> str | None:
-        """The nominal model's spec (bundled name or path) as given to ``calibrate``."""
+        """The nominal model's spec (bundled name or path) as given to ``calibrate``.
+
+        A calibration made with --sidecar, --frame or --lock holds the model with those
+        options as its own hashed ``model.yaml``: that file of *this* directory, wherever
+        it was copied or moved (the manifest's path names the first directory).
+        """
+        if MODEL_RECORD in (self.manifest.get("files") or {}):
+            return str(self.path / MODEL_RECORD)
         src = self.manifest.get("model_source")
         return str(src) if src else None
 

@@ -14,8 +14,10 @@ __all__ = [
     "CALIBRATION_FORMAT",
     "IDENTIFICATION_FILE",
     "MANIFEST",
+    "MODEL_RECORD",
     "NOMINAL_URDF",
     "PINCAL_EXTRAS",
+    "VALIDATION_FILE",
 ]
 
 #: the manifest's ``format`` entry
@@ -29,6 +31,11 @@ CALIBRATED_SIDECAR = "calibrated.yaml"
 IDENTIFICATION_FILE = "identification.json"
 #: the registered start model of a marker calibration (instrument frame + marker set)
 NOMINAL_URDF = "nominal.urdf"
+#: the model's options (--sidecar, --frame, --lock) as a local sidecar that reloads it
+MODEL_RECORD = "model.yaml"
 #: files other pincal commands put into a calibration directory (``pincal report``,
 #: ``pincal run``); stale once the calibration is replaced, so replaced with it
 PINCAL_EXTRAS = frozenset({"campaign.yaml", "report.html", "report.md", "report.json"})
+#: `pincal validate --out` in a calibration directory (`pincal run`, the README): an
+#: extra too when its content is validate's (a user's file of that name is not)
+VALIDATION_FILE = "validation.json"

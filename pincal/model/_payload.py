@@ -21,6 +21,10 @@ from pincal.model._mechanism import Mechanism
 __all__ = ["PAYLOAD_LINK", "Payload", "with_payload"]
 
 PAYLOAD_LINK = "payload"
+#: largest payload mass [kg] (a 100 t flight-simulator hexapod load; more is a typing slip)
+MAX_PAYLOAD_KG = 1e5
+#: largest distance of the payload's centre of mass from the tool frame [m]
+MAX_PAYLOAD_ARM = 10.0
 
 
 @dataclass(frozen=True)
@@ -28,8 +32,9 @@ class Payload:
     """A point mass on the tool.
 
     Attributes:
-        mass: [kg], ≥ 0.
-        com: (3,) centre of mass in the measured (tool) frame [m].
+        mass: [kg], 0 ≤ mass ≤ :data:`MAX_PAYLOAD_KG`.
+        com: (3,) centre of mass in the measured (tool) frame [m], within
+            :data:`MAX_PAYLOAD_ARM` of its origin.
     """
 
     mass: float
@@ -41,6 +46,18 @@ class Payload:
             raise ParameterError(f"payload centre of mass must be 3 finite numbers [m], got {com}")
         if not np.isfinite(self.mass) or self.mass < 0:
             raise ParameterError(f"payload mass must be finite and ≥ 0 [kg], got {self.mass}")
+        if self.mass > MAX_PAYLOAD_KG:
+            raise ParameterError(
+                f"payload mass {self.mass:g} kg is beyond the bound: at most {MAX_PAYLOAD_KG:g} "
+                f"kg; give the mass in kg (e.g. 20 for 20 kg)"
+            )
+        arm = float(np.linalg.norm(com))
+        if arm > MAX_PAYLOAD_ARM:
+            raise ParameterError(
+                f"payload centre of mass ({', '.join(f'{v:g}' for v in com)}) m is {arm:g} m "
+                f"from the tool frame: at most {MAX_PAYLOAD_ARM:g} m; give X,Y,Z in metres "
+                f"(e.g. 0,0,0.1 for 100 mm along the tool z)"
+            )
         object.__setattr__(self, "mass", float(self.mass))
         object.__setattr__(self, "com", com)
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pincal.errors import UnknownNameError
+from pincal.errors import TooFewPosesError, UnknownNameError
 from pincal.identification import (
     HeldOutEvidence,
     MarkerFit,
@@ -212,6 +212,12 @@ def calibrate_markers(
         raise UnknownNameError("preset", settings.preset, sorted(mech.presets),
                                " (the presets of a marker calibration, --params)")  # fmt: skip
     k, seed = settings.folds, settings.seed
+    if len(meas[0]) < k:
+        raise TooFewPosesError(
+            f"{len(meas[0])} poses: a marker calibration is judged by {k}-fold held-out "
+            f"prediction, so it needs at least {k} poses (and enough to fit the instrument "
+            f"frame, the marker and the robot's parameters: tens in practice); measure more"
+        )
     say(f"registering the instrument frame and {len(meas)} marker(s), then identifying from "
         f"{len(meas[0])} poses; {k}-fold cross-validation judges the fit")  # fmt: skip
     registrations = Registrations(mech, setup)  # each set of poses registered once

@@ -163,3 +163,11 @@ def test_readings_relative_to_home_use_the_home_info_prints(tmp_path, table):
     assert np.allclose(read.sets[0].q_act, q, atol=1e-8)
     note = next(n for n in read.notes if "joint_reference: home" in n)
     assert f"elbow_joint = {h[2]:.6g}" in note
+
+
+def test_fewer_poses_than_folds_are_named_as_such(tmp_path, table):
+    """Two rows: the route's own 5-fold judgement needs 5 poses (it said "cross-validation
+    needs 2 ≤ K ≤ 2 poses, got K = 5", a K the user never gave)."""
+    title, rows, *_ = table
+    r = _calibrate(tmp_path, _write(tmp_path / "m.csv", title, rows[:2]), "--length-unit", "mm")
+    _refused(r, tmp_path, "TooFewPosesError", "2 poses", "5-fold", "at least 5")

@@ -140,3 +140,19 @@ def test_select_model_finds_the_sag(sagging_stewart):
     assert res.exit_code == 0, res.output
     doc = json.loads(res.stdout.strip().splitlines()[-1])
     assert doc["recommended"] == "geometric+compliance", doc
+
+
+@pytest.mark.parametrize(
+    ("payload", "says"),
+    [("20,100000,0,0", "centre of mass"), ("1e9", "mass"), ("20,0,0,-11", "centre of mass")],
+)
+def test_payload_mass_and_centre_are_bounded(tmp_path, payload, says):
+    """A 100 km lever arm or a million-tonne mass is a typing slip (issue 38, item 9):
+    refused as a usage error naming the bound, before the data are read."""
+    res = CliRunner().invoke(main, ["calibrate", "stewart_6ups", "--data",
+                                    str(tmp_path / "m.csv"), "--model",
+                                    "geometric+compliance", "--payload", payload,
+                                    "--out", str(tmp_path / "cal")])  # fmt: skip
+    assert res.exit_code == 2, res.output
+    said = " ".join(res.output.split())
+    assert "--payload" in said and says in said and "at most" in said, said

@@ -154,3 +154,7 @@ def test_thermal_calibration_validates_at_the_held_out_temperatures(warm_arm, th
     (tmp / "cold.csv").write_text("\n".join(lines[:head] + cut) + "\n")
     res = runner.invoke(main, ["validate", str(cal), "--data", str(tmp / "cold.csv")])
     assert res.exit_code != 0 and "temperature_C" in res.output
+    # the message names the held-out file, says the calibration is thermal and what to do
+    said = " ".join(res.output.split())
+    assert "cold.csv" in said and "thermal" in said and "no 'temperature_C' column" in said
+    assert "20 °C" in said  # why it is not assumed: the prediction would be at the reference
