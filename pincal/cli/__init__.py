@@ -18,7 +18,7 @@ import click
 class _Group(click.Group):
     """The pincal group: a usage error of a subcommand given ``--json`` is JSON too."""
 
-    def invoke(self, ctx: click.Context):
+    def invoke(self, ctx: click.Context) -> object:
         args = [*getattr(ctx, "_protected_args", []), *ctx.args]
         try:
             return super().invoke(ctx)

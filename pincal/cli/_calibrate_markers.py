@@ -4,11 +4,16 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from pincal.cli._calibrate_text import result_json
 from pincal.cli.common import model_source
+
+if TYPE_CHECKING:  # imported in the calls: the CLI starts without the model stack
+    from pincal.measure import MarkerSetup
+    from pincal.workflow import MarkerSettings
 
 __all__ = ["calibrate_markers", "check_marker_rows"]
 
@@ -17,7 +22,7 @@ MARKER_REMEDY = ("the held-out prediction (printed below) judges a marker calibr
                  "validate it on another session (validate CAL --data OTHER)")  # fmt: skip
 
 
-def check_marker_rows(model, data, setup, preset: str, yes: bool) -> None:
+def check_marker_rows(model: str, data: str, setup: MarkerSetup, preset: str, yes: bool) -> None:
     """Refuse a marker table of more rows than the pose route fits without ``--yes``.
 
     The rows are counted before the table is read; the chain is built (for the
@@ -39,8 +44,17 @@ def check_marker_rows(model, data, setup, preset: str, yes: bool) -> None:
     check_data_rows(str(data), "--data", n, yes)
 
 
-def calibrate_markers(model, data, setup, settings, out, as_json, force, *,
-                      yes: bool = False) -> None:  # fmt: skip
+def calibrate_markers(
+    model: str,
+    data: str,
+    setup: MarkerSetup,
+    settings: MarkerSettings,
+    out: str,
+    as_json: bool,
+    force: bool,
+    *,
+    yes: bool = False,
+) -> None:
     """``calibrate --link``: run :func:`pincal.workflow.calibrate_markers`, gate, write.
 
     A table of more than :data:`pincal.cli._limits.MAX_POSES` rows is refused without

@@ -5,12 +5,12 @@ Its text (printed, and written as report.txt) is :func:`pincal.report.calibratio
 
 from __future__ import annotations
 
-from pincal.identification import result_to_dict
+from pincal.identification import IdentificationRecord, result_to_dict
 
 __all__ = ["result_json"]
 
 
-def result_json(result, data_path: str, urdf: str | None = None) -> dict:
+def result_json(result: IdentificationRecord, data_path: str, urdf: str | None = None) -> dict:
     """The identification result as ``identification.json`` (SI values and std).
 
     Built via :func:`pincal.identification.result_to_dict` with the data

@@ -13,10 +13,15 @@ import difflib
 import math
 import types
 import typing
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from pincal._yaml import shown
 from pincal.errors import CampaignError
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
+
+_T = TypeVar("_T", bound="DataclassInstance")
 
 __all__ = ["build", "choice"]
 
@@ -32,7 +37,7 @@ def choice(value: str, valid: tuple[str, ...], key: str) -> None:
         )
 
 
-def _type_name(tp: Any) -> str:
+def _type_name(tp: object) -> str:
     return getattr(tp, "__name__", str(tp))
 
 
@@ -95,7 +100,7 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
     return value
 
 
-def build(cls: type, data: Any, key: str) -> Any:
+def build(cls: type[_T], data: object, key: str) -> _T:
     """An instance of the dataclass ``cls`` from YAML ``data``; ``key`` is its path ('' at the top).
 
     Every key is checked: an unknown one suggests the nearest valid key; a value of the

@@ -8,7 +8,6 @@ it lacks (:class:`pincal.io.SocketTable`). ``pincal run`` turns it into a socket
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 from pincal._yaml import shown
 from pincal.errors import CampaignError
@@ -76,21 +75,21 @@ class Sockets:
         return opts
 
 
-def _entries(value: Any) -> Any:
+def _entries(value: object) -> object:
     """``{a: b, …}`` → ``'a=b …'`` (the header form); anything else unchanged."""
     if isinstance(value, dict):
         return " ".join(f"{k}={v}" for k, v in value.items())
     return value
 
 
-def _socket(value: Any) -> Any:
+def _socket(value: object) -> object:
     """A socket id written as a number in YAML (``1``) → its text (``'1'``)."""
     if isinstance(value, bool) or not isinstance(value, int | float):
         return value
     return str(int(value)) if float(value).is_integer() else str(value)
 
 
-def plain_socket_section(data: Any) -> Any:
+def plain_socket_section(data: object) -> object:
     """The raw ``sockets`` mapping with YAML's conveniences spelt in the typed form.
 
     Socket ids written as numbers become text, ``ball: unknown`` becomes None, and

@@ -15,17 +15,31 @@ renders it.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from pincal.errors import PincalError
 from pincal.validation import CrossValidationBaseline, CrossValidationSummary, OrientationErrors
 
+if TYPE_CHECKING:  # imported in the calls: the CLI starts without the identification stack
+    from pincal.identification import CrossValidation
+    from pincal.io import CalibrationDirectory
+    from pincal.measure import Measurements
+    from pincal.model import Mechanism
+
+    #: the poses a cross-validated fit takes: one set, or one per marker (same rows)
+    _Poses = Measurements | tuple[Measurements, ...]
+
 __all__ = ["run_cv"]
 
 
-def _pose_fit(cal):
+def _pose_fit(
+    cal: CalibrationDirectory,
+) -> tuple[Measurements, Callable[[_Poses], Mechanism], Callable[[_Poses], Mechanism]]:
     """(measurements, fit, baseline fit) of a pose-file calibration, as calibrate ran it.
 
     Replayed: the preset, the method, the robust loss and a declared noise (from the
@@ -51,7 +65,7 @@ def _pose_fit(cal):
     if w is not None and w.source == "declared":  # --noise or the file's header
         noise = {"position": w.position_std * 1e3, "orientation": w.orientation_std * 1e3}
 
-    def fit(m):
+    def fit(m: _Poses) -> Mechanism:
         return identify(
             nominal, params, m, method, noise=noise, options=options
         ).calibrated_mechanism
@@ -59,7 +73,9 @@ def _pose_fit(cal):
     return meas, fit, lambda m: nominal
 
 
-def _recorded(markers: dict, k: int, seed: int):
+def _recorded(
+    markers: dict, k: int, seed: int
+) -> tuple[CrossValidation, CrossValidation] | None:
     """(calibrated, baseline) cross-validations calibrate recorded on these folds, or None."""
     from pincal.identification import CrossValidation
 
@@ -72,7 +88,7 @@ def _recorded(markers: dict, k: int, seed: int):
 
 
 def run_cv(
-    cal, k: int, seed: int, folds_out: Path | None, refit: bool = False
+    cal: CalibrationDirectory, k: int, seed: int, folds_out: Path | None, refit: bool = False
 ) -> CrossValidationSummary:
     """The cross-validation of ``validate --cv`` (its ``to_dict()``: the ``cv`` JSON).
 
@@ -91,6 +107,7 @@ def run_cv(
         return summary
     markers = cal.manifest.get("markers")
     recorded = None
+    meas: _Poses
     if markers:
         from pincal.workflow import rebuild, replay_procedure
 
@@ -128,20 +145,22 @@ def run_cv(
     )  # fmt: skip
 
 
-def _angles(cv, fit_rms: float | None = None) -> OrientationErrors | None:
+def _angles(cv: CrossValidation, fit_rms: float | None = None) -> OrientationErrors | None:
     """The rotation errors of a cross-validation [rad], None without orientation."""
     if cv.held_out_orientation is None:
         return None
-    fold_fit = float(np.sqrt(np.mean(cv.fit_orientation_rms**2)))
-    return OrientationErrors(cv.orientation_rms, cv.orientation_max, fold_fit, fit_rms)
+    rms, worst, per_fold = cv.orientation_rms, cv.orientation_max, cv.fit_orientation_rms
+    assert rms is not None and worst is not None and per_fold is not None  # set together
+    fold_fit = float(np.sqrt(np.mean(per_fold**2)))
+    return OrientationErrors(rms, worst, fold_fit, fit_rms)
 
 
-def _fold_fit(cv) -> float:
+def _fold_fit(cv: CrossValidation) -> float:
     """RMS over the folds of each fold fit's RMS on its own poses [m]."""
     return float(np.sqrt(np.mean(cv.fit_rms**2)))
 
 
-def _write_folds(folds, poses: int, folds_out: Path | None) -> None:
+def _write_folds(folds: Sequence[npt.ArrayLike], poses: int, folds_out: Path | None) -> None:
     fold_of = np.empty(poses, dtype=int)
     for j, rows in enumerate(folds):
         fold_of[np.asarray(rows, dtype=int)] = j

@@ -7,16 +7,21 @@ prints it and raises :class:`pincal.errors.QualityGateError` for a refusal witho
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from pincal.errors import QualityGateError
 
+if TYPE_CHECKING:  # imported in the calls: the CLI starts without the identification stack
+    from pincal.identification import GateLimits, IdentificationResult, QualityVerdict
+    from pincal.measure import Measurements, NoiseModel
+    from pincal.model import Mechanism
+
 __all__ = ["apply_gate", "gate_limits"]
 
 
-def gate_limits(max_change: str | None, significance: float | None = None):
+def gate_limits(max_change: str | None, significance: float | None = None) -> GateLimits:
     """:class:`GateLimits` from ``--max-change 'mm,rad'`` and ``--significance P``.
 
     ``--significance`` sets both the χ² test's (declared noise) and the
@@ -52,7 +57,7 @@ def gate_limits(max_change: str | None, significance: float | None = None):
     return GateLimits(**opts)
 
 
-def apply_gate(verdict, force: bool, *, before_fit: bool = False) -> dict[str, Any]:
+def apply_gate(verdict: QualityVerdict, force: bool, *, before_fit: bool = False) -> dict[str, Any]:
     """Print the verdict's warnings; refuse (raise) or record a forced override.
 
     Args:
@@ -81,8 +86,16 @@ def apply_gate(verdict, force: bool, *, before_fit: bool = False) -> dict[str, A
     return verdict.to_dict(overridden=force)
 
 
-def honest_uncertainty(result, verdict, mech, meas, noise, loss: str, bootstrap: int = 0,
-                       n_jobs: int = 1):  # fmt: skip
+def honest_uncertainty(
+    result: IdentificationResult,
+    verdict: QualityVerdict,
+    mech: Mechanism,
+    meas: Measurements,
+    noise: NoiseModel | dict[str, float] | None,
+    loss: str,
+    bootstrap: int = 0,
+    n_jobs: int = 1,
+) -> tuple[IdentificationResult, QualityVerdict, dict[str, object] | None]:
     """Check the fit's linearisation; inflate its σ where it fails; bootstrap on request.
 
     Returns ``(result, verdict, summary)``: the result with the covariance written (the

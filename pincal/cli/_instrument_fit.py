@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import click
+
+if TYPE_CHECKING:  # imported in the calls: the CLI starts without the identification stack
+    from pincal.identification import GateLimits, IdentificationResult, QualityVerdict
+    from pincal.model import Mechanism, ParameterSet
 
 __all__ = ["identify_instrument_files", "is_instrument_file"]
 
@@ -41,8 +47,17 @@ def _once_each(files: list[str]) -> None:
         seen[digest] = f
 
 
-def identify_instrument_files(mech, params, files: list[str], method: str, force: bool, limits,
-                              profile, bootstrap: int = 0, n_jobs: int = 1):  # fmt: skip
+def identify_instrument_files(
+    mech: Mechanism,
+    params: ParameterSet,
+    files: list[str],
+    method: str,
+    force: bool,
+    limits: GateLimits,
+    profile: str | None,
+    bootstrap: int = 0,
+    n_jobs: int = 1,
+) -> tuple[QualityVerdict, IdentificationResult, dict[str, object] | None]:
     """Machine and instrument parameters from instrument files (ballbar, probe, sockets…).
 
     The readings' unit check refuses before the fit (unless ``force``); the fit is judged

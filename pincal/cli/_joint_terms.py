@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING, Any
 import click
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from pincal.compensation import JointTermCorrection
     from pincal.identification import IdentificationRecord
     from pincal.io import CalibrationDirectory
@@ -211,8 +213,12 @@ def temperature_note(terms: tuple[str, ...]) -> str | None:
 
 
 def thermal_machine(
-    nominal: Mechanism, q_act: Any, span: tuple[float, float], alpha: float, rng: Any
-) -> tuple[Any, Any, Any, dict[str, float]]:
+    nominal: Mechanism,
+    q_act: np.ndarray,
+    span: tuple[float, float],
+    alpha: float,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
     """A simulated machine expanding with temperature (``simulate --temperature``).
 
     Args:

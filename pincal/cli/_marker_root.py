@@ -10,14 +10,19 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, TypeVar, overload
 
 import click
+
+if TYPE_CHECKING:  # imported in the calls: the CLI starts without the model stack
+    from pincal.measure import MarkerSetup
+
+_F = TypeVar("_F", bound=Callable[..., object])
 
 __all__ = ["root_option", "with_root"]
 
 
-def root_option(f: Callable[..., Any]) -> Callable[..., Any]:
+def root_option(f: _F) -> _F:
     """The ``--root`` option (a marker table's chain starts at LINK)."""
     return click.option(
         "--root", "root", default=None, metavar="LINK",
@@ -27,7 +32,15 @@ def root_option(f: Callable[..., Any]) -> Callable[..., Any]:
     )(f)  # fmt: skip
 
 
-def with_root(setup: Any, root: str | None, link: str | None) -> Any:
+@overload
+def with_root(setup: MarkerSetup, root: str | None, link: str | None) -> MarkerSetup: ...
+
+
+@overload
+def with_root(setup: None, root: str | None, link: str | None) -> None: ...
+
+
+def with_root(setup: MarkerSetup | None, root: str | None, link: str | None) -> MarkerSetup | None:
     """``setup`` (a :class:`pincal.measure.MarkerSetup`) starting at ``root``.
 
     Raises:
@@ -40,4 +53,5 @@ def with_root(setup: Any, root: str | None, link: str | None) -> Any:
     if root == link:
         raise click.BadParameter(f"--root {root!r} is the measured --link itself: the chain "
                                  "between them is empty", param_hint="--root")  # fmt: skip
+    assert setup is not None  # None only checks the options (no --link)
     return dataclasses.replace(setup, root=root)

@@ -10,9 +10,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, TypeVar
 
 import click
+
+if TYPE_CHECKING:  # imported in the calls: the CLI starts without the model stack
+    from pincal.identification import GateLimits
+    from pincal.measure import MarkerSetup
+    from pincal.workflow import MarkerSettings
+
+_F = TypeVar("_F", bound=Callable[..., object])
 
 __all__ = ["marker_options", "marker_settings", "setup_from_options"]
 
@@ -21,7 +28,7 @@ ORIENTATION_CHOICES = ("rpy-deg", "rpy-rad", "xyz-deg", "xyz-rad", "rotvec-deg",
                        "quat-wxyz", "quat-xyzw")  # fmt: skip
 
 
-def marker_options(f: Callable[..., Any]) -> Callable[..., Any]:
+def marker_options(f: _F) -> _F:
     """The marker-calibration options of ``pincal calibrate``."""
     opts = [
         click.option("--link", default=None, metavar="LINK",
@@ -76,7 +83,7 @@ def _numbers(text: str, what: str, n: tuple[int, ...]) -> list[float]:
 def setup_from_options(link: str, frame: str, marker_spec: str, columns: str | tuple[str, ...],
                        unit: str, lock_spec: str | None = None,
                        orientation_columns: str | None = None,
-                       orientation: str | None = None):  # fmt: skip
+                       orientation: str | None = None) -> MarkerSetup:  # fmt: skip
     """The :class:`pincal.measure.MarkerSetup` of the command-line options.
 
     ``columns``: ``--marker-columns`` (a text, or the texts of a repeated option), each
@@ -140,7 +147,7 @@ def setup_from_options(link: str, frame: str, marker_spec: str, columns: str | t
 
 
 def marker_settings(preset: str | None, method: str, prior_spec: str | None, loss: str,
-                    limits, instrument: str | None):  # fmt: skip
+                    limits: GateLimits, instrument: str | None) -> MarkerSettings:  # fmt: skip
     """The :class:`pincal.workflow.MarkerSettings` of the command-line options.
 
     Raises:

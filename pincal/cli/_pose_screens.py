@@ -14,7 +14,7 @@ when it compensates on every draw.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, TypeVar
 
 import click
 import numpy as np
@@ -22,13 +22,19 @@ import pinocchio as pin
 
 from pincal.errors import OptionValueError
 
+if TYPE_CHECKING:  # imported in the calls: the CLI starts without the design stack
+    from pincal.design import CandidateSet, ScreenSettings
+    from pincal.model import Mechanism, ParameterSet
+
+_F = TypeVar("_F", bound=Callable[..., object])
+
 __all__ = ["DRAWS", "compensation_test", "parse_reach_errors", "screen_options", "screen_settings"]
 
 #: error draws each candidate must compensate on
 DRAWS = 3
 
 
-def screen_options(func: Callable[..., Any]) -> Callable[..., Any]:
+def screen_options(func: _F) -> _F:
     """The screen options of `pincal poses` (see docs/cli.md, "Executable poses")."""
     options = [
         click.option("--joint-margin", type=float, default=0.05, show_default=True,
@@ -68,7 +74,7 @@ def parse_reach_errors(text: str) -> tuple[float, float] | None:
 
 def screen_settings(
     joint_margin: float, singular_margin: float, obstacles: tuple[str, ...], no_collisions: bool
-) -> Any:
+) -> ScreenSettings:
     """:class:`pincal.design.ScreenSettings` from the options (errors name the option)."""
     from pincal.cli._limits import naming_option
     from pincal.design import ScreenSettings, parse_box
@@ -79,8 +85,8 @@ def screen_settings(
 
 
 def compensation_test(
-    mech: Any, params: Any, errors: tuple[float, float], seed: int
-) -> Callable[[Any], np.ndarray]:
+    mech: Mechanism, params: ParameterSet, errors: tuple[float, float], seed: int
+) -> Callable[[CandidateSet], np.ndarray]:
     """The ``compensable`` test of :func:`pincal.design.screen_candidates`.
 
     Args:
@@ -110,7 +116,7 @@ def compensation_test(
             err=True,
         )
 
-    def test(cands: Any) -> np.ndarray:
+    def test(cands: CandidateSet) -> np.ndarray:
         ok = np.ones(len(cands), dtype=bool)
         targets = [pin.SE3(R, p) for R, p in zip(cands.rotations, cands.positions, strict=True)]
         for model in displaced:

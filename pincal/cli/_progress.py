@@ -18,7 +18,10 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING
+
+if TYPE_CHECKING:  # imported in the call: tqdm only on a terminal
+    from tqdm import tqdm
 
 __all__ = ["counted", "iterations"]
 
@@ -45,7 +48,7 @@ def interactive() -> bool:
         return False
 
 
-def _bar(label: str, total: int | None, unit: str) -> Any:
+def _bar(label: str, total: int | None, unit: str) -> tqdm:
     from tqdm import tqdm
 
     return tqdm(

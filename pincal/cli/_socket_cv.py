@@ -19,16 +19,22 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pincal.errors import PincalError
 from pincal.validation import CrossValidationBaseline, CrossValidationSummary
 
+if TYPE_CHECKING:  # imported in the calls: the CLI starts without the identification stack
+    from pincal.io import CalibrationDirectory
+    from pincal.measure import SocketData
+    from pincal.model import Mechanism
+
 __all__ = ["is_socket_calibration", "socket_cv"]
 
 
-def is_socket_calibration(cal) -> bool:
+def is_socket_calibration(cal: CalibrationDirectory) -> bool:
     """True when the calibration's first data file is a ball-in-socket file."""
     from pincal.io import file_kind
 
@@ -37,12 +43,14 @@ def is_socket_calibration(cal) -> bool:
     return file_kind(cal.data_file()) == "sockets"
 
 
-def _flange(mech, data, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _flange(mech: Mechanism, data: SocketData, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     T = [mech.frame_placement(c, data.frame) for c in mech.configurations(data.q_act[rows])]
     return np.array([t.translation for t in T]), np.array([t.rotation for t in T])
 
 
-def _linear_fit(data, P: np.ndarray, R: np.ndarray, sockets: list[str]):
+def _linear_fit(
+    data: SocketData, P: np.ndarray, R: np.ndarray, sockets: list[str]
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Ball (3,) and socket centres {name: (3,)} [m] of a fixed machine: least squares."""
     names = sorted(set(sockets))
     m = len(sockets)
@@ -59,7 +67,14 @@ def _linear_fit(data, P: np.ndarray, R: np.ndarray, sockets: list[str]):
     return x[:3], {s: x[3 + 3 * i : 6 + 3 * i] for i, s in enumerate(names)}
 
 
-def _held_out(data, P, R, ball, centres, sockets) -> tuple[np.ndarray, list[float]]:
+def _held_out(
+    data: SocketData,
+    P: np.ndarray,
+    R: np.ndarray,
+    ball: np.ndarray,
+    centres: dict[str, np.ndarray],
+    sockets: list[str],
+) -> tuple[np.ndarray, list[float]]:
     B = P + np.einsum("mij,j->mi", R, ball)
     seat = np.array([np.linalg.norm(B[k] - centres[s]) for k, s in enumerate(sockets)])
     dist = []
@@ -88,20 +103,24 @@ def _summary(
     )
 
 
-def socket_cv(cal, k: int, seed: int) -> CrossValidationSummary:
+def socket_cv(cal: CalibrationDirectory, k: int, seed: int) -> CrossValidationSummary:
     """The cross-validation of a socket calibration (its held-out seatings).
 
     Raises:
         PincalError: the data file is gone, or no known distance fixes the scale (the
             held-out socket distance would then measure nothing).
     """
+    from pincal.errors import MeasurementFormatError
     from pincal.identification import identify_instruments, kfold
     from pincal.io import read_instrument_file
+    from pincal.measure import SocketData
     from pincal.model import parameters
 
     path = cal.data_file()
     nominal = cal.nominal()
     data = read_instrument_file(path, nominal)
+    if not isinstance(data, SocketData):
+        raise MeasurementFormatError(f"{path}: not a ball-in-socket file (# pincal sockets 1)")
     if not data.plate.distances:
         raise PincalError(
             f"{path}: no known distance between sockets: the length scale is unidentifiable, "
@@ -142,12 +161,12 @@ def socket_cv(cal, k: int, seed: int) -> CrossValidationSummary:
         base["dist"] += dist0
         base["fit"].append(float(np.sqrt(np.mean(fit0**2))))
     cv = _summary("calibrated model", full["seat"], full["dist"], full["fit"])
-    nominal = _summary("nominal model", base["seat"], base["dist"], base["fit"])
-    assert cv.socket_distance_rms is not None and nominal.socket_distance_rms is not None
+    baseline = _summary("nominal model", base["seat"], base["dist"], base["fit"])
+    assert cv.socket_distance_rms is not None and baseline.socket_distance_rms is not None
     return CrossValidationSummary(
         k, seed, len(sockets), tuple(tuple(int(i) for i in rows) for rows in folds),
         float(cal.result.after.rms_position), cv.held_out_rms, cv.held_out_max,
-        cv.fold_fit_rms, nominal,
-        beats_baseline=bool(cv.socket_distance_rms * 1e3 < nominal.socket_distance_rms * 1e3),
+        cv.fold_fit_rms, baseline,
+        beats_baseline=bool(cv.socket_distance_rms * 1e3 < baseline.socket_distance_rms * 1e3),
         socket_distance_rms=cv.socket_distance_rms, socket_distance_max=cv.socket_distance_max,
     )  # fmt: skip

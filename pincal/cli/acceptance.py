@@ -9,10 +9,21 @@ from typing import TYPE_CHECKING
 import click
 
 from pincal.cli._limits import MAX_POSES, check_count, check_number, yes_option
-from pincal.cli.common import fail_cleanly, guard_paths, load_model, model_input, model_options
+from pincal.cli.common import (
+    ModelOptions,
+    fail_cleanly,
+    guard_paths,
+    load_model,
+    model_input,
+    model_options,
+)
 
 if TYPE_CHECKING:
-    from pincal.model import Mechanism
+    import numpy as np
+    import pinocchio as pin
+
+    from pincal.measure import Measurements
+    from pincal.model import Mechanism, ParameterSet
 
 
 def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
@@ -44,7 +55,7 @@ def load_calibrated(spec: str, nominal: Mechanism) -> Mechanism:
         raise ParameterError(f"{str(path)!r}: {exc}") from None
 
 
-def _other_machine(cal: str, params, values) -> list[str]:
+def _other_machine(cal: str, params: ParameterSet, values: np.ndarray) -> list[str]:
     """Warnings when the simulated machine is not the one the calibration was fitted on.
 
     A calibration of simulated data records its data file; ``pincal simulate`` wrote the
@@ -86,7 +97,9 @@ def _other_machine(cal: str, params, values) -> list[str]:
     return out
 
 
-def _grouped(meas, controller):
+def _grouped(
+    meas: Measurements, controller: Mechanism
+) -> tuple[list[pin.SE3], np.ndarray, np.ndarray | None]:
     """Commands (forward kinematics of the distinct actuator rows) and the poses per row."""
     import numpy as np
 
@@ -154,9 +167,20 @@ def _grouped(meas, controller):
 @model_options
 @fail_cleanly
 def acceptance(
-    model, cal, data_file, preset, errors, error_size, cycles, repeatability, seed, json_out,
-    as_json, yes, model_opts,
-) -> None:  # fmt: skip
+    model: str,
+    cal: str | None,
+    data_file: str | None,
+    preset: str | None,
+    errors: str,
+    error_size: str,
+    cycles: int,
+    repeatability: float,
+    seed: int,
+    json_out: str | None,
+    as_json: bool,
+    yes: bool,
+    model_opts: ModelOptions,
+) -> None:
     """ISO 9283 acceptance of MODEL: AP and RP at P1–P5 of the test cube.
 
     The test uses the components MODEL measures: a cube in x, y, z, a square in the

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
@@ -15,6 +16,7 @@ from pincal.cli._limits import NOISE_RANGE, check_data_rows, number_pair, yes_op
 from pincal.cli._marker_root import root_option, with_root
 from pincal.cli._markers import marker_options
 from pincal.cli.common import (
+    ModelOptions,
     fail_cleanly,
     guard_paths,
     load_model,
@@ -25,6 +27,11 @@ from pincal.cli.common import (
 )
 from pincal.errors import PincalError
 from pincal.identification import METHODS
+
+if TYPE_CHECKING:  # imported in the calls: the CLI starts without the model stack
+    from pincal.identification import IdentificationResult
+    from pincal.measure import Measurements
+    from pincal.model import Mechanism, ParameterSet
 
 
 @click.command()
@@ -143,10 +150,12 @@ from pincal.identification import METHODS
 @root_option
 @fail_cleanly
 def calibrate(
-    model, data, preset, error_model, payload, method, out, as_json, noise, loss, force,
-    max_change, significance, instrument, link, instrument_frame, marker_spec, marker_columns,
-    length_unit, orientation_columns, orientation, prior_spec, root, bootstrap, n_jobs,
-    yes, model_opts,
+    model: str, data: tuple[str, ...], preset: str | None, error_model: str, payload: str | None,
+    method: str, out: str, as_json: bool, noise: str | None, loss: str | None, force: bool,
+    max_change: str | None, significance: float | None, instrument: str | None, link: str | None,
+    instrument_frame: str, marker_spec: str, marker_columns: tuple[str, ...], length_unit: str,
+    orientation_columns: str | None, orientation: str | None, prior_spec: str | None,
+    root: str | None, bootstrap: int, n_jobs: int, yes: bool, model_opts: ModelOptions,
 ) -> None:  # fmt: skip
     """Identify MODEL's geometric parameters from measured poses (--data).
 
@@ -200,7 +209,7 @@ def calibrate(
         except PincalError as e:
             raise click.BadParameter(str(e), param_hint="--instrument") from None
     files = list(data)
-    data = files[0]
+    data_file = files[0]
     if len(files) > 1 and not all(is_instrument_file(f) for f in files):
         raise click.BadParameter(
             "several --data files are fitted together only when all are instrument files "
@@ -267,7 +276,7 @@ def calibrate(
                                    orientation)  # fmt: skip
         setup = with_root(setup, root, link)
         settings = marker_settings(preset, method, prior_spec, loss, limits, profile)
-        calibrate_markers(model, data, setup, settings, out, as_json, force, yes=yes)
+        calibrate_markers(model, data_file, setup, settings, out, as_json, force, yes=yes)
         return
     with_root(None, root, link)  # --root without --link: refused
     if prior_spec is not None:
@@ -282,7 +291,7 @@ def calibrate(
     params = with_joint_terms(mech, parameters(mech, preset), terms)
     for f in files:
         check_data_rows(f, "--data", len(params), yes)
-    if is_instrument_file(data):
+    if is_instrument_file(data_file):
         if declared is not None or loss != "linear":
             raise click.BadParameter(
                 "an instrument file carries its own noise; --noise and --loss apply to "
@@ -294,7 +303,7 @@ def calibrate(
         )
         noise_model = None
     else:
-        mf = read_measurement_file(data, mech)  # its data check is the gate's first look
+        mf = read_measurement_file(data_file, mech)  # its data check is the gate's first look
         meas = mf.measurements
         noise_model = meas.noise
         gate = dataclasses.replace(mf.data_check, limits=limits)
@@ -345,7 +354,15 @@ def calibrate(
         )
 
 
-def _identify_poses(mech, params, preset: str, meas, method: str, declared, loss: str):
+def _identify_poses(
+    mech: Mechanism,
+    params: ParameterSet,
+    preset: str,
+    meas: Measurements,
+    method: str,
+    declared: dict[str, float] | None,
+    loss: str,
+) -> IdentificationResult:
     """Identification from a pose / position / target measurement file."""
     import numpy as np
 

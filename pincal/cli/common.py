@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import wraps
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn, ParamSpec, TypeVar
 
 import click
 
@@ -19,6 +19,10 @@ if TYPE_CHECKING:
     from pincal.model import Mechanism
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
+
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+_F = TypeVar("_F", bound=Callable[..., object])
 
 
 def _wants_json(ctx: click.Context) -> bool:
@@ -32,7 +36,7 @@ def _json_error(exc: BaseException, message: str) -> None:
     click.echo(json.dumps(doc, ensure_ascii=False))
 
 
-def _pipe_closed() -> None:
+def _pipe_closed() -> NoReturn:
     """The reader of stdout went away (``| head``): stop quietly, exit 0 (Unix convention)."""
     try:  # further writes (and the flush at exit) go nowhere instead of raising again
         devnull = os.open(os.devnull, os.O_WRONLY)
@@ -42,7 +46,7 @@ def _pipe_closed() -> None:
     sys.exit(EXIT_OK)
 
 
-def fail_cleanly(func):
+def fail_cleanly(func: Callable[_P, _R]) -> Callable[_P, _R]:
     """Report PincalError (and file/value errors) as one line on stderr, exit code 1.
 
     With ``--json`` (the command's ``as_json``) the error is instead one JSON object on
@@ -53,7 +57,7 @@ def fail_cleanly(func):
     """
 
     @wraps(func)
-    def wrapper(*args, **kwargs):
+    def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
         ctx = click.get_current_context()
         try:
             _apply_environment(ctx)
@@ -152,14 +156,20 @@ def _parse_locks(values: tuple[str, ...]) -> dict[str, float | str]:
     return out
 
 
-def model_options(func):
+def model_options(func: Callable[..., _R]) -> Callable[..., _R]:
     """Add ``--sidecar``, ``--frame`` and ``--lock`` to a command that loads a model.
 
     The command receives them as one ``model_opts`` (:class:`ModelOptions`) argument.
     """
 
     @wraps(func)
-    def wrapper(*args, sidecar=None, frame=None, lock=(), **kwargs):
+    def wrapper(
+        *args: object,
+        sidecar: str | None = None,
+        frame: str | None = None,
+        lock: tuple[str, ...] = (),
+        **kwargs: object,
+    ) -> _R:
         opts = ModelOptions(sidecar, frame, _parse_locks(lock))
         return func(*args, model_opts=opts, **kwargs)
 
@@ -283,7 +293,7 @@ def pincal_wrote(path: Path) -> bool:
     return isinstance(doc, dict) and str(doc.get(WRITTEN_BY, "")).startswith("pincal")
 
 
-def overwrite_option(func):
+def overwrite_option(func: _F) -> _F:
     """``--overwrite``: replace side files (``<stem>.json``…) pincal did not write."""
     return click.option(
         "--overwrite",

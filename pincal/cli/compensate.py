@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal, overload
 
 import click
 
@@ -16,8 +17,38 @@ from pincal.cli._joint_terms import (
 from pincal.cli._progress import counted
 from pincal.cli.common import fail_cleanly, guard_paths
 
+if TYPE_CHECKING:  # imported in the calls: the CLI starts without the model stack
+    import numpy as np
 
-def load_calibrated(spec: str, payload=None, with_terms: bool = False, temperature=None):
+    from pincal.compensation import Compensation, JointTermCorrection
+    from pincal.io import PoseFile
+    from pincal.model import Mechanism, Payload
+
+
+@overload
+def load_calibrated(
+    spec: str,
+    payload: Payload | None = None,
+    with_terms: Literal[False] = False,
+    temperature: float | None = None,
+) -> tuple[Mechanism, str]: ...
+
+
+@overload
+def load_calibrated(
+    spec: str,
+    payload: Payload | None,
+    with_terms: Literal[True],
+    temperature: float | None = None,
+) -> tuple[Mechanism, str, JointTermCorrection | None, str]: ...
+
+
+def load_calibrated(
+    spec: str,
+    payload: Payload | None = None,
+    with_terms: bool = False,
+    temperature: float | None = None,
+) -> tuple[Mechanism, str] | tuple[Mechanism, str, JointTermCorrection | None, str]:
     """The calibrated mechanism of a calibration directory (or a model spec, as in 0.1).
 
     With ``with_terms``: also the calibration's joint terms (at ``payload``, a
@@ -104,9 +135,17 @@ def load_calibrated(spec: str, payload=None, with_terms: bool = False, temperatu
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
 def compensate(
-    calibration, targets, program, out, components, skip_unreachable, allow_branch_change, payload,
-    temperature, as_json,
-) -> None:  # fmt: skip
+    calibration: str,
+    targets: str | None,
+    program: str | None,
+    out: str,
+    components: str | None,
+    skip_unreachable: bool,
+    allow_branch_change: bool,
+    payload: str | None,
+    temperature: float | None,
+    as_json: bool,
+) -> None:
     """Compensated actuator commands: inverse kinematics of the calibrated machine.
 
     CALIBRATION is the directory written by `pincal calibrate` (a model name or URDF
@@ -152,6 +191,7 @@ def compensate(
         _program(calibration, program, out, components, skip_unreachable, payload,
                  temperature, allow_branch_change, as_json)  # fmt: skip
         return
+    assert targets is not None  # exactly one of --targets / --program, checked above
     guard_paths({"CALIBRATION": calibration, "--targets": targets}, {"--out": out})
     mech, origin, terms, terms_note = load_calibrated(
         calibration, read_payload(payload), with_terms=True, temperature=temperature
@@ -183,7 +223,7 @@ def compensate(
     path = write_commands(
         out, result.actuated, result.commands, idx, actuator_units=si_actuator_units(mech)
     )
-    summary = {
+    summary: dict[str, Any] = {  # the --json document
         "written": str(path),
         "source": origin,
         "model": mech.name,
@@ -222,7 +262,17 @@ def compensate(
                 click.echo(f"  target {k}: {why}")
 
 
-def _program(calibration, program, out, components, skip, payload, temperature, allow, as_json):
+def _program(
+    calibration: str,
+    program: str,
+    out: str,
+    components: str | None,
+    skip: bool,
+    payload: str | None,
+    temperature: float | None,
+    allow: bool,
+    as_json: bool,
+) -> None:
     """`--program`: the compensated G-code program (see :mod:`pincal.cli._program`)."""
     from pincal.cli._program import compensate_program
     from pincal.errors import OptionValueError
@@ -248,7 +298,7 @@ def _program(calibration, program, out, components, skip, payload, temperature, 
     )
 
 
-def _starts(pf, mech):
+def _starts(pf: PoseFile, mech: Mechanism) -> tuple[np.ndarray | None, str]:
     """The targets file's nominal commands in ``mech``'s actuator order, and a note."""
     import numpy as np
 
@@ -264,7 +314,7 @@ def _starts(pf, mech):
     return starts, f"the nominal command of each target ({len(starts)} in the targets file)"
 
 
-def _largest_steps(result, mech) -> dict:
+def _largest_steps(result: Compensation, mech: Mechanism) -> dict:
     """Largest |Δq| from the start per actuator kind: {"rad"|"mm": {value, target, actuator}}."""
     out = {}
     for unit, shown, factor in (("rad", "rad", 1.0), ("m", "mm", 1e3)):
@@ -283,7 +333,9 @@ def _step_lines(steps: dict) -> list[str]:
     ]
 
 
-def _terms_summary(result, terms, note: str) -> dict | None:
+def _terms_summary(
+    result: Compensation, terms: JointTermCorrection | None, note: str
+) -> dict | None:
     """The joint terms the commands include, and the largest deflection they undo."""
     import numpy as np
 

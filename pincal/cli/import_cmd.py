@@ -8,7 +8,14 @@ from pathlib import Path
 import click
 
 from pincal.cli._limits import check_number
-from pincal.cli.common import fail_cleanly, guard_paths, load_model, model_input, model_options
+from pincal.cli.common import (
+    ModelOptions,
+    fail_cleanly,
+    guard_paths,
+    load_model,
+    model_input,
+    model_options,
+)
 
 _FILE = click.Path(exists=True, dir_okay=False, path_type=Path)
 
@@ -48,10 +55,28 @@ _FILE = click.Path(exists=True, dir_okay=False, path_type=Path)
 @model_options
 @fail_cleanly
 def import_tracker(
-    points, log_path, targets_path, model, out, match, tolerance, unit, log_length_unit,
-    log_angle_unit, columns, target_columns, log_columns, delimiter, decimal, point_std,
-    max_residual, out_unit, ignore_unknown_points, as_json, model_opts,
-) -> None:  # fmt: skip
+    points: Path,
+    log_path: Path,
+    targets_path: Path,
+    model: str,
+    out: Path,
+    match: str,
+    tolerance: float,
+    unit: str | None,
+    log_length_unit: str,
+    log_angle_unit: str,
+    columns: str | None,
+    target_columns: str | None,
+    log_columns: str | None,
+    delimiter: str,
+    decimal: str,
+    point_std: float | None,
+    max_residual: float | None,
+    out_unit: str,
+    ignore_unknown_points: bool,
+    as_json: bool,
+    model_opts: ModelOptions,
+) -> None:
     """Pair a laser tracker's POINTS export with a controller log into a targets file.
 
     POINTS has one measured point per row (long format): a pose/group id and/or a

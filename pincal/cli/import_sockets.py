@@ -7,7 +7,14 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import fail_cleanly, guard_paths, load_model, model_input, model_options
+from pincal.cli.common import (
+    ModelOptions,
+    fail_cleanly,
+    guard_paths,
+    load_model,
+    model_input,
+    model_options,
+)
 
 __all__ = ["import_sockets", "parse_distance"]
 
@@ -71,9 +78,21 @@ def _ball(text: str) -> tuple[float, float, float] | None:
 @model_options
 @fail_cleanly
 def import_sockets(
-    table, model, socket_column, distances, std, plate, ball, length_unit, columns,
-    joint_units, joint_reference, out, as_json, model_opts,
-) -> None:  # fmt: skip
+    table: Path,
+    model: str,
+    socket_column: str,
+    distances: tuple[str, ...],
+    std: float,
+    plate: str,
+    ball: str,
+    length_unit: str,
+    columns: str | None,
+    joint_units: str | None,
+    joint_reference: str | None,
+    out: Path,
+    as_json: bool,
+    model_opts: ModelOptions,
+) -> None:
     """Read a plain CSV of ball-in-socket seatings (no pincal header) into a sockets file.
 
     TABLE has one row per seating: a column per actuated joint (named as the URDF

@@ -3,13 +3,29 @@
 from __future__ import annotations
 
 import json
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import click
 
 from pincal.cli._joint_terms import carrying, payload_option, read_payload
 from pincal.cli._markers import marker_options
-from pincal.cli.common import fail_cleanly, guard_paths, load_model, model_input, model_options
+from pincal.cli.common import (
+    ModelOptions,
+    fail_cleanly,
+    guard_paths,
+    load_model,
+    model_input,
+    model_options,
+)
+
+if TYPE_CHECKING:  # imported in the calls: the CLI starts without the identification stack
+    from pincal.identification import Fitted
+    from pincal.measure import MarkerSetup, Measurements
+    from pincal.model import Mechanism
+
+    #: a candidate fitting procedure: training measurements → predictor
+    _Procedure = Callable[[Measurements], Fitted]
 
 __all__ = ["select_model_cmd"]
 
@@ -19,32 +35,36 @@ DEFAULT_MODELS = (
 )
 
 
-def _pose_candidates(mech, meas, preset: str, models: list[str], method: str):
+def _pose_candidates(
+    mech: Mechanism, meas: Measurements, preset: str, models: list[str], method: str
+) -> dict[str, _Procedure]:
     from pincal.identification import fitted, identify
     from pincal.model import split_model
     from pincal.sensitivity import parameters
 
-    def make(spec: str):
+    def make(spec: str) -> _Procedure:
         params = parameters(mech, "+".join([preset, *split_model(spec)]))
         return lambda m: fitted(mech, identify(mech, params, m, method))
 
     return {spec: make(spec) for spec in models}
 
 
-def _marker_candidates(mech, setup, preset: str, models: list[str], method: str):
+def _marker_candidates(
+    mech: Mechanism, setup: MarkerSetup, preset: str, models: list[str], method: str
+) -> dict[str, _Procedure]:
     from pincal.identification import fit_markers, fitted
     from pincal.model import split_model
 
-    def make(spec: str):
+    def make(spec: str) -> _Procedure:
         full = "+".join([preset, *split_model(spec)])
 
-        def fit(m):
+        def fit(m: Measurements) -> Fitted:
             f = fit_markers(mech, setup, m, full, method)
             return fitted(f.registration.mechanism, f.result)
 
         return fit
 
-    def registration(m):
+    def registration(m: Measurements) -> Fitted:
         f = fit_markers(mech, setup, m, registration_only=True)
         return fitted(f.registration.mechanism, f.result)
 
@@ -95,10 +115,25 @@ def _marker_candidates(mech, setup, preset: str, models: list[str], method: str)
 @marker_options
 @fail_cleanly
 def select_model_cmd(
-    model, data, preset, models, k, seed, method, payload, as_json, model_opts,
-    link, instrument_frame, marker_spec, marker_columns, length_unit, orientation_columns,
-    orientation, prior_spec,
-) -> None:  # fmt: skip
+    model: str,
+    data: str,
+    preset: str | None,
+    models: str,
+    k: int,
+    seed: int,
+    method: str,
+    payload: str | None,
+    as_json: bool,
+    model_opts: ModelOptions,
+    link: str | None,
+    instrument_frame: str,
+    marker_spec: str,
+    marker_columns: tuple[str, ...],
+    length_unit: str,
+    orientation_columns: str | None,
+    orientation: str | None,
+    prior_spec: str | None,
+) -> None:
     """Fit candidate error models and rank them by K-fold held-out position error.
 
     Every candidate is refitted from scratch on each fold (for a marker table the
@@ -145,8 +180,7 @@ def select_model_cmd(
                                    length_unit, lock_spec)  # fmt: skip
         mech = marker_mechanism(model, setup)
         meas = read_marker_table(data, mech, setup)
-        candidates: dict[str, Any] = _marker_candidates(mech, setup, preset or "chain", specs,
-                                                        method)  # fmt: skip
+        candidates = _marker_candidates(mech, setup, preset or "chain", specs, method)
     else:
         from pincal.io import read_measurement_file
 

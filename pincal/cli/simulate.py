@@ -18,6 +18,7 @@ from pincal.cli._limits import (
     yes_option,
 )
 from pincal.cli.common import (
+    ModelOptions,
     fail_cleanly,
     guard_paths,
     load_model,
@@ -135,9 +136,24 @@ def parse_pair(spec: str, option: str) -> tuple[float, float]:
 @model_options
 @fail_cleanly
 def simulate(
-    model, poses_file, n_random, preset, errors, error_size, noise, seed, length_unit, out,
-    instrument, temperature, thermal, as_json, yes, overwrite, model_opts,
-) -> None:  # fmt: skip
+    model: str,
+    poses_file: str | None,
+    n_random: int | None,
+    preset: str | None,
+    errors: str,
+    error_size: str,
+    noise: str,
+    seed: int,
+    length_unit: str,
+    out: str,
+    instrument: str | None,
+    temperature: str | None,
+    thermal: float,
+    as_json: bool,
+    yes: bool,
+    overwrite: bool,
+    model_opts: ModelOptions,
+) -> None:
     """Simulate a measurement campaign of MODEL with random geometric errors.
 
     The "actual" machine is MODEL with random errors on the preset's parameters; it is
@@ -201,6 +217,7 @@ def simulate(
     if poses_file is not None:
         q_act = read_pose_rows(poses_file, nominal)
     else:
+        assert n_random is not None  # exactly one of --poses / --random, checked above
         click.echo(f"… sampling {n_random} random poses", err=True)
         q_act = sample_actuators(nominal, n_random, rng)
     skipped: list[int] = []
@@ -213,6 +230,7 @@ def simulate(
     if instrument == SOCKET:
         from pincal.cli._sockets import simulate_socket_file
 
+        assert n_random is not None  # --instrument socket needs --random, checked above
         path, n_meas, truth_sockets = simulate_socket_file(
             nominal, actual, n_random, pos_mm * 1e-3, rng, out, length_unit
         )

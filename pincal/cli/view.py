@@ -19,8 +19,10 @@ import json
 import math
 import signal
 import sys
+from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, TypedDict
+from types import FrameType
+from typing import TYPE_CHECKING, NoReturn, TypedDict
 
 import click
 import numpy as np
@@ -38,6 +40,7 @@ from pincal.errors import ModelFileError
 from pincal.io import read_pose_rows
 
 if TYPE_CHECKING:
+    from pincal.model import Mechanism
     from pincal.viz import Arrow
 
 #: most poses drawn (ghost copies multiply the page size)
@@ -55,7 +58,7 @@ class _ViewOptions(TypedDict):
     up: str
 
 
-def _calibrated_mechanism(spec: Path):
+def _calibrated_mechanism(spec: Path) -> Mechanism:
     """The calibrated mechanism of a calibration directory (a bare .urdf as in 0.1)."""
     from pincal.cli.common import announce
     from pincal.io import read_calibration
@@ -68,7 +71,7 @@ def _calibrated_mechanism(spec: Path):
     return cal.calibrated()
 
 
-def _urdf_for_viz(mech) -> str | Path:
+def _urdf_for_viz(mech: Mechanism) -> str | Path:
     """What viz draws from: the URDF file, or the URDF text of a model from MJCF."""
     src = mech.source
     if src is not None and Path(src).suffix.lower() == ".urdf" and Path(src).is_file():
@@ -267,10 +270,10 @@ def view(
 
 
 @contextlib.contextmanager
-def _exit_on_signals():
+def _exit_on_signals() -> Iterator[None]:
     """Turn SIGTERM / SIGHUP into SystemExit, so ``finally`` stops the live server."""
 
-    def leave(signum, _frame):
+    def leave(signum: int, _frame: FrameType | None) -> NoReturn:
         raise SystemExit(128 + signum)
 
     wanted = [signal.SIGTERM] + ([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from pincal.errors import MeasurementError
@@ -104,7 +105,7 @@ class BlockScales:
         return {"position_mm": self.position * 1e3, "orientation_mrad": self.orientation * 1e3}
 
 
-def _floats(v: Any) -> np.ndarray | None:
+def _floats(v: npt.ArrayLike | None) -> np.ndarray | None:
     return None if v is None else np.asarray(v, dtype=float)
 
 

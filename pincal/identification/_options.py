@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -30,25 +29,39 @@ __all__ = [
 LOSSES = ("linear", "huber", "soft_l1", "cauchy", "arctan")
 
 
-def check_int(owner: str, name: str, value: Any, low: int, high: int | None = None) -> None:
+def check_int(owner: str, name: str, value: object, low: int, high: int | None = None) -> None:
     """Raise SolverOptionError unless ``value`` is an integer in [low, high]."""
-    ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-    ok = ok and value >= low and (high is None or value <= high)
+    ok = (
+        isinstance(value, (int, np.integer))
+        and not isinstance(value, bool)
+        and value >= low
+        and (high is None or value <= high)
+    )
     if not ok:
         valid = f"an integer ≥ {low}" if high is None else f"an integer in [{low}, {high}]"
         raise SolverOptionError(f"{owner}.{name} must be {valid}, got {value!r}")
 
 
 def check_real(
-    owner: str, name: str, value: Any, low: float, high: float = math.inf, *, open_low: bool = False
+    owner: str,
+    name: str,
+    value: object,
+    low: float,
+    high: float = math.inf,
+    *,
+    open_low: bool = False,
 ) -> None:
     """Raise SolverOptionError unless ``value`` is a finite real in [low, high].
 
     With ``open_low`` the interval is (low, high].
     """
-    ok = isinstance(value, (int, float, np.floating)) and not isinstance(value, bool)
-    ok = ok and math.isfinite(float(value)) and value <= high
-    ok = ok and (value > low if open_low else value >= low)
+    ok = (
+        isinstance(value, (int, float, np.floating))
+        and not isinstance(value, bool)
+        and math.isfinite(float(value))
+        and value <= high
+        and (value > low if open_low else value >= low)
+    )
     if not ok:
         bracket = "(" if open_low else "["
         top = "∞)" if math.isinf(high) else f"{high:g}]"

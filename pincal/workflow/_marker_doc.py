@@ -10,6 +10,7 @@ held-out evidence, the notes; the cross-validation that judged the fit, per pose
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
 import pinocchio as pin
@@ -24,7 +25,7 @@ if TYPE_CHECKING:
 __all__ = ["marker_doc"]
 
 
-def _mm(v: Any) -> list[float]:
+def _mm(v: Iterable[float]) -> list[float]:
     return [float(x) * 1e3 for x in v]
 
 
