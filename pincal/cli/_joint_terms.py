@@ -161,6 +161,13 @@ def calibration_terms(
     terms = terms.at_temperature(temperature)
     load = payload.describe() if payload is not None else "the calibration's load"
     kinds = sorted({n.rpartition(".")[2] for n in terms.params.names})
+    if payload is not None and not any("compliance" in k for k in kinds):
+        raise click.BadParameter(
+            f"calibration {str(cal.path)!r} has joint terms ({', '.join(kinds)}) but no "
+            f"compliance: a payload changes its predictions only with a compliance "
+            f"(calibrate --model geometric+compliance); drop --payload",
+            param_hint="--payload",
+        )
     line = f"{len(terms.params)} joint terms ({', '.join(kinds)}) at {load}"
     if "1/K" in terms.params.units:
         from pincal.model import THERMAL_REFERENCE_C
