@@ -29,6 +29,7 @@ __all__ = [
     "THERMAL_SPAN_C",
     "calibration_terms",
     "carrying",
+    "check_terms_record",
     "compliance_note",
     "payload_option",
     "read_payload",
@@ -157,10 +158,18 @@ def calibration_terms(
     nominal: Mechanism = cal.nominal()
     if payload is not None:
         nominal = with_payload(nominal, payload, replace=True)
+    check_terms_record(cal)
     terms = JointTermCorrection.from_names(nominal, cal.result.names, cal.result.full_values)
     terms = terms.at_temperature(temperature)
     load = payload.describe() if payload is not None else "the calibration's load"
     kinds = sorted({n.rpartition(".")[2] for n in terms.params.names})
+    if payload is not None and not any("compliance" in k for k in kinds):
+        raise click.BadParameter(
+            f"calibration {str(cal.path)!r} has joint terms ({', '.join(kinds)}) but no "
+            f"compliance: a payload changes its predictions only with a compliance "
+            f"(calibrate --model geometric+compliance); drop --payload",
+            param_hint="--payload",
+        )
     line = f"{len(terms.params)} joint terms ({', '.join(kinds)}) at {load}"
     if "1/K" in terms.params.units:
         from pincal.model import THERMAL_REFERENCE_C
@@ -245,3 +254,60 @@ def thermal_machine(
     q = actual_joint_values(nominal, terms, values, q_act, cond)
     shift = actual_shift(nominal, terms, values, q_act, cond)
     return q, shift, T, {terms.names[k]: alpha for k in terms.joint_terms}
+
+
+def check_terms_record(cal: CalibrationDirectory) -> None:
+    """``joint_terms.yaml`` says what the calibration applies: its terms and payload.
+
+    The values applied are read from ``identification.json`` and the payload from the
+    nominal model (``nominal.urdf``); the record beside them is what a reader sees. Each
+    term's value [SI] and the payload (mass [kg], centre [m]) must agree to 1e-9
+    relative, else the directory was edited (and re-hashed) and is refused.
+
+    Raises:
+        CalibrationDirectoryError: the record disagrees (the first difference named).
+    """
+    import math
+    import xml.etree.ElementTree as ET
+
+    from pincal._yaml import load_yaml
+    from pincal.errors import CalibrationDirectoryError
+
+    path = cal.path / TERMS_FILE
+    if not path.is_file():
+        return
+    doc = load_yaml(path, "joint terms record", CalibrationDirectoryError)
+    fix = "the directory was edited after calibrate wrote it; re-run `pincal calibrate`"
+    if not isinstance(doc, dict) or not isinstance(doc.get("terms"), list):
+        raise CalibrationDirectoryError(f"{path}: expected a mapping with a 'terms' list; {fix}")
+
+    def close(a: object, b: float) -> bool:
+        return isinstance(a, int | float) and math.isclose(float(a), b, rel_tol=1e-9)
+
+    values = dict(zip(cal.result.names, map(float, cal.result.full_values), strict=True))
+    for t in doc["terms"]:
+        name = t.get("name") if isinstance(t, dict) else None
+        if name not in values or not close(t.get("value"), values[name]):
+            said = values.get(name) if isinstance(name, str) else None
+            raise CalibrationDirectoryError(
+                f"{path}: term {name!r} reads {t.get('value') if isinstance(t, dict) else t!r}"
+                f", identification.json {said!r}; {fix}"
+            )
+    load = doc.get("payload")
+    link = ET.fromstring(cal.nominal().urdf_xml).find("link[@name='payload']/inertial")
+    if load is None and link is None:
+        return
+    ok = False
+    if isinstance(load, dict) and link is not None:
+        mass, origin = link.find("mass"), link.find("origin")
+        xyz = origin.get("xyz", "0 0 0") if origin is not None else "0 0 0"
+        com = [float(v) for v in xyz.split()]
+        recorded = load.get("com_m_tool_frame")
+        ok = mass is not None and close(load.get("mass_kg"), float(mass.get("value", "nan")))
+        ok = ok and isinstance(recorded, list) and len(recorded) == len(com) == 3
+        ok = ok and all(close(a, b) for a, b in zip(recorded or [], com, strict=False))
+    if not ok:
+        raise CalibrationDirectoryError(
+            f"{path}: the payload {load!r} is not the one the calibration's nominal model "
+            f"carries; {fix}"
+        )

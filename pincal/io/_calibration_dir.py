@@ -144,9 +144,11 @@ class CalibrationDirectory:
                 found.append(str(p))
         if found:
             raise CalibrationDirectoryError(
-                f"the data file the calibration {clip(str(self.path))} was fitted on changed "
-                f"since ({', '.join(clip(f) for f in found)} differ from its SHA-256); re-run "
-                "calibrate, or restore the file"
+                f"the data file the calibration {clip(str(self.path))} was fitted on "
+                f"({clip(str(typed))}) is not found: "
+                f"{', '.join(clip(f) for f in found)} differ from its SHA-256 (changed since, "
+                "or another file of that name); restore the file, run from calibrate's "
+                "directory, or re-run calibrate"
             )
         raise CalibrationDirectoryError(
             f"the data file the calibration {clip(str(self.path))} was fitted on "

@@ -30,7 +30,13 @@ def test_cv_from_another_directory_uses_the_fitted_file(tmp_path, monkeypatch):
     (tmp_path / "a" / "m.csv").write_text("x\n")  # the fitted file changed
     out = run(main, ["validate", str(tmp_path / "a" / "cal"), "--cv", "3"])
     assert out.exit_code != 0 and "changed since" in out.output
+    # moved away: only b's other m.csv is found; the message does not call it "changed"
+    # alone (it may be another file of that name) and names the file as fitted
     (tmp_path / "a" / "m.csv").unlink()
+    out = run(main, ["validate", str(tmp_path / "a" / "cal"), "--cv", "3"])
+    said = " ".join(out.output.split())
+    assert out.exit_code != 0 and "another file of that name" in said, said
+    assert "(m.csv) is not found" in said
     (tmp_path / "b" / "m.csv").unlink()
     out = run(main, ["validate", str(tmp_path / "a" / "cal"), "--cv", "3"])
     assert out.exit_code != 0 and "is not found" in out.output

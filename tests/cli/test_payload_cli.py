@@ -156,3 +156,45 @@ def test_payload_mass_and_centre_are_bounded(tmp_path, payload, says):
     assert res.exit_code == 2, res.output
     said = " ".join(res.output.split())
     assert "--payload" in said and says in said and "at most" in said, said
+
+
+def _edited(cal, tmp, old: str, new: str):
+    """A copy of ``cal`` whose joint_terms.yaml reads ``new`` for ``old``, re-hashed."""
+    import hashlib
+    import shutil
+
+    copy = tmp / f"edited-{abs(hash(new))}"
+    shutil.copytree(cal, copy)
+    record = copy / "joint_terms.yaml"
+    text = record.read_text()
+    assert old in text
+    record.write_text(text.replace(old, new, 1))
+    manifest = json.loads((copy / "calibration.json").read_text())
+    manifest["files"]["joint_terms.yaml"] = hashlib.sha256(record.read_bytes()).hexdigest()
+    (copy / "calibration.json").write_text(json.dumps(manifest, indent=1))
+    return copy
+
+
+def test_the_terms_record_agrees_with_what_is_applied(sagging_stewart):
+    """joint_terms.yaml (what a reader sees) against identification.json's values and the
+    nominal model's payload (what is applied): an edited, re-hashed record is refused
+    (issue 38, item 9); before, it was ignored silently."""
+    tmp = sagging_stewart[0]
+    cal = tmp / "record"
+    res = CliRunner().invoke(main, ["calibrate", str(STEWART), "--data", str(tmp / "meas.csv"),
+                                    "--model", "geometric+compliance", "--payload", SPINDLE,
+                                    "--out", str(cal)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    args = ["--targets", str(tmp / "targets.csv"), "--out", str(tmp / "c.csv")]
+    res = CliRunner().invoke(main, ["compensate", str(cal), *args])
+    assert res.exit_code == 0, res.output
+    record = yaml.safe_load((cal / "joint_terms.yaml").read_text())
+    mass = record["payload"]["mass_kg"]
+    value = record["terms"][0]["value"]
+    for old, new, says in (
+        (f"mass_kg: {mass}", f"mass_kg: {mass * 2}", "payload"),
+        (f"value: {value}", f"value: {value * 3}", record["terms"][0]["name"]),
+    ):
+        res = CliRunner().invoke(main, ["compensate", str(_edited(cal, tmp, old, new)), *args])
+        assert res.exit_code == 1, res.output
+        assert "CalibrationDirectoryError" in res.output and says in res.output, res.output

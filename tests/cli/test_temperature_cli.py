@@ -158,3 +158,14 @@ def test_thermal_calibration_validates_at_the_held_out_temperatures(warm_arm, th
     said = " ".join(res.output.split())
     assert "cold.csv" in said and "thermal" in said and "no 'temperature_C' column" in said
     assert "20 °C" in said  # why it is not assumed: the prediction would be at the reference
+
+
+def test_a_payload_on_a_thermal_calibration_is_refused(warm_arm, thermal_cal):
+    """A thermal calibration has no compliance: --payload changes nothing and was
+    accepted silently; now a usage error naming what it needs."""
+    tmp = warm_arm[0]
+    res = CliRunner().invoke(main, ["validate", str(thermal_cal), "--data", str(tmp / "m.csv"),
+                                    "--payload", "5"])  # fmt: skip
+    assert res.exit_code == 2, res.output
+    said = " ".join(res.output.split())
+    assert "--payload" in said and "no compliance" in said and "thermal" in said, said
