@@ -12,13 +12,16 @@ runs in test_roster.py (the machines are in the roster)."""
 
 from __future__ import annotations
 
+import json
 import logging
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from click.testing import CliRunner
 
+from pincal.cli import main
 from pincal.model import Mechanism, degenerate_translations, load_mechanism, sample_actuators
 from pincal.sensitivity import base_parameters, parameters
 from tests.open_world.machines import write_machine
@@ -86,6 +89,33 @@ def test_forward_stays_on_homes_branch_at_far_commands(models, name):
         assert np.max(np.abs(pin.log3(T.rotation.T @ C.rotation))) <= 1e-9, row
 
 
+def _simulate(model: Path, out: Path) -> dict:
+    res = CliRunner().invoke(main, ["simulate", str(model), "--random", "8", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    truth = json.loads(out.with_suffix(".truth.json").read_text())
+    return {p["name"]: p["value"] for p in truth["parameters"]}
+
+
+def test_default_simulation_of_an_overconstrained_wrist_assembles(models, tmp_path):
+    """The Agile Eye's 6d closures are over-constrained (all axes through one point):
+    55 of its 72 ``full`` parameters move an axis off the centre. Errors drawn on them
+    gave an actual machine that cannot be assembled (ClosureError before the fix)."""
+    truth = _simulate(models["agile_eye"], tmp_path / "m.csv")
+    assert len(truth) == 72
+    assert all(truth[f"seat2.t{d}"] == 0.0 for d in "xyz")  # breaks the closure
+    assert truth["base1.offset"] != 0.0
+
+
+def test_default_simulation_keeps_emulated_balls_whole(models, tmp_path):
+    """A translation between the three revolutes of an emulated ball splits it (the
+    mechanism gains freedoms: MobilityError before the fix); simulate leaves them 0."""
+    mech = _load(models["clavel_delta"])
+    truth = _simulate(models["clavel_delta"], tmp_path / "m.csv")
+    split = degenerate_translations(mech)
+    assert len(split) == 42 and all(truth[n] == 0.0 for n in split)
+    assert sum(v != 0.0 for v in truth.values()) == len(truth) - 42
+
+
 def test_poses_reduces_full_to_the_base_preset_info_offers(models):
     """One rank decision: the base set of ``full`` (what `poses` and `calibrate` use)
     is the ``base`` preset (57 parameters with split-joint translations before the fix,
@@ -94,3 +124,17 @@ def test_poses_reduces_full_to_the_base_preset_info_offers(models):
     reduced = base_parameters(mech, parameters(mech, "full"))
     assert reduced.names == parameters(mech, "base").names
     assert not set(reduced.names) & set(degenerate_translations(mech))
+
+
+def test_reach_screen_imposes_the_components_a_planar_machine_controls(tmp_path):
+    """The five-bar measures x y rz with 2 actuators: its reach screen now runs (its
+    errors used to break the planar loop, so it never did) and imposes x y — all three
+    were refused with MobilityError by compensate."""
+    from pincal.cli._pose_screens import controlled_components
+    from tests.sensitivity.five_bar import FIVE_BAR_SIDECAR, FIVE_BAR_URDF
+
+    mech = Mechanism(FIVE_BAR_URDF, FIVE_BAR_SIDECAR)
+    assert tuple(mech.measured_components) == ("x", "y", "rz")
+    assert controlled_components(mech) == ("x", "y")
+    stewart = _load(write_stewart(tmp_path))
+    assert controlled_components(stewart) == ("x", "y", "z", "rx", "ry", "rz")
