@@ -7,7 +7,8 @@ surviving candidate's nominal pose is compensated on the nominal model displaced
 random errors of the preset's parameters (uniform within ±``--reach-errors`` mm / mrad,
 as ``pincal simulate --error-size`` draws them; :data:`DRAWS` draws seeded by
 ``--seed``), from the candidate's own command, limits checked, branch changes refused
-— what ``pincal compensate`` does with a calibration of that size. A candidate is kept
+— what ``pincal compensate`` does with a calibration of that size, imposing the
+components the machine controls (:func:`controlled_components`). A candidate is kept
 when it compensates on every draw.
 """
 
@@ -28,7 +29,14 @@ if TYPE_CHECKING:  # imported in the calls: the CLI starts without the design st
 
 _F = TypeVar("_F", bound=Callable[..., object])
 
-__all__ = ["DRAWS", "compensation_test", "parse_reach_errors", "screen_options", "screen_settings"]
+__all__ = [
+    "DRAWS",
+    "compensation_test",
+    "controlled_components",
+    "parse_reach_errors",
+    "screen_options",
+    "screen_settings",
+]
 
 #: error draws each candidate must compensate on
 DRAWS = 3
@@ -92,15 +100,20 @@ def compensation_test(
     Args:
         mech: the nominal mechanism.
         params: the preset's parameter set (the errors are drawn on it, before any
-            reduction to a base set, as ``pincal simulate`` draws them).
+            reduction to a base set, as ``pincal simulate`` draws them: none on
+            parameters a built machine cannot have, :func:`buildable_mask`).
         errors: uniform error bounds (mm for lengths, mrad for angles).
         seed: random seed of the errors.
     """
+    from pincal.cli._buildable import buildable_mask
     from pincal.compensation import compensate
     from pincal.errors import PincalError
+    from pincal.model import sample_actuators
 
     rng = np.random.default_rng([seed, 37])
     bound = np.array([errors[0] * 1e-3 if u == "m" else errors[1] * 1e-3 for u in params.units])
+    bound *= buildable_mask(mech, params, sample_actuators(mech, 10, np.random.default_rng(seed)))
+    comps = controlled_components(mech)
     displaced, failed = [], []
     for _ in range(DRAWS):
         try:
@@ -123,8 +136,32 @@ def compensation_test(
             if not ok.any():
                 break
             idx = np.flatnonzero(ok)
-            result = compensate(model, [targets[i] for i in idx], starts=cands.q_act[idx])
+            result = compensate(
+                model, [targets[i] for i in idx], starts=cands.q_act[idx], components=comps
+            )
             ok[idx] = np.asarray(result.reachable, dtype=bool)
         return ok
 
     return test
+
+
+def controlled_components(mech: Mechanism) -> tuple[str, ...]:
+    """The measured components a target of the reach screen imposes.
+
+    All of them when the machine moves as many; else, positions first, each component
+    whose row of the actuator Jacobian at home [m or rad per m or rad] adds to the rank
+    of those kept, up to the mobility (a planar five-bar measuring x y rz is screened on
+    x y). Returns component names in x y z rx ry rz order.
+    """
+    from pincal.model import actuator_jacobian
+
+    comps = tuple(mech.measured_components)
+    if len(comps) <= mech.mobility:
+        return comps
+    G = actuator_jacobian(mech, mech.q_home)  # (components, actuators)
+    order = sorted(range(len(comps)), key=lambda k: comps[k].startswith("r"))
+    keep: list[int] = []
+    for k in order:
+        if len(keep) < mech.mobility and np.linalg.matrix_rank(G[[*keep, k]]) > len(keep):
+            keep.append(k)
+    return tuple(comps[k] for k in sorted(keep))

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from pincal.cli._buildable import buildable_mask
 from pincal.cli._kinds import SOCKET, InstrumentChoice
 from pincal.cli._limits import (
     ERROR_SIZE_RANGE,
@@ -208,11 +209,6 @@ def simulate(
     preset = preset or (next(iter(nominal.presets), "full"))
     params = parameters(nominal, preset)
     values = np.zeros(len(params))
-    if err_seed is not None:
-        er = np.random.default_rng(err_seed)
-        bound = np.array([size_mm * 1e-3 if u == "m" else size_mrad * 1e-3 for u in params.units])
-        values = er.uniform(-bound, bound)
-    actual = params.apply(nominal, values)
     rng = np.random.default_rng(seed)
     if poses_file is not None:
         q_act = read_pose_rows(poses_file, nominal)
@@ -220,6 +216,11 @@ def simulate(
         assert n_random is not None  # exactly one of --poses / --random, checked above
         click.echo(f"… sampling {n_random} random poses", err=True)
         q_act = sample_actuators(nominal, n_random, rng)
+    if err_seed is not None:
+        er = np.random.default_rng(err_seed)
+        bound = np.array([size_mm * 1e-3 if u == "m" else size_mrad * 1e-3 for u in params.units])
+        values = er.uniform(-bound, bound) * buildable_mask(nominal, params, q_act, say=True)
+    actual = params.apply(nominal, values)
     skipped: list[int] = []
     if instrument != SOCKET:
         q_act, skipped = _reachable(actual, q_act)

@@ -63,8 +63,8 @@ class BaseSet:
 def base_set(mech: Mechanism, params: ParameterSet | None = None) -> BaseSet:
     """The identifiable base set with the reasons for what it leaves out.
 
-    The candidates are ``params`` (default: the ``full`` preset without its
-    :func:`pincal.model.degenerate_translations`); over :data:`BASE_POSES` random
+    The candidates are ``params`` (default: the ``full`` preset) without their
+    :func:`pincal.model.degenerate_translations` (never fitted); over :data:`BASE_POSES` random
     workspace poses drawn with seed 0 (deterministic), the base parameters of
     :func:`analyse_jacobian` with the threshold :data:`BASE_RTOL` are kept, in the
     candidates' order. Parameters that break loop closure, are absorbed by others, or
@@ -72,7 +72,8 @@ def base_set(mech: Mechanism, params: ParameterSet | None = None) -> BaseSet:
 
     Args:
         mech: the mechanism.
-        params: candidate parameters (default: ``full`` minus degenerate translations).
+        params: candidate parameters (default: ``full``); degenerate translations are
+            left out of them.
 
     Returns:
         :class:`BaseSet` whose ``params`` is labelled ``"base"`` (default candidates) or
@@ -81,11 +82,11 @@ def base_set(mech: Mechanism, params: ParameterSet | None = None) -> BaseSet:
     Raises:
         UnidentifiableError: no candidate parameter changes the measured quantity.
     """
-    candidates = params
-    if candidates is None:
-        full = full_parameters(mech)
-        skip = set(degenerate_translations(mech))
-        candidates = full.subset([k for k, n in enumerate(full.names) if n not in skip])
+    # translations that split an emulated joint are never fitted (identify holds them):
+    # left out of any candidates, so that every command reduces a preset to one set
+    skip = set(degenerate_translations(mech))
+    given = full_parameters(mech) if params is None else params
+    candidates = given.subset([k for k, n in enumerate(given.names) if n not in skip])
     rows = sample_actuators(mech, BASE_POSES, np.random.default_rng(0))
     J, breaking = jacobian_and_closure_breaking(mech, candidates, rows)
     ident = analyse_jacobian(J, candidates.names, BASE_RTOL, breaks_closure=breaking)

@@ -22,6 +22,7 @@ from pincal.measure import simulate_measurements
 from pincal.model import Mechanism, load_mechanism, sample_actuators
 from pincal.sensitivity import identifiability, parameters
 from tests.open_world import machines as m
+from tests.open_world import paper_machines as pm
 
 MODEL_MACHINES = Path(__file__).parents[1] / "model" / "machines"
 
@@ -107,6 +108,23 @@ def _roster() -> list[Machine]:
             "2-RSU ankle, limits `0 0`",
             "zero-width URDF limits, no workspace",
             _urdf("ankle_zero", *m.ankle_2rsu(zero_limits=True)),
+        ),
+    ]
+    out += [
+        Machine(
+            "Agile Eye (Gosselin & Hamel 1994)",
+            "`robot.urdf` + `robot.yaml`, closures named by joints, orientation only",
+            pm.write_agile_eye,
+        ),
+        Machine(
+            "6-RSS Stewart head",
+            "MJCF freejoint, `connect site1 site2`, `<default>` classes, keyframe",
+            pm.write_stewart,
+        ),
+        Machine(
+            "Clavel delta, IRB 360 dimensions (Williams 2016)",
+            "every ball end three revolutes, platform on a rod",
+            _urdf("clavel_delta", *pm.clavel_delta()),
         ),
     ]
     for n, habits in (
