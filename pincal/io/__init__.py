@@ -34,6 +34,7 @@ from pincal.io._file_names import (
     IDENTIFICATION_FILE,
     MANIFEST,
 )
+from pincal.io._fleet_file import Fleet, FleetUnit, fleet_text, read_fleet
 from pincal.io._gcode import GcodeMove, GcodeProgram, read_gcode, write_gcode
 from pincal.io._identification_file import read_identification
 from pincal.io._import_tracker import (
@@ -99,6 +100,8 @@ __all__ = [
     "LENGTH_UNITS",
     "MANIFEST",
     "CalibrationDirectory",
+    "Fleet",
+    "FleetUnit",
     "GcodeMove",
     "GcodeProgram",
     "MarkerData",
@@ -115,6 +118,7 @@ __all__ = [
     "check_replaceable",
     "distinct_markers",
     "file_kind",
+    "fleet_text",
     "import_tracker",
     "is_instrument_file",
     "joint_columns",
@@ -123,6 +127,7 @@ __all__ = [
     "read_actuator_rows",
     "read_calibration",
     "read_commands",
+    "read_fleet",
     "read_gcode",
     "read_identification",
     "read_instrument_data",
