@@ -20,6 +20,8 @@ SCHEDULER_HELP = (
 def fleet() -> None:
     """Fleets of units of one model: simulate one, calibrate every unit, compare them.
 
+    Both subcommands take --json: a JSON summary on stdout instead of the text lines.
+
     \b
     Examples:
       pincal fleet simulate stewart_6ups --units 200 --seed 1 --out fleet/
@@ -86,8 +88,11 @@ def fleet() -> None:
     metavar="MM,MRAD",
     help="Instrument noise 1σ (declared in each unit's file).",
 )
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
-def simulate(model, n_units, out, seed, preset, n_poses, planted, spread, shift, noise) -> None:
+def simulate(
+    model, n_units, out, seed, preset, n_poses, planted, spread, shift, noise, as_json
+) -> None:
     """Draw a seeded fleet of MODEL and simulate each unit's measurement file.
 
     Every unit shares the line's offset of the nominal geometry plus its own Gaussian
@@ -145,6 +150,18 @@ def simulate(model, n_units, out, seed, preset, n_poses, planted, spread, shift,
     atomic_write_text(root / "truth.json", json.dumps(truth, indent=1) + "\n")
     atomic_write_text(root / "FLEET.yaml", fleet_text(model, units, preset))
     planted_ids = ", ".join(p["id"] for p in truth["planted"]) or "none"
+    if as_json:
+        click.echo(
+            json.dumps(
+                {
+                    "fleet": str(root / "FLEET.yaml"),
+                    "truth": str(root / "truth.json"),
+                    "units": n_units,
+                    "planted": [p["id"] for p in truth["planted"]],
+                }
+            )
+        )
+        return
     click.echo(
         f"wrote {root / 'FLEET.yaml'} ({n_units} units of {model}, preset {preset}; "
         f"planted out-of-family: {planted_ids}) and {root / 'truth.json'}"
@@ -183,8 +200,9 @@ def simulate(model, n_units, out, seed, preset, n_poses, planted, spread, shift,
     help="Fleet-wise false-alarm rate of the out-of-family test "
     "(Bonferroni: each unit at alpha / units).",
 )
+@click.option("--json", "as_json", is_flag=True, help="Print fleet.json's summary on stdout.")
 @fail_cleanly
-def run(fleet_file, out, scheduler, n_jobs, method, alpha) -> None:
+def run(fleet_file, out, scheduler, n_jobs, method, alpha, as_json) -> None:
     """Calibrate every unit of FLEET_FILE and report the fleet.
 
     Each unit is calibrated by `pincal calibrate` into OUT/units/<id>/ (its output in
@@ -246,6 +264,9 @@ def run(fleet_file, out, scheduler, n_jobs, method, alpha) -> None:
     atomic_write_text(root / "fleet.md", fleet_markdown(doc))
     atomic_write_text(root / "fleet.html", fleet_html(doc))
     s = doc["summary"]
+    if as_json:
+        click.echo(json.dumps({"report": str(root / "fleet.json"), **s}))
+        return
     reused = sum(bool(u.get("reused")) for u in doc["units"])
     click.echo(
         f"{s['calibrated']} of {s['units']} units calibrated ({reused} read back), "
