@@ -3,6 +3,9 @@
 The subpackages follow the data flow of a calibration, lowest first; a stage imports
 only the stages above it in this list (``tests/test_stage_boundaries.py`` checks it):
 
+0. :mod:`pincal.executor` — map independent work on local processes or a Dask cluster
+   (imports no other stage; studies and fleets run on it);
+
 1. :mod:`pincal.model` — load a machine (URDF + sidecar), close its loops, define parameters
    (:mod:`pincal.machines`, machine-specific closed forms, sits on the model alone);
 2. :mod:`pincal.sensitivity` — identification Jacobian, identifiability, the ``base`` preset;

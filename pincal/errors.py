@@ -22,13 +22,16 @@ __all__ = [
     "ConvergenceError",
     "DuplicateDataError",
     "ExportError",
+    "FleetFileError",
     "FrameMismatchError",
     "ImportMatchError",
     "InputFileError",
     "InputLimitError",
+    "ItemFailedError",
     "MeasurementError",
     "MeasurementFileError",
     "MeasurementFormatError",
+    "MissingExtraError",
     "MobilityError",
     "ModelFileError",
     "MovedTargetError",
@@ -376,3 +379,27 @@ class QualityGateError(PincalError):
     def __init__(self, message: str, verdict: object = None):
         self.verdict = verdict
         super().__init__(message)
+
+
+class MissingExtraError(PincalError):
+    """An optional dependency is needed and not installed (e.g. dask for ``--scheduler``)."""
+
+
+class ItemFailedError(PincalError):
+    """An item of an executor map failed in a worker; the message carries its error.
+
+    Attributes:
+        key: the item's key; ``error_type``: the worker's exception class name.
+    """
+
+    def __init__(self, message: str, key: str = "", error_type: str = ""):
+        self.key = key
+        self.error_type = error_type
+        super().__init__(message)
+
+    def __reduce__(self):
+        return (type(self), (str(self), self.key, self.error_type))
+
+
+class FleetFileError(InputFileError):
+    """A fleet file (``pincal fleet run``) is malformed: missing key, bad unit, missing data."""

@@ -31,6 +31,7 @@ LONG = {
     "scripts/bench_core.py": "benchmark (timings, no assertion)",
     "scripts/bench_design.py": "benchmark (timings, no assertion)",
     "scripts/bench_instruments.py": "benchmark (timings, no assertion)",
+    "scripts/bench_fleet.py": "benchmark; serial = Dask equality in tests/cli/test_fleet.py",
     "scripts/bench_open_world.py": "benchmark; equality in tests/model/test_batch_nonsquare.py",
     "scripts/bench_realdata.py": "benchmark (timings, no assertion; minutes per column)",
     "scripts/bench_vs_figaroh.py": "needs the optional [bench] extra",

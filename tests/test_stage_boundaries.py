@@ -2,7 +2,7 @@
 
 A stage is a subpackage of ``pincal/``. docs/design.md, section "Stages and the import
 rule" (and the docstring of ``pincal/__init__.py``) fixes their order, lowest first:
-model → {machines, sensitivity} → measure → design → identification → {compensation,
+executor, model → {machines, sensitivity} → measure → design → identification → {compensation,
 validation} → io → {workflow, export} → report / viz → cli. The rules checked here
 (issue 24), without exceptions:
 
@@ -32,6 +32,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "pincal"
 #: ``machines`` (machine-specific closed forms) sits on the model alone. The modules at
 #: the top of the package (``errors``, ``_files``, ``_yaml``) are below every stage.
 RANK = {
+    "executor": 0,
     "model": 0,
     "machines": 1,
     "sensitivity": 1,

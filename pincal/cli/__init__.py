@@ -82,6 +82,7 @@ from pincal.cli import calibrate as _calibrate  # noqa: E402
 from pincal.cli import compensate as _compensate  # noqa: E402
 from pincal.cli import demo as _demo  # noqa: E402
 from pincal.cli import export as _export  # noqa: E402
+from pincal.cli import fleet as _fleet  # noqa: E402
 from pincal.cli import import_cmd as _import_cmd  # noqa: E402
 from pincal.cli import import_sockets as _import_sockets  # noqa: E402
 from pincal.cli import info as _info  # noqa: E402
@@ -112,6 +113,7 @@ for _command in (
     _run.run,
     _acceptance.acceptance,
     _select_model.select_model_cmd,
+    _fleet.fleet,
 ):
     main.add_command(_command)
 

@@ -2,4 +2,5 @@
 
 from pincal.cli import main
 
-main()
+if __name__ == "__main__":  # worker processes (Dask spawns them) import this module again
+    main()

@@ -10,14 +10,12 @@ or file path and rebuild the mechanism once per process. Every run uses one BLAS
 thread (``threadpool_limits(1)``): the dense solves are small, and threaded BLAS on
 a busy machine is slower.
 
-Parallel runs use joblib's default process backend (loky). To run on a Dask
-cluster, select joblib's Dask backend around the call::
+Runs go through :class:`pincal.executor.Executor`: local processes by default (joblib's
+loky backend), a Dask cluster with ``scheduler="local:N"`` or ``"tcp://host:8786"``
+(the optional ``pincal[dask]`` extra); the numbers are the same on every backend::
 
-    from dask.distributed import Client
-    import joblib
-    client = Client("scheduler:8786")
-    with joblib.parallel_config(backend="dask"):
-        study = monte_carlo("stewart_6ups", "stewart42", rows, errors, noise, runs=200, n_jobs=-1)
+    study = monte_carlo("stewart_6ups", "stewart42", rows, errors, noise, runs=200,
+                        scheduler="tcp://scheduler:8786")
 """
 
 from __future__ import annotations
@@ -31,6 +29,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from pincal.errors import ParameterError, ShapeError
+from pincal.executor import Executor
 from pincal.measure import NoiseModel, simulate_measurements
 from pincal.model import Mechanism, ParameterSet, load_mechanism
 from pincal.sensitivity import parameters
@@ -69,17 +68,20 @@ def _setup(model: str, preset: str) -> tuple[Mechanism, ParameterSet]:
     return mech, parameters(mech, preset)
 
 
-def _one_run(
-    model: str,
-    preset: str,
-    rows: np.ndarray,
-    true_values: np.ndarray,
-    noise: NoiseModel | Mapping[str, float] | None,
-    seed: np.random.SeedSequence,
-    method: str,
-) -> tuple[np.ndarray, bool]:
+def one_run(args: tuple, seed: np.random.SeedSequence) -> tuple[np.ndarray, bool]:
+    """One simulate-and-identify run (an executor item; workers import it).
+
+    Args:
+        args: ``(model, preset, rows, true_values, noise, method)`` as for
+            :func:`monte_carlo` (rows (m, n_act), true_values (n,) [m, rad]).
+        seed: the run's ``SeedSequence`` child (its measurement noise).
+
+    Returns:
+        ((n,) identified values [m, rad], converged).
+    """
     from pincal.identification._identify import identify
 
+    model, preset, rows, true_values, noise, method = args
     with threadpool_limits(1):
         mech, params = _setup(model, preset)
         actual = _actual(mech, params, true_values.tobytes())
@@ -111,6 +113,7 @@ def monte_carlo(
     seed: int = 0,
     method: str = "gauss-newton",
     n_jobs: int = 1,
+    scheduler: str | None = None,
 ) -> MonteCarloStudy:
     """Repeat simulate-and-identify ``runs`` times with independent noise.
 
@@ -124,9 +127,11 @@ def monte_carlo(
         seed: study seed; run k uses child k of ``np.random.SeedSequence(seed)``.
         method: identification solver name.
         n_jobs: parallel processes (joblib; 1 = in this process, -1 = all cores).
+        scheduler: a Dask scheduler (``local:N`` or ``tcp://host:8786``) instead of
+            local processes (needs ``pincal[dask]``).
 
     Returns:
-        The :class:`MonteCarloStudy` (identical numbers for any ``n_jobs``).
+        The :class:`MonteCarloStudy` (identical numbers for any ``n_jobs``/scheduler).
 
     Raises:
         ParameterError: ``runs`` < 1 or ``true_values`` of the wrong length.
@@ -143,14 +148,9 @@ def monte_carlo(
             f"q_act_rows must have shape (m, {mech.n_actuated}) for actuated joints "
             f"{list(mech.actuated)}, got {np.shape(q_act_rows)}"
         )
-    seeds = np.random.SeedSequence(seed).spawn(int(runs))
-    args = [(model, preset, rows, truth, noise, s, method) for s in seeds]
-    if n_jobs == 1:
-        out = [_one_run(*a) for a in args]
-    else:
-        from joblib import Parallel, delayed  # here, not at import: joblib costs ~0.1 s
-
-        out = Parallel(n_jobs=n_jobs)(delayed(_one_run)(*a) for a in args)
+    args = (model, preset, rows, truth, noise, method)
+    with Executor(scheduler, n_jobs) as ex:
+        out = ex.map(one_run, [args] * int(runs), seed=seed).values()
     values = np.array([v for v, _ in out]).reshape(int(runs), len(params))
     success = np.array([s for _, s in out], dtype=bool)
     return MonteCarloStudy(tuple(params.names), truth, values, success, int(seed))

@@ -36,6 +36,7 @@ from pincal.io._file_names import (
     MODEL_RECORD,
     VALIDATION_FILE,
 )
+from pincal.io._fleet_file import Fleet, FleetUnit, fleet_text, read_fleet
 from pincal.io._gcode import GcodeMove, GcodeProgram, read_gcode, write_gcode
 from pincal.io._identification_file import read_identification
 from pincal.io._import_tracker import (
@@ -103,6 +104,8 @@ __all__ = [
     "MODEL_RECORD",
     "VALIDATION_FILE",
     "CalibrationDirectory",
+    "Fleet",
+    "FleetUnit",
     "GcodeMove",
     "GcodeProgram",
     "MarkerData",
@@ -119,6 +122,7 @@ __all__ = [
     "check_replaceable",
     "distinct_markers",
     "file_kind",
+    "fleet_text",
     "import_tracker",
     "is_instrument_file",
     "joint_columns",
@@ -127,6 +131,7 @@ __all__ = [
     "read_actuator_rows",
     "read_calibration",
     "read_commands",
+    "read_fleet",
     "read_gcode",
     "read_identification",
     "read_instrument_data",

@@ -11,6 +11,7 @@ from pincal.report._calibration import calibration_report
 from pincal.report._campaign_notes import campaign_notes
 from pincal.report._cv_text import cross_validation_text
 from pincal.report._document import ReportFiles, Section, Table, write_report
+from pincal.report._fleet import fleet_html, fleet_markdown, plot_fleet
 from pincal.report._marker_text import marker_lines
 from pincal.report._parameter_plots import plot_parameters
 from pincal.report._plots import (
@@ -38,11 +39,14 @@ __all__ = [
     "campaign_notes",
     "cross_validation_text",
     "error_statistics",
+    "fleet_html",
+    "fleet_markdown",
     "marker_errors_text",
     "marker_lines",
     "plot_convergence",
     "plot_error_histogram",
     "plot_errors_before_after",
+    "plot_fleet",
     "plot_index_history",
     "plot_parameters",
     "plot_validation_summary",

@@ -9,10 +9,20 @@ prints or writes files.
   unknown instrument frame, with the defaults of real data (:class:`MarkerSettings`);
   :func:`rebuild` and :func:`replay_procedure` run it again for ``validate --cv``;
   :func:`transfer_markers` carries it to another session (``validate --data``).
+- fleets (``pincal fleet``): :func:`draw_fleet` / :func:`simulate_unit` simulate a
+  production line with planted faulty units; :func:`fleet_statistics` flags the units
+  out of family, each judged with its own covariance.
 """
 
 from __future__ import annotations
 
+from pincal.workflow._fleet_draw import FleetDraw, draw_fleet, simulate_unit
+from pincal.workflow._fleet_stats import (
+    FleetStatistics,
+    UnitEstimate,
+    UnitVerdict,
+    fleet_statistics,
+)
 from pincal.workflow._marker_replay import rebuild, replay_procedure
 from pincal.workflow._marker_run import (
     MISFIT_RMS,
@@ -34,16 +44,23 @@ __all__ = [
     "MISFIT_RMS",
     "PRIOR_GRID",
     "ROBUST_LOSS",
+    "FleetDraw",
+    "FleetStatistics",
     "MarkerRun",
     "MarkerSettings",
     "PriorChoice",
+    "UnitEstimate",
+    "UnitVerdict",
     "calibrate_markers",
     "choose_prior",
     "cross_validated",
+    "draw_fleet",
+    "fleet_statistics",
     "marker_procedure",
     "nested_choice",
     "parse_prior",
     "rebuild",
     "replay_procedure",
+    "simulate_unit",
     "transfer_markers",
 ]

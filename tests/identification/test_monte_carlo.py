@@ -48,3 +48,14 @@ def test_bad_arguments_raise_specific_errors():
         monte_carlo("wedge3", "patent", rows[:, :1], truth, None, runs=1)
     with pytest.raises(ParameterError):
         monte_carlo("wedge3", "patent", rows, truth[:-1], None, runs=1)
+
+
+@pytest.mark.slow
+def test_a_local_dask_cluster_gives_the_serial_numbers():
+    pytest.importorskip("distributed")
+    _, _, rows, truth = _setup()
+    noise = {"position": 0.005, "orientation": 0.01}
+    one = monte_carlo("wedge3", "patent", rows, truth, noise, runs=4, seed=3, n_jobs=1)
+    dask = monte_carlo("wedge3", "patent", rows, truth, noise, runs=4, seed=3, scheduler="local:2")
+    np.testing.assert_array_equal(one.values, dask.values)
+    np.testing.assert_array_equal(one.success, dask.success)

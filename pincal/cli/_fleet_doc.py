@@ -1,0 +1,127 @@
+"""The fleet document (``fleet.json``): every unit, the test, the parameters' spread."""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ["fleet_document"]
+
+
+def _test_text(alpha: float, units: int, dof: int | None, threshold: float | None) -> str:
+    if dof is None:
+        return (
+            f"no out-of-family test: it needs at least 3 calibrated units, {units} were calibrated"
+        )
+    return (
+        "Each calibrated unit's estimate x_u is compared with the fleet's robust centre c "
+        "by D_u = (x_u − c)ᵀ (C_u + diag τ²)⁻¹ (x_u − c), with C_u the unit's own "
+        "covariance and τ the production spread per parameter (maximum likelihood, robust: "
+        "fitted on the 3/4 nearest units, then on every unit not rejected at p < 0.001); "
+        "in family D_u ~ "
+        f"χ²({dof}). A unit is out of family when its p-value is below α/M = {alpha:g}/"
+        f"{units} (Bonferroni: at most {100 * alpha:g} % chance of one or more false "
+        f"flags in this fleet), i.e. D_u > {threshold:.1f}. Assumes independent Gaussian "
+        "spread per parameter and linearised estimation errors."
+    )
+
+
+def fleet_document(fleet, results, stats, alpha: float, out_rel: str) -> dict[str, Any]:
+    """``fleet.json``: every unit ``{id, status, out_of_family, distance, p_value, …}``.
+
+    Args:
+        fleet: the :class:`pincal.io.Fleet`.
+        results: the executor's :class:`pincal.executor.MapResult`, one per unit.
+        stats: the :class:`pincal.workflow.FleetStatistics`, or None (< 3 calibrated).
+        alpha: the fleet-wise false-alarm rate.
+        out_rel: the units' directory relative to the report (``units``).
+
+    Returns:
+        The document (JSON-ready).
+    """
+    verdicts = {v.id: v for v in stats.units} if stats is not None else {}
+    compared = set(stats.names) if stats is not None else set()
+    units = []
+    for unit, res in zip(fleet.units, results, strict=True):
+        entry: dict[str, Any] = {"id": unit.id, "data": str(unit.data), **unit.meta}
+        if not res.ok:
+            entry |= {
+                "status": "failed",
+                "reason": res.error,
+                "out_of_family": None,
+                "distance": None,
+                "p_value": None,
+            }
+        elif res.value["status"] == "refused":
+            entry |= {
+                "status": "refused",
+                "reason": res.value["reason"],
+                "out_of_family": None,
+                "distance": None,
+                "p_value": None,
+            }
+        else:
+            s = res.value
+            v = verdicts.get(unit.id)
+            entry |= {
+                "status": "calibrated",
+                "calibration": f"{out_rel}/{unit.id}",
+                "out_of_family": None if v is None else v.out_of_family,
+                "distance": None if v is None else v.distance,
+                "dof": None if v is None else v.dof,
+                "p_value": None if v is None else v.p_value,
+                "largest": [] if v is None else [{"name": n, "z": z} for n, z in v.largest],
+                "reused": bool(s.get("reused") or res.cached),
+                "rms_after_mm": s.get("rms_after_mm"),
+                "values": {
+                    n: x for n, x in zip(s["names"], s["values"], strict=True) if n in compared
+                },
+            }
+        units.append(entry)
+    count = {k: sum(u["status"] == k for u in units) for k in ("calibrated", "refused", "failed")}
+    flagged = [u["id"] for u in units if u.get("out_of_family")]
+    unit_of: dict[str, str] = {}
+    for res in results:
+        if res.ok and res.value["status"] == "calibrated":
+            unit_of |= dict(zip(res.value["names"], res.value["units"], strict=True))
+    params = []
+    if stats is not None:
+        for j, name in enumerate(stats.names):
+            params.append(
+                {
+                    "name": name,
+                    "unit": unit_of.get(name, "m"),
+                    "centre": float(stats.centre[j]),
+                    "production_std": float(stats.production_std[j]),
+                    "estimate_std": float(stats.estimate_std[j]),
+                }
+            )
+    return {
+        "format": "pincal fleet",
+        "version": 1,
+        "fleet": str(fleet.path),
+        "model": fleet.model,
+        "preset": fleet.preset,
+        "summary": {
+            "units": len(units),
+            **count,
+            "out_of_family": len(flagged),
+            "out_of_family_ids": flagged,
+        },
+        "test": {
+            "statistic": "squared Mahalanobis distance to the robust fleet centre, "
+            "covariance = unit covariance + diag(production spread²)",
+            "alpha": alpha,
+            "correction": "bonferroni",
+            "per_unit_p_threshold": None if stats is None else alpha / count["calibrated"],
+            "dof": None if stats is None else len(stats.names),
+            "distance_threshold": None if stats is None else stats.threshold,
+            "description": _test_text(
+                alpha,
+                count["calibrated"],
+                None if stats is None else len(stats.names),
+                None if stats is None else stats.threshold,
+            ),
+        },
+        "units": units,
+        "parameters": params,
+    }

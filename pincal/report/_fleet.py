@@ -1,0 +1,166 @@
+"""The fleet report: per-parameter distributions (PNG), Markdown and HTML pages.
+
+Everything is drawn from the fleet document ``fleet.json`` (``pincal fleet run``), so
+the report can be rebuilt from it alone. Deviations are shown from the fleet's robust
+centre, lengths in mm and angles in mrad; out-of-family units in red.
+"""
+
+from __future__ import annotations
+
+import html
+import os
+import zlib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pincal.report._plots import new_figure, save_figure
+
+__all__ = ["fleet_html", "fleet_markdown", "plot_fleet"]
+
+_FLAGGED = "#c0392b"
+_FAMILY = "#34495e"
+
+
+def plot_fleet(doc: Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
+    """Every unit's deviation from the fleet centre, per parameter (lengths | angles).
+
+    Args:
+        doc: the fleet document (``parameters`` with name/unit/centre/production_std,
+            ``units`` with their ``values`` by name [m, rad]).
+        path: the PNG to write (atomically).
+
+    Returns:
+        The PNG's path.
+    """
+    params = list(doc["parameters"])
+    units = [u for u in doc["units"] if u.get("values")]
+    kinds = [("m", "length deviation [mm]"), ("rad", "angle deviation [mrad]")]
+    kinds = [(k, label) for k, label in kinds if any(p["unit"] == k for p in params)]
+    fig = new_figure(max(7.0, 0.22 * len(params) + 2.0), 3.2 * max(len(kinds), 1))
+    grid = fig.subplots(max(len(kinds), 1), 1, squeeze=False)[:, 0]
+    for ax, (kind, label) in zip(grid, kinds, strict=False):
+        cols = [p for p in params if p["unit"] == kind]
+        x = np.arange(len(cols))
+        band = 3e3 * np.array([p["production_std"] for p in cols])
+        ax.fill_between(x, -band, band, step="mid", color="#d5dbdb", label="±3τ production")
+        for u in units:
+            dev = [1e3 * (u["values"][p["name"]] - p["centre"]) for p in cols]
+            flagged = bool(u.get("out_of_family"))
+            jitter = (zlib.crc32(u["id"].encode()) % 100 - 50) / 250.0
+            ax.plot(
+                x + jitter,
+                dev,
+                "o",
+                ms=3 if not flagged else 4,
+                alpha=0.5 if not flagged else 0.9,
+                color=_FLAGGED if flagged else _FAMILY,
+            )
+        ax.set_xticks(x)
+        ax.set_xticklabels([p["name"] for p in cols], rotation=90, fontsize=6)
+        ax.set_ylabel(label)
+        ax.axhline(0.0, color="k", lw=0.5)
+    n_flagged = sum(bool(u.get("out_of_family")) for u in units)
+    title = fig.suptitle(
+        f"{len(units)} calibrated units: deviation from the fleet centre "
+        f"({n_flagged} out of family, red)"
+    )
+    return save_figure(fig, path, grid, title)
+
+
+def _rows(doc: Mapping[str, Any]) -> list[list[str]]:
+    rows = []
+    for u in doc["units"]:
+        d, p = u.get("distance"), u.get("p_value")
+        largest = ", ".join(f"{x['name']} {x['z']:+.1f}σ" for x in u.get("largest", []))
+        rows.append(
+            [
+                u["id"],
+                u["status"],
+                {True: "**yes**", False: "no", None: "–"}[u.get("out_of_family")],
+                "–" if d is None else f"{d:.1f}",
+                "–" if p is None else f"{p:.2g}",
+                largest or (u.get("reason") or "")[:120],
+            ]
+        )
+    return rows
+
+
+def fleet_markdown(doc: Mapping[str, Any], png: str = "fleet_parameters.png") -> str:
+    """The fleet report as Markdown (summary, the test, units, parameter spread).
+
+    Args:
+        doc: the fleet document.
+        png: the distribution plot's file name beside the page.
+
+    Returns:
+        The Markdown text.
+    """
+    s, t = doc["summary"], doc["test"]
+    lines = [
+        f"# Fleet report: {doc['model']} ({s['units']} units)",
+        "",
+        f"- calibrated: {s['calibrated']}, refused by the quality gate: {s['refused']}, "
+        f"failed: {s['failed']}",
+        f"- out of family: {s['out_of_family']} ({', '.join(s['out_of_family_ids']) or 'none'})",
+        "",
+        "## The test",
+        "",
+        t["description"],
+        "",
+        f"![per-parameter distributions]({png})",
+        "",
+        "## Units",
+        "",
+        "| unit | status | out of family | distance D | p-value | largest deviations / reason |",
+        "|---|---|---|---|---|---|",
+    ]
+    lines += ["| " + " | ".join(r) + " |" for r in _rows(doc)]
+    lines += ["", "## Parameters", ""]
+    lines += ["| parameter | centre | production σ τ | median unit σ |", "|---|---|---|---|"]
+    for p in doc["parameters"]:
+        scale, unit = (1e3, "mm") if p["unit"] == "m" else (1e3, "mrad")
+        lines.append(
+            f"| {p['name']} | {scale * p['centre']:+.4f} {unit} | "
+            f"{scale * p['production_std']:.4f} {unit} | {scale * p['estimate_std']:.4f} {unit} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def fleet_html(doc: Mapping[str, Any], png: str = "fleet_parameters.png") -> str:
+    """The fleet report as one HTML page (the PNG beside it).
+
+    Args:
+        doc: the fleet document.
+        png: the distribution plot's file name beside the page.
+
+    Returns:
+        The HTML text.
+    """
+    s, t = doc["summary"], doc["test"]
+    esc = html.escape
+    head = ["unit", "status", "out of family", "distance D", "p-value", "largest / reason"]
+    body = "".join(
+        "<tr"
+        + (' class="flag"' if "**yes**" in r[2] else "")
+        + ">"
+        + "".join(f"<td>{esc(c.replace('**', ''))}</td>" for c in r)
+        + "</tr>"
+        for r in _rows(doc)
+    )
+    return (
+        "<!doctype html><html><head><meta charset='utf-8'>"
+        f"<title>Fleet report: {esc(doc['model'])}</title><style>"
+        "body{font-family:sans-serif;max-width:70em;margin:auto}"
+        "td,th{padding:2px 8px;border-bottom:1px solid #ddd}"
+        f".flag{{color:{_FLAGGED};font-weight:bold}}</style></head><body>"
+        f"<h1>Fleet report: {esc(doc['model'])} ({s['units']} units)</h1>"
+        f"<p>calibrated {s['calibrated']}, refused by the gate {s['refused']}, failed "
+        f"{s['failed']}; <b>out of family: {s['out_of_family']}</b> "
+        f"({esc(', '.join(s['out_of_family_ids']) or 'none')})</p>"
+        f"<p>{esc(t['description'])}</p><img src='{esc(png)}' style='max-width:100%'>"
+        "<table><tr>" + "".join(f"<th>{h}</th>" for h in head) + f"</tr>{body}</table>"
+        "</body></html>\n"
+    )

@@ -1,0 +1,94 @@
+"""pincal fleet: simulate, run serial and on 2 Dask workers, resume, a failing unit."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import shutil
+
+import pytest
+from click.testing import CliRunner
+
+from pincal.cli import main
+
+
+def _ok(args):
+    res = CliRunner().invoke(main, args, catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    return res.output
+
+
+@pytest.fixture(scope="module")
+def fleet_dir(tmp_path_factory):
+    root = tmp_path_factory.mktemp("fleet") / "sim"
+    _ok(["fleet", "simulate", "wedge3", "--units", "8", "--seed", "3", "--poses", "100",
+         "--shift", "30", "--out", str(root)])  # fmt: skip
+    return root
+
+
+@pytest.fixture(scope="module")
+def serial(fleet_dir, tmp_path_factory):
+    out = tmp_path_factory.mktemp("serial")
+    _ok(["fleet", "run", str(fleet_dir / "FLEET.yaml"), "--out", str(out)])
+    return out
+
+
+def _units(out):
+    return json.loads((out / "fleet.json").read_text())["units"]
+
+
+def test_the_planted_unit_is_flagged_and_the_report_written(fleet_dir, serial):
+    truth = json.loads((fleet_dir / "truth.json").read_text())
+    planted = {p["id"] for p in truth["planted"]}
+    assert len(planted) == 1 and len(truth["units"]) == 8
+    units = _units(serial)
+    assert [u["status"] for u in units] == ["calibrated"] * 8
+    flagged = {u["id"] for u in units if u["out_of_family"]}
+    assert flagged == planted
+    for u in units:
+        assert 0 <= u["p_value"] <= 1 and u["distance"] >= 0
+        assert (serial / u["calibration"] / "calibration.json").is_file()
+    doc = json.loads((serial / "fleet.json").read_text())
+    assert doc["test"]["per_unit_p_threshold"] == pytest.approx(0.01 / 8)
+    assert (serial / "fleet_parameters.png").stat().st_size > 1000
+    assert "out of family: 1" in (serial / "fleet.md").read_text()
+    assert "<img" in (serial / "fleet.html").read_text()
+
+
+def test_a_rerun_recomputes_nothing(fleet_dir, serial, monkeypatch):
+    import pincal.cli._fleet_unit as unit
+
+    calls = []
+    real = unit.calibrate_unit
+    monkeypatch.setattr(unit, "calibrate_unit", lambda item: calls.append(item) or real(item))
+    before = {p: p.stat().st_mtime_ns for p in serial.glob("units/*/calibration.json")}
+    out = _ok(["fleet", "run", str(fleet_dir / "FLEET.yaml"), "--out", str(serial)])
+    assert calls == [] and "8 of 8 units calibrated" in out
+    assert before == {p: p.stat().st_mtime_ns for p in serial.glob("units/*/calibration.json")}
+    # without the per-unit results, complete calibration directories are read back
+    shutil.rmtree(serial / ".fleet-results")
+    out = _ok(["fleet", "run", str(fleet_dir / "FLEET.yaml"), "--out", str(serial)])
+    assert len(calls) == 8 and "(8 read back)" in out
+    assert before == {p: p.stat().st_mtime_ns for p in serial.glob("units/*/calibration.json")}
+
+
+@pytest.mark.skipif(importlib.util.find_spec("distributed") is None, reason="no dask")
+def test_two_dask_workers_give_the_serial_report(fleet_dir, serial, tmp_path):
+    _ok(["fleet", "run", str(fleet_dir / "FLEET.yaml"), "--out", str(tmp_path),
+         "--scheduler", "local:2"])  # fmt: skip
+    keep = ("id", "status", "out_of_family", "distance", "p_value", "values")
+    strip = [{k: u[k] for k in keep} for u in _units(serial)]
+    assert strip == [{k: u[k] for k in keep} for u in _units(tmp_path)]
+
+
+def test_a_failing_unit_is_reported_and_the_others_calibrated(fleet_dir, tmp_path):
+    sim = tmp_path / "sim"
+    shutil.copytree(fleet_dir, sim)
+    (sim / "SN-0002" / "measurements.csv").write_text("not,a\nmeasurement,file\n")
+    out = _ok(["fleet", "run", str(sim / "FLEET.yaml"), "--out", str(tmp_path / "rep"),
+               "--jobs", "2"])  # fmt: skip
+    units = _units(tmp_path / "rep")
+    assert units[1]["status"] == "failed" and units[1]["out_of_family"] is None
+    assert "SN-0002" in units[1]["reason"]
+    assert [u["status"] for i, u in enumerate(units) if i != 1] == ["calibrated"] * 7
+    assert "1 failed" in out

@@ -1,0 +1,51 @@
+"""The out-of-family test on synthetic estimates drawn from its own model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pincal.errors import ParameterError
+from pincal.workflow import UnitEstimate, fleet_statistics
+
+
+def _fleet(seed, M, p, planted, shift):
+    rng = np.random.default_rng(seed)
+    tau = rng.uniform(0.5, 1.5, p)
+    units, bad = [], set(rng.choice(M, planted, replace=False).tolist())
+    for u in range(M):
+        A = rng.standard_normal((p, p)) * 0.5 / np.sqrt(p)
+        C = A @ A.T + 0.05 * np.eye(p)
+        x = tau * rng.standard_normal(p) + rng.multivariate_normal(np.zeros(p), C)
+        if u in bad:
+            x[:3] += shift * tau[:3] * rng.choice([-1, 1], 3)
+        units.append(UnitEstimate(f"u{u}", tuple(f"k{j}" for j in range(p)), x, C))
+    return units, {f"u{u}" for u in bad}
+
+
+def test_planted_units_are_flagged_and_the_family_is_not():
+    units, bad = _fleet(0, 40, 6, 2, 10.0)
+    st = fleet_statistics(units, alpha=0.01)
+    flagged = {v.id for v in st.units if v.out_of_family}
+    assert bad <= flagged and len(flagged - bad) <= 1
+    assert st.threshold > 6  # χ²(6) at 0.01/40
+
+
+def test_refusals():
+    units, _ = _fleet(1, 5, 3, 0, 0.0)
+    with pytest.raises(ParameterError, match="at least 3"):
+        fleet_statistics(units[:2])
+    with pytest.raises(ParameterError, match="alpha"):
+        fleet_statistics(units, alpha=1.5)
+
+
+@pytest.mark.slow
+def test_detection_and_false_alarms_over_seeds():
+    """200 units, 42 parameters, 6 planted at 8 τ on 3 parameters, 5 seeds."""
+    found = false = 0
+    for seed in range(5):
+        units, bad = _fleet(seed, 200, 42, 6, 8.0)
+        flagged = {v.id for v in fleet_statistics(units).units if v.out_of_family}
+        found += len(flagged & bad)
+        false += len(flagged - bad)
+    assert found >= 0.95 * 30 and false <= 5
