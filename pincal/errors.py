@@ -397,7 +397,7 @@ class ItemFailedError(PincalError):
         self.error_type = error_type
         super().__init__(message)
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[type, tuple[str, str, str]]:
         return (type(self), (str(self), self.key, self.error_type))
 
 

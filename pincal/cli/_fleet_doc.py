@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from pincal.executor import MapResult
+    from pincal.io import Fleet
+    from pincal.workflow import FleetStatistics
 
 __all__ = ["fleet_document"]
 
@@ -25,7 +30,13 @@ def _test_text(alpha: float, units: int, dof: int | None, threshold: float | Non
     )
 
 
-def fleet_document(fleet, results, stats, alpha: float, out_rel: str) -> dict[str, Any]:
+def fleet_document(
+    fleet: Fleet,
+    results: MapResult,
+    stats: FleetStatistics | None,
+    alpha: float,
+    out_rel: str,
+) -> dict[str, Any]:
     """``fleet.json``: every unit ``{id, status, out_of_family, distance, p_value, …}``.
 
     Args:

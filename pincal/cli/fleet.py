@@ -91,7 +91,17 @@ def fleet() -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
 @fail_cleanly
 def simulate(
-    model, n_units, out, seed, preset, n_poses, planted, spread, shift, noise, as_json
+    model: str,
+    n_units: int,
+    out: str,
+    seed: int,
+    preset: str | None,
+    n_poses: int,
+    planted: int | None,
+    spread: str,
+    shift: float,
+    noise: str,
+    as_json: bool,
 ) -> None:
     """Draw a seeded fleet of MODEL and simulate each unit's measurement file.
 
@@ -202,7 +212,15 @@ def simulate(
 )
 @click.option("--json", "as_json", is_flag=True, help="Print fleet.json's summary on stdout.")
 @fail_cleanly
-def run(fleet_file, out, scheduler, n_jobs, method, alpha, as_json) -> None:
+def run(
+    fleet_file: str,
+    out: str,
+    scheduler: str | None,
+    n_jobs: int,
+    method: str,
+    alpha: float,
+    as_json: bool,
+) -> None:
     """Calibrate every unit of FLEET_FILE and report the fleet.
 
     Each unit is calibrated by `pincal calibrate` into OUT/units/<id>/ (its output in

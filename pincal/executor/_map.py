@@ -20,6 +20,14 @@ from pincal.executor._store import ResultStore
 
 __all__ = ["Executor", "ItemResult", "MapResult", "run_item"]
 
+#: one item's run in a worker: (index, item, seed child) → ``run_item``'s tuple
+ItemCall = Callable[
+    [int, Any, "np.random.SeedSequence | None"],
+    tuple[int, bool, Any, str | None, BaseException | None],
+]
+#: the client's callback on one arrived item: ``run_item``'s tuple unpacked
+Arrived = Callable[[int, bool, Any, str | None, Any], None]
+
 
 @dataclass(frozen=True)
 class ItemResult:
@@ -248,7 +256,15 @@ class Executor:
             bar.close()
         return MapResult(tuple(out[i] for i in range(n)))
 
-    def _map_local(self, call, items, children, pending, arrived, done) -> None:
+    def _map_local(
+        self,
+        call: ItemCall,
+        items: Sequence[Any],
+        children: Sequence[np.random.SeedSequence | None],
+        pending: list[int],
+        arrived: Arrived,
+        done: Callable[[int], bool],
+    ) -> None:
         if self.spec.workers == 1:
             for i in pending:
                 arrived(*call(i, items[i], children[i]))
@@ -270,7 +286,14 @@ class Executor:
                         if not done(i):
                             arrived(i, False, None, f"worker lost: {exc}", None)
 
-    def _map_dask(self, call, items, children, pending, arrived) -> None:
+    def _map_dask(
+        self,
+        call: ItemCall,
+        items: Sequence[Any],
+        children: Sequence[np.random.SeedSequence | None],
+        pending: list[int],
+        arrived: Arrived,
+    ) -> None:
         from distributed import as_completed
 
         client = self.client()

@@ -97,7 +97,9 @@ class FleetStatistics:
     units: tuple[UnitVerdict, ...]
 
 
-def _centre(X: np.ndarray, covs: np.ndarray, tau2: np.ndarray):
+def _centre(
+    X: np.ndarray, covs: np.ndarray, tau2: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """GLS centre of the units given τ², and each unit's (C_u + diag τ²)⁻¹."""
     inv = np.linalg.inv(covs + np.diag(tau2)[None])
     centre = np.linalg.solve(inv.sum(axis=0), np.einsum("uij,uj->i", inv, X))
@@ -141,7 +143,10 @@ def _nearest(distance: np.ndarray, h: int) -> np.ndarray:
     return mask
 
 
-def _distances(X, covs, centre, tau2):
+def _distances(
+    X: np.ndarray, covs: np.ndarray, centre: np.ndarray, tau2: np.ndarray
+) -> list[tuple[float, np.ndarray]]:
+    """Per unit: (distance² to ``centre`` under C_u + diag τ², (p,) residual over σ)."""
     out = []
     for x, C in zip(X, covs, strict=True):
         S = C + np.diag(tau2)
