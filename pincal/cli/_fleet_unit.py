@@ -103,10 +103,10 @@ def calibrate_unit(item: tuple[str, str | None, str, str, str, str, str]) -> dic
             calibrate.main(args, prog_name="pincal calibrate", standalone_mode=False, obj={})
         except SystemExit as exc:
             code = exc.code
-    Path(log).parent.mkdir(parents=True, exist_ok=True)
-    Path(log).write_text(
-        f"$ pincal calibrate {' '.join(args)}\n{stderr.getvalue()}{stdout.getvalue()}",
-        encoding="utf-8",
+    from pincal.io import atomic_write_text
+
+    atomic_write_text(  # creates the unit's directory when missing
+        log, f"$ pincal calibrate {' '.join(args)}\n{stderr.getvalue()}{stdout.getvalue()}"
     )
     if code in (0, None):
         summary = unit_summary(uid, out)

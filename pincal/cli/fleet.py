@@ -234,7 +234,7 @@ def run(
     from pincal.cli._fleet_unit import calibrate_unit, file_digest
     from pincal.errors import PincalError
     from pincal.executor import Executor
-    from pincal.io import atomic_write_text, read_fleet
+    from pincal.io import ResultStore, atomic_write_text, read_fleet
     from pincal.report import fleet_html, fleet_markdown, plot_fleet
     from pincal.workflow import UnitEstimate, fleet_statistics
 
@@ -259,7 +259,7 @@ def run(
             calibrate_unit,
             items,
             keys=keys,
-            store=root / ".fleet-results",
+            store=ResultStore(root / ".fleet-results"),
             progress="calibrating units",
         )
     import numpy as np

@@ -8,8 +8,9 @@ independent items mapped through :class:`Executor`: local processes by default
 - seeded items get child ``i`` of ``numpy.random.SeedSequence(seed)`` — the numbers do
   not depend on the backend, the worker count or the completion order;
 - a failing item is reported in its own :class:`ItemResult`, not fatal to the others;
-- with a ``store`` directory each result is written atomically as it arrives, and a
-  rerun loads what is written instead of computing it again (resume);
+- with a :class:`Store` (``pincal.io.ResultStore``: a directory) each result is written
+  atomically as it arrives, and a rerun loads what is written instead of computing it
+  again (resume);
 - a progress bar (tqdm) on the client.
 
 Dask is an optional extra (``pip install "pincal[dask]"``); without it, asking for a
@@ -18,15 +19,14 @@ scheduler raises :class:`~pincal.errors.MissingExtraError`. This stage imports n
 
 from __future__ import annotations
 
-from pincal.executor._map import Executor, ItemResult, MapResult
+from pincal.executor._map import Executor, ItemResult, MapResult, Store
 from pincal.executor._scheduler import SchedulerSpec, parse_scheduler
-from pincal.executor._store import ResultStore
 
 __all__ = [
     "Executor",
     "ItemResult",
     "MapResult",
-    "ResultStore",
     "SchedulerSpec",
+    "Store",
     "parse_scheduler",
 ]

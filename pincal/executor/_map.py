@@ -8,7 +8,7 @@ import pickle
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -16,9 +16,27 @@ from tqdm import tqdm
 
 from pincal.errors import ItemFailedError, OptionValueError
 from pincal.executor._scheduler import SchedulerSpec, parse_scheduler
-from pincal.executor._store import ResultStore
 
-__all__ = ["Executor", "ItemResult", "MapResult", "run_item"]
+__all__ = ["Executor", "ItemResult", "MapResult", "Store", "run_item"]
+
+
+class Store(Protocol):
+    """Where a map keeps each item's result for a resumed run.
+
+    :class:`pincal.io.ResultStore` is one: a directory, each result written atomically.
+    """
+
+    def has(self, key: str) -> bool:
+        """Whether a result of ``key`` is written."""
+        ...
+
+    def load(self, key: str) -> Any:
+        """The stored result of ``key``."""
+        ...
+
+    def save(self, key: str, value: Any) -> None:
+        """Write ``value`` as the result of ``key``, whole or not at all."""
+        ...
 
 #: one item's run in a worker: (index, item, seed child) → ``run_item``'s tuple
 ItemCall = Callable[
@@ -202,7 +220,7 @@ class Executor:
         *,
         seed: int | None = None,
         keys: Sequence[str] | None = None,
-        store: ResultStore | str | os.PathLike[str] | None = None,
+        store: Store | None = None,
         progress: str | None = None,
     ) -> MapResult:
         """``fn`` on every item, each result in its own :class:`ItemResult`.
@@ -215,9 +233,9 @@ class Executor:
             items: (n,) the items (picklable).
             seed: the study seed, or None for unseeded work.
             keys: (n,) distinct item keys (default ``str(i)``); the store's file names.
-            store: a directory (or :class:`ResultStore`): results already written there
-                are loaded, not computed (resume); each new success is written
-                atomically as it arrives on the client.
+            store: a :class:`Store` (:class:`pincal.io.ResultStore`, a directory):
+                results already written there are loaded, not computed (resume); each
+                new success is written as it arrives on the client.
             progress: a label for a progress bar on stderr (shown on a terminal), or None.
 
         Returns:
@@ -229,8 +247,6 @@ class Executor:
         if len(keys) != n or len(set(keys)) != n:
             raise OptionValueError(f"keys must be {n} distinct texts, one per item")
         children = np.random.SeedSequence(seed).spawn(n) if seed is not None else [None] * n
-        if store is not None and not isinstance(store, ResultStore):
-            store = ResultStore(store)
         out: dict[int, ItemResult] = {}
         if store is not None:
             for i, key in enumerate(keys):

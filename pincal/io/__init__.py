@@ -76,6 +76,7 @@ from pincal.io._poses_file import (
     read_poses,
     write_poses,
 )
+from pincal.io._result_store import ResultStore
 from pincal.io._socket_file import read_socket_data, write_socket_data
 from pincal.io._socket_table import SocketTable, read_socket_table, socket_id
 from pincal.io._tracker_file import (
@@ -111,6 +112,7 @@ __all__ = [
     "MarkerData",
     "MeasurementFile",
     "PoseFile",
+    "ResultStore",
     "SocketTable",
     "TargetMeasurements",
     "TrackerImport",

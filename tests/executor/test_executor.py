@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from pincal.errors import ItemFailedError, MissingExtraError, OptionValueError
-from pincal.executor import Executor, ResultStore, parse_scheduler
+from pincal.executor import Executor, parse_scheduler
+from pincal.io import ResultStore
 
 HAS_DASK = importlib.util.find_spec("distributed") is not None
 needs_dask = pytest.mark.skipif(not HAS_DASK, reason="dask.distributed not installed")
@@ -78,7 +79,7 @@ def test_a_failing_item_is_reported_and_the_rest_resume(tmp_path, backend, reque
     calls.mkdir()
     items = [(str(calls), v) for v in range(6)]
     keys = [f"unit-{v}" for v in range(6)]
-    first = ex.map(counted, items, keys=keys, store=tmp_path / "store")
+    first = ex.map(counted, items, keys=keys, store=ResultStore(tmp_path / "store"))
     assert [r.ok for r in first] == [True, True, True, False, True, True]
     assert first[3].error == "ValueError: item 3 is bad"
     assert isinstance(first[3].exception, ValueError)
@@ -87,7 +88,7 @@ def test_a_failing_item_is_reported_and_the_rest_resume(tmp_path, backend, reque
     with pytest.raises(ValueError, match="item 3 is bad"):
         first.values()
     # a rerun computes only the failed item again; the others are read back
-    again = ex.map(counted, items, keys=keys, store=tmp_path / "store")
+    again = ex.map(counted, items, keys=keys, store=ResultStore(tmp_path / "store"))
     assert _calls(calls) == 7
     assert again.cached == 5 and [r.cached for r in again] == [True] * 3 + [False] + [True] * 2
     assert [r.value for r in again] == [r.value for r in first]

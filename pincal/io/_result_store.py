@@ -1,4 +1,7 @@
-"""Per-item results on disk, each written atomically: what a resumed run reuses."""
+"""Per-item results on disk, each written atomically: a resumed executor map reuses them.
+
+:class:`ResultStore` is the :class:`pincal.executor.Store` of ``pincal fleet run``.
+"""
 
 from __future__ import annotations
 
@@ -6,11 +9,11 @@ import hashlib
 import os
 import pickle
 import re
-import tempfile
 from pathlib import Path
 from typing import Any
 
 from pincal.errors import OutputPathError, clip
+from pincal.io._atomic import atomic_write_bytes
 
 __all__ = ["ResultStore"]
 
@@ -20,9 +23,10 @@ _SAFE = re.compile(r"[^A-Za-z0-9_.-]")
 class ResultStore:
     """A directory of pickled item results, one file per key.
 
-    A result is written through a temporary file and ``os.replace``: a run killed
-    mid-write leaves the previous state, never half a file. Only successful results are
-    stored, so a rerun computes again exactly the items that failed or never ran.
+    A result is written through a temporary file and ``os.replace``
+    (:func:`atomic_write_bytes`): a run killed mid-write leaves the previous state, never
+    half a file. Only successful results are stored, so a rerun computes again exactly
+    the items that failed or never ran.
 
     Args:
         path: the directory (created when missing).
@@ -56,14 +60,4 @@ class ResultStore:
 
     def save(self, key: str, value: Any) -> None:
         """Write ``value`` as the result of ``key``, whole or not at all."""
-        target = self.file(key)
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=self.path)
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                pickle.dump(value, fh, protocol=pickle.HIGHEST_PROTOCOL)
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, target)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        atomic_write_bytes(self.file(key), pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL))
