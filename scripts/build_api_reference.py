@@ -22,7 +22,7 @@ import pdoc.render
 import pincal
 
 #: the stages in data-flow order (pincal/__init__.py); the CLI is documented by --help
-STAGES = ("model", "machines", "sensitivity", "measure", "design", "identification",
+STAGES = ("executor", "model", "machines", "sensitivity", "measure", "design", "identification",
           "compensation", "validation", "io", "workflow", "export", "report", "viz", "errors")
 
 
