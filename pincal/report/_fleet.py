@@ -45,7 +45,8 @@ def plot_fleet(doc: Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
         cols = [p for p in params if p["unit"] == kind]
         x = np.arange(len(cols))
         band = 3e3 * np.array([p["production_std"] for p in cols])
-        ax.fill_between(x, -band, band, step="mid", color="#d5dbdb", label="±3τ production")
+        for i, b in enumerate(band):  # each parameter's own ±3τ, as wide as its column
+            ax.fill_between([i - 0.4, i + 0.4], -b, b, color="#d5dbdb", lw=0)
         for u in units:
             dev = [1e3 * (u["values"][p["name"]] - p["centre"]) for p in cols]
             flagged = bool(u.get("out_of_family"))
@@ -65,7 +66,7 @@ def plot_fleet(doc: Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
     n_flagged = sum(bool(u.get("out_of_family")) for u in units)
     title = fig.suptitle(
         f"{len(units)} calibrated units: deviation from the fleet centre "
-        f"({n_flagged} out of family, red)"
+        f"({n_flagged} out of family, red; grey: ±3τ production spread)"
     )
     return save_figure(fig, path, grid, title)
 
