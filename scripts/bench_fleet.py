@@ -1,6 +1,6 @@
 """Units per second of `pincal fleet run`: local processes (joblib) vs Dask, 1 and 2 workers.
 
-Usage: PYTHONPATH=. python scripts/bench_fleet.py [--units 6] [--repeats 3]
+Usage: python scripts/bench_fleet.py [--units 6] [--repeats 3]
 
 Each configuration calibrates the same simulated wedge3 fleet into a fresh directory
 (nothing reused); the time includes starting the workers (and the Dask cluster). BLAS
