@@ -13,7 +13,7 @@ order, each counting what it removes from what the previous ones kept:
    actuators as they are, prismatic ones times L; L [m] balances the two row blocks
    (RMS of the position rows / RMS of the rotation rows of G over the candidates, as
    :func:`~pincal.design._scaling.characteristic_length`). With position components
-   only, L = 1 m (σ_min is then relative anyway);
+   only, or a measured point the actuators do not move, L = 1 m (σ_min is then relative anyway);
 3. **self-collision** and 4. **obstacle collision** — the URDF collision geometry
    (:class:`~pincal.design._collisions.CollisionChecker`) at each pose's closed
    configuration; skipped, with a note, when the model has none;
@@ -130,7 +130,8 @@ def actuator_sigma_min(
         else:
             rms_r = float(np.sqrt(np.mean(G[ok][:, ~is_pos] ** 2)))
             rms_p = float(np.sqrt(np.mean(G[ok][:, is_pos] ** 2)))
-            length = rms_p / rms_r if rms_r > 0 else 1.0
+            # a measured point the actuators do not move (rms_p = 0) has no length scale
+            length = rms_p / rms_r if rms_r > 0 and rms_p > 0 else 1.0
     prismatic = np.array([mech.tree.joints[j].type == "prismatic" for j in mech.actuated])
     G[:, is_pos, :] /= length
     G[:, :, prismatic] *= length

@@ -60,9 +60,10 @@ class IdentificationProblem:
             only: in a joint fit every file is weighted by its own declared σ.
         labels: a name per data set of a joint fit (prefix of its own unknowns' names;
             default ``"<kind><i>"``); unused for one pose file.
-        weak_bound: joint fit: (length [m], angle [rad]); a direction of the base set
-            whose 1σ exceeds it is held at nominal and named in the gauge; None fits the
-            whole identifiable base set. Unused for one pose file.
+        weak_bound: (length [m], angle [rad]); a direction of the base set whose 1σ
+            exceeds it is held at nominal and named (a joint fit's gauge, a pose file's
+            message); None fits the whole identifiable base set. A pose file whose noise
+            is estimated is checked at the solution only (its σ is not known before).
 
     Raises:
         ParameterError: ``initial`` of the wrong shape or non-finite; ``fit`` names a

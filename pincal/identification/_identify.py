@@ -21,7 +21,7 @@ from threadpoolctl import threadpool_limits
 from pincal.errors import SolverOptionError
 from pincal.identification._driver import FitPolicy, drive
 from pincal.identification._finish import finish
-from pincal.identification._fit_set import StructuralBase
+from pincal.identification._fit_set import StructuralBase, WeakBound
 from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._instrument_identify import joint_fit
 from pincal.identification._instrument_problem import Dataset
@@ -151,7 +151,9 @@ def _run(
 ) -> IdentificationResult:
     """The body of :func:`identify` (checked arguments), one BLAS thread."""
     model, x0 = problem.model, problem.x0
-    policy = FitPolicy(_base_rule(problem, model), weighting=True)
+    bound = problem.weak_bound  # an estimated noise is known at the solution only
+    weak = None if bound is None else WeakBound(*bound, at_start=model.noise_source != "estimate")
+    policy = FitPolicy(_base_rule(problem, model), weak, weighting=True)
     d = drive(model, x0, entry, opts, policy, progress)
     raw0 = d.raw0
     assert isinstance(raw0, np.ndarray)  # one pose file: (m, k)
@@ -161,8 +163,17 @@ def _run(
     result, _ = finish(
         d.model, d.settled, method=method, params=problem.params, raw0=raw0,
         stats=lambda raw: ResidualStats.from_residuals(raw, comps), residuals=d.settled.raw,
-        initial_values=x0, prefix=d.fit_set.note, prior=None if prior is None else prior[0],
+        initial_values=x0, prefix=d.fit_set.note + _held_note(problem.params, d.weak, weak),
+        prior=None if prior is None else prior[0],
         identifiability=d.fit_set.identifiability, weighting=d.weighting,
         initial_residuals=raw0, components=comps,
     )  # fmt: skip
     return result
+
+
+def _held_note(params: ParameterSet, held: np.ndarray, bound: WeakBound | None) -> str:
+    """The parameters the weak bound held, in words ("" when none)."""
+    if bound is None or held.size == 0:
+        return ""
+    names = ", ".join(params.names[i] for i in held)
+    return f"seen too weakly to place within {bound.describe()}, held at nominal: {names}; "

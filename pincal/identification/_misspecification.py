@@ -183,7 +183,8 @@ def probe_columns(
 ) -> dict[str, np.ndarray]:
     """Raw (m, k, q) derivative of the residuals w.r.t. each probe's nuisance terms.
 
-    ``scale``: measured positions about their centroid [m per unit scale];
+    ``scale``: the fitted model's positions (measured − residual) about their centroid
+    [m per unit scale];
     ``drift``: pose order t ∈ [−½, ½] on each measured position component [m per m];
     ``gains``: −∂pose/∂q_i · q_i per actuator at the calibrated machine [per unit gain]
     (left out when the actuator offsets cannot be built for the mechanism);
@@ -193,8 +194,17 @@ def probe_columns(
     m, k = len(meas), len(meas.components)
     pos = [j for j, c in enumerate(meas.components) if c in _POS]
     cols: dict[str, np.ndarray] = {}
+    model_pos = None  # the fitted model's positions: measured − residual
+    raw = np.asarray(result.residuals, dtype=float)
+    if raw.shape == (m, k):
+        model_pos = np.asarray(meas.positions, dtype=float).copy()
+        for j, c in enumerate(meas.components):
+            if c in _POS:
+                model_pos[:, _POS.index(c)] -= raw[:, j]
     if pos and m > 2:
-        p = np.asarray(meas.positions, dtype=float)
+        # the model's positions, not the measured ones: a measured point the machine
+        # barely moves would otherwise offer its own noise — the residual — as a "scale"
+        p = np.asarray(meas.positions if model_pos is None else model_pos, dtype=float)
         centred = p - p.mean(axis=0)
         scale = np.zeros((m, k, 1))
         drift = np.zeros((m, k, len(pos)))
@@ -208,13 +218,6 @@ def probe_columns(
     if gains is not None:
         cols["gains"] = gains
     actuators = tuple(cal.actuated)
-    model_pos = None  # the fitted model's positions: measured − residual
-    raw = np.asarray(result.residuals, dtype=float)
-    if raw.shape == (m, k):
-        model_pos = np.asarray(meas.positions, dtype=float).copy()
-        for j, c in enumerate(meas.components):
-            if c in _POS:
-                model_pos[:, _POS.index(c)] -= raw[:, j]
     cols.update(coordinate_columns(meas, actuators, model_pos))
     return cols
 

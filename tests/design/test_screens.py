@@ -168,3 +168,16 @@ def test_settings_refuse_bad_margins():
         ScreenSettings(joint_margin=0.6)
     with pytest.raises(OptionValueError, match="singularity margin"):
         ScreenSettings(singular_margin=-1)
+
+
+def test_a_measured_point_the_actuators_do_not_move_keeps_a_finite_margin():
+    """An MJCF four-bar loaded without a sidecar measures its rocker body at the rocker's
+    pivot: the position rows of G are zero. σ_min is then the rotation's (L = 1 m), not
+    NaN — with NaN every candidate was rejected as singular and `poses` refused."""
+    fourbar = load_mechanism(Path(__file__).parents[1] / "model" / "mjcf" / "fourbar.xml")
+    cands = candidate_set(fourbar, parameters(fourbar, "full"), "random:50", rng=0)
+    sigma, L = actuator_sigma_min(fourbar, cands.q_act)
+    assert L == 1.0
+    assert np.all(np.isfinite(sigma)) and np.all(sigma > 0)
+    _, report = screen_candidates(fourbar, cands)
+    assert report.removed["singularity margin"] < len(cands) // 2
