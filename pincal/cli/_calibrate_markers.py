@@ -12,14 +12,58 @@ from pincal.cli._calibrate_text import result_json
 from pincal.cli.common import model_source
 
 if TYPE_CHECKING:  # imported in the calls: the CLI starts without the model stack
+    from pincal.cli.common import ModelOptions
     from pincal.measure import MarkerSetup
+    from pincal.model import Payload
     from pincal.workflow import MarkerSettings
 
-__all__ = ["calibrate_markers", "check_marker_rows"]
+__all__ = ["calibrate_markers", "check_marker_rows", "refuse_pose_options"]
 
 #: the marker route's answer to the probes' blind spot (it takes no declared noise)
 MARKER_REMEDY = ("the held-out prediction (printed below) judges a marker calibration; "
                  "validate it on another session (validate CAL --data OTHER)")  # fmt: skip
+
+
+def refuse_pose_options(
+    terms: tuple[str, ...] | list[str], load: Payload | None, model_opts: ModelOptions,
+    noise: str | None, bootstrap: int,
+) -> None:  # fmt: skip
+    """Refuse the options of pose files on a marker table (``--link``).
+
+    Raises:
+        click.BadParameter: joint terms or a payload, ``--sidecar``/``--frame``,
+            ``--noise``, ``--bootstrap``, or a joint locked at home.
+    """
+    if terms or load is not None:
+        raise click.BadParameter(
+            "joint-space terms are not yet fitted from marker tables (--link); use "
+            "--model geometric there (and no --payload)",
+            param_hint="--model",
+        )
+    if model_opts.sidecar or model_opts.frame:
+        raise click.BadParameter(
+            "a marker table (--link) is measured on LINK: --frame and --sidecar do not "
+            "apply; give a sidecar file with `robot:` as MODEL instead",
+            param_hint="--link",
+        )
+    if noise is not None:
+        raise click.BadParameter(
+            "a marker calibration (--link) estimates the noise from the residuals and is "
+            "judged by held-out prediction; a declared noise applies to pose measurement "
+            "files: drop --noise",
+            param_hint="--noise",
+        )
+    if bootstrap:
+        raise click.BadParameter(
+            "a marker calibration (--link) is not bootstrapped yet; its σ are the linear "
+            "ones (prior rows included)",
+            param_hint="--bootstrap",
+        )
+    if "home" in model_opts.lock.values():
+        raise click.BadParameter(
+            "with --link, lock joints at a value (JOINT=VALUE [rad or m]), not at home",
+            param_hint="--lock",
+        )
 
 
 def check_marker_rows(model: str, data: str, setup: MarkerSetup, preset: str, yes: bool) -> None:

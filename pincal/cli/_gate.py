@@ -14,11 +14,9 @@ import click
 from pincal.errors import QualityGateError
 
 if TYPE_CHECKING:  # imported in the calls: the CLI starts without the identification stack
-    from pincal.identification import GateLimits, IdentificationResult, QualityVerdict
-    from pincal.measure import Measurements, NoiseModel
-    from pincal.model import Mechanism
+    from pincal.identification import GateLimits, QualityVerdict
 
-__all__ = ["apply_gate", "gate_limits"]
+__all__ = ["apply_gate", "bootstrap_lines", "gate_limits"]
 
 
 def gate_limits(max_change: str | None, significance: float | None = None) -> GateLimits:
@@ -84,50 +82,6 @@ def apply_gate(verdict: QualityVerdict, force: bool, *, before_fit: bool = False
             err=True,
         )
     return verdict.to_dict(overridden=force)
-
-
-def honest_uncertainty(
-    result: IdentificationResult,
-    verdict: QualityVerdict,
-    mech: Mechanism,
-    meas: Measurements,
-    noise: NoiseModel | dict[str, float] | None,
-    loss: str,
-    bootstrap: int = 0,
-    n_jobs: int = 1,
-) -> tuple[IdentificationResult, QualityVerdict, dict[str, object] | None]:
-    """Check the fit's linearisation; inflate its σ where it fails; bootstrap on request.
-
-    Returns ``(result, verdict, summary)``: the result with the covariance written (the
-    linear one, inflated along the directions the check finds non-linear), the verdict
-    with a ``linearity`` warning when the linearisation fails, and the check's JSON
-    summary (None when not run: a robust loss, or a refused fit). ``bootstrap`` > 0 runs
-    that many parametric-bootstrap refits (``n_jobs`` processes) reported beside the σ;
-    without it no refit runs after the fit.
-    """
-    if loss != "linear" or not verdict.passed or not result.identified.any():
-        if bootstrap:
-            click.echo("pincal: note: --bootstrap runs on a passed least-squares fit only "
-                       "(not with a robust --loss or a refused fit); no refits ran",
-                       err=True)  # fmt: skip
-        return result, verdict, None
-    from pincal.cli._progress import counted
-    from pincal.identification import (
-        check_uncertainty,
-        pose_recipe,
-        pose_residual_model,
-        with_uncertainty,
-    )
-
-    problem = pose_residual_model(result, mech, meas, noise)
-    if problem is None:
-        return result, verdict, None
-    declared = verdict.noise_source in ("declared", "per-pose")
-    factory = pose_recipe(result, mech, meas, noise) if bootstrap else None
-    with counted("bootstrap refits") as step:
-        check = check_uncertainty(problem, result, declared=declared, bootstrap=bootstrap,
-                                  progress=step, n_jobs=n_jobs, factory=factory)  # fmt: skip
-    return check.result, with_uncertainty(verdict, check), check.to_dict()
 
 
 def bootstrap_lines(uncertainty: dict | None, top: int = 8) -> list[str]:

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
-from typing import TYPE_CHECKING
 
 import click
 
@@ -19,14 +17,6 @@ from pincal.cli.common import (
     model_options,
 )
 
-if TYPE_CHECKING:  # imported in the calls: the CLI starts without the identification stack
-    from pincal.identification import Fitted
-    from pincal.measure import MarkerSetup, Measurements
-    from pincal.model import Mechanism
-
-    #: a candidate fitting procedure: training measurements → predictor
-    _Procedure = Callable[[Measurements], Fitted]
-
 __all__ = ["select_model_cmd"]
 
 DEFAULT_MODELS = (
@@ -35,79 +25,20 @@ DEFAULT_MODELS = (
 )
 
 
-def _pose_candidates(
-    mech: Mechanism, meas: Measurements, preset: str, models: list[str], method: str
-) -> dict[str, _Procedure]:
-    from pincal.identification import fitted, identify
-    from pincal.model import split_model
-    from pincal.sensitivity import parameters
-
-    def make(spec: str) -> _Procedure:
-        params = parameters(mech, "+".join([preset, *split_model(spec)]))
-        return lambda m: fitted(mech, identify(mech, params, m, method))
-
-    return {spec: make(spec) for spec in models}
-
-
-def _marker_candidates(
-    mech: Mechanism, setup: MarkerSetup, preset: str, models: list[str], method: str
-) -> dict[str, _Procedure]:
-    from pincal.identification import fit_markers, fitted
-    from pincal.model import split_model
-
-    def make(spec: str) -> _Procedure:
-        full = "+".join([preset, *split_model(spec)])
-
-        def fit(m: Measurements) -> Fitted:
-            f = fit_markers(mech, setup, m, full, method)
-            return fitted(f.registration.mechanism, f.result)
-
-        return fit
-
-    def registration(m: Measurements) -> Fitted:
-        f = fit_markers(mech, setup, m, registration_only=True)
-        return fitted(f.registration.mechanism, f.result)
-
-    return {"registration only": registration, **{spec: make(spec) for spec in models}}
-
-
 @click.command("select-model")
 @click.argument("model")
-@click.option(
-    "--data",
-    required=True,
-    type=click.Path(dir_okay=False),
-    help="Measurement file (pose file, or a marker table with --link).",
-)
-@click.option(
-    "--params",
-    "preset",
-    default=None,
-    help="Geometric preset of every candidate (default: the model's first; chain with --link).",
-)
-@click.option(
-    "--models",
-    default=DEFAULT_MODELS,
-    show_default=True,
-    help="Comma-separated candidate error models (geometric[+TERM…]).",
-)
-@click.option(
-    "--cv", "k", type=click.IntRange(2, 100), default=5, show_default=True, help="Number of folds."
-)
-@click.option(
-    "--seed",
-    type=click.IntRange(0, 2**32 - 1),
-    default=0,
-    show_default=True,
-    help="Seed of the folds.",
-)
-@click.option(
-    "--method",
-    type=click.Choice(["gauss-newton", "lm"]),
-    default="gauss-newton",
-    show_default=True,
-    help="Identification solver of every fit.",
-)
+@click.option("--data", required=True, type=click.Path(dir_okay=False),
+              help="Measurement file (pose file, or a marker table with --link).")  # fmt: skip
+@click.option("--params", "preset", default=None, help="Geometric preset of every candidate "
+              "(default: the model's first; chain with --link).")  # fmt: skip
+@click.option("--models", default=DEFAULT_MODELS, show_default=True,
+              help="Comma-separated candidate error models (geometric[+TERM…]).")  # fmt: skip
+@click.option("--cv", "k", type=click.IntRange(2, 100), default=5, show_default=True,
+              help="Number of folds.")  # fmt: skip
+@click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True,
+              help="Seed of the folds.")  # fmt: skip
+@click.option("--method", type=click.Choice(["gauss-newton", "lm"]), default="gauss-newton",
+              show_default=True, help="Identification solver of every fit.")  # fmt: skip
 @payload_option("Payload on the tool during the measurements (kg; centre of mass in m in the "
                 "tool frame), e.g. 20,0,0,0.1: part of the load a compliance term sees.")
 @click.option("--json", "as_json", is_flag=True, help="Print the ranking as JSON on stdout.")
@@ -115,25 +46,11 @@ def _marker_candidates(
 @marker_options
 @fail_cleanly
 def select_model_cmd(
-    model: str,
-    data: str,
-    preset: str | None,
-    models: str,
-    k: int,
-    seed: int,
-    method: str,
-    payload: str | None,
-    as_json: bool,
-    model_opts: ModelOptions,
-    link: str | None,
-    instrument_frame: str,
-    marker_spec: str,
-    marker_columns: tuple[str, ...],
-    length_unit: str,
-    orientation_columns: str | None,
-    orientation: str | None,
-    prior_spec: str | None,
-) -> None:
+    model: str, data: str, preset: str | None, models: str, k: int, seed: int, method: str,
+    payload: str | None, as_json: bool, model_opts: ModelOptions, link: str | None,
+    instrument_frame: str, marker_spec: str, marker_columns: tuple[str, ...], length_unit: str,
+    orientation_columns: str | None, orientation: str | None, prior_spec: str | None,
+) -> None:  # fmt: skip
     """Fit candidate error models and rank them by K-fold held-out position error.
 
     Every candidate is refitted from scratch on each fold (for a marker table the
@@ -149,8 +66,8 @@ def select_model_cmd(
       pincal select-model tiago --link arm_7_link --data mocap.csv \\
           --marker-columns x1,y1,z1 --models geometric,geometric+compliance
     """
-    from pincal.identification import select_model
     from pincal.model import split_model
+    from pincal.workflow import select_marker_model, select_pose_model
 
     guard_paths({"MODEL": model_input(model), "--data": data, "--sidecar": model_opts.sidecar})
     specs = [s.strip() for s in models.split(",") if s.strip()]
@@ -162,10 +79,9 @@ def select_model_cmd(
     if link is not None and load is not None:
         raise click.BadParameter("a payload is not used with a marker table (--link) yet",
                                  param_hint="--payload")  # fmt: skip
+    say = lambda line: click.echo(f"… {line}", err=True)  # noqa: E731
     if link is not None:
         from pincal.cli._markers import setup_from_options
-        from pincal.io import read_marker_table
-        from pincal.measure import marker_mechanism
 
         if prior_spec is not None:
             raise click.BadParameter("a prior is not used in model selection (not yet)",
@@ -178,18 +94,10 @@ def select_model_cmd(
         lock_spec = ",".join(f"{a}={v!r}" for a, v in model_opts.lock.items()) or None
         setup = setup_from_options(link, instrument_frame, marker_spec, marker_columns,
                                    length_unit, lock_spec)  # fmt: skip
-        mech = marker_mechanism(model, setup)
-        meas = read_marker_table(data, mech, setup)
-        candidates = _marker_candidates(mech, setup, preset or "chain", specs, method)
+        sel = select_marker_model(model, data, setup, preset, specs, method, k, seed, say)
     else:
-        from pincal.io import read_measurement_file
-
         mech = carrying(load_model(model, model_opts), load)
-        meas = read_measurement_file(data, mech).measurements
-        candidates = _pose_candidates(mech, meas, preset or next(iter(mech.presets), "full"),
-                                      specs, method)  # fmt: skip
-    click.echo(f"… {len(candidates)} models × {k} folds on {len(meas)} poses", err=True)
-    sel = select_model(candidates, meas, k, seed)
+        sel = select_pose_model(mech, data, preset, specs, method, k, seed, say)
     if as_json:
         click.echo(json.dumps(sel.to_dict()))
     else:

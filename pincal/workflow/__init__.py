@@ -9,6 +9,12 @@ prints or writes files.
   unknown instrument frame, with the defaults of real data (:class:`MarkerSettings`);
   :func:`rebuild` and :func:`replay_procedure` run it again for ``validate --cv``;
   :func:`transfer_markers` carries it to another session (``validate --data``).
+- :func:`calibrate_pose_file` (``pincal calibrate --data FILE``): a pose measurement
+  file read (:func:`pose_parameters`, :func:`pose_problem`), fitted, judged, its σ
+  checked (:class:`PoseRun`); :func:`calibrate_instrument_files` for instrument files
+  (ballbar, probe, sockets); :class:`Steps` carries the progress of their long steps.
+- :func:`select_pose_model` / :func:`select_marker_model` (``pincal select-model``):
+  candidate error models ranked by K-fold held-out error.
 - fleets (``pincal fleet``): :func:`draw_fleet` / :func:`simulate_unit` simulate a
   production line with planted faulty units; :func:`fleet_statistics` flags the units
   out of family, each judged with its own covariance.
@@ -23,6 +29,7 @@ from pincal.workflow._fleet_stats import (
     UnitVerdict,
     fleet_statistics,
 )
+from pincal.workflow._instrument_run import calibrate_instrument_files
 from pincal.workflow._marker_replay import rebuild, replay_procedure
 from pincal.workflow._marker_run import (
     MISFIT_RMS,
@@ -32,12 +39,21 @@ from pincal.workflow._marker_run import (
     marker_procedure,
 )
 from pincal.workflow._marker_settings import PRIOR_GRID, MarkerSettings, parse_prior
+from pincal.workflow._model_choice import select_marker_model, select_pose_model
+from pincal.workflow._pose_run import (
+    PoseProblem,
+    PoseRun,
+    calibrate_pose_file,
+    pose_parameters,
+    pose_problem,
+)
 from pincal.workflow._prior_choice import (
     PriorChoice,
     choose_prior,
     cross_validated,
     nested_choice,
 )
+from pincal.workflow._steps import Steps
 from pincal.workflow._transfer import transfer_markers
 
 __all__ = [
@@ -48,10 +64,15 @@ __all__ = [
     "FleetStatistics",
     "MarkerRun",
     "MarkerSettings",
+    "PoseProblem",
+    "PoseRun",
     "PriorChoice",
+    "Steps",
     "UnitEstimate",
     "UnitVerdict",
+    "calibrate_instrument_files",
     "calibrate_markers",
+    "calibrate_pose_file",
     "choose_prior",
     "cross_validated",
     "draw_fleet",
@@ -59,8 +80,12 @@ __all__ = [
     "marker_procedure",
     "nested_choice",
     "parse_prior",
+    "pose_parameters",
+    "pose_problem",
     "rebuild",
     "replay_procedure",
+    "select_marker_model",
+    "select_pose_model",
     "simulate_unit",
     "transfer_markers",
 ]
