@@ -9,6 +9,8 @@ prints or writes files.
   unknown instrument frame, with the defaults of real data (:class:`MarkerSettings`);
   :func:`rebuild` and :func:`replay_procedure` run it again for ``validate --cv``;
   :func:`transfer_markers` carries it to another session (``validate --data``).
+- :func:`simulate_demo` (``pincal demo``): a simulated calibration of a seeded actual
+  machine, poses chosen by design, predicted vs achieved accuracy (:class:`DemoResult`).
 - fleets (``pincal fleet``): :func:`draw_fleet` / :func:`simulate_unit` simulate a
   production line with planted faulty units; :func:`fleet_statistics` flags the units
   out of family, each judged with its own covariance.
@@ -16,6 +18,13 @@ prints or writes files.
 
 from __future__ import annotations
 
+from pincal.workflow._demo import (
+    DemoAccuracy,
+    DemoResult,
+    DemoSettings,
+    draw_errors,
+    simulate_demo,
+)
 from pincal.workflow._fleet_draw import FleetDraw, draw_fleet, simulate_unit
 from pincal.workflow._fleet_stats import (
     FleetStatistics,
@@ -44,6 +53,9 @@ __all__ = [
     "MISFIT_RMS",
     "PRIOR_GRID",
     "ROBUST_LOSS",
+    "DemoAccuracy",
+    "DemoResult",
+    "DemoSettings",
     "FleetDraw",
     "FleetStatistics",
     "MarkerRun",
@@ -54,6 +66,7 @@ __all__ = [
     "calibrate_markers",
     "choose_prior",
     "cross_validated",
+    "draw_errors",
     "draw_fleet",
     "fleet_statistics",
     "marker_procedure",
@@ -61,6 +74,7 @@ __all__ = [
     "parse_prior",
     "rebuild",
     "replay_procedure",
+    "simulate_demo",
     "simulate_unit",
     "transfer_markers",
 ]
