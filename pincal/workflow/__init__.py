@@ -12,8 +12,11 @@ prints or writes files.
 - :func:`simulate_demo` (``pincal demo``): a simulated calibration of a seeded actual
   machine, poses chosen by design, predicted vs achieved accuracy (:class:`DemoResult`).
 - fleets (``pincal fleet``): :func:`draw_fleet` / :func:`simulate_unit` simulate a
-  production line with planted faulty units; :func:`fleet_statistics` flags the units
-  out of family, each judged with its own covariance.
+  production line with planted faulty units, :func:`plan_fleet` as ``fleet simulate``
+  does it (:class:`FleetPlan`); :func:`fleet_jobs` lists the units of ``fleet run`` and
+  :func:`unit_summary` reads one back; :func:`fleet_statistics` flags the units
+  out of family, each judged with its own covariance; :func:`fleet_report` judges a
+  run and writes up ``fleet.json`` (:func:`fleet_document`).
 """
 
 from __future__ import annotations
@@ -25,13 +28,16 @@ from pincal.workflow._demo import (
     draw_errors,
     simulate_demo,
 )
+from pincal.workflow._fleet_doc import FleetReport, fleet_document, fleet_report
 from pincal.workflow._fleet_draw import FleetDraw, draw_fleet, simulate_unit
+from pincal.workflow._fleet_sim import FleetPlan, plan_fleet
 from pincal.workflow._fleet_stats import (
     FleetStatistics,
     UnitEstimate,
     UnitVerdict,
     fleet_statistics,
 )
+from pincal.workflow._fleet_units import UnitJob, file_digest, fleet_jobs, unit_summary
 from pincal.workflow._marker_replay import rebuild, replay_procedure
 from pincal.workflow._marker_run import (
     MISFIT_RMS,
@@ -57,24 +63,33 @@ __all__ = [
     "DemoResult",
     "DemoSettings",
     "FleetDraw",
+    "FleetPlan",
+    "FleetReport",
     "FleetStatistics",
     "MarkerRun",
     "MarkerSettings",
     "PriorChoice",
     "UnitEstimate",
+    "UnitJob",
     "UnitVerdict",
     "calibrate_markers",
     "choose_prior",
     "cross_validated",
     "draw_errors",
     "draw_fleet",
+    "file_digest",
+    "fleet_document",
+    "fleet_jobs",
+    "fleet_report",
     "fleet_statistics",
     "marker_procedure",
     "nested_choice",
     "parse_prior",
+    "plan_fleet",
     "rebuild",
     "replay_procedure",
     "simulate_demo",
     "simulate_unit",
     "transfer_markers",
+    "unit_summary",
 ]
