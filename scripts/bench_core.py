@@ -295,8 +295,9 @@ def identify_memory(m: int) -> dict:
 
 def design_and_demo() -> dict:
     import pincal
-    from pincal.cli._demo_job import DemoSettings, run_demo
+    from pincal.cli._demo_job import run_demo
     from pincal.design import DesignScaling, exchange, grid_candidates
+    from pincal.workflow import DemoSettings
 
     mech = pincal.load_mechanism("stewart_6ups")
     params = pincal.parameters(mech, "stewart42")

@@ -2,39 +2,10 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import contextmanager
-
 import click
 
 from pincal.cli._limits import MAX_POSES, check_count, naming_option, yes_option
 from pincal.cli.common import fail_cleanly
-
-
-@contextmanager
-def _collections_skip_the_imports() -> Iterator[None]:
-    """Within: the objects that exist now (the imported modules) are frozen; at exit, all.
-
-    Collections of Python's oldest generation scan every tracked object — numpy,
-    Pinocchio and pincal loaded, ≈ 25 ms each — though during the demo they can only
-    find the run's own garbage; and finalisation runs a last full collection (≈ 70 ms)
-    just before the process ends and its memory goes back anyway. The objects frozen
-    here are unfrozen on leaving unless the caller had frozen some (a process that
-    runs the command and goes on, a test session, collects them again); the freeze at
-    exit is registered once with :mod:`atexit`.
-    """
-    import atexit
-    import gc
-
-    atexit.unregister(gc.freeze)
-    atexit.register(gc.freeze)
-    frozen_before = gc.get_freeze_count()
-    gc.freeze()
-    try:
-        yield
-    finally:
-        if not frozen_before:  # not undoing a freeze of the caller's
-            gc.unfreeze()
 
 
 @click.command()
@@ -87,46 +58,31 @@ def demo(
       pincal demo --seed 3 --poses 18 --method lm --out run3
       pincal demo --no-report --json
     """
-    from pincal.cli._demo_job import DemoSettings, format_demo, run_demo
+    from pincal.cli._demo_job import (
+        collections_skip_the_imports,
+        demo_summary,
+        format_demo,
+        run_demo,
+    )
     from pincal.design import parse_candidate_spec
+    from pincal.workflow import DemoSettings
 
     check_count(poses, "--poses", MAX_POSES, yes)
     check_count(validation, "--validation", MAX_POSES, yes)
     if candidates != "none":
         with naming_option("--candidates"):
             parse_candidate_spec(candidates)
-    settings = DemoSettings(
-        seed=seed,
-        n_poses=poses,
-        n_validation=validation,
-        method=method,
-        candidates=candidates,
-        report=report,
-        bounded=not yes,
-        force=force,
-    )
+    settings = DemoSettings(seed=seed, n_poses=poses, n_validation=validation, method=method,
+                            candidates=candidates, report=report, bounded=not yes,
+                            force=force)  # fmt: skip
     with (
         naming_option("--candidates" if candidates != "none" else "--poses"),
-        _collections_skip_the_imports(),
+        collections_skip_the_imports(),
     ):
-        result = run_demo(settings, out, progress=lambda msg: click.echo(f"… {msg}", err=True))
+        result, files = run_demo(settings, out, lambda msg: click.echo(f"… {msg}", err=True))
     if as_json:
         import json
 
-        r = result.result
-        click.echo(
-            json.dumps(
-                {
-                    "model": result.nominal.name,
-                    "parameters": len(result.params),
-                    "iterations": int(r.iterations),
-                    "reduced_chi2": float(r.reduced_chi2),
-                    "validation_before": result.before.summary(),
-                    "validation_after": result.after.summary(),
-                    "calibration": str(out),
-                    "files": [str(f) for f in result.files],
-                }
-            )
-        )
+        click.echo(json.dumps(demo_summary(result, files, out)))
     else:
-        click.echo(format_demo(result))
+        click.echo(format_demo(result, files))

@@ -15,20 +15,35 @@ prints or writes files.
   (ballbar, probe, sockets); :class:`Steps` carries the progress of their long steps.
 - :func:`select_pose_model` / :func:`select_marker_model` (``pincal select-model``):
   candidate error models ranked by K-fold held-out error.
+- :func:`simulate_demo` (``pincal demo``): a simulated calibration of a seeded actual
+  machine, poses chosen by design, predicted vs achieved accuracy (:class:`DemoResult`).
 - fleets (``pincal fleet``): :func:`draw_fleet` / :func:`simulate_unit` simulate a
-  production line with planted faulty units; :func:`fleet_statistics` flags the units
-  out of family, each judged with its own covariance.
+  production line with planted faulty units, :func:`plan_fleet` as ``fleet simulate``
+  does it (:class:`FleetPlan`); :func:`fleet_jobs` lists the units of ``fleet run`` and
+  :func:`unit_summary` reads one back; :func:`fleet_statistics` flags the units
+  out of family, each judged with its own covariance; :func:`fleet_report` judges a
+  run and writes up ``fleet.json`` (:func:`fleet_document`).
 """
 
 from __future__ import annotations
 
+from pincal.workflow._demo import (
+    DemoAccuracy,
+    DemoResult,
+    DemoSettings,
+    draw_errors,
+    simulate_demo,
+)
+from pincal.workflow._fleet_doc import FleetReport, fleet_document, fleet_report
 from pincal.workflow._fleet_draw import FleetDraw, draw_fleet, simulate_unit
+from pincal.workflow._fleet_sim import FleetPlan, plan_fleet
 from pincal.workflow._fleet_stats import (
     FleetStatistics,
     UnitEstimate,
     UnitVerdict,
     fleet_statistics,
 )
+from pincal.workflow._fleet_units import UnitJob, file_digest, fleet_jobs, unit_summary
 from pincal.workflow._instrument_run import calibrate_instrument_files
 from pincal.workflow._marker_replay import rebuild, replay_procedure
 from pincal.workflow._marker_run import (
@@ -60,7 +75,12 @@ __all__ = [
     "MISFIT_RMS",
     "PRIOR_GRID",
     "ROBUST_LOSS",
+    "DemoAccuracy",
+    "DemoResult",
+    "DemoSettings",
     "FleetDraw",
+    "FleetPlan",
+    "FleetReport",
     "FleetStatistics",
     "MarkerRun",
     "MarkerSettings",
@@ -69,23 +89,32 @@ __all__ = [
     "PriorChoice",
     "Steps",
     "UnitEstimate",
+    "UnitJob",
     "UnitVerdict",
     "calibrate_instrument_files",
     "calibrate_markers",
     "calibrate_pose_file",
     "choose_prior",
     "cross_validated",
+    "draw_errors",
     "draw_fleet",
+    "file_digest",
+    "fleet_document",
+    "fleet_jobs",
+    "fleet_report",
     "fleet_statistics",
     "marker_procedure",
     "nested_choice",
     "parse_prior",
+    "plan_fleet",
     "pose_parameters",
     "pose_problem",
     "rebuild",
     "replay_procedure",
     "select_marker_model",
     "select_pose_model",
+    "simulate_demo",
     "simulate_unit",
     "transfer_markers",
+    "unit_summary",
 ]

@@ -14,10 +14,10 @@ from click.testing import CliRunner
 
 from pincal.cli import main
 from pincal.cli._campaign import Campaign
-from pincal.cli._demo_job import DemoSettings
 from pincal.io import read_measurement_file
 from pincal.measure import DEFAULT_NOISE
 from pincal.model import load_mechanism
+from pincal.workflow import DemoSettings
 
 RRR3 = Path(__file__).parents[1] / "model" / "machines" / "rrr3" / "rrr3.urdf"
 CAMPAIGN = f"""\

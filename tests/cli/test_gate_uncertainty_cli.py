@@ -108,7 +108,7 @@ def test_no_refit_runs_without_bootstrap_and_twenty_beside_with_it(tmp_path, cam
 
 def test_campaign_bootstrap_key_is_passed_to_calibrate(tmp_path):
     from pincal.cli._campaign import load_campaign
-    from pincal.cli.run import _calibrate
+    from pincal.cli._campaign_steps import _calibrate
     from pincal.errors import CampaignError
 
     f = tmp_path / "c.yaml"

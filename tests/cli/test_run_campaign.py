@@ -11,8 +11,8 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
+import pincal.cli._campaign_steps as run_steps
 from pincal.cli import main
-from pincal.cli import run as run_module
 from pincal.cli._campaign import load_campaign
 from pincal.errors import CampaignError
 
@@ -122,10 +122,10 @@ def test_relative_paths_follow_the_file(tmp_path):
 
 def test_dry_run_and_missing_subcommand_is_skipped(tmp_path, monkeypatch):
     steps = (
-        run_module.Step("calibrate", "calibrate", run_module._calibrate),
-        run_module.Step("future", "no-such-command", lambda c, p: [str(p.out), "--x"]),
+        run_steps.Step("calibrate", "calibrate", run_steps._calibrate),
+        run_steps.Step("future", "no-such-command", lambda c, p: [str(p.out), "--x"]),
     )
-    monkeypatch.setattr(run_module, "STEPS", steps)
+    monkeypatch.setattr(run_steps, "STEPS", steps)
     path = _campaign(tmp_path, "model: stewart_6ups\nmeasurements: {poses: 30}\n")
     out = tmp_path / "out"
     res = _run(str(path), "--out", str(out), "--dry-run", "--json")
@@ -182,7 +182,7 @@ def test_every_key_is_documented_and_the_example_is_valid():
     ],
 )
 def test_a_step_usage_error_is_a_campaign_error(tmp_path, monkeypatch, args, message):
-    monkeypatch.setattr(run_module, "STEPS", (run_module.Step("x", "simulate", lambda c, p: args),))
+    monkeypatch.setattr(run_steps, "STEPS", (run_steps.Step("x", "simulate", lambda c, p: args),))
     path = _campaign(tmp_path, "model: stewart_6ups\nmeasurements: {poses: 30}\n")
     res = _run(str(path), "--out", str(tmp_path / "out"))
     assert res.exit_code == 1, res.output

@@ -11,8 +11,9 @@ import sys
 
 import pytest
 
-from pincal.cli._demo_job import DemoSettings, run_demo
+from pincal.cli._demo_job import run_demo
 from pincal.report import calibration_report
+from pincal.workflow import DemoSettings
 from tests.report._identified import identified_directory
 
 forked = pytest.mark.skipif(

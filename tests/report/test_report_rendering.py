@@ -140,7 +140,8 @@ def test_the_cli_imports_no_network_stack():
 def test_a_demo_without_report_imports_no_plotting_or_viewer(tmp_path):
     # scipy is allowed here: the quality gate's F and χ² tests judge every fit
     code = (
-        "from pincal.cli._demo_job import DemoSettings, run_demo\n"
+        "from pincal.cli._demo_job import run_demo\n"
+        "from pincal.workflow import DemoSettings\n"
         f"run_demo(DemoSettings(n_poses=12, n_validation=5, report=False), {str(tmp_path)!r})"
     )
     assert not (HEAVY - {"scipy"}) & _modules_after(code)

@@ -1,15 +1,68 @@
-"""The fleet document (``fleet.json``): every unit, the test, the parameters' spread."""
+"""The fleet document (``fleet.json``): every unit, the test, the parameters' spread.
+
+:func:`fleet_report` judges the calibrated units of a fleet run
+(:func:`fleet_statistics`, when at least 3 were calibrated) and returns the document;
+:func:`fleet_document` writes it up from a given judgement.
+"""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
+from typing import Any
 
-if TYPE_CHECKING:
-    from pincal.executor import MapResult
-    from pincal.io import Fleet
-    from pincal.workflow import FleetStatistics
+import numpy as np
 
-__all__ = ["fleet_document"]
+from pincal.errors import PincalError
+from pincal.executor import MapResult
+from pincal.io import Fleet
+from pincal.workflow._fleet_stats import FleetStatistics, UnitEstimate, fleet_statistics
+
+__all__ = ["FleetReport", "fleet_document", "fleet_report"]
+
+
+@dataclass(frozen=True)
+class FleetReport:
+    """A fleet run judged.
+
+    Attributes:
+        document: ``fleet.json`` (:func:`fleet_document`), JSON-ready.
+        warning: why there is no out-of-family test although ≥ 3 units were
+            calibrated (the test's error message), else None.
+    """
+
+    document: dict[str, Any]
+    warning: str | None = None
+
+
+def fleet_report(
+    fleet: Fleet, results: MapResult, alpha: float, out_rel: str = "units"
+) -> FleetReport:
+    """Compare the calibrated units of a fleet run and write up the fleet document.
+
+    Args:
+        fleet: the :class:`pincal.io.Fleet`.
+        results: one result per unit, in fleet order; a value is a unit summary
+            (``{status: "calibrated", id, names, values [m, rad], covariance [SI], …}``)
+            or ``{status: "refused", reason}``.
+        alpha: the fleet-wise false-alarm rate, in (0, 1).
+        out_rel: the units' directory relative to the report.
+
+    Returns:
+        The :class:`FleetReport` (no test below 3 calibrated units, or when the test
+        refuses the units: then its message is the warning).
+    """
+    done = [r.value for r in results if r.ok and r.value["status"] == "calibrated"]
+    estimates = [
+        UnitEstimate(s["id"], tuple(s["names"]), np.array(s["values"]), np.array(s["covariance"]))
+        for s in done
+    ]
+    stats, warning = None, None
+    if len(estimates) >= 3:
+        try:
+            stats = fleet_statistics(estimates, alpha)
+        except PincalError as exc:
+            warning = str(exc)
+    return FleetReport(fleet_document(fleet, results, stats, alpha, out_rel), warning)
 
 
 def _test_text(alpha: float, units: int, dof: int | None, threshold: float | None) -> str:
@@ -42,7 +95,7 @@ def fleet_document(
     Args:
         fleet: the :class:`pincal.io.Fleet`.
         results: the executor's :class:`pincal.executor.MapResult`, one per unit.
-        stats: the :class:`pincal.workflow.FleetStatistics`, or None (< 3 calibrated).
+        stats: the :class:`FleetStatistics`, or None (< 3 calibrated).
         alpha: the fleet-wise false-alarm rate.
         out_rel: the units' directory relative to the report (``units``).
 
