@@ -367,11 +367,11 @@ def _identify_poses(
     import numpy as np
 
     from pincal.cli._progress import iterations
-    from pincal.cli.info import reduction_line
     from pincal.identification import LMOptions, identify
     from pincal.io import check_enough_poses
     from pincal.model import check_term_data
     from pincal.sensitivity import identifiability
+    from pincal.workflow import reduction_line
 
     if "1/K" in params.units:  # a thermal term: its rank depends on the data's temperatures
         check_term_data(params, meas.conditions)
