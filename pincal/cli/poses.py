@@ -60,7 +60,7 @@ def poses(
 
     from pincal.cli._pose_screens import parse_reach_errors, screen_settings
     from pincal.cli._progress import counted
-    from pincal.design import parse_candidate_spec
+    from pincal.design import MAX_CANDIDATE_BYTES, MAX_CANDIDATES, parse_candidate_spec
     from pincal.io import si_actuator_units, write_pose_design
     from pincal.workflow import PoseRequest, pose_basis, pose_candidates, select_pose_design
 
@@ -86,8 +86,10 @@ def poses(
         click.echo(line, err=True)
     with counted(f"candidates {spec}", unit="pose") as progress:
         with naming_option("--candidates"):
-            cands = pose_candidates(mech, basis, spec, seed, bounded=not yes, n_jobs=n_jobs,
-                                    progress=progress)  # fmt: skip
+            cands = pose_candidates(
+                mech, basis, spec, seed, max_candidates=None if yes else MAX_CANDIDATES,
+                max_bytes=None if yes else MAX_CANDIDATE_BYTES, n_jobs=n_jobs, progress=progress,
+            )  # fmt: skip
     request = PoseRequest(count, index_name, scaling, K_mm, noise, method, order, restarts, seed,
                           errors, spec)  # fmt: skip
     chosen = select_pose_design(mech, basis, cands, request, settings,

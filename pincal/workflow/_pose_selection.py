@@ -94,19 +94,19 @@ def pose_candidates(
     spec: str,
     seed: int,
     *,
-    bounded: bool = True,
+    max_candidates: int | None = MAX_CANDIDATES,
+    max_bytes: int | None = MAX_CANDIDATE_BYTES,
     n_jobs: int = 1,
     progress: Callable[[int, int], None] | None = None,
 ) -> CandidateSet:
     """The candidate poses of ``spec`` (``grid:LEVELS``, ``random:COUNT``, ``oa:LEVELS``).
 
-    ``bounded``: refuse more than :data:`pincal.design.MAX_CANDIDATES` poses or
-    :data:`pincal.design.MAX_CANDIDATE_BYTES`; ``progress(done, total)`` over the poses.
+    Refused past ``max_candidates`` poses or ``max_bytes`` of memory (None: no bound;
+    :func:`pincal.design.candidate_set`); ``progress(done, total)`` over the poses.
     """
     return candidate_set(
         mech, basis.params, spec, rng=seed, progress=progress,
-        max_candidates=MAX_CANDIDATES if bounded else None,
-        max_bytes=MAX_CANDIDATE_BYTES if bounded else None, n_jobs=n_jobs,
+        max_candidates=max_candidates, max_bytes=max_bytes, n_jobs=n_jobs,
     )  # fmt: skip
 
 
