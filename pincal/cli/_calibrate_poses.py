@@ -79,7 +79,6 @@ def calibrate_poses(
     """
     from pincal.cli._gate import apply_gate, bootstrap_lines
     from pincal.cli._joint_terms import carrying, terms_texts
-    from pincal.cli.info import reduction_line
     from pincal.io import (
         CALIBRATED_SIDECAR,
         CALIBRATED_URDF,
@@ -94,6 +93,7 @@ def calibrate_poses(
         calibrate_pose_file,
         pose_parameters,
         pose_problem,
+        reduction_line,
     )
 
     terms = split_model(error_model)

@@ -14,7 +14,7 @@ import click
 
 __all__ = ["SOCKET", "InstrumentChoice"]
 
-#: the socket-plate artefact, simulated by :mod:`pincal.cli._sockets`
+#: the socket-plate artefact, simulated by :func:`pincal.workflow.simulate_campaign`
 SOCKET = "socket"
 
 

@@ -204,7 +204,7 @@ def acceptance(
     import numpy as np
 
     from pincal.cli._progress import counted
-    from pincal.cli.simulate import parse_errors, parse_pair
+    from pincal.cli._simulate_options import parse_errors, parse_pair
     from pincal.io import atomic_write_text, read_measurements
     from pincal.sensitivity import parameters
     from pincal.validation import iso_test_cube, pose_characteristics, simulate_cycles

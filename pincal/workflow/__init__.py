@@ -23,10 +23,22 @@ prints or writes files.
   :func:`unit_summary` reads one back; :func:`fleet_statistics` flags the units
   out of family, each judged with its own covariance; :func:`fleet_report` judges a
   run and writes up ``fleet.json`` (:func:`fleet_document`).
+- models described (``pincal info``): :func:`structure_lines` and
+  :func:`describe_presets` (each preset's identifiability, the base set offered as a
+  preset, :func:`base_line`); :func:`reduction_line` says a preset was reduced to it.
+- measurement poses (``pincal poses``): :func:`pose_basis`, :func:`pose_candidates` and
+  :func:`select_pose_design` (screens, selection, travel order, Cramér–Rao prediction:
+  :class:`PoseSelection`); the reach screen compensates each candidate on displaced
+  models (:func:`compensation_test`, :func:`controlled_components`).
+- simulated campaigns (``pincal simulate``): :func:`simulate_campaign` measures the
+  nominal model with random errors (none a built machine cannot have,
+  :func:`buildable_mask`) at the poses it reaches (:func:`reachable_rows`), as poses, a
+  scalar instrument's readings or a ball seated in two sockets (:func:`default_sockets`).
 """
 
 from __future__ import annotations
 
+from pincal.workflow._buildable import buildable_mask
 from pincal.workflow._demo import (
     DemoAccuracy,
     DemoResult,
@@ -55,6 +67,13 @@ from pincal.workflow._marker_run import (
 )
 from pincal.workflow._marker_settings import PRIOR_GRID, MarkerSettings, parse_prior
 from pincal.workflow._model_choice import select_marker_model, select_pose_model
+from pincal.workflow._model_description import (
+    ModelDescription,
+    base_line,
+    describe_presets,
+    reduction_line,
+    structure_lines,
+)
 from pincal.workflow._pose_run import (
     PoseProblem,
     PoseRun,
@@ -62,19 +81,38 @@ from pincal.workflow._pose_run import (
     pose_parameters,
     pose_problem,
 )
+from pincal.workflow._pose_selection import (
+    PoseBasis,
+    PoseRequest,
+    PoseSelection,
+    pose_basis,
+    pose_candidates,
+    select_pose_design,
+)
 from pincal.workflow._prior_choice import (
     PriorChoice,
     choose_prior,
     cross_validated,
     nested_choice,
 )
+from pincal.workflow._reach_screen import DRAWS, compensation_test, controlled_components
+from pincal.workflow._simulation import (
+    SOCKET_SPACING,
+    SimulatedCampaign,
+    ThermalDraw,
+    default_sockets,
+    reachable_rows,
+    simulate_campaign,
+)
 from pincal.workflow._steps import Steps
 from pincal.workflow._transfer import transfer_markers
 
 __all__ = [
+    "DRAWS",
     "MISFIT_RMS",
     "PRIOR_GRID",
     "ROBUST_LOSS",
+    "SOCKET_SPACING",
     "DemoAccuracy",
     "DemoResult",
     "DemoSettings",
@@ -84,18 +122,30 @@ __all__ = [
     "FleetStatistics",
     "MarkerRun",
     "MarkerSettings",
+    "ModelDescription",
+    "PoseBasis",
     "PoseProblem",
+    "PoseRequest",
     "PoseRun",
+    "PoseSelection",
     "PriorChoice",
+    "SimulatedCampaign",
     "Steps",
+    "ThermalDraw",
     "UnitEstimate",
     "UnitJob",
     "UnitVerdict",
+    "base_line",
+    "buildable_mask",
     "calibrate_instrument_files",
     "calibrate_markers",
     "calibrate_pose_file",
     "choose_prior",
+    "compensation_test",
+    "controlled_components",
     "cross_validated",
+    "default_sockets",
+    "describe_presets",
     "draw_errors",
     "draw_fleet",
     "file_digest",
@@ -107,14 +157,21 @@ __all__ = [
     "nested_choice",
     "parse_prior",
     "plan_fleet",
+    "pose_basis",
+    "pose_candidates",
     "pose_parameters",
     "pose_problem",
+    "reachable_rows",
     "rebuild",
+    "reduction_line",
     "replay_procedure",
     "select_marker_model",
+    "select_pose_design",
     "select_pose_model",
+    "simulate_campaign",
     "simulate_demo",
     "simulate_unit",
+    "structure_lines",
     "transfer_markers",
     "unit_summary",
 ]

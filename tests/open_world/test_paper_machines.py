@@ -130,7 +130,7 @@ def test_reach_screen_imposes_the_components_a_planar_machine_controls(tmp_path)
     """The five-bar measures x y rz with 2 actuators: its reach screen now runs (its
     errors used to break the planar loop, so it never did) and imposes x y — all three
     were refused with MobilityError by compensate."""
-    from pincal.cli._pose_screens import controlled_components
+    from pincal.workflow import controlled_components
     from tests.sensitivity.five_bar import FIVE_BAR_SIDECAR, FIVE_BAR_URDF
 
     mech = Mechanism(FIVE_BAR_URDF, FIVE_BAR_SIDECAR)
