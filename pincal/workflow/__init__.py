@@ -9,6 +9,12 @@ prints or writes files.
   unknown instrument frame, with the defaults of real data (:class:`MarkerSettings`);
   :func:`rebuild` and :func:`replay_procedure` run it again for ``validate --cv``;
   :func:`transfer_markers` carries it to another session (``validate --data``).
+- cross-validation (``pincal validate --cv``): :func:`cross_validate_calibration`
+  refits each fold as calibrate ran it (a marker table, a pose file, ball-in-socket
+  seatings) beside its baseline; :func:`fold_table` lists the folds as CSV text.
+- a held-out file (``pincal validate --data``): :func:`read_held_out` reads it as the
+  calibration's data was; :func:`validate_on_data` returns the before / after errors
+  (:class:`DataValidation`, joint terms, further markers, transfer to its session).
 - fleets (``pincal fleet``): :func:`draw_fleet` / :func:`simulate_unit` simulate a
   production line with planted faulty units; :func:`fleet_statistics` flags the units
   out of family, each judged with its own covariance.
@@ -16,6 +22,7 @@ prints or writes files.
 
 from __future__ import annotations
 
+from pincal.workflow._cross_validation import cross_validate_calibration, fold_table
 from pincal.workflow._fleet_draw import FleetDraw, draw_fleet, simulate_unit
 from pincal.workflow._fleet_stats import (
     FleetStatistics,
@@ -39,13 +46,21 @@ from pincal.workflow._prior_choice import (
     nested_choice,
 )
 from pincal.workflow._transfer import transfer_markers
+from pincal.workflow._validate_data import (
+    DataValidation,
+    HeldOutData,
+    read_held_out,
+    validate_on_data,
+)
 
 __all__ = [
     "MISFIT_RMS",
     "PRIOR_GRID",
     "ROBUST_LOSS",
+    "DataValidation",
     "FleetDraw",
     "FleetStatistics",
+    "HeldOutData",
     "MarkerRun",
     "MarkerSettings",
     "PriorChoice",
@@ -53,14 +68,18 @@ __all__ = [
     "UnitVerdict",
     "calibrate_markers",
     "choose_prior",
+    "cross_validate_calibration",
     "cross_validated",
     "draw_fleet",
     "fleet_statistics",
+    "fold_table",
     "marker_procedure",
     "nested_choice",
     "parse_prior",
+    "read_held_out",
     "rebuild",
     "replay_procedure",
     "simulate_unit",
     "transfer_markers",
+    "validate_on_data",
 ]
