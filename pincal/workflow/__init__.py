@@ -9,6 +9,11 @@ prints or writes files.
   unknown instrument frame, with the defaults of real data (:class:`MarkerSettings`);
   :func:`rebuild` and :func:`replay_procedure` run it again for ``validate --cv``;
   :func:`transfer_markers` carries it to another session (``validate --data``).
+- ISO 9283 acceptance (``pincal acceptance``): :func:`measured_characteristics` of
+  measured repeated poses, or the test cube (:func:`cube_doc`) cycled by
+  :func:`cycle_characteristics` on an :func:`acceptance_machine` commanded by the
+  nominal or the calibrated model (:func:`calibrated_controller`); :func:`other_machine`
+  warns when the simulated machine is not the calibration's.
 - cross-validation (``pincal validate --cv``): :func:`cross_validate_calibration`
   refits each fold as calibrate ran it (a marker table, a pose file, ball-in-socket
   seatings) beside its baseline; :func:`fold_table` lists the folds as CSV text.
@@ -22,6 +27,15 @@ prints or writes files.
 
 from __future__ import annotations
 
+from pincal.workflow._acceptance import (
+    AcceptanceMachine,
+    acceptance_machine,
+    calibrated_controller,
+    cube_doc,
+    cycle_characteristics,
+    measured_characteristics,
+    other_machine,
+)
 from pincal.workflow._cross_validation import cross_validate_calibration, fold_table
 from pincal.workflow._fleet_draw import FleetDraw, draw_fleet, simulate_unit
 from pincal.workflow._fleet_stats import (
@@ -57,6 +71,7 @@ __all__ = [
     "MISFIT_RMS",
     "PRIOR_GRID",
     "ROBUST_LOSS",
+    "AcceptanceMachine",
     "DataValidation",
     "FleetDraw",
     "FleetStatistics",
@@ -66,15 +81,21 @@ __all__ = [
     "PriorChoice",
     "UnitEstimate",
     "UnitVerdict",
+    "acceptance_machine",
     "calibrate_markers",
+    "calibrated_controller",
     "choose_prior",
     "cross_validate_calibration",
     "cross_validated",
+    "cube_doc",
+    "cycle_characteristics",
     "draw_fleet",
     "fleet_statistics",
     "fold_table",
     "marker_procedure",
+    "measured_characteristics",
     "nested_choice",
+    "other_machine",
     "parse_prior",
     "read_held_out",
     "rebuild",
