@@ -7,19 +7,16 @@ from pathlib import Path
 
 import click
 
-from pincal.cli._joint_terms import payload_option, read_payload
+from pincal.cli._joint_terms import calibration_terms, payload_option, read_payload
 from pincal.cli._limits import check_data_rows, yes_option
+from pincal.cli._validate_out import echo_data_validation, guard_outputs
 from pincal.cli.common import announce, calibration_summary, fail_cleanly
 
 
 @click.command()
 @click.argument("calibration", type=click.Path(path_type=Path))
-@click.option(
-    "--data",
-    default=None,
-    type=click.Path(dir_okay=False, path_type=Path),
-    help="Held-out measurement file (not used for fitting); required without --cv.",
-)
+@click.option("--data", default=None, type=click.Path(dir_okay=False, path_type=Path),
+              help="Held-out measurement file (not used for fitting); required without --cv.")
 @click.option("--cv", "cv_folds", type=click.IntRange(2, 1000), default=None, metavar="K",
               help="K-fold cross-validation over the fitted poses: each fold refitted "
               "as calibrate ran, held-out RMS/max beside the registration-only model.")
@@ -32,12 +29,9 @@ from pincal.cli.common import announce, calibration_summary, fail_cleanly
               help="Write the --cv folds (pose row, fold) as CSV.")
 @click.option("--json", "as_json", is_flag=True, help="Print the full validation as JSON.")
 @yes_option
-@click.option(
-    "--out",
-    type=click.Path(dir_okay=False, path_type=Path),
-    default=None,
-    help="Also write the full validation JSON to this file (for `pincal report --validation`).",
-)
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Also write the full validation JSON to this file (for "
+              "`pincal report --validation`).")
 @payload_option("The load during the --data measurements (kg; centre of mass in m in the "
                 "tool frame), replacing the calibration's, for its compliance terms.")
 @fail_cleanly
@@ -79,135 +73,46 @@ def validate(
     --refit fits the folds again. With orientation measured (a 6-D marker body) the
     verdict weighs position and orientation, each whitened by its noise σ.
     """
-    from pincal.cli.common import guard_paths
-    from pincal.io import (
-        IDENTIFICATION_FILE,
-        MANIFEST,
-        atomic_write_text,
-        read_calibration,
-        read_measurement_file,
-        sha256_file,
-    )
+    from pincal.io import atomic_write_text, read_calibration
 
     if data is None and cv_folds is None:
         raise click.UsageError("give --data (held-out measurements) or --cv K (or both)")
     if out is not None or folds_out is not None:
-        from pincal.cli._implicit_inputs import calibration_inputs
-
-        inputs: dict = {} if data is None else {"--data": data}
-        inputs |= {f"CALIBRATION's {n}": calibration / n
-                   for n in (IDENTIFICATION_FILE, MANIFEST)}  # fmt: skip
-        # its files, its nominal model's and (--cv) the data file the folds are read from
-        inputs |= calibration_inputs(calibration, data_files=cv_folds is not None)
-        guard_paths(inputs, {"--out": out, "--folds-out": folds_out})
-    cv = cv_doc = None
+        guard_outputs(calibration, data, cv_folds is not None, out, folds_out)
+    cal = read_calibration(calibration)
+    cv = None
     if cv_folds is not None:
-        from pincal.cli._cv import run_cv
-        from pincal.report import cross_validation_text
+        from pincal.workflow import cross_validate_calibration, fold_table
 
-        cv = run_cv(read_calibration(calibration), cv_folds, cv_seed, folds_out, refit)
-        cv_doc = cv.to_dict()
+        cv = cross_validate_calibration(cal, cv_folds, cv_seed, refit)
+        if folds_out is not None:
+            atomic_write_text(folds_out, fold_table(cv.folds, cv.poses))
         if data is None:
-            only = {"calibration": str(calibration), "cv": cv_doc}
+            from pincal.report import cross_validation_text
+
+            only = {"calibration": str(calibration), "cv": cv.to_dict()}
             if out is not None:
                 atomic_write_text(out, json.dumps(only, indent=1) + "\n")
             click.echo(json.dumps(only) if as_json else cross_validation_text(cv), nl=as_json)
             return
     assert data is not None
-    from pincal.sensitivity import parameters
-    from pincal.validation import marker_errors, validate_held_out
+    from pincal.workflow import read_held_out, validate_on_data
 
-    cal = read_calibration(calibration)
     announce(cal)
-    nominal = cal.nominal()
-    params = parameters(nominal, cal.preset)
-    check_data_rows(str(data), "--data", len(params), yes)
-    more: tuple = ()  # further markers' measurement sets
-    if cal.manifest.get("markers"):  # a marker table, read as calibrate read it
-        from pincal.io import read_marker_sets
-        from pincal.measure import MarkerSetup
-
-        setup = MarkerSetup.from_dict(cal.manifest["markers"])
-        meas, *rest = read_marker_sets(data, nominal, setup)
-        more = tuple(zip(setup.more_columns, rest, strict=True))
-    else:
-        mf = read_measurement_file(data, nominal)
-        for w in mf.warnings:
-            click.echo(f"pincal: warning: {w}", err=True)
-        meas = mf.measurements
-    digest = sha256_file(data)
-    fitted = {d.get("sha256") for d in cal.manifest.get("data_files", []) or []}
-    independent = digest not in fitted
-    if not independent:
+    held = read_held_out(cal, data, lambda n: check_data_rows(str(data), "--data", n, yes))
+    for w in held.warnings:
+        click.echo(f"pincal: warning: {w}", err=True)
+    if not held.independent:
         click.echo(f"pincal: warning: {data} was used to fit this calibration", err=True)
-    result = cal.result
-    from pincal.cli._joint_terms import calibration_terms
-    from pincal.identification import covariance_kind
-
-    terms, terms_line = calibration_terms(cal, read_payload(payload),
-                                          per_pose=meas.temperature is not None)  # fmt: skip
-    if terms is not None and "1/K" in terms.params.units and meas.temperature is None:
-        from pincal.errors import ConditionError
-
-        raise ConditionError(
-            f"{data} has no 'temperature_C' column, but calibration {str(cal.path)!r} has a "
-            f"thermal term (calibrate --model geometric+temperature): it predicts each pose at "
-            f"its own temperature, and at the reference 20 °C it would predict a machine at "
-            f"20 °C, not the measured one; add the per-pose machine temperature [°C] as a "
-            f"temperature_C column (as the calibration data had)"
-        )
-    validation = validate_held_out(
-        nominal,
-        cal.calibrated(),
-        meas,
-        params,
-        tuple(result.identified_names),
-        result.covariance,
-        meas.noise or cal.noise,
-        tuple((cal.manifest.get("markers") or {}).get("held_weak") or ()),
-        None if terms is None else meas.q_act + terms.deflection(meas.q_act, meas.conditions),
-        covariance_kind(result.annotations,
-                        None if result.weighting is None else result.weighting.source),
-        None if terms is None else terms.shift(meas.q_act, meas.conditions),
-    )
-    doc = {
-        "calibration": calibration_summary(cal),
-        "data": str(data),
-        "data_sha256": digest,
-        "independent": independent,
-        "joint_terms": terms_line or None,
-        **validation.to_dict(),
-    }
-    markers = marker_errors(nominal, cal.calibrated(), more) if more else []
-    if markers:
-        doc["more_markers"] = [m.to_dict() for m in markers]
-    transfer = None
-    if (cal.manifest.get("markers") or {}).get("instrument_frame") == "unknown":
-        from pincal.workflow import transfer_markers
-
-        transfer = transfer_markers(cal, data, 5, cv_seed)
-        doc["transfer"] = transfer.to_dict()
-    if cv_doc is not None:
-        doc["cv"] = cv_doc
+    terms, line = calibration_terms(cal, read_payload(payload),
+                                    per_pose=held.meas.temperature is not None)  # fmt: skip
+    found = validate_on_data(cal, held, terms, line, cv_seed)
+    doc = {"calibration": calibration_summary(cal), **found.to_dict()}
+    if cv is not None:
+        doc["cv"] = cv.to_dict()
     if out is not None:
         atomic_write_text(out, json.dumps(doc, indent=1) + "\n")
     if as_json:
         click.echo(json.dumps(doc))
     else:
-        from pincal.report import marker_errors_text, validation_text
-
-        if terms_line:
-            click.echo(f"calibrated model: geometry and {terms_line} (joint = command + "
-                       f"deflection; the nominal: commands)")  # fmt: skip
-        click.echo(validation_text(validation, cal, str(data), independent), nl=False)
-        click.echo(marker_errors_text(markers), nl=False)
-        if transfer is not None:
-            from pincal.report import transfer_text
-
-            click.echo("(above: the instrument frame and marker as calibrated — the same "
-                       "capture set-up only)")  # fmt: skip
-            click.echo(transfer_text(transfer, str(data)), nl=False)
-        if cv is not None:
-            from pincal.report import cross_validation_text
-
-            click.echo(cross_validation_text(cv), nl=False)
+        echo_data_validation(found, cal, cv)

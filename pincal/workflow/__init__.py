@@ -17,6 +17,17 @@ prints or writes files.
   candidate error models ranked by K-fold held-out error.
 - :func:`simulate_demo` (``pincal demo``): a simulated calibration of a seeded actual
   machine, poses chosen by design, predicted vs achieved accuracy (:class:`DemoResult`).
+- ISO 9283 acceptance (``pincal acceptance``): :func:`measured_characteristics` of
+  measured repeated poses, or the test cube (:func:`cube_doc`) cycled by
+  :func:`cycle_characteristics` on an :func:`acceptance_machine` commanded by the
+  nominal or the calibrated model (:func:`calibrated_controller`); :func:`other_machine`
+  warns when the simulated machine is not the calibration's.
+- cross-validation (``pincal validate --cv``): :func:`cross_validate_calibration`
+  refits each fold as calibrate ran it (a marker table, a pose file, ball-in-socket
+  seatings) beside its baseline; :func:`fold_table` lists the folds as CSV text.
+- a held-out file (``pincal validate --data``): :func:`read_held_out` reads it as the
+  calibration's data was; :func:`validate_on_data` returns the before / after errors
+  (:class:`DataValidation`, joint terms, further markers, transfer to its session).
 - fleets (``pincal fleet``): :func:`draw_fleet` / :func:`simulate_unit` simulate a
   production line with planted faulty units, :func:`plan_fleet` as ``fleet simulate``
   does it (:class:`FleetPlan`); :func:`fleet_jobs` lists the units of ``fleet run`` and
@@ -38,7 +49,17 @@ prints or writes files.
 
 from __future__ import annotations
 
+from pincal.workflow._acceptance import (
+    AcceptanceMachine,
+    acceptance_machine,
+    calibrated_controller,
+    cube_doc,
+    cycle_characteristics,
+    measured_characteristics,
+    other_machine,
+)
 from pincal.workflow._buildable import buildable_mask
+from pincal.workflow._cross_validation import cross_validate_calibration, fold_table
 from pincal.workflow._demo import (
     DemoAccuracy,
     DemoResult,
@@ -106,6 +127,12 @@ from pincal.workflow._simulation import (
 )
 from pincal.workflow._steps import Steps
 from pincal.workflow._transfer import transfer_markers
+from pincal.workflow._validate_data import (
+    DataValidation,
+    HeldOutData,
+    read_held_out,
+    validate_on_data,
+)
 
 __all__ = [
     "DRAWS",
@@ -113,6 +140,8 @@ __all__ = [
     "PRIOR_GRID",
     "ROBUST_LOSS",
     "SOCKET_SPACING",
+    "AcceptanceMachine",
+    "DataValidation",
     "DemoAccuracy",
     "DemoResult",
     "DemoSettings",
@@ -120,6 +149,7 @@ __all__ = [
     "FleetPlan",
     "FleetReport",
     "FleetStatistics",
+    "HeldOutData",
     "MarkerRun",
     "MarkerSettings",
     "ModelDescription",
@@ -135,15 +165,20 @@ __all__ = [
     "UnitEstimate",
     "UnitJob",
     "UnitVerdict",
+    "acceptance_machine",
     "base_line",
     "buildable_mask",
     "calibrate_instrument_files",
     "calibrate_markers",
     "calibrate_pose_file",
+    "calibrated_controller",
     "choose_prior",
     "compensation_test",
     "controlled_components",
+    "cross_validate_calibration",
     "cross_validated",
+    "cube_doc",
+    "cycle_characteristics",
     "default_sockets",
     "describe_presets",
     "draw_errors",
@@ -153,8 +188,11 @@ __all__ = [
     "fleet_jobs",
     "fleet_report",
     "fleet_statistics",
+    "fold_table",
     "marker_procedure",
+    "measured_characteristics",
     "nested_choice",
+    "other_machine",
     "parse_prior",
     "plan_fleet",
     "pose_basis",
@@ -162,6 +200,7 @@ __all__ = [
     "pose_parameters",
     "pose_problem",
     "reachable_rows",
+    "read_held_out",
     "rebuild",
     "reduction_line",
     "replay_procedure",
@@ -174,4 +213,5 @@ __all__ = [
     "structure_lines",
     "transfer_markers",
     "unit_summary",
+    "validate_on_data",
 ]

@@ -1,4 +1,4 @@
-"""``pincal validate --cv K``: K-fold cross-validation of a calibration, as calibrate ran it.
+"""K-fold cross-validation of a calibration, as calibrate ran it (``validate --cv K``).
 
 Every fold is refitted from scratch on the other folds — for a marker calibration the
 closed-form registration too, and ``--prior auto`` chooses its strength again inside the
@@ -8,33 +8,38 @@ marker calibration, the nominal model otherwise. With orientation measured (a 6-
 marker body, a pose file) the held-out rotation error angles are reported beside the
 positions; for a marker body the verdict weighs both, each whitened by its noise σ. A marker
 calibration's own cross-validation (recorded by calibrate) is reused for the same K and
-seed unless ``refit``. The outcome is a
+seed unless ``refit``. A ball-in-socket calibration is cross-validated on its held-out
+seatings (see ``_socket_cv``). The outcome is a
 :class:`pincal.validation.CrossValidationSummary`; :func:`pincal.report.cross_validation_text`
-renders it.
+renders it, :func:`fold_table` lists its folds.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from pincal.errors import PincalError
+from pincal.identification import (
+    CrossValidation,
+    LMOptions,
+    compare,
+    cross_validate,
+    identify,
+)
+from pincal.io import CalibrationDirectory, read_measurement_file
+from pincal.measure import Measurements
+from pincal.model import Mechanism
+from pincal.sensitivity import parameters
 from pincal.validation import CrossValidationBaseline, CrossValidationSummary, OrientationErrors
+from pincal.workflow._marker_replay import rebuild, replay_procedure
+from pincal.workflow._socket_cv import is_socket_calibration, socket_cross_validation
 
-if TYPE_CHECKING:  # imported in the calls: the CLI starts without the identification stack
-    from pincal.identification import CrossValidation
-    from pincal.io import CalibrationDirectory
-    from pincal.measure import Measurements
-    from pincal.model import Mechanism
+__all__ = ["cross_validate_calibration", "fold_table"]
 
-    #: the poses a cross-validated fit takes: one set, or one per marker (same rows)
-    _Poses = Measurements | tuple[Measurements, ...]
-
-__all__ = ["run_cv"]
+#: the poses a cross-validated fit takes: one set, or one per marker (same rows)
+_Poses = Measurements | tuple[Measurements, ...]
 
 
 def _pose_fit(
@@ -45,10 +50,6 @@ def _pose_fit(
     Replayed: the preset, the method, the robust loss and a declared noise (from the
     calibration's weighting record).
     """
-    from pincal.identification import LMOptions, identify
-    from pincal.io import read_measurement_file
-    from pincal.sensitivity import parameters
-
     nominal = cal.nominal()
     meas = read_measurement_file(cal.data_file(), nominal).measurements
     params = parameters(nominal, cal.preset)
@@ -77,8 +78,6 @@ def _recorded(
     markers: dict, k: int, seed: int
 ) -> tuple[CrossValidation, CrossValidation] | None:
     """(calibrated, baseline) cross-validations calibrate recorded on these folds, or None."""
-    from pincal.identification import CrossValidation
-
     rec = markers.get("cross_validation")
     if not rec or rec.get("folds") != k or rec.get("seed") != seed:
         return None
@@ -87,30 +86,34 @@ def _recorded(
     )
 
 
-def run_cv(
-    cal: CalibrationDirectory, k: int, seed: int, folds_out: Path | None, refit: bool = False
+def cross_validate_calibration(
+    cal: CalibrationDirectory, k: int, seed: int, refit: bool = False
 ) -> CrossValidationSummary:
     """The cross-validation of ``validate --cv`` (its ``to_dict()``: the ``cv`` JSON).
 
     A marker calibration records the cross-validation its gate ran (the same procedure,
     folds from the same K and seed): that one is reused unless ``refit``, after
     :func:`pincal.workflow.rebuild` has checked the data file unchanged.
+
+    Args:
+        cal: the calibration (marker table, pose file or ball-in-socket file).
+        k: number of folds (2 ≤ k ≤ poses).
+        seed: the folds' seed (:func:`pincal.identification.kfold`).
+        refit: fit the folds again even when the calibration recorded them.
+
+    Returns:
+        Held-out RMS / max [m] (and rotation angles [rad] when measured) of the
+        calibration and of its baseline; ``folds``: the pose rows of each fold.
+
+    Raises:
+        PincalError: the data file is gone or changed, or the fit cannot be replayed.
     """
-    from pincal.cli._socket_cv import is_socket_calibration
-    from pincal.identification import compare, cross_validate
-
     if is_socket_calibration(cal):
-        from pincal.cli._socket_cv import socket_cv
-
-        summary = socket_cv(cal, k, seed)
-        _write_folds(summary.folds, summary.poses, folds_out)
-        return summary
+        return socket_cross_validation(cal, k, seed)
     markers = cal.manifest.get("markers")
     recorded = None
     meas: _Poses
     if markers:
-        from pincal.workflow import rebuild, replay_procedure
-
         setup, mech, meas = rebuild(cal)
         fit = replay_procedure(mech, setup, markers, registration_only=False)
         base = replay_procedure(mech, setup, markers, registration_only=True)
@@ -132,7 +135,6 @@ def run_cv(
     if scales is not None:
         wg, wse, beats = compare(full, ref, scales)
         whitened = (wg, wse)
-    _write_folds(full.folds, poses, folds_out)
     fit_angle = float(cal.result.after.rms_orientation)
     return CrossValidationSummary(
         k, seed, poses, tuple(tuple(int(i) for i in rows) for rows in full.folds),
@@ -160,12 +162,14 @@ def _fold_fit(cv: CrossValidation) -> float:
     return float(np.sqrt(np.mean(cv.fit_rms**2)))
 
 
-def _write_folds(folds: Sequence[npt.ArrayLike], poses: int, folds_out: Path | None) -> None:
+def fold_table(folds: Sequence[Sequence[int]], poses: int) -> str:
+    """The ``--folds-out`` CSV: one line ``pose,fold`` per pose row (0-based).
+
+    Args:
+        folds: the pose rows of each fold (``CrossValidationSummary.folds``).
+        poses: number of poses; every row is in one fold.
+    """
     fold_of = np.empty(poses, dtype=int)
     for j, rows in enumerate(folds):
         fold_of[np.asarray(rows, dtype=int)] = j
-    if folds_out is not None:
-        from pincal.io import atomic_write_text
-
-        text = "pose,fold\n" + "".join(f"{i},{f}\n" for i, f in enumerate(fold_of))
-        atomic_write_text(folds_out, text)
+    return "pose,fold\n" + "".join(f"{i},{f}\n" for i, f in enumerate(fold_of))

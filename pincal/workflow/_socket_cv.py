@@ -1,4 +1,4 @@
-"""``pincal validate --cv K`` of a ball-in-socket calibration: held-out seatings.
+"""The cross-validation of a ball-in-socket calibration (``validate --cv K``): held-out seatings.
 
 Every fold refits the machine, the sockets' centres and the ball (when unknown) from the
 other folds' seatings (:func:`pincal.identification.identify_instruments`, the plate's
@@ -19,25 +19,21 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pincal.errors import PincalError
+from pincal.errors import MeasurementFormatError, PincalError
+from pincal.identification import identify_instruments, kfold
+from pincal.io import CalibrationDirectory, file_kind, read_instrument_file
+from pincal.measure import SocketData
+from pincal.model import Mechanism, parameters
 from pincal.validation import CrossValidationBaseline, CrossValidationSummary
 
-if TYPE_CHECKING:  # imported in the calls: the CLI starts without the identification stack
-    from pincal.io import CalibrationDirectory
-    from pincal.measure import SocketData
-    from pincal.model import Mechanism
-
-__all__ = ["is_socket_calibration", "socket_cv"]
+__all__ = ["is_socket_calibration", "socket_cross_validation"]
 
 
 def is_socket_calibration(cal: CalibrationDirectory) -> bool:
     """True when the calibration's first data file is a ball-in-socket file."""
-    from pincal.io import file_kind
-
     if not cal.manifest.get("data_files"):
         return False
     return file_kind(cal.data_file()) == "sockets"
@@ -103,19 +99,24 @@ def _summary(
     )
 
 
-def socket_cv(cal: CalibrationDirectory, k: int, seed: int) -> CrossValidationSummary:
+def socket_cross_validation(
+    cal: CalibrationDirectory, k: int, seed: int
+) -> CrossValidationSummary:
     """The cross-validation of a socket calibration (its held-out seatings).
+
+    Args:
+        cal: a calibration of a ball-in-socket file (:func:`is_socket_calibration`).
+        k: folds of the seatings.
+        seed: the folds' seed (:func:`pincal.identification.kfold`).
+
+    Returns:
+        Held-out seating and socket-distance errors [m], calibrated model beside the
+        nominal one (ball and socket centres fitted); ``folds``: seating rows per fold.
 
     Raises:
         PincalError: the data file is gone, or no known distance fixes the scale (the
             held-out socket distance would then measure nothing).
     """
-    from pincal.errors import MeasurementFormatError
-    from pincal.identification import identify_instruments, kfold
-    from pincal.io import read_instrument_file
-    from pincal.measure import SocketData
-    from pincal.model import parameters
-
     path = cal.data_file()
     nominal = cal.nominal()
     data = read_instrument_file(path, nominal)

@@ -1,0 +1,248 @@
+"""ISO 9283 acceptance of a machine, as ``pincal acceptance`` runs it.
+
+Two ways: measured repeated poses (:func:`measured_characteristics`: the rows with equal
+actuator values are one commanded pose, commanded by the nominal or the calibrated
+model), or a simulation on the ISO test cube (:func:`pincal.validation.iso_test_cube`,
+recorded by :func:`cube_doc`): the actual machine carries the uniform errors of
+``pincal simulate`` (:func:`acceptance_machine`) and is commanded through
+:func:`cycle_characteristics` by the nominal model (before) or by the calibrated one
+(after, :func:`calibrated_controller`). :func:`other_machine` says when the simulated machine
+is not the one the calibration was fitted on. Nothing is printed or written.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from pincal.errors import CalibrationDirectoryError, MeasurementError, ParameterError
+from pincal.io import (
+    IDENTIFICATION_FILE,
+    MANIFEST,
+    CalibrationDirectory,
+    read_calibration,
+    read_identification,
+    read_measurements,
+)
+from pincal.measure import Measurements
+from pincal.model import Mechanism, ParameterSet
+from pincal.sensitivity import parameters
+from pincal.validation import (
+    PoseCharacteristics,
+    TestCube,
+    pose_characteristics,
+    simulate_cycles,
+)
+
+__all__ = [
+    "AcceptanceMachine",
+    "acceptance_machine",
+    "calibrated_controller",
+    "cube_doc",
+    "cycle_characteristics",
+    "measured_characteristics",
+    "other_machine",
+]
+
+
+def calibrated_controller(
+    spec: str,
+    nominal: Mechanism,
+    announce: Callable[[CalibrationDirectory], None] | None = None,
+) -> Mechanism:
+    """The calibrated machine from a calibration directory or an identification.json.
+
+    A calibration directory is read (and checked) by :func:`pincal.io.read_calibration`
+    and passed to ``announce`` (its caveat, for the caller to show); a directory without
+    a manifest, or a file, through its identification.json
+    (:func:`pincal.io.read_identification`): the record's values applied to ``nominal``.
+
+    Raises:
+        CalibrationDirectoryError / ParameterError: nothing usable at ``spec``, or a
+            record of another model.
+    """
+    path = Path(spec)
+    if (path / MANIFEST).is_file():  # a calibration directory: read (and checked) as one
+        cal = read_calibration(path)
+        if announce is not None:
+            announce(cal)
+        return cal.calibrated()
+    if path.is_dir():
+        path = path / IDENTIFICATION_FILE
+    record = read_identification(path)
+    try:
+        return record.applied_to(nominal)
+    except ParameterError as exc:
+        raise ParameterError(f"{str(path)!r}: {exc}") from None
+
+
+@dataclass(frozen=True)
+class AcceptanceMachine:
+    """The actual machine of a simulated acceptance test.
+
+    Attributes:
+        params: the parameter set of the errors (a preset of the nominal model).
+        values: (len(params),) the errors drawn [m, rad] (zeros without errors).
+        actual: the nominal model with ``values`` applied.
+    """
+
+    params: ParameterSet
+    values: np.ndarray
+    actual: Mechanism
+
+
+def acceptance_machine(
+    nominal: Mechanism,
+    preset: str | None,
+    seed: int | None,
+    size_mm: float,
+    size_mrad: float,
+) -> AcceptanceMachine:
+    """The nominal model with uniform errors, as ``pincal simulate`` draws them.
+
+    Args:
+        nominal: the nominal model.
+        preset: the preset of the errors; None: the model's first preset (else ``full``).
+        seed: seed of the draw; None: no errors.
+        size_mm: bound of the length errors [mm].
+        size_mrad: bound of the angle errors [mrad].
+    """
+    params = parameters(nominal, preset or next(iter(nominal.presets), "full"))
+    values = np.zeros(len(params))
+    if seed is not None:
+        er = np.random.default_rng(seed)
+        bound = np.array([size_mm * 1e-3 if u == "m" else size_mrad * 1e-3 for u in params.units])
+        values = er.uniform(-bound, bound)
+    return AcceptanceMachine(params, values, params.apply(nominal, values))
+
+
+def other_machine(cal: str, params: ParameterSet, values: np.ndarray) -> list[str]:
+    """Warnings when the simulated machine is not the one the calibration was fitted on.
+
+    A calibration of simulated data records its data file; ``pincal simulate`` wrote the
+    truth beside it (``<data>.truth.json``). When the errors simulated here differ from
+    that truth, the "after" figures test the calibration on another machine.
+
+    Args:
+        cal: the calibration (a directory; anything else: no warning).
+        params: the parameter set of the errors simulated here.
+        values: (len(params),) those errors [m, rad].
+    """
+    if not (Path(cal) / MANIFEST).is_file():
+        return []
+    directory = read_calibration(cal)
+    out = []
+    for k in range(len(directory.manifest.get("data_files") or [])):
+        try:  # found by its hash, wherever calibrate ran
+            truth_path = directory.data_file(k).with_suffix(".truth.json")
+        except CalibrationDirectoryError:
+            continue
+        if not truth_path.is_file():
+            continue
+        try:
+            truth = json.loads(truth_path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+        true = {p["name"]: p["value"] for p in truth.get("parameters", [])}
+        here = dict(zip(params.names, np.asarray(values, dtype=float), strict=True))
+        same = set(true) == set(here) and all(abs(true[n] - here[n]) <= 1e-12 for n in true)
+        if not same:
+            size = truth.get("error_size_mm_mrad")
+            hint = f"--errors {truth.get('errors')} --params {truth.get('preset')}"
+            hint += f" --error-size {size[0]:g},{size[1]:g}" if size else ""
+            out.append(f"the machine simulated here is not the one the calibration was fitted "
+                       f"on ({truth_path} differs): the 'after' figures test the calibration on "
+                       f"another machine; to test it on its own, pass {hint}")  # fmt: skip
+    return out
+
+
+def _grouped(
+    meas: Measurements, controller: Mechanism
+) -> tuple[list[pin.SE3], np.ndarray, np.ndarray | None]:
+    """Commands (forward kinematics of the distinct actuator rows) and the poses per row."""
+    keys, first, inverse = np.unique(meas.q_act, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    counts = np.bincount(inverse.reshape(-1))
+    if len(set(counts.tolist())) != 1 or counts[0] < 2:
+        raise MeasurementError(
+            f"every commanded pose must be measured the same number (≥ 2) of times; got "
+            f"counts {counts[order].tolist()}"
+        )
+    if meas.rotations is None and any(c.startswith("r") for c in meas.components):
+        raise MeasurementError(
+            f"the file declares components {' '.join(meas.components)} but holds no "
+            "orientation; measure the orientation or declare position components only"
+        )
+    poses, pos, rot = [], [], []
+    for g in order:
+        rows = np.flatnonzero(inverse.reshape(-1) == g)
+        poses.append(controller.forward(keys[g]))
+        pos.append(meas.positions[rows])
+        if meas.rotations is not None:
+            rot.append(meas.rotations[rows])
+    return poses, np.array(pos), (np.array(rot) if rot else None)
+
+
+def measured_characteristics(
+    data_file: str, nominal: Mechanism, controller: Mechanism
+) -> PoseCharacteristics:
+    """AP / RP of measured repeated poses (a pincal measurements file).
+
+    Args:
+        data_file: the measurements; rows with equal actuator values are one commanded
+            pose, each measured the same number (≥ 2) of times; its components are judged.
+        nominal: the model the file is read with.
+        controller: the model whose forward kinematics gives the commanded poses.
+
+    Raises:
+        MeasurementError: unequal repetitions, or orientation declared but not held.
+    """
+    meas = read_measurements(data_file, nominal)
+    poses, pos, rot = _grouped(meas, controller)
+    return pose_characteristics(poses, pos, rot, tuple(meas.components))
+
+
+def cube_doc(cube: TestCube) -> dict[str, Any]:
+    """The ``cube`` entry of the acceptance JSON (lengths in m)."""
+    return {
+        "shape": cube.shape,
+        "axes": list(cube.axes),
+        "components": list(cube.components),
+        "workspace": cube.workspace,
+        "bounds": np.asarray(cube.bounds).tolist(),
+        "centre": cube.centre.tolist(),
+        "edge": cube.edge,
+        "points": cube.points.tolist(),
+    }
+
+
+def cycle_characteristics(
+    actual: Mechanism,
+    controller: Mechanism,
+    cube: TestCube,
+    cycles: int,
+    actuator_std: float,
+    seed: int,
+    progress: Callable[[int, int], None] | None = None,
+) -> PoseCharacteristics:
+    """AP / RP of ``actual`` commanded by ``controller`` through the cube's five poses.
+
+    Args:
+        actual: the simulated machine.
+        controller: the model whose inverse kinematics gives the commands.
+        cube: the test cube (:func:`pincal.validation.iso_test_cube`).
+        cycles: cycles of the five poses.
+        actuator_std: actuator repeatability 1σ [m or rad].
+        seed: seed of the actuators' errors.
+        progress: called with (cycles done, cycles).
+    """
+    _, pos, rot = simulate_cycles(
+        actual, controller, cube.poses, cycles, actuator_std, seed, progress
+    )
+    return pose_characteristics(cube.poses, pos, rot, cube.components)
