@@ -134,7 +134,7 @@ def drive(
     if fit_set.note:
         log.info(fit_set.note)
     free, weak = fit_set.free, np.zeros(0, dtype=int)
-    if policy.weak is not None and policy.weak.at_start:
+    if policy.weak is not None:
         weak = policy.weak.held(J0, free, model.units, model.n_machine)
         free = np.setdiff1d(free, weak)
     start = model

@@ -152,15 +152,12 @@ class WeakBound:
         sigmas: k, how many σ the bound is of.
         at_solution: check again with the solution's Jacobian and refit when it sees
             weaker directions than the start did.
-        at_start: check with the start's Jacobian (False when its whitening is not the
-            noise's: a noise still to be estimated).
     """
 
     length: float
     angle: float
     sigmas: float = 1.0
     at_solution: bool = True
-    at_start: bool = True
 
     def held(self, Jw: np.ndarray, free: np.ndarray, units: tuple[str, ...], n: int) -> np.ndarray:
         """Indices (sorted, a subset of ``free``) held (see :func:`weak_parameters`).

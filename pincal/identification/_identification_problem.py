@@ -63,7 +63,8 @@ class IdentificationProblem:
         weak_bound: (length [m], angle [rad]); a direction of the base set whose 1σ
             exceeds it is held at nominal and named (a joint fit's gauge, a pose file's
             message); None fits the whole identifiable base set. A pose file whose noise
-            is estimated is checked at the solution only (its σ is not known before).
+            is estimated holds nothing: its σ̂ is not known before the fit, and at an
+            unconverged one it would call every direction weak.
 
     Raises:
         ParameterError: ``initial`` of the wrong shape or non-finite; ``fit`` names a

@@ -151,8 +151,9 @@ def _run(
 ) -> IdentificationResult:
     """The body of :func:`identify` (checked arguments), one BLAS thread."""
     model, x0 = problem.model, problem.x0
-    bound = problem.weak_bound  # an estimated noise is known at the solution only
-    weak = None if bound is None else WeakBound(*bound, at_start=model.noise_source != "estimate")
+    bound = problem.weak_bound  # with the noise estimated, σ̂ of a far start holds everything
+    declared = bound is not None and model.noise_source != "estimate"
+    weak = WeakBound(*bound) if bound is not None and declared else None
     policy = FitPolicy(_base_rule(problem, model), weak, weighting=True)
     d = drive(model, x0, entry, opts, policy, progress)
     raw0 = d.raw0

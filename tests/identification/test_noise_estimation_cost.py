@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pincal.identification import identify
+from pincal.identification import IdentificationProblem, identify
 from pincal.identification._noise import RATIO_RTOL
 from pincal.identification._problem import CalibrationProblem
 from pincal.measure import simulate_measurements
@@ -48,7 +48,8 @@ def test_estimate_costs_at_most_two_fits(name):
     # one fit with the estimated σ declared: the same solution (the ratio settled to 1 %:
     # the parameters within a few % of their σ) at half the evaluations or more
     sigma = {"position": w.position_std * 1e3, "orientation": w.orientation_std * 1e3}
-    ref = identify(mech, base, meas, noise=sigma)
+    # (weak_bound=None: declared, a direction placed beyond 20 mm / 0.1 rad would be held)
+    ref = identify(IdentificationProblem(mech, base, meas, noise=sigma, weak_bound=None))
     assert ref.success, ref.message
     moved = np.abs(est.values - ref.values) / ref.std
     assert moved.max() <= 0.05, moved.max()
