@@ -17,8 +17,6 @@ from typing import TYPE_CHECKING, Any
 import click
 
 if TYPE_CHECKING:
-    import numpy as np
-
     from pincal.compensation import JointTermCorrection
     from pincal.identification import IdentificationRecord
     from pincal.io import CalibrationDirectory
@@ -37,7 +35,6 @@ __all__ = [
     "temperature_option",
     "terms_record",
     "terms_texts",
-    "thermal_machine",
 ]
 
 TERMS_FILE = "joint_terms.yaml"
@@ -219,41 +216,6 @@ def temperature_note(terms: tuple[str, ...]) -> str | None:
         f"info analyses random poses at {THERMAL_SPAN_C[0]:g}–{THERMAL_SPAN_C[1]:g} °C, "
         "calibrate on the data's own temperatures"
     )
-
-
-def thermal_machine(
-    nominal: Mechanism,
-    q_act: np.ndarray,
-    span: tuple[float, float],
-    alpha: float,
-    rng: np.random.Generator,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
-    """A simulated machine expanding with temperature (``simulate --temperature``).
-
-    Args:
-        nominal: the nominal mechanism.
-        q_act: (m, n_act) commands [rad, m].
-        span: (low, high) temperatures [°C]; each pose's is drawn uniformly in it.
-        alpha: the true expansion coefficient of every actuated joint's length [1/K].
-        rng: the random generator.
-
-    Returns:
-        (joint values (m, n_act) the machine takes, world position change (m, 3) of the
-        measured frame [m], temperatures (m,) [°C], {parameter name: α}).
-    """
-    import numpy as np
-
-    from pincal.model import actual_joint_values, actual_shift, parameters, with_joint_terms
-
-    terms = with_joint_terms(nominal, parameters(nominal, [f"{nominal.actuated[0]}.offset"]),
-                             ("temperature",))  # fmt: skip
-    values = np.zeros(len(terms))
-    values[terms.joint_terms] = alpha
-    T = rng.uniform(span[0], span[1], len(q_act))
-    cond = {"temperature": T}
-    q = actual_joint_values(nominal, terms, values, q_act, cond)
-    shift = actual_shift(nominal, terms, values, q_act, cond)
-    return q, shift, T, {terms.names[k]: alpha for k in terms.joint_terms}
 
 
 def check_terms_record(cal: CalibrationDirectory) -> None:

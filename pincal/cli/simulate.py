@@ -49,7 +49,6 @@ def simulate(
       pincal simulate pkm5 --random 30 --noise 0.005,0.02 --length-unit mm --out m.csv
     """
     from pincal import __version__
-    from pincal.cli._joint_terms import thermal_machine
     from pincal.io import (
         atomic_write_text,
         write_instrument_data,
@@ -57,7 +56,7 @@ def simulate(
         write_socket_data,
     )
     from pincal.measure import InstrumentData, SocketData
-    from pincal.workflow import simulate_campaign
+    from pincal.workflow import ThermalDraw, simulate_campaign
 
     if (poses_file is None) == (n_random is None):
         raise click.UsageError("give exactly one of --poses FILE or --random N")
@@ -86,8 +85,7 @@ def simulate(
         nominal, preset, poses_file, n_random, error_seed=err_seed, error_size=size,
         noise=pos_ori, seed=seed, instrument=None if instrument == SOCKET else instrument,
         sockets=instrument == SOCKET, say=lambda line: click.echo(line, err=True),
-        thermal=None if span is None else (
-            lambda mech, q, rng: thermal_machine(mech, q, span, thermal, rng)),
+        thermal=None if span is None else ThermalDraw(span, thermal),
     )  # fmt: skip
     if isinstance(run.data, SocketData):
         path = write_socket_data(out, run.data, length_unit=length_unit)

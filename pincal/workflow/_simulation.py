@@ -32,7 +32,13 @@ from pincal.measure import (
     simulate_measurements,
     simulate_sockets,
 )
-from pincal.model import Mechanism, sample_actuators
+from pincal.model import (
+    Mechanism,
+    actual_joint_values,
+    actual_shift,
+    sample_actuators,
+    with_joint_terms,
+)
 from pincal.sensitivity import parameters
 from pincal.workflow._buildable import buildable_mask
 
@@ -43,6 +49,7 @@ __all__ = [
     "default_sockets",
     "reachable_rows",
     "simulate_campaign",
+    "thermal_machine",
 ]
 
 #: the known distance between the two simulated sockets [m]
@@ -50,12 +57,43 @@ SOCKET_SPACING = 0.05
 
 Say = Callable[[str], None]
 
-#: (nominal, commands (m, n_act) [rad, m], rng) → (joint values (m, n_act) the machine
-#: takes, world position change (m, 3) [m], temperatures (m,) [°C], {parameter: α [1/K]})
-ThermalDraw = Callable[
-    [Mechanism, np.ndarray, np.random.Generator],
-    tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, float]],
-]
+@dataclass(frozen=True)
+class ThermalDraw:
+    """A machine expanding with temperature (``simulate --temperature``).
+
+    Attributes:
+        span: (low, high) temperatures [°C]; each pose's is drawn uniformly in it.
+        alpha: the true expansion coefficient of every actuated joint's length [1/K].
+    """
+
+    span: tuple[float, float]
+    alpha: float
+
+
+def thermal_machine(
+    nominal: Mechanism, q_act: np.ndarray, draw: ThermalDraw, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
+    """The joint values and shifts of a machine expanding with temperature.
+
+    Args:
+        nominal: the nominal mechanism.
+        q_act: (m, n_act) commands [rad, m].
+        draw: the temperature span and the true coefficient.
+        rng: the random generator (draws each pose's temperature).
+
+    Returns:
+        (joint values (m, n_act) the machine takes, world position change (m, 3) of the
+        measured frame [m], temperatures (m,) [°C], {parameter name: α [1/K]}).
+    """
+    terms = with_joint_terms(nominal, parameters(nominal, [f"{nominal.actuated[0]}.offset"]),
+                             ("temperature",))  # fmt: skip
+    values = np.zeros(len(terms))
+    values[terms.joint_terms] = draw.alpha
+    T = rng.uniform(draw.span[0], draw.span[1], len(q_act))
+    cond = {"temperature": T}
+    q = actual_joint_values(nominal, terms, values, q_act, cond)
+    shift = actual_shift(nominal, terms, values, q_act, cond)
+    return q, shift, T, {terms.names[k]: draw.alpha for k in terms.joint_terms}
 
 
 @dataclass(frozen=True)
@@ -136,7 +174,7 @@ def simulate_campaign(
         seed: seed of the random poses and the noise.
         instrument: a registered scalar instrument kind measured instead of poses.
         sockets: seat a ball in two sockets :data:`SOCKET_SPACING` apart instead.
-        thermal: the thermal draw of ``--temperature`` (poses only).
+        thermal: the machine expands with temperature (``--temperature``; poses only).
         say: given the progress and notes, one line each (stderr on the command line).
 
     Raises:
@@ -183,7 +221,7 @@ def simulate_campaign(
         components = (data.kind,)
         extra["instrument"] = dict(zip(inst.parameter_names, map(float, theta), strict=True))
     elif thermal is not None:
-        q_true, shift, T, alphas = thermal(nominal, q_act, rng)
+        q_true, shift, T, alphas = thermal_machine(nominal, q_act, thermal, rng)
         poses = simulate_measurements(actual, q_true, NoiseModel(pos_mm, ori_mrad), rng)
         data = dataclasses.replace(
             poses, q_act=np.array(q_act, dtype=float), positions=poses.positions + shift,
