@@ -97,9 +97,12 @@ def controlled_components(mech: Mechanism) -> tuple[str, ...]:
     if len(comps) <= mech.mobility:
         return comps
     G = actuator_jacobian(mech, mech.q_home)  # (components, actuators)
+    # rounding of the loop closure leaves ~1e-15 in a row the actuators do not move (a
+    # planar machine's z); numpy's default tolerance (~1e-16 · σ_max) would count it
+    tol = 1e-9 * float(np.abs(G).max())
     order = sorted(range(len(comps)), key=lambda k: comps[k].startswith("r"))
     keep: list[int] = []
     for k in order:
-        if len(keep) < mech.mobility and np.linalg.matrix_rank(G[[*keep, k]]) > len(keep):
+        if len(keep) < mech.mobility and np.linalg.matrix_rank(G[[*keep, k]], tol) > len(keep):
             keep.append(k)
     return tuple(comps[k] for k in sorted(keep))

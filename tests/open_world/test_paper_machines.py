@@ -138,3 +138,14 @@ def test_reach_screen_imposes_the_components_a_planar_machine_controls(tmp_path)
     assert controlled_components(mech) == ("x", "y")
     stewart = _load(write_stewart(tmp_path))
     assert controlled_components(stewart) == ("x", "y", "z", "rx", "ry", "rz")
+
+
+def test_a_planar_machine_measured_in_six_components_imposes_its_three():
+    """The 3-RPR measures all six components; its actuator Jacobian's z, rx, ry rows are
+    closure rounding (~1e-15). Counted as rank by numpy's default tolerance, z was imposed,
+    every candidate of `pincal poses` failed the reach screen and `poses` refused."""
+    from pincal.workflow import controlled_components
+
+    rpr3 = load_mechanism(Path(__file__).parents[1] / "model" / "machines" / "rpr3")
+    assert len(rpr3.measured_components) == 6
+    assert controlled_components(rpr3) == ("x", "y", "rz")
