@@ -12,6 +12,12 @@ prints or writes files.
 - fleets (``pincal fleet``): :func:`draw_fleet` / :func:`simulate_unit` simulate a
   production line with planted faulty units; :func:`fleet_statistics` flags the units
   out of family, each judged with its own covariance.
+- compensation (``pincal compensate``): :func:`compensate_targets` gives the commands
+  of a targets file (:class:`TargetCompensation`, starts from :func:`nominal_starts`);
+  :func:`compensate_program` rewrites a G-code program's moves
+  (:class:`CompensatedProgram`).
+- views (``pincal view``): :func:`view_poses` gives the poses drawn,
+  :func:`prediction_changes` the nominal → calibrated arrows at each.
 """
 
 from __future__ import annotations
@@ -38,29 +44,50 @@ from pincal.workflow._prior_choice import (
     cross_validated,
     nested_choice,
 )
+from pincal.workflow._program_compensation import CompensatedProgram, compensate_program
+from pincal.workflow._target_compensation import (
+    TargetCompensation,
+    compensate_targets,
+    nominal_starts,
+)
 from pincal.workflow._transfer import transfer_markers
+from pincal.workflow._view_poses import (
+    PredictionChanges,
+    ViewPoses,
+    prediction_changes,
+    view_poses,
+)
 
 __all__ = [
     "MISFIT_RMS",
     "PRIOR_GRID",
     "ROBUST_LOSS",
+    "CompensatedProgram",
     "FleetDraw",
     "FleetStatistics",
     "MarkerRun",
     "MarkerSettings",
+    "PredictionChanges",
     "PriorChoice",
+    "TargetCompensation",
     "UnitEstimate",
     "UnitVerdict",
+    "ViewPoses",
     "calibrate_markers",
     "choose_prior",
+    "compensate_program",
+    "compensate_targets",
     "cross_validated",
     "draw_fleet",
     "fleet_statistics",
     "marker_procedure",
     "nested_choice",
+    "nominal_starts",
     "parse_prior",
+    "prediction_changes",
     "rebuild",
     "replay_procedure",
     "simulate_unit",
     "transfer_markers",
+    "view_poses",
 ]
