@@ -86,7 +86,7 @@ def compensate(
         )  # fmt: skip
     result = done.result
     path = write_commands(
-        out, result.actuated, result.commands, done.written,
+        out, result.actuated, result.commands, done.reached,
         actuator_units=si_actuator_units(mech),
     )  # fmt: skip
     if as_json:

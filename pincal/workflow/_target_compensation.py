@@ -51,7 +51,7 @@ class TargetCompensation:
     joint_terms: dict[str, Any] | None
 
     @property
-    def written(self) -> list[int]:
+    def reached(self) -> list[int]:
         """Indices of the targets whose commands are written (the reachable ones)."""
         return [i for i in range(len(self.result.reachable)) if self.result.reachable[i]]
 
@@ -79,7 +79,7 @@ class TargetCompensation:
             "model": self.mechanism.name,
             "components": list(result.components),
             "targets": len(result.reachable),
-            "commands": len(self.written),
+            "commands": len(self.reached),
             "unreachable": list(result.unreachable),
             "reasons": {str(k): v for k, v in result.reasons.items()},
             "starts": self.start_note,
@@ -96,7 +96,7 @@ class TargetCompensation:
             f"compensating {' '.join(result.components)} of the measured frame "
             f"{mech.measured_frame} ({mech.mobility} degrees of freedom) with the {self.origin}"
         ]
-        msg = f"wrote {written}: {len(self.written)} of {len(result.reachable)} targets"
+        msg = f"wrote {written}: {len(self.reached)} of {len(result.reachable)} targets"
         if result.unreachable:
             msg += f"; unreachable: {list(result.unreachable)}"
         out += [msg, f"starts: {self.start_note}"]
