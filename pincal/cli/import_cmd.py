@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from pincal.cli._limits import check_number
+from pincal.cli._tracker_options import TrackerArgs, tracker_options
 from pincal.cli.common import (
     ModelOptions,
     fail_cleanly,
@@ -30,27 +31,7 @@ _FILE = click.Path(exists=True, dir_okay=False, path_type=Path)
 @click.option("--model", required=True, help="Model (bundled name, directory or .urdf).")
 @click.option("--out", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="Targets measurement file to write (kind: targets).")  # fmt: skip
-@click.option("--match", type=click.Choice(["auto", "pose", "time"]), default="auto",
-              show_default=True, help="Pair points and log rows by pose id or time.")  # fmt: skip
-@click.option("--tolerance", type=float, default=0.5, show_default=True,
-              help="Largest point-to-log time difference [s] (--match time).")  # fmt: skip
-@click.option("--unit", default=None, help="Length unit of points and targets (m, mm, um).")
-@click.option("--log-length-unit", default="m", show_default=True, help="Prismatic joints' unit.")
-@click.option("--log-angle-unit", default="rad", show_default=True, help="Revolute joints' unit.")
-@click.option(
-    "--columns", default=None, help="Points columns: field=Title,… (pose,time,point,x,y,z)."
-)
-@click.option("--target-columns", default=None, help="Targets columns: field=Title,….")
-@click.option("--log-columns", default=None, help="Log columns: field=Title,… (pose,time,joints).")
-@click.option("--delimiter", type=click.Choice(["auto", ",", ";", "tab"]), default="auto",
-              show_default=True)  # fmt: skip
-@click.option("--decimal", type=click.Choice(["auto", ".", ","]), default="auto", show_default=True)
-@click.option("--point-std", type=float, default=None, help="1σ per point coordinate [--unit].")
-@click.option("--max-residual", type=float, default=None, help="Moved-target threshold [--unit].")
-@click.option("--out-unit", type=click.Choice(["m", "mm", "um"]), default="m", show_default=True,
-              help="Length unit of the written file (m round-trips exactly).")  # fmt: skip
-@click.option("--ignore-unknown-points", is_flag=True,
-              help="Skip points that are not in --targets (e.g. base nests).")  # fmt: skip
+@tracker_options
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary.")
 @model_options
 @fail_cleanly
@@ -60,20 +41,7 @@ def import_tracker(
     targets_path: Path,
     model: str,
     out: Path,
-    match: str,
-    tolerance: float,
-    unit: str | None,
-    log_length_unit: str,
-    log_angle_unit: str,
-    columns: str | None,
-    target_columns: str | None,
-    log_columns: str | None,
-    delimiter: str,
-    decimal: str,
-    point_std: float | None,
-    max_residual: float | None,
-    out_unit: str,
-    ignore_unknown_points: bool,
+    tracker: TrackerArgs,
     as_json: bool,
     model_opts: ModelOptions,
 ) -> None:
@@ -96,38 +64,18 @@ def import_tracker(
           --out targets.csv --json
       pincal calibrate stewart_6ups --data targets.csv --out cal/
     """
-    from pincal.io import (
-        TrackerImportOptions,
-        import_tracker,
-        parse_mapping,
-        write_target_measurements,
-    )
+    from pincal.io import import_tracker, write_target_measurements
 
     guard_paths(
         {"POINTS": points, "--log": log_path, "--targets": targets_path,
          "--model": model_input(model)},
         {"--out": out},
     )  # fmt: skip
-    check_number(tolerance, "--tolerance", positive=True)
-    check_number(point_std, "--point-std", positive=True)
+    check_number(tracker.tolerance, "--tolerance", positive=True)
+    check_number(tracker.point_std, "--point-std", positive=True)
     mech = load_model(model, model_opts)
-    opts = TrackerImportOptions(
-        match=match,
-        tolerance=tolerance,
-        length_unit=unit,
-        log_length_unit=log_length_unit,
-        log_angle_unit=log_angle_unit,
-        point_columns=parse_mapping(columns, "--columns"),
-        target_columns=parse_mapping(target_columns, "--target-columns"),
-        log_columns=parse_mapping(log_columns, "--log-columns"),
-        delimiter=delimiter,
-        decimal=decimal,
-        point_std=point_std,
-        max_residual=max_residual,
-        ignore_unknown_points=ignore_unknown_points,
-    )
-    result = import_tracker(points, log_path, targets_path, mech, opts)
-    path = write_target_measurements(out, result.targets, length_unit=out_unit)
+    result = import_tracker(points, log_path, targets_path, mech, tracker.options())
+    path = write_target_measurements(out, result.targets, length_unit=tracker.out_unit)
     summary = {
         "out": str(path),
         "model": mech.name,

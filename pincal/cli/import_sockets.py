@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from pincal.cli._socket_args import parse_ball, parse_distance
 from pincal.cli.common import (
     ModelOptions,
     fail_cleanly,
@@ -16,38 +17,7 @@ from pincal.cli.common import (
     model_options,
 )
 
-__all__ = ["import_sockets", "parse_distance"]
-
-
-def parse_distance(text: str) -> tuple[str, str, float, float]:
-    """``A,B,VALUE,STD`` → (A, B, value, std) (lengths in --length-unit).
-
-    Raises:
-        click.BadParameter: not four fields, or the last two not numbers.
-    """
-    parts = [p.strip() for p in text.split(",")]
-    try:
-        if len(parts) != 4 or not all(parts):
-            raise ValueError
-        return parts[0], parts[1], float(parts[2]), float(parts[3])
-    except ValueError:
-        raise click.BadParameter(
-            f"{text!r}: write A,B,DISTANCE,STD (two socket ids, the calibrated distance "
-            "and its 1σ in --length-unit), e.g. 1,2,50,0.002",
-            param_hint="--distance",
-        ) from None
-
-
-def _ball(text: str) -> tuple[float, float, float] | None:
-    if text.strip() == "unknown":
-        return None
-    try:
-        x, y, z = (float(v) for v in text.split(","))
-    except ValueError:
-        raise click.BadParameter(
-            f"{text!r}: give 'unknown' or X,Y,Z", param_hint="--ball"
-        ) from None
-    return (x, y, z)
+__all__ = ["import_sockets"]
 
 
 @click.command("import-sockets")
@@ -116,7 +86,7 @@ def import_sockets(
         std=std,
         distances=tuple(parse_distance(d) for d in distances),
         plate=plate,
-        ball=_ball(ball),
+        ball=parse_ball(ball),
         length_unit=length_unit,
         columns=parse_mapping(columns, "--columns"),
         joint_units=joint_units,

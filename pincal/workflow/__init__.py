@@ -45,6 +45,12 @@ prints or writes files.
   nominal model with random errors (none a built machine cannot have,
   :func:`buildable_mask`) at the poses it reaches (:func:`reachable_rows`), as poses, a
   scalar instrument's readings or a ball seated in two sockets (:func:`default_sockets`).
+- compensation (``pincal compensate``): :func:`compensate_targets` gives the commands
+  of a targets file (:class:`TargetCompensation`, starts from :func:`nominal_starts`);
+  :func:`compensate_program` rewrites a G-code program's moves
+  (:class:`CompensatedProgram`).
+- views (``pincal view``): :func:`view_poses` gives the poses drawn,
+  :func:`prediction_changes` the nominal → calibrated arrows at each.
 """
 
 from __future__ import annotations
@@ -116,6 +122,7 @@ from pincal.workflow._prior_choice import (
     cross_validated,
     nested_choice,
 )
+from pincal.workflow._program_compensation import CompensatedProgram, compensate_program
 from pincal.workflow._reach_screen import DRAWS, compensation_test, controlled_components
 from pincal.workflow._simulation import (
     SOCKET_SPACING,
@@ -126,12 +133,23 @@ from pincal.workflow._simulation import (
     simulate_campaign,
 )
 from pincal.workflow._steps import Steps
+from pincal.workflow._target_compensation import (
+    TargetCompensation,
+    compensate_targets,
+    nominal_starts,
+)
 from pincal.workflow._transfer import transfer_markers
 from pincal.workflow._validate_data import (
     DataValidation,
     HeldOutData,
     read_held_out,
     validate_on_data,
+)
+from pincal.workflow._view_poses import (
+    PredictionChanges,
+    ViewPoses,
+    prediction_changes,
+    view_poses,
 )
 
 __all__ = [
@@ -141,6 +159,7 @@ __all__ = [
     "ROBUST_LOSS",
     "SOCKET_SPACING",
     "AcceptanceMachine",
+    "CompensatedProgram",
     "DataValidation",
     "DemoAccuracy",
     "DemoResult",
@@ -158,13 +177,16 @@ __all__ = [
     "PoseRequest",
     "PoseRun",
     "PoseSelection",
+    "PredictionChanges",
     "PriorChoice",
     "SimulatedCampaign",
     "Steps",
+    "TargetCompensation",
     "ThermalDraw",
     "UnitEstimate",
     "UnitJob",
     "UnitVerdict",
+    "ViewPoses",
     "acceptance_machine",
     "base_line",
     "buildable_mask",
@@ -173,6 +195,8 @@ __all__ = [
     "calibrate_pose_file",
     "calibrated_controller",
     "choose_prior",
+    "compensate_program",
+    "compensate_targets",
     "compensation_test",
     "controlled_components",
     "cross_validate_calibration",
@@ -192,6 +216,7 @@ __all__ = [
     "marker_procedure",
     "measured_characteristics",
     "nested_choice",
+    "nominal_starts",
     "other_machine",
     "parse_prior",
     "plan_fleet",
@@ -199,6 +224,7 @@ __all__ = [
     "pose_candidates",
     "pose_parameters",
     "pose_problem",
+    "prediction_changes",
     "reachable_rows",
     "read_held_out",
     "rebuild",
@@ -214,4 +240,5 @@ __all__ = [
     "transfer_markers",
     "unit_summary",
     "validate_on_data",
+    "view_poses",
 ]
