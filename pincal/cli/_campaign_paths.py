@@ -59,7 +59,8 @@ def check_campaign_outputs(c: Campaign, p: Paths) -> None:
     Raises:
         CampaignError: naming the location and what to change.
     """
-    from pincal.cli.common import guard_paths, model_input
+    from pincal.cli._paths import guard_paths
+    from pincal.cli.common import model_input
     from pincal.errors import CampaignError, PincalError
     from pincal.io import check_replaceable
 

@@ -1,6 +1,6 @@
 """The files a command reads without naming them: a model's URDF and sidecar, a calibration's.
 
-:func:`pincal.cli.common.guard_paths` compares outputs with inputs; an input named on
+:func:`pincal.cli._paths.guard_paths` compares outputs with inputs; an input named on
 the command line often stands for more files: a model directory for its URDF and
 sidecar, a calibration directory for its own files, the nominal model it was fitted on
 (``model_files`` of its manifest) and, for ``validate --cv``, the data file it was

@@ -15,7 +15,7 @@ from typing import Any
 import click
 
 from pincal.cli._joint_terms import calibration_terms
-from pincal.cli.common import guard_paths
+from pincal.cli._paths import guard_paths
 
 __all__ = ["run_program"]
 

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from pincal.cli.common import guard_paths
+from pincal.cli._paths import guard_paths
 
 if TYPE_CHECKING:
     from pincal.io import CalibrationDirectory

@@ -7,11 +7,11 @@ import json
 import click
 
 from pincal.cli._limits import MAX_POSES, check_count, check_number, yes_option
+from pincal.cli._paths import guard_paths
 from pincal.cli.common import (
     ModelOptions,
     announce,
     fail_cleanly,
-    guard_paths,
     load_model,
     model_input,
     model_options,

@@ -9,7 +9,8 @@ from pincal.cli._calibrate_options import calibrate_options
 from pincal.cli._calibrate_poses import calibrate_poses, is_instrument_file, refuse_marker_options
 from pincal.cli._limits import NOISE_RANGE, number_pair
 from pincal.cli._marker_root import with_root
-from pincal.cli.common import ModelOptions, fail_cleanly, guard_paths, model_input
+from pincal.cli._paths import guard_paths
+from pincal.cli.common import ModelOptions, fail_cleanly, model_input
 from pincal.errors import PincalError
 
 

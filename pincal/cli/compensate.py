@@ -9,9 +9,10 @@ import click
 from pincal.cli._calibrated import calibrated_with_terms
 from pincal.cli._compensate_options import compensate_options
 from pincal.cli._joint_terms import read_payload
+from pincal.cli._paths import guard_paths
 from pincal.cli._program import run_program
 from pincal.cli._progress import counted
-from pincal.cli.common import fail_cleanly, guard_paths
+from pincal.cli.common import fail_cleanly
 
 
 @click.command()

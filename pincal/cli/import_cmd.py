@@ -8,15 +8,9 @@ from pathlib import Path
 import click
 
 from pincal.cli._limits import check_number
+from pincal.cli._paths import guard_paths
 from pincal.cli._tracker_options import TrackerArgs, tracker_options
-from pincal.cli.common import (
-    ModelOptions,
-    fail_cleanly,
-    guard_paths,
-    load_model,
-    model_input,
-    model_options,
-)
+from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_input, model_options
 
 _FILE = click.Path(exists=True, dir_okay=False, path_type=Path)
 

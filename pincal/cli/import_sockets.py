@@ -7,15 +7,9 @@ from pathlib import Path
 
 import click
 
+from pincal.cli._paths import guard_paths
 from pincal.cli._socket_args import parse_ball, parse_distance
-from pincal.cli.common import (
-    ModelOptions,
-    fail_cleanly,
-    guard_paths,
-    load_model,
-    model_input,
-    model_options,
-)
+from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_input, model_options
 
 __all__ = ["import_sockets"]
 

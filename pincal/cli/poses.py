@@ -14,17 +14,10 @@ from pincal.cli._limits import (
     naming_option,
     yes_option,
 )
+from pincal.cli._paths import guard_paths, overwrite_option
 from pincal.cli._pose_options import check_noise, jobs, pose_options
 from pincal.cli._pose_screens import screen_options
-from pincal.cli.common import (
-    ModelOptions,
-    fail_cleanly,
-    guard_paths,
-    load_model,
-    model_input,
-    model_options,
-    overwrite_option,
-)
+from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_input, model_options
 
 
 @click.command()

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import announce, fail_cleanly, guard_paths
+from pincal.cli._paths import guard_paths
+from pincal.cli.common import announce, fail_cleanly
 from pincal.errors import PincalError
 
 

@@ -8,14 +8,8 @@ import click
 
 from pincal.cli._joint_terms import carrying, payload_option, read_payload
 from pincal.cli._markers import marker_options
-from pincal.cli.common import (
-    ModelOptions,
-    fail_cleanly,
-    guard_paths,
-    load_model,
-    model_input,
-    model_options,
-)
+from pincal.cli._paths import guard_paths
+from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_input, model_options
 
 __all__ = ["select_model_cmd"]
 

@@ -9,16 +9,9 @@ import click
 
 from pincal.cli._kinds import SOCKET
 from pincal.cli._limits import MAX_POSES, check_count, number_pair, yes_option
+from pincal.cli._paths import guard_paths, overwrite_option
 from pincal.cli._simulate_options import parse_errors, parse_pair, simulate_options
-from pincal.cli.common import (
-    ModelOptions,
-    fail_cleanly,
-    guard_paths,
-    load_model,
-    model_input,
-    model_options,
-    overwrite_option,
-)
+from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_input, model_options
 
 
 @click.command()

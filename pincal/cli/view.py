@@ -20,16 +20,10 @@ from pathlib import Path
 import click
 
 from pincal.cli._calibrated import calibrated_mechanism
+from pincal.cli._paths import guard_paths
 from pincal.cli._view_draw import ViewOptions, draw_view, wait_live
 from pincal.cli._view_options import MAX_POSES, check_view_request, view_options
-from pincal.cli.common import (
-    ModelOptions,
-    fail_cleanly,
-    guard_paths,
-    load_model,
-    model_input,
-    model_options,
-)
+from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_input, model_options
 
 
 @click.command()

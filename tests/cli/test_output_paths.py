@@ -14,7 +14,7 @@ import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
-from pincal.cli.common import guard_paths
+from pincal.cli._paths import guard_paths
 from pincal.errors import OutputPathError
 
 PINCAL = Path(__file__).resolve().parents[2] / "pincal"
