@@ -109,6 +109,7 @@ def calibrate_markers(
     from pincal.io import CALIBRATED_URDF, write_calibration
     from pincal.report import calibration_text, marker_lines
     from pincal.workflow import calibrate_markers as run_markers
+    from pincal.workflow import marker_doc
 
     run = run_markers(model, data, setup, settings, lambda line: click.echo(f"… {line}", err=True))
     for note in run.notes:
@@ -119,7 +120,7 @@ def calibrate_markers(
     floor = quality.get("detection_floor")
     if isinstance(floor, dict) and floor.get("blind_spot"):  # the marker route has no --noise
         floor["blind_spot"] = run.verdict.blind_spot(MARKER_REMEDY)
-    markers = run.doc()
+    markers = marker_doc(run)
     doc = result_json(run.fit.result, str(data), CALIBRATED_URDF)
     doc["quality"] = quality
     doc["markers"] = markers

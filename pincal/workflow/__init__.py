@@ -8,7 +8,8 @@ prints or writes files.
 - :func:`calibrate_markers` (``pincal calibrate --link``): a marker table in an
   unknown instrument frame, with the defaults of real data (:class:`MarkerSettings`);
   :func:`rebuild` and :func:`replay_procedure` run it again for ``validate --cv``;
-  :func:`transfer_markers` carries it to another session (``validate --data``).
+  :func:`transfer_markers` carries it to another session (``validate --data``);
+  :func:`marker_doc` is its entry of the manifest and identification.json.
 - :func:`calibrate_pose_file` (``pincal calibrate --data FILE``): a pose measurement
   file read (:func:`pose_parameters`, :func:`pose_problem`), fitted, judged, its σ
   checked (:class:`PoseRun`); :func:`calibrate_instrument_files` for instrument files
@@ -84,6 +85,7 @@ from pincal.workflow._fleet_stats import (
 )
 from pincal.workflow._fleet_units import UnitJob, file_digest, fleet_jobs, unit_summary
 from pincal.workflow._instrument_run import calibrate_instrument_files
+from pincal.workflow._marker_doc import marker_doc
 from pincal.workflow._marker_replay import rebuild, replay_procedure
 from pincal.workflow._marker_run import (
     MISFIT_RMS,
@@ -213,6 +215,7 @@ __all__ = [
     "fleet_report",
     "fleet_statistics",
     "fold_table",
+    "marker_doc",
     "marker_procedure",
     "measured_characteristics",
     "nested_choice",

@@ -15,7 +15,6 @@ import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from pincal.errors import TooFewPosesError, UnknownNameError
 from pincal.identification import (
@@ -35,7 +34,6 @@ from pincal.io import distinct_markers, read_marker_data
 from pincal.measure import MarkerSetup, Measurements, marker_mechanism
 from pincal.model import Mechanism
 from pincal.sensitivity import parameters
-from pincal.workflow._marker_doc import marker_doc
 from pincal.workflow._marker_settings import MarkerSettings, parse_prior
 from pincal.workflow._prior_choice import (
     PriorChoice,
@@ -98,10 +96,6 @@ class MarkerRun:
     def prior(self) -> Prior | None:
         """The prior the fit used (None: none)."""
         return self.choice.prior
-
-    def doc(self) -> dict[str, Any]:
-        """The ``markers`` entry of the manifest / identification.json."""
-        return marker_doc(self)
 
 
 def marker_procedure(

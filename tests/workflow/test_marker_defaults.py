@@ -22,7 +22,7 @@ from pincal.identification import (
 )
 from pincal.measure import MarkerSetup
 from pincal.model import sample_actuators
-from pincal.workflow import PRIOR_GRID, MarkerSettings, calibrate_markers, rebuild
+from pincal.workflow import PRIOR_GRID, MarkerSettings, calibrate_markers, marker_doc, rebuild
 from tests.cli.test_markers_cli import _table, _truth
 
 SETUP = MarkerSetup("wrist_3_link", columns=("mx", "my", "mz"), length_unit="mm")
@@ -74,7 +74,7 @@ def test_defaults_choose_the_prior_and_stay_least_squares_on_clean_data(tmp_path
     held = run.verdict.held_out
     # 1 mm of errors against 20 µm of noise: the calibration predicts 10× better
     assert held["calibrated"]["held_out_rms_mm"] < 0.1 * held["baseline"]["held_out_rms_mm"]
-    doc = run.doc()
+    doc = marker_doc(run)
     assert doc["loss"] == "linear" and doc["loss_spec"] == "auto" and doc["prior_spec"] == "auto"
 
 
