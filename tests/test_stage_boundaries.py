@@ -211,6 +211,29 @@ def test_library_imports_other_stages_at_module_level():
     )
 
 
+#: a command module of the CLI: parse → one workflow call → print (issue 40)
+COMMAND_LINES = 120
+
+
+def test_the_cli_computes_nothing():
+    """The CLI imports no numpy / scipy (anywhere in a file, lazily or for typing: the
+    computation is the workflow's) and a command module — one defining a click
+    command — stays a page: parse the options, call the workflow, print."""
+    numeric, long = [], []
+    for rel, stage, tree in _files():
+        if stage != "cli":
+            continue
+        numeric += [f"{rel}:{line}: {module}" for line, module, _ in _imports(tree, rel)
+                    if module.split(".")[0] in ("numpy", "scipy")]  # fmt: skip
+        text = (PACKAGE.parent / rel).read_text(encoding="utf-8")
+        if ".command(" in text and text.count("\n") > COMMAND_LINES:
+            long.append(f"{rel}: {text.count(chr(10))} lines")
+    assert not numeric, "numpy/scipy in the CLI (move the work to pincal.workflow):\n" + (
+        "\n".join(numeric)
+    )
+    assert not long, f"command modules over {COMMAND_LINES} lines:\n" + "\n".join(long)
+
+
 def test_no_stage_registers_into_a_lower_one_at_import():
     found = import_time_registrations()
     assert not found, "import-time registrations into another stage:\n" + "\n".join(
