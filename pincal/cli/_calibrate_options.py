@@ -10,7 +10,7 @@ import click
 from pincal.cli._limits import yes_option
 from pincal.cli._marker_root import root_option
 from pincal.cli._markers import marker_options
-from pincal.cli.common import model_options
+from pincal.cli.common import jobs_option, model_options
 from pincal.identification import METHODS
 
 _F = TypeVar("_F", bound=Callable[..., object])
@@ -119,14 +119,9 @@ _OPTIONS = [
         "linear σ (calibration.json quality.uncertainty.bootstrap); never written as the "
         "covariance. Default: none (no refit runs after the fit).",
     ),
-    click.option(
-        "--jobs",
-        "n_jobs",
-        type=click.IntRange(min=-1),
-        default=1,
-        show_default=True,
-        help="Processes of the --bootstrap refits (-1: every CPU); same σ for any value. Each "
-        "worker loads pincal and rebuilds the model (seconds): worth it for long refits.",
+    jobs_option(
+        "Processes of the --bootstrap refits (-1: every CPU); same σ for any value. Each "
+        "worker loads pincal and rebuilds the model (seconds): worth it for long refits."
     ),
 ]
 

@@ -8,6 +8,7 @@ from typing import TypeVar
 import click
 
 from pincal.cli._limits import NOISE_RANGE, check_number
+from pincal.cli.common import jobs_option
 from pincal.measure import DEFAULT_NOISE
 
 _F = TypeVar("_F", bound=Callable[..., object])
@@ -75,15 +76,8 @@ def pose_options(func: _F) -> _F:
             show_default=True,
             help="Pose file to write (+ <stem>.commands.csv and <stem>.json beside it).",
         ),
-        click.option(
-            "--jobs",
-            "n_jobs",
-            type=click.IntRange(min=-1),
-            default=1,
-            show_default=True,
-            help="Processes evaluating the candidates (-1: every CPU); same poses for any "
-            "value.",
-        ),
+        jobs_option("Processes evaluating the candidates (-1: every CPU); same poses for any "
+                    "value."),
         click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout."),
     ]  # fmt: skip
     for option in reversed(options):

@@ -15,6 +15,8 @@ import click
 from pincal.errors import PincalError, clip
 
 if TYPE_CHECKING:
+    from click.decorators import FC
+
     from pincal.io import CalibrationDirectory
     from pincal.model import Mechanism
 
@@ -153,6 +155,12 @@ def _parse_locks(values: tuple[str, ...]) -> dict[str, float | str]:
                 )
             out[name.strip()] = number
     return out
+
+
+def jobs_option(help_text: str) -> Callable[[FC], FC]:
+    """``--jobs N`` (into ``n_jobs``): worker processes, -1 for every CPU, default 1."""
+    return click.option("--jobs", "n_jobs", type=click.IntRange(min=-1), default=1,
+                        show_default=True, help=help_text)  # fmt: skip
 
 
 def model_options(func: Callable[..., _R]) -> Callable[..., _R]:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import fail_cleanly
+from pincal.cli.common import fail_cleanly, jobs_option
 
 SCHEDULER_HELP = (
     "Run the units on dask.distributed: local:N (a local cluster of N worker processes) "
@@ -22,8 +22,7 @@ SCHEDULER_HELP = (
               help="Report directory: units/<id>/ (calibration directories), fleet.json, "
               "fleet.md, fleet.html, fleet_parameters.png.")  # fmt: skip
 @click.option("--scheduler", default=None, metavar="local:N|tcp://HOST:PORT", help=SCHEDULER_HELP)
-@click.option("--jobs", "n_jobs", type=click.IntRange(min=-1), default=1, show_default=True,
-              help="Local processes without --scheduler (-1: every CPU).")  # fmt: skip
+@jobs_option("Local processes without --scheduler (-1: every CPU).")
 @click.option("--method", default="gauss-newton", show_default=True,
               help="Identification solver of every unit.")  # fmt: skip
 @click.option("--alpha", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.01,
