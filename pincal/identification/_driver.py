@@ -38,7 +38,17 @@ from pincal.identification._result import IdentificationResult
 from pincal.identification._solvers import Solver, SolverOptions
 from pincal.identification._weighting import Weighting
 
-__all__ = ["Driven", "FitPolicy", "MarginalBound", "Refitted", "drive", "drive_holding"]
+__all__ = [
+    "Driven",
+    "FitPolicy",
+    "MarginalBound",
+    "Refitted",
+    "Start",
+    "drive",
+    "drive_holding",
+    "fitted_machine_count",
+    "start",
+]
 
 log = logging.getLogger(__name__)
 
@@ -104,6 +114,55 @@ def _solve(
     return model, settle(model, out, free, noise_floor=policy.noise_floor), weighting
 
 
+@dataclass(frozen=True)
+class Start:
+    """A fit at its start values, before solving (steps 1–2 of :func:`drive`).
+
+    Attributes:
+        model: the residual model, weighed by its start residuals when the noise is
+            estimated.
+        raw0: raw residuals at the start [m, rad].
+        fit_set: the set decided by the base-set rule.
+        free: (f,) indices to fit (``fit_set.free`` less ``weak``).
+        weak: (w,) indices held by the weak bound at the start.
+    """
+
+    model: ResidualModel
+    raw0: RawResiduals
+    fit_set: FitSet
+    free: np.ndarray
+    weak: np.ndarray
+
+
+def start(model: ResidualModel, x0: np.ndarray, policy: FitPolicy) -> Start:
+    """Evaluate ``model`` at ``x0`` [SI], weigh it and decide the fitted set (no solve).
+
+    Raises:
+        TooFewPosesError, UnidentifiableError: from the base-set rule.
+    """
+    _, J0, raw0 = model.evaluate(x0)
+    if policy.weighting:
+        assert isinstance(model, CalibrationProblem) and isinstance(raw0, np.ndarray)
+        model, J0 = initial_weights(model, J0, raw0)
+    fit_set = policy.base.decide(model, x0, J0)
+    free, weak = fit_set.free, np.zeros(0, dtype=int)
+    if policy.weak is not None:
+        weak = policy.weak.held(J0, free, model.units, model.n_machine)
+        free = np.setdiff1d(free, weak)
+    return Start(model, raw0, fit_set, free, weak)
+
+
+def fitted_machine_count(model: ResidualModel, x0: np.ndarray, policy: FitPolicy) -> int | None:
+    """How many machine unknowns a :func:`drive` of ``model`` from ``x0`` fits.
+
+    Known before solving unless a weak bound is checked again at the solution (then
+    None: only the solve tells).
+    """
+    if policy.weak is not None and policy.weak.at_solution:
+        return None
+    return int(np.sum(start(model, x0, policy).free < model.n_machine))
+
+
 def drive(
     model: ResidualModel,
     x0: np.ndarray,
@@ -126,19 +185,11 @@ def drive(
         TooFewPosesError, UnidentifiableError: from the base-set rule.
         NoiseEstimationError: too few redundant equations to estimate the noise.
     """
-    _, J0, raw0 = model.evaluate(x0)
-    if policy.weighting:
-        assert isinstance(model, CalibrationProblem) and isinstance(raw0, np.ndarray)
-        model, J0 = initial_weights(model, J0, raw0)
-    fit_set = policy.base.decide(model, x0, J0)
+    begun = start(model, x0, policy)
+    fit_set, free, weak = begun.fit_set, begun.free, begun.weak
     if fit_set.note:
         log.info(fit_set.note)
-    free, weak = fit_set.free, np.zeros(0, dtype=int)
-    if policy.weak is not None:
-        weak = policy.weak.held(J0, free, model.units, model.n_machine)
-        free = np.setdiff1d(free, weak)
-    start = model
-    model, settled, weighting = _solve(start, entry, x0, free, opts, progress, policy)
+    model, settled, weighting = _solve(begun.model, entry, x0, free, opts, progress, policy)
     if policy.weak is not None and policy.weak.at_solution:
         f = settled.fitted  # the solution's Jacobian may see a direction weaker still
         units = tuple(model.units[i] for i in f)
@@ -146,8 +197,10 @@ def drive(
                                   int(np.sum(f < model.n_machine)))]  # fmt: skip
         if more.size:
             weak, free = np.union1d(weak, more), np.setdiff1d(free, more)
-            model, settled, weighting = _solve(start, entry, x0, free, opts, progress, policy)
-    return Driven(model, settled, fit_set, free, weak, raw0, weighting)
+            model, settled, weighting = _solve(
+                begun.model, entry, x0, free, opts, progress, policy
+            )
+    return Driven(model, settled, fit_set, free, weak, begun.raw0, weighting)
 
 
 @dataclass(frozen=True)
@@ -202,6 +255,8 @@ class Refitted:
 
 #: one whole fit (through :func:`drive`): (names to fit, method, start values or None)
 FitFunction = Callable[[list[str], str, np.ndarray | None], IdentificationResult]
+#: (names to fit, start values) → parameters a fit from there identifies (None: unknown)
+SetCount = Callable[[list[str], np.ndarray], int | None]
 
 
 def _amount(value: float, unit: str) -> str:
@@ -214,6 +269,7 @@ def drive_holding(
     method: str,
     bound: MarginalBound,
     exempt: Callable[[str], bool],
+    counted: SetCount | None = None,
 ) -> Refitted:
     """Fit, hold what a :class:`MarginalBound` names and fit again; then re-decide.
 
@@ -231,6 +287,9 @@ def drive_holding(
         method: ``"gauss-newton"`` or ``"lm"``.
         bound: the bound on the finished fit's marginal σ.
         exempt: names never held (e.g. the instrument frame's).
+        counted: how many parameters a fit of these names from these values would
+            identify, without solving (None when unknown before solving): step 3 then
+            solves only when the count differs (the result is the same).
     """
     notes: list[str] = []
     held: list[str] = []
@@ -256,12 +315,16 @@ def drive_holding(
         out = {n for n, _ in weak}
         held += [n for n, _ in weak]
         names = [n for n in names if n not in out]
-    again = fit(names, used, result.full_values)
-    n0, n1 = int(result.identified.sum()), int(again.identified.sum())
-    if n1 != n0 and (again.success or not result.success):
-        notes.append(
-            f"the identifiable set decided again at the solution has {n1} parameters "
-            f"(at the start {n0}); the fit was refined from the solution with that set"
-        )
-        result = again
+    n0 = int(result.identified.sum())
+    # a refit whose set has the size of this one's is not kept: skip it when its set
+    # is known before solving
+    if counted is None or counted(names, result.full_values) != n0:
+        again = fit(names, used, result.full_values)
+        n1 = int(again.identified.sum())
+        if n1 != n0 and (again.success or not result.success):
+            notes.append(
+                f"the identifiable set decided again at the solution has {n1} parameters "
+                f"(at the start {n0}); the fit was refined from the solution with that set"
+            )
+            result = again
     return Refitted(result, used, tuple(notes), tuple(held))

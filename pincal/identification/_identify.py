@@ -13,13 +13,14 @@ are reported in ``result.weighting``. The sequence is the one fit driver's
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 
 import numpy as np
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 from pincal.errors import SolverOptionError
-from pincal.identification._driver import FitPolicy, drive
+from pincal.identification._driver import FitPolicy, drive, fitted_machine_count
 from pincal.identification._finish import finish
 from pincal.identification._fit_set import StructuralBase, WeakBound
 from pincal.identification._identification_problem import IdentificationProblem
@@ -35,7 +36,7 @@ from pincal.model import Mechanism, ParameterSet, degenerate_translations
 from pincal.sensitivity import closure_breaking
 from pincal.sensitivity.kernels import batch_applies
 
-__all__ = ["identify"]
+__all__ = ["fitted_at_start", "identify"]
 
 
 def _base_rule(problem: IdentificationProblem, model: CalibrationProblem) -> StructuralBase:
@@ -138,8 +139,36 @@ def identify(
         return joint_fit(problem.joint_model, method, options, progress, problem.weak_bound).result
     entry = solver(method)
     opts = entry.check_options(options)
-    with threadpool_limits(1):  # small dense solves: threaded BLAS only adds contention
+    with _blas().limit(limits=1):  # small dense solves: threaded BLAS only adds contention
         return _run(problem, method, entry, opts, progress)
+
+
+@functools.cache
+def _blas() -> ThreadpoolController:
+    """The BLAS libraries loaded (found once: the search costs ~1 ms per fit)."""
+    return ThreadpoolController()
+
+
+def _policy(problem: IdentificationProblem, model: CalibrationProblem) -> FitPolicy:
+    """The driver's policy for one pose file: its base rule, the weak bound if declared."""
+    bound = problem.weak_bound  # with the noise estimated, σ̂ of a far start holds everything
+    declared = bound is not None and model.noise_source != "estimate"
+    weak = WeakBound(*bound) if bound is not None and declared else None
+    return FitPolicy(_base_rule(problem, model), weak, weighting=True)
+
+
+def fitted_at_start(problem: IdentificationProblem) -> int | None:
+    """How many parameters :func:`identify` of one pose file fits, known without solving.
+
+    The count of the base set decided at ``problem.x0`` (less what a declared noise's
+    weak bound holds there); None when it is known only after solving (the weak bound
+    is checked again at the solution) or for a joint fit.
+    """
+    if problem.joint:
+        return None
+    model = problem.model
+    with _blas().limit(limits=1):
+        return fitted_machine_count(model, problem.x0, _policy(problem, model))
 
 
 def _run(
@@ -151,10 +180,7 @@ def _run(
 ) -> IdentificationResult:
     """The body of :func:`identify` (checked arguments), one BLAS thread."""
     model, x0 = problem.model, problem.x0
-    bound = problem.weak_bound  # with the noise estimated, σ̂ of a far start holds everything
-    declared = bound is not None and model.noise_source != "estimate"
-    weak = WeakBound(*bound) if bound is not None and declared else None
-    policy = FitPolicy(_base_rule(problem, model), weak, weighting=True)
+    policy = _policy(problem, model)
     d = drive(model, x0, entry, opts, policy, progress)
     raw0 = d.raw0
     assert isinstance(raw0, np.ndarray)  # one pose file: (m, k)
@@ -164,7 +190,7 @@ def _run(
     result, _ = finish(
         d.model, d.settled, method=method, params=problem.params, raw0=raw0,
         stats=lambda raw: ResidualStats.from_residuals(raw, comps), residuals=d.settled.raw,
-        initial_values=x0, prefix=d.fit_set.note + _held_note(problem.params, d.weak, weak),
+        initial_values=x0, prefix=d.fit_set.note + _held_note(problem.params, d.weak, policy.weak),
         prior=None if prior is None else prior[0],
         identifiability=d.fit_set.identifiability, weighting=d.weighting,
         initial_residuals=raw0, components=comps,

@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.identification._driver import MarginalBound, drive_holding
-from pincal.identification._identify import identify
+from pincal.identification._identification_problem import IdentificationProblem
+from pincal.identification._identify import fitted_at_start, identify
 from pincal.identification._marker_set import MarkerSetProblem
 from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._result import IdentificationResult
@@ -135,12 +136,21 @@ def _fit(
         opts = GaussNewtonOptions(max_iterations=max_iterations, fallback=False, **prior)
     elif method == "lm":
         opts = LMOptions(max_iterations=max_iterations, loss=loss, **prior)
+    return identify(_problem(mech, params, meas, names, initial), method=method, options=opts)
+
+
+def _problem(
+    mech: Mechanism | tuple[Mechanism, ...],
+    params: ParameterSet,
+    meas: Measurements | tuple[Measurements, ...],
+    names: list[str],
+    initial: np.ndarray | None,
+) -> IdentificationProblem:
     if isinstance(mech, tuple):  # several markers: one problem over their stacked rows
         assert isinstance(meas, tuple)
-        problem = MarkerSetProblem.build(mech, params, meas, initial, names)
-        return identify(problem, method=method, options=opts)
+        return MarkerSetProblem.build(mech, params, meas, initial, names)
     assert isinstance(meas, Measurements)
-    return identify(mech, params, meas, method, options=opts, fit=names, initial=initial)
+    return IdentificationProblem(mech, params, meas, initial, names)
 
 
 def fit_markers(
@@ -210,5 +220,8 @@ def fit_markers(
         limit = max_iterations if initial is None else 100
         return _fit(start, params, meas, names, used, std, loss, initial, limit)
 
-    out = drive_holding(one, names, method, MarginalBound(*bounds), is_registration)
+    def counted(names: list[str], initial: np.ndarray) -> int | None:
+        return fitted_at_start(_problem(start, params, meas, names, initial))
+
+    out = drive_holding(one, names, method, MarginalBound(*bounds), is_registration, counted)
     return MarkerFit(out.result, reg, out.notes, out.method, out.held)

@@ -180,3 +180,56 @@ def test_the_marker_hold_loop_switches_holds_and_redecides_in_that_order():
     assert "held 1 machine parameters" in out.notes[1] and "a (2σ 22 mm)" in out.notes[1]
     assert "decided again at the solution has 2 parameters (at the start 3)" in out.notes[2]
     assert out.result.identified.sum() == 2
+
+
+def test_the_hold_loop_skips_a_refit_whose_set_is_known_to_be_the_same():
+    """drive_holding with a set count: the refit from the solution runs only when the
+    count there differs from the fit's (a same-size refit is never kept)."""
+    from types import SimpleNamespace
+
+    from pincal.identification._driver import MarginalBound, drive_holding
+
+    def run(count):
+        calls = []
+
+        def fit(names, method, initial):
+            calls.append(initial is not None)
+            mask = np.array([True, True, initial is None])
+            return SimpleNamespace(
+                success=True, message="", names=("a", "b", "c"), units=("m",) * 3,
+                identified=mask, std=np.full(int(mask.sum()), 1e-4), full_values=np.zeros(3),
+            )  # fmt: skip
+
+        out = drive_holding(fit, ["a", "b", "c"], "gauss-newton", MarginalBound(0.02, 0.1),
+                            lambda n: False, count)  # fmt: skip
+        return calls, int(out.result.identified.sum())
+
+    assert run(lambda names, x: 3) == ([False], 3)  # same count: no refit
+    assert run(lambda names, x: 2) == ([False, True], 2)  # differs: refit, kept
+    assert run(lambda names, x: None) == ([False, True], 2)  # unknown: refit
+    assert run(None) == ([False, True], 2)
+
+
+@pytest.mark.parametrize("declared", [False, True])
+def test_the_count_known_at_the_start_is_what_the_fit_identifies(stewart, stewart_poses, declared):
+    """fitted_at_start counts exactly the parameters identify fits, from nominal and from
+    a solution (estimated noise; a declared noise re-checks at the solution: None)."""
+    from pincal.identification._identify import fitted_at_start
+
+    params = parameters(stewart, ["leg1_u1.tx", "leg1_u1.rz", "leg1_slide.offset"])
+    truth = np.random.default_rng(3).uniform(-3e-4, 3e-4, len(params))
+    meas = simulate_measurements(params.apply(stewart, truth), stewart_poses[:16],
+                                 {"position": 0.01, "orientation": 0.1},
+                                 np.random.default_rng(4))  # fmt: skip
+    if not declared:
+        meas = dataclasses.replace(meas, noise=None)
+    first = IdentificationProblem(stewart, params, meas)
+    result = identify(first)
+    again = IdentificationProblem(stewart, params, meas, result.full_values)
+    if declared:
+        assert fitted_at_start(first) is None and fitted_at_start(again) is None
+        return
+    assert result.identified.sum() == 2  # the base set leaves leg1_u1.rz out
+    assert fitted_at_start(first) == 2
+    # at the solution the structural Jacobian sees leg1_u1.rz: the count says so
+    assert fitted_at_start(again) == identify(again).identified.sum() == 3
