@@ -30,7 +30,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "pincal"
 #: docs/design.md, "Stages and the import rule", lowest first; a stage may import only
 #: stages of lower rank.
 #: ``machines`` (machine-specific closed forms) sits on the model alone. The modules at
-#: the top of the package (``errors``, ``_files``, ``_yaml``) are below every stage.
+#: the top of the package (``_files``, ``_yaml``, ...) and the BASE packages are below
+#: every stage.
 RANK = {
     "executor": 0,
     "model": 0,
@@ -52,11 +53,25 @@ RANK = {
 #: Modules a stage offers to later stages besides its ``__init__`` (no underscore).
 INTERFACES = {"kernels"}
 
+#: Subpackages below every stage, like the top-level modules (they import no stage);
+#: every other module enters one only through its ``__init__``.
+BASE = {"errors"}
+
 
 def _stage(path: Path) -> str | None:
-    """The stage a file of ``pincal/`` belongs to (None for the top-level modules)."""
+    """The stage a file of ``pincal/`` belongs to (None for the top-level modules and
+    the BASE packages)."""
     parts = path.relative_to(PACKAGE).parts
-    return parts[0] if len(parts) > 1 else None
+    return parts[0] if len(parts) > 1 and parts[0] not in BASE else None
+
+
+def _base_entered(rel: str, module: str) -> str | None:
+    """The BASE package ``module`` belongs to when the file ``rel`` is outside it."""
+    parts = module.split(".")
+    inside = Path(rel).parts[1] if len(Path(rel).parts) > 2 else None
+    if parts[0] != "pincal" or len(parts) < 2 or parts[1] not in BASE or parts[1] == inside:
+        return None
+    return parts[1]
 
 
 @functools.cache
@@ -98,11 +113,12 @@ def _cross_stage(stage: str | None, module: str) -> str | None:
 
 
 def private_module_imports() -> list[str]:
-    """Imports of another stage's private module or of a ``_name`` from another stage."""
+    """Imports of another stage's (or a BASE package's) private module or of a ``_name``
+    from another stage."""
     found = []
     for rel, stage, tree in _files():
         for line, module, names in _imports(tree, rel):
-            if _cross_stage(stage, module) is None:
+            if _cross_stage(stage, module) is None and _base_entered(rel, module) is None:
                 continue
             inner = module.split(".")[2:]
             private = [p for p in inner if p.startswith("_")]
@@ -244,7 +260,7 @@ def test_no_stage_registers_into_a_lower_one_at_import():
 def test_the_stage_order_is_the_documented_one():
     """RANK (checked above) is the order pincal/__init__'s docstring lists, and every
     subpackage has a rank."""
-    stages = {p.parent.name for p in PACKAGE.glob("*/__init__.py")}
+    stages = {p.parent.name for p in PACKAGE.glob("*/__init__.py")} - BASE
     assert stages == set(RANK), f"stages without a rank, or ranks of no stage: {stages ^ set(RANK)}"
     doc = ast.get_docstring(ast.parse((PACKAGE / "__init__.py").read_text(encoding="utf-8")))
     assert doc is not None
@@ -299,8 +315,16 @@ def test_the_checks_see_violations(tmp_path, monkeypatch):
         "register_solver('x', None)\n",
         encoding="utf-8",
     )
+    base = tmp_path / "pincal" / "errors"
+    base.mkdir()
+    (base / "__init__.py").write_text("from pincal.errors._kinds import KindError\n")
+    (base / "_kinds.py").write_text("from pincal.model import Mechanism\n", encoding="utf-8")
+    (tmp_path / "pincal" / "_top.py").write_text(
+        "from pincal.errors._kinds import KindError\n", encoding="utf-8"
+    )
     monkeypatch.setattr(sys.modules[__name__], "PACKAGE", tmp_path / "pincal")
     assert private_module_imports() == [
+        "pincal/_top.py:1: pincal.errors._kinds",
         "pincal/model/_bad.py:1: pincal.sensitivity._jacobian ['_plan']",
         "pincal/model/_bad.py:2: pincal.sensitivity.extra",
     ]
@@ -310,6 +334,7 @@ def test_the_checks_see_violations(tmp_path, monkeypatch):
         "pincal/model/_other.py:1: pincal.model._bad ['_helper']",
     ]
     assert set(order_violations()) == {
+        ("pincal/errors/_kinds.py", "pincal.model"),
         ("pincal/model/_bad.py", "pincal.sensitivity"),
         ("pincal/model/_bad.py", "pincal.identification"),
         ("pincal/model/_bad.py", "pincal.cli"),

@@ -22,13 +22,13 @@ sockets): one ``evaluate(x, jacobian)`` loops over them. The Jacobian is analyti
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Literal, overload
 
 import numpy as np
 
 from pincal.errors import ConvergenceError, MeasurementError
 from pincal.identification._data_blocks import ArtefactBlock, DataBlock, data_block
 from pincal.identification._problem import TRIAL_FAILURES
+from pincal.identification._residual_model import Evaluates
 from pincal.identification._shared_terms import SharedUnknowns
 from pincal.measure import (
     Artefact,
@@ -44,7 +44,7 @@ __all__ = ["Dataset", "InstrumentProblem"]
 Dataset = InstrumentData | Measurements | Artefact
 
 
-class InstrumentProblem:
+class InstrumentProblem(Evaluates[list[np.ndarray]]):
     """Whitened residuals and Jacobian of machine + instrument parameters.
 
     Args:
@@ -206,23 +206,8 @@ class InstrumentProblem:
         P = np.array([T.translation for T in placements]).reshape(-1, 3)
         return P, np.array([T.rotation for T in placements]).reshape(-1, 3, 3), None
 
-    @overload
-    def evaluate(
-        self, x: np.ndarray, jacobian: Literal[True] = True
-    ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]: ...
-
-    @overload
-    def evaluate(
-        self, x: np.ndarray, jacobian: Literal[False]
-    ) -> tuple[np.ndarray, None, list[np.ndarray]]: ...
-
-    @overload
-    def evaluate(
+    def residuals(
         self, x: np.ndarray, jacobian: bool
-    ) -> tuple[np.ndarray, np.ndarray | None, list[np.ndarray]]: ...
-
-    def evaluate(
-        self, x: np.ndarray, jacobian: bool = True
     ) -> tuple[np.ndarray, np.ndarray | None, list[np.ndarray]]:
         """Whitened residual (N,), its Jacobian (N, n + Σk) or None, raw residuals per dataset.
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Literal, overload
 
 import numpy as np
 
@@ -59,7 +58,6 @@ class StackedProblem(CalibrationProblem):
         self.mech, self.params, self.meas = first.mech, first.params, first.meas
         self.rows, self.blocks = first.rows, first.blocks
         self.noise_source = first.noise_source
-        self._memo = {}
 
     @property
     def sigma(self) -> np.ndarray:  # type: ignore[override]
@@ -71,7 +69,7 @@ class StackedProblem(CalibrationProblem):
         raise AttributeError("set the σ of a stacked problem with with_block_std")
 
     @property
-    def predict_starts(self) -> bool:  # type: ignore[override]
+    def predict_starts(self) -> bool:
         """Whether the parts start each pose's loop solve from a first-order prediction."""
         return self.parts[0].predict_starts
 
@@ -96,23 +94,8 @@ class StackedProblem(CalibrationProblem):
     def mechanism(self, values: np.ndarray) -> Mechanism:
         return self.parts[0].mechanism(values)
 
-    @overload
-    def evaluate(
-        self, values: np.ndarray, jacobian: Literal[True] = True
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
-
-    @overload
-    def evaluate(
-        self, values: np.ndarray, jacobian: Literal[False]
-    ) -> tuple[np.ndarray, None, np.ndarray]: ...
-
-    @overload
-    def evaluate(
+    def residuals(
         self, values: np.ndarray, jacobian: bool
-    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]: ...
-
-    def evaluate(
-        self, values: np.ndarray, jacobian: bool = True
     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         """Stacked whitened residual, its Jacobian (or None) and raw residuals (Σm_k, 3)."""
         outs = [p.evaluate(values, jacobian) for p in self.parts]

@@ -13,12 +13,15 @@ when neither is given (the normal case for real data) — estimated per block
 estimated has ``noise_source == "estimate"`` and must be re-weighted
 (:meth:`CalibrationProblem.with_block_std`) before it is fitted: it never fits with
 silent unit weights.
+
+The poses' closed configurations at trial values, warm-started, are
+:class:`pincal.identification._pose_configurations.PoseConfigurations`; this module
+assembles the residuals and the Jacobian on them.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Literal, overload
 
 import numpy as np
 
@@ -29,20 +32,12 @@ from pincal.errors import (
     MobilityError,
     ModelFileError,
 )
+from pincal.identification._pose_configurations import PoseConfigurations
+from pincal.identification._residual_model import Evaluates
 from pincal.measure import Measurements, NoiseModel
-from pincal.model import (
-    BatchKinematics,
-    Linearisation,
-    Mechanism,
-    ParameterSet,
-    deflected_joints,
-    deflection_jacobian,
-    joint_term_bases,
-    loaded_terms,
-)
+from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
 from pincal.model.kernels import jlog3_batch, log3_batch
 from pincal.sensitivity import sensitivities_batch
-from pincal.sensitivity.kernels import predict_configurations
 
 __all__ = ["BLOCKS", "TRIAL_FAILURES", "CalibrationProblem"]
 
@@ -55,7 +50,7 @@ TRIAL_FAILURES = (ConvergenceError, ClosureError, MobilityError, ModelFileError)
 BLOCKS = {"position": ("x", "y", "z"), "orientation": ("rx", "ry", "rz")}
 
 
-class CalibrationProblem:
+class CalibrationProblem(Evaluates[np.ndarray]):
     """Whitened residuals and Jacobian of a parameter set against measurements.
 
     Args:
@@ -70,6 +65,7 @@ class CalibrationProblem:
             :meth:`with_block_std`) or ``"estimate"`` (still to be estimated; ``sigma``
             is a placeholder that must not be fitted with).
         blocks: {block name: column indices into the measured components}.
+        poses: the measured poses' closed configurations at trial values.
 
     Raises:
         MeasurementError: the measurements are of other joints or another frame, or a
@@ -113,29 +109,23 @@ class CalibrationProblem:
         else:
             self.sigma = np.ones((m, k))
             self.noise_source = "estimate"
-        #: joint-term bases at the commanded values: δq (m, n_act, n) and the measured
-        #: frame's δp (m, 3, n); None when no term acts that way
-        self._basis, self._shift = joint_term_bases(mech, params, measurements)
-        #: load-dependent terms (compliance): evaluated on the estimate's geometry at the
-        #: deflected joint values (:mod:`pincal.model._deflection`), so their columns of
-        #: the command's basis are zeroed; (values key, actual joint values) of the last
-        self._loaded = loaded_terms(params)
-        if self._basis is not None and self._loaded.size:
-            self._basis = self._basis.copy()
-            self._basis[:, :, self._loaded] = 0.0
-        self._deflected: tuple[bytes, np.ndarray] | None = None
-        self._qs: np.ndarray | None = None
-        self._solved: tuple[Linearisation, Mechanism, BatchKinematics] | None = None
-        #: start each solve from the first-order prediction of the parameter change
-        #: (switched on by Gauss–Newton for its run; other solvers keep the last solution)
-        self.predict_starts = False
-        self._cache: tuple[bytes, Mechanism] | None = None
-        #: (values key, the parameter set linearised there) of the last values evaluated
-        self._linearised: tuple[bytes, Linearisation] | None = None
+        self.poses = PoseConfigurations(mech, params, measurements)
         self._memo: dict[bytes, tuple] = {}  # last evaluations: r_w, J_w, r_raw, qs, kinematics
         #: (values key, (m, k, n) model Jacobian of the measured components) of the last
         #: Jacobian evaluation, for :meth:`structural_jacobian`
         self._structural: tuple[bytes, np.ndarray] | None = None
+
+    @property
+    def predict_starts(self) -> bool:
+        """Whether each pose's loop solve starts from a first-order prediction.
+
+        Switched on by Gauss–Newton for its run (:attr:`PoseConfigurations.predict_starts`).
+        """
+        return self.poses.predict_starts
+
+    @predict_starts.setter
+    def predict_starts(self, value: bool) -> None:
+        self.poses.predict_starts = value
 
     @property
     def known_noise(self) -> bool:
@@ -174,9 +164,7 @@ class CalibrationProblem:
             sigma[:, cols] = float(v)
         new = CalibrationProblem(self.mech, self.params, self.meas)
         new.sigma, new.noise_source = sigma, "estimated"
-        new._qs, new._solved, new._cache = self._qs, self._solved, self._cache
-        new._deflected = self._deflected
-        new._linearised = self._linearised
+        new.poses = self.poses.warm_copy()
         new._structural = self._structural
         scale = (self.sigma / sigma).reshape(-1)
         for key, (r_w, J_w, raw, qs, bk) in self._memo.items():  # warm: re-weighted only
@@ -215,19 +203,11 @@ class CalibrationProblem:
 
     def linearisation(self, values: np.ndarray) -> Linearisation:
         """The parameter set linearised at values (n,) [SI] (kept for the last one)."""
-        key = np.asarray(values, dtype=float).tobytes()
-        if self._linearised is None or self._linearised[0] != key:
-            self._linearised = (key, self.params.linearise(values))
-        return self._linearised[1]
+        return self.poses.linearisation(values)
 
     def mechanism(self, values: np.ndarray) -> Mechanism:
         """The mechanism with parameter values (n,) [SI] applied (cached for the last one)."""
-        key = np.asarray(values, dtype=float).tobytes()
-        if self._cache is None or self._cache[0] != key:
-            lin = self.linearisation(values)
-            mech = self.mech if not np.any(values) else self.params.apply(self.mech, lin)
-            self._cache = (key, mech)
-        return self._cache[1]
+        return self.poses.mechanism(values)
 
     def cost(self, values: np.ndarray) -> float:
         """0.5·‖whitened residual‖² at ``values``.
@@ -240,23 +220,8 @@ class CalibrationProblem:
             return float("inf")
         return 0.5 * float(r @ r)
 
-    @overload
-    def evaluate(
-        self, values: np.ndarray, jacobian: Literal[True] = True
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
-
-    @overload
-    def evaluate(
-        self, values: np.ndarray, jacobian: Literal[False]
-    ) -> tuple[np.ndarray, None, np.ndarray]: ...
-
-    @overload
-    def evaluate(
+    def residuals(
         self, values: np.ndarray, jacobian: bool
-    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]: ...
-
-    def evaluate(
-        self, values: np.ndarray, jacobian: bool = True
     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         """Whitened residual (N,), its Jacobian (N, n) or None, and raw residuals (m, k).
 
@@ -270,8 +235,8 @@ class CalibrationProblem:
         if hit is not None and (hit[1] is not None or not jacobian):
             return hit[0], (hit[1] if jacobian else None), hit[2]
         mech = self.mechanism(values)
-        qs, bk = (hit[3], hit[4]) if hit is not None else self._configurations(mech, values)
-        out = self._residuals(mech, values, qs, bk, jacobian)
+        qs, bk = (hit[3], hit[4]) if hit is not None else self.poses.solve(mech, values)
+        out = self._assemble(mech, values, qs, bk, jacobian)
         for a in out:
             if a is not None:
                 a.setflags(write=False)
@@ -295,75 +260,14 @@ class CalibrationProblem:
         key = values.tobytes()
         if self._structural is None or self._structural[0] != key:
             hit = self._memo.get(key)
-            qs, bk = (hit[3], hit[4]) if hit is not None else self._configurations(
+            qs, bk = (hit[3], hit[4]) if hit is not None else self.poses.solve(
                 self.mechanism(values), values
             )
-            self._residuals(self.mechanism(values), values, qs, bk, True)
+            self._assemble(self.mechanism(values), values, qs, bk, True)
         assert self._structural is not None
         return (self._structural[1] / self.sigma[:, :, None]).reshape(-1, len(self.params))
 
-    def _guesses(self, values: np.ndarray) -> np.ndarray | None:
-        """Start configurations for a solve at ``values``.
-
-        The last solution, moved by the first-order passive-joint prediction of the
-        parameter change when predictions are on (:attr:`predict_starts`) and apply.
-        """
-        if self._solved is None or not self.predict_starts:
-            return self._qs
-        lin0, mech0, bk0 = self._solved
-        pred = predict_configurations(mech0, self.params, bk0, lin0, values - lin0.values)
-        return self._qs if pred is None else pred
-
-    def _configurations(
-        self, mech: Mechanism, values: np.ndarray
-    ) -> tuple[np.ndarray, BatchKinematics | None]:
-        """Closed configurations (m, nq) of the measured poses (warm-started), kinematics."""
-        meas = self.meas
-        q_act = self._joint_values(mech, values)
-        try:
-            qs, bk = mech.configurations_batch(q_act, self._guesses(values))
-        except ConvergenceError:
-            if self._qs is None:
-                raise
-            qs = np.empty((len(meas), mech.model.nq))
-            for i, q_i in enumerate(q_act):
-                try:
-                    qs[i] = mech.configuration(q_i, self._qs[i], pose_index=i)
-                except ConvergenceError:
-                    qs[i] = mech.configuration(q_i, None, pose_index=i)
-            bk = None
-        self._qs = qs
-        self._solved = None if bk is None else (self.linearisation(values), mech, bk)
-        return qs, bk
-
-    def _joint_values(self, mech: Mechanism, values: np.ndarray) -> np.ndarray:
-        """(m, n_act) actual joint values at ``values``: command, terms, deflection."""
-        meas = self.meas
-        u = meas.q_act if self._basis is None else meas.q_act + self._basis @ values
-        if not self._loaded.size:
-            return u
-        key = values.tobytes()
-        if self._deflected is None or self._deflected[0] != key:
-            q = deflected_joints(mech, self.params, values, u, meas.conditions)
-            self._deflected = (key, q)
-        return self._deflected[1]
-
-    def _term_basis(self, mech: Mechanism, values: np.ndarray) -> np.ndarray | None:
-        """(m, n_act, n) joint changes per parameter at ``values`` (None: no terms)."""
-        if self._basis is None or not self._loaded.size:
-            return self._basis
-        q = self._joint_values(mech, values)
-        return deflection_jacobian(
-            mech,
-            self.params,
-            values,
-            q,
-            self._basis,
-            lambda v: self.params.apply(self.mech, self.params.linearise(v)),
-            self.meas.conditions,
-        )
-
-    def _residuals(
+    def _assemble(
         self,
         mech: Mechanism,
         values: np.ndarray,
@@ -374,7 +278,7 @@ class CalibrationProblem:
         meas = self.meas
         if jacobian:
             lin = self.linearisation(values)
-            basis = self._term_basis(mech, values)
+            basis = self.poses.term_basis(mech, values)
             sens = sensitivities_batch(mech, self.params, qs, bk, lin, basis)
             p, R = sens.positions, sens.rotations
         elif bk is not None:
@@ -382,8 +286,9 @@ class CalibrationProblem:
         else:
             T = [mech.frame_placement(q) for q in qs]
             p, R = np.array([t.translation for t in T]), np.array([t.rotation for t in T])
-        if self._shift is not None:
-            p = p + self._shift @ values
+        shift = self.poses.shift
+        if shift is not None:
+            p = p + shift @ values
         r = np.zeros((len(meas), 6))
         r[:, :3] = meas.positions - p
         D_rot = None
@@ -398,8 +303,8 @@ class CalibrationProblem:
         if not jacobian:
             return r_w, None, r_raw
         Js = sens.jacobian
-        if self._shift is not None:  # terms moving the frame: their position columns
-            Js = np.concatenate([Js[:, :3] + self._shift, Js[:, 3:]], axis=1)
+        if shift is not None:  # terms moving the frame: their position columns
+            Js = np.concatenate([Js[:, :3] + shift, Js[:, 3:]], axis=1)
         self._structural = (values.tobytes(), -np.asarray(Js)[:, self.rows])
         J = -np.concatenate([Js[:, :3], Js[:, 3:] if D_rot is None else D_rot @ Js[:, 3:]], 1)
         J_w = (J[:, self.rows] * w[:, :, None]).reshape(-1, len(self.params))

@@ -9,24 +9,76 @@ its stacked form for several markers, and the joint
 :class:`pincal.identification.InstrumentProblem` of several data sets. The solvers, the
 driver (:mod:`pincal.identification._driver`) and the finishing step
 (:mod:`pincal.identification._finish`) use only what is declared here.
+
+The typing of ``evaluate`` (the Jacobian is an array when asked for, None when not) is
+declared once, in :class:`Evaluates`: the three classes subclass it, implement
+:meth:`Evaluates.residuals` and inherit ``evaluate``.
 """
 
 from __future__ import annotations
 
-from typing import Literal, Protocol, overload
+from typing import Literal, Protocol, TypeVar, overload
 
 import numpy as np
 
 from pincal.model import Mechanism
 
-__all__ = ["RawResiduals", "ResidualModel"]
+__all__ = ["Evaluates", "RawResiduals", "ResidualModel"]
 
 #: raw (unwhitened) residuals ``measured − model`` [m, rad]: (m, k) for one data set, or
 #: one (m_i, k_i) array per data set of a joint fit
 RawResiduals = np.ndarray | list[np.ndarray]
 
+#: the raw residuals of one kind of residual model
+RawT_co = TypeVar("RawT_co", bound=RawResiduals, covariant=True)
 
-class ResidualModel(Protocol):
+
+class Evaluates(Protocol[RawT_co]):
+    """Whitened residuals and their Jacobian at a vector of unknowns, typed once.
+
+    A residual model subclasses ``Evaluates[its raw residuals' type]``, implements
+    :meth:`residuals` and inherits :meth:`evaluate`, whose overloads tell the type
+    checker that the Jacobian is an array when asked for and None when not.
+    """
+
+    def residuals(
+        self, values: np.ndarray, jacobian: bool
+    ) -> tuple[np.ndarray, np.ndarray | None, RawT_co]:
+        """(N,) whitened residuals, (N, n_x) their Jacobian (None if not asked), raw residuals.
+
+        Args:
+            values: (n_x,) the unknowns [SI: m, rad, or a term's own unit].
+            jacobian: whether to compute the Jacobian.
+        """
+        ...
+
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: Literal[True] = True
+    ) -> tuple[np.ndarray, np.ndarray, RawT_co]: ...
+
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: Literal[False]
+    ) -> tuple[np.ndarray, None, RawT_co]: ...
+
+    @overload
+    def evaluate(
+        self, values: np.ndarray, jacobian: bool
+    ) -> tuple[np.ndarray, np.ndarray | None, RawT_co]: ...
+
+    def evaluate(
+        self, values: np.ndarray, jacobian: bool = True
+    ) -> tuple[np.ndarray, np.ndarray | None, RawT_co]:
+        """(N,) whitened residuals, (N, n_x) their Jacobian (None if not asked), raw residuals.
+
+        The raw residuals are ``measured − model`` [m, rad] (:data:`RawResiduals`); see
+        :meth:`residuals`, which this calls.
+        """
+        return self.residuals(values, jacobian)
+
+
+class ResidualModel(Evaluates[RawResiduals], Protocol):
     """Whitened residuals of measurements in a vector of unknowns.
 
     Attributes:
@@ -77,27 +129,6 @@ class ResidualModel(Protocol):
     @property
     def sigma(self) -> np.ndarray | list[np.ndarray]:
         """The residuals' standard deviations [m, rad]: (m, k), or one (m_i, k_i) per data set."""
-        ...
-
-    @overload
-    def evaluate(
-        self, values: np.ndarray, jacobian: Literal[True] = True
-    ) -> tuple[np.ndarray, np.ndarray, RawResiduals]: ...
-
-    @overload
-    def evaluate(
-        self, values: np.ndarray, jacobian: Literal[False]
-    ) -> tuple[np.ndarray, None, RawResiduals]: ...
-
-    @overload
-    def evaluate(
-        self, values: np.ndarray, jacobian: bool
-    ) -> tuple[np.ndarray, np.ndarray | None, RawResiduals]: ...
-
-    def evaluate(
-        self, values: np.ndarray, jacobian: bool = True
-    ) -> tuple[np.ndarray, np.ndarray | None, RawResiduals]:
-        """(N,) whitened residuals, (N, n_x) their Jacobian (None if not asked), raw residuals."""
         ...
 
     def cost(self, values: np.ndarray) -> float:

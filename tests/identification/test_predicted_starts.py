@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.identification import _problem
-from pincal.identification._problem import CalibrationProblem
+from pincal.identification import _pose_configurations, _problem
+from pincal.identification._pose_configurations import PoseConfigurations
 from pincal.model import Mechanism
 from pincal.sensitivity import _batch_predict
 from pincal.sensitivity._batch_jacobian import param_twists
@@ -132,16 +132,16 @@ def test_identify_result_unchanged_by_predicted_starts(monkeypatch):
     mech, params, meas = _measurements(150)
     with_prediction = pincal.identify(mech, params, meas)
     calls = {"n": 0}
-    guesses = CalibrationProblem._guesses
+    guesses = PoseConfigurations._guesses
 
     def counted(self, values):
         calls["n"] += 1 if self.predict_starts and self._solved is not None else 0
         return guesses(self, values)
 
-    monkeypatch.setattr(CalibrationProblem, "_guesses", counted)
+    monkeypatch.setattr(PoseConfigurations, "_guesses", counted)
     pincal.identify(mech, params, meas)
     assert calls["n"] >= 2  # Gauss–Newton's solves started from predictions
-    monkeypatch.setattr(_problem, "predict_configurations", lambda *a: None)
+    monkeypatch.setattr(_pose_configurations, "predict_configurations", lambda *a: None)
     plain = pincal.identify(mech, params, meas)
     a, b = np.asarray(with_prediction.values), np.asarray(plain.values)
     assert with_prediction.iterations == plain.iterations
