@@ -13,6 +13,7 @@ __all__ = [
     "CalibrationDirectoryError",
     "CampaignError",
     "FleetFileError",
+    "ImmutableError",
     "InputFileError",
     "InputLimitError",
     "ModelFileError",
@@ -73,6 +74,13 @@ class UnknownNameError(PincalError, KeyError):
 
     def __str__(self) -> str:  # KeyError would add quotes around the message
         return str(self.args[0])
+
+
+class ImmutableError(PincalError, AttributeError):
+    """An attribute of a read-only object (a :class:`~pincal.model.Mechanism`) was set.
+
+    Or deleted; the message names the attribute and the derivation to use instead.
+    """
 
 
 class OptionValueError(PincalError, ValueError):

@@ -106,8 +106,7 @@ def load_mechanism(
     singular = _singular_home(mech) if named.erd_defaults or named.local else None
     if singular:
         notes.append(singular)
-    mech.notes = tuple(notes) + mech.notes
-    return mech
+    return mech.with_notes(before=notes)
 
 
 def _singular_home(mech: Mechanism) -> str | None:

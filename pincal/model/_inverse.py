@@ -14,7 +14,23 @@ from pincal.errors import ConvergenceError, ShapeError, UnreachablePoseError
 from pincal.model._branch import LoopSolver
 from pincal.model._closures import COMPONENTS, measured_jacobian
 
-__all__ = ["inverse_configuration"]
+__all__ = ["check_actuator_limits", "inverse_configuration"]
+
+
+def check_actuator_limits(q_act: np.ndarray, limits: np.ndarray, actuated: tuple[str, ...]) -> None:
+    """Check that actuator values (n_act,) lie within ``limits`` (n_act, 2) [m or rad].
+
+    Raises:
+        UnreachablePoseError: the first actuator outside its limits (``actuated`` names it).
+    """
+    lo, hi = limits.T
+    bad = np.nonzero((q_act < lo - 1e-12) | (q_act > hi + 1e-12))[0]
+    if bad.size:
+        k = int(bad[0])
+        raise UnreachablePoseError(
+            f"target pose needs joint {actuated[k]!r} = {q_act[k]:.6g}, outside "
+            f"its limits [{lo[k]:.6g}, {hi[k]:.6g}]"
+        )
 
 
 def inverse_configuration(

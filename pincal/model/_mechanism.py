@@ -2,7 +2,9 @@
 
 Applying parameter values or calibrating returns a new mechanism derived from this one
 (:meth:`Mechanism.with_joint_origins`: the origins written into a copy of the Pinocchio
-model, the description shared); a mechanism is not modified after it is made.
+model, the description shared); a mechanism is not modified after it is made, and
+assigning or deleting an attribute raises :class:`~pincal.errors.ImmutableError` (see
+``_read_only``).
 Configuration vectors ``q`` are Pinocchio configurations (size ``nq``; quaternions are
 x, y, z, w); actuator vectors ``q_act`` hold one value per actuated joint in the order of
 :attr:`Mechanism.actuated` [m or rad].
@@ -14,9 +16,7 @@ solver, each built from explicit arguments, and delegates to them.
 
 from __future__ import annotations
 
-import copy
 import dataclasses
-import logging
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, overload
@@ -24,13 +24,9 @@ from typing import Any, Literal, overload
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import UnreachablePoseError
-from pincal.model._assembly import Assembly, model_size
+from pincal.model._assembly import model_size
 from pincal.model._batch import BatchKinematics, BatchModel
-from pincal.model._batch_fk import BatchLoopSolver
-from pincal.model._batch_newton import BatchNewton
-from pincal.model._block_solve import BlockSolver, PassiveFactor
-from pincal.model._branch import LoopSolver
+from pincal.model._block_solve import PassiveFactor
 from pincal.model._build import build_model, lock_joints
 from pincal.model._closures import COMPONENTS, parse_components
 from pincal.model._description import (
@@ -42,26 +38,19 @@ from pincal.model._description import (
     resolve_measured_frame,
 )
 from pincal.model._frames import measured_frame_candidates
-from pincal.model._inverse import inverse_configuration
+from pincal.model._inverse import check_actuator_limits, inverse_configuration
 from pincal.model._kinematics import KinematicQueries, Kinematics
+from pincal.model._loop_parts import close_loops
 from pincal.model._newton import REDUNDANT_RTOL, SolverOptions
 from pincal.model._placements import PlacementTree
-from pincal.model._sidecar import WORKSPACE_POSE_KEYS, Sidecar, Workspace
+from pincal.model._read_only import ReadOnly, derivation
+from pincal.model._sidecar import Sidecar
 from pincal.model._urdf import UrdfTree
 
-__all__ = [
-    "WORKSPACE_POSE_KEYS",
-    "Kinematics",
-    "Mechanism",
-    "Sidecar",
-    "SolverOptions",
-    "Workspace",
-]
-
-log = logging.getLogger(__name__)
+__all__ = ["Mechanism"]
 
 
-class Mechanism:
+class Mechanism(ReadOnly):
     """A mechanism loaded from URDF (+ sidecar).
 
     Use :func:`load_mechanism` to create one. Attributes of interest:
@@ -77,8 +66,9 @@ class Mechanism:
     * ``queries`` (:class:`~pincal.model._kinematics.KinematicQueries`: single-pose
       kinematics), ``loop_solver`` (:class:`~pincal.model._branch.LoopSolver`: pose by
       pose) and ``batch_solver`` (:class:`~pincal.model._batch_fk.BatchLoopSolver`):
-      the parts it owns and delegates to;
-    * ``workspace``: :class:`Workspace`; ``presets``: raw parameter presets;
+      the parts it owns: a query the mechanism offers is asked of the mechanism (one
+      way in), a part only for what the mechanism does not offer;
+    * ``workspace``: :class:`~pincal.model._sidecar.Workspace`; ``presets``: raw parameter presets;
     * ``sidecar``: the typed :class:`Sidecar`; ``notes``: remarks for ``pincal info``;
     * ``mobility``, ``closure_rank`` and ``idle_joints`` (passive joints the actuators
       do not hold and that do not move the measured frame).
@@ -86,13 +76,17 @@ class Mechanism:
     ``tree`` passes the already parsed :class:`UrdfTree` of ``urdf_xml`` (as
     :meth:`UrdfTree.displaced` returns it), so that the text is not parsed and checked
     again; it must be the tree of exactly that text.
+
+    Read-only: assigning or deleting an attribute raises
+    :class:`~pincal.errors.ImmutableError`; values other modules compute from a
+    mechanism are kept by :meth:`memo`.
     """
 
-    #: caches other model modules set on an instance (absent until then): the explored
-    #: actuator ranges (``_range_explore``) and the note on an MJCF home found nearby
-    #: (``_mjcf_home``)
-    _explored_ranges: dict[int, tuple[float, float]]
-    _mjcf_home_note: str
+    DERIVE_HINT = (
+        "derive a new one instead: with_joint_origins(...) for moved joints, "
+        "load_mechanism(..., options=..., measured_frame=...) for other settings, or edit "
+        "the sidecar / URDF and load again"
+    )
 
     def __init__(
         self,
@@ -136,6 +130,8 @@ class Mechanism:
         self._placements = PlacementTree(model)
         self._close(model, frame_ids, q_guess)
         self.actuator_limits = actuator_limits(model, self.queries)  # (n_act, 2)
+        self.actuator_limits.setflags(write=False)
+        self.freeze()
 
     def _close(
         self,
@@ -148,7 +144,7 @@ class Mechanism:
 
         ``moved_from``: the mechanism whose model ``model`` was moved from (same tree),
         the ids of the joints and the indices of the frames that moved: its batched
-        kinematics and scratch data serve as templates.
+        kinematics and scratch data serve as templates (see ``_loop_parts``).
         """
         self.model = model
         self.queries: KinematicQueries = KinematicQueries(
@@ -158,39 +154,22 @@ class Mechanism:
         #: the frames a sensitivity needs: the measured frame and every closure frame
         self.key_frames = self.queries.key_frames
         self.n_closure_rows = self.queries.n_closure_rows
-        assembly = Assembly(self.queries, self.options)
-        if q_guess is None:
-            keep = any(n in self.sidecar.home for n in self.actuated)
-            guess = assembly.home_guess(self.sidecar.home)
-            self.q_home = assembly.assemble(guess, keep_actuators=keep)
-        else:
-            self.q_home = assembly.assemble(np.asarray(q_guess, dtype=float), beside=True)
+        template = None if moved_from is None else (moved_from[0].batch_model, *moved_from[1:])
+        parts = close_loops(self.queries, self.options, self.sidecar.home, q_guess, template)
+        self.q_home, self.mobility = parts.q_home, parts.mobility
+        self.closure_rank, self.idle_joints = parts.closure_rank, parts.idle_joints
         #: remarks about the model (joint kinds from the sidecar, ranges), for `pincal info`
-        self.notes: tuple[str, ...] = (*self._model_notes, *assembly.notes)
-        mobility = assembly.mobility(self.q_home)
-        self.mobility, self.closure_rank = mobility.mobility, mobility.closure_rank
-        self.idle_joints = mobility.idle_joints
-        self.loop_solver = LoopSolver(
-            self.queries, self.options, self.q_home, mobility.passive_rank
-        )
+        self.notes: tuple[str, ...] = (*self._model_notes, *parts.notes)
+        self.loop_solver, self.batch_solver = parts.loop_solver, parts.batch_solver
         self.home_branch = self.loop_solver.home_branch
         #: the branch sign of the square block of rank rows and non-idle columns
         #: (= home_branch when the passive closure Jacobian is square; 0: no branch)
         self.idle_branch = self.loop_solver.idle_branch
-        kernels = BatchNewton(
-            self.queries,
-            self.options,
-            self.loop_solver.branch_block,
-            None if moved_from is None else (moved_from[0].batch_model, *moved_from[1:]),
-        )
-        self.batch_solver = BatchLoopSolver(kernels, self.loop_solver)
 
     @property
     def urdf_xml(self) -> str:
         """The URDF text of this mechanism (written on first use for a derived one)."""
-        if self._urdf_xml is None:
-            self._urdf_xml = self.tree.text()
-        return self._urdf_xml
+        return self.memo("urdf_xml", self.tree.text) if self._urdf_xml is None else self._urdf_xml
 
     def with_joint_origins(self, origins: Mapping[str, pin.SE3]) -> Mechanism:
         """A new mechanism with URDF joint origins replaced (this one is not modified).
@@ -212,10 +191,22 @@ class Mechanism:
         """
         tree = self.tree.moved(origins)
         moves = {j: self.tree.joints[j].origin.actInv(tree.joints[j].origin) for j in origins}
-        new = copy.copy(self)
+        new = derivation(self)
         new.tree, new._urdf_xml = tree, None
         model, joints, frames = self._placements.moved(self.model, moves)
         new._close(model, self.queries.frame_ids, self.q_home, (self, joints, frames))
+        new.freeze()
+        return new
+
+    def with_notes(self, before: Sequence[str] = (), after: Sequence[str] = ()) -> Mechanism:
+        """This mechanism with remarks added before / after its :attr:`notes`.
+
+        For loaders that say what they did to a file (locked joints, a home searched
+        nearby); everything else is shared (this one is not modified).
+        """
+        new = derivation(self)
+        new.notes = (*before, *self.notes, *after)
+        new.freeze()
         return new
 
     @property
@@ -340,11 +331,6 @@ class Mechanism:
         """Joint placements and WORLD joint Jacobian of configurations ``qs`` (N, nq)."""
         return self.batch_solver.kernels.kinematics_batch(qs)
 
-    @property
-    def passive_solver(self) -> BlockSolver | None:
-        """The block structure of the square passive closure Jacobian (None: dense)."""
-        return self.batch_solver.kernels.passive_solver
-
     def passive_factor(self, Jf: np.ndarray) -> PassiveFactor:
         """Factor passive closure Jacobians ``Jf`` (N, rows, k)."""
         return self.batch_solver.kernels.passive_factor(Jf)
@@ -379,17 +365,9 @@ class Mechanism:
         Raises:
             UnreachablePoseError: no convergence, or actuators outside their limits.
         """
-        q = self.inverse_configuration(T_world_target, q_guess)
-        q_act = self.actuators_of(q)
+        q_act = self.actuators_of(self.inverse_configuration(T_world_target, q_guess))
         if check_limits:
-            lo, hi = self.actuator_limits.T
-            bad = np.nonzero((q_act < lo - 1e-12) | (q_act > hi + 1e-12))[0]
-            if bad.size:
-                k = int(bad[0])
-                raise UnreachablePoseError(
-                    f"target pose needs joint {self.actuated[k]!r} = {q_act[k]:.6g}, outside "
-                    f"its limits [{lo[k]:.6g}, {hi[k]:.6g}]"
-                )
+            check_actuator_limits(q_act, self.actuator_limits, self.actuated)
         return q_act
 
     def inverse_configuration(

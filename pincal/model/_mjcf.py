@@ -285,9 +285,7 @@ def load_mjcf(
         )
 
     mech = build_with_home(build, sidecar, source, conv.ranges, stiffness)
-    if locked:
-        mech.notes = (locked, *mech.notes)
-    return mech
+    return mech.with_notes(before=[locked]) if locked else mech
 
 
 def _lock(

@@ -91,8 +91,8 @@ def build_with_home(
     try:
         mech = build(sidecar)
     except _FAILURES as exc:
-        mech = _nearby(build, sidecar, home, ranges) if home_source == "qpos0" else None
-        if mech is None:
+        found = _nearby(build, sidecar, home, ranges) if home_source == "qpos0" else None
+        if found is None:
             extra = f"; at the home ({home_source}), " + "; ".join(outside) if outside else ""
             hint = (
                 " Give a regular home: a <keyframe> in the MJCF, or 'home:' in a sidecar "
@@ -107,7 +107,8 @@ def build_with_home(
                     "sidecar <stem>.yaml beside the MJCF."
                 )
             raise type(exc)(f"{str(exc).rstrip('.')}{extra}.{hint}") from exc
-        notes.append(mech._mjcf_home_note)
+        mech, nearby_note = found
+        notes.append(nearby_note)
     outside = _outside(_home_values(mech, ranges), ranges)
     if outside:
         notes.append("at the home, " + "; ".join(outside))
@@ -120,8 +121,7 @@ def build_with_home(
         )
     for n in notes:
         log.warning("MJCF import of %r: %s", mech.name, n)
-    mech.notes += tuple(notes)
-    return mech
+    return mech.with_notes(after=notes)
 
 
 def _nearby(
@@ -129,8 +129,8 @@ def _nearby(
     sidecar: dict[str, Any],
     home: dict[str, Any],
     ranges: dict[str, tuple[float, float]],
-) -> Mechanism | None:
-    """The first regular assembly with one actuator moved from ``qpos0``, or None."""
+) -> tuple[Mechanism, str] | None:
+    """The first regular assembly with one actuator moved from ``qpos0`` and a note, or None."""
     actuated = [j for j in sidecar.get("name_mot") or [] if isinstance(home.get(j), float)]
     for step in SEARCH_STEPS:
         for j in actuated:
@@ -147,11 +147,11 @@ def _nearby(
                 kept = abs(_home_values(mech, [j]).get(j, value) - value) <= 1e-9
                 if not (kept and _regular(mech)):
                     continue  # the assembly moved the actuator (back to qpos0) or is singular
-                mech._mjcf_home_note = (
+                note = (
                     f"qpos0 is singular or does not close; home is the nearest regular "
                     f"configuration found: {j!r} = {value:.6g} (qpos0 {sign * step:+g}), the "
                     "passive joints solved from qpos0. Give a <keyframe> or a sidecar "
                     "'home:' to choose another"
                 )
-                return mech
+                return mech, note
     return None

@@ -67,16 +67,18 @@ def _side(
 def explored_ranges(mech: Mechanism) -> dict[int, tuple[float, float]]:
     """{actuator index: (lower, upper)} for the actuators without a declared range.
 
-    Cached on the mechanism. An actuator with one declared bound is explored on the
-    other side only.
+    Computed once per mechanism (kept by :meth:`Mechanism.memo`). An actuator with one
+    declared bound is explored on the other side only.
 
     Raises:
         ModelFileError: an actuator cannot move from home at all (its first step
             either way fails): no range can be found; declare one.
     """
-    cached = getattr(mech, "_explored_ranges", None)
-    if cached is not None:
-        return cached
+    return mech.memo("explored_ranges", lambda: _explore(mech))
+
+
+def _explore(mech: Mechanism) -> dict[int, tuple[float, float]]:
+    """The explored ranges of :func:`explored_ranges` (computed, not cached)."""
     limits = np.array(mech.actuator_limits, dtype=float)
     q_home = mech.q_home
     q_act0 = mech.actuators_of(q_home)
@@ -119,5 +121,4 @@ def explored_ranges(mech: Mechanism) -> dict[int, tuple[float, float]]:
             unit,
             why,
         )
-    mech._explored_ranges = out
     return out

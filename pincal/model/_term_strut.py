@@ -110,7 +110,7 @@ def struts(mech: Mechanism) -> tuple[str, ...]:
         return ()
     tree = mech.tree
     loop_links = {c.frame_a for c in mech.closures} | {c.frame_b for c in mech.closures}
-    frames, fid = mech.model.frames, mech.queries.frame_id
+    frames, fid = mech.model.frames, mech.frame_id
     measured_body = frames[fid(mech.measured_frame)].parentJoint
     actuated = set(mech.actuated)
     out = []
@@ -181,7 +181,7 @@ def _pose_loads(
     for i, strut in enumerate(names):
         uj = mech.tree.joints[strut]
         t = uj.origin.translation
-        v = data.oMf[mech.queries.frame_id(uj.parent)].rotation @ (t / np.linalg.norm(t))
+        v = data.oMf[mech.frame_id(uj.parent)].rotation @ (t / np.linalg.norm(t))
         rigid = _rigid_links(mech, uj.child)
         dc[:, i] = _closure_change(mech, model, data, rigid, v)
         mass = sum(masses.get(link, 0.0) for link in rigid)  # lifted with the elongation
@@ -239,7 +239,7 @@ def _measured_jacobian(
     Positions in world axes, rotations in the measured frame: the axes of the
     measurement residual.
     """
-    fid = mech.queries.frame_id(mech.measured_frame)
+    fid = mech.frame_id(mech.measured_frame)
     world = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
     local = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
     rows = [COMPONENTS.index(c) for c in mech.measured_components]
@@ -257,8 +257,8 @@ def _closure_change(
 
     blocks = []
     for c in mech.closures:
-        oMa = data.oMf[mech.queries.frame_id(c.frame_a)]
-        oMb = data.oMf[mech.queries.frame_id(c.frame_b)]
+        oMa = data.oMf[mech.frame_id(c.frame_a)]
+        oMb = data.oMf[mech.frame_id(c.frame_b)]
         blocks.append(c.jacobian(oMa, oMb, local(c.frame_a, oMa), local(c.frame_b, oMb))[:, 0])
     return np.concatenate(blocks)
 

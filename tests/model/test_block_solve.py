@@ -98,7 +98,7 @@ def test_structures_that_do_not_reduce():
 @pytest.mark.parametrize("name", MACHINES)
 def test_machines_use_blocks_and_keep_the_branch(name):
     mech = pincal.load_mechanism(name)
-    assert mech.passive_solver is not None
+    assert mech.batch_solver.kernels.passive_solver is not None
     rows = pincal.sample_actuators(mech, 30, np.random.default_rng(4))
     Q, bk = mech.configurations_batch(rows)
     _, Jf = mech.closure_terms_batch(bk, columns=mech.free_dofs)
