@@ -22,6 +22,13 @@ from pincal.identification._cross_validation import (
     position_errors,
 )
 from pincal.identification._data_check import check_measurements
+from pincal.identification._driver import MarginalBound
+from pincal.identification._held import (
+    HELD_AT_NOMINAL,
+    held_at_nominal,
+    held_summary,
+    with_held,
+)
 from pincal.identification._held_out_gate import HeldOutEvidence, held_out_verdict
 from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._identify import identify
@@ -115,6 +122,7 @@ __all__ = [
     "COVARIANCE_KINDS",
     "COVARIANCE_METHODS",
     "FORMAT_VERSION",
+    "HELD_AT_NOMINAL",
     "INSTRUMENT_PROFILES",
     "LOSSES",
     "METHODS",
@@ -142,6 +150,7 @@ __all__ = [
     "JointDetails",
     "LMOptions",
     "LocalSolverExtras",
+    "MarginalBound",
     "MarkerFit",
     "MarkerSetProblem",
     "ModelSelection",
@@ -173,7 +182,9 @@ __all__ = [
     "default_instrument",
     "fit_markers",
     "fitted",
+    "held_at_nominal",
     "held_out_verdict",
+    "held_summary",
     "identify",
     "identify_instruments",
     "inflated_covariance",
@@ -201,5 +212,6 @@ __all__ = [
     "select_model",
     "solver",
     "stacked_measurements",
+    "with_held",
     "with_uncertainty",
 ]

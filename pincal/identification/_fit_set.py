@@ -26,7 +26,7 @@ from pincal.identification._gauge import null_motions, weak_parameters
 from pincal.identification._instrument_problem import InstrumentProblem
 from pincal.identification._problem import CalibrationProblem
 from pincal.identification._residual_model import ResidualModel
-from pincal.sensitivity import Identifiability, analyse_jacobian
+from pincal.sensitivity import Identifiability, analyse_jacobian, placement_words
 
 __all__ = ["BaseRule", "FitSet", "JointBase", "StructuralBase", "WeakBound"]
 
@@ -173,4 +173,6 @@ class WeakBound:
 
     def describe(self) -> str:
         """The bound in words."""
+        if self.sigmas == 1.0:
+            return placement_words((self.length, self.angle))
         return f"{self.length * 1e3:g} mm / {self.angle:g} rad ({self.sigmas:g}σ)"

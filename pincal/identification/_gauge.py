@@ -25,7 +25,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.measure import DeclaredConstant
-from pincal.sensitivity import Identifiability
+from pincal.sensitivity import PLACEMENT_BOUND, Identifiability, placement_limits
 
 __all__ = ["NullMotions", "constant_line", "constant_std", "null_motions", "weak_parameters"]
 
@@ -190,7 +190,7 @@ def null_motions(
 
 def weak_parameters(
     Jw: np.ndarray, free: np.ndarray, units: tuple[str, ...], n: int,
-    bounds: tuple[float, float] = (0.02, 0.1),
+    bounds: tuple[float, float] = PLACEMENT_BOUND,
 ) -> np.ndarray:  # fmt: skip
     """The members of ``free`` to hold because the data place them only beyond a bound.
 
@@ -205,14 +205,15 @@ def weak_parameters(
         free: indices of the parameters fitted so far (the base set).
         units: per parameter ``"m"`` or ``"rad"``.
         n: the number of machine parameters (held first).
-        bounds: (length [m], angle [rad]).
+        bounds: (length [m], angle [rad]) (default: the one placement rule,
+            :data:`pincal.sensitivity.PLACEMENT_BOUND`).
 
     Returns:
         Indices (sorted) of the parameters held, a subset of ``free``.
     """
     keep = [int(i) for i in free]
     held: list[int] = []
-    b = np.array([bounds[1] if u == "rad" else bounds[0] for u in units])
+    b = placement_limits(units, bounds)
     while keep:
         A = Jw[:, keep] * b[keep]
         _, s, vt = np.linalg.svd(A, full_matrices=False)

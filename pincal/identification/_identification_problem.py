@@ -29,6 +29,7 @@ from pincal.identification._instrument_problem import Dataset, InstrumentProblem
 from pincal.identification._problem import CalibrationProblem
 from pincal.measure import InstrumentData, Measurements, NoiseModel, SocketData
 from pincal.model import Mechanism, ParameterSet
+from pincal.sensitivity import PLACEMENT_BOUND
 
 __all__ = ["IdentificationProblem"]
 
@@ -82,7 +83,7 @@ class IdentificationProblem:
     reduce: bool = True
     noise: NoiseModel | Mapping[str, float] | None = None
     labels: Sequence[str] | None = None
-    weak_bound: tuple[float, float] | None = (0.02, 0.1)
+    weak_bound: tuple[float, float] | None = PLACEMENT_BOUND
 
     def __post_init__(self) -> None:
         data = self.measurements

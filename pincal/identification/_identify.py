@@ -23,6 +23,7 @@ from pincal.errors import SolverOptionError
 from pincal.identification._driver import FitPolicy, drive, fitted_machine_count
 from pincal.identification._finish import finish
 from pincal.identification._fit_set import StructuralBase, WeakBound
+from pincal.identification._held import with_held
 from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._instrument_identify import joint_fit
 from pincal.identification._instrument_problem import Dataset
@@ -195,6 +196,9 @@ def _run(
         identifiability=d.fit_set.identifiability, weighting=d.weighting,
         initial_residuals=raw0, components=comps,
     )  # fmt: skip
+    if weak is not None:
+        held = [problem.params.names[i] for i in d.weak]
+        result = with_held(result, held, f"placed beyond {weak.describe()} by the poses")
     return result
 
 

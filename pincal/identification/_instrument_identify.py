@@ -32,7 +32,7 @@ from pincal.identification._joint_details import JointDetails
 from pincal.identification._result import IdentificationResult, ResidualStats
 from pincal.identification._solvers import SolverOptions, solver
 from pincal.model import Mechanism, ParameterSet
-from pincal.sensitivity import Identifiability
+from pincal.sensitivity import PLACEMENT_BOUND, Identifiability
 
 __all__ = ["SCALE_STD_LIMIT", "InstrumentIdentification", "identify_instruments", "joint_fit"]
 
@@ -113,7 +113,7 @@ def identify_instruments(
     options: SolverOptions | None = None,
     labels: Sequence[str] | None = None,
     progress: Callable[[int, float], None] | None = None,
-    weak_bound: tuple[float, float] | None = (0.02, 0.1),
+    weak_bound: tuple[float, float] | None = PLACEMENT_BOUND,
 ) -> InstrumentIdentification:
     """Identify machine and instrument parameters jointly from several datasets.
 

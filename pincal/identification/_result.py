@@ -133,20 +133,24 @@ class IdentifiabilitySummary:
         parameters: number of parameters analysed.
         rank: numerical rank (identifiable combinations).
         unidentifiable: names of the parameters that are not identifiable.
-        explanation: one sentence per parameter that is not (see
-            :meth:`pincal.sensitivity.Identifiability.describe`).
+        explanation: the sentences of
+            :meth:`pincal.sensitivity.Identifiability.describe` (the parameters that
+            break loop closure in one line).
+        breaks_closure: names of every parameter that breaks loop closure.
     """
 
     parameters: int
     rank: int
     unidentifiable: tuple[str, ...] = ()
     explanation: tuple[str, ...] = ()
+    breaks_closure: tuple[str, ...] = ()
 
     @classmethod
     def of(cls, ident: Identifiability) -> IdentifiabilitySummary:
         """The summary of an analysis."""
         return cls(
-            len(ident.names), int(ident.rank), ident.unidentifiable_names, tuple(ident.describe())
+            len(ident.names), int(ident.rank), ident.unidentifiable_names,
+            tuple(ident.describe()), ident.breaks_closure_names,
         )
 
 

@@ -119,12 +119,15 @@ def _extras_dict(e: SolverExtras | None) -> dict[str, Any] | None:
 
 
 def _identifiability_dict(s: IdentifiabilitySummary) -> dict[str, Any]:
-    return {
+    out: dict[str, Any] = {
         "parameters": s.parameters,
         "rank": s.rank,
         "unidentifiable": list(s.unidentifiable),
         "explanation": list(s.explanation),
     }
+    if s.breaks_closure:  # every name (the explanation groups them in one line)
+        out["breaks_closure"] = list(s.breaks_closure)
+    return out
 
 
 def result_to_dict(

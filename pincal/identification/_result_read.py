@@ -143,12 +143,13 @@ def _read_identifiability(value: object, src: str) -> IdentifiabilitySummary | N
     if not isinstance(value, dict):
         raise ReportError(f"{src}: 'identifiability' must be {shape}")
     n, rank = value.get("parameters"), value.get("rank")
-    lists = [value.get("unidentifiable", []), value.get("explanation", [])]
+    lists = [value.get("unidentifiable", []), value.get("explanation", []),
+             value.get("breaks_closure", [])]  # fmt: skip
     counts_ok = all(isinstance(c, int) and not isinstance(c, bool) and c >= 0 for c in (n, rank))
     lists_ok = all(isinstance(x, list) and all(isinstance(t, str) for t in x) for x in lists)
     if not (counts_ok and lists_ok and isinstance(n, int) and isinstance(rank, int)):
         raise ReportError(f"{src}: 'identifiability' must be {shape}, got {str(value)[:120]}")
-    return IdentifiabilitySummary(n, rank, tuple(lists[0]), tuple(lists[1]))
+    return IdentifiabilitySummary(n, rank, tuple(lists[0]), tuple(lists[1]), tuple(lists[2]))
 
 
 def _read_components(value: object, residuals: np.ndarray, src: str) -> tuple[str, ...]:

@@ -11,7 +11,12 @@ from pathlib import Path
 
 import numpy as np
 
-from pincal.identification import COVARIANCE_KINDS, IdentificationRecord, covariance_kind
+from pincal.identification import (
+    COVARIANCE_KINDS,
+    IdentificationRecord,
+    covariance_kind,
+    held_at_nominal,
+)
 from pincal.report._document import Section, Table
 from pincal.report._gate_text import gate_sentences
 from pincal.report._parameter_plots import plot_correlation, plot_parameters
@@ -309,8 +314,12 @@ def parameter_section(
         f"{POOR_ANGLE_2SIGMA * 1e3:g} mrad (angles) — {len(poor)} parameters"
         + (f": {', '.join(sorted(poor))}." if poor else ".")
     )
-    if result.fixed:
-        text += f"\n\nHeld at their start values (not identifiable): {', '.join(result.fixed)}."
+    held, why = held_at_nominal(result.annotations)
+    unidentifiable = [n for n in result.fixed if n not in held]
+    if unidentifiable:
+        text += f"\n\nHeld at their start values (not identifiable): {', '.join(unidentifiable)}."
+    if held:
+        text += f"\n\nHeld at nominal although identifiable ({why}): {', '.join(held)}."
     return Section("Identified parameters", text, images, [Table(headers, rows)]), sorted(poor)
 
 

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from pincal.identification import IdentificationRecord, QualityVerdict
+from pincal.identification import IdentificationRecord, QualityVerdict, held_summary
 from pincal.report._sections import block_label
 from pincal.report._uncertainty_text import uncertainty_lines
 
@@ -39,7 +39,9 @@ def _header(
     ]
     ident = result.identifiability_summary
     if ident is not None:
-        lines.append(f"identifiable: {ident.rank} of {ident.parameters} parameters")
+        held = held_summary(notes)
+        lines.append(f"identifiable: {ident.rank} of {ident.parameters} parameters"
+                     + (f" ({held})" if held else ""))  # fmt: skip
         lines += [f"  {t}" for t in ident.explanation]
     lines.append("")
     w = result.weighting

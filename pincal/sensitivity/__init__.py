@@ -2,7 +2,8 @@
 
 The analytic identification Jacobian, identifiability
 (rank, base set, absorbed combinations, parameters that break loop closure), the one
-numerical-rank rule, global sensitivity over a workspace, and :func:`parameters` — the
+numerical-rank rule, the bound beyond which the poses do not place a parameter
+(:data:`PLACEMENT_BOUND`), global sensitivity over a workspace, and :func:`parameters` — the
 preset resolver with the ``"base"`` preset computed here (later stages resolve preset
 names through it).
 """
@@ -27,6 +28,12 @@ from pincal.sensitivity._identification_jacobian import (
     identification_jacobian,
 )
 from pincal.sensitivity._jacobian import BatchSensitivity, PoseSensitivity, pose_sensitivity
+from pincal.sensitivity._placement import (
+    PLACEMENT_BOUND,
+    beyond_placement,
+    placement_limits,
+    placement_words,
+)
 from pincal.sensitivity._presets import COMPUTED_PRESETS, parameters
 from pincal.sensitivity._rank import (
     RANK_RTOL,
@@ -42,6 +49,7 @@ __all__ = [
     "BASE_POSES",
     "BASE_RTOL",
     "COMPUTED_PRESETS",
+    "PLACEMENT_BOUND",
     "RANK_RTOL",
     "BaseSet",
     "BatchSensitivity",
@@ -52,6 +60,7 @@ __all__ = [
     "analyse_jacobian",
     "base_parameters",
     "base_set",
+    "beyond_placement",
     "closure_breaking",
     "full_jacobian_ranks",
     "global_sensitivity",
@@ -62,6 +71,8 @@ __all__ = [
     "numerical_rank",
     "numerical_ranks",
     "parameters",
+    "placement_limits",
+    "placement_words",
     "pose_sensitivity",
     "sensitivities_batch",
     "unit_columns",

@@ -147,17 +147,36 @@ class Identifiability:
             absorbed = " ".join(shown) if shown else "no effect on the measurements"
             verb = "absorbed by" if shown else "it has"
             lines.append(f"{self.names[k]} is not identifiable ({verb} {absorbed})")
-        for k in self.breaks_closure:
-            lines.append(
-                f"{self.names[k]} breaks loop closure (no passive-joint motion can close the "
-                "loops after changing it; it is not identifiable)"
-            )
+        if self.breaks_closure.size:
+            lines.append(self._closure_line(max_terms))
         for k in self.splits_joint:
             lines.append(
                 f"{self.names[k]} would split an emulated ball or universal joint (a "
                 "translation between revolute axes that meet at one point; not fitted)"
             )
         return lines
+
+    def _closure_line(self, max_joints: int) -> str:
+        """One line for every parameter that breaks loop closure, grouped by joint.
+
+        For example ``"55 parameters break loop closure at 11 joints (no passive-joint
+        motion can close the loops after changing them; not identifiable): base1.{tx ty
+        tz rx ry}, elbow1.{…}, … and 7 more joints"``; every name is in
+        :attr:`breaks_closure_names` (and ``identification.json``).
+        """
+        joints: dict[str, list[str]] = {}
+        for name in self.breaks_closure_names:
+            joint, _, dof = name.rpartition(".")
+            joints.setdefault(joint or name, []).append(dof if joint else "")
+        shown = [f"{j}.{{{' '.join(d)}}}" if len(d) > 1 else (f"{j}.{d[0]}" if d[0] else j)
+                 for j, d in list(joints.items())[:max_joints]]  # fmt: skip
+        more = len(joints) - len(shown)
+        n = self.breaks_closure.size
+        verb, them = ("parameter breaks", "it") if n == 1 else ("parameters break", "them")
+        where = f" at {len(joints)} joints" if len(joints) > 1 else ""
+        return (f"{n} {verb} loop closure{where} (no passive-joint motion can close the loops "
+                f"after changing {them}; not identifiable): {', '.join(shown)}"
+                + (f" and {more} more joints" if more else ""))  # fmt: skip
 
     def _in_units(self, k: int, terms: list[tuple[int, float]], max_terms: int) -> str:
         """The sentence of parameter k, its combination in mm / mrad (else SI) amounts."""

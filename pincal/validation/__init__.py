@@ -16,7 +16,6 @@ from pincal.validation._cv_summary import (
     OrientationErrors,
 )
 from pincal.validation._held_out import (
-    PREDICTION_BOUNDS,
     HeldOutValidation,
     prediction_caveat,
     validate_held_out,
@@ -44,7 +43,6 @@ from pincal.validation._pose_errors import (
 
 __all__ = [
     "ORIENTATION_CONVENTION",
-    "PREDICTION_BOUNDS",
     "CrossValidationBaseline",
     "CrossValidationSummary",
     "HeldOutValidation",

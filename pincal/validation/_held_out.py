@@ -31,20 +31,21 @@ from pincal.design import predicted_validation_rms
 from pincal.errors import ShapeError
 from pincal.measure import Measurements, NoiseModel
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
-from pincal.sensitivity import identification_jacobian
+from pincal.sensitivity import (
+    PLACEMENT_BOUND,
+    beyond_placement,
+    identification_jacobian,
+    placement_words,
+)
 from pincal.validation._iso9283 import ORIENTATION_CONVENTION, point_accuracy
 
 __all__ = [
-    "PREDICTION_BOUNDS",
     "PREDICTION_COND_BOUND",
     "HeldOutValidation",
     "prediction_caveat",
     "validate_held_out",
 ]
 
-#: (length [m], angle [rad]): largest 2σ of an identified parameter for which the
-#: linearised (Cramér–Rao) prediction is printed — the bound of the marker fit's guard
-PREDICTION_BOUNDS = (0.02, 0.1)
 #: largest condition number of the parameters' correlation matrix for which it is printed
 PREDICTION_COND_BOUND = 1e10
 
@@ -53,7 +54,7 @@ def prediction_caveat(
     names: tuple[str, ...],
     units: tuple[str, ...],
     covariance: np.ndarray,
-    bounds: tuple[float, float] = PREDICTION_BOUNDS,
+    bounds: tuple[float, float] = PLACEMENT_BOUND,
     cond_bound: float | None = None,
 ) -> str | None:
     """Why the Cramér–Rao prediction of a covariance would be meaningless, or None.
@@ -62,14 +63,16 @@ def prediction_caveat(
     covariance is not a covariance (non-finite, not positive semi-definite), when it is
     ill-conditioned (condition number of the correlation matrix above ``cond_bound``:
     some combination of parameters is barely determined) or when an identified
-    parameter's 2σ exceeds ``bounds`` (length [m], angle [rad]; outside the small-error
-    regime where the linearisation holds).
+    parameter's 1σ exceeds ``bounds`` (length [m], angle [rad]; outside the small-error
+    regime where the linearisation holds). That is the fit's own rule for holding a
+    direction at nominal (:data:`pincal.sensitivity.PLACEMENT_BOUND`, one definition
+    for both), so a parameter the fit keeps does not make the prediction withheld.
 
     Args:
         names: the k identified parameters, in ``covariance``'s order.
         units: their units (``"m"`` or ``"rad"``).
         covariance: (k, k) [SI].
-        bounds: default :data:`PREDICTION_BOUNDS`.
+        bounds: default :data:`pincal.sensitivity.PLACEMENT_BOUND`.
         cond_bound: default :data:`PREDICTION_COND_BOUND`.
     """
     cond_bound = PREDICTION_COND_BOUND if cond_bound is None else cond_bound
@@ -92,18 +95,16 @@ def prediction_caveat(
             f"correlation matrix {cond:.2g} > {cond_bound:.0e}: some combination of "
             "parameters is barely determined by the poses)"
         )
-    two_sigma = 2 * np.sqrt(var)
-    limit = np.array([bounds[0] if u == "m" else bounds[1] for u in units])
+    std = np.sqrt(var)
     big = [
-        f"{n} (2σ {v * 1e3:.3g} {'mm' if u == 'm' else 'mrad'})"
-        for n, u, v, b in zip(names, units, two_sigma, limit, strict=True)
-        if v > b
+        f"{names[i]} (1σ {std[i] * 1e3:.3g} {'mrad' if units[i] == 'rad' else 'mm'})"
+        for i in np.flatnonzero(beyond_placement(std, units, bounds))
     ]
     if big:
         return (
-            f"{len(big)} identified parameters have 2σ above {bounds[0] * 1e3:g} mm / "
-            f"{bounds[1] * 1e3:g} mrad, outside the small-error range where the "
-            "first-order prediction holds: " + ", ".join(big[:5]) + (" …" if len(big) > 5 else "")
+            f"{len(big)} identified parameters are beyond {placement_words(bounds)}, "
+            "outside the small-error range where the first-order prediction holds: "
+            + ", ".join(big[:5]) + (" …" if len(big) > 5 else "")
         )
     return None
 

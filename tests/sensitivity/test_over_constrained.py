@@ -89,7 +89,14 @@ def test_identifiability_reports_breaking_parameters_apart(five_bar, full, rows)
     assert len(ident.base) == ident.rank
     assert len(ident.base) + len(ident.unidentifiable) + len(breaking) == len(full)
     assert "break loop closure" in ident.summary()
-    assert any("act_a.rx breaks loop closure" in line for line in ident.describe())
+    # one grouped line (issue 36: not one per parameter), counting them, naming the joints;
+    # every name stays in breaks_closure_names
+    closing = [line for line in ident.describe() if "loop closure" in line]
+    assert len(closing) == 1
+    assert closing[0].startswith(f"{len(breaking)} parameters break loop closure at ")
+    assert "act_a.{" in closing[0] and "rx" in closing[0].split("act_a.{")[1].split("}")[0]
+    assert "act_a.rx" in ident.breaks_closure_names
+    assert len(ident.breaks_closure_names) == len(breaking)
     # the rank counts only closable columns
     closable = np.flatnonzero(~closure_breaking(five_bar, full, rows))
     J = identification_jacobian(five_bar, full, rows)[:, closable]
