@@ -196,9 +196,9 @@ def _run(
         identifiability=d.fit_set.identifiability, weighting=d.weighting,
         initial_residuals=raw0, components=comps,
     )  # fmt: skip
-    if weak is not None:
+    if policy.weak is not None:
         held = [problem.params.names[i] for i in d.weak]
-        result = with_held(result, held, f"placed beyond {weak.describe()} by the poses")
+        result = with_held(result, held, f"placed beyond {policy.weak.describe()} by the poses")
     return result
 
 
