@@ -35,6 +35,10 @@ HEADER_KEYS = ("columns", "joint_units", "joint_reference")
 _PLAUSIBLE = {"angle": 4 * math.pi, "length": 10.0}
 
 
+_EXAMPLE = {"columns": "torso1=torso_lift_joint", "joint_units": "elbow_joint=deg",
+            "joint_reference": "elbow_joint=0.1 wrist_joint=-0.2"}
+
+
 def _pairs(header: Header, key: str, name: str) -> dict[str, str]:
     if key not in header:
         return {}
@@ -44,7 +48,7 @@ def _pairs(header: Header, key: str, name: str) -> dict[str, str]:
         if not eq or not k or not v:
             raise MeasurementFormatError(
                 f"{name}: header '{key}' entry {shown(item)}; write NAME=VALUE entries "
-                f"separated by spaces (e.g. '# columns: torso1=torso_lift_joint')"
+                f"separated by spaces (e.g. '# {key}: {_EXAMPLE.get(key, 'NAME=VALUE')}')"
             )
         out[k] = v
     return out
