@@ -244,3 +244,31 @@ def test_a_project_moved_whole_finds_its_model(proj, tmp_path, how):
     line = _refused(_run("validate", dst / "cal2", "--data", dst / "m.csv"), 1,
                     "CalibrationDirectoryError", "nominal model")  # fmt: skip
     assert "pass the model" not in line  # validate has no such option
+
+
+def test_a_reading_out_of_range_by_its_reference_names_the_reference(tmp_path, marker_table):
+    """Absolute readings under '# joint_reference: home': the range error says home was added
+    (it named the sum alone, a value the file does not hold)."""
+    title, rows = marker_table
+    cells = rows[0].split(",")
+    cells[5] = "-3.1"  # elbow_joint, inside ±π; home adds −45°
+    f = tmp_path / "t.csv"
+    lines = ["# joint_reference: home", title, ",".join(cells), *rows[1:]]
+    f.write_text("\n".join(lines) + "\n")
+    res = _run("calibrate", "ur5", "--link", "wrist_3_link", "--length-unit", "mm",
+               "--data", f, "--out", tmp_path / "cal")  # fmt: skip
+    _refused(res, 1, "ActuatorRangeError", "relative to home", "joint_reference")
+
+
+# ---- class 10: a pincal file of another kind says which command reads it
+
+
+@pytest.mark.parametrize(("command", "words"), [
+    (["validate", "{cal}", "--data", "{sockets}"], ("sockets", "pincal validate --cv")),
+    (["compensate", "{cal}", "--targets", "{m}", "--out", "{tmp}/c.csv"],
+     ("measurements", "pincal calibrate --data")),
+])  # fmt: skip
+def test_a_file_of_another_kind_says_where_it_is_read(proj, sockets, tmp_path, command, words):
+    args = [a.format(cal=proj / "cal", sockets=sockets, m=proj / "m.csv", tmp=tmp_path)
+            for a in command]  # fmt: skip
+    _refused(_run(*args), 1, "MeasurementFormatError", *words)
