@@ -102,6 +102,32 @@ class CalibrationDirectory:
             return None
         return self._moved_model(str(src)) or str(src)
 
+    def model_paths(self) -> list[Path]:
+        """The nominal model's files as recorded (``model_files``), where they are now.
+
+        Their recorded paths, or beside this directory when the model was moved with it
+        (as :attr:`model_source` finds it); files that exist only. Commands treat them as
+        inputs (never written over).
+        """
+        recorded = self.manifest.get("model_files")
+        if not isinstance(recorded, dict):
+            return []
+        src = str(self.manifest.get("model_source") or "")
+        moved = self._moved_model(src) if src else None
+        out = []
+        for name in recorded:
+            f = Path(str(name))
+            if moved is not None:
+                old, new = Path(src), Path(moved)
+                root_old, root_new = (old, new) if new.is_dir() else (old.parent, new.parent)
+                try:
+                    f = root_new / f.relative_to(root_old)
+                except ValueError:
+                    pass
+            if f.is_file():
+                out.append(f)
+        return out
+
     def _moved_model(self, src: str) -> str | None:
         """The nominal model moved with this directory: beside it, every file as hashed.
 

@@ -238,8 +238,13 @@ def test_a_project_moved_whole_finds_its_model(proj, tmp_path, how):
         shutil.rmtree(p)
     res = _run("validate", dst / "cal2", "--data", dst / "m.csv")
     assert res.exit_code == 0, res.output
-    # the moved model is used only as hashed: an edited sidecar is not the model fitted
+    # the moved model is an input where it is now: never written over
     side = dst / "wmod" / "wedge3.yaml"
+    before = side.read_bytes()
+    res = _run("validate", dst / "cal2", "--data", dst / "m.csv", "--out", side)
+    _refused(res, 1, "OutputPathError", "nominal model's sidecar")
+    assert side.read_bytes() == before
+    # the moved model is used only as hashed: an edited sidecar is not the model fitted
     side.write_text(side.read_text() + "\n# edited\n")
     line = _refused(_run("validate", dst / "cal2", "--data", dst / "m.csv"), 1,
                     "CalibrationDirectoryError", "nominal model")  # fmt: skip
