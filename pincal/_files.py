@@ -17,7 +17,7 @@ from pathlib import Path
 from pincal._limits import DEFAULT_MAX_BYTES, active_limits
 from pincal.errors import InputFileError, InputLimitError, clip
 
-__all__ = ["DEFAULT_MAX_BYTES", "max_bytes", "read_bytes", "read_text"]
+__all__ = ["DEFAULT_MAX_BYTES", "max_bytes", "read_bytes", "read_text", "too_big_message"]
 
 def max_bytes() -> int:
     """The size cap in bytes of the limits in force (default :data:`DEFAULT_MAX_BYTES`)."""
@@ -58,7 +58,7 @@ def read_bytes(
         kind = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file (device, FIFO, …)"
         raise error(f"{what} {_shown(p)} is {kind}; give the path of a regular file")
     if st.st_size > cap:
-        raise InputLimitError(_too_big(p, what, st.st_size, cap))
+        raise InputLimitError(too_big_message(p, what, st.st_size, cap))
     try:
         # O_NONBLOCK: a file swapped for a FIFO after the check cannot block the open.
         fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
@@ -67,7 +67,7 @@ def read_bytes(
     with os.fdopen(fd, "rb") as fh:
         data = fh.read(cap + 1)
     if len(data) > cap:
-        raise InputLimitError(_too_big(p, what, len(data), cap))
+        raise InputLimitError(too_big_message(p, what, len(data), cap))
     return data
 
 
@@ -108,7 +108,18 @@ def _shown(path: str | Path) -> str:
     return clip(str(path), 300)
 
 
-def _too_big(p: Path, what: str, size: int, cap: int) -> str:
+def too_big_message(p: str | Path, what: str, size: int, cap: int) -> str:
+    """The message of a file over the size cap.
+
+    Args:
+        p: the file.
+        what: what the file is ("measurements file", …).
+        size: its size (or the bytes read) [bytes].
+        cap: the cap in force [bytes].
+
+    Returns:
+        One line naming the file, both sizes [MB] and how to raise the cap.
+    """
     return (
         f"{what} {_shown(p)} is {size / 1e6:.1f} MB or more, over the {cap / 1e6:.0f} MB "
         "limit; if the file is right, raise the limit with PINCAL_MAX_FILE_MB (in Python: "

@@ -348,6 +348,8 @@ def load_campaign(path: str | Path) -> Campaign:
         model = _resolve(model, base) or model
     for key, f in (("measurements.file", m.file), ("validation.file", v.file)):
         if f is not None and not Path(f).is_file():
-            raise CampaignError(f"{key}: {shown(f, 300)} does not exist")
+            what = ("is not a regular file (device, FIFO or directory); give the path of a "
+                    "regular file") if Path(f).exists() else "does not exist"  # fmt: skip
+            raise CampaignError(f"{key}: {shown(f, 300)} {what}")
     out = _resolve(camp.out, base) or camp.out
     return dataclasses.replace(camp, model=model, out=out, measurements=m, validation=v)

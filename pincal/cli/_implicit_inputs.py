@@ -83,12 +83,9 @@ def calibration_inputs(
     for n in sorted(set(cal.manifest.get("files") or {}) | {cal.calibrated_urdf.name}):
         if (d / n).exists():
             out[f"{label}'s {n}"] = d / n
-    model = cal.manifest.get("model_files")
-    for name in model if isinstance(model, dict) else {}:
-        f = Path(str(name))
-        if f.is_file():
-            kind = "nominal model" if f.suffix.lower() == ".urdf" else "nominal model's sidecar"
-            out[f"{label}'s {kind}"] = f
+    for f in cal.model_paths():  # where they are now (a project moved whole: beside it)
+        kind = "nominal model" if f.suffix.lower() == ".urdf" else "nominal model's sidecar"
+        out[f"{label}'s {kind}"] = f
     if data_files:
         for k in range(len(cal.manifest.get("data_files") or [])):
             try:

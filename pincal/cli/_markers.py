@@ -69,6 +69,10 @@ def marker_options(f: _F) -> _F:
     return f
 
 
+#: a given marker lies at most this far from its link's origin [m]
+MAX_MARKER_M = 10.0
+
+
 def _numbers(text: str, what: str, n: tuple[int, ...]) -> list[float]:
     try:
         vals = [float(v) for v in text.split(",")]
@@ -99,9 +103,15 @@ def setup_from_options(link: str, frame: str, marker_spec: str, columns: str | t
     if marker_spec != "unknown":
         vals = _numbers(marker_spec, "--marker", (3, 4))
         marker = tuple(v * 1e-3 for v in vals[:3])
+        if math.hypot(*marker) > MAX_MARKER_M:
+            raise click.BadParameter(
+                f"the marker is {math.hypot(*vals[:3]):.3g} mm from the link's origin; a marker "
+                f"lies within {MAX_MARKER_M * 1e3:.0f} mm of it (X,Y,Z in mm, in the link's "
+                "frame), or give 'unknown'", param_hint="--marker")  # fmt: skip
         if len(vals) == 4:
-            if vals[3] <= 0:
-                raise click.BadParameter("the marker's σ must be > 0 mm", param_hint="--marker")
+            if not 1e-6 <= vals[3] <= 1000:
+                raise click.BadParameter("the marker's σ lies between 1e-06 and 1000 mm, got "
+                                         f"{vals[3]:g}", param_hint="--marker")  # fmt: skip
             std = vals[3] * 1e-3
     lock: dict[str, float] = {}
     for item in (lock_spec or "").split(","):

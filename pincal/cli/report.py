@@ -75,7 +75,7 @@ def report(
         raise click.BadParameter("must be a plain file stem", param_hint="--name")
     target = out or directory
     guard_paths(
-        _inputs(directory),
+        {**_inputs(directory), "--validation": validation, "--truth": truth, "--design": design},
         {f"--name's {x}": target / f"{name}.{x}" for x in ("html", "md", "json")},
     )
     notes = campaign_notes(validation, truth, design)

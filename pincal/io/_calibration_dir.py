@@ -98,7 +98,59 @@ class CalibrationDirectory:
         if MODEL_RECORD in (self.manifest.get("files") or {}):
             return str(self.path / MODEL_RECORD)
         src = self.manifest.get("model_source")
-        return str(src) if src else None
+        if not src:
+            return None
+        return self._moved_model(str(src)) or str(src)
+
+    def model_paths(self) -> list[Path]:
+        """The nominal model's files as recorded (``model_files``), where they are now.
+
+        Their recorded paths, or beside this directory when the model was moved with it
+        (as :attr:`model_source` finds it); files that exist only. Commands treat them as
+        inputs (never written over).
+        """
+        recorded = self.manifest.get("model_files")
+        if not isinstance(recorded, dict):
+            return []
+        src = str(self.manifest.get("model_source") or "")
+        moved = self._moved_model(src) if src else None
+        out = []
+        for name in recorded:
+            f = Path(str(name))
+            if moved is not None:
+                old, new = Path(src), Path(moved)
+                root_old, root_new = (old, new) if new.is_dir() else (old.parent, new.parent)
+                try:
+                    f = root_new / f.relative_to(root_old)
+                except ValueError:
+                    pass
+            if f.is_file():
+                out.append(f)
+        return out
+
+    def _moved_model(self, src: str) -> str | None:
+        """The nominal model moved with this directory: beside it, every file as hashed.
+
+        A model directory or URDF recorded by its absolute path that is gone there is
+        looked for beside the calibration directory under its own name (a project moved
+        or copied whole); it is used only when each file the manifest hashes
+        (``model_files``) is found at the same place relative to it with its SHA-256.
+        """
+        old, recorded = Path(src), self.manifest.get("model_files")
+        if not old.is_absolute() or old.exists() or not isinstance(recorded, dict):
+            return None
+        new = self.path.resolve().parent / old.name
+        if not recorded or not new.exists():
+            return None
+        root_old, root_new = (old, new) if new.is_dir() else (old.parent, new.parent)
+        for name, digest in recorded.items():
+            try:
+                moved = root_new / Path(str(name)).relative_to(root_old)
+            except ValueError:
+                return None
+            if not moved.is_file() or hash_bounded(moved) != digest:
+                return None
+        return str(new)
 
     @property
     def caveat(self) -> str | None:
@@ -136,19 +188,27 @@ class CalibrationDirectory:
         typed = Path(str(entry.get("path", "")))
         places = [typed, Path(str(entry.get("absolute_path") or typed)),
                   self.path.parent / typed.name, self.path / typed.name]  # fmt: skip
-        found = []
-        for p in dict.fromkeys(places):  # in order, once each
+        found, odd = [], []
+        seen: set[Path] = set()
+        for p in places:  # in order, once each
+            if p.absolute() in seen:
+                continue
+            seen.add(p.absolute())
             if p.is_file():
                 if sha256_file(p) == entry.get("sha256"):
                     return p
                 found.append(str(p))
-        if found:
+            elif p.exists():  # a device, FIFO or directory is never read
+                odd.append(str(p))
+        if found or odd:
+            said = [f"{', '.join(clip(f) for f in found)} differ from its SHA-256 (changed "
+                    "since, or another file of that name)"] if found else []  # fmt: skip
+            said += [f"{', '.join(clip(f) for f in odd)}: not a regular file (device, FIFO "
+                     "or directory)"] if odd else []  # fmt: skip
             raise CalibrationDirectoryError(
                 f"the data file the calibration {clip(str(self.path))} was fitted on "
-                f"({clip(str(typed))}) is not found: "
-                f"{', '.join(clip(f) for f in found)} differ from its SHA-256 (changed since, "
-                "or another file of that name); restore the file, run from calibrate's "
-                "directory, or re-run calibrate"
+                f"({clip(str(typed))}) is not found: {'; '.join(said)}; restore the file, "
+                "run from calibrate's directory, or re-run calibrate"
             )
         raise CalibrationDirectoryError(
             f"the data file the calibration {clip(str(self.path))} was fitted on "
@@ -215,7 +275,8 @@ class CalibrationDirectory:
             except PincalError as exc:
                 raise CalibrationDirectoryError(
                     f"{str(self.path)!r}: cannot load the nominal model {spec!r} ({exc}); "
-                    f"run from the directory calibrate was run in, or pass the model"
+                    "put the model (with the files it was fitted on) back there or beside the "
+                    "calibration directory under its name, or re-run `pincal calibrate`"
                 ) from exc
         return self._cache["nominal"]
 

@@ -99,6 +99,17 @@ def file_kind(path: str | Path) -> str | None:
     return None
 
 
+#: where a pincal file of each kind is read, said when it is given where another is read
+_READ_BY = {
+    "sockets": " (a socket file is read by `pincal calibrate --data`; a socket calibration "
+    "is checked with `pincal validate --cv`)",
+    "poses": " (a pose file is read by `pincal simulate --poses` and `pincal compensate "
+    "--targets`)",
+    "measurements": " (a measurements file is read by `pincal calibrate --data` and "
+    "`pincal validate --data`)",
+}
+
+
 def split_file(path: str | Path, magic: str) -> tuple[Header, list[str], list[list[str]]]:
     """Header (key → values, repeated keys collected), column titles, data rows (text).
 
@@ -131,7 +142,8 @@ def split_file(path: str | Path, magic: str) -> tuple[Header, list[str], list[li
             if text.startswith("pincal "):
                 if text.split()[1:2] != [magic]:
                     raise MeasurementFormatError(
-                        f"{name} line {n}: this is a {clip(text)} file, expected 'pincal {magic}'"
+                        f"{name} line {n}: this is a {clip(text)} file, expected 'pincal "
+                        f"{magic}'{_READ_BY.get(''.join(text.split()[1:2]), '')}"
                     )
                 version = text.split()[2:3]
                 if version and version != ["1"]:

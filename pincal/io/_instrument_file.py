@@ -37,12 +37,11 @@ from pincal.io._csv import (
     split_file,
     write_csv,
 )
+from pincal.io._joint_columns import joint_columns, read_joints
 from pincal.io._measurement_header import length_sigma
 from pincal.io._names import quote_value
 from pincal.io._units import (
     LENGTH_UNITS,
-    actuator_read_factors,
-    check_actuator_ranges,
     unit_factor,
 )
 from pincal.measure import InstrumentData, instrument_class, instrument_kinds
@@ -129,17 +128,18 @@ def read_instrument_data(path: str | Path, mech: Mechanism) -> InstrumentData:
         raise MeasurementFormatError(f"{name}: {e}") from None
     parsed = [parse_column(c) for c in columns]
     names = [p[0] for p in parsed]
-    need = [*mech.actuated, "value", *([cls.id_column] if cls.id_column else [])]
+    need = ["value", *([cls.id_column] if cls.id_column else [])]
     missing = [c for c in need if c not in names]
     if missing:
         raise ColumnError(f"{name}: missing columns {missing}", missing=missing)
+    # the joints as the pose route reads them: header/sidecar columns, units, reference
+    act, declared = joint_columns(mech, header, parsed, name)
     data = parse_numbers(rows, columns, name)
     if data.shape[0] == 0:
         raise MeasurementFormatError(f"{name}: no data rows")
     col = {c: k for k, c in enumerate(names)}
-    act = [col[j] for j in mech.actuated]
-    q_act = data[:, act] / actuator_read_factors(mech, [parsed[k][1] for k in act], name)
-    check_actuator_ranges(mech, q_act, name, [columns[k] for k in act])
+    q_act = read_joints(mech, data[:, act], declared, [parsed[k][1] for k in act],
+                        [columns[k] for k in act], name)  # fmt: skip
     values = data[:, col["value"]] / lf
     ids = data[:, col[cls.id_column]] if cls.id_column else None
     initial = None

@@ -23,7 +23,13 @@ from collections.abc import Sequence
 import numpy as np
 
 from pincal._yaml import shown
-from pincal.errors import BadValueError, ColumnError, MeasurementFormatError, PincalError
+from pincal.errors import (
+    ActuatorRangeError,
+    BadValueError,
+    ColumnError,
+    MeasurementFormatError,
+    PincalError,
+)
 from pincal.io._csv import Header, header_value
 from pincal.io._units import ANGLE_UNITS, LENGTH_UNITS, check_actuator_ranges, unit_factor
 from pincal.model import JointReadings, Mechanism
@@ -35,6 +41,10 @@ HEADER_KEYS = ("columns", "joint_units", "joint_reference")
 _PLAUSIBLE = {"angle": 4 * math.pi, "length": 10.0}
 
 
+_EXAMPLE = {"columns": "torso1=torso_lift_joint", "joint_units": "elbow_joint=deg",
+            "joint_reference": "elbow_joint=0.1 wrist_joint=-0.2"}
+
+
 def _pairs(header: Header, key: str, name: str) -> dict[str, str]:
     if key not in header:
         return {}
@@ -44,7 +54,7 @@ def _pairs(header: Header, key: str, name: str) -> dict[str, str]:
         if not eq or not k or not v:
             raise MeasurementFormatError(
                 f"{name}: header '{key}' entry {shown(item)}; write NAME=VALUE entries "
-                f"separated by spaces (e.g. '# columns: torso1=torso_lift_joint')"
+                f"separated by spaces (e.g. '# {key}: {_EXAMPLE.get(key, 'NAME=VALUE')}')"
             )
         out[k] = v
     return out
@@ -155,7 +165,8 @@ def read_joints(
             )
     q = np.empty_like(raw, dtype=float)
     home = mech.actuators_of(mech.q_home) if decl.reference == "home" else None
-    factors = []
+    factors: list[float] = []
+    offsets: list[float] = []
     for k, joint in enumerate(mech.actuated):
         kind = _kind(mech, joint)
         unit = units[k] or decl.units.get(joint) or decl.units.get(kind)
@@ -169,7 +180,20 @@ def read_joints(
         else:
             offset = 0.0
         q[:, k] = raw[:, k] / factor + offset
-    check_actuator_ranges(mech, q, name, titles)
+        offsets.append(offset)
+    try:
+        check_actuator_ranges(mech, q, name, titles)
+    except ActuatorRangeError as exc:
+        k = list(mech.actuated).index(exc.joint) if exc.joint in mech.actuated else -1
+        if k < 0 or offsets[k] == 0.0:
+            raise
+        ref = "home" if home is not None else "the declared joint_reference"
+        raise ActuatorRangeError(
+            f"{exc}; the file's reading is relative to {ref} ({offsets[k]:+.6g} "
+            f"{'rad' if _kind(mech, exc.joint) == 'angle' else 'm'} added, 'joint_reference'): "
+            "if the readings are absolute, drop that declaration",
+            exc.row, exc.column, exc.joint, exc.limits,
+        ) from None
     for k, joint in enumerate(mech.actuated):  # joints without a URDF range
         kind, factor = _kind(mech, joint), factors[k]
         unit = units[k] or decl.units.get(joint) or decl.units.get(kind)

@@ -132,8 +132,11 @@ def _marker_columns(table: Table, setup: MarkerSetup) -> list[int]:
     for c in (c for triple in setup.marker_sets for c in triple):
         k = table.find(c, [c], {})
         if k is None:
+            like = [t for t in table.columns if t.split("(")[0].strip().lower() == c.lower()]
+            hint = (f" ({like[0]!r} is one with its unit in parentheses: write the unit in "
+                    f"brackets, '{c} [mm]', or name it with --marker-columns)") if like else ""
             raise ColumnError(
-                f"{table.name}: no marker column {c!r}; columns are {list(table.columns)}",
+                f"{table.name}: no marker column {c!r}; columns are {list(table.columns)}{hint}",
                 missing=[c],
             )
         out.append(k)
@@ -260,6 +263,8 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
         raise MeasurementFormatError(f"{name}: no data rows")
     factors, unit_notes = _length_factors(table, setup)
     parsed = joint_titles(table, mech)
+    named = [k for k, (n, _) in enumerate(parsed) if n in mech.actuated]
+    check_unique_titles(table, [*_marker_columns(table, setup), *named])  # before "missing"
     joints, decl = joint_columns(mech, _comment_header(path), parsed, name)
     read_columns = [*_marker_columns(table, setup), *joints]
     if setup.measures_orientation:

@@ -38,12 +38,11 @@ from pincal.io._csv import (
     split_file,
     write_csv,
 )
+from pincal.io._joint_columns import joint_columns, read_joints
 from pincal.io._measurement_header import MAX_COORDINATE, length_sigma
 from pincal.io._names import quote_value
 from pincal.io._units import (
     LENGTH_UNITS,
-    actuator_read_factors,
-    check_actuator_ranges,
     unit_factor,
 )
 from pincal.measure import KnownDistance, SocketData, SocketPlate
@@ -116,9 +115,10 @@ def read_socket_data(path: str | Path, mech: Mechanism) -> SocketData:
             )
     parsed = [parse_column(c) for c in columns]
     names = [p[0] for p in parsed]
-    missing = [c for c in [*mech.actuated, "socket"] if c not in names]
-    if missing:
-        raise ColumnError(f"{name}: missing columns {missing}", missing=missing)
+    if "socket" not in names:
+        raise ColumnError(f"{name}: missing columns ['socket']", missing=["socket"])
+    # the joints as the pose route reads them: header/sidecar columns, units, reference
+    act, declared = joint_columns(mech, header, parsed, name)
     if not rows:
         raise MeasurementFormatError(f"{name}: no data rows")
     k_socket = names.index("socket")
@@ -132,11 +132,9 @@ def read_socket_data(path: str | Path, mech: Mechanism) -> SocketData:
     numeric = [c for k, c in enumerate(columns) if k != k_socket]
     data = parse_numbers([[c for k, c in enumerate(r) if k != k_socket] for r in rows],
                          numeric, name)  # fmt: skip
-    col = {c: k for k, c in enumerate(n for k, n in enumerate(names) if k != k_socket)}
-    act = [col[j] for j in mech.actuated]
-    units = [parse_column(numeric[k])[1] for k in act]
-    q_act = data[:, act] / actuator_read_factors(mech, units, name)
-    check_actuator_ranges(mech, q_act, name, [numeric[k] for k in act])
+    in_data = [k - (k > k_socket) for k in act]  # data holds every column but the socket's
+    q_act = read_joints(mech, data[:, in_data], declared, [parsed[k][1] for k in act],
+                        [columns[k] for k in act], name)  # fmt: skip
     return SocketData(plate, q_act, sockets, mech.actuated, frame, ball)
 
 
