@@ -39,9 +39,9 @@ def test_caveat_names_each_reason():
     corr = np.array([[1.0, 1 - 1e-12], [1 - 1e-12, 1.0]])
     msg = prediction_caveat(names, units, corr * np.outer(s, s))
     assert "ill-conditioned" in msg and "condition number" in msg
-    # a length whose 1σ is 30 mm (the one placement rule: 1σ 20 mm) is named with its 1σ
-    msg = prediction_caveat(names, units, np.diag([9e-4, 1e-6]))
-    assert "a.tx (1σ 30 mm)" in msg and "a.rx" not in msg
+    # a length whose 2σ is 40 mm (bound 20 mm at 2σ) is named with its 2σ
+    msg = prediction_caveat(names, units, np.diag([4e-4, 1e-6]))
+    assert "a.tx (2σ 40 mm)" in msg and "a.rx" not in msg
 
 
 def test_validate_prints_the_reason_not_the_number(wedge, monkeypatch):
