@@ -64,7 +64,7 @@ def validation_text(
     if not independent:
         lines.append("  WARNING: this file was used for fitting; the validation is not independent")
     lines += [
-        f"                        {pos:23s}{ori}",
+        f"                        {pos:22s} {ori}",
         "                        RMS        max         RMS        max",
         f"  nominal model      {_fmt(b['rms_position_mm'])}  {_fmt(b['max_position_mm'])}"
         f"   {_fmt(b['rms_orientation_mrad'])}  {_fmt(b['max_orientation_mrad'])}",

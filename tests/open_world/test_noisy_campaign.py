@@ -10,6 +10,8 @@ positions" — the probe fitted the measured pivot's own noise.
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from tests.open_world import acceptance
@@ -26,3 +28,7 @@ def test_a_noisy_campaign_reaches_the_cramer_rao_prediction(name, tmp_path):
     after, predicted, _ = acceptance.prediction_ratio(acceptance.noisy_campaign(model, tmp_path))
     assert predicted is not None
     assert after <= 2.5 * predicted
+    # the printed table's header keeps its two blocks apart, whichever is not measured
+    text = acceptance.invoke("validate", tmp_path / "cal", "--data", tmp_path / "v.csv")
+    header = text.splitlines()[1]
+    assert re.search(r"\[mm\]\s+orientation \(", header), header
