@@ -40,7 +40,7 @@ def changes(result: IdentificationResult, lim: GateLimits) -> list[QualityIssue]
         if over.size == 0:
             continue
         worst = int(over[np.argmax(d[over] / bound[over])])
-        size = f"{d[worst]:.3g} rad" if units[worst] == "rad" else f"{d[worst] * 1e3:.4g} mm"
+        size = _amount(float(d[worst]), str(units[worst]))
         hint = "; change the bound with --max-change" if kind == "change" else ""
         issues.append(QualityIssue(
             kind, True,
@@ -48,6 +48,15 @@ def changes(result: IdentificationResult, lim: GateLimits) -> list[QualityIssue]
             f"(worst {result.names[worst]}: {size}{hint})",
         ))  # fmt: skip
     return issues
+
+
+def _amount(value: float, unit: str) -> str:
+    """A change in its own unit: mm for a length, rad, % for a gain (unit 1), else SI."""
+    if unit == "m":
+        return f"{value * 1e3:.4g} mm"
+    if unit == "1":
+        return f"{value * 100:.3g} %"
+    return f"{value:.3g} {unit}"
 
 
 def chi2_issues(

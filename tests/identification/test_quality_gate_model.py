@@ -140,6 +140,11 @@ def test_registration_unknowns_have_their_own_bound(stewart, stewart42, clean):
     machine[n - 1] += 0.05
     issues = _changes(dataclasses.replace(fake, full_values=machine), GateLimits())
     assert [i.kind for i in issues] == ["change"]
+    # a joint term's change is said in its own unit, never as a length
+    gain = dataclasses.replace(fake, full_values=machine,
+                               units=(*fake.units[:-1], "1"))  # fmt: skip
+    message = _changes(gain, GateLimits())[0].message
+    assert f"{names[-1]}: 5 %" in message and " mm;" not in message.split("worst")[1]
 
 
 def test_probe_f_test_is_calibrated_and_sees_a_term():
