@@ -223,6 +223,10 @@ class MarginalBound:
     sigmas: float = 2.0
     rounds: int = 6
 
+    def describe(self) -> str:
+        """The bound in words, e.g. ``20 mm / 0.1 rad (2σ)``."""
+        return f"{self.length * 1e3:g} mm / {self.angle:g} rad ({self.sigmas:g}σ)"
+
     def weak(
         self, result: IdentificationResult, exempt: Callable[[str], bool]
     ) -> list[tuple[str, str]]:

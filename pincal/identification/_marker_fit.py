@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.identification._driver import MarginalBound, drive_holding
+from pincal.identification._held import with_held
 from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._identify import fitted_at_start, identify
 from pincal.identification._marker_set import MarkerSetProblem
@@ -41,7 +42,7 @@ from pincal.measure import (
     register_markers,
 )
 from pincal.model import BASE_JOINT, TOOL_JOINT, Mechanism, ParameterSet
-from pincal.sensitivity import parameters
+from pincal.sensitivity import PLACEMENT_BOUND, parameters
 
 __all__ = ["REGISTRATION_PRESET", "MarkerFit", "Prior", "fit_markers", "is_registration"]
 
@@ -160,7 +161,7 @@ def fit_markers(
     preset: str = "chain",
     method: str = "gauss-newton",
     prior: Prior | None = None,
-    bounds: tuple[float, float] = (0.02, 0.1),
+    bounds: tuple[float, float] = PLACEMENT_BOUND,
     registration_only: bool = False,
     loss: str = "linear",
     max_iterations: int = 100,
@@ -223,5 +224,7 @@ def fit_markers(
     def counted(names: list[str], initial: np.ndarray) -> int | None:
         return fitted_at_start(_problem(start, params, meas, names, initial))
 
-    out = drive_holding(one, names, method, MarginalBound(*bounds), is_registration, counted)
-    return MarkerFit(out.result, reg, out.notes, out.method, out.held)
+    bound = MarginalBound(*bounds)
+    out = drive_holding(one, names, method, bound, is_registration, counted)
+    result = with_held(out.result, out.held, f"placed beyond {bound.describe()} by the poses")
+    return MarkerFit(result, reg, out.notes, out.method, out.held)

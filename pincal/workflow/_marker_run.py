@@ -19,7 +19,6 @@ from pathlib import Path
 from pincal.errors import TooFewPosesError, UnknownNameError
 from pincal.identification import (
     HeldOutEvidence,
-    MarginalBound,
     MarkerFit,
     Prior,
     QualityIssue,
@@ -30,12 +29,11 @@ from pincal.identification import (
     held_out_verdict,
     is_registration,
     stacked_measurements,
-    with_held,
 )
 from pincal.io import distinct_markers, read_marker_data
 from pincal.measure import MarkerSetup, Measurements, marker_mechanism
 from pincal.model import Mechanism
-from pincal.sensitivity import PLACEMENT_BOUND, parameters
+from pincal.sensitivity import parameters
 from pincal.workflow._marker_settings import MarkerSettings, parse_prior
 from pincal.workflow._prior_choice import (
     PriorChoice,
@@ -256,7 +254,6 @@ def calibrate_markers(
         # the procedure's fold fits leave (the same σ for both procedures)
         evidence = HeldOutEvidence(cv, baseline, "registration only", cv.fit_scales())
         verdict = held_out_verdict(verdict, evidence, fit.result)
-    fit = _held_recorded(fit)
     rms = fit.registration.fit.rms
     warnings: tuple[str, ...] = (_misfit_note(rms),) if rms > MISFIT_RMS else ()
     angle = fit.registration.orientation_rms
@@ -265,13 +262,3 @@ def calibrate_markers(
     return MarkerRun(fit, meas, setup, settings, loss, choice, verdict,
                      (*notes, *fit.notes), warnings, evidence if machine else None)  # fmt: skip
 
-
-def _held_recorded(fit: MarkerFit) -> MarkerFit:
-    """``fit`` with what its marginal bound held recorded in its result.
-
-    In the pose route's form; ``fit_markers``'s bound is :class:`MarginalBound` of the
-    placement bound.
-    """
-    b = MarginalBound(*PLACEMENT_BOUND)
-    reason = f"placed beyond {b.length * 1e3:g} mm / {b.angle:g} rad ({b.sigmas:g}σ) by the poses"
-    return dataclasses.replace(fit, result=with_held(fit.result, fit.held_weak, reason))

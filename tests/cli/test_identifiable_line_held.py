@@ -5,7 +5,6 @@ route and the marker route alike, in report.txt, identification.json and report.
 
 from __future__ import annotations
 
-import dataclasses
 import json
 from pathlib import Path
 
@@ -13,13 +12,12 @@ import numpy as np
 from click.testing import CliRunner
 
 from pincal.cli import main
-from pincal.identification import MarkerFit, held_at_nominal, identify
+from pincal.identification import MarginalBound, held_at_nominal, identify, with_held
 from pincal.io import read_identification
 from pincal.measure import NoiseModel, simulate_measurements
 from pincal.model import load_mechanism, sample_actuators
 from pincal.report import calibration_text
-from pincal.sensitivity import parameters
-from pincal.workflow._marker_run import _held_recorded
+from pincal.sensitivity import PLACEMENT_BOUND, parameters
 
 FOURBAR = Path(__file__).parents[1] / "model" / "mjcf" / "fourbar.xml"
 LINE = ("identifiable: 10 of 10 parameters (1 held at nominal: placed beyond 20 mm / "
@@ -61,8 +59,9 @@ def test_marker_route_records_its_held_parameters_in_the_same_form():
                                  rng)  # fmt: skip
     result = identify(mech, params, meas)
     names = params.names[:5]
-    fit = MarkerFit(result, None, (), "gauss-newton", held_weak=names)  # type: ignore[arg-type]
-    marked = _held_recorded(fit).result
+    # what fit_markers records for the parameters its marginal bound (the default) held
+    reason = f"placed beyond {MarginalBound(*PLACEMENT_BOUND).describe()} by the poses"
+    marked = with_held(result, names, reason)
     line = next(t for t in calibration_text(marked).splitlines() if t.startswith("identifiable"))
     s = marked.identifiability_summary
     assert s is not None
@@ -71,6 +70,5 @@ def test_marker_route_records_its_held_parameters_in_the_same_form():
         f"beyond 20 mm / 0.1 rad (2σ) by the poses — {', '.join(names[:3])} and 2 more)"
     )
     # nothing held: the line is the plain count, as before
-    plain = dataclasses.replace(fit, held_weak=())
     assert f"identifiable: {s.rank} of {s.parameters} parameters\n" in calibration_text(
-        _held_recorded(plain).result)
+        with_held(result, (), reason))
