@@ -47,13 +47,14 @@ CURVATURE_LIMIT = 1.0
 #: δ drawn by the curvature check (2 evaluations each)
 CURVATURE_DRAWS = 64
 
-#: ``method`` of a check: how the written covariance was made
+#: ``method`` of a check: how the written covariance was made (a noun phrase without
+#: its article, as :data:`KINDS` and the texts that print them expect)
 METHODS = {
-    "linear": "the linear covariance s²(JᵀWJ)⁻¹ at the solution",
-    "inflated": "the linear covariance, inflated along the principal directions the "
+    "linear": "linear covariance s²(JᵀWJ)⁻¹ at the solution",
+    "inflated": "linear covariance, inflated along the principal directions the "
                 "linearity check finds non-linear (each by its measured spread), plus the "
                 "second moment of the fit's second-order error over its confidence region",
-    "second-order": "the linear covariance plus the second moment of the fit's "
+    "second-order": "linear covariance plus the second moment of the fit's "
                     "second-order error over its confidence region",
 }  # fmt: skip
 

@@ -13,6 +13,11 @@ over the components the machine measures (the others are neither commanded nor j
   standard deviations). The angles are undefined at b = ±90° (gimbal lock); a test pose
   there is refused. Only the measured rotation components are reported; for a planar
   machine measuring rz, c is its rotation about z exactly.
+* Rotation components are measured in the measured frame (the sidecar's ``rx ry rz``).
+  When only some are, an attained orientation is first reduced to them: its rotation
+  from the command ``log3(R_cᵀ R_i)`` keeps the measured components and the others are
+  the command's (``R_i ← R_c · exp(masked)``), so an unmeasured turn about the tool
+  axis of a tilted pose does not leak into a and b.
 
 :func:`point_accuracy` computes one test point; ``pincal acceptance`` (through
 :func:`pose_characteristics`) and ``pincal validate`` both use it.
@@ -128,6 +133,17 @@ def _axes(components: tuple[str, ...] | list[str]) -> tuple[list[int], list[int]
     )
 
 
+def _measured_part(Rc: np.ndarray, rotations: np.ndarray, rot_k: list[int]) -> np.ndarray:
+    """(n, 3, 3) attained rotations reduced to their measured local components (module doc).
+
+    ``Rc`` (3, 3) the command; ``rot_k`` the measured rotation axes of the measured frame.
+    """
+    if len(rot_k) == 3:
+        return rotations
+    mask = np.isin(np.arange(3), rot_k)
+    return np.array([Rc @ pin.exp3(mask * pin.log3(Rc.T @ R)) for R in rotations])
+
+
 def point_accuracy(
     commanded: pin.SE3,
     positions: np.ndarray,
@@ -164,7 +180,8 @@ def point_accuracy(
                 "was given"
             )
         abc_c = iso_angles(commanded.rotation)
-        ang = np.array([iso_angles(R) for R in np.asarray(rotations, dtype=float)]) - abc_c
+        attained = _measured_part(commanded.rotation, np.asarray(rotations, dtype=float), rot_k)
+        ang = np.array([iso_angles(R) for R in attained]) - abc_c
         ang = (ang + np.pi) % (2 * np.pi) - np.pi  # each difference in [−π, π)
         ap_abc[rot_k] = ang.mean(axis=0)[rot_k]
         if n >= 2:

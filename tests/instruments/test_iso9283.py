@@ -204,3 +204,28 @@ def test_cli_acceptance_before_and_after_and_from_data(tmp_path):
     ref = pose_characteristics(cube.poses, pos, rot)
     np.testing.assert_allclose(got["AP_p"], ref.ap_p, atol=1e-9)
     np.testing.assert_allclose(got["RP_l"], ref.rp_l, rtol=1e-9)
+
+
+def test_unmeasured_tool_axis_turn_does_not_leak_into_a_and_b():
+    """A machine measuring rx ry (in its measured frame) at a pose tilted 0.3 rad: a turn
+    of 50 mrad about the tool axis, which the instrument does not see, leaves AP_a and
+    AP_b those of the measured tilt alone (written from the definition), where reading
+    the angles off the whole matrix would move them by ≈ 0.3 × 50 mrad."""
+    from pincal.validation import point_accuracy
+
+    Rc = pin.rpy.rpyToMatrix(0.2, 0.3, 0.4)
+    cmd = pin.SE3(Rc, np.array([0.0, 0.0, 0.5]))
+    seen = np.array([1e-3, -2e-3, 0.0])
+    attained = Rc @ pin.exp3(seen + np.array([0.0, 0.0, 0.05]))
+
+    def abc(R):
+        return np.array([math.atan2(R[2, 1], R[2, 2]), -math.asin(R[2, 0])])
+
+    expected = abc(Rc @ pin.exp3(seen)) - abc(Rc)
+    leaky = abc(attained) - abc(Rc)
+    pa = point_accuracy(cmd, cmd.translation[None], attained[None], ("z", "rx", "ry"))
+    assert np.allclose(pa.ap_abc[:2], expected, atol=1e-12)
+    assert np.isnan(pa.ap_abc[2])
+    assert np.max(np.abs(leaky - expected)) > 5e-3  # the case is one where it matters
+    full = point_accuracy(cmd, cmd.translation[None], attained[None])  # all three seen
+    assert np.allclose(full.ap_abc[:2], leaky, atol=1e-12)
