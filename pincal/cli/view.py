@@ -86,9 +86,11 @@ def view(
     if calibrated is not None:
         changes = prediction_changes(mech, calibrated_mechanism(calibrated, mech), poses)
         ends = zip(changes.nominal, changes.calibrated, strict=True)
-        arrows = [viz.Arrow(a, b, "#b0008c", f"pose {k}") for k, (a, b) in enumerate(ends)]
+        arrows = [viz.Arrow(a, b, "#b0008c", f"pose {k}") for k, (a, b) in enumerate(ends)
+                  if k not in changes.unreachable]  # fmt: skip
         if arrows:
             summary["max_prediction_change_mm"] = changes.largest_mm
+        summary["unreachable_calibrated"] = list(changes.unreachable)
     options: ViewOptions = {"frame": mech.measured_frame, "ghosts": ghosts, "animate": animate,
                             "arrows": arrows, "arrow_scale": arrow_scale, "up": up_dir}  # fmt: skip
     title = f"{mech.name}: {len(poses)} poses" + (" — calibration changes" if arrows else "")
@@ -106,5 +108,10 @@ def view(
         if arrows:
             click.echo(f"largest nominal → calibrated prediction change: "
                        f"{summary['max_prediction_change_mm']:.4f} mm")  # fmt: skip
+        if summary.get("unreachable_calibrated"):
+            rows = ", ".join(str(k) for k in summary["unreachable_calibrated"])
+            click.echo(f"note: the calibrated model cannot reach pose {rows} (0-based; its "
+                       "loops do not close on home's branch there: beyond the calibrated "
+                       "machine's workspace): drawn without an arrow")  # fmt: skip
     if session is not None:
         wait_live(session)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pincal.errors import ConvergenceError
 from pincal.io import read_pose_rows
 from pincal.model import Mechanism, sample_actuators
 
@@ -42,13 +43,17 @@ class PredictionChanges:
 
     Attributes:
         nominal: (m, 3) positions the nominal model predicts, world frame [m].
-        calibrated: (m, 3) positions the calibrated model predicts, world frame [m].
-        largest_mm: the largest distance between the two at a pose [mm].
+        calibrated: (m, 3) positions the calibrated model predicts, world frame [m]
+            (NaN at a pose the calibrated machine cannot reach).
+        largest_mm: the largest distance between the two at a pose [mm] (reached poses).
+        unreachable: indices of the poses whose commands the calibrated model cannot
+            close on home's assembly branch (beyond the calibrated machine's workspace).
     """
 
     nominal: np.ndarray
     calibrated: np.ndarray
     largest_mm: float
+    unreachable: tuple[int, ...] = ()
 
 
 def view_poses(
@@ -86,16 +91,24 @@ def prediction_changes(
     """The measured frame's position at each pose by ``nominal`` and by ``calibrated``.
 
     Both are evaluated at the actuator rows and configurations of ``poses`` (found on
-    ``nominal``); the two mechanisms have the same actuators.
+    ``nominal``); the two mechanisms have the same actuators. A pose near the workspace's
+    edge may be out of the calibrated machine's reach: it is listed in ``unreachable``.
     """
-    starts, ends, lengths = [], [], []
+    starts, ends, lengths, unreachable = [], [], [], []
     for k, row in enumerate(poses.rows):
         q = poses.configurations[k]
         p_nominal = np.array(nominal.forward(row, q).translation)
-        p_calibrated = np.array(calibrated.forward(row, q).translation)
+        try:
+            p_calibrated = np.array(calibrated.forward(row, q).translation)
+            lengths.append(float(np.linalg.norm(p_calibrated - p_nominal)) * 1e3)
+        except ConvergenceError:
+            p_calibrated = np.full(3, np.nan)
+            unreachable.append(k)
         starts.append(p_nominal)
         ends.append(p_calibrated)
-        lengths.append(float(np.linalg.norm(p_calibrated - p_nominal)) * 1e3)
     return PredictionChanges(
-        np.array(starts).reshape(-1, 3), np.array(ends).reshape(-1, 3), max(lengths, default=0.0)
+        np.array(starts).reshape(-1, 3),
+        np.array(ends).reshape(-1, 3),
+        max(lengths, default=0.0),
+        tuple(unreachable),
     )
