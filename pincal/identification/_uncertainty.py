@@ -265,12 +265,16 @@ def check_uncertainty(
     cov = inf.covariance + (cu.second_moment if cu.second_moment is not None else 0.0)
     new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
     worst = widest_combination(C, cov - C)
-    text += (f"; the covariance reported is the linear one inflated along the "
-             f"{inf.inflated.size} directions whose cost rises less than predicted (each σ by "
-             "1/√(measured rise / predicted)), plus the second moment of the fit's "
-             f"second-order error over {cu.draws} draws from its confidence region (it adds "
-             f"{cu.excess:.2g} to d²/k); every other direction as the linearisation gives "
-             f"it: the combination it moves most has {worst:.3g}× the linear σ")  # fmt: skip
+    text += ((f"; the covariance reported is the linear one inflated along the "
+              f"{inf.inflated.size} directions whose cost rises less than predicted (each σ "
+              "by 1/√(measured rise / predicted)), every other direction as the "
+              "linearisation gives it")
+             if inf.inflated.size else
+             "; the covariance reported is the linear one (along no direction does the cost "
+             "rise less than predicted)")  # fmt: skip
+    text += (", plus the second moment of the fit's second-order error over "
+             f"{cu.draws} draws from its confidence region (it adds {cu.excess:.2g} to d²/k); "
+             f"the combination it moves most has {worst:.3g}× the linear σ")  # fmt: skip
     if inf.unmeasured.size or cu.failed or not cu.checked:
         text += ("; along some directions the cost did not rise or the model could not be "
                  "evaluated: the σ there are a lower bound")  # fmt: skip

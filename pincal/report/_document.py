@@ -89,13 +89,23 @@ def _markdown_table(table: Table) -> str:
     return "\n".join(lines)
 
 
+#: a cell longer than this [characters] is prose: aligned left, not as a number
+_PROSE = 40
+
+
+def _html_cell(text: str) -> str:
+    """A ``<td>``; prose (a finding, a note) left-aligned, numbers and words right."""
+    mark = ' class="text"' if len(text) > _PROSE else ""
+    return f"<td{mark}>{html.escape(text)}</td>"
+
+
 def _html_table(table: Table) -> str:
     parts = ["<table>"]
     if table.caption:
         parts.append(f"<caption>{html.escape(table.caption)}</caption>")
     parts.append("<tr>" + "".join(f"<th>{html.escape(str(h))}</th>" for h in table.headers))
     for row in table.rows:
-        parts.append("<tr>" + "".join(f"<td>{html.escape(_cell(c))}</td>" for c in row))
+        parts.append("<tr>" + "".join(_html_cell(_cell(c)) for c in row))
     parts.append("</table>")
     return "\n".join(parts)
 
@@ -112,7 +122,7 @@ img {{ max-width: 100%; border: 1px solid #ddd; margin: 0.5em 0; }}
 table {{ border-collapse: collapse; margin: 0.8em 0; }}
 th, td {{ border: 1px solid #bbb; padding: 2px 8px; text-align: right; }}
 th {{ background: #eee; }}
-td:first-child {{ text-align: left; }}
+td:first-child, td.text {{ text-align: left; }}
 p.note {{ color: #555; font-size: 90%; }}
 caption {{ caption-side: top; font-style: italic; text-align: left; }}
 </style>

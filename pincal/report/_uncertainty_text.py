@@ -24,11 +24,16 @@ def uncertainty_lines(unc: Mapping[str, Any]) -> list[str]:
     method = unc.get("method")
     widest = unc.get("widened_max") or 1.0
     if method == "inflated":
+        how = (
+            "linear ones inflated along them by the measured spread"
+            if unc.get("directions_inflated", 1)
+            else "linear ones (along none does the cost rise less than predicted)"
+        )
         lines.append(
             f"  uncertainties: not linear along {unc.get('directions_failed')} of the "
             f"{unc.get('directions_checked')} most uncertain directions; the σ above are the "
-            "linear ones inflated along them by the measured spread, plus the fit's "
-            f"second-order term (the combination it moves most: {widest:.3g}× the linear σ)"
+            f"{how}, plus the fit's second-order term (the combination it moves most: "
+            f"{widest:.3g}× the linear σ)"
         )
     elif method == "second-order" and unc.get("curvature_excess") is not None:
         lines.append(
