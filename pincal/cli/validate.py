@@ -71,7 +71,9 @@ def validate(
     beats it by more than the standard error. A marker calibration records the
     cross-validation its gate ran; the same K and seed reuse it (said in the output),
     --refit fits the folds again. With orientation measured (a 6-D marker body) the
-    verdict weighs position and orientation, each whitened by its noise σ.
+    verdict weighs position and orientation, each whitened by its noise σ. A
+    calibration from instrument files (ballbar, probe…) is cross-validated on its
+    readings, beside the nominal machine with only the instruments fitted.
     """
     from pincal.io import atomic_write_text, read_calibration
 

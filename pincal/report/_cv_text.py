@@ -13,10 +13,19 @@ from pincal.validation import CrossValidationSummary
 __all__ = ["cross_validation_text"]
 
 
+#: what each baseline of a cross-validation is, in words
+_BASELINES = {
+    "registration only": "registration only: instrument frame + marker fitted, the robot "
+    "uncalibrated",
+    "nominal model": "nominal model: the model before calibration",
+    "instruments only": "instruments only: the instruments' constants (pivot, centre, "
+    "planes…) fitted, the machine nominal",
+}
+
+
 def cross_validation_text(cv: CrossValidationSummary) -> str:
     """The printed cross-validation block [mm] (a blank line first, a newline last)."""
     b = cv.baseline
-    registration = b.model == "registration only"
     lines = [
         "",
         f"cross-validation: {cv.k} folds over {cv.poses} poses (seed {cv.seed}); "
@@ -27,9 +36,7 @@ def cross_validation_text(cv: CrossValidationSummary) -> str:
         f"{cv.held_out_rms * 1e3:12.3f}   {cv.held_out_max * 1e3:12.3f}",
         f"  {b.model[:17]:17s} {'':10s}   {b.fold_fit_rms * 1e3:12.3f}   "
         f"{b.held_out_rms * 1e3:12.3f}   {b.held_out_max * 1e3:12.3f}",
-        "  (registration only: instrument frame + marker fitted, the robot uncalibrated)"
-        if registration
-        else "  (nominal model: the model before calibration)",
+        f"  ({_BASELINES.get(b.model, b.model + ': the model before calibration')})",
     ]
     if cv.sockets:
         assert cv.socket_distance_rms is not None and cv.socket_distance_max is not None

@@ -9,7 +9,8 @@ marker body, a pose file) the held-out rotation error angles are reported beside
 positions; for a marker body the verdict weighs both, each whitened by its noise σ. A marker
 calibration's own cross-validation (recorded by calibrate) is reused for the same K and
 seed unless ``refit``. A ball-in-socket calibration is cross-validated on its held-out
-seatings (see ``_socket_cv``). The outcome is a
+seatings (see ``_socket_cv``), one of scalar instrument files on its held-out readings
+(see ``_instrument_cv``). The outcome is a
 :class:`pincal.validation.CrossValidationSummary`; :func:`pincal.report.cross_validation_text`
 renders it, :func:`fold_table` lists its folds.
 """
@@ -33,6 +34,7 @@ from pincal.measure import Measurements
 from pincal.model import Mechanism
 from pincal.sensitivity import parameters
 from pincal.validation import CrossValidationBaseline, CrossValidationSummary, OrientationErrors
+from pincal.workflow._instrument_cv import instrument_cross_validation, is_instrument_calibration
 from pincal.workflow._marker_replay import rebuild, replay_procedure
 from pincal.workflow._socket_cv import is_socket_calibration, socket_cross_validation
 
@@ -96,7 +98,7 @@ def cross_validate_calibration(
     :func:`pincal.workflow.rebuild` has checked the data file unchanged.
 
     Args:
-        cal: the calibration (marker table, pose file or ball-in-socket file).
+        cal: the calibration (marker table, pose file, ball-in-socket or instrument files).
         k: number of folds (2 ≤ k ≤ poses).
         seed: the folds' seed (:func:`pincal.identification.kfold`).
         refit: fit the folds again even when the calibration recorded them.
@@ -110,6 +112,8 @@ def cross_validate_calibration(
     """
     if is_socket_calibration(cal):
         return socket_cross_validation(cal, k, seed)
+    if is_instrument_calibration(cal):
+        return instrument_cross_validation(cal, k, seed)
     markers = cal.manifest.get("markers")
     recorded = None
     meas: _Poses
