@@ -3,14 +3,17 @@
 The cause is chosen from the refusals actually found, in order of how directly they
 explain the others: a frame offset, a singular pose, a few outliers, a fired
 misspecification probe, a robust-fit breakdown, a χ² beyond the declared noise, an
-estimated noise beyond the instrument profile, a parameter change, a registration
-change, and last an unfinished solve (often a consequence of the others). A
+estimated noise beyond the instrument profile, a joint zero moved (the joint readings
+relative to another zero than declared: ``joint_reference``), a parameter change, a
+registration change, and last an unfinished solve (often a consequence of the others). A
 refusal names "the declared noise" only when noise was declared.
 """
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
 
 from pincal.identification._coordinate_probe import is_trend
 from pincal.identification._result import IdentificationResult
@@ -80,6 +83,16 @@ def likely_cause(v: QualityVerdict, result: IdentificationResult, m: int) -> tup
             "profile typically reaches: the model misses an error the data show, or the "
             "instrument is off (check its calibration, or declare its real noise with --noise)."
         )
+    zeros = _moved_zeros(result, lim.max_length_change, lim.max_angle_change)
+    if "change" in kinds and zeros:
+        return "joint reference", (
+            f"joint zeros moved beyond the bound ({zeros}): the joint readings are probably "
+            "relative to another zero than the declared joint_reference (a file's "
+            "'# joint_reference:' header, the model's sidecar, a campaign's sockets "
+            "section) — readings relative to the home pose need 'joint_reference: home', "
+            "absolute readings none; if it is right, a large real error: check the model, "
+            "or raise the bound with --max-change."
+        )
     if "change" in kinds:
         return "parameter change", (
             "parameters moved further than the bound: a large real error, or directions "
@@ -109,6 +122,27 @@ def likely_cause(v: QualityVerdict, result: IdentificationResult, m: int) -> tup
             "from the workspace's edges and singularities."
         )
     return "data or model", "check the data, the measured frame and the model (--params)."
+
+
+def _moved_zeros(result: IdentificationResult, length: float, angle: float) -> str:
+    """The joint zeros (``JOINT.offset``) moved beyond the bound, worst first, in words.
+
+    Args:
+        result: the fit.
+        length: the bound on a length change [m].
+        angle: the bound on an angle change [rad].
+
+    Returns:
+        ``'wrist_2_joint.offset −0.261 rad, …'`` (at most three), '' when none moved so.
+    """
+    delta = np.asarray(result.full_values, dtype=float) - np.asarray(result.initial_values)
+    moved = []
+    for name, d, unit in zip(result.names, delta, result.units, strict=True):
+        bound = angle if unit == "rad" else length
+        if name.endswith(".offset") and not abs(d) <= bound:
+            moved.append((abs(d) / bound, f"{name} {d:+.3g} {unit}"))
+    moved.sort(reverse=True)
+    return ", ".join(t for _, t in moved[:3]) + (" …" if len(moved) > 3 else "")
 
 
 def _worst_block(v: QualityVerdict) -> str:

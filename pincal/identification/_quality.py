@@ -201,12 +201,13 @@ def check_quality(
         data: the verdict of :func:`check_measurements` on the same data (computed here
             when None and both ``mech`` and ``measurements`` are given).
         limits: thresholds (default :class:`GateLimits`, or ``data``'s).
-        scalar_instrument: the result is a ballbar / probe / plane / gauge fit, whose
-            near-gauge directions (an instrument pivot against a translation of the
-            machine) let parameters drift and the solver stop at its iteration limit
-            without changing the fit: its χ² is judged against the file's σ (the
-            result's ``redundancy`` annotation gives ν) and, when that passes,
-            parameter changes and an unfinished solve are warnings, not refusals.
+        scalar_instrument: the result is an instrument-file fit (ballbar, probe, plane,
+            sockets…): its χ² is judged against the files' σ (the result's
+            ``redundancy`` annotation gives ν), not by the misspecification probes.
+            Parameter changes and an unfinished solve refuse as on the pose route (they
+            were warnings once: the directions near a gauge that let parameters drift
+            are now held at nominal by the fit's placement bound, and a wrong
+            ``joint_reference`` fits as well as the right one with ≈ 300 mm changes).
         instrument: the instrument's profile (or its name, see
             :data:`INSTRUMENT_PROFILES`): with estimated noise, a σ̂ beyond
             ``limits.noise_factor`` × its typical σ refuses.
@@ -297,15 +298,14 @@ def check_quality(
         comps = None if measurements is None else tuple(measurements.components)
         blocks = chi2_blocks(result, comps, inliers) if declared else []
     fit_issues = chi2_issues(chi2, blocks, declared, lim)
-    lenient = scalar_instrument and not any(i.refuse for i in fit_issues)
     if not result.success:
         issues.append(QualityIssue(
-            "solver", not lenient, f"the solver did not succeed ({result.message.strip()[:160]})"
+            "solver", True, f"the solver did not succeed ({result.message.strip()[:160]})"
         ))  # fmt: skip
     issues += fit_issues
     if profile is not None and source == "estimated" and w is not None:
         issues += profile_issues(w, profile, lim)
-    issues += [replace(c, refuse=not lenient) for c in changes(result, lim)]
+    issues += changes(result, lim)
     if serial is not None:  # refuses when a probe fired on it, warns otherwise
         issues.append(QualityIssue("model", fired is not None, serial.describe()))
     if fired is not None and (serial is None or fired.name != "drift"):

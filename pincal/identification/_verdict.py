@@ -120,7 +120,7 @@ class QualityVerdict:
         issues: refusals and warnings, in the order found.
         cause: the likely cause of a refusal: ``units``, ``frame``, ``outliers``,
             ``singular pose``, ``model or instrument``, ``noise or model``, ``solver``,
-            ``parameter change``, ``units, frame or model`` ("" when passed).
+            ``joint reference``, ``parameter change``, ``units, frame or model`` ("" when passed).
         cause_text: one sentence explaining the cause and what to try.
         outlier_poses: indices of the poses flagged as outliers.
         outlier_limit: the normalised-residual threshold used (NaN when not tested).

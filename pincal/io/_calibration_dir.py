@@ -100,7 +100,8 @@ class CalibrationDirectory:
         src = self.manifest.get("model_source")
         if not src:
             return None
-        return self._moved_model(str(src)) or str(src)
+        moved = self._moved_model(str(src))
+        return str(moved[0]) if moved is not None else str(src)
 
     def model_paths(self) -> list[Path]:
         """The nominal model's files as recorded (``model_files``), where they are now.
@@ -112,37 +113,31 @@ class CalibrationDirectory:
         recorded = self.manifest.get("model_files")
         if not isinstance(recorded, dict):
             return []
-        src = str(self.manifest.get("model_source") or "")
-        moved = self._moved_model(src) if src else None
-        out = []
-        for name in recorded:
-            f = Path(str(name))
-            if moved is not None:
-                old, new = Path(src), Path(moved)
-                root_old, root_new = (old, new) if new.is_dir() else (old.parent, new.parent)
-                try:
-                    f = root_new / f.relative_to(root_old)
-                except ValueError:
-                    pass
-            if f.is_file():
-                out.append(f)
-        return out
+        moved = self._moved_model(str(self.manifest.get("model_source") or ""))
+        if moved is not None:
+            return moved[1]
+        return [f for f in (Path(str(name)) for name in recorded) if f.is_file()]
 
-    def _moved_model(self, src: str) -> str | None:
+    def _moved_model(self, src: str) -> tuple[Path, list[Path]] | None:
         """The nominal model moved with this directory: beside it, every file as hashed.
 
         A model directory or URDF recorded by its absolute path that is gone there is
         looked for beside the calibration directory under its own name (a project moved
         or copied whole); it is used only when each file the manifest hashes
         (``model_files``) is found at the same place relative to it with its SHA-256.
+
+        Returns:
+            (the model's path now, each hashed file's path now, in the manifest's
+            order), or None when the model was not moved so ('' for ``src``: None).
         """
         old, recorded = Path(src), self.manifest.get("model_files")
-        if not old.is_absolute() or old.exists() or not isinstance(recorded, dict):
+        if not src or not old.is_absolute() or old.exists() or not isinstance(recorded, dict):
             return None
         new = self.path.resolve().parent / old.name
         if not recorded or not new.exists():
             return None
         root_old, root_new = (old, new) if new.is_dir() else (old.parent, new.parent)
+        files = []
         for name, digest in recorded.items():
             try:
                 moved = root_new / Path(str(name)).relative_to(root_old)
@@ -150,7 +145,8 @@ class CalibrationDirectory:
                 return None
             if not moved.is_file() or hash_bounded(moved) != digest:
                 return None
-        return str(new)
+            files.append(moved)
+        return new, files
 
     @property
     def caveat(self) -> str | None:

@@ -3,11 +3,15 @@
 A simulated UR5 socket file, then the slips: a ball declared 1000 km off the flange
 (its −1e9 mm wrist offset was written), a seating σ of 1e300 (a directory with no
 parameters was written, replacing a good one), one file given twice or as a byte copy
-(fitted twice, σ understated by √2). Each is refused in one line before any fit.
+(fitted twice, σ understated by √2). Each is refused in one line before any fit. And a
+wrong ``joint_reference`` (a fit with ≈ 300 mm changes was written with a warning):
+refused after the fit by the pose route's bound, naming the joint reference, nothing
+replaced.
 """
 
 from __future__ import annotations
 
+import json
 import shutil
 
 import pytest
@@ -65,3 +69,51 @@ def test_one_file_twice_is_refused(tmp_path, sockets, copy):
         shutil.copy(sockets, other)
     r = _run("calibrate", "ur5", "--data", sockets, "--data", other, "--out", tmp_path / "cal")
     _refused(r, tmp_path, "DuplicateDataError", "fitted twice", "√2")
+
+
+def _with_reference(src, dst, shift, declare: str | None):
+    """``src``'s readings minus ``shift`` (one value per joint column), ``declare`` as the
+    file's ``# joint_reference:`` header (None: no header)."""
+    lines = src.read_text().splitlines()
+    k = next(i for i, ln in enumerate(lines) if not ln.startswith("#"))
+    rows = [",".join([*(f"{float(v) - s:.15g}" for v, s in zip(ln.split(",")[:-1], shift,
+                                                                   strict=True)),
+                      ln.split(",")[-1]]) for ln in lines[k + 1:]]  # fmt: skip
+    head = [f"# joint_reference: {declare}"] if declare else []
+    dst.write_text("\n".join([*lines[:k], *head, lines[k], *rows]) + "\n")
+    return dst
+
+
+@pytest.mark.parametrize("readings, declared", [
+    ("absolute", "home"),      # absolute readings declared relative to home
+    ("home", None),            # readings relative to home, declared absolute (no header)
+])  # fmt: skip
+def test_a_wrong_joint_reference_is_refused_and_nothing_replaced(tmp_path, sockets, readings,
+                                                                   declared):
+    """The fit absorbs home's joint values into the joint zeros (≈ 300 mm and 0.26 rad of
+    changes, χ² as good as the right fit's): it was written with a warning. Now refused
+    as the pose route refuses, naming the joint reference; a good calibration in --out
+    is left as it was."""
+    from pincal.model import load_mechanism
+
+    mech = load_mechanism("ur5")
+    home = mech.actuators_of(mech.q_home)
+    shift = home if readings == "home" else 0.0 * home
+    wrong = _with_reference(sockets, tmp_path / "wrong.csv", shift, declared)
+    cal = tmp_path / "cal"
+    assert _run("calibrate", "ur5", "--data", sockets, "--out", cal).exit_code == 0
+    before = {p.name: p.read_bytes() for p in cal.iterdir()}
+    r = _run("calibrate", "ur5", "--data", wrong, "--out", cal)
+    assert r.exit_code != 0, r.output
+    line = r.output.strip().splitlines()[-1]
+    assert line.startswith("pincal: error: QualityGateError: calibration refused"), line
+    for w in ("moved beyond 20 mm / 0.1 rad", "Likely cause: joint reference",
+              "wrist_2_joint.offset", "'joint_reference: home'", "Nothing was written"):
+        assert w in line, line
+    assert {p.name: p.read_bytes() for p in cal.iterdir()} == before
+    # --force writes it, the override recorded
+    r = _run("calibrate", "ur5", "--data", wrong, "--out", tmp_path / "forced", "--force")
+    assert r.exit_code == 0, r.output
+    assert "--force: writing despite the quality gate" in r.output
+    quality = json.loads((tmp_path / "forced" / "calibration.json").read_text())["quality"]
+    assert quality["overridden"] is True and quality["cause"] == "joint reference"
