@@ -74,8 +74,7 @@ def prediction_caveat(
     both): the fit holds a direction placed beyond it at 1σ, so whatever the fit would
     hold also withholds the prediction; a parameter kept at 1σ between half the bound
     and the bound is placed, but its likely error is too large for a first-order
-    prediction (on the RUSR with a universal joint, 1σ 12 mm: predicted 2.25 mm
-    against 0.020 mm achieved).
+    prediction (on the RUSR with a universal joint, 1σ 12 mm: withheld).
 
     Args:
         names: the k identified parameters, in ``covariance``'s order.
