@@ -37,6 +37,8 @@ LONG = {
     "scripts/bench_vs_figaroh.py": "needs the optional [bench] extra",
     "scripts/studies/open_world_campaigns.py": "19 CLI campaigns (~15 min); the four-bar's "
     "and the Agile Eye's in tests/open_world/test_noisy_campaign.py",
+    "scripts/studies/prediction_honesty.py": "60 CLI campaigns (~5 min); the curved fits' "
+    "predicted / achieved in tests/open_world/test_noisy_campaign.py",
     "scripts/studies/stewart_pose_selection.py": "Monte-Carlo; core claim in test_seed000_study.py",
     "scripts/studies/pkm5_qpso.py": "QPSO study; core claim in test_identify_qpso.py",
     "scripts/studies/instrument_campaigns.py": "Monte-Carlo study; core claim in tests/instruments",

@@ -111,6 +111,7 @@ from pincal.identification._uncertainty import (
     covariance_kind,
     pose_recipe,
     pose_residual_model,
+    prediction_covariance,
     result_intervals,
     with_uncertainty,
 )
@@ -204,6 +205,7 @@ __all__ = [
     "pose_recipe",
     "pose_residual_model",
     "position_errors",
+    "prediction_covariance",
     "qpso",
     "qpso_stepwise",
     "result_from_dict",

@@ -26,7 +26,12 @@ from pincal.identification._gauge import null_motions, weak_parameters
 from pincal.identification._instrument_problem import InstrumentProblem
 from pincal.identification._problem import CalibrationProblem
 from pincal.identification._residual_model import ResidualModel
-from pincal.sensitivity import Identifiability, analyse_jacobian, placement_words
+from pincal.sensitivity import (
+    Identifiability,
+    analyse_jacobian,
+    closure_loops,
+    placement_words,
+)
 
 __all__ = ["BaseRule", "FitSet", "JointBase", "StructuralBase", "WeakBound"]
 
@@ -77,8 +82,9 @@ class StructuralBase:
         names, units = model.names, model.units
         candidates, breaking, splitting = self.candidates, self.breaks_closure, self.splits_joint
         Js = model.structural_jacobian(x0)  # not the measured deviation's mixing
+        loops = closure_loops(model.mech, model.params) if breaking.any() else ()
         ident = analyse_jacobian(Js, names, breaks_closure=breaking, splits_joint=splitting,
-                                 units=units)  # fmt: skip
+                                 units=units, loops=loops)  # fmt: skip
         if np.array_equal(candidates, np.arange(len(names))):
             sub = ident  # fitting every parameter: the same analysis
         else:

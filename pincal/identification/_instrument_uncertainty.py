@@ -109,7 +109,8 @@ def instrument_uncertainty(
         return base
     new = replace(result, covariance=cov, std=np.sqrt(np.clip(np.diag(cov), 0.0, None)))
     worst = widest_combination(np.asarray(fit.covariance), cu.second_moment)
-    base = replace(base, result=new, method="second-order", widened=worst)
+    base = replace(base, result=new, method="second-order", widened=worst,
+                   linear_covariance=np.asarray(result.covariance, dtype=float))
     lower = f"; {beyond}: the σ may still be too small" if cu.failed else ""
     if linear and not cu.failed:
         return base

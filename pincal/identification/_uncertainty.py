@@ -79,6 +79,7 @@ __all__ = [
     "covariance_kind",
     "pose_recipe",
     "pose_residual_model",
+    "prediction_covariance",
     "with_uncertainty",
 ]
 
@@ -100,6 +101,9 @@ class UncertaintyCheck:
         linear_std: (k,) the linear σ of the identified parameters [SI].
         inflation: the per-direction inflation (None when not inflated).
         intervals: the quantiles of the intervals and joint region (None: not computed).
+        linear_covariance: (k, k) the linear covariance of the identified parameters
+            [SI] when the one written is widened (``method`` not ``linear``), else None;
+            recorded as ``linear_covariance`` (:func:`prediction_covariance`).
     """
 
     result: IdentificationResult
@@ -112,6 +116,7 @@ class UncertaintyCheck:
     linear_std: np.ndarray | None = None
     inflation: Inflation | None = None
     intervals: Intervals | None = None
+    linear_covariance: np.ndarray | None = None
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready summary (``quality.uncertainty`` of the calibration's record)."""
@@ -134,6 +139,8 @@ class UncertaintyCheck:
                     "directions_unmeasured": int(self.inflation.unmeasured.size)}  # fmt: skip
         if self.method != "linear":
             out["widened_max"] = _finite(self.widened)
+            if self.linear_covariance is not None:
+                out["linear_covariance"] = np.asarray(self.linear_covariance).tolist()
         if self.intervals is not None:
             out["intervals"] = self.intervals.to_dict()
         if self.bootstrap is not None:
@@ -281,7 +288,8 @@ def check_uncertainty(
     if boot is not None:
         text += _bootstrap_text(boot, result.std)
     return replace(base, result=new, issue=QualityIssue("linearity", False, text),
-                   widened=worst, method="inflated", inflation=inf, curvature=cu)  # fmt: skip
+                   widened=worst, method="inflated", inflation=inf, curvature=cu,
+                   linear_covariance=C)  # fmt: skip
 
 
 def _bootstrap_text(boot: Bootstrap, linear_std: np.ndarray) -> str:
@@ -316,6 +324,40 @@ def covariance_kind(annotations: Mapping[str, Any], noise_source: str | None) ->
     if method in ("inflated", "second-order"):
         return str(method)
     return "cramer-rao" if noise_source in ("declared", "per-pose") else "linear"
+
+
+def prediction_covariance(
+    annotations: Mapping[str, Any], covariance: np.ndarray, noise_source: str | None
+) -> tuple[np.ndarray, str]:
+    """The covariance a prediction of the calibrated model's outputs propagates, and its kind.
+
+    The linear one (``s²(JᵀWJ)⁻¹`` at the solution; the Cramér–Rao bound at a declared
+    noise) when the written covariance was widened for the parameters' curvature
+    (``quality.uncertainty.linear_covariance``), else the written one. The widening
+    (inflation, second-order term) is the parameter-effects curvature: the fit moves
+    along the valley of the curved model, so its parameters err more than the linear σ
+    say, but the model's outputs along that valley do not change, to second order: the
+    fitted values' error is ``P_J ε`` plus the intrinsic curvature only. Propagating
+    the widened covariance through the Jacobian counts the valley as output error (on
+    the RUSR with a universal joint 0.81 mm predicted against 0.019 mm achieved).
+
+    Args:
+        annotations: the record's annotations.
+        covariance: (k, k) the written covariance of the identified parameters [SI].
+        noise_source: its weighting's source (``declared``, ``per-pose``, ``estimated``).
+
+    Returns:
+        ((k, k) covariance [SI], its kind: a key of :data:`KINDS`).
+    """
+    written = np.asarray(covariance, dtype=float)
+    quality = annotations.get("quality")
+    unc = quality.get("uncertainty") if isinstance(quality, Mapping) else None
+    lin = unc.get("linear_covariance") if isinstance(unc, Mapping) else None
+    if lin is not None:
+        cov = np.asarray(lin, dtype=float)
+        if cov.shape == written.shape:
+            return cov, ("cramer-rao" if noise_source in ("declared", "per-pose") else "linear")
+    return written, covariance_kind(annotations, noise_source)
 
 
 def with_uncertainty(verdict: QualityVerdict, check: UncertaintyCheck) -> QualityVerdict:

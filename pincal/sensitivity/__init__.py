@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from pincal.sensitivity._base_set import BASE_POSES, BaseSet, base_parameters, base_set
 from pincal.sensitivity._batch_jacobian import sensitivities_batch
+from pincal.sensitivity._closure_loops import ClosureLoop, closure_line, closure_loops
 from pincal.sensitivity._global import (
     GlobalSensitivity,
     global_sensitivity,
@@ -53,6 +54,7 @@ __all__ = [
     "RANK_RTOL",
     "BaseSet",
     "BatchSensitivity",
+    "ClosureLoop",
     "GlobalSensitivity",
     "Identifiability",
     "PoseSensitivity",
@@ -62,6 +64,8 @@ __all__ = [
     "base_set",
     "beyond_placement",
     "closure_breaking",
+    "closure_line",
+    "closure_loops",
     "full_jacobian_ranks",
     "global_sensitivity",
     "global_sensitivity_from_jacobians",

@@ -37,6 +37,7 @@ from pincal.model import (
     degenerate_translations,
     sample_actuators,
 )
+from pincal.sensitivity._closure_loops import ClosureLoop, closure_line, closure_loops
 from pincal.sensitivity._identification_jacobian import jacobian_and_closure_breaking
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank, unit_columns
 
@@ -88,6 +89,9 @@ class Identifiability:
             identifiable, never fitted.
         units: each parameter's SI unit (``m``, ``rad``, …), or () when not given: the
             sentences of :meth:`describe` then state amounts in mm and mrad.
+        loops: each loop closure's label and the indices of the parameters on its loop
+            (:func:`pincal.sensitivity.closure_loops`), or () when not known: the
+            parameters that break closure are then said by joint only.
     """
 
     names: tuple[str, ...]
@@ -100,6 +104,7 @@ class Identifiability:
     breaks_closure: np.ndarray = field(default_factory=_empty)
     splits_joint: np.ndarray = field(default_factory=_empty)
     units: tuple[str, ...] = ()
+    loops: tuple[ClosureLoop, ...] = ()
 
     @property
     def full_rank(self) -> bool:
@@ -157,26 +162,13 @@ class Identifiability:
         return lines
 
     def _closure_line(self, max_joints: int) -> str:
-        """One line for every parameter that breaks loop closure, grouped by joint.
+        """One line for every parameter that breaks loop closure, grouped by loop.
 
-        For example ``"55 parameters break loop closure at 11 joints (no passive-joint
-        motion can close the loops after changing them; not identifiable): base1.{tx ty
-        tz rx ry}, elbow1.{…}, … and 7 more joints"``; every name is in
-        :attr:`breaks_closure_names` (and ``identification.json``).
+        :func:`~pincal.sensitivity.closure_line`; by joint when the loops are not known.
         """
-        joints: dict[str, list[str]] = {}
-        for name in self.breaks_closure_names:
-            joint, _, dof = name.rpartition(".")
-            joints.setdefault(joint or name, []).append(dof if joint else "")
-        shown = [f"{j}.{{{' '.join(d)}}}" if len(d) > 1 else (f"{j}.{d[0]}" if d[0] else j)
-                 for j, d in list(joints.items())[:max_joints]]  # fmt: skip
-        more = len(joints) - len(shown)
-        n = self.breaks_closure.size
-        verb, them = ("parameter breaks", "it") if n == 1 else ("parameters break", "them")
-        where = f" at {len(joints)} joints" if len(joints) > 1 else ""
-        return (f"{n} {verb} loop closure{where} (no passive-joint motion can close the loops "
-                f"after changing {them}; not identifiable): {', '.join(shown)}"
-                + (f" and {more} more joints" if more else ""))  # fmt: skip
+        members = [self.names[k] for k in self.breaks_closure]
+        loops = tuple((label, tuple(self.names[k] for k in on)) for label, on in self.loops)
+        return closure_line(members, loops, max_joints)
 
     def _in_units(self, k: int, terms: list[tuple[int, float]], max_terms: int) -> str:
         """The sentence of parameter k, its combination in mm / mrad (else SI) amounts."""
@@ -248,6 +240,7 @@ def analyse_jacobian(
     breaks_closure: np.ndarray | None = None,
     splits_joint: np.ndarray | None = None,
     units: tuple[str, ...] = (),
+    loops: tuple[ClosureLoop, ...] = (),
 ) -> Identifiability:
     """Identifiability of the parameters whose identification Jacobian is ``J`` (N, n).
 
@@ -265,6 +258,8 @@ def analyse_jacobian(
         splits_joint: indices (or an (n,) boolean mask) of translations inside emulated
             ball or universal joints; reported apart and left out of the rank likewise.
         units: the n parameters' SI units, for :meth:`Identifiability.describe` (or ()).
+        loops: the loop closures and the parameters on each (:func:`closure_loops`),
+            for :meth:`Identifiability.describe` (or ()).
 
     Raises:
         PincalError: J is not 2-D with one column per name, or contains NaN/inf.
@@ -315,6 +310,7 @@ def analyse_jacobian(
         np.flatnonzero(breaking),
         np.flatnonzero(splitting),
         tuple(units) if len(units) == n else (),
+        tuple(loops) if breaking.any() else (),
     )
 
 
@@ -373,5 +369,6 @@ def identifiability(
         q_act_rows = sample_actuators(mech, n_poses, rng or np.random.default_rng(0))
     J, breaking = jacobian_and_closure_breaking(mech, params, q_act_rows, conditions=conditions)
     splitting = np.isin(params.names, degenerate_translations(mech))
+    loops = closure_loops(mech, params) if np.any(breaking) else ()
     return analyse_jacobian(J, params.names, rtol, breaks_closure=breaking,
-                            splits_joint=splitting, units=params.units)  # fmt: skip
+                            splits_joint=splitting, units=params.units, loops=loops)  # fmt: skip

@@ -74,8 +74,7 @@ def prediction_caveat(
     both): the fit holds a direction placed beyond it at 1σ, so whatever the fit would
     hold also withholds the prediction; a parameter kept at 1σ between half the bound
     and the bound is placed, but its likely error is too large for a first-order
-    prediction (on the RUSR with a universal joint, 1σ 12 mm: predicted 2.25 mm
-    against 0.020 mm achieved).
+    prediction (on the RUSR with a universal joint, 1σ 12 mm: withheld).
 
     Args:
         names: the k identified parameters, in ``covariance``'s order.
@@ -257,11 +256,15 @@ def _prediction(
     rot: list[int],
     noise: NoiseModel | None,
     conditions: dict[str, np.ndarray | None] | None = None,
+    values: np.ndarray | None = None,
+    propagated: np.ndarray | None = None,
 ) -> dict[str, float | str | None]:
     """Cramér–Rao prediction of the calibrated model's validation RMS (mm, mrad).
 
-    ``withheld`` is None, or why the prediction is not given (:func:`prediction_caveat`;
-    the RMS entries are then None).
+    ``propagated`` (default ``covariance``) is propagated through the Jacobian at
+    ``values`` (the full parameter vector it was evaluated at; None: nominal), the
+    caveat judges ``covariance``. ``withheld`` is None, or why the prediction is not
+    given (:func:`prediction_caveat`; the RMS entries are then None).
     """
     cols = [params.index(n) for n in names]
     units = tuple(params.units[c] for c in cols)
@@ -270,7 +273,8 @@ def _prediction(
         none = {f"{w}_rms_{k}": None for w in ("model", "observed")
                 for k in ("position_mm", "orientation_mrad")}  # fmt: skip
         return {**none, "withheld": caveat}
-    J = identification_jacobian(nominal, params, q_rows, components=COMPONENTS,
+    cov = covariance if propagated is None else propagated
+    J = identification_jacobian(nominal, params, q_rows, values, components=COMPONENTS,
                                 conditions=conditions)  # fmt: skip
     J = J.reshape(len(q_rows), 6, len(params))[:, :, cols]
     out: dict[str, float | str | None] = {"withheld": None}
@@ -281,7 +285,7 @@ def _prediction(
         if not idx:
             out[f"model_rms_{key}"] = out[f"observed_rms_{key}"] = None
             continue
-        model = predicted_validation_rms(J[:, idx, :], covariance) * np.sqrt(len(idx))
+        model = predicted_validation_rms(J[:, idx, :], cov) * np.sqrt(len(idx))
         out[f"model_rms_{key}"] = float(model * 1e3)
         out[f"observed_rms_{key}"] = (
             None if sigma is None else float(np.sqrt(model**2 + len(idx) * sigma**2) * 1e3)
@@ -301,6 +305,8 @@ def validate_held_out(
     joints: np.ndarray | None = None,
     covariance_kind: str = "cramer-rao",
     shift: np.ndarray | None = None,
+    values: np.ndarray | None = None,
+    propagated: np.ndarray | None = None,
 ) -> HeldOutValidation:
     """Before (nominal) / after (calibrated) errors on held-out measurements.
 
@@ -325,9 +331,20 @@ def validate_held_out(
             (None: the commands ``meas.q_act``; a geometric calibration).
         shift: (m, 3) world position change of the measured frame the joint terms add
             to the calibrated predictions [m] (a thermal expansion of the links), or None.
-        covariance_kind: which covariance ``covariance`` is (a key of
-            :data:`pincal.identification.COVARIANCE_KINDS`: ``cramer-rao`` only for the
-            linear one at a declared noise); recorded as the prediction's ``covariance``.
+        covariance_kind: which covariance the prediction propagates (``propagated``,
+            else ``covariance``; a key of :data:`pincal.identification.COVARIANCE_KINDS`:
+            ``cramer-rao`` only for the linear one at a declared noise); recorded as the
+            prediction's ``covariance``.
+        values: (n,) the full parameter vector of ``params`` at which the covariance
+            was evaluated [SI] (the fit's solution); the prediction's Jacobian is taken
+            there, since a covariance only cancels the directions the data do not see
+            against the Jacobian of its own point (None: the nominal; on a machine whose
+            Jacobian changes over the fit's move, the 2-RSU ankle, J at the nominal
+            against the covariance at the solution predicted 0.24 mm for 0.018 mm).
+        propagated: (k, k) the covariance propagated to the prediction [SI] (None:
+            ``covariance``): the linear one when ``covariance`` was widened for the
+            parameters' curvature (:func:`pincal.identification.prediction_covariance`);
+            ``covariance`` still decides whether the prediction is withheld.
 
     Returns:
         The :class:`HeldOutValidation`.
@@ -358,7 +375,7 @@ def validate_held_out(
                   for k, v in (meas.conditions or {}).items()}  # fmt: skip
     cov = np.asarray(covariance, dtype=float)
     predicted = _prediction(nominal, params, names, cov, q_rows, pos, [3 + k for k in rot], noise,
-                            conditions)  # fmt: skip
+                            conditions, values, propagated)  # fmt: skip
     if held_weak and predicted["withheld"] is None:
         more = " …" if len(held_weak) > 5 else ""
         predicted = {k: None for k in predicted}

@@ -17,9 +17,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from pincal.compensation import JointTermCorrection
 from pincal.errors import ConditionError
-from pincal.identification import HeldOutEvidence, covariance_kind
+from pincal.identification import HeldOutEvidence, prediction_covariance
 from pincal.io import (
     CalibrationDirectory,
     read_marker_sets,
@@ -167,6 +169,8 @@ def validate_on_data(
         )
     result = cal.result
     markers_doc = cal.manifest.get("markers") or {}
+    source = None if result.weighting is None else result.weighting.source
+    propagated, kind = prediction_covariance(result.annotations, result.covariance, source)
     validation = validate_held_out(
         held.nominal,
         cal.calibrated(),
@@ -177,12 +181,26 @@ def validate_on_data(
         meas.noise or cal.noise,
         tuple(markers_doc.get("held_weak") or ()),
         None if terms is None else meas.q_act + terms.deflection(meas.q_act, meas.conditions),
-        covariance_kind(result.annotations,
-                        None if result.weighting is None else result.weighting.source),
+        kind,
         None if terms is None else terms.shift(meas.q_act, meas.conditions),
+        _solution(result.names, result.full_values, held.params),
+        propagated,
     )  # fmt: skip
     markers = marker_errors(held.nominal, cal.calibrated(), held.more) if held.more else []
     transfer = None
     if markers_doc.get("instrument_frame") == "unknown":
         transfer = transfer_markers(cal, held.path, TRANSFER_FOLDS, seed)
     return DataValidation(held, validation, markers, transfer, terms_line)
+
+
+def _solution(
+    names: tuple[str, ...] | list[str], full_values: np.ndarray, params: ParameterSet
+) -> np.ndarray | None:
+    """(n,) the fit's values in the order of ``params`` [SI], or None.
+
+    Its covariance was evaluated there; None when the record lacks a name of ``params``.
+    """
+    index = {n: k for k, n in enumerate(names)}
+    if any(n not in index for n in params.names):
+        return None
+    return np.array([full_values[index[n]] for n in params.names], dtype=float)

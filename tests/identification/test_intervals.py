@@ -13,6 +13,7 @@ from pincal.identification import (
     covariance_kind,
     identify,
     interval_quantiles,
+    prediction_covariance,
     result_intervals,
 )
 from pincal.model import sample_actuators
@@ -70,6 +71,29 @@ def test_the_covariance_is_called_cramer_rao_only_when_linear_at_declared_noise(
                                                                                 kind):  # fmt: skip
     notes = {} if unc is None else {"quality": {"uncertainty": unc}}
     assert covariance_kind(notes, source) == kind
+
+
+
+@pytest.mark.parametrize(("source", "kind"), [("declared", "cramer-rao"), ("estimated", "linear")])
+def test_a_prediction_propagates_the_linear_covariance_of_a_widened_one(source, kind):
+    written, linear = np.diag([4.0, 9.0]), np.diag([1.0, 2.0])
+    notes = {"quality": {"uncertainty": {"method": "inflated",
+                                         "linear_covariance": linear.tolist()}}}  # fmt: skip
+    cov, got = prediction_covariance(notes, written, source)
+    assert got == kind
+    assert np.array_equal(cov, linear)
+
+
+def test_without_a_recorded_linear_covariance_the_written_one_is_propagated():
+    written = np.diag([4.0, 9.0])
+    old = {"quality": {"uncertainty": {"method": "inflated"}}}  # an older record
+    cov, kind = prediction_covariance(old, written, "declared")
+    assert (kind, np.array_equal(cov, written)) == ("inflated", True)
+    bad = {"quality": {"uncertainty": {"method": "inflated", "linear_covariance": [[1.0]]}}}
+    cov, kind = prediction_covariance(bad, written, "declared")  # not this record's shape
+    assert (kind, np.array_equal(cov, written)) == ("inflated", True)
+    cov, kind = prediction_covariance({}, written, "declared")
+    assert (kind, np.array_equal(cov, written)) == ("cramer-rao", True)
 
 
 @pytest.mark.slow
