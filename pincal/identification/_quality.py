@@ -204,7 +204,8 @@ def check_quality(
         scalar_instrument: the result is an instrument-file fit (ballbar, probe, plane,
             sockets…): its χ² is judged against the files' σ (the result's
             ``redundancy`` annotation gives ν), not by the misspecification probes.
-            Parameter changes and an unfinished solve refuse as on the pose route (they
+            Parameter changes and an unfinished solve refuse as on the pose route — a
+            change within 3σ of its own uncertainty only warns (``changes``) — (they
             were warnings once: the directions near a gauge that let parameters drift
             are now held at nominal by the fit's placement bound, and a wrong
             ``joint_reference`` fits as well as the right one with ≈ 300 mm changes).
@@ -305,7 +306,7 @@ def check_quality(
     issues += fit_issues
     if profile is not None and source == "estimated" and w is not None:
         issues += profile_issues(w, profile, lim)
-    issues += changes(result, lim)
+    issues += changes(result, lim, weighed=scalar_instrument)
     if serial is not None:  # refuses when a probe fired on it, warns otherwise
         issues.append(QualityIssue("model", fired is not None, serial.describe()))
     if fired is not None and (serial is None or fired.name != "drift"):

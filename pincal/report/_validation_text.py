@@ -86,7 +86,7 @@ def validation_text(
             f"   {_fmt(num('model_rms_orientation_mrad'))}",
             f"  {name + ' + noise':18s} {_fmt(num('observed_rms_position_mm'))}  {'':9s}"
             f"   {_fmt(num('observed_rms_orientation_mrad'))}",
-            f"  (predicted from {_the(COVARIANCE_KINDS.get(kind, kind))})",
+            f"  (predicted from the {COVARIANCE_KINDS.get(kind, kind)})",
         ]
     lines += [
         "",
@@ -121,8 +121,3 @@ def marker_errors_text(errors: Sequence[MarkerErrors]) -> str:
                      f"{d['after_max_position_mm']:.4f} mm); the table above: the first "
                      "marker\n")  # fmt: skip
     return "".join(lines)
-
-
-def _the(words: str) -> str:
-    """``words`` with the article "the" in front, once (a kind's text may start with it)."""
-    return words if words.startswith("the ") else f"the {words}"

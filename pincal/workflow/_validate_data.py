@@ -13,7 +13,7 @@ written: the outcome is one :class:`DataValidation`.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -186,11 +186,28 @@ def validate_on_data(
         _solution(result.names, result.full_values, held.params),
         propagated,
     )  # fmt: skip
+    unseen = _unobserved(result.joint.gauge if result.joint is not None else ())
+    if unseen and validation.predicted.get("withheld") is None:
+        why = (f"the readings the calibration was fitted on do not observe all that these "
+               f"poses measure ({'; '.join(unseen)}); those errors are the nominal model's "
+               "and not in the covariance, so a prediction would be optimistic")  # fmt: skip
+        predicted = {k: None for k in validation.predicted} | {
+            "withheld": why, "covariance": validation.predicted.get("covariance")}
+        validation = replace(validation, predicted=predicted)
     markers = marker_errors(held.nominal, cal.calibrated(), held.more) if held.more else []
     transfer = None
     if markers_doc.get("instrument_frame") == "unknown":
         transfer = transfer_markers(cal, held.path, TRANSFER_FOLDS, seed)
     return DataValidation(held, validation, markers, transfer, terms_line)
+
+
+#: the starts of a joint fit's gauge lines naming what its data did not determine
+_UNSEEN = ("not observed", "absorbed", "seen too weakly")
+
+
+def _unobserved(gauge: tuple[str, ...] | list[str]) -> list[str]:
+    """The gauge lines of a joint fit (instrument readings) naming what it left unseen."""
+    return [line for line in gauge if line.startswith(_UNSEEN)]
 
 
 def _solution(

@@ -59,3 +59,17 @@ def test_a_held_out_reading_is_predicted_without_itself(ballbar, tmp_path):
     cv = json.loads(_run("validate", tmp_path / "cal", "--cv", "4", "--json"))["cv"]
     assert cv["fit_rms_mm"] * 40**0.5 < 1.0  # the fit with the reading absorbs it
     assert cv["held_out_max_mm"] > 1.9
+
+
+def test_a_ballbar_calibration_predicts_no_pose_error_it_did_not_observe(ballbar, tmp_path):
+    """A ballbar sees distances only: validated on full poses, the absolute position and
+    the orientation it never observed keep the nominal error, so no prediction is made
+    (it gave 0.77 mm against 1.59 mm achieved on a 3-PRS head)."""
+    _run("calibrate", "stewart_6ups", "--data", ballbar, "--out", tmp_path / "cal")
+    _run("simulate", "stewart_6ups", "--random", "10", "--seed", "5", "--out",
+         tmp_path / "poses.csv")  # fmt: skip
+    doc = json.loads(_run("validate", tmp_path / "cal", "--data", tmp_path / "poses.csv",
+                          "--json"))  # fmt: skip
+    predicted = doc["predicted"]
+    assert predicted["model_rms_position_mm"] is None
+    assert "do not observe" in predicted["withheld"] and "absolute tool" in predicted["withheld"]
