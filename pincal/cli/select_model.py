@@ -53,6 +53,8 @@ def select_model_cmd(
     best. The recommendation is the smallest model within one standard error of the
     best: a term that does not lower the held-out error by more than its scatter does
     not pay. A marker table adds the registration-only model (the robot uncalibrated).
+    Of the default list, a model whose terms the machine cannot take (compliance
+    without link masses, harmonics on a prismatic actuator) is left out and said.
 
     \b
     Examples:
@@ -74,6 +76,7 @@ def select_model_cmd(
         raise click.BadParameter("a payload is not used with a marker table (--link) yet",
                                  param_hint="--payload")  # fmt: skip
     say = lambda line: click.echo(f"… {line}", err=True)  # noqa: E731
+    default = models == DEFAULT_MODELS  # the default list: leave out what does not apply
     if link is not None:
         from pincal.cli._markers import setup_from_options
 
@@ -88,10 +91,11 @@ def select_model_cmd(
         lock_spec = ",".join(f"{a}={v!r}" for a, v in model_opts.lock.items()) or None
         setup = setup_from_options(link, instrument_frame, marker_spec, marker_columns,
                                    length_unit, lock_spec)  # fmt: skip
-        sel = select_marker_model(model, data, setup, preset, specs, method, k, seed, say)
+        sel = select_marker_model(model, data, setup, preset, specs, method, k, seed, say,
+                                  default)  # fmt: skip
     else:
         mech = carrying(load_model(model, model_opts), load)
-        sel = select_pose_model(mech, data, preset, specs, method, k, seed, say)
+        sel = select_pose_model(mech, data, preset, specs, method, k, seed, say, default)
     if as_json:
         click.echo(json.dumps(sel.to_dict()))
     else:

@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+from pincal.errors import ParameterError
 from pincal.identification import (
     Fitted,
     ModelSelection,
@@ -30,6 +31,37 @@ __all__ = ["select_marker_model", "select_pose_model"]
 
 #: a candidate fitting procedure: training measurements → predictor
 Procedure = Callable[[Measurements], Fitted]
+
+
+def _applicable(
+    mech: Mechanism,
+    preset: str,
+    models: list[str],
+    skip: bool,
+    progress: Callable[[str], None] | None,
+) -> list[str]:
+    """The candidate models whose parameters ``mech`` has.
+
+    With ``skip`` an inapplicable one (a compliance term on a model without link
+    masses…) is left out and said through ``progress``; else its error is raised.
+
+    Raises:
+        ParameterError: a model that does not apply (``skip`` False), or none applies.
+    """
+    kept = []
+    for spec in models:
+        try:
+            parameters(mech, "+".join([preset, *split_model(spec)]))
+        except ParameterError as exc:
+            if not skip:
+                raise
+            if progress is not None:
+                progress(f"left out {spec}: {exc}")
+            continue
+        kept.append(spec)
+    if not kept:
+        raise ParameterError(f"none of the models {', '.join(models)} applies to {mech.name!r}")
+    return kept
 
 
 def _pose_candidates(
@@ -82,6 +114,7 @@ def select_pose_model(
     k: int = 5,
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
+    skip_inapplicable: bool = False,
 ) -> ModelSelection:
     """Rank error models on a pose measurement file by K-fold held-out position error.
 
@@ -95,13 +128,20 @@ def select_pose_model(
         k: the number of folds.
         seed: the seed of the folds.
         progress: called with a line before the long step.
+        skip_inapplicable: leave out (and say) a model whose terms ``mech`` cannot
+            take, e.g. a compliance without link masses (the default list), instead
+            of raising.
 
     Returns:
         The ranking (:class:`pincal.identification.ModelSelection`).
+
+    Raises:
+        ParameterError: a model does not apply (see ``skip_inapplicable``).
     """
     meas = read_measurement_file(data, mech).measurements
-    candidates = _pose_candidates(mech, preset or next(iter(mech.presets), "full"), models,
-                                  method)  # fmt: skip
+    preset = preset or next(iter(mech.presets), "full")
+    models = _applicable(mech, preset, models, skip_inapplicable, progress)
+    candidates = _pose_candidates(mech, preset, models, method)
     return _rank(candidates, meas, k, seed, progress)
 
 
@@ -115,6 +155,7 @@ def select_marker_model(
     k: int = 5,
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
+    skip_inapplicable: bool = False,
 ) -> ModelSelection:
     """Rank error models on a marker table, the registration alone among them.
 
@@ -128,11 +169,16 @@ def select_marker_model(
         k: the number of folds.
         seed: the seed of the folds.
         progress: called with a line before the long step.
+        skip_inapplicable: as :func:`select_pose_model`.
 
     Returns:
         The ranking (:class:`pincal.identification.ModelSelection`).
+
+    Raises:
+        ParameterError: a model does not apply (see ``skip_inapplicable``).
     """
     mech = marker_mechanism(model, setup)
     meas = read_marker_table(data, mech, setup)
+    models = _applicable(mech, preset or "chain", models, skip_inapplicable, progress)
     candidates = _marker_candidates(mech, setup, preset or "chain", models, method)
     return _rank(candidates, meas, k, seed, progress)
