@@ -221,6 +221,9 @@ def main() -> None:
     ap.add_argument("--targets", type=int, default=10, help="compensated targets (--cells)")
     ap.add_argument("--out", default=None, help="append one JSON line per draw")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--only", default=None,
+                    help="NAME,... run only these cells, each with the draws it has in the "
+                         "full list (to run the cells in parallel processes)")  # fmt: skip
     args = ap.parse_args()
     mech = with_payload(load_mechanism(STEWART), Payload(PAYLOAD[0], tuple(PAYLOAD[1])))
     params = with_joint_terms(mech, parameters(mech, "stewart42"), ("compliance",))
@@ -236,7 +239,10 @@ def main() -> None:
     print("cell (sag [mm])   Mahalanobis/n all | compliances   "
           + ("| RMS miss [µm] compliance cal | geometric cal | nominal   " if n_targets else "")
           + "(draws, seconds)")  # fmt: skip
+    only = None if args.only is None else set(args.only.split(","))
     for k, (name, lo, hi) in enumerate(cells):
+        if only is not None and name not in only:
+            continue
         rng = np.random.default_rng([args.seed, k])
         t0 = time.perf_counter()
         rows = []
