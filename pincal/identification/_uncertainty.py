@@ -356,7 +356,7 @@ def prediction_covariance(
     if lin is not None:
         cov = np.asarray(lin, dtype=float)
         if cov.shape == written.shape:
-            return cov, ("cramer-rao" if noise_source in ("declared", "per-pose") else "linear")
+            return cov, covariance_kind({}, noise_source)  # the linear one, by its noise
     return written, covariance_kind(annotations, noise_source)
 
 

@@ -2,30 +2,16 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import pincal
 from pincal.model import dh_fk
+from tests.studies.scripts import load_script
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def _load(folder, name):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / folder / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-script = _load("studies", "aacmm_calibration")
-build = _load("models", "build_aacmm")
+script = load_script("aacmm_calibration")
+build = load_script("build_aacmm", "models")
 
 
 def test_identifiability_names_the_five_position_blind_dh_errors():

@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -13,20 +9,10 @@ from pincal.model import (
     DHError,
     dh_fk,
 )
+from tests.studies.scripts import load_script
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def _load(folder, name):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / folder / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-script = _load("studies", "aacmm_error_model")
-build = _load("models", "build_aacmm")
+script = load_script("aacmm_error_model")
+build = load_script("build_aacmm", "models")
 ROWS = script.table2_rows()
 COARSE = {(11, 2): 5e-3}  # row 11's z is printed with two decimals
 

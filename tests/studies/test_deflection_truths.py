@@ -8,29 +8,14 @@ the exact strut elongation.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pinocchio as pin
 
 from pincal.model import actual_joint_values, strut_loads
+from tests.studies.scripts import load_script
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def _load(name):
-    path = ROOT / "scripts" / "studies" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-hexa = _load("hexaslide_deflection")
-arm = _load("arm_deflection")
+hexa = load_script("hexaslide_deflection")
+arm = load_script("arm_deflection")
 
 
 def _hexaslide(seed: int, sag: float):

@@ -2,25 +2,12 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+from tests.studies.scripts import load_script
 
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / "studies" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-script = _load("nongeometric_recovery")
+script = load_script("nongeometric_recovery")
 
 
 @pytest.mark.slow  # ~40 s; joint terms recovered fast: tests/identification/test_model_selection

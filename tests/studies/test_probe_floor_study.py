@@ -7,22 +7,9 @@ and the rates' standard errors is in docs/quality_gate.md.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def _load():
-    path = ROOT / "scripts" / "studies" / "probe_floor.py"
-    spec = importlib.util.spec_from_file_location("probe_floor_study", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["probe_floor_study"] = module
-    spec.loader.exec_module(module)
-    return module
+from tests.studies.scripts import load_script
 
 
 def _refused(verdict) -> bool:
@@ -33,7 +20,7 @@ def _refused(verdict) -> bool:
 def test_gain_errors_above_the_floor_are_caught_and_below_pass_saying_so():
     """A gain error at 1.5× the stated floor, on each actuator, is refused ≥ 90 %; at 0.5×
     on the floor's own scale the passing fits state what they cannot see."""
-    study = _load()
+    study = load_script("probe_floor", module="probe_floor_study")
     above, below, stated = [], [], []
     for seed in range(6):
         mech, params, meas, *_ = study._draw(100 + seed, 50)
@@ -56,7 +43,7 @@ def test_gain_errors_above_the_floor_are_caught_and_below_pass_saying_so():
 def test_ar1_noise_is_named_correlated_never_a_model_error():
     """AR(1) noise (ρ = 0.8) along the pose order: every fit names the correlation, and no
     refusal names a drift, gain or trend (its probe fires on the correlation)."""
-    study = _load()
+    study = load_script("probe_floor", module="probe_floor_study")
     named, misnamed = 0, 0
     draws = 10
     for seed in range(draws):

@@ -2,24 +2,11 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def _load():
-    path = ROOT / "scripts" / "studies" / "quality_gate.py"
-    spec = importlib.util.spec_from_file_location("quality_gate_study", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["quality_gate_study"] = module
-    spec.loader.exec_module(module)
-    return module
+from tests.studies.scripts import load_script
 
 
 def test_one_fit_per_cell_reports_rates(capsys):
-    study = _load()
+    study = load_script("quality_gate", module="quality_gate_study")
     cells = "clean, Stewart, declared;1 % leg gain"
     assert study.main(["--fits", "1", "--poses", "40", "--cells", cells]) == 0
     out = capsys.readouterr().out
