@@ -38,8 +38,10 @@ class CompensatedProgram:
         targets: the number of distinct targets among them (each compensated once).
         lines: the number of lines of the program.
         components: the components rewritten (x y z rx ry rz order).
-        largest_correction_mm: the largest distance T → T' [mm].
-        largest_correction_mrad: the largest rotation angle T → T' [mrad].
+        largest_correction_mm: the largest distance T → T' over the position axes the
+            program controls [mm].
+        largest_correction_mrad: the largest change of the angles A B C the program
+            controls, as a vector norm [mrad].
     """
 
     text: str
@@ -125,12 +127,17 @@ def compensate_program(
     new: dict[int, dict[str, float]] = {}
     worst_p = worst_r = 0.0
     q = nominal.q_home
+    # the correction over the axes the program controls (the others are not written)
+    moved = [i for i, a in enumerate("XYZ") if a in axes]
+    turned = [i for i, a in enumerate("ABC") if a in axes]
     for k, T in enumerate(targets):
         q = nominal.configuration(result.q_act[k], q)
         Tc = nominal.frame_placement(q)
-        worst_p = max(worst_p, float(np.linalg.norm(Tc.translation - T.translation)))
-        worst_r = max(worst_r, float(np.linalg.norm(pin.log3(T.rotation.T @ Tc.rotation))))
+        worst_p = max(worst_p, float(np.linalg.norm((Tc.translation - T.translation)[moved])))
         abc = np.degrees(pin.rpy.matrixToRpy(R_home.T @ Tc.rotation))
+        abc_t = np.degrees(pin.rpy.matrixToRpy(R_home.T @ T.rotation))
+        turn = (abc - abc_t + 180.0) % 360.0 - 180.0  # [deg], wrapped
+        worst_r = max(worst_r, float(np.linalg.norm(np.radians(turn)[turned])))
         for line in lines_of[k]:
             unit = 25.4e-3 if inch_of[line] else 1e-3
             vals = dict(zip("XYZ", Tc.translation / unit, strict=True))

@@ -116,3 +116,32 @@ def test_an_unreachable_target_refuses_the_whole_program(stewart_calibration, tm
                                     str(src), "--out", str(out)])  # fmt: skip
     assert res.exit_code == 1 and "line 2" in res.stderr and "nothing written" in res.stderr
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_correction_said_over_the_axes_the_program_controls(tmp_path):
+    """A 3-PRS head controls Z A B: the largest correction printed is that of the written
+    Z and A B (it said 23 mm, the parasitic x y the program does not write)."""
+    from tests.open_world.prs3_head import write_prs3_head
+
+    model = write_prs3_head(tmp_path)
+    run = CliRunner().invoke
+    sim = run(main, ["simulate", str(model), "--random", "40", "--noise", "0,0", "--out",
+                     str(tmp_path / "m.csv")])  # fmt: skip
+    assert sim.exit_code == 0, sim.output
+    res = run(main, ["calibrate", str(model), "--data", str(tmp_path / "m.csv"), "--params",
+                     "base", "--out", str(tmp_path / "cal")])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    src, out = tmp_path / "p.nc", tmp_path / "p_c.nc"
+    src.write_text("G0 Z440 A0 B0\nG1 Z430 A5 B-2\nG1 Z420 A0 B10\n")
+    res = run(main, ["compensate", str(tmp_path / "cal"), "--program", str(src), "--out",
+                     str(out), "--json"])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout)
+    old, new = read_gcode(src.read_text()).moves, read_gcode(out.read_text()).moves
+    dz = max(abs(n.values["Z"] - o.values["Z"]) for o, n in zip(old, new, strict=True))
+    dab = max(np.hypot(*np.radians([n.values[a] - o.values[a] for a in "AB"])) * 1e3
+              for o, n in zip(old, new, strict=True))  # fmt: skip
+    assert dz > 0.1  # the calibration moves the program
+    assert summary["largest_correction_mm"] == pytest.approx(dz, abs=1e-3)
+    assert summary["largest_correction_mrad"] == pytest.approx(dab, abs=1e-3)
