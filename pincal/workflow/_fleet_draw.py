@@ -56,6 +56,7 @@ def draw_fleet(
     offset_mrad: float = 2.0,
     planted: int | None = None,
     shift: float = 8.0,
+    free: np.ndarray | None = None,
 ) -> FleetDraw:
     """Draw a fleet's true parameter errors (see the module doc).
 
@@ -69,6 +70,9 @@ def draw_fleet(
         offset_mrad: bound of the uniform line offset of angles [mrad].
         planted: out-of-family units (default max(1, round(0.03 N))), < N / 2.
         shift: a faulty part's shift in production σ (±, random sign per parameter).
+        free: (n,) 1 where a built machine can have an error, 0 where not (a
+            translation inside an emulated joint, a loop-breaking offset:
+            :func:`pincal.workflow.buildable_mask`); None: every parameter.
 
     Returns:
         The :class:`FleetDraw`.
@@ -90,13 +94,15 @@ def draw_fleet(
     children = np.random.SeedSequence(seed).spawn(n_units + 1)
     rng = np.random.default_rng(children[0])
     metric = np.array([u == "m" for u in params.units])
-    spread = np.where(metric, spread_mm, spread_mrad) * 1e-3
-    bound = np.where(metric, offset_mm, offset_mrad) * 1e-3
+    free = np.ones(len(params)) if free is None else np.asarray(free, dtype=float)
+    spread = np.where(metric, spread_mm, spread_mrad) * 1e-3 * free
+    bound = np.where(metric, offset_mm, offset_mrad) * 1e-3 * free
     offset = rng.uniform(-bound, bound)
     values = offset + spread * rng.standard_normal((n_units, len(params)))
     groups: dict[str, list[int]] = {}
     for j, name in enumerate(params.names):
-        groups.setdefault(name.rsplit(".", 1)[0], []).append(j)
+        if free[j]:
+            groups.setdefault(name.rsplit(".", 1)[0], []).append(j)
     prefixes = sorted(groups)
     faulty: dict[int, dict[str, float]] = {}
     for unit in sorted(int(u) for u in rng.choice(n_units, size=k, replace=False)):

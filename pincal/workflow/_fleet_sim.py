@@ -14,6 +14,7 @@ from typing import Any
 from pincal.measure import Measurements, NoiseModel
 from pincal.model import Mechanism, ParameterSet, load_mechanism
 from pincal.sensitivity import parameters
+from pincal.workflow._buildable import buildable_mask
 from pincal.workflow._fleet_draw import FleetDraw, draw_fleet, simulate_unit
 
 __all__ = ["FleetPlan", "plan_fleet"]
@@ -104,8 +105,9 @@ def plan_fleet(
     nominal = load_mechanism(model)
     preset = preset or next(iter(nominal.presets), "full")
     params = parameters(nominal, preset)
+    free = buildable_mask(nominal, params, nominal.actuators_of(nominal.q_home)[None])
     draw = draw_fleet(params, n_units, seed, spread_mm=spread[0], spread_mrad=spread[1],
-                      planted=planted, shift=shift)  # fmt: skip
+                      planted=planted, shift=shift, free=free)  # fmt: skip
     ids = tuple(f"SN-{i + 1:04d}" for i in range(n_units))
     return FleetPlan(model, nominal, preset, params, draw, ids, seed, n_poses, spread, shift,
                      NoiseModel(*noise))  # fmt: skip

@@ -14,7 +14,6 @@ import logging
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from pincal.errors import ClosureError
 from pincal.model import Mechanism, load_mechanism
@@ -54,21 +53,39 @@ def _truth(mech: Mechanism):
     return params, truth
 
 
-def test_perturbed_loop_past_the_dead_point_is_assembled_beside_home(tmp_path):
-    mech = _fourbar(tmp_path)
-    params, truth = _truth(mech)
-    actual = params.apply(mech, truth)
-    assert np.max(np.abs(actual.closure_residual(actual.q_home))) < 1e-12
-    assert any("dead point" in note for note in actual.notes)
-    # the nearest closed configuration: the crank moved a few hundredths of a radian
-    step = np.abs(actual.q_home - mech.q_home)
-    assert 1e-3 < step.max() < 0.2, step
+#: scales of STALLING_ERROR tried: which of them stalls Newton at home depends on the
+#: LAPACK's rounding at the dead point (1.0 on the machine that showed it; 0.75 and 1.75
+#: on numpy 2.4 / OpenBLAS), so the tests scan them
+SCALES = np.linspace(0.25, 3.0, 23)
 
 
-def test_without_the_nearby_start_newton_at_home_stalls(tmp_path, monkeypatch):
-    """The case above is one where the plain Newton from home does fail."""
+def _stalls(mech: Mechanism, params, truth, monkeypatch) -> list[float]:
+    """The scales at which the plain Newton from home (no nearby start) stays open."""
+    with monkeypatch.context() as m:
+        m.setattr(Assembly, "_nearby_assembly", lambda self, guess, free: None)
+        stalled = []
+        for s in SCALES:
+            try:
+                params.apply(mech, s * truth)
+            except ClosureError as exc:
+                assert "stays open" in str(exc)
+                stalled.append(float(s))
+    return stalled
+
+
+def test_perturbed_loop_past_the_dead_point_is_assembled_beside_home(tmp_path, monkeypatch):
+    """Every error of the scan that stalls the plain Newton at home (there is one: the
+    case is real) is assembled from a start beside home, said in a note; the others
+    close as before."""
     mech = _fourbar(tmp_path)
     params, truth = _truth(mech)
-    monkeypatch.setattr(Assembly, "_nearby_assembly", lambda self, guess, free: None)
-    with pytest.raises(ClosureError, match="stays open"):
-        params.apply(mech, truth)
+    stalled = _stalls(mech, params, truth, monkeypatch)
+    assert stalled, "no scale of the error stalls Newton at home: the case is gone"
+    for s in SCALES:
+        actual = params.apply(mech, s * truth)
+        assert np.max(np.abs(actual.closure_residual(actual.q_home))) < 1e-12
+        if s in stalled:
+            assert any("dead point" in note for note in actual.notes), s
+            # the nearest closed configuration: the crank moved a few hundredths of a radian
+            step = np.abs(actual.q_home - mech.q_home)
+            assert 1e-3 < step.max() < 0.2, (s, step)
