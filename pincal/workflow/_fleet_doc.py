@@ -65,20 +65,26 @@ def fleet_report(
     return FleetReport(fleet_document(fleet, results, stats, alpha, out_rel), warning)
 
 
-def _test_text(alpha: float, units: int, dof: int | None, threshold: float | None) -> str:
-    if dof is None:
+def _test_text(alpha: float, units: int, stats: FleetStatistics | None) -> str:
+    if stats is None:
         return (
             f"no out-of-family test: it needs at least 3 calibrated units, {units} were calibrated"
         )
+    bonferroni = stats.limit >= alpha / len(stats.units)
+    limit = (
+        f"α/M = {alpha:g}/{len(stats.units)} (Bonferroni"
+        if bonferroni
+        else f"{stats.limit:.3g}, calibrated by 200 fault-free fleets drawn from the fitted "
+        f"family (on {len(stats.units)} units α/M alone flags in-family units far more often"
+    )
     return (
         "Each calibrated unit's estimate x_u is compared with the fleet's robust centre c "
         "by D_u = (x_u − c)ᵀ (C_u + diag τ²)⁻¹ (x_u − c), with C_u the unit's own "
         "covariance and τ the production spread per parameter (maximum likelihood, robust: "
         "fitted on the 3/4 nearest units, then on every unit not rejected at p < 0.001); "
-        "in family D_u ~ "
-        f"χ²({dof}). A unit is out of family when its p-value is below α/M = {alpha:g}/"
-        f"{units} (Bonferroni: at most {100 * alpha:g} % chance of one or more false "
-        f"flags in this fleet), i.e. D_u > {threshold:.1f}. Assumes independent Gaussian "
+        f"in family D_u ~ χ²({len(stats.names)}). A unit is out of family when its p-value "
+        f"is below {limit}: at most {100 * alpha:g} % chance of one or more false flags in "
+        f"this fleet), i.e. D_u > {stats.threshold:.1f}. Assumes independent Gaussian "
         "spread per parameter and linearised estimation errors."
     )
 
@@ -175,16 +181,12 @@ def fleet_document(
             "statistic": "squared Mahalanobis distance to the robust fleet centre, "
             "covariance = unit covariance + diag(production spread²)",
             "alpha": alpha,
-            "correction": "bonferroni",
-            "per_unit_p_threshold": None if stats is None else alpha / count["calibrated"],
+            "correction": "bonferroni" if stats is None or stats.limit >= alpha / len(stats.units)
+            else "calibrated by fault-free fleets",
+            "per_unit_p_threshold": None if stats is None else stats.limit,
             "dof": None if stats is None else len(stats.names),
             "distance_threshold": None if stats is None else stats.threshold,
-            "description": _test_text(
-                alpha,
-                count["calibrated"],
-                None if stats is None else len(stats.names),
-                None if stats is None else stats.threshold,
-            ),
+            "description": _test_text(alpha, count["calibrated"], stats),
         },
         "units": units,
         "parameters": params,

@@ -49,3 +49,16 @@ def test_detection_and_false_alarms_over_seeds():
         found += len(flagged & bad)
         false += len(flagged - bad)
     assert found >= 0.95 * 30 and false <= 5
+
+
+@pytest.mark.slow
+def test_small_fault_free_fleets_are_rarely_flagged():
+    """Fleets of 6 units of the test's own model, none faulty: with its limit at alpha/M
+    alone more than half of such fleets flagged a unit (τ fitted to the units it
+    judges); calibrated by fault-free fleets of the fitted family, at most 2 of 20
+    (alpha 1 %: 0.2 expected; 2 or more has chance 1.7 %)."""
+    flagged = sum(
+        any(v.out_of_family for v in fleet_statistics(_fleet(seed, 6, 5, 0, 0.0)[0]).units)
+        for seed in range(20)
+    )
+    assert flagged <= 2
