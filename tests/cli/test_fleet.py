@@ -8,6 +8,7 @@ import shutil
 
 import pytest
 from click.testing import CliRunner
+from scipy.stats import chi2
 
 from pincal.cli import main
 
@@ -49,7 +50,15 @@ def test_the_planted_unit_is_flagged_and_the_report_written(fleet_dir, serial):
         assert 0 <= u["p_value"] <= 1 and u["distance"] >= 0
         assert (serial / u["calibration"] / "calibration.json").is_file()
     doc = json.loads((serial / "fleet.json").read_text())
-    assert doc["test"]["per_unit_p_threshold"] == pytest.approx(0.01 / 8)
+    # 8 units < CALIBRATE_BELOW: the limit is calibrated by fault-free fleets, never above α/M
+    test = doc["test"]
+    assert test["correction"] == "calibrated by fault-free fleets"
+    assert 0 < test["per_unit_p_threshold"] <= 0.01 / 8
+    assert test["distance_threshold"] == pytest.approx(
+        chi2.isf(test["per_unit_p_threshold"], test["dof"]), rel=1e-9
+    )
+    for u in units:
+        assert u["out_of_family"] == (u["p_value"] < test["per_unit_p_threshold"])
     assert (serial / "fleet_parameters.png").stat().st_size > 1000
     assert "out of family: 1" in (serial / "fleet.md").read_text()
     assert "<img" in (serial / "fleet.html").read_text()
