@@ -47,7 +47,7 @@ def validate(
     poses are repeated, i.e. rows with the same actuator values) and the Cramér–Rao
     prediction from the calibration's covariance (without and with the instrument
     noise; withheld, with the reason, when the covariance is not valid or
-    ill-conditioned, a parameter's 2σ exceeds 20 mm / 0.1 rad, or parameters were held
+    ill-conditioned, a parameter's σ exceeds 20 mm / 0.1 rad, or parameters were held
     for weakness). Warns when --data is a file the calibration was fitted on. A --data
     file of more than 100000 rows is refused (with an estimate) unless --yes.
 

@@ -27,16 +27,14 @@ __all__ = ["changes", "chi2_issues", "left_misfit", "profile_issues"]
 SIGNIFICANT_CHANGE = 3.0
 
 
-def changes(
-    result: IdentificationResult, lim: GateLimits, weighed: bool = False
-) -> list[QualityIssue]:
+def changes(result: IdentificationResult, lim: GateLimits) -> list[QualityIssue]:
     """Parameters moved beyond their bound: machine parameters, registration unknowns.
 
-    ``weighed`` (instrument fits): a change beyond the bound but within
-    :data:`SIGNIFICANT_CHANGE` of the parameter's own σ is a warning — a direction the
-    readings see weakly, wandering within its uncertainty (a 3-RRR ballbar's base
-    coordinate 24 mm at σ 9 mm while the truth is within 1 mm) — not a refusal; a
-    runaway (a wrong joint reference: 300 mm at σ 0.45 mm) still refuses.
+    A change beyond the bound but within :data:`SIGNIFICANT_CHANGE` of the parameter's
+    own σ is a warning — a direction the readings see weakly, wandering within its
+    uncertainty (a 3-RRR ballbar's base coordinate 24 mm at σ 9 mm while the truth is
+    within 1 mm; a RUSR crank 22 mm at σ 12 mm) — not a refusal; a runaway (a wrong
+    joint reference: 300 mm at σ 0.45 mm) still refuses.
     """
     d = np.abs(np.asarray(result.full_values) - np.asarray(result.initial_values))
     sigma = np.full(d.size, np.inf)
@@ -58,12 +56,12 @@ def changes(
         size = _amount(float(d[worst]), str(units[worst]))
         hint = "; change the bound with --max-change" if kind == "change" else ""
         runaway = ~(d[over] <= SIGNIFICANT_CHANGE * sigma[over])  # NaN σ: a runaway
-        if weighed and not runaway.any():
+        if not runaway.any():
             hint = (f", {d[worst] / sigma[worst]:.2g}σ: within {SIGNIFICANT_CHANGE:g}σ of "
                     "their own uncertainty, directions the readings see weakly; more poses "
                     "or a second instrument placement would pin them")  # fmt: skip
         issues.append(QualityIssue(
-            kind, bool(runaway.any()) or not weighed,
+            kind, bool(runaway.any()),
             f"{over.size} {what} moved beyond {length * 1e3:g} mm / {angle:g} rad "
             f"(worst {result.names[worst]}: {size}{hint})",
         ))  # fmt: skip

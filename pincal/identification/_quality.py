@@ -306,7 +306,7 @@ def check_quality(
     issues += fit_issues
     if profile is not None and source == "estimated" and w is not None:
         issues += profile_issues(w, profile, lim)
-    issues += changes(result, lim, weighed=scalar_instrument)
+    issues += changes(result, lim)
     if serial is not None:  # refuses when a probe fired on it, warns otherwise
         issues.append(QualityIssue("model", fired is not None, serial.describe()))
     if fired is not None and (serial is None or fired.name != "drift"):

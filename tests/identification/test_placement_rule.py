@@ -1,7 +1,7 @@
-"""One bound for a parameter the poses do not place (issue 36): the fit's hold (1σ
-beyond 20 mm / 0.1 rad) and `validate`'s withheld prediction (2σ beyond it) both read
-:data:`pincal.sensitivity.PLACEMENT_BOUND`, so whatever the fit holds withholds the
-prediction, and the prediction also asks the kept parameters' 2σ to be inside it."""
+"""One bound for a parameter the poses do not place (issue 36): the fit's hold and
+`validate`'s withheld prediction (both 1σ beyond 20 mm / 0.1 rad) read
+:data:`pincal.sensitivity.PLACEMENT_BOUND` and one rule, so the prediction is withheld
+exactly where the fit holds."""
 
 from __future__ import annotations
 
@@ -30,9 +30,9 @@ def test_fit_and_validate_read_one_bound(factor):
     cov = np.linalg.inv(Jw.T @ Jw)
     caveat = prediction_caveat(NAMES, UNITS, cov)
     assert set(held) == ({0, 1} if factor > 1 else set())  # the fit: 1σ beyond the bound
-    if factor < 0.5:  # 2σ inside the bound: the prediction is given
+    if factor < 1:  # 1σ inside the bound: kept and predicted from
         assert caveat is None
-    else:  # 2σ beyond: withheld, naming exactly those parameters
+    else:  # 1σ beyond: held by the fit, and withheld, naming exactly those parameters
         assert caveat is not None and "a.tx" in caveat and "a.rx" in caveat
         assert "b.ty" not in caveat
     # the one bound, parameter by parameter
@@ -42,4 +42,4 @@ def test_fit_and_validate_read_one_bound(factor):
 def test_the_rule_is_said_in_one_wording():
     assert WeakBound(*PLACEMENT_BOUND).describe() == "20 mm / 0.1 rad (1σ)"
     msg = prediction_caveat(NAMES, UNITS, np.diag([(0.03) ** 2, 1e-6, 1e-10]))
-    assert msg is not None and "1 identified parameter is beyond 20 mm / 0.1 rad (2σ)" in msg
+    assert msg is not None and "1 identified parameter is beyond 20 mm / 0.1 rad (1σ)" in msg

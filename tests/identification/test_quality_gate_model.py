@@ -147,6 +147,24 @@ def test_registration_unknowns_have_their_own_bound(stewart, stewart42, clean):
     assert f"{names[-1]}: 5 %" in message and " mm;" not in message.split("worst")[1]
 
 
+@pytest.mark.parametrize("sigmas, refused", [(2.9, False), (3.1, True), (np.nan, True)])
+def test_a_change_beyond_the_bound_refuses_only_beyond_three_sigma(stewart, stewart42, clean,
+                                                                  sigmas, refused):
+    """Every route: a weakly seen parameter wandering 22 mm within 3σ of its own σ is
+    said (a warning naming the σ); a runaway, or a change with no finite σ, refuses."""
+    result = identify(stewart, stewart42, clean)
+    k = int(np.flatnonzero(np.asarray(result.units) == "m")[0])  # the first length
+    moved = result.initial_values.copy()
+    moved[k] += 0.022
+    std = np.asarray(result.std, dtype=float).copy()
+    std[int(np.cumsum(result.identified)[k]) - 1] = 0.022 / sigmas
+    fake = dataclasses.replace(result, full_values=moved, std=std)
+    issues = _changes(fake, GateLimits())
+    assert [(i.kind, i.refuse) for i in issues] == [("change", refused)]
+    assert result.names[k] in issues[0].message
+    assert ("σ: within 3σ of their own uncertainty" in issues[0].message) == (not refused)
+
+
 def test_probe_f_test_is_calibrated_and_sees_a_term():
     """Linear model, Gaussian noise: false alarms at the nominal rate; a term is found."""
     rng = np.random.default_rng(0)
