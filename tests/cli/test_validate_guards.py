@@ -39,9 +39,11 @@ def test_caveat_names_each_reason():
     corr = np.array([[1.0, 1 - 1e-12], [1 - 1e-12, 1.0]])
     msg = prediction_caveat(names, units, corr * np.outer(s, s))
     assert "ill-conditioned" in msg and "condition number" in msg
-    # a length whose 2σ is 40 mm (bound 20 mm at 2σ) is named with its 2σ
-    msg = prediction_caveat(names, units, np.diag([4e-4, 1e-6]))
-    assert "a.tx (2σ 40 mm)" in msg and "a.rx" not in msg
+    # a length whose σ is 40 mm (bound 20 mm at 1σ, the fit's hold rule) is named with it
+    msg = prediction_caveat(names, units, np.diag([1.6e-3, 1e-6]))
+    assert "a.tx (σ 40 mm)" in msg and "a.rx" not in msg
+    # σ 19 mm is kept by the fit, and predicted from
+    assert prediction_caveat(names, units, np.diag([0.019**2, 1e-6])) is None
 
 
 def test_validate_prints_the_reason_not_the_number(wedge, monkeypatch):
