@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
@@ -21,16 +21,38 @@ if TYPE_CHECKING:  # imported in the calls: the CLI starts without the model sta
 
 _F = TypeVar("_F", bound=Callable[..., object])
 
-__all__ = ["marker_options", "marker_settings", "setup_from_options"]
+__all__ = ["marker_options", "marker_settings", "marker_table_options", "setup_from_options"]
 
 #: the --orientation conventions (pincal.measure.ORIENTATIONS, listed without importing it)
 ORIENTATION_CHOICES = ("rpy-deg", "rpy-rad", "xyz-deg", "xyz-rad", "rotvec-deg", "rotvec-rad",
                        "quat-wxyz", "quat-xyzw")  # fmt: skip
 
 
+def _apply(f: _F, opts: list[Callable[[Any], Any]]) -> _F:
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+def marker_table_options(f: _F) -> _F:
+    """The options that read a marker table's positions (``pincal select-model``).
+
+    ``--link``, ``--instrument-frame``, ``--marker``, ``--marker-columns``,
+    ``--length-unit``: a command offers only the options it uses.
+    """
+    return _apply(f, _table_options())
+
+
 def marker_options(f: _F) -> _F:
-    """The marker-calibration options of ``pincal calibrate``."""
-    opts = [
+    """The marker-calibration options of ``pincal calibrate``.
+
+    Those of :func:`marker_table_options`, a marker body's orientation and the prior.
+    """
+    return _apply(f, [*_table_options(), *_calibration_options()])
+
+
+def _table_options() -> list[Callable[[Any], Any]]:
+    return [
         click.option("--link", default=None, metavar="LINK",
                      help="Measured link carrying the marker: read --data as a marker table "
                      "(instrument-frame positions + joint columns)."),
@@ -49,6 +71,11 @@ def marker_options(f: _F) -> _F:
                      "unknown offset each; a marker exported twice is used once."),
         click.option("--length-unit", type=click.Choice(["m", "mm", "um"]), default="m",
                      show_default=True, help="Unit of the marker columns."),
+    ]  # fmt: skip
+
+
+def _calibration_options() -> list[Callable[[Any], Any]]:
+    return [
         click.option("--orientation-columns", default=None, metavar="A,B,C[,D]",
                      help="A 6-D marker body: its orientation columns (e.g. roll,pitch,yaw, "
                      "or qw,qx,qy,qz): the body's pose on LINK is fitted, orientation "
@@ -64,9 +91,6 @@ def marker_options(f: _F) -> _F:
                      help="Gaussian prior on the machine's parameters about nominal (1σ) "
                      "[default: auto, its strength chosen by 5-fold cross-validation]."),
     ]  # fmt: skip
-    for opt in reversed(opts):
-        f = opt(f)
-    return f
 
 
 #: a given marker lies at most this far from its link's origin [m]

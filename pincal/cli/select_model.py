@@ -7,7 +7,7 @@ import json
 import click
 
 from pincal.cli._joint_terms import carrying, payload_option, read_payload
-from pincal.cli._markers import marker_options
+from pincal.cli._markers import marker_table_options
 from pincal.cli._paths import guard_paths
 from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_input, model_options
 
@@ -37,13 +37,12 @@ DEFAULT_MODELS = (
                 "tool frame), e.g. 20,0,0,0.1: part of the load a compliance term sees.")
 @click.option("--json", "as_json", is_flag=True, help="Print the ranking as JSON on stdout.")
 @model_options
-@marker_options
+@marker_table_options
 @fail_cleanly
 def select_model_cmd(
     model: str, data: str, preset: str | None, models: str, k: int, seed: int, method: str,
     payload: str | None, as_json: bool, model_opts: ModelOptions, link: str | None,
     instrument_frame: str, marker_spec: str, marker_columns: tuple[str, ...], length_unit: str,
-    orientation_columns: str | None, orientation: str | None, prior_spec: str | None,
 ) -> None:  # fmt: skip
     """Fit candidate error models and rank them by K-fold held-out position error.
 
@@ -80,14 +79,6 @@ def select_model_cmd(
     if link is not None:
         from pincal.cli._markers import setup_from_options
 
-        if prior_spec is not None:
-            raise click.BadParameter("a prior is not used in model selection (not yet)",
-                                     param_hint="--prior")  # fmt: skip
-        if orientation_columns is not None or orientation is not None:
-            raise click.BadParameter("model selection ranks by held-out positions; a marker "
-                                     "body's orientation is not used there (not yet): leave "
-                                     "out --orientation-columns",
-                                     param_hint="--orientation-columns")  # fmt: skip
         lock_spec = ",".join(f"{a}={v!r}" for a, v in model_opts.lock.items()) or None
         setup = setup_from_options(link, instrument_frame, marker_spec, marker_columns,
                                    length_unit, lock_spec)  # fmt: skip

@@ -90,6 +90,9 @@ class Probe:
             gate's significance on this design and noise, in the coefficient's unit
             (a scale or gain as a fraction, a drift over the pose order in m, a trend
             in m: positions), NaN when not computed (:mod:`._probe_floor`).
+        workspace: the RMS distance of the fitted positions from their centroid [m]
+            (NaN when unknown): a drift or trend floor beyond it is not detectable with
+            these poses, as a scale or gain floor of 100 % or more.
     """
 
     name: str
@@ -99,18 +102,38 @@ class Probe:
     explained: float
     size: str
     floor: float = float("nan")
+    workspace: float = float("nan")
+
+    @property
+    def detectable(self) -> bool:
+        """False when the floor exceeds the campaign's own scale (see ``workspace``)."""
+        if self.name in ("scale", "gains"):
+            return self.floor < 1.0
+        return not self.floor > self.workspace  # NaN workspace: not judged
 
     def floor_text(self) -> str:
-        """The floor in words (e.g. ``a scale error below 0.02 %``), "" when unknown."""
+        """The floor in words (e.g. ``a scale error below 0.02 %``), "" when unknown.
+
+        A floor beyond the campaign's own scale (:attr:`detectable`) is said as not
+        detectable with these poses, with the size 90 % detection would need.
+        """
         if not math.isfinite(self.floor):
             return ""
         if self.name in ("scale", "gains"):
             what = "a scale error" if self.name == "scale" else "an actuator gain error"
-            return f"{what} below {self.floor * 100:.2g} %"
+            if not self.detectable:
+                return (f"{what} (not detectable with these poses: 90 % detection needs "
+                        f"{_figure(self.floor * 100)} %)")  # fmt: skip
+            return f"{what} below {_figure(self.floor * 100)} %"
         if self.name == "drift":
-            return f"a drift below {self.floor * 1e6:.2g} µm over the pose order"
-        where = self.name.removeprefix("trend:")
-        return f"a trend below {self.floor * 1e6:.2g} µm along the {where}"
+            what, where = "a drift", " over the pose order"
+        else:
+            what, where = "a trend", f" along the {self.name.removeprefix('trend:')}"
+        if not self.detectable:
+            return (f"{what}{where} (not detectable with these poses: 90 % detection needs "
+                    f"{length_text(self.floor)}, more than the {length_text(self.workspace)} "
+                    "RMS spread of the positions)")  # fmt: skip
+        return f"{what} below {length_text(self.floor)}{where}"
 
     def describe(self) -> str:
         """One sentence: the effect's size, the share of the residual it explains, its p-value."""
@@ -119,6 +142,25 @@ class Probe:
             f"(F-test p = {self.p_value:.2g})"
         )
 
+
+
+def _figure(v: float) -> str:
+    """``v`` to two significant digits, without an exponent (9.58 → 9.6, 309 → 310)."""
+    if v == 0 or not math.isfinite(v):
+        return f"{v:g}"
+    digits = 1 - math.floor(math.log10(abs(v)))
+    digits = 1 - math.floor(math.log10(abs(round(v, digits))))  # 0.9996 → 1.0, not 1.00
+    return f"{round(v, digits):.{max(digits, 0)}f}"
+
+
+def length_text(v: float) -> str:
+    """A length [m] in words in a unit that suits it (34 µm, 9.6 mm, 1.2 m)."""
+    a = abs(float(_figure(v))) if math.isfinite(v) else math.inf  # the unit of the rounded
+    if a < 1e-3:
+        return f"{_figure(v * 1e6)} µm"
+    if a < 1.0:
+        return f"{_figure(v * 1e3)} mm"
+    return f"{_figure(v)} m"
 
 
 def _sf(dist: str, x: float, *df: float) -> float:
@@ -303,10 +345,19 @@ def probe_misspecification(
     if significance is None or not probes:
         return probes
     alpha = significance / len(probes)
+    reach = _workspace(columns)
     return [
-        replace(pr, floor=detection_floor(b, q, nu - q, alpha, min_share, nu_t))
+        replace(pr, floor=detection_floor(b, q, nu - q, alpha, min_share, nu_t), workspace=reach)
         for pr, (b, q, nu_t) in zip(probes, seen, strict=True)
     ]
+
+
+def _workspace(columns: dict[str, np.ndarray]) -> float:
+    """RMS distance [m] of the fitted positions from their centroid (the scale column)."""
+    scale = columns.get("scale")
+    if scale is None or not scale.size:
+        return float("nan")
+    return float(math.sqrt(np.sum(scale**2) / scale.shape[0]))
 
 
 def _position_columns(name: str, raw: np.ndarray, comps: tuple[str, ...]) -> np.ndarray:

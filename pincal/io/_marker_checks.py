@@ -24,7 +24,13 @@ from pincal.io._measurement_header import MAX_COORDINATE
 from pincal.io._units import LENGTH_UNITS
 from pincal.model import Mechanism
 
-__all__ = ["check_coordinates", "check_scale", "check_unique_titles", "title_key"]
+__all__ = [
+    "check_coordinates",
+    "check_scale",
+    "check_unique_titles",
+    "position_triples",
+    "title_key",
+]
 
 #: positions spread more than this factor away from the nominal link's: a unit is wrong
 SCALE_FACTOR = 20.0
@@ -42,6 +48,37 @@ def title_key(title: str) -> str:
     from pincal.io._delimited import parsable_title
 
     return (parse_column(title)[0] if parsable_title(title) else title).strip().lower()
+
+
+def _bare(title: str) -> str:
+    """A title without its bracketed unit, as written (``x1 [mm]`` → ``x1``)."""
+    from pincal.io._csv import parse_column
+    from pincal.io._delimited import parsable_title
+
+    return (parse_column(title)[0] if parsable_title(title) else title).strip()
+
+
+def position_triples(columns: Sequence[str]) -> list[tuple[str, str, str]]:
+    """The column triples of ``columns`` that look like a marker's x, y, z.
+
+    Titles (any case, without a bracketed unit) that differ only in one letter x / y / z
+    at the same place (``x1 y1 z1``, ``hand_X hand_Y hand_Z``), in the order of their x
+    column; each as the titles are written without the unit, for a ``--marker-columns``
+    suggestion.
+    """
+    bare = [_bare(c) for c in columns]
+    index = {b.lower(): b for b in reversed(bare)}  # first title of each key
+    out: list[tuple[str, str, str]] = []
+    for name in bare:
+        low = name.lower()
+        for i, ch in enumerate(low):
+            if ch != "x":
+                continue
+            y, z = (low[:i] + c + low[i + 1 :] for c in "yz")
+            triple = (name, index.get(y, ""), index.get(z, ""))
+            if all(triple) and triple not in out:
+                out.append(triple)
+    return out
 
 
 def check_unique_titles(table: Table, used: Sequence[int]) -> None:

@@ -53,6 +53,7 @@ from pincal.io._marker_checks import (
     check_coordinates,
     check_scale,
     check_unique_titles,
+    position_triples,
 )
 from pincal.io._marker_orientation import orientation_values, read_rotations
 from pincal.io._names import is_decimal
@@ -127,6 +128,20 @@ def _cell(table: Table, i: int, k: int) -> float:
     return float(text)
 
 
+def _columns_hint(table: Table) -> str:
+    """How to name the marker's columns, with the file's x/y/z-like triples."""
+    found = [",".join(t) for t in position_triples(table.columns)]
+    if not found:
+        return ("name the marker's three position columns with --marker-columns X,Y,Z "
+                "(markers.columns in a campaign)")  # fmt: skip
+    hint = (f"name the marker's position columns with --marker-columns {found[0]} "
+            "(markers.columns in a campaign)")  # fmt: skip
+    if len(found) > 1:
+        hint += f"; x/y/z-like triples in the file: {' '.join(found[:8])}"
+        hint += " …" if len(found) > 8 else ""
+    return hint
+
+
 def _marker_columns(table: Table, setup: MarkerSetup) -> list[int]:
     out = []
     for c in (c for triple in setup.marker_sets for c in triple):
@@ -136,7 +151,8 @@ def _marker_columns(table: Table, setup: MarkerSetup) -> list[int]:
             hint = (f" ({like[0]!r} is one with its unit in parentheses: write the unit in "
                     f"brackets, '{c} [mm]', or name it with --marker-columns)") if like else ""
             raise ColumnError(
-                f"{table.name}: no marker column {c!r}; columns are {list(table.columns)}{hint}",
+                f"{table.name}: no marker column {c!r}{hint}; {_columns_hint(table)}; columns "
+                f"are {list(table.columns)}",
                 missing=[c],
             )
         out.append(k)

@@ -119,6 +119,7 @@ from pincal.workflow._pose_selection import (
     select_pose_design,
 )
 from pincal.workflow._prior_choice import (
+    NestedChoice,
     PriorChoice,
     choose_prior,
     cross_validated,
@@ -174,6 +175,7 @@ __all__ = [
     "MarkerRun",
     "MarkerSettings",
     "ModelDescription",
+    "NestedChoice",
     "PoseBasis",
     "PoseProblem",
     "PoseRequest",

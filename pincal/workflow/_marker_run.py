@@ -156,6 +156,15 @@ def _angle_note(rms: float) -> str:
     )
 
 
+def _leave_one_out_note(sizes: list[int], k: int) -> str:
+    poses = "–".join(map(str, sorted({min(sizes), max(sizes)})))
+    return (
+        f"the prior of {len(sizes)} of the {k} cross-validation folds was chosen by "
+        f"leave-one-out: their {poses} training poses are too few for an inner {k}-fold "
+        "split to fit"
+    )
+
+
 def _gate(
     fit: MarkerFit, meas: tuple[Measurements, ...], settings: MarkerSettings
 ) -> QualityVerdict:
@@ -249,7 +258,10 @@ def calibrate_markers(
             say("cross-validating the calibration, the prior chosen again in each fold")
             procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss,
                                          registrations)  # fmt: skip
-            cv = cross_validate(nested_choice(procedure, k, seed), meas, k, seed)
+            nested = nested_choice(procedure, k, seed)
+            cv = cross_validate(nested, meas, k, seed)
+            if nested.leave_one_out:
+                notes.append(_leave_one_out_note(nested.leave_one_out, k))
         # with orientation measured, both blocks count, each whitened by the noise σ
         # the procedure's fold fits leave (the same σ for both procedures)
         evidence = HeldOutEvidence(cv, baseline, "registration only", cv.fit_scales())

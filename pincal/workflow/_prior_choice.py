@@ -5,7 +5,10 @@ cross-validated for each prior of the grid on the same folds; the prior of the l
 held-out RMS is chosen (:func:`choose_prior`). The held-out error of a calibration whose
 prior was chosen so is that of the whole procedure, choice included
 (:func:`nested_choice`, cross-validated: nested CV); a fixed prior is cross-validated
-alone (:func:`cross_validated`).
+alone (:func:`cross_validated`). A campaign of few poses leaves an outer fold's training
+poses too few for the inner K-fold split (a 17-pose TIAGo session: 10 training poses of
+an inner fold cannot fit the arm); that fold's prior is then chosen by leave-one-out,
+which keeps all but one of its poses in each fit (:class:`NestedChoice`).
 
 With orientation measured (a 6-D marker body) the candidates are compared by their
 held-out squared errors whitened by each block's noise σ
@@ -22,13 +25,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pincal.errors import TooFewPosesError
 from pincal.identification import BlockScales, CrossValidation, Prior, cross_validate
 from pincal.measure import Measurements
 from pincal.model import Mechanism
 from pincal.workflow._marker_settings import PRIOR_GRID
 from pincal.workflow._registrations import MarkerData, MarkerProcedure
 
-__all__ = ["PriorChoice", "choose_prior", "cross_validated", "nested_choice"]
+__all__ = ["NestedChoice", "PriorChoice", "choose_prior", "cross_validated", "nested_choice"]
 
 #: measurements → calibrated mechanism, for one prior
 Procedure = Callable[[Prior | None], MarkerProcedure]
@@ -100,16 +104,56 @@ def choose_prior(
     return PriorChoice(priors[best], cvs[best], table, turned, scales)
 
 
-def nested_choice(procedure: Procedure, k: int, seed: int) -> MarkerProcedure:
+class NestedChoice:
     """Measurements → calibrated mechanism with the prior chosen on those measurements.
 
-    Cross-validating this procedure is nested cross-validation: each outer fold chooses
-    its prior by an inner K-fold CV of its own training poses, so no held-out pose
-    takes part in choosing the prior that predicts it.
+    Cross-validating it is nested cross-validation: each outer fold chooses its prior by
+    an inner K-fold CV of its own training poses, so no held-out pose takes part in
+    choosing the prior that predicts it. When an inner fold's training poses are too
+    few to fit (:class:`pincal.errors.TooFewPosesError`), the prior of those poses is
+    chosen by leave-one-out instead (K = their number).
+
+    Attributes:
+        leave_one_out: the number of poses of every call whose prior was chosen by
+            leave-one-out, in call order (empty when the K-fold split always fitted).
     """
 
-    def fit(meas: MarkerData) -> Mechanism:
-        parts = (meas,) if isinstance(meas, Measurements) else tuple(meas)
-        return procedure(choose_prior(procedure, parts, k, seed).prior)(meas)
+    def __init__(self, procedure: Procedure, k: int, seed: int) -> None:
+        self.procedure, self.k, self.seed = procedure, k, seed
+        self.leave_one_out: list[int] = []
 
-    return fit
+    def choose(self, parts: Sequence[Measurements]) -> PriorChoice:
+        """The prior of ``parts`` (one set per marker): K-fold, else leave-one-out.
+
+        Raises:
+            TooFewPosesError: even leave-one-out leaves too few poses to fit.
+        """
+        try:
+            return choose_prior(self.procedure, parts, self.k, self.seed)
+        except TooFewPosesError as e:
+            m = len(parts[0])
+            if m <= self.k:
+                raise
+            try:
+                choice = choose_prior(self.procedure, parts, m, self.seed)
+            except TooFewPosesError as again:
+                raise TooFewPosesError(
+                    f"{m} poses cannot choose the prior: neither {self.k}-fold nor "
+                    f"leave-one-out cross-validation leaves enough poses to fit ({again}); "
+                    "measure more poses or give the prior (--prior LEN_MM,ANG_MRAD)"
+                ) from e
+            self.leave_one_out.append(m)
+            return choice
+
+    def __call__(self, meas: MarkerData) -> Mechanism:
+        parts = (meas,) if isinstance(meas, Measurements) else tuple(meas)
+        return self.procedure(self.choose(parts).prior)(meas)
+
+
+def nested_choice(procedure: Procedure, k: int, seed: int) -> NestedChoice:
+    """Measurements → calibrated mechanism with the prior chosen on those measurements.
+
+    See :class:`NestedChoice` (the inner K-fold choice, leave-one-out when the poses of
+    an outer fold are too few for it).
+    """
+    return NestedChoice(procedure, k, seed)

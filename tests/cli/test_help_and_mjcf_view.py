@@ -75,3 +75,18 @@ def test_view_calibrated_refuses_a_partial_copy_with_one_line(tmp_path):
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 1
     assert "calibrated.yaml" in res.stderr and len(res.stderr.strip().splitlines()) == 1
+
+
+def test_select_model_offers_no_option_it_refuses():
+    """select-model ranks by held-out positions without a prior: it does not list --prior
+    or a marker body's orientation (calibrate does), and giving one is a usage error."""
+    sel = CliRunner().invoke(main, ["select-model", "--help"])
+    cal = CliRunner().invoke(main, ["calibrate", "--help"])
+    assert sel.exit_code == 0 and cal.exit_code == 0
+    for option in ("--prior", "--orientation-columns", "--orientation "):
+        assert option not in sel.output, option
+        assert option in cal.output, option
+    assert "--marker-columns" in sel.output and "--link" in sel.output
+    res = CliRunner().invoke(main, ["select-model", "ur5", "--link", "wrist_3_link", "--data",
+                                    "m.csv", "--prior", "1,1"])  # fmt: skip
+    assert res.exit_code == 2 and "No such option" in res.output and "--prior" in res.output

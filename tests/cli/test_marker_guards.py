@@ -171,3 +171,22 @@ def test_fewer_poses_than_folds_are_named_as_such(tmp_path, table):
     title, rows, *_ = table
     r = _calibrate(tmp_path, _write(tmp_path / "m.csv", title, rows[:2]), "--length-unit", "mm")
     _refused(r, tmp_path, "TooFewPosesError", "2 poses", "5-fold", "at least 5")
+
+
+def test_a_missing_marker_column_names_the_option_and_the_triples_found(tmp_path, table):
+    """Columns not named x, y, z: the refusal suggests --marker-columns with the file's
+    first x/y/z-like triple (titles without their unit), lists every such triple and the
+    columns; the suggestion, given, reads the table."""
+    title, rows, *_ = table
+    titled = title.replace("x,y,z", "Hand_X [mm],Hand_Y [mm],Hand_Z [mm]", 1)
+    titled += ",ref_x,ref_y,ref_z"
+    path = _write(tmp_path / "m.csv", titled, [r + ",1,2,3" for r in rows])
+    r = _calibrate(tmp_path, path)
+    line = _refused(r, tmp_path, "ColumnError", "no marker column 'x'",
+                    "--marker-columns Hand_X,Hand_Y,Hand_Z",
+                    "Hand_X,Hand_Y,Hand_Z ref_x,ref_y,ref_z",
+                    "'Hand_X [mm]'", "'shoulder_pan_joint'")  # fmt: skip
+    assert len(r.output.strip().splitlines()) == 1, r.output
+    suggested = line.split("--marker-columns ")[1].split()[0]
+    ok = _calibrate(tmp_path, path, "--marker-columns", suggested, "--prior", "none")
+    assert ok.exit_code == 0, ok.output

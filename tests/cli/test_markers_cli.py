@@ -9,6 +9,7 @@ exports do.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -241,3 +242,55 @@ def test_tiago_mocap_example_runs(tmp_path):
     assert "registration only" in r.output and "held-out RMS" in r.output
     report = (tmp_path / "tiago-cal" / "report.md").read_text(encoding="utf-8")
     assert "## Cross-validation" in report and "| registration only |" in report
+
+
+@pytest.mark.slow
+def test_a_small_campaign_is_judged_not_stopped_by_the_inner_folds(tmp_path):
+    """17 real TIAGo poses: an outer fold's 13–14 training poses are too few for the inner
+    5-fold split that chooses the prior (10 poses cannot fit the arm); the prior of such a
+    fold is chosen by leave-one-out, so the calibration is judged by held-out prediction
+    (and ``validate --cv`` replays it) instead of stopping with TooFewPosesError."""
+    real = ROOT / "docs" / "examples" / "tiago-mocap" / "measurements.csv"
+    lines = real.read_text().splitlines()
+    (tmp_path / "m.csv").write_text("\n".join(lines[:18]) + "\n")
+    r = _run("calibrate", "tiago", "--link", "arm_7_link", "--data", tmp_path / "m.csv",
+             "--marker-columns", "x1,y1,z1", "--force", "--out", tmp_path / "cal")  # fmt: skip
+    assert r.exit_code == 0, r.output
+    assert "TooFewPosesError" not in r.output
+    doc = json.loads((tmp_path / "cal" / "calibration.json").read_text())
+    notes = [n for n in doc["markers"]["notes"] if "leave-one-out" in n]
+    assert len(notes) == 1 and "of the 5 cross-validation folds" in notes[0], notes
+    held = doc["quality"]["held_out"]
+    assert held["folds"] == 5 and np.isfinite(held["calibrated"]["held_out_rms_mm"])
+    out = _run("validate", tmp_path / "cal", "--cv", 5, "--json")
+    assert out.exit_code == 0, out.output
+    cv = json.loads(out.output)["cv"]
+    assert cv["poses"] == 17
+    assert cv["held_out_rms_mm"] == pytest.approx(held["calibrated"]["held_out_rms_mm"], rel=1e-9)
+
+
+@pytest.mark.slow
+def test_what_the_gate_cannot_see_is_said_in_sensible_units_on_real_data(tmp_path):
+    """The TIAGo session's "cannot see" line printed "a drift below 9.6e+03 µm" and "a
+    trend below 3.1e+05 µm": every floor is now in a unit that suits it, and one beyond
+    the RMS spread of the positions is said to be not detectable with these poses."""
+    data = ROOT / "docs" / "examples" / "tiago-mocap" / "measurements.csv"
+    r = _run("calibrate", "tiago", "--link", "arm_7_link", "--data", data,
+             "--marker-columns", "x1,y1,z1", "--out", tmp_path / "cal")  # fmt: skip
+    assert r.exit_code == 0, r.output
+    line = next(ln for ln in r.output.splitlines() if "what the gate cannot see" in ln)
+    assert not re.search(r"\de[+-]\d", line), line  # no exponent
+    floor = json.loads((tmp_path / "cal" / "calibration.json").read_text())["quality"][
+        "detection_floor"
+    ]
+    P = np.loadtxt(data, delimiter=",", skiprows=1, usecols=(0, 1, 2))
+    spread = float(np.sqrt(np.mean(np.sum((P - P.mean(axis=0)) ** 2, axis=1))))
+    lengths = [p for p in floor["probes"] if p["name"] not in ("scale", "gains")]
+    assert lengths
+    for p in lengths:
+        if p["floor"] > 1.05 * spread:
+            assert "not detectable with these poses" in p["text"], p
+        elif p["floor"] < 0.95 * spread:
+            assert " below " in p["text"] and "not detectable" not in p["text"], p
+    assert any("not detectable with these poses" in p["text"] for p in lengths)
+    assert re.search(r"a drift below \d+(\.\d+)? mm over the pose order", line), line

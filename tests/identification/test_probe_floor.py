@@ -71,3 +71,23 @@ def test_ar1_residuals_are_correlated_after_a_drift_is_fitted():
     assert serial_correlation(A, linear, None).p_value < 1e-6  # seen before the fit
     after = serial_correlation(A, linear, drift)
     assert after is not None and after.p_value > 1e-3
+
+
+def test_floors_are_said_in_their_unit_and_beyond_the_workspace_as_not_detectable():
+    """9.6 mm was printed "9.6e+03 µm"; a floor past the positions' spread (a trend the
+    model nearly absorbs) or a gain of 100 % or more is not detectable with these poses."""
+    from pincal.identification._misspecification import Probe
+
+    def text(name: str, floor: float, workspace: float = 0.28) -> str:
+        return Probe(name, 1, 1.0, 0.5, 0.1, "", floor, workspace).floor_text()
+
+    assert text("drift", 0.00958) == "a drift below 9.6 mm over the pose order"
+    assert text("drift", 3.4e-5) == "a drift below 34 µm over the pose order"
+    assert text("trend:tool x", 2.1e-4) == "a trend below 210 µm along the tool x"
+    far = text("trend:actuator torso", 0.309)
+    assert far.startswith("a trend along the actuator torso (not detectable with these poses")
+    assert "310 mm" in far and "280 mm" in far
+    assert text("gains", 0.33) == "an actuator gain error below 33 %"
+    assert "not detectable" in text("gains", 1.5) and "150 %" in text("gains", 1.5)
+    assert text("scale", 4.4e-5) == "a scale error below 0.0044 %"
+    assert "not detectable" not in text("drift", 5.0, float("nan"))  # spread unknown
