@@ -40,3 +40,30 @@ def test_cv_from_another_directory_uses_the_fitted_file(tmp_path, monkeypatch):
     (tmp_path / "b" / "m.csv").unlink()
     out = run(main, ["validate", str(tmp_path / "a" / "cal"), "--cv", "3"])
     assert out.exit_code != 0 and "is not found" in out.output
+
+
+def test_a_project_moved_whole_finds_its_data_from_anywhere(tmp_path, monkeypatch):
+    """The data file is recorded relative to the calibration directory too: a project
+    (data/m.csv, cals/cal) moved whole is cross-validated from any directory; a
+    different file put at that place is refused by its SHA-256, never cross-validated."""
+    run = CliRunner().invoke
+    (tmp_path / "p" / "data").mkdir(parents=True)
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "p")
+    assert run(main, ["simulate", "wedge3", "--random", "24", "--out", "data/m.csv"]).exit_code == 0
+    r = run(main, ["calibrate", "wedge3", "--data", "data/m.csv", "--out", "cals/cal"])
+    assert r.exit_code == 0, r.output
+    entry = json.loads((tmp_path / "p" / "cals" / "cal" / "calibration.json").read_text())
+    assert entry["data_files"][0]["relative_path"] == "../../data/m.csv"
+    (tmp_path / "p").rename(tmp_path / "q")
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    cal = str(tmp_path / "q" / "cals" / "cal")
+    out = run(main, ["validate", cal, "--cv", "3", "--json"])
+    assert out.exit_code == 0, out.output
+    assert json.loads(out.output)["cv"]["poses"] == 24
+    assert run(main, ["simulate", "wedge3", "--random", "20", "--seed", "3",
+                      "--out", str(tmp_path / "q" / "data" / "m.csv")]).exit_code == 0  # fmt: skip
+    out = run(main, ["validate", cal, "--cv", "3"])
+    said = " ".join(out.output.split())
+    assert out.exit_code != 0 and "CalibrationDirectoryError" in said, said
+    assert "differs from its SHA-256" in said and "not found" in said
