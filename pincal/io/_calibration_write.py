@@ -20,6 +20,7 @@ from typing import Any
 import yaml  # type: ignore[import-untyped]
 
 from pincal._version import __version__
+from pincal.errors import UnidentifiableError, clip
 from pincal.identification import IdentificationRecord, IdentificationResult, result_to_dict
 from pincal.io._atomic import (
     atomic_write_text,
@@ -153,11 +154,38 @@ def write_calibration(
         CalibrationDirectoryError: ``path`` exists and is not a calibration directory, or
             another process is writing it (see :func:`calibration_lock`).
     """
+    _check_placed(result)
     out = Path(path).resolve()  # "." or "cal/" name a directory we can replace by rename
     out.parent.mkdir(parents=True, exist_ok=True)
     with calibration_lock(out):
         _write_locked(out, result, model_source, data_files, noise, annotations, texts, nominal)
     return read_calibration(out)  # resolved: "." names the old directory after the swap
+
+
+def _check_placed(result: IdentificationResult) -> None:
+    """Refuse, before anything is written, a fit that placed no parameter.
+
+    Its directory would have no parameter: its own reader refuses it.
+
+    Raises:
+        UnidentifiableError: no parameter identified (the gauge's reason named).
+    """
+    if len(result.identified_names):
+        return
+    joint = getattr(result, "joint", None)
+    weak = [g for g in (joint.gauge if joint is not None else ()) if "too weakly" in g]
+    if weak:  # our own text: "seen too weakly to place within …, held at nominal: names"
+        why = f": {weak[0].split(', held at nominal')[0][:120]}"
+        fix = ("the declared σ is too large for the data to place any (check the data "
+               "file's '# std:' or '# noise:' header and its unit), or measure more poses")
+    else:
+        why = ""
+        fix = "the data do not see the parameters: check the measured frame and --params"
+    raise UnidentifiableError(
+        f"the fit placed no parameter of {clip(result.model)} (all {len(result.names)} held "
+        f"at nominal{why}); nothing was written: {fix}",
+        result.names,
+    )
 
 
 def _write_locked(
