@@ -257,7 +257,15 @@ def _acquire(lock: Path, out: Path) -> int:
     import fcntl
 
     while True:
-        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        try:  # O_NOFOLLOW: a planted link (dangling: O_CREAT would create its target)
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
+        except OSError as exc:
+            if exc.errno != errno.ELOOP:
+                raise
+            raise CalibrationDirectoryError(
+                f"the lock file {str(lock)!r} of {str(out)!r} is a symbolic link; pincal "
+                "never opens a link there (it could point anywhere): remove it"
+            ) from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:

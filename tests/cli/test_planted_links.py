@@ -77,3 +77,23 @@ def test_a_planted_directory_link_is_not_written_through(calibration, tmp_path, 
         assert {p.read_text() for p in victim.iterdir()} == {"keep\n"}
     finally:
         link.unlink()
+
+
+def test_a_planted_lock_link_is_not_opened(calibration, tmp_path):
+    """The writer's lock beside the directory (``.cal.pincal-lock``) planted as a dangling
+    link: opening it with O_CREAT created the file it points to; now refused, nothing
+    created, the calibration unchanged."""
+    target = tmp_path / "created"
+    lock = calibration / ".cal.pincal-lock"
+    os.symlink(target, lock)
+    before = {p.name: p.read_bytes() for p in (calibration / "cal").iterdir()}
+    try:
+        r = CliRunner().invoke(main, ["calibrate", "wedge3", "--data", str(calibration / "m.csv"),
+                                      "--out", str(calibration / "cal")])  # fmt: skip
+        said = " ".join(r.output.split())
+        assert r.exit_code != 0 and "CalibrationDirectoryError" in said, r.output
+        assert "is a symbolic link" in said and "remove it" in said
+        assert not target.exists()
+        assert {p.name: p.read_bytes() for p in (calibration / "cal").iterdir()} == before
+    finally:
+        lock.unlink()
