@@ -26,12 +26,13 @@ checked before use (see :mod:`pincal.io._calibration_checks`).
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from pincal._files import read_text
+from pincal._files import expected_sha256, read_text
 from pincal.errors import CalibrationDirectoryError, PincalError, clip
 from pincal.identification import IdentificationRecord
 from pincal.io._calibration_checks import (
@@ -245,6 +246,19 @@ class CalibrationDirectory:
             "directory, at its absolute path, beside the directory nor where it was given; "
             "put it back where it was relative to the directory, or copy it beside it"
         )
+
+    @contextmanager
+    def reading_data_file(self, index: int = 0) -> Iterator[Path]:
+        """:meth:`data_file`, its bytes checked again as they are read (no swap between).
+
+        Yields:
+            The data file; reading it inside (through :func:`pincal._files.read_bytes`,
+            as every reader does) raises CalibrationDirectoryError if its bytes are not
+            the ones fitted.
+        """
+        path = self.data_file(index)
+        with expected_sha256(path, str(self.manifest["data_files"][index].get("sha256"))):
+            yield path
 
     @property
     def preset(self) -> str:
