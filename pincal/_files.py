@@ -10,14 +10,60 @@ block raises it; the command line sets it from ``PINCAL_MAX_FILE_MB``).
 
 from __future__ import annotations
 
+import hashlib
 import os
 import stat
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 
 from pincal._limits import DEFAULT_MAX_BYTES, active_limits
-from pincal.errors import InputFileError, InputLimitError, clip
+from pincal.errors import CalibrationDirectoryError, InputFileError, InputLimitError, clip
 
-__all__ = ["DEFAULT_MAX_BYTES", "max_bytes", "read_bytes", "read_text", "too_big_message"]
+__all__ = [
+    "DEFAULT_MAX_BYTES",
+    "expected_sha256",
+    "max_bytes",
+    "read_bytes",
+    "read_text",
+    "too_big_message",
+]
+
+#: (real path, SHA-256) of files whose bytes must be those hashed (see expected_sha256)
+_EXPECTED: ContextVar[tuple[tuple[str, str], ...]] = ContextVar("pincal_expected", default=())
+
+
+@contextmanager
+def expected_sha256(path: str | Path, digest: str) -> Iterator[None]:
+    """While inside, the bytes :func:`read_bytes` reads from ``path`` must have ``digest``.
+
+    A file checked by its SHA-256 and then read by name (a calibration's fitted data)
+    could be swapped between the two; the reader compares the very bytes it parses.
+
+    Args:
+        path: the file (compared by its real path).
+        digest: its expected SHA-256 (hex).
+    """
+    token = _EXPECTED.set((*_EXPECTED.get(), (os.path.realpath(path), digest)))
+    try:
+        yield
+    finally:
+        _EXPECTED.reset(token)
+
+
+def _check_expected(p: Path, what: str, data: bytes) -> None:
+    """Raise when ``p`` is expected (:func:`expected_sha256`) with other bytes than ``data``."""
+    expected = _EXPECTED.get()
+    if not expected:
+        return
+    real = os.path.realpath(p)
+    for where, digest in expected:
+        if where == real and hashlib.sha256(data).hexdigest() != digest:
+            raise CalibrationDirectoryError(
+                f"{what} {_shown(p)} changed after its SHA-256 was checked (the bytes read are "
+                "not the file the calibration was fitted on); run again once nothing writes it"
+            )
 
 def max_bytes() -> int:
     """The size cap in bytes of the limits in force (default :data:`DEFAULT_MAX_BYTES`)."""
@@ -68,6 +114,7 @@ def read_bytes(
         data = fh.read(cap + 1)
     if len(data) > cap:
         raise InputLimitError(too_big_message(p, what, len(data), cap))
+    _check_expected(p, what, data)
     return data
 
 

@@ -131,7 +131,7 @@ def calibrate_poses(
     if record is not None:
         texts[MODEL_RECORD] = record
     texts |= terms_texts(run.result, error_model, terms, load)
-    source = str(out_dir.resolve() / MODEL_RECORD) if record else model_source(model)
+    source = MODEL_RECORD if record else model_source(model)  # relative: the directory moves
     cal = write_calibration(
         out_dir,
         run.result,

@@ -59,14 +59,37 @@ def _remove_dead_writers_temporaries(path: Path) -> None:
             stale.unlink(missing_ok=True)
 
 
+def _link_in_calibration(path: Path) -> tuple[Path, Path] | None:
+    """The first symbolic link on ``path`` below a calibration directory, and that directory.
+
+    A calibration directory is one holding a manifest; the file itself and every
+    directory between it and the calibration directory are checked (a received
+    directory may hold ``report.md -> ~/.bashrc`` or ``sub -> ~``). Links above the
+    calibration directory are the user's own and are followed.
+
+    Returns:
+        (the link, the calibration directory), or None.
+    """
+    full = Path(os.path.abspath(path))
+    chain = [*reversed(full.parents), full]  # the root first
+    for k, above in enumerate(chain[:-1]):
+        if (above / MANIFEST).is_file():
+            for below in chain[k + 1 :]:
+                if below.is_symlink():
+                    return below, above
+            return None
+    return None
+
+
 def output_target(path: str | Path, what: str = "output") -> Path:
     """The regular file an output named ``path`` is written to.
 
     An absent path or a regular file is written as named. A symbolic link is never
     replaced: the file it points to is written instead (so ``--out link.csv`` updates
     the linked file and keeps the link) — except inside a calibration directory (one
-    holding a manifest), where a link is refused: a received directory could point
-    ``report.md`` at any file of the user's. Devices, FIFOs, sockets, directories, links to
+    holding a manifest), where a link is refused, the file's or a directory's between
+    it and the calibration directory: a received directory could point ``report.md``
+    (or a sub-directory) at any file of the user's. Devices, FIFOs, sockets, directories, links to
     them and dangling links are refused: replacing them would turn ``/dev/null`` or
     ``/dev/stdout`` into a regular file. Nothing under ``/dev`` or ``/proc`` is written.
 
@@ -82,11 +105,15 @@ def output_target(path: str | Path, what: str = "output") -> Path:
     fix = "outputs are written only to regular files: give the path of a file"
     if Path(os.path.abspath(p)).parts[1:2] in (("dev",), ("proc",)):
         raise OutputPathError(f"{what} {clip(str(p), 300)} is under /dev or /proc; {fix}")
-    if p.is_symlink() and (p.parent / MANIFEST).is_file():
+    planted = _link_in_calibration(p)
+    if planted is not None:
+        link, home = planted
+        where = ("is" if link == Path(os.path.abspath(p))
+                 else f"passes through {clip(str(link), 200)},")  # fmt: skip
         raise OutputPathError(
-            f"{what} {clip(str(p), 300)} is a symbolic link inside the calibration directory "
-            f"{clip(str(p.parent), 200)}; pincal never writes through a link there (it could "
-            "point anywhere): remove the link, or write elsewhere"
+            f"{what} {clip(str(p), 300)} {where} a symbolic link inside the calibration "
+            f"directory {clip(str(home), 200)}; pincal never writes through a link there (it "
+            "could point anywhere): remove the link, or write elsewhere"
         )
     if p.is_symlink():
         try:
@@ -230,7 +257,15 @@ def _acquire(lock: Path, out: Path) -> int:
     import fcntl
 
     while True:
-        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        try:  # O_NOFOLLOW: a planted link (dangling: O_CREAT would create its target)
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
+        except OSError as exc:
+            if exc.errno != errno.ELOOP:
+                raise
+            raise CalibrationDirectoryError(
+                f"the lock file {str(lock)!r} of {str(out)!r} is a symbolic link; pincal "
+                "never opens a link there (it could point anywhere): remove it"
+            ) from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:

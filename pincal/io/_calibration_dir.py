@@ -25,12 +25,14 @@ checked before use (see :mod:`pincal.io._calibration_checks`).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import os
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from pincal._files import read_text
+from pincal._files import expected_sha256, read_text
 from pincal.errors import CalibrationDirectoryError, PincalError, clip
 from pincal.identification import IdentificationRecord
 from pincal.io._calibration_checks import (
@@ -93,9 +95,9 @@ class CalibrationDirectory:
 
         A calibration made with --sidecar, --frame or --lock holds the model with those
         options as its own hashed ``model.yaml``: that file of *this* directory, wherever
-        it was copied or moved (the manifest's path names the first directory).
+        it was copied or moved (older manifests name the first directory's).
         """
-        if MODEL_RECORD in (self.manifest.get("files") or {}):
+        if self._record() is not None:
             return str(self.path / MODEL_RECORD)
         src = self.manifest.get("model_source")
         if not src:
@@ -103,28 +105,44 @@ class CalibrationDirectory:
         moved = self._moved_model(str(src))
         return str(moved[0]) if moved is not None else str(src)
 
+    def _record(self) -> dict[str, Any] | None:
+        """The keys of this directory's hashed model record (``model.yaml``), or None."""
+        if MODEL_RECORD not in (self.manifest.get("files") or {}):
+            return None
+        if "record" not in self._cache:
+            self._cache["record"] = dict(read_sidecar(self.path / MODEL_RECORD))
+        return self._cache["record"]
+
+    def _recorded_model(self) -> str:
+        """The model the calibration was made on as recorded: the record's robot or source."""
+        record = self._record()
+        if record is not None:
+            return str(record.get("robot") or "")
+        return str(self.manifest.get("model_source") or "")
+
     def model_paths(self) -> list[Path]:
         """The nominal model's files as recorded (``model_files``), where they are now.
 
-        Their recorded paths, or beside this directory when the model was moved with it
-        (as :attr:`model_source` finds it); files that exist only. Commands treat them as
+        Their recorded paths, or where the model was moved with this directory (as
+        :attr:`model_source` finds it); files that exist only. Commands treat them as
         inputs (never written over).
         """
         recorded = self.manifest.get("model_files")
         if not isinstance(recorded, dict):
             return []
-        moved = self._moved_model(str(self.manifest.get("model_source") or ""))
+        moved = self._moved_model(self._recorded_model())
         if moved is not None:
             return moved[1]
         return [f for f in (Path(str(name)) for name in recorded) if f.is_file()]
 
     def _moved_model(self, src: str) -> tuple[Path, list[Path]] | None:
-        """The nominal model moved with this directory: beside it, every file as hashed.
+        """The nominal model moved with this directory, every file as hashed.
 
         A model directory or URDF recorded by its absolute path that is gone there is
-        looked for beside the calibration directory under its own name (a project moved
-        or copied whole); it is used only when each file the manifest hashes
-        (``model_files``) is found at the same place relative to it with its SHA-256.
+        looked for where it was relative to the calibration directory (``model_relative``:
+        a project moved whole), then beside the directory under its own name; a place is
+        used only when each file the manifest hashes (``model_files``) is found at the
+        same place relative to it with its SHA-256.
 
         Returns:
             (the model's path now, each hashed file's path now, in the manifest's
@@ -133,20 +151,29 @@ class CalibrationDirectory:
         old, recorded = Path(src), self.manifest.get("model_files")
         if not src or not old.is_absolute() or old.exists() or not isinstance(recorded, dict):
             return None
-        new = self.path.resolve().parent / old.name
-        if not recorded or not new.exists():
+        if not recorded:
             return None
-        root_old, root_new = (old, new) if new.is_dir() else (old.parent, new.parent)
-        files = []
-        for name, digest in recorded.items():
-            try:
-                moved = root_new / Path(str(name)).relative_to(root_old)
-            except ValueError:
-                return None
-            if not moved.is_file() or hash_bounded(moved) != digest:
-                return None
-            files.append(moved)
-        return new, files
+        here = self.path.resolve()
+        places = [here.parent / old.name]
+        relative = self.manifest.get("model_relative")
+        if isinstance(relative, str) and relative:
+            places.insert(0, Path(os.path.normpath(here / relative)))
+        for new in places:
+            if not new.exists():
+                continue
+            root_old, root_new = (old, new) if new.is_dir() else (old.parent, new.parent)
+            files = []
+            for name, digest in recorded.items():
+                try:
+                    moved = root_new / Path(str(name)).relative_to(root_old)
+                except ValueError:
+                    break
+                if not moved.is_file() or hash_bounded(moved) != digest:
+                    break
+                files.append(moved)
+            else:
+                return new, files
+        return None
 
     @property
     def caveat(self) -> str | None:
@@ -168,9 +195,11 @@ class CalibrationDirectory:
     def data_file(self, index: int = 0) -> Path:
         """The data file the calibration was fitted on, found and checked by its SHA-256.
 
-        Looked for where it was given (``path`` as typed, relative to the working
-        directory), at its absolute path when calibrate ran, and beside the calibration
-        directory; the first regular file whose hash matches the record is returned.
+        Looked for where it was relative to the calibration directory (``relative_path``:
+        a project moved or copied whole), at its absolute path when calibrate ran, beside
+        the calibration directory, and where it was given (``path`` as typed, relative
+        to the working directory); the first regular file whose hash matches the record
+        is returned (a file of that name that differs is never used).
 
         Raises:
             CalibrationDirectoryError: no file recorded, none found, or every file found
@@ -182,8 +211,11 @@ class CalibrationDirectory:
                                             "data file")  # fmt: skip
         entry = files[index]
         typed = Path(str(entry.get("path", "")))
-        places = [typed, Path(str(entry.get("absolute_path") or typed)),
-                  self.path.parent / typed.name, self.path / typed.name]  # fmt: skip
+        places = [Path(str(entry.get("absolute_path") or typed)),
+                  self.path.parent / typed.name, self.path / typed.name, typed]  # fmt: skip
+        relative = entry.get("relative_path")
+        if isinstance(relative, str) and relative:
+            places.insert(0, Path(os.path.normpath(self.path.resolve() / relative)))
         found, odd = [], []
         seen: set[Path] = set()
         for p in places:  # in order, once each
@@ -197,20 +229,36 @@ class CalibrationDirectory:
             elif p.exists():  # a device, FIFO or directory is never read
                 odd.append(str(p))
         if found or odd:
-            said = [f"{', '.join(clip(f) for f in found)} differ from its SHA-256 (changed "
+            verb = "differs" if len(found) == 1 else "differ"
+            said = [f"{', '.join(clip(f) for f in found)} {verb} from its SHA-256 (changed "
                     "since, or another file of that name)"] if found else []  # fmt: skip
             said += [f"{', '.join(clip(f) for f in odd)}: not a regular file (device, FIFO "
                      "or directory)"] if odd else []  # fmt: skip
             raise CalibrationDirectoryError(
                 f"the data file the calibration {clip(str(self.path))} was fitted on "
-                f"({clip(str(typed))}) is not found: {'; '.join(said)}; restore the file, "
-                "run from calibrate's directory, or re-run calibrate"
+                f"({clip(str(typed))}) is not found: {'; '.join(said)}; restore the file "
+                "(where it was relative to the calibration directory, or beside it), or "
+                "re-run calibrate"
             )
         raise CalibrationDirectoryError(
             f"the data file the calibration {clip(str(self.path))} was fitted on "
-            f"({clip(str(typed))}) is not found where it was given, at its absolute path, nor "
-            "beside the calibration directory; run from calibrate's directory or copy it there"
+            f"({clip(str(typed))}) is not found where it was relative to the calibration "
+            "directory, at its absolute path, beside the directory nor where it was given; "
+            "put it back where it was relative to the directory, or copy it beside it"
         )
+
+    @contextmanager
+    def reading_data_file(self, index: int = 0) -> Iterator[Path]:
+        """:meth:`data_file`, its bytes checked again as they are read (no swap between).
+
+        Yields:
+            The data file; reading it inside (through :func:`pincal._files.read_bytes`,
+            as every reader does) raises CalibrationDirectoryError if its bytes are not
+            the ones fitted.
+        """
+        path = self.data_file(index)
+        with expected_sha256(path, str(self.manifest["data_files"][index].get("sha256"))):
+            yield path
 
     @property
     def preset(self) -> str:
@@ -266,8 +314,13 @@ class CalibrationDirectory:
         if "nominal" not in self._cache:
             spec = self.model_source or self.model
             check_model_files(self.manifest.get("model_files"), str(self.path / MANIFEST))
+            record = self._record()
+            moved = None if record is None else self._moved_model(self._recorded_model())
             try:
-                self._cache["nominal"] = load_mechanism(spec)
+                if moved is not None and record is not None:  # the record's robot moved
+                    self._cache["nominal"] = load_mechanism(str(moved[0]), sidecar=record)
+                else:
+                    self._cache["nominal"] = load_mechanism(spec)
             except PincalError as exc:
                 raise CalibrationDirectoryError(
                     f"{str(self.path)!r}: cannot load the nominal model {spec!r} ({exc}); "

@@ -17,7 +17,10 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+import yaml  # type: ignore[import-untyped]
+
 from pincal._version import __version__
+from pincal.errors import UnidentifiableError, clip
 from pincal.identification import IdentificationRecord, IdentificationResult, result_to_dict
 from pincal.io._atomic import (
     atomic_write_text,
@@ -36,6 +39,7 @@ from pincal.io._file_names import (
     CALIBRATION_FORMAT,
     IDENTIFICATION_FILE,
     MANIFEST,
+    MODEL_RECORD,
     NOMINAL_URDF,
 )
 from pincal.io._urdf_export import save_urdf
@@ -45,12 +49,43 @@ from pincal.model import Mechanism
 __all__ = ["sha256_file", "write_calibration"]
 
 
+def _model_entries(model_source: str | None, out: Path, record: str | None) -> dict[str, Any]:
+    """The manifest's model entries: source, the model's files hashed, its relative path.
+
+    A calibration with a model record (``model.yaml``, its options) names it relative to
+    the directory; the model it reloads (its ``robot``) is what is hashed. A model kept
+    at a local path is also recorded relative to the directory (``model_relative``), so
+    a project moved whole finds it from anywhere (checked against the hashes).
+    """
+    robot = model_source
+    if model_source == MODEL_RECORD:
+        doc = yaml.safe_load(record or "") or {}
+        robot = str(doc.get("robot") or "") if isinstance(doc, dict) else ""
+    entries: dict[str, Any] = {
+        "model_source": model_source,
+        "model_files": model_files(robot) if robot else {},
+    }
+    if robot and Path(robot).is_absolute():
+        entries["model_relative"] = os.path.relpath(robot, out)
+    return entries
+
+
+def _data_entry(p: str | Path, out: Path) -> dict[str, str]:
+    """A fitted data file: as typed, absolute, relative to the directory, SHA-256."""
+    absolute = Path(p).resolve()
+    return {"path": str(p), "absolute_path": str(absolute),
+            "relative_path": os.path.relpath(absolute, out), "name": Path(p).name,
+            "sha256": sha256_file(p)}  # fmt: skip
+
+
 def _manifest(
     result: IdentificationRecord,
     model_source: str | None,
     data_files: Sequence[str | Path],
     noise: NoiseModel | None,
     files: dict[str, str],
+    out: Path,
+    record: str | None = None,
 ) -> dict[str, Any]:
     ident = result.identified
     return {
@@ -59,8 +94,7 @@ def _manifest(
         "pincal_version": __version__,
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "model": result.model,
-        "model_source": model_source,
-        "model_files": model_files(model_source) if model_source else {},
+        **_model_entries(model_source, out, record),
         "preset": result.preset,
         "method": result.method,
         "units": {"length": "m", "angle": "rad"},
@@ -78,11 +112,7 @@ def _manifest(
         "noise": None
         if noise is None
         else {"position_mm": float(noise.position), "orientation_mrad": float(noise.orientation)},
-        "data_files": [
-            {"path": str(p), "absolute_path": str(Path(p).resolve()), "name": Path(p).name,
-             "sha256": sha256_file(p)}
-            for p in data_files
-        ],
+        "data_files": [_data_entry(p, out) for p in data_files],
         "calibrated_urdf": CALIBRATED_URDF,
         "calibrated_sidecar": CALIBRATED_SIDECAR,
         "identification": IDENTIFICATION_FILE,
@@ -107,7 +137,8 @@ def write_calibration(
         path: the directory; an existing calibration directory (or an empty one) is
             replaced, any other existing path is refused.
         result: identification result with its calibrated mechanism.
-        model_source: the nominal model spec (bundled name or path) for later commands.
+        model_source: the nominal model spec (bundled name or absolute path) for later
+            commands, or ``"model.yaml"`` when ``texts`` holds that model record.
         data_files: measurement files the calibration was fitted on (hashed).
         noise: instrument noise of those data (mm, mrad), if known.
         annotations: extra entries of ``identification.json`` (validation, truth, ...).
@@ -123,11 +154,38 @@ def write_calibration(
         CalibrationDirectoryError: ``path`` exists and is not a calibration directory, or
             another process is writing it (see :func:`calibration_lock`).
     """
+    _check_placed(result)
     out = Path(path).resolve()  # "." or "cal/" name a directory we can replace by rename
     out.parent.mkdir(parents=True, exist_ok=True)
     with calibration_lock(out):
         _write_locked(out, result, model_source, data_files, noise, annotations, texts, nominal)
     return read_calibration(out)  # resolved: "." names the old directory after the swap
+
+
+def _check_placed(result: IdentificationResult) -> None:
+    """Refuse, before anything is written, a fit that placed no parameter.
+
+    Its directory would have no parameter: its own reader refuses it.
+
+    Raises:
+        UnidentifiableError: no parameter identified (the gauge's reason named).
+    """
+    if len(result.identified_names):
+        return
+    joint = getattr(result, "joint", None)
+    weak = [g for g in (joint.gauge if joint is not None else ()) if "too weakly" in g]
+    if weak:  # our own text: "seen too weakly to place within …, held at nominal: names"
+        why = f": {weak[0].split(', held at nominal')[0][:120]}"
+        fix = ("the declared σ is too large for the data to place any (check the data "
+               "file's '# std:' or '# noise:' header and its unit), or measure more poses")
+    else:
+        why = ""
+        fix = "the data do not see the parameters: check the measured frame and --params"
+    raise UnidentifiableError(
+        f"the fit placed no parameter of {clip(result.model)} (all {len(result.names)} held "
+        f"at nominal{why}); nothing was written: {fix}",
+        result.names,
+    )
 
 
 def _write_locked(
@@ -155,7 +213,8 @@ def _write_locked(
         if nominal is not None:
             save_urdf(nominal, tmp / NOMINAL_URDF)
         files = {p.name: sha256_file(p) for p in sorted(tmp.iterdir()) if p.is_file()}
-        manifest = _manifest(result, model_source, data_files, noise, files)
+        record = (texts or {}).get(MODEL_RECORD)
+        manifest = _manifest(result, model_source, data_files, noise, files, out, record)
         if annotations and "quality" in annotations:  # the quality gate's verdict / override
             manifest["quality"] = annotations["quality"]
         if nominal is not None:

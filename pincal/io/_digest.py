@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import hashlib
+import os
+import stat
 from pathlib import Path
 
 from pincal._files import max_bytes, too_big_message
@@ -20,16 +22,26 @@ def sha256_file(path: str | Path) -> str:
             a huge or sparse file is refused at once, never hashed for minutes.
     """
     h = hashlib.sha256()
-    if not Path(path).is_file():  # a FIFO or device would block or never end
-        raise CalibrationDirectoryError(f"{clip(str(path))} is not a regular file")
     cap = max_bytes()
-    size = Path(path).stat().st_size
-    if size > cap:
-        raise InputLimitError(too_big_message(path, "data file", size, cap))
     try:
-        with open(path, "rb") as fh:
-            for block in iter(lambda: fh.read(1 << 20), b""):
-                h.update(block)
+        # O_NONBLOCK: a file swapped for a FIFO after any earlier check cannot block the
+        # open; what is checked is the file opened (fstat), not the name
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     except OSError as exc:
         raise CalibrationDirectoryError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
+    with os.fdopen(fd, "rb") as fh:
+        st = os.fstat(fh.fileno())
+        if not stat.S_ISREG(st.st_mode):  # a FIFO or device would block or never end
+            raise CalibrationDirectoryError(f"{clip(str(path))} is not a regular file")
+        if st.st_size > cap:
+            raise InputLimitError(too_big_message(path, "data file", st.st_size, cap))
+        left = cap + 1  # a file growing while read cannot make the read unbounded
+        try:
+            while left > 0 and (block := fh.read(min(1 << 20, left))):
+                h.update(block)
+                left -= len(block)
+        except OSError as exc:
+            raise CalibrationDirectoryError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
+    if left <= 0:
+        raise InputLimitError(too_big_message(path, "data file", cap + 1, cap))
     return h.hexdigest()

@@ -105,13 +105,13 @@ class SocketTable:
             try:
                 sigma = length_sigma(std, f"the std of distance {a}–{b}", lf, name)
                 known.append(KnownDistance(socket_id(a), socket_id(b), value / lf, sigma))
-            except MeasurementError as exc:
-                raise MeasurementError(f"{name}: {exc} (distances in {self.length_unit})") from None
+            except MeasurementError as exc:  # it names the file already
+                raise type(exc)(f"{exc} (distances in {self.length_unit})") from None
         try:
             std = length_sigma(self.std, "the seating std (--std)", lf, name)
             return SocketPlate(self.plate, std, tuple(known))
-        except MeasurementError as exc:
-            raise MeasurementError(f"{name}: {exc} (std in {self.length_unit})") from None
+        except MeasurementError as exc:  # it names the file already
+            raise type(exc)(f"{exc} (std in {self.length_unit})") from None
 
 
 def _mapped_titles(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 from pincal._files import read_text
 from pincal.errors import ModelFileError
@@ -23,7 +24,7 @@ def load_mechanism(
     measured_frame: str | None = None,
     options: SolverOptions | None = None,
     *,
-    sidecar: str | Path | None = None,
+    sidecar: str | Path | Mapping[str, Any] | None = None,
     lock: Mapping[str, float | str] | None = None,
 ) -> Mechanism:
     """Load a mechanism from a model directory, a ``.urdf`` or MJCF ``.xml`` path or a name.
@@ -46,7 +47,8 @@ def load_mechanism(
         spec: the model.
         measured_frame: the measured frame (wins over the sidecar's).
         options: solver options.
-        sidecar: a sidecar file for the model (its keys replace the model's own).
+        sidecar: a sidecar file for the model (its keys replace the model's own), or
+            its keys already read (a mapping; a ``robot`` key in it is ignored).
         lock: joints made fixed ``{name: value}`` [rad or m] or ``"home"`` (the home
             value: sidecar or SRDF, else 0) (wins over the sidecar's ``lock``); joints
             that mimic them are locked too.

@@ -231,10 +231,13 @@ def turn_note(names: list[str]) -> str:
 
 def resolve_named(
     spec: str | Path,
-    sidecar_file: str | Path | None = None,
+    sidecar_file: str | Path | Mapping[str, Any] | None = None,
     lock: Mapping[str, float | str] | None = None,
 ) -> NamedModel:
     """Resolve a model spec with its local sidecar, locks and defaults (see module doc).
+
+    ``sidecar_file`` may be the sidecar's keys already read (a mapping without ``robot``:
+    a calibration's own model record once its model was found moved).
 
     Raises:
         ModelFileError: a local sidecar without ``robot``, a ``--sidecar`` whose ``robot``
@@ -254,6 +257,8 @@ def resolve_named(
         data = dict(read_sidecar(local))
         robot = _robot_spec(local, data)
         by_name = not _path_like(str(data["robot"]))
+    elif isinstance(sidecar_file, Mapping):
+        data = {k: v for k, v in sidecar_file.items() if k != "robot"}
     elif sidecar_file is not None:
         local = Path(sidecar_file)
         data = dict(read_sidecar(local))

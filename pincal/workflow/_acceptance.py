@@ -21,7 +21,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import CalibrationDirectoryError, MeasurementError, ParameterError
+from pincal._files import read_text
+from pincal.errors import CalibrationDirectoryError, MeasurementError, ParameterError, PincalError
 from pincal.io import (
     IDENTIFICATION_FILE,
     MANIFEST,
@@ -145,11 +146,16 @@ def other_machine(cal: str, params: ParameterSet, values: np.ndarray) -> list[st
             continue
         if not truth_path.is_file():
             continue
-        try:
-            truth = json.loads(truth_path.read_text(encoding="utf-8"))
-        except (OSError, ValueError):
+        try:  # read as every input is: a regular file under the size cap
+            truth = json.loads(read_text(truth_path, "truth file"))
+        except (PincalError, ValueError):
             continue
-        true = {p["name"]: p["value"] for p in truth.get("parameters", [])}
+        entries = truth.get("parameters") if isinstance(truth, dict) else None
+        if not isinstance(entries, list) or not all(
+            isinstance(p, dict) and isinstance(p.get("value"), int | float) for p in entries
+        ):
+            continue  # not a truth file pincal simulate wrote: nothing to compare
+        true = {p.get("name"): p["value"] for p in entries}
         here = dict(zip(params.names, np.asarray(values, dtype=float), strict=True))
         same = set(true) == set(here) and all(abs(true[n] - here[n]) <= 1e-12 for n in true)
         if not same:

@@ -53,7 +53,8 @@ def _pose_fit(
     calibration's weighting record).
     """
     nominal = cal.nominal()
-    meas = read_measurement_file(cal.data_file(), nominal).measurements
+    with cal.reading_data_file() as path:  # the bytes parsed are the ones hashed
+        meas = read_measurement_file(path, nominal).measurements
     params = parameters(nominal, cal.preset)
     if params.joint_terms.size:
         raise PincalError(

@@ -9,14 +9,13 @@ needs (its identified values and covariance). The calibration itself is the
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from pincal.errors import PincalError
-from pincal.io import Fleet, read_calibration
+from pincal.io import Fleet, read_calibration, sha256_file
 
 __all__ = ["UnitJob", "file_digest", "fleet_jobs", "unit_summary"]
 
@@ -26,12 +25,14 @@ UnitJob = tuple[str, str | None, str, str, str, str, str]
 
 
 def file_digest(path: str | Path) -> str:
-    """SHA-256 (hex) of a file's bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
+    """SHA-256 (hex) of a file's bytes, read as every input is (:func:`pincal.io.sha256_file`).
+
+    Raises:
+        CalibrationDirectoryError: not a regular file, or unreadable.
+        InputLimitError: larger than the input size cap (a sparse 50 GB file is refused
+            at once, never hashed for minutes).
+    """
+    return sha256_file(path)
 
 
 def fleet_jobs(fleet: Fleet, root: Path, method: str) -> tuple[list[UnitJob], list[str]]:

@@ -110,10 +110,12 @@ def instrument_cross_validation(
             or a fold would leave a file without training readings.
     """
     nominal = cal.nominal()
-    files = [cal.data_file(i) for i in range(len(cal.manifest.get("data_files") or []))]
+    files = []
     datasets = []
-    for path in files:
-        data = read_instrument_file(path, nominal)
+    for i in range(len(cal.manifest.get("data_files") or [])):
+        with cal.reading_data_file(i) as path:  # the bytes parsed are the ones hashed
+            data = read_instrument_file(path, nominal)
+        files.append(path)
         if not isinstance(data, InstrumentData):
             raise MeasurementFormatError(
                 f"{path}: cross-validation of a calibration that mixes instrument kinds with "

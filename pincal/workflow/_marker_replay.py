@@ -34,9 +34,9 @@ def rebuild(cal: CalibrationDirectory) -> tuple[MarkerSetup, Mechanism, tuple[Me
     """
     doc = cal.manifest.get("markers") or {}
     setup = MarkerSetup.from_dict(doc)
-    path = cal.data_file()
     mech = marker_mechanism(cal.model_source or cal.model, setup)
-    return setup, mech, tuple(read_marker_sets(path, mech, setup))
+    with cal.reading_data_file() as path:  # the bytes parsed are the ones hashed
+        return setup, mech, tuple(read_marker_sets(path, mech, setup))
 
 
 def _recorded_prior(doc: dict[str, Any]) -> Prior | None:

@@ -117,9 +117,9 @@ def socket_cross_validation(
         PincalError: the data file is gone, or no known distance fixes the scale (the
             held-out socket distance would then measure nothing).
     """
-    path = cal.data_file()
     nominal = cal.nominal()
-    data = read_instrument_file(path, nominal)
+    with cal.reading_data_file() as path:  # the bytes parsed are the ones hashed
+        data = read_instrument_file(path, nominal)
     if not isinstance(data, SocketData):
         raise MeasurementFormatError(f"{path}: not a ball-in-socket file (# pincal sockets 1)")
     if not data.plate.distances:

@@ -21,3 +21,24 @@ def test_acceptance_names_the_options_of_the_calibrated_machine(tmp_path, monkey
                       "--errors", "seed:4", "--error-size", "0.5,5"])  # fmt: skip
     assert same.exit_code == 0, same.output
     assert "not the one the calibration" not in same.output
+
+
+def test_acceptance_reads_the_truth_beside_the_fitted_data_as_an_input(tmp_path, monkeypatch):
+    """The ``.truth.json`` found beside the fitted data file (through the manifest) is
+    read as every input is: a list (it was a traceback: 'list' has no 'get') or a sparse
+    file over the size cap (it was read whole: 6.5 GB for 3 GB) is no truth, not a crash."""
+    monkeypatch.chdir(tmp_path)
+    run = CliRunner().invoke
+    assert run(main, ["simulate", "wedge3", "--random", "30", "--out", "m.csv"]).exit_code == 0
+    assert run(main, ["calibrate", "wedge3", "--data", "m.csv", "--out", "cal"]).exit_code == 0
+    monkeypatch.setenv("PINCAL_MAX_FILE_MB", "1")
+    for plant in ("list", "sparse"):
+        (tmp_path / "m.truth.json").unlink()
+        if plant == "list":
+            (tmp_path / "m.truth.json").write_text("[]\n")
+        else:
+            with open(tmp_path / "m.truth.json", "wb") as fh:
+                fh.truncate(50 << 20)
+        res = run(main, ["acceptance", "wedge3", "--calibrated", "cal", "--cycles", "3"])
+        assert res.exit_code == 0, (plant, res.output)
+        assert "not the one the calibration" not in res.output

@@ -101,3 +101,20 @@ def test_a_failing_unit_is_reported_and_the_others_calibrated(fleet_dir, tmp_pat
     assert "SN-0002" in units[1]["reason"]
     assert [u["status"] for i, u in enumerate(units) if i != 1] == ["calibrated"] * 7
     assert "1 failed" in out
+
+
+def test_a_unit_data_file_over_the_cap_is_refused_at_once(fleet_dir, tmp_path, monkeypatch):
+    """A unit's data file is hashed as every input is read: a sparse file over the size
+    cap (it was hashed whole: 98 s for 20 GB) is refused in one line before any unit runs."""
+    sim = tmp_path / "sim"
+    shutil.copytree(fleet_dir, sim)
+    with open(sim / "SN-0002" / "measurements.csv", "wb") as fh:
+        fh.truncate(50 << 20)
+    monkeypatch.setenv("PINCAL_MAX_FILE_MB", "1")
+    res = CliRunner().invoke(main, ["fleet", "run", str(sim / "FLEET.yaml"),
+                                    "--out", str(tmp_path / "rep")])  # fmt: skip
+    assert res.exit_code == 1, res.output
+    line = res.output.strip().splitlines()[-1]
+    assert line.startswith("pincal: error: InputLimitError: data file"), line
+    assert "measurements.csv" in line and "PINCAL_MAX_FILE_MB" in line, line
+    assert not (tmp_path / "rep" / "units").exists()

@@ -53,3 +53,47 @@ def test_validate_out_refuses_a_planted_link(calibration, tmp_path):
         assert victim.read_text() == "keep\n"
     finally:
         link.unlink()
+
+
+@pytest.mark.parametrize("command", ["report", "validate"])
+def test_a_planted_directory_link_is_not_written_through(calibration, tmp_path, command):
+    """A link to a directory inside the calibration directory (``cal/sub -> ~``) is a
+    link there too: an output under it is refused, the files it points to keep their bytes."""
+    victim = tmp_path / "home"
+    victim.mkdir()
+    (victim / "report.md").write_text("keep\n")
+    (victim / "v.json").write_text("keep\n")
+    link = calibration / "cal" / "sub"
+    os.symlink(victim, link)
+    args = {"report": ["report", str(calibration / "cal"), "--out", str(link)],
+            "validate": ["validate", str(calibration / "cal"), "--data",
+                         str(calibration / "m.csv"), "--out", str(link / "v.json")]}  # fmt: skip
+    try:
+        r = CliRunner().invoke(main, args[command])
+        said = " ".join(r.output.split())
+        assert r.exit_code != 0 and "OutputPathError" in said, r.output
+        assert f"passes through {link}, a symbolic link inside the calibration directory" in said
+        assert sorted(p.name for p in victim.iterdir()) == ["report.md", "v.json"]
+        assert {p.read_text() for p in victim.iterdir()} == {"keep\n"}
+    finally:
+        link.unlink()
+
+
+def test_a_planted_lock_link_is_not_opened(calibration, tmp_path):
+    """The writer's lock beside the directory (``.cal.pincal-lock``) planted as a dangling
+    link: opening it with O_CREAT created the file it points to; now refused, nothing
+    created, the calibration unchanged."""
+    target = tmp_path / "created"
+    lock = calibration / ".cal.pincal-lock"
+    os.symlink(target, lock)
+    before = {p.name: p.read_bytes() for p in (calibration / "cal").iterdir()}
+    try:
+        r = CliRunner().invoke(main, ["calibrate", "wedge3", "--data", str(calibration / "m.csv"),
+                                      "--out", str(calibration / "cal")])  # fmt: skip
+        said = " ".join(r.output.split())
+        assert r.exit_code != 0 and "CalibrationDirectoryError" in said, r.output
+        assert "is a symbolic link" in said and "remove it" in said
+        assert not target.exists()
+        assert {p.name: p.read_bytes() for p in (calibration / "cal").iterdir()} == before
+    finally:
+        lock.unlink()

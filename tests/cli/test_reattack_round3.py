@@ -103,8 +103,8 @@ def test_the_fitted_data_file_is_guarded(proj, tmp_path, monkeypatch, kind, kind
     p = _copy(proj, tmp_path)
     doc = json.loads((p / "cal" / "calibration.json").read_text())
     planted = _plant(kind, p)
-    for f in doc["data_files"]:
-        f["path"] = f["absolute_path"] = planted
+    for f in doc["data_files"]:  # every place recorded (relative to the directory too)
+        f["path"] = f["absolute_path"] = f["relative_path"] = planted
     (p / "cal" / "calibration.json").write_text(json.dumps(doc))
     monkeypatch.setenv("PINCAL_MAX_FILE_MB", "1")
     line = _refused(_run("validate", p / "cal", "--cv", "3", cwd=tmp_path), 1, kind_word)

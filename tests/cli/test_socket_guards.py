@@ -117,3 +117,40 @@ def test_a_wrong_joint_reference_is_refused_and_nothing_replaced(tmp_path, socke
     assert "--force: writing despite the quality gate" in r.output
     quality = json.loads((tmp_path / "forced" / "calibration.json").read_text())["quality"]
     assert quality["overridden"] is True and quality["cause"] == "joint reference"
+
+
+def test_a_seating_sigma_too_large_to_place_anything_is_refused(tmp_path, sockets):
+    """A σ inside the bounds (100 mm) but too large for 20 seatings to place any
+    parameter: every direction is held at nominal. That directory (no parameter) was
+    refused only by its own read-back, naming a temporary directory; now refused in one
+    line before anything is written, and a good calibration in --out stays as it was."""
+    cal = tmp_path / "cal"
+    assert _run("calibrate", "ur5", "--data", sockets, "--out", cal).exit_code == 0
+    before = {p.name: p.read_bytes() for p in cal.iterdir()}
+    r = _run("calibrate", "ur5", "--data", _header(sockets, tmp_path, "std", "0.1"),
+             "--out", cal)  # fmt: skip
+    assert r.exit_code != 0, r.output
+    line = r.output.strip().splitlines()[-1]
+    assert line.startswith("pincal: error: UnidentifiableError: the fit placed no parameter")
+    for w in ("held at nominal", "too weakly", "'# std:'", "nothing was written"):
+        assert w in line, line
+    assert "pincal-tmp" not in line
+    assert {p.name: p.read_bytes() for p in cal.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
+
+
+@pytest.mark.parametrize("std", ["1e300", "0", "nan", "5000", "1e-30"])
+def test_import_sockets_bounds_std(tmp_path, sockets, std):
+    """--std of `pincal import-sockets` is bounded as the header's std: one line, of the
+    format error's class, the table named once, nothing written."""
+    table = tmp_path / "lab.csv"
+    table.write_text("".join(ln for ln in sockets.read_text().splitlines(True)
+                             if not ln.startswith("#")))  # fmt: skip
+    out = tmp_path / "s.csv"
+    r = _run("import-sockets", table, "--model", "ur5", "--distance", "A,B,50,0.01",
+             "--std", std, "--out", out)  # fmt: skip
+    assert r.exit_code != 0, r.output
+    line = r.output.strip().splitlines()[-1]
+    assert line.startswith("pincal: error: MeasurementFormatError: lab.csv: the seating std"), line
+    assert line.count("lab.csv") == 1 and "between 1e-06 and 1000 mm" in line, line
+    assert not out.exists()
