@@ -42,6 +42,8 @@ LONG = {
     "scripts/studies/stewart_pose_selection.py": "Monte-Carlo; core claim in test_seed000_study.py",
     "scripts/studies/pkm5_qpso.py": "QPSO study; core claim in test_identify_qpso.py",
     "scripts/studies/instrument_campaigns.py": "Monte-Carlo study; core claim in tests/instruments",
+    "scripts/studies/socket_gate.py": "180 UR5 socket fits (minutes); a wrong "
+    "joint_reference refused in tests/cli/test_socket_guards.py",
     "scripts/studies/fleet_small.py": "fault-free fleets, each limit calibrated by 200 more "
     "(minutes); the small-fleet limit in tests/workflow/test_fleet_stats.py",
 }
