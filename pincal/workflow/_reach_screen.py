@@ -24,7 +24,14 @@ import pinocchio as pin
 from pincal.compensation import compensate
 from pincal.design import CandidateSet
 from pincal.errors import PincalError
-from pincal.model import COMPONENTS, Mechanism, ParameterSet, actuator_jacobian, sample_actuators
+from pincal.model import (
+    COMPONENTS,
+    Mechanism,
+    ParameterSet,
+    actuator_jacobian,
+    fixing_components,
+    sample_actuators,
+)
 from pincal.workflow._buildable import buildable_mask
 
 __all__ = ["DRAWS", "compensation_test", "controlled_components", "unfixed_commands"]
@@ -122,35 +129,22 @@ def unfixed_commands(mech: Mechanism) -> str:
     """Why no target of the measured components fixes the commands ("" when they do).
 
     The measured components fix the n actuators when their actuator Jacobian at home
-    (:func:`actuator_jacobian`) has rank n. Otherwise the note names components that,
-    measured too, would: unmeasured ones of the measured kind (positions or
-    orientations) first, each kept when it adds to the rank.
+    (:func:`actuator_jacobian`) has rank n; otherwise the note names components that,
+    measured, would (:func:`fixing_components`).
     """
     n = mech.n_actuated
     comps = tuple(mech.measured_components)
     G = actuator_jacobian(mech, mech.q_home, components=COMPONENTS)  # (6, n)
-    tol = 1e-9 * max(float(np.abs(G).max()), 1e-300)
-    rows = [COMPONENTS.index(c) for c in comps]
-    rank = int(np.linalg.matrix_rank(G[rows], tol)) if rows else 0
+    rank, measure = fixing_components(G, comps)
     if rank >= n:
         return ""
-    kind = comps[0].startswith("r") if comps else False
-    others = sorted(
-        (c for c in COMPONENTS if c not in comps), key=lambda c: c.startswith("r") != kind
-    )
-    add: list[str] = []
-    for c in others:
-        trial = [*rows, *(COMPONENTS.index(a) for a in [*add, c])]
-        if rank + len(add) < n and np.linalg.matrix_rank(G[trial], tol) > rank + len(add):
-            add.append(c)
-    measure = [c for c in COMPONENTS if c in comps or c in add]
     return (
         f"the measured components [{', '.join(comps)}] fix only {rank} of the {n} commands "
         f"{list(mech.actuated)} at home (no target fixes a command); measure "
         + (
             f"[{', '.join(measure)}] (sidecar 'measured') to screen reach"
-            if rank + len(add) == n
-            else "more of the pose (the actuators move fewer than "
-            f"{n} of its six components at home)"
+            if measure
+            else f"more of the pose (the actuators move fewer than {n} of its six "
+            "components at home)"
         )
     )
