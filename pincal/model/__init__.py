@@ -38,6 +38,7 @@ from pincal.model._dh_model import (
     parameters_to_dh_errors,
 )
 from pincal.model._directions import describe_direction, direction_record, parent_direction
+from pincal.model._fixing import fixing_components
 from pincal.model._floor import DEFAULT_FLOOR, above_floor
 from pincal.model._home_search import conditioning, regular_home
 from pincal.model._joint_term_set import (
@@ -165,6 +166,7 @@ __all__ = [
     "example_robot_names",
     "example_robot_urdf",
     "find_local_sidecar",
+    "fixing_components",
     "full_parameters",
     "joint_term",
     "joint_term_bases",

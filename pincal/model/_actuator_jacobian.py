@@ -13,21 +13,43 @@ G = J_m,act + J_m,free·(−J_c,free⁺ J_c,act).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from pincal.errors import ConvergenceError
+from pincal.errors import ConvergenceError, MeasurementError
 from pincal.model._closures import COMPONENTS
 from pincal.model._mechanism import Mechanism
 
 __all__ = ["actuator_jacobian", "actuator_jacobians"]
 
 
-def actuator_jacobian(mech: Mechanism, q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """G (k, n_act) at the closed configuration q (nq,) [m or rad per m or rad]."""
+def actuator_jacobian(
+    mech: Mechanism,
+    q: NDArray[np.float64],
+    components: Sequence[str] | None = None,
+) -> NDArray[np.float64]:
+    """G (k, n_act) at the closed configuration q (nq,) [m or rad per m or rad].
+
+    Args:
+        mech: the mechanism.
+        q: (nq,) a configuration whose loops are closed.
+        components: the k rows, names from x y z rx ry rz in any order (default the
+            measured components), e.g. all six to ask which ones the actuators move.
+
+    Raises:
+        MeasurementError: an unknown component name.
+    """
     model = mech.model
-    cols = [COMPONENTS.index(c) for c in mech.measured_components]
+    comps = tuple(mech.measured_components) if components is None else tuple(components)
+    bad = [c for c in comps if c not in COMPONENTS]
+    if bad:
+        raise MeasurementError(
+            f"actuator_jacobian components {bad} unknown; choose names from {' '.join(COMPONENTS)}"
+        )
+    cols = [COMPONENTS.index(c) for c in comps]
     act = np.array([model.joints[mech.joint_id(j)].idx_v for j in mech.actuated])
     fid = mech.frame_id(mech.measured_frame)
     data = model.createData()

@@ -83,27 +83,33 @@ class PointClosures:
         columns: np.ndarray,
     ):
         self.bm = bm
-        self.fa = np.array([a for a, _ in frames], dtype=int)
-        self.fb = np.array([b for _, b in frames], dtype=int)
-        self.rows = np.asarray(rows, dtype=int)[:, None] + np.arange(3)  # (C, 3)
         cols = np.asarray(columns, dtype=int)
-        ma = np.array([bm.support_of_frame(a)[cols] for a in self.fa]).reshape(-1, cols.size)
-        mb = np.array([bm.support_of_frame(b)[cols] for b in self.fb]).reshape(-1, cols.size)
-        # per closure, the columns that move frame a or b, padded to a common width w
-        # by repeating its first one (written twice with the same value)
+        fa = np.array([a for a, _ in frames], dtype=int)
+        fb = np.array([b for _, b in frames], dtype=int)
+        first = np.asarray(rows, dtype=int)
+        ma = np.array([bm.support_of_frame(a)[cols] for a in fa]).reshape(-1, cols.size)
+        mb = np.array([bm.support_of_frame(b)[cols] for b in fb]).reshape(-1, cols.size)
+        # per closure, the columns that move frame a or b; a closure no column moves has
+        # zero Jacobian rows (the caller's J starts at zero) and is left out of the scatter
         touched = [np.nonzero(x | y)[0] for x, y in zip(ma, mb, strict=True)]
-        w = max((t.size for t in touched), default=0)
-        if any(t.size == 0 for t in touched):  # a closure no column moves: no Jacobian
-            touched, w = [], 0
-        local = np.array([np.pad(t, (0, w - t.size), mode="edge") for t in touched], dtype=int)
-        local = local.reshape(len(touched), w)
-        self.ma = np.take_along_axis(ma, local, axis=1).astype(float) if touched else local
-        self.mb = np.take_along_axis(mb, local, axis=1).astype(float) if touched else local
-        self.dofs = cols[local]  # (C, w) tangent dof of each column
+        moved = np.array([t.size > 0 for t in touched], dtype=bool).reshape(-1)
+        #: all closures' frames and rows (residuals), (C,) and (C, 3)
+        self.fa, self.fb = fa, fb
+        self.rows = first[:, None] + np.arange(3)
+        # the moved closures' columns, padded to a common width w by repeating the first
+        # (written twice with the same value)
+        kept = [t for t in touched if t.size]
+        w = max((t.size for t in kept), default=0)
+        local = np.array([np.pad(t, (0, w - t.size), mode="edge") for t in kept], dtype=int)
+        local = local.reshape(len(kept), w)
+        self.moved = moved
+        self.ma = np.take_along_axis(ma[moved], local, axis=1).astype(float)
+        self.mb = np.take_along_axis(mb[moved], local, axis=1).astype(float)
+        self.dofs = cols[local]  # (C', w) tangent dof of each column of a moved closure
         self._ma, self._mb = self.ma[:, :, None, None], self.mb[:, :, None, None]
         self._sign = self._mb - self._ma
-        #: (3, C, w) flat index of each entry in a (rows × len(columns)) Jacobian
-        self.flat = self.rows.T[:, :, None] * cols.size + local[None]
+        #: (3, C', w) flat index of each entry in a (rows × len(columns)) Jacobian
+        self.flat = self.rows[moved].T[:, :, None] * cols.size + local[None]
 
     def terms(self, bk: BatchKinematics, r: np.ndarray, J: np.ndarray | None) -> None:
         """Write residuals into ``r`` (N, rows) and Jacobians into ``J`` (N, rows, k).
@@ -116,6 +122,7 @@ class PointClosures:
         r[:, self.rows] = pb - pa
         if J is None or self.flat.size == 0:
             return
+        pa, pb = pa[:, self.moved], pb[:, self.moved]
         # poses last (arrays (C, w, 3, N)): the masks broadcast over long contiguous rows
         G = np.ascontiguousarray(np.transpose(bk.jacobian, (2, 1, 0)))[self.dofs]  # (C, w, 6, N)
         Jw = G[:, :, 3:]

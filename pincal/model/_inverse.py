@@ -13,6 +13,7 @@ import pinocchio as pin
 from pincal.errors import ConvergenceError, ShapeError, UnreachablePoseError
 from pincal.model._branch import LoopSolver
 from pincal.model._closures import COMPONENTS, measured_jacobian
+from pincal.model._fixing import fixing_components
 
 __all__ = ["check_actuator_limits", "inverse_configuration"]
 
@@ -71,6 +72,7 @@ def inverse_configuration(
         return r[comps], J[comps]
 
     guess = loop.q_home if q_guess is None else queries.check_q(q_guess)
+    _check_independent(loop, measured_components, guess, fid, target_p)
     try:
         sol = loop.newton(guess, np.arange(model.nv), extra)
     except ConvergenceError as exc:
@@ -90,18 +92,76 @@ def inverse_configuration(
     return sol.q
 
 
-def _output_rank(loop: LoopSolver, q: np.ndarray, fid: int, comps: np.ndarray) -> int:
-    """Rank of the actuator → measured-components map at q, the loops staying closed."""
+def _output_map(loop: LoopSolver, q: np.ndarray, fid: int) -> tuple[np.ndarray, float]:
+    """The actuator → six-components map G (6, n_act) at q, the loops staying closed.
+
+    Returns G and the largest entry of the measured frame's Jacobian (the rank's scale).
+    """
     data = loop.queries.compute(q)
     J_frame = pin.getFrameJacobian(loop.model, data, fid, pin.LOCAL)
-    Jm = measured_jacobian(data.oMf[fid], J_frame)[comps]
+    Jm = measured_jacobian(data.oMf[fid], J_frame)
     Jc = loop.queries.jacobian_of(data)
     act, free = loop.queries.act_v_arr, loop.queries.free_v
     dq_free = -np.linalg.pinv(Jc[:, free], rcond=loop.options.rcond) @ Jc[:, act]
     G = Jm[:, act] + Jm[:, free] @ dq_free
-    s = np.linalg.svd(G, compute_uv=False)
-    scale = max(float(np.max(np.abs(Jm), initial=0.0)), 1e-300)
+    return G, max(float(np.max(np.abs(Jm), initial=0.0)), 1e-300)
+
+
+def _output_rank(loop: LoopSolver, q: np.ndarray, fid: int, comps: np.ndarray) -> int:
+    """Rank of the actuator → measured-components map at q, the loops staying closed."""
+    G, scale = _output_map(loop, q, fid)
+    s = np.linalg.svd(G[comps], compute_uv=False)
     return int(np.sum(s > 1e-9 * scale))
+
+
+def _check_independent(
+    loop: LoopSolver,
+    measured_components: tuple[str, ...],
+    q: np.ndarray,
+    fid: int,
+    target_p: np.ndarray,
+) -> None:
+    """Refuse imposed components that are locally dependent at q and nearby.
+
+    Their actuator map (k, n_act) must have rank min(k, n_act): k components the
+    actuators move independently, which fix the commands when k ≥ n_act. Short of it at
+    q only, q is a dead point (:func:`_dead_start_note`); short of it at 3 random
+    configurations within 1e-3 [m, rad] too, no start helps: Newton would return one
+    of a family of commands (a planar five-bar imposing x z moves z by neither motor).
+
+    Raises:
+        UnreachablePoseError: the imposed components are dependent here and nearby.
+    """
+    comps = np.array([COMPONENTS.index(c) for c in measured_components])
+    n = len(loop.queries.actuated)
+    need = min(len(comps), n)
+    if _output_rank(loop, q, fid, comps) >= need:
+        return
+    rng = np.random.default_rng(0)
+    ranks = [
+        _output_rank(
+            loop,
+            pin.integrate(loop.model, q, 1e-3 * rng.standard_normal(loop.model.nv)),
+            fid,
+            comps,
+        )
+        for _ in range(3)
+    ]
+    if max(ranks) >= need:
+        return  # a dead point: Newton says so if it stalls
+    G, _ = _output_map(loop, q, fid)
+    G[np.abs(G) <= 1e-9 * float(np.abs(G).max(initial=0.0))] = 0.0
+    _, fixing = fixing_components(G, measured_components)
+    raise UnreachablePoseError(
+        f"target pose (p = {np.round(target_p * 1e3, 3).tolist()} mm): the imposed components "
+        f"[{', '.join(measured_components)}] are locally dependent: the actuators "
+        f"{list(loop.queries.actuated)} move them in only {max(ranks)} independent "
+        f"direction(s) here and nearby, so they do not fix the commands (inverse kinematics "
+        f"would return one of many); impose "
+        + (f"[{', '.join(fixing)}]" if fixing else f"{need} components the actuators move")
+        + " instead (sidecar 'measured', or the components asked of compensate)",
+        residual=float("nan"),
+    )
 
 
 def _dead_start_note(

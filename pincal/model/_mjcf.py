@@ -23,7 +23,8 @@ is translated once into the URDF route (models/README.md, section "MJCF"):
   replaced by a regular configuration nearby, a home outside a joint's range and
   joints with springs (``stiffness``) are reported (:mod:`pincal.model._mjcf_home`).
 
-Joint/tendon/flex equalities and ``<include>`` are refused (:class:`ModelFileError`);
+Active joint/tendon/flex equalities (a joint ``polycoef`` coupling) and ``<include>`` are
+refused (:class:`ModelFileError`, one line saying what to do instead);
 actuators on tendons, sites or bodies are skipped with a logged warning. Geometry,
 inertia, tendons, sensors and contacts do not affect kinematics and are ignored.
 """
@@ -89,15 +90,12 @@ class _Converter(MjcfTree):
         names: list[str] = []
         for k, e in enumerate(self._section("equality")):
             a = self.attrs(e, "main", "equality")
-            if e.tag not in ("connect", "weld"):
-                raise ModelFileError(
-                    f"MJCF <equality><{e.tag}> is not supported (it couples joint or tendon "
-                    "values, not frames); only connect (3d) and weld (6d) closures are"
-                )
             name = a.get("name") or f"{e.tag}{k}"
             if a.get("active", "true") == "false":
                 log.warning("MJCF import: inactive equality %r skipped", name)
                 continue
+            if e.tag not in ("connect", "weld"):
+                raise ModelFileError(_refusal(e.tag, a, name))
             if "site1" in a or "site2" in a:
                 pair = [self._site(a.get("site1", "")), self._site(a.get("site2", ""))]
             else:
@@ -176,6 +174,39 @@ class _Converter(MjcfTree):
                 q = pin.Quaternion(*unit(w, f"free {jname!r} qpos")).coeffs()  # x y z w
                 home[jname], i = [*map(float, qpos[i : i + 3]), *map(float, q)], i + 7
         return home
+
+
+def _refusal(tag: str, a: dict[str, str], name: str) -> str:
+    """The one-line refusal of an active ``<equality><tag>`` other than connect and weld."""
+    head = f"MJCF <equality><{tag}> {name!r} is not supported"
+    if tag == "joint":
+        j1, j2 = a.get("joint1", "?"), a.get("joint2")
+        poly = a.get("polycoef", "0 1 0 0 0")
+        if j2 is None:
+            return (
+                f"{head}: it holds joint {j1!r} at a value (polycoef {poly!r}), not a frame; "
+                f"remove it and fix the joint with 'lock: {{{j1}: VALUE}}' [rad or m] in a "
+                "sidecar <stem>.yaml beside the MJCF"
+            )
+        return (
+            f"{head}: it couples joint {j1!r} to joint {j2!r} by a polynomial (polycoef "
+            f"{poly!r}), and pincal closes loops between frames only; model the linkage "
+            "that makes the coupling (its bodies, closed by <connect> or <weld>), or remove "
+            f"the equality and drive both joints (load_mjcf(actuated=[..., {j1!r}, {j2!r}]) "
+            "or the sidecar 'name_mot')"
+        )
+    if tag == "tendon":
+        return (
+            f"{head}: it couples tendon lengths ({a.get('tendon1', '?')!r}"
+            + (f", {a['tendon2']!r}" if "tendon2" in a else "")
+            + "), and pincal models rigid links; model the tendon's path as a linkage closed "
+            "by <connect>, or remove the equality and declare the actuated joints "
+            "(load_mjcf(actuated=[...]) or the sidecar 'name_mot')"
+        )
+    return (
+        f"{head}: only connect (3d) and weld (6d) closures between frames are; remove it, "
+        "or model what it constrains as bodies closed by <connect> or <weld>"
+    )
 
 
 def mjcf_to_urdf(

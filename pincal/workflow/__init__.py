@@ -41,7 +41,8 @@ prints or writes files.
 - measurement poses (``pincal poses``): :func:`pose_basis`, :func:`pose_candidates` and
   :func:`select_pose_design` (screens, selection, travel order, Cramér–Rao prediction:
   :class:`PoseSelection`); the reach screen compensates each candidate on displaced
-  models (:func:`compensation_test`, :func:`controlled_components`).
+  models (:func:`compensation_test`, :func:`controlled_components`; off, and
+  :func:`unfixed_commands` says why, when the measured components do not fix the commands).
 - simulated campaigns (``pincal simulate``): :func:`simulate_campaign` measures the
   nominal model with random errors (none a built machine cannot have,
   :func:`buildable_mask`) at the poses it reaches (:func:`reachable_rows`), as poses, a
@@ -126,7 +127,12 @@ from pincal.workflow._prior_choice import (
     nested_choice,
 )
 from pincal.workflow._program_compensation import CompensatedProgram, compensate_program
-from pincal.workflow._reach_screen import DRAWS, compensation_test, controlled_components
+from pincal.workflow._reach_screen import (
+    DRAWS,
+    compensation_test,
+    controlled_components,
+    unfixed_commands,
+)
 from pincal.workflow._simulation import (
     SOCKET_SPACING,
     SimulatedCampaign,
@@ -243,6 +249,7 @@ __all__ = [
     "simulate_unit",
     "structure_lines",
     "transfer_markers",
+    "unfixed_commands",
     "unit_summary",
     "validate_on_data",
     "view_poses",

@@ -9,6 +9,9 @@ machine cannot have; :data:`DRAWS` draws seeded by the seed), from the candidate
 command, limits checked, branch changes refused — what ``pincal compensate`` does with
 a calibration of that size, imposing the components the machine controls
 (:func:`controlled_components`). A candidate is kept when it compensates on every draw.
+When the measured components do not fix the commands (a two-motor neck measured by
+one angle) no target fixes a command, the screen is off and :func:`unfixed_commands`
+says which components to measure.
 """
 
 from __future__ import annotations
@@ -21,10 +24,17 @@ import pinocchio as pin
 from pincal.compensation import compensate
 from pincal.design import CandidateSet
 from pincal.errors import PincalError
-from pincal.model import Mechanism, ParameterSet, actuator_jacobian, sample_actuators
+from pincal.model import (
+    COMPONENTS,
+    Mechanism,
+    ParameterSet,
+    actuator_jacobian,
+    fixing_components,
+    sample_actuators,
+)
 from pincal.workflow._buildable import buildable_mask
 
-__all__ = ["DRAWS", "compensation_test", "controlled_components"]
+__all__ = ["DRAWS", "compensation_test", "controlled_components", "unfixed_commands"]
 
 #: error draws each candidate must compensate on
 DRAWS = 3
@@ -36,7 +46,7 @@ def compensation_test(
     errors: tuple[float, float],
     seed: int,
     say: Callable[[str], None] | None = None,
-) -> Callable[[CandidateSet], np.ndarray]:
+) -> Callable[[CandidateSet], np.ndarray] | None:
     """The ``compensable`` test of :func:`pincal.design.screen_candidates`.
 
     Args:
@@ -46,11 +56,18 @@ def compensation_test(
             parameters a built machine cannot have, :func:`buildable_mask`).
         errors: uniform error bounds (mm for lengths, mrad for angles).
         seed: random seed of the errors.
-        say: given a note (one line) when some error draws do not assemble.
+        say: given a note (one line) when some error draws do not assemble, or when
+            the screen is off (:func:`unfixed_commands`).
 
     Returns:
-        candidates (M) → (M,) bool, whether each compensates on every draw.
+        candidates (M) → (M,) bool, whether each compensates on every draw; None (no
+        screen) when the measured components do not fix the commands.
     """
+    unfixed = unfixed_commands(mech)
+    if unfixed:
+        if say is not None:
+            say(f"  reach screen off: {unfixed}")
+        return None
     rng = np.random.default_rng([seed, 37])
     bound = np.array([errors[0] * 1e-3 if u == "m" else errors[1] * 1e-3 for u in params.units])
     bound *= buildable_mask(mech, params, sample_actuators(mech, 10, np.random.default_rng(seed)))
@@ -106,3 +123,28 @@ def controlled_components(mech: Mechanism) -> tuple[str, ...]:
         if len(keep) < mech.mobility and np.linalg.matrix_rank(G[[*keep, k]], tol) > len(keep):
             keep.append(k)
     return tuple(comps[k] for k in sorted(keep))
+
+
+def unfixed_commands(mech: Mechanism) -> str:
+    """Why no target of the measured components fixes the commands ("" when they do).
+
+    The measured components fix the n actuators when their actuator Jacobian at home
+    (:func:`actuator_jacobian`) has rank n; otherwise the note names components that,
+    measured, would (:func:`fixing_components`).
+    """
+    n = mech.n_actuated
+    comps = tuple(mech.measured_components)
+    G = actuator_jacobian(mech, mech.q_home, components=COMPONENTS)  # (6, n)
+    rank, measure = fixing_components(G, comps)
+    if rank >= n:
+        return ""
+    return (
+        f"the measured components [{', '.join(comps)}] fix only {rank} of the {n} commands "
+        f"{list(mech.actuated)} at home (no target fixes a command); measure "
+        + (
+            f"[{', '.join(measure)}] (sidecar 'measured') to screen reach"
+            if measure
+            else f"more of the pose (the actuators move fewer than {n} of its six "
+            "components at home)"
+        )
+    )

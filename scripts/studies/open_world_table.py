@@ -1,6 +1,7 @@
 """Print the README's open-world table: what loads, calibrates, and is refused.
 
-Run: python scripts/studies/open_world_table.py
+Run: python scripts/studies/open_world_table.py [--only WORD ...]
+(``--only``: the machines whose name contains one of the words, case-insensitive)
 
 Every machine of tests/open_world/roster.py (written here in other people's habits:
 MJCF cuts and keyframes, emulated ball and U joints, robot.yaml joint kinds, 0/0 URDF
@@ -11,6 +12,7 @@ on the identifiable set of its ``base`` and ``full`` presets from exact measurem
 
 from __future__ import annotations
 
+import argparse
 import logging
 import sys
 import tempfile
@@ -19,13 +21,22 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))  # the test suite's machine writers
 
-from tests.open_world.roster import table  # noqa: E402
+from tests.open_world.roster import ROSTER, row, table  # noqa: E402
 
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--only", nargs="+", default=None, help="name fragments of machines")
+    args = ap.parse_args()
     logging.disable(logging.WARNING)  # the notes of each load; the table says the result
     with tempfile.TemporaryDirectory() as folder:
-        for line in table(Path(folder)):
+        if args.only is None:
+            lines = table(Path(folder))
+        else:
+            words = [w.lower() for w in args.only]
+            picked = [mc for mc in ROSTER if any(w in mc.name.lower() for w in words)]
+            lines = (row(mc, Path(folder)) for mc in picked)
+        for line in lines:
             print(line, flush=True)
 
 

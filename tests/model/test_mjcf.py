@@ -354,12 +354,26 @@ def test_free_joint_and_keyframe_home():
         (
             '<equality><joint joint1="ja" joint2="jb"/></equality>',
             ModelFileError,
-            r"<equality><joint> is not supported",
+            r"<equality><joint> 'joint0' is not supported: it couples joint 'ja' to joint 'jb'"
+            r" by a polynomial \(polycoef '0 1 0 0 0'\).*model the linkage .*<connect>.*"
+            r"drive both joints \(load_mjcf\(actuated=\[\.\.\., 'ja', 'jb'\]\)",
+        ),
+        (
+            '<equality><joint name="hold" joint1="ja" polycoef="0.3 0 0 0 0"/></equality>',
+            ModelFileError,
+            r"<equality><joint> 'hold' is not supported: it holds joint 'ja' at a value "
+            r"\(polycoef '0.3 0 0 0 0'\).*'lock: \{ja: VALUE\}' \[rad or m\] in a sidecar",
         ),
         (
             '<equality><tendon tendon1="t"/></equality>',
             ModelFileError,
-            r"<equality><tendon> is not supported",
+            r"<equality><tendon> 'tendon0' is not supported: it couples tendon lengths "
+            r"\('t'\).*path as a linkage closed by <connect>, or remove the equality",
+        ),
+        (
+            '<equality><flex flex="f"/></equality>',
+            ModelFileError,
+            r"<equality><flex> 'flex0' is not supported: only connect \(3d\) and weld",
         ),
         (
             '<equality><connect body1="a" body2="nope" anchor="0 0 0"/></equality>',
@@ -385,8 +399,17 @@ def test_unsupported_or_wrong_input_is_refused(snippet, error, match):
         '<worldbody><body name="a"><joint name="ja"/><site name="sa"/><body name="b">'
         '<joint name="jb"/><joint name="jf" type="ball"/></body></body></worldbody>'
     )
-    with pytest.raises(error, match=match):
+    with pytest.raises(error, match=match) as info:
         mjcf_to_urdf(f"<mujoco>{body}{snippet}</mujoco>")
+    assert "\n" not in str(info.value)  # one line
+
+
+def test_inactive_joint_equality_is_skipped(caplog):
+    body = '<worldbody><body name="a"><joint name="ja"/></body></worldbody>'
+    eq = '<equality><joint name="off" joint1="ja" active="false"/></equality>'
+    with caplog.at_level(logging.WARNING, logger="pincal.model._mjcf"):
+        _, sc = mjcf_to_urdf(f"<mujoco>{body}{eq}</mujoco>")
+    assert "closed_loop" not in sc and "inactive equality 'off' skipped" in caplog.text
 
 
 @pytest.mark.parametrize(

@@ -18,9 +18,23 @@ LOADS = [mc for mc in ROSTER if mc.refused is None]
 REFUSED = [mc for mc in ROSTER if mc.refused is not None]
 
 
-# every machine with its base set in the fast lane; the full preset in the slow lane
-@pytest.mark.parametrize("preset", ["base", pytest.param("full", marks=pytest.mark.slow)])
-@pytest.mark.parametrize("machine", LOADS, ids=[mc.name for mc in LOADS])
+def _cases() -> list:
+    """(machine, preset): base in the fast lane, full in the slow lane; a machine's
+    ``unresolved`` presets are strict xfails naming their reason."""
+    out = []
+    for preset in ("base", "full"):
+        for mc in LOADS:
+            marks = [pytest.mark.slow] if preset == "full" else []
+            marks += [
+                pytest.mark.xfail(strict=True, reason=why)
+                for p, why in mc.unresolved
+                if p == preset
+            ]
+            out.append(pytest.param(mc, preset, marks=marks, id=f"{preset}-{mc.name}"))
+    return out
+
+
+@pytest.mark.parametrize(("machine", "preset"), _cases())
 def test_noise_free_recovery_on_every_machine(machine: Machine, preset: str, tmp_path):
     logging.disable(logging.WARNING)
     try:
