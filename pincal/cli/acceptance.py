@@ -102,7 +102,9 @@ def acceptance(
         size_mm, size_mrad = parse_pair(error_size, "--error-size")
         sim = acceptance_machine(nominal, preset, err_seed, size_mm, size_mrad)
         if cal:
-            for line in other_machine(cal, sim.params, sim.values):
+            here = {"model": nominal.name, "preset": sim.preset, "errors": errors,
+                    "error_size_mm_mrad": [size_mm, size_mrad]}  # fmt: skip
+            for line in other_machine(cal, sim.params, sim.values, here):
                 click.echo(f"pincal: warning: {line}", err=True)
         runs = [("before", nominal)] + ([("after", calibrated)] if calibrated else [])
         for label, controller in runs:

@@ -65,14 +65,23 @@ def calibrated_controller(
 
     Raises:
         CalibrationDirectoryError / ParameterError: nothing usable at ``spec``, or a
-            record of another model.
+            calibration of another model (another robot name or actuated joints than
+            ``nominal``'s: its controller would command a machine it does not describe).
     """
     path = Path(spec)
     if (path / MANIFEST).is_file():  # a calibration directory: read (and checked) as one
         cal = read_calibration(path)
         if announce is not None:
             announce(cal)
-        return cal.calibrated()
+        calibrated = cal.calibrated()
+        if (calibrated.name, calibrated.actuated) != (nominal.name, nominal.actuated):
+            model = cal.manifest.get("model") or calibrated.name
+            raise ParameterError(
+                f"calibration {spec!r} is of model {model!r} (robot {calibrated.name!r}), not "
+                f"of MODEL's robot {nominal.name!r}: its 'after' figures would command another "
+                f"machine; pass its model: pincal acceptance {model} --calibrated {spec}"
+            )
+        return calibrated
     if path.is_dir():
         path = path / IDENTIFICATION_FILE
     record = read_identification(path)
@@ -90,11 +99,13 @@ class AcceptanceMachine:
         params: the parameter set of the errors (a preset of the nominal model).
         values: (len(params),) the errors drawn [m, rad] (zeros without errors).
         actual: the nominal model with ``values`` applied.
+        preset: the name of the preset ``params`` is ("" when not given).
     """
 
     params: ParameterSet
     values: np.ndarray
     actual: Mechanism
+    preset: str = ""
 
 
 def acceptance_machine(
@@ -113,26 +124,35 @@ def acceptance_machine(
         size_mm: bound of the length errors [mm].
         size_mrad: bound of the angle errors [mrad].
     """
-    params = parameters(nominal, preset or next(iter(nominal.presets), "full"))
+    name = preset or next(iter(nominal.presets), "full")
+    params = parameters(nominal, name)
     values = np.zeros(len(params))
     if seed is not None:
         er = np.random.default_rng(seed)
         bound = np.array([size_mm * 1e-3 if u == "m" else size_mrad * 1e-3 for u in params.units])
         values = er.uniform(-bound, bound)
-    return AcceptanceMachine(params, values, params.apply(nominal, values))
+    return AcceptanceMachine(params, values, params.apply(nominal, values), name)
 
 
-def other_machine(cal: str, params: ParameterSet, values: np.ndarray) -> list[str]:
+def other_machine(
+    cal: str,
+    params: ParameterSet,
+    values: np.ndarray,
+    settings: dict[str, Any] | None = None,
+) -> list[str]:
     """Warnings when the simulated machine is not the one the calibration was fitted on.
 
     A calibration of simulated data records its data file; ``pincal simulate`` wrote the
     truth beside it (``<data>.truth.json``). When the errors simulated here differ from
-    that truth, the "after" figures test the calibration on another machine.
+    that truth, the "after" figures test the calibration on another machine: one line
+    per truth file, saying which settings differ (there → here) and what to pass.
 
     Args:
         cal: the calibration (a directory; anything else: no warning).
         params: the parameter set of the errors simulated here.
         values: (len(params),) those errors [m, rad].
+        settings: the settings simulated here, as the truth file records them (keys
+            ``model``, ``preset``, ``errors``, ``error_size_mm_mrad``); None: not said.
     """
     if not (Path(cal) / MANIFEST).is_file():
         return []
@@ -157,9 +177,29 @@ def other_machine(cal: str, params: ParameterSet, values: np.ndarray) -> list[st
             hint = f"--errors {truth.get('errors')} --params {truth.get('preset')}"
             hint += f" --error-size {size[0]:g},{size[1]:g}" if size else ""
             out.append(f"the machine simulated here is not the one the calibration was fitted "
-                       f"on ({truth_path} differs): the 'after' figures test the calibration on "
-                       f"another machine; to test it on its own, pass {hint}")  # fmt: skip
+                       f"on ({truth_path}: {_differences(truth, settings or {})}): the 'after' "
+                       f"figures test the calibration on another machine; to test it on its "
+                       f"own, pass {hint}")  # fmt: skip
     return out
+
+
+def _differences(truth: dict[str, Any], here: dict[str, Any]) -> str:
+    """Which of the truth's settings differ from ``here``'s, in words (there → here)."""
+
+    def shown(key: str, value: Any) -> str:
+        if key == "error_size_mm_mrad" and isinstance(value, list | tuple) and len(value) == 2:
+            return f"{value[0]:g},{value[1]:g}"
+        return str(value)
+
+    words = {"model": "model", "preset": "--params", "errors": "--errors",
+             "error_size_mm_mrad": "--error-size"}  # fmt: skip
+    said = []
+    for key, word in words.items():
+        if key in here and key in truth:
+            there, now = shown(key, truth[key]), shown(key, here[key])
+            if there != now:
+                said.append(f"{word} {there} there, {now} here")
+    return "; ".join(said) or "the same settings, other error values"
 
 
 def _grouped(
