@@ -46,6 +46,8 @@ __all__ = [
     "calibrated_controller",
     "cube_doc",
     "cycle_characteristics",
+    "fitted_truths",
+    "held_out_machine",
     "measured_characteristics",
     "other_machine",
 ]
@@ -156,35 +158,102 @@ def other_machine(
     """
     if not (Path(cal) / MANIFEST).is_file():
         return []
-    directory = read_calibration(cal)
+    here = dict(zip(params.names, np.asarray(values, dtype=float), strict=True))
     out = []
-    for k in range(len(directory.manifest.get("data_files") or [])):
-        try:  # found by its hash, wherever calibrate ran
-            truth_path = directory.data_file(k).with_suffix(".truth.json")
-        except CalibrationDirectoryError:
-            continue
-        if not truth_path.is_file():
-            continue
-        try:
-            truth = json.loads(truth_path.read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            continue
-        true = {p["name"]: p["value"] for p in truth.get("parameters", [])}
-        here = dict(zip(params.names, np.asarray(values, dtype=float), strict=True))
-        same = set(true) == set(here) and all(abs(true[n] - here[n]) <= 1e-12 for n in true)
-        if not same:
-            size = truth.get("error_size_mm_mrad")
-            hint = f"--errors {truth.get('errors')} --params {truth.get('preset')}"
-            hint += f" --error-size {size[0]:g},{size[1]:g}" if size else ""
+    for truth_path, truth in fitted_truths(read_calibration(cal)):
+        if not _same_errors(_true_values(truth), here):
             out.append(f"the machine simulated here is not the one the calibration was fitted "
                        f"on ({truth_path}: {_differences(truth, settings or {})}): the 'after' "
                        f"figures test the calibration on another machine; to test it on its "
-                       f"own, pass {hint}")  # fmt: skip
+                       f"own, pass {_options(truth)}")  # fmt: skip
     return out
 
 
-def _differences(truth: dict[str, Any], here: dict[str, Any]) -> str:
-    """Which of the truth's settings differ from ``here``'s, in words (there → here)."""
+def fitted_truths(directory: CalibrationDirectory) -> list[tuple[Path, dict[str, Any]]]:
+    """The ``<data>.truth.json`` of ``pincal simulate`` beside the calibration's data files.
+
+    Each data file is found by its hash, wherever calibrate ran; a file not found, without
+    a truth beside it or with an unreadable one is left out. Returns (path, document) pairs.
+    """
+    out = []
+    for k in range(len(directory.manifest.get("data_files") or [])):
+        try:
+            truth_path = directory.data_file(k).with_suffix(".truth.json")
+        except CalibrationDirectoryError:
+            continue
+        truth = _read_truth(truth_path)
+        if truth is not None:
+            out.append((truth_path, truth))
+    return out
+
+
+def held_out_machine(directory: CalibrationDirectory, data: Path) -> list[str]:
+    """Warnings when a held-out file was simulated on another machine than the fit's data.
+
+    Both ``<data>.truth.json`` (the held-out file's and the calibration's data files') are
+    compared: true errors [m, rad] and thermal coefficients [1/K]. One line per differing
+    truth, saying which ``simulate`` settings differ and what to pass.
+    """
+    held = _read_truth(Path(data).with_suffix(".truth.json"))
+    if held is None:
+        return []
+    out = []
+    for fit_path, fit in fitted_truths(directory):
+        warm = _same_errors(_thermal(fit), _thermal(held))
+        if not (warm and _same_errors(_true_values(fit), _true_values(held))):
+            differs = _differences(fit, held, warm).replace(" here", " for the held-out file")
+            differs = differs.replace(" there,", " for the calibration's data,")
+            out.append(f"{data} was simulated on another machine than the calibration's data "
+                       f"({fit_path}: {differs}): the figures test the calibration on another "
+                       f"machine; simulate the held-out file with {_options(fit)}")  # fmt: skip
+    return out
+
+
+def _read_truth(path: Path) -> dict[str, Any] | None:
+    """A truth document, or None (no file, or not readable JSON)."""
+    if not path.is_file():
+        return None
+    try:
+        truth = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return truth if isinstance(truth, dict) else None
+
+
+def _true_values(truth: dict[str, Any]) -> dict[str, float]:
+    """The truth's parameter values by name [m, rad]."""
+    return {p["name"]: float(p["value"]) for p in truth.get("parameters", [])}
+
+
+def _same_errors(a: dict[str, float], b: dict[str, float]) -> bool:
+    """One machine: every value equal (to 1e-12), a name missing on one side counts as 0."""
+    return all(abs(a.get(n, 0.0) - b.get(n, 0.0)) <= 1e-12 for n in set(a) | set(b))
+
+
+def _thermal(truth: dict[str, Any]) -> dict[str, float]:
+    """The truth's thermal coefficients by name [1/K] (empty: no thermal expansion)."""
+    return {str(k): float(v) for k, v in (truth.get("thermal_1_per_K") or {}).items()}
+
+
+def _alpha(truth: dict[str, Any]) -> str:
+    """The truth's ``--thermal`` coefficient in words [1/K] ("none" without expansion)."""
+    alphas = sorted(set(_thermal(truth).values()))
+    return "none" if not alphas else " / ".join(f"{a:g}" for a in alphas)
+
+
+def _options(truth: dict[str, Any]) -> str:
+    """The ``simulate`` options (errors, preset, size, thermal) that draw the truth's machine."""
+    size = truth.get("error_size_mm_mrad")
+    hint = f"--errors {truth.get('errors')} --params {truth.get('preset')}"
+    hint += f" --error-size {size[0]:g},{size[1]:g}" if size else ""
+    return hint + (f" --thermal {_alpha(truth)}" if _thermal(truth) else "")
+
+
+def _differences(truth: dict[str, Any], here: dict[str, Any], warm: bool = True) -> str:
+    """Which of the truth's settings differ from ``here``'s, in words (there → here).
+
+    ``warm``: False when both are truths whose thermal coefficients differ (said too).
+    """
 
     def shown(key: str, value: Any) -> str:
         if key == "error_size_mm_mrad" and isinstance(value, list | tuple) and len(value) == 2:
@@ -199,6 +268,8 @@ def _differences(truth: dict[str, Any], here: dict[str, Any]) -> str:
             there, now = shown(key, truth[key]), shown(key, here[key])
             if there != now:
                 said.append(f"{word} {there} there, {now} here")
+    if not warm:
+        said.append(f"--thermal {_alpha(truth)} there, {_alpha(here)} here")
     return "; ".join(said) or "the same settings, other error values"
 
 

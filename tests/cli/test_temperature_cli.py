@@ -195,6 +195,7 @@ def test_the_pose_accuracy_table_is_taken_at_each_row_s_temperature(warm_arm, th
     res = runner.invoke(main, ["validate", str(thermal_cal), "--data", str(tmp / "warm.csv"),
                                "--json"])  # fmt: skip
     assert res.exit_code == 0, res.output
+    assert "another machine" not in res.output  # simulated on the fit's machine
     doc = json.loads(res.stdout.strip().splitlines()[-1])
     assert doc["commanded_poses"] == 10 and doc["poses"] == 30
     ap = np.array([p["after"]["AP_p_mm"] for p in doc["iso9283"]])
@@ -209,3 +210,32 @@ def test_the_pose_accuracy_table_is_taken_at_each_row_s_temperature(warm_arm, th
     assert np.sqrt(np.mean(ap**2)) < 1.5 * expected
     assert doc["after"]["rms_position_mm"] < 1.5 * expected
     assert np.sqrt(np.mean(ap_before**2)) > 10 * expected
+
+
+OTHER = [("--thermal", "2e-05", "3e-05"), ("--errors", "seed:0", "seed:3")]
+
+
+@pytest.mark.parametrize(("option", "there", "here"), OTHER)
+def test_validate_warns_when_the_held_out_file_is_another_machine(
+    warm_arm, thermal_cal, option, there, here
+):
+    """A held-out file simulated with other errors or another expansion is another machine
+    (issue 39, item 4): validate says which setting differs and what to simulate with
+    (before, its figures quietly tested the calibration on another machine)."""
+    tmp = warm_arm[0]
+    runner = CliRunner()
+    settings = {"--thermal": "2e-5", "--errors": "seed:0", option: here}
+    out = tmp / f"other{option}.csv"
+    res = runner.invoke(main, ["simulate", "ur5", "--random", "12", "--temperature", "24,30",
+                               "--thermal", settings["--thermal"], "--errors",
+                               settings["--errors"], "--error-size", "0.2,1", "--noise",
+                               "0.005,0.005", "--out", str(out)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(main, ["validate", str(thermal_cal), "--data", str(out)])
+    assert res.exit_code == 0, res.output
+    warning = next(line for line in res.output.splitlines() if "another machine" in line)
+    assert f"{out} was simulated on another machine than the calibration's data" in warning
+    assert (f"{option} {there} for the calibration's data, {here} for the held-out file"
+            in warning)  # fmt: skip
+    assert "simulate the held-out file with --errors seed:0 --params full --error-size 0.2,1 " \
+        "--thermal 2e-05" in warning
