@@ -102,12 +102,22 @@ class AcceptanceMachine:
         values: (len(params),) the errors drawn [m, rad] (zeros without errors).
         actual: the nominal model with ``values`` applied.
         preset: the name of the preset ``params`` is ("" when not given).
+        size: the bounds of the draw (length [mm], angle [mrad]).
     """
 
     params: ParameterSet
     values: np.ndarray
     actual: Mechanism
     preset: str = ""
+    size: tuple[float, float] = (0.0, 0.0)
+
+    def settings(self, errors: str) -> dict[str, Any]:
+        """The draw's settings as a ``<data>.truth.json`` records them, for :func:`other_machine`.
+
+        ``errors``: the ``--errors`` text (``seed:N`` or ``none``).
+        """
+        return {"model": self.actual.name, "preset": self.preset, "errors": errors,
+                "error_size_mm_mrad": list(self.size)}  # fmt: skip
 
 
 def acceptance_machine(
@@ -133,7 +143,9 @@ def acceptance_machine(
         er = np.random.default_rng(seed)
         bound = np.array([size_mm * 1e-3 if u == "m" else size_mrad * 1e-3 for u in params.units])
         values = er.uniform(-bound, bound)
-    return AcceptanceMachine(params, values, params.apply(nominal, values), name)
+    return AcceptanceMachine(
+        params, values, params.apply(nominal, values), name, (size_mm, size_mrad)
+    )
 
 
 def other_machine(
