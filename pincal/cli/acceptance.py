@@ -58,7 +58,8 @@ def acceptance(
 
     Simulates the actual machine (MODEL with the errors of `pincal simulate`, same
     defaults) commanded by the nominal model (before) and by the calibrated one
-    (after, with --calibrated), or evaluates measured cycles (--data).
+    (after, with --calibrated), or evaluates measured cycles (--data). A calibration of
+    another robot is refused; one whose data's simulate truth differs is warned about.
 
     \b
     Examples:
@@ -102,7 +103,7 @@ def acceptance(
         size_mm, size_mrad = parse_pair(error_size, "--error-size")
         sim = acceptance_machine(nominal, preset, err_seed, size_mm, size_mrad)
         if cal:
-            for line in other_machine(cal, sim.params, sim.values):
+            for line in other_machine(cal, sim.params, sim.values, sim.settings(errors)):
                 click.echo(f"pincal: warning: {line}", err=True)
         runs = [("before", nominal)] + ([("after", calibrated)] if calibrated else [])
         for label, controller in runs:

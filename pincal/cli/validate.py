@@ -48,13 +48,13 @@ def validate(
     prediction from the calibration's covariance (without and with the instrument
     noise; withheld, with the reason, when the covariance is not valid or
     ill-conditioned, a parameter's σ exceeds 20 mm / 0.1 rad, or parameters were held
-    for weakness). Warns when --data is a file the calibration was fitted on. A --data
-    file of more than 100000 rows is refused (with an estimate) unless --yes.
+    for weakness). Warns when --data was fitted on, or simulated on another machine (its
+    truth.json). A --data file over 100000 rows is refused (with an estimate) unless --yes.
 
     A calibration with joint terms (joint_terms.yaml: compliance under the recorded
     payload, gain, harmonics, struts' compliance) predicts with its geometry and its
-    terms: each command moves the joints by the terms' deflection, as compensate
-    assumes; --payload changes the load the compliance sees.
+    terms: each command moves the joints by the terms' deflection, as compensate assumes;
+    --payload changes the load the compliance sees; a thermal one each pose's temperature_C.
 
     \b
     Examples:

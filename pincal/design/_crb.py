@@ -81,8 +81,29 @@ class CramerRaoReport:
 
     @property
     def rms_std(self) -> float:
-        """sqrt(tr(F⁻¹)/n): the predicted RMS parameter error (mixed units if any rad)."""
+        """sqrt(tr(F⁻¹)/n): the predicted RMS parameter error [SI].
+
+        It adds m² and rad² when the set mixes lengths and angles: a design criterion
+        (comparing pose sets of one parameter set), never a figure to print; see
+        :meth:`std_by_unit`.
+        """
         return float(np.sqrt(np.mean(self.std**2)))
+
+    def std_by_unit(self) -> dict[str, dict[str, float | int | str]]:
+        """The predicted σ summarised per unit class, never mixed in one figure.
+
+        Returns:
+            ``{"lengths": {...}, "angles": {...}}`` for the classes present, each
+            ``{"unit": "mm" | "mrad", "count": k, "rms": sqrt(mean σ²), "max": max σ}``
+            (lengths in mm, angles in mrad); parameters of another unit are not in it.
+        """
+        out: dict[str, dict[str, float | int | str]] = {}
+        for unit, kind, shown in (("m", "lengths", "mm"), ("rad", "angles", "mrad")):
+            s = self.std[np.asarray(self.units) == unit] * 1e3
+            if s.size:
+                out[kind] = {"unit": shown, "count": int(s.size), "rms": _rms(s),
+                             "max": float(s.max())}  # fmt: skip
+        return out
 
     def summary(self) -> str:
         """Two lines: predicted parameter and validation accuracy (mm, mrad).
@@ -90,11 +111,8 @@ class CramerRaoReport:
         The parameter σ are summarised per unit class (lengths in mm, angles in mrad,
         any other unit in SI), never mixed in one figure.
         """
-        parts = []
-        for unit, kind, shown in (("m", "lengths", "mm"), ("rad", "angles", "mrad")):
-            s = self.std[np.asarray(self.units) == unit] * 1e3
-            if s.size:
-                parts.append(f"{kind} {_rms(s):.4g} {shown} (max {s.max():.4g})")
+        parts = [f"{kind} {c['rms']:.4g} {c['unit']} (max {c['max']:.4g})"
+                 for kind, c in self.std_by_unit().items()]  # fmt: skip
         other = [(n, u, v) for n, u, v in zip(self.names, self.units, self.std, strict=True)
                  if u not in ("m", "rad")]  # fmt: skip
         if other:

@@ -206,7 +206,11 @@ def _model_errors(
 ) -> ModelErrors:
     """Errors of ``model`` at ``joints`` (m, n_act) (None: the commands).
 
-    The measured frame is moved by ``shift`` (m, 3) [m] (None: not moved).
+    The measured frame is moved by ``shift`` (m, 3) [m] (None: not moved). Each row is
+    predicted at its own joints and shift (the repeats of one command may differ, e.g.
+    measured at other temperatures); the ISO 9283 AP of a command compares the attained
+    poses, each moved by its own prediction's difference to the first row's, with the
+    first row's prediction, so AP is the mean of the rows' errors.
     """
     joints = meas.q_act if joints is None else joints
     m = len(meas)
@@ -215,13 +219,19 @@ def _model_errors(
     ap: list[dict[str, Any]] = []
     comps = tuple(COMPONENTS[k] for k in pos) + tuple(COMPONENTS[3 + k] for k in rot)
     for rows in groups:
-        T = model.forward(joints[rows[0]])
-        R = None if meas.rotations is None else meas.rotations[rows]
-        for i in rows:
-            ep[i] = meas.positions[i] - T.translation - (0.0 if shift is None else shift[i])
-            if meas.rotations is not None:
+        T0 = model.forward(joints[rows[0]])
+        P = np.empty((len(rows), 3))
+        R = None if meas.rotations is None else np.empty((len(rows), 3, 3))
+        for j, i in enumerate(rows):
+            same = j == 0 or np.array_equal(joints[i], joints[rows[0]])
+            T = T0 if same else model.forward(joints[i])
+            at = T.translation + (0.0 if shift is None else shift[i])  # predicted [m]
+            ep[i] = meas.positions[i] - at
+            P[j] = meas.positions[i] - (at - T0.translation)  # referred to T0
+            if meas.rotations is not None and R is not None:
                 er[i] = pin.log3(T.rotation.T @ meas.rotations[i])
-        pa = point_accuracy(T, meas.positions[rows], R, comps)
+                R[j] = T0.rotation @ T.rotation.T @ meas.rotations[i]
+        pa = point_accuracy(T0, P, R, comps)
         entry: dict[str, Any] = {"AP_p_mm": pa.ap_p * 1e3 if pos else None}
         for k, label in enumerate(("AP_a_mrad", "AP_b_mrad", "AP_c_mrad")):
             entry[label] = float(pa.ap_abc[k] * 1e3) if k in rot else None

@@ -179,7 +179,7 @@ class PoseSelection:
             "index": self.request.index,
             "value": float(sel.value),
             "converged": bool(sel.converged),
-            "predicted_rms_std": float(self.crb.rms_std),
+            "predicted_std_by_unit": self.crb.std_by_unit(),  # [mm], [mrad]: never mixed
             "screens_removed": self.screens.removed,
         }
 

@@ -32,6 +32,7 @@ from pincal.measure import MarkerSetup, Measurements
 from pincal.model import Mechanism, ParameterSet
 from pincal.sensitivity import parameters
 from pincal.validation import HeldOutValidation, MarkerErrors, marker_errors, validate_held_out
+from pincal.workflow._acceptance import held_out_machine
 from pincal.workflow._transfer import transfer_markers
 
 __all__ = ["DataValidation", "HeldOutData", "read_held_out", "validate_on_data"]
@@ -50,7 +51,9 @@ class HeldOutData:
         params: the calibration's parameter set (its preset) on ``nominal``.
         meas: the measurements (SI: m, rad; the first marker of a marker table).
         more: a marker table's further markers: ((x, y, z) columns, measurements).
-        warnings: the reader's warnings (a measurement file's), in words.
+        warnings: the reader's warnings (a measurement file's) and, when ``pincal
+            simulate`` wrote truths beside the file and the fit's data, a line when they
+            describe other machines, in words.
         digest: the file's SHA-256 (hex).
         independent: False when the calibration was fitted on this file.
     """
@@ -133,6 +136,8 @@ def read_held_out(
         meas = mf.measurements
     digest = sha256_file(data)
     fitted = {d.get("sha256") for d in cal.manifest.get("data_files", []) or []}
+    if digest not in fitted:  # a simulated file of another machine than the fit's data
+        warnings += tuple(held_out_machine(cal, data))
     return HeldOutData(data, nominal, params, meas, more, warnings, digest, digest not in fitted)
 
 
