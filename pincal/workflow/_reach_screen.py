@@ -129,14 +129,15 @@ def unfixed_commands(mech: Mechanism) -> str:
     """Why no target of the measured components fixes the commands ("" when they do).
 
     The measured components fix the n actuators when their actuator Jacobian at home
-    (:func:`actuator_jacobian`) has rank n; otherwise the note names components that,
+    (:func:`actuator_jacobian`) has rank n (the mobility, when the actuation is
+    redundant); otherwise the note names components that,
     measured, would (:func:`fixing_components`).
     """
     n = mech.n_actuated
     comps = tuple(mech.measured_components)
     G = actuator_jacobian(mech, mech.q_home, components=COMPONENTS)  # (6, n)
     rank, measure = fixing_components(G, comps)
-    if rank >= n:
+    if rank >= min(n, mech.mobility):  # redundant actuators: the mobility's rank fixes them
         return ""
     return (
         f"the measured components [{', '.join(comps)}] fix only {rank} of the {n} commands "
