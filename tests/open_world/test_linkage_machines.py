@@ -18,8 +18,8 @@ import pinocchio as pin
 import pytest
 
 from pincal.errors import ModelFileError
-from pincal.model import COMPONENTS, load_mechanism, sample_actuators
-from pincal.sensitivity import identifiability, identification_jacobian, parameters
+from pincal.model import load_mechanism, sample_actuators
+from pincal.sensitivity import identifiability, parameters
 from tests.open_world import acceptance
 from tests.open_world import linkage_machines as lm
 from tests.open_world.roster import ROSTER
@@ -69,36 +69,10 @@ def test_forward_inverse_forward(machine):
         assert np.max(np.abs(pin.log3(T.rotation.T @ T2.rotation))) <= 1e-12
 
 
-def _measured(mech, rows, R_ref):
-    out = []
-    for row, R0 in zip(rows, R_ref, strict=True):
-        T = mech.forward(row)
-        out.append(np.r_[T.translation, pin.log3(R0.T @ T.rotation)])
-    return np.concatenate(out)
-
-
 def test_identification_jacobian_matches_central_differences(machine):
     _, mech = machine
-    # the identifiable set (a random error of the full preset may break a planar loop)
-    base = parameters(mech, "base")
-    rng = np.random.default_rng(7)
-    pick = np.sort(rng.choice(len(base), size=min(len(base), 16), replace=False))
-    params = parameters(mech, [base.names[i] for i in pick])
-    rows = sample_actuators(mech, 2, np.random.default_rng(4))
-    values = rng.normal(0, 2e-4, len(params))
-    J = identification_jacobian(mech, params, rows, values, components=COMPONENTS)
-    at = params.apply(mech, values)
-    R_ref = [at.forward(r).rotation for r in rows]
-    h, cols = 1e-6, []
-    for k in range(len(params)):
-        e = np.zeros(len(params))
-        e[k] = h
-        plus = _measured(params.apply(mech, values + e), rows, R_ref)
-        minus = _measured(params.apply(mech, values - e), rows, R_ref)
-        cols.append((plus - minus) / (2 * h))
-    J_fd = np.stack(cols, axis=1)
-    assert np.max(np.abs(J)) > 0.1
-    assert np.max(np.abs(J - J_fd)) <= 1e-6 * np.max(np.abs(J))
+    # 16 of the identifiable set (a random error of the full preset may break a planar loop)
+    assert acceptance.check_jacobian(mech, size=16) > 0.1
 
 
 def test_excavator_full_set_is_as_ill_conditioned_as_its_xfail_says(tmp_path):
