@@ -114,6 +114,13 @@ def _output_rank(loop: LoopSolver, q: np.ndarray, fid: int, comps: np.ndarray) -
     return int(np.sum(s > 1e-9 * scale))
 
 
+def _nearby_rank(loop: LoopSolver, q: np.ndarray, fid: int, comps: np.ndarray) -> int:
+    """The largest :func:`_output_rank` at 3 seeded configurations within 1e-3 [m, rad] of q."""
+    rng = np.random.default_rng(0)
+    steps = (1e-3 * rng.standard_normal(loop.model.nv) for _ in range(3))
+    return max(_output_rank(loop, pin.integrate(loop.model, q, dq), fid, comps) for dq in steps)
+
+
 def _check_independent(
     loop: LoopSolver,
     measured_components: tuple[str, ...],
@@ -137,17 +144,8 @@ def _check_independent(
     need = min(len(comps), n)
     if _output_rank(loop, q, fid, comps) >= need:
         return
-    rng = np.random.default_rng(0)
-    ranks = [
-        _output_rank(
-            loop,
-            pin.integrate(loop.model, q, 1e-3 * rng.standard_normal(loop.model.nv)),
-            fid,
-            comps,
-        )
-        for _ in range(3)
-    ]
-    if max(ranks) >= need:
+    nearby = _nearby_rank(loop, q, fid, comps)
+    if nearby >= need:
         return  # a dead point: Newton says so if it stalls
     G, _ = _output_map(loop, q, fid)
     G[np.abs(G) <= 1e-9 * float(np.abs(G).max(initial=0.0))] = 0.0
@@ -155,7 +153,7 @@ def _check_independent(
     raise UnreachablePoseError(
         f"target pose (p = {np.round(target_p * 1e3, 3).tolist()} mm): the imposed components "
         f"[{', '.join(measured_components)}] are locally dependent: the actuators "
-        f"{list(loop.queries.actuated)} move them in only {max(ranks)} independent "
+        f"{list(loop.queries.actuated)} move them in only {nearby} independent "
         f"direction(s) here and nearby, so they do not fix the commands (inverse kinematics "
         f"would return one of many); impose "
         + (f"[{', '.join(fixing)}]" if fixing else f"{need} components the actuators move")
@@ -177,16 +175,7 @@ def _dead_start_note(
     q than at nearby configurations (first order, the loops staying closed).
     """
     rank = _output_rank(loop, q, fid, comps)
-    rng = np.random.default_rng(0)
-    nearby = max(
-        _output_rank(
-            loop,
-            pin.integrate(loop.model, q, 1e-3 * rng.standard_normal(loop.model.nv)),
-            fid,
-            comps,
-        )
-        for _ in range(3)
-    )
+    nearby = _nearby_rank(loop, q, fid, comps)
     if rank >= nearby:
         return ""
     return (
