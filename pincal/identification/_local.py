@@ -16,11 +16,10 @@ over the free parameters. A trial vector whose model cannot be built or assemble
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
 
 import numpy as np
 
-from pincal.identification._acceleration import accelerated_trial
+from pincal.identification._acceleration import bent_step
 from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
@@ -133,26 +132,6 @@ def _continue_with_lm(
     )
 
 
-def _bent(
-    problem: CalibrationProblem,
-    x: np.ndarray,
-    free: np.ndarray,
-    step: np.ndarray,
-    A: np.ndarray,
-    r: np.ndarray,
-    cost_of: Callable[[np.ndarray], float],
-    straight: tuple[np.ndarray, float],
-    evals: int,
-) -> tuple[np.ndarray, np.ndarray, float, int]:
-    """The full step bent to second order (:func:`accelerated_trial`) where the straight
-    one failed: (trial values, step, cost there, evaluations); the straight trial's when
-    the correction is not trusted."""
-    out = accelerated_trial(problem, x, free, step, A, r, cost_of)
-    if out is None:
-        return straight[0], step, straight[1], evals + 1
-    return out[0], out[1], out[2], evals + 2
-
-
 def _gauss_newton(
     problem: CalibrationProblem,
     x0: np.ndarray,
@@ -202,10 +181,13 @@ def _gauss_newton(
             x_try[free] += step
             cost_try = problem.cost(x_try)
             evals += 1
-            if not (cost_try < cost and cost - cost_try >= 0.25 * predicted) and opts.acceleration:
-                x_try, step, cost_try, evals = _bent(problem, x, free, step, A, r, cost_of,
-                                                     (x_try, cost_try), evals)  # fmt: skip
-            if cost_try < cost and cost - cost_try >= 0.25 * predicted:
+            enough = cost_try < cost and cost - cost_try >= 0.25 * predicted
+            if not enough and opts.acceleration:  # bent to second order (a curved valley)
+                bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
+                evals += bent.evaluations
+                if bent.values is not None:
+                    x_try, step, cost_try, enough = bent.values, bent.step, bent.cost, True
+            if enough:
                 accepted, mu, wait = True, 0.0, 1
             else:
                 rejected += 1
@@ -224,9 +206,11 @@ def _gauss_newton(
                 # decrease (else the linear model is not trusted and the step is damped)
                 enough = not opts.damping or cost - cost_try >= 0.25 * predicted
                 if not (cost_try < cost and enough) and opts.damping and opts.acceleration:
-                    x_try, step, cost_try, evals = _bent(problem, x, free, step, A, r, cost_of,
-                                                         (x_try, cost_try), evals)  # fmt: skip
-                    enough = cost - cost_try >= 0.25 * predicted
+                    # bent to second order along the residual's curvature (a curved valley)
+                    bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
+                    evals += bent.evaluations
+                    if bent.values is not None:
+                        x_try, step, cost_try, enough = bent.values, bent.step, bent.cost, True
                 if cost_try < cost and enough:
                     accepted = True
                     break
