@@ -185,6 +185,7 @@ def _gauss_newton(
             if not enough and opts.acceleration:  # bent to second order (a curved valley)
                 bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
                 evals += bent.evaluations
+                rejected += bent.values is None  # the bent trial: one more rejected step
                 if bent.values is not None:
                     x_try, step, cost_try, enough = bent.values, bent.step, bent.cost, True
             if enough:
@@ -209,6 +210,7 @@ def _gauss_newton(
                     # bent to second order along the residual's curvature (a curved valley)
                     bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
                     evals += bent.evaluations
+                    rejected += bent.values is None
                     if bent.values is not None:
                         x_try, step, cost_try, enough = bent.values, bent.step, bent.cost, True
                 if cost_try < cost and enough:

@@ -153,7 +153,6 @@ def _roster() -> list[Machine]:
             "URDF excavator-style arm, three cylinders, four planar loops",
             "CAD-exporter `<inertial>` everywhere, `[x, z]` cuts, measures x z ry",
             _urdf("excavator", *lm.urdf_excavator()),
-            unresolved=(("full", lm.EXCAVATOR_FULL_REASON),),
         ),
         Machine(
             "MJCF gripper finger, two four-bars",
