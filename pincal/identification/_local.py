@@ -101,9 +101,10 @@ def _continue_with_lm(
     """Levenberg–Marquardt from ``x0`` after Gauss–Newton stopped unconverged (``gn``).
 
     The same cost: the prior of ``opts``, or its Tikhonov term ``½λ‖x − x0‖²`` as a
-    prior of σ = 1/√λ about ``x0``. The outcome is Levenberg–Marquardt's; its
-    iterations, history and evaluations count both runs and its message says what
-    Gauss–Newton stopped at.
+    prior of σ = 1/√λ about ``x0``. Its evaluation limit is 10 × ``opts.max_iterations``
+    or 100 × (p + 1) for p fitted parameters, whichever is larger. The outcome is
+    Levenberg–Marquardt's; its iterations, history and evaluations count both runs and
+    its message says what Gauss–Newton stopped at.
     """
     std = mean = None
     if opts.prior_std is not None:
@@ -112,9 +113,11 @@ def _continue_with_lm(
         sigma = np.full(x0.size, np.inf)
         sigma[free] = 1.0 / np.sqrt(opts.regularization)
         std, mean = tuple(sigma), tuple(float(v) for v in x0)
-    lm_opts = LMOptions(
-        max_iterations=opts.max_iterations, xtol=opts.xtol, prior_std=std, prior_mean=mean
-    )
+    # evaluations, not iterations, are counted: 10 per iteration of Gauss–Newton's limit,
+    # or 100 per fitted parameter when more (scipy's own default for its ``lm``); the
+    # finger measured in [x, z] (13 parameters, ratio 1.1e-7) needs 722 from the start
+    budget = max(opts.max_iterations, 10 * (free.size + 1))
+    lm_opts = LMOptions(max_iterations=budget, xtol=opts.xtol, prior_std=std, prior_mean=mean)
     log.info("gauss-newton stopped (%s); re-running lm from the start", gn.message)
     on = None if progress is None else (lambda i, c: progress(gn.iterations + i, c))
     lm = levenberg_marquardt(problem, x0, free, lm_opts, on)

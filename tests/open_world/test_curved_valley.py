@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from pincal.errors import ClosureError
+from pincal.identification import GaussNewtonOptions
 from pincal.identification._acceleration import bent_step
 from pincal.model import Mechanism, load_mechanism
 from tests.open_world import linkage_machines as lm
@@ -123,3 +124,15 @@ def test_gauss_newton_converges_without_the_fallback_on_the_linkages(name: str, 
     assert rec.success, rec.message
     assert rec.parameter_error <= 1e-9, rec.parameter_error
     assert "levenberg" not in rec.message, rec.message
+
+
+@pytest.mark.slow
+def test_levenberg_marquardt_fallback_has_evaluations_enough_for_the_finger(tmp_path):
+    """With straight steps only, the fallback from the start needs 722 evaluations for
+    the finger [x, z] ``base`` (13 parameters); its limit was 500 (10 × 50) whatever the
+    parameter count, now 100 × (13 + 1)."""
+    mech = _finger_xz(tmp_path)
+    rec = recover(mech, "base", options=GaussNewtonOptions(acceleration=False))
+    assert rec.success, rec.message
+    assert "levenberg-marquardt from the start: converged" in rec.message, rec.message
+    assert rec.parameter_error <= 1e-9, rec.parameter_error
