@@ -102,7 +102,7 @@ def _continue_with_lm(
 
     The same cost: the prior of ``opts``, or its Tikhonov term ``½λ‖x − x0‖²`` as a
     prior of σ = 1/√λ about ``x0``. Its evaluation limit is 10 × ``opts.max_iterations``
-    or 100 × (p + 1) for p fitted parameters, whichever is larger. The outcome is
+    × ⌈(p + 1) / 5⌉ for p fitted parameters (at least 10 × ``max_iterations``). The outcome is
     Levenberg–Marquardt's; its iterations, history and evaluations count both runs and
     its message says what Gauss–Newton stopped at.
     """
@@ -113,10 +113,11 @@ def _continue_with_lm(
         sigma = np.full(x0.size, np.inf)
         sigma[free] = 1.0 / np.sqrt(opts.regularization)
         std, mean = tuple(sigma), tuple(float(v) for v in x0)
-    # evaluations, not iterations, are counted: 10 per iteration of Gauss–Newton's limit,
-    # or 100 per fitted parameter when more (scipy's own default for its ``lm``); the
-    # finger measured in [x, z] (13 parameters, ratio 1.1e-7) needs 722 from the start
-    budget = max(opts.max_iterations, 10 * (free.size + 1))
+    # scipy counts evaluations, not iterations: 10 per iteration of Gauss–Newton's limit,
+    # times (p + 1) / 5 for p > 4 fitted parameters (at the default 50 iterations, 100 per
+    # parameter: scipy's own default for its ``lm``); the finger measured in [x, z] (13
+    # parameters, ratio 1.1e-7) needs 722 evaluations from the start
+    budget = opts.max_iterations * max(1, -(-(free.size + 1) // 5))
     lm_opts = LMOptions(max_iterations=budget, xtol=opts.xtol, prior_std=std, prior_mean=mean)
     log.info("gauss-newton stopped (%s); re-running lm from the start", gn.message)
     on = None if progress is None else (lambda i, c: progress(gn.iterations + i, c))
@@ -186,9 +187,9 @@ def _gauss_newton(
             evals += 1
             enough = cost_try < cost and cost - cost_try >= 0.25 * predicted
             if not enough and opts.acceleration:  # bent to second order (a curved valley)
+                rejected += 1  # the straight trial (a failed bent one is counted below)
                 bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
                 evals += bent.evaluations
-                rejected += bent.values is None  # the bent trial: one more rejected step
                 if bent.values is not None:
                     x_try, step, cost_try, enough = bent.values, bent.step, bent.cost, True
             if enough:
@@ -211,9 +212,9 @@ def _gauss_newton(
                 enough = not opts.damping or cost - cost_try >= 0.25 * predicted
                 if not (cost_try < cost and enough) and opts.damping and opts.acceleration:
                     # bent to second order along the residual's curvature (a curved valley)
+                    rejected += 1  # the straight trial (a failed bent one is counted below)
                     bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
                     evals += bent.evaluations
-                    rejected += bent.values is None
                     if bent.values is not None:
                         x_try, step, cost_try, enough = bent.values, bent.step, bent.cost, True
                 if cost_try < cost and enough:

@@ -130,7 +130,7 @@ def test_gauss_newton_converges_without_the_fallback_on_the_linkages(name: str, 
 def test_levenberg_marquardt_fallback_has_evaluations_enough_for_the_finger(tmp_path):
     """With straight steps only, the fallback from the start needs 722 evaluations for
     the finger [x, z] ``base`` (13 parameters); its limit was 500 (10 × 50) whatever the
-    parameter count, now 100 × (13 + 1)."""
+    parameter count, now 10 × 50 × ⌈(13 + 1) / 5⌉ = 1500."""
     mech = _finger_xz(tmp_path)
     rec = recover(mech, "base", options=GaussNewtonOptions(acceleration=False))
     assert rec.success, rec.message
