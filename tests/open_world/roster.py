@@ -201,7 +201,8 @@ class Recovery:
 
     ``k`` of ``n`` parameters identified; ``parameter_error`` max |found − true| [m or
     rad] over them; ``prediction_error`` max over 5 fresh poses of the measured
-    components' difference between the calibrated and the actual model [m or rad].
+    components' difference between the calibrated and the actual model [m or rad];
+    ``iterations`` the solver's (Levenberg–Marquardt's evaluations included).
     """
 
     n: int
@@ -210,6 +211,7 @@ class Recovery:
     message: str
     parameter_error: float
     prediction_error: float
+    iterations: int = 0
 
 
 def _measured_error(mech: Mechanism, a: pin.SE3, b: pin.SE3) -> float:
@@ -241,7 +243,8 @@ def recover(
     err = float(np.max(np.abs(res.full_values - truth)[res.identified]))
     fresh = sample_actuators(mech, 5, np.random.default_rng(12))
     pred = max(_measured_error(mech, actual.forward(r), res.calibrated.forward(r)) for r in fresh)
-    return Recovery(len(params), int(res.identified.sum()), res.success, res.message, err, pred)
+    k = int(res.identified.sum())
+    return Recovery(len(params), k, res.success, res.message, err, pred, res.iterations)
 
 
 def row(machine: Machine, folder: Path) -> str:
