@@ -57,7 +57,9 @@ def gauss_newton(
     """Gauss–Newton with Levenberg damping when the full step fails, then ``lm``.
 
     The undamped Gauss–Newton step is taken whenever it decreases the cost (so a
-    well-behaved problem converges quadratically as before). When it does not (or the
+    well-behaved problem converges quadratically as before). When it does not, it is
+    first bent to second order along the residual's curvature (``opts.acceleration``,
+    :func:`pincal.identification._acceleration.bent_step`); when that fails too (or the
     trial model cannot be assembled), the step is damped,
     ``(JᵀJ + μ·diag(JᵀJ)) δ = −Jᵀr``, with μ raised ×10 per rejected and lowered ÷10 per
     accepted step until it falls below 1e-7 and pure Gauss–Newton resumes. With
@@ -113,10 +115,8 @@ def _continue_with_lm(
         sigma = np.full(x0.size, np.inf)
         sigma[free] = 1.0 / np.sqrt(opts.regularization)
         std, mean = tuple(sigma), tuple(float(v) for v in x0)
-    # scipy counts evaluations, not iterations: 10 per iteration of Gauss–Newton's limit,
-    # times (p + 1) / 5 for p > 4 fitted parameters (at the default 50 iterations, 100 per
-    # parameter: scipy's own default for its ``lm``); the finger measured in [x, z] (13
-    # parameters, ratio 1.1e-7) needs 722 evaluations from the start
+    # at the default 50 iterations, 100 evaluations per parameter (scipy's default for its
+    # ``lm``): the finger measured in [x, z] (13 parameters) needs 722 from the start
     budget = opts.max_iterations * max(1, -(-(free.size + 1) // 5))
     lm_opts = LMOptions(max_iterations=budget, xtol=opts.xtol, prior_std=std, prior_mean=mean)
     log.info("gauss-newton stopped (%s); re-running lm from the start", gn.message)
