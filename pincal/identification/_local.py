@@ -19,6 +19,7 @@ import logging
 
 import numpy as np
 
+from pincal.identification._acceleration import bent_step
 from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
@@ -56,7 +57,9 @@ def gauss_newton(
     """Gauss–Newton with Levenberg damping when the full step fails, then ``lm``.
 
     The undamped Gauss–Newton step is taken whenever it decreases the cost (so a
-    well-behaved problem converges quadratically as before). When it does not (or the
+    well-behaved problem converges quadratically as before). When it does not, it is
+    first bent to second order along the residual's curvature (``opts.acceleration``,
+    :func:`pincal.identification._acceleration.bent_step`); when that fails too (or the
     trial model cannot be assembled), the step is damped,
     ``(JᵀJ + μ·diag(JᵀJ)) δ = −Jᵀr``, with μ raised ×10 per rejected and lowered ÷10 per
     accepted step until it falls below 1e-7 and pure Gauss–Newton resumes. With
@@ -100,9 +103,10 @@ def _continue_with_lm(
     """Levenberg–Marquardt from ``x0`` after Gauss–Newton stopped unconverged (``gn``).
 
     The same cost: the prior of ``opts``, or its Tikhonov term ``½λ‖x − x0‖²`` as a
-    prior of σ = 1/√λ about ``x0``. The outcome is Levenberg–Marquardt's; its
-    iterations, history and evaluations count both runs and its message says what
-    Gauss–Newton stopped at.
+    prior of σ = 1/√λ about ``x0``. Its evaluation limit is 10 × ``opts.max_iterations``
+    × ⌈(p + 1) / 5⌉ for p fitted parameters (at least 10 × ``max_iterations``). The outcome is
+    Levenberg–Marquardt's; its iterations, history and evaluations count both runs and
+    its message says what Gauss–Newton stopped at.
     """
     std = mean = None
     if opts.prior_std is not None:
@@ -111,9 +115,10 @@ def _continue_with_lm(
         sigma = np.full(x0.size, np.inf)
         sigma[free] = 1.0 / np.sqrt(opts.regularization)
         std, mean = tuple(sigma), tuple(float(v) for v in x0)
-    lm_opts = LMOptions(
-        max_iterations=opts.max_iterations, xtol=opts.xtol, prior_std=std, prior_mean=mean
-    )
+    # at the default 50 iterations, 100 evaluations per parameter (scipy's default for its
+    # ``lm``): the finger measured in [x, z] (13 parameters) needs 722 from the start
+    budget = opts.max_iterations * max(1, -(-(free.size + 1) // 5))
+    lm_opts = LMOptions(max_iterations=budget, xtol=opts.xtol, prior_std=std, prior_mean=mean)
     log.info("gauss-newton stopped (%s); re-running lm from the start", gn.message)
     on = None if progress is None else (lambda i, c: progress(gn.iterations + i, c))
     lm = levenberg_marquardt(problem, x0, free, lm_opts, on)
@@ -180,7 +185,14 @@ def _gauss_newton(
             x_try[free] += step
             cost_try = problem.cost(x_try)
             evals += 1
-            if cost_try < cost and cost - cost_try >= 0.25 * predicted:
+            enough = cost_try < cost and cost - cost_try >= 0.25 * predicted
+            if not enough and opts.acceleration:  # bent to second order (a curved valley)
+                rejected += 1  # the straight trial (a failed bent one is counted below)
+                bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
+                evals += bent.evaluations
+                if bent.values is not None:
+                    x_try, step, cost_try, enough = bent.values, bent.step, bent.cost, True
+            if enough:
                 accepted, mu, wait = True, 0.0, 1
             else:
                 rejected += 1
@@ -198,6 +210,13 @@ def _gauss_newton(
                 # with damping on, a full step must deliver a quarter of its predicted
                 # decrease (else the linear model is not trusted and the step is damped)
                 enough = not opts.damping or cost - cost_try >= 0.25 * predicted
+                if not (cost_try < cost and enough) and opts.damping and opts.acceleration:
+                    # bent to second order along the residual's curvature (a curved valley)
+                    rejected += 1  # the straight trial (a failed bent one is counted below)
+                    bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
+                    evals += bent.evaluations
+                    if bent.values is not None:
+                        x_try, step, cost_try, enough = bent.values, bent.step, bent.cost, True
                 if cost_try < cost and enough:
                     accepted = True
                     break

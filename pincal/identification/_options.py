@@ -122,6 +122,9 @@ class GaussNewtonOptions:
             the whitened residual (a maximum a posteriori fit); None = no prior.
         prior_mean: (n,) the prior's centre [m, rad] (required with ``prior_std``).
         fallback: continue with ``lm`` from where Gauss–Newton stopped unconverged.
+        acceleration: when a full step fails, try it bent to second order along the
+            residual's curvature before damping (geodesic acceleration; see
+            :mod:`pincal.identification._acceleration`); False: straight steps only.
     """
 
     max_iterations: int = 50
@@ -133,14 +136,18 @@ class GaussNewtonOptions:
     prior_std: tuple[float, ...] | None = None
     prior_mean: tuple[float, ...] | None = None
     fallback: bool = True
+    acceleration: bool = True
 
     def __post_init__(self) -> None:
         o = type(self).__name__
         check_int(o, "max_iterations", self.max_iterations, 1)
         check_real(o, "xtol", self.xtol, 0.0, open_low=True)
         check_real(o, "regularization", self.regularization, 0.0)
-        if not isinstance(self.fallback, bool):
-            raise SolverOptionError(f"{o}.fallback must be True or False, got {self.fallback!r}")
+        for flag in ("fallback", "acceleration"):
+            if not isinstance(getattr(self, flag), bool):
+                raise SolverOptionError(
+                    f"{o}.{flag} must be True or False, got {getattr(self, flag)!r}"
+                )
         check_int(o, "max_halvings", self.max_halvings, 1, 60)
         check_real(o, "damping_start", self.damping_start, 0.0, 1.0, open_low=True)
         if not isinstance(self.damping, bool):

@@ -64,7 +64,7 @@ SOLVERS: dict[str, Solver] = {
             "gauss-newton",
             GaussNewtonOptions,
             gauss_newton,
-            "Gauss–Newton with line search and Levenberg damping fallback",
+            "Gauss–Newton: bent (second-order) steps, Levenberg damping, then lm",
         ),
         Solver("lm", LMOptions, levenberg_marquardt, "scipy least_squares (robust losses)"),
         Solver(

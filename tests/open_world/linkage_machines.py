@@ -163,14 +163,6 @@ def _exc_joint(
     )
 
 
-EXCAVATOR_FULL_REASON = (
-    "the identifiable set of the excavator's full preset at 30 random poses is "
-    "ill-conditioned (smallest / largest singular value of the scaled Jacobian 6e-8): "
-    "exact data recover it to 1.4e-9 m, the round-off of the residuals amplified; its "
-    "base preset (ratio 1.8e-7) recovers to 1e-10"
-)
-
-
 def urdf_excavator() -> tuple[str, dict]:
     """URDF text and sidecar of the excavator-style arm (module docstring).
 

@@ -22,7 +22,7 @@ from pincal.errors import (
     PincalError,
     SingularConfigurationError,
 )
-from pincal.identification import identify
+from pincal.identification import GaussNewtonOptions, identify
 from pincal.measure import simulate_measurements
 from pincal.model import Mechanism, load_mechanism, sample_actuators
 from pincal.sensitivity import identifiability, parameters
@@ -153,7 +153,6 @@ def _roster() -> list[Machine]:
             "URDF excavator-style arm, three cylinders, four planar loops",
             "CAD-exporter `<inertial>` everywhere, `[x, z]` cuts, measures x z ry",
             _urdf("excavator", *lm.urdf_excavator()),
-            unresolved=(("full", lm.EXCAVATOR_FULL_REASON),),
         ),
         Machine(
             "MJCF gripper finger, two four-bars",
@@ -202,7 +201,8 @@ class Recovery:
 
     ``k`` of ``n`` parameters identified; ``parameter_error`` max |found − true| [m or
     rad] over them; ``prediction_error`` max over 5 fresh poses of the measured
-    components' difference between the calibrated and the actual model [m or rad].
+    components' difference between the calibrated and the actual model [m or rad];
+    ``iterations`` the solver's (Levenberg–Marquardt's evaluations included).
     """
 
     n: int
@@ -211,6 +211,7 @@ class Recovery:
     message: str
     parameter_error: float
     prediction_error: float
+    iterations: int = 0
 
 
 def _measured_error(mech: Mechanism, a: pin.SE3, b: pin.SE3) -> float:
@@ -219,10 +220,17 @@ def _measured_error(mech: Mechanism, a: pin.SE3, b: pin.SE3) -> float:
     return float(np.max(np.abs(d[[idx.index(c) for c in mech.measured_components]])))
 
 
-def recover(mech: Mechanism, preset: str, n_poses: int = 30, size: float = 2e-4) -> Recovery:
+def recover(
+    mech: Mechanism,
+    preset: str,
+    n_poses: int = 30,
+    size: float = 2e-4,
+    options: GaussNewtonOptions | None = None,
+) -> Recovery:
     """Simulate a random error (σ = ``size`` [m, rad]) on the identifiable set of
     ``preset`` (its base parameters at the poses), measure it exactly at ``n_poses``
-    random rows the actual machine reaches, and identify from the nominal model."""
+    random rows the actual machine reaches, and identify from the nominal model (the
+    default solver, with ``options`` when given)."""
     params = parameters(mech, preset)
     rows = sample_actuators(mech, n_poses, np.random.default_rng(11))
     ident = identifiability(mech, params, rows)
@@ -231,11 +239,12 @@ def recover(mech: Mechanism, preset: str, n_poses: int = 30, size: float = 2e-4)
     truth[base] = np.random.default_rng(1).normal(0, size, len(base))
     actual = params.apply(mech, truth)
     rows = rows[actual.closable_batch(rows)]  # a campaign measures the poses it reaches
-    res = identify(mech, params, simulate_measurements(actual, rows))
+    res = identify(mech, params, simulate_measurements(actual, rows), options=options)
     err = float(np.max(np.abs(res.full_values - truth)[res.identified]))
     fresh = sample_actuators(mech, 5, np.random.default_rng(12))
     pred = max(_measured_error(mech, actual.forward(r), res.calibrated.forward(r)) for r in fresh)
-    return Recovery(len(params), int(res.identified.sum()), res.success, res.message, err, pred)
+    k = int(res.identified.sum())
+    return Recovery(len(params), k, res.success, res.message, err, pred, res.iterations)
 
 
 def row(machine: Machine, folder: Path) -> str:
