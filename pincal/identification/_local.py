@@ -115,8 +115,7 @@ def _continue_with_lm(
         sigma = np.full(x0.size, np.inf)
         sigma[free] = 1.0 / np.sqrt(opts.regularization)
         std, mean = tuple(sigma), tuple(float(v) for v in x0)
-    # at the default 50 iterations, 100 evaluations per parameter (scipy's default for its
-    # ``lm``): the finger measured in [x, z] (13 parameters) needs 722 from the start
+    # 50 iterations: 100 evaluations per parameter (the [x, z] finger's 13 needed 722)
     budget = opts.max_iterations * max(1, -(-(free.size + 1) // 5))
     lm_opts = LMOptions(max_iterations=budget, xtol=opts.xtol, prior_std=std, prior_mean=mean)
     log.info("gauss-newton stopped (%s); re-running lm from the start", gn.message)
