@@ -8,6 +8,7 @@ from typing import Any
 
 from pincal._files import read_text
 from pincal.errors import ModelFileError
+from pincal.model._jacobian_shape import six_by_nv
 from pincal.model._lock_values import lock_values_at_home
 from pincal.model._mechanism import Mechanism
 from pincal.model._mjcf import load_mjcf
@@ -125,7 +126,7 @@ def _singular_home(mech: Mechanism) -> str | None:
 
     data = mech.model.createData()
     fid = mech.frame_id(mech.measured_frame)
-    J = pin.computeFrameJacobian(mech.model, data, mech.q_home, fid, pin.LOCAL)
+    J = six_by_nv(pin.computeFrameJacobian(mech.model, data, mech.q_home, fid, pin.LOCAL))
     rows = [COMPONENTS.index(c) for c in mech.measured_components]
     cols = [mech.model.idx_vs[mech.model.getJointId(n)] for n in mech.actuated]
     G = J[np.ix_(rows, cols)]
