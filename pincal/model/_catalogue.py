@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from pincal._files import read_text
-from pincal.errors import ModelFileError
+from pincal.errors import MobilityError, ModelFileError
 from pincal.model._jacobian_shape import six_by_nv
 from pincal.model._lock_values import lock_values_at_home
 from pincal.model._mechanism import Mechanism
@@ -82,6 +82,13 @@ def load_mechanism(
     mech = Mechanism(
         urdf_xml, side, name=urdf.stem, source=urdf, measured_frame=measured_frame, options=options
     )
+    if not mech.actuated and not mech.closures:
+        raise MobilityError(
+            f"nothing moves frame {mech.measured_frame!r} of {urdf.stem!r}: no unlocked joint "
+            f"between the root and it (locked: {', '.join(sorted(locks)) or 'none'}); measure "
+            "a frame further along the chain (--frame, the sidecar's measured_frame) or lock "
+            "fewer joints"
+        )
     kept = {k: v for k, v in named.turns.items() if k in mech.actuated}
     if kept:  # the defaults' one-turn ranges, for the actuated joints only
         side["workspace"] = {**(side.get("workspace") or {}), "joints": kept}
