@@ -9,7 +9,9 @@ One simulated UR5 marker table (the fixture of ``test_marker_guards``), then per
 * 10 — messages: one-word joint units that are no unit (taken as a length and ignored),
   ``import-sockets`` naming ``--delimiter`` / ``--decimal``, options it does not have.
 
-Every refusal is one line naming its error class, nothing written.
+Further, messages: a directory whose files disagree shown with numpy reprs, a frame no
+joint moves ("zero-size array to reduction"). Every refusal is one line naming its
+error class, nothing written.
 """
 
 from __future__ import annotations
@@ -83,3 +85,38 @@ def test_import_sockets_names_no_option_it_lacks(tmp_path, body, words):
         assert w in line, line
     assert "--delimiter" not in line and "--decimal" not in line, line
     assert not out.exists()
+
+
+def test_a_disagreeing_directory_shows_plain_numbers(tmp_path, table):
+    """An edited calibration.json value: the refusal shows 0.5…, not np.float64(0.5…)."""
+    import json
+
+    path = _write(tmp_path / "m.csv", *table[:2])
+    assert _calibrate(tmp_path, path, "--length-unit", "mm", "--prior", "none").exit_code == 0
+    manifest = tmp_path / "cal" / "calibration.json"
+    doc = json.loads(manifest.read_text())
+    doc["parameters"][0]["value"] += 0.5
+    manifest.write_text(json.dumps(doc))
+    r = CliRunner().invoke(main, ["validate", str(tmp_path / "cal"), "--data", str(path)])
+    assert r.exit_code == 1, r.output
+    line = next(ln for ln in r.output.splitlines() if ln.startswith("pincal: error"))
+    assert "CalibrationDirectoryError" in line and "disagree" in line, line
+    assert "np." not in line, line
+    shown = float(line.split(" is ")[1].split()[0])
+    assert shown == pytest.approx(doc["parameters"][0]["value"], rel=1e-12)
+
+
+@pytest.mark.parametrize("args", [
+    ["info", "ur5", "--frame", "base_link"],
+    ["poses", "ur5", "--frame", "base_link", "--count", "5"],
+    ["info", "ur5", "--lock", ",".join(f"{j}=0" for j in JOINTS)],
+])  # fmt: skip
+def test_a_frame_nothing_moves_is_a_mobility_error(tmp_path, args):
+    """It was "ValueError: zero-size array to reduction operation maximum …"."""
+    extra = ["--out", str(tmp_path / "p.csv")] if args[0] == "poses" else []
+    r = CliRunner().invoke(main, [*args, *extra])
+    assert r.exit_code == 1, r.output
+    line = next(ln for ln in r.output.splitlines() if ln.startswith("pincal: error"))
+    assert line.startswith("pincal: error: MobilityError: nothing moves frame"), line
+    assert "lock fewer joints" in line and "zero-size" not in line, line
+    assert not (tmp_path / "p.csv").exists()
