@@ -120,3 +120,25 @@ def test_a_frame_nothing_moves_is_a_mobility_error(tmp_path, args):
     assert line.startswith("pincal: error: MobilityError: nothing moves frame"), line
     assert "lock fewer joints" in line and "zero-size" not in line, line
     assert not (tmp_path / "p.csv").exists()
+
+
+def _home_lines(*args: str) -> tuple[str, str]:
+    r = CliRunner().invoke(main, ["info", "ur5", "--frame", LINK, *args])
+    assert r.exit_code == 0, r.output
+    home = next(ln for ln in r.output.splitlines() if "home (searched)" in ln)
+    locked = next((ln for ln in r.output.splitlines() if "locked:" in ln), "")
+    return home.split("(no SRDF")[0].strip(), locked.strip()
+
+
+@pytest.mark.parametrize("lock, value", [
+    ("elbow_joint=home", "elbow_joint = -0.785398"),  # it was 0: 'home' was q = 0 here
+    ("wrist_2_joint=0", "wrist_2_joint = 0"),  # the others' home was searched again
+])  # fmt: skip
+def test_a_lock_does_not_move_home(lock, value):
+    """One home (issue 38 item 4): with --lock, info prints the home it prints without,
+    and 'JOINT=home' locks the joint at that home (it was q = 0: elbow 0, not −45°)."""
+    free, _ = _home_lines()
+    home, locked = _home_lines("--lock", lock)
+    assert "elbow_joint = -45°" in free, free
+    assert home == free, (home, free)
+    assert value in locked, locked
