@@ -19,7 +19,7 @@ import pinocchio as pin
 from pincal.errors import MeasurementError, ModelFileError, UnidentifiableError
 from pincal.measure._markers import marker_frame
 from pincal.measure._measurements import Measurements
-from pincal.measure._tracker import _COLLINEAR_RTOL, RigidFit, fit_rigid_transform, kabsch
+from pincal.measure._tracker import COLLINEAR_RTOL, RigidFit, fit_rigid_transform, kabsch
 from pincal.model import BASE_JOINT, TOOL_JOINT, Mechanism, with_joint_origin
 
 __all__ = ["MarkerRegistration", "register_markers"]
@@ -79,7 +79,7 @@ def _check_spread(mech: Mechanism, points: np.ndarray, q_act: np.ndarray) -> Non
     """
     centred = points - points.mean(axis=0)
     sv = np.linalg.svd(centred, compute_uv=False)
-    if sv[0] > 0.0 and sv[1] > _COLLINEAR_RTOL * sv[0]:
+    if sv[0] > 0.0 and sv[1] > COLLINEAR_RTOL * sv[0]:
         return
     link = mech.tree.joints[TOOL_JOINT].parent
     if not np.ptp(q_act, axis=0).any():
