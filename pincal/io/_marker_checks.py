@@ -38,6 +38,9 @@ SCALE_FACTOR = 20.0
 UNIT_MATCH = 3.0
 #: the nominal link must move at least this much [m] for the comparison to mean anything
 MIN_SPREAD = 0.02
+#: a row is wild beyond SCALE_FACTOR times the nominal reach, and never within
+#: SCALE_FACTOR times this [m] (an unknown marker offset adds up to a link's size)
+WILD_FLOOR = 1.0
 #: rows compared at most (evenly spaced): the spread of a table needs no more
 SCALE_ROWS = 500
 
@@ -139,7 +142,7 @@ def _check_wild_rows(nominal: np.ndarray, positions: np.ndarray, name: str,
                      lines: Sequence[int] | None) -> None:  # fmt: skip
     """Refuse a row (n, 3) [m] far beyond the nominal link's reach about the median point."""
     reach = max(float(np.linalg.norm(nominal - np.median(nominal, axis=0), axis=1).max()),
-                MIN_SPREAD)  # fmt: skip
+                WILD_FLOOR)  # fmt: skip
     d = np.linalg.norm(positions - np.median(positions, axis=0), axis=1)
     far = np.flatnonzero(d > SCALE_FACTOR * reach)
     if not far.size:
@@ -148,8 +151,9 @@ def _check_wild_rows(nominal: np.ndarray, positions: np.ndarray, name: str,
     where = f"line {lines[i]}" if lines is not None else f"row {i + 1}"
     raise BadValueError(
         f"{name} {where}: the marker lies {d[i]:.3g} m from the table's median marker "
-        f"position, {d[i] / reach:.0f}× the nominal link's reach about its own ({reach:.3g} m; "
-        f"{len(far)} such row(s)): a mistyped cell? correct or delete the row",
+        f"position, beyond {SCALE_FACTOR * reach:.3g} m ({SCALE_FACTOR:g}× the nominal link's "
+        f"reach, at least {SCALE_FACTOR * WILD_FLOOR:g} m; {len(far)} such row(s)): a "
+        "mistyped cell? correct or delete the row",
         i + 1,
         "marker",
     )
@@ -174,8 +178,8 @@ def check_scale(mech: Mechanism, q_act: np.ndarray, positions: np.ndarray, unit:
 
     Raises:
         BadValueError: the spreads agree but a row lies more than :data:`SCALE_FACTOR`
-            times the nominal link's largest distance from the median point (one wild
-            cell: the line is named).
+            times the nominal link's largest distance from the median point (at least
+            :data:`WILD_FLOOR`; one wild cell: the line is named).
         UnitMismatchError: the ratio is beyond :data:`SCALE_FACTOR` and a ratio of two
             length units explains it within :data:`UNIT_MATCH` (the message names the
             unit to declare).
