@@ -33,6 +33,7 @@ def clip(value: object, limit: int = 80, *, quote: bool = False) -> str:
     Returns:
         The text, ending in "… (N chars)" when cut.
     """
+    value = _plain(value, limit)
     if isinstance(value, str):
         text = value.encode("unicode_escape", "backslashreplace").decode("ascii", "replace")
         if quote:
@@ -52,6 +53,27 @@ def clip(value: object, limit: int = 80, *, quote: bool = False) -> str:
         return text
     tail = f"… ({len(text)} chars)"
     return text[: max(limit - len(tail), 1)] + tail
+
+
+def _plain(value: object, limit: int, depth: int = 3) -> object:
+    """``value`` with numpy scalars and small arrays as Python numbers and lists.
+
+    A message shows ``0.5``, not ``np.float64(0.5)`` (numpy 2's repr), also inside
+    tuples and lists (to ``depth`` levels, containers of at most ``limit`` items).
+    """
+    module = type(value).__module__
+    if module == "numpy" or module.startswith("numpy."):
+        item, size = getattr(value, "item", None), getattr(value, "size", limit + 1)
+        if getattr(value, "ndim", None) == 0 and callable(item):
+            return item()
+        to_list = getattr(value, "tolist", None)
+        if callable(to_list) and isinstance(size, int) and size <= limit:
+            return to_list()
+        return value
+    if depth and isinstance(value, (list, tuple)) and len(value) <= limit:
+        plain = [_plain(v, limit, depth - 1) for v in value]
+        return plain if isinstance(value, list) else tuple(plain)
+    return value
 
 
 def listing(names: Iterable[str], limit: int = 40) -> str:

@@ -172,8 +172,8 @@ def check_parameters(
     if off.any():
         k = int(np.argmax(off))
         raise CalibrationDirectoryError(
-            f"{where}: parameter {names[k]!r} is {values[k]!r} but {ident} gives "
-            f"{ours[k]!r}; the files of the directory disagree: re-run `pincal calibrate`"
+            f"{where}: parameter {names[k]!r} is {float(values[k])!r} but {ident} gives "
+            f"{float(ours[k])!r}; the files of the directory disagree: re-run `pincal calibrate`"
         )
 
 
@@ -222,8 +222,8 @@ def check_covariance(result: IdentificationRecord, ident: str) -> None:
         if bad.any():
             k = int(np.argmax(bad))
             raise CalibrationDirectoryError(
-                f"{ident}: std of {result.identified_names[k]!r} is {std[k]!r} but the "
-                f"covariance's diagonal gives {root[k]!r}; {fix}"
+                f"{ident}: std of {result.identified_names[k]!r} is {float(std[k])!r} but the "
+                f"covariance's diagonal gives {float(root[k])!r}; {fix}"
             )
 
 

@@ -64,7 +64,7 @@ class Table:
     delimiter: str
     decimal: str
     preamble: tuple[int, ...] = ()
-    hints: bool = True
+    hints: bool = False
 
     def find(self, field: str, aliases: Sequence[str], mapping: Mapping[str, str]) -> int | None:
         """Index of the column holding ``field``: the mapped title, else an alias.
@@ -153,6 +153,7 @@ def read_table(
     decimal: str = "auto",
     *,
     titles: Sequence[str] | None = None,
+    hints: bool = False,
 ) -> Table:
     """Read a delimited export (see the module doc).
 
@@ -165,6 +166,8 @@ def read_table(
             holds them all, else the first line. With ``titles`` the messages name no
             option (the command reading the table has no ``--delimiter``); a row whose
             cell count differs from the title line's is named as a shifted title line.
+        hints: messages name ``--delimiter`` and ``--decimal`` (only for a command
+            that has them: ``pincal import``).
 
     Returns:
         The table as text cells with their file line numbers.
@@ -200,7 +203,8 @@ def read_table(
                 raise _shifted(name, numbered[0][0], n, len(columns), len(cells), delim)
             raise MeasurementFormatError(
                 f"{name} line {n}: {len(cells)} fields, the title line has {len(columns)} "
-                f"(delimiter {delim!r}; set it with --delimiter)"
+                f"(delimiter {delim!r}; "
+                + ("set it with --delimiter)" if hints else "give every row one cell per title)")
             )
         rows.append(tuple(cells))
         lines.append(n)
@@ -211,7 +215,7 @@ def read_table(
     elif decimal == "," and delim == ",":
         raise MeasurementFormatError(f"{name}: a decimal comma needs a ';' or tab delimiter")
     return Table(name, columns, tuple(rows), tuple(lines), delim, decimal, preamble,
-                 hints=titles is None)  # fmt: skip
+                 hints=hints)  # fmt: skip
 
 
 #: most lines before the title line that a reader given ``titles`` skips

@@ -252,9 +252,9 @@ def import_tracker(
         MeasurementError: a bad option (unit, delimiter, match, tolerance).
     """
     o = options or TrackerImportOptions()
-    points = read_table(points_path, o.delimiter, o.decimal)
-    log = read_table(log_path, o.delimiter, o.decimal)
-    tgt = read_table(targets_path, o.delimiter, o.decimal)
+    points = read_table(points_path, o.delimiter, o.decimal, hints=True)
+    log = read_table(log_path, o.delimiter, o.decimal, hints=True)
+    tgt = read_table(targets_path, o.delimiter, o.decimal, hints=True)
     tnames, local, _ = read_xyz(tgt, o.target_columns, o.length_unit, "targets file")
     dup = sorted({n for n in tnames if tnames.count(n) > 1})
     if dup or len(tnames) < 3:

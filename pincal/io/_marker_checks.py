@@ -38,6 +38,9 @@ SCALE_FACTOR = 20.0
 UNIT_MATCH = 3.0
 #: the nominal link must move at least this much [m] for the comparison to mean anything
 MIN_SPREAD = 0.02
+#: a row is wild beyond SCALE_FACTOR times the nominal reach, and never within
+#: SCALE_FACTOR times this [m] (an unknown marker offset adds up to a link's size)
+WILD_FLOOR = 1.0
 #: rows compared at most (evenly spaced): the spread of a table needs no more
 SCALE_ROWS = 500
 
@@ -128,15 +131,39 @@ def check_coordinates(table: Table, values: np.ndarray, columns: Sequence[int],
 
 
 def _spread(points: np.ndarray) -> float:
-    """RMS distance of points (n, 3) from their centroid."""
-    return float(np.sqrt(np.mean(np.sum((points - points.mean(axis=0)) ** 2, axis=1))))
+    """Median distance of points (n, 3) from their coordinate-wise median.
+
+    Robust: a few wild rows (one cell typed 9e6 mm) do not read as a unit ratio.
+    """
+    return float(np.median(np.linalg.norm(points - np.median(points, axis=0), axis=1)))
+
+
+def _check_wild_rows(nominal: np.ndarray, positions: np.ndarray, name: str,
+                     lines: Sequence[int] | None) -> None:  # fmt: skip
+    """Refuse a row (n, 3) [m] far beyond the nominal link's reach about the median point."""
+    reach = max(float(np.linalg.norm(nominal - np.median(nominal, axis=0), axis=1).max()),
+                WILD_FLOOR)  # fmt: skip
+    d = np.linalg.norm(positions - np.median(positions, axis=0), axis=1)
+    far = np.flatnonzero(d > SCALE_FACTOR * reach)
+    if not far.size:
+        return
+    i = int(far[np.argmax(d[far])])
+    where = f"line {lines[i]}" if lines is not None else f"row {i + 1}"
+    raise BadValueError(
+        f"{name} {where}: the marker lies {d[i]:.3g} m from the table's median marker "
+        f"position, beyond {SCALE_FACTOR * reach:.3g} m ({SCALE_FACTOR:g}× the nominal link's "
+        f"reach, at least {SCALE_FACTOR * WILD_FLOOR:g} m; {len(far)} such row(s)): a "
+        "mistyped cell? correct or delete the row",
+        i + 1,
+        "marker",
+    )
 
 
 def check_scale(mech: Mechanism, q_act: np.ndarray, positions: np.ndarray, unit: str,
-                name: str) -> None:  # fmt: skip
+                name: str, lines: Sequence[int] | None = None) -> None:  # fmt: skip
     """Refuse positions whose spread is a length-unit ratio away from the nominal link's.
 
-    The marker's spread about its centroid is compared with that of the nominal
+    The marker's spread about its median point is compared with that of the nominal
     measured frame over the same joint readings (rotation and translation of the
     instrument do not change a spread; an unknown marker offset changes it by far less
     than :data:`SCALE_FACTOR`).
@@ -147,8 +174,12 @@ def check_scale(mech: Mechanism, q_act: np.ndarray, positions: np.ndarray, unit:
         positions: (n, 3) the first marker's positions [m], as read.
         unit: the unit the positions were read in (for the message).
         name: file name.
+        lines: (n,) the file line of each row (for the message); None: 1-based rows.
 
     Raises:
+        BadValueError: the spreads agree but a row lies more than :data:`SCALE_FACTOR`
+            times the nominal link's largest distance from the median point (at least
+            :data:`WILD_FLOOR`; one wild cell: the line is named).
         UnitMismatchError: the ratio is beyond :data:`SCALE_FACTOR` and a ratio of two
             length units explains it within :data:`UNIT_MATCH` (the message names the
             unit to declare).
@@ -163,6 +194,7 @@ def check_scale(mech: Mechanism, q_act: np.ndarray, positions: np.ndarray, unit:
         return
     ratio = s_meas / s_nom
     if 1 / SCALE_FACTOR <= ratio <= SCALE_FACTOR:
+        _check_wild_rows(nominal, positions, name, lines)
         return
     per_m = LENGTH_UNITS[unit] if unit in LENGTH_UNITS else 1.0
     for other, f in LENGTH_UNITS.items():
@@ -173,7 +205,7 @@ def check_scale(mech: Mechanism, q_act: np.ndarray, positions: np.ndarray, unit:
             raise UnitMismatchError(
                 f"{name}: the marker positions spread {ratio:.3g}× as far as the nominal "
                 f"marker link over the same joint readings ({s_meas:.3g} m against "
-                f"{s_nom:.3g} m RMS about their centre): the marker columns look like {other} "
-                f"read as {unit}; declare --length-unit {other} (markers.length_unit in a "
-                f"campaign, or title the columns 'x [{other}]')"
+                f"{s_nom:.3g} m, median distance from their median): the marker columns look "
+                f"like {other} read as {unit}; declare --length-unit {other} "
+                f"(markers.length_unit in a campaign, or title the columns 'x [{other}]')"
             )

@@ -317,7 +317,8 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
         rotations, said = read_rotations(table, setup, angles, rows)
         notes += said
     positions = markers[rows] / factors
-    check_scale(mech, q_act, positions[:, :3], _unit_read(table, setup), name)
+    check_scale(mech, q_act, positions[:, :3], _unit_read(table, setup), name,
+                [table.lines[int(i)] for i in rows])  # fmt: skip
     out = []
     for k in range(len(setup.marker_sets)):
         frame = mech.measured_frame if k == 0 else marker_frame(k)[1]

@@ -16,10 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from pincal.errors import MeasurementError, ModelFileError
+from pincal.errors import MeasurementError, ModelFileError, UnidentifiableError
 from pincal.measure._markers import marker_frame
 from pincal.measure._measurements import Measurements
-from pincal.measure._tracker import RigidFit, fit_rigid_transform, kabsch
+from pincal.measure._tracker import COLLINEAR_RTOL, RigidFit, fit_rigid_transform, kabsch
 from pincal.model import BASE_JOINT, TOOL_JOINT, Mechanism, with_joint_origin
 
 __all__ = ["MarkerRegistration", "register_markers"]
@@ -72,6 +72,30 @@ def _body_rotation(T: pin.SE3, R_f: np.ndarray, R_meas: np.ndarray) -> tuple[np.
     return R, float(np.sqrt(np.mean(np.square(angles))))
 
 
+def _check_spread(mech: Mechanism, points: np.ndarray, q_act: np.ndarray) -> None:
+    """Refuse nominal marker points (n, 3) [m] that are coincident or collinear.
+
+    ``q_act`` (n, n_act) [rad, m]: rows of one joint reading are named as such.
+    """
+    centred = points - points.mean(axis=0)
+    sv = np.linalg.svd(centred, compute_uv=False)
+    if sv[0] > 0.0 and sv[1] > COLLINEAR_RTOL * sv[0]:
+        return
+    link = mech.tree.joints[TOOL_JOINT].parent
+    if not np.ptp(q_act, axis=0).any():
+        raise UnidentifiableError(
+            f"the instrument frame cannot be registered: every row has the same joint "
+            f"readings, so the nominal marker on link {link!r} never moves; measure poses "
+            "that move the joints (check that the joint columns are the robot's readings)"
+        )
+    raise UnidentifiableError(
+        f"the instrument frame cannot be registered: the nominal marker positions on link "
+        f"{link!r} are coincident or collinear over the poses (moved by "
+        f"{', '.join(mech.actuated)}); give the marker off the joint's axis (--marker X,Y,Z "
+        "[mm]), --instrument-frame known, or a link further along the chain"
+    )
+
+
 def register_markers(
     mech: Mechanism,
     measurements: Measurements,
@@ -93,7 +117,9 @@ def register_markers(
             (their offsets are unknown; all markers share the rigid fit).
 
     Raises:
-        MeasurementError: too few poses, or collinear predicted points.
+        MeasurementError: too few poses.
+        UnidentifiableError: the nominal marker points are coincident or collinear (a
+            marker on the axis of the one joint moving it): no frame registers them.
     """
     joints = [BASE_JOINT, TOOL_JOINT] + [marker_frame(k)[0] for k in range(1, len(more) + 1)]
     for j in joints:
@@ -112,6 +138,9 @@ def register_markers(
     P = [measurements.positions, *(m.positions for m in more)]
     mk = [np.asarray(T_tool.translation, dtype=float).copy()]
     mk += [np.zeros(3) for _ in more]
+    if not frame_known:
+        _check_spread(mech, np.vstack([t_f + np.einsum("mij,j->mi", R_f, v) for v in mk]),
+                      measurements.q_act)  # fmt: skip
     T = T_base
     it = 0
     measured, ones = np.vstack(P), np.ones(sum(len(Pk) for Pk in P))

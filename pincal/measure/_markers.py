@@ -263,8 +263,9 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
         root=setup.root,
     )
     if not mech.actuated:
+        start = "the robot's root" if setup.root is None else f"the chain's start {setup.root!r}"
         raise MobilityError(
-            f"nothing moves the marker: no unlocked joint between the robot's root and link "
+            f"nothing moves the marker: no unlocked joint between {start} and link "
             f"{setup.link!r} (locked: {', '.join(sorted(setup.lock)) or 'none'}); give the "
             "link the marker is on, further along the chain, or lock fewer joints"
         )

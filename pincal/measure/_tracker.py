@@ -49,7 +49,7 @@ _log = logging.getLogger(__name__)
 
 #: Relative threshold on the second singular value of the centred target cloud
 #: below which the targets count as collinear (rotation about the line undefined).
-_COLLINEAR_RTOL = 1e-7
+COLLINEAR_RTOL = 1e-7
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,7 +98,7 @@ def _as_weights(weights: np.ndarray | None, n: int) -> np.ndarray:
 def _check_not_collinear(points: np.ndarray, weights: np.ndarray, name: str) -> None:
     centred = points - weights @ points / weights.sum()
     s = np.linalg.svd(centred * np.sqrt(weights)[:, None], compute_uv=False)
-    if s[0] == 0.0 or s[1] <= _COLLINEAR_RTOL * s[0]:
+    if s[0] == 0.0 or s[1] <= COLLINEAR_RTOL * s[0]:
         raise MeasurementError(
             f"{name}: the {len(points)} targets are coincident or collinear; a rigid fit "
             "needs at least 3 non-collinear targets"

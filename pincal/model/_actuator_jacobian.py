@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from pincal.errors import ConvergenceError, MeasurementError
 from pincal.model._closures import COMPONENTS
+from pincal.model._jacobian_shape import six_by_nv
 from pincal.model._mechanism import Mechanism
 
 __all__ = ["actuator_jacobian", "actuator_jacobians"]
@@ -53,8 +54,8 @@ def actuator_jacobian(
     act = np.array([model.joints[mech.joint_id(j)].idx_v for j in mech.actuated])
     fid = mech.frame_id(mech.measured_frame)
     data = model.createData()
-    J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
-    J[:3] = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)[:3]
+    J = six_by_nv(pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)).copy()
+    J[:3] = six_by_nv(pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED))[:3]
     Jm = J[cols]
     G = Jm[:, act]
     free = mech.free_dofs

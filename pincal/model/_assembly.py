@@ -23,6 +23,7 @@ from pincal.errors import (
     ModelFileError,
     SingularConfigurationError,
 )
+from pincal.model._jacobian_shape import six_by_nv
 from pincal.model._kind_hint import open_loop_hint, spherical_hint
 from pincal.model._kinematics import KinematicQueries
 from pincal.model._newton import Solution, SolverOptions, damped_newton
@@ -341,7 +342,7 @@ class Assembly:
         mobility = self.model.nv - rank - idle
         if idle:  # passive motions the actuators do not fix must not move the measured frame
             fid = self.queries.frame_id(self.queries.measured_frame)
-            Jm = pin.getFrameJacobian(self.model, data, fid, pin.LOCAL)[:, free_v]
+            Jm = six_by_nv(pin.getFrameJacobian(self.model, data, fid, pin.LOCAL))[:, free_v]
             moved = np.linalg.norm(Jm @ nullspace, axis=0)
             if np.any(moved > 1e-9):
                 if self.closures:

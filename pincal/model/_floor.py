@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from pincal.model._jacobian_shape import six_by_nv
 from pincal.model._mechanism import Mechanism
 
 __all__ = ["DEFAULT_FLOOR", "above_floor", "moving_points", "point_heights", "stands_on_base"]
@@ -46,7 +47,7 @@ def moving_points(mech: Mechanism) -> np.ndarray:
         for f in range(model.nframes):
             if moving[f] or model.frames[f].parentJoint == 0:
                 continue
-            J = pin.getFrameJacobian(model, data, f, pin.LOCAL_WORLD_ALIGNED)
+            J = six_by_nv(pin.getFrameJacobian(model, data, f, pin.LOCAL_WORLD_ALIGNED))
             moving[f] = bool(np.abs(J[2, cols]).max(initial=0.0) > _STILL)
     return np.flatnonzero(moving)
 

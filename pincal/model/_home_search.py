@@ -28,6 +28,7 @@ import pinocchio as pin
 
 from pincal.model._closures import COMPONENTS
 from pincal.model._floor import moving_points, point_heights
+from pincal.model._jacobian_shape import six_by_nv
 from pincal.model._mechanism import Mechanism
 
 __all__ = ["RegularHome", "by_name_defaults", "conditioning", "regular_home"]
@@ -66,7 +67,7 @@ def conditioning(mech: Mechanism, q: np.ndarray, length: float | None = None) ->
     L = _chain_length(mech) if length is None else length
     data = mech.model.createData()
     fid = mech.frame_id(mech.measured_frame)
-    J = pin.computeFrameJacobian(mech.model, data, q, fid, pin.LOCAL)
+    J = six_by_nv(pin.computeFrameJacobian(mech.model, data, q, fid, pin.LOCAL))
     rows = [COMPONENTS.index(c) for c in mech.measured_components]
     cols = [mech.model.idx_vs[mech.model.getJointId(n)] for n in mech.actuated]
     G = J[np.ix_(rows, cols)] * np.array([1.0 / L if r < 3 else 1.0 for r in rows])[:, None]

@@ -14,6 +14,7 @@ from pincal.errors import ConvergenceError, ShapeError, UnreachablePoseError
 from pincal.model._branch import LoopSolver
 from pincal.model._closures import COMPONENTS, measured_jacobian
 from pincal.model._fixing import fixing_components
+from pincal.model._jacobian_shape import six_by_nv
 
 __all__ = ["check_actuator_limits", "inverse_configuration"]
 
@@ -67,7 +68,7 @@ def inverse_configuration(
         r[:3] = oMf.translation - target_p
         E = target_R.T @ oMf.rotation
         r[3:] = pin.log3(E)
-        J = measured_jacobian(oMf, pin.getFrameJacobian(model, data, fid, pin.LOCAL))
+        J = measured_jacobian(oMf, six_by_nv(pin.getFrameJacobian(model, data, fid, pin.LOCAL)))
         J[3:] = pin.Jlog3(E) @ J[3:]
         return r[comps], J[comps]
 
@@ -98,7 +99,7 @@ def _output_map(loop: LoopSolver, q: np.ndarray, fid: int) -> tuple[np.ndarray, 
     Returns G and the largest entry of the measured frame's Jacobian (the rank's scale).
     """
     data = loop.queries.compute(q)
-    J_frame = pin.getFrameJacobian(loop.model, data, fid, pin.LOCAL)
+    J_frame = six_by_nv(pin.getFrameJacobian(loop.model, data, fid, pin.LOCAL))
     Jm = measured_jacobian(data.oMf[fid], J_frame)
     Jc = loop.queries.jacobian_of(data)
     act, free = loop.queries.act_v_arr, loop.queries.free_v

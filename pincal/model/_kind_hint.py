@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from pincal.model._jacobian_shape import six_by_nv
 from pincal.model._kinematics import KinematicQueries
 
 __all__ = ["open_loop_hint", "spherical_hint"]
@@ -103,7 +104,7 @@ def spherical_hint(queries: KinematicQueries, q: np.ndarray, rcond: float) -> st
         return ""
     # the idle motions of the spherical joints (a rod spinning) must not move the tool
     fid = queries.frame_id(queries.measured_frame)
-    Jm = pin.getFrameJacobian(queries.model, data, fid, pin.LOCAL)[:, queries.free_v]
+    Jm = six_by_nv(pin.getFrameJacobian(queries.model, data, fid, pin.LOCAL))[:, queries.free_v]
     idle = np.linalg.svd(free)[2][rank_free:].T
     if idle.size and np.any(np.linalg.norm(np.hstack([Jm, extra_twists]) @ idle, axis=0) > 1e-9):
         return ""

@@ -18,6 +18,7 @@ import pinocchio as pin
 
 from pincal.errors import ShapeError, UnknownNameError
 from pincal.model._closures import Closure
+from pincal.model._jacobian_shape import six_by_nv
 from pincal.model._urdf import UrdfTree
 
 __all__ = ["KinematicQueries", "Kinematics", "frame_index"]
@@ -167,12 +168,12 @@ class KinematicQueries:
         blocks = []
         for (a, b), c in zip(self.closure_fids, self.closures, strict=True):
             if c.is_point:  # world-aligned point velocities directly
-                Jb = pin.getFrameJacobian(model, data, b, lwa)
-                Ja = pin.getFrameJacobian(model, data, a, lwa)
+                Jb = six_by_nv(pin.getFrameJacobian(model, data, b, lwa))
+                Ja = six_by_nv(pin.getFrameJacobian(model, data, a, lwa))
                 blocks.append(Jb[:3] - Ja[:3])
             else:
-                Ja = pin.getFrameJacobian(model, data, a, local)
-                Jb = pin.getFrameJacobian(model, data, b, local)
+                Ja = six_by_nv(pin.getFrameJacobian(model, data, a, local))
+                Jb = six_by_nv(pin.getFrameJacobian(model, data, b, local))
                 blocks.append(c.jacobian(oMf[a], oMf[b], Ja, Jb))
         return np.vstack(blocks)
 
@@ -185,7 +186,7 @@ class KinematicQueries:
             q=np.array(q, dtype=float),
             placements={f: pin.SE3(data.oMf[self.frame_id(f)]) for f in frames},
             jacobians={
-                f: pin.getFrameJacobian(model, data, self.frame_id(f), pin.LOCAL)
+                f: six_by_nv(pin.getFrameJacobian(model, data, self.frame_id(f), pin.LOCAL))
                 for f in jacobian_frames
             },
             joint_placements=tuple(pin.SE3(M) for M in data.oMi),

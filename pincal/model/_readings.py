@@ -28,6 +28,8 @@ __all__ = ["KINDS", "JointReadings"]
 #: keys of ``joint_units`` that name a joint kind rather than a joint
 KINDS = ("angle", "length")
 _ANGLES = ("rad", "mrad", "urad", "deg")
+#: length units (those of :data:`pincal.io._units.LENGTH_UNITS`)
+_LENGTHS = ("m", "mm", "um")
 
 
 @dataclass(frozen=True)
@@ -49,7 +51,8 @@ class JointReadings:
         """Check the three declarations (``where`` names their origin in messages).
 
         Raises:
-            ModelFileError: a value of the wrong type, a joint mapped from two columns.
+            ModelFileError: a value of the wrong type, a joint mapped from two columns, a
+                single unit that is neither an angle nor a length unit.
         """
         cols = _str_map(columns, f"{where} 'columns'", "file column names to joint names")
         joints = list(cols.values())
@@ -57,8 +60,20 @@ class JointReadings:
         if twice:
             raise ModelFileError(f"{where} 'columns' maps several columns to {shown(twice)}")
         if isinstance(units, str):  # one unit: for the joints of its kind
+            if units not in _ANGLES + _LENGTHS:
+                raise ModelFileError(
+                    f"{where} 'joint_units' {shown(units)} is neither an angle unit "
+                    f"({', '.join(_ANGLES)}) nor a length unit ({', '.join(_LENGTHS)}); give "
+                    "one of them, or 'angle=deg length=mm' / 'JOINT=UNIT' entries"
+                )
             units = {"angle" if units in _ANGLES else "length": units}
         unit_map = _str_map(units, f"{where} 'joint_units'", "angle/length or joints to units")
+        for kind, known in (("angle", _ANGLES), ("length", _LENGTHS)):
+            if kind in unit_map and unit_map[kind] not in known:
+                raise ModelFileError(
+                    f"{where} 'joint_units' {kind}={shown(unit_map[kind])}: not a {kind} "
+                    f"unit; use one of {', '.join(known)}"
+                )
         ref: str | dict[str, float]
         if reference is None or reference == {}:
             ref = {}

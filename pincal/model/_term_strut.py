@@ -39,6 +39,7 @@ import pinocchio as pin
 
 from pincal.errors import ParameterError
 from pincal.model._closures import COMPONENTS
+from pincal.model._jacobian_shape import six_by_nv
 from pincal.model._joint_terms import JointTerm, register_term
 from pincal.model._term_compliance import equilibrium, gravity_model, gravity_wrench, held_once
 from pincal.model._workspace import sample_actuators
@@ -240,8 +241,8 @@ def _measured_jacobian(
     measurement residual.
     """
     fid = mech.frame_id(mech.measured_frame)
-    world = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
-    local = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
+    world = six_by_nv(pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED))
+    local = six_by_nv(pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL))
     rows = [COMPONENTS.index(c) for c in mech.measured_components]
     return np.vstack([world[:3], local[3:]])[rows]
 
