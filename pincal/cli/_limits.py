@@ -57,7 +57,7 @@ def check_data_rows(path: str, option: str, n_params: int, yes: bool) -> int | N
     """Refuse a data file of more than :data:`MAX_POSES` rows unless ``yes``.
 
     The rows are counted (data lines after the column titles) before the file is
-    parsed; the message estimates the fit's time and memory.
+    parsed; the message estimates the fit's time and memory (for ``n_params`` > 0).
 
     Returns:
         The row count, or None when the file cannot be read (its reader says why).
@@ -77,10 +77,15 @@ def check_data_rows(path: str, option: str, n_params: int, yes: bool) -> int | N
     if rows > MAX_POSES and not yes:
         seconds = rows * n_params * _FIT_S_PER_ROW_PARAM
         gb = rows * 6 * n_params * _FIT_BYTES_PER_ENTRY / 1e9
+        cost = (
+            f"; with {n_params} parameters the fit would take about {seconds:.0f} s and "
+            f"{gb:.1f} GB of memory"
+            if n_params > 0
+            else ""
+        )
         raise InputLimitError(
             f"{option} {clip(path, 300)} has {rows} poses, over the {MAX_POSES} fitted without "
-            f"--yes; with {n_params} parameters the fit would take about {seconds:.0f} s and "
-            f"{gb:.1f} GB of memory; pass --yes to fit it anyway, or use a subset of the poses"
+            f"--yes{cost}; pass --yes to fit it anyway, or use a subset of the poses"
         )
     return rows
 

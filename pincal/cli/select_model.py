@@ -7,6 +7,7 @@ import json
 import click
 
 from pincal.cli._joint_terms import carrying, payload_option, read_payload
+from pincal.cli._limits import check_data_rows, yes_option
 from pincal.cli._markers import marker_table_options
 from pincal.cli._paths import guard_paths
 from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_input, model_options
@@ -36,12 +37,13 @@ DEFAULT_MODELS = (
 @payload_option("Payload on the tool during the measurements (kg; centre of mass in m in the "
                 "tool frame), e.g. 20,0,0,0.1: part of the load a compliance term sees.")
 @click.option("--json", "as_json", is_flag=True, help="Print the ranking as JSON on stdout.")
+@yes_option
 @model_options
 @marker_table_options
 @fail_cleanly
 def select_model_cmd(
     model: str, data: str, preset: str | None, models: str, k: int, seed: int, method: str,
-    payload: str | None, as_json: bool, model_opts: ModelOptions, link: str | None,
+    payload: str | None, as_json: bool, yes: bool, model_opts: ModelOptions, link: str | None,
     instrument_frame: str, marker_spec: str, marker_columns: tuple[str, ...], length_unit: str,
 ) -> None:  # fmt: skip
     """Fit candidate error models and rank them by K-fold held-out position error.
@@ -65,6 +67,7 @@ def select_model_cmd(
     from pincal.workflow import select_marker_model, select_pose_model
 
     guard_paths({"MODEL": model_input(model), "--data": data, "--sidecar": model_opts.sidecar})
+    check_data_rows(data, "--data", 0, yes)  # every candidate is fitted k + 1 times
     specs = [s.strip() for s in models.split(",") if s.strip()]
     if not specs:
         raise click.BadParameter("give at least one model", param_hint="--models")

@@ -146,6 +146,12 @@ def test_more_rows_than_the_pose_route_fits_are_refused_without_yes(tmp_path, ta
     many = (rows * (MAX_POSES // len(rows) + 1))[: MAX_POSES + 1]
     r = _calibrate(tmp_path, _write(tmp_path / "m.csv", title, many), "--length-unit", "mm")
     _refused(r, tmp_path, "InputLimitError", f"{MAX_POSES + 1} poses", "--yes")
+    # select-model fits every candidate k + 1 times: the same bound (it had none)
+    args = ["select-model", "ur5", "--link", LINK, "--data", tmp_path / "m.csv",
+            "--length-unit", "mm", "--models", "geometric"]  # fmt: skip
+    r = CliRunner().invoke(main, [str(a) for a in args])
+    line = _refused(r, tmp_path, "InputLimitError", f"{MAX_POSES + 1} poses", "--yes")
+    assert " 0 s " not in line  # no cost estimate without a parameter count
 
 
 def test_readings_relative_to_home_use_the_home_info_prints(tmp_path, table):
