@@ -134,7 +134,10 @@ def _columns_hint(table: Table) -> str:
     if not found:
         return ("name the marker's three position columns with --marker-columns X,Y,Z "
                 "(markers.columns in a campaign)")  # fmt: skip
-    hint = (f"name the marker's position columns with --marker-columns {found[0]} "
+    # a unit in parentheses is part of the title, not read: say it with --length-unit
+    unit = found[0].split(",")[0].rpartition("(")[2].rstrip(") ").strip().lower()
+    unit_opt = f" --length-unit {unit}" if unit in LENGTH_UNITS and "(" in found[0] else ""
+    hint = (f"name the marker's position columns with --marker-columns {found[0]}{unit_opt} "
             "(markers.columns in a campaign)")  # fmt: skip
     if len(found) > 1:
         hint += f"; x/y/z-like triples in the file: {' '.join(found[:8])}"

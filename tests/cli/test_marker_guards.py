@@ -196,3 +196,17 @@ def test_a_missing_marker_column_names_the_option_and_the_triples_found(tmp_path
     suggested = line.split("--marker-columns ")[1].split()[0]
     ok = _calibrate(tmp_path, path, "--marker-columns", suggested, "--prior", "none")
     assert ok.exit_code == 0, ok.output
+
+
+def test_a_unit_in_parentheses_is_suggested_as_the_length_unit(tmp_path, table):
+    """'x (mm)' titles are read without a unit: the --marker-columns suggestion adds
+    --length-unit mm (alone it would read the millimetres as metres), and given, it fits."""
+    title, rows, *_ = table
+    titled = title.replace("x,y,z", "Hand_X (mm),Hand_Y (mm),Hand_Z (mm)", 1)
+    path = _write(tmp_path / "m.csv", titled, rows)
+    r = _calibrate(tmp_path, path)
+    cols = "Hand_X (mm),Hand_Y (mm),Hand_Z (mm)"
+    _refused(r, tmp_path, "ColumnError", f"--marker-columns {cols} --length-unit mm")
+    ok = _calibrate(tmp_path, path, "--marker-columns", cols, "--length-unit", "mm",
+                    "--prior", "none")  # fmt: skip
+    assert ok.exit_code == 0, ok.output
