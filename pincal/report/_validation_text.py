@@ -56,6 +56,8 @@ def validation_text(
     pos = f"{block_label('position', comps)} [mm]"
     ori = f"{block_label('orientation', comps)} [mrad]"
     poses = sum(len(g) for g in validation.groups)
+    # a marker calibration: both rows keep the calibrated instrument frame and marker
+    what = "robot" if calibration.manifest.get("markers") else "model"
     lines = [
         f"pincal validate {calibration.path} ({calibration.model}, "
         f"preset {calibration.preset}) on {data}: {poses} poses, "
@@ -66,9 +68,9 @@ def validation_text(
     lines += [
         f"                        {pos:22s} {ori}",
         "                        RMS        max         RMS        max",
-        f"  nominal model      {_fmt(b['rms_position_mm'])}  {_fmt(b['max_position_mm'])}"
+        f"  nominal {what}      {_fmt(b['rms_position_mm'])}  {_fmt(b['max_position_mm'])}"
         f"   {_fmt(b['rms_orientation_mrad'])}  {_fmt(b['max_orientation_mrad'])}",
-        f"  calibrated model   {_fmt(a['rms_position_mm'])}  {_fmt(a['max_position_mm'])}"
+        f"  calibrated {what}   {_fmt(a['rms_position_mm'])}  {_fmt(a['max_position_mm'])}"
         f"   {_fmt(a['rms_orientation_mrad'])}  {_fmt(a['max_orientation_mrad'])}",
     ]
 

@@ -43,6 +43,9 @@ def test_transfer_to_another_session_reports_the_ratio(tmp_path):
     assert transfer["ratio"] < 0.2  # 1 mm errors against 20 µm of noise
     text = _run("validate", tmp_path / "cal", "--data", tmp_path / "b.csv").output
     assert "ratio calibrated / registration only" in text and "carries over" in text
+    # the same-set-up rows keep the calibrated registration: robots, not models
+    assert "  nominal robot " in text and "  calibrated robot " in text
+    assert "nominal model" not in text
     # the same poses on the nominal robot: the calibrated geometry is now the wrong one
     _, nominal = _truth(0.0)
     _table(tmp_path / "c.csv", with_joint_origin(nominal, BASE_JOINT, T_OTHER), q_b, 2e-5, 4)
