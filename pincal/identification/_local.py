@@ -122,10 +122,8 @@ def _continue_with_lm(
     on = None if progress is None else (lambda i, c: progress(gn.iterations + i, c))
     lm = levenberg_marquardt(problem, x0, free, lm_opts, on)
     assert isinstance(gn.extras, LocalSolverExtras) and isinstance(lm.extras, LocalSolverExtras)
-    extras = LocalSolverExtras(
-        evaluations=gn.extras.evaluations + lm.extras.evaluations,
-        rejected_steps=gn.extras.rejected_steps,
-    )  # the damping ends inside scipy: NaN
+    evals = gn.extras.evaluations + lm.extras.evaluations  # (the damping ends inside scipy)
+    extras = LocalSolverExtras(evaluations=evals, rejected_steps=gn.extras.rejected_steps)
     message = (
         f"gauss-newton stopped after {gn.iterations} iterations ({gn.message}); "
         f"levenberg-marquardt from the start: {lm.message}"
@@ -171,21 +169,21 @@ def _gauss_newton(
             A, b = Jf, r
         step = -np.linalg.lstsq(A, b, rcond=None)[0]
         predicted = cost - 0.5 * float(np.sum((b + A @ step) ** 2))
+        round_off = predicted <= 1e-9 * cost  # the linear model promises only round-off
         if predicted <= 1e-12 * cost + 1e-24 * history[0]:
             message, success = "converged (predicted decrease below 1e-12 of the cost)", True
             break
         accepted, alpha, x_try = False, 1.0, x
         if mu > 0.0 and opts.damping and skip == 0:
-            # damping on: the full Gauss–Newton step is still tried; when it delivers a
-            # quarter of its predicted decrease the damping is switched off again (else a
-            # damped run can crawl on ill-conditioned loops to its iteration limit). After
-            # a failed try the next one waits twice as many iterations as the last wait.
+            # damping on: the full step is still tried, and when it delivers a quarter of
+            # its predicted decrease damping is off again (a damped run can crawl on loops
+            # to its iteration limit); after a failed try the next waits twice as long.
             x_try = x.copy()
             x_try[free] += step
             cost_try = problem.cost(x_try)
             evals += 1
             enough = cost_try < cost and cost - cost_try >= 0.25 * predicted
-            if not enough and opts.acceleration:  # bent to second order (a curved valley)
+            if not enough and opts.acceleration and not round_off:  # bent (a curved valley)
                 rejected += 1  # the straight trial (a failed bent one is counted below)
                 bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
                 evals += bent.evaluations
@@ -209,8 +207,10 @@ def _gauss_newton(
                 # with damping on, a full step must deliver a quarter of its predicted
                 # decrease (else the linear model is not trusted and the step is damped)
                 enough = not opts.damping or cost - cost_try >= 0.25 * predicted
-                if not (cost_try < cost and enough) and opts.damping and opts.acceleration:
-                    # bent to second order along the residual's curvature (a curved valley)
+                bend = opts.damping and opts.acceleration and not round_off
+                if not (cost_try < cost and enough) and bend:
+                    # bent to second order along the residual's curvature (a curved valley;
+                    # not at round-off, where the curvature probe is round-off too)
                     rejected += 1  # the straight trial (a failed bent one is counted below)
                     bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
                     evals += bent.evaluations
@@ -224,9 +224,9 @@ def _gauss_newton(
             if not accepted and _at_floor(problem, cost, history[0]):
                 message, success = "converged (solver precision)", True
                 break
-            if not accepted and opts.damping and predicted <= 1e-9 * cost:
-                # the model promises only round-off (the verdict the damped search below
-                # would reach after up to 17 rejected solves): converged at the noise floor
+            if not accepted and opts.damping and round_off:
+                # the model promises only round-off (the damped search below would say so
+                # after up to 17 rejected solves): converged at the noise floor
                 message = "converged (noise floor: the step promises below 1e-9 of the cost)"
                 success = True
                 break
@@ -250,9 +250,9 @@ def _gauss_newton(
                 rejected += 1
                 mu *= 10.0
             if not accepted:
-                # no step decreases the cost although the model promised only round-off
-                # (below 1e-9 of the cost): converged as well as the evaluation allows
-                success = _at_floor(problem, cost, history[0]) or predicted <= 1e-9 * cost
+                # no step decreases the cost although the model promised only round-off:
+                # converged as well as the evaluation allows
+                success = _at_floor(problem, cost, history[0]) or round_off
                 message = (
                     "converged (solver precision)"
                     if success
