@@ -202,7 +202,11 @@ class Recovery:
     ``k`` of ``n`` parameters identified; ``parameter_error`` max |found − true| [m or
     rad] over them; ``prediction_error`` max over 5 fresh poses of the measured
     components' difference between the calibrated and the actual model [m or rad];
-    ``iterations`` the solver's (Levenberg–Marquardt's evaluations included).
+    ``iterations`` the solver's (Levenberg–Marquardt's evaluations included);
+    ``floor`` [m or rad] what Gauss–Newton's stopping rule may leave: it stops once a
+    step promises below 1e-24 of the starting cost (a residual 1e12 times smaller), so
+    along a direction κ times weaker than the strongest (κ the column-scaled condition
+    number of the identifiable set) up to 1e-12·κ of the error's size remains.
     """
 
     n: int
@@ -212,6 +216,7 @@ class Recovery:
     parameter_error: float
     prediction_error: float
     iterations: int = 0
+    floor: float = 0.0
 
 
 def _measured_error(mech: Mechanism, a: pin.SE3, b: pin.SE3) -> float:
@@ -239,12 +244,15 @@ def recover(
     truth[base] = np.random.default_rng(1).normal(0, size, len(base))
     actual = params.apply(mech, truth)
     rows = rows[actual.closable_batch(rows)]  # a campaign measures the poses it reaches
-    res = identify(mech, params, simulate_measurements(actual, rows), options=options)
+    meas = simulate_measurements(actual, rows)
+    res = identify(mech, params, meas, options=options)
     err = float(np.max(np.abs(res.full_values - truth)[res.identified]))
+    s = ident.singular_values
+    low = 1e-12 * float(s[0] / s[ident.rank - 1]) * float(np.max(np.abs(truth)))
     fresh = sample_actuators(mech, 5, np.random.default_rng(12))
     pred = max(_measured_error(mech, actual.forward(r), res.calibrated.forward(r)) for r in fresh)
     k = int(res.identified.sum())
-    return Recovery(len(params), k, res.success, res.message, err, pred, res.iterations)
+    return Recovery(len(params), k, res.success, res.message, err, pred, res.iterations, low)
 
 
 def row(machine: Machine, folder: Path) -> str:
