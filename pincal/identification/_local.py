@@ -180,7 +180,7 @@ def _gauss_newton(
             # to its iteration limit); after a failed try the next waits twice as long.
             x_try = x.copy()
             x_try[free] += step
-            cost_try = problem.cost(x_try)
+            cost_try = cost_of(x_try)
             evals += 1
             enough = cost_try < cost and cost - cost_try >= 0.25 * predicted
             if not enough and opts.acceleration and not round_off:  # bent (a curved valley)
