@@ -6,9 +6,14 @@ A SPEC is ``MACHINE@PRESET``; MACHINE is ``finger_xz`` (the roster's gripper fin
 measured in [x, z] only), a fragment of a roster machine's name (``excavator``,
 ``finger``), ``robot:NAME`` (a bundled robot, e.g. ``robot:ur5``) or ``file:PATH`` (a
 model file). Each line: parameters fitted / in the preset, success, max |found − true|
-over them [m, rad], solver iterations (evaluations for Levenberg–Marquardt), wall time
-and the solver's message. The error is the roster's (tests/open_world/roster.py,
-``recover``): σ 0.2 mm / 0.2 mrad on the identifiable set, 30 random poses, exact data.
+over them [m, rad], the bound the stopping rule allows (``floor``), max prediction error
+of the measured components at 5 fresh poses [m, rad], solver iterations (evaluations for
+Levenberg–Marquardt), wall time and the solver's message. The errors are the roster's
+(tests/open_world/roster.py, ``recover``): σ 0.2 mm / 0.2 mrad on the identifiable set,
+30 random poses, exact data. A parameter error far above the floor with exact
+predictions is another choice among exactly aliased parameters, not a failed fit
+(wedge3 ``full``: 2.9e-5 because q2.tz is fitted for q2.offset, which moves the platform
+5 times as much; predictions 2e-16).
 ``--straight`` adds a line per SPEC with ``GaussNewtonOptions(acceleration=False)``
 (the solver before the bent steps, its Levenberg–Marquardt fallback included).
 """
@@ -76,7 +81,9 @@ def main() -> None:
                 dt = time.perf_counter() - t
                 print(
                     f"{Path(name).name}@{preset} {label}: {rec.k}/{rec.n} success={rec.success}"
-                    f" error={rec.parameter_error:.2e} iterations={rec.iterations} t={dt:.2f}s"
+                    f" error={rec.parameter_error:.2e} floor={rec.floor:.1e}"
+                    f" prediction={rec.prediction_error:.1e} iterations={rec.iterations}"
+                    f" t={dt:.2f}s"
                     f" | {rec.message}",
                     flush=True,
                 )
