@@ -145,7 +145,8 @@ def _gauss_newton(
     r, J, _ = problem.evaluate(x)
     evals, rejected = 1, 0
     prior = opts.prior_weights(x0.size)
-    wf, mean = (prior[0][free], prior[1]) if prior is not None else (np.zeros(free.size), x0)
+    tikhonov = np.full(free.size, np.sqrt(opts.regularization))  # a prior σ = 1/√λ about x0
+    wf, mean = (prior[0][free], prior[1]) if prior is not None else (tikhonov, x0)
 
     def cost_of(values: np.ndarray) -> float:  # the data cost plus the prior's
         return problem.cost(values) + 0.5 * float(np.sum((wf * (values - mean)[free]) ** 2))
@@ -153,18 +154,14 @@ def _gauss_newton(
     cost = 0.5 * float(r @ r) + 0.5 * float(np.sum((wf * (x - mean)[free]) ** 2))
     history = [cost]
     message, success = "maximum iterations reached", False
-    lam = opts.regularization
     mu = 0.0
     skip, wait = 0, 1  # iterations until the full step is tried again while damped
     it = 0
     for it in range(1, opts.max_iterations + 1):
         Jf = J[:, free]
-        if prior is not None:
+        if wf.any():
             A = np.vstack([Jf, np.diag(wf)])
             b = np.concatenate([r, wf * (x - mean)[free]])
-        elif lam > 0:
-            A = np.vstack([Jf, np.sqrt(lam) * np.eye(free.size)])
-            b = np.concatenate([r, np.sqrt(lam) * (x[free] - x0[free])])
         else:
             A, b = Jf, r
         step = -np.linalg.lstsq(A, b, rcond=None)[0]
