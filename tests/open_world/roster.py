@@ -246,15 +246,14 @@ def recover(
     truth[base] = np.random.default_rng(1).normal(0, size, len(base))
     actual = params.apply(mech, truth)
     rows = rows[actual.closable_batch(rows)]  # a campaign measures the poses it reaches
-    meas = simulate_measurements(actual, rows)
-    res = identify(mech, params, meas, options=options)
+    res = identify(mech, params, simulate_measurements(actual, rows), options=options)
     err = float(np.max(np.abs(res.full_values - truth)[res.identified]))
-    s = ident.singular_values
-    low = 1e-12 * float(s[0] / s[ident.rank - 1]) * float(np.max(np.abs(truth)))
+    s = ident.singular_values  # column-scaled, descending
+    bound = 1e-12 * float(s[0] / s[ident.rank - 1]) * float(np.max(np.abs(truth)))
     fresh = sample_actuators(mech, 5, np.random.default_rng(12))
     pred = max(_measured_error(mech, actual.forward(r), res.calibrated.forward(r)) for r in fresh)
     k = int(res.identified.sum())
-    return Recovery(len(params), k, res.success, res.message, err, pred, res.iterations, low)
+    return Recovery(len(params), k, res.success, res.message, err, pred, res.iterations, bound)
 
 
 def row(machine: Machine, folder: Path) -> str:
