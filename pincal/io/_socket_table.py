@@ -105,13 +105,20 @@ class SocketTable:
             try:
                 sigma = length_sigma(std, f"the std of distance {a}–{b}", lf, name)
                 known.append(KnownDistance(socket_id(a), socket_id(b), value / lf, sigma))
-            except MeasurementError as exc:  # it names the file already
-                raise type(exc)(f"{exc} (distances in {self.length_unit})") from None
+            except MeasurementError as exc:
+                raise _named(exc, name, f"distances in {self.length_unit}") from None
         try:
             std = length_sigma(self.std, "the seating std (--std)", lf, name)
             return SocketPlate(self.plate, std, tuple(known))
-        except MeasurementError as exc:  # it names the file already
-            raise type(exc)(f"{exc} (std in {self.length_unit})") from None
+        except MeasurementError as exc:
+            raise _named(exc, name, f"std in {self.length_unit}") from None
+
+
+def _named(exc: MeasurementError, name: str, units: str) -> MeasurementError:
+    """``exc`` naming the file once and the units (a format error stays one)."""
+    text = str(exc) if str(exc).startswith(f"{name}:") else f"{name}: {exc}"
+    kind = MeasurementFormatError if isinstance(exc, MeasurementFormatError) else MeasurementError
+    return kind(f"{text} ({units})")
 
 
 def _mapped_titles(

@@ -99,6 +99,7 @@ def test_plain_table_without_distance_says_the_scale_is_unidentifiable(lab):
         (["--socket-column", "socket"], "no socket column 'socket'"),
         (["--distance", "1,3,50,0.01"], "names socket(s) ['3']"),
         (["--distance", "1,2,-50,0.01"], "must be finite and > 0 [mm]"),
+        (["--distance", "1,1,50,0.01"], "lab.csv: a known distance joins two sockets"),
         (["--columns", "Joint 1=shoulder_pan_joint"], "missing actuator columns"),
         (["--columns", "J1=shoulder_pan_joint"], "has no column 'J1'"),
         (["--columns", "Joint 1=shoulder_pan"], "does not actuate"),
