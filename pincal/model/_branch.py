@@ -75,6 +75,8 @@ class LoopSolver:
             non-idle columns; = ``home_branch`` where the Jacobian is square; 0: no
             branch is checked).
         branch_block: (rows, columns) of that block, None when there is none.
+        home_notes: inverse kinematics' verdict from home per set of imposed components
+            (what it says if Newton stalls there; :mod:`pincal.model._inverse`), kept.
     """
 
     def __init__(
@@ -98,6 +100,7 @@ class LoopSolver:
         sign = self.branch_sign(q_home)
         self.home_branch = sign if square else 0.0
         self.idle_branch = sign
+        self.home_notes: dict[tuple[str, ...], str] = {}
 
     def newton(
         self,

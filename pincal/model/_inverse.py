@@ -73,14 +73,18 @@ def inverse_configuration(
         return r[comps], J[comps]
 
     guess = loop.q_home if q_guess is None else queries.check_q(q_guess)
-    _check_independent(loop, measured_components, guess, fid, target_p)
+    # from home the verdict is the mechanism's: checked once per set of components
+    note = loop.home_notes.get(measured_components) if q_guess is None else None
+    if note is None:
+        note = _check_independent(loop, measured_components, guess, fid, target_p)
+        if q_guess is None:
+            loop.home_notes[measured_components] = note
     try:
         sol = loop.newton(guess, np.arange(model.nv), extra)
     except ConvergenceError as exc:
         raise UnreachablePoseError(
             f"target pose unreachable (p = {np.round(target_p * 1e3, 3).tolist()} mm): "
-            f"residual {exc.residual * 1e3:.3g} mm/mrad after Newton"
-            + _dead_start_note(loop, measured_components, guess, fid, comps),
+            f"residual {exc.residual * 1e3:.3g} mm/mrad after Newton" + note,
             residual=exc.residual,
         ) from exc
     if loop.idle_branch and loop.branch_sign(sol.q) != loop.idle_branch:
@@ -108,11 +112,15 @@ def _output_map(loop: LoopSolver, q: np.ndarray, fid: int) -> tuple[np.ndarray, 
     return G, max(float(np.max(np.abs(Jm), initial=0.0)), 1e-300)
 
 
+def _rank(G: np.ndarray, scale: float) -> int:
+    """Rank of an actuator map (k, n_act) relative to ``scale`` (1e-9)."""
+    return int(np.sum(np.linalg.svd(G, compute_uv=False) > 1e-9 * scale))
+
+
 def _output_rank(loop: LoopSolver, q: np.ndarray, fid: int, comps: np.ndarray) -> int:
     """Rank of the actuator → measured-components map at q, the loops staying closed."""
     G, scale = _output_map(loop, q, fid)
-    s = np.linalg.svd(G[comps], compute_uv=False)
-    return int(np.sum(s > 1e-9 * scale))
+    return _rank(G[comps], scale)
 
 
 def _nearby_rank(loop: LoopSolver, q: np.ndarray, fid: int, comps: np.ndarray) -> int:
@@ -128,7 +136,7 @@ def _check_independent(
     q: np.ndarray,
     fid: int,
     target_p: np.ndarray,
-) -> None:
+) -> str:
     """Refuse imposed components that are locally dependent at q and nearby.
 
     Their actuator map (k, n_act) must have rank min(k, n_act): k components the
@@ -137,18 +145,22 @@ def _check_independent(
     configurations within 1e-3 [m, rad] too, no start helps: Newton would return one
     of a family of commands (a planar five-bar imposing x z moves z by neither motor).
 
+    Returns:
+        what to say if Newton stalls: "" or, at a dead point, :func:`_dead_start_note`.
+
     Raises:
         UnreachablePoseError: the imposed components are dependent here and nearby.
     """
     comps = np.array([COMPONENTS.index(c) for c in measured_components])
     n = len(loop.queries.actuated)
     need = min(len(comps), n)
-    if _output_rank(loop, q, fid, comps) >= need:
-        return
+    G, scale = _output_map(loop, q, fid)
+    rank = _rank(G[comps], scale)
+    if rank >= need:
+        return ""
     nearby = _nearby_rank(loop, q, fid, comps)
     if nearby >= need:
-        return  # a dead point: Newton says so if it stalls
-    G, _ = _output_map(loop, q, fid)
+        return _dead_start_note(loop, measured_components, rank, nearby)
     G[np.abs(G) <= 1e-9 * float(np.abs(G).max(initial=0.0))] = 0.0
     _, fixing = fixing_components(G, measured_components)
     raise UnreachablePoseError(
@@ -164,21 +176,13 @@ def _check_independent(
 
 
 def _dead_start_note(
-    loop: LoopSolver,
-    measured_components: tuple[str, ...],
-    q: np.ndarray,
-    fid: int,
-    comps: np.ndarray,
+    loop: LoopSolver, measured_components: tuple[str, ...], rank: int, nearby: int
 ) -> str:
-    """Why inverse kinematics may not leave ``q`` ("" when it is not a dead point).
+    """Why inverse kinematics may not leave a dead point of the start configuration.
 
-    A dead point: the actuators move the measured components in fewer directions at
-    q than at nearby configurations (first order, the loops staying closed).
+    A dead point: the actuators move the measured components in fewer directions there
+    (``rank``) than at nearby configurations (``nearby``; first order, loops closed).
     """
-    rank = _output_rank(loop, q, fid, comps)
-    nearby = _nearby_rank(loop, q, fid, comps)
-    if rank >= nearby:
-        return ""
     return (
         f". At the start configuration the actuators {list(loop.queries.actuated)} move the "
         f"measured components {list(measured_components)} in only {rank} "
