@@ -16,7 +16,6 @@ outside the directory). After the hashes, the contents are cross-checked:
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import re
@@ -30,6 +29,7 @@ import numpy as np
 from pincal._files import max_bytes, read_text
 from pincal.errors import CalibrationDirectoryError, ParameterError, PincalError, clip
 from pincal.identification import IdentificationRecord
+from pincal.io._digest import hash_stream
 from pincal.measure import NoiseModel
 from pincal.model import resolve_model_path
 
@@ -129,14 +129,9 @@ def check_listed_file(path: Path) -> int:
 def hash_bounded(path: Path) -> str:
     """SHA-256 of the listed file ``path`` (checked by :func:`check_listed_file` first)."""
     size = check_listed_file(path)
-    h = hashlib.sha256()
     fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOFOLLOW", 0))
     with os.fdopen(fd, "rb") as fh:
-        left = size + 1  # a file growing while read cannot make the read unbounded
-        while left > 0 and (block := fh.read(min(1 << 20, left))):
-            h.update(block)
-            left -= len(block)
-    return h.hexdigest()
+        return hash_stream(fh, size)[0]  # (a file grown since hashes otherwise)
 
 
 def check_parameters(

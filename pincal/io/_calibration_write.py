@@ -172,8 +172,7 @@ def _check_placed(result: IdentificationResult) -> None:
     """
     if len(result.identified_names):
         return
-    joint = getattr(result, "joint", None)
-    weak = [g for g in (joint.gauge if joint is not None else ()) if "too weakly" in g]
+    weak = [g for g in (result.joint.gauge if result.joint else ()) if "too weakly" in g]
     if weak:  # our own text: "seen too weakly to place within …, held at nominal: names"
         why = f": {weak[0].split(', held at nominal')[0][:120]}"
         fix = ("the declared σ is too large for the data to place any (check the data "

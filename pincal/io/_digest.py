@@ -6,11 +6,12 @@ import hashlib
 import os
 import stat
 from pathlib import Path
+from typing import BinaryIO
 
 from pincal._files import max_bytes, too_big_message
 from pincal.errors import CalibrationDirectoryError, InputLimitError, clip
 
-__all__ = ["sha256_file"]
+__all__ = ["hash_stream", "sha256_file"]
 
 
 def sha256_file(path: str | Path) -> str:
@@ -21,7 +22,6 @@ def sha256_file(path: str | Path) -> str:
         InputLimitError: the file is larger than the cap (:func:`pincal._files.max_bytes`):
             a huge or sparse file is refused at once, never hashed for minutes.
     """
-    h = hashlib.sha256()
     cap = max_bytes()
     try:
         # O_NONBLOCK: a file swapped for a FIFO after any earlier check cannot block the
@@ -35,13 +35,23 @@ def sha256_file(path: str | Path) -> str:
             raise CalibrationDirectoryError(f"{clip(str(path))} is not a regular file")
         if st.st_size > cap:
             raise InputLimitError(too_big_message(path, "data file", st.st_size, cap))
-        left = cap + 1  # a file growing while read cannot make the read unbounded
         try:
-            while left > 0 and (block := fh.read(min(1 << 20, left))):
-                h.update(block)
-                left -= len(block)
+            digest, more = hash_stream(fh, cap)
         except OSError as exc:
             raise CalibrationDirectoryError(f"cannot read {str(path)!r}: {exc.strerror}") from exc
-    if left <= 0:
+    if more:
         raise InputLimitError(too_big_message(path, "data file", cap + 1, cap))
-    return h.hexdigest()
+    return digest
+
+
+def hash_stream(fh: BinaryIO, limit: int) -> tuple[str, bool]:
+    """(hex SHA-256 of at most ``limit`` + 1 bytes [B] of an open file, more than ``limit``).
+
+    Bounded so that a file growing while it is read cannot make the read unbounded.
+    """
+    h = hashlib.sha256()
+    left = limit + 1
+    while left > 0 and (block := fh.read(min(1 << 20, left))):
+        h.update(block)
+        left -= len(block)
+    return h.hexdigest(), left <= 0

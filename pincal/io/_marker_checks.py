@@ -139,7 +139,7 @@ def _spread(points: np.ndarray) -> float:
 
 
 def _check_wild_rows(nominal: np.ndarray, positions: np.ndarray, name: str,
-                     lines: Sequence[int] | None) -> None:  # fmt: skip
+                     lines: Sequence[int]) -> None:  # fmt: skip
     """Refuse a row (n, 3) [m] far beyond the nominal link's reach about the median point."""
     reach = max(float(np.linalg.norm(nominal - np.median(nominal, axis=0), axis=1).max()),
                 WILD_FLOOR)  # fmt: skip
@@ -148,9 +148,8 @@ def _check_wild_rows(nominal: np.ndarray, positions: np.ndarray, name: str,
     if not far.size:
         return
     i = int(far[np.argmax(d[far])])
-    where = f"line {lines[i]}" if lines is not None else f"row {i + 1}"
     raise BadValueError(
-        f"{name} {where}: the marker lies {d[i]:.3g} m from the table's median marker "
+        f"{name} line {lines[i]}: the marker lies {d[i]:.3g} m from the table's median marker "
         f"position, beyond {SCALE_FACTOR * reach:.3g} m ({SCALE_FACTOR:g}× the nominal link's "
         f"reach, at least {SCALE_FACTOR * WILD_FLOOR:g} m; {len(far)} such row(s)): a "
         "mistyped cell? correct or delete the row",
@@ -160,7 +159,7 @@ def _check_wild_rows(nominal: np.ndarray, positions: np.ndarray, name: str,
 
 
 def check_scale(mech: Mechanism, q_act: np.ndarray, positions: np.ndarray, unit: str,
-                name: str, lines: Sequence[int] | None = None) -> None:  # fmt: skip
+                name: str, lines: Sequence[int]) -> None:  # fmt: skip
     """Refuse positions whose spread is a length-unit ratio away from the nominal link's.
 
     The marker's spread about its median point is compared with that of the nominal
@@ -174,7 +173,7 @@ def check_scale(mech: Mechanism, q_act: np.ndarray, positions: np.ndarray, unit:
         positions: (n, 3) the first marker's positions [m], as read.
         unit: the unit the positions were read in (for the message).
         name: file name.
-        lines: (n,) the file line of each row (for the message); None: 1-based rows.
+        lines: (n,) the file line of each row (for the message).
 
     Raises:
         BadValueError: the spreads agree but a row lies more than :data:`SCALE_FACTOR`
