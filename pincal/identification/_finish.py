@@ -107,7 +107,7 @@ def finish(
     residuals: np.ndarray,
     initial_values: np.ndarray,
     prefix: str = "",
-    prior: np.ndarray | None = None,
+    prior: tuple[np.ndarray, np.ndarray] | None = None,
     weighting: Weighting | None = None,
     initial_residuals: np.ndarray | None = None,
     components: tuple[str, ...] = (),
@@ -129,7 +129,8 @@ def finish(
         residuals: the residual table the result records at the solution.
         initial_values: (n,) the recorded start values [SI].
         prefix: text before the solver's message (what was held, warnings).
-        prior: (n_x,) prior weights 1/σ of every unknown (None: no prior).
+        prior: (1/σ (n_x,), mean (n_x,)) of the prior on every unknown, weight 0 where
+            there is none (None: no prior); recorded on the result.
         identifiability: the analysis at the start (recorded as given).
         weighting: the noise σ used (recorded as given).
         initial_residuals: (m, k) raw residuals at the start (recorded as given).
@@ -142,7 +143,7 @@ def finish(
     n = len(params)
     chi2 = s.reduced_chi2
     cov_m, mask, cov = fitted_covariance(
-        s.Jf, s.fitted, n, None if prior is None else prior[s.fitted],
+        s.Jf, s.fitted, n, None if prior is None else prior[0][s.fitted],
         1.0 if model.known_noise else chi2,
     )  # fmt: skip
     x = np.asarray(s.out.x, dtype=float)
@@ -174,5 +175,6 @@ def finish(
         weighting=weighting,
         initial_residuals=initial_residuals,
         components=components,
+        prior=prior,
     )
     return result, cov

@@ -192,7 +192,7 @@ def _run(
         d.model, d.settled, method=method, params=problem.params, raw0=raw0,
         stats=lambda raw: ResidualStats.from_residuals(raw, comps), residuals=d.settled.raw,
         initial_values=x0, prefix=d.fit_set.note + _held_note(problem.params, d.weak, policy.weak),
-        prior=None if prior is None else prior[0],
+        prior=prior,
         identifiability=d.fit_set.identifiability, weighting=d.weighting,
         initial_residuals=raw0, components=comps,
     )  # fmt: skip

@@ -4,7 +4,8 @@
 solution. When gross outliers pulled that solution far (5 mm among 10 µm noise), the
 linearisation is poor there and a good pose can look bad once the outliers are deleted
 linearly. Here the poses it named are left out and the model refitted (Gauss–Newton,
-the same parameters, the noise as the fit had it); the deletion test is then run again
+the parameters it identified, the noise and the prior as the fit had them: the same cost less
+those poses); the deletion test is then run again
 over *all* poses, linearised at the refit — a point near the outlier-free solution,
 where deleting the true outliers is exact to first order — and the poses it named are
 judged against the scale of the poses outside them
@@ -17,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from pincal.errors import PincalError
+from pincal.identification._options import GaussNewtonOptions
 from pincal.identification._outliers import refit_outliers
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import IdentificationResult
@@ -61,9 +63,16 @@ def confirm_outliers(
     if w.source == "declared":
         declared = {"position": w.position_std * 1e3, "orientation": w.orientation_std * 1e3}
         declared = {b: v for b, v in declared.items() if np.isfinite(v)}
+    options = None
+    if result.prior is not None:  # without it a prior-held direction runs away
+        weight, mean = result.prior
+        with np.errstate(divide="ignore"):
+            sd = np.where(weight > 0, 1.0 / weight, np.inf)
+        options = GaussNewtonOptions(prior_std=tuple(sd), prior_mean=tuple(mean))
     try:
         refit = identify(mech, ps, meas.subset(keep), initial=result.full_values,
-                         noise=declared or None)  # fmt: skip
+                         fit=result.identified_names, noise=declared or None,
+                         options=options)  # fmt: skip
         rw = refit.weighting
         model = CalibrationProblem(mech, ps, meas, noise=declared or None)
         if rw is not None and rw.source.startswith("estimate"):

@@ -285,11 +285,15 @@ class IdentificationResult(IdentificationRecord):
             :attr:`calibrated`).
         identifiability: analysis at the start values; ``identifiability_summary`` is
             derived from it.
+        prior: the Gaussian prior of the fit, (1/σ (n_x,), mean (n_x,)) over every
+            unknown [1/SI, SI], weight 0 where there is none; None without a prior. A
+            refit of the same cost (the gate's refit without outliers) uses it.
     """
 
     parameter_set: ParameterSet = field(kw_only=True, repr=False)
     calibrated_mechanism: Mechanism = field(kw_only=True, repr=False)
     identifiability: Identifiability = field(kw_only=True, repr=False)
+    prior: tuple[np.ndarray, np.ndarray] | None = field(default=None, kw_only=True, repr=False)
     identifiability_summary: IdentifiabilitySummary | None = field(
         default=None, init=False, repr=False
     )

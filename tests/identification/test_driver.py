@@ -55,7 +55,7 @@ def _pose_sequence(problem: IdentificationProblem, method: str, opts):
     result, _ = finish(
         model, s, method=method, params=problem.params, raw0=raw0,
         stats=lambda raw: ResidualStats.from_residuals(raw, comps), residuals=s.raw,
-        initial_values=x0, prior=None if prior is None else prior[0], identifiability=ident,
+        initial_values=x0, prior=prior, identifiability=ident,
         weighting=weighting, initial_residuals=raw0, components=comps,
     )  # fmt: skip
     return result
