@@ -13,16 +13,20 @@ n_b − tr(H_bb) the block's redundancy (its equations not used up by the fit). 
 robust loss, equations whose whitened residual exceeds 3 are left out of the estimate
 (and the sum is corrected for the truncated Gaussian tail).
 
-Only the ratio of the blocks' σ changes the fit (a common factor scales the cost, not
-its minimum). For least squares with a local solver the estimate is therefore iterated
-without re-fitting first: on the fit linearised at the current solution (the
+Without a prior, only the ratio of the blocks' σ changes the fit (a common factor
+scales the cost, not its minimum). For least squares with a local solver the estimate
+is therefore iterated without re-fitting first: on the fit linearised at the current solution (the
 Jacobian and residuals already evaluated there; no kinematics), until the σ ratio
 changes by at most :data:`RATIO_RTOL` (1 %); only then is the model re-fitted,
 warm-started from the current solution (and from its last evaluation, re-weighted),
 and the estimate checked once more on the re-fitted residuals. A well-posed problem
 so needs two fits in all. The estimate has settled when the ratio moved by at most
 ``RATIO_RTOL`` between two fits (one block: after one fit); with a robust loss, when
-no block's σ moved by more than :data:`RTOL` (0.1 %).
+no block's σ moved by more than :data:`RTOL` (0.1 %). A Gaussian prior (``prior_std``
+of the options) is weighed against the data by the σ themselves, not only their ratio
+(the cost is Σ(r/σ)² + Σ((x − mean)/σ_prior)²): with one, as with a robust loss, the
+fit is repeated until no σ moves by more than ``RTOL`` — the data and the prior are then
+weighed by the noise the fit leaves, not by the start residuals' RMS.
 """
 
 from __future__ import annotations
@@ -280,7 +284,9 @@ def weighted_fit(
     converged = not estimating
     red: dict[str, float] = {}
     first, evaluations, rejected = None, 0, 0
-    tol = RATIO_RTOL if loss == "linear" else RTOL
+    prior = isinstance(opts, (GaussNewtonOptions, LMOptions)) and opts.prior_std is not None
+    ratio_only = loss == "linear" and not prior  # σ's common factor leaves the fit alone
+    tol = RATIO_RTOL if ratio_only else RTOL
     while True:
         out = entry.solve(model, x, free, opts, progress)
         first = first or out
@@ -298,7 +304,7 @@ def weighted_fit(
         std, red = variance_components(model, raw, J[:, fitted], loss)
         old = model.block_std()
         exact = all(v <= model.sigma_floor for v in std.values())
-        if loss == "linear":  # only the ratio moves the fit: settle it without kinematics
+        if ratio_only:  # only the ratio moves the fit: settle it without kinematics
             change, tol = _ratio_change(std, old), RATIO_RTOL
             if local and not exact and change > tol:
                 std = _settle_linearised(model, raw, J[:, fitted], std)

@@ -1,0 +1,43 @@
+"""With a prior and the noise estimated, the fit weighs data and prior by the σ it leaves.
+
+The prior's weight against the data depends on σ itself, not only on the ratio of the
+blocks' σ: the fit must be the one the estimated σ, declared, would give — not the one
+weighted by the start residuals (which for a far start are model errors, not noise).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import pincal
+from pincal.identification import GaussNewtonOptions, identify
+from pincal.model import sample_actuators
+
+
+@pytest.fixture(scope="module")
+def case(stewart, stewart42):
+    rng = np.random.default_rng(5)
+    actual = stewart42.apply(stewart, rng.normal(0.0, 1e-3, len(stewart42)))
+    noise = pincal.NoiseModel(0.01, 0.02)  # mm, mrad
+    meas = pincal.simulate_measurements(actual, sample_actuators(stewart, 25, rng), noise, rng)
+    return dataclasses.replace(meas, noise=None)  # the noise is to be estimated
+
+
+@pytest.mark.parametrize("sigma", [3e-4, 3e-3])
+def test_estimated_noise_with_a_prior_is_its_own_fixed_point(stewart, stewart42, case, sigma):
+    n = len(stewart42)
+    opts = GaussNewtonOptions(prior_std=(sigma,) * n, prior_mean=(0.0,) * n)
+    est = identify(stewart, stewart42, case, options=opts)
+    w = est.weighting
+    assert w is not None and w.source.startswith("estimate") and w.converged
+    # the start residuals (errors of ~1 mm) are far above the noise (10 µm)
+    assert est.before.rms_position > 20 * w.position_std
+    declared = {"position": w.position_std * 1e3, "orientation": w.orientation_std * 1e3}
+    fixed = identify(stewart, stewart42, case, options=opts, noise=declared)
+    # the same fit to the settling tolerance (0.1 % of σ) — in units of its σ
+    assert np.all(est.identified == fixed.identified)
+    moved = (est.values - fixed.values) / fixed.std
+    assert np.max(np.abs(moved)) < 0.05
