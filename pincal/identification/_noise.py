@@ -14,18 +14,16 @@ robust loss, equations whose whitened residual exceeds 3 are left out of the est
 (and the sum is corrected for the truncated Gaussian tail).
 
 Without a prior, only the ratio of the blocks' σ changes the fit (a common factor
-scales the cost, not its minimum). For least squares with a local solver the estimate
-is therefore iterated without re-fitting first: on the fit linearised at the current solution (the
-Jacobian and residuals already evaluated there; no kinematics), until the σ ratio
-changes by at most :data:`RATIO_RTOL` (1 %); only then is the model re-fitted,
-warm-started from the current solution (and from its last evaluation, re-weighted),
-and the estimate checked once more on the re-fitted residuals. A well-posed problem
-so needs two fits in all. The estimate has settled when the ratio moved by at most
-``RATIO_RTOL`` between two fits (one block: after one fit); with a robust loss, when
-no block's σ moved by more than :data:`RTOL` (0.1 %). A Gaussian prior (``prior_std``
-of the options) is weighed against the data by the σ themselves, not only their ratio
-(the cost is Σ(r/σ)² + Σ((x − mean)/σ_prior)²): with one, as with a robust loss, the
-fit is repeated until no σ moves by more than ``RTOL`` — the data and the prior are then
+scales the cost, not its minimum); with a robust loss (its margin is in σ) or a
+Gaussian prior (``prior_std`` of the options: the cost is Σ(r/σ)² + Σ((x − mean)/σ_p)²)
+σ itself does. With a local solver the estimate is first iterated without re-fitting:
+on the fit linearised at the current solution (the Jacobian and residuals already
+evaluated there, a robust loss by re-weighted least squares; no kinematics), until it
+settles — the ratio by at most :data:`RATIO_RTOL` (1 %) for least squares without a
+prior, each σ by at most :data:`RTOL` (0.1 %) otherwise; only then is the model
+re-fitted, warm-started from the current solution, and the estimate checked once more
+on the re-fitted residuals by the same rule (one block, least squares, no prior: after
+one fit). A well-posed problem so needs two fits in all, and the data and a prior are
 weighed by the noise the fit leaves, not by the start residuals' RMS.
 """
 
@@ -100,11 +98,24 @@ def initial_weights(
     return new, J0 * scale[:, None]
 
 
+def data_leverage(J_w: np.ndarray, prior: np.ndarray | None = None) -> np.ndarray:
+    """(N,) leverages h_ii of the data rows of a whitened Jacobian (N, p).
+
+    With a prior of weights 1/σ (p,) (0: none), of the regularised fit: the data rows'
+    diagonal of the hat matrix of ``[J_w; diag(prior)]``, ``J (JᵀJ + diag(prior)²)⁻¹ Jᵀ``
+    — what the prior holds uses up no equation.
+    """
+    if prior is None:
+        return hat_diagonal(J_w)
+    return hat_diagonal(np.vstack([J_w, np.diag(prior)]))[: J_w.shape[0]]
+
+
 def variance_components(
     model: CalibrationProblem,
     raw: np.ndarray,
     J_w: np.ndarray,
     loss: str = "linear",
+    prior: np.ndarray | None = None,
 ) -> tuple[dict[str, float], dict[str, float]]:
     """One variance-component update: σ_b² = r_bᵀr_b / (n_b − tr(H_bb)) per block.
 
@@ -113,6 +124,8 @@ def variance_components(
         raw: (m, k) raw residuals [m, rad].
         J_w: (N, p) whitened Jacobian of the fitted parameters, N = m·k.
         loss: with a robust loss, equations beyond 3σ are left out.
+        prior: (p,) prior weights 1/σ of the fitted parameters (0: none), or None: H
+            is then the regularised fit's (:func:`data_leverage`).
 
     Returns:
         ({block: σ [m or rad]}, {block: redundancy n_b − tr(H_bb)}).
@@ -123,7 +136,7 @@ def variance_components(
     z = (raw / model.sigma).ravel()
     keep = np.ones(z.size, dtype=bool) if loss == "linear" else np.abs(z) <= INLIER_LIMIT
     h = np.zeros(z.size)
-    h[keep] = hat_diagonal(J_w[keep])
+    h[keep] = data_leverage(J_w[keep], prior)
     col = np.tile(np.arange(raw.shape[1]), raw.shape[0])
     flat = raw.ravel()
     std, red = {}, {}
@@ -150,8 +163,37 @@ def _ratio_change(new: dict[str, float], old: dict[str, float]) -> float:
     return max(q) / min(q) - 1.0
 
 
+def _linear_step(
+    A: np.ndarray, b: np.ndarray, loss: str, f_scale: float, prior: tuple | None
+) -> np.ndarray:
+    """The step δ of the linearised fit: min Σ ρ((b + Aδ)²) (+ ½‖w_p·δ + c‖² of a prior).
+
+    ``A`` (N, p) and ``b`` (N,) whitened; ``prior`` (w_p (p,), c (p,)) its weights and its
+    residual at the current point, or None. A robust loss is solved by iteratively
+    re-weighted least squares on all rows (scipy's losses apply to the prior rows too).
+    """
+    if prior is not None:
+        A, b = np.vstack([A, np.diag(prior[0])]), np.concatenate([b, prior[1]])
+    u = np.ones(b.size)
+    step = np.zeros(A.shape[1])
+    for _ in range(MAX_ROUNDS if loss != "linear" else 1):
+        s = np.sqrt(u)
+        step = -np.linalg.lstsq(A * s[:, None], b * s, rcond=None)[0]
+        new = robust_weights(loss, b + A @ step, f_scale)
+        if np.max(np.abs(new - u)) <= 1e-6:
+            break
+        u = new
+    return step
+
+
 def _settle_linearised(
-    model: CalibrationProblem, raw: np.ndarray, J_w: np.ndarray, std: dict[str, float]
+    model: CalibrationProblem,
+    raw: np.ndarray,
+    J_w: np.ndarray,
+    std: dict[str, float],
+    loss: str = "linear",
+    f_scale: float = float("nan"),
+    prior: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> dict[str, float]:
     """Variance components iterated on the fit linearised at the current solution.
 
@@ -161,20 +203,32 @@ def _settle_linearised(
         raw: (m, k) raw residuals at the solution [m, rad].
         J_w: (N, p) whitened Jacobian of the fitted parameters there.
         std: the first estimate {block: σ} from ``raw``.
+        loss: the fit's loss.
+        f_scale: its soft margin [σ] (a robust loss).
+        prior: (1/σ (p,), residual w·(x − mean) (p,)) of the fitted parameters' prior
+            at the solution, or None.
 
     Returns:
-        {block: σ} whose ratio no longer changes (≤ ``RATIO_RTOL``) on the linearised fit.
+        {block: σ} that no longer changes on the linearised fit: their ratio by at most
+        ``RATIO_RTOL`` (least squares without a prior), else each by at most ``RTOL``.
     """
     J_raw = J_w * model.sigma.reshape(-1)[:, None]  # Jacobian of the raw residuals
     r0 = raw.reshape(-1)
+    ratio_only = loss == "linear" and prior is None
+    weights = None if prior is None else prior[0]
     for _ in range(MAX_ROUNDS):
         trial = model.with_block_std(std)
         w = 1.0 / trial.sigma.reshape(-1)
         A = J_raw * w[:, None]
-        step = -np.linalg.lstsq(A, r0 * w, rcond=None)[0]
-        new, _ = variance_components(trial, (r0 + J_raw @ step).reshape(raw.shape), A)
-        change, std = _ratio_change(new, std), new
-        if change <= RATIO_RTOL:
+        step = _linear_step(A, r0 * w, loss, f_scale, prior)
+        lin = (r0 + J_raw @ step).reshape(raw.shape)
+        new, _ = variance_components(trial, lin, A, loss, weights)
+        if ratio_only:
+            change, tol = _ratio_change(new, std), RATIO_RTOL
+        else:
+            change, tol = max(abs(new[b] / std[b] - 1.0) for b in new), RTOL
+        std = new
+        if change <= tol:
             break
     return std
 
@@ -284,8 +338,10 @@ def weighted_fit(
     converged = not estimating
     red: dict[str, float] = {}
     first, evaluations, rejected = None, 0, 0
-    prior = isinstance(opts, (GaussNewtonOptions, LMOptions)) and opts.prior_std is not None
-    ratio_only = loss == "linear" and not prior  # σ's common factor leaves the fit alone
+    weights = (
+        opts.prior_weights(x0.size) if isinstance(opts, (GaussNewtonOptions, LMOptions)) else None
+    )
+    ratio_only = loss == "linear" and weights is None  # σ's common factor leaves the fit alone
     tol = RATIO_RTOL if ratio_only else RTOL
     while True:
         out = entry.solve(model, x, free, opts, progress)
@@ -301,15 +357,20 @@ def weighted_fit(
         _, J, raw = model.evaluate(x)
         if not estimating:
             break
-        std, red = variance_components(model, raw, J[:, fitted], loss)
+        prior = None if weights is None else weights[0][fitted]
+        std, red = variance_components(model, raw, J[:, fitted], loss, prior)
         old = model.block_std()
         exact = all(v <= model.sigma_floor for v in std.values())
-        if ratio_only:  # only the ratio moves the fit: settle it without kinematics
-            change, tol = _ratio_change(std, old), RATIO_RTOL
-            if local and not exact and change > tol:
-                std = _settle_linearised(model, raw, J[:, fitted], std)
-        else:
-            change, tol = max(abs(std[b] / old[b] - 1.0) for b in std), RTOL
+        if ratio_only:  # only the ratio moves the fit
+            change = _ratio_change(std, old)
+        else:  # a robust loss or a prior: σ itself does
+            change = max(abs(std[b] / old[b] - 1.0) for b in std)
+        if local and not exact and change > tol:  # settle it first without kinematics
+            held = None
+            if prior is not None:
+                assert weights is not None
+                held = (prior, prior * (x[fitted] - weights[1][fitted]))
+            std = _settle_linearised(model, raw, J[:, fitted], std, loss, f_scale, held)
         log.info("noise estimate round %d: %s (change %.2g)", rounds, std, change)
         new = model.with_block_std(std)
         J = J * (model.sigma / new.sigma).reshape(-1)[:, None]
@@ -323,8 +384,9 @@ def weighted_fit(
         if rounds >= 2 and not out.success:
             break  # two fits in a row did not converge: more weights will not help
     r_w = raw / model.sigma
-    if not red:
-        h = hat_diagonal(J[:, fitted]).reshape(raw.shape)
+    if not red:  # the declared noise's redundancy, as an estimate would count it
+        prior = None if weights is None else weights[0][fitted]
+        h = data_leverage(J[:, fitted], prior).reshape(raw.shape)
         red = {b: float(np.sum(1.0 - h[:, cols])) for b, cols in model.blocks.items()}
     std_now = model.block_std()
     pose_w = robust_weights(loss, r_w, f_scale).min(axis=1) if loss != "linear" else None

@@ -292,5 +292,6 @@ def test_what_the_gate_cannot_see_is_said_in_sensible_units_on_real_data(tmp_pat
             assert "not detectable with these poses" in p["text"], p
         elif p["floor"] < 0.95 * spread:
             assert " below " in p["text"] and "not detectable" not in p["text"], p
-    assert any("not detectable with these poses" in p["text"] for p in lengths)
+    # (since its outliers are down-weighted, no floor of this session passes the spread;
+    # the "not detectable" wording is checked in tests/identification/test_probe_floor.py)
     assert re.search(r"a drift below \d+(\.\d+)? mm over the pose order", line), line
