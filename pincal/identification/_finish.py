@@ -22,7 +22,7 @@ from pincal.identification._joint_details import JointDetails
 from pincal.identification._outcome import SolverOutcome
 from pincal.identification._residual_model import ResidualModel
 from pincal.identification._result import IdentificationResult, ResidualStats
-from pincal.identification._weighting import Weighting
+from pincal.identification._weighting import Weighting, data_leverage
 from pincal.model import ParameterSet
 from pincal.sensitivity import Identifiability
 
@@ -117,7 +117,9 @@ def finish(
 
     The covariance is the posterior one of the fitted unknowns (data, plus ``prior``
     where given), scaled by χ²/ν when the noise was not known
-    (``model.known_noise``); the result holds its machine block, in name order.
+    (``model.known_noise``); the result holds its machine block, in name order. With a
+    prior, ν is the regularised fit's redundancy N − tr(H) (H the data rows' hat matrix
+    of the data and prior rows), not N − f.
 
     Args:
         model: the residual model.
@@ -142,6 +144,9 @@ def finish(
     """
     n = len(params)
     chi2 = s.reduced_chi2
+    if prior is not None:  # what the prior holds uses up no equation (see data_leverage)
+        used = float(np.sum(data_leverage(s.Jf, prior[0][s.fitted])))
+        chi2 = float(s.r @ s.r) / max(s.r.size - used, 1.0)
     cov_m, mask, cov = fitted_covariance(
         s.Jf, s.fitted, n, None if prior is None else prior[0][s.fitted],
         1.0 if model.known_noise else chi2,

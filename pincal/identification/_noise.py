@@ -44,7 +44,7 @@ from pincal.identification._weighting import (
     ROBUST_F_SCALE,
     TRUNCATED_VARIANCE,
     Weighting,
-    hat_diagonal,
+    data_leverage,
     robust_weights,
 )
 
@@ -96,18 +96,6 @@ def initial_weights(
     new = model.with_block_std(std)
     scale = (model.sigma / new.sigma).ravel()
     return new, J0 * scale[:, None]
-
-
-def data_leverage(J_w: np.ndarray, prior: np.ndarray | None = None) -> np.ndarray:
-    """(N,) leverages h_ii of the data rows of a whitened Jacobian (N, p).
-
-    With a prior of weights 1/σ (p,) (0: none), of the regularised fit: the data rows'
-    diagonal of the hat matrix of ``[J_w; diag(prior)]``, ``J (JᵀJ + diag(prior)²)⁻¹ Jᵀ``
-    — what the prior holds uses up no equation.
-    """
-    if prior is None:
-        return hat_diagonal(J_w)
-    return hat_diagonal(np.vstack([J_w, np.diag(prior)]))[: J_w.shape[0]]
 
 
 def variance_components(

@@ -172,7 +172,8 @@ class IdentificationRecord:
         covariance: (k, k) their covariance ``(Jᵀ W J)⁻¹`` with W from the declared or
             estimated noise (see ``weighting``).
         before, after: residual statistics at the start and identified values.
-        reduced_chi2: weighted residual sum of squares / (N − k).
+        reduced_chi2: weighted residual sum of squares / (N − k); with a prior, / (N − tr H),
+            the regularised fit's redundancy.
         iterations: solver iterations (function evaluations for ``lm``).
         success: whether the solver reached its tolerance or the noise/solver floor.
         message: solver message, including any parameter reduction.

@@ -19,6 +19,7 @@ __all__ = [
     "INLIER_LIMIT",
     "ROBUST_F_SCALE",
     "Weighting",
+    "data_leverage",
     "hat_diagonal",
     "robust_weights",
 ]
@@ -162,3 +163,15 @@ def hat_diagonal(J_w: np.ndarray, rtol: float = 1e-10) -> np.ndarray:
     U, s, _ = np.linalg.svd(J_w, full_matrices=False)
     keep = s > rtol * (s[0] if s.size else 0.0)
     return np.einsum("ij,ij->i", U[:, keep], U[:, keep])
+
+
+def data_leverage(J_w: np.ndarray, prior: np.ndarray | None = None) -> np.ndarray:
+    """(N,) leverages h_ii of the data rows of a whitened Jacobian (N, p).
+
+    With a prior of weights 1/σ (p,) (0: none), of the regularised fit: the data rows'
+    diagonal of the hat matrix of ``[J_w; diag(prior)]``, ``J (JᵀJ + diag(prior)²)⁻¹ Jᵀ``
+    — what the prior holds uses up no equation.
+    """
+    if prior is None:
+        return hat_diagonal(J_w)
+    return hat_diagonal(np.vstack([J_w, np.diag(prior)]))[: J_w.shape[0]]
