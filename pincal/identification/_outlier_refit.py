@@ -4,11 +4,11 @@
 solution. When gross outliers pulled that solution far (5 mm among 10 µm noise), the
 linearisation is poor there and a good pose can look bad once the outliers are deleted
 linearly. Here the poses it named are left out and the model refitted (Gauss–Newton,
-the parameters it identified, the noise and the prior as the fit had them: the same cost less
-those poses); the deletion test is then run again
-over *all* poses, linearised at the refit — a point near the outlier-free solution,
-where deleting the true outliers is exact to first order — and the poses it named are
-judged against the scale of the poses outside them
+the parameters it identified, the noise and the prior as the fit had them: the same
+cost less those poses); the deletion test is then run again over *all* poses,
+linearised at the refit — a point near the outlier-free solution, where deleting the
+true outliers is exact to first order — and the poses it named are judged against the
+scale of the poses outside them
 (:func:`pincal.identification._outliers.refit_outliers`: outliers that mask each other
 there are still confirmed). Only the poses named there are reported.
 """
