@@ -284,12 +284,10 @@ class Campaign:
                 "no markers section"
             )
         ident = self.identification
-        robust = ident.loss not in (None, "linear") and ident.method != "lm"
-        robust = robust or ident.loss == "auto"
-        if self.markers is None and (ident.prior is not None or robust):
+        if self.markers is None and (ident.prior is not None or ident.loss == "auto"):
             raise CampaignError(
-                "identification.prior (and loss: auto, or a robust loss without method: lm) "
-                "apply to marker campaigns (a 'markers' section)"
+                "identification.prior and loss: auto apply to marker campaigns (a 'markers' "
+                "section)"
             )
         if m.source == "file" and m.poses is not None:
             raise CampaignError("measurements.poses applies to source: simulated only")

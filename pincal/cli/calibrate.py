@@ -75,12 +75,13 @@ def calibrate(
     terms = split_model(error_model)
     load = read_payload(payload)
     if link is None and loss == "auto":
-        raise click.BadParameter("auto applies to marker tables (--link); give linear or a "
-                                 "robust loss with --method lm", param_hint="--loss")  # fmt: skip
-    loss = loss or ("auto" if link is not None else "linear")
-    if loss != "linear" and method != "lm" and link is None:
-        raise click.BadParameter(f"a robust loss needs --method lm, not {method}",
+        raise click.BadParameter("auto applies to marker tables (--link); give linear or "
+                                 "a robust loss (huber, soft_l1, cauchy)",
                                  param_hint="--loss")  # fmt: skip
+    loss = loss or ("auto" if link is not None else "linear")
+    if loss != "linear" and method not in ("gauss-newton", "lm") and link is None:
+        raise click.BadParameter(f"a robust loss needs --method gauss-newton or lm, not "
+                                 f"{method}", param_hint="--loss")  # fmt: skip
     guard_paths({"MODEL": model_input(model), "--sidecar": model_opts.sidecar}
                 | {f"--data {f}": f for f in files}, out_dirs={"--out": out})  # fmt: skip
     click.get_current_context().with_resource(calibration_lock(out))  # until the end

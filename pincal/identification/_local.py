@@ -16,14 +16,16 @@ over the free parameters. A trial vector whose model cannot be built or assemble
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 
 import numpy as np
 
-from pincal.identification._acceleration import bent_step
-from pincal.identification._options import GaussNewtonOptions, LMOptions
+from pincal.identification._acceleration import Bent, bent_step
+from pincal.identification._options import GaussNewtonOptions, LMOptions, f_scale
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import LocalSolverExtras
+from pincal.identification._weighting import data_rows_loss, loss_derivatives, robust_cost
 
 __all__ = ["gauss_newton", "levenberg_marquardt"]
 
@@ -36,6 +38,51 @@ _FAILED_RESIDUAL = 1e100  # whitened residual entries of a trial that cannot be 
 def _at_floor(problem: CalibrationProblem, cost: float, initial: float) -> bool:
     """True when the cost is at the kinematic solver's precision (exact data fitted)."""
     return cost <= problem.solver_floor_cost or cost <= 1e-20 * initial
+
+
+def _decrease(
+    A: np.ndarray, b: np.ndarray, step: np.ndarray, cost: float, gradient: np.ndarray | None
+) -> float:
+    """The decrease of the cost its quadratic model ``½‖Aδ + b‖²`` promises along ``step``.
+
+    With a robust loss ``A``, ``b`` are scaled (:func:`loss_derivatives`) and the decrease
+    is computed from the ``gradient`` of the cost, −gᵀδ − ½‖Aδ‖²: the scaled ``b`` of a
+    residual beyond Huber's margin is ~1e8 and ``½‖b‖²`` would cancel to round-off.
+    """
+    if gradient is None:
+        return cost - 0.5 * float(np.sum((b + A @ step) ** 2))
+    return -float(gradient @ step) - 0.5 * float(np.sum((A @ step) ** 2))
+
+
+def _second_try(
+    problem: CalibrationProblem,
+    x: np.ndarray,
+    free: np.ndarray,
+    step: np.ndarray,
+    A: np.ndarray,
+    b: np.ndarray,
+    cost: float,
+    cost_of: Callable[[np.ndarray], float],
+    reweighted: tuple[np.ndarray, np.ndarray, float] | None,
+) -> Bent:
+    """The trial after a failed full step, before damping.
+
+    Least squares: the step bent along the residual's curvature (:func:`bent_step`). A
+    robust loss: the minimiser of the re-weighted model ``reweighted`` = (A, b, its
+    cost ½‖b‖²), which majorises the robust cost where the second-order model, without
+    curvature for a far Huber residual, can overshoot; it must deliver a quarter of the
+    decrease it promises.
+    """
+    if reweighted is None:
+        return bent_step(problem, x, free, step, A, b, cost, cost_of)
+    A_w, b_w, base = reweighted
+    trial = -np.linalg.lstsq(A_w, b_w, rcond=None)[0]
+    values = x.copy()
+    values[free] += trial
+    value = cost_of(values)
+    if value < cost and cost - value >= 0.25 * _decrease(A_w, b_w, trial, base, None):
+        return Bent(values, trial, value, 1)
+    return Bent(None, np.zeros_like(trial), cost, 1)
 
 
 def _damped_step(A: np.ndarray, b: np.ndarray, mu: float) -> np.ndarray:
@@ -117,7 +164,8 @@ def _continue_with_lm(
         std, mean = tuple(sigma), tuple(float(v) for v in x0)
     # 50 iterations: 100 evaluations per parameter (the [x, z] finger's 13 needed 722)
     budget = opts.max_iterations * max(1, -(-(free.size + 1) // 5))
-    lm_opts = LMOptions(max_iterations=budget, xtol=opts.xtol, prior_std=std, prior_mean=mean)
+    lm_opts = LMOptions(max_iterations=budget, xtol=opts.xtol, loss=opts.loss,
+                        f_scale=opts.f_scale, prior_std=std, prior_mean=mean)  # fmt: skip
     log.info("gauss-newton stopped (%s); re-running lm from the start", gn.message)
     on = None if progress is None else (lambda i, c: progress(gn.iterations + i, c))
     lm = levenberg_marquardt(problem, x0, free, lm_opts, on)
@@ -147,14 +195,25 @@ def _gauss_newton(
     prior = opts.prior_weights(x0.size)
     tikhonov = np.full(free.size, np.sqrt(opts.regularization))  # a prior σ = 1/√λ about x0
     wf, mean = (prior[0][free], prior[1]) if prior is not None else (tikhonov, x0)
+    robust, f = opts.loss != "linear", f_scale(opts) if opts.loss != "linear" else 1.0
 
-    def cost_of(values: np.ndarray) -> float:  # the data cost plus the prior's
-        return problem.cost(values) + 0.5 * float(np.sum((wf * (values - mean)[free]) ** 2))
+    def total(r: np.ndarray, values: np.ndarray) -> float:  # the data cost plus the prior's
+        data = robust_cost(opts.loss, r, f) if robust else 0.5 * float(r @ r)
+        return data + 0.5 * float(np.sum((wf * (values - mean)[free]) ** 2))
 
-    cost = 0.5 * float(r @ r) + 0.5 * float(np.sum((wf * (x - mean)[free]) ** 2))
+    def cost_of(values: np.ndarray) -> float:
+        if not robust:
+            return problem.cost(values) + 0.5 * float(np.sum((wf * (values - mean)[free]) ** 2))
+        try:
+            return total(problem.evaluate(values, jacobian=False)[0], values)
+        except TRIAL_FAILURES:
+            return float("inf")
+
+    cost = total(r, x)
     history = [cost]
     message, success = "maximum iterations reached", False
     mu = 0.0
+    retries = opts.acceleration or robust  # a failed full step is bent, or re-weighted
     skip, wait = 0, 1  # iterations until the full step is tried again while damped
     it = 0
     for it in range(1, opts.max_iterations + 1):
@@ -164,8 +223,21 @@ def _gauss_newton(
             b = np.concatenate([r, wf * (x - mean)[free]])
         else:
             A, b = Jf, r
+        gradient, A_d, b_d, base_d, reweighted = None, A, b, cost, None
+        if robust:  # the robust cost's quadratic models (the prior's rows stay Gaussian)
+            slope, curve = np.ones(b.size), np.ones(b.size)
+            slope[: r.size], curve[: r.size] = loss_derivatives(opts.loss, r, f)
+            # damped steps: re-weighted least squares, ½Σρ'·(b + Aδ)², which majorises
+            # the robust cost (a far residual keeps curvature, so damping shortens steps)
+            root = np.sqrt(slope)
+            A_d, b_d = A * root[:, None], b * root
+            base_d = 0.5 * float(b_d @ b_d)
+            reweighted = (A_d, b_d, base_d)
+            # the full step: the second-order model (a far Huber residual has no curvature)
+            gradient = A.T @ (slope * b)
+            A, b = A * curve[:, None], b * slope / curve
         step = -np.linalg.lstsq(A, b, rcond=None)[0]
-        predicted = cost - 0.5 * float(np.sum((b + A @ step) ** 2))
+        predicted = _decrease(A, b, step, cost, gradient)
         round_off = predicted <= 1e-9 * cost  # the linear model promises only round-off
         if predicted <= 1e-12 * cost + 1e-24 * history[0]:
             message, success = "converged (predicted decrease below 1e-12 of the cost)", True
@@ -180,9 +252,9 @@ def _gauss_newton(
             cost_try = cost_of(x_try)
             evals += 1
             enough = cost_try < cost and cost - cost_try >= 0.25 * predicted
-            if not enough and opts.acceleration and not round_off:  # bent (a curved valley)
-                rejected += 1  # the straight trial (a failed bent one is counted below)
-                bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
+            if not enough and retries and not round_off:  # bent, or re-weighted
+                rejected += 1  # the straight trial (a failed second one is counted below)
+                bent = _second_try(problem, x, free, step, A, b, cost, cost_of, reweighted)
                 evals += bent.evaluations
                 if bent.values is not None:
                     x_try, step, cost_try, enough = bent.values, bent.step, bent.cost, True
@@ -204,12 +276,13 @@ def _gauss_newton(
                 # with damping on, a full step must deliver a quarter of its predicted
                 # decrease (else the linear model is not trusted and the step is damped)
                 enough = not opts.damping or cost - cost_try >= 0.25 * predicted
-                bend = opts.damping and opts.acceleration and not round_off
+                bend = opts.damping and retries and not round_off
                 if not (cost_try < cost and enough) and bend:
                     # bent to second order along the residual's curvature (a curved valley;
-                    # not at round-off, where the curvature probe is round-off too)
-                    rejected += 1  # the straight trial (a failed bent one is counted below)
-                    bent = bent_step(problem, x, free, step, A, b, cost, cost_of)
+                    # not at round-off, where the curvature probe is round-off too), or
+                    # with a robust loss the re-weighted step
+                    rejected += 1  # the straight trial (a failed second one is counted below)
+                    bent = _second_try(problem, x, free, step, A, b, cost, cost_of, reweighted)
                     evals += bent.evaluations
                     if bent.values is not None:
                         x_try, step, cost_try, enough = bent.values, bent.step, bent.cost, True
@@ -236,7 +309,7 @@ def _gauss_newton(
         damped = not accepted
         if damped:
             while mu <= _MU_MAX:
-                step = _damped_step(A, b, mu)
+                step = _damped_step(A_d, b_d, mu)
                 x_try = x.copy()
                 x_try[free] += step
                 cost_try = cost_of(x_try)
@@ -258,7 +331,7 @@ def _gauss_newton(
                 break
             alpha = 1.0
             # gain ratio ρ = actual / predicted decrease (Nielsen's update of μ)
-            predicted_d = cost - 0.5 * float(np.sum((b + A @ step) ** 2))
+            predicted_d = _decrease(A_d, b_d, step, base_d, None)
             rho = (cost - cost_try) / predicted_d if predicted_d > 0 else 0.0
             mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
             mu = mu if mu >= _MU_OFF else 0.0
@@ -266,7 +339,7 @@ def _gauss_newton(
         small = np.linalg.norm(alpha * step) <= opts.xtol * (np.linalg.norm(x[free]) + opts.xtol)
         r, J, _ = problem.evaluate(x)
         evals += 1
-        cost = 0.5 * float(r @ r) + 0.5 * float(np.sum((wf * (x - mean)[free]) ** 2))
+        cost = total(r, x)
         history.append(cost)
         if progress:
             progress(it, cost)
@@ -275,13 +348,6 @@ def _gauss_newton(
             break
     extras = LocalSolverExtras(evaluations=evals, rejected_steps=rejected, damping=mu)
     return SolverOutcome(x, it, tuple(history), success, message, extras)
-
-
-def _f_scale(opts: LMOptions) -> float:
-    """The robust loss' soft margin [σ]: the option, or the loss' 3σ-at-weight-½ default."""
-    from pincal.identification._weighting import ROBUST_F_SCALE
-
-    return float(ROBUST_F_SCALE[opts.loss] if opts.f_scale is None else opts.f_scale)
 
 
 _FTOL = 1e-10
@@ -358,8 +424,11 @@ def levenberg_marquardt(
         x0[free],
         jac=lambda z: both(z)[1].copy(),
         method="lm" if opts.loss == "linear" else "trf",
-        loss=opts.loss,
-        f_scale=1.0 if opts.loss == "linear" else _f_scale(opts),
+        # a prior's rows stay Gaussian: the loss applies to the data's rows
+        loss=opts.loss
+        if wf is None or opts.loss == "linear"
+        else data_rows_loss(opts.loss, problem.n_equations),
+        f_scale=1.0 if opts.loss == "linear" else f_scale(opts),
         x_scale="jac",
         xtol=max(opts.xtol, 1e-15),
         ftol=_FTOL,

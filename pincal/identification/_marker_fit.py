@@ -134,7 +134,8 @@ def _fit(
     opts: GaussNewtonOptions | LMOptions | None = None
     if method == "gauss-newton":
         # fit_markers switches to lm itself (and keeps the method it used): no fallback
-        opts = GaussNewtonOptions(max_iterations=max_iterations, fallback=False, **prior)
+        opts = GaussNewtonOptions(max_iterations=max_iterations, fallback=False, loss=loss,
+                                  **prior)  # fmt: skip
     elif method == "lm":
         opts = LMOptions(max_iterations=max_iterations, loss=loss, **prior)
     return identify(_problem(mech, params, meas, names, initial), method=method, options=opts)
@@ -183,7 +184,7 @@ def fit_markers(
             a parameter above it is held at its nominal value.
         registration_only: fit only the instrument frame and the marker (the baseline
             of an uncalibrated robot).
-        loss: robust loss of ``lm`` (a robust loss runs ``lm``; see ``LMOptions.loss``).
+        loss: robust loss (Gauss–Newton re-weighted, or ``lm``; see ``LMOptions.loss``).
         max_iterations: iteration limit of each solve (``lm``: 10 × evaluations).
         registration: the closed-form registration of these measurements (from
             :func:`pincal.measure.register_markers` with this set-up), when the caller
@@ -210,8 +211,6 @@ def fit_markers(
     if registration_only:
         result = _fit(start, params, meas, names, "gauss-newton", std)
         return MarkerFit(result, reg, (), "gauss-newton")
-    if loss != "linear":
-        method = "lm"
     if method not in ("gauss-newton", "lm"):
         result = _fit(start, params, meas, names, method, std)
         return MarkerFit(result, reg, (), method)

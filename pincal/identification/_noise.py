@@ -44,6 +44,7 @@ from pincal.identification._weighting import (
     ROBUST_F_SCALE,
     Weighting,
     data_leverage,
+    robust_cost,
     robust_weights,
 )
 
@@ -65,22 +66,6 @@ def _loss(opts: object) -> tuple[str, float]:
         return loss, float("nan")
     f = getattr(opts, "f_scale", None)
     return loss, float(ROBUST_F_SCALE[loss] if f is None else f)
-
-
-def robust_cost(loss: str, r_w: np.ndarray, f_scale: float) -> float:
-    """The robust cost ``½ f² Σ ρ((r/f)²)`` of scipy's losses for whitened residuals [σ²]."""
-    z = (np.asarray(r_w, dtype=float).ravel() / f_scale) ** 2
-    if loss == "huber":
-        rho = np.where(z <= 1.0, z, 2.0 * np.sqrt(z) - 1.0)
-    elif loss == "soft_l1":
-        rho = 2.0 * (np.sqrt(1.0 + z) - 1.0)
-    elif loss == "cauchy":
-        rho = np.log1p(z)
-    elif loss == "arctan":
-        rho = np.arctan(z)
-    else:
-        rho = z
-    return 0.5 * f_scale**2 * float(np.sum(rho))
 
 
 def _robust_progress(

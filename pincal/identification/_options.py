@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.errors import SolverOptionError
+from pincal.identification._weighting import ROBUST_F_SCALE
 from pincal.sensitivity import GlobalSensitivity
 
 __all__ = [
@@ -23,9 +24,10 @@ __all__ = [
     "StepPlanningOptions",
     "check_int",
     "check_real",
+    "f_scale",
 ]
 
-#: robust losses of ``lm`` (scipy.optimize.least_squares)
+#: robust losses (``gauss-newton``: re-weighted steps; ``lm``: scipy.optimize.least_squares)
 LOSSES = ("linear", "huber", "soft_l1", "cauchy", "arctan")
 
 
@@ -85,6 +87,18 @@ def _check_prior(opts: GaussNewtonOptions | LMOptions, owner: str) -> None:
         object.__setattr__(opts, "prior_mean", mean)
 
 
+def _check_loss(opts: GaussNewtonOptions | LMOptions, owner: str) -> None:
+    if opts.loss not in LOSSES:
+        raise SolverOptionError(f"{owner}.loss must be one of {LOSSES}, got {opts.loss!r}")
+    if opts.f_scale is not None:
+        check_real(owner, "f_scale", opts.f_scale, 0.0, open_low=True)
+
+
+def f_scale(opts: GaussNewtonOptions | LMOptions) -> float:
+    """The robust loss' soft margin [σ]: the option, or the loss' 3σ-at-weight-½ default."""
+    return float(ROBUST_F_SCALE[opts.loss] if opts.f_scale is None else opts.f_scale)
+
+
 def _prior_weights(
     opts: GaussNewtonOptions | LMOptions, n: int
 ) -> tuple[np.ndarray, np.ndarray] | None:
@@ -124,7 +138,11 @@ class GaussNewtonOptions:
         fallback: continue with ``lm`` from where Gauss–Newton stopped unconverged.
         acceleration: when a full step fails, try it bent to second order along the
             residual's curvature before damping (geodesic acceleration; see
-            :mod:`pincal.identification._acceleration`); False: straight steps only.
+            :mod:`pincal.identification._acceleration`); False: straight steps only
+            (a robust loss takes straight steps).
+        loss: robust loss, one of :data:`LOSSES`, minimised by iteratively re-weighted
+            Gauss–Newton steps; the same cost as ``lm``'s (the prior's rows included).
+        f_scale: the robust loss' soft margin in σ, as :attr:`LMOptions.f_scale`.
     """
 
     max_iterations: int = 50
@@ -137,12 +155,15 @@ class GaussNewtonOptions:
     prior_mean: tuple[float, ...] | None = None
     fallback: bool = True
     acceleration: bool = True
+    loss: str = "linear"
+    f_scale: float | None = None
 
     def __post_init__(self) -> None:
         o = type(self).__name__
         check_int(o, "max_iterations", self.max_iterations, 1)
         check_real(o, "xtol", self.xtol, 0.0, open_low=True)
         check_real(o, "regularization", self.regularization, 0.0)
+        _check_loss(self, o)
         for flag in ("fallback", "acceleration"):
             if not isinstance(getattr(self, flag), bool):
                 raise SolverOptionError(
@@ -172,7 +193,7 @@ class LMOptions:
             tied to the noise (> 0); None: the loss' default, at which a residual of
             3σ gets the weight 0.5 (huber 1.5, soft_l1 √3, cauchy 3, arctan 3).
         prior_std, prior_mean: a Gaussian prior as in :class:`GaussNewtonOptions` (its
-            rows join the whitened residuals, so a robust loss applies to them too).
+            rows join the whitened residuals and stay Gaussian under a robust loss).
     """
 
     max_iterations: int = 50
@@ -186,10 +207,7 @@ class LMOptions:
         o = type(self).__name__
         check_int(o, "max_iterations", self.max_iterations, 1)
         check_real(o, "xtol", self.xtol, 0.0, open_low=True)
-        if self.loss not in LOSSES:
-            raise SolverOptionError(f"{o}.loss must be one of {LOSSES}, got {self.loss!r}")
-        if self.f_scale is not None:
-            check_real(o, "f_scale", self.f_scale, 0.0, open_low=True)
+        _check_loss(self, o)
         _check_prior(self, o)
 
     def prior_weights(self, n: int) -> tuple[np.ndarray, np.ndarray] | None:

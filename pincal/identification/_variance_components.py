@@ -143,8 +143,9 @@ def _linear_step(
 
     ``A`` (N, p) and ``b`` (N,) whitened; ``prior`` (w_p (p,), c (p,)) its weights and its
     residual at the current point, or None. A robust loss is solved by iteratively
-    re-weighted least squares on all rows (scipy's losses apply to the prior rows too).
+    re-weighted least squares on the data's rows (the prior's stay Gaussian).
     """
+    n = b.size
     if prior is not None:
         A, b = np.vstack([A, np.diag(prior[0])]), np.concatenate([b, prior[1]])
     u = np.ones(b.size)
@@ -152,7 +153,8 @@ def _linear_step(
     for _ in range(MAX_ROUNDS if loss != "linear" else 1):
         s = np.sqrt(u)
         step = -np.linalg.lstsq(A * s[:, None], b * s, rcond=None)[0]
-        new = robust_weights(loss, b + A @ step, f_scale)
+        new = np.ones(b.size)
+        new[:n] = robust_weights(loss, (b + A @ step)[:n], f_scale)
         if np.max(np.abs(new - u)) <= 1e-6:
             break
         u = new

@@ -10,6 +10,7 @@ down-weighted. The helpers here compute the redundancy shares and robust weights
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,7 +21,11 @@ __all__ = [
     "ROBUST_F_SCALE",
     "Weighting",
     "data_leverage",
+    "data_rows_loss",
     "hat_diagonal",
+    "loss_derivatives",
+    "loss_terms",
+    "robust_cost",
     "robust_weights",
 ]
 
@@ -133,6 +138,27 @@ class Weighting:
         )
 
 
+def loss_terms(loss: str, z: np.ndarray) -> np.ndarray:
+    """ρ(z), ρ'(z), ρ''(z) of scipy's losses, z = (r/f)² (any shape) → (3, *z.shape)."""
+    z = np.asarray(z, dtype=float)
+    if loss == "linear":
+        return np.stack([z, np.ones_like(z), np.zeros_like(z)])
+    if loss == "huber":
+        far = z > 1.0
+        root = np.sqrt(np.where(far, z, 1.0))
+        return np.stack([np.where(far, 2.0 * root - 1.0, z), np.where(far, 1.0 / root, 1.0),
+                         np.where(far, -0.5 / root**3, 0.0)])  # fmt: skip
+    if loss == "soft_l1":
+        t = 1.0 + z
+        return np.stack([2.0 * (np.sqrt(t) - 1.0), t**-0.5, -0.5 * t**-1.5])
+    if loss == "cauchy":
+        return np.stack([np.log1p(z), 1.0 / (1.0 + z), -1.0 / (1.0 + z) ** 2])
+    if loss == "arctan":
+        t = 1.0 + z**2
+        return np.stack([np.arctan(z), 1.0 / t, -2.0 * z / t**2])
+    raise ValueError(f"unknown loss {loss!r}")
+
+
 def robust_weights(loss: str, r_w: np.ndarray, f_scale: float) -> np.ndarray:
     """IRLS weights ρ'((r/f)²) of scipy's losses for whitened residuals ``r_w`` (any shape).
 
@@ -141,18 +167,53 @@ def robust_weights(loss: str, r_w: np.ndarray, f_scale: float) -> np.ndarray:
         r_w: whitened residuals [σ] (any shape).
         f_scale: the loss' soft margin [σ].
     """
-    z = (np.asarray(r_w, dtype=float) / f_scale) ** 2 if loss != "linear" else None
-    if z is None:
+    if loss == "linear":
         return np.ones_like(np.asarray(r_w, dtype=float))
-    if loss == "huber":
-        return np.where(z <= 1.0, 1.0, 1.0 / np.sqrt(np.maximum(z, 1.0)))
-    if loss == "soft_l1":
-        return 1.0 / np.sqrt(1.0 + z)
-    if loss == "cauchy":
-        return 1.0 / (1.0 + z)
-    if loss == "arctan":
-        return 1.0 / (1.0 + z**2)
-    raise ValueError(f"unknown loss {loss!r}")
+    return loss_terms(loss, (np.asarray(r_w, dtype=float) / f_scale) ** 2)[1]
+
+
+def robust_cost(loss: str, r_w: np.ndarray, f_scale: float) -> float:
+    """The robust cost ``½ f² Σ ρ((r/f)²)`` of scipy's losses for whitened residuals [σ²]."""
+    r = np.asarray(r_w, dtype=float).ravel()
+    if loss == "linear":
+        return 0.5 * float(r @ r)
+    return 0.5 * f_scale**2 * float(np.sum(loss_terms(loss, (r / f_scale) ** 2)[0]))
+
+
+def loss_derivatives(loss: str, r_w: np.ndarray, f_scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Slope ρ' and curvature scale √(ρ' + 2zρ'') of a robust loss per whitened residual.
+
+    The cost ``½ f² ρ((r/f)²)`` of one residual has the derivative ρ'·r and the second
+    derivative ρ' + 2zρ'' (z = (r/f)²) in r. A Gauss–Newton model of the robust cost
+    scales each Jacobian row by the square root of the latter, floored at machine
+    precision as scipy's ``least_squares`` does (it is zero beyond Huber's margin and
+    negative for Cauchy's and arctan's far residuals), and each residual by ρ'/that.
+
+    Args:
+        loss: ``linear``, ``huber``, ``soft_l1``, ``cauchy`` or ``arctan``.
+        r_w: (N,) whitened residuals [σ].
+        f_scale: the loss' soft margin [σ].
+
+    Returns:
+        (ρ' (N,), √max(ρ' + 2zρ'', ε) (N,)).
+    """
+    z = (np.asarray(r_w, dtype=float) / f_scale) ** 2
+    _, slope, second = loss_terms(loss, z)
+    return slope, np.sqrt(np.maximum(slope + 2.0 * z * second, np.finfo(float).eps))
+
+
+def data_rows_loss(loss: str, n_data: int) -> Callable[[np.ndarray], np.ndarray]:
+    """The ``loss`` callable of scipy's ``least_squares`` for the first ``n_data`` rows only.
+
+    The rows after them (a Gaussian prior's) stay least squares.
+    """
+
+    def rho(z: np.ndarray) -> np.ndarray:
+        out = loss_terms("linear", z)
+        out[:, :n_data] = loss_terms(loss, z[:n_data])
+        return out
+
+    return rho
 
 
 def hat_diagonal(J_w: np.ndarray, rtol: float = 1e-10) -> np.ndarray:

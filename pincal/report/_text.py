@@ -156,7 +156,7 @@ def quality_lines(
         lines.append(
             f"  outlier poses (normalised residual > {quality.get('outlier_limit') or 0:.2f}): "
             f"{quality['outlier_poses']}; "
-            + ("consider --method lm --loss huber" if loss == "linear"
+            + ("consider --loss huber" if loss == "linear"
                else f"down-weighted by the {loss} loss")
         )  # fmt: skip
     return lines

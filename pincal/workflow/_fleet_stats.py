@@ -32,7 +32,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize, stats
 
 from pincal.errors import ParameterError
 
@@ -146,6 +145,8 @@ def _spread(X: np.ndarray, covs: np.ndarray, keep: np.ndarray) -> np.ndarray:
 
     bounds = [(float(np.log(f)), float(np.log(1e4 * s))) for f, s in zip(floor, scale, strict=True)]
     start = np.clip(start, [b[0] for b in bounds], [b[1] for b in bounds])
+    from scipy import optimize  # here: scipy.optimize and .stats cost ~0.5 s to import
+
     fit = optimize.minimize(nll, start, jac=True, method="L-BFGS-B", bounds=bounds)
     tau2 = np.exp(fit.x)
     return np.where(tau2 <= 1.01 * floor, 0.0, tau2)
@@ -193,6 +194,8 @@ def _fit(
             break
         keep = now
     # reweighting: every unit the trimmed fit does not reject at p < 0.001
+    from scipy import stats
+
     first = np.array([stats.chi2.sf(d, p) for d, _ in _distances(X, covs, centre, tau2)])
     if (first >= FIRST_LOOK_P).sum() >= 3:
         keep = first >= FIRST_LOOK_P
@@ -260,6 +263,8 @@ def fleet_statistics(
     var = np.diagonal(covs_, axis1=1, axis2=2)
     p, M = len(common), len(units)
     centre, tau2, found, pvals = _fit(X_, covs_)
+    from scipy import stats
+
     limit = alpha / M
     if M < CALIBRATE_BELOW:
         limit = min(limit, _calibrated_limit(centre, tau2, covs_, alpha, seed))

@@ -21,6 +21,7 @@ import numpy as np
 from pincal.errors import QualityGateError
 from pincal.identification import (
     GateLimits,
+    GaussNewtonOptions,
     IdentificationResult,
     LMOptions,
     QualityVerdict,
@@ -85,6 +86,13 @@ class PoseProblem:
     rank: int
     data: QualityVerdict
     instrument: str | None
+
+
+def _loss_options(method: str, loss: str) -> GaussNewtonOptions | LMOptions | None:
+    """The local solver's options carrying ``loss`` (None: the method's defaults)."""
+    if method == "lm":
+        return LMOptions(loss=loss)
+    return GaussNewtonOptions(loss=loss) if method == "gauss-newton" and loss != "linear" else None
 
 
 def pose_parameters(
@@ -153,7 +161,7 @@ def calibrate_pose_file(
         method: the identification solver (:data:`pincal.identification.METHODS`).
         declared: the noise 1σ ``{"position": mm, "orientation": mrad}`` given for the
             file (overriding its header), or None.
-        loss: ``linear`` or a robust loss (with ``method="lm"``).
+        loss: ``linear`` or a robust loss (``method`` ``gauss-newton`` or ``lm``).
         profile: the instrument profile judging an estimated noise (None: the file's).
         bootstrap: parametric-bootstrap refits reported beside the σ (0: none; run on a
             passed least-squares fit only).
@@ -167,7 +175,7 @@ def calibrate_pose_file(
     with steps.iterations("identifying") as step:
         result = identify(problem.mech, problem.params, meas, method=method, progress=step,
                           noise=declared,
-                          options=LMOptions(loss=loss) if method == "lm" else None)  # fmt: skip
+                          options=_loss_options(method, loss))  # fmt: skip
     verdict = check_quality(result, meas, mech=problem.mech, data=problem.data,
                             instrument=profile or problem.instrument)  # fmt: skip
     if loss != "linear" or not verdict.passed or not result.identified.any():

@@ -45,8 +45,11 @@ def test_noise_option_and_loss(bare_file, tmp_path):
     assert res.exit_code == 0, res.output
     w = json.loads(res.stdout)["weighting"]
     assert w["source"] == "declared" and w["position_std"] == pytest.approx(1e-5)
-    res = _run(bare_file, tmp_path / "c", "--loss", "huber")
-    assert res.exit_code != 0 and "--method lm" in res.output
+    res = _run(bare_file, tmp_path / "c", "--loss", "huber")  # Gauss–Newton, re-weighted
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["weighting"]["loss"] == "huber"
+    res = _run(bare_file, tmp_path / "c2", "--loss", "huber", "--method", "qpso")
+    assert res.exit_code != 0 and "gauss-newton or lm" in res.output
     res = _run(bare_file, tmp_path / "d", "--noise", "0.01")
     assert res.exit_code != 0 and "pos_mm,ori_mrad" in res.output
 

@@ -69,6 +69,6 @@ def test_outlier_advice_follows_the_loss():
     from pincal.report import quality_lines
 
     record = {"passed": True, "outlier_poses": [3], "outlier_limit": 3.0}
-    assert quality_lines(record)[-1].endswith("consider --method lm --loss huber")
+    assert quality_lines(record)[-1].endswith("consider --loss huber")
     robust = quality_lines(record, "huber")[-1]
     assert robust.endswith("down-weighted by the huber loss") and "consider" not in robust
