@@ -53,6 +53,10 @@ Campaign file keys (YAML; relative paths are relative to the file):
     columns: [x, y, z]       the marker's position columns (e.g. [x1, y1, z1])
     more_columns: []         further markers on LINK, fitted together (an unknown
                              offset each), e.g. [[x2, y2, z2]]; copies are used once
+    more_links: []           the link of each further marker when not LINK (two arms:
+                             [arm_right_7_link]): the chains are calibrated together
+    root: null               the link the chains start from (a humanoid's sole), if
+                             not the URDF's root
     length_unit: m           m | mm | um (marker columns)
     orientation_columns: []  a 6-D marker body's orientation columns, e.g.
                              [roll, pitch, yaw]: its pose on LINK is fitted
@@ -187,6 +191,8 @@ class Markers:
     marker: tuple[float, float, float] | None = None
     marker_std: float | None = None
     more_columns: tuple[tuple[str, str, str], ...] = ()
+    more_links: tuple[str, ...] = ()
+    root: str | None = None
     lock: dict[str, float] = field(default_factory=dict)
     orientation_columns: tuple[str, ...] = ()
     orientation: str | None = None
@@ -209,15 +215,20 @@ class Markers:
                 raise CampaignError(f"{key}.orientation_columns describe one marker body: "
                                     "leave more_columns empty")  # fmt: skip
         choice(self.instrument_frame, ("unknown", "known"), f"{key}.instrument_frame")
+        if self.more_links and len(self.more_links) != len(self.more_columns):
+            raise CampaignError(f"{key}.more_links names one link per more_columns entry "
+                                f"({len(self.more_columns)}), got "
+                                f"{list(self.more_links)}")  # fmt: skip
         if self.marker_std is not None and (self.marker is None or self.marker_std <= 0):
             raise CampaignError(f"{key}.marker_std needs a given marker and must be > 0 [mm]")
 
     def options(self) -> list[str]:
         """The ``pincal calibrate`` options of this section."""
         columns = ";".join(",".join(c) for c in (self.columns, *self.more_columns))
-        opts = ["--link", self.link, "--marker-columns", columns]
+        opts = ["--link", ",".join((self.link, *self.more_links)), "--marker-columns", columns]
         opts += ["--length-unit", self.length_unit, "--instrument-frame", self.instrument_frame]
         opts += [x for j, v in self.lock.items() for x in ("--lock", f"{j}={v!r}")]
+        opts += ["--root", self.root] if self.root is not None else []
         if self.marker is not None:
             given = [*self.marker, *([self.marker_std] if self.marker_std else [])]
             opts += ["--marker", ",".join(repr(float(v)) for v in given)]

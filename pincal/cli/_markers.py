@@ -53,9 +53,12 @@ def marker_options(f: _F) -> _F:
 
 def _table_options() -> list[Callable[[Any], Any]]:
     return [
-        click.option("--link", default=None, metavar="LINK",
+        click.option("--link", default=None, metavar="LINK[,LINK2…]",
                      help="Measured link carrying the marker: read --data as a marker table "
-                     "(instrument-frame positions + joint columns)."),
+                     "(instrument-frame positions + joint columns). Markers on several "
+                     "links (two arms): one link per --marker-columns set, comma-separated; "
+                     "the chains to them are calibrated together, sharing the joints they "
+                     "have in common."),
         click.option("--instrument-frame", type=click.Choice(["unknown", "known"]),
                      default="unknown", show_default=True,
                      help="unknown: registered in closed form, then identified; known: the "
@@ -168,14 +171,20 @@ def setup_from_options(link: str, frame: str, marker_spec: str, columns: str | t
         raise click.BadParameter("orientation columns describe one marker body: give one set "
                                  "of --marker-columns with them",
                                  param_hint="--orientation-columns")  # fmt: skip
+    links = [v.strip() for v in link.split(",") if v.strip()]
+    if len(links) > 1 and len(links) != len(sets):
+        raise click.BadParameter(f"{len(links)} links for {len(sets)} marker column sets: give "
+                                 "one link per set (--link L1,L2 --marker-columns "
+                                 "'x1,y1,z1;x2,y2,z2'), or one link for all",
+                                 param_hint="--link")  # fmt: skip
     if not turned:
-        return MarkerSetup(link, frame, marker, std, lock, sets[0], unit,  # type: ignore[arg-type]
-                           tuple(sets[1:]))  # fmt: skip
+        return MarkerSetup(links[0], frame, marker, std, lock, sets[0], unit,  # type: ignore[arg-type]
+                           tuple(sets[1:]), tuple(links[1:]))  # fmt: skip
     from pincal.errors import MeasurementError
 
     try:
         return MarkerSetup(link, frame, marker, std, lock, sets[0], unit,  # type: ignore[arg-type]
-                           (), turned, orientation)  # fmt: skip
+                           orientation_columns=turned, orientation=orientation)  # fmt: skip
     except MeasurementError as exc:
         raise click.BadParameter(str(exc), param_hint="--orientation-columns") from None
 

@@ -222,7 +222,9 @@ def distinct_markers(path: str | Path, setup: MarkerSetup) -> tuple[MarkerSetup,
             f"marker exported twice): used once, as {','.join(b)}"
         )
     sets = [setup.marker_sets[k] for k in keep]
-    return replace(setup, columns=sets[0], more_columns=tuple(sets[1:])), tuple(notes)
+    links = tuple(setup.marker_links[k] for k in keep[1:]) if setup.more_links else ()
+    kept = replace(setup, columns=sets[0], more_columns=tuple(sets[1:]), more_links=links)
+    return kept, tuple(notes)
 
 
 def check_titles(table: Table) -> None:

@@ -113,8 +113,9 @@ def register_markers(
         marker_known: keep the mechanism's ``tool_frame`` translation.
         frame_known: keep the mechanism's ``base_frame``.
         max_iterations: alternation limit.
-        more: positions of further markers on the same link, rows as ``measurements``
-            (their offsets are unknown; all markers share the rigid fit).
+        more: positions of further markers, rows as ``measurements`` (their offsets
+            are unknown, each on its ``marker<k>_frame`` joint's parent link; all
+            markers share the rigid fit).
 
     Raises:
         MeasurementError: too few poses.
@@ -132,40 +133,48 @@ def register_markers(
     bare = with_joint_origin(
         with_joint_origin(mech, BASE_JOINT, pin.SE3.Identity()), TOOL_JOINT, pin.SE3.Identity()
     )
-    flange = [bare.frame_placement(q) for q in bare.configurations(measurements.q_act)]
-    R_f = np.array([T.rotation for T in flange])  # (m, 3, 3) link in robot base
-    t_f = np.array([T.translation for T in flange])
+    qs = bare.configurations(measurements.q_act)
+    # each marker's link (markers on several links: several chains) in the robot base
+    links = [mech.tree.joints[TOOL_JOINT].parent]
+    links += [mech.tree.joints[j].parent for j in joints[2:]]
+    placed = {link: [bare.frame_placement(q, link) for q in qs] for link in set(links)}
+    R_fs = [np.array([T.rotation for T in placed[link]]) for link in links]  # (m, 3, 3)
+    t_fs = [np.array([T.translation for T in placed[link]]) for link in links]  # (m, 3)
+    R_f = R_fs[0]
     P = [measurements.positions, *(m.positions for m in more)]
     mk = [np.asarray(T_tool.translation, dtype=float).copy()]
     mk += [np.zeros(3) for _ in more]
+
+    def points() -> np.ndarray:  # every marker's nominal points, stacked
+        return np.vstack([t + np.einsum("mij,j->mi", R, v)
+                          for R, t, v in zip(R_fs, t_fs, mk, strict=True)])  # fmt: skip
+
     if not frame_known:
-        _check_spread(mech, np.vstack([t_f + np.einsum("mij,j->mi", R_f, v) for v in mk]),
-                      measurements.q_act)  # fmt: skip
+        _check_spread(mech, points(), measurements.q_act)
     T = T_base
     it = 0
     measured, ones = np.vstack(P), np.ones(sum(len(Pk) for Pk in P))
     while it < max_iterations:
         it += 1
-        pred = np.vstack([t_f + np.einsum("mij,j->mi", R_f, v) for v in mk])
+        pred = points()
         if frame_known:
             T = T_base
         elif it == 1:  # checked once: shapes, NaN, collinear predicted points
             T = fit_rigid_transform(pred, measured).T
         else:  # the same closed form on the same (moved) points, unchecked
             T = pin.SE3(*kabsch(pred, measured, ones))
-        A = np.einsum("ij,mjk->mik", T.rotation, R_f).reshape(-1, 3)
         moved = 0.0
         for k, Pk in enumerate(P):
             if k == 0 and marker_known:
                 continue
-            b = (Pk - t_f @ T.rotation.T - T.translation).reshape(-1)
+            A = np.einsum("ij,mjk->mik", T.rotation, R_fs[k]).reshape(-1, 3)
+            b = (Pk - t_fs[k] @ T.rotation.T - T.translation).reshape(-1)
             new = np.linalg.lstsq(A, b, rcond=None)[0]
             moved = max(moved, float(np.linalg.norm(new - mk[k])))
             mk[k] = new
         if moved < 1e-9 or frame_known or (marker_known and not more):
             break
-    stacked = np.vstack([t_f + np.einsum("mij,j->mi", R_f, v) for v in mk])
-    res = np.vstack(P) - (stacked @ T.rotation.T + T.translation)  # every marker's rows
+    res = np.vstack(P) - (points() @ T.rotation.T + T.translation)  # every marker's rows
     dist = np.linalg.norm(res, axis=1)
     fit = RigidFit(T, res, dist, float(np.sqrt(np.mean(dist**2))))
     rotation, angle_rms = T_tool.rotation, None

@@ -21,7 +21,7 @@ identification, which then refines both jointly with the robot's own parameters.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -37,6 +37,7 @@ from pincal.model import (
     Mechanism,
     UrdfTree,
     chain_joints,
+    chain_preset,
     load_mechanism,
     resolve_named,
     serial_mechanism,
@@ -62,9 +63,14 @@ class MarkerSetup:
             off the chain to ``link`` is locked at 0.
         columns: the marker's three position columns (x, y, z) in the file.
         length_unit: unit of the marker columns (``m``, ``mm``, ``um``).
-        more_columns: the columns of further distinct markers on the same link, each
-            with its own unknown offset (joint ``marker<k>_frame``, k = 2, 3, …) and the
-            same instrument frame; fitted together with the first.
+        more_columns: the columns of further distinct markers, each with its own
+            unknown offset (joint ``marker<k>_frame``, k = 2, 3, …) and the same
+            instrument frame; fitted together with the first.
+        more_links: the link of each further marker (one per ``more_columns`` entry),
+            or () when all are on ``link``. Markers on several links make one problem
+            of several chains from ``root`` sharing the links they have in common (two
+            arms and the torso): every joint on a chain to one of the links is
+            calibrated.
         orientation_columns: the columns of the body's orientation (a single marker
             body: no ``more_columns``), or () for a point.
         orientation: their convention (:data:`pincal.measure.ORIENTATIONS`, e.g.
@@ -83,6 +89,7 @@ class MarkerSetup:
     columns: tuple[str, str, str] = ("x", "y", "z")
     length_unit: str = "m"
     more_columns: tuple[tuple[str, str, str], ...] = ()
+    more_links: tuple[str, ...] = ()
     orientation_columns: tuple[str, ...] = ()
     orientation: str | None = None
     root: str | None = None
@@ -117,6 +124,12 @@ class MarkerSetup:
                 raise MeasurementError(
                     f"marker columns must be three distinct names (x, y, z), got {list(cols)}"
                 )
+        object.__setattr__(self, "more_links", tuple(str(v) for v in self.more_links))
+        if self.more_links and len(self.more_links) != len(more):
+            raise MeasurementError(
+                f"{len(self.more_links)} links for {len(more)} further markers: give one link "
+                "per further marker's columns, or none when all are on the first marker's link"
+            )
         sets = self.marker_sets
         if len(set(sets)) != len(sets):
             raise MeasurementError(f"a marker is named twice: {[list(c) for c in sets]}")
@@ -162,6 +175,11 @@ class MarkerSetup:
         return (self.columns, *self.more_columns)  # type: ignore[return-value]
 
     @property
+    def marker_links(self) -> tuple[str, ...]:
+        """The link of every marker used, the first one's first."""
+        return (self.link, *(self.more_links or (self.link,) * len(self.more_columns)))
+
+    @property
     def held(self) -> tuple[str, ...]:
         """Registration parameters held at their start values (not identified)."""
         base = [f"{BASE_JOINT}.{d}" for d in ("tx", "ty", "tz", "rx", "ry", "rz")]
@@ -180,6 +198,7 @@ class MarkerSetup:
             "columns": list(self.columns),
             "length_unit": self.length_unit,
             "more_columns": [list(c) for c in self.more_columns],
+            **({"more_links": list(self.more_links)} if self.more_links else {}),
             **(
                 {"orientation_columns": list(self.orientation_columns),
                  "orientation": self.orientation}
@@ -201,6 +220,7 @@ class MarkerSetup:
             columns=tuple(d.get("columns") or ("x", "y", "z")),  # type: ignore[arg-type]
             length_unit=str(d.get("length_unit", "m")),
             more_columns=tuple(tuple(c) for c in d.get("more_columns") or ()),  # type: ignore[misc]
+            more_links=tuple(d.get("more_links") or ()),
             orientation_columns=tuple(d.get("orientation_columns") or ()),
             orientation=d.get("orientation"),
             root=d.get("root"),
@@ -208,17 +228,17 @@ class MarkerSetup:
 
 
 def _off_chain_locks(
-    model: str, link: str, lock: Mapping[str, float], root: str | None = None
+    model: str, links: Sequence[str], lock: Mapping[str, float], root: str | None = None
 ) -> dict[str, float]:
-    """``lock`` plus every movable joint off the chain from ``root`` to ``link`` at 0."""
+    """``lock`` plus every movable joint off the chains from ``root`` to ``links`` at 0."""
     from pincal._files import read_text
 
     urdf = resolve_named(model).urdf  # a name, a path, or a local sidecar with `robot:`
     tree = UrdfTree(read_text(urdf, "URDF", error=ModelFileError))
-    for name in (link, root or tree.root_link):
+    for name in (*links, root or tree.root_link):
         if name not in tree.links:
             raise UnknownNameError("link", name, list(tree.links))
-    chain = set(chain_joints(tree, root or tree.root_link, link))
+    chain = {j for link in links for j in chain_joints(tree, root or tree.root_link, link)}
     out = {n: 0.0 for n, j in tree.joints.items() if j.type in MOVABLE_TYPES and n not in chain}
     bad = sorted(set(lock) - set(tree.joints))
     if bad:
@@ -255,7 +275,7 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
         MobilityError: no joint moves the marker (the link is the root or every joint
             on the way is locked).
     """
-    lock = _off_chain_locks(model, setup.link, setup.lock, setup.root)
+    lock = _off_chain_locks(model, setup.marker_links, setup.lock, setup.root)
     marker = pin.SE3(np.eye(3), np.asarray(setup.marker)) if setup.marker is not None else None
     measured = "pose" if setup.measures_orientation else "position"
     mech = serial_mechanism(
@@ -276,22 +296,32 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
     import xml.etree.ElementTree as ET
 
     root = ET.fromstring(mech.urdf_xml)
-    extra = []
+    extra: list[dict[str, object]] = []
     for k in range(1, len(setup.marker_sets)):
         joint, link = marker_frame(k)
         if joint in mech.tree.joints or link in mech.tree.links:
             raise ModelFileError(f"cannot add marker {k + 1}: the URDF already has {joint!r}")
         root.append(ET.Element("link", {"name": link}))
         e = ET.SubElement(root, "joint", {"name": joint, "type": "fixed"})
-        ET.SubElement(e, "parent", {"link": setup.link})
+        ET.SubElement(e, "parent", {"link": setup.marker_links[k]})
         ET.SubElement(e, "child", {"link": link})
         ET.SubElement(e, "origin", {"xyz": "0 0 0", "rpy": "0 0 0"})
         extra.append({"joints": joint, "dofs": ["tx", "ty", "tz"]})
+    markers = list(extra)
     sidecar = mech.sidecar.to_dict()
     presets = dict(sidecar.get("presets") or {})
+    chained = {e["joints"] for e in presets["chain"]}
+    for other in dict.fromkeys(setup.marker_links[1:]):  # the other chains' joints
+        for entry in chain_preset(mech, base=False, tool=False, frame=other):
+            if entry["joints"] not in chained:
+                chained.add(entry["joints"])
+                extra.append(entry)
     for name in ("chain", "base_tool"):
-        presets[name] = [*presets[name], *extra]
+        presets[name] = [*presets[name], *(extra if name == "chain" else markers)]
     sidecar["presets"] = presets
+    if len(set(setup.marker_links)) > 1:  # every chain's joints are commanded
+        on = {str(e["joints"]) for e in presets["chain"]}
+        sidecar["name_mot"] = [n for n in mech.model.names[1:] if n in on]
     return Mechanism(
         ET.tostring(root, encoding="unicode"), sidecar, name=mech.name, source=mech.source
     )

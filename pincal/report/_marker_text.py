@@ -53,7 +53,7 @@ def _identified(fit: MarkerFit, setup: MarkerSetup) -> list[str]:
     for k in range(1, 1 + len(setup.more_columns)):
         joint = marker_frame(k)[0]
         lines.append(f"identified marker {k + 1} [{_nums(mm(joints[joint].origin.translation))}]"
-                     f" mm in {setup.link}; 2σ of marker{k + 1}_frame tx ty tz "
+                     f" mm in {setup.marker_links[k]}; 2σ of marker{k + 1}_frame tx ty tz "
                      f"[{_nums(sig(joint, 'tx ty tz'))}] mm")  # fmt: skip
     return lines
 
@@ -70,7 +70,9 @@ def marker_lines(run: MarkerRun) -> list[str]:
     fit, setup, prior = run.fit, run.setup, run.prior
     reg = fit.registration
     mk = ", ".join(f"{float(v) * 1e3:.2f}" for v in reg.marker)
+    links = setup.marker_links
     also = "".join(f"; marker {k + 2}: columns {' '.join(c)}"
+                   + (f" on {links[k + 1]}" if links[k + 1] != setup.link else "")
                    for k, c in enumerate(setup.more_columns))  # fmt: skip
     body = ""
     if setup.measures_orientation:

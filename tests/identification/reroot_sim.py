@@ -28,13 +28,15 @@ def perturbed_model(robot: str, perturb: float, seed: int) -> pin.Model:
 
 
 def marker_points(model: pin.Model, root: str, link: str, names: tuple[str, ...],
-                  q: np.ndarray, sigma: float, seed: int) -> np.ndarray:  # fmt: skip
+                  q: np.ndarray, sigma: float, seed: int,
+                  marker: np.ndarray = MARKER) -> np.ndarray:  # fmt: skip
     """(n, 3) marker positions [m] in the instrument frame, noise σ per coordinate.
 
     Args:
         model: the truth (:func:`perturbed_model`); root, link: the chain's two ends.
         names: the joints of the columns of ``q`` (n, len(names)) [rad, m]; every other
             joint at 0.
+        marker: the marker in ``link``'s frame [m].
     """
     data = model.createData()
     rng = np.random.default_rng(seed)
@@ -46,7 +48,7 @@ def marker_points(model: pin.Model, root: str, link: str, names: tuple[str, ...]
             full[model.idx_qs[model.getJointId(name)]] = v
         pin.framesForwardKinematics(model, data, full)
         T = T_INSTRUMENT_ROOT * data.oMf[f_root].inverse() * data.oMf[f_link]
-        out[i] = T.act(MARKER) + rng.normal(0, sigma, 3)
+        out[i] = T.act(marker) + rng.normal(0, sigma, 3)
     return out
 
 

@@ -97,7 +97,7 @@ def test_loss_terms_are_the_derivatives_of_rho():
     z = np.array([0.2, 0.9, 1.7, 6.0])
     h = 1e-6
     for loss in ("huber", "soft_l1", "cauchy", "arctan"):
-        rho, d1, d2 = loss_terms(loss, z)
+        _, d1, d2 = loss_terms(loss, z)
         up, down = loss_terms(loss, z + h), loss_terms(loss, z - h)
         np.testing.assert_allclose(d1, (up[0] - down[0]) / (2 * h), atol=1e-8)
         np.testing.assert_allclose(d2, (up[1] - down[1]) / (2 * h), atol=1e-8)
