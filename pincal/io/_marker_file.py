@@ -311,6 +311,7 @@ def read_marker_data(path: str | Path, mech: Mechanism, setup: MarkerSetup) -> M
     q_act = read_joints(mech, raw, decl, units, titles, name)
     dropped = tuple(table.lines[i] for i in np.flatnonzero(~seen))
     notes = [*_preamble_note(table), *unit_notes, *_home_note(mech, decl)]
+    notes += _off_chain_note(table, parsed, mech)
     if dropped:
         shown_lines = ", ".join(map(str, dropped[:10])) + (" …" if len(dropped) > 10 else "")
         notes.append(
@@ -355,3 +356,17 @@ def _home_note(mech: Mechanism, decl: JointReadings) -> list[str]:
     values = ", ".join(f"{j} = {v:.6g}" for j, v in zip(mech.actuated, home, strict=True))
     return [f"joint readings relative to home (joint_reference: home), the model's home as "
             f"`pincal info MODEL --frame LINK` prints it [rad or m]: {values}"]  # fmt: skip
+
+
+def _off_chain_note(
+    table: Table, parsed: list[tuple[str, str | None]], mech: Mechanism
+) -> list[str]:
+    """The joint columns of joints the model holds fixed (off the measured chain), once."""
+    fixed = {n for n, j in mech.tree.joints.items() if not j.movable}
+    names = [n for n, _ in parsed if n in fixed and n not in mech.actuated]
+    if not names:
+        return []
+    shown = ", ".join(names[:8]) + (f" … ({len(names)} in all)" if len(names) > 8 else "")
+    return [f"{table.name}: columns {shown} are joints off the calibrated chain (held fixed "
+            "in the model): not used; a marker on a link they move calibrates them (--link "
+            "LINK, or several: --link L1,L2)"]  # fmt: skip

@@ -103,3 +103,15 @@ def test_noisy_markers_predict_at_the_cramer_rao_level(two_arms, tmp_path):
     se = np.std(d2, ddof=1) / np.sqrt(len(d2))
     print(f"d2/k {np.mean(d2):.3f} ± {se:.3f}; prediction RMS {np.mean(rms) * 1e3:.4f} mm")
     assert abs(np.mean(d2) - 1.0) < max(3 * se, 0.15), (np.mean(d2), se, d2)
+
+
+def test_joint_columns_off_the_chains_are_named_once(two_arms, tmp_path):
+    """One wrist's chain read from the two-arm table: the other arm's columns are said."""
+    mech, truth, q = two_arms
+    _table(tmp_path / "t.csv", mech, truth, q[:10], 1e-4, 4)
+    one = MarkerSetup(LEFT, root=ROOT, columns=("xl", "yl", "zl"), length_unit="mm")
+    read = read_marker_data(tmp_path / "t.csv", marker_mechanism("talos", one), one)
+    said = [n for n in read.notes if "off the calibrated chain" in n]
+    assert len(said) == 1 and "arm_right_1_joint" in said[0] and "torso" not in said[0]
+    both = read_marker_data(tmp_path / "t.csv", mech, SETUP)
+    assert not [n for n in both.notes if "off the calibrated chain" in n]
