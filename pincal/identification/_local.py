@@ -1,4 +1,4 @@
-"""Local solvers: damped Gauss–Newton and scipy's Levenberg–Marquardt.
+"""Damped Gauss–Newton, with scipy's Levenberg–Marquardt as its fallback.
 
 Gauss–Newton that stops unconverged is re-run by Levenberg–Marquardt from its start
 (:attr:`GaussNewtonOptions.fallback`): after a rejected full step its damped path can
@@ -7,7 +7,9 @@ a curved valley where both crawl, where scipy's trust region, scaled by the Jaco
 columns, goes around it from the start (measured on tests/open_world/roster.py).
 
 Both minimise ``0.5·‖r_w(x)‖²`` of :class:`pincal.identification.CalibrationProblem`
-over the free parameters. A trial vector whose model cannot be built or assembled
+over the free parameters, or with a robust loss ``½ f² Σ ρ((r/f)²)`` of the data's rows
+(a Gaussian prior's rows stay least squares; Levenberg–Marquardt is
+:mod:`pincal.identification._levenberg_marquardt`). A trial vector whose model cannot be built or assembled
 (:class:`pincal.ModelFileError`, :class:`pincal.MobilityError`,
 :class:`pincal.ClosureError`) or whose poses cannot be solved
 (:class:`pincal.ConvergenceError`) is a rejected step, never an error.
@@ -21,23 +23,18 @@ from collections.abc import Callable
 import numpy as np
 
 from pincal.identification._acceleration import Bent, bent_step
+from pincal.identification._levenberg_marquardt import at_floor, levenberg_marquardt
 from pincal.identification._options import GaussNewtonOptions, LMOptions, f_scale
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import LocalSolverExtras
-from pincal.identification._weighting import data_rows_loss, loss_derivatives, robust_cost
+from pincal.identification._weighting import loss_derivatives, robust_cost
 
-__all__ = ["gauss_newton", "levenberg_marquardt"]
+__all__ = ["gauss_newton"]
 
 log = logging.getLogger(__name__)
 _MU_MAX = 1e10  # largest relative damping before the step is given up
 _MU_OFF = 1e-7  # below it the damping is switched off (pure Gauss–Newton again)
-_FAILED_RESIDUAL = 1e100  # whitened residual entries of a trial that cannot be evaluated
-
-
-def _at_floor(problem: CalibrationProblem, cost: float, initial: float) -> bool:
-    """True when the cost is at the kinematic solver's precision (exact data fitted)."""
-    return cost <= problem.solver_floor_cost or cost <= 1e-20 * initial
 
 
 def _decrease(
@@ -198,8 +195,7 @@ def _gauss_newton(
     robust, f = opts.loss != "linear", f_scale(opts) if opts.loss != "linear" else 1.0
 
     def total(r: np.ndarray, values: np.ndarray) -> float:  # the data cost plus the prior's
-        data = robust_cost(opts.loss, r, f) if robust else 0.5 * float(r @ r)
-        return data + 0.5 * float(np.sum((wf * (values - mean)[free]) ** 2))
+        return robust_cost(opts.loss, r, f) + 0.5 * float(np.sum((wf * (values - mean)[free]) ** 2))
 
     def cost_of(values: np.ndarray) -> float:
         if not robust:
@@ -291,7 +287,7 @@ def _gauss_newton(
                     break
                 rejected += 1
                 alpha *= 0.5
-            if not accepted and _at_floor(problem, cost, history[0]):
+            if not accepted and at_floor(problem, cost, history[0]):
                 message, success = "converged (solver precision)", True
                 break
             if not accepted and opts.damping and round_off:
@@ -322,7 +318,7 @@ def _gauss_newton(
             if not accepted:
                 # no step decreases the cost although the model promised only round-off:
                 # converged as well as the evaluation allows
-                success = _at_floor(problem, cost, history[0]) or round_off
+                success = at_floor(problem, cost, history[0]) or round_off
                 message = (
                     "converged (solver precision)"
                     if success
@@ -348,119 +344,3 @@ def _gauss_newton(
             break
     extras = LocalSolverExtras(evaluations=evals, rejected_steps=rejected, damping=mu)
     return SolverOutcome(x, it, tuple(history), success, message, extras)
-
-
-_FTOL = 1e-10
-"""Levenberg–Marquardt stops when an accepted step lowers the cost by less than this
-share of it (scipy's ``ftol``). At the solution the cost is about ν/2, so the step left
-moves the parameters by ~1e-5 σ; the TIAGo example's fit took 70 iterations at 1e-15
-and 30 at 1e-10, its values equal to 7e-8 σ."""
-
-
-def levenberg_marquardt(
-    problem: CalibrationProblem,
-    x0: np.ndarray,
-    free: np.ndarray,
-    opts: LMOptions,
-    progress: Progress = None,
-) -> SolverOutcome:
-    """``scipy.optimize.least_squares`` on the free parameters.
-
-    The residuals are whitened by the noise σ, so a robust loss' ``f_scale`` is in σ
-    (:attr:`LMOptions.f_scale`). Success is scipy's convergence, or — when scipy stopped
-    at its evaluation limit — a cost at the kinematic solver's precision (exact data
-    fitted) or at the noise floor (a Gauss–Newton step from the end point promises less
-    than 1e-9 of the cost).
-
-    Args:
-        problem: residual model (n parameters).
-        x0: (n,) start values [SI].
-        free: (p,) integer indices into the n parameters of those to fit.
-        opts: options.
-        progress: optional ``(evaluation, cost)`` callback.
-    """
-    history: list[float] = []
-    cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
-
-    def full(z: np.ndarray) -> np.ndarray:
-        x = x0.copy()
-        x[free] = z
-        return x
-
-    last: list[tuple[np.ndarray, np.ndarray]] = []
-
-    prior = opts.prior_weights(x0.size)
-    wf, mean = (prior[0][free], prior[1][free]) if prior is not None else (None, None)
-
-    def both(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        key = z.tobytes()
-        if key not in cache:
-            cache.clear()
-            try:
-                r, J, _ = problem.evaluate(full(z))
-                J = J[:, free]
-                if wf is not None:  # the prior's rows
-                    r = np.concatenate([r, wf * (z - mean)])
-                    J = np.vstack([J, np.diag(wf)])
-                last[:] = [(r, J)]
-            except TRIAL_FAILURES:
-                if not last:
-                    raise  # the start itself cannot be evaluated
-                # a trial model that cannot be assembled / solved: a huge residual makes
-                # the solver reject the step and shrink its trust region
-                r, J = np.full_like(last[0][0], _FAILED_RESIDUAL), last[0][1]
-            cache[key] = (r, J)
-            history.append(0.5 * float(r @ r))
-            if progress:
-                progress(len(history), history[-1])
-        return cache[key]
-
-    import scipy.optimize  # here, not at import: scipy.optimize costs ~0.3 s to import
-
-    max_nfev = opts.max_iterations * 10
-    # copies: scipy < 1.14 scales the residual and Jacobian of robust losses in place
-    sol = scipy.optimize.least_squares(
-        lambda z: both(z)[0].copy(),
-        x0[free],
-        jac=lambda z: both(z)[1].copy(),
-        method="lm" if opts.loss == "linear" else "trf",
-        # a prior's rows stay Gaussian: the loss applies to the data's rows
-        loss=opts.loss
-        if wf is None or opts.loss == "linear"
-        else data_rows_loss(opts.loss, problem.n_equations),
-        f_scale=1.0 if opts.loss == "linear" else f_scale(opts),
-        x_scale="jac",
-        xtol=max(opts.xtol, 1e-15),
-        ftol=_FTOL,
-        gtol=1e-15,
-        max_nfev=max_nfev,
-    )
-    x = full(sol.x)
-    r_end, J_end = both(sol.x)
-    cost = 0.5 * float(r_end @ r_end)
-    # decrease the Gauss–Newton model still promises at the end point
-    gn = np.linalg.lstsq(J_end, -r_end, rcond=None)[0]
-    promised = cost - 0.5 * float(np.sum((r_end + J_end @ gn) ** 2))
-    if sol.success:
-        success, message = True, f"converged ({sol.message})"
-    elif _at_floor(problem, cost, history[0]):
-        success = True
-        message = (
-            f"converged: cost {cost:.3g} is at the kinematic solver's precision (exact data "
-            f"fitted); scipy stopped at its evaluation limit ({max_nfev}) before its own "
-            "tolerances"
-        )
-    elif promised <= 1e-9 * cost:
-        success = True
-        message = (
-            f"converged: cost {cost:.6g} is at the noise floor (a further Gauss–Newton step "
-            f"promises {promised:.2g}); scipy stopped at its evaluation limit ({max_nfev})"
-        )
-    else:
-        success = False
-        message = (
-            f"stopped at the evaluation limit ({max_nfev}) with the cost still decreasing "
-            f"({cost:.6g}); raise max_iterations ({sol.message})"
-        )
-    extras = LocalSolverExtras(evaluations=int(sol.nfev), rejected_steps=0)
-    return SolverOutcome(x, int(sol.nfev), tuple(history), success, message, extras)

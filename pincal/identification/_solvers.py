@@ -13,7 +13,8 @@ from dataclasses import dataclass
 from functools import partial
 
 from pincal.errors import SolverOptionError
-from pincal.identification._local import gauss_newton, levenberg_marquardt
+from pincal.identification._levenberg_marquardt import levenberg_marquardt
+from pincal.identification._local import gauss_newton
 from pincal.identification._options import GaussNewtonOptions, LMOptions, StepPlanningOptions
 from pincal.identification._outcome import SolverOutcome
 from pincal.identification._qpso_identify import QPSOOptions, qpso_search

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from pincal.identification._local import gauss_newton, levenberg_marquardt
+from pincal.identification._levenberg_marquardt import levenberg_marquardt
+from pincal.identification._local import gauss_newton
 from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._weighting import ROBUST_F_SCALE, loss_terms, robust_cost
 
