@@ -262,8 +262,10 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
     (the tree re-rooted there, :func:`pincal.model.reroot_urdf`). The measured frame is
     ``tool`` (the marker); ``base_frame`` and ``tool_frame`` start at identity, or at the
     given marker. With further markers (``setup.more_columns``), fixed joints
-    ``marker<k>_frame`` from the link to links ``marker<k>`` (start: identity) are added,
-    and their ``tx ty tz`` join the ``chain`` and ``base_tool`` presets.
+    ``marker<k>_frame`` from each marker's link to links ``marker<k>`` (start: identity)
+    are added, and their ``tx ty tz`` join the ``chain`` and ``base_tool`` presets; with
+    markers on several links (``setup.more_links``) every joint on a chain to one of
+    them is commanded and in ``chain`` (the shared ones once).
 
     Home is the model's home as :func:`pincal.model.load_mechanism` (and ``pincal info
     MODEL --frame LINK``) has it: the sidecar's, the SRDF's, else the searched regular
