@@ -78,7 +78,7 @@ _OPTIONS = [
         "--loss",
         type=click.Choice(["auto", "linear", "huber", "soft_l1", "cauchy"]),
         default=None,
-        help="Robust loss (needs --method lm); poses it down-weights are reported. Default: "
+        help="Robust loss (gauss-newton or lm); poses it down-weights are reported. Default: "
         "linear; with --link auto (least squares, then huber when the outlier test names poses).",
     ),
     click.option(

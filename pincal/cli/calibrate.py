@@ -44,7 +44,7 @@ def calibrate(
     Examples:
       pincal calibrate hexaslide_6pus --data m.csv --out cal/
       pincal calibrate hexaslide_6pus --data m.csv --noise 0.01,0.02 --out cal/
-      pincal calibrate wedge3 --data m.csv --params patent --method lm --loss huber --out cal/
+      pincal calibrate wedge3 --data m.csv --params patent --loss huber --out cal/
       pincal calibrate tiago --link arm_7_link --data mocap.csv --marker-columns x1,y1,z1 \\
           --out cal/        markers in an unknown instrument frame (prior, loss: auto)
     """

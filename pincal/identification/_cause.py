@@ -47,7 +47,7 @@ def likely_cause(v: QualityVerdict, result: IdentificationResult, m: int) -> tup
     if few and "outliers" in kinds:
         return "outliers", (
             f"poses {list(v.outlier_poses[:12])} do not fit the others; refit with "
-            "--method lm --loss huber, or remove them."
+            "--loss huber, or remove them."
         )
     if "model" in kinds and v.probes:
         alpha = lim.probe_significance / len(v.probes)

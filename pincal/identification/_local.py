@@ -9,8 +9,8 @@ columns, goes around it from the start (measured on tests/open_world/roster.py).
 Both minimise ``0.5·‖r_w(x)‖²`` of :class:`pincal.identification.CalibrationProblem`
 over the free parameters, or with a robust loss ``½ f² Σ ρ((r/f)²)`` of the data's rows
 (a Gaussian prior's rows stay least squares; Levenberg–Marquardt is
-:mod:`pincal.identification._levenberg_marquardt`). A trial vector whose model cannot be built or assembled
-(:class:`pincal.ModelFileError`, :class:`pincal.MobilityError`,
+:mod:`pincal.identification._levenberg_marquardt`). A trial vector whose model cannot
+be built or assembled (:class:`pincal.ModelFileError`, :class:`pincal.MobilityError`,
 :class:`pincal.ClosureError`) or whose poses cannot be solved
 (:class:`pincal.ConvergenceError`) is a rejected step, never an error.
 """

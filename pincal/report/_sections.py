@@ -387,7 +387,7 @@ def quality_section(notes: dict) -> Section | None:
         limit = q.get("outlier_limit")
         text += (
             f"\n\nOutlier poses (robust normalised residual > {limit if limit else '?'}): "
-            f"{q['outlier_poses']}; a robust fit (--method lm --loss huber) down-weights them."
+            f"{q['outlier_poses']}; a robust fit (--loss huber) down-weights them."
         )
     if q.get("duplicate_rows"):
         text += f"\n\nDuplicate rows (copy, original): {q['duplicate_rows']}."
