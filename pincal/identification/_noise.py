@@ -26,7 +26,7 @@ import logging
 
 import numpy as np
 
-from pincal.identification._options import GaussNewtonOptions, LMOptions
+from pincal.identification._options import GaussNewtonOptions, LMOptions, f_scale
 from pincal.identification._outcome import Progress, SolverOutcome
 from pincal.identification._problem import TRIAL_FAILURES, CalibrationProblem
 from pincal.identification._result import LocalSolverExtras
@@ -41,7 +41,6 @@ from pincal.identification._variance_components import (
     variance_components,
 )
 from pincal.identification._weighting import (
-    ROBUST_F_SCALE,
     Weighting,
     data_leverage,
     robust_cost,
@@ -61,11 +60,10 @@ log = logging.getLogger(__name__)
 
 
 def _loss(opts: object) -> tuple[str, float]:
-    loss = str(getattr(opts, "loss", "linear"))
-    if loss == "linear":
-        return loss, float("nan")
-    f = getattr(opts, "f_scale", None)
-    return loss, float(ROBUST_F_SCALE[loss] if f is None else f)
+    """(loss, its margin f [σ]) of a local solver's options; least squares otherwise."""
+    if isinstance(opts, (GaussNewtonOptions, LMOptions)) and opts.loss != "linear":
+        return opts.loss, f_scale(opts)
+    return "linear", float("nan")
 
 
 def _robust_progress(

@@ -298,7 +298,7 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
     import xml.etree.ElementTree as ET
 
     root = ET.fromstring(mech.urdf_xml)
-    extra: list[dict[str, object]] = []
+    frames: list[dict[str, object]] = []  # the further markers' offsets
     for k in range(1, len(setup.marker_sets)):
         joint, link = marker_frame(k)
         if joint in mech.tree.joints or link in mech.tree.links:
@@ -308,18 +308,18 @@ def marker_mechanism(model: str, setup: MarkerSetup) -> Mechanism:
         ET.SubElement(e, "parent", {"link": setup.marker_links[k]})
         ET.SubElement(e, "child", {"link": link})
         ET.SubElement(e, "origin", {"xyz": "0 0 0", "rpy": "0 0 0"})
-        extra.append({"joints": joint, "dofs": ["tx", "ty", "tz"]})
-    markers = list(extra)
+        frames.append({"joints": joint, "dofs": ["tx", "ty", "tz"]})
     sidecar = mech.sidecar.to_dict()
     presets = dict(sidecar.get("presets") or {})
     chained = {e["joints"] for e in presets["chain"]}
-    for other in dict.fromkeys(setup.marker_links[1:]):  # the other chains' joints
+    others = []  # the other chains' joints (the shared ones are in the first chain's)
+    for other in dict.fromkeys(setup.marker_links[1:]):
         for entry in chain_preset(mech, base=False, tool=False, frame=other):
             if entry["joints"] not in chained:
                 chained.add(entry["joints"])
-                extra.append(entry)
-    for name in ("chain", "base_tool"):
-        presets[name] = [*presets[name], *(extra if name == "chain" else markers)]
+                others.append(entry)
+    presets["chain"] = [*presets["chain"], *frames, *others]
+    presets["base_tool"] = [*presets["base_tool"], *frames]
     sidecar["presets"] = presets
     if len(set(setup.marker_links)) > 1:  # every chain's joints are commanded
         on = {str(e["joints"]) for e in presets["chain"]}
