@@ -63,6 +63,8 @@ def bent_step(
     b: np.ndarray,
     cost: float,
     cost_of: Callable[[np.ndarray], float],
+    rows: np.ndarray | None = None,
+    base: float | None = None,
 ) -> Bent:
     """The Gauss–Newton step bent to second order, shortened along its parabola if need be.
 
@@ -79,6 +81,10 @@ def bent_step(
         b: (N + q,) its right-hand side: the whitened residuals at ``x``, then the q rows'.
         cost: the cost at ``x`` (½‖b‖²).
         cost_of: the cost at a full value vector (+inf when it cannot be evaluated).
+        rows: (N,) the scale of the data's rows in ``A`` and ``b`` (a robust loss'
+            re-weighted model: √ρ'), or None (1).
+        base: the model's value at δ = 0 when it is not ``cost`` (the re-weighted
+            model's ½‖b‖²); the predicted decrease is measured from it.
     """
     none = Bent(None, np.zeros_like(step), cost, 0)
     probe = x.copy()
@@ -88,6 +94,8 @@ def bent_step(
     except TRIAL_FAILURES:
         return Bent(None, none.step, cost, 1)
     n = r_probe.size
+    if rows is not None:
+        r_probe = r_probe * rows
     second = np.zeros(A.shape[0])
     second[:n] = (2.0 / _PROBE) * ((r_probe - b[:n]) / _PROBE - A[:n] @ step)
     if not np.all(np.isfinite(second)):
@@ -103,7 +111,9 @@ def bent_step(
         trial[free] += taken
         cost_try = cost_of(trial)
         evaluations += 1
-        predicted = cost - 0.5 * float(np.sum((b + t * (A @ step)) ** 2))
+        predicted = (cost if base is None else base) - 0.5 * float(
+            np.sum((b + t * (A @ step)) ** 2)
+        )
         if cost_try < cost and cost - cost_try >= 0.25 * predicted:
             return Bent(trial, taken, cost_try, evaluations)
     return Bent(None, none.step, cost, evaluations)

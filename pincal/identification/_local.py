@@ -60,7 +60,7 @@ def _second_try(
     b: np.ndarray,
     cost: float,
     cost_of: Callable[[np.ndarray], float],
-    reweighted: tuple[np.ndarray, np.ndarray, float] | None,
+    reweighted: tuple[np.ndarray, np.ndarray, float, np.ndarray] | None,
 ) -> Bent:
     """The trial after a failed full step, before damping.
 
@@ -72,14 +72,16 @@ def _second_try(
     """
     if reweighted is None:
         return bent_step(problem, x, free, step, A, b, cost, cost_of)
-    A_w, b_w, base = reweighted
+    A_w, b_w, base, rows = reweighted
     trial = -np.linalg.lstsq(A_w, b_w, rcond=None)[0]
     values = x.copy()
     values[free] += trial
     value = cost_of(values)
     if value < cost and cost - value >= 0.25 * _decrease(A_w, b_w, trial, base, None):
         return Bent(values, trial, value, 1)
-    return Bent(None, np.zeros_like(trial), cost, 1)
+    # a curved valley: the re-weighted step bent along the residual's curvature
+    bent = bent_step(problem, x, free, trial, A_w, b_w, cost, cost_of, rows, base)
+    return Bent(bent.values, bent.step, bent.cost, bent.evaluations + 1)
 
 
 def _damped_step(A: np.ndarray, b: np.ndarray, mu: float) -> np.ndarray:
@@ -197,8 +199,8 @@ def _gauss_newton(
     def total(r: np.ndarray, values: np.ndarray) -> float:  # the data cost plus the prior's
         return robust_cost(opts.loss, r, f) + 0.5 * float(np.sum((wf * (values - mean)[free]) ** 2))
 
-    def cost_of(values: np.ndarray) -> float:
-        if not robust:
+    def cost_of(values: np.ndarray) -> float:  # +inf where a trial cannot be evaluated
+        if not robust:  # the model's own cost (½‖r‖²)
             return problem.cost(values) + 0.5 * float(np.sum((wf * (values - mean)[free]) ** 2))
         try:
             return total(problem.evaluate(values, jacobian=False)[0], values)
@@ -228,7 +230,7 @@ def _gauss_newton(
             root = np.sqrt(slope)
             A_d, b_d = A * root[:, None], b * root
             base_d = 0.5 * float(b_d @ b_d)
-            reweighted = (A_d, b_d, base_d)
+            reweighted = (A_d, b_d, base_d, root[: r.size])
             # the full step: the second-order model (a far Huber residual has no curvature)
             gradient = A.T @ (slope * b)
             A, b = A * curve[:, None], b * slope / curve
