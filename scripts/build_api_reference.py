@@ -16,6 +16,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import numpy.testing  # noqa: F401  (see main: imported before pdoc's import guard)
 import pdoc
 import pdoc.render
 
@@ -34,6 +35,9 @@ def main(argv: list[str] | None = None) -> int:
     # namespace so pdoc documents them where users import them from
     for name in pincal._LAZY:
         setattr(pincal, name, getattr(pincal, name))
+    # numpy 2.0's numpy.testing runs `lscpu` when imported (its SVE check), which pdoc's
+    # guard against subprocesses at import reports as a warning; it is imported above,
+    # so the guard sees only what pincal's own modules do when imported.
     pdoc.render.configure(docformat="google", search=True)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
