@@ -38,7 +38,7 @@ def worker(repeats: int) -> dict[str, float]:
         identify_instruments,
         instrument_uncertainty,
     )
-    from pincal.identification._instrument_problem import InstrumentProblem
+    from pincal.identification.problem._instrument_problem import InstrumentProblem
     from pincal.measure import simulate_instrument
     from pincal.model import load_mechanism, parameters, sample_actuators
 

@@ -291,7 +291,7 @@ def _stewart_rows(repeats: int) -> dict[str, float]:
     from threadpoolctl import threadpool_limits
 
     from pincal.identification import identify, identify_instruments
-    from pincal.identification._identification_problem import IdentificationProblem
+    from pincal.identification.problem._identification_problem import IdentificationProblem
     from pincal.measure import simulate_measurements
     from pincal.model import load_mechanism, parameters, sample_actuators
 

@@ -13,7 +13,10 @@ validation} → io → {workflow, export} → report / viz → cli. The rules ch
 * outside the CLI, other stages are imported at module level, not inside functions;
 * inside a stage too, a ``_name`` never crosses a module boundary: what another module
   uses is public in the module that defines it (the size of a module is a matter of its
-  concept, not of a line count).
+  concept, not of a line count);
+* one level down, the same rule as between stages: a room of a stage (a sub-package by
+  concept, e.g. ``pincal/model/loops/``) is entered from outside it only through its
+  ``__init__``, never through one of its private modules.
 """
 
 from __future__ import annotations
@@ -141,6 +144,22 @@ def private_name_imports() -> list[str]:
     return found
 
 
+def room_imports() -> list[str]:
+    """Imports of a room's private module (``pincal.STAGE.ROOM._module``) from outside
+    that room."""
+    found = []
+    for rel, _, tree in _files():
+        for line, module, _names in _imports(tree, rel):
+            parts = module.split(".")
+            if len(parts) < 4 or parts[0] != "pincal" or not parts[3].startswith("_"):
+                continue
+            room = PACKAGE.joinpath(*parts[1:3])
+            inside = rel.startswith(f"pincal/{parts[1]}/{parts[2]}/")
+            if (room / "__init__.py").is_file() and not inside:
+                found.append(f"{rel}:{line}: {module}")
+    return found
+
+
 def order_violations() -> dict[tuple[str, str], list[int]]:
     """Imports of a stage that is not lower: (file, module) → lines."""
     found: dict[tuple[str, str], list[int]] = {}
@@ -206,6 +225,14 @@ def test_no_private_name_crosses_a_module():
     assert not offenders, (
         "a name another module imports is public where it is defined (drop the leading "
         "underscore there):\n" + "\n".join(offenders)
+    )
+
+
+def test_rooms_are_entered_through_their_init():
+    offenders = room_imports()
+    assert not offenders, (
+        "import a room of a stage through its __init__ (export the name there), never "
+        "one of its private modules from outside it:\n" + "\n".join(offenders)
     )
 
 
@@ -333,6 +360,13 @@ def test_the_checks_see_violations(tmp_path, monkeypatch):
         "pincal/model/_bad.py:1: pincal.sensitivity._jacobian ['_plan']",
         "pincal/model/_other.py:1: pincal.model._bad ['_helper']",
     ]
+    room = stage / "loops"
+    room.mkdir()
+    (room / "__init__.py").write_text("from pincal.model.loops._newton import f\n")
+    (room / "_newton.py").write_text("f = 1\n", encoding="utf-8")
+    (room / "_branch.py").write_text("from pincal.model.loops._newton import f\n")
+    (stage / "_mechanism.py").write_text("from pincal.model.loops._newton import f\n")
+    assert room_imports() == ["pincal/model/_mechanism.py:1: pincal.model.loops._newton"]
     assert set(order_violations()) == {
         ("pincal/errors/_kinds.py", "pincal.model"),
         ("pincal/model/_bad.py", "pincal.sensitivity"),

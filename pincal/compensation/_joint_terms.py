@@ -1,7 +1,7 @@
 """Commands that include the joint terms: the deflection at the target's load, undone.
 
 A calibration with joint terms (compliance under load, gain, harmonics; see
-:mod:`pincal.model._joint_terms`) says that a command ``u`` moves the joints to
+:mod:`pincal.model.params._joint_terms`) says that a command ``u`` moves the joints to
 ``q = u + B(u) θ``. Compensation first solves the calibrated geometry's inverse
 kinematics for the joint values ``q*`` that reach the target, then the command that
 produces them: ``u = q* − B(u) θ``, by fixed-point iteration from ``u = q*`` (the

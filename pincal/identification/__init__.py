@@ -11,7 +11,6 @@ holds) with the live calibration. ``result_to_dict`` writes a record as that doc
 
 from __future__ import annotations
 
-from pincal.identification._bootstrap import Bootstrap, bootstrap_covariance
 from pincal.identification._cross_validation import (
     BlockScales,
     CrossValidation,
@@ -21,8 +20,6 @@ from pincal.identification._cross_validation import (
     orientation_errors,
     position_errors,
 )
-from pincal.identification._data_check import check_measurements
-from pincal.identification._driver import MarginalBound
 from pincal.identification._held import (
     HELD_AT_NOMINAL,
     held_at_nominal,
@@ -30,9 +27,7 @@ from pincal.identification._held import (
     with_held,
 )
 from pincal.identification._held_out_gate import HeldOutEvidence, held_out_verdict
-from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._identify import identify
-from pincal.identification._inflation import Inflation, inflated_covariance
 from pincal.identification._instrument_design import (
     InstrumentIdentifiability,
     default_instrument,
@@ -41,31 +36,16 @@ from pincal.identification._instrument_design import (
     instrument_cramer_rao,
     instrument_identifiability,
 )
-from pincal.identification._instrument_gate import check_instrument_data, instrument_gate
 from pincal.identification._instrument_identify import (
     InstrumentIdentification,
     identify_instruments,
 )
-from pincal.identification._instrument_problem import InstrumentProblem
-from pincal.identification._instrument_profiles import (
-    INSTRUMENT_PROFILES,
-    InstrumentProfile,
-    instrument_profile,
-)
-from pincal.identification._instrument_uncertainty import instrument_uncertainty
-from pincal.identification._intervals import Intervals, interval_quantiles
-from pincal.identification._joint_details import JointDetails
 from pincal.identification._marker_fit import (
     REGISTRATION_PRESET,
     MarkerFit,
     Prior,
     fit_markers,
     is_registration,
-)
-from pincal.identification._marker_set import (
-    MarkerSetProblem,
-    StackedProblem,
-    stacked_measurements,
 )
 from pincal.identification._model_selection import (
     CandidateScore,
@@ -81,42 +61,77 @@ from pincal.identification._options import (
     LMOptions,
     StepPlanningOptions,
 )
-from pincal.identification._problem import CalibrationProblem
-from pincal.identification._qpso import QPSOResult, qpso
-from pincal.identification._qpso_identify import COST_MODELS, QPSOOptions
-from pincal.identification._qpso_stepwise import QPSOStage, QPSOStepwiseResult, qpso_stepwise
-from pincal.identification._quality import check_quality, outlier_poses
-from pincal.identification._result import (
+from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
+from pincal.identification._weighting import Weighting
+from pincal.identification.gate import (
+    INSTRUMENT_PROFILES,
+    InstrumentProfile,
+    check_instrument_data,
+    check_measurements,
+    check_quality,
+    instrument_gate,
+    instrument_profile,
+    outlier_poses,
+)
+from pincal.identification.problem import (
+    CalibrationProblem,
+    IdentificationProblem,
+    InstrumentProblem,
+    MarkerSetProblem,
+    StackedProblem,
+    stacked_measurements,
+)
+from pincal.identification.results import (
+    FORMAT_VERSION,
     IdentifiabilitySummary,
     IdentificationRecord,
     IdentificationResult,
+    JointDetails,
     LocalSolverExtras,
     QPSOExtras,
     ResidualStats,
     SolverExtras,
     StepPlanningExtras,
+    result_from_dict,
+    result_to_dict,
 )
-from pincal.identification._result_io import FORMAT_VERSION, result_to_dict
-from pincal.identification._result_read import result_from_dict
-from pincal.identification._solvers import METHODS, SOLVERS, Solver, solver
-from pincal.identification._uncertainty import (
+from pincal.identification.solvers import (
+    COST_MODELS,
+    METHODS,
+    SOLVERS,
+    MarginalBound,
+    QPSOOptions,
+    QPSOResult,
+    QPSOStage,
+    QPSOStepwiseResult,
+    Solver,
+    qpso,
+    qpso_stepwise,
+    solver,
+)
+from pincal.identification.uncertainty import (
     KINDS as COVARIANCE_KINDS,
 )
-from pincal.identification._uncertainty import (
+from pincal.identification.uncertainty import (
     METHODS as COVARIANCE_METHODS,
 )
-from pincal.identification._uncertainty import (
+from pincal.identification.uncertainty import (
+    Bootstrap,
+    Inflation,
+    Intervals,
     UncertaintyCheck,
+    bootstrap_covariance,
     check_uncertainty,
     covariance_kind,
+    inflated_covariance,
+    instrument_uncertainty,
+    interval_quantiles,
     pose_recipe,
     pose_residual_model,
     prediction_covariance,
     result_intervals,
     with_uncertainty,
 )
-from pincal.identification._verdict import GateLimits, QualityIssue, QualityVerdict
-from pincal.identification._weighting import Weighting
 
 __all__ = [
     "COST_MODELS",

@@ -15,7 +15,7 @@ import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import Any, TypeVar
 
-from pincal.identification._result import IdentificationRecord
+from pincal.identification.results import IdentificationRecord
 
 __all__ = ["HELD_AT_NOMINAL", "held_at_nominal", "held_summary", "with_held"]
 

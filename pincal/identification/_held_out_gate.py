@@ -25,10 +25,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from pincal.identification._cause import likely_cause
 from pincal.identification._cross_validation import BlockScales, CrossValidation, compare
-from pincal.identification._result import IdentificationResult
 from pincal.identification._verdict import QualityIssue, QualityVerdict
+from pincal.identification.gate import likely_cause
+from pincal.identification.results import IdentificationResult
 
 __all__ = ["HeldOutEvidence", "held_out_verdict"]
 

@@ -5,10 +5,10 @@ of the parameters to fit), runs the solver chosen by name and computes the commo
 result: covariance ``(Jᵀ W J)⁻¹`` at the solution (the Cramér–Rao bound for Gaussian
 noise), residual statistics and the calibrated mechanism. When the data declare no
 noise, the σ of each block (position, orientation) is estimated from the residuals by
-variance-component estimation (:mod:`pincal.identification._noise`); the weights used
+variance-component estimation (:mod:`pincal.identification.solvers._noise`); the weights used
 are reported in ``result.weighting``. The sequence is the one fit driver's
-(:func:`pincal.identification._driver.drive`) with the pose file's set rule
-(:class:`pincal.identification._fit_set.StructuralBase`).
+(:func:`pincal.identification.solvers._driver.drive`) with the pose file's set rule
+(:class:`pincal.identification.problem._fit_set.StructuralBase`).
 """
 
 from __future__ import annotations
@@ -20,18 +20,26 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 from pincal.errors import SolverOptionError
-from pincal.identification._driver import FitPolicy, drive, fitted_machine_count
-from pincal.identification._finish import finish
-from pincal.identification._fit_set import StructuralBase, WeakBound
 from pincal.identification._held import with_held
-from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._instrument_identify import joint_fit
-from pincal.identification._instrument_problem import Dataset
 from pincal.identification._options import GaussNewtonOptions, LMOptions
-from pincal.identification._outcome import Progress
-from pincal.identification._problem import CalibrationProblem
-from pincal.identification._result import IdentificationResult, ResidualStats
-from pincal.identification._solvers import Solver, SolverOptions, solver
+from pincal.identification.problem import (
+    CalibrationProblem,
+    Dataset,
+    IdentificationProblem,
+    StructuralBase,
+    WeakBound,
+)
+from pincal.identification.results import IdentificationResult, Progress, ResidualStats
+from pincal.identification.solvers import (
+    FitPolicy,
+    Solver,
+    SolverOptions,
+    drive,
+    finish,
+    fitted_machine_count,
+    solver,
+)
 from pincal.measure import Measurements, NoiseModel
 from pincal.model import Mechanism, ParameterSet, degenerate_translations
 from pincal.sensitivity import closure_breaking
@@ -82,7 +90,7 @@ def identify(
     data sets or instrument files by the joint model of machine and instrument
     unknowns (``"gauss-newton"`` or ``"lm"``; the instrument values and the gauge are
     in ``result.joint``, see also :func:`pincal.identification.identify_instruments`).
-    Both run the one fit driver (:mod:`pincal.identification._driver`) and end in the
+    Both run the one fit driver (:mod:`pincal.identification.solvers._driver`) and end in the
     same finishing step.
 
     Args:

@@ -25,7 +25,7 @@ import pinocchio as pin
 
 from pincal.design import CandidateSet, crb_covariance
 from pincal.errors import ConvergenceError, MeasurementError
-from pincal.identification._gauge import null_motions
+from pincal.identification.problem import null_motions
 from pincal.measure import Instrument, instrument_class
 from pincal.model import Mechanism, ParameterSet, sample_actuators
 from pincal.sensitivity import Identifiability, analyse_jacobian, pose_sensitivity

@@ -4,10 +4,10 @@
 registered local solver (``"gauss-newton"`` or ``"lm"``), fitting the identifiable base
 set (instrument parameters first, so what an instrument absorbs is held on the machine
 side) less the directions the data place only beyond a bound, names what it did not
-calibrate (:mod:`pincal.identification._gauge`) and ends in the finishing step every
-identification shares (:mod:`pincal.identification._finish`). The sequence is the one
-fit driver's (:func:`pincal.identification._driver.drive`) with the joint set rule and a
-1σ :class:`pincal.identification._fit_set.WeakBound`; the joint details are typed
+calibrate (:mod:`pincal.identification.problem._gauge`) and ends in the finishing step every
+identification shares (:mod:`pincal.identification.solvers._finish`). The sequence is the one
+fit driver's (:func:`pincal.identification.solvers._driver.drive`) with the joint set rule and a
+1σ :class:`pincal.identification.problem._fit_set.WeakBound`; the joint details are typed
 (:class:`pincal.identification.JointDetails` on ``result.joint``).
 :func:`pincal.identification.identify` runs it for an
 :class:`pincal.identification.IdentificationProblem` of several data sets;
@@ -22,15 +22,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pincal.errors import SolverOptionError
-from pincal.identification._data_blocks import DataBlock
-from pincal.identification._driver import FitPolicy, drive
-from pincal.identification._finish import finish
-from pincal.identification._fit_set import JointBase, WeakBound
-from pincal.identification._gauge import constant_line, constant_std
-from pincal.identification._instrument_problem import Dataset, InstrumentProblem
-from pincal.identification._joint_details import JointDetails
-from pincal.identification._result import IdentificationResult, ResidualStats
-from pincal.identification._solvers import SolverOptions, solver
+from pincal.identification.problem import (
+    DataBlock,
+    Dataset,
+    InstrumentProblem,
+    JointBase,
+    WeakBound,
+    constant_line,
+    constant_std,
+)
+from pincal.identification.results import IdentificationResult, JointDetails, ResidualStats
+from pincal.identification.solvers import FitPolicy, SolverOptions, drive, finish, solver
 from pincal.model import Mechanism, ParameterSet
 from pincal.sensitivity import PLACEMENT_BOUND, Identifiability
 
@@ -135,7 +137,7 @@ def identify_instruments(
         progress: optional ``(iteration, cost)`` callback passed to the solver.
         weak_bound: (length [m], angle [rad]): a direction of the base set whose 1σ
             (at the files' declared noise) exceeds it is held at nominal too, named in
-            the gauge (see :func:`pincal.identification._gauge.weak_parameters`); None
+            the gauge (see :func:`pincal.identification.problem._gauge.weak_parameters`); None
             fits the whole identifiable base set.
 
     Returns:

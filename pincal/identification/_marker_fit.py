@@ -14,8 +14,8 @@
    parameters, e.g. a marker guessed on the last joint axis), and the fit repeated
    from there when it differs — each said in words in :attr:`MarkerFit.notes`.
 
-Steps 2–4 are the fit driver's (:func:`pincal.identification._driver.drive_holding`
-over :func:`pincal.identification._driver.drive`); this module registers and states
+Steps 2–4 are the fit driver's (:func:`pincal.identification.solvers._driver.drive_holding`
+over :func:`pincal.identification.solvers._driver.drive`); this module registers and states
 the policies.
 """
 
@@ -27,13 +27,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pincal.identification._driver import MarginalBound, drive_holding
 from pincal.identification._held import with_held
-from pincal.identification._identification_problem import IdentificationProblem
 from pincal.identification._identify import fitted_at_start, identify
-from pincal.identification._marker_set import MarkerSetProblem
 from pincal.identification._options import GaussNewtonOptions, LMOptions
-from pincal.identification._result import IdentificationResult
+from pincal.identification.problem import IdentificationProblem, MarkerSetProblem
+from pincal.identification.results import IdentificationResult
+from pincal.identification.solvers import MarginalBound, drive_holding
 from pincal.measure import (
     MarkerRegistration,
     MarkerSetup,

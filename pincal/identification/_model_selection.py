@@ -28,7 +28,7 @@ import numpy as np
 
 from pincal.errors import MeasurementError
 from pincal.identification._cross_validation import kfold, position_errors
-from pincal.identification._result import IdentificationResult
+from pincal.identification.results import IdentificationResult
 from pincal.measure import Measurements
 from pincal.model import Mechanism, actual_joint_values, actual_shift
 

@@ -138,7 +138,7 @@ class GaussNewtonOptions:
         fallback: continue with ``lm`` from where Gauss–Newton stopped unconverged.
         acceleration: when a full step fails, try it bent to second order along the
             residual's curvature before damping (geodesic acceleration; see
-            :mod:`pincal.identification._acceleration`); False: straight steps only
+            :mod:`pincal.identification.solvers._acceleration`); False: straight steps only
             (a robust loss takes straight steps).
         loss: robust loss, one of :data:`LOSSES`, minimised by iteratively re-weighted
             Gauss–Newton steps; the same cost as ``lm``'s (the prior's rows included).

@@ -1,6 +1,6 @@
 """The verdict of the quality gate: thresholds, issues, likely cause.
 
-See :mod:`pincal.identification._quality` for what is checked and the default
+See :mod:`pincal.identification.gate._quality` for what is checked and the default
 thresholds.
 """
 

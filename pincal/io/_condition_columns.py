@@ -2,7 +2,7 @@
 
 An optional column ``temperature_C`` holds the machine's temperature at each pose in
 degrees Celsius (°C), for the thermal-expansion term (``calibrate --model
-geometric+temperature``, :mod:`pincal.model._term_temperature`). It is read into
+geometric+temperature``, :mod:`pincal.model.params._term_temperature`). It is read into
 :attr:`pincal.measure.Measurements.temperature` and written back by
 :func:`pincal.io.write_measurements` (``simulate`` keeps it).
 """

@@ -9,101 +9,99 @@ from __future__ import annotations
 
 from pincal._limits import Limits, active_limits
 from pincal.model._actuator_jacobian import actuator_jacobian, actuator_jacobians
-from pincal.model._batch import BatchKinematics, BatchModel
-from pincal.model._catalogue import load_mechanism
-from pincal.model._closures import (
-    COMPONENTS,
-    Closure,
-    parse_components,
-)
-from pincal.model._deflection import (
-    actual_joint_values,
-    deflected_joints,
-    deflection_jacobian,
-    loaded_terms,
-)
-from pincal.model._dh import (
-    DHError,
-    DHLayout,
-    DHNames,
-    DHRow,
-    dh_apply_errors,
-    dh_fk,
-    dh_layout,
-)
-from pincal.model._dh_model import (
-    dh_errors_to_parameters,
-    dh_preset,
-    dh_urdf,
-    parameters_to_dh_errors,
-)
-from pincal.model._directions import describe_direction, direction_record, parent_direction
-from pincal.model._fixing import fixing_components
-from pincal.model._floor import DEFAULT_FLOOR, above_floor
-from pincal.model._home_search import conditioning, regular_home
-from pincal.model._joint_term_set import (
-    actual_shift,
-    check_term_data,
-    joint_term_bases,
-    joint_term_basis,
-    joint_term_prior,
-    joint_term_shift,
-    split_model,
-    with_joint_terms,
-)
-from pincal.model._joint_terms import (
-    JointTerm,
-    joint_term,
-    joint_term_units,
-    register_term,
-    term_kinds,
-)
-from pincal.model._kinematics import Kinematics
-from pincal.model._linearisation import Linearisation
 from pincal.model._mechanism import Mechanism
-from pincal.model._mjcf import load_mjcf, mjcf_to_urdf
-from pincal.model._model_files import bundled_models, read_sidecar, resolve_model_path
-from pincal.model._named import find_local_sidecar, model_record, resolve_named, srdf_home
-from pincal.model._newton import SolverOptions
-from pincal.model._parameters import (
-    DOFS,
-    Parameter,
-    ParameterSet,
-    degenerate_translations,
-    full_parameters,
+from pincal.model.batch import BatchKinematics, BatchModel
+from pincal.model.files import (
+    COMPONENTS,
+    JOINT_KINDS,
+    MOVABLE_TYPES,
+    WORKSPACE_POSE_KEYS,
+    Closure,
+    JointReadings,
+    Sidecar,
+    UrdfJoint,
+    UrdfTree,
+    Workspace,
+    parse_components,
+    se3_from_xyz_rpy,
+    validate_sidecar,
 )
-from pincal.model._payload import Payload, with_payload
-from pincal.model._presets import parameters
-from pincal.model._readings import JointReadings
-from pincal.model._reroot import chain_joints, reroot_urdf
-from pincal.model._robots import example_robot_names, example_robot_urdf
-from pincal.model._serial import (
+from pincal.model.loading import (
     BASE_JOINT,
     INSTRUMENT_LINK,
     TOOL_JOINT,
     TOOL_LINK,
+    DHError,
+    DHLayout,
+    DHNames,
+    DHRow,
+    bundled_models,
+    chain_joints,
     chain_preset,
+    dh_apply_errors,
+    dh_errors_to_parameters,
+    dh_fk,
+    dh_layout,
+    dh_preset,
+    dh_urdf,
+    example_robot_names,
+    example_robot_urdf,
+    find_local_sidecar,
+    load_mechanism,
+    load_mjcf,
     lock_joints,
+    mjcf_to_urdf,
+    model_record,
+    parameters_to_dh_errors,
+    read_sidecar,
+    reroot_urdf,
+    resolve_model_path,
+    resolve_named,
     serial_mechanism,
+    srdf_home,
     with_joint_origin,
     wrap_base_tool,
 )
-from pincal.model._sidecar import (
-    JOINT_KINDS,
-    WORKSPACE_POSE_KEYS,
-    Sidecar,
-    Workspace,
-    validate_sidecar,
+from pincal.model.loops import Kinematics, SolverOptions, fixing_components
+from pincal.model.params import (
+    DOFS,
+    JointTerm,
+    Linearisation,
+    Parameter,
+    ParameterSet,
+    Payload,
+    actual_joint_values,
+    actual_shift,
+    check_term_data,
+    deflected_joints,
+    deflection_jacobian,
+    degenerate_translations,
+    describe_direction,
+    direction_record,
+    full_parameters,
+    joint_term,
+    joint_term_bases,
+    joint_term_basis,
+    joint_term_prior,
+    joint_term_shift,
+    joint_term_units,
+    loaded_terms,
+    parameters,
+    parent_direction,
+    register_term,
+    split_model,
+    strut_loads,
+    struts,
+    term_kinds,
+    with_joint_terms,
+    with_payload,
 )
-from pincal.model._term_strut import strut_loads, struts
-from pincal.model._term_temperature import REFERENCE_C as THERMAL_REFERENCE_C
-from pincal.model._urdf import (
-    MOVABLE_TYPES,
-    UrdfJoint,
-    UrdfTree,
-    se3_from_xyz_rpy,
-)
-from pincal.model._workspace import (
+from pincal.model.params import REFERENCE_C as THERMAL_REFERENCE_C
+from pincal.model.reach import (
+    DEFAULT_FLOOR,
+    above_floor,
+    conditioning,
+    regular_home,
     sample_actuators,
     sample_pose,
 )

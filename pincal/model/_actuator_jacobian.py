@@ -20,9 +20,9 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from pincal.errors import ConvergenceError, MeasurementError
-from pincal.model._closures import COMPONENTS
-from pincal.model._jacobian_shape import six_by_nv
 from pincal.model._mechanism import Mechanism
+from pincal.model.files import COMPONENTS
+from pincal.model.loops import six_by_nv
 
 __all__ = ["actuator_jacobian", "actuator_jacobians"]
 

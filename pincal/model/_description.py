@@ -11,11 +11,15 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.errors import ModelFileError, UnknownNameError
-from pincal.model._closures import Closure, parse_components
-from pincal.model._frames import default_measured_frame
-from pincal.model._kinematics import KinematicQueries, frame_index
-from pincal.model._sidecar import Sidecar, Workspace
-from pincal.model._urdf import UrdfTree
+from pincal.model.files import (
+    Closure,
+    Sidecar,
+    UrdfTree,
+    Workspace,
+    default_measured_frame,
+    parse_components,
+)
+from pincal.model.loops import KinematicQueries, frame_index
 
 __all__ = [
     "actuator_limits",

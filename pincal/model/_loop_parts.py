@@ -16,13 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pincal.model._assembly import Assembly
-from pincal.model._batch import BatchModel
-from pincal.model._batch_fk import BatchLoopSolver
-from pincal.model._batch_newton import BatchNewton
-from pincal.model._branch import LoopSolver
-from pincal.model._kinematics import KinematicQueries
-from pincal.model._newton import SolverOptions
+from pincal.model.batch import BatchLoopSolver, BatchModel, BatchNewton
+from pincal.model.loops import Assembly, KinematicQueries, LoopSolver, SolverOptions
 
 __all__ = ["LoopParts", "close_loops"]
 
@@ -34,7 +29,7 @@ class LoopParts:
     Attributes:
         q_home: assembled home configuration (nq,), read-only [m, rad].
         notes: remarks made while assembling (for ``pincal info``).
-        mobility, closure_rank, idle_joints: see :class:`~pincal.model._assembly.Mobility`.
+        mobility, closure_rank, idle_joints: see :class:`~pincal.model.loops._assembly.Mobility`.
         loop_solver: pose-by-pose loop closing on home's assembly branch.
         batch_solver: batched loop closing (many poses together) on the same branch.
     """

@@ -24,11 +24,6 @@ from typing import Any, Literal, overload
 import numpy as np
 import pinocchio as pin
 
-from pincal.model._assembly import model_size
-from pincal.model._batch import BatchKinematics, BatchModel
-from pincal.model._block_solve import PassiveFactor
-from pincal.model._build import build_model, lock_joints
-from pincal.model._closures import COMPONENTS, parse_components
 from pincal.model._description import (
     actuator_limits,
     closure_links,
@@ -37,15 +32,28 @@ from pincal.model._description import (
     parse_workspace,
     resolve_measured_frame,
 )
-from pincal.model._frames import measured_frame_candidates
-from pincal.model._inverse import check_actuator_limits, inverse_configuration
-from pincal.model._kinematics import KinematicQueries, Kinematics
 from pincal.model._loop_parts import close_loops
-from pincal.model._newton import REDUNDANT_RTOL, SolverOptions
 from pincal.model._placements import PlacementTree
 from pincal.model._read_only import ReadOnly, derivation
-from pincal.model._sidecar import Sidecar
-from pincal.model._urdf import UrdfTree
+from pincal.model.batch import BatchKinematics, BatchModel, PassiveFactor
+from pincal.model.files import (
+    COMPONENTS,
+    Sidecar,
+    UrdfTree,
+    build_model,
+    lock_joints,
+    measured_frame_candidates,
+    parse_components,
+)
+from pincal.model.loops import (
+    REDUNDANT_RTOL,
+    KinematicQueries,
+    Kinematics,
+    SolverOptions,
+    check_actuator_limits,
+    inverse_configuration,
+    model_size,
+)
 
 __all__ = ["Mechanism"]
 
@@ -63,12 +71,13 @@ class Mechanism(ReadOnly):
       where that Jacobian is not square; ``idle_branch``: the same sign with idle passive
       directions left out, see ``_branch``); ``batch_solvable``: whether
       :meth:`configurations_batch` closes the loops of many poses together;
-    * ``queries`` (:class:`~pincal.model._kinematics.KinematicQueries`: single-pose
-      kinematics), ``loop_solver`` (:class:`~pincal.model._branch.LoopSolver`: pose by
-      pose) and ``batch_solver`` (:class:`~pincal.model._batch_fk.BatchLoopSolver`):
+    * ``queries`` (:class:`~pincal.model.loops._kinematics.KinematicQueries`: single-pose
+      kinematics), ``loop_solver`` (:class:`~pincal.model.loops._branch.LoopSolver`: pose by
+      pose) and ``batch_solver`` (:class:`~pincal.model.batch._batch_fk.BatchLoopSolver`):
       the parts it owns: a query the mechanism offers is asked of the mechanism (one
       way in), a part only for what the mechanism does not offer;
-    * ``workspace``: :class:`~pincal.model._sidecar.Workspace`; ``presets``: raw parameter presets;
+    * ``workspace``: :class:`~pincal.model.files.Workspace`; ``presets``: raw parameter
+      presets;
     * ``sidecar``: the typed :class:`Sidecar`; ``notes``: remarks for ``pincal info``;
     * ``mobility``, ``closure_rank`` and ``idle_joints`` (passive joints the actuators
       do not hold and that do not move the measured frame).
@@ -302,7 +311,7 @@ class Mechanism(ReadOnly):
         """Closed configurations (N, nq) on home's branch and their kinematics.
 
         See :meth:`BatchLoopSolver.configurations_batch
-        <pincal.model._batch_fk.BatchLoopSolver.configurations_batch>`.
+        <pincal.model.batch._batch_fk.BatchLoopSolver.configurations_batch>`.
         """
         return self.batch_solver.configurations_batch(q_act_rows, guesses)
 

@@ -1,7 +1,7 @@
 """Joint origins written into a copy of a Pinocchio model (no URDF text, no rebuild).
 
 A geometric parameter moves the origin of a URDF joint: ``origin ← origin · D``
-(:mod:`pincal.model._parameters`). Pinocchio's URDF parser turns the tree into
+(:mod:`pincal.model.params._parameters`). Pinocchio's URDF parser turns the tree into
 
 * a joint per movable URDF joint, placed relative to its parent joint by the product of
   the origins from that parent's child link down to it (fixed joints between them are

@@ -11,15 +11,21 @@ without notice. Shapes follow the batch convention: a leading axis of N poses.
 
 from __future__ import annotations
 
-from pincal.model._batch import cross_cols, mm, mv, slice_kinematics
-from pincal.model._batch_closures import closure_jacobian_batch
-from pincal.model._batch_fk import CHUNK
-from pincal.model._batch_ops import cross3, jlog3_batch, log3_batch
-from pincal.model._block_solve import PassiveFactor
-from pincal.model._closures import measured_jacobian, measurement_residual
-from pincal.model._range_factor import RangeFactor
-from pincal.model._urdf_check import captured_stderr
-from pincal.model._workspace import joint_ranges
+from pincal.model.batch import (
+    CHUNK,
+    PassiveFactor,
+    RangeFactor,
+    closure_jacobian_batch,
+    cross3,
+    cross_cols,
+    jlog3_batch,
+    log3_batch,
+    mm,
+    mv,
+    slice_kinematics,
+)
+from pincal.model.files import captured_stderr, measured_jacobian, measurement_residual
+from pincal.model.reach import joint_ranges
 
 __all__ = [
     "CHUNK",

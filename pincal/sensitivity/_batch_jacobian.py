@@ -2,7 +2,7 @@
 
 The same mathematics as :func:`pincal.sensitivity.pose_sensitivity` (see
 :mod:`pincal.sensitivity._jacobian`), evaluated on the batched kinematics of
-:mod:`pincal.model._batch`: the local twist of a key frame per unit of each parameter
+:mod:`pincal.model.batch._batch`: the local twist of a key frame per unit of each parameter
 is a batched adjoint ``Ad(oMf⁻¹ · A_j) · eff_j``; the passive motion
 ``dq_u/dp = −(∂c/∂q_u)⁺ ∂c/∂p`` enters through one adjoint solve with the forward
 kinematics' factorisation of ``∂c/∂q_u`` (block LU where square; thin QR where

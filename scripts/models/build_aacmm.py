@@ -6,7 +6,7 @@ Usage:
 
 The DH table is read from scripts/data/seed004.yaml (mm, rad) and converted to
 SI. Links 1–6 are revolute; link 7 is the probe (fixed, θ7 = 0). The URDF comes
-from pincal.model._dh.dh_urdf, so each Table 1 error is one single-dof twist.
+from pincal.model.loading._dh.dh_urdf, so each Table 1 error is one single-dof twist.
 """
 
 from __future__ import annotations

@@ -24,7 +24,7 @@ d6' = d6 − D sin ε.
 
 Second part: the instrument frame. The arm is placed at a known transform in the
 instrument frame; registration solves it first by a best-fit rigid transform
-(``pincal.model._serial.register_instrument``), then identification refines the six
+(``pincal.model.loading._serial.register_instrument``), then identification refines the six
 ``base_frame`` parameters with the DH errors.
 """
 

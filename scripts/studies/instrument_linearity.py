@@ -17,10 +17,10 @@ fit is the fit's target: what the data identify of the machine, gauge held alike
 - ``zdiag``: mean over the parameters of (x̂ − x̂₀)²/σ² (per-parameter σ);
 - ``d2k_dirs``: the same along the 12 largest-σ principal directions;
 - ``excess``: the curvature check of ``pincal calibrate``
-  (:func:`pincal.identification._linearity.check_curvature`, 64 draws), the d²/k the
+  (:func:`pincal.identification.uncertainty._linearity.check_curvature`, 64 draws), the d²/k the
   fit's second-order error adds (predicted from the fit alone);
 - ``ratio_max``, ``jacobian_change``: the cost-ratio check of pose fits
-  (:func:`pincal.identification._linearity.check_linearity`);
+  (:func:`pincal.identification.uncertainty._linearity.check_linearity`);
 - ``widened``, ``d2k_s``, ``zdiag_s``, ``cover_s``: what ``pincal calibrate`` writes —
   :func:`pincal.identification.instrument_uncertainty` adds the second moment of the
   fit's second-order error (its own curvature draws) to the covariance: the largest σ
@@ -51,9 +51,9 @@ from pincal.identification import (
     instrument_candidates,
     instrument_uncertainty,
 )
-from pincal.identification._bootstrap import bootstrap_covariance
-from pincal.identification._instrument_problem import InstrumentProblem
-from pincal.identification._linearity import check_linearity
+from pincal.identification.problem._instrument_problem import InstrumentProblem
+from pincal.identification.uncertainty._bootstrap import bootstrap_covariance
+from pincal.identification.uncertainty._linearity import check_linearity
 from pincal.measure import simulate_instrument
 from pincal.model import load_mechanism, parameters, sample_actuators
 from pincal.sensitivity import analyse_jacobian

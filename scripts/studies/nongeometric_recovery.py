@@ -28,7 +28,7 @@ fixed-length struts (``strut-compliance``: ``δL_j = c_j·F_j``, the strut force
 loop-closure equilibrium, true ``c ~ N(0, 1e-7 m/N)``, the default prior). The machine
 is simulated with the physical model — each pose measured on the true geometry with every
 strut lengthened by its ``c_j·F_j`` — while the identification models the elongation as
-joint changes (:mod:`pincal.model._term_strut`). ``F`` is the nominal machine's, as the
+joint changes (:mod:`pincal.model.params._term_strut`). ``F`` is the nominal machine's, as the
 model evaluates it (and as the Stewart study's leg forces are); ``--true-forces`` takes
 the forces of the true (geometrically erroneous) machine instead, which shows what
 evaluating the load on the nominal geometry costs.

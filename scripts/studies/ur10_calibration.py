@@ -4,7 +4,7 @@ joint offsets, from N position or full-pose measurements.
 Usage:
     python scripts/studies/ur10_calibration.py [--robot ur10|panda] [--poses 50] [--seed 0]
 
-Model: the example-robot-data URDF wrapped by ``pincal.model._serial.serial_mechanism``
+Model: the example-robot-data URDF wrapped by ``pincal.model.loading._serial.serial_mechanism``
 (``instrument → base_frame → robot … → tool0 → tool_frame → tool``); Panda with its
 finger joints locked at 0.02 m (``lock``). Parameters: preset ``chain`` = base frame (6),
 every joint origin (5 twists + the joint offset), tool frame (6 for pose, 3 for

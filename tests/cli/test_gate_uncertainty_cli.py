@@ -63,7 +63,7 @@ def test_inflated_sigma_and_a_bootstrap_beside_are_announced_in_the_report():
 
 
 def _count_refits(monkeypatch) -> list[int]:
-    from pincal.identification import _bootstrap
+    from pincal.identification.uncertainty import _bootstrap
 
     calls: list[int] = []
     real = _bootstrap._refit

@@ -1,7 +1,7 @@
 """Library warnings reach the terminal as pincal's own warning lines (issue 38, item 10).
 
 The command line configured Python's logging with its default format, so a library
-warning printed as ``WARNING:pincal.model._build:…`` beside ``pincal: warning: …``
+warning printed as ``WARNING:pincal.model.files._build:…`` beside ``pincal: warning: …``
 lines; --debug keeps the logger names.
 """
 
@@ -39,4 +39,4 @@ def test_a_library_warning_is_a_pincal_warning_line(tmp_path):
     lines = [ln for ln in err.splitlines() if "mimics 'j1'" in ln]
     assert lines and all(ln.startswith("pincal: warning: joint 'j2'") for ln in lines), err
     assert "WARNING:" not in err
-    assert "WARNING:pincal.model._build:" in _info(tmp_path, "--debug")
+    assert "WARNING:pincal.model.files._build:" in _info(tmp_path, "--debug")

@@ -9,8 +9,8 @@ import pytest
 
 import pincal
 from pincal.identification import check_quality, identify
-from pincal.identification._coordinate_probe import coordinate_columns, trend_size
-from pincal.identification._misspecification import probe_misspecification
+from pincal.identification.gate._coordinate_probe import coordinate_columns, trend_size
+from pincal.identification.gate._misspecification import probe_misspecification
 from pincal.model import sample_actuators
 
 NOISE = pincal.NoiseModel(0.01, 0.05)

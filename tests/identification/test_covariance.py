@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pincal.identification._covariance import covariance_from_jacobian, fitted_covariance
+from pincal.identification.solvers._covariance import covariance_from_jacobian, fitted_covariance
 
 
 def test_equals_the_inverse_normal_matrix_when_well_posed():

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.identification._problem import CalibrationProblem
+from pincal.identification.problem._problem import CalibrationProblem
 from pincal.model import Payload, deflected_joints, with_joint_terms, with_payload
-from pincal.model._term_compliance import actuator_load
+from pincal.model.params._term_compliance import actuator_load
 
 
 @pytest.fixture(scope="module")

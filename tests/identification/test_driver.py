@@ -25,11 +25,11 @@ from pincal.identification import (
     result_from_dict,
     result_to_dict,
 )
-from pincal.identification._finish import finish, settle
-from pincal.identification._gauge import null_motions, weak_parameters
-from pincal.identification._noise import initial_weights, weighted_fit
-from pincal.identification._result import ResidualStats
-from pincal.identification._solvers import solver
+from pincal.identification.problem._gauge import null_motions, weak_parameters
+from pincal.identification.results._result import ResidualStats
+from pincal.identification.solvers._finish import finish, settle
+from pincal.identification.solvers._noise import initial_weights, weighted_fit
+from pincal.identification.solvers._solvers import solver
 from pincal.measure import SocketPlate, simulate_measurements, simulate_sockets
 from pincal.model import degenerate_translations, load_mechanism, parameters
 from pincal.sensitivity import analyse_jacobian
@@ -152,7 +152,7 @@ def test_the_marker_hold_loop_switches_holds_and_redecides_in_that_order():
     the set decided again at the solution is kept when it differs."""
     from types import SimpleNamespace
 
-    from pincal.identification._driver import MarginalBound, drive_holding
+    from pincal.identification.solvers._driver import MarginalBound, drive_holding
 
     calls = []
     units = {"base.tx": "m", "a": "m", "b": "rad", "c": "m"}
@@ -187,7 +187,7 @@ def test_the_hold_loop_skips_a_refit_whose_set_is_known_to_be_the_same():
     count there differs from the fit's (a same-size refit is never kept)."""
     from types import SimpleNamespace
 
-    from pincal.identification._driver import MarginalBound, drive_holding
+    from pincal.identification.solvers._driver import MarginalBound, drive_holding
 
     def run(count):
         calls = []

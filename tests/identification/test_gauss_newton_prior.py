@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import least_squares
 
-from pincal.identification._local import gauss_newton
 from pincal.identification._options import GaussNewtonOptions
+from pincal.identification.solvers._local import gauss_newton
 
 
 class _CurvedToy:

@@ -99,7 +99,7 @@ def test_without_a_recorded_linear_covariance_the_written_one_is_propagated():
 @pytest.mark.slow
 def test_a_parallel_bootstrap_rebuilds_the_problem_and_gives_the_serial_sigma(stewart, stewart42):
     from pincal.identification import bootstrap_covariance, pose_recipe, pose_residual_model
-    from pincal.identification._bootstrap import _worker
+    from pincal.identification.uncertainty._bootstrap import _worker
 
     rng = np.random.default_rng(8)
     actual = stewart42.apply(stewart, rng.uniform(-5e-4, 5e-4, len(stewart42)))

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pincal.identification._fit_issues import left_misfit
 from pincal.identification._verdict import GateLimits
+from pincal.identification.gate._fit_issues import left_misfit
 
 
 def _linear(rng, m=60, p=20, scale=1.0, bad=()):

@@ -17,22 +17,23 @@ from scipy import stats
 
 import pincal
 from pincal.errors import ConvergenceError
-from pincal.identification import _bootstrap, identify
-from pincal.identification._bootstrap import bootstrap_covariance
-from pincal.identification._covariance import covariance_from_jacobian
-from pincal.identification._inflation import inflated_covariance
-from pincal.identification._linearity import (
+from pincal.identification import identify
+from pincal.identification._verdict import QualityVerdict
+from pincal.identification.solvers._covariance import covariance_from_jacobian
+from pincal.identification.uncertainty import _bootstrap
+from pincal.identification.uncertainty._bootstrap import bootstrap_covariance
+from pincal.identification.uncertainty._inflation import inflated_covariance
+from pincal.identification.uncertainty._linearity import (
     check_curvature,
     check_linearity,
     principal_directions,
 )
-from pincal.identification._uncertainty import (
+from pincal.identification.uncertainty._uncertainty import (
     CURVATURE_LIMIT,
     check_uncertainty,
     pose_residual_model,
     with_uncertainty,
 )
-from pincal.identification._verdict import QualityVerdict
 from pincal.model import sample_actuators
 
 TRUTH = np.array([0.0, 0.0, 0.0, 0.1])  # pivot [m], bar length [m]
@@ -78,7 +79,7 @@ def _sphere(seed: int, cap_deg: float, m: int, sigma: float) -> Sphere:
 
 
 def _fit(prob: Sphere) -> np.ndarray:
-    from pincal.identification._bootstrap import _refit
+    from pincal.identification.uncertainty._bootstrap import _refit
 
     x = _refit(prob, TRUTH + np.array([1e-3, -1e-3, 1e-3, 5e-4]), np.arange(4),
                np.zeros(prob.d.size))  # fmt: skip
@@ -302,7 +303,9 @@ def test_curvature_is_small_on_a_well_excited_fit_and_misses_a_changing_covarian
 def test_the_widest_combination_is_the_generalised_eigenvalue_and_survives_a_singular_covariance():
     from scipy.linalg import eigh
 
-    from pincal.identification._inflation import widest_combination as _widest_combination
+    from pincal.identification.uncertainty._inflation import (
+        widest_combination as _widest_combination,
+    )
 
     rng = np.random.default_rng(0)
     A, B = rng.standard_normal((8, 8)), rng.standard_normal((8, 3))

@@ -138,9 +138,9 @@ def test_a_robust_fit_with_a_prior_is_judged_by_its_whole_objective(caplog):
 
 def test_a_robust_refit_from_its_own_solution_is_no_worse():
     """Re-started at its solution, a Huber fit ends where it began (to 1e-3 of the median)."""
-    from pincal.identification._noise import _robust_progress
-    from pincal.identification._outcome import SolverOutcome
-    from pincal.identification._problem import CalibrationProblem
+    from pincal.identification.problem._problem import CalibrationProblem
+    from pincal.identification.results._outcome import SolverOutcome
+    from pincal.identification.solvers._noise import _robust_progress
 
     mech, setup, meas = _ur5_case(30, None, 2)
     fit = fit_markers(mech, setup, meas, loss="huber")

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.identification import _problem
-from pincal.identification._problem import CalibrationProblem
+from pincal.identification.problem import _problem
+from pincal.identification.problem._problem import CalibrationProblem
 from pincal.model import Mechanism
 
 

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from pincal.identification import IdentificationProblem, identify
-from pincal.identification._noise import RATIO_RTOL
-from pincal.identification._problem import CalibrationProblem
+from pincal.identification.problem._problem import CalibrationProblem
+from pincal.identification.solvers._noise import RATIO_RTOL
 from pincal.measure import simulate_measurements
 from pincal.model import Mechanism, load_mechanism, sample_actuators
 from pincal.sensitivity import parameters

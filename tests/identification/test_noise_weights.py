@@ -15,7 +15,7 @@ from pincal.identification import (
     result_from_dict,
     result_to_dict,
 )
-from pincal.identification._noise import variance_components
+from pincal.identification.solvers._noise import variance_components
 from pincal.measure import NoiseModel, simulate_measurements
 from pincal.model import sample_actuators
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from pincal.identification import _outliers
-from pincal.identification._outliers import deletion_outliers, refit_outliers
+from pincal.identification.gate import _outliers
+from pincal.identification.gate._outliers import deletion_outliers, refit_outliers
 
 
 def _masked(rng: np.random.Generator, m: int = 60, p: int = 38, size: float = 50.0, bad: int = 2):

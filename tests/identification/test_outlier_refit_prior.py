@@ -15,8 +15,8 @@ import pytest
 
 import pincal
 from pincal.identification import GaussNewtonOptions, identify
-from pincal.identification._outlier_refit import confirm_outliers
-from pincal.identification._problem import CalibrationProblem
+from pincal.identification.gate._outlier_refit import confirm_outliers
+from pincal.identification.problem._problem import CalibrationProblem
 from pincal.model import sample_actuators
 
 NOISE = pincal.NoiseModel(0.01, 0.02)  # mm, mrad

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pincal.identification._fit_set import WeakBound
+from pincal.identification.problem._fit_set import WeakBound
 from pincal.sensitivity import PLACEMENT_BOUND, beyond_placement
 from pincal.validation import prediction_caveat
 

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.identification import _pose_configurations, _problem
-from pincal.identification._pose_configurations import PoseConfigurations
+from pincal.identification.problem import _pose_configurations, _problem
+from pincal.identification.problem._pose_configurations import PoseConfigurations
 from pincal.model import Mechanism
 from pincal.sensitivity import _batch_predict
 from pincal.sensitivity._batch_jacobian import param_twists

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pincal.identification._autocorrelation import serial_correlation
 from pincal.identification._distributions import f_isf
-from pincal.identification._misspecification import probe_misspecification
-from pincal.identification._probe_floor import POWER, floor_lambda
+from pincal.identification.gate._autocorrelation import serial_correlation
+from pincal.identification.gate._misspecification import probe_misspecification
+from pincal.identification.gate._probe_floor import POWER, floor_lambda
 
 
 def _design(m: int, k: int, p: int, seed: int):
@@ -76,7 +76,7 @@ def test_ar1_residuals_are_correlated_after_a_drift_is_fitted():
 def test_floors_are_said_in_their_unit_and_beyond_the_workspace_as_not_detectable():
     """9.6 mm was printed "9.6e+03 µm"; a floor past the positions' spread (a trend the
     model nearly absorbs) or a gain of 100 % or more is not detectable with these poses."""
-    from pincal.identification._misspecification import Probe
+    from pincal.identification.gate._misspecification import Probe
 
     def text(name: str, floor: float, workspace: float = 0.28) -> str:
         return Probe(name, 1, 1.0, 0.5, 0.1, "", floor, workspace).floor_text()

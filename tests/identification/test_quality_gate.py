@@ -18,10 +18,10 @@ from pincal.identification import (
     check_quality,
     identify,
 )
-from pincal.identification._noise import _robust_progress
-from pincal.identification._outcome import SolverOutcome
-from pincal.identification._problem import CalibrationProblem
 from pincal.identification._weighting import robust_cost
+from pincal.identification.problem._problem import CalibrationProblem
+from pincal.identification.results._outcome import SolverOutcome
+from pincal.identification.solvers._noise import _robust_progress
 from pincal.model import sample_actuators
 
 NOISE = pincal.NoiseModel(0.01, 0.02)

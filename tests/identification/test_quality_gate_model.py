@@ -15,9 +15,9 @@ from pincal.identification import (
     identify,
     instrument_profile,
 )
-from pincal.identification._fit_issues import changes as _changes
-from pincal.identification._misspecification import probe_misspecification
-from pincal.identification._outliers import deletion_outliers
+from pincal.identification.gate._fit_issues import changes as _changes
+from pincal.identification.gate._misspecification import probe_misspecification
+from pincal.identification.gate._outliers import deletion_outliers
 from pincal.model import sample_actuators
 
 NOISE = pincal.NoiseModel(0.01, 0.02)

@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from pincal.identification._levenberg_marquardt import levenberg_marquardt
-from pincal.identification._local import gauss_newton
 from pincal.identification._options import GaussNewtonOptions, LMOptions
 from pincal.identification._weighting import ROBUST_F_SCALE, loss_terms, robust_cost
+from pincal.identification.solvers._levenberg_marquardt import levenberg_marquardt
+from pincal.identification.solvers._local import gauss_newton
 
 T = np.linspace(0.0, 2.0, 40)
 

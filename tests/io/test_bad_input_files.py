@@ -41,7 +41,7 @@ from pincal.io import (
 )
 from pincal.measure import simulate_measurements
 from pincal.model import load_mechanism, read_sidecar, sample_actuators
-from pincal.model._model_files import MODELS_DIR
+from pincal.model.loading._model_files import MODELS_DIR
 from tests.cli._checks import assert_clean_failure
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -7,8 +7,8 @@ import pinocchio as pin
 import pytest
 
 import pincal
-from pincal.model import _batch_fk
-from pincal.model._batch_ops import jlog3_batch, log3_batch
+from pincal.model.batch import _batch_fk
+from pincal.model.batch._batch_ops import jlog3_batch, log3_batch
 from pincal.sensitivity import _batch_jacobian
 from pincal.sensitivity._batch_jacobian import sensitivities_batch
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.model._batch_fk import _MIN_CONTINUATION_ROWS
+from pincal.model.batch._batch_fk import _MIN_CONTINUATION_ROWS
 
 MACHINES = Path(__file__).parents[1] / "model" / "machines"
 
@@ -78,7 +78,7 @@ def test_rows_do_not_depend_on_the_batch(mech, rows):
 def test_home_predictions_are_each_rows_own(mech, rows):
     """From home, one solve serves every row: the same starts as each row's prediction
     from home's kinematics."""
-    from pincal.model._batch import BatchKinematics
+    from pincal.model.batch._batch import BatchKinematics
 
     solver = mech.batch_solver
     home = np.tile(mech.q_home, (len(rows), 1))

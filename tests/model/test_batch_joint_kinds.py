@@ -18,7 +18,7 @@ import pytest
 
 import pincal
 from pincal.model import COMPONENTS
-from pincal.model._batch import BatchModel
+from pincal.model.batch._batch import BatchModel
 from pincal.sensitivity import pose_sensitivity
 from tests.open_world.machines import rusr_universal, write_machine
 

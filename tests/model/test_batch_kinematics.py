@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 import pincal
-from pincal.model._batch import BatchModel
+from pincal.model.batch._batch import BatchModel
 
 MODELS = ["stewart_6ups", "hexaslide_6pus", "pkm5", "wedge3", "aacmm", "ur10"]
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.model._range_factor import RangeFactor
+from pincal.model.batch._range_factor import RangeFactor
 from pincal.sensitivity import pose_sensitivity
 from pincal.sensitivity._batch_jacobian import batch_applies, sensitivities_batch
 from tests.open_world import machines

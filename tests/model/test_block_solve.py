@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pincal
-from pincal.model._block_solve import BlockSolver, DenseFactor
+from pincal.model.batch._block_solve import BlockSolver, DenseFactor
 
 MACHINES = ["stewart_6ups", "hexaslide_6pus", "pkm5", "wedge3", "tests/model/machines/rpr3"]
 

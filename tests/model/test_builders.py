@@ -1,4 +1,4 @@
-"""Tests of pincal.model._dh: DH tables → URDF, DH error parameters, example-robot-data."""
+"""Tests of pincal.model.loading._dh: DH tables → URDF, DH error parameters, example-robot-data."""
 
 from __future__ import annotations
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from pincal.errors import ClosureError
 from pincal.model import Mechanism, load_mechanism
-from pincal.model._assembly import Assembly
+from pincal.model.loops._assembly import Assembly
 from pincal.sensitivity import parameters
 from tests.open_world.roster import ROSTER
 

@@ -7,7 +7,7 @@ import pytest
 
 import pincal
 from pincal.model import Mechanism
-from pincal.model._urdf import UrdfTree
+from pincal.model.files._urdf import UrdfTree
 
 
 @pytest.mark.parametrize("name", ["stewart_6ups", "ur10", "aacmm", "wedge3"])

@@ -13,11 +13,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-import pincal.model._assembly as assembly
+import pincal.model.loops._assembly as assembly
 from pincal.errors import ConvergenceError
 from pincal.model import SolverOptions, load_mechanism
-from pincal.model._branch import corrector_options
-from pincal.model._newton import damped_newton
+from pincal.model.loops._branch import corrector_options
+from pincal.model.loops._newton import damped_newton
 from tests.open_world.machines import MODEL_MACHINES
 
 

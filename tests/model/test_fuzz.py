@@ -19,7 +19,7 @@ from pincal.model import (
     load_mechanism,
     parameters,
 )
-from pincal.model._model_files import MODELS_DIR
+from pincal.model.loading._model_files import MODELS_DIR
 
 FAST = settings(
     max_examples=100,

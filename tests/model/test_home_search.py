@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pincal.model import Mechanism, above_floor, conditioning, load_mechanism, regular_home
-from pincal.model._floor import moving_points, point_heights
+from pincal.model.reach._floor import moving_points, point_heights
 
 # a waist about z, a shoulder and an elbow about y; stretched along x at q = 0, where the
 # shoulder and elbow both move the tool along z only (rank 2 of 3)

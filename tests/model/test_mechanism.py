@@ -11,7 +11,7 @@ import yaml
 
 import pincal
 from pincal.model import load_mechanism
-from pincal.model._model_files import MODELS_DIR
+from pincal.model.loading._model_files import MODELS_DIR
 
 STEWART = MODELS_DIR / "stewart_6ups"
 B_DEG = (-15, 15, 105, 135, 225, 255)

@@ -21,7 +21,7 @@ URDF = """<robot name="mimic_pair">
 def test_mimic_joint_is_noted_and_warned_once(tmp_path, caplog):
     f = tmp_path / "mimic_pair.urdf"
     f.write_text(URDF)
-    with caplog.at_level(logging.WARNING, logger="pincal.model._build"):
+    with caplog.at_level(logging.WARNING, logger="pincal.model.files._build"):
         mech = load_mechanism(f)
         load_mechanism(f)
     said = [r.getMessage() for r in caplog.records if "mimics" in r.getMessage()]

@@ -202,7 +202,7 @@ def test_zoo_matches_pinocchio_mjcf_parser():
     """Frame conventions (euler/axisangle/xyaxes/zaxis/quat/fromto, degrees, eulerseq,
     default classes, childclass, ref, joint pos, multi-joint bodies, ball) agree with
     ``pin.buildModelAndConstraintsFromMJCF`` on a tree with one top-level body."""
-    from pincal.model._mjcf_tree import euler_xyz
+    from pincal.model.files._mjcf_tree import euler_xyz
 
     urdf, _ = mjcf_to_urdf(HERE / "zoo.xml")
     mine = pin.buildModelFromXML(urdf)
@@ -407,7 +407,7 @@ def test_unsupported_or_wrong_input_is_refused(snippet, error, match):
 def test_inactive_joint_equality_is_skipped(caplog):
     body = '<worldbody><body name="a"><joint name="ja"/></body></worldbody>'
     eq = '<equality><joint name="off" joint1="ja" active="false"/></equality>'
-    with caplog.at_level(logging.WARNING, logger="pincal.model._mjcf"):
+    with caplog.at_level(logging.WARNING, logger="pincal.model.loading._mjcf"):
         _, sc = mjcf_to_urdf(f"<mujoco>{body}{eq}</mujoco>")
     assert "closed_loop" not in sc and "inactive equality 'off' skipped" in caplog.text
 
@@ -452,7 +452,7 @@ def test_non_joint_actuator_is_skipped_with_warning(caplog):
         '</worldbody><actuator><motor name="m" site="s"/><motor joint="ja"/></actuator>'
         "</mujoco>"
     )
-    with caplog.at_level(logging.WARNING, logger="pincal.model._mjcf"):
+    with caplog.at_level(logging.WARNING, logger="pincal.model.loading._mjcf"):
         _, sc = mjcf_to_urdf(text)
     assert sc["name_mot"] == ["ja"] and "actuator 'm'" in caplog.text
 

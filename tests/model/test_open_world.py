@@ -123,7 +123,7 @@ def test_unsupported_joint_kinds_are_clear_errors(changes, message):
 # ------------------------------------------------------------- 8. default measured frame
 @pytest.mark.parametrize("name", pincal.model.bundled_models())
 def test_default_measured_frame_finds_the_effector_of_every_bundled_model(name):
-    folder = pincal.model._model_files.MODELS_DIR / name
+    folder = pincal.model.loading._model_files.MODELS_DIR / name
     sc = pincal.model.read_sidecar(folder / f"{name}.yaml")
     chosen = sc.pop("measured_frame")
     mech = pincal.Mechanism((folder / f"{name}.urdf").read_text(), sc)

@@ -8,7 +8,7 @@ import yaml
 from pincal.errors import ModelFileError
 from pincal.io import save_urdf
 from pincal.model import Mechanism, Sidecar, bundled_models, load_mechanism, read_sidecar
-from pincal.model._model_files import MODELS_DIR
+from pincal.model.loading._model_files import MODELS_DIR
 
 
 def test_misspelt_key_is_refused_with_the_nearest_valid_key():

@@ -26,8 +26,8 @@ from pincal.model import (
     sample_actuators,
     sample_pose,
 )
-from pincal.model import _urdf as urdf_module
-from pincal.model._urdf_check import captured_stderr
+from pincal.model.files import _urdf as urdf_module
+from pincal.model.files._urdf_check import captured_stderr
 from pincal.sensitivity import identifiability
 
 ROOT = Path(__file__).resolve().parents[2]

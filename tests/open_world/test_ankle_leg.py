@@ -15,7 +15,7 @@ from pincal.errors import ConvergenceError
 from pincal.identification import GaussNewtonOptions, identify
 from pincal.measure import simulate_measurements
 from pincal.model import Mechanism, degenerate_translations, load_mechanism, sample_actuators
-from pincal.model._range_explore import BACK_OFF, DEFAULT_SPAN, STEPS, explored_ranges
+from pincal.model.reach._range_explore import BACK_OFF, DEFAULT_SPAN, STEPS, explored_ranges
 from pincal.sensitivity import identifiability, parameters
 from tests.open_world import acceptance
 from tests.open_world.machines import ANKLE_MOTOR_RANGE, ankle_2rsu, write_machine
@@ -86,7 +86,7 @@ def zero():
 
 
 def test_zero_width_limits_are_explored_from_home(zero, caplog):
-    with caplog.at_level(logging.WARNING, logger="pincal.model._range_explore"):
+    with caplog.at_level(logging.WARNING, logger="pincal.model.reach._range_explore"):
         rows = sample_actuators(zero, 20, np.random.default_rng(0))
     said = [r.getMessage() for r in caplog.records]
     assert any(

@@ -7,7 +7,7 @@ the residual is far from linear: straight Gauss–Newton steps leave the valley,
 ones crawl (the finger [x, z]: "no decrease along the step, even damped", parameters off
 by 2.5e-3, and the Levenberg–Marquardt fallback out of evaluations; the excavator: 50
 iterations, then the fallback). The step bent to second order
-(:mod:`pincal.identification._acceleration`) follows the valley.
+(:mod:`pincal.identification.solvers._acceleration`) follows the valley.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import pytest
 
 from pincal.errors import ClosureError
 from pincal.identification import GaussNewtonOptions
-from pincal.identification._acceleration import bent_step
+from pincal.identification.solvers._acceleration import bent_step
 from pincal.model import Mechanism, load_mechanism
 from tests.open_world import linkage_machines as lm
 from tests.open_world.roster import ROSTER, _mjcf, recover

@@ -2,7 +2,7 @@
 machines/fivebar as written, no workspace): they are unlimited, with a note.
 
 Random poses are then drawn over the range explored from home by continuation (at
-most ±π/2 about home, see pincal/model/_range_explore.py; it was ±π before issue 28).
+most ±π/2 about home, see pincal/model/reach/_range_explore.py; it was ±π before issue 28).
 What works: loading, forward kinematics and identification Jacobians over that range,
 calibration through the CLI. Inverse kinematics from home answers the pose, but for far
 poses in another working mode (other actuator values reaching the same point) or not on

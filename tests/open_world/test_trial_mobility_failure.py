@@ -13,9 +13,9 @@ import pytest
 
 from pincal.errors import MobilityError
 from pincal.identification import identify
-from pincal.identification._local import gauss_newton
 from pincal.identification._options import GaussNewtonOptions
-from pincal.identification._problem import CalibrationProblem
+from pincal.identification.problem._problem import CalibrationProblem
+from pincal.identification.solvers._local import gauss_newton
 from pincal.measure import simulate_measurements
 from pincal.model import Mechanism, sample_actuators
 from pincal.sensitivity import parameters

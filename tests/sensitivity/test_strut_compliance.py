@@ -19,7 +19,7 @@ from pincal.model import (
     with_joint_terms,
     with_payload,
 )
-from pincal.model._term_compliance import gravity_model
+from pincal.model.params._term_compliance import gravity_model
 from pincal.sensitivity import parameters
 
 from .test_joint_terms import _fd_errors
