@@ -11,22 +11,12 @@ holds) with the live calibration. ``result_to_dict`` writes a record as that doc
 
 from __future__ import annotations
 
-from pincal.identification._cross_validation import (
-    BlockScales,
-    CrossValidation,
-    compare,
-    cross_validate,
-    kfold,
-    orientation_errors,
-    position_errors,
-)
 from pincal.identification._held import (
     HELD_AT_NOMINAL,
     held_at_nominal,
     held_summary,
     with_held,
 )
-from pincal.identification._held_out_gate import HeldOutEvidence, held_out_verdict
 from pincal.identification._identify import identify
 from pincal.identification._instrument_design import (
     InstrumentIdentifiability,
@@ -47,14 +37,6 @@ from pincal.identification._marker_fit import (
     fit_markers,
     is_registration,
 )
-from pincal.identification._model_selection import (
-    CandidateScore,
-    Fitted,
-    ModelSelection,
-    fitted,
-    select_model,
-)
-from pincal.identification._monte_carlo import MonteCarloStudy, monte_carlo
 from pincal.identification._options import (
     LOSSES,
     GaussNewtonOptions,
@@ -71,6 +53,7 @@ from pincal.identification.gate import (
     check_quality,
     instrument_gate,
     instrument_profile,
+    likely_cause,
     outlier_poses,
 )
 from pincal.identification.problem import (
@@ -144,15 +127,10 @@ __all__ = [
     "METHODS",
     "REGISTRATION_PRESET",
     "SOLVERS",
-    "BlockScales",
     "Bootstrap",
     "CalibrationProblem",
-    "CandidateScore",
-    "CrossValidation",
-    "Fitted",
     "GateLimits",
     "GaussNewtonOptions",
-    "HeldOutEvidence",
     "IdentifiabilitySummary",
     "IdentificationProblem",
     "IdentificationRecord",
@@ -169,8 +147,6 @@ __all__ = [
     "MarginalBound",
     "MarkerFit",
     "MarkerSetProblem",
-    "ModelSelection",
-    "MonteCarloStudy",
     "Prior",
     "QPSOExtras",
     "QPSOOptions",
@@ -192,14 +168,10 @@ __all__ = [
     "check_measurements",
     "check_quality",
     "check_uncertainty",
-    "compare",
     "covariance_kind",
-    "cross_validate",
     "default_instrument",
     "fit_markers",
-    "fitted",
     "held_at_nominal",
-    "held_out_verdict",
     "held_summary",
     "identify",
     "identify_instruments",
@@ -213,20 +185,16 @@ __all__ = [
     "instrument_uncertainty",
     "interval_quantiles",
     "is_registration",
-    "kfold",
-    "monte_carlo",
-    "orientation_errors",
+    "likely_cause",
     "outlier_poses",
     "pose_recipe",
     "pose_residual_model",
-    "position_errors",
     "prediction_covariance",
     "qpso",
     "qpso_stepwise",
     "result_from_dict",
     "result_intervals",
     "result_to_dict",
-    "select_model",
     "solver",
     "stacked_measurements",
     "with_held",

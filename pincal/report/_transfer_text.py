@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from pincal.identification import HeldOutEvidence
+from pincal.validation import HeldOutEvidence
 
 __all__ = ["transfer_text"]
 

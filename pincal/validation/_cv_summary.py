@@ -1,6 +1,6 @@
 """The outcome of ``pincal validate --cv K``: held-out errors of a calibration and a baseline.
 
-K-fold refits of the calibration as it was run (:func:`pincal.identification.cross_validate`
+K-fold refits of the calibration as it was run (:func:`pincal.validation.cross_validate`
 for pose and marker files, held-out seatings for a ball-in-socket file), beside the same
 for a baseline model (the nominal model, or for a marker campaign the registration-only
 model). Lengths in metres and angles in radians inside; with orientation measured (a
@@ -71,7 +71,7 @@ class CrossValidationSummary:
     """K-fold cross-validation of a calibration beside a baseline [m, m²].
 
     Attributes:
-        k, seed: the folds (:func:`pincal.identification.kfold`); poses: rows split.
+        k, seed: the folds (:func:`pincal.validation.kfold`); poses: rows split.
         folds: the pose rows of each fold.
         fit_rms: RMS position residual of the calibration itself.
         held_out_rms, held_out_max, fold_fit_rms: as :class:`CrossValidationBaseline`,
@@ -86,7 +86,7 @@ class CrossValidationSummary:
             the baseline's), or None (no orientation measured).
         whitened_gain: with orientation measured, the gain of the per-pose squared
             errors whitened by each block's noise σ and its standard error
-            (dimensionless, :func:`pincal.identification.compare`); the verdict is then
+            (dimensionless, :func:`pincal.validation.compare`); the verdict is then
             on it (``gain_mse`` stays the positions' gain), else None.
         recorded: the figures are those calibrate computed and recorded on these folds
             (the same procedure), not refitted here.

@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from pincal.identification import position_errors
 from pincal.measure import Measurements
 from pincal.model import Mechanism
+from pincal.validation._cross_validation import position_errors
 
 __all__ = ["MarkerErrors", "marker_errors"]
 

@@ -22,18 +22,19 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from pincal.errors import PincalError
-from pincal.identification import (
-    CrossValidation,
-    LMOptions,
-    compare,
-    cross_validate,
-    identify,
-)
+from pincal.identification import LMOptions, identify
 from pincal.io import CalibrationDirectory, read_measurement_file
 from pincal.measure import Measurements
 from pincal.model import Mechanism
 from pincal.sensitivity import parameters
-from pincal.validation import CrossValidationBaseline, CrossValidationSummary, OrientationErrors
+from pincal.validation import (
+    CrossValidation,
+    CrossValidationBaseline,
+    CrossValidationSummary,
+    OrientationErrors,
+    compare,
+    cross_validate,
+)
 from pincal.workflow._instrument_cv import instrument_cross_validation, is_instrument_calibration
 from pincal.workflow._marker_replay import rebuild, replay_procedure
 from pincal.workflow._socket_cv import is_socket_calibration, socket_cross_validation
@@ -101,7 +102,7 @@ def cross_validate_calibration(
     Args:
         cal: the calibration (marker table, pose file, ball-in-socket or instrument files).
         k: number of folds (2 ≤ k ≤ poses).
-        seed: the folds' seed (:func:`pincal.identification.kfold`).
+        seed: the folds' seed (:func:`pincal.validation.kfold`).
         refit: fit the folds again even when the calibration recorded them.
 
     Returns:

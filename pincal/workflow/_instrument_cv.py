@@ -21,17 +21,11 @@ from dataclasses import replace
 import numpy as np
 
 from pincal.errors import MeasurementFormatError, PincalError
-from pincal.identification import (
-    GateLimits,
-    InstrumentProblem,
-    identify_instruments,
-    kfold,
-    solver,
-)
+from pincal.identification import GateLimits, InstrumentProblem, identify_instruments, solver
 from pincal.io import CalibrationDirectory, file_kind, read_instrument_file
 from pincal.measure import InstrumentData
 from pincal.model import Mechanism, ParameterSet, parameters
-from pincal.validation import CrossValidationBaseline, CrossValidationSummary
+from pincal.validation import CrossValidationBaseline, CrossValidationSummary, kfold
 
 __all__ = ["instrument_cross_validation", "is_instrument_calibration"]
 
@@ -98,7 +92,7 @@ def instrument_cross_validation(
     Args:
         cal: a calibration of scalar instrument files (:func:`is_instrument_calibration`).
         k: folds of the readings of all files together.
-        seed: the folds' seed (:func:`pincal.identification.kfold`).
+        seed: the folds' seed (:func:`pincal.validation.kfold`).
 
     Returns:
         Held-out reading errors [m] of the calibration refitted per fold beside the

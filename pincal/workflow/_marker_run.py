@@ -3,7 +3,7 @@
 :func:`calibrate_markers` reads the table, registers the instrument frame and the
 marker(s) in closed form, settles the prior and the loss (:class:`MarkerSettings`),
 fits the machine with them, judges the fit (:func:`pincal.identification.check_quality`,
-then :func:`pincal.identification.held_out_verdict`: with the noise estimated, K-fold
+then :func:`pincal.validation.held_out_verdict`: with the noise estimated, K-fold
 held-out prediction against the registration alone decides, the prior's choice redone
 inside every fold when it was chosen) and returns everything a
 report or a calibration directory needs as one :class:`MarkerRun`. Nothing is written.
@@ -18,15 +18,12 @@ from pathlib import Path
 
 from pincal.errors import TooFewPosesError, UnknownNameError
 from pincal.identification import (
-    HeldOutEvidence,
     MarkerFit,
     Prior,
     QualityIssue,
     QualityVerdict,
     check_quality,
-    cross_validate,
     fit_markers,
-    held_out_verdict,
     is_registration,
     stacked_measurements,
 )
@@ -34,6 +31,7 @@ from pincal.io import distinct_markers, read_marker_data
 from pincal.measure import MarkerSetup, Measurements, marker_mechanism
 from pincal.model import Mechanism
 from pincal.sensitivity import parameters
+from pincal.validation import HeldOutEvidence, cross_validate, held_out_verdict
 from pincal.workflow._marker_settings import MarkerSettings, parse_prior
 from pincal.workflow._prior_choice import (
     PriorChoice,

@@ -2,7 +2,7 @@
 
 Every candidate error model (``geometric[+TERM…]``) is a procedure — training
 measurements → a fitted predictor — refitted from scratch on each of K folds
-(:func:`pincal.identification.select_model`); for a marker table the closed-form
+(:func:`pincal.validation.select_model`); for a marker table the closed-form
 registration is refitted too, and the registration alone is a candidate (the robot
 uncalibrated). :func:`select_pose_model` and :func:`select_marker_model` read the data,
 build the candidates and rank them. Nothing is written.
@@ -14,18 +14,12 @@ from collections.abc import Callable
 from pathlib import Path
 
 from pincal.errors import ParameterError
-from pincal.identification import (
-    Fitted,
-    ModelSelection,
-    fit_markers,
-    fitted,
-    identify,
-    select_model,
-)
+from pincal.identification import fit_markers, identify
 from pincal.io import read_marker_table, read_measurement_file
 from pincal.measure import MarkerSetup, Measurements, marker_mechanism
 from pincal.model import Mechanism, split_model
 from pincal.sensitivity import parameters
+from pincal.validation import Fitted, ModelSelection, fitted, select_model
 
 __all__ = ["select_marker_model", "select_pose_model"]
 
@@ -133,7 +127,7 @@ def select_pose_model(
             of raising.
 
     Returns:
-        The ranking (:class:`pincal.identification.ModelSelection`).
+        The ranking (:class:`pincal.validation.ModelSelection`).
 
     Raises:
         ParameterError: a model does not apply (see ``skip_inapplicable``).
@@ -172,7 +166,7 @@ def select_marker_model(
         skip_inapplicable: as :func:`select_pose_model`.
 
     Returns:
-        The ranking (:class:`pincal.identification.ModelSelection`).
+        The ranking (:class:`pincal.validation.ModelSelection`).
 
     Raises:
         ParameterError: a model does not apply (see ``skip_inapplicable``).

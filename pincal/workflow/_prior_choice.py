@@ -12,8 +12,8 @@ which keeps all but one of its poses in each fit (:class:`NestedChoice`).
 
 With orientation measured (a 6-D marker body) the candidates are compared by their
 held-out squared errors whitened by each block's noise σ
-(:meth:`pincal.identification.CrossValidation.squared_errors`), the σ those of the
-weakest prior's fold fits (:meth:`pincal.identification.CrossValidation.fit_scales`:
+(:meth:`pincal.validation.CrossValidation.squared_errors`), the σ those of the
+weakest prior's fold fits (:meth:`pincal.validation.CrossValidation.fit_scales`:
 what the poses given leave when the prior barely acts), so a prior that helps the
 positions and harms the orientation by more is not chosen.
 """
@@ -26,9 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.errors import TooFewPosesError
-from pincal.identification import BlockScales, CrossValidation, Prior, cross_validate
+from pincal.identification import Prior
 from pincal.measure import Measurements
 from pincal.model import Mechanism
+from pincal.validation import BlockScales, CrossValidation, cross_validate
 from pincal.workflow._marker_settings import PRIOR_GRID
 from pincal.workflow._registrations import MarkerData, MarkerProcedure
 

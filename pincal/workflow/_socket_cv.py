@@ -23,11 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from pincal.errors import MeasurementFormatError, PincalError
-from pincal.identification import identify_instruments, kfold
+from pincal.identification import identify_instruments
 from pincal.io import CalibrationDirectory, file_kind, read_instrument_file
 from pincal.measure import SocketData
 from pincal.model import Mechanism, parameters
-from pincal.validation import CrossValidationBaseline, CrossValidationSummary
+from pincal.validation import CrossValidationBaseline, CrossValidationSummary, kfold
 
 __all__ = ["is_socket_calibration", "socket_cross_validation"]
 
@@ -107,7 +107,7 @@ def socket_cross_validation(
     Args:
         cal: a calibration of a ball-in-socket file (:func:`is_socket_calibration`).
         k: folds of the seatings.
-        seed: the folds' seed (:func:`pincal.identification.kfold`).
+        seed: the folds' seed (:func:`pincal.validation.kfold`).
 
     Returns:
         Held-out seating and socket-distance errors [m], calibrated model beside the

@@ -16,10 +16,11 @@ from __future__ import annotations
 from pathlib import Path
 
 from pincal.errors import PincalError
-from pincal.identification import HeldOutEvidence, cross_validate, fit_markers
+from pincal.identification import fit_markers
 from pincal.io import CalibrationDirectory, read_marker_sets
 from pincal.measure import MarkerSetup, Measurements
 from pincal.model import Mechanism
+from pincal.validation import HeldOutEvidence, cross_validate
 from pincal.workflow._registrations import MarkerData, MarkerProcedure
 
 __all__ = ["transfer_markers"]
@@ -41,7 +42,7 @@ def transfer_markers(
         cal: a :class:`pincal.io.CalibrationDirectory` of a marker calibration.
         data: the other session's marker table (the calibration's columns and set-up).
         k: folds of the new table.
-        seed: the folds' seed (:func:`pincal.identification.kfold`).
+        seed: the folds' seed (:func:`pincal.validation.kfold`).
 
     Returns:
         ``calibrated``: the calibrated robot, frame and marker registered per fold;

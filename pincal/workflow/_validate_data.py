@@ -21,7 +21,7 @@ import numpy as np
 
 from pincal.compensation import JointTermCorrection
 from pincal.errors import ConditionError
-from pincal.identification import HeldOutEvidence, prediction_covariance
+from pincal.identification import prediction_covariance
 from pincal.io import (
     CalibrationDirectory,
     read_marker_sets,
@@ -31,7 +31,13 @@ from pincal.io import (
 from pincal.measure import MarkerSetup, Measurements
 from pincal.model import Mechanism, ParameterSet
 from pincal.sensitivity import parameters
-from pincal.validation import HeldOutValidation, MarkerErrors, marker_errors, validate_held_out
+from pincal.validation import (
+    HeldOutEvidence,
+    HeldOutValidation,
+    MarkerErrors,
+    marker_errors,
+    validate_held_out,
+)
 from pincal.workflow._acceptance import held_out_machine
 from pincal.workflow._transfer import transfer_markers
 

@@ -14,9 +14,10 @@ import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
-from pincal.identification import LMOptions, cross_validate, identify
+from pincal.identification import LMOptions, identify
 from pincal.io import read_calibration, read_measurement_file
 from pincal.sensitivity import parameters
+from pincal.validation import cross_validate
 
 
 def _run(*args):

@@ -18,9 +18,9 @@ import pytest
 from click.testing import CliRunner
 
 from pincal.cli import main
-from pincal.identification import kfold
 from pincal.measure import MarkerSetup, marker_mechanism
 from pincal.model import BASE_JOINT, TOOL_JOINT, parameters, sample_actuators, with_joint_origin
+from pincal.validation import kfold
 from pincal.workflow import PRIOR_GRID
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -121,8 +121,8 @@ def test_a_robust_fit_with_a_prior_is_judged_by_its_whole_objective(caplog):
     import logging
     from pathlib import Path
 
-    from pincal.identification import kfold
     from pincal.io import read_marker_sets
+    from pincal.validation import kfold
 
     data = Path(__file__).resolve().parents[2] / "docs/examples/tiago-mocap/measurements.csv"
     setup = MarkerSetup("arm_7_link", columns=("x1", "y1", "z1"))

@@ -11,11 +11,12 @@ from click.testing import CliRunner
 
 from pincal.cli import main
 from pincal.errors import MeasurementError
-from pincal.identification import Fitted, fitted, identify, select_model
+from pincal.identification import identify
 from pincal.io import write_measurements
 from pincal.measure import simulate_measurements
 from pincal.model import actual_joint_values, load_mechanism, sample_actuators, with_joint_terms
 from pincal.sensitivity import parameters
+from pincal.validation import Fitted, fitted, select_model
 
 NOISE = {"position": 0.01, "orientation": 0.01}  # [mm], [mrad]
 

@@ -7,7 +7,7 @@ import pytest
 
 import pincal
 from pincal.errors import ParameterError, ShapeError
-from pincal.identification import monte_carlo
+from pincal.validation import monte_carlo
 
 
 def _setup():

@@ -13,15 +13,10 @@ import numpy as np
 import pytest
 
 from pincal.errors import CalibrationDirectoryError
-from pincal.identification import (
-    CrossValidation,
-    HeldOutEvidence,
-    QualityIssue,
-    QualityVerdict,
-    held_out_verdict,
-)
+from pincal.identification import QualityIssue, QualityVerdict
 from pincal.measure import MarkerSetup
 from pincal.model import sample_actuators
+from pincal.validation import CrossValidation, HeldOutEvidence, held_out_verdict
 from pincal.workflow import PRIOR_GRID, MarkerSettings, calibrate_markers, marker_doc, rebuild
 from tests.cli.test_markers_cli import _table, _truth
 

@@ -13,11 +13,11 @@ import json
 import numpy as np
 import pytest
 
-from pincal.identification import (
+from pincal.identification import QualityVerdict
+from pincal.validation import (
     BlockScales,
     CrossValidation,
     HeldOutEvidence,
-    QualityVerdict,
     compare,
     held_out_verdict,
 )

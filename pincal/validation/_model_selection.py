@@ -2,7 +2,7 @@
 
 Every candidate error model (e.g. registration only, geometric, geometric+compliance)
 is fitted on K − 1 folds and predicts the held-out fold, on the same folds (from
-:func:`pincal.identification.kfold`); a candidate's score is the held-out mean squared
+:func:`pincal.validation.kfold`); a candidate's score is the held-out mean squared
 position error over all poses. Standard errors are those of the paired per-pose
 differences to the best candidate. The recommendation is the smallest candidate (fewest
 identified parameters) whose held-out error is within one standard error of the best
@@ -27,10 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from pincal.errors import MeasurementError
-from pincal.identification._cross_validation import kfold, position_errors
-from pincal.identification.results import IdentificationResult
+from pincal.identification import IdentificationResult
 from pincal.measure import Measurements
 from pincal.model import Mechanism, actual_joint_values, actual_shift
+from pincal.validation._cross_validation import kfold, position_errors
 
 __all__ = ["CandidateScore", "Fitted", "ModelSelection", "fitted", "select_model"]
 

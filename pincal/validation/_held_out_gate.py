@@ -25,10 +25,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from pincal.identification._cross_validation import BlockScales, CrossValidation, compare
-from pincal.identification._verdict import QualityIssue, QualityVerdict
-from pincal.identification.gate import likely_cause
-from pincal.identification.results import IdentificationResult
+from pincal.identification import IdentificationResult, QualityIssue, QualityVerdict, likely_cause
+from pincal.validation._cross_validation import BlockScales, CrossValidation, compare
 
 __all__ = ["HeldOutEvidence", "held_out_verdict"]
 

@@ -30,6 +30,7 @@ from threadpoolctl import threadpool_limits
 
 from pincal.errors import ParameterError, ShapeError
 from pincal.executor import Executor
+from pincal.identification import identify
 from pincal.measure import NoiseModel, simulate_measurements
 from pincal.model import Mechanism, ParameterSet, load_mechanism
 from pincal.sensitivity import parameters
@@ -79,8 +80,6 @@ def one_run(args: tuple, seed: np.random.SeedSequence) -> tuple[np.ndarray, bool
     Returns:
         ((n,) identified values [m, rad], converged).
     """
-    from pincal.identification._identify import identify
-
     model, preset, rows, true_values, noise, method = args
     with threadpool_limits(1):
         mech, params = _setup(model, preset)
