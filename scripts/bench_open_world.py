@@ -37,7 +37,7 @@ sys.path.insert(0, str(ROOT))  # the test suite's machine writers
 
 import pincal  # noqa: E402
 from pincal.sensitivity import pose_sensitivity  # noqa: E402
-from pincal.sensitivity._batch_jacobian import sensitivities_batch  # noqa: E402
+from pincal.sensitivity.batch import sensitivities_batch  # noqa: E402
 from tests.open_world import machines  # noqa: E402
 from tests.open_world.roster import ROSTER  # noqa: E402
 

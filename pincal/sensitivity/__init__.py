@@ -11,7 +11,6 @@ names through it).
 from __future__ import annotations
 
 from pincal.sensitivity._base_set import BASE_POSES, BaseSet, base_parameters, base_set
-from pincal.sensitivity._batch_jacobian import sensitivities_batch
 from pincal.sensitivity._closure_loops import ClosureLoop, closure_line, closure_loops
 from pincal.sensitivity._global import (
     GlobalSensitivity,
@@ -45,6 +44,7 @@ from pincal.sensitivity._rank import (
     numerical_ranks,
     unit_columns,
 )
+from pincal.sensitivity.batch import sensitivities_batch
 
 __all__ = [
     "BASE_POSES",

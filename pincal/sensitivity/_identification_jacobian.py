@@ -11,8 +11,8 @@ from collections.abc import Mapping
 import numpy as np
 
 from pincal.model import COMPONENTS, Mechanism, ParameterSet
-from pincal.sensitivity._batch_jacobian import sensitivities_batch
 from pincal.sensitivity._jacobian import BatchSensitivity
+from pincal.sensitivity.batch import sensitivities_batch
 
 __all__ = ["closure_breaking", "identification_jacobian", "jacobian_and_closure_breaking"]
 

@@ -10,9 +10,8 @@ pose. Anything else in ``pincal.sensitivity._*`` may change without notice.
 
 from __future__ import annotations
 
-from pincal.sensitivity._batch_jacobian import batch_applies
-from pincal.sensitivity._batch_predict import predict_configurations
 from pincal.sensitivity._jacobian import jacobian_plan
+from pincal.sensitivity.batch import batch_applies, predict_configurations
 
 __all__ = [
     "batch_applies",

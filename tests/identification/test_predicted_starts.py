@@ -15,10 +15,10 @@ import pincal
 from pincal.identification.problem import _pose_configurations, _problem
 from pincal.identification.problem._pose_configurations import PoseConfigurations
 from pincal.model import Mechanism
-from pincal.sensitivity import _batch_predict
-from pincal.sensitivity._batch_jacobian import param_twists
-from pincal.sensitivity._batch_predict import predict_configurations
 from pincal.sensitivity._jacobian import jacobian_plan
+from pincal.sensitivity.batch import _batch_predict
+from pincal.sensitivity.batch._batch_jacobian import param_twists
+from pincal.sensitivity.batch._batch_predict import predict_configurations
 
 MODELS = [
     ("stewart_6ups", "stewart42"),

@@ -9,8 +9,8 @@ import pytest
 import pincal
 from pincal.model.batch import _batch_fk
 from pincal.model.batch._batch_ops import jlog3_batch, log3_batch
-from pincal.sensitivity import _batch_jacobian
-from pincal.sensitivity._batch_jacobian import sensitivities_batch
+from pincal.sensitivity.batch import _batch_jacobian
+from pincal.sensitivity.batch._batch_jacobian import sensitivities_batch
 
 
 @pytest.mark.parametrize("name", ["stewart_6ups", "pkm5", "ur10"])

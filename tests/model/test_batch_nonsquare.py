@@ -17,7 +17,7 @@ import pytest
 import pincal
 from pincal.model.batch._range_factor import RangeFactor
 from pincal.sensitivity import pose_sensitivity
-from pincal.sensitivity._batch_jacobian import batch_applies, sensitivities_batch
+from pincal.sensitivity.batch._batch_jacobian import batch_applies, sensitivities_batch
 from tests.open_world import machines
 
 

@@ -7,7 +7,7 @@ import pytest
 
 import pincal
 from pincal.sensitivity import pose_sensitivity
-from pincal.sensitivity._batch_jacobian import batch_applies, sensitivities_batch
+from pincal.sensitivity.batch._batch_jacobian import batch_applies, sensitivities_batch
 
 MODELS = ["stewart_6ups", "hexaslide_6pus", "pkm5", "wedge3", "aacmm", "ur10"]
 

@@ -17,8 +17,8 @@ import pytest
 
 import pincal
 from pincal.sensitivity import pose_sensitivity
-from pincal.sensitivity._batch_jacobian import sensitivities_batch
 from pincal.sensitivity._jacobian import jacobian_plan
+from pincal.sensitivity.batch._batch_jacobian import sensitivities_batch
 
 RPR3 = Path(__file__).parents[1] / "model" / "machines" / "rpr3"
 

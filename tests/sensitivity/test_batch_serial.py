@@ -15,9 +15,10 @@ import pytest
 
 import pincal
 from pincal.model import Mechanism
-from pincal.sensitivity import _batch_serial, pose_sensitivity
-from pincal.sensitivity._batch_jacobian import sensitivities_batch
+from pincal.sensitivity import pose_sensitivity
 from pincal.sensitivity._jacobian import jacobian_plan
+from pincal.sensitivity.batch import _batch_serial
+from pincal.sensitivity.batch._batch_jacobian import sensitivities_batch
 
 LIMIT = '<limit lower="-2" upper="2" effort="1" velocity="1"/>'
 CHAIN_URDF = f"""<?xml version="1.0"?>

@@ -14,7 +14,7 @@ joint, ``p_b = p_a`` in world axes. There the whole Jacobian is a few dense prod
 * the passive joints re-close the loops: ``J −= Yᵀ ∂c/∂p`` with the adjoint
   ``Y = Jf⁻ᵀ Jm_uᵀ`` (6 right-hand sides, from the solve's factorisation).
 
-The helpers shared with :mod:`pincal.sensitivity._batch_jacobian` (the measured
+The helpers shared with :mod:`pincal.sensitivity.batch._batch_jacobian` (the measured
 frame's free-dof Jacobian, the adjoint) live here.
 """
 
@@ -24,8 +24,8 @@ import numpy as np
 
 from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
 from pincal.model.kernels import PassiveFactor, cross_cols
-from pincal.sensitivity._batch_serial import anchors
 from pincal.sensitivity._jacobian import JacobianPlan
+from pincal.sensitivity.batch._batch_serial import anchors
 
 __all__ = ["point_path"]
 

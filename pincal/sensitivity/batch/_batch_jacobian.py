@@ -34,13 +34,6 @@ from pincal.model.kernels import (
     mv,
     slice_kinematics,
 )
-from pincal.sensitivity._batch_points import (
-    adjoint,
-    measured_free_jacobian,
-    point_factor,
-    point_path,
-)
-from pincal.sensitivity._batch_serial import anchors, serial_columns, serial_path
 from pincal.sensitivity._jacobian import (
     BatchSensitivity,
     JacobianPlan,
@@ -49,6 +42,13 @@ from pincal.sensitivity._jacobian import (
 )
 from pincal.sensitivity._joint_terms import joint_term_sensitivities
 from pincal.sensitivity._rank import RANK_RTOL
+from pincal.sensitivity.batch._batch_points import (
+    adjoint,
+    measured_free_jacobian,
+    point_factor,
+    point_path,
+)
+from pincal.sensitivity.batch._batch_serial import anchors, serial_columns, serial_path
 
 __all__ = ["BatchSensitivity", "batch_applies", "sensitivities_batch"]
 

@@ -14,9 +14,9 @@ import numpy as np
 
 from pincal.model import BatchKinematics, Linearisation, Mechanism, ParameterSet
 from pincal.model.kernels import closure_jacobian_batch, cross3, mv
-from pincal.sensitivity._batch_jacobian import batch_applies, param_twists
-from pincal.sensitivity._batch_serial import anchors
 from pincal.sensitivity._jacobian import JacobianPlan, jacobian_plan
+from pincal.sensitivity.batch._batch_jacobian import batch_applies, param_twists
+from pincal.sensitivity.batch._batch_serial import anchors
 
 __all__ = ["predict_configurations"]
 

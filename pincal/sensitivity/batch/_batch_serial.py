@@ -1,6 +1,6 @@
 """The batched identification Jacobian of a serial chain (no closures), body-wise.
 
-Split from :mod:`pincal.sensitivity._batch_jacobian` (same mathematics, a faster
+Split from :mod:`pincal.sensitivity.batch._batch_jacobian` (same mathematics, a faster
 formation for chains). Every parameterised joint origin j hangs at a constant placement
 ``C_j`` on a Pinocchio body k (the parent joint of a movable joint, the supporting joint
 of a fixed one): ``A_j = oMi[k] · C_j``. A local twist ξ of that origin moves the
