@@ -30,6 +30,7 @@ from pincal.identification._instrument_identify import (
     InstrumentIdentification,
     identify_instruments,
 )
+from pincal.identification._linearised_fit import LinearisedFit, linearise_marker_fit
 from pincal.identification._marker_fit import (
     REGISTRATION_PRESET,
     MarkerFit,
@@ -143,6 +144,7 @@ __all__ = [
     "Intervals",
     "JointDetails",
     "LMOptions",
+    "LinearisedFit",
     "LocalSolverExtras",
     "MarginalBound",
     "MarkerFit",
@@ -186,6 +188,7 @@ __all__ = [
     "interval_quantiles",
     "is_registration",
     "likely_cause",
+    "linearise_marker_fit",
     "outlier_poses",
     "pose_recipe",
     "pose_residual_model",

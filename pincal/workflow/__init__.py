@@ -93,6 +93,7 @@ from pincal.workflow._marker_run import (
     ROBUST_LOSS,
     MarkerRun,
     calibrate_markers,
+    marker_fitter,
     marker_procedure,
 )
 from pincal.workflow._marker_settings import PRIOR_GRID, MarkerSettings, parse_prior
@@ -120,11 +121,11 @@ from pincal.workflow._pose_selection import (
     select_pose_design,
 )
 from pincal.workflow._prior_choice import (
-    NestedChoice,
+    Fitter,
     PriorChoice,
-    choose_prior,
+    PriorChooser,
     cross_validated,
-    nested_choice,
+    pick_prior,
 )
 from pincal.workflow._program_compensation import CompensatedProgram, compensate_program
 from pincal.workflow._reach_screen import (
@@ -173,6 +174,7 @@ __all__ = [
     "DemoAccuracy",
     "DemoResult",
     "DemoSettings",
+    "Fitter",
     "FleetDraw",
     "FleetPlan",
     "FleetReport",
@@ -181,7 +183,6 @@ __all__ = [
     "MarkerRun",
     "MarkerSettings",
     "ModelDescription",
-    "NestedChoice",
     "PoseBasis",
     "PoseProblem",
     "PoseRequest",
@@ -189,6 +190,7 @@ __all__ = [
     "PoseSelection",
     "PredictionChanges",
     "PriorChoice",
+    "PriorChooser",
     "SimulatedCampaign",
     "Steps",
     "TargetCompensation",
@@ -204,7 +206,6 @@ __all__ = [
     "calibrate_markers",
     "calibrate_pose_file",
     "calibrated_controller",
-    "choose_prior",
     "compensate_program",
     "compensate_targets",
     "compensation_test",
@@ -224,12 +225,13 @@ __all__ = [
     "fleet_statistics",
     "fold_table",
     "marker_doc",
+    "marker_fitter",
     "marker_procedure",
     "measured_characteristics",
-    "nested_choice",
     "nominal_starts",
     "other_machine",
     "parse_prior",
+    "pick_prior",
     "plan_fleet",
     "pose_basis",
     "pose_candidates",
