@@ -30,7 +30,6 @@ from pincal.identification._instrument_identify import (
     InstrumentIdentification,
     identify_instruments,
 )
-from pincal.identification._linearised_fit import LinearisedFit, linearise_marker_fit
 from pincal.identification._marker_fit import (
     REGISTRATION_PRESET,
     MarkerFit,
@@ -144,7 +143,6 @@ __all__ = [
     "Intervals",
     "JointDetails",
     "LMOptions",
-    "LinearisedFit",
     "LocalSolverExtras",
     "MarginalBound",
     "MarkerFit",
@@ -188,7 +186,6 @@ __all__ = [
     "interval_quantiles",
     "is_registration",
     "likely_cause",
-    "linearise_marker_fit",
     "outlier_poses",
     "pose_recipe",
     "pose_residual_model",

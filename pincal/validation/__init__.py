@@ -45,7 +45,6 @@ from pincal.validation._iso_cube import (
     TestCube,
     iso_test_cube,
 )
-from pincal.validation._linearised_cv import linearised_cross_validation
 from pincal.validation._marker_errors import (
     MarkerErrors,
     marker_errors,
@@ -87,7 +86,6 @@ __all__ = [
     "held_out_verdict",
     "iso_test_cube",
     "kfold",
-    "linearised_cross_validation",
     "marker_errors",
     "monte_carlo",
     "orientation_errors",

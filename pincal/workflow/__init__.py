@@ -93,7 +93,6 @@ from pincal.workflow._marker_run import (
     ROBUST_LOSS,
     MarkerRun,
     calibrate_markers,
-    marker_fitter,
     marker_procedure,
 )
 from pincal.workflow._marker_settings import PRIOR_GRID, MarkerSettings, parse_prior
@@ -121,11 +120,11 @@ from pincal.workflow._pose_selection import (
     select_pose_design,
 )
 from pincal.workflow._prior_choice import (
-    Fitter,
+    NestedChoice,
     PriorChoice,
-    PriorChooser,
+    choose_prior,
     cross_validated,
-    pick_prior,
+    nested_choice,
 )
 from pincal.workflow._program_compensation import CompensatedProgram, compensate_program
 from pincal.workflow._reach_screen import (
@@ -174,7 +173,6 @@ __all__ = [
     "DemoAccuracy",
     "DemoResult",
     "DemoSettings",
-    "Fitter",
     "FleetDraw",
     "FleetPlan",
     "FleetReport",
@@ -183,6 +181,7 @@ __all__ = [
     "MarkerRun",
     "MarkerSettings",
     "ModelDescription",
+    "NestedChoice",
     "PoseBasis",
     "PoseProblem",
     "PoseRequest",
@@ -190,7 +189,6 @@ __all__ = [
     "PoseSelection",
     "PredictionChanges",
     "PriorChoice",
-    "PriorChooser",
     "SimulatedCampaign",
     "Steps",
     "TargetCompensation",
@@ -206,6 +204,7 @@ __all__ = [
     "calibrate_markers",
     "calibrate_pose_file",
     "calibrated_controller",
+    "choose_prior",
     "compensate_program",
     "compensate_targets",
     "compensation_test",
@@ -225,13 +224,12 @@ __all__ = [
     "fleet_statistics",
     "fold_table",
     "marker_doc",
-    "marker_fitter",
     "marker_procedure",
     "measured_characteristics",
+    "nested_choice",
     "nominal_starts",
     "other_machine",
     "parse_prior",
-    "pick_prior",
     "plan_fleet",
     "pose_basis",
     "pose_candidates",

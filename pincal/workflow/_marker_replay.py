@@ -15,8 +15,8 @@ from pincal.identification import Prior
 from pincal.io import CalibrationDirectory, read_marker_sets
 from pincal.measure import MarkerSetup, Measurements, marker_mechanism
 from pincal.model import Mechanism
-from pincal.workflow._marker_run import marker_fitter, registration_procedure
-from pincal.workflow._prior_choice import PriorChooser
+from pincal.workflow._marker_run import marker_procedure, registration_procedure
+from pincal.workflow._prior_choice import nested_choice
 from pincal.workflow._registrations import MarkerProcedure
 
 __all__ = ["rebuild", "replay_procedure"]
@@ -57,8 +57,7 @@ def replay_procedure(
     if registration_only:
         return registration_procedure(mech, setup)
     preset, method = doc.get("preset", "chain"), doc.get("method", "gauss-newton")
-    fitter = marker_fitter(mech, setup, preset, method, doc.get("loss", "linear"))
+    procedure = marker_procedure(mech, setup, preset, method, doc.get("loss", "linear"))
     if doc.get("prior_spec") != "auto":
-        prior = _recorded_prior(doc)
-        return lambda meas: fitter(prior)(meas).calibrated
-    return PriorChooser(fitter, setup, int(doc.get("cv_folds", 5)), int(doc.get("cv_seed", 0)))
+        return procedure(_recorded_prior(doc))
+    return nested_choice(procedure, int(doc.get("cv_folds", 5)), int(doc.get("cv_seed", 0)))

@@ -33,7 +33,12 @@ from pincal.model import Mechanism
 from pincal.sensitivity import parameters
 from pincal.validation import HeldOutEvidence, cross_validate, held_out_verdict
 from pincal.workflow._marker_settings import MarkerSettings, parse_prior
-from pincal.workflow._prior_choice import Fitter, PriorChoice, PriorChooser, cross_validated
+from pincal.workflow._prior_choice import (
+    PriorChoice,
+    choose_prior,
+    cross_validated,
+    nested_choice,
+)
 from pincal.workflow._registrations import MarkerData, MarkerProcedure, Registrations
 
 __all__ = [
@@ -41,7 +46,6 @@ __all__ = [
     "ROBUST_LOSS",
     "MarkerRun",
     "calibrate_markers",
-    "marker_fitter",
     "marker_procedure",
     "registration_procedure",
 ]
@@ -92,31 +96,6 @@ class MarkerRun:
         return self.choice.prior
 
 
-def marker_fitter(
-    mech: Mechanism,
-    setup: MarkerSetup,
-    preset: str,
-    method: str,
-    loss: str,
-    registrations: Registrations | None = None,
-) -> Fitter:
-    """Prior → (measurements → marker fit): the fit that is cross-validated.
-
-    ``registrations``: the registrations shared with other procedures of the same
-    calibration (a new one when None): each set of poses is registered once.
-    """
-    reg = registrations or Registrations(mech, setup)
-
-    def with_prior(prior: Prior | None) -> Callable[[MarkerData], MarkerFit]:
-        def fit(meas: MarkerData) -> MarkerFit:
-            return fit_markers(mech, setup, meas, preset, method, prior, loss=loss,
-                               registration=reg(meas))  # fmt: skip
-
-        return fit
-
-    return with_prior
-
-
 def marker_procedure(
     mech: Mechanism,
     setup: MarkerSetup,
@@ -125,9 +104,21 @@ def marker_procedure(
     loss: str,
     registrations: Registrations | None = None,
 ) -> Callable[[Prior | None], MarkerProcedure]:
-    """Prior → (measurements → calibrated mechanism): :func:`marker_fitter`'s calibration."""
-    fitter = marker_fitter(mech, setup, preset, method, loss, registrations)
-    return lambda prior: lambda meas: fitter(prior)(meas).calibrated
+    """Prior → (measurements → calibrated mechanism): the fit that is cross-validated.
+
+    ``registrations``: the registrations shared with other procedures of the same
+    calibration (a new one when None): each set of poses is registered once.
+    """
+    reg = registrations or Registrations(mech, setup)
+
+    def with_prior(prior: Prior | None) -> MarkerProcedure:
+        def fit(meas: MarkerData) -> Mechanism:
+            return fit_markers(mech, setup, meas, preset, method, prior, loss=loss,
+                               registration=reg(meas)).calibrated  # fmt: skip
+
+        return fit
+
+    return with_prior
 
 
 def registration_procedure(
@@ -160,6 +151,15 @@ def _angle_note(rms: float) -> str:
         "milliradians, so the orientation columns and the model disagree — check their "
         "convention, order and unit (--orientation: rpy-deg, quat-wxyz, …) and that the body "
         "is on the marker's link"
+    )
+
+
+def _leave_one_out_note(sizes: list[int], k: int) -> str:
+    poses = "–".join(map(str, sorted({min(sizes), max(sizes)})))
+    return (
+        f"the prior of {len(sizes)} of the {k} cross-validation folds was chosen by "
+        f"leave-one-out: their {poses} training poses are too few for an inner {k}-fold "
+        "split to fit"
     )
 
 
@@ -229,16 +229,15 @@ def calibrate_markers(
         asked = None  # only the registration is fitted: no prior, no baseline to beat
 
     def settle(loss: str) -> tuple[PriorChoice, MarkerFit, QualityVerdict]:
-        fitter = marker_fitter(mech, setup, settings.preset, settings.method, loss,
-                               registrations)  # fmt: skip
+        procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss,
+                                     registrations)  # fmt: skip
         if asked == "auto":
             say(f"choosing the prior's strength by {k}-fold cross-validation ({loss} loss)")
-            choice = PriorChooser(fitter, setup, k, seed).choose(meas)
-            assert choice.fit is not None
-            fit = choice.fit
+            choice = choose_prior(procedure, meas, k, seed)
         else:
-            choice = cross_validated(fitter, asked, meas, k, seed)  # type: ignore[arg-type]
-            fit = fitter(choice.prior)(meas)
+            choice = cross_validated(procedure, asked, meas, k, seed)  # type: ignore[arg-type]
+        fit = fit_markers(mech, setup, meas, settings.preset, settings.method, choice.prior,
+                          loss=loss, registration=registrations(meas))  # fmt: skip
         return choice, fit, _gate(fit, meas, settings)
 
     loss = "linear" if settings.loss == "auto" else settings.loss
@@ -255,9 +254,12 @@ def calibrate_markers(
         cv = choice.cv
         if choice.chosen:  # the choice is part of the procedure: nested CV
             say("cross-validating the calibration, the prior chosen again in each fold")
-            fitter = marker_fitter(mech, setup, settings.preset, settings.method, loss,
-                                   registrations)  # fmt: skip
-            cv = cross_validate(PriorChooser(fitter, setup, k, seed), meas, k, seed)
+            procedure = marker_procedure(mech, setup, settings.preset, settings.method, loss,
+                                         registrations)  # fmt: skip
+            nested = nested_choice(procedure, k, seed)
+            cv = cross_validate(nested, meas, k, seed)
+            if nested.leave_one_out:
+                notes.append(_leave_one_out_note(nested.leave_one_out, k))
         # with orientation measured, both blocks count, each whitened by the noise σ
         # the procedure's fold fits leave (the same σ for both procedures)
         evidence = HeldOutEvidence(cv, baseline, "registration only", cv.fit_scales())
@@ -269,3 +271,4 @@ def calibrate_markers(
         warnings += (_angle_note(angle),)
     return MarkerRun(fit, meas, setup, settings, loss, choice, verdict,
                      (*notes, *fit.notes), warnings, evidence if machine else None)  # fmt: skip
+

@@ -1,17 +1,14 @@
 """The prior of a marker calibration, chosen (or checked) by cross-validation.
 
-A prior's strength is chosen among :data:`PRIOR_GRID` by K-fold cross-validation of the
-fit on the poses given (:class:`PriorChooser`): each candidate is fitted once on all of
-them, and its K-fold held-out error is that fit's one-step leave-fold-out
-(:func:`pincal.validation.linearised_cross_validation`: the fitted set, weights and
-prior kept; exact for a linear model) — one fit per candidate instead of K. The
-candidate of the lowest held-out error is chosen and its fit is the calibration.
-
-The held-out error of a calibration whose prior was chosen so is that of the whole
-procedure, choice included: cross-validating a :class:`PriorChooser` (real refits of
-every outer fold, each choosing its prior on its own training poses) is nested
-cross-validation, and that is the figure a calibration reports. A fixed prior is
-cross-validated by real refits alone (:func:`cross_validated`).
+A fitting procedure ``procedure(prior)`` (measurements → calibrated mechanism) is
+cross-validated for each prior of the grid on the same folds; the prior of the lowest
+held-out RMS is chosen (:func:`choose_prior`). The held-out error of a calibration whose
+prior was chosen so is that of the whole procedure, choice included
+(:func:`nested_choice`, cross-validated: nested CV); a fixed prior is cross-validated
+alone (:func:`cross_validated`). A campaign of few poses leaves an outer fold's training
+poses too few for the inner K-fold split (a 17-pose TIAGo session: 10 training poses of
+an inner fold cannot fit the arm); that fold's prior is then chosen by leave-one-out,
+which keeps all but one of its poses in each fit (:class:`NestedChoice`).
 
 With orientation measured (a 6-D marker body) the candidates are compared by their
 held-out squared errors whitened by each block's noise σ
@@ -28,23 +25,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pincal.identification import MarkerFit, Prior, linearise_marker_fit
-from pincal.measure import MarkerSetup, Measurements
+from pincal.errors import TooFewPosesError
+from pincal.identification import Prior
+from pincal.measure import Measurements
 from pincal.model import Mechanism
-from pincal.validation import (
-    BlockScales,
-    CrossValidation,
-    cross_validate,
-    kfold,
-    linearised_cross_validation,
-)
+from pincal.validation import BlockScales, CrossValidation, cross_validate
 from pincal.workflow._marker_settings import PRIOR_GRID
-from pincal.workflow._registrations import MarkerData
+from pincal.workflow._registrations import MarkerData, MarkerProcedure
 
-__all__ = ["Fitter", "PriorChoice", "PriorChooser", "cross_validated", "pick_prior"]
+__all__ = ["NestedChoice", "PriorChoice", "choose_prior", "cross_validated", "nested_choice"]
 
-#: prior → (measurements → the marker fit with that prior)
-Fitter = Callable[[Prior | None], Callable[[MarkerData], MarkerFit]]
+#: measurements → calibrated mechanism, for one prior
+Procedure = Callable[[Prior | None], MarkerProcedure]
 
 
 @dataclass(frozen=True)
@@ -53,15 +45,13 @@ class PriorChoice:
 
     Attributes:
         prior: the prior (None: no prior).
-        cv: the cross-validation of the fit with ``prior``: for a given prior by real
-            refits; for a chosen one the linearised leave-fold-out that chose it (the
-            lowest of the table, optimistic).
+        cv: the cross-validation of the procedure with ``prior`` (for a chosen prior,
+            on the folds that chose it: the lowest of the table, optimistic).
         table: when chosen, every candidate's (σ [mm, mrad], held-out RMS [mm]), in the
             order tried; empty for a prior that was given.
         orientation: when chosen with orientation measured, every candidate's held-out
             RMS rotation angle [mrad] (the order of ``table``), else empty.
         scales: the σ that whitened the choice (orientation measured), else None.
-        fit: when chosen, the fit with ``prior`` on the poses that chose it.
     """
 
     prior: Prior | None
@@ -69,7 +59,6 @@ class PriorChoice:
     table: tuple[tuple[float, float], ...] = ()
     orientation: tuple[float, ...] = ()
     scales: BlockScales | None = None
-    fit: MarkerFit | None = None
 
     @property
     def chosen(self) -> bool:
@@ -78,25 +67,33 @@ class PriorChoice:
 
 
 def cross_validated(
-    fitter: Fitter, prior: Prior | None, meas: Sequence[Measurements], k: int, seed: int
+    procedure: Procedure, prior: Prior | None, meas: Sequence[Measurements], k: int, seed: int
 ) -> PriorChoice:
-    """A given prior, cross-validated by refitting each of K folds (from ``seed``)."""
-    fit = fitter(prior)
-    return PriorChoice(prior, cross_validate(lambda d: fit(d).calibrated, meas, k, seed))
+    """A given prior, cross-validated (K folds from ``seed``)."""
+    return PriorChoice(prior, cross_validate(procedure(prior), meas, k, seed))
 
 
-def pick_prior(
-    grid: Sequence[float],
-    cvs: Sequence[CrossValidation],
-    fits: Sequence[MarkerFit] | None = None,
+def choose_prior(
+    procedure: Procedure,
+    meas: Sequence[Measurements],
+    k: int,
+    seed: int,
+    grid: Sequence[float] = PRIOR_GRID,
+    progress: Callable[[str], None] | None = None,
 ) -> PriorChoice:
-    """The candidate of ``grid`` (σ in mm and mrad) of the lowest held-out error.
+    """The prior of ``grid`` (σ in mm and mrad) of the lowest K-fold held-out error.
 
-    ``cvs`` holds each candidate's cross-validation, ``fits`` (optional) its fit. The
-    error is the RMS position error, or with orientation measured the mean whitened
-    squared error (see the module). Ties keep the stronger prior (the one tried first).
+    The error is the RMS position error, or with orientation measured the mean
+    whitened squared error (see the module). Ties keep the stronger prior (the one
+    tried first).
     """
-    assert cvs and len(cvs) == len(grid), "one cross-validation per candidate"
+    priors = [Prior(s * 1e-3, s * 1e-3) for s in grid]
+    cvs = []
+    for s, prior in zip(grid, priors, strict=True):
+        cvs.append(cross_validate(procedure(prior), meas, k, seed))
+        if progress is not None:
+            progress(f"prior σ {s:g} mm / {s:g} mrad: held-out RMS {cvs[-1].rms * 1e3:.3f} mm")
+    assert cvs, "an empty prior grid"
     scales = cvs[-1].fit_scales()
     if scales is None:
         score = [cv.rms for cv in cvs]
@@ -105,54 +102,59 @@ def pick_prior(
     best = min(range(len(cvs)), key=lambda i: (score[i], i))
     table = tuple((float(s), cv.rms * 1e3) for s, cv in zip(grid, cvs, strict=True))
     turned = tuple(float(cv.orientation_rms) * 1e3 for cv in cvs if cv.orientation_rms is not None)
-    s = grid[best] * 1e-3
-    fit = None if fits is None else fits[best]
-    return PriorChoice(Prior(s, s), cvs[best], table, turned, scales, fit)
+    return PriorChoice(priors[best], cvs[best], table, turned, scales)
 
 
-class PriorChooser:
+class NestedChoice:
     """Measurements → calibrated mechanism with the prior chosen on those measurements.
 
-    Each candidate of ``grid`` is fitted on the measurements given and judged by its
-    linearised K-fold leave-fold-out (see the module); cross-validating a chooser is
-    nested cross-validation, no held-out pose taking part in choosing the prior that
-    predicts it.
+    Cross-validating it is nested cross-validation: each outer fold chooses its prior by
+    an inner K-fold CV of its own training poses, so no held-out pose takes part in
+    choosing the prior that predicts it. When an inner fold's training poses are too
+    few to fit (:class:`pincal.errors.TooFewPosesError`), the prior of those poses is
+    chosen by leave-one-out instead (K = their number).
 
-    Args:
-        fitter: prior → (measurements → marker fit).
-        setup: the marker set-up the fits use (several markers: one set each).
-        k: folds of the choice; seed: their seed.
-        grid: candidate σ [mm for lengths, mrad for angles], strongest first.
-        progress: called with a line per candidate, or None.
+    Attributes:
+        leave_one_out: the number of poses of every call whose prior was chosen by
+            leave-one-out, in call order (empty when the K-fold split always fitted).
     """
 
-    def __init__(
-        self,
-        fitter: Fitter,
-        setup: MarkerSetup,
-        k: int,
-        seed: int,
-        grid: Sequence[float] = PRIOR_GRID,
-        progress: Callable[[str], None] | None = None,
-    ) -> None:
-        self.fitter, self.setup, self.k, self.seed = fitter, setup, k, seed
-        self.grid, self.progress = tuple(grid), progress
+    def __init__(self, procedure: Procedure, k: int, seed: int) -> None:
+        self.procedure, self.k, self.seed = procedure, k, seed
+        self.leave_one_out: list[int] = []
 
-    def choose(self, meas: MarkerData) -> PriorChoice:
-        """The prior of ``meas`` (one set, or one per marker) and its fit."""
-        parts = (meas,) if isinstance(meas, Measurements) else tuple(meas)
-        folds = kfold(len(parts[0]), self.k, self.seed)
-        fits, cvs = [], []
-        for s in self.grid:
-            fits.append(self.fitter(Prior(s * 1e-3, s * 1e-3))(meas))
-            lin = linearise_marker_fit(fits[-1], self.setup, meas)
-            cvs.append(linearised_cross_validation(lin, folds))
-            if self.progress is not None:
-                self.progress(f"prior σ {s:g} mm / {s:g} mrad: held-out RMS "
-                              f"{cvs[-1].rms * 1e3:.3f} mm (linearised)")  # fmt: skip
-        return pick_prior(self.grid, cvs, fits)
+    def choose(self, parts: Sequence[Measurements]) -> PriorChoice:
+        """The prior of ``parts`` (one set per marker): K-fold, else leave-one-out.
+
+        Raises:
+            TooFewPosesError: even leave-one-out leaves too few poses to fit.
+        """
+        try:
+            return choose_prior(self.procedure, parts, self.k, self.seed)
+        except TooFewPosesError as e:
+            m = len(parts[0])
+            if m <= self.k:
+                raise
+            try:
+                choice = choose_prior(self.procedure, parts, m, self.seed)
+            except TooFewPosesError as again:
+                raise TooFewPosesError(
+                    f"{m} poses cannot choose the prior: neither {self.k}-fold nor "
+                    f"leave-one-out cross-validation leaves enough poses to fit ({again}); "
+                    "measure more poses or give the prior (--prior LEN_MM,ANG_MRAD)"
+                ) from e
+            self.leave_one_out.append(m)
+            return choice
 
     def __call__(self, meas: MarkerData) -> Mechanism:
-        fit = self.choose(meas).fit
-        assert fit is not None
-        return fit.calibrated
+        parts = (meas,) if isinstance(meas, Measurements) else tuple(meas)
+        return self.procedure(self.choose(parts).prior)(meas)
+
+
+def nested_choice(procedure: Procedure, k: int, seed: int) -> NestedChoice:
+    """Measurements → calibrated mechanism with the prior chosen on those measurements.
+
+    See :class:`NestedChoice` (the inner K-fold choice, leave-one-out when the poses of
+    an outer fold are too few for it).
+    """
+    return NestedChoice(procedure, k, seed)

@@ -246,11 +246,10 @@ def test_tiago_mocap_example_runs(tmp_path):
 
 @pytest.mark.slow
 def test_a_small_campaign_is_judged_not_stopped_by_the_inner_folds(tmp_path):
-    """17 real TIAGo poses: an outer fold's 13–14 training poses are too few for an inner
-    5-fold split of refits (10 poses cannot fit the arm); the prior of each fold is chosen
-    on its fit's linearised leave-fold-out, which needs no fit of fewer poses, so the
-    calibration is judged by held-out prediction (and ``validate --cv`` replays it)
-    instead of stopping with TooFewPosesError."""
+    """17 real TIAGo poses: an outer fold's 13–14 training poses are too few for the inner
+    5-fold split that chooses the prior (10 poses cannot fit the arm); the prior of such a
+    fold is chosen by leave-one-out, so the calibration is judged by held-out prediction
+    (and ``validate --cv`` replays it) instead of stopping with TooFewPosesError."""
     real = ROOT / "docs" / "examples" / "tiago-mocap" / "measurements.csv"
     lines = real.read_text().splitlines()
     (tmp_path / "m.csv").write_text("\n".join(lines[:18]) + "\n")
@@ -259,6 +258,8 @@ def test_a_small_campaign_is_judged_not_stopped_by_the_inner_folds(tmp_path):
     assert r.exit_code == 0, r.output
     assert "TooFewPosesError" not in r.output
     doc = json.loads((tmp_path / "cal" / "calibration.json").read_text())
+    notes = [n for n in doc["markers"]["notes"] if "leave-one-out" in n]
+    assert len(notes) == 1 and "of the 5 cross-validation folds" in notes[0], notes
     held = doc["quality"]["held_out"]
     assert held["folds"] == 5 and np.isfinite(held["calibrated"]["held_out_rms_mm"])
     out = _run("validate", tmp_path / "cal", "--cv", 5, "--json")
