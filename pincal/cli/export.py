@@ -67,7 +67,9 @@ def export(
     Formats: linuxcnc-genhexkins (hexapod strut ends as HAL setp lines, per-joint
     offsets), generic-table (every joint placement calibrated vs nominal and the zero
     offsets, any machine, YAML), dh-standard / dh-modified (a DH table fitted to a
-    serial arm's joint axes, with base and tool transforms, YAML).
+    serial arm's joint axes, with base and tool transforms, YAML), klipper-delta /
+    linuxcnc-lineardeltakins / rotary-delta (delta parameters), volumetric-map (an
+    error map and command corrections on a workspace grid, CSV).
 
     An export is a projection: over random workspace poses it reports the RMS and max
     position / orientation difference between the controller's own equations with

@@ -144,9 +144,18 @@ def projection(
         [np.linalg.norm(pin.log3(r[:3, :3].T @ c[:3, :3])) for r, c in zip(ref, ctl, strict=True)]
     )
     joint_rms = joint_max = None
+    missing = list(built.not_expressed)
     if built.inverse is not None:
         e_q = np.abs(built.inverse(ref) - q_act)
-        joint_rms, joint_max = float(np.sqrt(np.mean(e_q**2))), float(e_q.max())
+        solved = ~np.isnan(e_q).any(axis=1)
+        if not solved.all():
+            missing.append(
+                f"the controller's inverse found no solution at {int((~solved).sum())} of "
+                f"{len(q_act)} poses (joint figures over the others)"
+            )
+        if solved.any():
+            e_q = e_q[solved]
+            joint_rms, joint_max = float(np.sqrt(np.mean(e_q**2))), float(e_q.max())
     return Projection(
         name,
         float(np.sqrt(np.mean(e_p**2))),
@@ -155,7 +164,7 @@ def projection(
         float(e_r.max()),
         joint_rms,
         joint_max,
-        tuple(built.not_expressed),
+        tuple(missing),
         tuple(built.conventions),
         np.array(q_act, dtype=float),
     )

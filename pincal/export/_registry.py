@@ -21,6 +21,7 @@ from pincal.export._linear_delta import KlipperDelta, LinuxCncLinearDelta
 from pincal.export._machine import CalibratedMachine
 from pincal.export._rotary_delta import RotaryDelta
 from pincal.export._table import GenericTable
+from pincal.export._volumetric import VolumetricMap
 from pincal.io import atomic_write_text
 from pincal.model import sample_actuators
 
@@ -37,6 +38,7 @@ FORMATS: dict[str, ControllerFormat] = {
         KlipperDelta(),
         LinuxCncLinearDelta(),
         RotaryDelta(),
+        VolumetricMap(),
     )
 }
 
