@@ -67,7 +67,8 @@ def export(
     Formats: linuxcnc-genhexkins (hexapod strut ends as HAL setp lines, per-joint
     offsets), generic-table (every joint placement calibrated vs nominal and the zero
     offsets, any machine, YAML), dh-standard / dh-modified (a DH table fitted to a
-    serial arm's joint axes, with base and tool transforms, YAML), klipper-delta /
+    serial arm's joint axes, with base and tool transforms, YAML), dh-offsets-lengths
+    (zero offsets and link lengths on the nominal DH table), klipper-delta /
     linuxcnc-lineardeltakins / rotary-delta (delta parameters), volumetric-map (an
     error map and command corrections on a workspace grid, CSV).
 

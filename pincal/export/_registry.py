@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from pincal.errors import ExportError
+from pincal.export._dh_pendant import OffsetsLengthsDH
 from pincal.export._dh_table import ModifiedDH, StandardDH
 from pincal.export._format import ControllerFormat, Projection, projection
 from pincal.export._genhexkins import GenHexKins
@@ -35,6 +36,7 @@ FORMATS: dict[str, ControllerFormat] = {
         GenericTable(),
         StandardDH(),
         ModifiedDH(),
+        OffsetsLengthsDH(),
         KlipperDelta(),
         LinuxCncLinearDelta(),
         RotaryDelta(),
