@@ -34,6 +34,7 @@ __all__ = [
     "actuator_units",
     "branch_change",
     "det_sign",
+    "unwrapped",
 ]
 
 #: largest |Δq| of a revolute actuator that stays on the start's branch [rad]
@@ -51,6 +52,20 @@ def actuator_units(mech: Mechanism) -> tuple[str, ...]:
         "rad" if mech.tree.joints[j].type in ("revolute", "continuous") else "m"
         for j in mech.actuated
     )
+
+
+def unwrapped(mech: Mechanism, q_act: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """``q_act`` (n_act,) with each continuous actuator's angle taken nearest ``start``.
+
+    A continuous joint has no angle range: its configuration holds (cos θ, sin θ), read
+    back in (−π, π]. A solution a few mrad past ±π from a start on the other side reads
+    2π away from it; the command is the same angle taken within π of the start [rad].
+    """
+    out = np.array(q_act, dtype=float)
+    for k, j in enumerate(mech.actuated):
+        if mech.tree.joints[j].type == "continuous" and np.isfinite(start[k]):
+            out[k] = start[k] + np.angle(np.exp(1j * (out[k] - start[k])))
+    return out
 
 
 def det_sign(mech: Mechanism, q_act: np.ndarray, q: np.ndarray | None = None) -> int:

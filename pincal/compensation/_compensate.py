@@ -29,7 +29,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from pincal.compensation._branch import actuator_units, branch_change
+from pincal.compensation._branch import actuator_units, branch_change, unwrapped
 from pincal.compensation._joint_terms import JointTermCorrection
 from pincal.errors import ConvergenceError, MeasurementError, MobilityError, ModelFileError
 from pincal.model import COMPONENTS, Mechanism
@@ -290,7 +290,7 @@ def compensate(
             q = solver.inverse_configuration(T, guess)
             if joint_terms:
                 q = joint_terms.solve(solver, T, q)
-            joints = solver.actuators_of(q)
+            joints = unwrapped(solver, solver.actuators_of(q), start_rows[i])
             row = joint_terms.commands(joints[None])[0] if joint_terms else joints
             if check_limits:
                 out = np.nonzero((row < lo - 1e-12) | (row > hi + 1e-12))[0]

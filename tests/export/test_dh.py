@@ -23,13 +23,15 @@ def ur5():
     return load_mechanism("ur5")
 
 
-def _dh_expressible(ur5, seed=4) -> CalibratedMachine:
-    """UR5 with errors DH can hold: joint-origin translations, zero offsets and the
-    tilts of the axes that have no parallel neighbour (the 2-3-4 axes stay parallel)."""
+def _dh_expressible(
+    ur5, seed=4, parallel=("shoulder_lift_joint", "elbow_joint", "wrist_1_joint")
+) -> CalibratedMachine:
+    """An arm (UR5 by default) with errors DH can hold: joint-origin translations, zero
+    offsets and the tilts of the axes that have no parallel neighbour (``parallel``: the
+    axes that stay parallel, UR5's 2-3-4)."""
     params = parameters(ur5, "full")
     rng = np.random.default_rng(seed)
     values = np.zeros(len(params))
-    parallel = ("shoulder_lift_joint", "elbow_joint", "wrist_1_joint")
     for k, p in enumerate(params.parameters):
         if p.dof in ("tx", "ty", "tz"):
             values[k] = rng.uniform(-1e-3, 1e-3)
@@ -104,3 +106,25 @@ def test_a_tilt_of_parallel_axes_is_named_and_its_residual_reported(tmp_path, ur
     assert done.projection.position_max == pytest.approx(errs[:, 0].max(), rel=1e-6)
     assert done.projection.orientation_max == pytest.approx(errs[:, 1].max(), rel=1e-6)
     assert done.projection.position_max > 1e-4  # a real loss, not rounding
+
+
+@pytest.mark.parametrize("fmt", ["dh-standard", "dh-modified", "dh-offsets-lengths"])
+def test_kinova_tables_are_the_controllers_own_kinematics(fmt):
+    """A Kinova arm (Jaco 2: axes 2 and 3 parallel): errors DH holds are written to
+    ≤ 1 µm / 1 µrad, and every table's reported figures are its own forward
+    kinematics' (written in the test) against the calibrated model."""
+    kinova = load_mechanism("kinova")
+    parallel = ("j2s6s200_joint_2", "j2s6s200_joint_3")
+    machine = _dh_expressible(kinova, seed=6, parallel=parallel)
+    done = export_calibration(machine, fmt, poses=20, seed=1)
+    doc = read_yaml_body(done.text)
+    ref = machine.reference(done.projection.q_act)
+    errs = np.array(
+        [pose_error(dh_forward(doc, r), T) for r, T in zip(done.projection.q_act, ref, strict=True)]
+    )
+    assert done.projection.position_max == pytest.approx(errs[:, 0].max(), rel=1e-6, abs=1e-12)
+    if fmt != "dh-offsets-lengths":  # a full DH table holds these errors
+        assert errs[:, 0].max() <= 1e-6 and errs[:, 1].max() <= 1e-6
+    else:  # the pendant's table keeps the nominal twists: the tilts are named, and lost
+        assert any("twists" in t for t in done.projection.not_expressed)
+        assert errs[:, 0].max() > 1e-5
