@@ -146,7 +146,10 @@ def projection(
     joint_rms = joint_max = None
     missing = list(built.not_expressed)
     if built.inverse is not None:
-        e_q = np.abs(built.inverse(ref) - q_act)
+        diff = built.inverse(ref) - q_act
+        joints = machine.calibrated.tree.joints
+        endless = [joints[j].type == "continuous" for j in machine.calibrated.actuated]
+        e_q = np.abs(np.where(endless, np.angle(np.exp(1j * diff)), diff))  # 2π: one angle
         solved = ~np.isnan(e_q).any(axis=1)
         if not solved.all():
             missing.append(

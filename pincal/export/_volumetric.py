@@ -134,6 +134,8 @@ class VolumetricMap(ControllerFormat):
             axes.append(np.array([home.translation[i]]) if one else np.linspace(lo, hi, GRID))
         n_act = len(nom.actuated)
         scale = 1.0 + np.array([machine.gains().get(j, 0.0) for j in nom.actuated])
+        # a continuous joint reads back in (−π, π]: its correction is taken within π
+        endless = np.array([nom.tree.joints[j].type == "continuous" for j in nom.actuated])
         values = np.full((*(a.size for a in axes), 6 + n_act), np.nan)
         u_nom_all = np.full((*values.shape[:3], n_act), np.nan)
         for idx in np.ndindex(*values.shape[:3]):
@@ -149,9 +151,8 @@ class VolumetricMap(ControllerFormat):
             if not (_within(nom, u_nom) and _within(cal, u_cal)):
                 continue
             R_nom = nom.frame_placement(qn).rotation
-            values[idx] = np.concatenate(
-                [T.translation - p, pin.log3(R_nom.T @ T.rotation), u_cal - u_nom]
-            )
+            du = np.where(endless, np.angle(np.exp(1j * (u_cal - u_nom))), u_cal - u_nom)
+            values[idx] = np.concatenate([T.translation - p, pin.log3(R_nom.T @ T.rotation), du])
             u_nom_all[idx] = u_nom
         reachable = ~np.isnan(values[..., 0])
         if not reachable.any():
