@@ -25,7 +25,14 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.export._dh_fit import fit_dh
-from pincal.export._dh_table import StandardDH, _axes, _seq, _transform, _w, _xyz_rpy
+from pincal.export._dh_table import (
+    StandardDH,
+    as_written,
+    joint_axes,
+    transform,
+    xyz_rpy,
+    yaml_seq,
+)
 from pincal.export._format import Built, fmt_number
 from pincal.export._machine import CalibratedMachine
 
@@ -41,12 +48,12 @@ class OffsetsLengthsDH(StandardDH):
     def build(self, machine: CalibratedMachine, q_fit: np.ndarray) -> Built:
         from scipy.optimize import least_squares  # here: importing pincal must not load scipy
 
-        nominal = fit_dh(*_axes(machine.nominal), False)
-        own = fit_dh(*_axes(machine.calibrated), False)
-        base_xyz, base_rpy = _xyz_rpy(nominal.base)
-        tool_xyz, tool_rpy = _xyz_rpy(nominal.tool)
-        B, E = _transform(base_xyz, base_rpy), _transform(tool_xyz, tool_rpy)
-        alpha = np.vectorize(_w)(nominal.rows[:, 1])
+        nominal = fit_dh(*joint_axes(machine.nominal), False)
+        own = fit_dh(*joint_axes(machine.calibrated), False)
+        base_xyz, base_rpy = xyz_rpy(nominal.base)
+        tool_xyz, tool_rpy = xyz_rpy(nominal.tool)
+        B, E = transform(base_xyz, base_rpy), transform(tool_xyz, tool_rpy)
+        alpha = np.vectorize(as_written)(nominal.rows[:, 1])
         theta0 = nominal.rows[:, 2]
 
         def forward_with(x: np.ndarray, q_act: np.ndarray) -> np.ndarray:
@@ -72,7 +79,7 @@ class OffsetsLengthsDH(StandardDH):
         start = np.concatenate([np.angle(np.exp(1j * (own.rows[:, 2] - theta0))),
                                 own.rows[:, 0], own.rows[:, 3]])  # fmt: skip
         x = least_squares(residual, start, method="lm", x_scale="jac").x
-        x = np.vectorize(_w)(x)
+        x = np.vectorize(as_written)(x)
         dtheta, a, d = x.reshape(3, -1)
 
         lines = [
@@ -82,7 +89,7 @@ class OffsetsLengthsDH(StandardDH):
             "written: zero_offset, a, d per joint; alpha, base and tool are the nominal arm's",
             "units: {length: m, angle: rad}",
             f"measured_frame: {json.dumps(machine.calibrated.measured_frame)}",
-            f"base: {{xyz: {_seq(base_xyz)}, rpy: {_seq(base_rpy)}}}",
+            f"base: {{xyz: {yaml_seq(base_xyz)}, rpy: {yaml_seq(base_rpy)}}}",
             "rows:",
         ]
         for i, joint in enumerate(machine.calibrated.actuated):
@@ -97,7 +104,7 @@ class OffsetsLengthsDH(StandardDH):
                 f"    nominal: {{a: {fmt_number(a0)}, alpha: {fmt_number(al0)}, "
                 f"d: {fmt_number(d0)}, theta_offset: {fmt_number(t0)}}}",
             ]
-        lines.append(f"tool: {{xyz: {_seq(tool_xyz)}, rpy: {_seq(tool_rpy)}}}")
+        lines.append(f"tool: {{xyz: {yaml_seq(tool_xyz)}, rpy: {yaml_seq(tool_rpy)}}}")
         missing = [
             "changed axis twists (alpha), a moved base or tool: absorbed by offsets and "
             "lengths as far as they can, the rest in the figures above",

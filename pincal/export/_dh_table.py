@@ -30,14 +30,23 @@ from pincal.export._format import Built, ControllerFormat, fmt_number
 from pincal.export._machine import CalibratedMachine
 from pincal.model import Mechanism
 
-__all__ = ["ModifiedDH", "StandardDH"]
+__all__ = [
+    "ModifiedDH",
+    "StandardDH",
+    "as_written",
+    "joint_axes",
+    "transform",
+    "xyz_rpy",
+    "yaml_seq",
+]
 
 
-def _w(x: float) -> float:
+def as_written(x: float) -> float:
+    """``x`` as the table writes it (12 decimals)."""
     return float(fmt_number(x))
 
 
-def _axes(mech: Mechanism) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def joint_axes(mech: Mechanism) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Joint axis points and directions (n, 3) and the tool pose (4, 4) at zero readings.
 
     Raises:
@@ -74,17 +83,21 @@ def _axes(mech: Mechanism) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.array(points), np.array(dirs), mech.frame_placement(q).homogeneous
 
 
-def _xyz_rpy(T: np.ndarray) -> tuple[list[float], list[float]]:
-    return [_w(v) for v in T[:3, 3]], [_w(v) for v in pin.rpy.matrixToRpy(T[:3, :3])]
+def xyz_rpy(T: np.ndarray) -> tuple[list[float], list[float]]:
+    """(xyz [m], rpy [rad]) of a (4, 4) transform, as written."""
+    rpy = pin.rpy.matrixToRpy(T[:3, :3])
+    return [as_written(v) for v in T[:3, 3]], [as_written(v) for v in rpy]
 
 
-def _transform(xyz: list[float], rpy: list[float]) -> np.ndarray:
+def transform(xyz: list[float], rpy: list[float]) -> np.ndarray:
+    """The (4, 4) transform of ``xyz`` [m] and ``rpy`` [rad] (``R = Rz·Ry·Rx``)."""
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = pin.rpy.rpyToMatrix(np.array(rpy)), xyz
     return T
 
 
-def _seq(values: list[float]) -> str:
+def yaml_seq(values: list[float]) -> str:
+    """A YAML flow sequence of numbers as written."""
     return "[" + ", ".join(fmt_number(v) for v in values) + "]"
 
 
@@ -115,12 +128,12 @@ class _DHTable(ControllerFormat):
 
     def build(self, machine: CalibratedMachine, q_fit: np.ndarray) -> Built:
         cal = machine.calibrated
-        fit = fit_dh(*_axes(cal), self.modified)
-        nominal = fit_dh(*_axes(machine.nominal), self.modified)
-        rows = np.vectorize(_w)(fit.rows)
-        base_xyz, base_rpy = _xyz_rpy(fit.base)
-        tool_xyz, tool_rpy = _xyz_rpy(fit.tool)
-        B, E = _transform(base_xyz, base_rpy), _transform(tool_xyz, tool_rpy)
+        fit = fit_dh(*joint_axes(cal), self.modified)
+        nominal = fit_dh(*joint_axes(machine.nominal), self.modified)
+        rows = np.vectorize(as_written)(fit.rows)
+        base_xyz, base_rpy = xyz_rpy(fit.base)
+        tool_xyz, tool_rpy = xyz_rpy(fit.tool)
+        B, E = transform(base_xyz, base_rpy), transform(tool_xyz, tool_rpy)
 
         def forward(q_act: np.ndarray) -> np.ndarray:
             out = np.empty((len(q_act), 4, 4))
@@ -142,7 +155,7 @@ class _DHTable(ControllerFormat):
             + "; theta_i = q_i + theta_offset_i; T = base A_1 ... A_n tool'",
             "units: {length: m, angle: rad}",
             f"measured_frame: {json.dumps(cal.measured_frame)}",
-            f"base: {{xyz: {_seq(base_xyz)}, rpy: {_seq(base_rpy)}}}",
+            f"base: {{xyz: {yaml_seq(base_xyz)}, rpy: {yaml_seq(base_rpy)}}}",
             "rows:",
         ]
         for joint, row, nom in zip(cal.actuated, rows, nominal.rows, strict=True):
@@ -157,7 +170,7 @@ class _DHTable(ControllerFormat):
                 f"    nominal: {{a: {fmt_number(nom[0])}, alpha: {fmt_number(nom[1])}, "
                 f"d: {fmt_number(nom[3])}, theta_offset: {fmt_number(nom[2])}}}",
             ]
-        lines.append(f"tool: {{xyz: {_seq(tool_xyz)}, rpy: {_seq(tool_rpy)}}}")
+        lines.append(f"tool: {{xyz: {yaml_seq(tool_xyz)}, rpy: {yaml_seq(tool_rpy)}}}")
         return Built(
             "\n".join(lines) + "\n", forward, self._missing(machine, fit), self._conventions(fit)
         )
