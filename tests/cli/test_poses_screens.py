@@ -90,7 +90,7 @@ def test_kinova_design_has_no_collision_or_singular_pose(tmp_path):
     """Kinova (Jaco 2, a hand with fingers: collisions checked on full configurations).
     Its reach screen (3 error draws of 1 mm / 10 mrad) does not make every pose
     compensate on every other draw: the poses nearest the wrist singularity (σ_min
-    0.03–0.06) failed Newton in 3 of 10 further draws: a limit of the screen, not checked."""
+    0.03–0.06) failed Newton in 1–3 of 10 further draws: a limit of the screen, not checked."""
     out = tmp_path / "kinova.csv"
     args = ["poses", "kinova", "--count", "20", "--candidates", "random:150", "--out", str(out)]
     res = CliRunner().invoke(main, [*args, "--json"])
