@@ -94,7 +94,35 @@ def inverse_configuration(
             f"give q_guess on home's mode or choose another target",
             residual=0.0,
         )
-    return sol.q
+    return into_limits(model, sol.q)
+
+
+def into_limits(model: pin.Model, q: np.ndarray) -> np.ndarray:
+    """``q`` (nq,) with each revolute joint outside its limits turned by whole turns into them.
+
+    Newton integrates a revolute joint's angle freely, so it may end a full turn away from
+    the range (−0.52 rad for a joint limited to [0.33, 5.95] that reaches the same pose at
+    5.76 rad); the configuration that many turns away is the same pose. A joint no whole
+    turn brings inside is left as it is (the actuator limit check names it). Continuous
+    joints (cos, sin) and joints without a range are untouched.
+    """
+    out = np.array(q, dtype=float)
+    lo, hi = model.lowerPositionLimit, model.upperPositionLimit
+    for j in range(1, model.njoints):
+        joint = model.joints[j]
+        if joint.nq != 1 or not joint.shortname().startswith(("JointModelR", "JointModelRevolute")):
+            continue
+        i = joint.idx_q
+        if not (np.isfinite(lo[i]) and np.isfinite(hi[i])) or lo[i] <= out[i] <= hi[i]:
+            continue
+        turns = (
+            np.ceil((lo[i] - out[i]) / (2 * np.pi))
+            if out[i] < lo[i]
+            else -np.ceil((out[i] - hi[i]) / (2 * np.pi))
+        )
+        if lo[i] <= out[i] + 2 * np.pi * turns <= hi[i]:
+            out[i] += 2 * np.pi * turns
+    return out
 
 
 def _output_map(loop: LoopSolver, q: np.ndarray, fid: int) -> tuple[np.ndarray, float]:
