@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from pincal.errors import ConvergenceError
-from pincal.model import Mechanism, actuator_jacobian
+from pincal.model import Mechanism, actuator_difference, actuator_jacobian
 
 __all__ = [
     "BRANCH_STEP_M",
@@ -57,15 +57,13 @@ def actuator_units(mech: Mechanism) -> tuple[str, ...]:
 def unwrapped(mech: Mechanism, q_act: np.ndarray, start: np.ndarray) -> np.ndarray:
     """``q_act`` (n_act,) with each continuous actuator's angle taken nearest ``start``.
 
-    A continuous joint has no angle range: its configuration holds (cos θ, sin θ), read
-    back in (−π, π]. A solution a few mrad past ±π from a start on the other side reads
-    2π away from it; the command is the same angle taken within π of the start [rad].
+    A continuous joint's angle reads back in (−π, π]: a solution a few mrad past ±π from
+    a start on the other side reads 2π away from it; the command is the same angle taken
+    within π of the start [rad] (:func:`pincal.model.actuator_difference`).
     """
-    out = np.array(q_act, dtype=float)
-    for k, j in enumerate(mech.actuated):
-        if mech.tree.joints[j].type == "continuous" and np.isfinite(start[k]):
-            out[k] = start[k] + np.angle(np.exp(1j * (out[k] - start[k])))
-    return out
+    start = np.asarray(start, dtype=float)
+    moved = actuator_difference(mech, q_act, start)
+    return np.where(np.isfinite(start), start + moved, np.asarray(q_act, dtype=float))
 
 
 def det_sign(mech: Mechanism, q_act: np.ndarray, q: np.ndarray | None = None) -> int:

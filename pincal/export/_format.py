@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.export._machine import CalibratedMachine
+from pincal.model import actuator_difference
 
 __all__ = ["Built", "ControllerFormat", "Projection", "fmt_number", "projection"]
 
@@ -146,10 +147,7 @@ def projection(
     joint_rms = joint_max = None
     missing = list(built.not_expressed)
     if built.inverse is not None:
-        diff = built.inverse(ref) - q_act
-        joints = machine.calibrated.tree.joints
-        endless = [joints[j].type == "continuous" for j in machine.calibrated.actuated]
-        e_q = np.abs(np.where(endless, np.angle(np.exp(1j * diff)), diff))  # 2π: one angle
+        e_q = np.abs(actuator_difference(machine.calibrated, built.inverse(ref), q_act))
         solved = ~np.isnan(e_q).any(axis=1)
         if not solved.all():
             missing.append(

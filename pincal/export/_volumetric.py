@@ -42,7 +42,7 @@ import pinocchio as pin
 from pincal.errors import ExportError, PincalError
 from pincal.export._format import Built, ControllerFormat, fmt_number
 from pincal.export._machine import CalibratedMachine
-from pincal.model import Mechanism
+from pincal.model import Mechanism, actuator_difference
 
 __all__ = ["GRID", "VolumetricMap", "trilinear"]
 
@@ -134,8 +134,6 @@ class VolumetricMap(ControllerFormat):
             axes.append(np.array([home.translation[i]]) if one else np.linspace(lo, hi, GRID))
         n_act = len(nom.actuated)
         scale = 1.0 + np.array([machine.gains().get(j, 0.0) for j in nom.actuated])
-        # a continuous joint reads back in (−π, π]: its correction is taken within π
-        endless = np.array([nom.tree.joints[j].type == "continuous" for j in nom.actuated])
         values = np.full((*(a.size for a in axes), 6 + n_act), np.nan)
         u_nom_all = np.full((*values.shape[:3], n_act), np.nan)
         for idx in np.ndindex(*values.shape[:3]):
@@ -151,7 +149,7 @@ class VolumetricMap(ControllerFormat):
             if not (_within(nom, u_nom) and _within(cal, u_cal)):
                 continue
             R_nom = nom.frame_placement(qn).rotation
-            du = np.where(endless, np.angle(np.exp(1j * (u_cal - u_nom))), u_cal - u_nom)
+            du = actuator_difference(nom, u_cal, u_nom)  # a continuous joint's within π
             values[idx] = np.concatenate([T.translation - p, pin.log3(R_nom.T @ T.rotation), du])
             u_nom_all[idx] = u_nom
         reachable = ~np.isnan(values[..., 0])
@@ -180,7 +178,7 @@ class VolumetricMap(ControllerFormat):
                 "left out of their cells' weights, the nearest reachable node's values where "
                 "a cell has none)"
             )
-        worse = _worse_than_none(machine, forward, q_fit)
+        worse = _worse_than_none(machine, forward, q_fit, fit_p)
         if worse:
             missing.append(worse)
         conventions = [
@@ -191,12 +189,16 @@ class VolumetricMap(ControllerFormat):
 
 
 def _worse_than_none(
-    machine: CalibratedMachine, forward: Callable[[np.ndarray], np.ndarray], q: np.ndarray
+    machine: CalibratedMachine,
+    forward: Callable[[np.ndarray], np.ndarray],
+    q: np.ndarray,
+    plain: np.ndarray,
 ) -> str:
-    """A phrase when the map's positions miss the model by more than no map does at ``q``."""
+    """A phrase when the map's positions miss the model by more than no map does at ``q``.
+
+    ``plain`` (m, 3): the nominal positions at ``q`` [m] (no map).
+    """
     ref = machine.reference(q)[:, :3, 3]
-    nom = machine.nominal
-    plain = np.array([nom.frame_placement(c).translation for c in nom.configurations(q)])
     rms = [
         float(np.sqrt(np.mean(np.sum((p - ref) ** 2, axis=1))))
         for p in (forward(q)[:, :3, 3], plain)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from pincal._limits import Limits, active_limits
 from pincal.model._actuator_jacobian import actuator_jacobian, actuator_jacobians
+from pincal.model._actuator_turns import actuator_difference
 from pincal.model._mechanism import Mechanism
 from pincal.model.batch import BatchKinematics, BatchModel
 from pincal.model.files import (
@@ -143,6 +144,7 @@ __all__ = [
     "active_limits",
     "actual_joint_values",
     "actual_shift",
+    "actuator_difference",
     "actuator_jacobian",
     "actuator_jacobians",
     "bundled_models",
