@@ -27,8 +27,9 @@ machine cannot reach is written ``reachable = 0`` (its columns empty) and left o
 the sum, the other weights divided by their total (a cell at the workspace's edge); a
 cell of unreachable nodes only takes the nearest reachable node's values, and a point
 outside the grid the values at the grid's nearest point (clamped). What (1)–(2) cannot
-hold: the error's dependence on the orientation (the map is at the home orientation),
-its variation inside a cell, and beyond the grid.
+hold: the error's dependence on the orientation (the map is at the home orientation) and,
+with more actuators than imposed components, on the configuration that reaches a
+position; its variation inside a cell; and beyond the grid.
 """
 
 from __future__ import annotations
@@ -166,8 +167,13 @@ class VolumetricMap(ControllerFormat):
         forward, inverse = _controller(nom, axes, written, (conf_nom, fit_p))
         turned = any(c.startswith("r") for c in comps)
         held = "the error's dependence on orientation (the map is at the nominal home orientation)"
+        redundant = (
+            f"the error's dependence on the configuration reaching a position ({n_act} "
+            f"actuators for {len(comps)} imposed components: one configuration per node)"
+        )
         missing = [
             *([held] if turned else []),
+            *([redundant] if n_act > len(comps) else []),
             "its variation inside a grid cell (trilinear)",
             "the error beyond the grid (clamped to its edge)",
         ]

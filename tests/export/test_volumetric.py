@@ -150,3 +150,21 @@ def test_export_volumetric_map_from_the_cli(tmp_path, ur5_calibration):
     assert "cannot express:" in text and "x_m,y_m,z_m,reachable" in text
     axes, _, rows = _read(text)
     assert len(rows) == np.prod([a.size for a in axes])  # every node written, unreachable too
+
+
+def test_a_redundant_arm_map_names_what_it_cannot_hold(delta):
+    """An articulated-arm CMM (6 joints, [x y z] measured) reaches a position in many
+    configurations whose errors differ: the map holds one per node and says so; a Delta
+    (3 actuators, 3 components) has nothing of the kind to say."""
+    arm = load_mechanism("aacmm")
+    ps = parameters(arm, "dh")
+    moved = ps.apply(arm, np.random.default_rng(0).uniform(-1e-4, 1e-4, len(ps)))
+    exp = export_calibration(CalibratedMachine.from_mechanisms(moved, arm), "volumetric-map",
+                             poses=20)  # fmt: skip
+    said = [s for s in exp.projection.not_expressed if "configuration reaching" in s]
+    assert said and "6 actuators for 3 imposed components" in said[0]
+    assert not any("orientation" in s for s in exp.projection.not_expressed)  # not measured
+    nominal, calibrated = delta
+    plain = export_calibration(CalibratedMachine.from_mechanisms(calibrated, nominal),
+                               "volumetric-map", poses=10)  # fmt: skip
+    assert not any("configuration reaching" in s for s in plain.projection.not_expressed)
