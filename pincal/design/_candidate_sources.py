@@ -43,13 +43,15 @@ __all__ = [
 def default_grid_ranges(mech: Mechanism) -> NDArray[np.float64]:
     """Actuator ranges (n_act, 2) for a joint-space grid [m, rad].
 
-    The sidecar's ``workspace.joints`` where given; otherwise, when a pose
-    workspace is given, the range of each actuator over the inverse kinematics
-    of the home pose and the 2·d "star" poses that move one pose factor at a
-    time to either end of its range (so the grid spans the joint motion of the
-    workspace axes rather than the far larger URDF limits; grid corners that
-    combine several extremes are then filtered by the pose workspace);
-    otherwise the URDF limits. Always clipped to the actuator limits.
+    With a pose workspace: the range of each actuator over the inverse kinematics of
+    the home pose and the 2·d "star" poses that move one pose factor at a time to
+    either end of its range, so the grid spans the joint motion of the workspace axes
+    (grid corners that combine several extremes are then filtered by the pose
+    workspace), within the sidecar's ``workspace.joints`` where given. A parallel
+    machine's joint stroke is far wider than the joint motion of its pose workspace
+    (a hexaslide's six carriages each over their whole rail: 4 levels leave one of
+    4096 grid rows that assembles). Without a pose workspace: ``workspace.joints``,
+    else the URDF limits. Always clipped to the actuator limits.
     """
     ranges = joint_ranges(mech)
     limits = np.asarray(mech.actuator_limits, dtype=float)
@@ -72,9 +74,10 @@ def default_grid_ranges(mech: Mechanism) -> NDArray[np.float64]:
                 except ConvergenceError:
                     continue
         seen_arr = np.array(seen)
-        for k, name in enumerate(mech.actuated):
-            if name not in mech.workspace.joints:
-                ranges[k] = seen_arr[:, k].min(), seen_arr[:, k].max()
+        star = np.stack([seen_arr.min(axis=0), seen_arr.max(axis=0)], axis=1)
+        star = np.clip(star, ranges[:, :1], ranges[:, 1:])
+        moved = star[:, 1] > star[:, 0]  # an actuator the pose workspace moves within its range
+        ranges = np.where(moved[:, None], star, ranges)
     lo = np.maximum(ranges[:, 0], np.where(np.isfinite(limits[:, 0]), limits[:, 0], -np.inf))
     hi = np.minimum(ranges[:, 1], np.where(np.isfinite(limits[:, 1]), limits[:, 1], np.inf))
     return np.stack([lo, hi], axis=1)
