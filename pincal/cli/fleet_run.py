@@ -42,11 +42,14 @@ def run(
     """Calibrate every unit of FLEET_FILE and report the fleet.
 
     Each unit is calibrated by `pincal calibrate` into OUT/units/<id>/ (its output in
-    OUT/logs/<id>.log). A rerun skips every unit already done (results are kept per unit
-    as they arrive; a unit whose calibration directory is complete is read back). Units
-    the quality gate refuses are listed, not compared; a unit that fails is reported and
-    the others go on. fleet.json lists every unit {id, status, out_of_family, distance,
-    p_value, …}; fleet.md / fleet.html show the test and the per-parameter spread.
+    OUT/logs/<id>.log); a unit listed once per session (each with its date:) into
+    OUT/units/<id>@<date>/, its consecutive sessions compared for drift. A rerun skips
+    every unit already done (results are kept per unit as they arrive; a unit whose
+    calibration directory is complete is read back). Units the quality gate refuses are
+    listed, not compared; a unit that fails is reported and the others go on.
+    fleet.json lists every unit {id, status, out_of_family, distance, p_value, …} and
+    the drift of recalibrated units; fleet.md / fleet.html show the tests and the
+    per-parameter spread.
     """
     from pincal.cli._fleet_unit import calibrate_unit
     from pincal.executor import Executor
@@ -76,13 +79,22 @@ def run(
         click.echo(json.dumps({"report": str(root / "fleet.json"), **s}))
         return
     reused = sum(bool(u.get("reused")) for u in doc["units"])
+    ids = len({u["id"] for u in doc["units"]})
+    what = "units" if ids == s["units"] else f"sessions of {ids} units"
     click.echo(
-        f"{s['calibrated']} of {s['units']} units calibrated ({reused} read back), "
+        f"{s['calibrated']} of {s['units']} {what} calibrated ({reused} read back), "
         f"{s['refused']} refused by the gate, {s['failed']} failed"
     )
     for u in doc["units"]:
         if u["status"] != "calibrated" or u.get("out_of_family"):
             what = "out of family" if u.get("out_of_family") else u["status"]
             why = f"p = {u['p_value']:.2g}" if u.get("out_of_family") else u.get("reason")
-            click.echo(f"  {u['id']}: {what} ({why})")
+            click.echo(f"  {u.get('session', u['id'])}: {what} ({why})")
+    if doc["drift"]:
+        click.echo(f"{s['drifted']} of {s['drift_compared']} recalibrations drifted")
+    for d in doc["drift"]:
+        if d["drifted"]:
+            moved = ", ".join(f"{x['name']} {x['z']:+.1f}σ" for x in d["largest"])
+            click.echo(f"  {d['id']}: drifted {d['before']} → {d['after']} "
+                       f"(p = {d['p_value']:.2g}; {moved})")  # fmt: skip
     click.echo(f"wrote {root}/fleet.json, fleet.md, fleet.html (calibrations in {root}/units/)")

@@ -40,6 +40,11 @@ from pincal.cli.common import fail_cleanly
     show_default=True,
     help="A faulty part's shift, in production σ, on each parameter of one joint.",
 )
+@click.option("--recalibrated", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Units measured again in a second session (dated after the first).")  # fmt: skip
+@click.option("--drifted", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Of the recalibrated units, those with a part moved by --shift between "
+              "the sessions (listed in truth.json).")  # fmt: skip
 @click.option("--noise", default="0.01,0.02", show_default=True, metavar="MM,MRAD",
               help="Instrument noise 1σ (declared in each unit's file).")  # fmt: skip
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout.")
@@ -54,6 +59,8 @@ def simulate(
     planted: int | None,
     spread: str,
     shift: float,
+    recalibrated: int,
+    drifted: int,
     noise: str,
     as_json: bool,
 ) -> None:
@@ -62,7 +69,9 @@ def simulate(
     Every unit shares the line's offset of the nominal geometry plus its own Gaussian
     production spread; a few planted units carry a faulty part (every parameter of one
     joint moved by --shift production σ), listed in truth.json. FLEET.yaml lists the
-    units for `pincal fleet run`.
+    units for `pincal fleet run`. --recalibrated units appear twice, dated 2026-01-15
+    (ID/measurements.csv) and 2026-07-15 (ID/recalibration.csv, new poses and noise);
+    `fleet run` compares their sessions for drift.
     """
     from tqdm import tqdm
 
@@ -80,23 +89,32 @@ def simulate(
             f"--out {out} exists and is not an empty directory: give a new directory for the fleet"
         )
     plan = plan_fleet(model, n_units, seed, preset=preset, n_poses=n_poses, planted=planted,
-                      spread=spread_pair, shift=shift, noise=noise_pair)  # fmt: skip
-    ids = plan.ids
+                      spread=spread_pair, shift=shift, noise=noise_pair,
+                      recalibrated=recalibrated, drifted=drifted)  # fmt: skip
     root.mkdir(parents=True, exist_ok=True)
     units = []
     for i in tqdm(range(n_units), desc="simulating units", leave=False, disable=None):
-        write_measurements(root / ids[i] / "measurements.csv", plan.measurements(i))
-        units.append({"id": ids[i], "data": f"{ids[i]}/measurements.csv"})
+        for entry, second in plan.sessions(i):
+            write_measurements(root / entry["data"], plan.measurements(i, second))
+            units.append(entry)
     truth = {"written_by": f"pincal {__version__}", **plan.truth()}
     atomic_write_text(root / "truth.json", json.dumps(truth, indent=1) + "\n")
     atomic_write_text(root / "FLEET.yaml", fleet_text(model, units, plan.preset))
     planted_ids = [p["id"] for p in truth["planted"]]
+    drifted_ids = [r["id"] for r in truth["recalibrated"] if r["drift"]]
     if as_json:
         click.echo(json.dumps({"fleet": str(root / "FLEET.yaml"),
                                "truth": str(root / "truth.json"), "units": n_units,
-                               "planted": planted_ids}))  # fmt: skip
+                               "planted": planted_ids, "recalibrated": len(plan.draw.second),
+                               "drifted": drifted_ids}))  # fmt: skip
         return
+    again = (
+        f"; recalibrated {len(plan.draw.second)}, drifted: {', '.join(drifted_ids) or 'none'}"
+        if plan.draw.second
+        else ""
+    )
     click.echo(
         f"wrote {root / 'FLEET.yaml'} ({n_units} units of {model}, preset {plan.preset}; "
-        f"planted out-of-family: {', '.join(planted_ids) or 'none'}) and {root / 'truth.json'}"
+        f"planted out-of-family: {', '.join(planted_ids) or 'none'}{again}) and "
+        f"{root / 'truth.json'}"
     )

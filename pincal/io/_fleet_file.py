@@ -11,6 +11,10 @@
 Data paths are relative to the fleet file's directory. A unit id names its
 calibration directory, so it is a plain file name (letters, digits, ``-``, ``_``,
 ``.``; not starting with a dot). Keys beyond ``id`` and ``data`` are kept as metadata.
+
+A unit calibrated more than once (a recalibration in the field) appears once per
+session, each with its own ``date:`` (a file-name text; ISO dates ``YYYY-MM-DD`` sort
+in time): its sessions are calibrated into ``<id>@<date>`` and compared for drift.
 """
 
 from __future__ import annotations
@@ -40,11 +44,18 @@ class FleetUnit:
         id: the unit's id (its calibration directory's name).
         data: its measurement file (absolute, or as written when relative).
         meta: other keys of the unit (date, serial number, site, …) as texts.
+        repeated: the id has more than one session in the fleet (each with its date).
     """
 
     id: str
     data: Path
     meta: Mapping[str, str] = field(default_factory=dict)
+    repeated: bool = False
+
+    @property
+    def label(self) -> str:
+        """The calibration's name: the id, or ``<id>@<date>`` for one of several sessions."""
+        return f"{self.id}@{self.meta['date']}" if self.repeated else self.id
 
 
 @dataclass(frozen=True)
@@ -75,8 +86,8 @@ def read_fleet(path: str | Path) -> Fleet:
 
     Raises:
         FleetFileError: unreadable, not a mapping, an unknown or missing key, a unit
-            without id or data, an id that is not a file name or appears twice, a data
-            file that does not exist.
+            without id or data, an id that is not a file name, an id repeated without
+            a distinct file-name ``date:`` per session, a data file that does not exist.
     """
     path = Path(path)
     doc = load_yaml(path, "fleet file", FleetFileError)
@@ -102,7 +113,6 @@ def read_fleet(path: str | Path) -> Fleet:
     if not isinstance(units, list) or not units:
         raise FleetFileError(f"{where}: units: must be a non-empty list of {{id:, data:}}")
     out: list[FleetUnit] = []
-    seen: set[str] = set()
     for k, unit in enumerate(units, start=1):
         if not isinstance(unit, dict) or "id" not in unit or "data" not in unit:
             raise FleetFileError(
@@ -114,9 +124,6 @@ def read_fleet(path: str | Path) -> Fleet:
                 f"{where}: unit {k} id {clip(uid, quote=True)} names its calibration "
                 "directory: use letters, digits, '-', '_', '.' (not starting with '.')"
             )
-        if uid in seen:
-            raise FleetFileError(f"{where}: unit id {clip(uid, quote=True)} appears twice")
-        seen.add(uid)
         data = base / str(unit["data"])
         if not data.is_file():
             raise FleetFileError(
@@ -125,7 +132,31 @@ def read_fleet(path: str | Path) -> Fleet:
             )
         meta = {str(key): str(v) for key, v in unit.items() if key not in ("id", "data")}
         out.append(FleetUnit(uid, data, meta))
-    return Fleet(model, preset, tuple(out), path)
+    return Fleet(model, preset, _sessions(out, where), path)
+
+
+def _sessions(units: list[FleetUnit], where: str) -> tuple[FleetUnit, ...]:
+    """Mark the units whose id appears more than once; check their dates name them."""
+    count: dict[str, int] = {}
+    for u in units:
+        count[u.id] = count.get(u.id, 0) + 1
+    labels: set[str] = set()
+    out = []
+    for u in units:
+        if count[u.id] == 1:
+            out.append(u)
+            continue
+        date = u.meta.get("date")
+        if date is None or not _ID.match(date) or f"{u.id}@{date}" in labels:
+            raise FleetFileError(
+                f"{where}: unit id {clip(u.id, quote=True)} appears {count[u.id]} times: a unit "
+                f"calibrated again needs a distinct date: per session (e.g. date: 2026-11-30), "
+                f"got {clip(date, quote=True) if date else 'none'}; otherwise give each unit "
+                f"its own id"
+            )
+        labels.add(f"{u.id}@{date}")
+        out.append(FleetUnit(u.id, u.data, u.meta, repeated=True))
+    return tuple(out)
 
 
 def fleet_text(model: str, units: list[dict[str, Any]], preset: str | None = None) -> str:

@@ -50,7 +50,7 @@ def plot_fleet(doc: Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
         for u in units:
             dev = [1e3 * (u["values"][p["name"]] - p["centre"]) for p in cols]
             flagged = bool(u.get("out_of_family"))
-            jitter = (zlib.crc32(u["id"].encode()) % 100 - 50) / 250.0
+            jitter = (zlib.crc32(u.get("session", u["id"]).encode()) % 100 - 50) / 250.0
             ax.plot(
                 x + jitter,
                 dev,
@@ -71,6 +71,11 @@ def plot_fleet(doc: Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
     return save_figure(fig, path, grid, title)
 
 
+def _count(summary: Mapping[str, Any]) -> str:
+    ids = summary.get("unit_ids", summary["units"])
+    return f"{ids} units" + (f", {summary['units']} sessions" if ids != summary["units"] else "")
+
+
 def _rows(doc: Mapping[str, Any]) -> list[list[str]]:
     rows = []
     for u in doc["units"]:
@@ -78,7 +83,7 @@ def _rows(doc: Mapping[str, Any]) -> list[list[str]]:
         largest = ", ".join(f"{x['name']} {x['z']:+.1f}σ" for x in u.get("largest", []))
         rows.append(
             [
-                u["id"],
+                u.get("session", u["id"]),
                 u["status"],
                 {True: "**yes**", False: "no", None: "–"}[u.get("out_of_family")],
                 "–" if d is None else f"{d:.1f}",
@@ -87,6 +92,53 @@ def _rows(doc: Mapping[str, Any]) -> list[list[str]]:
             ]
         )
     return rows
+
+
+_DRIFT_HEAD = ["unit", "sessions", "drifted", "T²", "dof", "p-value", "largest changes"]
+
+
+def _drift_rows(doc: Mapping[str, Any]) -> list[list[str]]:
+    rows = []
+    for d in doc.get("drift", []):
+        moved = ", ".join(
+            f"{x['name']} {1e3 * x['change']:+.4f} {'mm' if x['unit'] == 'm' else 'mrad'} "
+            f"({x['z']:+.1f}σ)"
+            for x in d["largest"]
+        )
+        rows.append(
+            [
+                d["id"],
+                f"{d['before']} → {d['after']}",
+                "**yes**" if d["drifted"] else "no",
+                f"{d['distance']:.1f}",
+                str(d["dof"]),
+                f"{d['p_value']:.2g}",
+                moved,
+            ]
+        )
+    return rows
+
+
+def _drift_markdown(doc: Mapping[str, Any]) -> list[str]:
+    lines = ["", "## Drift between sessions", "", doc.get("drift_test", ""), ""]
+    rows = _drift_rows(doc)
+    if rows:
+        lines += ["| " + " | ".join(_DRIFT_HEAD) + " |", "|---" * len(_DRIFT_HEAD) + "|"]
+        lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return lines
+
+
+def _table_html(head: list[str], rows: list[list[str]], flag_col: int) -> str:
+    esc = html.escape
+    body = "".join(
+        "<tr"
+        + (' class="flag"' if "**yes**" in r[flag_col] else "")
+        + ">"
+        + "".join(f"<td>{esc(c.replace('**', ''))}</td>" for c in r)
+        + "</tr>"
+        for r in rows
+    )
+    return "<table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in head) + f"</tr>{body}</table>"
 
 
 def fleet_markdown(doc: Mapping[str, Any], png: str = "fleet_parameters.png") -> str:
@@ -101,11 +153,13 @@ def fleet_markdown(doc: Mapping[str, Any], png: str = "fleet_parameters.png") ->
     """
     s, t = doc["summary"], doc["test"]
     lines = [
-        f"# Fleet report: {doc['model']} ({s['units']} units)",
+        f"# Fleet report: {doc['model']} ({_count(s)})",
         "",
         f"- calibrated: {s['calibrated']}, refused by the quality gate: {s['refused']}, "
         f"failed: {s['failed']}",
         f"- out of family: {s['out_of_family']} ({', '.join(s['out_of_family_ids']) or 'none'})",
+        f"- drifted between sessions: {s.get('drifted', 0)} of {s.get('drift_compared', 0)} "
+        f"compared ({', '.join(s.get('drifted_ids', [])) or 'none'})",
         "",
         "## The test",
         "",
@@ -127,6 +181,7 @@ def fleet_markdown(doc: Mapping[str, Any], png: str = "fleet_parameters.png") ->
             f"| {p['name']} | {scale * p['centre']:+.4f} {unit} | "
             f"{scale * p['production_std']:.4f} {unit} | {scale * p['estimate_std']:.4f} {unit} |"
         )
+    lines += _drift_markdown(doc)
     return "\n".join(lines) + "\n"
 
 
@@ -143,13 +198,9 @@ def fleet_html(doc: Mapping[str, Any], png: str = "fleet_parameters.png") -> str
     s, t = doc["summary"], doc["test"]
     esc = html.escape
     head = ["unit", "status", "out of family", "distance D", "p-value", "largest / reason"]
-    body = "".join(
-        "<tr"
-        + (' class="flag"' if "**yes**" in r[2] else "")
-        + ">"
-        + "".join(f"<td>{esc(c.replace('**', ''))}</td>" for c in r)
-        + "</tr>"
-        for r in _rows(doc)
+    drift = _drift_rows(doc)
+    drifted = f"<h2>Drift between sessions</h2><p>{esc(doc.get('drift_test', ''))}</p>" + (
+        _table_html(_DRIFT_HEAD, drift, 2) if drift else ""
     )
     return (
         "<!doctype html><html><head><meta charset='utf-8'>"
@@ -157,11 +208,14 @@ def fleet_html(doc: Mapping[str, Any], png: str = "fleet_parameters.png") -> str
         "body{font-family:sans-serif;max-width:70em;margin:auto}"
         "td,th{padding:2px 8px;border-bottom:1px solid #ddd}"
         f".flag{{color:{_FLAGGED};font-weight:bold}}</style></head><body>"
-        f"<h1>Fleet report: {esc(doc['model'])} ({s['units']} units)</h1>"
+        f"<h1>Fleet report: {esc(doc['model'])} ({esc(_count(s))})</h1>"
         f"<p>calibrated {s['calibrated']}, refused by the gate {s['refused']}, failed "
         f"{s['failed']}; <b>out of family: {s['out_of_family']}</b> "
-        f"({esc(', '.join(s['out_of_family_ids']) or 'none')})</p>"
+        f"({esc(', '.join(s['out_of_family_ids']) or 'none')})"
+        f"; drifted between sessions: {s.get('drifted', 0)} of {s.get('drift_compared', 0)} "
+        f"compared ({esc(', '.join(s.get('drifted_ids', [])) or 'none')})</p>"
         f"<p>{esc(t['description'])}</p><img src='{esc(png)}' style='max-width:100%'>"
-        "<table><tr>" + "".join(f"<th>{h}</th>" for h in head) + f"</tr>{body}</table>"
-        "</body></html>\n"
+        + _table_html(head, _rows(doc), 2)
+        + drifted
+        + "</body></html>\n"
     )

@@ -34,7 +34,8 @@ prints or writes files.
   does it (:class:`FleetPlan`); :func:`fleet_jobs` lists the units of ``fleet run`` and
   :func:`unit_summary` reads one back; :func:`fleet_statistics` flags the units
   out of family, each judged with its own covariance; :func:`fleet_report` judges a
-  run and writes up ``fleet.json`` (:func:`fleet_document`).
+  run and writes up ``fleet.json`` (:func:`fleet_document`); :func:`session_drift`
+  compares the sessions of a unit calibrated more than once.
 - models described (``pincal info``): :func:`structure_lines` and
   :func:`describe_presets` (each preset's identifiability, the base set offered as a
   preset, :func:`base_line`); :func:`reduction_line` says a preset was reduced to it.
@@ -77,7 +78,8 @@ from pincal.workflow._demo import (
 )
 from pincal.workflow._fleet_doc import FleetReport, fleet_document, fleet_report
 from pincal.workflow._fleet_draw import FleetDraw, draw_fleet, simulate_unit
-from pincal.workflow._fleet_sim import FleetPlan, plan_fleet
+from pincal.workflow._fleet_drift import DriftVerdict, session_drift
+from pincal.workflow._fleet_sim import SESSION_DATES, FleetPlan, plan_fleet
 from pincal.workflow._fleet_stats import (
     FleetStatistics,
     UnitEstimate,
@@ -166,6 +168,7 @@ __all__ = [
     "MISFIT_RMS",
     "PRIOR_GRID",
     "ROBUST_LOSS",
+    "SESSION_DATES",
     "SOCKET_SPACING",
     "AcceptanceMachine",
     "CompensatedProgram",
@@ -173,6 +176,7 @@ __all__ = [
     "DemoAccuracy",
     "DemoResult",
     "DemoSettings",
+    "DriftVerdict",
     "FleetDraw",
     "FleetPlan",
     "FleetReport",
@@ -244,6 +248,7 @@ __all__ = [
     "select_marker_model",
     "select_pose_design",
     "select_pose_model",
+    "session_drift",
     "simulate_campaign",
     "simulate_demo",
     "simulate_unit",

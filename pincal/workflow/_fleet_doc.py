@@ -15,6 +15,7 @@ import numpy as np
 from pincal.errors import PincalError
 from pincal.executor import MapResult
 from pincal.io import Fleet
+from pincal.workflow._fleet_drift import DriftVerdict, session_drift
 from pincal.workflow._fleet_stats import FleetStatistics, UnitEstimate, fleet_statistics
 
 __all__ = ["FleetReport", "fleet_document", "fleet_report"]
@@ -49,20 +50,33 @@ def fleet_report(
 
     Returns:
         The :class:`FleetReport` (no test below 3 calibrated units, or when the test
-        refuses the units: then its message is the warning).
+        refuses the units: then its message is the warning). A unit calibrated in
+        several sessions enters the out-of-family test with its latest session, and its
+        consecutive sessions are compared for drift (:func:`session_drift`).
     """
-    done = [r.value for r in results if r.ok and r.value["status"] == "calibrated"]
-    estimates = [
-        UnitEstimate(s["id"], tuple(s["names"]), np.array(s["values"]), np.array(s["covariance"]))
-        for s in done
-    ]
+    latest: dict[str, tuple[str, UnitEstimate]] = {}
+    sessions = []
+    for unit, res in zip(fleet.units, results, strict=True):
+        if not (res.ok and res.value["status"] == "calibrated"):
+            continue
+        s = res.value
+        est = UnitEstimate(
+            unit.label, tuple(s["names"]), np.array(s["values"]), np.array(s["covariance"])
+        )
+        date = unit.meta.get("date", "") if unit.repeated else ""
+        if unit.id not in latest or date > latest[unit.id][0]:
+            latest[unit.id] = (date, est)
+        if unit.repeated:
+            sessions.append((unit.id, date, est))
+    estimates = [est for _, est in latest.values()]
     stats, warning = None, None
     if len(estimates) >= 3:
         try:
             stats = fleet_statistics(estimates, alpha)
         except PincalError as exc:
             warning = str(exc)
-    return FleetReport(fleet_document(fleet, results, stats, alpha, out_rel), warning)
+    drift = session_drift(sessions, alpha)
+    return FleetReport(fleet_document(fleet, results, stats, alpha, out_rel, drift), warning)
 
 
 def _test_text(alpha: float, units: int, stats: FleetStatistics | None) -> str:
@@ -95,6 +109,7 @@ def fleet_document(
     stats: FleetStatistics | None,
     alpha: float,
     out_rel: str,
+    drift: tuple[DriftVerdict, ...] = (),
 ) -> dict[str, Any]:
     """``fleet.json``: every unit ``{id, status, out_of_family, distance, p_value, …}``.
 
@@ -104,6 +119,7 @@ def fleet_document(
         stats: the :class:`FleetStatistics`, or None (< 3 calibrated).
         alpha: the fleet-wise false-alarm rate.
         out_rel: the units' directory relative to the report (``units``).
+        drift: the drift verdicts of units calibrated more than once.
 
     Returns:
         The document (JSON-ready).
@@ -113,6 +129,8 @@ def fleet_document(
     units = []
     for unit, res in zip(fleet.units, results, strict=True):
         entry: dict[str, Any] = {"id": unit.id, "data": str(unit.data), **unit.meta}
+        if unit.repeated:
+            entry["session"] = unit.label
         if not res.ok:
             entry |= {
                 "status": "failed",
@@ -131,15 +149,20 @@ def fleet_document(
             }
         else:
             s = res.value
-            v = verdicts.get(unit.id)
+            v = verdicts.get(unit.label)
             entry |= {
                 "status": "calibrated",
-                "calibration": f"{out_rel}/{unit.id}",
+                "calibration": f"{out_rel}/{unit.label}",
                 "out_of_family": None if v is None else v.out_of_family,
                 "distance": None if v is None else v.distance,
                 "dof": None if v is None else v.dof,
                 "p_value": None if v is None else v.p_value,
                 "largest": [] if v is None else [{"name": n, "z": z} for n, z in v.largest],
+                **(
+                    {"reason": "an earlier session: compared for drift"}
+                    if v is None and stats is not None and unit.repeated
+                    else {}
+                ),
                 "reused": bool(s.get("reused") or res.cached),
                 "rms_after_mm": s.get("rms_after_mm"),
                 "values": {
@@ -149,6 +172,7 @@ def fleet_document(
         units.append(entry)
     count = {k: sum(u["status"] == k for u in units) for k in ("calibrated", "refused", "failed")}
     flagged = [u["id"] for u in units if u.get("out_of_family")]
+    drifted = [d.id for d in drift if d.drifted]
     unit_of: dict[str, str] = {}
     for res in results:
         if res.ok and res.value["status"] == "calibrated":
@@ -173,15 +197,20 @@ def fleet_document(
         "preset": fleet.preset,
         "summary": {
             "units": len(units),
+            "unit_ids": len({u.id for u in fleet.units}),
             **count,
             "out_of_family": len(flagged),
             "out_of_family_ids": flagged,
+            "drift_compared": len(drift),
+            "drifted": len(drifted),
+            "drifted_ids": drifted,
         },
         "test": {
             "statistic": "squared Mahalanobis distance to the robust fleet centre, "
             "covariance = unit covariance + diag(production spread²)",
             "alpha": alpha,
-            "correction": "bonferroni" if stats is None or stats.limit >= alpha / len(stats.units)
+            "correction": "bonferroni"
+            if stats is None or stats.limit >= alpha / len(stats.units)
             else "calibrated by fault-free fleets",
             "per_unit_p_threshold": None if stats is None else stats.limit,
             "dof": None if stats is None else len(stats.names),
@@ -190,4 +219,35 @@ def fleet_document(
         },
         "units": units,
         "parameters": params,
+        "drift": [
+            {
+                "id": d.id,
+                "before": d.before,
+                "after": d.after,
+                "drifted": d.drifted,
+                "distance": d.distance,
+                "dof": d.dof,
+                "p_value": d.p_value,
+                "largest": [
+                    {"name": n, "z": z, "change": c, "unit": unit_of.get(n, "m")}
+                    for n, z, c in d.largest
+                ],
+            }
+            for d in drift
+        ],
+        "drift_test": _drift_text(alpha, drift),
     }
+
+
+def _drift_text(alpha: float, drift: tuple[DriftVerdict, ...]) -> str:
+    if not drift:
+        return "no unit was calibrated in more than one session: no drift compared"
+    return (
+        "Consecutive calibrations x₁, x₂ of a unit are compared by T² = dᵀ(C₁ + C₂)⁺d, "
+        "d = x₂ − x₁, over the parameters both identified (χ²(rank) without drift). A "
+        f"unit drifted when p < α/K = {alpha:g}/{len(drift)} (Bonferroni over the "
+        f"{len(drift)} comparisons: at most {100 * alpha:g} % chance of one or more false "
+        "drifts), as far as each calibration's covariance is its whole error: unmodelled "
+        "errors that differ between the sessions' poses show as drift. The out-of-family "
+        "test takes each unit's latest session."
+    )

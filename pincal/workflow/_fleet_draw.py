@@ -8,6 +8,12 @@ prefix, e.g. ``leg3_u1.*``) moved by ±``shift`` of its production σ — what a
 mis-machined or mis-assembled part does. Draws come from ``SeedSequence(seed)``: child
 0 for the fleet (offset, spread, planted units), child ``i + 1`` for unit ``i``'s poses
 and noise, so a unit's data do not depend on the fleet's size or order of work.
+
+Recalibrated units are measured in a second session (new poses and noise); a drifted
+one has, in that session, one joint placement's parameters moved as a faulty part's
+are (a part that wore, slipped or was replaced). Their draws come from
+``SeedSequence([seed, 2])`` (child 0: which units, which part; child ``i + 1``: unit
+``i``'s second session), so a fleet without recalibrations is drawn as before.
 """
 
 from __future__ import annotations
@@ -34,6 +40,9 @@ class FleetDraw:
         values: (N, n) every unit's true parameter errors [m, rad].
         planted: unit index → {parameter name: its faulty-part shift [m, rad]}.
         seeds: (N,) each unit's ``SeedSequence`` child (its poses and noise).
+        second: unit index → its true parameter errors in the second session [m, rad].
+        drifts: unit index → {parameter name: its drift between the sessions [m, rad]}.
+        second_seeds: (N,) each unit's second-session ``SeedSequence`` child.
     """
 
     names: tuple[str, ...]
@@ -43,6 +52,9 @@ class FleetDraw:
     values: np.ndarray
     planted: dict[int, dict[str, float]]
     seeds: tuple[np.random.SeedSequence, ...]
+    second: dict[int, np.ndarray]
+    drifts: dict[int, dict[str, float]]
+    second_seeds: tuple[np.random.SeedSequence, ...]
 
 
 def draw_fleet(
@@ -57,6 +69,8 @@ def draw_fleet(
     planted: int | None = None,
     shift: float = 8.0,
     free: np.ndarray | None = None,
+    recalibrated: int = 0,
+    drifted: int = 0,
 ) -> FleetDraw:
     """Draw a fleet's true parameter errors (see the module doc).
 
@@ -73,12 +87,16 @@ def draw_fleet(
         free: (n,) 1 where a built machine can have an error, 0 where not (a
             translation inside an emulated joint, a loop-breaking offset:
             :func:`pincal.workflow.buildable_mask`); None: every parameter.
+        recalibrated: units measured in a second session (0 ≤ R ≤ N).
+        drifted: of those, units whose second session has a part moved by ``shift``
+            (0 ≤ D ≤ R).
 
     Returns:
         The :class:`FleetDraw`.
 
     Raises:
-        ParameterError: N < 2, planted units not below half the fleet, a negative size.
+        ParameterError: N < 2, planted units not below half the fleet, a negative size,
+            more recalibrated units than units or drifted than recalibrated.
     """
     n_units = int(n_units)
     if n_units < 2:
@@ -91,6 +109,11 @@ def draw_fleet(
         )
     if min(spread_mm, spread_mrad, offset_mm, offset_mrad, shift) < 0:
         raise ParameterError("spread, offset and shift are sizes ≥ 0")
+    if not 0 <= drifted <= recalibrated <= n_units:
+        raise ParameterError(
+            f"drifted ≤ recalibrated ≤ units, each ≥ 0: got {drifted} drifted of {recalibrated} "
+            f"recalibrated of {n_units} units"
+        )
     children = np.random.SeedSequence(seed).spawn(n_units + 1)
     rng = np.random.default_rng(children[0])
     metric = np.array([u == "m" for u in params.units])
@@ -104,13 +127,26 @@ def draw_fleet(
         if free[j]:
             groups.setdefault(name.rsplit(".", 1)[0], []).append(j)
     prefixes = sorted(groups)
+
+    def part(rng: np.random.Generator) -> tuple[list[int], np.ndarray]:
+        """One joint placement's columns and their ±shift production σ."""
+        cols = groups[prefixes[int(rng.integers(len(prefixes)))]]
+        return cols, rng.choice([-1.0, 1.0], size=len(cols)) * shift * spread[cols]
+
     faulty: dict[int, dict[str, float]] = {}
     for unit in sorted(int(u) for u in rng.choice(n_units, size=k, replace=False)):
-        cols = groups[prefixes[int(rng.integers(len(prefixes)))]]
-        signs = rng.choice([-1.0, 1.0], size=len(cols))
-        moved = signs * shift * spread[cols]
+        cols, moved = part(rng)
         values[unit, cols] += moved
         faulty[unit] = {params.names[j]: float(m) for j, m in zip(cols, moved, strict=True)}
+    later = np.random.SeedSequence([seed, 2]).spawn(n_units + 1)
+    rng2 = np.random.default_rng(later[0])
+    chosen = [int(u) for u in rng2.choice(n_units, size=recalibrated, replace=False)]
+    second = {u: values[u].copy() for u in chosen}
+    drifts: dict[int, dict[str, float]] = {}
+    for unit in sorted(chosen[:drifted]):
+        cols, moved = part(rng2)
+        second[unit][cols] += moved
+        drifts[unit] = {params.names[j]: float(m) for j, m in zip(cols, moved, strict=True)}
     return FleetDraw(
         tuple(params.names),
         tuple(params.units),
@@ -119,6 +155,9 @@ def draw_fleet(
         values,
         faulty,
         tuple(children[1:]),
+        dict(sorted(second.items())),
+        drifts,
+        tuple(later[1:]),
     )
 
 

@@ -17,7 +17,10 @@ from pincal.sensitivity import parameters
 from pincal.workflow._buildable import buildable_mask
 from pincal.workflow._fleet_draw import FleetDraw, draw_fleet, simulate_unit
 
-__all__ = ["FleetPlan", "plan_fleet"]
+__all__ = ["SESSION_DATES", "FleetPlan", "plan_fleet"]
+
+#: the dates of a recalibrated unit's two sessions in a simulated fleet file
+SESSION_DATES = ("2026-01-15", "2026-07-15")
 
 
 @dataclass(frozen=True)
@@ -48,15 +51,34 @@ class FleetPlan:
     shift: float
     noise: NoiseModel
 
-    def measurements(self, i: int) -> Measurements:
-        """Unit ``i``'s simulated measurements (``n_poses`` random poses, its own seed)."""
-        return simulate_unit(self.nominal, self.params, self.draw.values[i], self.n_poses,
-                             self.noise, self.draw.seeds[i])  # fmt: skip
+    def measurements(self, i: int, second: bool = False) -> Measurements:
+        """Unit ``i``'s simulated measurements (``n_poses`` random poses, its own seed).
+
+        ``second``: its second session (a recalibrated unit: ``i in draw.second``).
+        """
+        draw = self.draw
+        values, seed = (draw.second[i], draw.second_seeds[i]) if second else (
+            draw.values[i], draw.seeds[i])  # fmt: skip
+        return simulate_unit(self.nominal, self.params, values, self.n_poses, self.noise, seed)
+
+    def sessions(self, i: int) -> list[tuple[dict[str, str], bool]]:
+        """Unit ``i``'s fleet-file entries ``{id, data[, date]}`` and whether each is its second.
+
+        Data paths are relative to the fleet file; a recalibrated unit has two entries,
+        dated :data:`SESSION_DATES`.
+        """
+        uid = self.ids[i]
+        first = {"id": uid, "data": f"{uid}/measurements.csv"}
+        if i not in self.draw.second:
+            return [(first, False)]
+        second = {"id": uid, "data": f"{uid}/recalibration.csv", "date": SESSION_DATES[1]}
+        return [(first | {"date": SESSION_DATES[0]}, False), (second, True)]
 
     def truth(self) -> dict[str, Any]:
         """``truth.json`` (JSON-ready): the settings, offset, planted units, true values.
 
-        Values are parameter errors [m, rad] in the order of ``names``.
+        Values are parameter errors [m, rad] in the order of ``names``;
+        ``recalibrated`` lists the second sessions' values and drifts.
         """
         draw, ids = self.draw, self.ids
         return {
@@ -71,6 +93,10 @@ class FleetPlan:
             "offset": draw.offset.tolist(),
             "planted": [{"id": ids[i], "parameters": p} for i, p in sorted(draw.planted.items())],
             "units": [{"id": ids[i], "values": draw.values[i].tolist()} for i in range(len(ids))],
+            "recalibrated": [
+                {"id": ids[i], "values": v.tolist(), "drift": draw.drifts.get(i, {})}
+                for i, v in draw.second.items()
+            ],
         }
 
 
@@ -85,6 +111,8 @@ def plan_fleet(
     spread: tuple[float, float] = (0.1, 0.5),
     shift: float = 8.0,
     noise: tuple[float, float] = (0.01, 0.02),
+    recalibrated: int = 0,
+    drifted: int = 0,
 ) -> FleetPlan:
     """Load ``model`` and draw a fleet of ``n_units`` of it (see :func:`draw_fleet`).
 
@@ -98,6 +126,8 @@ def plan_fleet(
         spread: 1σ production spread (lengths [mm], angles [mrad]).
         shift: a faulty part's shift, in production σ.
         noise: instrument noise 1σ (position [mm], orientation [mrad]).
+        recalibrated: units measured again in a second session.
+        drifted: of those, units with a part moved between the sessions.
 
     Raises:
         PincalError subclasses of loading the model, of the preset and of the draw.
@@ -107,7 +137,8 @@ def plan_fleet(
     params = parameters(nominal, preset)
     free = buildable_mask(nominal, params, nominal.actuators_of(nominal.q_home)[None])
     draw = draw_fleet(params, n_units, seed, spread_mm=spread[0], spread_mrad=spread[1],
-                      planted=planted, shift=shift, free=free)  # fmt: skip
+                      planted=planted, shift=shift, free=free, recalibrated=recalibrated,
+                      drifted=drifted)  # fmt: skip
     ids = tuple(f"SN-{i + 1:04d}" for i in range(n_units))
     return FleetPlan(model, nominal, preset, params, draw, ids, seed, n_poses, spread, shift,
                      NoiseModel(*noise))  # fmt: skip

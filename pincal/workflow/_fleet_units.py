@@ -19,8 +19,8 @@ from pincal.io import Fleet, read_calibration, sha256_file
 
 __all__ = ["UnitJob", "file_digest", "fleet_jobs", "unit_summary"]
 
-#: one unit's work: (model, preset or None, unit id, data file, calibration directory,
-#: method, log file), every path absolute
+#: one unit's work: (model, preset or None, unit label (id, or id@date for one of several
+#: sessions), data file, calibration directory, method, log file), every path absolute
 UnitJob = tuple[str, str | None, str, str, str, str, str]
 
 
@@ -40,19 +40,20 @@ def fleet_jobs(fleet: Fleet, root: Path, method: str) -> tuple[list[UnitJob], li
 
     Args:
         fleet: the fleet file as read.
-        root: the report directory (absolute): units go to ``root/units/<id>``, their
-            logs to ``root/logs/<id>.log``.
+        root: the report directory (absolute): units go to ``root/units/<label>``, their
+            logs to ``root/logs/<label>.log`` (the label: the id, or ``<id>@<date>`` for
+            one of a unit's several sessions).
         method: the identification method of every unit.
 
     Returns:
-        The jobs (N,) and keys (N,) ``<id>.<first 16 hex digits of the data's SHA-256>``.
+        The jobs (N,) and keys (N,) ``<label>.<first 16 hex digits of the data's SHA-256>``.
     """
     jobs: list[UnitJob] = [
-        (fleet.model, fleet.preset, u.id, str(u.data.resolve()), str(root / "units" / u.id),
-         method, str(root / "logs" / f"{u.id}.log"))
+        (fleet.model, fleet.preset, u.label, str(u.data.resolve()),
+         str(root / "units" / u.label), method, str(root / "logs" / f"{u.label}.log"))
         for u in fleet.units
     ]  # fmt: skip
-    keys = [f"{u.id}.{file_digest(u.data)[:16]}" for u in fleet.units]
+    keys = [f"{u.label}.{file_digest(u.data)[:16]}" for u in fleet.units]
     return jobs, keys
 
 
