@@ -57,6 +57,7 @@ from pincal.design import (
     grid_candidates,
     select_poses,
 )
+from pincal.executor import Executor
 from pincal.model import COMPONENTS
 
 MODEL, PRESET = "stewart_6ups", "stewart42"
@@ -131,6 +132,11 @@ def _one_repetition(designs, r: int, seq: np.random.SeedSequence, levels, q_val)
     return out
 
 
+def _repetition(args: tuple):
+    """One Monte-Carlo repetition as an executor item (``args`` of :func:`_one_repetition`)."""
+    return _one_repetition(*args)
+
+
 def run_mc(
     designs: dict[str, np.ndarray],
     reps: int,
@@ -138,6 +144,7 @@ def run_mc(
     q_val: np.ndarray | None,
     levels=(0, 1, 2),
     n_jobs: int = 1,
+    scheduler: str | None = None,
 ) -> dict[tuple[str, int], Outcome]:
     """Monte Carlo on the bundled Stewart model; returns {(design, level): Outcome}.
 
@@ -146,16 +153,17 @@ def run_mc(
         reps: repetitions; repetition r uses the r-th child of ``seq``.
         q_val: validation poses (m_v, 6), or None to skip the validation errors.
         levels: indices into NOISE_LEVELS.
-        n_jobs: joblib processes (1: run here).
+        n_jobs: local processes without a scheduler (1: run here).
+        scheduler: a Dask scheduler (``local:N`` or ``tcp://host:port``), or None:
+            :class:`pincal.executor.Executor`. Each repetition carries its own seed, so
+            the result does not depend on the backend or the worker count.
     """
     children = seq.spawn(reps)
     args = [(designs, r, children[r], tuple(levels), q_val) for r in range(reps)]
-    if n_jobs > 1:
-        from joblib import Parallel, delayed
-
-        parts = Parallel(n_jobs=n_jobs)(delayed(_one_repetition)(*a) for a in args)
-    else:
-        parts = [_one_repetition(*a) for a in args]
+    with Executor(scheduler, n_jobs) as ex:
+        if scheduler is not None and __name__ != "__main__":  # imported (a test): the
+            ex.client().upload_file(__file__)  # workers import the script as its module
+        parts = ex.map(_repetition, args, progress="Monte Carlo").values()
     out = {(d, lv): Outcome() for d in designs for lv in levels}
     for part in parts:
         for key, (pm, rm, err) in part.items():
@@ -275,7 +283,13 @@ def main() -> None:
     parser.add_argument("--restarts", type=int, default=3, help="exchange random starts")
     parser.add_argument("--indices", nargs="+", default=["O1", "O2", "O3", "O4", "O5"])
     parser.add_argument("--no-random", action="store_true", help="skip O1 vs random poses")
-    parser.add_argument("--jobs", type=int, default=1, help="joblib processes for the MC")
+    parser.add_argument("--jobs", type=int, default=1, help="local processes for the MC")
+    parser.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="local:N|tcp://HOST:PORT",
+        help="run the MC on dask.distributed (pip install 'pincal[dask]')",
+    )
     args = parser.parse_args()
     t_start = time.perf_counter()
 
@@ -320,7 +334,10 @@ def main() -> None:
                 f"{np.linalg.cond(d.candidates.jacobians.reshape(-1, len(params))):.3g}"
             )
         t0 = time.perf_counter()
-        res = run_mc(designs, args.reps, stream(args.seed, index), q_val, n_jobs=args.jobs)
+        res = run_mc(
+            designs, args.reps, stream(args.seed, index), q_val, n_jobs=args.jobs,
+            scheduler=args.scheduler,
+        )  # fmt: skip
         print(f"  Monte Carlo: {args.reps} repetitions × 3 noise levels × 2 designs "
               f"({time.perf_counter() - t0:.0f} s)")  # fmt: skip
         summary[index] = print_table(index, res, designs_J, comps, Jv, params, labels)
@@ -349,7 +366,8 @@ def main() -> None:
             [pincal.sample_actuators(nominal, M_POSES, rng_rand) for _ in range(args.reps_random)]
         )
         designs = {"O1": d.q_act, "random": random_sets}
-        res = run_mc(designs, args.reps_random, stream(args.seed, "random"), None, (1,), args.jobs)
+        res = run_mc(designs, args.reps_random, stream(args.seed, "random"), None, (1,), args.jobs,
+                     args.scheduler)  # fmt: skip
         a = np.mean(np.array(res[("random", 1)].param_err) ** 2, axis=1)
         b = np.mean(np.array(res[("O1", 1)].param_err) ** 2, axis=1)
         ratio, se = ratio_se(a, b)

@@ -105,6 +105,25 @@ def test_monte_carlo_ratio_estimates_the_bound_ratio_reduced():
         assert abs(eff.whitened - 1.0) <= 3 * eff.whitened_se, (key, eff.whitened)
 
 
+@pytest.mark.slow  # a 2-worker Dask cluster and 2 × 4 repetitions
+def test_the_monte_carlo_is_bit_identical_on_two_dask_workers():
+    """Issue 41: the study's table reproduces bit for bit on 1 process and 2 Dask workers."""
+    pytest.importorskip("distributed")
+    nominal, params = study._model()
+    cands = grid_candidates(nominal, params, 3)
+    designs = {k: d.q_act for k, d in _designs(cands, "O1", 0.3, restarts=1).items()}
+    q_val, _ = _validation(nominal, params, 10, 5)
+    runs = [
+        study.run_mc(designs, 4, study.stream(0, "O1"), q_val, levels=(1,), scheduler=where)
+        for where in (None, "local:2")
+    ]
+    for key, serial in runs[0].items():
+        dask = runs[1][key]
+        assert serial.pos_ms == dask.pos_ms and serial.rot_ms == dask.rot_ms
+        assert all(np.array_equal(a, b) for a, b in zip(serial.param_err, dask.param_err))
+    assert len(runs[0][("Jz", 1)].pos_ms) == 4
+
+
 def test_indices_use_independent_seed_streams():
     states = {
         i: study.stream(0, i).generate_state(4).tolist()
