@@ -8,7 +8,7 @@ from typing import TypeVar
 import click
 
 from pincal.cli._limits import NOISE_RANGE, check_number
-from pincal.cli.common import jobs_option
+from pincal.cli.common import jobs_option, scheduler_option
 from pincal.measure import DEFAULT_NOISE
 
 _F = TypeVar("_F", bound=Callable[..., object])
@@ -78,6 +78,7 @@ def pose_options(func: _F) -> _F:
         ),
         jobs_option("Processes evaluating the candidates (-1: every CPU); same poses for any "
                     "value."),
+        scheduler_option("the candidates' evaluation (the same poses)"),
         click.option("--json", "as_json", is_flag=True, help="Print a JSON summary on stdout."),
     ]  # fmt: skip
     for option in reversed(options):

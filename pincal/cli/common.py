@@ -163,6 +163,17 @@ def jobs_option(help_text: str) -> Callable[[FC], FC]:
                         show_default=True, help=help_text)  # fmt: skip
 
 
+def scheduler_option(what: str) -> Callable[[FC], FC]:
+    """``--scheduler`` (into ``scheduler``): run ``what`` on dask.distributed."""
+    return click.option(
+        "--scheduler", default=None, metavar="local:N|tcp://HOST:PORT",
+        help=f"Run {what} on dask.distributed: local:N (a local cluster of N worker "
+        "processes) or a scheduler address tcp://host:8786 (its workers must see the same "
+        'file paths). Needs the optional extra: pip install "pincal[dask]". Default: local '
+        "processes (--jobs).",
+    )  # fmt: skip
+
+
 def model_options(func: Callable[..., _R]) -> Callable[..., _R]:
     """Add ``--sidecar``, ``--frame`` and ``--lock`` to a command that loads a model.
 

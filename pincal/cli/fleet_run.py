@@ -7,13 +7,7 @@ from pathlib import Path
 
 import click
 
-from pincal.cli.common import fail_cleanly, jobs_option
-
-SCHEDULER_HELP = (
-    "Run the units on dask.distributed: local:N (a local cluster of N worker processes) "
-    "or a scheduler address tcp://host:8786 (its workers must see the same file paths). "
-    'Needs the optional extra: pip install "pincal[dask]". Default: local processes (--jobs).'
-)
+from pincal.cli.common import fail_cleanly, jobs_option, scheduler_option
 
 
 @click.command("run")
@@ -21,7 +15,7 @@ SCHEDULER_HELP = (
 @click.option("--out", required=True, type=click.Path(file_okay=False),
               help="Report directory: units/<id>/ (calibration directories), fleet.json, "
               "fleet.md, fleet.html, fleet_parameters.png.")  # fmt: skip
-@click.option("--scheduler", default=None, metavar="local:N|tcp://HOST:PORT", help=SCHEDULER_HELP)
+@scheduler_option("the units")
 @jobs_option("Local processes without --scheduler (-1: every CPU).")
 @click.option("--method", default="gauss-newton", show_default=True,
               help="Identification solver of every unit.")  # fmt: skip

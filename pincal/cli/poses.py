@@ -31,7 +31,7 @@ from pincal.cli.common import ModelOptions, fail_cleanly, load_model, model_inpu
 def poses(
     model: str, count: int, index_name: str, spec: str, preset: str | None, scaling: str,
     K_mm: float | None, noise: tuple[float, float], method: str, order: str, restarts: int,
-    seed: int, out: str, n_jobs: int, as_json: bool, joint_margin: float,
+    seed: int, out: str, n_jobs: int, scheduler: str | None, as_json: bool, joint_margin: float,
     singular_margin: float, obstacles: tuple[str, ...], no_collisions: bool, reach_errors: str,
     yes: bool, overwrite: bool, model_opts: ModelOptions,
 ) -> None:  # fmt: skip
@@ -82,6 +82,7 @@ def poses(
             cands = pose_candidates(
                 mech, basis, spec, seed, max_candidates=None if yes else MAX_CANDIDATES,
                 max_bytes=None if yes else MAX_CANDIDATE_BYTES, n_jobs=n_jobs, progress=progress,
+                scheduler=scheduler,
             )  # fmt: skip
     request = PoseRequest(count, index_name, scaling, K_mm, noise, method, order, restarts, seed,
                           errors, spec)  # fmt: skip

@@ -94,6 +94,7 @@ def grid_candidates(
     max_candidates: int | None = MAX_CANDIDATES,
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
     n_jobs: int = 1,
+    scheduler: str | None = None,
 ) -> CandidateSet:
     """Seed 000: a full joint-space grid pushed through the forward kinematics.
 
@@ -110,6 +111,7 @@ def grid_candidates(
         in_workspace: keep only poses inside the sidecar pose workspace.
         progress: callback ``(done, total)``.
         n_jobs: processes evaluating the rows (see :func:`evaluate_candidates`).
+        scheduler: a Dask scheduler evaluating them instead, or None.
         max_candidates: refuse more rows than this (None: no bound).
         max_bytes: refuse a larger memory estimate [bytes] (None: no bound).
 
@@ -136,6 +138,7 @@ def grid_candidates(
         in_workspace=in_workspace,
         progress=progress,
         n_jobs=n_jobs,
+        scheduler=scheduler,
     )
 
 
@@ -149,10 +152,12 @@ def random_candidates(
     max_candidates: int | None = MAX_CANDIDATES,
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
     n_jobs: int = 1,
+    scheduler: str | None = None,
 ) -> CandidateSet:
     """``count`` random feasible workspace poses (:func:`pincal.sample_actuators`).
 
-    ``n_jobs``: processes evaluating the rows (see :func:`evaluate_candidates`).
+    ``n_jobs``, ``scheduler``: processes or a Dask scheduler evaluating the rows (see
+    :func:`evaluate_candidates`).
 
     Raises:
         OptionValueError: ``count`` is not an integer ≥ 1.
@@ -171,6 +176,7 @@ def random_candidates(
         in_workspace=False,
         progress=progress,
         n_jobs=n_jobs,
+        scheduler=scheduler,
     )
 
 
@@ -183,6 +189,7 @@ def orthogonal_candidates(
     max_candidates: int | None = MAX_CANDIDATES,
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
     n_jobs: int = 1,
+    scheduler: str | None = None,
 ) -> CandidateSet:
     """Seed 001: a strength-2 orthogonal array over the six workspace pose factors.
 
@@ -191,8 +198,8 @@ def orthogonal_candidates(
     mapped evenly onto the sidecar's pose ranges (a factor without a range stays
     at its home value) and each run is solved by inverse kinematics. Unreachable
     runs are counted as ``"no IK"``. ``max_candidates`` and ``max_bytes`` bound the
-    estimated cost as in :func:`grid_candidates`; ``n_jobs``: processes evaluating the
-    solved rows (see :func:`evaluate_candidates`).
+    estimated cost as in :func:`grid_candidates`; ``n_jobs``, ``scheduler``: processes or
+    a Dask scheduler evaluating the solved rows (see :func:`evaluate_candidates`).
     """
     if not isinstance(levels, (int, np.integer)) or levels < 2:
         raise OptionValueError(f"an orthogonal array needs levels >= 2; got {levels!r}")
@@ -240,6 +247,7 @@ def orthogonal_candidates(
         rejected={"no IK": failed},
         progress=second_half,
         n_jobs=n_jobs,
+        scheduler=scheduler,
     )
 
 
@@ -277,13 +285,14 @@ def candidate_set(
     max_candidates: int | None = MAX_CANDIDATES,
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
     n_jobs: int = 1,
+    scheduler: str | None = None,
 ) -> CandidateSet:
     """Candidates from a spec string: ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``.
 
     The cost (rows, memory) is estimated before any work and refused past
-    ``max_candidates`` rows or ``max_bytes`` (None: no bound). ``n_jobs``: processes
-    evaluating the rows (see :func:`evaluate_candidates`); the candidates do not depend
-    on it.
+    ``max_candidates`` rows or ``max_bytes`` (None: no bound). ``n_jobs``, ``scheduler``:
+    local processes or a Dask scheduler evaluating the rows (see
+    :func:`evaluate_candidates`); the candidates do not depend on them.
 
     Raises:
         OptionValueError: the spec is malformed (kind, or a number that is not an integer
@@ -296,16 +305,19 @@ def candidate_set(
         result = grid_candidates(
             mech, params, value, progress=progress, max_candidates=lim, max_bytes=mem,
             n_jobs=n_jobs,
+        scheduler=scheduler,
         )  # fmt: skip
     elif kind == "random":
         result = random_candidates(
             mech, params, value, rng, progress=progress, max_candidates=lim, max_bytes=mem,
             n_jobs=n_jobs,
+        scheduler=scheduler,
         )  # fmt: skip
     else:
         result = orthogonal_candidates(
             mech, params, value, progress=progress, max_candidates=lim, max_bytes=mem,
             n_jobs=n_jobs,
+        scheduler=scheduler,
         )  # fmt: skip
     if len(result) == 0:
         raise PincalError(f"no feasible candidate poses from {spec!r}: {result.summary()}")

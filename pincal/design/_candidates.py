@@ -223,6 +223,7 @@ def evaluate_candidates(
     rejected: dict[str, int] | None = None,
     progress: Progress | None = None,
     n_jobs: int = 1,
+    scheduler: str | None = None,
 ) -> CandidateSet:
     """Forward kinematics and Jacobian blocks of actuator rows; infeasible rows dropped.
 
@@ -251,6 +252,8 @@ def evaluate_candidates(
             mechanism (:mod:`pincal.design._parallel`); the result does not depend on
             ``n_jobs``. Pays off for thousands of rows (a worker's start-up costs
             about an import of pincal).
+        scheduler: a Dask scheduler (``local:N``, ``tcp://host:port``) whose workers
+            take the chunks instead (:class:`pincal.executor.Executor`), or None.
 
     Returns:
         The feasible candidates, in input order.
@@ -278,9 +281,9 @@ def evaluate_candidates(
     if in_workspace and mech.workspace.floor is not None:
         below = ~above_floor(mech, rows)
         counts["below floor"] = 0
-    parallel = check_n_jobs(n_jobs) != 1 and total > 1
+    parallel = (check_n_jobs(n_jobs) != 1 or scheduler is not None) and total > 1
     if parallel:
-        Q, solved, R_all, p_all = parallel_rows("fk", mech, rows, n_jobs)
+        Q, solved, R_all, p_all = parallel_rows("fk", mech, rows, n_jobs, scheduler=scheduler)
     else:
         Q, solved, bk = mech.try_configurations_batch(rows)
         if bk is not None:
@@ -317,7 +320,7 @@ def evaluate_candidates(
         keep.append(i)
     Q_keep = Q[keep].reshape(-1, mech.model.nq)
     if parallel and len(keep) > 1:
-        keep_p, keep_R, J = parallel_rows("sensitivity", mech, Q_keep, n_jobs, params)
+        keep_p, keep_R, J = parallel_rows("sensitivity", mech, Q_keep, n_jobs, params, scheduler)
     else:
         sens = sensitivities_batch(mech, params, Q_keep)
         keep_p, keep_R, J = sens.positions, sens.rotations, sens.jacobian

@@ -7,8 +7,9 @@ process (cached by the recipe's digest). The batched forward kinematics and the
 batched Jacobian blocks are computed row by row independently, so splitting the rows
 into chunks gives the same numbers as one call. Workers use one BLAS thread.
 
-Parallel runs use joblib's default process backend (loky); to run on a Dask cluster,
-select joblib's Dask backend around the call (``joblib.parallel_config(backend="dask")``).
+Chunks are mapped through :class:`pincal.executor.Executor`: local processes (joblib's
+loky) by default, a Dask cluster when a scheduler is given (``local:N`` or
+``tcp://host:port``).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from pincal.errors import PincalError
+from pincal.executor import Executor
 from pincal.model import Mechanism, ParameterSet, active_limits
 from pincal.sensitivity import sensitivities_batch
 
@@ -76,29 +78,28 @@ def _rebuild(recipe: tuple[str, bytes]) -> Mechanism:
     return _REBUILT[digest]
 
 
-def _fk_chunk(recipe: tuple[str, bytes], rows: np.ndarray) -> tuple[Any, ...]:
-    """Batched forward kinematics of a chunk: (Q, solved, R, p) or (Q, solved, None, None)."""
-    from threadpoolctl import threadpool_limits
+def _fk_chunk(item: tuple[tuple[str, bytes], np.ndarray]) -> tuple[Any, ...]:
+    """Batched forward kinematics of a chunk ``(recipe, rows)``.
 
-    with threadpool_limits(1):
-        mech = _rebuild(recipe)
-        Q, solved, bk = mech.try_configurations_batch(rows)
-        if bk is None:
-            return Q, solved, None, None
-        R, p = mech.batch_model.frame_placement(bk, mech.frame_id(mech.measured_frame))
-        return Q, solved, R, p
+    Returns (Q, solved, R, p), or (Q, solved, None, None) when the batched solve does
+    not apply. Executor items run on one BLAS thread.
+    """
+    recipe, rows = item
+    mech = _rebuild(recipe)
+    Q, solved, bk = mech.try_configurations_batch(rows)
+    if bk is None:
+        return Q, solved, None, None
+    R, p = mech.batch_model.frame_placement(bk, mech.frame_id(mech.measured_frame))
+    return Q, solved, R, p
 
 
 def _sensitivity_chunk(
-    recipe: tuple[str, bytes], params: ParameterSet, Q: np.ndarray
+    item: tuple[tuple[str, bytes], ParameterSet, np.ndarray],
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Measured-frame positions, rotations and Jacobian blocks of a chunk of configurations."""
-    from threadpoolctl import threadpool_limits
-
-
-    with threadpool_limits(1):
-        sens = sensitivities_batch(_rebuild(recipe), params, Q)
-        return sens.positions, sens.rotations, sens.jacobian
+    """Positions, rotations and Jacobian blocks of a chunk ``(recipe, params, Q)``."""
+    recipe, params, Q = item
+    sens = sensitivities_batch(_rebuild(recipe), params, Q)
+    return sens.positions, sens.rotations, sens.jacobian
 
 
 def _chunks(n: int, parts: int) -> list[slice]:
@@ -107,7 +108,12 @@ def _chunks(n: int, parts: int) -> list[slice]:
 
 
 def parallel_rows(
-    kind: str, mech: Mechanism, rows: np.ndarray, n_jobs: int, params: ParameterSet | None = None
+    kind: str,
+    mech: Mechanism,
+    rows: np.ndarray,
+    n_jobs: int,
+    params: ParameterSet | None = None,
+    scheduler: str | None = None,
 ) -> tuple[Any, ...]:
     """Batched FK (``kind="fk"``) or sensitivities (``"sensitivity"``) of rows, in chunks.
 
@@ -119,23 +125,24 @@ def parallel_rows(
             rotations, jacobian)`` like :func:`sensitivities_batch`.
         mech: the mechanism (rebuilt in each worker).
         rows: (N, ·) rows, split into one contiguous chunk per worker.
-        n_jobs: worker processes (joblib; -1 = every CPU).
+        n_jobs: local worker processes without a scheduler (-1 = every CPU).
         params: parameter set (``"sensitivity"`` only).
+        scheduler: a Dask scheduler (``local:N``, ``tcp://host:port``) or None.
 
     Returns:
         The chunks' results concatenated in row order.
-    """
-    from joblib import Parallel, cpu_count, delayed
 
-    workers = cpu_count() if n_jobs == -1 else n_jobs
-    parts = _chunks(rows.shape[0], max(1, min(workers, rows.shape[0])))
+    Raises:
+        The first failing chunk's error.
+    """
     recipe = _recipe(mech)
-    if kind == "fk":
-        out = Parallel(n_jobs=n_jobs)(delayed(_fk_chunk)(recipe, rows[s]) for s in parts)
-    else:
-        out = Parallel(n_jobs=n_jobs)(
-            delayed(_sensitivity_chunk)(recipe, params, rows[s]) for s in parts
-        )
+    with Executor(scheduler, n_jobs) as ex:
+        parts = _chunks(rows.shape[0], max(1, min(ex.workers, rows.shape[0])))
+        if kind == "fk":
+            out = ex.map(_fk_chunk, [(recipe, rows[s]) for s in parts]).values()
+        else:
+            items = [(recipe, params, rows[s]) for s in parts]
+            out = ex.map(_sensitivity_chunk, items).values()
     if kind == "fk" and any(o[2] is None for o in out):
         return np.concatenate([o[0] for o in out]), np.concatenate([o[1] for o in out]), None, None
     return tuple(np.concatenate([o[k] for o in out]) for k in range(len(out[0])))

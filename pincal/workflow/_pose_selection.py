@@ -98,15 +98,18 @@ def pose_candidates(
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
     n_jobs: int = 1,
     progress: Callable[[int, int], None] | None = None,
+    scheduler: str | None = None,
 ) -> CandidateSet:
     """The candidate poses of ``spec`` (``grid:LEVELS``, ``random:COUNT``, ``oa:LEVELS``).
 
     Refused past ``max_candidates`` poses or ``max_bytes`` of memory (None: no bound;
-    :func:`pincal.design.candidate_set`); ``progress(done, total)`` over the poses.
+    :func:`pincal.design.candidate_set`); ``progress(done, total)`` over the poses;
+    evaluated on ``n_jobs`` local processes or a Dask ``scheduler``.
     """
     return candidate_set(
         mech, basis.params, spec, rng=seed, progress=progress,
         max_candidates=max_candidates, max_bytes=max_bytes, n_jobs=n_jobs,
+        scheduler=scheduler,
     )  # fmt: skip
 
 
