@@ -44,6 +44,8 @@ LONG = {
     "scripts/studies/instrument_campaigns.py": "Monte-Carlo study; core claim in tests/instruments",
     "scripts/studies/socket_gate.py": "180 UR5 socket fits (minutes); a wrong "
     "joint_reference refused in tests/cli/test_socket_guards.py",
+    "scripts/studies/fleet_detection.py": "five 200-unit CLI fleets (~6 min); the planted "
+    "unit flagged in tests/cli/test_fleet.py",
     "scripts/studies/fleet_drift.py": "21 CLI fleets of 40 sessions (~8 min); a drifted "
     "part named in tests/cli/test_fleet_drift_cli.py",
     "scripts/studies/fleet_small.py": "fault-free fleets, each limit calibrated by 200 more "
