@@ -5,11 +5,16 @@ Usage: python scripts/bench_fleet.py [--units 6] [--repeats 3]
 Each configuration calibrates the same simulated wedge3 fleet into a fresh directory
 (nothing reused); the time includes starting the workers (and the Dask cluster). BLAS
 runs on one thread (threadpoolctl) in this process and in every worker.
+
+Memory: the peak resident set of this process before and after the in-process run
+(``--jobs 1``, every unit calibrated here one after the other) and, per unit, the size of
+a unit's summary the fleet run keeps (its identified values and covariance).
 """
 
 from __future__ import annotations
 
 import argparse
+import resource
 import statistics
 import tempfile
 import time
@@ -39,6 +44,7 @@ def main_() -> None:
         sim = Path(tmp) / "sim"
         _run(["fleet", "simulate", "wedge3", "--units", str(a.units), "--poses", "100",
               "--seed", "0", "--out", str(sim)])  # fmt: skip
+        before, after = _peak_mb(), float("nan")
         print(f"| backend | workers | units/s (median of {a.repeats}) | s per unit |")
         print("|---|---|---|---|")
         for backend, opts in CONFIGS:
@@ -51,6 +57,18 @@ def main_() -> None:
             t = statistics.median(times)
             print(f"| {backend} | {opts[-1].split(':')[-1]} | {a.units / t:.2f} | "
                   f"{t / a.units:.2f} |", flush=True)  # fmt: skip
+            if opts == ["--jobs", "1"]:
+                after = _peak_mb()
+        summaries = list((out / ".fleet-results").glob("*"))
+        kept = sum(f.stat().st_size for f in summaries) / max(len(summaries), 1)
+        print(f"\npeak resident memory of this process: {before:.0f} MB before, {after:.0f} MB "
+              f"after calibrating {a.units} units in it (--jobs 1); a unit's kept result "
+              f"{kept / 1024:.1f} KiB on disk")  # fmt: skip
+
+
+def _peak_mb() -> float:
+    """This process' peak resident set [MB] (Linux reports kilobytes)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 if __name__ == "__main__":
