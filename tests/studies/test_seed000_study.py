@@ -120,7 +120,8 @@ def test_the_monte_carlo_is_bit_identical_on_two_dask_workers():
     for key, serial in runs[0].items():
         dask = runs[1][key]
         assert serial.pos_ms == dask.pos_ms and serial.rot_ms == dask.rot_ms
-        assert all(np.array_equal(a, b) for a, b in zip(serial.param_err, dask.param_err))
+        pairs = zip(serial.param_err, dask.param_err, strict=True)
+        assert all(np.array_equal(a, b) for a, b in pairs)
     assert len(runs[0][("Jz", 1)].pos_ms) == 4
 
 
