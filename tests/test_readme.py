@@ -47,7 +47,7 @@ LONG = {
     "scripts/studies/fleet_detection.py": "five 200-unit CLI fleets (~6 min); the planted "
     "unit flagged in tests/cli/test_fleet.py",
     "scripts/studies/fleet_drift.py": "21 CLI fleets of 40 sessions (~8 min); a drifted "
-    "part named in tests/cli/test_fleet_drift_cli.py",
+    "part named in tests/cli/test_fleet.py",
     "scripts/studies/fleet_small.py": "fault-free fleets, each limit calibrated by 200 more "
     "(minutes); the small-fleet limit in tests/workflow/test_fleet_stats.py",
 }
