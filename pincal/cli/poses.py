@@ -54,6 +54,7 @@ def poses(
     from pincal.cli._pose_screens import parse_reach_errors, screen_settings
     from pincal.cli._progress import counted
     from pincal.design import MAX_CANDIDATE_BYTES, MAX_CANDIDATES, parse_candidate_spec
+    from pincal.executor import parse_scheduler
     from pincal.io import si_actuator_units, write_pose_design
     from pincal.workflow import PoseRequest, pose_basis, pose_candidates, select_pose_design
 
@@ -71,6 +72,8 @@ def poses(
     check_noise(noise)
     with naming_option("--candidates"):
         parse_candidate_spec(spec)  # a malformed spec fails before the model loads
+    with naming_option("--scheduler:"):
+        parse_scheduler(scheduler, n_jobs)
     settings = screen_settings(joint_margin, singular_margin, obstacles, no_collisions)
     errors = parse_reach_errors(reach_errors)
     mech = load_model(model, model_opts)

@@ -89,3 +89,16 @@ def test_poses_command_selects_the_same_poses_for_any_jobs(tmp_path):
     assert all(w == written[0] for w in written[1:])
     bad = CliRunner().invoke(main, ["poses", "stewart_6ups", "--jobs", "0"])
     assert bad.exit_code != 0 and "jobs" in bad.output
+
+
+def test_a_bad_scheduler_is_refused_before_any_work(tmp_path):
+    from click.testing import CliRunner
+
+    from pincal.cli import main
+
+    out = tmp_path / "p.csv"
+    res = CliRunner().invoke(main, ["poses", "stewart_6ups", "--scheduler", "local:0",
+                                    "--out", str(out)])  # fmt: skip
+    assert res.exit_code != 0 and not out.exists()
+    assert "--scheduler: scheduler 'local:0'" in res.output and "local:2" in res.output
+    assert "Traceback" not in res.output and "parameters" not in res.output  # no model loaded
