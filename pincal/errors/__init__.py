@@ -55,6 +55,7 @@ from pincal.errors._outputs import (
     MissingExtraError,
     ReportError,
     VisualizationError,
+    WorkerSetupError,
 )
 from pincal.errors._solving import (
     ClosureError,
@@ -116,5 +117,6 @@ __all__ = [
     "UnknownNameError",
     "UnreachablePoseError",
     "VisualizationError",
+    "WorkerSetupError",
     "clip",
 ]

@@ -1,7 +1,7 @@
 """Errors of producing results: views, reports, controller exports and running the work.
 
-Running the work: an optional dependency that is not installed, an item that failed
-in a worker of an executor map.
+Running the work: an optional dependency that is not installed, workers that cannot
+load the work they are sent, an item that failed in a worker of an executor map.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ __all__ = [
     "MissingExtraError",
     "ReportError",
     "VisualizationError",
+    "WorkerSetupError",
 ]
 
 
@@ -31,6 +32,10 @@ class ExportError(PincalError):
 
 class MissingExtraError(PincalError):
     """An optional dependency is needed and not installed (e.g. dask for ``--scheduler``)."""
+
+
+class WorkerSetupError(PincalError):
+    """The Dask workers cannot load the work they are sent (a module missing there)."""
 
 
 class ItemFailedError(PincalError):

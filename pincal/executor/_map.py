@@ -14,7 +14,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 from tqdm import tqdm
 
-from pincal.errors import ItemFailedError, OptionValueError
+from pincal.errors import ItemFailedError, OptionValueError, WorkerSetupError
 from pincal.executor._scheduler import SchedulerSpec, parse_scheduler
 
 __all__ = ["Executor", "ItemResult", "MapResult", "Store", "run_item"]
@@ -37,6 +37,7 @@ class Store(Protocol):
     def save(self, key: str, value: Any) -> None:
         """Write ``value`` as the result of ``key``, whole or not at all."""
         ...
+
 
 #: one item's run in a worker: (index, item, seed child) → ``run_item``'s tuple
 ItemCall = Callable[
@@ -313,6 +314,8 @@ class Executor:
         from distributed import as_completed
 
         client = self.client()
+        if pending:
+            _check_workers(client, call, items[pending[0]], children[pending[0]])
         token = uuid.uuid4().hex[:8]
         futures = {
             client.submit(
@@ -335,3 +338,22 @@ class Executor:
             else:
                 arrived(*res)
             fut.release()
+
+
+def _check_workers(client: Any, call: ItemCall, item: Any, child: Any) -> None:
+    """Raise WorkerSetupError when a worker cannot load the call with its first item.
+
+    A task whose function a worker cannot unpickle (its module missing there) breaks
+    that worker's connection and is never answered: the map would wait for ever. Sent
+    as the arguments of a builtin (``len``), the same pickles fail at once, on the
+    client, and leave the workers usable.
+    """
+    try:
+        client.run(len, (call, item, child))
+    except Exception as exc:  # the worker's unpickling error, carried back as text
+        raise WorkerSetupError(
+            f"the Dask workers cannot load the work sent to them ({exc}): every worker "
+            "needs pincal and the module that defines the mapped function, installed in "
+            "the same versions as here; a script's own functions can be sent with "
+            "Executor.client().upload_file(PATH)"
+        ) from exc

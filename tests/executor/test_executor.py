@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from pincal.errors import ItemFailedError, MissingExtraError, OptionValueError
+from pincal.errors import ItemFailedError, MissingExtraError, OptionValueError, WorkerSetupError
 from pincal.executor import Executor, parse_scheduler
 from pincal.io import ResultStore
 
@@ -156,3 +158,18 @@ class _Unpicklable(Exception):
 
 def _raise_local(item):
     raise _Unpicklable(f"bad item {item}")
+
+
+@needs_dask
+def test_work_the_workers_cannot_load_is_refused_at_once(tmp_path, monkeypatch, dask2):
+    """A function whose module only this process has: refused, the workers still usable."""
+    (tmp_path / "only_here.py").write_text("def square(x):\n    return x * x\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    only_here = importlib.import_module("only_here")
+    (tmp_path / "only_here.py").unlink()  # the workers (started elsewhere) cannot import it
+    try:
+        with pytest.raises(WorkerSetupError, match="only_here"):
+            dask2.map(only_here.square, [1, 2, 3])
+    finally:
+        del sys.modules["only_here"]
+    assert dask2.map(draw, [1, 2], seed=0).values()[1].shape == (3,)
