@@ -2,7 +2,7 @@
 
 Usage:
     python scripts/studies/quality_gate.py [--fits 20] [--poses 50] [--seed 0]
-        [--cells "clean, Stewart;1 % leg gain"] [--part 0/3]
+        [--cells "clean, Stewart;1 % leg gain"] [--part 0/3] [--jobs 2 | --scheduler local:2]
 
 Each fit: an "actual" machine drawn as ``pincal simulate`` draws it (geometric errors
 uniform in ±1 mm / ±10 mrad on the model's first preset), random workspace poses, noise
@@ -27,7 +27,8 @@ fault cells) with its binomial standard error √(p(1−p)/n) and its exact one-
 false-alarm rate (k = 0 of n: 1 − 0.05^(1/n); 0 misses in 59 fits bound the detection
 rate above 95 %). The last line pools the clean cells. Seeded: fit i of every cell uses
 seed ``seed + i`` for the machine, the poses and the noise; missed (or falsely refused)
-seeds are listed.
+seeds are listed. A cell's fits run through :class:`pincal.executor.Executor` (``--jobs``
+local processes, or a Dask ``--scheduler``): the table does not depend on either.
 """
 
 from __future__ import annotations
@@ -43,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import pincal
+from pincal.executor import Executor
 from pincal.identification import check_quality, identify
 from pincal.model import load_mechanism, parameters, sample_actuators
 
@@ -140,6 +142,17 @@ def run_fit(cell: Cell, seed: int, poses: int) -> tuple[bool, str, bool]:
     return not verdict.passed, kinds, exact
 
 
+def _fit_item(item: tuple[Cell, int, int]) -> tuple[bool, str, bool]:
+    """One fit as an executor item: ``run_fit(cell, seed, poses)``."""
+    return run_fit(*item)
+
+
+def cell_fits(ex: Executor, cell: Cell, seeds: range, poses: int) -> list[tuple[bool, str, bool]]:
+    """``run_fit`` of ``cell`` at every seed, through the executor (in seed order)."""
+    items = [(cell, seed, poses) for seed in seeds]
+    return ex.map(_fit_item, items, progress=cell.name).values()
+
+
 def _rate(k: int, n: int) -> str:
     p = k / n if n else float("nan")
     se = math.sqrt(p * (1 - p) / n) if n else float("nan")
@@ -171,6 +184,29 @@ TABLE_HEAD = (f"| {'cell':44s} | {'refused (rate ± s.e.)':24s} | 95 % bound | r
               f"|{'-' * 46}|{'-' * 26}|------------|---|")  # fmt: skip
 
 
+def _row(cell: Cell, fits: list[tuple[bool, str, bool]], seeds: range) -> tuple[int, int]:
+    """Print the cell's row; (false alarms, fits) for the pooled clean row, else (0, 0)."""
+    refused, exact, seen, odd = 0, 0, Counter(), []
+    for seed, (r, kinds, ex) in zip(seeds, fits, strict=True):
+        refused += r
+        exact += ex
+        if kinds:
+            seen[kinds] += 1
+        if r == cell.clean:  # a false alarm, or a miss
+            odd.append(seed)
+    n = len(fits)
+    what = "false alarms" if cell.clean else "detected"
+    lim = f"{'≤' if cell.clean else '≥'} {100 * bound(refused, n, upper=cell.clean):5.1f} %"
+    note = ", ".join(f"{k} ×{c}" for k, c in seen.most_common(3)) or "—"
+    if odd:
+        note += f"; {'refused' if cell.clean else 'missed'}: seeds {odd[:10]}"
+    if cell.fault == "outlier":
+        note += f"; named exactly: {_rate(exact, n)}"
+    print(f"| {cell.name:44s} | {_rate(refused, n):24s} | {lim:10s} | {what}: {note} |",
+          flush=True)  # fmt: skip
+    return (refused, n) if cell.clean else (0, 0)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fits", type=int, default=60, help="fits per cell (≥ 59 to show ≥ 95 %%)")
@@ -180,6 +216,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--part", default=None, metavar="I/P",
                     help="run only cells I, I+P, I+2P, … (0-based) of the selection: P "
                     "processes in parallel, same seeds as one run")  # fmt: skip
+    ap.add_argument("--jobs", type=int, default=1, help="local processes (default 1)")
+    ap.add_argument("--scheduler", default=None,
+                    help="a Dask scheduler: local:N or tcp://HOST:PORT")  # fmt: skip
     a = ap.parse_args(argv)
     cells = selected(CELLS, a.cells, a.part)
     print(f"# quality gate study: {a.fits} fits per cell, {a.poses} poses, seeds "
@@ -187,29 +226,11 @@ def main(argv: list[str] | None = None) -> int:
     print(TABLE_HEAD)
     t0 = time.perf_counter()
     pooled = [0, 0]
-    for cell in cells:
-        refused, exact, seen, odd = 0, 0, Counter(), []
-        for i in range(a.fits):
-            r, kinds, ex = run_fit(cell, a.seed + i, a.poses)
-            refused += r
-            exact += ex
-            if kinds:
-                seen[kinds] += 1
-            if r == cell.clean:  # a false alarm, or a miss
-                odd.append(a.seed + i)
-        what = "false alarms" if cell.clean else "detected"
-        b = bound(refused, a.fits, upper=cell.clean)
-        lim = f"{'≤' if cell.clean else '≥'} {100 * b:5.1f} %"
-        note = ", ".join(f"{k} ×{n}" for k, n in seen.most_common(3)) or "—"
-        if odd:
-            note += f"; {'refused' if cell.clean else 'missed'}: seeds {odd[:10]}"
-        if cell.fault == "outlier":
-            note += f"; named exactly: {_rate(exact, a.fits)}"
-        if cell.clean:
-            pooled[0] += refused
-            pooled[1] += a.fits
-        print(f"| {cell.name:44s} | {_rate(refused, a.fits):24s} | {lim:10s} | {what}: {note} |",
-              flush=True)  # fmt: skip
+    seeds = range(a.seed, a.seed + a.fits)
+    with Executor(a.scheduler, a.jobs) as executor:  # run as a program: __main__'s functions
+        for cell in cells:
+            k, n = _row(cell, cell_fits(executor, cell, seeds, a.poses), seeds)
+            pooled = [pooled[0] + k, pooled[1] + n]
     if pooled[1]:
         lim = f"≤ {100 * bound(pooled[0], pooled[1], upper=True):5.1f} %"
         print(f"| {'all clean cells':44s} | {_rate(*pooled):24s} | {lim:10s} | false alarms |")

@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
-from tests.studies.scripts import load_script
+import os
+import subprocess
+import sys
+
+import pytest
+
+from tests.studies.scripts import ROOT, load_script
 
 
 def test_one_fit_per_cell_reports_rates(capsys):
@@ -18,3 +24,19 @@ def test_one_fit_per_cell_reports_rates(capsys):
     assert len(faults) == 2  # the fault with estimated and with declared noise
     assert all("1/1" in ln and "detected:" in ln and "model" in ln for ln in faults)
     assert len(rows) == 4  # only the cells asked for, and the pooled clean row
+
+
+@pytest.mark.slow  # a 2-worker Dask cluster and 3 × 3 fits, the script run as a program
+def test_the_table_is_the_same_on_local_processes_and_on_dask():
+    pytest.importorskip("distributed")
+    cells = "clean, Stewart, declared;one 5 mm outlier in 30, Stewart, estimated"
+    tables = []
+    for where in (["--jobs", "1"], ["--jobs", "2"], ["--scheduler", "local:2"]):
+        out = subprocess.run(
+            [sys.executable, str(ROOT / "scripts/studies/quality_gate.py"), "--fits", "3",
+             "--poses", "40", "--cells", cells, *where],
+            check=True, capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(ROOT)},
+        ).stdout  # fmt: skip
+        tables.append([ln for ln in out.splitlines() if ln.startswith("| ")])
+    assert len(tables[0]) == 4 and "named exactly:   3/3" in tables[0][2]
+    assert tables[1] == tables[0] and tables[2] == tables[0]
