@@ -2,7 +2,8 @@
 
 Usage:
     python scripts/studies/pose_coverage.py [--model stewart_6ups] [--poses random|designed]
-        [--count 10] [--box 1] [--noise declared|estimated] [--seeds 0:40] [--jobs 2]
+        [--count 10] [--box 1] [--noise declared|estimated] [--seeds 0:40]
+        [--jobs 2 | --scheduler local:2|tcp://HOST:PORT]
     python scripts/studies/pose_coverage.py --summarise FILE.jsonl ...
 
 Per seed S (truths simulated by pincal's simulate path, as ``pincal simulate`` draws
@@ -27,7 +28,10 @@ With e the error of the identified parameters from the truth:
   noise); ``joint_chi2``: inside χ²_k(0.95) whatever the noise;
 - ``method``: the written covariance's method; ``s``: seconds for the draw.
 
-One JSON line per seed; ``--summarise`` prints one table row per file (mean ± s.e.).
+One JSON line per seed, in seed order; ``--summarise`` prints one table row per file
+(mean ± s.e.). The draws run through :class:`pincal.executor.Executor` (``--jobs`` local
+processes or a Dask ``--scheduler``); each is seeded by its own S, so the lines (but
+``s``) do not depend on either.
 """
 
 from __future__ import annotations
@@ -124,6 +128,11 @@ def summarise(path: str) -> str:
     ])  # fmt: skip
 
 
+def _draw_item(item: tuple[argparse.Namespace, int, np.ndarray | None]) -> dict:
+    """One draw as an executor item: ``draw(args, seed, q_design)``."""
+    return draw(*item)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--summarise", nargs="+", metavar="FILE",
@@ -137,7 +146,9 @@ def main() -> None:
                          "ill-conditioned workspace)")  # fmt: skip
     ap.add_argument("--noise", default="declared", choices=("declared", "estimated"))
     ap.add_argument("--seeds", default="0:40", help="first:last (exclusive)")
-    ap.add_argument("--jobs", type=int, default=1, help="processes (joblib)")
+    ap.add_argument("--jobs", type=int, default=1, help="local processes (default 1)")
+    ap.add_argument("--scheduler", default=None,
+                    help="a Dask scheduler: local:N or tcp://HOST:PORT")  # fmt: skip
     a = ap.parse_args()
     if a.summarise:
         print("\n".join(summarise(path) for path in a.summarise))
@@ -150,12 +161,12 @@ def main() -> None:
         q_design = _design(nom, pincal.parameters(nom, a.preset or next(iter(nom.presets))),
                            a.count)  # fmt: skip
     lo, hi = (int(v) for v in a.seeds.split(":"))
-    from joblib import Parallel, delayed
+    from pincal.executor import Executor
 
-    for rec in Parallel(n_jobs=a.jobs, return_as="generator")(
-        delayed(draw)(a, seed, q_design) for seed in range(lo, hi)
-    ):
-        print(json.dumps(rec), flush=True)
+    with Executor(a.scheduler, a.jobs) as ex:
+        items = [(a, seed, q_design) for seed in range(lo, hi)]
+        for rec in ex.map(_draw_item, items, progress="draws").values():
+            print(json.dumps(rec), flush=True)
 
 
 if __name__ == "__main__":
