@@ -100,6 +100,7 @@ SCRIPTS = [c for c in _commands() if c.startswith("python scripts/") and c.split
 SLOW_SCRIPTS = {
     "scripts/studies/open_world_table.py": "tests/open_world/test_roster.py",
     "scripts/studies/hexaslide_calibration.py": "tests/studies/test_hexaslide_calibration.py",
+    "scripts/studies/reach_screen.py": "tests/cli/test_poses_screens.py",
 }
 
 

@@ -60,6 +60,7 @@ from pincal.design._screens import (
     ScreenReport,
     ScreenSettings,
     actuator_sigma_min,
+    scaled_actuator_jacobians,
     screen_candidates,
 )
 from pincal.design._selection import SELECTION_METHODS, PoseDesign, select_poses
@@ -115,6 +116,7 @@ __all__ = [
     "predicted_validation_rms",
     "random_candidates",
     "scale_columns",
+    "scaled_actuator_jacobians",
     "screen_candidates",
     "select_poses",
     "travel_order",

@@ -43,6 +43,7 @@ __all__ = [
     "ScreenReport",
     "ScreenSettings",
     "actuator_sigma_min",
+    "scaled_actuator_jacobians",
     "screen_candidates",
 ]
 
@@ -107,10 +108,10 @@ class ScreenReport:
         return "screens removed: " + ", ".join(f"{n} {k}" for k, n in self.removed.items())
 
 
-def actuator_sigma_min(
+def scaled_actuator_jacobians(
     mech: Mechanism, q_act: NDArray[np.float64], length: float | None = None
-) -> tuple[NDArray[np.float64], float]:
-    """σ_min of the dimensionless actuator → measured-components Jacobian per row.
+) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
+    """The dimensionless actuator → measured-components Jacobians of the rows.
 
     Args:
         mech: the mechanism (its measured components are the rows of G).
@@ -118,7 +119,8 @@ def actuator_sigma_min(
         length: L [m] (None: balanced over these rows, see the module docstring).
 
     Returns:
-        (σ_min per row (N,) — NaN where the forward kinematics failed —, L [m]).
+        (G (N, k, n_act) scaled — NaN where the forward kinematics failed —, the row
+        scale (k,): 1/L [1/m] on position rows and 1 on rotation rows, L [m]).
     """
     rows = np.atleast_2d(np.asarray(q_act, dtype=float))
     G = actuator_jacobians(mech, rows)
@@ -133,13 +135,31 @@ def actuator_sigma_min(
             # a measured point the actuators do not move (rms_p = 0) has no length scale
             length = rms_p / rms_r if rms_r > 0 and rms_p > 0 else 1.0
     prismatic = np.array([mech.tree.joints[j].type == "prismatic" for j in mech.actuated])
-    G[:, is_pos, :] /= length
+    scale = np.where(is_pos, 1.0 / length, 1.0)
+    G *= scale[None, :, None]
     G[:, :, prismatic] *= length
-    sigma = np.full(len(rows), np.nan)
-    for i in range(len(rows)):
-        if np.all(np.isfinite(G[i])):
-            sigma[i] = np.linalg.svd(G[i], compute_uv=False)[-1]
-    return sigma, float(length)
+    return G, scale, float(length)
+
+
+def actuator_sigma_min(
+    mech: Mechanism, q_act: NDArray[np.float64], length: float | None = None
+) -> tuple[NDArray[np.float64], float]:
+    """σ_min of the dimensionless actuator → measured-components Jacobian per row.
+
+    Args:
+        mech: the mechanism (its measured components are the rows of G).
+        q_act: (N, n_act) actuator rows [m, rad].
+        length: L [m] (None: balanced over these rows, see the module docstring).
+
+    Returns:
+        (σ_min per row (N,) — NaN where the forward kinematics failed —, L [m]).
+    """
+    G, _, length = scaled_actuator_jacobians(mech, q_act, length)
+    sigma = np.full(len(G), np.nan)
+    for i, Gi in enumerate(G):
+        if np.all(np.isfinite(Gi)):
+            sigma[i] = np.linalg.svd(Gi, compute_uv=False)[-1]
+    return sigma, length
 
 
 def screen_candidates(

@@ -8,7 +8,17 @@ the given mm / mrad bounds, as ``pincal simulate --error-size`` draws them, none
 machine cannot have; :data:`DRAWS` draws seeded by the seed), from the candidate's own
 command, limits checked, branch changes refused — what ``pincal compensate`` does with
 a calibration of that size, imposing the components the machine controls
-(:func:`controlled_components`). A candidate is kept when it compensates on every draw.
+(:func:`controlled_components`). A few random draws seldom reach the errors that hurt a
+pose most, and the designs that maximise observability favour poses at the edge of the
+workspace and near singularities, where such errors make a pose unreachable or throw its
+wrist onto another branch. So each candidate is also compensated, to first order, on
+the two *critical* draws of its own (:func:`critical_shifts`): the pose change
+δ = ±``CRITICAL_SIGMA`` σ_u C u / √(uᵀCu) the errors cause along u, the direction the
+actuators move the measured frame least (the last left singular vector of the scaled
+actuator Jacobian, :func:`pincal.design.scaled_actuator_jacobians`), C = K Σ Kᵀ the
+covariance of the pose change for the uniform errors (Σ = diag(bound²/3), K the
+identification Jacobian; the displaced model reaching a target is the nominal reaching
+it moved by −Kδp). A candidate is kept when it compensates on every draw.
 When the measured components do not fix the commands (a two-motor neck measured by
 one angle) no target fixes a command, the screen is off and :func:`unfixed_commands`
 says which components to measure.
@@ -22,7 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from pincal.compensation import compensate
-from pincal.design import CandidateSet
+from pincal.design import CandidateSet, scaled_actuator_jacobians
 from pincal.errors import PincalError
 from pincal.model import (
     COMPONENTS,
@@ -32,12 +42,22 @@ from pincal.model import (
     fixing_components,
     sample_actuators,
 )
+from pincal.sensitivity import identification_jacobian
 from pincal.workflow._buildable import buildable_mask
 
-__all__ = ["DRAWS", "compensation_test", "controlled_components", "unfixed_commands"]
+__all__ = [
+    "CRITICAL_SIGMA",
+    "DRAWS",
+    "compensation_test",
+    "controlled_components",
+    "critical_shifts",
+    "unfixed_commands",
+]
 
-#: error draws each candidate must compensate on
+#: random error draws each candidate must compensate on
 DRAWS = 3
+#: size of a candidate's critical draws, in σ of the pose change along its critical direction
+CRITICAL_SIGMA = 3.0
 
 
 def compensation_test(
@@ -89,17 +109,62 @@ def compensation_test(
     def test(cands: CandidateSet) -> np.ndarray:
         ok = np.ones(len(cands), dtype=bool)
         targets = [pin.SE3(R, p) for R, p in zip(cands.rotations, cands.positions, strict=True)]
-        for model in displaced:
-            if not ok.any():
-                break
+
+        def compensates(model: Mechanism, moved: list[pin.SE3]) -> None:
             idx = np.flatnonzero(ok)
-            result = compensate(
-                model, [targets[i] for i in idx], starts=cands.q_act[idx], components=comps
-            )
-            ok[idx] = np.asarray(result.reachable, dtype=bool)
+            if idx.size:
+                result = compensate(model, [moved[i] for i in idx], starts=cands.q_act[idx],
+                                    components=comps)  # fmt: skip
+                ok[idx] = np.asarray(result.reachable, dtype=bool)
+
+        for model in displaced:
+            compensates(model, targets)
+        if ok.any():
+            shift = np.zeros((len(cands), 6))
+            shift[ok] = critical_shifts(mech, params, cands.q_act[ok], bound / np.sqrt(3.0))
+            for sign in (1.0, -1.0):
+                compensates(
+                    mech, [_moved(T, sign * d) for T, d in zip(targets, shift, strict=True)]
+                )
         return ok
 
     return test
+
+
+def critical_shifts(
+    mech: Mechanism, params: ParameterSet, q_act: np.ndarray, std: np.ndarray
+) -> np.ndarray:
+    """Each row's critical pose change δ (N, 6) [m, rad] (module doc; zero where undefined).
+
+    Args:
+        mech: the nominal mechanism.
+        params: the parameter set the errors are drawn on (n).
+        q_act: (N, n_act) actuator rows [m, rad].
+        std: (n,) the errors' σ [m, rad] (0: no error).
+
+    Returns:
+        δ in x y z [m, world axes] rx ry rz [rad, measured frame]; the components not
+        measured, and rows whose kinematics fail, are zero.
+    """
+    G, scale, _ = scaled_actuator_jacobians(mech, q_act)
+    comps = [COMPONENTS.index(c) for c in mech.measured_components]
+    K = identification_jacobian(mech, params, q_act).reshape(len(q_act), len(comps), -1)
+    out = np.zeros((len(q_act), 6))
+    for i in range(len(q_act)):
+        if not (np.all(np.isfinite(G[i])) and np.all(np.isfinite(K[i]))):
+            continue
+        u = np.linalg.svd(G[i], full_matrices=False)[0][:, -1]
+        Ks = scale[:, None] * K[i] * std[None, :]  # scaled pose change per unit σ of each error
+        C_u = Ks @ (Ks.T @ u)  # C u, C = Ks Ksᵀ
+        var = float(u @ C_u)
+        if var > 0.0:
+            out[i, comps] = CRITICAL_SIGMA * C_u / np.sqrt(var) / scale
+    return out
+
+
+def _moved(T: pin.SE3, d: np.ndarray) -> pin.SE3:
+    """``T`` moved by d (6,): position + d[:3] (world axes), rotation R·exp(d[3:])."""
+    return pin.SE3(T.rotation @ pin.exp3(d[3:]), T.translation + d[:3])
 
 
 def controlled_components(mech: Mechanism) -> tuple[str, ...]:

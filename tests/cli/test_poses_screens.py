@@ -44,15 +44,23 @@ def test_ur5_design_has_no_collision_singularity_or_branch_change(ur5_design):
     assert np.all(np.abs(elbow) > 0.02) and np.all(np.abs(elbow) < 3.0)  # the issue's poses
     checker = CollisionChecker(mech)
     assert not any(checker.collisions(q)[0] for q in q_act)
-    # every pose compensates on another draw of errors than the screen's, from its command
-    params = parameters(mech, "full")
-    rng = np.random.default_rng(2026)
-    bound = np.where(np.array(params.units) == "m", 1e-3, 10e-3)
-    displaced = params.apply(mech, rng.uniform(-bound, bound))
-    result = compensate(displaced, read_poses(out), starts=q_act)
-    assert result.reachable.all(), result.reasons
+    assert not _failed_on_further_draws(mech, out, q_act)
     sigma, _ = actuator_sigma_min(mech, q_act)
     assert sigma.min() > 0.01  # away from the stretched/folded singularities
+
+
+def _failed_on_further_draws(mech, out, q_act, draws: int = 20) -> dict[tuple[int, int], str]:
+    """{(draw, pose): why} of the designed poses that do not compensate, from their own
+    commands, on further draws of ±1 mm / ±10 mrad errors than the screen's."""
+    params = parameters(mech, "full")
+    bound = np.where(np.array(params.units) == "m", 1e-3, 10e-3)
+    rng = np.random.default_rng(2026)
+    failed = {}
+    for d in range(draws):
+        displaced = params.apply(mech, rng.uniform(-bound, bound))
+        result = compensate(displaced, read_poses(out), starts=q_act)
+        failed.update({(d, i): why for i, why in result.reasons.items()})
+    return failed
 
 
 def test_screens_can_be_relaxed_and_obstacles_declared(tmp_path):
@@ -88,9 +96,9 @@ def test_bad_screen_options_fail_in_one_line(tmp_path, option, value):
 
 def test_kinova_design_has_no_collision_or_singular_pose(tmp_path):
     """Kinova (Jaco 2, a hand with fingers: collisions checked on full configurations).
-    Its reach screen (3 error draws of 1 mm / 10 mrad) does not make every pose
-    compensate on every other draw: the poses nearest the wrist singularity (σ_min
-    0.03–0.06) failed Newton in 1–3 of 10 further draws: a limit of the screen, not checked."""
+    Three random error draws of 1 mm / 10 mrad alone let poses through that failed on
+    1–3 of 10 further draws (the wrist singularity, the edge of the reach); with each
+    candidate's critical draws every pose compensates on 20 further draws."""
     out = tmp_path / "kinova.csv"
     args = ["poses", "kinova", "--count", "20", "--candidates", "random:150", "--out", str(out)]
     res = CliRunner().invoke(main, [*args, "--json"])
@@ -104,3 +112,4 @@ def test_kinova_design_has_no_collision_or_singular_pose(tmp_path):
     assert not any(checker.collisions(mech.configuration(q))[0] for q in q_act)
     sigma, _ = actuator_sigma_min(mech, q_act)
     assert sigma.min() > 0.01
+    assert not _failed_on_further_draws(mech, out, q_act)
