@@ -36,7 +36,7 @@ Campaign file keys (YAML; relative paths are relative to the file):
   design:                    optional pose design (pincal poses)
     count: 18                poses to select
     index: O1                O1 O2 O3 O4 O5 A
-    candidates: grid:4       grid:LEVELS | random:COUNT | oa:LEVELS
+    candidates: auto         auto | grid:LEVELS | random:COUNT | oa:LEVELS
     method: exchange         exchange | detmax | greedy
     seed: 0
   measurements:
@@ -98,7 +98,7 @@ class Design:
 
     count: int = 18
     index: str = "O1"
-    candidates: str = "grid:4"
+    candidates: str = "auto"
     method: str = "exchange"
     seed: int = 0
 

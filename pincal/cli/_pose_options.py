@@ -31,9 +31,10 @@ def pose_options(func: _F) -> _F:
         click.option(
             "--candidates",
             "spec",
-            default="grid:4",
+            default="auto",
             show_default=True,
-            help="grid:LEVELS (joint grid), random:COUNT or oa:LEVELS (orthogonal array); "
+            help="auto (grid:4, with random:500 added when the grid keeps fewer than 100 "
+            "poses), grid:LEVELS (joint grid), random:COUNT or oa:LEVELS (orthogonal array); "
             "more than 200000 candidate poses or ~2 GB need --yes.",
         ),
         click.option("--preset", default=None,

@@ -21,9 +21,10 @@ from pincal.cli.common import fail_cleanly
 )
 @click.option(
     "--candidates",
-    default="grid:4",
+    default="auto",
     show_default=True,
-    help="Candidate poses for O1 selection (grid:LEVELS, random:N, oa:P) or 'none' for random.",
+    help="Candidate poses for O1 selection (auto, grid:LEVELS, random:N, oa:P) or 'none' for "
+    "random.",
 )
 @click.option("--out", default="pincal-out", show_default=True, help="Output directory.")
 @click.option("--report/--no-report", default=True, show_default=True, help="Write report.html.")

@@ -12,6 +12,7 @@ from __future__ import annotations
 from pincal.design._arrays import bose_array, map_to_ranges, orthogonal_array
 from pincal.design._bounds import crb_covariance, predicted_std, predicted_validation_rms
 from pincal.design._candidate_sources import (
+    AUTO_LEAST,
     candidate_set,
     default_grid_ranges,
     grid_candidates,
@@ -66,6 +67,7 @@ from pincal.design._screens import (
 from pincal.design._selection import SELECTION_METHODS, PoseDesign, select_poses
 
 __all__ = [
+    "AUTO_LEAST",
     "COLUMN_SCALINGS",
     "INDEX_NAMES",
     "MAX_CANDIDATES",

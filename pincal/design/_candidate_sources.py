@@ -1,13 +1,18 @@
 """Candidate generators: joint-space grids, random workspace poses, orthogonal arrays.
 
 Joint-space grids (seed 000), random workspace poses and orthogonal arrays over the
-workspace pose factors (seed 001), plus spec strings.
+workspace pose factors (seed 001), plus spec strings. The default spec, ``auto``, is
+the joint grid ``grid:4``, topped up with ``random:500`` poses drawn in the workspace
+when the grid keeps fewer than :data:`AUTO_LEAST` (a pose workspace thin in the
+actuators' space: the wedge mechanism's grid keeps 4 of 64) or costs more rows than
+allowed (many actuators: random poses only).
 
 Each pushes actuator rows through :func:`pincal.design._candidates.evaluate_candidates`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -31,6 +36,7 @@ from pincal.model import WORKSPACE_POSE_KEYS, Mechanism, ParameterSet, sample_ac
 from pincal.model.kernels import joint_ranges
 
 __all__ = [
+    "AUTO_LEAST",
     "candidate_set",
     "default_grid_ranges",
     "grid_candidates",
@@ -254,13 +260,21 @@ def orthogonal_candidates(
 # ----------------------------------------------------------------------------- specs
 
 
+#: ``auto``: the grid's levels, the feasible candidates below which random poses are
+#: added, and how many
+AUTO_GRID, AUTO_LEAST, AUTO_RANDOM = 4, 100, 500
+
+
 def parse_candidate_spec(spec: str) -> tuple[str, int]:
-    """``"grid:4"`` → ("grid", 4); kinds: grid (levels), random (count), oa (levels)."""
+    """``"grid:4"`` → ("grid", 4); kinds: grid (levels), random (count), oa (levels), auto."""
+    if spec == "auto":
+        return "auto", AUTO_GRID
     kind, _, arg = spec.partition(":")
     defaults = {"grid": 4, "random": 500, "oa": 5}
     if kind not in defaults:
         raise OptionValueError(
-            f"{clip(spec)} is not a candidate spec; use grid:LEVELS, random:COUNT or oa:LEVELS"
+            f"{clip(spec)} is not a candidate spec; use auto, grid:LEVELS, random:COUNT or "
+            "oa:LEVELS"
         )
     least = {"grid": 2, "random": 1, "oa": 2}[kind]
     try:
@@ -287,7 +301,7 @@ def candidate_set(
     n_jobs: int = 1,
     scheduler: str | None = None,
 ) -> CandidateSet:
-    """Candidates from a spec string: ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``.
+    """Candidates from a spec string: ``auto``, ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``.
 
     The cost (rows, memory) is estimated before any work and refused past
     ``max_candidates`` rows or ``max_bytes`` (None: no bound). ``n_jobs``, ``scheduler``:
@@ -301,7 +315,9 @@ def candidate_set(
     """
     kind, value = parse_candidate_spec(spec)
     lim, mem = max_candidates, max_bytes
-    if kind == "grid":
+    if kind == "auto":
+        result = _auto_candidates(mech, params, rng, progress, lim, mem, n_jobs, scheduler)
+    elif kind == "grid":
         result = grid_candidates(
             mech, params, value, progress=progress, max_candidates=lim, max_bytes=mem,
             n_jobs=n_jobs,
@@ -322,6 +338,39 @@ def candidate_set(
     if len(result) == 0:
         raise PincalError(f"no feasible candidate poses from {spec!r}: {result.summary()}")
     return result
+
+
+def _auto_candidates(
+    mech: Mechanism,
+    params: ParameterSet,
+    rng: np.random.Generator | int | None,
+    progress: Progress | None,
+    max_candidates: int | None,
+    max_bytes: int | None,
+    n_jobs: int,
+    scheduler: str | None,
+) -> CandidateSet:
+    """``auto`` (module doc): the grid, with random workspace poses when it keeps few."""
+    grid_cost = _cost(mech, params, "grid", AUTO_GRID)
+    grid = None
+    if (max_candidates is None or grid_cost.rows <= max_candidates) and (
+        max_bytes is None or grid_cost.bytes <= max_bytes
+    ):
+        grid = grid_candidates(mech, params, AUTO_GRID, progress=progress,
+                               max_candidates=max_candidates, max_bytes=max_bytes,
+                               n_jobs=n_jobs, scheduler=scheduler)  # fmt: skip
+        if len(grid) >= AUTO_LEAST:
+            return grid
+        why = f"grid:{AUTO_GRID} kept {len(grid)} of {grid.tried}"
+    else:
+        why = f"grid:{AUTO_GRID} would be {grid_cost.rows} rows"
+    extra = random_candidates(mech, params, AUTO_RANDOM, rng, progress=progress,
+                              max_candidates=max_candidates, max_bytes=max_bytes,
+                              n_jobs=n_jobs, scheduler=scheduler)  # fmt: skip
+    source = f"auto: {why}, random:{AUTO_RANDOM} added"
+    if grid is None:
+        return dataclasses.replace(extra, source=source)
+    return grid.joined(extra, source)
 
 
 def _cost(mech: Mechanism, params: ParameterSet, kind: str, value: int) -> CandidateCost:

@@ -111,6 +111,24 @@ class CandidateSet:
             dict(self.rejected),
         )
 
+    def joined(self, other: CandidateSet, source: str) -> CandidateSet:
+        """These candidates followed by ``other``'s (same parameters), named ``source``."""
+        rejected = dict(self.rejected)
+        for reason, n in other.rejected.items():
+            rejected[reason] = rejected.get(reason, 0) + n
+        return CandidateSet(
+            np.concatenate([self.q_act, other.q_act]),
+            np.concatenate([self.positions, other.positions]),
+            np.concatenate([self.rotations, other.rotations]),
+            np.concatenate([self.jacobians, other.jacobians]),
+            self.components,
+            self.actuated,
+            self.param_names,
+            source,
+            self.tried + other.tried,
+            rejected,
+        )
+
     def summary(self) -> str:
         """One line: how many candidates were kept and why others were rejected."""
         why = ", ".join(f"{n} {reason}" for reason, n in self.rejected.items() if n)

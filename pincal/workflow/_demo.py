@@ -54,7 +54,7 @@ class DemoSettings:
         noise: instrument noise (mm, mrad).
         method: identification method.
         report: the command writes report.html too (not used by :func:`simulate_demo`).
-        candidates: candidate spec for pose selection (``grid:4``, ``random:300``,
+        candidates: candidate spec for pose selection (``auto``, ``grid:4``, ``random:300``,
             ``oa:5``) or ``"none"`` for random measurement poses.
         index: observability index maximised on the noise-whitened Jacobian.
         bounded: refuse a candidate set past the default bounds of
@@ -71,7 +71,7 @@ class DemoSettings:
     noise: NoiseModel = DEFAULT_NOISE
     method: str = "gauss-newton"
     report: bool = True
-    candidates: str = "grid:4"
+    candidates: str = "auto"
     index: str = "O1"
     bounded: bool = True
     force: bool = False

@@ -1,0 +1,50 @@
+"""The default candidate spec ``auto``: the joint grid, random workspace poses when it keeps few."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import pincal
+from pincal.cli import main
+from pincal.design import AUTO_LEAST, candidate_set, parse_candidate_spec
+
+
+def test_where_the_grid_keeps_enough_auto_is_the_grid():
+    mech = pincal.load_mechanism("stewart_6ups")
+    params = pincal.parameters(mech, "stewart42")
+    auto, grid = candidate_set(mech, params, "auto", 0), candidate_set(mech, params, "grid:4", 0)
+    assert len(auto) == len(grid) >= AUTO_LEAST and auto.source == "grid:4"
+    assert np.array_equal(auto.q_act, grid.q_act)
+
+
+def test_a_thin_pose_workspace_gets_random_workspace_poses():
+    """The wedge's grid keeps 4 of 64 rows; auto adds random poses inside the pose box."""
+    mech = pincal.load_mechanism("wedge3")
+    params = pincal.parameters(mech, "patent")
+    grid = candidate_set(mech, params, "grid:4", 0)
+    assert len(grid) < AUTO_LEAST
+    auto = candidate_set(mech, params, "auto", 0)
+    assert len(auto) >= AUTO_LEAST and auto.tried == grid.tried + 500
+    assert np.array_equal(auto.q_act[: len(grid)], grid.q_act)  # the grid's rows first
+    assert "grid:4 kept" in auto.source and auto.summary().startswith(f"{len(auto)} of ")
+    box = mech.workspace.pose
+    x = auto.positions[:, 0] - mech.forward(mech.actuators_of(mech.q_home)).translation[0]
+    assert np.all(np.abs(x) <= max(abs(v) for v in box["x"]) + 1e-9)
+
+
+def test_a_grid_past_the_row_bound_is_replaced_by_random_poses():
+    mech = pincal.load_mechanism("stewart_6ups")
+    params = pincal.parameters(mech, "stewart42")
+    auto = candidate_set(mech, params, "auto", 0, max_candidates=1000)  # 4^6 rows > 1000
+    assert auto.tried == 500 and "would be 4096 rows" in auto.source
+
+
+def test_auto_parses_and_the_default_poses_command_works_on_the_wedge(tmp_path):
+    assert parse_candidate_spec("auto")[0] == "auto"
+    with pytest.raises(pincal.PincalError, match="auto, grid:LEVELS"):
+        parse_candidate_spec("automatic")
+    res = CliRunner().invoke(main, ["poses", "wedge3", "--out", str(tmp_path / "p.csv")])
+    assert res.exit_code == 0, res.output  # grid:4 alone was refused: 4 poses for 18
+    assert "random:500 added" in res.stderr
