@@ -33,7 +33,8 @@ def test_max_file_mb_must_be_a_finite_positive_number(monkeypatch, value):
 
 
 def test_poses_count_above_the_candidates_names_count():
-    line = one_line_error(["poses", "wedge3", "--count", "8", "--out", "/tmp/unused-p.csv"])
+    line = one_line_error(["poses", "wedge3", "--count", "8", "--candidates", "grid:4",
+                           "--out", "/tmp/unused-p.csv"])  # fmt: skip
     assert "--count 8 is more than the 4 feasible candidate poses" in line
     assert "m must be" not in line
 
