@@ -65,7 +65,7 @@ def plot_fleet(doc: Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
         ax.axhline(0.0, color="k", lw=0.5)
     n_flagged = sum(bool(u.get("out_of_family")) for u in units)
     title = fig.suptitle(
-        f"{len(units)} calibrated units: deviation from the fleet centre "
+        f"{len(units)} calibrated units: deviation from the fleet centre\n"
         f"({n_flagged} out of family, red; grey: ±3τ production spread)"
     )
     return save_figure(fig, path, grid, title)
@@ -95,6 +95,23 @@ def _rows(doc: Mapping[str, Any]) -> list[list[str]]:
 
 
 _DRIFT_HEAD = ["unit", "sessions", "drifted", "T²", "dof", "p-value", "largest changes"]
+
+
+_PARAMETER_HEAD = [
+    "parameter", "centre", "production σ τ", "median unit σ", "detectable alone (95 %)"
+]  # fmt: skip
+
+
+def _parameter_rows(doc: Mapping[str, Any]) -> list[list[str]]:
+    """One row per compared parameter, in mm or mrad."""
+    rows = []
+    for p in doc["parameters"]:
+        unit = "mm" if p["unit"] == "m" else "mrad"
+        cells = [f"{1e3 * p['centre']:+.4f} {unit}"]
+        for key in ("production_std", "estimate_std", "detectable_error"):
+            cells.append(f"{1e3 * p[key]:.4f} {unit}" if key in p else "—")
+        rows.append([p["name"], *cells])
+    return rows
 
 
 def _drift_rows(doc: Mapping[str, Any]) -> list[list[str]]:
@@ -174,13 +191,8 @@ def fleet_markdown(doc: Mapping[str, Any], png: str = "fleet_parameters.png") ->
     ]
     lines += ["| " + " | ".join(r) + " |" for r in _rows(doc)]
     lines += ["", "## Parameters", ""]
-    lines += ["| parameter | centre | production σ τ | median unit σ |", "|---|---|---|---|"]
-    for p in doc["parameters"]:
-        scale, unit = (1e3, "mm") if p["unit"] == "m" else (1e3, "mrad")
-        lines.append(
-            f"| {p['name']} | {scale * p['centre']:+.4f} {unit} | "
-            f"{scale * p['production_std']:.4f} {unit} | {scale * p['estimate_std']:.4f} {unit} |"
-        )
+    lines += ["| " + " | ".join(_PARAMETER_HEAD) + " |", "|---" * len(_PARAMETER_HEAD) + "|"]
+    lines += ["| " + " | ".join(r) + " |" for r in _parameter_rows(doc)]
     lines += _drift_markdown(doc)
     return "\n".join(lines) + "\n"
 
@@ -216,6 +228,8 @@ def fleet_html(doc: Mapping[str, Any], png: str = "fleet_parameters.png") -> str
         f"compared ({esc(', '.join(s.get('drifted_ids', [])) or 'none')})</p>"
         f"<p>{esc(t['description'])}</p><img src='{esc(png)}' style='max-width:100%'>"
         + _table_html(head, _rows(doc), 2)
+        + "<h2>Parameters</h2>"
+        + _table_html(_PARAMETER_HEAD, _parameter_rows(doc), 0)
         + drifted
         + "</body></html>\n"
     )

@@ -16,7 +16,12 @@ from pincal.errors import PincalError
 from pincal.executor import MapResult
 from pincal.io import Fleet
 from pincal.workflow._fleet_drift import DriftVerdict, session_drift
-from pincal.workflow._fleet_stats import FleetStatistics, UnitEstimate, fleet_statistics
+from pincal.workflow._fleet_stats import (
+    DETECTION_POWER,
+    FleetStatistics,
+    UnitEstimate,
+    fleet_statistics,
+)
 
 __all__ = ["FleetReport", "fleet_document", "fleet_report"]
 
@@ -99,7 +104,11 @@ def _test_text(alpha: float, units: int, stats: FleetStatistics | None) -> str:
         f"in family D_u ~ χ²({len(stats.names)}). A unit is out of family when its p-value "
         f"is below {limit}: at most {100 * alpha:g} % chance of one or more false flags in "
         f"this fleet), i.e. D_u > {stats.threshold:.1f}. Assumes independent Gaussian "
-        "spread per parameter and linearised estimation errors."
+        "spread per parameter and linearised estimation errors. A parameter's error alone "
+        f"is flagged with {100 * DETECTION_POWER:g} % probability from the size in the "
+        "parameters' 'detectable' column (median over the units: √(λ / [(C_u + diag τ²)⁻¹]_jj), "
+        "λ the noncentrality of that power); an error below it, however real, these "
+        "calibrations do not tell from the family."
     )
 
 
@@ -187,6 +196,7 @@ def fleet_document(
                     "centre": float(stats.centre[j]),
                     "production_std": float(stats.production_std[j]),
                     "estimate_std": float(stats.estimate_std[j]),
+                    "detectable_error": float(stats.detectable[j]),
                 }
             )
     return {

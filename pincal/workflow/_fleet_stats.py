@@ -24,18 +24,32 @@ smallest p-value such a fleet reaches; its ``alpha`` quantile, when below ``alph
 is the limit. Measured on fault-free fleets of the model, 30 parameters
 (``scripts/studies/fleet_small.py``): with ``alpha / M`` alone 85 % of fleets of 4 units,
 70 % of 10, 55 % of 20 and 5 % of 40 flagged a unit (20 fleets each).
+
+What the test can see: an error δ of parameter j alone moves D_u by the noncentrality
+λ = δ² [S_u⁻¹]_jj (S_u = C_u + diag τ²: the correlations included, so a parameter
+the poses confuse with others needs a large δ), and is flagged with probability
+P(χ²(p, λ) > threshold). The smallest δ flagged with probability
+:data:`DETECTION_POWER` is stated per parameter (the median over the units): an error
+below it, however real, the fleet's own data do not tell from the family.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from pincal.errors import ParameterError
 
-__all__ = ["FleetStatistics", "UnitEstimate", "UnitVerdict", "fleet_statistics"]
+__all__ = [
+    "DETECTION_POWER",
+    "FleetStatistics",
+    "UnitEstimate",
+    "UnitVerdict",
+    "detectable_errors",
+    "fleet_statistics",
+]
 
 #: per-unit p-value below which a unit is left out of the second (efficient) estimate
 FIRST_LOOK_P = 1e-3
@@ -43,6 +57,8 @@ FIRST_LOOK_P = 1e-3
 CALIBRATE_BELOW = 50
 #: fault-free fleets drawn to calibrate a small fleet's limit
 CALIBRATION_FLEETS = 200
+#: the detection probability the ``detectable`` errors are stated at
+DETECTION_POWER = 0.95
 
 
 @dataclass(frozen=True)
@@ -99,6 +115,9 @@ class FleetStatistics:
         limit: the per-unit p-value below which a unit is out of family: alpha / M, or
             for a fleet of fewer than :data:`CALIBRATE_BELOW` units the smaller limit
             fault-free fleets like it reach with chance alpha.
+        detectable: (p,) per parameter, the smallest error of it alone that the test
+            flags with probability :data:`DETECTION_POWER` (median over the units)
+            [m, rad] (module doc); empty when not computed.
     """
 
     names: tuple[str, ...]
@@ -109,11 +128,33 @@ class FleetStatistics:
     threshold: float
     units: tuple[UnitVerdict, ...]
     limit: float = 0.0
+    detectable: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
-def _centre(
-    X: np.ndarray, covs: np.ndarray, tau2: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def detectable_errors(covs: np.ndarray, tau2: np.ndarray, threshold: float) -> np.ndarray:
+    """(p,) the smallest single-parameter errors flagged with :data:`DETECTION_POWER`.
+
+    Args:
+        covs: (M, p, p) the units' covariances [SI].
+        tau2: (p,) the production variances τ² [SI].
+        threshold: the χ²(p) distance beyond which a unit is out of family.
+
+    Returns:
+        Per parameter, the median over the units of √(λ / [S_u⁻¹]_jj) [m, rad], λ the
+        noncentrality at which P(χ²(p, λ) > threshold) = :data:`DETECTION_POWER`.
+    """
+    from scipy import optimize, stats
+
+    p = covs.shape[1]
+    lam = optimize.brentq(
+        lambda x: stats.ncx2.sf(threshold, p, x) - DETECTION_POWER, 1e-9, 100.0 * (threshold + p)
+    )
+    S_inv = np.linalg.pinv(covs + np.diag(tau2)[None])
+    diag = np.diagonal(S_inv, axis1=1, axis2=2)
+    return np.median(np.sqrt(lam / np.maximum(diag, 1e-300)), axis=0)
+
+
+def _centre(X: np.ndarray, covs: np.ndarray, tau2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """GLS centre of the units given τ², and each unit's (C_u + diag τ²)⁻¹."""
     inv = np.linalg.inv(covs + np.diag(tau2)[None])
     centre = np.linalg.solve(inv.sum(axis=0), np.einsum("uij,uj->i", inv, X))
@@ -273,13 +314,15 @@ def fleet_statistics(
         top = np.argsort(-np.abs(z))[:3]
         largest = tuple((common[j], float(z[j])) for j in top)
         verdicts.append(UnitVerdict(u.id, d, p, float(pv), bool(pv < limit), largest))
+    threshold = float(stats.chi2.isf(limit, p))
     return FleetStatistics(
         tuple(common),
         centre,
         np.sqrt(tau2),
         np.sqrt(np.median(var, axis=0)),
         float(alpha),
-        float(stats.chi2.isf(limit, p)),
+        threshold,
         tuple(verdicts),
         limit,
+        detectable_errors(covs_, tau2, threshold),
     )

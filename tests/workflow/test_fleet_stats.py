@@ -62,3 +62,26 @@ def test_small_fault_free_fleets_are_rarely_flagged():
         for seed in range(20)
     )
     assert flagged <= 2
+
+
+def test_a_single_error_of_the_detectable_size_is_flagged_95_percent_of_the_time():
+    """Every unit with one covariance: the stated size is exact, checked by Monte Carlo."""
+    rng = np.random.default_rng(4)
+    p = 5
+    A = rng.standard_normal((p, p))
+    C = A @ A.T / p + 0.05 * np.eye(p)  # correlated estimation errors
+    tau = rng.uniform(0.5, 1.5, p)
+    units = [
+        UnitEstimate(f"u{u}", tuple(f"k{j}" for j in range(p)),
+                     tau * rng.standard_normal(p) + rng.multivariate_normal(np.zeros(p), C), C)
+        for u in range(60)
+    ]  # fmt: skip
+    st = fleet_statistics(units)
+    S = C + np.diag(st.production_std**2)
+    draws = 4000
+    for j in range(p):
+        shift = np.zeros(p)
+        shift[j] = st.detectable[j]
+        r = shift + rng.multivariate_normal(np.zeros(p), S, size=draws)
+        rate = np.mean(np.einsum("ui,ui->u", r, np.linalg.solve(S, r.T).T) > st.threshold)
+        assert rate == pytest.approx(0.95, abs=4 * np.sqrt(0.95 * 0.05 / draws)), j
