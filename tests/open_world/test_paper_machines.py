@@ -24,6 +24,7 @@ from click.testing import CliRunner
 from pincal.cli import main
 from pincal.model import Mechanism, degenerate_translations, load_mechanism, sample_actuators
 from pincal.sensitivity import base_parameters, parameters
+from tests.open_world.continuation import continuation
 from tests.open_world.machines import write_machine
 from tests.open_world.paper_machines import clavel_delta, write_agile_eye, write_stewart
 
@@ -46,25 +47,6 @@ def _load(path: Path) -> Mechanism:
         return load_mechanism(path)
     finally:
         logging.disable(logging.NOTSET)
-
-
-def continuation(mech: Mechanism, target: np.ndarray, steps: int = 200) -> np.ndarray:
-    """Closed configuration at actuator values ``target`` reached from home along the
-    straight command path in ``steps`` steps, each closed by minimum-norm Gauss–Newton
-    on the passive joints from the previous step's configuration."""
-    q, a0, free = mech.q_home.copy(), mech.actuators_of(mech.q_home), mech.free_dofs
-    for t in np.linspace(0.0, 1.0, steps + 1)[1:]:
-        q = mech.with_actuators(q, a0 + t * (np.asarray(target) - a0))
-        for _ in range(50):
-            r = mech.closure_residual(q)
-            if np.max(np.abs(r)) <= 1e-14:
-                break
-            J = mech.closure_jacobian(q)[:, free]
-            v = np.zeros(mech.model.nv)
-            v[free] = -np.linalg.lstsq(J, r, rcond=None)[0]
-            q = pin.integrate(mech.model, q, v)
-        assert np.max(np.abs(mech.closure_residual(q))) <= 1e-12, (t, target)
-    return q
 
 
 @pytest.mark.parametrize("name", list(WRITERS))

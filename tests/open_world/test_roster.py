@@ -11,9 +11,11 @@ from __future__ import annotations
 import logging
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from pincal.model import load_mechanism, sample_actuators
+from tests.open_world.continuation import continuation
 from tests.open_world.roster import ROSTER, Machine, recover
 
 LOADS = [mc for mc in ROSTER if mc.refused is None]
@@ -66,6 +68,25 @@ def test_batched_and_pose_by_pose_closing_agree_on_every_machine(machine: Machin
         a = mech.frame_placement(q).translation
         b = mech.frame_placement(mech.configuration(row)).translation
         assert np.max(np.abs(a - b)) <= 1e-9
+
+
+@pytest.mark.parametrize("machine", LOADS, ids=[mc.name for mc in LOADS])
+def test_forward_stays_on_homes_branch_on_every_machine(machine: Machine, tmp_path):
+    """The 4 of 30 random commands farthest from home: ``forward`` (a fresh call, its own
+    start) = the pose a continuation from home reaches (tests/open_world/continuation.py),
+    ≤ 1e-9 m / rad (issue 36: FK must not leave home's assembly mode)."""
+    logging.disable(logging.WARNING)
+    try:
+        mech = load_mechanism(machine.write(tmp_path))
+    finally:
+        logging.disable(logging.NOTSET)
+    rows = sample_actuators(mech, 30, np.random.default_rng(5))
+    a0 = mech.actuators_of(mech.q_home)
+    for row in rows[np.argsort(-np.linalg.norm(rows - a0, axis=1))[:4]]:
+        T = mech.forward(row)
+        C = mech.frame_placement(continuation(mech, row))
+        assert np.max(np.abs(T.translation - C.translation)) <= 1e-9, row
+        assert np.max(np.abs(pin.log3(T.rotation.T @ C.rotation))) <= 1e-9, row
 
 
 @pytest.mark.parametrize("machine", REFUSED, ids=[mc.name for mc in REFUSED])
