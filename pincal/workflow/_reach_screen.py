@@ -18,7 +18,10 @@ actuators move the measured frame least (the last left singular vector of the sc
 actuator Jacobian, :func:`pincal.design.scaled_actuator_jacobians`), C = K Σ Kᵀ the
 covariance of the pose change for the uniform errors (Σ = diag(bound²/3), K the
 identification Jacobian; the displaced model reaching a target is the nominal reaching
-it moved by −Kδp). A candidate is kept when it compensates on every draw.
+it moved by −Kδp). A candidate is kept when it compensates on every draw — unless the
+critical draws would leave candidates that cannot identify the parameters the random
+draws' survivors can (a small machine under large error bounds: a finger linkage kept 47
+of 265): then they are not applied, and a note says so.
 When the measured components do not fix the commands (a two-motor neck measured by
 one angle) no target fixes a command, the screen is off and :func:`unfixed_commands`
 says which components to measure.
@@ -42,7 +45,7 @@ from pincal.model import (
     fixing_components,
     sample_actuators,
 )
-from pincal.sensitivity import identification_jacobian
+from pincal.sensitivity import identification_jacobian, jacobian_rank
 from pincal.workflow._buildable import buildable_mask
 
 __all__ = [
@@ -119,13 +122,23 @@ def compensation_test(
 
         for model in displaced:
             compensates(model, targets)
-        if ok.any():
-            shift = np.zeros((len(cands), 6))
-            shift[ok] = critical_shifts(mech, params, cands.q_act[ok], bound / np.sqrt(3.0))
-            for sign in (1.0, -1.0):
-                compensates(
-                    mech, [_moved(T, sign * d) for T, d in zip(targets, shift, strict=True)]
+        if not ok.any():
+            return ok
+        random_ok = ok.copy()
+        shift = np.zeros((len(cands), 6))
+        shift[ok] = critical_shifts(mech, params, cands.q_act[ok], bound / np.sqrt(3.0))
+        for sign in (1.0, -1.0):
+            compensates(mech, [_moved(T, sign * d) for T, d in zip(targets, shift, strict=True)])
+        before, after = _rank(cands, random_ok), _rank(cands, ok)
+        if after < before:  # the design would fail: the random draws' verdict stands
+            if say is not None:
+                say(
+                    f"  reach screen: the critical draws would leave {ok.sum()} candidates "
+                    f"of rank {after} < {before}: not applied; designed poses near the edge "
+                    "of the reach may not compensate under errors of this size (smaller "
+                    "--reach-errors if the calibration's will be smaller)"
                 )
+            return random_ok
         return ok
 
     return test
@@ -160,6 +173,12 @@ def critical_shifts(
         if var > 0.0:
             out[i, comps] = CRITICAL_SIGMA * C_u / np.sqrt(var) / scale
     return out
+
+
+def _rank(cands: CandidateSet, keep: np.ndarray) -> int:
+    """The identification rank of the candidates ``keep`` (the design's rank rule)."""
+    J = cands.jacobians[keep]
+    return jacobian_rank(J.reshape(-1, J.shape[-1])) if len(J) else 0
 
 
 def _moved(T: pin.SE3, d: np.ndarray) -> pin.SE3:
