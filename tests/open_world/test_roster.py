@@ -14,12 +14,21 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from pincal.model import load_mechanism, sample_actuators
+from pincal.model import Mechanism, load_mechanism, sample_actuators
 from tests.open_world.continuation import continuation
 from tests.open_world.roster import ROSTER, Machine, recover
 
 LOADS = [mc for mc in ROSTER if mc.refused is None]
 REFUSED = [mc for mc in ROSTER if mc.refused is not None]
+
+
+def _load(machine: Machine, folder) -> Mechanism:
+    """The machine written into ``folder`` and loaded (its load-time notes silenced)."""
+    logging.disable(logging.WARNING)
+    try:
+        return load_mechanism(machine.write(folder))
+    finally:
+        logging.disable(logging.NOTSET)
 
 
 def _cases() -> list:
@@ -40,11 +49,7 @@ def _cases() -> list:
 
 @pytest.mark.parametrize(("machine", "preset"), _cases())
 def test_noise_free_recovery_on_every_machine(machine: Machine, preset: str, tmp_path):
-    logging.disable(logging.WARNING)
-    try:
-        mech = load_mechanism(machine.write(tmp_path))
-    finally:
-        logging.disable(logging.NOTSET)
+    mech = _load(machine, tmp_path)
     r = recover(mech, preset)
     assert r.success, r.message
     # (the excavator's full set, κ = 1.7e7: 3.7e-10 with the newest dependencies, 1.2e-9
@@ -57,11 +62,7 @@ def test_noise_free_recovery_on_every_machine(machine: Machine, preset: str, tmp
 def test_batched_and_pose_by_pose_closing_agree_on_every_machine(machine: Machine, tmp_path):
     """The batched solve keeps home's assembly mode as configuration() from home does
     (the 0/0-limits ankle once closed 2 of 30 wide rows with its foot turned over)."""
-    logging.disable(logging.WARNING)
-    try:
-        mech = load_mechanism(machine.write(tmp_path))
-    finally:
-        logging.disable(logging.NOTSET)
+    mech = _load(machine, tmp_path)
     rows = sample_actuators(mech, 30, np.random.default_rng(11))
     Q, _ = mech.configurations_batch(rows)
     for row, q in zip(rows, Q, strict=True):
@@ -75,11 +76,7 @@ def test_forward_stays_on_homes_branch_on_every_machine(machine: Machine, tmp_pa
     """The 4 of 30 random commands farthest from home: ``forward`` (a fresh call, its own
     start) = the pose a continuation from home reaches (tests/open_world/continuation.py),
     ≤ 1e-9 m / rad (issue 36: FK must not leave home's assembly mode)."""
-    logging.disable(logging.WARNING)
-    try:
-        mech = load_mechanism(machine.write(tmp_path))
-    finally:
-        logging.disable(logging.NOTSET)
+    mech = _load(machine, tmp_path)
     rows = sample_actuators(mech, 30, np.random.default_rng(5))
     a0 = mech.actuators_of(mech.q_home)
     for row in rows[np.argsort(-np.linalg.norm(rows - a0, axis=1))[:4]]:
