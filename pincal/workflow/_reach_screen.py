@@ -24,7 +24,9 @@ draws' survivors can (a small machine under large error bounds: a finger linkage
 of 265): then they are not applied, and a note says so.
 When the measured components do not fix the commands (a two-motor neck measured by
 one angle) no target fixes a command, the screen is off and :func:`unfixed_commands`
-says which components to measure.
+says which components to measure; a redundant arm measured in full pose is screened
+(a Panda's designed poses failed 37 of 1 200 further compensations unscreened, 1
+screened).
 """
 
 from __future__ import annotations
@@ -214,8 +216,10 @@ def unfixed_commands(mech: Mechanism) -> str:
 
     The measured components fix the n actuators when their actuator Jacobian at home
     (:func:`actuator_jacobian`) has rank n (the mobility, when the actuation is
-    redundant); otherwise the note names components that,
-    measured, would (:func:`fixing_components`).
+    redundant), and as far as anything can when it has the rank of all six components'
+    rows: a 7-joint arm measured in full pose (its self-motion no measurement fixes;
+    compensation keeps it near the start, minimum-norm). Otherwise the note names
+    components that, measured, would (:func:`fixing_components`).
     """
     n = mech.n_actuated
     comps = tuple(mech.measured_components)
@@ -223,6 +227,8 @@ def unfixed_commands(mech: Mechanism) -> str:
     rank, measure = fixing_components(G, comps)
     if rank >= min(n, mech.mobility):  # redundant actuators: the mobility's rank fixes them
         return ""
+    if rank >= np.linalg.matrix_rank(G, 1e-9 * max(float(np.abs(G).max()), 1e-300)):
+        return ""  # every component the actuators move is measured: a redundant chain
     return (
         f"the measured components [{', '.join(comps)}] fix only {rank} of the {n} commands "
         f"{list(mech.actuated)} at home (no target fixes a command); measure "
