@@ -57,7 +57,7 @@ from pincal.model import load_mechanism, sample_actuators
 from pincal.sensitivity import parameters
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-from scripts.studies.quality_gate import TABLE_HEAD, _rate, bound, selected
+from scripts.studies.quality_gate import TABLE_HEAD, _rate, bound, cell_words, selected
 
 STD = 1e-5  # m: `pincal simulate`'s default noise, the file's declared σ
 ERRORS = (1.0, 10.0)  # mm, mrad: `pincal simulate`'s default error bounds
@@ -181,14 +181,7 @@ def main(argv: list[str] | None = None) -> int:
                 seen[kinds] += 1
             if r == cell.clean:  # a false alarm, or a miss
                 odd.append(a.seed + i)
-        what = "false alarms" if cell.clean else "detected"
-        b = bound(refused, a.fits, upper=cell.clean)
-        lim = f"{'≤' if cell.clean else '≥'} {100 * b:5.1f} %"
-        note = ", ".join(f"{k} ×{n}" for k, n in seen.most_common(3)) or "—"
-        if odd:
-            note += f"; {'refused' if cell.clean else 'missed'}: seeds {odd[:10]}"
-        if cell.fault == "outlier":
-            note += f"; named exactly: {_rate(exact, a.fits)}"
+        what, lim, note = cell_words(cell, refused, exact, seen, odd, a.fits)
         if cell.fault in ("none", "bar", "radius"):
             for k, told in named.items():
                 vals = sorted(float(t.split()[0]) for t in told if t != "not told")

@@ -184,6 +184,20 @@ TABLE_HEAD = (f"| {'cell':44s} | {'refused (rate ± s.e.)':24s} | 95 % bound | r
               f"|{'-' * 46}|{'-' * 26}|------------|---|")  # fmt: skip
 
 
+def cell_words(
+    cell: Cell, refused: int, exact: int, seen: Counter, odd: list[int], n: int
+) -> tuple[str, str, str]:
+    """(what the rate counts, its one-sided 95 % bound, the note) of a cell's row."""
+    what = "false alarms" if cell.clean else "detected"
+    lim = f"{'≤' if cell.clean else '≥'} {100 * bound(refused, n, upper=cell.clean):5.1f} %"
+    note = ", ".join(f"{k} ×{c}" for k, c in seen.most_common(3)) or "—"
+    if odd:
+        note += f"; {'refused' if cell.clean else 'missed'}: seeds {odd[:10]}"
+    if cell.fault == "outlier":
+        note += f"; named exactly: {_rate(exact, n)}"
+    return what, lim, note
+
+
 def _row(cell: Cell, fits: list[tuple[bool, str, bool]], seeds: range) -> tuple[int, int]:
     """Print the cell's row; (false alarms, fits) for the pooled clean row, else (0, 0)."""
     refused, exact, seen, odd = 0, 0, Counter(), []
@@ -195,13 +209,7 @@ def _row(cell: Cell, fits: list[tuple[bool, str, bool]], seeds: range) -> tuple[
         if r == cell.clean:  # a false alarm, or a miss
             odd.append(seed)
     n = len(fits)
-    what = "false alarms" if cell.clean else "detected"
-    lim = f"{'≤' if cell.clean else '≥'} {100 * bound(refused, n, upper=cell.clean):5.1f} %"
-    note = ", ".join(f"{k} ×{c}" for k, c in seen.most_common(3)) or "—"
-    if odd:
-        note += f"; {'refused' if cell.clean else 'missed'}: seeds {odd[:10]}"
-    if cell.fault == "outlier":
-        note += f"; named exactly: {_rate(exact, n)}"
+    what, lim, note = cell_words(cell, refused, exact, seen, odd, n)
     print(f"| {cell.name:44s} | {_rate(refused, n):24s} | {lim:10s} | {what}: {note} |",
           flush=True)  # fmt: skip
     return (refused, n) if cell.clean else (0, 0)
