@@ -13,7 +13,8 @@ pose most, and the designs that maximise observability favour poses at the edge 
 workspace and near singularities, where such errors make a pose unreachable or throw its
 wrist onto another branch. So each candidate is also compensated, to first order, on
 the two *critical* draws of its own (:func:`critical_shifts`): the pose change
-δ = ±``CRITICAL_SIGMA`` σ_u C u / √(uᵀCu) the errors cause along u, the direction the
+δ = ±``CRITICAL_SIGMA`` · C u / √(uᵀCu) (that many σ of the change the errors cause
+along u, σ_u = √(uᵀCu), with the most likely change elsewhere), u the direction the
 actuators move the measured frame least (the last left singular vector of the scaled
 actuator Jacobian, :func:`pincal.design.scaled_actuator_jacobians`), C = K Σ Kᵀ the
 covariance of the pose change for the uniform errors (Σ = diag(bound²/3), K the
