@@ -198,7 +198,7 @@ class Identifiability:
         return "\n".join([head, *self.describe()])
 
 
-def _greedy_base(Js: np.ndarray, rank: int, threshold: float) -> list[int]:
+def _greedy_base(Js: np.ndarray, rank: int, threshold: float, whole: bool = False) -> list[int]:
     """Exactly ``rank`` column indices of Js: in order while independent, then pivoted.
 
     In order, a column is kept when its part outside the span of those kept exceeds
@@ -206,12 +206,13 @@ def _greedy_base(Js: np.ndarray, rank: int, threshold: float) -> list[int]:
     pivoting: the best-conditioned completion). Parts outside the span one by one do
     not bound the whole set's smallest singular value: columns each 3e-6 off the span
     of the ones before can together be dependent to 1e-16 (the in-axis offsets of the
-    xarm7, whose URDF rounds π/2 to 1.5708). When the set so chosen is numerically
-    rank-deficient (:data:`RANK_RTOL`), the choice is made again requiring the smallest
-    singular value of the kept columns, not the new part alone, above ``threshold``.
+    xarm7, whose URDF rounds π/2 to 1.5708). With ``whole``, when the set so chosen is
+    numerically rank-deficient (:data:`RANK_RTOL`), the choice is made again requiring
+    the smallest singular value of the kept columns, not the new part alone, above
+    ``threshold``.
     """
     chosen = _choose(Js, rank, threshold, whole=False)
-    if chosen:
+    if whole and chosen:
         sv = np.linalg.svd(Js[:, chosen], compute_uv=False)
         if numerical_rank(sv, RANK_RTOL) < len(chosen):
             chosen = _choose(Js, rank, threshold, whole=True)
@@ -267,6 +268,7 @@ def analyse_jacobian(
     splits_joint: np.ndarray | None = None,
     units: tuple[str, ...] = (),
     loops: tuple[ClosureLoop, ...] = (),
+    whole_base: bool = False,
 ) -> Identifiability:
     """Identifiability of the parameters whose identification Jacobian is ``J`` (N, n).
 
@@ -286,6 +288,9 @@ def analyse_jacobian(
         units: the n parameters' SI units, for :meth:`Identifiability.describe` (or ()).
         loops: the loop closures and the parameters on each (:func:`closure_loops`),
             for :meth:`Identifiability.describe` (or ()).
+        whole_base: make sure the base's own Jacobian has full rank (:func:`_greedy_base`:
+            the ``base`` preset asks for it; a fit's choice, which the placement bound
+            guards, is left as it was).
 
     Raises:
         PincalError: J is not 2-D with one column per name, or contains NaN/inf.
@@ -314,7 +319,7 @@ def analyse_jacobian(
     # full set took a rod-end offset at 1e-6 of σ1, whose Gauss–Newton steps went 48 mm
     # off); the rank's other members are pivoted in
     threshold = max(rtol, BASE_RTOL) * float(sv[0]) if sv.size else 0.0
-    base = closable[_greedy_base(Jc, rank, threshold)] if rank else _empty()
+    base = closable[_greedy_base(Jc, rank, threshold, whole_base)] if rank else _empty()
     others = np.array([k for k in closable if k not in set(base.tolist())], dtype=int)
     combos: dict[int, dict[int, float]] = {}
     if base.size and others.size:
