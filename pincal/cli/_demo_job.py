@@ -147,7 +147,8 @@ def format_demo(d: DemoResult, files: tuple[Path, ...] = ()) -> str:
         sel = d.design.selection
         poses_text = (
             f"poses chosen by {sel.index_name} ({sel.method}) from {d.design.n_candidates} "
-            f"{s.candidates} candidates; {sel.index_name} {sel.history[0]:.4g} → {sel.value:.4g}"
+            f"{d.design.candidates.source} candidates; "
+            f"{sel.index_name} {sel.history[0]:.4g} → {sel.value:.4g}"
         )
     else:
         poses_text = "random workspace poses"
