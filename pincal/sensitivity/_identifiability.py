@@ -37,6 +37,7 @@ from pincal.model import (
     degenerate_translations,
     sample_actuators,
 )
+from pincal.sensitivity._base_columns import greedy_base
 from pincal.sensitivity._closure_loops import ClosureLoop, closure_line, closure_loops
 from pincal.sensitivity._identification_jacobian import jacobian_and_closure_breaking
 from pincal.sensitivity._rank import RANK_RTOL, RangeSolver, numerical_rank, unit_columns
@@ -198,68 +199,6 @@ class Identifiability:
         return "\n".join([head, *self.describe()])
 
 
-def _greedy_base(Js: np.ndarray, rank: int, threshold: float, whole: bool = False) -> list[int]:
-    """Exactly ``rank`` column indices of Js: in order while independent, then pivoted.
-
-    In order, a column is kept when its part outside the span of those kept exceeds
-    ``threshold``; the rest are the columns with the largest such part (column
-    pivoting: the best-conditioned completion). Parts outside the span one by one do
-    not bound the whole set's smallest singular value: columns each 3e-6 off the span
-    of the ones before can together be dependent to 1e-16 (the in-axis offsets of the
-    xarm7, whose URDF rounds π/2 to 1.5708). With ``whole``, when the set so chosen is
-    numerically rank-deficient (:data:`RANK_RTOL`), the choice is made again requiring
-    the smallest singular value of the kept columns, not the new part alone, above
-    ``threshold``.
-    """
-    chosen = _choose(Js, rank, threshold, whole=False)
-    if whole and chosen:
-        sv = np.linalg.svd(Js[:, chosen], compute_uv=False)
-        if numerical_rank(sv, RANK_RTOL) < len(chosen):
-            chosen = _choose(Js, rank, threshold, whole=True)
-    return chosen
-
-
-def _choose(Js: np.ndarray, rank: int, threshold: float, whole: bool) -> list[int]:
-    """:func:`_greedy_base`'s choice of columns.
-
-    ``whole``: each extension is judged by the smallest singular value of the kept
-    columns with it (from their R factor), else by its part outside their span
-    (Gram–Schmidt, twice).
-    """
-    n = Js.shape[1]
-    basis = np.zeros((Js.shape[0], 0))
-    R = np.zeros((0, 0))
-    chosen: list[int] = []
-
-    def extended(k: int) -> tuple[float, np.ndarray, np.ndarray]:
-        """(score of adding k, k's unit part outside the kept columns, the new R)."""
-        c = basis.T @ Js[:, k]
-        v = Js[:, k] - basis @ c
-        c2 = basis.T @ v
-        v, c = v - basis @ c2, c + c2
-        norm = float(np.linalg.norm(v))
-        R_new = np.block([[R, c[:, None]], [np.zeros((1, R.shape[1])), np.array([[norm]])]])
-        score = float(np.linalg.svd(R_new, compute_uv=False)[-1]) if whole else norm
-        return score, (v / norm if norm > 0 else v), R_new
-
-    for k in range(n):
-        if len(chosen) == rank:
-            break
-        score, v, R_new = extended(k)
-        if score > threshold:
-            basis, R = np.column_stack([basis, v]), R_new
-            chosen.append(k)
-    while len(chosen) < rank:  # borderline spectrum: fill by pivoting
-        rest = [k for k in range(n) if k not in set(chosen)]
-        tried = [extended(k) for k in rest]
-        i = int(np.argmax([t[0] for t in tried]))
-        if tried[i][0] == 0.0:
-            break
-        basis, R = np.column_stack([basis, tried[i][1]]), tried[i][2]
-        chosen.append(rest[i])
-    return sorted(chosen)
-
-
 def analyse_jacobian(
     J: np.ndarray,
     names: tuple[str, ...],
@@ -288,9 +227,9 @@ def analyse_jacobian(
         units: the n parameters' SI units, for :meth:`Identifiability.describe` (or ()).
         loops: the loop closures and the parameters on each (:func:`closure_loops`),
             for :meth:`Identifiability.describe` (or ()).
-        whole_base: make sure the base's own Jacobian has full rank (:func:`_greedy_base`:
-            the ``base`` preset asks for it; a fit's choice, which the placement bound
-            guards, is left as it was).
+        whole_base: make sure the base's own Jacobian has full rank (``greedy_base`` of
+            :mod:`pincal.sensitivity._base_columns`: the ``base`` preset asks for it; a
+            fit's choice, which the placement bound guards, is left as it was).
 
     Raises:
         PincalError: J is not 2-D with one column per name, or contains NaN/inf.
@@ -319,7 +258,7 @@ def analyse_jacobian(
     # full set took a rod-end offset at 1e-6 of σ1, whose Gauss–Newton steps went 48 mm
     # off); the rank's other members are pivoted in
     threshold = max(rtol, BASE_RTOL) * float(sv[0]) if sv.size else 0.0
-    base = closable[_greedy_base(Jc, rank, threshold, whole_base)] if rank else _empty()
+    base = closable[greedy_base(Jc, rank, threshold, whole_base)] if rank else _empty()
     others = np.array([k for k in closable if k not in set(base.tolist())], dtype=int)
     combos: dict[int, dict[int, float]] = {}
     if base.size and others.size:
