@@ -31,7 +31,13 @@ from pincal.design._candidates import (
     evaluate_candidates,
     home_pose,
 )
-from pincal.errors import ConvergenceError, OptionValueError, PincalError, clip
+from pincal.errors import (
+    ConvergenceError,
+    InputLimitError,
+    OptionValueError,
+    PincalError,
+    clip,
+)
 from pincal.model import WORKSPACE_POSE_KEYS, Mechanism, ParameterSet, sample_actuators
 from pincal.model.kernels import joint_ranges
 
@@ -351,19 +357,17 @@ def _auto_candidates(
     scheduler: str | None,
 ) -> CandidateSet:
     """``auto`` (module doc): the grid, with random workspace poses when it keeps few."""
-    grid_cost = _cost(mech, params, "grid", AUTO_GRID)
     grid = None
-    if (max_candidates is None or grid_cost.rows <= max_candidates) and (
-        max_bytes is None or grid_cost.bytes <= max_bytes
-    ):
+    try:
         grid = grid_candidates(mech, params, AUTO_GRID, progress=progress,
                                max_candidates=max_candidates, max_bytes=max_bytes,
                                n_jobs=n_jobs, scheduler=scheduler)  # fmt: skip
+    except InputLimitError:  # many actuators: the grid's own bound refuses it
+        why = f"grid:{AUTO_GRID} would be {_cost(mech, params, 'grid', AUTO_GRID).rows} rows"
+    else:
         if len(grid) >= AUTO_LEAST:
             return grid
         why = f"grid:{AUTO_GRID} kept {len(grid)} of {grid.tried}"
-    else:
-        why = f"grid:{AUTO_GRID} would be {grid_cost.rows} rows"
     extra = random_candidates(mech, params, AUTO_RANDOM, rng, progress=progress,
                               max_candidates=max_candidates, max_bytes=max_bytes,
                               n_jobs=n_jobs, scheduler=scheduler)  # fmt: skip
