@@ -30,7 +30,7 @@ import pincal.workflow._reach_screen as reach
 from pincal.cli import main as cli
 from pincal.compensation import compensate
 from pincal.io import read_commands
-from pincal.model import load_mechanism
+from pincal.model import bundled_models, example_robot_names, load_mechanism
 from pincal.workflow import buildable_mask, controlled_components, pose_basis
 
 
@@ -64,8 +64,12 @@ def main() -> None:
           f"each pose compensated on {a.draws} further draws of ±1 mm / ±10 mrad")  # fmt: skip
     print("| arm | poses | failed compensations | poses that failed | O1 | screen removed | s |")
     print("|---|---|---|---|---|---|---|")
+    known = set(bundled_models()) | set(example_robot_names())
     with tempfile.TemporaryDirectory() as tmp:
         for model in a.models.split(","):
+            if model not in known:  # e.g. so100 is not in example-robot-data 4.1
+                print(f"| {model} | not in this example-robot-data | | | | | |")
+                continue
             out = Path(tmp) / f"{model}.csv"
             t0 = time.process_time()
             with contextlib.redirect_stdout(io.StringIO()):  # the command's own lines
