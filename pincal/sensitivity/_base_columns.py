@@ -8,69 +8,55 @@ while independent, then by pivoting (the best-conditioned completion) — the ru
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg
 
-from pincal.sensitivity._rank import RANK_RTOL, numerical_rank
+__all__ = ["ORDER_COST", "greedy_base"]
 
-__all__ = ["greedy_base"]
+ORDER_COST = 1e-2
+"""How much conditioning the set's order may cost a base. A column is kept in order only
+when its part outside the span of those kept before it is at least this fraction of
+the ``rank``-th pivot of a column-pivoted QR of the same columns (the weakest part of
+the best-conditioned greedy choice). A URDF that rounds π/2 to 1.5708 makes columns
+3.7e-6 rad off being parallel: the xarm7's in-order base kept such pairs and was
+conditioned at 1e-6 where a base of the same rank exists at 0.4 (its fit stalled at
+1.1 mm); a machine whose every base is that weak keeps its in-order choice."""
 
 
-def greedy_base(Js: np.ndarray, rank: int, threshold: float, whole: bool = False) -> list[int]:
+def greedy_base(Js: np.ndarray, rank: int, threshold: float) -> list[int]:
     """Exactly ``rank`` column indices of Js: in order while independent, then pivoted.
 
     In order, a column is kept when its part outside the span of those kept exceeds
-    ``threshold``; the rest are the columns with the largest such part (column
-    pivoting: the best-conditioned completion). Parts outside the span one by one do
-    not bound the whole set's smallest singular value: columns each 3e-6 off the span
-    of the ones before can together be dependent to 1e-16 (the in-axis offsets of the
-    xarm7, whose URDF rounds π/2 to 1.5708). With ``whole``, when the set so chosen is
-    numerically rank-deficient (:data:`RANK_RTOL`), the choice is made again requiring
-    the smallest singular value of the kept columns, not the new part alone, above
-    ``threshold``.
+    ``threshold`` and :data:`ORDER_COST` of the best-conditioned choice's weakest part;
+    the rest are the columns with the largest such part (column pivoting: the
+    best-conditioned completion).
     """
-    chosen = _choose(Js, rank, threshold, whole=False)
-    if whole and chosen:
-        sv = np.linalg.svd(Js[:, chosen], compute_uv=False)
-        if numerical_rank(sv, RANK_RTOL) < len(chosen):
-            chosen = _choose(Js, rank, threshold, whole=True)
-    return chosen
-
-
-def _choose(Js: np.ndarray, rank: int, threshold: float, whole: bool) -> list[int]:
-    """:func:`greedy_base`'s choice of columns.
-
-    ``whole``: each extension is judged by the smallest singular value of the kept
-    columns with it (from their R factor), else by its part outside their span
-    (Gram–Schmidt, twice).
-    """
+    if rank:
+        pivots = np.abs(np.diag(scipy.linalg.qr(Js, mode="r", pivoting=True)[0]))
+        threshold = max(threshold, ORDER_COST * float(pivots[rank - 1]))
     n = Js.shape[1]
     basis = np.zeros((Js.shape[0], 0))
-    R = np.zeros((0, 0))
     chosen: list[int] = []
 
-    def extended(k: int) -> tuple[float, np.ndarray, np.ndarray]:
-        """(score of adding k, k's unit part outside the kept columns, the new R)."""
-        c = basis.T @ Js[:, k]
-        v = Js[:, k] - basis @ c
-        c2 = basis.T @ v
-        v, c = v - basis @ c2, c + c2
-        norm = float(np.linalg.norm(v))
-        R_new = np.block([[R, c[:, None]], [np.zeros((1, R.shape[1])), np.array([[norm]])]])
-        score = float(np.linalg.svd(R_new, compute_uv=False)[-1]) if whole else norm
-        return score, (v / norm if norm > 0 else v), R_new
+    def outside(k: int) -> np.ndarray:
+        """Column k's part outside the span of the kept columns (Gram–Schmidt, twice)."""
+        v = Js[:, k] - basis @ (basis.T @ Js[:, k])
+        return v - basis @ (basis.T @ v)
 
     for k in range(n):
         if len(chosen) == rank:
             break
-        score, v, R_new = extended(k)
-        if score > threshold:
-            basis, R = np.column_stack([basis, v]), R_new
+        v = outside(k)
+        norm = float(np.linalg.norm(v))
+        if norm > threshold:
+            basis = np.column_stack([basis, v / norm])
             chosen.append(k)
     while len(chosen) < rank:  # borderline spectrum: fill by pivoting
         rest = [k for k in range(n) if k not in set(chosen)]
-        tried = [extended(k) for k in rest]
-        i = int(np.argmax([t[0] for t in tried]))
-        if tried[i][0] == 0.0:
+        parts = [outside(k) for k in rest]
+        norms = [float(np.linalg.norm(v)) for v in parts]
+        i = int(np.argmax(norms))
+        if norms[i] == 0.0:
             break
-        basis, R = np.column_stack([basis, tried[i][1]]), tried[i][2]
+        basis = np.column_stack([basis, parts[i] / norms[i]])
         chosen.append(rest[i])
     return sorted(chosen)

@@ -89,8 +89,7 @@ def base_set(mech: Mechanism, params: ParameterSet | None = None) -> BaseSet:
     candidates = given.subset([k for k, n in enumerate(given.names) if n not in skip])
     rows = sample_actuators(mech, BASE_POSES, np.random.default_rng(0))
     J, breaking = jacobian_and_closure_breaking(mech, candidates, rows)
-    ident = analyse_jacobian(J, candidates.names, BASE_RTOL, breaks_closure=breaking,
-                             whole_base=True)  # fmt: skip
+    ident = analyse_jacobian(J, candidates.names, BASE_RTOL, breaks_closure=breaking)
     if numerical_rank(ident.singular_values, RANK_RTOL) == 0:
         raise UnidentifiableError(
             f"none of the {len(candidates)} parameters of {mech.name!r} changes the measured "

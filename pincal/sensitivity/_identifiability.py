@@ -4,9 +4,11 @@ The numerical rank r of the column-scaled identification Jacobian over many pose
 the number of identifiable parameters; it follows the one rank rule of
 :func:`pincal.sensitivity._rank.numerical_rank` (σi > rtol·σ1). The *base* parameters
 are chosen greedily in the set's order (an orthogonalisation that keeps a column when
-its part outside the span of the columns kept so far exceeds max(rtol, BASE_RTOL)·σ1),
-so a preset's physically meaningful parameters, listed first, are preferred unless one
-is barely independent of those before it (a base conditioned like that column).
+its part outside the span of the columns kept so far exceeds max(rtol, BASE_RTOL)·σ1
+and 1 % of the weakest part of the best-conditioned choice,
+:data:`~pincal.sensitivity._base_columns.ORDER_COST`), so a preset's physically
+meaningful parameters, listed first, are preferred unless one is barely independent of
+those before it (a base conditioned like that column).
 The base always has exactly r members: the greedy pass stops at r, and if it found
 fewer, the remaining members are the columns with the largest part outside the span
 (column pivoting). Every other parameter's column is a combination of base columns,
@@ -207,7 +209,6 @@ def analyse_jacobian(
     splits_joint: np.ndarray | None = None,
     units: tuple[str, ...] = (),
     loops: tuple[ClosureLoop, ...] = (),
-    whole_base: bool = False,
 ) -> Identifiability:
     """Identifiability of the parameters whose identification Jacobian is ``J`` (N, n).
 
@@ -227,9 +228,6 @@ def analyse_jacobian(
         units: the n parameters' SI units, for :meth:`Identifiability.describe` (or ()).
         loops: the loop closures and the parameters on each (:func:`closure_loops`),
             for :meth:`Identifiability.describe` (or ()).
-        whole_base: make sure the base's own Jacobian has full rank (``greedy_base`` of
-            :mod:`pincal.sensitivity._base_columns`: the ``base`` preset asks for it; a
-            fit's choice, which the placement bound guards, is left as it was).
 
     Raises:
         PincalError: J is not 2-D with one column per name, or contains NaN/inf.
@@ -258,7 +256,7 @@ def analyse_jacobian(
     # full set took a rod-end offset at 1e-6 of σ1, whose Gauss–Newton steps went 48 mm
     # off); the rank's other members are pivoted in
     threshold = max(rtol, BASE_RTOL) * float(sv[0]) if sv.size else 0.0
-    base = closable[greedy_base(Jc, rank, threshold, whole_base)] if rank else _empty()
+    base = closable[greedy_base(Jc, rank, threshold)] if rank else _empty()
     others = np.array([k for k in closable if k not in set(base.tolist())], dtype=int)
     combos: dict[int, dict[int, float]] = {}
     if base.size and others.size:
