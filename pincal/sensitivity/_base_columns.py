@@ -8,7 +8,6 @@ while independent, then by pivoting (the best-conditioned completion) — the ru
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
 
 __all__ = ["ORDER_COST", "greedy_base"]
 
@@ -31,6 +30,8 @@ def greedy_base(Js: np.ndarray, rank: int, threshold: float) -> list[int]:
     best-conditioned completion).
     """
     if rank:
+        import scipy.linalg  # here: importing pincal must not load scipy
+
         pivots = np.abs(np.diag(scipy.linalg.qr(Js, mode="r", pivoting=True)[0]))
         threshold = max(threshold, ORDER_COST * float(pivots[rank - 1]))
     n = Js.shape[1]
