@@ -229,6 +229,10 @@ def test_ur3_resolves_to_the_real_robot_not_the_empty_stub():
     assert mech.n_actuated == 6 and len(mech.tree.links) > 6
     for name in pincal.model.example_robot_names():
         assert b"<link" in pincal.model.example_robot_urdf(name).read_bytes()
+        # every listed name loads by name, the qualified 'package/stem' ones too (an
+        # 'anymal_b_simple/anymal' was taken for a missing file path)
+        urdf, _ = pincal.model.resolve_model_path(name)
+        assert urdf == pincal.model.example_robot_urdf(name)
 
 
 def test_open_closure_blames_the_home_guess_when_other_starts_close():

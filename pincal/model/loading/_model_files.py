@@ -70,7 +70,7 @@ def resolve_model_path(spec: str | Path, by_name: bool = False) -> tuple[Path, P
             raise ModelFileError(f"URDF file {str(path)!r} does not exist")
     elif (MODELS_DIR / str(spec)).is_dir():
         return resolve_model_path(MODELS_DIR / str(spec))
-    elif path.exists() or os.sep in str(spec):
+    elif path.exists() or (os.sep in str(spec) and str(spec) not in example_robot_names()):
         if not path.exists():
             what = "does not exist"
         elif not path.is_file():
