@@ -13,6 +13,7 @@ from pincal.design._arrays import bose_array, map_to_ranges, orthogonal_array
 from pincal.design._bounds import crb_covariance, predicted_std, predicted_validation_rms
 from pincal.design._candidate_sources import (
     AUTO_LEAST,
+    AUTO_ROWS,
     candidate_set,
     default_grid_ranges,
     grid_candidates,
@@ -68,6 +69,7 @@ from pincal.design._selection import SELECTION_METHODS, PoseDesign, select_poses
 
 __all__ = [
     "AUTO_LEAST",
+    "AUTO_ROWS",
     "COLUMN_SCALINGS",
     "INDEX_NAMES",
     "MAX_CANDIDATES",

@@ -2,10 +2,11 @@
 
 Joint-space grids (seed 000), random workspace poses and orthogonal arrays over the
 workspace pose factors (seed 001), plus spec strings. The default spec, ``auto``, is
-the joint grid ``grid:4``, topped up with ``random:500`` poses drawn in the workspace
-when the grid keeps fewer than :data:`AUTO_LEAST` (a pose workspace thin in the
-actuators' space: the wedge mechanism's grid keeps 4 of 64) or costs more rows than
-allowed (many actuators: random poses only).
+the joint grid of 4 levels (3 where 4 would pass :data:`AUTO_ROWS` rows: seven
+actuators), topped up with ``random:500`` poses drawn in the workspace when the grid
+keeps fewer than :data:`AUTO_LEAST` (a pose workspace thin in the actuators' space: the
+wedge mechanism's grid keeps 4 of 64), and replaced by them when even 3 levels pass
+:data:`AUTO_ROWS` or the grid costs more rows than allowed (many actuators).
 
 Each pushes actuator rows through :func:`pincal.design._candidates.evaluate_candidates`.
 """
@@ -43,6 +44,7 @@ from pincal.model.kernels import joint_ranges
 
 __all__ = [
     "AUTO_LEAST",
+    "AUTO_ROWS",
     "candidate_set",
     "default_grid_ranges",
     "grid_candidates",
@@ -52,7 +54,7 @@ __all__ = [
 ]
 
 
-def default_grid_ranges(mech: Mechanism) -> NDArray[np.float64]:
+def default_grid_ranges(mech: Mechanism, joint_margin: float = 0.0) -> NDArray[np.float64]:
     """Actuator ranges (n_act, 2) for a joint-space grid [m, rad].
 
     With a pose workspace: the range of each actuator over the inverse kinematics of
@@ -63,7 +65,10 @@ def default_grid_ranges(mech: Mechanism) -> NDArray[np.float64]:
     machine's joint stroke is far wider than the joint motion of its pose workspace
     (a hexaslide's six carriages each over their whole rail: 4 levels leave one of
     4096 grid rows that assembles). Without a pose workspace: ``workspace.joints``,
-    else the URDF limits. Always clipped to the actuator limits.
+    else the URDF limits. Always clipped to the actuator limits, less ``joint_margin``
+    of each finite range at both ends (the joint-limit screen's margin: a grid over an
+    arm's whole limits puts all but two of its levels where that screen removes them —
+    a Panda's ``grid:4`` kept 128 of 16 384 rows).
     """
     ranges = joint_ranges(mech)
     limits = np.asarray(mech.actuator_limits, dtype=float)
@@ -90,8 +95,13 @@ def default_grid_ranges(mech: Mechanism) -> NDArray[np.float64]:
         star = np.clip(star, ranges[:, :1], ranges[:, 1:])
         moved = star[:, 1] > star[:, 0]  # an actuator the pose workspace moves within its range
         ranges = np.where(moved[:, None], star, ranges)
-    lo = np.maximum(ranges[:, 0], np.where(np.isfinite(limits[:, 0]), limits[:, 0], -np.inf))
-    hi = np.minimum(ranges[:, 1], np.where(np.isfinite(limits[:, 1]), limits[:, 1], np.inf))
+    lower = np.where(np.isfinite(limits[:, 0]), limits[:, 0], -np.inf)
+    upper = np.where(np.isfinite(limits[:, 1]), limits[:, 1], np.inf)
+    if joint_margin:  # the screen's own expressions (limit ± pad): a level there passes it
+        both = np.isfinite(limits).all(axis=1)
+        pad = np.where(both, joint_margin * (limits[:, 1] - limits[:, 0]), 0.0)
+        lower, upper = np.where(both, lower + pad, lower), np.where(both, upper - pad, upper)
+    lo, hi = np.maximum(ranges[:, 0], lower), np.minimum(ranges[:, 1], upper)
     return np.stack([lo, hi], axis=1)
 
 
@@ -107,6 +117,7 @@ def grid_candidates(
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
     n_jobs: int = 1,
     scheduler: str | None = None,
+    joint_margin: float = 0.0,
 ) -> CandidateSet:
     """Seed 000: a full joint-space grid pushed through the forward kinematics.
 
@@ -126,6 +137,8 @@ def grid_candidates(
         scheduler: a Dask scheduler evaluating them instead, or None.
         max_candidates: refuse more rows than this (None: no bound).
         max_bytes: refuse a larger memory estimate [bytes] (None: no bound).
+        joint_margin: share of each finite actuator range the default ranges leave out
+            at both ends (:func:`default_grid_ranges`).
 
     Raises:
         OptionValueError: ``levels`` is not an integer ≥ 2.
@@ -137,7 +150,9 @@ def grid_candidates(
     _cost(mech, params, "grid", int(levels)).check(
         f"grid:{levels} ({n_act} actuators)", max_candidates, max_bytes
     )
-    rng_arr = default_grid_ranges(mech) if ranges is None else np.asarray(ranges, dtype=float)
+    rng_arr = (
+        default_grid_ranges(mech, joint_margin) if ranges is None else np.asarray(ranges, float)
+    )
     if rng_arr.shape != (n_act, 2) or not np.all(np.isfinite(rng_arr)):
         raise PincalError(f"ranges must be finite (lower, upper) pairs, shape ({n_act}, 2)")
     axes = [np.linspace(lo, hi, int(levels)) for lo, hi in rng_arr]
@@ -269,6 +284,9 @@ def orthogonal_candidates(
 #: ``auto``: the grid's levels, the feasible candidates below which random poses are
 #: added, and how many
 AUTO_GRID, AUTO_LEAST, AUTO_RANDOM = 4, 100, 500
+#: ``auto``: most grid rows (a 7-joint arm's 4⁷ rows cost the screens 60–90 s; 3⁷
+#: design within 3 % of their O1 in 4–7 s)
+AUTO_ROWS = 4096
 
 
 def parse_candidate_spec(spec: str) -> tuple[str, int]:
@@ -306,13 +324,15 @@ def candidate_set(
     max_bytes: int | None = MAX_CANDIDATE_BYTES,
     n_jobs: int = 1,
     scheduler: str | None = None,
+    joint_margin: float = 0.0,
 ) -> CandidateSet:
     """Candidates from a spec string: ``auto``, ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``.
 
     The cost (rows, memory) is estimated before any work and refused past
     ``max_candidates`` rows or ``max_bytes`` (None: no bound). ``n_jobs``, ``scheduler``:
     local processes or a Dask scheduler evaluating the rows (see
-    :func:`evaluate_candidates`); the candidates do not depend on them.
+    :func:`evaluate_candidates`); the candidates do not depend on them. ``joint_margin``:
+    the joint-limit screen's margin, which a grid's default ranges leave out.
 
     Raises:
         OptionValueError: the spec is malformed (kind, or a number that is not an integer
@@ -322,12 +342,12 @@ def candidate_set(
     kind, value = parse_candidate_spec(spec)
     lim, mem = max_candidates, max_bytes
     if kind == "auto":
-        result = _auto_candidates(mech, params, rng, progress, lim, mem, n_jobs, scheduler)
+        result = _auto_candidates(mech, params, rng, progress, lim, mem, n_jobs, scheduler,
+                                  joint_margin)  # fmt: skip
     elif kind == "grid":
         result = grid_candidates(
             mech, params, value, progress=progress, max_candidates=lim, max_bytes=mem,
-            n_jobs=n_jobs,
-        scheduler=scheduler,
+            n_jobs=n_jobs, scheduler=scheduler, joint_margin=joint_margin,
         )  # fmt: skip
     elif kind == "random":
         result = random_candidates(
@@ -355,19 +375,24 @@ def _auto_candidates(
     max_bytes: int | None,
     n_jobs: int,
     scheduler: str | None,
+    joint_margin: float,
 ) -> CandidateSet:
     """``auto`` (module doc): the grid, with random workspace poses when it keeps few."""
-    grid = None
+    grid, n_act = None, len(mech.actuated)
+    levels = AUTO_GRID if AUTO_GRID**n_act <= AUTO_ROWS else AUTO_GRID - 1
+    why = f"grid:{levels} would be {levels**n_act} rows"
     try:
-        grid = grid_candidates(mech, params, AUTO_GRID, progress=progress,
-                               max_candidates=max_candidates, max_bytes=max_bytes,
-                               n_jobs=n_jobs, scheduler=scheduler)  # fmt: skip
-    except InputLimitError:  # many actuators: the grid's own bound refuses it
-        why = f"grid:{AUTO_GRID} would be {_cost(mech, params, 'grid', AUTO_GRID).rows} rows"
-    else:
+        if levels**n_act <= AUTO_ROWS:
+            grid = grid_candidates(mech, params, levels, progress=progress,
+                                   max_candidates=max_candidates, max_bytes=max_bytes,
+                                   n_jobs=n_jobs, scheduler=scheduler,
+                                   joint_margin=joint_margin)  # fmt: skip
+    except InputLimitError:  # the grid's own bounds refuse it
+        pass
+    if grid is not None:
         if len(grid) >= AUTO_LEAST:
             return grid
-        why = f"grid:{AUTO_GRID} kept {len(grid)} of {grid.tried}"
+        why = f"grid:{levels} kept {len(grid)} of {grid.tried}"
     extra = random_candidates(mech, params, AUTO_RANDOM, rng, progress=progress,
                               max_candidates=max_candidates, max_bytes=max_bytes,
                               n_jobs=n_jobs, scheduler=scheduler)  # fmt: skip

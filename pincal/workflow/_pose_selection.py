@@ -99,17 +99,19 @@ def pose_candidates(
     n_jobs: int = 1,
     progress: Callable[[int, int], None] | None = None,
     scheduler: str | None = None,
+    joint_margin: float = 0.0,
 ) -> CandidateSet:
     """The candidate poses of ``spec`` (``grid:LEVELS``, ``random:COUNT``, ``oa:LEVELS``).
 
     Refused past ``max_candidates`` poses or ``max_bytes`` of memory (None: no bound;
     :func:`pincal.design.candidate_set`); ``progress(done, total)`` over the poses;
-    evaluated on ``n_jobs`` local processes or a Dask ``scheduler``.
+    evaluated on ``n_jobs`` local processes or a Dask ``scheduler``; a grid's default
+    ranges leave the joint-limit screen's ``joint_margin`` out.
     """
     return candidate_set(
         mech, basis.params, spec, rng=seed, progress=progress,
         max_candidates=max_candidates, max_bytes=max_bytes, n_jobs=n_jobs,
-        scheduler=scheduler,
+        scheduler=scheduler, joint_margin=joint_margin,
     )  # fmt: skip
 
 
