@@ -115,6 +115,16 @@ def pose_candidates(
     )  # fmt: skip
 
 
+#: the option that relaxes each screen (named when the screens leave too few poses)
+RELAX = {
+    "joint-limit margin": "--joint-margin",
+    "singularity margin": "--singular-margin",
+    "self-collision": "--no-collisions",
+    "obstacle collision": "--no-collisions or fewer --obstacle",
+    "compensation": "--reach-errors smaller or none",
+}
+
+
 @dataclass(frozen=True)
 class PoseRequest:
     """What ``pincal poses`` asks for.
@@ -218,11 +228,13 @@ def select_pose_design(
     for note in screens.notes:
         tell(f"  {note}")
     if req.count > len(cands):
+        busiest = sorted(screens.removed, key=lambda n: -screens.removed[n])
+        relax = "; ".join(dict.fromkeys(RELAX[n] for n in busiest if screens.removed[n]))
         raise OptionValueError(
             f"--count {req.count} is more than the {len(cands)} feasible candidate poses of "
             f"--candidates {req.spec} ({screens.summary()}); ask for at most {len(cands)} "
             "poses, generate more candidates (e.g. --candidates random:2000 or a finer "
-            "grid:LEVELS) or relax the screens (--joint-margin, --singular-margin)"
+            f"grid:LEVELS) or relax the screens that removed them ({relax or 'none did'})"
         )
     noise_model = NoiseModel(*req.noise)
     design_scaling = _scaling(req, cands, noise_model)

@@ -37,6 +37,14 @@ def test_poses_count_above_the_candidates_names_count():
                            "--out", "/tmp/unused-p.csv"])  # fmt: skip
     assert "--count 8 is more than the 4 feasible candidate poses" in line
     assert "m must be" not in line
+    assert "relax the screens that removed them (none did)" in line
+
+
+def test_too_few_poses_left_by_the_screens_names_the_options_that_relax_them():
+    line = one_line_error(["poses", "ur5", "--count", "8", "--candidates", "random:40",
+                           "--joint-margin", "0.45", "--out", "/tmp/unused-p.csv"])  # fmt: skip
+    assert "feasible candidate poses" in line
+    assert "relax the screens that removed them (--joint-margin" in line
 
 
 @pytest.mark.parametrize("command", [
