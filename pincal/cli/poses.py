@@ -85,7 +85,7 @@ def poses(
             cands = pose_candidates(
                 mech, basis, spec, seed, max_candidates=None if yes else MAX_CANDIDATES,
                 max_bytes=None if yes else MAX_CANDIDATE_BYTES, n_jobs=n_jobs, progress=progress,
-                scheduler=scheduler, joint_margin=settings.joint_margin,
+                scheduler=scheduler, screens=settings,
             )  # fmt: skip
     request = PoseRequest(count, index_name, scaling, K_mm, noise, method, order, restarts, seed,
                           errors, spec)  # fmt: skip

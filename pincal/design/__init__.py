@@ -12,14 +12,16 @@ from __future__ import annotations
 from pincal.design._arrays import bose_array, map_to_ranges, orthogonal_array
 from pincal.design._bounds import crb_covariance, predicted_std, predicted_validation_rms
 from pincal.design._candidate_sources import (
-    AUTO_LEAST,
-    AUTO_ROWS,
-    candidate_set,
     default_grid_ranges,
     grid_candidates,
     orthogonal_candidates,
-    parse_candidate_spec,
     random_candidates,
+)
+from pincal.design._candidate_specs import (
+    AUTO_LEAST,
+    AUTO_ROWS,
+    candidate_set,
+    parse_candidate_spec,
 )
 from pincal.design._candidates import (
     MAX_CANDIDATE_BYTES,

@@ -1,21 +1,14 @@
 """Candidate generators: joint-space grids, random workspace poses, orthogonal arrays.
 
 Joint-space grids (seed 000), random workspace poses and orthogonal arrays over the
-workspace pose factors (seed 001), plus spec strings. The default spec, ``auto``, is
-the joint grid of 4 levels (3 where 4 would pass :data:`AUTO_ROWS` rows: seven
-actuators), topped up with ``random:500`` poses drawn in the workspace when the grid
-keeps fewer than :data:`AUTO_LEAST` (a pose workspace thin in the actuators' space: the
-wedge mechanism's grid keeps 4 of 64), and replaced by them when even 3 levels pass
-:data:`AUTO_ROWS` or the grid costs more rows than allowed (many actuators).
-
-Each pushes actuator rows through :func:`pincal.design._candidates.evaluate_candidates`.
+workspace pose factors (seed 001); the spec strings that name them (and ``auto``) are
+:mod:`pincal.design._candidate_specs`. Each pushes actuator rows through
+:func:`pincal.design._candidates.evaluate_candidates`.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
-import math
 
 import numpy as np
 import pinocchio as pin
@@ -34,22 +27,16 @@ from pincal.design._candidates import (
 )
 from pincal.errors import (
     ConvergenceError,
-    InputLimitError,
     OptionValueError,
     PincalError,
-    clip,
 )
 from pincal.model import WORKSPACE_POSE_KEYS, Mechanism, ParameterSet, sample_actuators
 from pincal.model.kernels import joint_ranges
 
 __all__ = [
-    "AUTO_LEAST",
-    "AUTO_ROWS",
-    "candidate_set",
     "default_grid_ranges",
     "grid_candidates",
     "orthogonal_candidates",
-    "parse_candidate_spec",
     "random_candidates",
 ]
 
@@ -278,130 +265,7 @@ def orthogonal_candidates(
     )
 
 
-# ----------------------------------------------------------------------------- specs
-
-
-#: ``auto``: the grid's levels, the feasible candidates below which random poses are
-#: added, and how many
-AUTO_GRID, AUTO_LEAST, AUTO_RANDOM = 4, 100, 500
-#: ``auto``: most grid rows (a 7-joint arm's 4⁷ rows: 52 s CPU for a Panda design; 3⁷:
-#: 6.8 s, O1 within 4 %)
-AUTO_ROWS = 4096
-
-
-def parse_candidate_spec(spec: str) -> tuple[str, int]:
-    """``"grid:4"`` → ("grid", 4); kinds: grid (levels), random (count), oa (levels), auto."""
-    if spec == "auto":
-        return "auto", AUTO_GRID
-    kind, _, arg = spec.partition(":")
-    defaults = {"grid": 4, "random": 500, "oa": 5}
-    if kind not in defaults:
-        raise OptionValueError(
-            f"{clip(spec)} is not a candidate spec; use auto, grid:LEVELS, random:COUNT or "
-            "oa:LEVELS"
-        )
-    least = {"grid": 2, "random": 1, "oa": 2}[kind]
-    try:
-        number = float(arg) if arg else defaults[kind]  # "1e4" is an integer too
-    except ValueError:
-        number = math.nan
-    if not (math.isfinite(number) and number == int(number) and number >= least):
-        raise OptionValueError(
-            f"{clip(spec)}: {clip(arg)} is not an integer >= {least}; candidate specs are "
-            f"grid:LEVELS (>= 2), random:COUNT (>= 1) or oa:LEVELS (>= 2)"
-        )
-    return kind, int(number)
-
-
-def candidate_set(
-    mech: Mechanism,
-    params: ParameterSet,
-    spec: str = "grid:4",
-    rng: np.random.Generator | int | None = None,
-    *,
-    progress: Progress | None = None,
-    max_candidates: int | None = MAX_CANDIDATES,
-    max_bytes: int | None = MAX_CANDIDATE_BYTES,
-    n_jobs: int = 1,
-    scheduler: str | None = None,
-    joint_margin: float = 0.0,
-) -> CandidateSet:
-    """Candidates from a spec string: ``auto``, ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``.
-
-    The cost (rows, memory) is estimated before any work and refused past
-    ``max_candidates`` rows or ``max_bytes`` (None: no bound). ``n_jobs``, ``scheduler``:
-    local processes or a Dask scheduler evaluating the rows (see
-    :func:`evaluate_candidates`); the candidates do not depend on them. ``joint_margin``:
-    the joint-limit screen's margin, which a grid's default ranges leave out.
-
-    Raises:
-        OptionValueError: the spec is malformed (kind, or a number that is not an integer
-            of the kind's minimum).
-        InputLimitError: the estimate passes a bound, naming the estimate and the bound.
-    """
-    kind, value = parse_candidate_spec(spec)
-    lim, mem = max_candidates, max_bytes
-    if kind == "auto":
-        result = _auto_candidates(mech, params, rng, progress, lim, mem, n_jobs, scheduler,
-                                  joint_margin)  # fmt: skip
-    elif kind == "grid":
-        result = grid_candidates(
-            mech, params, value, progress=progress, max_candidates=lim, max_bytes=mem,
-            n_jobs=n_jobs, scheduler=scheduler, joint_margin=joint_margin,
-        )  # fmt: skip
-    elif kind == "random":
-        result = random_candidates(
-            mech, params, value, rng, progress=progress, max_candidates=lim, max_bytes=mem,
-            n_jobs=n_jobs,
-        scheduler=scheduler,
-        )  # fmt: skip
-    else:
-        result = orthogonal_candidates(
-            mech, params, value, progress=progress, max_candidates=lim, max_bytes=mem,
-            n_jobs=n_jobs,
-        scheduler=scheduler,
-        )  # fmt: skip
-    if len(result) == 0:
-        raise PincalError(f"no feasible candidate poses from {spec!r}: {result.summary()}")
-    return result
-
-
-def _auto_candidates(
-    mech: Mechanism,
-    params: ParameterSet,
-    rng: np.random.Generator | int | None,
-    progress: Progress | None,
-    max_candidates: int | None,
-    max_bytes: int | None,
-    n_jobs: int,
-    scheduler: str | None,
-    joint_margin: float,
-) -> CandidateSet:
-    """``auto`` (module doc): the grid, with random workspace poses when it keeps few."""
-    grid, n_act = None, len(mech.actuated)
-    levels = AUTO_GRID if AUTO_GRID**n_act <= AUTO_ROWS else AUTO_GRID - 1
-    why = f"grid:{levels} would be {levels**n_act} rows"
-    try:
-        if levels**n_act <= AUTO_ROWS:
-            grid = grid_candidates(mech, params, levels, progress=progress,
-                                   max_candidates=max_candidates, max_bytes=max_bytes,
-                                   n_jobs=n_jobs, scheduler=scheduler,
-                                   joint_margin=joint_margin)  # fmt: skip
-    except InputLimitError:  # the grid's own bounds refuse it
-        pass
-    if grid is not None:
-        if len(grid) >= AUTO_LEAST:
-            return grid
-        why = f"grid:{levels} kept {len(grid)} of {grid.tried}"
-    extra = random_candidates(mech, params, AUTO_RANDOM, rng, progress=progress,
-                              max_candidates=max_candidates, max_bytes=max_bytes,
-                              n_jobs=n_jobs, scheduler=scheduler)  # fmt: skip
-    source = f"auto: {why}, random:{AUTO_RANDOM} added"
-    if grid is None:
-        return dataclasses.replace(extra, source=source)
-    return grid.joined(extra, source)
-
-
 def _cost(mech: Mechanism, params: ParameterSet, kind: str, value: int) -> CandidateCost:
+    """The cost (rows, memory) of ``kind:value`` candidates of ``mech`` for ``params``."""
     k = len(mech.measured_components)
     return candidate_cost(kind, value, len(mech.actuated), k, len(params))

@@ -99,19 +99,27 @@ def pose_candidates(
     n_jobs: int = 1,
     progress: Callable[[int, int], None] | None = None,
     scheduler: str | None = None,
-    joint_margin: float = 0.0,
+    screens: ScreenSettings | None = None,
 ) -> CandidateSet:
-    """The candidate poses of ``spec`` (``grid:LEVELS``, ``random:COUNT``, ``oa:LEVELS``).
+    """The candidate poses of ``spec`` (``auto``, ``grid:LEVELS``, ``random:COUNT``, ``oa:LEVELS``).
 
     Refused past ``max_candidates`` poses or ``max_bytes`` of memory (None: no bound;
     :func:`pincal.design.candidate_set`); ``progress(done, total)`` over the poses;
-    evaluated on ``n_jobs`` local processes or a Dask ``scheduler``; a grid's default
-    ranges leave the joint-limit screen's ``joint_margin`` out.
+    evaluated on ``n_jobs`` local processes or a Dask ``scheduler``. With the
+    ``screens`` the design will apply, a grid's default ranges leave the joint-limit
+    margin out and ``auto`` counts the grid's poses those screens keep (all but the
+    compensation screen, which runs on the design's candidates only).
     """
+
+    def usable(cands: CandidateSet) -> int:
+        assert screens is not None
+        return len(screen_candidates(mech, cands, screens)[0])
+
     return candidate_set(
         mech, basis.params, spec, rng=seed, progress=progress,
         max_candidates=max_candidates, max_bytes=max_bytes, n_jobs=n_jobs,
-        scheduler=scheduler, joint_margin=joint_margin,
+        scheduler=scheduler, joint_margin=screens.joint_margin if screens else 0.0,
+        usable=usable if screens else None,
     )  # fmt: skip
 
 
