@@ -37,6 +37,9 @@ LONG = {
     "scripts/bench_vs_figaroh.py": "needs the optional [bench] extra",
     "scripts/studies/open_world_campaigns.py": "19 CLI campaigns (~15 min); the four-bar's "
     "and the Agile Eye's in tests/open_world/test_noisy_campaign.py",
+    "scripts/studies/arms_by_name.py": "74 robots through poses, simulate and calibrate "
+    "(~5 min); the xArm7, aacmm and panda_collision cases in tests/sensitivity and "
+    "tests/design",
     "scripts/studies/prediction_honesty.py": "60 CLI campaigns (~5 min); the curved fits' "
     "predicted / achieved in tests/open_world/test_noisy_campaign.py",
     "scripts/studies/stewart_pose_selection.py": "Monte-Carlo; core claim in test_seed000_study.py",
