@@ -2,10 +2,11 @@
 
 The default spec, ``auto``, is the joint grid of 4 levels (3 where 4 would pass
 :data:`AUTO_ROWS` rows: seven actuators), topped up with ``random:500`` poses drawn in
-the workspace when the grid leaves fewer than :data:`AUTO_LEAST` usable poses (a pose
-workspace thin in the actuators' space: the wedge mechanism's grid keeps 4 of 64; or
-the caller's screens removing most of an arm's grid: a Panda whose collision capsules
-touch at most folded poses kept 81 of 2 187), and replaced by them when even 3 levels
+the workspace when the grid leaves fewer than :data:`AUTO_LEAST` usable poses or poses
+that do not identify the parameters (a pose workspace thin in the actuators' space: the
+wedge mechanism's grid keeps 4 of 64; the caller's screens removing most of an arm's
+grid: a Panda whose collision capsules touch at most folded poses kept 81 of 2 187, a
+Baxter arm beside its body 147 of rank 30 < 34), and replaced by them when even 3 levels
 pass :data:`AUTO_ROWS` or the grid costs more rows than allowed (many actuators).
 """
 
@@ -30,6 +31,7 @@ from pincal.design._candidates import (
 )
 from pincal.errors import InputLimitError, OptionValueError, PincalError, clip
 from pincal.model import Mechanism, ParameterSet
+from pincal.sensitivity import jacobian_rank
 
 __all__ = ["AUTO_LEAST", "AUTO_ROWS", "candidate_set", "parse_candidate_spec"]
 
@@ -77,7 +79,7 @@ def candidate_set(
     n_jobs: int = 1,
     scheduler: str | None = None,
     joint_margin: float = 0.0,
-    usable: Callable[[CandidateSet], int] | None = None,
+    usable: Callable[[CandidateSet], CandidateSet] | None = None,
 ) -> CandidateSet:
     """Candidates from a spec string: ``auto``, ``grid:LEVELS``, ``random:COUNT`` or ``oa:LEVELS``.
 
@@ -86,8 +88,9 @@ def candidate_set(
     local processes or a Dask scheduler evaluating the rows (see
     :func:`evaluate_candidates`); the candidates do not depend on them. ``joint_margin``:
     the joint-limit screen's margin, which a grid's default ranges leave out.
-    ``usable``: how many of some candidates the caller's screens keep (``auto`` tops its
-    grid up when they keep fewer than :data:`AUTO_LEAST`; None: every feasible one).
+    ``usable``: the candidates the caller's screens keep of some (``auto`` tops its grid
+    up when they keep fewer than :data:`AUTO_LEAST` or do not identify ``params``;
+    None: every feasible one).
 
     Raises:
         OptionValueError: the spec is malformed (kind, or a number that is not an integer
@@ -98,7 +101,7 @@ def candidate_set(
     lim, mem = max_candidates, max_bytes
     if kind == "auto":
         result = _auto_candidates(mech, params, rng, progress, lim, mem, n_jobs, scheduler,
-                                  joint_margin, usable or len)  # fmt: skip
+                                  joint_margin, usable or (lambda c: c))  # fmt: skip
     elif kind == "grid":
         result = grid_candidates(
             mech, params, value, progress=progress, max_candidates=lim, max_bytes=mem,
@@ -129,7 +132,7 @@ def _auto_candidates(
     n_jobs: int,
     scheduler: str | None,
     joint_margin: float,
-    usable: Callable[[CandidateSet], int],
+    usable: Callable[[CandidateSet], CandidateSet],
 ) -> CandidateSet:
     """``auto`` (module doc): the grid, with random workspace poses when it keeps few."""
     grid, n_act = None, len(mech.actuated)
@@ -145,10 +148,12 @@ def _auto_candidates(
         pass
     if grid is not None:
         kept = usable(grid)
-        if kept >= AUTO_LEAST:
+        rank = jacobian_rank(kept.jacobians.reshape(-1, len(params))) if len(kept) else 0
+        if len(kept) >= AUTO_LEAST and rank == len(params):
             return grid
-        why = f"grid:{levels} kept {kept} of {grid.tried}"
-        why += " after the screens" if kept < len(grid) else ""
+        why = f"grid:{levels} kept {len(kept)} of {grid.tried}"
+        why += " after the screens" if len(kept) < len(grid) else ""
+        why += f", of rank {rank} < {len(params)}" if rank < len(params) else ""
     extra = random_candidates(mech, params, AUTO_RANDOM, rng, progress=progress,
                               max_candidates=max_candidates, max_bytes=max_bytes,
                               n_jobs=n_jobs, scheduler=scheduler)  # fmt: skip

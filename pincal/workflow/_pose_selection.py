@@ -107,13 +107,13 @@ def pose_candidates(
     :func:`pincal.design.candidate_set`); ``progress(done, total)`` over the poses;
     evaluated on ``n_jobs`` local processes or a Dask ``scheduler``. With the
     ``screens`` the design will apply, a grid's default ranges leave the joint-limit
-    margin out and ``auto`` counts the grid's poses those screens keep (all but the
+    margin out and ``auto`` judges the grid by the poses those screens keep (all but the
     compensation screen, which runs on the design's candidates only).
     """
 
-    def usable(cands: CandidateSet) -> int:
+    def usable(cands: CandidateSet) -> CandidateSet:
         assert screens is not None
-        return len(screen_candidates(mech, cands, screens)[0])
+        return screen_candidates(mech, cands, screens)[0]
 
     return candidate_set(
         mech, basis.params, spec, rng=seed, progress=progress,

@@ -53,9 +53,12 @@ def test_auto_parses_and_the_default_poses_command_works_on_the_wedge(tmp_path):
 def test_auto_counts_the_grid_poses_the_callers_screens_keep():
     mech = pincal.load_mechanism("stewart_6ups")
     params = pincal.parameters(mech, "stewart42")
-    auto = candidate_set(mech, params, "auto", 0, usable=lambda c: len(c) // 10)  # 36 of 364
+    auto = candidate_set(mech, params, "auto", 0, usable=lambda c: c.subset(range(36)))
     assert "grid:4 kept 36 of 4096 after the screens, random:500 added" in auto.source
     assert auto.tried == 4096 + 500
+    # enough poses, but too alike to identify the parameters: topped up as well
+    same = candidate_set(mech, params, "auto", 0, usable=lambda c: c.subset([0] * 200))
+    assert "grid:4 kept 200 of 4096 after the screens, of rank 6 < 42" in same.source
 
 
 @pytest.mark.skipif(
@@ -64,7 +67,12 @@ def test_auto_counts_the_grid_poses_the_callers_screens_keep():
 )
 def test_an_arm_whose_grid_the_collision_screen_empties_is_designed(tmp_path):
     """The Panda's collision capsules touch at most folded grid poses: the screens kept 81
-    of 2 187, which identify 22 of 34 parameters (`poses` refused: rank 22 < 34)."""
+    of 2 187, which identify 22 of 34 parameters (`poses` refused: rank 22 < 34); a
+    Baxter arm beside its body kept 147, enough poses, of rank 30 < 34."""
     res = CliRunner().invoke(main, ["poses", "panda_collision", "--out", str(tmp_path / "p.csv")])
     assert res.exit_code == 0, res.output
-    assert "after the screens, random:500 added" in res.stderr
+    assert "kept 81 of 2187 after the screens, of rank 22 < 34, random:500 added" in res.stderr
+    args = ["poses", "baxter", "--frame", "left_gripper", "--out", str(tmp_path / "b.csv")]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output  # was: "Jacobian has rank 30 < 34 parameters"
+    assert "kept 147 of 2187 after the screens, of rank 30 < 34" in res.stderr
