@@ -2,12 +2,13 @@
 
 The default spec, ``auto``, is the joint grid of 4 levels (3 where 4 would pass
 :data:`AUTO_ROWS` rows: seven actuators), topped up with ``random:500`` poses drawn in
-the workspace when the grid leaves fewer than :data:`AUTO_LEAST` usable poses or poses
-that do not identify the parameters (a pose workspace thin in the actuators' space: the
-wedge mechanism's grid keeps 4 of 64; the caller's screens removing most of an arm's
-grid: a Panda whose collision capsules touch at most folded poses kept 81 of 2 187, a
-Baxter arm beside its body 147 of rank 30 < 34), and replaced by them when even 3 levels
-pass :data:`AUTO_ROWS` or the grid costs more rows than allowed (many actuators).
+the workspace when the grid leaves fewer than :data:`AUTO_LEAST` usable poses, or poses
+that identify fewer parameters than the whole grid (a pose workspace thin in the
+actuators' space: the wedge mechanism's grid keeps 4 of 64; the caller's screens
+removing most of an arm's grid: a Panda whose collision capsules touch at most folded
+poses kept 81 of 2 187, a Baxter arm beside its body 147 of rank 30 < 34), and replaced
+by them when even 3 levels pass :data:`AUTO_ROWS` or the grid costs more rows than
+allowed (many actuators).
 """
 
 from __future__ import annotations
@@ -89,8 +90,8 @@ def candidate_set(
     :func:`evaluate_candidates`); the candidates do not depend on them. ``joint_margin``:
     the joint-limit screen's margin, which a grid's default ranges leave out.
     ``usable``: the candidates the caller's screens keep of some (``auto`` tops its grid
-    up when they keep fewer than :data:`AUTO_LEAST` or do not identify ``params``;
-    None: every feasible one).
+    up when they keep fewer than :data:`AUTO_LEAST`, or poses of lower rank than the
+    whole grid's; None: every feasible one).
 
     Raises:
         OptionValueError: the spec is malformed (kind, or a number that is not an integer
@@ -148,12 +149,14 @@ def _auto_candidates(
         pass
     if grid is not None:
         kept = usable(grid)
-        rank = jacobian_rank(kept.jacobians.reshape(-1, len(params))) if len(kept) else 0
-        if len(kept) >= AUTO_LEAST and rank == len(params):
+        n = len(params)
+        rank = jacobian_rank(kept.jacobians.reshape(-1, n)) if len(kept) else 0
+        whole = rank if len(kept) == len(grid) else jacobian_rank(grid.jacobians.reshape(-1, n))
+        if len(kept) >= AUTO_LEAST and rank == whole:
             return grid
         why = f"grid:{levels} kept {len(kept)} of {grid.tried}"
         why += " after the screens" if len(kept) < len(grid) else ""
-        why += f", of rank {rank} < {len(params)}" if rank < len(params) else ""
+        why += f", of rank {rank} < {whole}" if rank < whole else ""
     extra = random_candidates(mech, params, AUTO_RANDOM, rng, progress=progress,
                               max_candidates=max_candidates, max_bytes=max_bytes,
                               n_jobs=n_jobs, scheduler=scheduler)  # fmt: skip

@@ -49,5 +49,9 @@ def test_the_default_poses_of_the_bundled_arm_cmm_are_designed(tmp_path):
 def test_auto_takes_three_levels_for_seven_joints():
     mech = pincal.load_mechanism("panda")
     assert len(mech.actuated) == 7 and 4**7 > AUTO_ROWS >= 3**7
-    auto = candidate_set(mech, pincal.parameters(mech, "full"), "auto", 0, joint_margin=0.05)
+    params = pincal.parameters(mech, "base")
+    auto = candidate_set(mech, params, "auto", 0, joint_margin=0.05)
     assert auto.source == "grid:3" and auto.tried == 3**7
+    # a set the grid cannot identify either (72 parameters, rank 34) is not topped up
+    full = candidate_set(mech, pincal.parameters(mech, "full"), "auto", 0, joint_margin=0.05)
+    assert full.source == "grid:3"
