@@ -56,7 +56,15 @@ def default_grid_ranges(mech: Mechanism, joint_margin: float = 0.0) -> NDArray[n
     of each finite range at both ends (the joint-limit screen's margin: a grid over an
     arm's whole limits puts all but two of its levels where that screen removes them —
     a Panda's ``grid:4`` kept 128 of 16 384 rows).
+
+    Raises:
+        OptionValueError: ``joint_margin`` is not in [0, 0.5).
     """
+    if not 0.0 <= joint_margin < 0.5:
+        raise OptionValueError(
+            f"joint margin {joint_margin!r} must be in [0, 0.5) (a share of each actuator "
+            "range left out at both ends; the screens' default is 0.05)"
+        )
     ranges = joint_ranges(mech)
     limits = np.asarray(mech.actuator_limits, dtype=float)
     pose = mech.workspace.pose

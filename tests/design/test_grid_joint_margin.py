@@ -10,6 +10,7 @@ would pass :data:`AUTO_ROWS` rows (seven joints).
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 import pincal
@@ -22,6 +23,7 @@ from pincal.design import (
     grid_candidates,
     screen_candidates,
 )
+from pincal.errors import OptionValueError
 
 
 def test_the_grid_leaves_the_screens_margin_out_and_the_screen_keeps_every_row():
@@ -31,6 +33,9 @@ def test_the_grid_leaves_the_screens_margin_out_and_the_screen_keeps_every_row()
     assert np.allclose(ranges[:, 0], lo + 0.05 * (hi - lo))
     assert np.allclose(ranges[:, 1], hi - 0.05 * (hi - lo))
     assert np.array_equal(default_grid_ranges(mech), np.stack([lo, hi], axis=1))  # no margin
+    for bad in (0.5, -0.1, float("nan")):
+        with pytest.raises(OptionValueError, match=r"must be in \[0, 0.5\)"):
+            default_grid_ranges(mech, bad)
     params = pincal.parameters(mech, "full")
     grid = grid_candidates(mech, params, 3, joint_margin=0.05)
     _, report = screen_candidates(mech, grid, ScreenSettings(joint_margin=0.05))
