@@ -38,6 +38,7 @@ from pincal.model import (
     joint_term_shift,
     loaded_terms,
     parameters,
+    undeflected_commands,
 )
 
 __all__ = ["JointTermCorrection"]
@@ -196,8 +197,8 @@ class JointTermCorrection:
         loaded = loaded_terms(self.params)
         if self.loaded_on is not None and loaded.size:
             # the compliances' deflection at the joints reached, on the calibrated machine
-            sub, theta = self.params.subset(loaded), self.values[loaded]
-            q = q - joint_term_basis(self.loaded_on, sub, q, self._conditions(len(q))) @ theta
+            q = undeflected_commands(self.loaded_on, self.params, self.values, q,
+                                     self._conditions(len(q)))  # fmt: skip
             keep = np.setdiff1d(np.arange(len(self.params)), loaded)
             if not keep.size:  # compliances only: the command is found
                 return q

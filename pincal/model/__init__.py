@@ -94,6 +94,7 @@ from pincal.model.params import (
     strut_loads,
     struts,
     term_kinds,
+    undeflected_commands,
     with_joint_terms,
     with_payload,
 )
@@ -199,6 +200,7 @@ __all__ = [
     "strut_loads",
     "struts",
     "term_kinds",
+    "undeflected_commands",
     "validate_sidecar",
     "with_joint_origin",
     "with_joint_terms",

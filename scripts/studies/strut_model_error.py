@@ -1,16 +1,19 @@
-"""Study: where pincal's strut-compliance model departs from an elongated strut, and why.
+"""Study: pincal's strut elongation against an independent one, and the first-order
+substitute its Jacobian columns use.
 
 The truth is scripts/studies/hexaslide_deflection.py's statics: carriages at the command,
-struts lengthened by the fixed point ``ℓ' = ℓ + c·F(ℓ')`` of the true machine. pincal
-deflects a rigid substitute instead (nominal strut lengths, carriages moved by the joint
-change ``q = u + E(q)·c·F(q)``) and evaluates the strut forces ``F`` there. Per sag, on
-the hexaslide with 20 kg, geometric errors N(0, 0.2 mm / 0.2 mrad), ``--poses`` random
-poses (seed 5, as tests/studies/test_deflection_truths.py):
+struts lengthened by the fixed point ``ℓ' = ℓ + c·F(ℓ')`` of the true machine. pincal's
+deflection (``actual_joint_values``) solves the same fixed point on its own machine; its
+columns (``joint_term_basis``) are first order: a rigid substitute (nominal strut
+lengths, carriages moved by ``q = u + E(q)·c·F(q)``) with the forces ``F`` taken there.
+Per sag, on the hexaslide with 20 kg, geometric errors N(0, 0.2 mm / 0.2 mrad),
+``--poses`` random poses (seed 5, as tests/studies/test_deflection_truths.py):
 
-* model error: distance of pincal's deflected platform from the exact one, RMS / max [µm];
+* pincal: distance of pincal's deflected platform from the exact one, RMS / max [µm];
+* substitute: the same for the first-order fixed point of the columns [µm];
 * force error: the substitute's strut forces against the elongated machine's at the
   exact pose, largest relative error, and the elongation ``c·ΔF`` it makes [µm];
-* midpoint: the model error with the joint change's tangent ``E`` taken at the midpoint
+* midpoint: the substitute with the joint change's tangent ``E`` taken at the midpoint
   of command and deflected joints (``q = u + E((u+q)/2)·c·F(q)``), to tell a path
   (integration) error from the substitute's geometry.
 
@@ -41,12 +44,13 @@ def _hexa():
     return module
 
 
-def _midpoint(actual, names, c, rows) -> np.ndarray:
-    """Joint values (m, 6) of ``q = u + E((u+q)/2)·c·F(q)`` [m]."""
+def _substitute(actual, names, c, rows, midpoint: bool) -> np.ndarray:
+    """Joint values (m, 6) of ``q = u + E(q)·c·F(q)``, or with ``E((u+q)/2)`` [m]."""
     q = rows.copy()
     for _ in range(60):
-        F = strut_loads(actual, q, names)[0]
-        E = strut_loads(actual, 0.5 * (rows + q), names)[1]
+        F, E = strut_loads(actual, q, names)
+        if midpoint:
+            E = strut_loads(actual, 0.5 * (rows + q), names)[1]
         new = rows + np.einsum("mj,mja->ma", F * c, E)
         step, q = float(np.max(np.abs(new - q))), new
         if step < 1e-13:
@@ -60,8 +64,8 @@ def main() -> None:
     ap.add_argument("--poses", type=int, default=6)
     args = ap.parse_args()
     hexa = _hexa()
-    print("sag [mm] | model error RMS/max [µm] | force error (rel.) | its elongation [µm] "
-          "| midpoint model error RMS/max [µm]")  # fmt: skip
+    print("sag [mm] | pincal RMS/max [µm] | substitute RMS/max [µm] | force error (rel.) "
+          "| its elongation [µm] | midpoint RMS/max [µm]")  # fmt: skip
     for sag in (1e-3 * float(s) for s in args.sags.split(",")):
         mech = hexa.with_payload(hexa.load_mechanism(hexa.HEXASLIDE), hexa.PAYLOAD)
         params = hexa.with_joint_terms(mech, hexa.parameters(mech, "pus54"), ("strut-compliance",))
@@ -76,19 +80,20 @@ def main() -> None:
         names, c = tuple(params.parameters[k].joint for k in comp), truth[comp]
         exact = [h.deflected(u, c, *hexa.HOME) for u in rows]
         rel, elong = [], []
-        tangent = actual_joint_values(mech, params, truth, rows)
+        tangent = _substitute(actual, names, c, rows, midpoint=False)
         for u, qm, (t, R) in zip(rows, tangent, exact, strict=True):
             F_exact = h.forces(u, t, R)
             F_model = strut_loads(actual, qm[None], names)[0][0]
             rel.append(np.max(np.abs(F_model - F_exact)) / np.max(np.abs(F_exact)))
             elong.append(np.max(np.abs(c * (F_model - F_exact))) * 1e6)
         errs = []
-        for joints in (tangent, _midpoint(actual, names, c, rows)):
+        pincal = actual_joint_values(mech, params, truth, rows)
+        for joints in (pincal, tangent, _substitute(actual, names, c, rows, midpoint=True)):
             d = [np.linalg.norm(actual.forward(q).translation - t) * 1e6
                  for q, (t, _) in zip(joints, exact, strict=True)]  # fmt: skip
             errs.append(f"{np.sqrt(np.mean(np.square(d))):.3g} / {max(d):.3g}")
-        print(f"{sag * 1e3:g} | {errs[0]} | {max(rel):.2g} | {max(elong):.3g} | {errs[1]}",
-              flush=True)  # fmt: skip
+        print(f"{sag * 1e3:g} | {errs[0]} | {errs[1]} | {max(rel):.2g} | {max(elong):.3g} "
+              f"| {errs[2]}", flush=True)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -11,11 +11,13 @@ import pytest
 from pincal.errors import ParameterError
 from pincal.model import (
     Payload,
+    actual_joint_values,
     joint_term_basis,
     load_mechanism,
     sample_actuators,
     strut_loads,
     struts,
+    undeflected_commands,
     with_joint_terms,
     with_payload,
 )
@@ -155,6 +157,39 @@ def test_struts_of_an_ankle(tmp_path):
             )[comps]
             assert np.linalg.norm(d_el) > 1e-3 * h
             assert np.linalg.norm(d_mv - d_el) < 1e-4 * np.linalg.norm(d_el)
+
+
+def test_an_ankles_struts_lengthen_under_their_own_machines_load(tmp_path):
+    """The deflection of a 2-RSU ankle's rods is the fixed point δL = c·F of the machine
+    with its rods lengthened (built here through placement parameters, not pincal's
+    solver), reached by the rigid machine's joints; the commands invert it."""
+    mech = _open_world("ankle_2rsu", tmp_path)
+    names = struts(mech)
+    params = parameters(mech, [f"{s}.strut_compliance" for s in names])
+    rows = sample_actuators(mech, 3, np.random.default_rng(9))
+    F0 = strut_loads(mech, rows)[0]
+    c = -2e-4 / np.sqrt(np.mean(F0**2)) * np.array([0.7, 1.3])  # 0.2 mm of sag [m/N]
+    joints = actual_joint_values(mech, params, c, rows)
+    assert np.max(np.abs(joints - rows)) > 1e-5  # [rad]
+    shift = parameters(mech, [f"{s}.{d}" for s in names for d in ("tx", "ty", "tz")])
+    origins = [mech.tree.joints[s].origin for s in names]
+    comps = [("x", "y", "z", "rx", "ry", "rz").index(k) for k in mech.measured_components]
+    for u, q in zip(rows, joints, strict=True):
+        dL = np.zeros(len(names))
+        for _ in range(40):
+            step = np.concatenate(
+                [d * o.rotation.T @ o.translation / np.linalg.norm(o.translation)
+                 for d, o in zip(dL, origins, strict=True)]
+            )  # fmt: skip
+            longer = shift.apply(mech, step)
+            dL = c * strut_loads(longer, u[None], names)[0][0]
+        reached, rigid = longer.forward(u), mech.forward(q)
+        diff = np.concatenate(
+            [rigid.translation - reached.translation, pin.log3(reached.rotation.T @ rigid.rotation)]
+        )[comps]
+        assert np.max(np.abs(diff)) < 1e-10  # [m, rad]
+    back = undeflected_commands(mech, params, c, joints)
+    assert np.max(np.abs(back - rows)) < 1e-10  # [rad]
 
 
 def test_parallelogram_bars_are_refused(tmp_path):

@@ -12,6 +12,7 @@ from pincal.model.params._deflection import (
     deflected_joints,
     deflection_jacobian,
     loaded_terms,
+    undeflected_commands,
 )
 from pincal.model.params._directions import (
     describe_direction,
@@ -45,7 +46,7 @@ from pincal.model.params._parameters import (
 )
 from pincal.model.params._payload import Payload, with_payload
 from pincal.model.params._presets import parameters
-from pincal.model.params._term_strut import strut_loads, struts
+from pincal.model.params._strut_statics import strut_loads, struts
 from pincal.model.params._term_temperature import REFERENCE_C
 
 __all__ = [
@@ -79,6 +80,7 @@ __all__ = [
     "strut_loads",
     "struts",
     "term_kinds",
+    "undeflected_commands",
     "with_joint_terms",
     "with_payload",
 ]

@@ -31,7 +31,7 @@ import numpy as np
 from pincal.errors import ConvergenceError
 from pincal.model._mechanism import Mechanism
 from pincal.model.params._joint_term_set import joint_term_basis
-from pincal.model.params._joint_terms import term_of_dof
+from pincal.model.params._joint_terms import JointTerm, term_of_dof
 from pincal.model.params._parameters import ParameterSet
 
 __all__ = [
@@ -40,6 +40,7 @@ __all__ = [
     "deflected_joints",
     "deflection_jacobian",
     "loaded_terms",
+    "undeflected_commands",
 ]
 
 #: central-difference step of the statics' derivatives [m, rad]
@@ -56,6 +57,48 @@ def loaded_terms(params: ParameterSet) -> np.ndarray:
         if term is not None and term.loaded:
             out.append(int(k))
     return np.array(out, dtype=int)
+
+
+def _exact(params: ParameterSet, idx: np.ndarray) -> tuple[JointTerm, tuple[str, ...]] | None:
+    """(the term, its joints) of loaded parameters ``idx`` that one kind holds.
+
+    None when several kinds are loaded or the kind has no deflection of its own
+    (:meth:`JointTerm.deflected`): the generic fixed point.
+    """
+    terms = {term_of_dof(params.parameters[k].dof) for k in idx}
+    term = terms.pop() if len(terms) == 1 else None
+    if term is None or type(term).deflected is JointTerm.deflected:
+        return None
+    return term, tuple(params.parameters[k].joint for k in idx)
+
+
+def undeflected_commands(
+    mech: Mechanism,
+    params: ParameterSet,
+    values: np.ndarray,
+    q: np.ndarray,
+    conditions: Mapping[str, np.ndarray | None] | None = None,
+) -> np.ndarray:
+    """The inverse of :func:`deflected_joints`: ``u`` (m, n_act) whose fixed point is ``q``.
+
+    Args:
+        mech: the machine at the current parameter values.
+        params: the parameter set (n).
+        values: (n,) its values [SI].
+        q: (m, n_act) the joint values to reach [rad, m].
+        conditions: per-pose conditions of the terms.
+    """
+    idx = loaded_terms(params)
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    theta = np.asarray(values, dtype=float)[idx]
+    if not idx.size or not np.any(theta):
+        return q.copy()
+    exact = _exact(params, idx)
+    if exact is not None:
+        out = exact[0].commands(mech, exact[1], theta, q)
+        if out is not None:
+            return out
+    return q - _loaded_change(mech, params.subset(idx), theta, q, conditions or {})
 
 
 def _loaded_change(
@@ -92,6 +135,10 @@ def deflected_joints(
     theta = np.asarray(values, dtype=float)[idx]
     if not idx.size or not np.any(theta):
         return u.copy()
+    exact = _exact(params, idx)
+    solved = None if exact is None else exact[0].deflected(mech, exact[1], theta, u)
+    if solved is not None:
+        return solved
     sub, cond = params.subset(idx), conditions or {}
     q = u.copy()
     step = np.inf

@@ -136,6 +136,35 @@ class JointTerm(ABC):
             out[a] = col
         return out
 
+    def deflected(
+        self, mech: Mechanism, joints: tuple[str, ...], theta: np.ndarray, u: np.ndarray
+    ) -> np.ndarray | None:
+        """The loaded joint values (m, n_act) when this kind is the only loaded one.
+
+        None (the default): the generic fixed point ``q = u + L(q) θ`` of
+        :mod:`pincal.model.params._deflection` on the term's columns. A term whose load
+        acts on another machine than the rigid one its columns move (a strut's,
+        lengthened) solves it exactly here.
+
+        Args:
+            mech: the machine at the current geometry.
+            joints: the joints of ``theta``'s parameters (one per parameter).
+            theta: (k,) the term's values [SI].
+            u: (m, n_act) the command moved by the terms that are not loaded [rad, m].
+        """
+        del mech, joints, theta, u  # the generic fixed point
+        return None
+
+    def commands(
+        self, mech: Mechanism, joints: tuple[str, ...], theta: np.ndarray, q: np.ndarray
+    ) -> np.ndarray | None:
+        """The inverse of :meth:`deflected`: commands (m, n_act) reaching joint values ``q``.
+
+        None (the default): ``u = q − L(q) θ``, exact for the generic fixed point.
+        """
+        del mech, joints, theta, q
+        return None
+
 
 _TERMS: dict[str, JointTerm] = {}
 
