@@ -27,11 +27,11 @@ the same 20 kg payload, its ``pus54`` preset plus the axial compliance of its si
 fixed-length struts (``strut-compliance``: ``δL_j = c_j·F_j``, the strut forces from the
 loop-closure equilibrium, true ``c ~ N(0, 1e-7 m/N)``, the default prior). The machine
 is simulated with the physical model — each pose measured on the true geometry with every
-strut lengthened by its ``c_j·F_j`` — while the identification models the elongation as
-joint changes (:mod:`pincal.model.params._term_strut`). ``F`` is the nominal machine's, as the
-model evaluates it (and as the Stewart study's leg forces are); ``--true-forces`` takes
-the forces of the true (geometrically erroneous) machine instead, which shows what
-evaluating the load on the nominal geometry costs.
+strut lengthened by its ``c_j·F_j``. ``F`` is the nominal machine's at the command (as the
+Stewart study's leg forces are); ``--true-forces`` takes the true (geometrically
+erroneous) machine's at the command instead. Neither is the lengthened machine's own,
+which the identification solves for (:mod:`pincal.model.params._term_strut`); the exact
+truth is scripts/studies/hexaslide_deflection.py's.
 
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py [--draws 100] [--poses 60]
     PYTHONPATH=. python scripts/studies/nongeometric_recovery.py --machine stewart
