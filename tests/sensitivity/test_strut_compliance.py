@@ -159,18 +159,14 @@ def test_struts_of_an_ankle(tmp_path):
             assert np.linalg.norm(d_mv - d_el) < 1e-4 * np.linalg.norm(d_el)
 
 
-def test_an_ankles_struts_lengthen_under_their_own_machines_load(tmp_path):
-    """The deflection of a 2-RSU ankle's rods is the fixed point δL = c·F of the machine
-    with its rods lengthened (built here through placement parameters, not pincal's
-    solver), reached by the rigid machine's joints; the commands invert it."""
-    mech = _open_world("ankle_2rsu", tmp_path)
-    names = struts(mech)
-    params = parameters(mech, [f"{s}.strut_compliance" for s in names])
-    rows = sample_actuators(mech, 3, np.random.default_rng(9))
-    F0 = strut_loads(mech, rows)[0]
-    c = -2e-4 / np.sqrt(np.mean(F0**2)) * np.array([0.7, 1.3])  # 0.2 mm of sag [m/N]
-    joints = actual_joint_values(mech, params, c, rows)
-    assert np.max(np.abs(joints - rows)) > 1e-5  # [rad]
+def _check_exact_elongation(mech, params, values, rows) -> None:
+    """pincal's deflection is the fixed point δL = c·F of the machine with its struts
+    lengthened (built here through placement parameters, not pincal's solver), reached by
+    the rigid machine's joints in the measured components; the commands invert it."""
+    k = params.joint_terms
+    names, c = tuple(params.parameters[i].joint for i in k), values[k]
+    joints = actual_joint_values(mech, params, values, rows)
+    assert np.max(np.abs(joints - rows)) > 1e-5  # [rad, m]
     shift = parameters(mech, [f"{s}.{d}" for s in names for d in ("tx", "ty", "tz")])
     origins = [mech.tree.joints[s].origin for s in names]
     comps = [("x", "y", "z", "rx", "ry", "rz").index(k) for k in mech.measured_components]
@@ -188,12 +184,23 @@ def test_an_ankles_struts_lengthen_under_their_own_machines_load(tmp_path):
             [rigid.translation - reached.translation, pin.log3(reached.rotation.T @ rigid.rotation)]
         )[comps]
         assert np.max(np.abs(diff)) < 1e-10  # [m, rad]
-    back = undeflected_commands(mech, params, c, joints)
-    assert np.max(np.abs(back - rows)) < 1e-10  # [rad]
+    back = undeflected_commands(mech, params, values, joints)
+    assert np.max(np.abs(back - rows)) < 1e-10  # [rad, m]
+
+
+def test_an_ankles_struts_lengthen_under_their_own_machines_load(tmp_path):
+    """A 2-RSU ankle, 6-D measured, 0.2 mm of sag."""
+    mech = _open_world("ankle_2rsu", tmp_path)
+    params = parameters(mech, [f"{s}.strut_compliance" for s in struts(mech)])
+    rows = sample_actuators(mech, 3, np.random.default_rng(9))
+    F0 = strut_loads(mech, rows)[0]
+    c = -2e-4 / np.sqrt(np.mean(F0**2)) * np.array([0.7, 1.3])  # [m/N]
+    _check_exact_elongation(mech, params, c, rows)
 
 
 def test_parallelogram_bars_are_refused(tmp_path):
-    """A delta's parallelogram bars close over-constrained loops: their force is open."""
+    """A delta's parallelogram bars close over-constrained loops: their force is open;
+    its other struts take a compliance and deflect as on the ankle."""
     mech = _open_world("delta_4r", tmp_path)
     assert "wbar_b1" in struts(mech)
     with pytest.raises(ParameterError, match="over-constrained loop"):
@@ -201,3 +208,10 @@ def test_parallelogram_bars_are_refused(tmp_path):
     params = with_joint_terms(mech, parameters(mech, ["hinge1.offset"]), ["strut-compliance"])
     on = {params.parameters[k].joint for k in params.joint_terms}
     assert on and not on & {"wbar_b1", "wbar_b2", "wbar_b3"}  # the bars are left out
+    # the struts left (the wrists' rods) deflect, measured in position only
+    k = params.joint_terms
+    rows = sample_actuators(mech, 3, np.random.default_rng(2))
+    F0 = strut_loads(mech, rows, tuple(params.parameters[i].joint for i in k))[0]
+    values = np.zeros(len(params))
+    values[k] = -2e-4 / np.sqrt(np.mean(F0**2))  # [m/N]
+    _check_exact_elongation(mech, params, values, rows)

@@ -111,13 +111,17 @@ def joint_term_basis(
     """
     q_act = np.atleast_2d(np.asarray(q_act, dtype=float))
     B = np.zeros((q_act.shape[0], len(mech.actuated), len(params)))
-    cache: dict[str, dict[str, np.ndarray]] = {}
-    for k in params.joint_terms:
-        p = params.parameters[k]
-        term = term_of_dof(p.dof)
+    terms = {int(k): term_of_dof(params.parameters[k].dof) for k in params.joint_terms}
+    wanted: dict[str, tuple[str, ...]] = {}  # kind → the joints its parameters sit on
+    for k, term in terms.items():
         assert term is not None
+        wanted[term.kind] = (*wanted.get(term.kind, ()), params.parameters[k].joint)
+    cache: dict[str, dict[str, np.ndarray]] = {}
+    for k, term in terms.items():
+        assert term is not None
+        p = params.parameters[k]
         if term.kind not in cache:
-            cache[term.kind] = term.columns(mech, q_act, conditions or {})
+            cache[term.kind] = term.columns(mech, q_act, conditions or {}, wanted[term.kind])
         if p.joint not in cache[term.kind]:
             raise ParameterError(
                 f"joint term {p.name!r} is on a joint that is not a {term.sits_on} of "

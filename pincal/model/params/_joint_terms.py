@@ -119,15 +119,21 @@ class JointTerm(ABC):
         del conditions  # nothing to check for a term that needs no conditions
 
     def columns(
-        self, mech: Mechanism, q_act: np.ndarray, conditions: Mapping[str, np.ndarray | None]
+        self,
+        mech: Mechanism,
+        q_act: np.ndarray,
+        conditions: Mapping[str, np.ndarray | None],
+        joints: tuple[str, ...] | None = None,
     ) -> dict[str, np.ndarray]:
         """Basis per joint the term sits on: {joint: (m, n_act, len(dofs))}.
 
         ``δq += columns[joint] @ θ_joint`` over all actuated joints [rad, m]. The
         default places :meth:`basis_at` of each actuated joint on that joint alone; a
         term on other joints (a strut's length, :mod:`pincal.model.params._term_strut`) moves
-        every actuator the joint's change acts through.
+        every actuator the joint's change acts through. ``joints``: the joints asked for
+        (None: all; a term may return more).
         """
+        del joints  # every actuated joint's column costs the same basis
         B = self.basis_at(mech, q_act, conditions)
         out = {}
         for i, a in enumerate(mech.actuated):

@@ -89,9 +89,14 @@ class StrutCompliance(JointTerm):
         )
 
     def columns(
-        self, mech: Mechanism, q_act: np.ndarray, conditions: Mapping[str, np.ndarray | None]
+        self,
+        mech: Mechanism,
+        q_act: np.ndarray,
+        conditions: Mapping[str, np.ndarray | None],
+        joints: tuple[str, ...] | None = None,
     ) -> dict[str, np.ndarray]:
-        names = struts(mech)
+        # only the struts asked for: a parallelogram bar's force is not determined
+        names = tuple(j for j in struts(mech) if joints is None or j in joints)
         F, E = strut_loads(mech, q_act, names)
         return {j: (F[:, i, None] * E[:, i])[:, :, None] for i, j in enumerate(names)}
 
