@@ -59,17 +59,19 @@ def loaded_terms(params: ParameterSet) -> np.ndarray:
     return np.array(out, dtype=int)
 
 
-def _exact(params: ParameterSet, idx: np.ndarray) -> tuple[JointTerm, tuple[str, ...]] | None:
-    """(the term, its joints) of loaded parameters ``idx`` that one kind holds.
+def _loaded(
+    params: ParameterSet, values: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, JointTerm | None, tuple[str, ...]]:
+    """The loaded terms of ``params``: (indices (k,), values θ_L (k,) [SI], kind, joints).
 
-    None when several kinds are loaded or the kind has no deflection of its own
-    (:meth:`JointTerm.deflected`): the generic fixed point.
+    The kind is the term when one kind holds them all (its own :meth:`JointTerm.deflected`
+    may solve the deflection), None otherwise (the generic fixed point).
     """
-    terms = {term_of_dof(params.parameters[k].dof) for k in idx}
-    term = terms.pop() if len(terms) == 1 else None
-    if term is None or type(term).deflected is JointTerm.deflected:
-        return None
-    return term, tuple(params.parameters[k].joint for k in idx)
+    idx = loaded_terms(params)
+    kinds = {term_of_dof(params.parameters[k].dof) for k in idx}
+    kind = kinds.pop() if len(kinds) == 1 else None
+    joints = tuple(params.parameters[k].joint for k in idx)
+    return idx, np.asarray(values, dtype=float)[idx], kind, joints
 
 
 def undeflected_commands(
@@ -88,16 +90,13 @@ def undeflected_commands(
         q: (m, n_act) the joint values to reach [rad, m].
         conditions: per-pose conditions of the terms.
     """
-    idx = loaded_terms(params)
+    idx, theta, term, joints = _loaded(params, values)
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    theta = np.asarray(values, dtype=float)[idx]
-    if not idx.size or not np.any(theta):
+    if not np.any(theta):
         return q.copy()
-    exact = _exact(params, idx)
-    if exact is not None:
-        out = exact[0].commands(mech, exact[1], theta, q)
-        if out is not None:
-            return out
+    out = None if term is None else term.commands(mech, joints, theta, q)
+    if out is not None:
+        return out
     return q - _loaded_change(mech, params.subset(idx), theta, q, conditions or {})
 
 
@@ -130,13 +129,11 @@ def deflected_joints(
         ConvergenceError: the iteration does not settle (a compliance so large that the
             machine buckles under its load).
     """
-    idx = loaded_terms(params)
+    idx, theta, term, joints = _loaded(params, values)
     u = np.atleast_2d(np.asarray(u, dtype=float))
-    theta = np.asarray(values, dtype=float)[idx]
-    if not idx.size or not np.any(theta):
+    if not np.any(theta):
         return u.copy()
-    exact = _exact(params, idx)
-    solved = None if exact is None else exact[0].deflected(mech, exact[1], theta, u)
+    solved = None if term is None else term.deflected(mech, joints, theta, u)
     if solved is not None:
         return solved
     sub, cond = params.subset(idx), conditions or {}
